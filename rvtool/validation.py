@@ -1,0 +1,57 @@
+"""Input checks that raise :class:`rvtool.errors.RvtoolInputError` with the
+parameter name, its value and the valid range (never a silent clamp)."""
+import math
+
+import numpy as np
+
+from .errors import RvtoolInputError
+
+
+def check_finite(name, value):
+    arr = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise RvtoolInputError(f"{name} must be finite; got {value!r} (valid range: finite real numbers)")
+    return value
+
+
+def check_range(name, value, low=-math.inf, high=math.inf, low_open=False, high_open=False):
+    """Check ``low <= value <= high`` (open ends where requested) element-wise."""
+    arr = np.asarray(value, dtype=float)
+    if arr.size and not np.all(np.isfinite(arr) | np.isinf(arr)):
+        raise RvtoolInputError(f"{name} must be a real number; got {value!r}")
+    if np.any(np.isnan(arr)):
+        raise RvtoolInputError(f"{name} must not be NaN; got {value!r}")
+    lo_ok = arr > low if low_open else arr >= low
+    hi_ok = arr < high if high_open else arr <= high
+    if not (np.all(lo_ok) and np.all(hi_ok)):
+        lb = "(" if low_open else "["
+        hb = ")" if high_open else "]"
+        bad = arr[~(lo_ok & hi_ok)] if arr.ndim else arr
+        raise RvtoolInputError(
+            f"{name} = {np.asarray(bad).ravel()[:4].tolist()}{'...' if np.size(bad) > 4 else ''} "
+            f"is outside the valid range {lb}{low}, {high}{hb}")
+    return value
+
+
+def check_positive(name, value):
+    return check_range(name, value, 0.0, math.inf, low_open=True)
+
+
+def check_nonnegative(name, value):
+    return check_range(name, value, 0.0, math.inf)
+
+
+def check_shape(name, array, shape):
+    """Check an array's shape; ``None`` in ``shape`` matches any length."""
+    arr = np.asarray(array)
+    ok = arr.ndim == len(shape) and all(s is None or s == a for s, a in zip(shape, arr.shape))
+    if not ok:
+        want = "(" + ", ".join("N" if s is None else str(s) for s in shape) + ")"
+        raise RvtoolInputError(f"{name} must have shape {want}; got {arr.shape}")
+    return arr
+
+
+def check_choice(name, value, choices):
+    if value not in choices:
+        raise RvtoolInputError(f"{name} = {value!r} is not one of the valid choices {sorted(map(str, choices))}")
+    return value

@@ -1,0 +1,42 @@
+"""Precision and device selection for the Warp contact kernels.
+
+Double precision is the default everywhere; ``"float32"`` is an explicit
+option. Kernels are generated per scalar type by small factories so that the
+float64 and float32 variants share one source.
+"""
+import functools
+
+import numpy as np
+import warp as wp
+
+from rvtool.errors import RvtoolInputError
+
+wp.config.quiet = True
+
+PRECISIONS = {"float64": (wp.float64, np.float64), "float32": (wp.float32, np.float32)}
+
+
+def scalar_types(precision):
+    """Return ``(warp_dtype, numpy_dtype)`` for ``precision`` ("float64" or "float32")."""
+    try:
+        return PRECISIONS[precision]
+    except KeyError:
+        raise RvtoolInputError(
+            f"precision = {precision!r} is not valid; valid choices are {sorted(PRECISIONS)}") from None
+
+
+@functools.lru_cache(maxsize=None)
+def _warp_ready():
+    wp.init()
+    return True
+
+
+def resolve_device(device):
+    """Return a Warp device name for ``device`` ("cpu", "cuda", "cuda:N")."""
+    _warp_ready()
+    names = [d.alias for d in wp.get_devices()]
+    if device == "cuda":
+        device = "cuda:0"
+    if device not in names:
+        raise RvtoolInputError(f"device = {device!r} is not available; available Warp devices are {names}")
+    return device
