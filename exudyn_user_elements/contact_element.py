@@ -1,0 +1,117 @@
+"""Contact set as an Exudyn ``ObjectGenericODE2`` with force and Jacobian user functions.
+
+The element spans the nodes of the participating planar rigid bodies
+(``NodeRigidBody2D``: x, y, theta). Its force callback gathers q and q_t once,
+evaluates every contact of the set in one kernel launch and returns
+Q = G^T f (Eq. (contact_mapping)); the Jacobian callback returns the analytic
+tangent of Eq. (assembled_contact_tangent) in Exudyn's convention for
+``ObjectGenericODE2``: J_user = -(f_ODE2 dQ/dq + f_ODE2_t dQ/dq_t).
+The kernel result is cached per state, so the Jacobian at the state of the
+preceding residual costs no second launch.
+
+The callbacks keep Exudyn's exact signatures and contain no physics; the
+physics lives in :mod:`warp_contacts` and :mod:`rvtool.contact`.
+"""
+import numpy as np
+import exudyn as exu
+from exudyn.itemInterface import ObjectGenericODE2, VObjectGenericODE2
+
+from rvtool.contact.evaluator import ContactSetEvaluator
+from rvtool.errors import RvtoolInputError
+from rvtool.observe.registry import ContactSnapshot
+from warp_contacts import circle_pairs_ref as ref
+
+
+class ContactElement:
+    """A contact set attached to an Exudyn system.
+
+    Parameters
+    ----------
+    mbs : exudyn MainSystem
+    nodes : node numbers of the set's bodies, in the order of the set's body indices
+    contact_set : :class:`rvtool.contact.circle_set.CircleContactSet`
+    backend, precision, device : evaluation options (see ContactSetEvaluator)
+    """
+
+    def __init__(self, mbs, nodes, contact_set, *, backend="warp", precision="float64", device="cpu"):
+        nodes = [int(n) for n in nodes]
+        if len(nodes) != contact_set.n_bodies:
+            raise RvtoolInputError(f"nodes has {len(nodes)} entries but contact_set.n_bodies = {contact_set.n_bodies}; "
+                                   "they must be equal")
+        ref_coords = []
+        for n in nodes:
+            if n < 0 or n >= mbs.systemData.NumberOfNodes():
+                raise RvtoolInputError(f"nodes contains {n}, outside the valid range [0, {mbs.systemData.NumberOfNodes() - 1}]")
+            r = np.asarray(mbs.GetNodeParameter(n, "referenceCoordinates"), dtype=float)
+            if r.shape != (3,):
+                raise RvtoolInputError(f"node {n} has {r.size} coordinates; the circle contact element needs "
+                                       "planar rigid-body nodes with exactly 3 (x, y, theta)")
+            ref_coords.append(r)
+        self.name = contact_set.name
+        self.ids = contact_set.ids
+        self.nodes = nodes
+        self.reference = np.array(ref_coords)
+        self.evaluator = ContactSetEvaluator(contact_set, backend=backend, precision=precision, device=device)
+        self.n = 3 * len(nodes)
+        self.n_force_calls = 0
+        self.n_jacobian_calls = 0
+        self.n_evaluations = 0
+        self.nonfinite = False          # set by a trial with non-finite output; reset by the driver per attempt
+        self.inject_nan_at = set()      # fault injection (tests, hard cases): evaluation counters to poison
+        self._key = None
+        self._ev = None
+        self.object_number = mbs.AddObject(ObjectGenericODE2(
+            nodeNumbers=nodes, massMatrix=np.zeros((self.n, self.n)),
+            forceUserFunction=self._force, jacobianUserFunction=self._jacobian,
+            visualization=VObjectGenericODE2(show=False)))
+        self.mbs = mbs
+        self._ltg = None
+
+    # -- pure evaluation -------------------------------------------------
+    def pose_velocity(self, q, q_t):
+        """Absolute body poses and velocities (nb, 3) from element coordinates."""
+        return self.reference + np.asarray(q, float).reshape(-1, 3), np.asarray(q_t, float).reshape(-1, 3)
+
+    def evaluate(self, t, q, q_t):
+        """Cached evaluation at element coordinates (trial: committed history is only read)."""
+        q = np.asarray(q, dtype=float)
+        q_t = np.asarray(q_t, dtype=float)
+        key = (float(t), q.tobytes(), q_t.tobytes())
+        if key != self._key:
+            pose, vel = self.pose_velocity(q, q_t)
+            ev = self.evaluator.evaluate(pose, vel)
+            self.n_evaluations += 1
+            if self.n_evaluations in self.inject_nan_at:
+                ev.Q = ev.Q * np.nan
+                ev.finite = False
+            if not (ev.finite and np.all(np.isfinite(q)) and np.all(np.isfinite(q_t))):
+                self.nonfinite = True
+            self._key, self._ev = key, ev
+        return self._ev
+
+    # -- Exudyn callbacks (exact signatures) ------------------------------
+    def _force(self, mbs, t, itemNumber, q, q_t):
+        self.n_force_calls += 1
+        return self.evaluate(t, q, q_t).Q
+
+    def _jacobian(self, mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
+        self.n_jacobian_calls += 1
+        ev = self.evaluate(t, q, q_t)
+        return -(fODE2 * ev.dQdq + fODE2_t * ev.dQdv)
+
+    # -- accepted-step interface -----------------------------------------
+    def local(self, q_global):
+        if self._ltg is None:
+            self._ltg = np.asarray(self.mbs.systemData.GetObjectLTGODE2(self.object_number), dtype=int)
+        return np.asarray(q_global)[self._ltg]
+
+    def commit(self, q_global, v_global):
+        """Commit history at the accepted state; return the observation snapshot."""
+        pose, vel = self.pose_velocity(self.local(q_global), self.local(v_global))
+        obs = self.evaluator.commit(pose, vel)
+        return ContactSnapshot(ids=self.ids, normal_force=obs[:, ref.O_FN], slip_speed=np.abs(obs[:, ref.O_VT]),
+                               position=obs[:, ref.O_PX:ref.O_PY + 1], normal=obs[:, ref.O_NX:ref.O_NY + 1])
+
+    def history_state(self):
+        h = self.evaluator.history
+        return {"active": h.active.copy(), "anchor_a": h.anchor_a.copy(), "anchor_b": h.anchor_b.copy()}

@@ -1,0 +1,1 @@
+"""Contact sets: specifications (data), evaluation backends and assembly."""

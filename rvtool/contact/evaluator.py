@@ -1,0 +1,106 @@
+"""Evaluation of a contact set with committed (accepted-step) history.
+
+Trial evaluations (every Newton residual and tangent) read only the committed
+history z_n and return a trial history that is *not* stored (Eq.
+(trial_state)). :meth:`ContactSetEvaluator.commit` is called once per
+accepted step, at the accepted evaluation state, and is the only place where
+the committed history changes (Fig. (accepted_state)).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from warp_contacts import circle_pairs_ref
+
+from ..errors import RvtoolInputError
+from .assembly import PairAssembler
+from .circle_set import CircleContactSet
+
+BACKENDS = ("warp", "numpy")
+
+
+@dataclass
+class Evaluation:
+    """Result of one evaluation of a contact set at element coordinates."""
+    Q: np.ndarray          # (n,) generalized forces [N, N m]
+    dQdq: np.ndarray       # (n, n) dQ/dq
+    dQdv: np.ndarray       # (n, n) dQ/dv
+    obs: np.ndarray        # (N, 7) per-contact observation values (circle_pairs_ref.O_*)
+    trial_history: tuple   # (active, anchor_a, anchor_b), not committed
+    finite: bool
+
+
+class ContactHistory:
+    """Committed anchor history of a set: active flags and anchors in body coordinates [m]."""
+
+    def __init__(self, n):
+        self.active = np.zeros(n, dtype=np.int32)
+        self.anchor_a = np.zeros((n, 2))
+        self.anchor_b = np.zeros((n, 2))
+
+    def as_tuple(self):
+        return self.active, self.anchor_a, self.anchor_b
+
+    def assign(self, trial):
+        act, a, b = trial
+        self.active = np.array(act, dtype=np.int32)
+        self.anchor_a = np.array(a, dtype=np.float64)
+        self.anchor_b = np.array(b, dtype=np.float64)
+
+    def copy(self):
+        h = ContactHistory(len(self.active))
+        h.assign(self.as_tuple())
+        return h
+
+
+class ContactSetEvaluator:
+    """Evaluates a :class:`CircleContactSet` at absolute body poses.
+
+    backend: "warp" (one batched kernel launch, default) or "numpy" (the
+    reference implementation). precision: "float64" (default) or "float32".
+    """
+
+    def __init__(self, contact_set: CircleContactSet, backend="warp", precision="float64", device="cpu"):
+        if backend not in BACKENDS:
+            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are {list(BACKENDS)}")
+        self.set = contact_set
+        self.backend = backend
+        self.precision = precision
+        self.fparams, self.iparams = contact_set.packed()
+        self.n_contacts = len(contact_set.contacts)
+        self.n_bodies = contact_set.n_bodies
+        self.history = ContactHistory(self.n_contacts)
+        self.assembler = PairAssembler(self.iparams[:, 0], self.iparams[:, 1], self.n_bodies)
+        if backend == "warp":
+            from warp_contacts.circle_pairs import CirclePairKernel
+            self._kernel = CirclePairKernel(self.fparams, self.iparams, self.n_bodies, precision, device)
+        elif precision != "float64":
+            raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
+        self._pose = np.zeros((self.n_bodies + 1, 3))
+        self._vel = np.zeros((self.n_bodies + 1, 3))
+
+    def raw(self, pose, vel, history=None):
+        """Per-contact results (Q (N,6), dQdq, dQdv, obs, trial history) at poses (nb, 3)."""
+        h = (history or self.history).as_tuple()
+        self._pose[:-1] = pose
+        self._vel[:-1] = vel
+        if self.backend == "warp":
+            return self._kernel.evaluate(self._pose, self._vel, *h)
+        return circle_pairs_ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, *h)
+
+    def evaluate(self, pose, vel, history=None):
+        """Assembled :class:`Evaluation` at absolute poses/velocities (nb, 3) with the committed history."""
+        Qc, dq, dv, obs, trial = self.raw(pose, vel, history)
+        Q = self.assembler.vector(np.asarray(Qc, np.float64))
+        finite = bool(np.all(np.isfinite(Qc)) and np.all(np.isfinite(dq)) and np.all(np.isfinite(dv)))
+        return Evaluation(Q, self.assembler.matrix(np.asarray(dq, np.float64)),
+                          self.assembler.matrix(np.asarray(dv, np.float64)), np.asarray(obs, np.float64), trial, finite)
+
+    def commit(self, pose, vel):
+        """Evaluate at the accepted state from the committed history and commit the result.
+
+        Returns the observation array (N, 7) at the accepted state.
+        """
+        Qc, dq, dv, obs, trial = self.raw(pose, vel, self.history)
+        self.history.assign(trial)
+        return np.asarray(obs, np.float64)

@@ -1,0 +1,301 @@
+"""Warp kernel of the circle--circle contact-pair evaluation with analytic
+tangent: one batched launch evaluates every contact of a set.
+
+The physics, conventions and parameter layout are documented in the NumPy
+reference :mod:`warp_contacts.circle_pairs_ref`, which this kernel mirrors
+line by line (a test compares the two). Outputs per contact: generalized
+forces Q (6), dQ/dq (6x6), dQ/dv (6x6) (Eq. (assembled_contact_tangent)),
+observation values and the trial anchor history.
+"""
+import functools
+
+import numpy as np
+import warp as wp
+
+from .circle_geometry import circle_funcs
+from .circle_pairs_ref import (FRICTION_ANCHOR, FRICTION_REGULARIZED, I_BODY_A, I_BODY_B, I_FRICTION,
+                               I_INTERNAL, N_FLOAT_PARAMS, N_INT_PARAMS, N_OBS)
+from .laws import law_funcs
+from .precision import resolve_device, scalar_types
+
+
+@functools.lru_cache(maxsize=None)
+def _kernel(dtype):
+    L = law_funcs(dtype)
+    C = circle_funcs(dtype)
+    vec2 = C.vec2
+    normal_force = L.normal_force
+    friction_coefficient = L.friction_coefficient
+    circle_gap = C.circle_gap
+
+    @wp.func
+    def perp(a: vec2):
+        return vec2(-a[1], a[0])
+
+    @wp.func
+    def cross2(a: vec2, b: vec2):
+        return a[0] * b[1] - a[1] * b[0]
+
+    @wp.func
+    def rot(th: dtype, x: vec2):
+        c = wp.cos(th)
+        s = wp.sin(th)
+        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
+
+    @wp.kernel(module="unique")
+    def eval_circle_pairs(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        vel_in: wp.array2d(dtype=dtype),
+        hist_active_in: wp.array(dtype=wp.int32),
+        hist_a_in: wp.array2d(dtype=dtype),
+        hist_b_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        dqdv_out: wp.array3d(dtype=dtype),
+        obs_out: wp.array2d(dtype=dtype),
+        hist_active_out: wp.array(dtype=wp.int32),
+        hist_a_out: wp.array2d(dtype=dtype),
+        hist_b_out: wp.array2d(dtype=dtype),
+    ):
+        i = wp.tid()
+        ia = iparams[i, 0]
+        ib = iparams[i, 1]
+        internal = iparams[i, 2]
+        mode = iparams[i, 3]
+        s = dtype(1.0)
+        if internal != 0:
+            s = dtype(-1.0)
+        xa = vec2(pose_in[ia, 0], pose_in[ia, 1])
+        xb = vec2(pose_in[ib, 0], pose_in[ib, 1])
+        tha = pose_in[ia, 2]
+        thb = pose_in[ib, 2]
+        vxa = vec2(vel_in[ia, 0], vel_in[ia, 1])
+        vxb = vec2(vel_in[ib, 0], vel_in[ib, 1])
+        wa = vel_in[ia, 2]
+        wb = vel_in[ib, 2]
+        ra = fparams[i, 4]
+        rb = fparams[i, 5]
+        k = fparams[i, 6]
+        p = fparams[i, 7]
+        c = fparams[i, 8]
+        dr = fparams[i, 9]
+        muk = fparams[i, 10]
+        mus = fparams[i, 11]
+        vs = fparams[i, 12]
+        vreg = fparams[i, 13]
+        kt = fparams[i, 14]
+
+        pa = rot(tha, vec2(fparams[i, 0], fparams[i, 1]))
+        pb = rot(thb, vec2(fparams[i, 2], fparams[i, 3]))
+        g, n, Lc = circle_gap(xa + pa, xb + pb, ra, rb, internal)
+        Ls = Lc
+        if Ls <= dtype(0.0):
+            Ls = dtype(1.0)
+        t = perp(n)
+        delta = -g
+        w = (vxb + wb * perp(pb)) - (vxa + wa * perp(pa))
+        Ldot = wp.dot(n, w)
+        delta_dot = -s * Ldot
+        F, Fd, Fdd = normal_force(k, p, c, dr, delta, delta_dot)
+        fnA = (-s * F) * n
+
+        aa = pa + (s * ra) * n
+        bb = pb - rb * n
+        ua = vxa + wa * perp(aa)
+        ub = vxb + wb * perp(bb)
+        vrel = ua - ub
+        vt = wp.dot(t, vrel)
+
+        mu, dmu = friction_coefficient(muk, mus, vs, vreg, vt)
+        hla = vec2(hist_a_in[i, 0], hist_a_in[i, 1])
+        hlb = vec2(hist_b_in[i, 0], hist_b_in[i, 1])
+        ha = rot(tha, hla)
+        hb = rot(thb, hlb)
+        e = (xa + ha) - (xb + hb)
+        st = wp.dot(t, e)
+        lim = muk * F
+        contact = delta > dtype(0.0)
+        anchored = mode == FRICTION_ANCHOR and contact and hist_active_in[i] != 0
+        stick = anchored and wp.abs(kt * st) <= lim
+        slip = anchored and not stick
+        sg = wp.sign(st)
+        if st == dtype(0.0):
+            sg = dtype(0.0)
+        reg = mode == FRICTION_REGULARIZED and F > dtype(0.0)
+        ft_mag = dtype(0.0)
+        if reg:
+            ft_mag = -F * mu
+        if stick:
+            ft_mag = -kt * st
+        if slip:
+            ft_mag = -lim * sg
+        ftA = ft_mag * t
+        armA = aa
+        armB = bb
+        if anchored:
+            armA = ha
+            armB = hb
+
+        fA = fnA + ftA
+        q_out[i, 0] = fA[0]
+        q_out[i, 1] = fA[1]
+        q_out[i, 2] = cross2(pa, fnA) + cross2(armA, ftA)
+        q_out[i, 3] = -fA[0]
+        q_out[i, 4] = -fA[1]
+        q_out[i, 5] = -(cross2(pb, fnA) + cross2(armB, ftA))
+
+        for j in range(12):
+            dqa = wp.vec3d(0.0, 0.0, 0.0)
+            dqb = wp.vec3d(0.0, 0.0, 0.0)
+            dva = wp.vec3d(0.0, 0.0, 0.0)
+            dvb = wp.vec3d(0.0, 0.0, 0.0)
+            if j < 3:
+                dqa[j] = wp.float64(1.0)
+            elif j < 6:
+                dqb[j - 3] = wp.float64(1.0)
+            elif j < 9:
+                dva[j - 6] = wp.float64(1.0)
+            else:
+                dvb[j - 9] = wp.float64(1.0)
+            dpa = dtype(dqa[2]) * perp(pa)
+            dpb = dtype(dqb[2]) * perp(pb)
+            dd = (vec2(dtype(dqb[0]), dtype(dqb[1])) + dpb) - (vec2(dtype(dqa[0]), dtype(dqa[1])) + dpa)
+            dL = wp.dot(n, dd)
+            dn = (dd - dL * n) / Ls
+            dt = perp(dn)
+            ddelta = -s * dL
+            dvca = vec2(dtype(dva[0]), dtype(dva[1])) + dtype(dva[2]) * perp(pa) + wa * perp(dpa)
+            dvcb = vec2(dtype(dvb[0]), dtype(dvb[1])) + dtype(dvb[2]) * perp(pb) + wb * perp(dpb)
+            dw = dvcb - dvca
+            dLdot = wp.dot(dn, w) + wp.dot(n, dw)
+            ddelta_dot = -s * dLdot
+            dF = Fd * ddelta + Fdd * ddelta_dot
+            dfnA = -s * (dF * n + F * dn)
+            daa = dpa + (s * ra) * dn
+            dbb = dpb - rb * dn
+            dua = vec2(dtype(dva[0]), dtype(dva[1])) + dtype(dva[2]) * perp(aa) + wa * perp(daa)
+            dub = vec2(dtype(dvb[0]), dtype(dvb[1])) + dtype(dvb[2]) * perp(bb) + wb * perp(dbb)
+            dvt = wp.dot(dt, vrel) + wp.dot(t, dua - dub)
+            dha = dtype(dqa[2]) * perp(ha)
+            dhb = dtype(dqb[2]) * perp(hb)
+            de = (vec2(dtype(dqa[0]), dtype(dqa[1])) + dha) - (vec2(dtype(dqb[0]), dtype(dqb[1])) + dhb)
+            dst = wp.dot(dt, e) + wp.dot(t, de)
+            dft_mag = dtype(0.0)
+            if reg:
+                dft_mag = -(dF * mu + F * dmu * dvt)
+            if stick:
+                dft_mag = -kt * dst
+            if slip:
+                dft_mag = -muk * dF * sg
+            dftA = dft_mag * t + ft_mag * dt
+            darmA = daa
+            darmB = dbb
+            if anchored:
+                darmA = dha
+                darmB = dhb
+            dfA = dfnA + dftA
+            dQa = cross2(dpa, fnA) + cross2(pa, dfnA) + cross2(darmA, ftA) + cross2(armA, dftA)
+            dQb = -(cross2(dpb, fnA) + cross2(pb, dfnA) + cross2(darmB, ftA) + cross2(armB, dftA))
+            if j < 6:
+                dqdq_out[i, 0, j] = dfA[0]
+                dqdq_out[i, 1, j] = dfA[1]
+                dqdq_out[i, 2, j] = dQa
+                dqdq_out[i, 3, j] = -dfA[0]
+                dqdq_out[i, 4, j] = -dfA[1]
+                dqdq_out[i, 5, j] = dQb
+            else:
+                dqdv_out[i, 0, j - 6] = dfA[0]
+                dqdv_out[i, 1, j - 6] = dfA[1]
+                dqdv_out[i, 2, j - 6] = dQa
+                dqdv_out[i, 3, j - 6] = -dfA[0]
+                dqdv_out[i, 4, j - 6] = -dfA[1]
+                dqdv_out[i, 5, j - 6] = dQb
+
+        # trial anchor history (committed by the driver only for accepted steps)
+        act = 0
+        na = vec2(dtype(0.0), dtype(0.0))
+        nbv = vec2(dtype(0.0), dtype(0.0))
+        if mode == FRICTION_ANCHOR and contact:
+            act = 1
+            if anchored:
+                na = hla
+                nbv = hlb
+                if slip:
+                    st_lim = dtype(0.0)
+                    if kt > dtype(0.0):
+                        st_lim = sg * lim / kt
+                    na = rot(-tha, ha - (st - st_lim) * t)
+            else:
+                na = rot(-tha, aa)
+                nbv = rot(-thb, bb)
+        hist_active_out[i] = act
+        hist_a_out[i, 0] = na[0]
+        hist_a_out[i, 1] = na[1]
+        hist_b_out[i, 0] = nbv[0]
+        hist_b_out[i, 1] = nbv[1]
+
+        cp = dtype(0.5) * ((xa + aa) + (xb + bb))
+        obs_out[i, 0] = F
+        obs_out[i, 1] = vt
+        obs_out[i, 2] = g
+        obs_out[i, 3] = cp[0]
+        obs_out[i, 4] = cp[1]
+        obs_out[i, 5] = n[0]
+        obs_out[i, 6] = n[1]
+
+    return eval_circle_pairs
+
+
+class CirclePairKernel:
+    """Device-resident evaluator of one circle contact set.
+
+    Parameters are uploaded once; per evaluation only poses/velocities and the
+    committed history go in, and forces, tangent blocks, observations and the
+    trial history come out.
+    """
+
+    def __init__(self, fparams, iparams, n_bodies, precision="float64", device="cpu"):
+        self.wdtype, self.ndtype = scalar_types(precision)
+        self.device = resolve_device(device)
+        self.precision = precision
+        fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
+        iparams = np.ascontiguousarray(iparams, dtype=np.int32)
+        assert fparams.shape[1] == N_FLOAT_PARAMS and iparams.shape[1] == N_INT_PARAMS
+        self.n = n = fparams.shape[0]
+        self.n_bodies = n_bodies
+        self.kernel = _kernel(self.wdtype)
+        d, dt = self.device, self.wdtype
+        self.fparams = wp.array(fparams, dtype=dt, device=d)
+        self.iparams = wp.array(iparams, dtype=wp.int32, device=d)
+        self.pose = wp.zeros((n_bodies + 1, 3), dtype=dt, device=d)
+        self.vel = wp.zeros((n_bodies + 1, 3), dtype=dt, device=d)
+        self.h_act_in = wp.zeros(n, dtype=wp.int32, device=d)
+        self.h_a_in = wp.zeros((n, 2), dtype=dt, device=d)
+        self.h_b_in = wp.zeros((n, 2), dtype=dt, device=d)
+        self.q = wp.zeros((n, 6), dtype=dt, device=d)
+        self.dqdq = wp.zeros((n, 6, 6), dtype=dt, device=d)
+        self.dqdv = wp.zeros((n, 6, 6), dtype=dt, device=d)
+        self.obs = wp.zeros((n, N_OBS), dtype=dt, device=d)
+        self.h_act_out = wp.zeros(n, dtype=wp.int32, device=d)
+        self.h_a_out = wp.zeros((n, 2), dtype=dt, device=d)
+        self.h_b_out = wp.zeros((n, 2), dtype=dt, device=d)
+        self._needs_history = bool(np.any(iparams[:, I_FRICTION] == FRICTION_ANCHOR))
+
+    def evaluate(self, pose, vel, hist_active, hist_a, hist_b):
+        """Same signature and results as :func:`circle_pairs_ref.evaluate` (arrays in NumPy)."""
+        self.pose.assign(np.ascontiguousarray(pose, dtype=self.ndtype))
+        self.vel.assign(np.ascontiguousarray(vel, dtype=self.ndtype))
+        if self._needs_history:
+            self.h_act_in.assign(np.ascontiguousarray(hist_active, dtype=np.int32))
+            self.h_a_in.assign(np.ascontiguousarray(hist_a, dtype=self.ndtype))
+            self.h_b_in.assign(np.ascontiguousarray(hist_b, dtype=self.ndtype))
+        wp.launch(self.kernel, dim=self.n, device=self.device,
+                  inputs=[self.fparams, self.iparams, self.pose, self.vel, self.h_act_in, self.h_a_in, self.h_b_in],
+                  outputs=[self.q, self.dqdq, self.dqdv, self.obs, self.h_act_out, self.h_a_out, self.h_b_out])
+        return (self.q.numpy(), self.dqdq.numpy(), self.dqdv.numpy(), self.obs.numpy(),
+                (self.h_act_out.numpy(), self.h_a_out.numpy(), self.h_b_out.numpy()))
