@@ -1,0 +1,204 @@
+"""Accepted-step driver around Exudyn's implicit generalized-alpha solver.
+
+Ownership of state follows Fig. (accepted_state):
+
+* trial evaluations (every residual and Jacobian callback of every Newton
+  iteration and retry) read only the committed contact history z_n;
+* an attempt is accepted by Exudyn's Newton convergence plus the gate in the
+  post-Newton hook (finite state and forces, optional strict residual bound
+  of Eq. (acceptance), injected test rejections); a rejected attempt restores
+  the start-of-step state (Exudyn) and, because nothing was committed, all
+  history; the step is retried with a smaller increment down to ``min_step``;
+* after acceptance the post-step hook evaluates each contact set once at the
+  accepted evaluation state from z_n and commits z_{n+1}; observers then
+  consume that snapshot with the accepted duration dt_acc, so the physical
+  clock and all exposure advance only by accepted steps.
+
+Exudyn's generalized-alpha is the Arnold--Bruels form: the equations of
+motion are enforced at the step end, so the accepted evaluation state is
+(q_{n+1}, v_{n+1}); the algorithmic accelerations carry the alpha weighting.
+"""
+import os
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import exudyn as exu
+
+from ..errors import SolverFailure
+from ..observe.registry import AcceptedStep, ObserverRegistry
+from .run_spec import RunSpec
+
+
+@dataclass
+class RunRecord:
+    """Step statistics of a finished run."""
+    accepted_steps: int = 0
+    attempts: int = 0
+    rejected_steps: int = 0
+    newton_iterations: int = 0
+    jacobian_updates: int = 0
+    min_step_s: float = np.inf
+    max_step_s: float = 0.0
+    max_residual: float = 0.0
+    end_time: float = 0.0
+    wall_s: float = 0.0
+    reject_reasons: dict = field(default_factory=dict)
+    times: list = field(default_factory=list)
+
+    def to_dict(self):
+        d = dict(self.__dict__)
+        d.pop("times")
+        d["min_step_s"] = None if not np.isfinite(self.min_step_s) else self.min_step_s
+        return d
+
+
+def _settings(spec: RunSpec):
+    ss = exu.SimulationSettings()
+    ti = ss.timeIntegration
+    ti.endTime = spec.end_time
+    ti.numberOfSteps = int(np.ceil(spec.end_time / spec.step - 1e-9))
+    ti.generalizedAlpha.spectralRadius = spec.spectral_radius
+    ti.generalizedAlpha.computeInitialAccelerations = True
+    ti.newton.useModifiedNewton = spec.newton_mode != "full"
+    ti.newton.modifiedNewtonJacUpdatePerStep = spec.newton_mode == "per_step"
+    ti.newton.maxIterations = spec.max_newton_iterations
+    ti.newton.absoluteTolerance = spec.abs_tol
+    ti.newton.relativeTolerance = spec.rel_tol
+    ti.adaptiveStep = spec.adaptive
+    ti.minimumStepSize = spec.minimum_step
+    ti.verboseMode = 0
+    # the post-Newton hook is the acceptance gate: one pass, a non-zero error rejects
+    ti.discontinuous.maxIterations = 1
+    ti.discontinuous.ignoreMaxIterations = False
+    ti.discontinuous.iterationTolerance = 0.5
+    ss.solutionSettings.writeSolutionToFile = False
+    ss.solutionSettings.sensorsWritePeriod = 1e30
+    ss.displayStatistics = False
+    ss.displayComputationTime = False
+    return ss
+
+
+def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None = None, *,
+             rotational=None, out_dir=None, reject_attempts=(), before_accept=None):
+    """Run ``mbs`` (assembled, or assembled here) over ``spec.end_time``.
+
+    elements: contact elements (:class:`exudyn_user_elements.ContactElement`).
+    observers: registry receiving one :class:`AcceptedStep` per accepted step.
+    rotational: boolean mask over ODE2 coordinates for the W scaling.
+    out_dir: where the last accepted state is saved if the run fails.
+    reject_attempts: attempt numbers (1-based) to reject by force (tests).
+    Returns a :class:`RunRecord`; raises :class:`SolverFailure` on failure.
+    """
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        ss = _settings(spec)
+    try:
+        mbs.systemData.ODE2Size()
+    except Exception:
+        mbs.Assemble()
+    solver = exu.MainSolverImplicitSecondOrder()
+    rec = RunRecord()
+    reject_attempts = set(reject_attempts)
+    state = {"t_prev": 0.0, "q_prev": None, "last_reason": None}
+
+    def weighted_residual():
+        r = np.asarray(solver.GetSystemResidual(), dtype=float)
+        if spec.reference_length is not None and rotational is not None:
+            r = np.where(rotational, r / spec.reference_length, r)
+        return float(np.linalg.norm(r))
+
+    def pre_step(mbs_, t):
+        rec.attempts += 1
+        for e in elements:
+            e.nonfinite = False
+        return True
+
+    def post_newton(mbs_, t):
+        reason = None
+        q = mbs_.systemData.GetODE2Coordinates()
+        v = mbs_.systemData.GetODE2Coordinates_t()
+        if any(e.nonfinite for e in elements):
+            reason = "non-finite contact force in a trial evaluation"
+        elif not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            reason = "non-finite state"
+        elif rec.attempts in reject_attempts:
+            reason = "forced rejection (test)"
+        else:
+            res = weighted_residual()
+            if not np.isfinite(res):
+                reason = "non-finite residual"
+            elif spec.strict_abs_tol is not None and res > spec.strict_abs_tol:
+                reason = f"residual {res:.3e} above strict_abs_tol"
+            else:
+                state["residual"] = res
+        if reason is not None:
+            rec.reject_reasons[reason] = rec.reject_reasons.get(reason, 0) + 1
+            state["last_reason"] = reason
+            return [1.0, -1.0]
+        return [0.0, -1.0]
+
+    def post_step(mbs_, t):
+        if not state.get("started"):
+            # Exudyn's initial FinishStep (t = t_0) is not an accepted step
+            state["started"] = True
+            return True
+        dt = t - state["t_prev"]
+        q = np.array(mbs_.systemData.GetODE2Coordinates())
+        v = np.array(mbs_.systemData.GetODE2Coordinates_t())
+        snaps = {e.name: e.commit(q, v) for e in elements}
+        if observers is not None:
+            observers.on_accepted(AcceptedStep(index=rec.accepted_steps, t_start=state["t_prev"], dt=dt,
+                                               q_start=state["q_prev"], q_end=q, snapshots=snaps))
+        rec.accepted_steps += 1
+        rec.newton_iterations += solver.it.newtonSteps
+        rec.min_step_s = min(rec.min_step_s, dt)
+        rec.max_step_s = max(rec.max_step_s, dt)
+        rec.max_residual = max(rec.max_residual, state.get("residual", 0.0))
+        rec.times.append(t)
+        state["t_prev"], state["q_prev"] = t, q
+        state["v_prev"] = v
+        if before_accept is not None:
+            before_accept(t, q, v)
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    mbs.SetPostNewtonUserFunction(post_newton)
+    mbs.SetPostStepUserFunction(post_step)
+    state["q_prev"] = np.array(mbs.systemData.GetODE2Coordinates())
+    state["v_prev"] = np.array(mbs.systemData.GetODE2Coordinates_t())
+    t0 = time.perf_counter()
+    error = None
+    try:
+        ok = solver.SolveSystem(mbs, ss)
+    except Exception as exc:  # a failing user function ends the run: report it with the saved state
+        ok, error = False, exc
+    rec.wall_s = time.perf_counter() - t0
+    rec.rejected_steps = rec.attempts - rec.accepted_steps
+    rec.end_time = state["t_prev"]
+    rec.jacobian_updates = int(solver.it.newtonJacobiCount)
+    if not ok or rec.end_time < spec.end_time * (1 - 1e-9) - 1e-12:
+        path = _save_state(out_dir, state, elements, rec, spec)
+        msg = (f"solver failed at t = {rec.end_time:.6g} s of {spec.end_time:.6g} s after {rec.accepted_steps} accepted "
+               f"and {rec.rejected_steps} rejected steps; last rejection: {state['last_reason'] or 'Newton did not converge'}; "
+               f"minimum step {spec.minimum_step:.3g} s reached or retries exhausted")
+        if error is not None:
+            msg += f"; exception: {error}"
+        raise SolverFailure(msg, path)
+    return rec
+
+
+def _save_state(out_dir, state, elements, rec, spec):
+    if out_dir is None:
+        return None
+    os.makedirs(out_dir, exist_ok=True)
+    path = os.path.join(out_dir, "failed_state.npz")
+    arrays = {"t": rec.end_time, "q": state["q_prev"], "v": state.get("v_prev")}
+    for e in elements:
+        for k, v in e.history_state().items():
+            arrays[f"{e.name}.{k}"] = v
+    tmp = path + ".tmp.npz"
+    np.savez(tmp, **{k: np.asarray(v) for k, v in arrays.items() if v is not None})
+    os.replace(tmp, path)
+    return path
