@@ -50,3 +50,56 @@ def random_pair_scene(rng, n_bodies, n_contacts, *, overlap=2e-5, friction=True,
             friction=FrictionLaw(model=model, mu_kinetic=0.1, mu_static=0.15, stribeck_speed=1e-2,
                                  regularization_speed=1e-3, tangential_stiffness=1e8 if model == FrictionModel.ANCHOR else 0.0)))
     return CircleContactSet(name=name, n_bodies=n_bodies, contacts=tuple(contacts)), poses, vels
+
+
+def block_on_belt(*, normal_load=100.0, mu=0.3, tangential_stiffness=1e6, spring=1e5, spring_damping=60.0,
+                  amplitude=2e-3, frequency=2.0, block_mass=1.0, backend="warp", precision="float64"):
+    """A block pressed onto a belt that oscillates, with anchor friction: an
+    imposed stick--slip cycle.
+
+    The block (planar rigid body, rotation locked) carries a circle of radius
+    5 mm pressed with ``normal_load`` [N] onto the belt, modelled as a circle of
+    radius 1 m (a nearly flat surface) on a body whose x follows
+    ``amplitude`` sin(2 pi ``frequency`` t) [m]. A spring [N/m] with damper
+    [N s/m] ties the block to the ground in x. The friction limit mu F_N is
+    reached on every half cycle, so the contact alternates between stick and slip.
+
+    Returns (SystemContainer, mbs, ContactElement).
+    """
+    import exudyn as exu
+    from exudyn.itemInterface import (CoordinateConstraint, CoordinateSpringDamper, LoadCoordinate, MarkerNodeCoordinate,
+                                      NodeRigidBody2D, NodePointGround, ObjectRigidBody2D)
+
+    from exudyn_user_elements.contact_element import ContactElement
+
+    r_block, r_belt, k_point = 5e-3, 1.0, 1e10
+    delta0 = (normal_load / k_point) ** (2.0 / 3.0)
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    nb = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, r_block - delta0, 0.0]))
+    mbs.AddObject(ObjectRigidBody2D(nodeNumber=nb, mass=block_mass, inertia=1e-4))
+    nbelt = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, 0.0, 0.0]))
+    mbs.AddObject(ObjectRigidBody2D(nodeNumber=nbelt, mass=10.0, inertia=1.0))
+    ng = mbs.AddNode(NodePointGround())
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ng, coordinate=0))
+    mk = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nb, coordinate=i)) for i in range(3)]
+    mbelt = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nbelt, coordinate=i)) for i in range(3)]
+    w = 2 * np.pi * frequency
+
+    def belt_x(mbs_, t, itemNumber, lOffset):
+        return amplitude * np.sin(w * t)
+
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mbelt[0]], offsetUserFunction=belt_x))
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mbelt[1]]))
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mbelt[2]]))
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mk[2]]))
+    mbs.AddObject(CoordinateSpringDamper(markerNumbers=[mg, mk[0]], stiffness=spring, damping=spring_damping))
+    mbs.AddLoad(LoadCoordinate(markerNumber=mk[1], load=-normal_load))
+    cset = CircleContactSet(name="belt", n_bodies=2, contacts=(CircleContact(
+        body_a=0, body_b=1, centre_a=(0.0, 0.0), centre_b=(0.0, -r_belt), radius_a=r_block, radius_b=r_belt,
+        normal=NormalLaw(law="point", stiffness=k_point, damping=200.0, ramp_depth=1e-6),
+        friction=FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=mu, tangential_stiffness=tangential_stiffness),
+        name="belt/block"),))
+    el = ContactElement(mbs, [nb, nbelt], cset, backend=backend, precision=precision)
+    mbs.Assemble()
+    return SC, mbs, el
