@@ -5,6 +5,7 @@ from ..errors import RvtoolInputError
 from ..validation import check_choice, check_positive, check_range
 
 NEWTON_MODES = ("full", "per_step", "modified")
+FLOAT32_REL_TOL_FLOOR = 1e-6
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -59,6 +60,11 @@ class RunSpec:
             check_positive("reference_length", self.reference_length)
         check_choice("backend", self.backend, ("warp", "numpy"))
         check_choice("precision", self.precision, ("float64", "float32"))
+        if self.precision == "float32" and self.rel_tol < FLOAT32_REL_TOL_FLOOR:
+            # float32 contact forces carry ~1e-7 relative round-off; a tighter Newton
+            # tolerance can never be met and would only end in step rejections
+            raise RvtoolInputError(f"rel_tol = {self.rel_tol} is below the float32 round-off floor; valid range "
+                                   f"[{FLOAT32_REL_TOL_FLOOR}, 1] for precision 'float32'")
 
     @property
     def minimum_step(self):
