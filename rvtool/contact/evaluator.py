@@ -93,8 +93,10 @@ class ContactSetEvaluator:
         Qc, dq, dv, obs, trial = self.raw(pose, vel, history)
         Q = self.assembler.vector(np.asarray(Qc, np.float64))
         finite = bool(np.all(np.isfinite(Qc)) and np.all(np.isfinite(dq)) and np.all(np.isfinite(dv)))
+        # copies: the kernel's output buffers are reused by the next launch
         return Evaluation(Q, self.assembler.matrix(np.asarray(dq, np.float64)),
-                          self.assembler.matrix(np.asarray(dv, np.float64)), np.asarray(obs, np.float64), trial, finite)
+                          self.assembler.matrix(np.asarray(dv, np.float64)), np.array(obs, np.float64),
+                          tuple(np.array(a) for a in trial), finite)
 
     def commit(self, pose, vel):
         """Evaluate at the accepted state from the committed history and commit the result.
@@ -103,4 +105,4 @@ class ContactSetEvaluator:
         """
         Qc, dq, dv, obs, trial = self.raw(pose, vel, self.history)
         self.history.assign(trial)
-        return np.asarray(obs, np.float64)
+        return np.array(obs, np.float64)

@@ -27,7 +27,7 @@ import exudyn as exu
 
 from ..errors import SolverFailure
 from ..observe.registry import AcceptedStep, ObserverRegistry
-from .run_spec import RunSpec
+from .run_spec import DENSE_MAX_COORDINATES, RunSpec
 
 
 @dataclass
@@ -53,7 +53,7 @@ class RunRecord:
         return d
 
 
-def _settings(spec: RunSpec):
+def _settings(spec: RunSpec, n_coordinates):
     ss = exu.SimulationSettings()
     ti = ss.timeIntegration
     ti.endTime = spec.end_time
@@ -72,6 +72,8 @@ def _settings(spec: RunSpec):
     ti.discontinuous.maxIterations = 1
     ti.discontinuous.ignoreMaxIterations = False
     ti.discontinuous.iterationTolerance = 0.5
+    dense = spec.linear_solver == "dense" or (spec.linear_solver == "auto" and n_coordinates <= DENSE_MAX_COORDINATES)
+    ss.linearSolverType = exu.LinearSolverType.EXUdense if dense else exu.LinearSolverType.EigenSparse
     ss.solutionSettings.writeSolutionToFile = False
     ss.solutionSettings.sensorsWritePeriod = 1e30
     ss.displayStatistics = False
@@ -91,13 +93,14 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
     Returns a :class:`RunRecord`; raises :class:`SolverFailure` on failure.
     """
     import warnings
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        ss = _settings(spec)
     try:
-        mbs.systemData.ODE2Size()
+        n_coordinates = mbs.systemData.ODE2Size()
     except Exception:
         mbs.Assemble()
+        n_coordinates = mbs.systemData.ODE2Size()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        ss = _settings(spec, n_coordinates)
     solver = exu.MainSolverImplicitSecondOrder()
     rec = RunRecord()
     reject_attempts = set(reject_attempts)
