@@ -112,8 +112,21 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
             r = np.where(rotational, r / spec.reference_length, r)
         return float(np.linalg.norm(r))
 
+    def reject(reason):
+        rec.reject_reasons[reason] = rec.reject_reasons.get(reason, 0) + 1
+        state["last_reason"] = reason
+        state["open"] = False
+
+    def close_failed_attempt():
+        # an attempt that reached neither the gate nor acceptance failed inside Newton
+        if state.get("open"):
+            reject("non-finite contact force in a trial evaluation" if any(e.nonfinite for e in elements)
+                   else "Newton did not converge")
+
     def pre_step(mbs_, t):
+        close_failed_attempt()
         rec.attempts += 1
+        state["open"] = True
         for e in elements:
             e.nonfinite = False
         return True
@@ -137,8 +150,7 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
             else:
                 state["residual"] = res
         if reason is not None:
-            rec.reject_reasons[reason] = rec.reject_reasons.get(reason, 0) + 1
-            state["last_reason"] = reason
+            reject(reason)
             return [1.0, -1.0]
         return [0.0, -1.0]
 
@@ -147,6 +159,7 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
             # Exudyn's initial FinishStep (t = t_0) is not an accepted step
             state["started"] = True
             return True
+        state["open"] = False
         dt = t - state["t_prev"]
         q = np.array(mbs_.systemData.GetODE2Coordinates())
         v = np.array(mbs_.systemData.GetODE2Coordinates_t())
@@ -178,6 +191,7 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
     except Exception as exc:  # a failing user function ends the run: report it with the saved state
         ok, error = False, exc
     rec.wall_s = time.perf_counter() - t0
+    close_failed_attempt()
     rec.rejected_steps = rec.attempts - rec.accepted_steps
     rec.end_time = state["t_prev"]
     rec.jacobian_updates = int(solver.it.newtonJacobiCount)
