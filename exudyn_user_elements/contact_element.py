@@ -66,6 +66,7 @@ class ContactElement:
             visualization=VObjectGenericODE2(show=False)))
         self.mbs = mbs
         self._ltg = None
+        self.last_obs = None            # observation array (N, 8) of the last accepted state
 
     # -- pure evaluation -------------------------------------------------
     def pose_velocity(self, q, q_t):
@@ -109,6 +110,7 @@ class ContactElement:
         """Commit history at the accepted state; return the observation snapshot."""
         pose, vel = self.pose_velocity(self.local(q_global), self.local(v_global))
         obs = self.evaluator.commit(pose, vel)
+        self.last_obs = obs
         return ContactSnapshot(ids=self.ids, normal_force=obs[:, ref.O_FN], slip_speed=np.abs(obs[:, ref.O_VT]),
                                position=obs[:, ref.O_PX:ref.O_PY + 1], normal=obs[:, ref.O_NX:ref.O_NY + 1])
 

@@ -247,6 +247,7 @@ def _kernel(dtype):
         obs_out[i, 4] = cp[1]
         obs_out[i, 5] = n[0]
         obs_out[i, 6] = n[1]
+        obs_out[i, 7] = ft_mag
 
     return eval_circle_pairs
 

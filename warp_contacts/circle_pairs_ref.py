@@ -36,9 +36,10 @@ N_FLOAT_PARAMS = 15
 # column layout of the integer parameters
 I_BODY_A, I_BODY_B, I_INTERNAL, I_FRICTION = 0, 1, 2, 3
 N_INT_PARAMS = 4
-# observation columns: normal force, tangential slip velocity, gap, contact point (2), normal (2)
-O_FN, O_VT, O_GAP, O_PX, O_PY, O_NX, O_NY = range(7)
-N_OBS = 7
+# observation columns: normal force, tangential slip velocity, gap, contact point (2), normal (2),
+# tangential force on A along t = perp(n)
+O_FN, O_VT, O_GAP, O_PX, O_PY, O_NX, O_NY, O_FT = range(8)
+N_OBS = 8
 
 FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_ANCHOR = 0, 1, 2
 
@@ -74,7 +75,7 @@ def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
 
     Returns
     -------
-    Q (N, 6), dQdq (N, 6, 6), dQdv (N, 6, 6), obs (N, 7),
+    Q (N, 6), dQdq (N, 6, 6), dQdv (N, 6, 6), obs (N, 8),
     trial history (active (N,), anchor_a (N, 2), anchor_b (N, 2)).
     """
     fp = np.asarray(fparams, np.float64)
@@ -198,4 +199,5 @@ def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
     obs[:, O_GAP] = g
     obs[:, O_PX:O_PY + 1] = 0.5 * ((qa[:, :2] + aa) + (qb[:, :2] + bb))
     obs[:, O_NX:O_NY + 1] = n
+    obs[:, O_FT] = ft_mag
     return Q, dQ[:, :, :6], dQ[:, :, 6:], obs, (act, new_a, new_b)

@@ -25,7 +25,7 @@ class Evaluation:
     Q: np.ndarray          # (n,) generalized forces [N, N m]
     dQdq: np.ndarray       # (n, n) dQ/dq
     dQdv: np.ndarray       # (n, n) dQ/dv
-    obs: np.ndarray        # (N, 7) per-contact observation values (circle_pairs_ref.O_*)
+    obs: np.ndarray        # (N, 8) per-contact observation values (circle_pairs_ref.O_*)
     trial_history: tuple   # (active, anchor_a, anchor_b), not committed
     finite: bool
 
@@ -101,7 +101,7 @@ class ContactSetEvaluator:
     def commit(self, pose, vel):
         """Evaluate at the accepted state from the committed history and commit the result.
 
-        Returns the observation array (N, 7) at the accepted state.
+        Returns the observation array (N, 8) at the accepted state.
         """
         Qc, dq, dv, obs, trial = self.raw(pose, vel, self.history)
         self.history.assign(trial)
