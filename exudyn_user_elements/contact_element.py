@@ -16,6 +16,7 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import ObjectGenericODE2, VObjectGenericODE2
 
+from rvtool.contact.circle_set import CircleContactSet
 from rvtool.contact.evaluator import ContactSetEvaluator
 from rvtool.errors import RvtoolInputError
 from rvtool.observe.registry import ContactSnapshot
@@ -29,14 +30,27 @@ class ContactElement:
     ----------
     mbs : exudyn MainSystem
     nodes : node numbers of the set's bodies, in the order of the set's body indices
-    contact_set : :class:`rvtool.contact.circle_set.CircleContactSet`
-    backend, precision, device : evaluation options (see ContactSetEvaluator)
+    contact_set : :class:`rvtool.contact.circle_set.CircleContactSet`, or an
+        evaluator object of any contact family following the evaluator protocol
+        (attributes ``name``, ``ids``, ``n_bodies``, ``history``; methods
+        ``evaluate(pose, vel) -> Evaluation`` and ``commit(pose, vel) -> obs``
+        with the observation columns of :mod:`warp_contacts.circle_pairs_ref`)
+    backend, precision, device : evaluation options (see ContactSetEvaluator),
+        used when ``contact_set`` is a CircleContactSet
     """
 
     def __init__(self, mbs, nodes, contact_set, *, backend="warp", precision="float64", device="cpu"):
         nodes = [int(n) for n in nodes]
-        if len(nodes) != contact_set.n_bodies:
-            raise RvtoolInputError(f"nodes has {len(nodes)} entries but contact_set.n_bodies = {contact_set.n_bodies}; "
+        if isinstance(contact_set, CircleContactSet):
+            evaluator = ContactSetEvaluator(contact_set, backend=backend, precision=precision, device=device)
+        else:
+            evaluator = contact_set
+            for attr in ("name", "ids", "n_bodies", "history", "evaluate", "commit"):
+                if not hasattr(evaluator, attr):
+                    raise RvtoolInputError(f"contact_set must be a CircleContactSet or a contact evaluator; "
+                                           f"{type(contact_set).__name__} lacks '{attr}'")
+        if len(nodes) != evaluator.n_bodies:
+            raise RvtoolInputError(f"nodes has {len(nodes)} entries but contact_set.n_bodies = {evaluator.n_bodies}; "
                                    "they must be equal")
         ref_coords = []
         for n in nodes:
@@ -47,11 +61,11 @@ class ContactElement:
                 raise RvtoolInputError(f"node {n} has {r.size} coordinates; the circle contact element needs "
                                        "planar rigid-body nodes with exactly 3 (x, y, theta)")
             ref_coords.append(r)
-        self.name = contact_set.name
-        self.ids = contact_set.ids
+        self.name = evaluator.name
+        self.ids = evaluator.ids
         self.nodes = nodes
         self.reference = np.array(ref_coords)
-        self.evaluator = ContactSetEvaluator(contact_set, backend=backend, precision=precision, device=device)
+        self.evaluator = evaluator
         self.n = 3 * len(nodes)
         self.n_force_calls = 0
         self.n_jacobian_calls = 0
@@ -115,5 +129,6 @@ class ContactElement:
                                position=obs[:, ref.O_PX:ref.O_PY + 1], normal=obs[:, ref.O_NX:ref.O_NY + 1])
 
     def history_state(self):
+        """Committed history arrays (for saving a failed run's state)."""
         h = self.evaluator.history
-        return {"active": h.active.copy(), "anchor_a": h.anchor_a.copy(), "anchor_b": h.anchor_b.copy()}
+        return {k: np.array(v) for k, v in vars(h).items() if isinstance(v, np.ndarray)}

@@ -64,6 +64,8 @@ class ContactSetEvaluator:
         if backend not in BACKENDS:
             raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are {list(BACKENDS)}")
         self.set = contact_set
+        self.name = contact_set.name
+        self.ids = contact_set.ids
         self.backend = backend
         self.precision = precision
         self.fparams, self.iparams = contact_set.packed()
