@@ -1,0 +1,175 @@
+"""Command line: ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``.
+
+The studies are the scripts in the repository's ``cases/`` folder (see
+``rvtool.casekit`` for their convention). ``list`` reads each script's module
+docstring with ``ast``, without importing it, so that a broken or slow case
+cannot stop the listing; ``run`` executes one case's ``main()`` in this
+process. The folder is ``cases/`` beside the package unless the environment
+variable ``RVTOOL_CASES`` names another one.
+"""
+import argparse
+import ast
+import importlib.util
+import os
+import sys
+from pathlib import Path
+
+DEFAULT_CASE = "verify_history"
+"""Case run (with ``--quick``) by a bare ``rvtool run``: a short demonstration."""
+
+CASES_ENV = "RVTOOL_CASES"
+"""Environment variable that overrides the location of the cases folder."""
+
+EXIT_USAGE = 2
+"""Exit status of a usage error (argparse's convention)."""
+
+_CASE_MODULE_PREFIX = "rvtool_case_"
+
+
+def cases_dir():
+    """Folder holding the case scripts: ``$RVTOOL_CASES`` or ``<repository>/cases``."""
+    override = os.environ.get(CASES_ENV)
+    if override:
+        return Path(override).expanduser().resolve()
+    return Path(__file__).resolve().parents[1] / "cases"
+
+
+def discover_cases(folder=None):
+    """Case names (file stems) in ``folder``, sorted; files starting with ``_`` are helpers, not cases."""
+    folder = cases_dir() if folder is None else Path(folder)
+    if not folder.is_dir():
+        return []
+    return sorted(p.stem for p in folder.glob("*.py") if p.is_file() and not p.name.startswith("_"))
+
+
+def case_summary(path):
+    """First line of the module docstring of the script at ``path``, read without importing it."""
+    try:
+        tree = ast.parse(Path(path).read_text(encoding="utf-8"), filename=str(path))
+    except (OSError, SyntaxError, ValueError) as exc:  # listed, flagged, not fatal
+        return f"(unreadable: {type(exc).__name__}: {exc})"
+    doc = ast.get_docstring(tree)
+    if not doc:
+        return "(no docstring)"
+    return doc.strip().splitlines()[0]
+
+
+def _missing_folder_message(folder):
+    return (f"cases folder not found: {folder} "
+            f"(run from a source checkout, or set {CASES_ENV} to the folder holding the case scripts)")
+
+
+def _cmd_list(args):
+    folder = cases_dir()
+    if not folder.is_dir():
+        print(f"rvtool: error: {_missing_folder_message(folder)}", file=sys.stderr)
+        return EXIT_USAGE
+    names = discover_cases(folder)
+    width = max((len(n) for n in names), default=0)
+    for name in names:
+        print(f"{name:<{width}}  {case_summary(folder / (name + '.py'))}")
+    return 0
+
+
+def load_case(path, name):
+    """Import the case script at ``path`` as a fresh module named after the case."""
+    spec = importlib.util.spec_from_file_location(_CASE_MODULE_PREFIX + name, path)
+    module = importlib.util.module_from_spec(spec)
+    # Registered before execution: dataclasses and pickling look modules up by name.
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def run_case(name, quick=False, out=None):
+    """Run ``cases/<name>.py``'s ``main()`` in this process; return the path of the results.json it wrote.
+
+    ``out`` defaults to ``results/<name>`` in the current directory, as when
+    the script is run directly. While the case runs, ``sys.argv`` and
+    ``sys.path[0]`` look as they would for ``python cases/<name>.py``, so that the
+    recorded command and imports of helper modules beside the case behave the same.
+    """
+    folder = cases_dir()
+    path = folder / f"{name}.py"
+    out = os.path.join("results", name) if out is None else out
+    case_argv = (["--quick"] if quick else []) + ["--out", str(out)]
+    saved_argv, saved_path = sys.argv, list(sys.path)
+    sys.argv = [str(path)] + case_argv
+    sys.path.insert(0, str(folder))
+    try:
+        module = load_case(path, name)
+        if not callable(getattr(module, "main", None)):
+            raise AttributeError(f"case {name!r} ({path}) defines no main(argv) function")
+        module.main(case_argv)
+    finally:
+        sys.argv = saved_argv
+        sys.path[:] = saved_path
+        sys.modules.pop(_CASE_MODULE_PREFIX + name, None)
+    return Path(out).resolve() / "results.json"
+
+
+def _cmd_run(args, parser):
+    folder = cases_dir()
+    if not folder.is_dir():
+        parser.error(_missing_folder_message(folder))
+    name = args.case if args.case is not None else DEFAULT_CASE
+    quick = args.quick or args.case is None
+    name = name[:-3] if name.endswith(".py") else name
+    available = discover_cases(folder)
+    if name not in available:
+        parser.error(f"unknown case {name!r} in {folder}; available cases: "
+                     + (", ".join(available) if available else "(none)"))
+    results = run_case(name, quick=quick, out=args.out)
+    if not results.is_file():
+        print(f"rvtool: error: case {name!r} finished but wrote no {results}", file=sys.stderr)
+        return 1
+    print(f"{name}: results written to {results}")
+    return 0
+
+
+def _cmd_version(args):
+    from rvtool import casekit  # imported here: it loads numpy and matplotlib
+
+    for package, version in casekit.versions().items():
+        print(f"{package}: {version if version is not None else 'not installed'}")
+    return 0
+
+
+def build_parser():
+    """The ``rvtool`` argument parser with its subcommands."""
+    from rvtool import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="rvtool",
+        description=f"rvtool {__version__}: precision gear reducer studies on Exudyn with Warp contact kernels.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.add_parser("list", help="list the cases (name and first docstring line)",
+                   description="List the case scripts and the first line of each one's docstring.")
+    run = sub.add_parser("run", help="run a case in this process",
+                         description=f"Run cases/CASE.py's main(). Without CASE, runs {DEFAULT_CASE} --quick.")
+    run.add_argument("case", nargs="?", default=None, metavar="CASE",
+                     help=f"case name, as printed by 'rvtool list' (default: {DEFAULT_CASE}, with --quick)")
+    run.add_argument("--quick", action="store_true", help="fast, reduced version of the study")
+    run.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/CASE)")
+    sub.add_parser("version", help="print the versions of rvtool and the packages results depend on",
+                   description="Print the versions recorded in every results.json provenance.")
+    return parser
+
+
+def main(argv=None):
+    """Entry point of the ``rvtool`` console script; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command == "list":
+        return _cmd_list(args)
+    if args.command == "run":
+        return _cmd_run(args, parser)
+    if args.command == "version":
+        return _cmd_version(args)
+    parser.print_help(sys.stderr)
+    return EXIT_USAGE
+
+
+if __name__ == "__main__":
+    sys.exit(main())
