@@ -15,12 +15,19 @@ from rvtool.contact.scenes import random_pair_scene  # noqa: E402
 from rvtool.errors import RvtoolInputError  # noqa: E402
 
 
-def _committed_scene(seed, backend="warp", precision="float64", n_bodies=3, n_contacts=12):
+def _devices():
+    import warp as wp
+    wp.config.quiet = True
+    wp.init()
+    return [d.alias for d in wp.get_devices()]
+
+
+def _committed_scene(seed, backend="warp", precision="float64", n_bodies=3, n_contacts=12, device="cpu"):
     """Scene whose anchor contacts have committed anchors, then a small perturbation
     so that the anchored contacts stick with a non-zero elastic displacement."""
     rng = np.random.default_rng(seed)
     cset, pose, vel = random_pair_scene(rng, n_bodies, n_contacts)
-    ev = ContactSetEvaluator(cset, backend=backend, precision=precision)
+    ev = ContactSetEvaluator(cset, backend=backend, precision=precision, device=device)
     ev.commit(pose, vel)
     pose = pose + np.column_stack([rng.normal(0, 2e-8, (n_bodies, 2)), rng.normal(0, 2e-6, n_bodies)])
     return ev, pose, vel
@@ -67,11 +74,14 @@ def test_tangent_in_slip_and_regularized_friction():
     assert np.linalg.norm(e.dQdv - Kv) / np.linalg.norm(Kv) < 1e-6
 
 
+@pytest.mark.parametrize("device", _devices())
 @pytest.mark.parametrize("precision,tol", [("float64", 1e-12), ("float32", 5e-3)])
-def test_warp_matches_numpy_reference(precision, tol):
+def test_warp_matches_numpy_reference(precision, tol, device):
     """float32: positions ~2e-2 m carry ~2e-9 m rounding against ~2e-5 m indentation,
-    so forces agree to ~1e-4 relative (p <= 1.5); 5e-3 leaves margin for the tangent."""
-    ev_w, pose, vel = _committed_scene(3, backend="warp", precision=precision)
+    so forces agree to ~1e-4 relative (p <= 1.5); 5e-3 leaves margin for the tangent.
+    float64: the same arithmetic in another order, ~1e-15; 1e-12 allows for
+    fused multiply-add on GPUs."""
+    ev_w, pose, vel = _committed_scene(3, backend="warp", precision=precision, device=device)
     ev_n, _, _ = _committed_scene(3, backend="numpy")
     a, b = ev_w.evaluate(pose, vel), ev_n.evaluate(pose, vel)
     for x, y in ((a.Q, b.Q), (a.dQdq, b.dQdq), (a.dQdv, b.dQdv)):
