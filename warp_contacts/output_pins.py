@@ -1,0 +1,509 @@
+"""Warp kernels of the output-pin contact family with analytic tangent:
+the plain rigid-pin pairs and the shared-pin condensation (one thread per
+pin, so one launch evaluates every pin of any number of mechanisms).
+
+Physics, conventions and parameter layout are documented in the NumPy
+reference :mod:`warp_contacts.output_pins_ref`, which these kernels mirror
+(a test compares them on every available device). The tangent is forward
+mode with all seed directions carried at once: each scalar has a ``vec9``
+tangent, each planar vector a pair of them, so the fixed sleeve updates are
+differentiated in one pass (Eq. (moment_chain_rule) force-arm term
+included).
+"""
+import functools
+
+import numpy as np
+import warp as wp
+
+from .output_pins_ref import (I_FLANGE, I_UPDATES, I_WHEEL0, I_WHEEL1, J_FLANGE, J_WHEEL, N_PIN_COLS, N_PLAIN_F,
+                              N_PLAIN_I, N_SHARED_F, N_SHARED_I, N_SLICE_COLS)
+from .precision import resolve_device, scalar_types
+
+
+@functools.lru_cache(maxsize=None)
+def _funcs(dtype):
+    """Warp functions of the output-pin family for scalar type ``dtype``."""
+    vec2 = wp.types.vector(2, dtype)
+    vec9 = wp.types.vector(9, dtype)
+
+    @wp.func
+    def seed(k: int):
+        e = vec9()
+        e[k] = dtype(1.0)
+        return e
+
+    @wp.func
+    def rot(th: dtype, x: vec2):
+        c = wp.cos(th)
+        s = wp.sin(th)
+        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
+
+    @wp.func
+    def tilt_offset(t: vec2, z: dtype):
+        """Planar offset (theta_y z, -theta_x z) of a point at axial plane z (small tilts)."""
+        return vec2(t[1] * z, -t[0] * z)
+
+    @wp.func
+    def cross2(a: vec2, b: vec2):
+        return a[0] * b[1] - a[1] * b[0]
+
+    @wp.func
+    def unit(v: vec2, dvx: vec9, dvy: vec9, floor: dtype):
+        """L = max(|v|, floor), n = v/L and tangents (dL, dn_x, dn_y)."""
+        Lr = wp.sqrt(v[0] * v[0] + v[1] * v[1])
+        L = floor
+        dL = vec9()
+        if Lr > floor:
+            L = Lr
+            dL = (v[0] * dvx + v[1] * dvy) / Lr
+        n = v / L
+        return L, n, dL, (dvx - n[0] * dL) / L, (dvy - n[1] * dL) / L
+
+    @wp.func
+    def wheel_open(a: vec2, dax: vec9, day: vec9, b: vec2, u: vec2, dux: vec9, duy: vec9, clr: dtype, ks: dtype,
+                   p: dtype, dmin: dtype, dfloor: dtype, stations: wp.array(dtype=dtype)):
+        """Open resultant F^0 and tangent K of one wheel with their tangents (Eq. (pin_open_state))."""
+        F0 = dtype(0.0)
+        K = dtype(0.0)
+        dF0 = vec9()
+        dK = vec9()
+        for js in range(stations.shape[0]):
+            L, n, dL, dnx, dny = unit(a + stations[js] * b + u, dax + dux, day + duy, dfloor)
+            d = L - clr
+            if d > dtype(0.0):
+                F0 += ks * wp.pow(d, p)
+                dF0 += (p * ks * wp.pow(d, p - dtype(1.0))) * dL
+                if d > dmin:
+                    K += p * ks * wp.pow(d, p - dtype(1.0))
+                    dK += (p * (p - dtype(1.0)) * ks * wp.pow(d, p - dtype(2.0))) * dL
+                else:
+                    K += p * ks * wp.pow(dmin, p - dtype(1.0))
+        return F0, K, dF0, dK
+
+    @wp.func
+    def closure(F00: dtype, F01: dtype, K0: dtype, K1: dtype, dF00: vec9, dF01: vec9, dK0: vec9, dK1: vec9,
+                n0: vec2, dn0x: vec9, dn0y: vec9, n1: vec2, dn1x: vec9, dn1y: vec9,
+                c00: dtype, c11: dtype, cross: dtype, detfloor: dtype):
+        """Local closure (I + K_c C_p) F^c = F^0 with tensile clipping, u_p = C_p F^c (Eq. (supp_pin_closure))."""
+        c01 = cross * wp.dot(n0, n1)
+        dc01 = cross * (n1[0] * dn0x + n1[1] * dn0y + n0[0] * dn1x + n0[1] * dn1y)
+        A00 = dtype(1.0) + K0 * c00
+        A11 = dtype(1.0) + K1 * c11
+        A01 = K0 * c01
+        A10 = K1 * c01
+        dA00 = c00 * dK0
+        dA11 = c11 * dK1
+        dA01 = c01 * dK0 + K0 * dc01
+        dA10 = c01 * dK1 + K1 * dc01
+        det = A00 * A11 - A01 * A10
+        ddet = vec9()
+        if det > detfloor:
+            ddet = A11 * dA00 + A00 * dA11 - A10 * dA01 - A01 * dA10
+        else:
+            det = detfloor
+        Fc0 = (A11 * F00 - A01 * F01) / det
+        Fc1 = (A00 * F01 - A10 * F00) / det
+        dFc0 = (F00 * dA11 + A11 * dF00 - F01 * dA01 - A01 * dF01 - Fc0 * ddet) / det
+        dFc1 = (F01 * dA00 + A00 * dF01 - F00 * dA10 - A10 * dF00 - Fc1 * ddet) / det
+        if Fc0 <= dtype(0.0):
+            Fc0 = dtype(0.0)
+            dFc0 = vec9()
+        if Fc1 <= dtype(0.0):
+            Fc1 = dtype(0.0)
+            dFc1 = vec9()
+        up0 = c00 * Fc0 + c01 * Fc1
+        up1 = c01 * Fc0 + c11 * Fc1
+        dup0 = c00 * dFc0 + Fc1 * dc01 + c01 * dFc1
+        dup1 = Fc0 * dc01 + c01 * dFc0 + c11 * dFc1
+        return Fc0, Fc1, dFc0, dFc1, up0, up1, dup0, dup1
+
+    @wp.func
+    def wheel_react(a: vec2, dax: vec9, day: vec9, b: vec2, u: vec2, dux: vec9, duy: vec9, up: dtype, dup: vec9,
+                    clr: dtype, ks: dtype, p: dtype, dfloor: dtype, rsum: dtype, pf: vec2, ph: vec2, xw: vec2,
+                    tf: vec2, tw: vec2, zw: dtype, cw: int, stations: wp.array(dtype=dtype),
+                    row: int, wheel: int, write_tan: int,
+                    slice_out: wp.array3d(dtype=dtype), slice_df_out: wp.array4d(dtype=dtype)):
+        """Nonlinear slice re-evaluation after subtracting the station deflection and reaction assembly.
+
+        Returns the wheel triple (F_x, F_y, M_z), the flange moment, their tangents,
+        tilt moments (M_x, M_y) of flange and wheel and the wheel resultant sum_s F_is.
+        """
+        fx = dtype(0.0)
+        fy = dtype(0.0)
+        mw = dtype(0.0)
+        mf = dtype(0.0)
+        dfx = vec9()
+        dfy = vec9()
+        dmw = vec9()
+        dmf = vec9()
+        mtf = vec2()
+        mtw = vec2()
+        fw = dtype(0.0)
+        ns = stations.shape[0]
+        for js in range(ns):
+            s = stations[js]
+            L, n, dL, dnx, dny = unit(a + s * b + u, dax + dux, day + duy, dfloor)
+            d = L - clr
+            de = d - up
+            F = dtype(0.0)
+            dF = vec9()
+            if de > dtype(0.0):
+                F = ks * wp.pow(de, p)
+                dF = (p * ks * wp.pow(de, p - dtype(1.0))) * (dL - dup)
+            fw += F
+            fv = F * n
+            dfvx = n[0] * dF + F * dnx
+            dfvy = n[1] * dF + F * dny
+            arm_w = ph + tilt_offset(tw, s)
+            zf = zw + s
+            arm_f = pf + tilt_offset(tf, zf) + u
+            darm_wx = (-ph[1]) * seed(cw + 2)
+            darm_wy = ph[0] * seed(cw + 2)
+            darm_fx = dux + (-pf[1]) * seed(2)
+            darm_fy = duy + pf[0] * seed(2)
+            fx += fv[0]
+            fy += fv[1]
+            mw += cross2(arm_w, fv)
+            mf -= cross2(arm_f, fv)
+            dfx += dfvx
+            dfy += dfvy
+            # Eq. (moment_chain_rule): force term r x df plus force-arm term dr x f
+            dmw += arm_w[0] * dfvy - arm_w[1] * dfvx + fv[1] * darm_wx - fv[0] * darm_wy
+            dmf -= arm_f[0] * dfvy - arm_f[1] * dfvx + fv[1] * darm_fx - fv[0] * darm_fy
+            mtf -= vec2(-zf * fv[1], zf * fv[0])
+            mtw += vec2(-s * fv[1], s * fv[0])
+            r = wheel * ns + js
+            pc = xw + arm_w + (dtype(0.5) * (L + rsum)) * n
+            slice_out[row, r, 0] = F
+            slice_out[row, r, 1] = de
+            slice_out[row, r, 2] = d
+            slice_out[row, r, 3] = n[0]
+            slice_out[row, r, 4] = n[1]
+            slice_out[row, r, 5] = pc[0]
+            slice_out[row, r, 6] = pc[1]
+            if write_tan != 0:
+                for j in range(9):
+                    slice_df_out[row, r, 0, j] = dfvx[j]
+                    slice_df_out[row, r, 1, j] = dfvy[j]
+        return fx, fy, mw, mf, dfx, dfy, dmw, dmf, mtf, mtw, fw
+
+    @wp.func
+    def separation(xf: vec2, pf: vec2, tf: vec2, zw: dtype, xw: vec2, ph: vec2, tw: vec2, cw: int):
+        """e_s = a + s b (pin minus hole centre in slice plane s) and the tangent of a."""
+        a = (xf + pf + tilt_offset(tf, zw)) - (xw + ph)
+        b = tilt_offset(tf, dtype(1.0)) - tilt_offset(tw, dtype(1.0))
+        dax = seed(0) - pf[1] * seed(2) - seed(cw) + ph[1] * seed(cw + 2)
+        day = seed(1) + pf[0] * seed(2) - seed(cw + 1) - ph[0] * seed(cw + 2)
+        return a, b, dax, day
+
+    return dict(vec2=vec2, vec9=vec9, seed=seed, rot=rot, unit=unit, wheel_open=wheel_open, closure=closure,
+                wheel_react=wheel_react, separation=separation, cross2=cross2)
+
+
+@functools.lru_cache(maxsize=None)
+def _shared_kernel(dtype):
+    F = _funcs(dtype)
+    vec2, vec9 = F["vec2"], F["vec9"]
+    rot, unit, wheel_open, closure = F["rot"], F["unit"], F["wheel_open"], F["closure"]
+    wheel_react, separation = F["wheel_react"], F["separation"]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def eval_shared_pins(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        stations: wp.array(dtype=dtype),
+        write_tan: int,
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        tilt_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        tilt_out: wp.array3d(dtype=dtype),
+        slice_out: wp.array3d(dtype=dtype),
+        pin_out: wp.array2d(dtype=dtype),
+        sleeve_du_out: wp.array3d(dtype=dtype),
+        slice_df_out: wp.array4d(dtype=dtype),
+    ):
+        i = wp.tid()
+        bf = iparams[i, 0]
+        b0 = iparams[i, 1]
+        b1 = iparams[i, 2]
+        nupd = iparams[i, 3]
+        ns = stations.shape[0]
+        smean = dtype(0.0)
+        for js in range(ns):
+            smean += stations[js]
+        smean = smean / dtype(ns)
+        ks = fparams[i, 10] / dtype(ns)
+        p = fparams[i, 11]
+        rp = fparams[i, 6]
+        rh = fparams[i, 7]
+        clr0 = rh - rp + fparams[i, 8]
+        clr1 = rh - rp + fparams[i, 9]
+        z0 = fparams[i, 12]
+        z1 = fparams[i, 13]
+        c00 = fparams[i, 14] + fparams[i, 17]
+        c11 = fparams[i, 15] + fparams[i, 17]
+        cross = fparams[i, 16]
+        clear = fparams[i, 18]
+        relax = fparams[i, 19]
+        kfloor = fparams[i, 20]
+        detfloor = fparams[i, 21]
+        dfloor = fparams[i, 22]
+        dmin = fparams[i, 23]
+
+        xf = vec2(pose_in[bf, 0], pose_in[bf, 1])
+        x0 = vec2(pose_in[b0, 0], pose_in[b0, 1])
+        x1 = vec2(pose_in[b1, 0], pose_in[b1, 1])
+        tf = vec2(tilt_in[bf, 0], tilt_in[bf, 1])
+        t0 = vec2(tilt_in[b0, 0], tilt_in[b0, 1])
+        t1 = vec2(tilt_in[b1, 0], tilt_in[b1, 1])
+        pf = rot(pose_in[bf, 2], vec2(fparams[i, 0], fparams[i, 1]))
+        ph0 = rot(pose_in[b0, 2], vec2(fparams[i, 2], fparams[i, 3]))
+        ph1 = rot(pose_in[b1, 2], vec2(fparams[i, 4], fparams[i, 5]))
+        a0, bb0, da0x, da0y = separation(xf, pf, tf, z0, x0, ph0, t0, 3)
+        a1, bb1, da1x, da1y = separation(xf, pf, tf, z1, x1, ph1, t1, 6)
+
+        u = vec2()
+        dux = vec9()
+        duy = vec9()
+        for it in range(nupd):
+            F00, K0, dF00, dK0 = wheel_open(a0, da0x, da0y, bb0, u, dux, duy, clr0, ks, p, dmin, dfloor, stations)
+            F01, K1, dF01, dK1 = wheel_open(a1, da1x, da1y, bb1, u, dux, duy, clr1, ks, p, dmin, dfloor, stations)
+            m0L, n0, m0dL, dn0x, dn0y = unit(a0 + smean * bb0 + u, da0x + dux, da0y + duy, dfloor)
+            m1L, n1, m1dL, dn1x, dn1y = unit(a1 + smean * bb1 + u, da1x + dux, da1y + duy, dfloor)
+            Fc0, Fc1, dFc0, dFc1, up0, up1, dup0, dup1 = closure(F00, F01, K0, K1, dF00, dF01, dK0, dK1, n0, dn0x,
+                                                                dn0y, n1, dn1x, dn1y, c00, c11, cross, detfloor)
+            g = Fc0 * n0 + Fc1 * n1
+            dgx = n0[0] * dFc0 + Fc0 * dn0x + n1[0] * dFc1 + Fc1 * dn1x
+            dgy = n0[1] * dFc0 + Fc0 * dn0y + n1[1] * dFc1 + Fc1 * dn1y
+            Kt = K0 + K1
+            dKt = dK0 + dK1
+            if Kt <= kfloor:
+                Kt = kfloor
+                dKt = vec9()
+            # Eq. (supp_pin_fit): relaxed step along the net force on the sleeve
+            w = u - (relax / Kt) * g
+            dwx = dux - (relax / Kt) * dgx + (relax * g[0] / (Kt * Kt)) * dKt
+            dwy = duy - (relax / Kt) * dgy + (relax * g[1] / (Kt * Kt)) * dKt
+            wl = wp.sqrt(w[0] * w[0] + w[1] * w[1])
+            if wl > clear:
+                # projection onto the clearance disk: d(c w/|w|) = c (I - w_hat w_hat^T) dw / |w|
+                wh = w / wl
+                wdw = wh[0] * dwx + wh[1] * dwy
+                dux = (clear / wl) * (dwx - wh[0] * wdw)
+                duy = (clear / wl) * (dwy - wh[1] * wdw)
+                u = clear * wh
+            else:
+                dux = dwx
+                duy = dwy
+                u = w
+
+        F00, K0, dF00, dK0 = wheel_open(a0, da0x, da0y, bb0, u, dux, duy, clr0, ks, p, dmin, dfloor, stations)
+        F01, K1, dF01, dK1 = wheel_open(a1, da1x, da1y, bb1, u, dux, duy, clr1, ks, p, dmin, dfloor, stations)
+        m0L, n0, m0dL, dn0x, dn0y = unit(a0 + smean * bb0 + u, da0x + dux, da0y + duy, dfloor)
+        m1L, n1, m1dL, dn1x, dn1y = unit(a1 + smean * bb1 + u, da1x + dux, da1y + duy, dfloor)
+        Fc0, Fc1, dFc0, dFc1, up0, up1, dup0, dup1 = closure(F00, F01, K0, K1, dF00, dF01, dK0, dK1, n0, dn0x, dn0y,
+                                                            n1, dn1x, dn1y, c00, c11, cross, detfloor)
+        rsum = rp + rh
+        fx0, fy0, mw0, mf0, dfx0, dfy0, dmw0, dmf0, mtf0, mtw0, fw0 = wheel_react(
+            a0, da0x, da0y, bb0, u, dux, duy, up0, dup0, clr0, ks, p, dfloor, rsum, pf, ph0, x0, tf, t0, z0, 3,
+            stations, i, 0, write_tan, slice_out, slice_df_out)
+        fx1, fy1, mw1, mf1, dfx1, dfy1, dmw1, dmf1, mtf1, mtw1, fw1 = wheel_react(
+            a1, da1x, da1y, bb1, u, dux, duy, up1, dup1, clr1, ks, p, dfloor, rsum, pf, ph1, x1, tf, t1, z1, 6,
+            stations, i, 1, write_tan, slice_out, slice_df_out)
+
+        q_out[i, 0] = -(fx0 + fx1)
+        q_out[i, 1] = -(fy0 + fy1)
+        q_out[i, 2] = mf0 + mf1
+        q_out[i, 3] = fx0
+        q_out[i, 4] = fy0
+        q_out[i, 5] = mw0
+        q_out[i, 6] = fx1
+        q_out[i, 7] = fy1
+        q_out[i, 8] = mw1
+        for j in range(9):
+            dqdq_out[i, 0, j] = -(dfx0[j] + dfx1[j])
+            dqdq_out[i, 1, j] = -(dfy0[j] + dfy1[j])
+            dqdq_out[i, 2, j] = dmf0[j] + dmf1[j]
+            dqdq_out[i, 3, j] = dfx0[j]
+            dqdq_out[i, 4, j] = dfy0[j]
+            dqdq_out[i, 5, j] = dmw0[j]
+            dqdq_out[i, 6, j] = dfx1[j]
+            dqdq_out[i, 7, j] = dfy1[j]
+            dqdq_out[i, 8, j] = dmw1[j]
+            sleeve_du_out[i, 0, j] = dux[j]
+            sleeve_du_out[i, 1, j] = duy[j]
+        mtf = mtf0 + mtf1
+        tilt_out[i, 0, 0] = mtf[0]
+        tilt_out[i, 0, 1] = mtf[1]
+        tilt_out[i, 1, 0] = mtw0[0]
+        tilt_out[i, 1, 1] = mtw0[1]
+        tilt_out[i, 2, 0] = mtw1[0]
+        tilt_out[i, 2, 1] = mtw1[1]
+        pin_out[i, 0] = u[0]
+        pin_out[i, 1] = u[1]
+        pin_out[i, 2] = Fc0
+        pin_out[i, 3] = Fc1
+        pin_out[i, 4] = up0
+        pin_out[i, 5] = up1
+        pin_out[i, 6] = K0
+        pin_out[i, 7] = K1
+        pin_out[i, 8] = F00
+        pin_out[i, 9] = F01
+        pin_out[i, 10] = fw0
+        pin_out[i, 11] = fw1
+        pin_out[i, 12] = n0[0]
+        pin_out[i, 13] = n0[1]
+        pin_out[i, 14] = n1[0]
+        pin_out[i, 15] = n1[1]
+
+    return eval_shared_pins
+
+
+@functools.lru_cache(maxsize=None)
+def _plain_kernel(dtype):
+    F = _funcs(dtype)
+    vec2, vec9 = F["vec2"], F["vec9"]
+    rot, wheel_react, separation = F["rot"], F["wheel_react"], F["separation"]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def eval_plain_pins(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        stations: wp.array(dtype=dtype),
+        write_tan: int,
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        tilt_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        tilt_out: wp.array3d(dtype=dtype),
+        slice_out: wp.array3d(dtype=dtype),
+        slice_df_out: wp.array4d(dtype=dtype),
+    ):
+        i = wp.tid()
+        bf = iparams[i, 0]
+        bw = iparams[i, 1]
+        ns = stations.shape[0]
+        ks = fparams[i, 7] / dtype(ns)
+        xf = vec2(pose_in[bf, 0], pose_in[bf, 1])
+        xw = vec2(pose_in[bw, 0], pose_in[bw, 1])
+        tf = vec2(tilt_in[bf, 0], tilt_in[bf, 1])
+        tw = vec2(tilt_in[bw, 0], tilt_in[bw, 1])
+        pf = rot(pose_in[bf, 2], vec2(fparams[i, 0], fparams[i, 1]))
+        ph = rot(pose_in[bw, 2], vec2(fparams[i, 2], fparams[i, 3]))
+        zw = fparams[i, 9]
+        a, b, dax, day = separation(xf, pf, tf, zw, xw, ph, tw, 3)
+        clr = fparams[i, 5] - fparams[i, 4] + fparams[i, 6]
+        # a rigid pin without sleeve: zero sleeve offset and zero station deflection
+        fx, fy, mw, mf, dfx, dfy, dmw, dmf, mtf, mtw, fw = wheel_react(
+            a, dax, day, b, vec2(), vec9(), vec9(), dtype(0.0), vec9(), clr, ks, fparams[i, 8], fparams[i, 10],
+            fparams[i, 4] + fparams[i, 5], pf, ph, xw, tf, tw, zw, 3, stations, i, 0, write_tan, slice_out,
+            slice_df_out)
+        q_out[i, 0] = -fx
+        q_out[i, 1] = -fy
+        q_out[i, 2] = mf
+        q_out[i, 3] = fx
+        q_out[i, 4] = fy
+        q_out[i, 5] = mw
+        for j in range(6):
+            dqdq_out[i, 0, j] = -dfx[j]
+            dqdq_out[i, 1, j] = -dfy[j]
+            dqdq_out[i, 2, j] = dmf[j]
+            dqdq_out[i, 3, j] = dfx[j]
+            dqdq_out[i, 4, j] = dfy[j]
+            dqdq_out[i, 5, j] = dmw[j]
+        tilt_out[i, 0, 0] = mtf[0]
+        tilt_out[i, 0, 1] = mtf[1]
+        tilt_out[i, 1, 0] = mtw[0]
+        tilt_out[i, 1, 1] = mtw[1]
+
+    return eval_plain_pins
+
+
+class OutputPinKernel:
+    """Device-resident evaluator of a set of output pins (``mode`` "shared" or "plain").
+
+    Parameters are uploaded once; per evaluation only poses and tilts go in.
+    On the CPU the Warp arrays alias NumPy buffers (no copies per call) and the
+    launch is recorded once and replayed; on a GPU inputs are copied in and
+    outputs out once per evaluation. ``slice_tangent`` enables the per-slice
+    force tangents (needed only by the separate moment assembly).
+    """
+
+    def __init__(self, fparams, iparams, stations, n_rows_pose, mode="shared", precision="float64", device="cpu",
+                 slice_tangent=False):
+        self.wdtype, self.ndtype = scalar_types(precision)
+        self.device = resolve_device(device)
+        self.precision = precision
+        self.mode = mode
+        nf, ni, nq = (N_SHARED_F, N_SHARED_I, 9) if mode == "shared" else (N_PLAIN_F, N_PLAIN_I, 6)
+        fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
+        iparams = np.ascontiguousarray(iparams, dtype=np.int32)
+        assert fparams.shape[1] == nf and iparams.shape[1] == ni
+        self.n = n = fparams.shape[0]
+        ns = len(stations)
+        nw = 2 if mode == "shared" else 1
+        self.slice_tangent = bool(slice_tangent)
+        dft_shape = (n, nw * ns, 2, 9) if slice_tangent else (1, 1, 2, 9)
+        h = {"pose": np.zeros((n_rows_pose, 3), self.ndtype), "tilt": np.zeros((n_rows_pose, 2), self.ndtype),
+             "q": np.zeros((n, nq), self.ndtype), "dqdq": np.zeros((n, nq, nq), self.ndtype),
+             "tilt_m": np.zeros((n, nw + 1, 2), self.ndtype), "slices": np.zeros((n, nw * ns, N_SLICE_COLS), self.ndtype),
+             "slice_df": np.zeros(dft_shape, self.ndtype)}
+        if mode == "shared":
+            h["pin"] = np.zeros((n, N_PIN_COLS), self.ndtype)
+            h["sleeve_du"] = np.zeros((n, 2, 9), self.ndtype)
+        self._host = h
+        self._on_cpu = wp.get_device(self.device).is_cpu
+        d, dt = self.device, self.wdtype
+        self._dev = {k: (wp.array(v, dtype=dt, device=d, copy=False) if self._on_cpu
+                         else wp.zeros(v.shape, dtype=dt, device=d)) for k, v in h.items()}
+        self.fparams = wp.array(fparams, dtype=dt, device=d)
+        self.iparams = wp.array(iparams, dtype=wp.int32, device=d)
+        self.stations = wp.array(np.asarray(stations, self.ndtype), dtype=dt, device=d)
+        D = self._dev
+        if mode == "shared":
+            kernel = _shared_kernel(dt)
+            self._out_names = ("q", "dqdq", "tilt_m", "slices", "pin", "sleeve_du", "slice_df")
+        else:
+            kernel = _plain_kernel(dt)
+            self._out_names = ("q", "dqdq", "tilt_m", "slices", "slice_df")
+        inputs = [self.fparams, self.iparams, self.stations, int(self.slice_tangent), D["pose"], D["tilt"]]
+        self._cmd = wp.launch(kernel, dim=n, device=d, inputs=inputs, outputs=[D[k] for k in self._out_names],
+                              record_cmd=True)
+
+    def evaluate(self, pose, tilt=None):
+        """Results in the layout of :mod:`output_pins_ref` (arrays owned by this object, overwritten next call).
+
+        pose: (n_rows_pose, 3) [m, m, rad]; tilt: (n_rows_pose, 2) [rad] or None (zero).
+        Returns a dict: Q, dQdq, tilt_moments, slices (N, n_wheels*ns, cols) and, in
+        shared mode, pin and sleeve_tangent; slice_force_tangent if enabled.
+        """
+        h = self._host
+        h["pose"][...] = pose
+        names = ["pose"]
+        if tilt is not None:
+            h["tilt"][...] = tilt
+            names.append("tilt")
+        elif h["tilt"].any():
+            h["tilt"][...] = 0.0
+            names.append("tilt")
+        if not self._on_cpu:
+            for k in names:
+                self._dev[k].assign(h[k])
+        self._cmd.launch()
+        if not self._on_cpu:
+            for k in self._out_names:
+                h[k][...] = self._dev[k].numpy()
+        out = {"Q": h["q"], "dQdq": h["dqdq"], "tilt_moments": h["tilt_m"], "slices": h["slices"]}
+        if self.mode == "shared":
+            out["pin"] = h["pin"]
+            out["sleeve_tangent"] = h["sleeve_du"]
+        if self.slice_tangent:
+            out["slice_force_tangent"] = h["slice_df"]
+        return out
