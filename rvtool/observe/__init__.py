@@ -1,0 +1,8 @@
+"""Observation of accepted steps: snapshots, the observer registry, exposure
+statistics of Eq. (obs_statistics) and the sampling windows that hold them."""
+from .registry import AcceptedStep, ContactSnapshot, Observer, ObserverRegistry
+from .statistics import ExposureAccumulator
+from .windows import PhaseWindows, StepRecorder, TimeWindows, WholeRun, Window
+
+__all__ = ["AcceptedStep", "ContactSnapshot", "Observer", "ObserverRegistry", "ExposureAccumulator",
+           "PhaseWindows", "StepRecorder", "TimeWindows", "WholeRun", "Window"]
