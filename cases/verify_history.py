@@ -10,7 +10,10 @@ states) the slip exposure I_s of Eq. (obs_statistics) and the friction-force
 history differ only by the time discretization of the retried steps. As a
 control, the same pair of runs is made with a deliberately wrong policy that
 commits the history of every trial evaluation: the difference it produces
-shows what the ownership rules prevent.
+shows what the ownership rules prevent. The committed history compared is
+the anchor state and the accumulated slip distance (the sliding distance a
+wear model consumes), which a trial-committing policy counts once per
+evaluation instead of once per accepted step.
 """
 import time
 
@@ -67,14 +70,18 @@ def run(spec, reject_every=0, leaky=False):
     acc = whole.accumulator
     i = acc.index("belt/block")
     return {"I_s": float(acc.I_s[i]), "I_F": float(acc.I_F[i]), "t": np.array(hist.t), "ft": np.array(hist.ft),
-            "fn": np.array(hist.fn), "rec": rec, "wall_s": wall}
+            "fn": np.array(hist.fn), "rec": rec, "wall_s": wall,
+            "slip_distance": float(el.evaluator.history.slip_distance[0])}
 
 
 def _compare(a, b):
+    """Relative differences of slip exposure I_s, of the committed history
+    (accumulated slip distance) and of the friction-force time history."""
     exposure = abs(b["I_s"] - a["I_s"]) / abs(a["I_s"])
+    history = abs(b["slip_distance"] - a["slip_distance"]) / abs(a["slip_distance"])
     ft_b = np.interp(a["t"], b["t"], b["ft"])
-    history = float(np.max(np.abs(ft_b - a["ft"])) / np.max(np.abs(a["ft"])))
-    return float(exposure), history
+    force = float(np.max(np.abs(ft_b - a["ft"])) / np.max(np.abs(a["ft"])))
+    return float(exposure), float(history), force
 
 
 def main(argv=None):
@@ -85,8 +92,9 @@ def main(argv=None):
     rej = run(spec, reject_every=25)
     leak = run(spec, leaky=True)
     leak_rej = run(spec, reject_every=25, leaky=True)
-    exposure, history = _compare(base, rej)
-    leak_exposure, leak_history = _compare(leak, leak_rej)
+    exposure, history, force = _compare(base, rej)
+    leak_exposure, leak_history, leak_force = _compare(leak, leak_rej)
+    _, leak_vs_correct, _ = _compare(base, leak)
     ft = base["ft"]
     mu_fn = 0.3 * base["fn"]
     slipping = np.abs(np.abs(ft) - mu_fn) < 1e-6 * mu_fn
@@ -94,11 +102,15 @@ def main(argv=None):
         "exposure_rel_diff": exposure,
         "history_rel_diff": history,
         "n_rejected": rej["rec"].rejected_steps,
+        "friction_force_rel_diff": force,
+        "slip_distance_m": base["slip_distance"],
         "reference": "the same run without rejections (difference = time discretization of retried steps)",
         "I_s_Ns_m": base["I_s"], "I_F_Ns": base["I_F"],
         "slip_fraction": float(np.mean(slipping)),
         "control_wrong_policy_exposure_rel_diff": leak_exposure,
         "control_wrong_policy_history_rel_diff": leak_history,
+        "control_wrong_policy_friction_force_rel_diff": leak_force,
+        "control_wrong_policy_slip_distance_vs_correct_rel": leak_vs_correct,
         "wall_s": [base["wall_s"], rej["wall_s"]],
         "steps": [base["rec"].accepted_steps, rej["rec"].accepted_steps],
         "run_record": base["rec"].to_dict(),

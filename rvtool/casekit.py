@@ -35,7 +35,10 @@ def parse_args(argv=None, description=None, extra=None):
         extra(parser)
     args = parser.parse_args(argv)
     if args.out is None:
-        name = os.path.splitext(os.path.basename(sys.argv[0] if argv is None else "case"))[0]
+        # name the folder after the calling case script, also when main(argv) is called from Python
+        import inspect
+        caller = inspect.stack()[1].filename
+        name = os.path.splitext(os.path.basename(caller))[0]
         args.out = os.path.join("results", name)
     os.makedirs(args.out, exist_ok=True)
     return args

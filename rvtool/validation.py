@@ -16,11 +16,16 @@ def check_finite(name, value):
 
 def check_range(name, value, low=-math.inf, high=math.inf, low_open=False, high_open=False):
     """Check ``low <= value <= high`` (open ends where requested) element-wise."""
-    arr = np.asarray(value, dtype=float)
-    if arr.size and not np.all(np.isfinite(arr) | np.isinf(arr)):
-        raise RvtoolInputError(f"{name} must be a real number; got {value!r}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise RvtoolInputError(f"{name} must be a real number; got {value!r}") from None
     if np.any(np.isnan(arr)):
         raise RvtoolInputError(f"{name} must not be NaN; got {value!r}")
+    if np.any(np.isinf(arr)):
+        # an infinite parameter is never physical, whatever the bounds
+        raise RvtoolInputError(f"{name} must be finite; got {value!r} (valid range "
+                               f"{'(' if low_open else '['}{low}, {high}{')' if high_open else ']'})")
     lo_ok = arr > low if low_open else arr >= low
     hi_ok = arr < high if high_open else arr <= high
     if not (np.all(lo_ok) and np.all(hi_ok)):

@@ -17,7 +17,7 @@ from rvtool.errors import RvtoolInputError  # noqa: E402
 
 def _devices():
     import warp as wp
-    wp.config.quiet = True
+    import warp_contacts.precision  # noqa: F401  (sets Warp's log level)
     wp.init()
     return [d.alias for d in wp.get_devices()]
 

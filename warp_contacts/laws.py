@@ -13,7 +13,7 @@ Laws (paper, Eq. (normal_force) and Eq. (friction)):
   F_n = max(0, F_el(delta) + c r(delta) d(delta)/dt).
 * regularized friction  F_t = -F_n mu_reg(v_t),
   mu_reg(v) = [mu_k + (mu_s - mu_k) exp(-(v/v_s)^2)] tanh(v / v_reg),
-  which satisfies mu_reg(v) v >= 0 (dissipative) for mu_s >= mu_k >= 0.
+  which satisfies mu_reg(v) v >= 0 (dissipative) for mu_k, mu_s >= 0.
 """
 import functools
 import types
@@ -24,9 +24,6 @@ import warp as wp
 @functools.lru_cache(maxsize=None)
 def law_funcs(dtype):
     """Warp functions of the scalar contact laws for scalar type ``dtype``."""
-    zero = dtype(0.0)
-    one = dtype(1.0)
-
     @wp.func
     def power_law(k: dtype, p: dtype, delta: dtype):
         """F = k delta^p and dF/d delta for delta > 0, else (0, 0)."""
@@ -71,6 +68,5 @@ def law_funcs(dtype):
         dth = (dtype(1.0) - th * th) / v_reg
         return mu * th, dmu * th + mu * dth
 
-    del zero, one
     return types.SimpleNamespace(power_law=power_law, damping_ramp=damping_ramp,
                                  normal_force=normal_force, friction_coefficient=friction_coefficient)

@@ -11,7 +11,9 @@ import warp as wp
 
 from rvtool.errors import RvtoolInputError
 
-wp.config.quiet = True
+# Warp's start-up banner and per-module load lines are noise in case output
+if hasattr(wp, "LOG_WARNING"):
+    wp.config.log_level = wp.LOG_WARNING
 
 PRECISIONS = {"float64": (wp.float64, np.float64), "float32": (wp.float32, np.float32)}
 

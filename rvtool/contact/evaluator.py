@@ -31,25 +31,31 @@ class Evaluation:
 
 
 class ContactHistory:
-    """Committed anchor history of a set: active flags and anchors in body coordinates [m]."""
+    """Committed history of a set: anchor active flags, anchors in body
+    coordinates [m], and the accumulated slip distance per contact [m] (the
+    sliding distance consumed by wear models; it must grow once per accepted
+    step, never once per trial)."""
 
     def __init__(self, n):
         self.active = np.zeros(n, dtype=np.int32)
         self.anchor_a = np.zeros((n, 2))
         self.anchor_b = np.zeros((n, 2))
+        self.slip_distance = np.zeros(n)
 
     def as_tuple(self):
+        """The kernel's history inputs (active, anchor_a, anchor_b)."""
         return self.active, self.anchor_a, self.anchor_b
 
     def assign(self, trial):
-        act, a, b = trial
+        act, a, b, slip = trial
         self.active = np.array(act, dtype=np.int32)
         self.anchor_a = np.array(a, dtype=np.float64)
         self.anchor_b = np.array(b, dtype=np.float64)
+        self.slip_distance = np.array(slip, dtype=np.float64)
 
     def copy(self):
         h = ContactHistory(len(self.active))
-        h.assign(self.as_tuple())
+        h.assign((*self.as_tuple(), self.slip_distance))
         return h
 
 
@@ -82,13 +88,23 @@ class ContactSetEvaluator:
         self._vel = np.zeros((self.n_bodies + 1, 3))
 
     def raw(self, pose, vel, history=None):
-        """Per-contact results (Q (N,6), dQdq, dQdv, obs, trial history) at poses (nb, 3)."""
-        h = (history or self.history).as_tuple()
+        """Per-contact results (Q (N,6), dQdq, dQdv, obs, trial history) at poses (nb, 3).
+
+        The trial history is (active, anchor_a, anchor_b, slip_distance); the slip
+        distance grows by the anchor's projection shift on slip, which is the
+        tangential sliding of this increment.
+        """
+        hist = history or self.history
         self._pose[:-1] = pose
         self._vel[:-1] = vel
         if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel, *h)
-        return circle_pairs_ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, *h)
+            Qc, dq, dv, obs, (act, a, b) = self._kernel.evaluate(self._pose, self._vel, *hist.as_tuple())
+        else:
+            Qc, dq, dv, obs, (act, a, b) = circle_pairs_ref.evaluate(self._pose, self._vel, self.fparams,
+                                                                    self.iparams, *hist.as_tuple())
+        kept = (hist.active != 0) & (act != 0)
+        slip = hist.slip_distance + np.where(kept, np.linalg.norm(a - hist.anchor_a, axis=1), 0.0)
+        return Qc, dq, dv, obs, (act, a, b, slip)
 
     def evaluate(self, pose, vel, history=None):
         """Assembled :class:`Evaluation` at absolute poses/velocities (nb, 3) with the committed history."""
