@@ -1,0 +1,135 @@
+"""Output-pin family behind the evaluator protocol of
+:class:`exudyn_user_elements.contact_element.ContactElement`.
+
+Bodies are planar rigid bodies (x, y, theta): the flange and the wheels of
+one :class:`~rvtool.output_pins.spec.OutputPinMechanism`. Every slice of
+every (pin, wheel) contact is one observed contact, with the columns of
+:mod:`warp_contacts.circle_pairs_ref` (normal force, zero slip speed,
+gap = -effective approach, contact point, direction of the force on the
+wheel, zero tangential force). The family has no committed history (no
+friction, no anchors); its history object is empty. Damping is not part of
+this family, so dQ/dv = 0.
+"""
+import numpy as np
+
+from rvtool.contact.evaluator import Evaluation
+from warp_contacts import circle_pairs_ref as cref
+from warp_contacts import output_pins_ref as ref
+
+from ..errors import RvtoolInputError
+from ..validation import check_choice
+from .spec import OutputPinMechanism, PinMode
+
+GROUND = -1
+"""Body index of the fixed ground (the flange may be fixed)."""
+
+
+class NoHistory:
+    """Committed history of a family without history variables (no arrays)."""
+
+
+class BlockAssembler:
+    """Scatter per-row triples of m bodies, Q (N, 3m) and K (N, 3m, 3m), into 3 n_bodies coordinates.
+
+    Rows of the ground (index n_bodies) are dropped.
+    """
+
+    def __init__(self, bodies, n_bodies):
+        bodies = np.asarray(bodies)
+        m = bodies.shape[1]
+        self.n = n = 3 * n_bodies
+        gidx = (3 * bodies[:, :, None] + np.arange(3)).reshape(len(bodies), 3 * m)
+        gidx = np.where(np.repeat(bodies >= n_bodies, 3, axis=1), -1, gidx)
+        self.vec_mask = gidx >= 0
+        self.vec_idx = gidx[self.vec_mask]
+        rows = np.repeat(gidx[:, :, None], 3 * m, axis=2)
+        cols = np.repeat(gidx[:, None, :], 3 * m, axis=1)
+        self.mat_mask = (rows >= 0) & (cols >= 0)
+        self.mat_idx = (rows * n + cols)[self.mat_mask]
+
+    def vector(self, Q):
+        return np.bincount(self.vec_idx, weights=np.asarray(Q, float)[self.vec_mask], minlength=self.n)
+
+    def matrix(self, K):
+        return np.bincount(self.mat_idx, weights=np.asarray(K, float)[self.mat_mask],
+                           minlength=self.n * self.n).reshape(self.n, self.n)
+
+
+class OutputPinEvaluator:
+    """Evaluates an output-pin mechanism at absolute body poses (nb, 3).
+
+    flange: body index of the flange (or ``GROUND``); wheels: body indices of
+    the wheels (one per wheel midplane of the mechanism); n_bodies: number of
+    bodies of the contact element. backend "warp" | "numpy", precision
+    "float64" | "float32", device "cpu" | "cuda:N".
+    """
+
+    def __init__(self, mechanism: OutputPinMechanism, *, name="output_pins", flange=0, wheels=None, n_bodies=None,
+                 backend="warp", precision="float64", device="cpu"):
+        if not isinstance(mechanism, OutputPinMechanism):
+            raise RvtoolInputError(f"mechanism must be an OutputPinMechanism; got {type(mechanism).__name__}")
+        check_choice("backend", backend, ("warp", "numpy"))
+        check_choice("precision", precision, ("float64", "float32"))
+        if backend == "numpy" and precision != "float64":
+            raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
+        wheels = tuple(range(1, mechanism.n_wheels + 1)) if wheels is None else tuple(int(w) for w in wheels)
+        if n_bodies is None:
+            n_bodies = 1 + mechanism.n_wheels if flange != GROUND else mechanism.n_wheels
+        self.n_bodies = int(n_bodies)
+        for nm, b in [("flange", flange)] + [(f"wheels[{k}]", w) for k, w in enumerate(wheels)]:
+            if not (b == GROUND and nm == "flange") and not 0 <= b < self.n_bodies:
+                raise RvtoolInputError(f"{nm} = {b} is outside the valid range [0, {self.n_bodies - 1}]"
+                                       + (" or GROUND (-1)" if nm == "flange" else ""))
+        fl = self.n_bodies if flange == GROUND else int(flange)   # ground row of the padded pose array
+        self.mechanism = mechanism
+        self.name = name
+        self.backend = backend
+        self.mode = mechanism.mode
+        self.stations = mechanism.stations
+        self.fparams, self.iparams = mechanism.packed(fl, wheels)
+        ns = mechanism.n_slices
+        if self.mode == PinMode.SHARED:
+            bodies = self.iparams[:, :3]
+            self.ids = tuple(f"{name}/pin{p}/wheel{w}/slice{s}" for p in range(mechanism.n_pins)
+                             for w in range(2) for s in range(ns))
+        else:
+            bodies = self.iparams[:, :2]
+            self.ids = tuple(f"{name}/pin{p}/wheel{w}/slice{s}" for p in range(mechanism.n_pins)
+                             for w in range(mechanism.n_wheels) for s in range(ns))
+        self.assembler = BlockAssembler(bodies, self.n_bodies)
+        self.history = NoHistory()
+        self._pose = np.zeros((self.n_bodies + 1, 3))
+        if backend == "warp":
+            from warp_contacts.output_pins import OutputPinKernel
+            self._kernel = OutputPinKernel(self.fparams, self.iparams, self.stations, self.n_bodies + 1,
+                                           self.mode.value, precision, device)
+
+    def raw(self, pose):
+        """Per-row results (layout of :mod:`warp_contacts.output_pins_ref`) at poses (nb, 3)."""
+        self._pose[:-1] = pose
+        if self.backend == "warp":
+            return self._kernel.evaluate(self._pose)
+        if self.mode == PinMode.SHARED:
+            return ref.evaluate_shared(self._pose, self.fparams, self.iparams, self.stations)
+        return ref.evaluate_plain(self._pose, self.fparams, self.iparams, self.stations)
+
+    def _observations(self, slices):
+        s = np.asarray(slices, np.float64).reshape(-1, ref.N_SLICE_COLS)
+        obs = np.zeros((s.shape[0], cref.N_OBS))
+        obs[:, cref.O_FN] = s[:, ref.S_FORCE]
+        obs[:, cref.O_GAP] = -s[:, ref.S_APPROACH]
+        obs[:, cref.O_PX:cref.O_PY + 1] = s[:, ref.S_PX:ref.S_PY + 1]
+        obs[:, cref.O_NX:cref.O_NY + 1] = s[:, ref.S_NX:ref.S_NY + 1]
+        return obs
+
+    def evaluate(self, pose, vel, history=None):
+        """Assembled :class:`rvtool.contact.evaluator.Evaluation` at poses/velocities (nb, 3)."""
+        r = self.raw(pose)
+        Q = self.assembler.vector(np.asarray(r["Q"], np.float64))
+        K = self.assembler.matrix(np.asarray(r["dQdq"], np.float64))
+        finite = bool(np.all(np.isfinite(Q)) and np.all(np.isfinite(K)))
+        return Evaluation(Q, K, np.zeros_like(K), self._observations(r["slices"]), (), finite)
+
+    def commit(self, pose, vel):
+        """Observation array (N, 8) at the accepted state (nothing to commit)."""
+        return self._observations(self.raw(pose)["slices"])

@@ -1,0 +1,248 @@
+"""Specification of an output-pin mechanism (plain data, validated on
+construction; packed once into the parameter rows of
+:mod:`warp_contacts.output_pins_ref`).
+
+The mechanism is one flange carrying ``n_pins`` pins on the pin circle and
+one or two wheels whose holes lie on the hole circle (paper, subsection
+"Output-pin transfer and a reproducible two-wheel coupling"; inputs of
+Table (tab:supp_pin_inputs)). ``mode`` selects the plain rigid-pin contacts
+(the "nothing" variant: no sleeve, no shaft compliance) or the shared-pin
+condensation with a massless sleeve and the station compliance of Eq.
+(pin_compliance).
+"""
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from warp_contacts import output_pins_ref as ref
+
+from ..errors import RvtoolInputError
+from ..validation import check_finite, check_nonnegative, check_positive, check_range
+from .calibration import PIN_EXPONENT
+
+
+class PinMode(str, Enum):
+    """Output-pin contact model."""
+    PLAIN = "plain"      # rigid pin, one independent contact per (pin, wheel)
+    SHARED = "shared"    # shared pin: sleeve clearance fit and condensed shaft compliance
+
+
+@dataclass(frozen=True, kw_only=True)
+class SharedPinCompliance:
+    """Station compliance of the pin shaft at the two wheel stations (Eq. (pin_compliance)).
+
+    self_compliance_0: C_00 [m/N]; self_compliance_1: C_11 [m/N];
+    cross_compliance: C_01 [m/N] (multiplied by n_0 . n_1 in C_p);
+    inner_compliance: declared inner-contact compliance added to both
+    diagonal terms [m/N] (0: inner Hertz indentation omitted).
+    """
+    self_compliance_0: float
+    self_compliance_1: float
+    cross_compliance: float = 0.0
+    inner_compliance: float = 0.0
+
+    def __post_init__(self):
+        check_nonnegative("self_compliance_0", self.self_compliance_0)
+        check_nonnegative("self_compliance_1", self.self_compliance_1)
+        bound = math.sqrt(self.self_compliance_0 * self.self_compliance_1)
+        # a beam compliance matrix is positive semi-definite: |C_01| <= sqrt(C_00 C_11)
+        check_range("cross_compliance", self.cross_compliance, -bound, bound)
+        check_nonnegative("inner_compliance", self.inner_compliance)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SleeveFit:
+    """Massless sleeve in its radial clearance disk and the numerical settings of Eq. (supp_pin_fit).
+
+    clearance: radial clearance c [m]; updates: number of sleeve updates (16);
+    relaxation: step factor (0.7) [-]; tangent_floor: floor of K_0 + K_1 in the
+    update [N/m]; determinant_floor: floor of det(I + K_c C_p) [-];
+    distance_floor: floor of centre distances before normalising [m];
+    indentation_floor: d_min of the open tangent, Eq. (pin_open_state) [m].
+    """
+    clearance: float = 5e-6
+    updates: int = 16
+    relaxation: float = 0.7
+    tangent_floor: float = 1e3
+    determinant_floor: float = 1e-12
+    distance_floor: float = 1e-9
+    indentation_floor: float = 1e-9
+
+    def __post_init__(self):
+        check_nonnegative("clearance", self.clearance)
+        if not isinstance(self.updates, (int, np.integer)) or self.updates < 0:
+            raise RvtoolInputError(f"updates = {self.updates!r} is outside the valid range [0, inf) (an integer)")
+        check_range("relaxation", self.relaxation, 0.0, 2.0, low_open=True, high_open=True)
+        check_positive("tangent_floor", self.tangent_floor)
+        check_positive("determinant_floor", self.determinant_floor)
+        check_positive("distance_floor", self.distance_floor)
+        check_positive("indentation_floor", self.indentation_floor)
+
+
+@dataclass(frozen=True, kw_only=True)
+class OutputPinMechanism:
+    """Flange pins in wheel holes.
+
+    pin_circle_radius: radius of the pin centres on the flange [m].
+    hole_circle_radius: radius of the hole centres on each wheel [m].
+    n_pins: number of pins, equally spaced from ``phase`` [rad].
+    pin_radius: outer pin (sleeve) radius r_p [m]; hole_radius: R_h [m] > r_p.
+    coefficient: whole-contact coefficient k [N m^-p]; exponent: p [-] (10/9).
+    contact_length: axial contact width [m], integrated by ``n_slices`` equal-weight
+    midpoint slices (stations s relative to each wheel midplane).
+    wheel_midplanes: axial positions z_i of the wheel midplanes relative to the flange [m].
+    gap_offsets: u_off of Eq. (output_gap) per wheel [m] (e.g. thermal; positive opens).
+    mode: :class:`PinMode`; compliance and sleeve: shared mode only.
+    """
+    pin_circle_radius: float
+    hole_circle_radius: float
+    n_pins: int = 1
+    phase: float = 0.0
+    pin_radius: float
+    hole_radius: float
+    coefficient: float
+    exponent: float = PIN_EXPONENT
+    contact_length: float
+    n_slices: int = 4
+    wheel_midplanes: tuple = (0.0,)
+    gap_offsets: tuple | None = None
+    mode: PinMode = PinMode.PLAIN
+    compliance: SharedPinCompliance | None = None
+    sleeve: SleeveFit = field(default_factory=SleeveFit)
+
+    def __post_init__(self):
+        try:
+            object.__setattr__(self, "mode", PinMode(self.mode))
+        except ValueError:
+            raise RvtoolInputError(f"mode = {self.mode!r} is not valid; valid choices are "
+                                   f"{[m.value for m in PinMode]}") from None
+        check_positive("pin_circle_radius", self.pin_circle_radius)
+        check_positive("hole_circle_radius", self.hole_circle_radius)
+        if not isinstance(self.n_pins, (int, np.integer)) or self.n_pins < 1:
+            raise RvtoolInputError(f"n_pins = {self.n_pins!r} is outside the valid range [1, inf) (an integer)")
+        check_finite("phase", self.phase)
+        check_positive("pin_radius", self.pin_radius)
+        check_range("hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
+        check_nonnegative("coefficient", self.coefficient)
+        check_range("exponent", self.exponent, 1.0)
+        check_positive("contact_length", self.contact_length)
+        if not isinstance(self.n_slices, (int, np.integer)) or self.n_slices < 1:
+            raise RvtoolInputError(f"n_slices = {self.n_slices!r} is outside the valid range [1, inf) (an integer)")
+        z = np.asarray(self.wheel_midplanes, dtype=float)
+        if z.ndim != 1 or z.size < 1:
+            raise RvtoolInputError(f"wheel_midplanes must list one axial position per wheel [m]; got {self.wheel_midplanes!r}")
+        check_finite("wheel_midplanes", z)
+        object.__setattr__(self, "wheel_midplanes", tuple(float(v) for v in z))
+        offs = (0.0,) * z.size if self.gap_offsets is None else tuple(float(v) for v in self.gap_offsets)
+        if len(offs) != z.size:
+            raise RvtoolInputError(f"gap_offsets has {len(offs)} entries; it must have one per wheel ({z.size})")
+        check_finite("gap_offsets", offs)
+        object.__setattr__(self, "gap_offsets", offs)
+        if self.mode == PinMode.SHARED:
+            if z.size != 2:
+                raise RvtoolInputError(f"wheel_midplanes has {z.size} entries; the shared-pin mode couples exactly 2 wheels")
+            if not isinstance(self.compliance, SharedPinCompliance):
+                raise RvtoolInputError(f"compliance = {self.compliance!r} must be a SharedPinCompliance in shared mode")
+        if not isinstance(self.sleeve, SleeveFit):
+            raise RvtoolInputError(f"sleeve = {self.sleeve!r} must be a SleeveFit")
+
+    @property
+    def n_wheels(self):
+        return len(self.wheel_midplanes)
+
+    @property
+    def stations(self):
+        """Midpoint slice stations s relative to each wheel midplane [m] (equal weights)."""
+        w = self.contact_length / self.n_slices
+        return -0.5 * self.contact_length + w * (np.arange(self.n_slices) + 0.5)
+
+    def pin_angles(self):
+        return self.phase + 2.0 * np.pi * np.arange(self.n_pins) / self.n_pins
+
+    def packed(self, flange=0, wheels=None):
+        """(fparams, iparams) rows of :mod:`warp_contacts.output_pins_ref` for the given body indices.
+
+        Shared mode: one row per pin (N_SHARED_F, N_SHARED_I). Plain mode: one row per
+        (pin, wheel) pair, pins outer (N_PLAIN_F, N_PLAIN_I).
+        """
+        wheels = tuple(range(1, self.n_wheels + 1)) if wheels is None else tuple(wheels)
+        if len(wheels) != self.n_wheels:
+            raise RvtoolInputError(f"wheels has {len(wheels)} body indices; the mechanism has {self.n_wheels} wheels")
+        ang = self.pin_angles()
+        xp = self.pin_circle_radius * np.column_stack([np.cos(ang), np.sin(ang)])
+        xh = self.hole_circle_radius * np.column_stack([np.cos(ang), np.sin(ang)])
+        if self.mode == PinMode.SHARED:
+            fp = np.zeros((self.n_pins, ref.N_SHARED_F))
+            ip = np.zeros((self.n_pins, ref.N_SHARED_I), dtype=np.int32)
+            fp[:, ref.P_XI_PIN:ref.P_XI_PIN + 2] = xp
+            fp[:, ref.P_XI_HOLE0:ref.P_XI_HOLE0 + 2] = xh
+            fp[:, ref.P_XI_HOLE1:ref.P_XI_HOLE1 + 2] = xh
+            fp[:, ref.P_R_PIN], fp[:, ref.P_R_HOLE] = self.pin_radius, self.hole_radius
+            fp[:, ref.P_OFF0], fp[:, ref.P_OFF1] = self.gap_offsets
+            fp[:, ref.P_K], fp[:, ref.P_EXP] = self.coefficient, self.exponent
+            fp[:, ref.P_Z0], fp[:, ref.P_Z1] = self.wheel_midplanes
+            c = self.compliance
+            fp[:, ref.P_C00], fp[:, ref.P_C11] = c.self_compliance_0, c.self_compliance_1
+            fp[:, ref.P_C01], fp[:, ref.P_CIN] = c.cross_compliance, c.inner_compliance
+            s = self.sleeve
+            fp[:, ref.P_CLEAR], fp[:, ref.P_RELAX], fp[:, ref.P_KFLOOR] = s.clearance, s.relaxation, s.tangent_floor
+            fp[:, ref.P_DETFLOOR], fp[:, ref.P_DISTFLOOR] = s.determinant_floor, s.distance_floor
+            fp[:, ref.P_DMIN] = s.indentation_floor
+            ip[:] = (flange, wheels[0], wheels[1], s.updates)
+            return fp, ip
+        n = self.n_pins * self.n_wheels
+        fp = np.zeros((n, ref.N_PLAIN_F))
+        ip = np.zeros((n, ref.N_PLAIN_I), dtype=np.int32)
+        for k in range(n):
+            pin, w = divmod(k, self.n_wheels)
+            fp[k, ref.Q_XI_PIN:ref.Q_XI_PIN + 2] = xp[pin]
+            fp[k, ref.Q_XI_HOLE:ref.Q_XI_HOLE + 2] = xh[pin]
+            fp[k, ref.Q_R_PIN], fp[k, ref.Q_R_HOLE] = self.pin_radius, self.hole_radius
+            fp[k, ref.Q_OFF], fp[k, ref.Q_K], fp[k, ref.Q_EXP] = self.gap_offsets[w], self.coefficient, self.exponent
+            fp[k, ref.Q_Z], fp[k, ref.Q_DISTFLOOR] = self.wheel_midplanes[w], self.sleeve.distance_floor
+            ip[k] = (flange, wheels[w])
+        return fp, ip
+
+
+def shared_pin_study_mechanism(cross_compliance=0.0, **overrides):
+    """The shared-pin inputs of Table (tab:supp_pin_inputs) (one pin, two wheels).
+
+    R = 35 mm, r_p = 1.50 mm, R_h = 1.55 mm, k = 2e8 N m^-10/9, 6 mm contact width
+    in four midpoint slices, z_0 = -3 mm, z_1 = 3 mm, C_00 = C_11 = 1.5e-9 m/N,
+    C_01 = ``cross_compliance`` (0 or 0.9e-9 m/N), 5 um clearance, no inner compliance.
+    """
+    kw = dict(pin_circle_radius=35e-3, hole_circle_radius=35e-3, n_pins=1, phase=0.0, pin_radius=1.50e-3,
+              hole_radius=1.55e-3, coefficient=2e8, exponent=PIN_EXPONENT, contact_length=6e-3, n_slices=4,
+              wheel_midplanes=(-3e-3, 3e-3), mode=PinMode.SHARED,
+              compliance=SharedPinCompliance(self_compliance_0=1.5e-9, self_compliance_1=1.5e-9,
+                                             cross_compliance=cross_compliance),
+              sleeve=SleeveFit())
+    kw.update(overrides)
+    return OutputPinMechanism(**kw)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ExplicitSleeveInterface:
+    """Explicit sleeve with its own coordinates: inner (shaft-to-sleeve) contact settings.
+
+    clearance: radial clearance between shaft and sleeve bore [m];
+    inner_coefficient: whole inner-contact coefficient k_in per wheel station
+    [N m^-p], spread over the slices like the outer law; inner_exponent: p_in [-];
+    tolerance: Newton tolerance of the flexible interface on the approaches [m];
+    max_iterations: Newton iterations of the interface solve.
+    """
+    clearance: float = 5e-6
+    inner_coefficient: float
+    inner_exponent: float = PIN_EXPONENT
+    tolerance: float = 1e-15
+    max_iterations: int = 60
+
+    def __post_init__(self):
+        check_nonnegative("clearance", self.clearance)
+        check_positive("inner_coefficient", self.inner_coefficient)
+        check_range("inner_exponent", self.inner_exponent, 1.0)
+        check_positive("tolerance", self.tolerance)
+        if not isinstance(self.max_iterations, (int, np.integer)) or self.max_iterations < 1:
+            raise RvtoolInputError(f"max_iterations = {self.max_iterations!r} is outside the valid range [1, inf)")
