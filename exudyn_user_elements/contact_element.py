@@ -120,10 +120,20 @@ class ContactElement:
             self._ltg = np.asarray(self.mbs.systemData.GetObjectLTGODE2(self.object_number), dtype=int)
         return np.asarray(q_global)[self._ltg]
 
-    def commit(self, q_global, v_global):
-        """Commit history at the accepted state; return the observation snapshot."""
-        pose, vel = self.pose_velocity(self.local(q_global), self.local(v_global))
-        obs = self.evaluator.commit(pose, vel)
+    def commit(self, q_global, v_global, t=None):
+        """Commit history at the accepted state ``t``; return the observation snapshot.
+
+        The last Newton residual was evaluated at this state from the same
+        committed history, so its cached evaluation is committed instead of
+        launching the kernel again (identical by construction).
+        """
+        ql, vl = self.local(q_global), self.local(v_global)
+        pose, vel = self.pose_velocity(ql, vl)
+        cached = None
+        if t is not None and self._key == (float(t), np.asarray(ql, float).tobytes(), np.asarray(vl, float).tobytes()):
+            cached = self._ev
+        obs = self.evaluator.commit(pose, vel, evaluation=cached) if cached is not None else self.evaluator.commit(pose, vel)
+        self._key = None  # the committed history changed: no trial result may be reused
         self.last_obs = obs
         return ContactSnapshot(ids=self.ids, normal_force=obs[:, ref.O_FN], slip_speed=np.abs(obs[:, ref.O_VT]),
                                position=obs[:, ref.O_PX:ref.O_PY + 1], normal=obs[:, ref.O_NX:ref.O_NY + 1])

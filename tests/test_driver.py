@@ -86,6 +86,8 @@ def test_extra_trial_evaluations_do_not_change_observations():
     rec1, obs1, el1 = _belt_run(wrap=wrap)
     assert obs1.fn == obs0.fn and obs1.vs == obs0.vs and obs1.dt == obs0.dt
     np.testing.assert_array_equal(el0.evaluator.history.anchor_a, el1.evaluator.history.anchor_a)
+    np.testing.assert_array_equal(el0.evaluator.history.slip_distance, el1.evaluator.history.slip_distance)
+    assert el0.evaluator.history.slip_distance[0] > 0
 
 
 def test_rejected_trials_see_only_committed_history():
@@ -103,8 +105,8 @@ def test_rejected_trials_see_only_committed_history():
             log.append(("trial", h.active.copy(), h.anchor_a.copy(), h.anchor_b.copy()))
             return inner(pose, vel, history)
 
-        def committed(pose, vel):
-            out = commit(pose, vel)
+        def committed(pose, vel, **kw):
+            out = commit(pose, vel, **kw)
             h = el.evaluator.history
             log.append(("commit", h.active.copy(), h.anchor_a.copy(), h.anchor_b.copy()))
             return out
@@ -158,3 +160,20 @@ def test_run_spec_errors_name_the_parameter():
         RunSpec(end_time=1.0, step=0.1, newton_mode="quasi")
     with pytest.raises(RvtoolInputError, match="rel_tol"):
         RunSpec(end_time=1.0, step=0.1, precision="float32", rel_tol=1e-12)
+
+
+def test_commit_from_cached_last_trial_equals_fresh_commit():
+    """The element commits its cached last Newton evaluation (same state, same
+    committed history); a fresh evaluation at the accepted state gives the same bits."""
+    rec0, obs0, el0 = _belt_run()
+
+    def wrap(el):
+        commit = el.evaluator.commit
+
+        def fresh(pose, vel, evaluation=None):
+            return commit(pose, vel)
+        el.evaluator.commit = fresh
+
+    rec1, obs1, el1 = _belt_run(wrap=wrap)
+    assert obs0.fn == obs1.fn and obs0.vs == obs1.vs
+    np.testing.assert_array_equal(el0.evaluator.history.slip_distance, el1.evaluator.history.slip_distance)

@@ -163,7 +163,7 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
         dt = t - state["t_prev"]
         q = np.array(mbs_.systemData.GetODE2Coordinates())
         v = np.array(mbs_.systemData.GetODE2Coordinates_t())
-        snaps = {e.name: e.commit(q, v) for e in elements}
+        snaps = {e.name: e.commit(q, v, t) for e in elements}
         if observers is not None:
             observers.on_accepted(AcceptedStep(index=rec.accepted_steps, t_start=state["t_prev"], dt=dt,
                                                q_start=state["q_prev"], q_end=q, snapshots=snaps))
