@@ -29,8 +29,8 @@ def check_range(name, value, low=-math.inf, high=math.inf, low_open=False, high_
     lo_ok = arr > low if low_open else arr >= low
     hi_ok = arr < high if high_open else arr <= high
     if not (np.all(lo_ok) and np.all(hi_ok)):
-        lb = "(" if low_open else "["
-        hb = ")" if high_open else "]"
+        lb = "(" if (low_open or low == -math.inf) else "["
+        hb = ")" if (high_open or high == math.inf) else "]"
         bad = arr[~(lo_ok & hi_ok)] if arr.ndim else arr
         raise RvtoolInputError(
             f"{name} = {np.asarray(bad).ravel()[:4].tolist()}{'...' if np.size(bad) > 4 else ''} "
