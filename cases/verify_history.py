@@ -46,8 +46,8 @@ def _commit_every_trial(el):
     """The wrong policy (control only): every trial overwrites the committed history."""
     inner = el.evaluator.evaluate
 
-    def leaky(pose, vel, history=None):
-        ev = inner(pose, vel, history)
+    def leaky(pose, vel, history=None, **kw):
+        ev = inner(pose, vel, history, **kw)
         el.evaluator.history.assign(ev.trial_history)
         return ev
     el.evaluator.evaluate = leaky

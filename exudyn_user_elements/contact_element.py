@@ -17,7 +17,7 @@ import exudyn as exu
 from exudyn.itemInterface import ObjectGenericODE2, VObjectGenericODE2
 
 from rvtool.contact.circle_set import CircleContactSet
-from rvtool.contact.evaluator import ContactSetEvaluator
+from rvtool.contact.evaluator import ContactSetEvaluator, Evaluation
 from rvtool.errors import RvtoolInputError
 from rvtool.observe.registry import ContactSnapshot
 from warp_contacts import circle_pairs_ref as ref
@@ -94,12 +94,19 @@ class ContactElement:
         key = (float(t), q.tobytes(), q_t.tobytes())
         if key != self._key:
             pose, vel = self.pose_velocity(q, q_t)
-            ev = self.evaluator.evaluate(pose, vel)
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(q_t))):
+                # a diverged Newton trial: answer with NaN so that the driver rejects the attempt
+                self.nonfinite = True
+                n = len(q)
+                self._key, self._ev = key, Evaluation(np.full(n, np.nan), np.full((n, n), np.nan),
+                                                      np.full((n, n), np.nan), None, None, False)
+                return self._ev
+            ev = self.evaluator.evaluate(pose, vel, check=False)
             self.n_evaluations += 1
             if self.n_evaluations in self.inject_nan_at:
                 ev.Q = ev.Q * np.nan
                 ev.finite = False
-            if not (ev.finite and np.all(np.isfinite(q)) and np.all(np.isfinite(q_t))):
+            if not ev.finite:
                 self.nonfinite = True
             self._key, self._ev = key, ev
         return self._ev

@@ -185,3 +185,10 @@ def test_bad_inputs_name_the_parameter():
     SC, mbs, nodes = _three_body_mbs(cset)
     with pytest.raises(RvtoolInputError, match="nodes"):
         ContactElement(mbs, nodes[:1], cset)
+    with pytest.raises(RvtoolInputError, match="contact_set must be a CircleContactSet or a contact evaluator"):
+        ContactElement(mbs, nodes, "involute-gearz")  # unknown contact family
+    ev = ContactSetEvaluator(cset, backend="numpy")
+    with pytest.raises(RvtoolInputError, match=r"pose must have shape \(2, 3\)"):
+        ev.evaluate(np.zeros((3, 3)), np.zeros((2, 3)))
+    with pytest.raises(RvtoolInputError, match="pose contains non-finite"):
+        ev.evaluate(np.array([[0, 0, 0], [np.nan, 0, 0]]), np.zeros((2, 3)))

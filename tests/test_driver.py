@@ -78,9 +78,9 @@ def test_extra_trial_evaluations_do_not_change_observations():
         inner = el.evaluator.evaluate
         rng = np.random.default_rng(0)
 
-        def noisy(pose, vel, history=None):
-            inner(pose + rng.normal(0, 1e-6, pose.shape), vel + rng.normal(0, 1e-3, vel.shape), history)
-            return inner(pose, vel, history)
+        def noisy(pose, vel, history=None, **kw):
+            inner(pose + rng.normal(0, 1e-6, pose.shape), vel + rng.normal(0, 1e-3, vel.shape), history, **kw)
+            return inner(pose, vel, history, **kw)
         el.evaluator.evaluate = noisy
 
     rec1, obs1, el1 = _belt_run(wrap=wrap)
@@ -100,10 +100,10 @@ def test_rejected_trials_see_only_committed_history():
         inner = el.evaluator.evaluate
         commit = el.evaluator.commit
 
-        def trial(pose, vel, history=None):
+        def trial(pose, vel, history=None, **kw):
             h = el.evaluator.history
             log.append(("trial", h.active.copy(), h.anchor_a.copy(), h.anchor_b.copy()))
-            return inner(pose, vel, history)
+            return inner(pose, vel, history, **kw)
 
         def committed(pose, vel, **kw):
             out = commit(pose, vel, **kw)

@@ -106,8 +106,24 @@ class ContactSetEvaluator:
         slip = hist.slip_distance + np.where(kept, np.linalg.norm(a - hist.anchor_a, axis=1), 0.0)
         return Qc, dq, dv, obs, (act, a, b, slip)
 
-    def evaluate(self, pose, vel, history=None):
-        """Assembled :class:`Evaluation` at absolute poses/velocities (nb, 3) with the committed history."""
+    def check_state(self, pose, vel):
+        """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
+        for name, arr in (("pose", pose), ("vel", vel)):
+            a = np.asarray(arr)
+            if a.shape != (self.n_bodies, 3):
+                raise RvtoolInputError(f"{name} must have shape ({self.n_bodies}, 3) for contact set "
+                                       f"'{self.name}' (x, y, theta per body); got {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise RvtoolInputError(f"{name} contains non-finite values (NaN or inf) at bodies "
+                                       f"{np.unique(np.nonzero(~np.isfinite(a))[0]).tolist()}; valid: finite reals")
+
+    def evaluate(self, pose, vel, history=None, check=True):
+        """Assembled :class:`Evaluation` at absolute poses/velocities (nb, 3) with the committed history.
+
+        ``check=False`` skips the input checks (the contact element checks once per call itself).
+        """
+        if check:
+            self.check_state(pose, vel)
         Qc, dq, dv, obs, trial = self.raw(pose, vel, history)
         Q = self.assembler.vector(np.asarray(Qc, np.float64))
         finite = bool(np.all(np.isfinite(Qc)) and np.all(np.isfinite(dq)) and np.all(np.isfinite(dv)))
