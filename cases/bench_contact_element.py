@@ -106,7 +106,9 @@ def main(argv=None):
     ax.set(xlabel="contacts", ylabel="wall time [us]", title="contact element cost (float64)")
     ax.legend()
     casekit.save_figure(fig, args.out, "bench_contact_element")
-    return casekit.write_results(args.out, results, settings={"steps": steps, "step_s": 1e-6, "device": "cpu"},
+    run_spec = RunSpec(end_time=steps * 1e-6, step=1e-6, adaptive=True).to_dict()
+    return casekit.write_results(args.out, results, settings={"steps": steps, "run_spec_float64": run_spec,
+                                                              "float32_rel_tol": 1e-5, "device": "cpu"},
                                  wall_s=time.perf_counter() - t0)
 
 
