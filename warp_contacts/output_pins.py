@@ -507,3 +507,187 @@ class OutputPinKernel:
         if self.slice_tangent:
             out["slice_force_tangent"] = h["slice_df"]
         return out
+
+
+# --------------------------------------------------------------------------------------------
+# Force-only shared-pin kernel for Warp's reverse mode (wp.Tape): the moment diagnostic of
+# Appendix "Independent check of the geometric moment derivative" differentiates the force
+# routine itself instead of the hand-written forward-mode tangent. ``static_loops`` = 0 keeps
+# the natural dynamic loops over slices and sleeve updates (runtime bounds); a positive value
+# (the slice count) unrolls both loops at code generation, so every accumulation is a new SSA
+# value that the adjoint can replay.
+@functools.lru_cache(maxsize=None)
+def _adjoint_kernel(dtype, static_slices, static_updates):
+    vec2 = wp.types.vector(2, dtype)
+    unrolled = static_slices > 0
+
+    @wp.func
+    def rot(th: dtype, x: vec2):
+        return vec2(wp.cos(th) * x[0] - wp.sin(th) * x[1], wp.sin(th) * x[0] + wp.cos(th) * x[1])
+
+    @wp.func
+    def dist(v: vec2, floor: dtype):
+        return wp.max(wp.sqrt(v[0] * v[0] + v[1] * v[1]), floor)
+
+    if unrolled:
+        @wp.func
+        def wheel_open(e: vec2, u: vec2, clr: dtype, ks: dtype, p: dtype, dmin: dtype, dfloor: dtype):
+            F0 = dtype(0.0)
+            K = dtype(0.0)
+            for js in range(wp.static(static_slices)):
+                d = dist(e + u, dfloor) - clr
+                if d > dtype(0.0):
+                    F0 = F0 + ks * wp.pow(d, p)
+                    K = K + p * ks * wp.pow(wp.max(d, dmin), p - dtype(1.0))
+            return F0, K
+    else:
+        @wp.func
+        def wheel_open(e: vec2, u: vec2, clr: dtype, ks: dtype, p: dtype, dmin: dtype, dfloor: dtype,
+                       ns: int):
+            F0 = dtype(0.0)
+            K = dtype(0.0)
+            for js in range(ns):
+                d = dist(e + u, dfloor) - clr
+                if d > dtype(0.0):
+                    F0 += ks * wp.pow(d, p)
+                    K += p * ks * wp.pow(wp.max(d, dmin), p - dtype(1.0))
+            return F0, K
+
+    @wp.func
+    def closure(F00: dtype, F01: dtype, K0: dtype, K1: dtype, n0: vec2, n1: vec2, c00: dtype, c11: dtype,
+                cross: dtype, detfloor: dtype):
+        c01 = cross * wp.dot(n0, n1)
+        A00 = dtype(1.0) + K0 * c00
+        A11 = dtype(1.0) + K1 * c11
+        det = wp.max(A00 * A11 - K0 * K1 * c01 * c01, detfloor)
+        Fc0 = wp.max((A11 * F00 - K0 * c01 * F01) / det, dtype(0.0))
+        Fc1 = wp.max((A00 * F01 - K1 * c01 * F00) / det, dtype(0.0))
+        return Fc0, Fc1, c00 * Fc0 + c01 * Fc1, c01 * Fc0 + c11 * Fc1
+
+    # max_unroll covers the sleeve updates plus the final closure (17 passes), so the static
+    # variant is fully unrolled; above the limit Warp would silently emit a dynamic loop again
+    @wp.kernel(module="unique", module_options={"max_unroll": max(16, static_updates + 1)})
+    def shared_pin_forces(fparams: wp.array2d(dtype=dtype), iparams: wp.array2d(dtype=wp.int32),
+                          stations: wp.array(dtype=dtype), pose_in: wp.array2d(dtype=dtype),
+                          q_out: wp.array2d(dtype=dtype)):
+        i = wp.tid()
+        bf = iparams[i, 0]
+        b0 = iparams[i, 1]
+        b1 = iparams[i, 2]
+        ns = stations.shape[0]
+        ks = fparams[i, 10] / dtype(ns)
+        p = fparams[i, 11]
+        clr0 = fparams[i, 7] - fparams[i, 6] + fparams[i, 8]
+        clr1 = fparams[i, 7] - fparams[i, 6] + fparams[i, 9]
+        c00 = fparams[i, 14] + fparams[i, 17]
+        c11 = fparams[i, 15] + fparams[i, 17]
+        cross = fparams[i, 16]
+        clear = fparams[i, 18]
+        relax = fparams[i, 19]
+        kfloor = fparams[i, 20]
+        detfloor = fparams[i, 21]
+        dfloor = fparams[i, 22]
+        dmin = fparams[i, 23]
+        xf = vec2(pose_in[bf, 0], pose_in[bf, 1])
+        x0 = vec2(pose_in[b0, 0], pose_in[b0, 1])
+        x1 = vec2(pose_in[b1, 0], pose_in[b1, 1])
+        pf = rot(pose_in[bf, 2], vec2(fparams[i, 0], fparams[i, 1]))
+        ph0 = rot(pose_in[b0, 2], vec2(fparams[i, 2], fparams[i, 3]))
+        ph1 = rot(pose_in[b1, 2], vec2(fparams[i, 4], fparams[i, 5]))
+        # planar (untilted) separations: every slice of a wheel shares e_i
+        e0 = (xf + pf) - (x0 + ph0)
+        e1 = (xf + pf) - (x1 + ph1)
+        u = vec2()
+        F00 = dtype(0.0)
+        F01 = dtype(0.0)
+        K0 = dtype(0.0)
+        K1 = dtype(0.0)
+        n0 = vec2()
+        n1 = vec2()
+        Fc0 = dtype(0.0)
+        Fc1 = dtype(0.0)
+        up0 = dtype(0.0)
+        up1 = dtype(0.0)
+        if wp.static(unrolled):
+            for it in range(wp.static(static_updates + 1)):
+                F00, K0 = wheel_open(e0, u, clr0, ks, p, dmin, dfloor)
+                F01, K1 = wheel_open(e1, u, clr1, ks, p, dmin, dfloor)
+                n0 = (e0 + u) / dist(e0 + u, dfloor)
+                n1 = (e1 + u) / dist(e1 + u, dfloor)
+                Fc0, Fc1, up0, up1 = closure(F00, F01, K0, K1, n0, n1, c00, c11, cross, detfloor)
+                if it < wp.static(static_updates):
+                    w = u - (relax / wp.max(K0 + K1, kfloor)) * (Fc0 * n0 + Fc1 * n1)
+                    wl = wp.sqrt(w[0] * w[0] + w[1] * w[1])
+                    u = w
+                    if wl > clear:
+                        u = (clear / wl) * w
+        else:
+            nupd = iparams[i, 3]
+            for it in range(nupd + 1):
+                F00, K0 = wheel_open(e0, u, clr0, ks, p, dmin, dfloor, ns)
+                F01, K1 = wheel_open(e1, u, clr1, ks, p, dmin, dfloor, ns)
+                n0 = (e0 + u) / dist(e0 + u, dfloor)
+                n1 = (e1 + u) / dist(e1 + u, dfloor)
+                Fc0, Fc1, up0, up1 = closure(F00, F01, K0, K1, n0, n1, c00, c11, cross, detfloor)
+                if it < nupd:
+                    w = u - (relax / wp.max(K0 + K1, kfloor)) * (Fc0 * n0 + Fc1 * n1)
+                    wl = wp.sqrt(w[0] * w[0] + w[1] * w[1])
+                    u = w
+                    if wl > clear:
+                        u = (clear / wl) * w
+        # nonlinear re-evaluation after subtracting the station deflections; reaction assembly
+        f0 = ks * wp.pow(wp.max(dist(e0 + u, dfloor) - clr0 - up0, dtype(0.0)), p) * dtype(ns) * n0
+        f1 = ks * wp.pow(wp.max(dist(e1 + u, dfloor) - clr1 - up1, dtype(0.0)), p) * dtype(ns) * n1
+        arm = pf + u
+        q_out[i, 0] = -(f0[0] + f1[0])
+        q_out[i, 1] = -(f0[1] + f1[1])
+        q_out[i, 2] = -(arm[0] * (f0[1] + f1[1]) - arm[1] * (f0[0] + f1[0]))
+        q_out[i, 3] = f0[0]
+        q_out[i, 4] = f0[1]
+        q_out[i, 5] = ph0[0] * f0[1] - ph0[1] * f0[0]
+        q_out[i, 6] = f1[0]
+        q_out[i, 7] = f1[1]
+        q_out[i, 8] = ph1[0] * f1[1] - ph1[1] * f1[0]
+
+    return shared_pin_forces
+
+
+def shared_pin_adjoint_jacobian(fparams, iparams, stations, pose, unrolled, precision="float64", device="cpu"):
+    """dQ/dpose (N, 9, nb, 3) of the force-only shared-pin kernel by Warp's reverse mode (wp.Tape).
+
+    Planar states only (no tilts; untilted slices of a wheel share one
+    separation). ``unrolled``: unroll the slice and update loops at code
+    generation (static bounds) instead of the dynamic loops. Also returns Q (N, 9).
+    """
+    wdt, ndt = scalar_types(precision)
+    device = resolve_device(device)
+    fparams = np.ascontiguousarray(fparams, ndt)
+    iparams = np.ascontiguousarray(iparams, np.int32)
+    n = fparams.shape[0]
+    if unrolled:
+        nupd = set(int(v) for v in iparams[:, I_UPDATES])
+        assert len(nupd) == 1, "the unrolled kernel needs one update count for all pins"
+        kernel = _adjoint_kernel(wdt, len(stations), nupd.pop())
+    else:
+        kernel = _adjoint_kernel(wdt, 0, 0)
+    fa = wp.array(fparams, dtype=wdt, device=device)
+    ia = wp.array(iparams, dtype=wp.int32, device=device)
+    sa = wp.array(np.asarray(stations, ndt), dtype=wdt, device=device)
+    pa = wp.array(np.asarray(pose, ndt), dtype=wdt, device=device, requires_grad=True)
+    qa = wp.zeros((n, 9), dtype=wdt, device=device, requires_grad=True)
+    tape = wp.Tape()
+    with tape:
+        wp.launch(kernel, dim=n, inputs=[fa, ia, sa, pa], outputs=[qa], device=device)
+    Q = qa.numpy().astype(np.float64)
+    J = np.zeros((n, 9) + pa.shape)
+    for r in range(9):
+        # one reverse sweep per output component; pins are independent, so one sweep serves all rows
+        seed = np.zeros((n, 9), ndt)
+        seed[:, r] = 1.0
+        tape.backward(grads={qa: wp.array(seed, dtype=wdt, device=device)})
+        g = pa.grad.numpy().astype(np.float64)
+        for k in range(n):
+            bodies = iparams[k, :3]
+            J[k, r][bodies] = g[bodies]   # each pose row feeds only the pins that read it
+        tape.zero()
+    return Q, J
