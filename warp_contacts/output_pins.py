@@ -71,11 +71,14 @@ def _funcs(dtype):
             L, n, dL, dnx, dny = unit(a + stations[js] * b + u, dax + dux, day + duy, dfloor)
             d = L - clr
             if d > dtype(0.0):
-                F0 += ks * wp.pow(d, p)
-                dF0 += (p * ks * wp.pow(d, p - dtype(1.0))) * dL
+                # one pow per slice: the derivatives follow as F p / d and K (p - 1) / d
+                f = ks * wp.pow(d, p)
+                k = p * f / d
+                F0 += f
+                dF0 += k * dL
                 if d > dmin:
-                    K += p * ks * wp.pow(d, p - dtype(1.0))
-                    dK += (p * (p - dtype(1.0)) * ks * wp.pow(d, p - dtype(2.0))) * dL
+                    K += k
+                    dK += ((p - dtype(1.0)) * k / d) * dL
                 else:
                     K += p * ks * wp.pow(dmin, p - dtype(1.0))
         return F0, K, dF0, dK
@@ -149,7 +152,7 @@ def _funcs(dtype):
             dF = vec9()
             if de > dtype(0.0):
                 F = ks * wp.pow(de, p)
-                dF = (p * ks * wp.pow(de, p - dtype(1.0))) * (dL - dup)
+                dF = (p * F / de) * (dL - dup)
             fw += F
             fv = F * n
             dfvx = n[0] * dF + F * dnx

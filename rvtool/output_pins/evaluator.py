@@ -122,14 +122,36 @@ class OutputPinEvaluator:
         obs[:, cref.O_NX:cref.O_NY + 1] = s[:, ref.S_NX:ref.S_NY + 1]
         return obs
 
-    def evaluate(self, pose, vel, history=None):
-        """Assembled :class:`rvtool.contact.evaluator.Evaluation` at poses/velocities (nb, 3)."""
+    def check_state(self, pose, vel):
+        """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
+        for name, arr in (("pose", pose), ("vel", vel)):
+            a = np.asarray(arr)
+            if a.shape != (self.n_bodies, 3):
+                raise RvtoolInputError(f"{name} must have shape ({self.n_bodies}, 3) for output pins "
+                                       f"'{self.name}' (x, y, theta per body); got {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise RvtoolInputError(f"{name} contains non-finite values (NaN or inf); valid: finite reals")
+
+    def evaluate(self, pose, vel, history=None, check=True):
+        """Assembled :class:`rvtool.contact.evaluator.Evaluation` at poses/velocities (nb, 3).
+
+        ``history`` is accepted for the protocol and unused (no history variables);
+        ``check=False`` skips the input checks (the contact element checks itself).
+        """
+        if check:
+            self.check_state(pose, vel)
         r = self.raw(pose)
         Q = self.assembler.vector(np.asarray(r["Q"], np.float64))
         K = self.assembler.matrix(np.asarray(r["dQdq"], np.float64))
         finite = bool(np.all(np.isfinite(Q)) and np.all(np.isfinite(K)))
         return Evaluation(Q, K, np.zeros_like(K), self._observations(r["slices"]), (), finite)
 
-    def commit(self, pose, vel):
-        """Observation array (N, 8) at the accepted state (nothing to commit)."""
+    def commit(self, pose, vel, evaluation=None):
+        """Observation array (N, 8) at the accepted state (nothing to commit).
+
+        ``evaluation``: the element's cached evaluation at exactly this state, reused
+        instead of a second launch.
+        """
+        if evaluation is not None:
+            return np.array(evaluation.obs, np.float64)
         return self._observations(self.raw(pose)["slices"])
