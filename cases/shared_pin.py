@@ -1,6 +1,7 @@
-"""Load transfer through a shared output pin (paper, section "Load transfer
-through a shared output pin"; Appendix "Reproducing the shared-pin
-calculation").
+"""Load transfer through a shared output pin: both C01 cases, 81-point scans, tangent and moment diagnostics.
+
+Paper, section "Load transfer through a shared output pin"; Appendix
+"Reproducing the shared-pin calculation".
 
 One pin on the flange, loaded by two wheels through a massless sleeve in a
 5 um clearance disk, with the inputs of Table (tab:supp_pin_inputs). Both

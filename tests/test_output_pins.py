@@ -10,7 +10,7 @@ import pytest
 import warp as wp
 
 from rvtool.errors import RvtoolInputError
-from rvtool.output_pins import (ExplicitSleeveInterface, ExplicitSleeveModel, OutputPinEvaluator, OutputPinMechanism,
+from rvtool.output_pins import (ExplicitSleeveEvaluator, ExplicitSleeveInterface, ExplicitSleeveModel, OutputPinEvaluator, OutputPinMechanism,
                                 PinMode, SharedPinCompliance, SharedPinModel, SleeveFit, calibrate_pin_coefficient,
                                 hertz_calibrated_coefficient, hertz_pin_in_hole_approach, scaled_tangent,
                                 shared_pin_study_mechanism)
@@ -378,3 +378,31 @@ def test_exudyn_simulate_conserves_momentum():
     assert vmax > 1e-3, "the pressed wheels must have moved"
     assert np.linalg.norm(p) <= 1e-9 * max(masses) * vmax
     assert el.last_obs is not None and np.max(el.last_obs[:, 0]) > 0
+
+
+def test_exudyn_explicit_sleeve_with_its_own_inertia():
+    """The explicit sleeve as a fourth body with a small mass: its node carries the inner and outer
+    contacts, linear momentum of all four bodies stays zero (internal forces only)."""
+    from exudyn.itemInterface import NodeRigidBody2D, ObjectRigidBody2D
+    from exudyn_user_elements.contact_element import ContactElement
+    from rvtool.solver import RunSpec, simulate
+    mech = shared_pin_study_mechanism(0.9e-9)
+    q0 = np.zeros(12)
+    q0[3:6], q0[6:9], q0[9:11] = (100e-6, 5e-6, 0.0), (-70e-6, -5e-6, 0.0), (R + 6e-6, 0.0)
+    masses = (0.5, 0.2, 0.2, 0.005)
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    nodes = []
+    for b in range(4):
+        n = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, 0.0, 0.0], initialCoordinates=list(q0[3 * b:3 * b + 3])))
+        mbs.AddObject(ObjectRigidBody2D(nodeNumber=n, mass=masses[b], inertia=1e-6 if b == 3 else 1e-4))
+        nodes.append(n)
+    el = ContactElement(mbs, nodes, ExplicitSleeveEvaluator(mech, ExplicitSleeveInterface(inner_coefficient=2e9)))
+    mbs.Assemble()
+    ev = el.evaluate(0.0, np.asarray(mbs.systemData.GetODE2Coordinates()), np.zeros(12))
+    assert np.max(ev.obs[:8, 0]) > 0 and np.max(ev.obs[8:, 0]) > 0, "outer and inner contacts must both be loaded"
+    rec = simulate(mbs, RunSpec(end_time=1e-5, step=2.5e-6, abs_tol=1e-6, rel_tol=1e-10), elements=[el])
+    assert rec.accepted_steps == 4
+    v = np.asarray(mbs.systemData.GetODE2Coordinates_t()).reshape(4, 3)
+    p = sum(m * v[b, :2] for b, m in enumerate(masses))
+    assert np.linalg.norm(p) <= 1e-9 * max(m * np.linalg.norm(v[b, :2]) for b, m in enumerate(masses))

@@ -40,7 +40,9 @@ along all unit seed directions at once (a trailing axis of length 6 or 9),
 differentiated by hand through the closure, the fixed sleeve updates with
 projection, clipping and floors, and the re-evaluation. It is the exact
 derivative of the implemented finite-iteration force map on each smooth
-branch, including the force-arm term of Eq. (moment_chain_rule).
+branch, including the force-arm term of Eq. (moment_chain_rule). Tilts are
+prescribed inputs (e.g. from a tilt-constrained or separately integrated
+model): the tangent covers the planar coordinates (x, y, theta) only.
 
 Complex step. With ``tangent=False`` the functions accept complex poses and
 keep every branch decision on the real part, so that Im(Q(q + i h e_j))/h is

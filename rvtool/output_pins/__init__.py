@@ -13,10 +13,10 @@ from .calibration import (PIN_EXPONENT, calibrate_pin_coefficient, contact_modul
 from .spec import (ExplicitSleeveInterface, OutputPinMechanism, PinMode, SharedPinCompliance, SleeveFit,
                    shared_pin_study_mechanism)
 from .shared_pin import SharedPinModel, SharedPinResponse, scaled_tangent, scaling_matrix
-from .explicit_sleeve import ExplicitSleeveModel
+from .explicit_sleeve import ExplicitSleeveEvaluator, ExplicitSleeveModel
 from .evaluator import GROUND, OutputPinEvaluator
 
 __all__ = ["PIN_EXPONENT", "calibrate_pin_coefficient", "contact_modulus", "hertz_calibrated_coefficient",
            "hertz_pin_in_hole_approach", "ExplicitSleeveInterface", "OutputPinMechanism", "PinMode",
            "SharedPinCompliance", "SleeveFit", "shared_pin_study_mechanism", "SharedPinModel", "SharedPinResponse",
-           "scaled_tangent", "scaling_matrix", "ExplicitSleeveModel", "GROUND", "OutputPinEvaluator"]
+           "scaled_tangent", "scaling_matrix", "ExplicitSleeveModel", "ExplicitSleeveEvaluator", "GROUND", "OutputPinEvaluator"]

@@ -126,6 +126,9 @@ class ExplicitSleeveModel:
         p = fp[ref.P_EXP]
         floor = fp[ref.P_DISTFLOOR]
         outer = np.zeros((2, ns))
+        outer_d = np.zeros((2, ns))
+        outer_n = np.zeros((2, ns, 2))
+        outer_p = np.zeros((2, ns, 2))
         for i in range(2):
             ph = _rot(P[1 + i, 2], fp[ref.P_XI_HOLE0 + 2 * i:ref.P_XI_HOLE0 + 2 * i + 2])
             dh = np.zeros((2, 12))
@@ -138,6 +141,9 @@ class ExplicitSleeveModel:
                 F = ks * d ** p if d > 0 else 0.0
                 dF = p * ks * d ** (p - 1.0) * dL if d > 0 else np.zeros(12)
                 outer[i, s] = F
+                outer_d[i, s] = d
+                outer_n[i, s] = n
+                outer_p[i, s] = P[1 + i, :2] + ph + 0.5 * (L + fp[ref.P_R_PIN] + fp[ref.P_R_HOLE]) * n
                 f = F * n
                 df = np.outer(n, dF) + F * dn
                 darm = np.zeros((2, 12))
@@ -171,8 +177,9 @@ class ExplicitSleeveModel:
             dQ[0:2] += df
             dQ[2] += pf[0] * df[1] - pf[1] * df[0] + darm_f[0] * f[1] - darm_f[1] * f[0]
             dQ[9:11] -= df
-        info = {"outer_force": outer, "inner_force": Fin.reshape(2, ns), "inner_approach": delta.reshape(2, ns),
-                "sleeve_offset": xs - (P[0, :2] + pf)}
+        info = {"outer_force": outer, "outer_approach": outer_d, "outer_normal": outer_n, "outer_point": outer_p,
+                "inner_force": Fin.reshape(2, ns), "inner_approach": delta.reshape(2, ns), "inner_normal": m1,
+                "shaft_centre": P[0, :2] + pf, "sleeve_offset": xs - (P[0, :2] + pf)}
         return Q, dQ, info
 
     def sleeve_equilibrium(self, q9, start_offset=(0.0, 0.0), tol=1e-6, max_iterations=100):
@@ -204,3 +211,61 @@ class ExplicitSleeveModel:
             raise SolverFailure(f"sleeve equilibrium did not reach tol = {tol} N in {max_iterations} iterations "
                                    f"(residual {np.linalg.norm(Q[9:11]):.3e} N)")
         return q, Q, -dQ, info
+
+
+class ExplicitSleeveEvaluator:
+    """The explicit-sleeve model behind the contact-element evaluator protocol.
+
+    Bodies (in this order): flange, wheel 0, wheel 1, sleeve, each a planar
+    rigid body (x, y, theta); give the sleeve node its own mass and inertia to
+    study the inertia assumption, or a small one for a nearly massless sleeve.
+    Observed contacts: the 2 n_s outer slices (sleeve in wheel holes), then the
+    2 n_s inner slices (shaft in sleeve bore, normal = direction of the force on
+    the flange, point = shaft centre). No history; dQ/dv = 0.
+    """
+
+    def __init__(self, mechanism: OutputPinMechanism, interface: ExplicitSleeveInterface, *, name="explicit_sleeve"):
+        from .evaluator import NoHistory
+        self.model = ExplicitSleeveModel(mechanism, interface)
+        self.name = name
+        self.n_bodies = 4
+        ns = mechanism.n_slices
+        self.ids = tuple(f"{name}/outer/wheel{w}/slice{s}" for w in range(2) for s in range(ns)) + \
+            tuple(f"{name}/inner/station{w}/slice{s}" for w in range(2) for s in range(ns))
+        self.history = NoHistory()
+
+    def check_state(self, pose, vel):
+        for nm, arr in (("pose", pose), ("vel", vel)):
+            a = np.asarray(arr)
+            if a.shape != (4, 3):
+                raise RvtoolInputError(f"{nm} must have shape (4, 3) (flange, wheel 0, wheel 1, sleeve); got {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf); valid: finite reals")
+
+    @staticmethod
+    def _observations(info):
+        from warp_contacts import circle_pairs_ref as cref
+        ns = info["outer_force"].shape[1]
+        obs = np.zeros((4 * ns, cref.N_OBS))
+        obs[:2 * ns, cref.O_FN] = info["outer_force"].ravel()
+        obs[:2 * ns, cref.O_GAP] = -info["outer_approach"].ravel()
+        obs[:2 * ns, cref.O_PX:cref.O_PY + 1] = info["outer_point"].reshape(-1, 2)
+        obs[:2 * ns, cref.O_NX:cref.O_NY + 1] = info["outer_normal"].reshape(-1, 2)
+        obs[2 * ns:, cref.O_FN] = info["inner_force"].ravel()
+        obs[2 * ns:, cref.O_GAP] = -info["inner_approach"].ravel()
+        obs[2 * ns:, cref.O_PX:cref.O_PY + 1] = info["shaft_centre"]
+        obs[2 * ns:, cref.O_NX:cref.O_NY + 1] = info["inner_normal"]
+        return obs
+
+    def evaluate(self, pose, vel, history=None, check=True):
+        from rvtool.contact.evaluator import Evaluation
+        if check:
+            self.check_state(pose, vel)
+        Q, dQ, info = self.model.evaluate(np.asarray(pose, float).ravel())
+        finite = bool(np.all(np.isfinite(Q)) and np.all(np.isfinite(dQ)))
+        return Evaluation(Q, dQ, np.zeros_like(dQ), self._observations(info), (), finite)
+
+    def commit(self, pose, vel, evaluation=None):
+        if evaluation is not None:
+            return np.array(evaluation.obs, np.float64)
+        return self._observations(self.model.evaluate(np.asarray(pose, float).ravel())[2])
