@@ -1,0 +1,1 @@
+"""Tooth geometry: profiles, deviations and their feasibility checks."""

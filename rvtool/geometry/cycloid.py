@@ -1,0 +1,183 @@
+"""Cycloidal wheel profile of Eq. (cycloid_geometry), its modifications,
+curvature, feasibility checks and the arc-length table used by the contact
+search.
+
+Profile (wheel coordinates, phi the generating angle):
+
+    c(phi) = R_z [sin phi - (K1/z_b) sin(z_b phi), cos phi - (K1/z_b) cos(z_b phi)]
+             + (r_c / D) [K1 sin(z_b phi) - sin phi, K1 cos(z_b phi) - cos phi],
+    D(phi) = sqrt(1 + K1^2 - 2 K1 cos(z_g phi)),
+
+with R_z the pin-circle radius, K1 = e_g z_b / R_z the eccentricity
+coefficient (e_g the nominal generating eccentricity), z_b = z_g + 1 the pin
+count and r_c the generating radius. Modifications (all lengths in m):
+equidistant (r_c = r_p + delta_eq), offset (R_z -> R_z + delta_off),
+rotation (the profile turned by delta_rot [rad]) and a tabulated radial
+modification r_c(phi) = r_c + table(phi). The nominal generating
+eccentricity and the assembly eccentricity are separate inputs.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import RvtoolInputError
+from ..validation import check_finite, check_nonnegative, check_positive, check_range
+
+
+@dataclass(frozen=True, kw_only=True)
+class CycloidProfile:
+    """Cycloidal wheel profile specification.
+
+    pin_circle_radius: R_z [m]. pin_radius: r_p [m]. n_pins: z_b.
+    generating_eccentricity: e_g [m] (nominal; defines K1 = e_g z_b / R_z).
+    equidistant_mod: delta_eq [m], added to the generating radius (positive removes material).
+    offset_mod: delta_off [m], added to R_z in the profile (negative removes material).
+    rotation_mod: delta_rot [rad], profile rotation about the wheel centre.
+    radial_mod_table: optional (phi [rad], delta_r [m]) pairs of a tabulated
+    generating-radius modification, periodic over one tooth (2 pi / z_g).
+    """
+    pin_circle_radius: float
+    pin_radius: float
+    n_pins: int
+    generating_eccentricity: float
+    equidistant_mod: float = 0.0
+    offset_mod: float = 0.0
+    rotation_mod: float = 0.0
+    radial_mod_table: tuple | None = None
+
+    def __post_init__(self):
+        check_positive("pin_circle_radius", self.pin_circle_radius)
+        check_positive("pin_radius", self.pin_radius)
+        if not isinstance(self.n_pins, (int, np.integer)) or self.n_pins < 3:
+            raise RvtoolInputError(f"n_pins = {self.n_pins!r} is outside the valid range [3, inf) (integer)")
+        check_positive("generating_eccentricity", self.generating_eccentricity)
+        for nm in ("equidistant_mod", "offset_mod", "rotation_mod"):
+            check_finite(nm, getattr(self, nm))
+        K1 = self.K1
+        if K1 >= 1.0:
+            raise RvtoolInputError(f"eccentricity coefficient K1 = e_g z_b / R_z = {K1:.4g} must be < 1 "
+                                   "(valid range (0, 1) for a curtate epitrochoid; reduce generating_eccentricity)")
+        # neighbouring pins must not overlap: 2 r_p < 2 R_z sin(pi / z_b)
+        gap = 2 * self.pin_circle_radius * np.sin(np.pi / self.n_pins)
+        if 2 * self.pin_radius >= gap:
+            raise RvtoolInputError(f"pin_radius = {self.pin_radius} m makes neighbouring pins overlap; valid range "
+                                   f"(0, {gap / 2:.6g}) m for {self.n_pins} pins on R_z = {self.pin_circle_radius} m")
+        if self.radial_mod_table is not None:
+            t = np.asarray(self.radial_mod_table, dtype=float)
+            if t.ndim != 2 or t.shape[1] != 2 or t.shape[0] < 2:
+                raise RvtoolInputError(f"radial_mod_table must be a sequence of (phi, delta_r) pairs; got shape {t.shape}")
+            check_finite("radial_mod_table", t)
+            if np.any(np.diff(t[:, 0]) <= 0):
+                raise RvtoolInputError("radial_mod_table angles must increase strictly (valid: sorted phi in [0, 2 pi / z_g])")
+        self._check_undercut()
+
+    @property
+    def n_teeth(self):
+        """z_g = z_b - 1 (the only tooth-count combination supported)."""
+        return self.n_pins - 1
+
+    @property
+    def R(self):
+        return self.pin_circle_radius + self.offset_mod
+
+    @property
+    def K1(self):
+        return self.generating_eccentricity * self.n_pins / self.pin_circle_radius
+
+    def generating_radius(self, phi):
+        rc = self.pin_radius + self.equidistant_mod
+        if self.radial_mod_table is None:
+            return np.full_like(np.asarray(phi, float), rc)
+        t = np.asarray(self.radial_mod_table, float)
+        period = 2 * np.pi / self.n_teeth
+        return rc + np.interp(np.mod(phi, period), t[:, 0], t[:, 1], period=period)
+
+    # -- analytic curve -----------------------------------------------------
+    def epitrochoid(self, phi):
+        """Pin-centre path E(phi) and its first two derivatives (wheel coordinates)."""
+        phi = np.asarray(phi, float)
+        R, K1, zb = self.R, self.K1, self.n_pins
+        s, c, S, C = np.sin(phi), np.cos(phi), np.sin(zb * phi), np.cos(zb * phi)
+        E = R * np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1)
+        dE = R * np.stack([c - K1 * C, -s + K1 * S], axis=-1)
+        ddE = R * np.stack([-s + K1 * zb * S, -c + K1 * zb * C], axis=-1)
+        return E, dE, ddE
+
+    def points(self, phi):
+        """Profile points c(phi) of Eq. (cycloid_geometry), before the rotation modification."""
+        phi = np.asarray(phi, float)
+        E, dE, _ = self.epitrochoid(phi)
+        D = np.linalg.norm(dE, axis=-1) / self.R   # = sqrt(1 + K1^2 - 2 K1 cos(z_g phi))
+        K1, zb = self.K1, self.n_pins
+        inward = np.stack([K1 * np.sin(zb * phi) - np.sin(phi), K1 * np.cos(zb * phi) - np.cos(phi)], axis=-1) / D[..., None]
+        return self._rotate(E + self.generating_radius(phi)[..., None] * inward)
+
+    def _rotate(self, xy):
+        if self.rotation_mod == 0.0:
+            return xy
+        c, s = np.cos(self.rotation_mod), np.sin(self.rotation_mod)
+        return np.stack([c * xy[..., 0] - s * xy[..., 1], s * xy[..., 0] + c * xy[..., 1]], axis=-1)
+
+    def curvature_of_points(self, phi, h=None):
+        """Signed curvature of the profile (positive where it is convex outward), by the
+        analytic offset-curve relation kappa = kappa_E / (1 - r_c kappa_E) for constant r_c."""
+        E, dE, ddE = self.epitrochoid(phi)
+        cross = dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]
+        speed = np.linalg.norm(dE, axis=-1)
+        # the curve runs clockwise for increasing phi (x ~ sin, y ~ cos), so convex-outward is cross < 0
+        kE = -cross / speed ** 3
+        rc = self.generating_radius(phi)
+        return kE / (1.0 - rc * kE)
+
+    def _check_undercut(self):
+        """Undercut / pointed teeth: the offset must not exceed the epitrochoid's convex radius."""
+        phi = np.linspace(0, 2 * np.pi / self.n_teeth, 4001)
+        E, dE, ddE = self.epitrochoid(phi)
+        cross = dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]
+        kE = -cross / np.linalg.norm(dE, axis=-1) ** 3
+        rc = self.generating_radius(phi)
+        worst = np.max(rc * kE)
+        if worst >= 1.0:
+            rho_min = 1.0 / np.max(kE)
+            raise RvtoolInputError(f"the profile is undercut or pointed: generating radius {np.max(rc):.6g} m exceeds the "
+                                   f"minimum convex curvature radius {rho_min:.6g} m of the epitrochoid; valid range of "
+                                   f"pin_radius + equidistant_mod: (0, {rho_min:.6g}) m")
+
+    # -- tables for the contact search ---------------------------------------
+    def table(self, n_samples):
+        """Arc-length resampled profile: (points (n,2), outward normals (n,2), curvature (n,),
+        polar angle (n,), sample spacing [m]). Samples are ordered by increasing polar angle."""
+        if n_samples < 8 * self.n_teeth:
+            raise RvtoolInputError(f"n_samples = {n_samples} is too small; valid range [{8 * self.n_teeth}, inf) "
+                                   f"(at least 8 per tooth)")
+        dense = np.linspace(0, 2 * np.pi, 16 * n_samples, endpoint=False)
+        P = self.points(dense)
+        seg = np.linalg.norm(np.diff(np.vstack([P, P[:1]]), axis=0), axis=1)
+        s = np.concatenate([[0.0], np.cumsum(seg)])
+        total = s[-1]
+        target = np.arange(n_samples) * total / n_samples
+        phi_dense = np.concatenate([dense, [2 * np.pi]])
+        phi = np.interp(target, s, phi_dense)
+        pts = self.points(phi)
+        _, dE, _ = self.epitrochoid(phi)
+        tang = self._rotate(dE / np.linalg.norm(dE, axis=-1)[..., None])
+        # outward normal: the curve runs clockwise, so the outward normal is the tangent turned by +90 deg
+        nrm = np.stack([-tang[..., 1], tang[..., 0]], axis=-1)
+        kap = self.curvature_of_points(phi)
+        polar = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
+        order = np.argsort(polar)
+        return pts[order], nrm[order], kap[order], polar[order], total / n_samples
+
+
+def pin_centres(profile: CycloidProfile, pin_centre_errors=None):
+    """Ring pin centres in the housing frame [m]: pin k at angle 2 pi k / z_b from +y,
+    clockwise, R_z (sin a, cos a) plus optional per-pin errors (z_b, 2)."""
+    a = 2 * np.pi * np.arange(profile.n_pins) / profile.n_pins
+    p = profile.pin_circle_radius * np.column_stack([np.sin(a), np.cos(a)])
+    if pin_centre_errors is not None:
+        e = np.asarray(pin_centre_errors, float)
+        if e.shape != p.shape:
+            raise RvtoolInputError(f"pin_centre_errors must have shape ({profile.n_pins}, 2); got {e.shape}")
+        check_finite("pin_centre_errors", e)
+        p = p + e
+    return p

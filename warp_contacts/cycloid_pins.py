@@ -1,0 +1,289 @@
+"""Warp kernel of the cycloid--pin contact family (search, gap, force and
+analytic tangent in one launch; one thread per pin slice).
+
+Mirrors :mod:`warp_contacts.cycloid_pins_ref` line by line; see there for
+the equations. Several profile tables (e.g. two wheels with different
+modifications) are concatenated, each addressed by offset and length.
+"""
+import functools
+
+import numpy as np
+import warp as wp
+
+from .circle_pairs_ref import N_OBS
+from .cycloid_pins_ref import N_FLOAT, N_INT
+from .laws import law_funcs
+from .precision import resolve_device, scalar_types
+
+
+@functools.lru_cache(maxsize=None)
+def _kernel(dtype):
+    L = law_funcs(dtype)
+    vec2 = wp.types.vector(2, dtype)
+    normal_force = L.normal_force
+    friction_coefficient = L.friction_coefficient
+
+    @wp.func
+    def perp(a: vec2):
+        return vec2(-a[1], a[0])
+
+    @wp.func
+    def cross2(a: vec2, b: vec2):
+        return a[0] * b[1] - a[1] * b[0]
+
+    @wp.func
+    def rot(th: dtype, x: vec2):
+        c = wp.cos(th)
+        s = wp.sin(th)
+        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
+
+    @wp.kernel(module="unique")
+    def eval_cycloid_pins(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        tab_pts: wp.array2d(dtype=dtype),
+        tab_nrm: wp.array2d(dtype=dtype),
+        tab_kap: wp.array(dtype=dtype),
+        tab_polar: wp.array(dtype=dtype),
+        tab_offset: wp.array(dtype=wp.int32),
+        tab_len: wp.array(dtype=wp.int32),
+        tab_h: wp.array(dtype=dtype),
+        window: int,
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        vel_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        dqdv_out: wp.array3d(dtype=dtype),
+        obs_out: wp.array2d(dtype=dtype),
+    ):
+        i = wp.tid()
+        ia = iparams[i, 0]
+        ib = iparams[i, 1]
+        mode = iparams[i, 2]
+        tb = iparams[i, 3]
+        xa = vec2(pose_in[ia, 0], pose_in[ia, 1])
+        xb = vec2(pose_in[ib, 0], pose_in[ib, 1])
+        tha = pose_in[ia, 2]
+        thb = pose_in[ib, 2]
+        vxa = vec2(vel_in[ia, 0], vel_in[ia, 1])
+        vxb = vec2(vel_in[ib, 0], vel_in[ib, 1])
+        wa = vel_in[ia, 2]
+        wb = vel_in[ib, 2]
+        r = fparams[i, 2]
+        e_off = fparams[i, 3]
+        k = fparams[i, 4]
+        p_exp = fparams[i, 5]
+        c_damp = fparams[i, 6]
+        dr = fparams[i, 7]
+        muk = fparams[i, 8]
+        mus = fparams[i, 9]
+        vs = fparams[i, 10]
+        vreg = fparams[i, 11]
+
+        b = rot(thb, vec2(fparams[i, 0], fparams[i, 1]))
+        p = xb + b
+        pl = rot(-tha, p - xa)
+
+        # -- discrete search: binary search of the polar angle, then a window ----
+        off = tab_offset[tb]
+        n = tab_len[tb]
+        two_pi = dtype(6.283185307179586)
+        beta = wp.atan2(pl[1], pl[0])
+        if beta < dtype(0.0):
+            beta = beta + two_pi
+        lo = int(0)
+        hi = n
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if tab_polar[off + mid] < beta:
+                lo = mid + 1
+            else:
+                hi = mid
+        best = int(0)
+        bestd = dtype(1.0e30)
+        for jw in range(2 * window + 1):
+            idx = (lo + jw - window + n) % n
+            d = pl - vec2(tab_pts[off + idx, 0], tab_pts[off + idx, 1])
+            d2 = wp.dot(d, d)
+            if d2 < bestd:
+                bestd = d2
+                best = idx
+        ci = vec2(tab_pts[off + best, 0], tab_pts[off + best, 1])
+        ni = vec2(tab_nrm[off + best, 0], tab_nrm[off + best, 1])
+        kap = tab_kap[off + best]
+        ti = perp(ni)
+        wi = pl - ci
+        tt = wp.dot(wi, ti) / (dtype(1.0) + kap * wp.dot(wi, ni))
+        hh = dtype(0.5) * tab_h[tb]
+        clamped = wp.abs(tt) > hh
+        tt = wp.clamp(tt, -hh, hh)
+        cl = ci + tt * ti - (dtype(0.5) * kap * tt * tt) * ni
+        nl = wp.normalize(ni + (kap * tt) * ti)
+
+        a = rot(tha, cl)
+        nv = rot(tha, nl)
+        t = perp(nv)
+        c = xa + a
+        w = p - c
+        hw = wp.dot(nv, w)
+        g = hw - r + e_off
+        if clamped:
+            g = wp.sqrt(bestd) - r + e_off
+        delta = -g
+        vc = vxa + wa * perp(a)
+        vp = vxb + wb * perp(b)
+        u = vp - vc
+        delta_dot = -wp.dot(nv, u)
+        F, Fd, Fdd = normal_force(k, p_exp, c_damp, dr, delta, delta_dot)
+        fA = -F * nv
+        bpc = b - r * nv
+        vpc = vxb + wb * perp(bpc)
+        vt = wp.dot(t, vc - vpc)
+        mu, dmu = friction_coefficient(muk, mus, vs, vreg, vt)
+        reg = mode == 1 and F > dtype(0.0)
+        ft = dtype(0.0)
+        if reg:
+            ft = -F * mu
+        ftA = ft * t
+
+        fsum = fA + ftA
+        q_out[i, 0] = fsum[0]
+        q_out[i, 1] = fsum[1]
+        q_out[i, 2] = cross2(a, fsum)
+        q_out[i, 3] = -fsum[0]
+        q_out[i, 4] = -fsum[1]
+        q_out[i, 5] = -(cross2(b, fA) + cross2(bpc, ftA))
+
+        den = dtype(1.0) + kap * hw
+        wt = wp.dot(w, t)
+        for j in range(12):
+            dqa = vec2(dtype(0.0), dtype(0.0))
+            dqb = vec2(dtype(0.0), dtype(0.0))
+            dva = vec2(dtype(0.0), dtype(0.0))
+            dvb = vec2(dtype(0.0), dtype(0.0))
+            dtha = dtype(0.0)
+            dthb = dtype(0.0)
+            dwa = dtype(0.0)
+            dwb = dtype(0.0)
+            if j == 0:
+                dqa = vec2(dtype(1.0), dtype(0.0))
+            elif j == 1:
+                dqa = vec2(dtype(0.0), dtype(1.0))
+            elif j == 2:
+                dtha = dtype(1.0)
+            elif j == 3:
+                dqb = vec2(dtype(1.0), dtype(0.0))
+            elif j == 4:
+                dqb = vec2(dtype(0.0), dtype(1.0))
+            elif j == 5:
+                dthb = dtype(1.0)
+            elif j == 6:
+                dva = vec2(dtype(1.0), dtype(0.0))
+            elif j == 7:
+                dva = vec2(dtype(0.0), dtype(1.0))
+            elif j == 8:
+                dwa = dtype(1.0)
+            elif j == 9:
+                dvb = vec2(dtype(1.0), dtype(0.0))
+            elif j == 10:
+                dvb = vec2(dtype(0.0), dtype(1.0))
+            else:
+                dwb = dtype(1.0)
+            dca = dqa + dtha * perp(a)
+            db = dthb * perp(b)
+            dp = dqb + db
+            D = dp - dca
+            dn = ((kap * wp.dot(t, D) + dtha) / den) * t
+            dt = perp(dn)
+            dg = wp.dot(nv, D) + wt * wp.dot(t, dn)
+            da = dtha * perp(a) + ((wp.dot(t, D) - dtha * hw) / den) * t
+            dvc = dva + dwa * perp(a) + wa * perp(da)
+            dvp = dvb + dwb * perp(b) + wb * perp(db)
+            ddelta_dot = -(wp.dot(dn, u) + wp.dot(nv, dvp - dvc))
+            dF = Fd * (-dg) + Fdd * ddelta_dot
+            dfA = -(dF * nv + F * dn)
+            dbpc = db - r * dn
+            dvpc = dvb + dwb * perp(bpc) + wb * perp(dbpc)
+            dvt = wp.dot(dt, vc - vpc) + wp.dot(t, dvc - dvpc)
+            dft = dtype(0.0)
+            if reg:
+                dft = -(dF * mu + F * dmu * dvt)
+            dftA = dft * t + ft * dt
+            dsum = dfA + dftA
+            dQa = cross2(da, fsum) + cross2(a, dsum)
+            dQb = -(cross2(db, fA) + cross2(b, dfA) + cross2(dbpc, ftA) + cross2(bpc, dftA))
+            if j < 6:
+                dqdq_out[i, 0, j] = dsum[0]
+                dqdq_out[i, 1, j] = dsum[1]
+                dqdq_out[i, 2, j] = dQa
+                dqdq_out[i, 3, j] = -dsum[0]
+                dqdq_out[i, 4, j] = -dsum[1]
+                dqdq_out[i, 5, j] = dQb
+            else:
+                dqdv_out[i, 0, j - 6] = dsum[0]
+                dqdv_out[i, 1, j - 6] = dsum[1]
+                dqdv_out[i, 2, j - 6] = dQa
+                dqdv_out[i, 3, j - 6] = -dsum[0]
+                dqdv_out[i, 4, j - 6] = -dsum[1]
+                dqdv_out[i, 5, j - 6] = dQb
+
+        cp = c + (dtype(0.5) * (hw - r)) * nv
+        obs_out[i, 0] = F
+        obs_out[i, 1] = vt
+        obs_out[i, 2] = g
+        obs_out[i, 3] = cp[0]
+        obs_out[i, 4] = cp[1]
+        obs_out[i, 5] = nv[0]
+        obs_out[i, 6] = nv[1]
+        obs_out[i, 7] = ft
+
+    return eval_cycloid_pins
+
+
+class CycloidPinKernel:
+    """Device-resident evaluator of one cycloid--pin contact set (one launch per call)."""
+
+    def __init__(self, fparams, iparams, tables, window, n_bodies, precision="float64", device="cpu"):
+        self.wdtype, self.ndtype = scalar_types(precision)
+        self.device = d = resolve_device(device)
+        fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
+        iparams = np.ascontiguousarray(iparams, dtype=np.int32)
+        assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
+        self.n = n = len(fparams)
+        dt = self.wdtype
+        lens = [len(tb[0]) for tb in tables]
+        offs = np.concatenate([[0], np.cumsum(lens)[:-1]]).astype(np.int32)
+        model = [
+            wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
+            wp.array(np.vstack([tb[0] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
+            wp.array(np.vstack([tb[1] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
+            wp.array(np.concatenate([tb[2] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
+            wp.array(np.concatenate([tb[3] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
+            wp.array(offs, dtype=wp.int32, device=d), wp.array(np.array(lens, np.int32), dtype=wp.int32, device=d),
+            wp.array(np.array([tb[4] for tb in tables], self.ndtype), dtype=dt, device=d), int(window)]
+        self._host = {"pose": np.zeros((n_bodies + 1, 3), self.ndtype), "vel": np.zeros((n_bodies + 1, 3), self.ndtype),
+                      "q": np.zeros((n, 6), self.ndtype), "dqdq": np.zeros((n, 6, 6), self.ndtype),
+                      "dqdv": np.zeros((n, 6, 6), self.ndtype), "obs": np.zeros((n, N_OBS), self.ndtype)}
+        self._on_cpu = wp.get_device(d).is_cpu
+        self._dev = {k: (wp.array(v, dtype=dt, device=d, copy=False) if self._on_cpu else wp.zeros(v.shape, dtype=dt, device=d))
+                     for k, v in self._host.items()}
+        self._model = model
+        self._cmd = wp.launch(_kernel(dt), dim=n, device=d, inputs=model + [self._dev["pose"], self._dev["vel"]],
+                              outputs=[self._dev[k] for k in ("q", "dqdq", "dqdv", "obs")], record_cmd=True)
+
+    def evaluate(self, pose, vel):
+        """Returns (Q (N,6), dQdq, dQdv, obs (N,8)); arrays are reused by the next call."""
+        h = self._host
+        h["pose"][...] = pose
+        h["vel"][...] = vel
+        if not self._on_cpu:
+            self._dev["pose"].assign(h["pose"])
+            self._dev["vel"].assign(h["vel"])
+        self._cmd.launch()
+        if not self._on_cpu:
+            for k in ("q", "dqdq", "dqdv", "obs"):
+                h[k][...] = self._dev[k].numpy()
+        return h["q"], h["dqdq"], h["dqdv"], h["obs"]

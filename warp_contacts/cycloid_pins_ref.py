@@ -1,0 +1,161 @@
+"""NumPy reference of the cycloid--pin contact family with its analytic tangent
+(readable version of :mod:`warp_contacts.cycloid_pins`).
+
+Each contact is one face-width slice of one ring pin against a wheel (body A,
+planar x, y, theta). The pin belongs to body B (usually the ground/housing).
+Contact location (Section "Tooth geometry, deviations, and contact location"):
+the pin centre is expressed in wheel coordinates, the arc-length resampled
+profile table is searched in a window around the pin's polar angle, and the
+nearest sample is refined by projection onto its tangent, clamped to half a
+sample spacing. Inside the interval the projected distance is used; a clamped
+projection is tested conservatively with the sampled point (so activation and
+indentation may differ there).
+
+Gap, Eq. (gap): g = n . (p - c) - r_p + e, where c is the contact point,
+n the outward profile normal, r_p the pin radius and e the slice's deviation
+sum (pin-centre error along n, wheel normal deviation, clearance, skew and
+crowning). Normal force Eq. (normal_force) with the power law k_s delta^p
+(k_s the per-slice coefficient); regularized friction Eq. (friction) with the
+material relative velocity of wheel and pin at the contact.
+
+Tangent. The search station is frozen, and the profile is represented at it
+by its osculating circle (curvature kappa), which reproduces the first
+derivatives of gap, normal and contact point exactly on a smooth branch:
+
+    Delta = dp - dc_mat,    d n = tau (kappa tau.Delta + d theta_A) / (1 + kappa n.w),
+    d c   = dc_mat + tau (tau.Delta - d theta_A n.w) / (1 + kappa n.w),
+
+with w = p - c and tau = perp(n). These forms stay finite at inflection
+points (kappa = 0), where an osculating centre would be at infinity.
+"""
+import numpy as np
+
+from . import laws_ref
+from .circle_pairs_ref import N_OBS, O_FN, O_FT, O_GAP, O_NX, O_NY, O_PX, O_PY, O_VT, _cross, _dot, _perp, _rot
+
+# float parameter columns
+(C_XI_B, C_RP, C_E, C_K, C_P, C_C, C_DR, C_MUK, C_MUS, C_VS, C_VREG) = (0, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11)
+N_FLOAT = 12
+# integer parameter columns
+(J_BODY_A, J_BODY_B, J_FRICTION, J_TABLE) = range(4)
+N_INT = 4
+
+
+def search(table, pin_local, window):
+    """Discrete search and tangent projection for pins given in wheel coordinates.
+
+    table: (points (n,2), normals (n,2), kappa (n,), polar (n,), spacing).
+    Returns (c (N,2), n (N,2), kappa (N,), clamped (N,) bool, sampled distance (N,)).
+    """
+    P, Nn, K, polar, h = table
+    n = len(P)
+    beta = np.mod(np.arctan2(pin_local[:, 1], pin_local[:, 0]), 2 * np.pi)
+    i0 = np.searchsorted(polar, beta)
+    idx = (i0[:, None] + np.arange(-window, window + 1)[None, :]) % n
+    d2 = np.sum((P[idx] - pin_local[:, None, :]) ** 2, axis=2)
+    best = idx[np.arange(len(beta)), np.argmin(d2, axis=1)]
+    ci, ni, ki = P[best], Nn[best], K[best]
+    ti = _perp(ni)
+    wi = pin_local - ci
+    # projection onto the sample's osculating arc (second order in the arc parameter t),
+    # the same local geometry the tangent differentiates
+    t = _dot(wi, ti) / (1.0 + ki * _dot(wi, ni))
+    clamped = np.abs(t) > 0.5 * h
+    t = np.clip(t, -0.5 * h, 0.5 * h)
+    c = ci + t[:, None] * ti - (0.5 * ki * t * t)[:, None] * ni
+    nn = ni + (ki * t)[:, None] * ti
+    nn /= np.linalg.norm(nn, axis=1)[:, None]
+    return c, nn, ki, clamped, np.linalg.norm(pin_local - ci, axis=1)
+
+
+def evaluate(pose, vel, fparams, iparams, tables, window):
+    """Evaluate all pin-slice contacts.
+
+    pose, vel: (nb+1, 3) absolute poses and velocities, last row the ground.
+    fparams (N, 12), iparams (N, 4): packed parameters (columns C_*, J_*).
+    tables: list of profile tables (see :func:`search`), indexed by J_TABLE.
+    Returns Q (N,6), dQdq (N,6,6), dQdv (N,6,6), obs (N, 8).
+    """
+    fp = np.asarray(fparams, float)
+    ip = np.asarray(iparams)
+    N = len(fp)
+    ia, ib = ip[:, J_BODY_A], ip[:, J_BODY_B]
+    qa, qb, va, vb = pose[ia], pose[ib], vel[ia], vel[ib]
+    b = _rot(qb[:, 2], fp[:, C_XI_B:C_XI_B + 2])
+    p = qb[:, :2] + b
+    pin_local = _rot(-qa[:, 2], p - qa[:, :2])
+    c_loc = np.zeros((N, 2))
+    n_loc = np.zeros((N, 2))
+    kap = np.zeros(N)
+    clamped = np.zeros(N, bool)
+    dist = np.zeros(N)
+    for tb in np.unique(ip[:, J_TABLE]):
+        m = ip[:, J_TABLE] == tb
+        c_loc[m], n_loc[m], kap[m], clamped[m], dist[m] = search(tables[tb], pin_local[m], window)
+    a = _rot(qa[:, 2], c_loc)
+    n = _rot(qa[:, 2], n_loc)
+    t = _perp(n)
+    c = qa[:, :2] + a
+    w = p - c
+    hw = _dot(n, w)
+    r = fp[:, C_RP]
+    g = np.where(clamped, dist, hw) - r + fp[:, C_E]
+    delta = -g
+    vc = va[:, :2] + va[:, 2:3] * _perp(a)
+    vp = vb[:, :2] + vb[:, 2:3] * _perp(b)
+    u = vp - vc
+    delta_dot = -_dot(n, u)
+    F, Fd, Fdd = laws_ref.normal_force(fp[:, C_K], fp[:, C_P], fp[:, C_C], fp[:, C_DR], delta, delta_dot)
+    fA = -F[:, None] * n
+    bpc = b - r[:, None] * n
+    vpc = vb[:, :2] + vb[:, 2:3] * _perp(bpc)
+    vt = _dot(t, vc - vpc)
+    mu, dmu = laws_ref.friction_coefficient(fp[:, C_MUK], fp[:, C_MUS], fp[:, C_VS], fp[:, C_VREG], vt)
+    reg = (ip[:, J_FRICTION] == 1) & (F > 0)
+    ft = np.where(reg, -F * mu, 0.0)
+    ftA = ft[:, None] * t
+
+    Q = np.zeros((N, 6))
+    Q[:, 0:2] = fA + ftA
+    Q[:, 2] = _cross(a, fA + ftA)
+    Q[:, 3:5] = -(fA + ftA)
+    Q[:, 5] = -(_cross(b, fA) + _cross(bpc, ftA))
+
+    den = 1.0 + kap * hw
+    wt = _dot(w, t)
+    dQ = np.zeros((N, 6, 12))
+    for j in range(12):
+        s = np.zeros(12)
+        s[j] = 1.0
+        dqa, dqb, dva, dvb = s[0:3], s[3:6], s[6:9], s[9:12]
+        dca = dqa[:2] + dqa[2] * _perp(a)
+        db = dqb[2] * _perp(b)
+        dp = dqb[:2] + db
+        D = dp - dca
+        dn = t * ((kap * _dot(t, D) + dqa[2]) / den)[:, None]
+        dt = _perp(dn)
+        dg = _dot(n, D) + wt * _dot(t, dn)
+        da = dqa[2] * _perp(a) + t * ((_dot(t, D) - dqa[2] * hw) / den)[:, None]
+        dvc = dva[:2] + dva[2] * _perp(a) + va[:, 2:3] * _perp(da)
+        dvp = dvb[:2] + dvb[2] * _perp(b) + vb[:, 2:3] * _perp(db)
+        ddelta_dot = -(_dot(dn, u) + _dot(n, dvp - dvc))
+        dF = Fd * (-dg) + Fdd * ddelta_dot
+        dfA = -(dF[:, None] * n + F[:, None] * dn)
+        dbpc = db - r[:, None] * dn
+        dvpc = dvb[:2] + dvb[2] * _perp(bpc) + vb[:, 2:3] * _perp(dbpc)
+        dvt = _dot(dt, vc - vpc) + _dot(t, dvc - dvpc)
+        dft = np.where(reg, -(dF * mu + F * dmu * dvt), 0.0)
+        dftA = dft[:, None] * t + ft[:, None] * dt
+        dQ[:, 0:2, j] = dfA + dftA
+        dQ[:, 2, j] = _cross(da, fA + ftA) + _cross(a, dfA + dftA)
+        dQ[:, 3:5, j] = -(dfA + dftA)
+        dQ[:, 5, j] = -(_cross(db, fA) + _cross(b, dfA) + _cross(dbpc, ftA) + _cross(bpc, dftA))
+
+    obs = np.zeros((N, N_OBS))
+    obs[:, O_FN] = F
+    obs[:, O_VT] = vt
+    obs[:, O_GAP] = g
+    obs[:, O_PX:O_PY + 1] = c + 0.5 * (hw - r)[:, None] * n
+    obs[:, O_NX:O_NY + 1] = n
+    obs[:, O_FT] = ft
+    return Q, dQ[:, :, :6], dQ[:, :, 6:], obs
