@@ -324,10 +324,13 @@ def test_bad_inputs_name_the_parameter():
 
 
 # ---------------------------------------------------------------- Exudyn integration
-exu = pytest.importorskip("exudyn")
+@pytest.fixture
+def exu():
+    """Exudyn, or a skip of the integration tests only (the family itself needs no Exudyn)."""
+    return pytest.importorskip("exudyn")
 
 
-def _reducer_output_stage(mech, q0, masses=(0.5, 0.2, 0.2), inertias=(1e-3, 2e-4, 2e-4)):
+def _reducer_output_stage(exu, mech, q0, masses=(0.5, 0.2, 0.2), inertias=(1e-3, 2e-4, 2e-4)):
     from exudyn.itemInterface import NodeRigidBody2D, ObjectRigidBody2D
     from exudyn_user_elements.contact_element import ContactElement
     SC = exu.SystemContainer()
@@ -342,12 +345,12 @@ def _reducer_output_stage(mech, q0, masses=(0.5, 0.2, 0.2), inertias=(1e-3, 2e-4
     return SC, mbs, el, nodes
 
 
-def test_exudyn_contact_element_forces_and_jacobian():
+def test_exudyn_contact_element_forces_and_jacobian(exu):
     """Flange and two wheels on NodeRigidBody2D nodes: the element returns the family's Q and the
     Jacobian in Exudyn's ObjectGenericODE2 convention J = -(f_ODE2 dQ/dq + f_ODE2_t dQ/dv)."""
     mech = shared_pin_study_mechanism(0.9e-9, n_pins=3)
     q0 = _random_state(np.random.default_rng(21))
-    SC, mbs, el, nodes = _reducer_output_stage(mech, q0)
+    SC, mbs, el, nodes = _reducer_output_stage(exu, mech, q0)
     Q = el._force(mbs, 0.0, el.object_number, q0, np.zeros(9))
     J = el._jacobian(mbs, 0.0, el.object_number, q0, np.zeros(9), 1.0, 0.5)
     r = SharedPinModel(mech).evaluate(q0)
@@ -358,7 +361,7 @@ def test_exudyn_contact_element_forces_and_jacobian():
     assert len(snap.ids) == 3 * 2 * 4 and np.all(np.isfinite(snap.normal_force))
 
 
-def test_exudyn_simulate_conserves_momentum():
+def test_exudyn_simulate_conserves_momentum(exu):
     """Free flange and wheels released from a pressed state: the pin forces are internal, so total
     linear momentum stays at its initial zero (to the Newton tolerance, here 1e-9 of m |v|)."""
     from rvtool.solver import RunSpec, simulate
@@ -367,7 +370,7 @@ def test_exudyn_simulate_conserves_momentum():
     # ~40 um approach on every pin; not symmetric, so the momentum balance is not trivial
     q0[3:6], q0[6:9] = (90e-6, 10e-6, 1e-4), (-85e-6, 5e-6, -5e-5)
     masses = (0.5, 0.2, 0.2)
-    SC, mbs, el, nodes = _reducer_output_stage(mech, q0, masses=masses)
+    SC, mbs, el, nodes = _reducer_output_stage(exu, mech, q0, masses=masses)
     # well inside a quarter of the contact period 2 pi sqrt(0.2 kg / 3e8 N/m) ~ 0.16 ms: the pins stay loaded
     spec = RunSpec(end_time=2e-5, step=5e-6, abs_tol=1e-6, rel_tol=1e-10)
     rec = simulate(mbs, spec, elements=[el])
@@ -380,7 +383,7 @@ def test_exudyn_simulate_conserves_momentum():
     assert el.last_obs is not None and np.max(el.last_obs[:, 0]) > 0
 
 
-def test_exudyn_explicit_sleeve_with_its_own_inertia():
+def test_exudyn_explicit_sleeve_with_its_own_inertia(exu):
     """The explicit sleeve as a fourth body with a small mass: its node carries the inner and outer
     contacts, linear momentum of all four bodies stays zero (internal forces only)."""
     from exudyn.itemInterface import NodeRigidBody2D, ObjectRigidBody2D
