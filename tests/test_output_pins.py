@@ -409,3 +409,18 @@ def test_exudyn_explicit_sleeve_with_its_own_inertia(exu):
     v = np.asarray(mbs.systemData.GetODE2Coordinates_t()).reshape(4, 3)
     p = sum(m * v[b, :2] for b, m in enumerate(masses))
     assert np.linalg.norm(p) <= 1e-9 * max(m * np.linalg.norm(v[b, :2]) for b, m in enumerate(masses))
+
+
+@pytest.mark.parametrize("mode", ["shared", "plain"])
+def test_evaluator_with_grounded_flange(mode):
+    """A fixed flange (GROUND) drops the flange rows and columns: the wheel blocks equal those of the
+    same mechanism with the flange as a body at rest."""
+    from rvtool.output_pins import GROUND
+    kw = {} if mode == "shared" else dict(mode=PinMode.PLAIN, compliance=None)
+    mech = shared_pin_study_mechanism(0.9e-9, n_pins=3, **kw)
+    q = _random_state(np.random.default_rng(31))
+    q[0:3] = 0.0
+    full = OutputPinEvaluator(mech).evaluate(q.reshape(3, 3), np.zeros((3, 3)))
+    grounded = OutputPinEvaluator(mech, flange=GROUND, wheels=(0, 1)).evaluate(q[3:].reshape(2, 3), np.zeros((2, 3)))
+    np.testing.assert_allclose(grounded.Q, full.Q[3:], rtol=0, atol=1e-12 * np.max(np.abs(full.Q)))
+    np.testing.assert_allclose(grounded.dQdq, full.dQdq[3:, 3:], rtol=0, atol=1e-12 * np.max(np.abs(full.dQdq)))
