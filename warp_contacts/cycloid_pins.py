@@ -82,6 +82,9 @@ def _kernel(dtype):
         mus = fparams[i, 9]
         vs = fparams[i, 10]
         vreg = fparams[i, 11]
+        zs = fparams[i, 12]
+        tx = fparams[i, 13]
+        ty = fparams[i, 14]
 
         b = rot(thb, vec2(fparams[i, 0], fparams[i, 1]))
         p = xb + b
@@ -117,7 +120,7 @@ def _kernel(dtype):
         ti = perp(ni)
         wi = pl - ci
         tt = wp.dot(wi, ti) / (dtype(1.0) + kap * wp.dot(wi, ni))
-        hh = dtype(0.5) * tab_h[tb]
+        hh = tab_h[tb]
         clamped = wp.abs(tt) > hh
         tt = wp.clamp(tt, -hh, hh)
         cl = ci + tt * ti - (dtype(0.5) * kap * tt * tt) * ni
@@ -129,9 +132,10 @@ def _kernel(dtype):
         c = xa + a
         w = p - c
         hw = wp.dot(nv, w)
-        g = hw - r + e_off
+        e_tilt = zs * (ty * nv[0] - tx * nv[1])
+        g = hw - r + e_off + e_tilt
         if clamped:
-            g = wp.sqrt(bestd) - r + e_off
+            g = wp.sqrt(bestd) - r + e_off + e_tilt
         delta = -g
         vc = vxa + wa * perp(a)
         vp = vxb + wb * perp(b)
@@ -198,7 +202,7 @@ def _kernel(dtype):
             D = dp - dca
             dn = ((kap * wp.dot(t, D) + dtha) / den) * t
             dt = perp(dn)
-            dg = wp.dot(nv, D) + wt * wp.dot(t, dn)
+            dg = wp.dot(nv, D) + wt * wp.dot(t, dn) + zs * (ty * dn[0] - tx * dn[1])
             da = dtha * perp(a) + ((wp.dot(t, D) - dtha * hw) / den) * t
             dvc = dva + dwa * perp(a) + wa * perp(da)
             dvp = dvb + dwb * perp(b) + wb * perp(db)

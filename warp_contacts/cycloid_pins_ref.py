@@ -6,15 +6,17 @@ planar x, y, theta). The pin belongs to body B (usually the ground/housing).
 Contact location (Section "Tooth geometry, deviations, and contact location"):
 the pin centre is expressed in wheel coordinates, the arc-length resampled
 profile table is searched in a window around the pin's polar angle, and the
-nearest sample is refined by projection onto its tangent, clamped to half a
-sample spacing. Inside the interval the projected distance is used; a clamped
+nearest sample is refined by projection onto its osculating arc, clamped to one
+sample spacing either side. Inside the interval the projected distance is used; a clamped
 projection is tested conservatively with the sampled point (so activation and
 indentation may differ there).
 
 Gap, Eq. (gap): g = n . (p - c) - r_p + e, where c is the contact point,
 n the outward profile normal, r_p the pin radius and e the slice's deviation
 sum (pin-centre error along n, wheel normal deviation, clearance, skew and
-crowning). Normal force Eq. (normal_force) with the power law k_s delta^p
+crowning) plus the relative-tilt term of Eq. (skew),
+z (Delta theta_y n_x - Delta theta_x n_y), for the slice at axial station z
+with the declared relative tilt (Delta theta_x, Delta theta_y) of wheel and pin. Normal force Eq. (normal_force) with the power law k_s delta^p
 (k_s the per-slice coefficient); regularized friction Eq. (friction) with the
 material relative velocity of wheel and pin at the contact.
 
@@ -34,8 +36,9 @@ from . import laws_ref
 from .circle_pairs_ref import N_OBS, O_FN, O_FT, O_GAP, O_NX, O_NY, O_PX, O_PY, O_VT, _cross, _dot, _perp, _rot
 
 # float parameter columns
-(C_XI_B, C_RP, C_E, C_K, C_P, C_C, C_DR, C_MUK, C_MUS, C_VS, C_VREG) = (0, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11)
-N_FLOAT = 12
+(C_XI_B, C_RP, C_E, C_K, C_P, C_C, C_DR, C_MUK, C_MUS, C_VS, C_VREG, C_Z, C_TX, C_TY) = (
+    0, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14)
+N_FLOAT = 15
 # integer parameter columns
 (J_BODY_A, J_BODY_B, J_FRICTION, J_TABLE) = range(4)
 N_INT = 4
@@ -60,8 +63,9 @@ def search(table, pin_local, window):
     # projection onto the sample's osculating arc (second order in the arc parameter t),
     # the same local geometry the tangent differentiates
     t = _dot(wi, ti) / (1.0 + ki * _dot(wi, ni))
-    clamped = np.abs(t) > 0.5 * h
-    t = np.clip(t, -0.5 * h, 0.5 * h)
+    # permitted local interval: up to the neighbouring samples
+    clamped = np.abs(t) > h
+    t = np.clip(t, -h, h)
     c = ci + t[:, None] * ti - (0.5 * ki * t * t)[:, None] * ni
     nn = ni + (ki * t)[:, None] * ti
     nn /= np.linalg.norm(nn, axis=1)[:, None]
@@ -99,7 +103,8 @@ def evaluate(pose, vel, fparams, iparams, tables, window):
     w = p - c
     hw = _dot(n, w)
     r = fp[:, C_RP]
-    g = np.where(clamped, dist, hw) - r + fp[:, C_E]
+    z, tx, ty = fp[:, C_Z], fp[:, C_TX], fp[:, C_TY]
+    g = np.where(clamped, dist, hw) - r + fp[:, C_E] + z * (ty * n[:, 0] - tx * n[:, 1])
     delta = -g
     vc = va[:, :2] + va[:, 2:3] * _perp(a)
     vp = vb[:, :2] + vb[:, 2:3] * _perp(b)
@@ -134,7 +139,7 @@ def evaluate(pose, vel, fparams, iparams, tables, window):
         D = dp - dca
         dn = t * ((kap * _dot(t, D) + dqa[2]) / den)[:, None]
         dt = _perp(dn)
-        dg = _dot(n, D) + wt * _dot(t, dn)
+        dg = _dot(n, D) + wt * _dot(t, dn) + z * (ty * dn[:, 0] - tx * dn[:, 1])
         da = dqa[2] * _perp(a) + t * ((_dot(t, D) - dqa[2] * hw) / den)[:, None]
         dvc = dva[:2] + dva[2] * _perp(a) + va[:, 2:3] * _perp(da)
         dvp = dvb[:2] + dvb[2] * _perp(b) + vb[:, 2:3] * _perp(db)

@@ -1,0 +1,1 @@
+"""Builders that turn reducer specifications (data) into Exudyn systems."""

@@ -1,0 +1,266 @@
+"""Builder: a :class:`~rvtool.assembly.spec.CycloidDesign` -> an Exudyn system.
+
+Bodies (planar rigid, x, y, theta): 0 the input eccentric shaft, 1..n the
+wheels, n+1 the output flange; the housing with the ring pins is the ground.
+Assembly phase: the journal of wheel k sits at angle phi_k on the shaft
+(opposed journals for two wheels) and the wheel's profile is turned by
+-phi_k / z_g, the conjugate tooth phase, so every wheel starts in mesh.
+Contact sets (each one Exudyn contact element, one kernel launch per
+evaluation):
+
+* ``pins``: cycloid--pin meshes of all wheels (slices, deviations),
+* ``output_pins``: flange pins in wheel holes (plain rigid pins, 10/9 law
+  calibrated from a Hertz reference load),
+* bearings: ``eccentric_bearings`` (journal--wheel bore), ``main_bearing``
+  (flange--housing), ``input_bearing`` (shaft--housing), either from rolling
+  elements (``bearing_model="rolling"``, :mod:`rvtool.bearings`) or as one
+  lumped internal circle contact per bearing (``"lumped"``, linear radial
+  stiffness from the rolling-element model's small-load secant) for studies that
+  isolate the gearing.
+
+The input rotation is prescribed through a coordinate constraint (an angle
+for quasi-static sequences, a speed for driven runs); the output load is a
+torque on the flange rotation.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+import exudyn as exu
+from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNodeCoordinate, NodePointGround,
+                                  NodeRigidBody2D, ObjectRigidBody2D)
+
+from exudyn_user_elements.contact_element import ContactElement
+
+from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
+from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiffness
+from ..errors import RvtoolInputError
+from ..geometry.cycloid import CycloidProfile
+from .spec import CycloidDesign
+
+SHAFT = 0
+
+
+@dataclass
+class CycloidModel:
+    """An assembled cycloid reducer: Exudyn system plus the handles protocols need."""
+    design: CycloidDesign
+    SC: object
+    mbs: object
+    nodes: list
+    elements: dict
+    pin_set: CycloidPinSet
+    drive: int
+    load: int
+    n_wheels: int
+    locks: list = field(default_factory=list)
+    profiles: list = field(default_factory=list)
+    reg_springs: list = field(default_factory=list)
+
+    def regularization_force(self, q):
+        """Largest force [N] (or moment [N m]) carried by the regularization springs at q."""
+        out = 0.0
+        for body, c, k, _ in self.reg_springs:
+            out = max(out, abs(k * q[self.coordinate_index(body, c)]))
+        return out
+
+    @property
+    def flange(self):
+        return self.n_wheels + 1
+
+    def coordinate_index(self, body, coord):
+        """Global ODE2 index of ``coord`` (0 x, 1 y, 2 theta) of ``body``."""
+        return int(self.mbs.systemData.GetNodeLTGODE2(self.nodes[body])[coord])
+
+    def set_input_angle(self, angle):
+        """Prescribed input-shaft angle [rad] (quasi-static sequences)."""
+        self.mbs.SetObjectParameter(self.drive, "offset", float(angle))
+
+    def set_input_speed(self, omega, angle0=0.0):
+        """Prescribed constant input speed omega [rad/s] from angle0 at t = 0."""
+        self.mbs.SetObjectParameter(self.drive, "offsetUserFunction",
+                                    lambda mbs, t, itemNumber, lOffset: angle0 + omega * t)
+
+    def set_output_torque(self, torque):
+        """Torque on the flange rotation [N m] (positive counter-clockwise)."""
+        self.mbs.SetLoadParameter(self.load, "load", float(torque))
+
+    def kinematic_state(self, input_angle):
+        """Rigid, clearance-free kinematic positions of all bodies at ``input_angle`` (initial guess)."""
+        d = self.design
+        q = np.zeros((len(self.nodes), 3))
+        q[SHAFT, 2] = input_angle
+        zg = d.pins.n_pins - 1
+        for k in range(self.n_wheels):
+            psi = input_angle + np.deg2rad(d.wheels.phases_deg[k])
+            e = d.wheels.eccentricity
+            q[1 + k] = (-e * np.sin(psi), e * np.cos(psi), -input_angle / zg)
+        q[self.flange, 2] = -input_angle / zg
+        return q
+
+
+def _mass_wheel(design):
+    d = design
+    r_o = d.pins.pin_circle_radius - d.pins.pin_radius
+    r_i = d.eccentric_bearing.journal_radius + d.eccentric_bearing.roller_diameter
+    m = np.pi * (r_o ** 2 - r_i ** 2) * d.wheels.width * d.material.density
+    return m, 0.5 * m * (r_o ** 2 + r_i ** 2)
+
+
+def lumped_needle_stiffness(design):
+    """Radial stiffness [N/m] of the eccentric needle bearing as a lumped contact: Palmgren
+    line contacts of the loaded rollers (about Z/4 effective rollers at a typical load)."""
+    b = design.eccentric_bearing
+    per_roller = secant_line_stiffness(300.0, b.roller_length)  # two races in series
+    return 0.25 * b.n_rollers * 0.5 * per_roller
+
+
+def lumped_ball_stiffness(spec, material, load=2000.0):
+    """Radial secant stiffness [N/m] of a ball bearing at ``load`` from the Stribeck maximum
+    ball load and a steel ball point-contact approach (Palmgren: 4.36e-4 Q^(2/3) / D^(1/3) mm)."""
+    Z = spec.n_balls * (2 if spec.kind == "angular_contact_pair" else 1)
+    ca = np.cos(np.deg2rad(spec.contact_angle_deg))
+    q_max = 5.0 * load / (Z * ca)
+    delta = 2 * 4.36e-4 * q_max ** (2 / 3) / (spec.ball_diameter * 1e3) ** (1 / 3) * 1e-3 / ca
+    return load / delta
+
+
+def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
+          pin_overrides=None, lock_wheel_translation=False, regularization=(100.0, 0.1)):
+    """Assemble ``design`` into an Exudyn system; returns a :class:`CycloidModel`.
+
+    pin_overrides: dict of WheelPinMesh fields applied to every wheel (e.g.
+    ``{"pin_centre_errors": ..., "normal": NormalLaw(...)}``).
+    lock_wheel_translation: hold the wheel centres at their kinematic positions
+    (rigid eccentric support; used by the ideal load-sharing check).
+    regularization: (k_translation [N/m], k_rotation [N m/rad]) of weak springs from
+    every free coordinate to its reference (a numerical setting: free play in
+    clearances leaves equilibrium directions without stiffness at zero load; at
+    100 N/m and 10 um they carry 1e-3 N against contact loads of 1e2-1e3 N; the
+    forces they carry are reported by the protocols). (0, 0) removes them.
+    """
+    if bearing_model not in ("lumped", "rolling"):
+        raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
+    d = design
+    nw = d.n_wheels
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    zg = d.pins.n_pins - 1
+    m_w, J_w = _mass_wheel(d)
+    nodes = []
+    ref = np.zeros((nw + 2, 3))
+    for k in range(nw):
+        phi = np.deg2rad(d.wheels.phases_deg[k])
+        ref[1 + k, :2] = (-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi))
+    masses = [(d.bodies.shaft_mass, d.bodies.shaft_inertia)] + [(m_w, J_w)] * nw + \
+             [(d.bodies.flange_mass, d.bodies.flange_inertia)]
+    for b in range(nw + 2):
+        n = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=list(ref[b])))
+        mbs.AddObject(ObjectRigidBody2D(nodeNumber=n, mass=masses[b][0], inertia=masses[b][1]))
+        nodes.append(n)
+    ground = mbs.AddNode(NodePointGround())
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+
+    def marker(body, c):
+        return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[body], coordinate=c))
+
+    locks = []
+    retained = {SHAFT: d.bodies.shaft, nw + 1: d.bodies.flange}
+    retained.update({1 + k: d.bodies.wheel for k in range(nw)})
+    for body, coords in retained.items():
+        for c, name in enumerate(("x", "y", "theta")):
+            if (body == SHAFT and c == 2):
+                continue  # the drive prescribes the input angle
+            if name not in coords or (lock_wheel_translation and 1 <= body <= nw and c < 2):
+                locks.append(mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, marker(body, c)])))
+    drive = mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, marker(SHAFT, 2)], offset=0.0))
+    k_reg_t, k_reg_r = regularization
+    reg_springs = []
+    if k_reg_t > 0 or k_reg_r > 0:
+        from exudyn.itemInterface import CoordinateSpringDamper
+        for body in range(nw + 2):
+            for c in range(3):
+                if body == SHAFT and c == 2:
+                    continue
+                k_reg = k_reg_t if c < 2 else k_reg_r
+                if k_reg > 0:
+                    reg_springs.append((body, c, k_reg, mbs.AddObject(CoordinateSpringDamper(
+                        markerNumbers=[mg, marker(body, c)], stiffness=k_reg))))
+    load = mbs.AddLoad(LoadCoordinate(markerNumber=marker(nw + 1, 2), load=0.0))
+
+    # -- ring pins ---------------------------------------------------------------
+    pc = d.pin_contact
+    width = d.wheels.width
+    if pc.law == "power":
+        law = NormalLaw(law="power", exponent=pc.exponent, stiffness=pc.stiffness or 1e9, damping=pc.damping)
+    else:
+        k_line = pc.stiffness if (pc.law == "line" and pc.stiffness > 0) else secant_line_stiffness(pc.reference_force, width)
+        law = NormalLaw(law="line", stiffness=k_line, damping=pc.damping, ramp_depth=1e-6)
+    friction = FrictionLaw(model=FrictionModel.REGULARIZED if pc.mu > 0 else FrictionModel.NONE, mu_kinetic=pc.mu)
+    profiles, meshes = [], []
+    for k in range(nw):
+        phi = np.deg2rad(d.wheels.phases_deg[k])
+        prof = CycloidProfile(pin_circle_radius=d.pins.pin_circle_radius, pin_radius=d.pins.pin_radius,
+                              n_pins=d.pins.n_pins, generating_eccentricity=d.wheels.e_g,
+                              equidistant_mod=d.wheels.equidistant_mod, offset_mod=d.wheels.offset_mod,
+                              rotation_mod=d.wheels.rotation_mod - phi / zg)
+        profiles.append(prof)
+        kw = dict(profile=prof, wheel_body=1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
+                  wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,
+                  name=f"wheel{k}")
+        kw.update(pin_overrides or {})
+        meshes.append(WheelPinMesh(**kw))
+    pin_set = CycloidPinSet(meshes, nw + 2, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
+                            precision=precision, device=device, name="pins")
+    elements = {"pins": ContactElement(mbs, nodes, pin_set)}
+
+    # -- output pins (plain rigid pins in the wheel holes) -------------------------
+    from ..output_pins.calibration import hertz_calibrated_coefficient
+    from ..output_pins.evaluator import OutputPinEvaluator
+    from ..output_pins.spec import OutputPinMechanism, PinMode
+    op = d.output_pins
+    k_op = hertz_calibrated_coefficient(op.reference_force, op.pin_radius, op.hole_radius, width,
+                                        d.material.youngs_modulus, d.material.poisson_ratio)
+    mech = OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
+                              n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
+                              coefficient=k_op, contact_length=width, n_slices=op.n_slices,
+                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN)
+    op_eval = OutputPinEvaluator(mech, name="output_pins", flange=nw + 1, wheels=tuple(range(1, nw + 1)),
+                                 n_bodies=nw + 2, backend=backend, precision=precision, device=device)
+    elements["output_pins"] = ContactElement(mbs, nodes, op_eval)
+
+    # -- bearings -----------------------------------------------------------------
+    if bearing_model == "rolling":
+        from ..bearings.reducer import rolling_bearing_sets
+        for name, ev in rolling_bearing_sets(d, nw, backend=backend, precision=precision, device=device).items():
+            elements[name] = ContactElement(mbs, nodes, ev)
+    else:
+        eb = d.eccentric_bearing
+        r_j = eb.journal_radius
+        k_n = lumped_needle_stiffness(d)
+        contacts = []
+        for k in range(nw):
+            phi = np.deg2rad(d.wheels.phases_deg[k])
+            contacts.append(CircleContact(
+                body_a=SHAFT, body_b=1 + k, centre_a=(-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi)),
+                centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + eb.radial_clearance + 1e-12, internal=True,
+                normal=NormalLaw(law="line", stiffness=k_n, damping=50.0, ramp_depth=1e-6), name=f"eccentric_bearing{k}"))
+        main = d.main_bearing
+        if main.kind != "locked":
+            contacts.append(CircleContact(
+                body_a=nw + 1, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0), radius_a=0.5 * main.pitch_diameter,
+                radius_b=0.5 * main.pitch_diameter + main.radial_clearance + 1e-12, internal=True,
+                normal=NormalLaw(law="line", stiffness=lumped_ball_stiffness(main, d.material), damping=200.0, ramp_depth=1e-6),
+                name="main_bearing"))
+        inp = d.input_bearing
+        if inp.kind != "locked":
+            contacts.append(CircleContact(
+                body_a=SHAFT, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0), radius_a=0.5 * inp.pitch_diameter,
+                radius_b=0.5 * inp.pitch_diameter + inp.radial_clearance + 1e-12, internal=True,
+                normal=NormalLaw(law="line", stiffness=2 * lumped_ball_stiffness(inp, d.material, 500.0), damping=50.0,
+                                 ramp_depth=1e-6),
+                name="input_bearing"))
+        bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(contacts))
+        elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
+    mbs.Assemble()
+    return CycloidModel(design=d, SC=SC, mbs=mbs, nodes=nodes, elements=elements, pin_set=pin_set, drive=drive,
+                        load=load, n_wheels=nw, locks=locks, profiles=profiles, reg_springs=reg_springs)

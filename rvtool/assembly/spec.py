@@ -1,0 +1,252 @@
+"""Cycloid reducer specification: plain data (TOML) loaded into frozen
+dataclasses and validated on load; errors name the parameter (with its
+section) and its valid range."""
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+
+from ..errors import RvtoolInputError
+from ..validation import check_nonnegative, check_positive, check_range
+
+COORDS = ("x", "y", "theta")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Material:
+    """youngs_modulus [Pa], poisson_ratio [-], density [kg/m^3]."""
+    youngs_modulus: float = 206e9
+    poisson_ratio: float = 0.3
+    density: float = 7850.0
+
+    def __post_init__(self):
+        check_positive("material.youngs_modulus", self.youngs_modulus)
+        check_range("material.poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
+        check_positive("material.density", self.density)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Pins:
+    """Ring pins: n_pins (z_b), pin_circle_radius R_z [m], pin_radius r_p [m]."""
+    n_pins: int
+    pin_circle_radius: float
+    pin_radius: float
+
+    def __post_init__(self):
+        if not isinstance(self.n_pins, int) or self.n_pins < 3:
+            raise RvtoolInputError(f"pins.n_pins = {self.n_pins!r} is outside the valid range [3, inf) (integer)")
+        check_positive("pins.pin_circle_radius", self.pin_circle_radius)
+        check_positive("pins.pin_radius", self.pin_radius)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Wheels:
+    """Cycloid wheels: assembly eccentricity e [m] and nominal generating eccentricity e_g [m]
+    (separate inputs), width [m], axial midplanes [m], eccentric phases [deg], face-width slices,
+    profile table resolution, profile modifications [m, rad] and uniform clearance [m]."""
+    eccentricity: float
+    generating_eccentricity: float | None = None
+    width: float
+    midplanes: tuple = (0.0,)
+    phases_deg: tuple = (0.0,)
+    n_slices: int = 1
+    samples_per_tooth: int = 120
+    equidistant_mod: float = 0.0
+    offset_mod: float = 0.0
+    rotation_mod: float = 0.0
+    clearance: float = 0.0
+    n_teeth: int | None = None
+
+    def __post_init__(self):
+        check_positive("wheels.eccentricity", self.eccentricity)
+        check_positive("wheels.width", self.width)
+        if len(self.midplanes) != len(self.phases_deg):
+            raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases_deg "
+                                   f"({len(self.phases_deg)}) must have one entry per wheel")
+        if not 1 <= len(self.midplanes) <= 2:
+            raise RvtoolInputError(f"wheels: {len(self.midplanes)} wheels; valid range [1, 2]")
+        if not isinstance(self.n_slices, int) or self.n_slices < 1:
+            raise RvtoolInputError(f"wheels.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
+
+    @property
+    def e_g(self):
+        return self.eccentricity if self.generating_eccentricity is None else self.generating_eccentricity
+
+
+@dataclass(frozen=True, kw_only=True)
+class PinContact:
+    """Cycloid--pin contact law: law ("line", "power", "secant"), stiffness [N/m] (whole contact;
+    0 with "line" = secant stiffness at reference_force), exponent (power law), reference_force [N],
+    damping [N s/m], mu [-] (regularized friction; 0 = none)."""
+    law: str = "line"
+    stiffness: float = 0.0
+    exponent: float = 1.0
+    reference_force: float = 500.0
+    damping: float = 0.0
+    mu: float = 0.0
+
+    def __post_init__(self):
+        if self.law not in ("line", "power", "secant"):
+            raise RvtoolInputError(f"pin_contact.law = {self.law!r}; valid choices are ['line', 'power', 'secant']")
+        check_nonnegative("pin_contact.stiffness", self.stiffness)
+        check_range("pin_contact.exponent", self.exponent, 1.0)
+        check_positive("pin_contact.reference_force", self.reference_force)
+        check_nonnegative("pin_contact.damping", self.damping)
+        check_nonnegative("pin_contact.mu", self.mu)
+
+
+@dataclass(frozen=True, kw_only=True)
+class OutputPins:
+    """Flange pins in wheel holes: n_pins, pin_circle_radius [m], pin_radius [m], hole_radius [m],
+    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices."""
+    n_pins: int
+    pin_circle_radius: float
+    pin_radius: float
+    hole_radius: float
+    reference_force: float = 1000.0
+    n_slices: int = 4
+
+    def __post_init__(self):
+        check_positive("output_pins.pin_circle_radius", self.pin_circle_radius)
+        check_positive("output_pins.pin_radius", self.pin_radius)
+        check_range("output_pins.hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
+
+
+@dataclass(frozen=True, kw_only=True)
+class EccentricBearing:
+    """Needle bearing between journal and wheel bore: journal_radius [m], n_rollers,
+    roller_diameter [m], roller_length [m], radial_clearance [m], n_slices."""
+    journal_radius: float
+    n_rollers: int
+    roller_diameter: float
+    roller_length: float
+    radial_clearance: float = 0.0
+    n_slices: int = 4
+
+    def __post_init__(self):
+        check_positive("eccentric_bearing.journal_radius", self.journal_radius)
+        check_positive("eccentric_bearing.roller_diameter", self.roller_diameter)
+        check_positive("eccentric_bearing.roller_length", self.roller_length)
+        check_nonnegative("eccentric_bearing.radial_clearance", self.radial_clearance)
+
+
+@dataclass(frozen=True, kw_only=True)
+class BallBearingSpec:
+    """Ball bearing (row or back-to-back pair): kind ("deep_groove" | "angular_contact_pair"),
+    n_balls, ball_diameter [m], pitch_diameter [m], contact_angle_deg, groove_curvature_ratio,
+    radial_clearance [m], axial_preload [N], row_spacing [m]."""
+    kind: str = "deep_groove"
+    n_balls: int
+    ball_diameter: float
+    pitch_diameter: float
+    contact_angle_deg: float = 0.0
+    groove_curvature_ratio: float = 0.52
+    radial_clearance: float = 0.0
+    axial_preload: float = 0.0
+    row_spacing: float = 0.0
+
+    def __post_init__(self):
+        if self.kind not in ("deep_groove", "angular_contact_pair", "locked"):
+            raise RvtoolInputError(f"bearing kind = {self.kind!r}; valid: ['deep_groove', 'angular_contact_pair', 'locked']")
+        check_positive("ball_diameter", self.ball_diameter)
+        check_positive("pitch_diameter", self.pitch_diameter)
+        check_range("groove_curvature_ratio", self.groove_curvature_ratio, 0.5, 1.0, low_open=True)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Bodies:
+    """Retained planar coordinates per body (subset of x, y, theta) and rigid-body data
+    (shaft and flange masses [kg] and polar inertias [kg m^2]; wheels from their geometry)."""
+    shaft: tuple = COORDS
+    wheel: tuple = COORDS
+    flange: tuple = COORDS
+    shaft_mass: float = 0.3
+    shaft_inertia: float = 2e-5
+    flange_mass: float = 1.2
+    flange_inertia: float = 1.5e-3
+
+    def __post_init__(self):
+        for nm in ("shaft", "wheel", "flange"):
+            for c in getattr(self, nm):
+                if c not in COORDS:
+                    raise RvtoolInputError(f"bodies.{nm} contains {c!r}; valid coordinates are {list(COORDS)}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CycloidDesign:
+    """A single-stage cycloid drive with one or two wheels (see cases/designs/rd40.toml)."""
+    name: str
+    n_wheels: int
+    rated_torque: float
+    input_speed_rpm: float
+    material: Material
+    pins: Pins
+    wheels: Wheels
+    pin_contact: PinContact
+    output_pins: OutputPins
+    eccentric_bearing: EccentricBearing
+    main_bearing: BallBearingSpec
+    input_bearing: BallBearingSpec
+    bodies: Bodies = field(default_factory=Bodies)
+
+    def __post_init__(self):
+        if self.n_wheels != len(self.wheels.midplanes):
+            raise RvtoolInputError(f"n_wheels = {self.n_wheels} but wheels.midplanes has {len(self.wheels.midplanes)} entries")
+        check_positive("rated_torque", self.rated_torque)
+        check_positive("input_speed_rpm", self.input_speed_rpm)
+        zg = self.wheels.n_teeth if self.wheels.n_teeth is not None else self.pins.n_pins - 1
+        if zg != self.pins.n_pins - 1:
+            raise RvtoolInputError(f"wheels.n_teeth = {zg} with pins.n_pins = {self.pins.n_pins}: only Z_pins = Z_wheel + 1 "
+                                   f"is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
+        needed = self.wheels.eccentricity + self.output_pins.pin_radius
+        if self.output_pins.hole_radius < needed - 1e-4:
+            raise RvtoolInputError(f"output_pins.hole_radius = {self.output_pins.hole_radius} m cannot pass the eccentric "
+                                   f"motion; valid range [{needed:.6g}, inf) m (pin radius + eccentricity)")
+
+    @property
+    def ratio(self):
+        """Signed nominal ratio i = omega_in / omega_out (fixed pins, output through the wheel): -z_g."""
+        return -(self.pins.n_pins - 1)
+
+
+_SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact": PinContact,
+             "output_pins": OutputPins, "eccentric_bearing": EccentricBearing, "main_bearing": BallBearingSpec,
+             "input_bearing": BallBearingSpec, "bodies": Bodies}
+
+
+def _build(cls, section, data):
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = set(data) - names
+    if unknown:
+        raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(names)}")
+    kw = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
+    try:
+        return cls(**kw)
+    except TypeError as exc:
+        raise RvtoolInputError(f"[{section}]: {exc}") from None
+
+
+def design_from_dict(d):
+    d = dict(d)
+    kw = {}
+    for sec, cls in _SECTIONS.items():
+        if sec not in d and sec != "bodies":
+            raise RvtoolInputError(f"section [{sec}] is missing from the design")
+        kw[sec] = _build(cls, sec, d.pop(sec, {}))
+    return _build(CycloidDesign, "design", {**d, **kw})
+
+
+def load_design(path):
+    """Load a design TOML file into a validated :class:`CycloidDesign`."""
+    with open(path, "rb") as fh:
+        return design_from_dict(tomllib.load(fh))
+
+
+def replace(design, **sections):
+    """A copy of ``design`` with sections replaced by dicts of changed fields, e.g.
+    ``replace(d, wheels={"n_slices": 4}, n_wheels=1)``."""
+    kw = {}
+    for k, v in sections.items():
+        cur = getattr(design, k)
+        kw[k] = dataclasses.replace(cur, **v) if isinstance(v, dict) else v
+    return dataclasses.replace(design, **kw)
