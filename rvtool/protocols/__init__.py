@@ -1,0 +1,1 @@
+"""Operating protocols (boundary conditions, load histories, sampling) applied to assembled models."""

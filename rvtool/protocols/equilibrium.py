@@ -1,0 +1,99 @@
+"""Quasi-static equilibria of an assembled model with Exudyn's static solver.
+
+Each equilibrium is a Newton solve of the static residual (contact forces,
+loads, constraints) at prescribed controls, warm-started from the previous
+equilibrium shifted by the kinematic increment; loads are applied in full
+(no load factor). If a warm start fails, the point is re-solved from the
+kinematic state with the load ramped over ``ramp_steps`` steps. A point that
+still fails raises :class:`SolverFailure` naming the control values.
+"""
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import exudyn as exu
+
+from ..errors import SolverFailure
+
+
+@dataclass
+class EquilibriumStats:
+    points: int = 0
+    newton_iterations: int = 0
+    ramped_restarts: int = 0
+    wall_s: float = 0.0
+
+    def to_dict(self):
+        return dict(self.__dict__)
+
+
+class StaticSolver:
+    """Warm-started static solves of ``model`` (a model with ``mbs`` and ``kinematic_state``).
+
+    abs_tol [N], rel_tol [-]: Newton tolerances on Exudyn's residual norm.
+    """
+
+    def __init__(self, model, *, abs_tol=1e-7, rel_tol=1e-10, max_iterations=30, ramp_steps=20):
+        self.model = model
+        self.stats = EquilibriumStats()
+        self.ramp_steps = ramp_steps
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            ss = exu.SimulationSettings()
+            ss.solutionSettings.writeSolutionToFile = False
+        st = ss.staticSolver
+        st.newton.absoluteTolerance = abs_tol
+        st.newton.relativeTolerance = rel_tol
+        st.newton.maxIterations = max_iterations
+        st.verboseMode = 0
+        n = model.mbs.systemData.ODE2Size()
+        ss.linearSolverType = exu.LinearSolverType.EXUdense if n <= 30 else exu.LinearSolverType.EigenSparse
+        self.settings = ss
+        self.q = None
+
+    def _solve(self, q_init, ramp):
+        mbs = self.model.mbs
+        st = self.settings.staticSolver
+        st.useLoadFactor = ramp
+        st.numberOfLoadSteps = self.ramp_steps if ramp else 1
+        st.adaptiveStep = True
+        mbs.systemData.SetODE2Coordinates(q_init, configuration=exu.ConfigurationType.Initial)
+        solver = exu.MainSolverStatic()
+        try:
+            ok = solver.SolveSystem(mbs, self.settings)
+        except Exception:
+            ok = False
+        self.stats.newton_iterations += int(solver.it.newtonStepsCount)
+        q = np.array(mbs.systemData.GetODE2Coordinates())
+        return ok and np.all(np.isfinite(q)), q
+
+    def kinematic_vector(self, input_angle):
+        """Kinematic state as displacement coordinates of the system's ODE2 vector."""
+        m = self.model
+        q = np.zeros(m.mbs.systemData.ODE2Size())
+        kin = m.kinematic_state(input_angle)
+        for b, node in enumerate(m.nodes):
+            ref = np.asarray(m.mbs.GetNodeParameter(node, "referenceCoordinates"))
+            q[np.asarray(m.mbs.systemData.GetNodeLTGODE2(node))] = kin[b] - ref
+        return q
+
+    def solve(self, input_angle, previous_angle=None):
+        """Equilibrium at ``input_angle`` with the model's current loads; returns q."""
+        t0 = time.perf_counter()
+        self.model.set_input_angle(input_angle)
+        ok = False
+        if self.q is not None and previous_angle is not None:
+            guess = self.q + self.kinematic_vector(input_angle) - self.kinematic_vector(previous_angle)
+            ok, q = self._solve(guess, ramp=False)
+        if not ok:
+            if self.q is not None:
+                self.stats.ramped_restarts += 1
+            ok, q = self._solve(self.kinematic_vector(input_angle), ramp=True)
+        self.stats.wall_s += time.perf_counter() - t0
+        if not ok:
+            raise SolverFailure(f"no static equilibrium at input angle {input_angle:.6g} rad "
+                                f"(warm start and a {self.ramp_steps}-step load ramp both failed)")
+        self.stats.points += 1
+        self.q = q
+        return q
