@@ -49,7 +49,7 @@ def main(argv=None):
     design = replace(base, wheels={"clearance": 0.0, "equidistant_mod": 0.0, "offset_mod": 0.0, "rotation_mod": 0.0,
                                    "samples_per_tooth": 60 if args.quick else 240},
                      pin_contact={"law": "line", "damping": 0.0, "mu": 0.0})
-    model = build(design, lock_wheel_translation=True)
+    model = build(design, rigid_supports=True)
     solver = StaticSolver(model)
     T = design.rated_torque
     model.set_output_torque(-np.sign(design.ratio) * T)
@@ -80,8 +80,8 @@ def main(argv=None):
     ax.set(xlabel="pin index", ylabel="pin force [N]", title=f"ideal load sharing at {T} N m")
     ax.legend(fontsize=7)
     casekit.save_figure(fig, args.out, "ideal_load_sharing")
-    settings = {"samples_per_tooth": design.wheels.samples_per_tooth, "law": "line", "wheel_translation": "held",
-                "bearing_model": "lumped (wheels held, so bearings unloaded)"}
+    settings = {"samples_per_tooth": design.wheels.samples_per_tooth, "law": "line",
+                "supports": "rigid: shaft and flange on the axis, wheels on their journals (100 x bearing stiffness)"}
     return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])
 
 

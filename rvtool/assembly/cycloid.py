@@ -55,6 +55,8 @@ class CycloidModel:
     locks: list = field(default_factory=list)
     profiles: list = field(default_factory=list)
     reg_springs: list = field(default_factory=list)
+    journal_locks: list = field(default_factory=list)
+    reference: np.ndarray = None
 
     def regularization_force(self, q):
         """Largest force [N] (or moment [N m]) carried by the regularization springs at q."""
@@ -74,6 +76,10 @@ class CycloidModel:
     def set_input_angle(self, angle):
         """Prescribed input-shaft angle [rad] (quasi-static sequences)."""
         self.mbs.SetObjectParameter(self.drive, "offset", float(angle))
+        if self.journal_locks:
+            kin = self.kinematic_state(angle)
+            for body, c, obj in self.journal_locks:
+                self.mbs.SetObjectParameter(obj, "offset", float(kin[body, c] - self.reference[body, c]))
 
     def set_input_speed(self, omega, angle0=0.0):
         """Prescribed constant input speed omega [rad/s] from angle0 at t = 0."""
@@ -125,13 +131,15 @@ def lumped_ball_stiffness(spec, material, load=2000.0):
 
 
 def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
-          pin_overrides=None, lock_wheel_translation=False, regularization=(100.0, 0.1)):
+          pin_overrides=None, rigid_supports=False, regularization=(100.0, 0.1)):
     """Assemble ``design`` into an Exudyn system; returns a :class:`CycloidModel`.
 
     pin_overrides: dict of WheelPinMesh fields applied to every wheel (e.g.
     ``{"pin_centre_errors": ..., "normal": NormalLaw(...)}``).
-    lock_wheel_translation: hold the wheel centres at their kinematic positions
-    (rigid eccentric support; used by the ideal load-sharing check).
+    rigid_supports: shaft and flange centres held on the axis and the wheel
+    centres held on their journals (translation constraints that follow the
+    input angle): the rigid-body idealization of the classical load-sharing
+    analysis. The bearings then carry no load.
     regularization: (k_translation [N/m], k_rotation [N m/rad]) of weak springs from
     every free coordinate to its reference (a numerical setting: free play in
     clearances leaves equilibrium directions without stiffness at zero load; at
@@ -163,14 +171,16 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     def marker(body, c):
         return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[body], coordinate=c))
 
-    locks = []
+    locks, journal_locks = [], []
     retained = {SHAFT: d.bodies.shaft, nw + 1: d.bodies.flange}
     retained.update({1 + k: d.bodies.wheel for k in range(nw)})
     for body, coords in retained.items():
         for c, name in enumerate(("x", "y", "theta")):
             if (body == SHAFT and c == 2):
                 continue  # the drive prescribes the input angle
-            if name not in coords or (lock_wheel_translation and 1 <= body <= nw and c < 2):
+            if rigid_supports and 1 <= body <= nw and c < 2:
+                journal_locks.append((body, c, mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, marker(body, c)]))))
+            elif name not in coords or (rigid_supports and body in (SHAFT, nw + 1) and c < 2):
                 locks.append(mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, marker(body, c)])))
     drive = mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, marker(SHAFT, 2)], offset=0.0))
     k_reg_t, k_reg_r = regularization
@@ -237,12 +247,13 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         eb = d.eccentric_bearing
         r_j = eb.journal_radius
         k_n = lumped_needle_stiffness(d)
+        clear_n = eb.radial_clearance
         contacts = []
         for k in range(nw):
             phi = np.deg2rad(d.wheels.phases_deg[k])
             contacts.append(CircleContact(
                 body_a=SHAFT, body_b=1 + k, centre_a=(-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi)),
-                centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + eb.radial_clearance + 1e-12, internal=True,
+                centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + clear_n + 1e-12, internal=True,
                 normal=NormalLaw(law="line", stiffness=k_n, damping=50.0, ramp_depth=1e-6), name=f"eccentric_bearing{k}"))
         main = d.main_bearing
         if main.kind != "locked":
@@ -263,4 +274,5 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, nodes=nodes, elements=elements, pin_set=pin_set, drive=drive,
-                        load=load, n_wheels=nw, locks=locks, profiles=profiles, reg_springs=reg_springs)
+                        load=load, n_wheels=nw, locks=locks, profiles=profiles, reg_springs=reg_springs,
+                        journal_locks=journal_locks, reference=ref)
