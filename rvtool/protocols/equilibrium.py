@@ -48,7 +48,7 @@ class StaticSolver:
         st.newton.maxIterations = max_iterations
         st.verboseMode = 0
         n = model.mbs.systemData.ODE2Size()
-        ss.linearSolverType = exu.LinearSolverType.EXUdense if n <= 30 else exu.LinearSolverType.EigenSparse
+        ss.linearSolver.solverType = exu.LinearSolverType.EXUdense if n <= 30 else exu.LinearSolverType.EigenSparse
         self.settings = ss
         self.q = None
 

@@ -73,7 +73,7 @@ def _settings(spec: RunSpec, n_coordinates):
     ti.discontinuous.ignoreMaxIterations = False
     ti.discontinuous.iterationTolerance = 0.5
     dense = spec.linear_solver == "dense" or (spec.linear_solver == "auto" and n_coordinates <= DENSE_MAX_COORDINATES)
-    ss.linearSolverType = exu.LinearSolverType.EXUdense if dense else exu.LinearSolverType.EigenSparse
+    ss.linearSolver.solverType = exu.LinearSolverType.EXUdense if dense else exu.LinearSolverType.EigenSparse
     ss.solutionSettings.writeSolutionToFile = False
     ss.solutionSettings.sensorsWritePeriod = 1e30
     ss.displayStatistics = False
