@@ -33,8 +33,11 @@ class ContactElement:
     contact_set : :class:`rvtool.contact.circle_set.CircleContactSet`, or an
         evaluator object of any contact family following the evaluator protocol
         (attributes ``name``, ``ids``, ``n_bodies``, ``history``; methods
-        ``evaluate(pose, vel) -> Evaluation`` and ``commit(pose, vel) -> obs``
-        with the observation columns of :mod:`warp_contacts.circle_pairs_ref`)
+        ``evaluate(pose, vel, history=None, check=True) -> Evaluation`` and
+        ``commit(pose, vel, evaluation=None) -> obs`` with the observation
+        columns of :mod:`warp_contacts.circle_pairs_ref`; ``check=False`` skips
+        input checks the element already made, and ``evaluation`` is a trial
+        evaluation at exactly the accepted state that commit may reuse)
     backend, precision, device : evaluation options (see ContactSetEvaluator),
         used when ``contact_set`` is a CircleContactSet
     """
