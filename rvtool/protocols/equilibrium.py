@@ -34,7 +34,7 @@ class StaticSolver:
     abs_tol [N], rel_tol [-]: Newton tolerances on Exudyn's residual norm.
     """
 
-    def __init__(self, model, *, abs_tol=1e-7, rel_tol=1e-10, max_iterations=30, ramp_steps=20):
+    def __init__(self, model, *, abs_tol=1e-6, rel_tol=1e-9, max_iterations=30, ramp_steps=20):
         self.model = model
         self.stats = EquilibriumStats()
         self.ramp_steps = ramp_steps

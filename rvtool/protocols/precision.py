@@ -42,12 +42,21 @@ def te_metrics(te, *, n_revolutions=1.0, n_peaks=10, remove_mean=True):
             "orders": orders, "amplitudes": amp, "peak_orders": orders[idx], "peak_amplitudes": amp[idx]}
 
 
-def family_peaks(model, q, t=0.0):
+def _evaluation_at(el, q):
+    """The element's evaluation at state q with zero velocity, reusing the solver's last
+    (cached) evaluation when it was made at exactly this state."""
+    ql = el.local(q)
+    v = np.zeros(len(ql))
+    if el._key is not None and el._key[1] == np.asarray(ql, float).tobytes() and el._key[2] == v.tobytes():
+        return el._ev
+    return el.evaluate(0.0, ql, v)
+
+
+def family_peaks(model, q):
     """Peak normal force [N] per contact family of the model at state q (zero velocity)."""
     out = {}
-    v = np.zeros_like(q)
     for name, el in model.elements.items():
-        ev = el.evaluate(t, el.local(q), el.local(v))
+        ev = _evaluation_at(el, q)
         if name == "bearings":
             for fam in ("eccentric_bearing", "main_bearing", "input_bearing"):
                 sel = [i for i, cid in enumerate(el.ids) if cid.startswith(fam)]
@@ -58,11 +67,10 @@ def family_peaks(model, q, t=0.0):
     return out
 
 
-def pin_forces(model, q, t=0.0):
+def pin_forces(model, q):
     """Per wheel, per pin normal force [N] (slices summed) at state q."""
     el = model.elements["pins"]
-    ev = el.evaluate(t, el.local(q), np.zeros(len(el.local(q))))
-    return el.evaluator.pin_forces(ev.obs)
+    return el.evaluator.pin_forces(_evaluation_at(el, q).obs)
 
 
 def quasi_static_te(model, *, torque, input_angles, solver=None, record=None):
@@ -109,7 +117,7 @@ def kinematic_velocity(model, omega_in, input_angle=0.0):
     return v
 
 
-def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, out_dir=None):
+def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, out_dir=None, on_start=None):
     """Driven rotation at constant input speed from the quasi-static loaded state at angle 0.
 
     Returns time, angle histories, TE [rad] on the accepted steps, the run record and
@@ -145,6 +153,8 @@ def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, 
 
     import dataclasses
     spec = dataclasses.replace(run_spec, end_time=duration)
+    if on_start is not None:
+        on_start()
     rec = simulate(mbs, spec, list(model.elements.values()), observers, before_accept=record, out_dir=out_dir)
     t_rec, th_in, th_out = map(np.array, (t_rec, th_in, th_out))
     te = transmission_error(th_in, th_out, ratio)
