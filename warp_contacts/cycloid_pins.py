@@ -37,6 +37,31 @@ def _kernel(dtype):
         s = wp.sin(th)
         return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
 
+    @wp.func
+    def rot2(th: dtype, x: vec2):
+        c = wp.cos(th)
+        s = wp.sin(th)
+        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
+
+    @wp.func
+    def analytic_point(R: dtype, K1: dtype, zb: dtype, rc: dtype, rot: dtype, phi: dtype):
+        """Profile point, outward normal, curvature and d(arc)/d(phi) (see the reference)."""
+        s = wp.sin(phi)
+        c = wp.cos(phi)
+        S = wp.sin(zb * phi)
+        C = wp.cos(zb * phi)
+        E = R * vec2(s - K1 / zb * S, c - K1 / zb * C)
+        dE = R * vec2(c - K1 * C, -s + K1 * S)
+        ddE = R * vec2(-s + K1 * zb * S, -c + K1 * zb * C)
+        speed = wp.length(dE)
+        tau = dE / speed
+        n = vec2(-tau[1], tau[0])
+        kE = -(dE[0] * ddE[1] - dE[1] * ddE[0]) / (speed * speed * speed)
+        pt = E - rc * n
+        kap = kE / (dtype(1.0) - rc * kE)
+        ds = speed * (dtype(1.0) - rc * kE)
+        return rot2(rot, pt), rot2(rot, n), kap, ds
+
     @wp.kernel(module="unique")
     def eval_cycloid_pins(
         # Model:
@@ -49,6 +74,8 @@ def _kernel(dtype):
         tab_offset: wp.array(dtype=wp.int32),
         tab_len: wp.array(dtype=wp.int32),
         tab_h: wp.array(dtype=dtype),
+        tab_phi: wp.array(dtype=dtype),
+        tab_ana: wp.array2d(dtype=dtype),
         window: int,
         # Data in:
         pose_in: wp.array2d(dtype=dtype),
@@ -125,6 +152,24 @@ def _kernel(dtype):
         tt = wp.clamp(tt, -hh, hh)
         cl = ci + tt * ti - (dtype(0.5) * kap * tt * tt) * ni
         nl = wp.normalize(ni + (kap * tt) * ti)
+        if tab_ana[tb, 0] > dtype(0.0):
+            # analytic closest point: Newton on (c - p) . c' = 0 from the nearest sample
+            aR = tab_ana[tb, 1]
+            aK1 = tab_ana[tb, 2]
+            azb = tab_ana[tb, 3]
+            arc = tab_ana[tb, 4]
+            arot = tab_ana[tb, 5]
+            phi = tab_phi[off + best]
+            for it in range(4):
+                pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
+                wa_ = pl - pa
+                dsn = wp.dot(wa_, -perp(na)) / (dtype(1.0) + ka * wp.dot(wa_, na))
+                phi = phi + dsn / dsa
+            pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
+            cl = pa
+            nl = na
+            kap = ka
+            clamped = False
 
         a = rot(tha, cl)
         nv = rot(tha, nl)
@@ -250,7 +295,7 @@ def _kernel(dtype):
 class CycloidPinKernel:
     """Device-resident evaluator of one cycloid--pin contact set (one launch per call)."""
 
-    def __init__(self, fparams, iparams, tables, window, n_bodies, precision="float64", device="cpu"):
+    def __init__(self, fparams, iparams, tables, window, n_bodies, precision="float64", device="cpu", analytic=None):
         self.wdtype, self.ndtype = scalar_types(precision)
         self.device = d = resolve_device(device)
         fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
@@ -267,7 +312,11 @@ class CycloidPinKernel:
             wp.array(np.concatenate([tb[2] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
             wp.array(np.concatenate([tb[3] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
             wp.array(offs, dtype=wp.int32, device=d), wp.array(np.array(lens, np.int32), dtype=wp.int32, device=d),
-            wp.array(np.array([tb[4] for tb in tables], self.ndtype), dtype=dt, device=d), int(window)]
+            wp.array(np.array([tb[4] for tb in tables], self.ndtype), dtype=dt, device=d),
+            wp.array(np.concatenate([tb[5] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
+            wp.array(np.array([[0.0] * 6 if (analytic is None or analytic[k] is None) else [1.0, *analytic[k]]
+                               for k in range(len(tables))], self.ndtype), dtype=dt, device=d),
+            int(window)]
         self._host = {"pose": np.zeros((n_bodies + 1, 3), self.ndtype), "vel": np.zeros((n_bodies + 1, 3), self.ndtype),
                       "q": np.zeros((n, 6), self.ndtype), "dqdq": np.zeros((n, 6, 6), self.ndtype),
                       "dqdv": np.zeros((n, 6, 6), self.ndtype), "obs": np.zeros((n, N_OBS), self.ndtype)}

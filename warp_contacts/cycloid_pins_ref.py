@@ -44,13 +44,41 @@ N_FLOAT = 15
 N_INT = 4
 
 
-def search(table, pin_local, window):
-    """Discrete search and tangent projection for pins given in wheel coordinates.
+ANALYTIC_ITERATIONS = 4
 
-    table: (points (n,2), normals (n,2), kappa (n,), polar (n,), spacing).
+
+def analytic_point(params, phi):
+    """Analytic profile point, outward normal and curvature at generating angle phi
+    (Eq. (cycloid_geometry) with equidistant, offset and rotation modifications)."""
+    R, K1, zb, rc, rot = params
+    s, c, S, C = np.sin(phi), np.cos(phi), np.sin(zb * phi), np.cos(zb * phi)
+    E = R * np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1)
+    dE = R * np.stack([c - K1 * C, -s + K1 * S], axis=-1)
+    ddE = R * np.stack([-s + K1 * zb * S, -c + K1 * zb * C], axis=-1)
+    speed = np.linalg.norm(dE, axis=-1)
+    tau = dE / speed[..., None]
+    n = np.stack([-tau[..., 1], tau[..., 0]], axis=-1)
+    kE = -(dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]) / speed ** 3
+    pt = E - rc * n
+    kap = kE / (1.0 - rc * kE)
+    dsdphi = speed * (1.0 - rc * kE)     # arc length of the offset curve per unit phi
+    cr, sr = np.cos(rot), np.sin(rot)
+    rotm = lambda v: np.stack([cr * v[..., 0] - sr * v[..., 1], sr * v[..., 0] + cr * v[..., 1]], axis=-1)
+    return rotm(pt), rotm(n), kap, dsdphi
+
+
+def search(table, pin_local, window, analytic=None):
+    """Contact location for pins given in wheel coordinates.
+
+    Discrete path: window search of the nearest sample and projection on its
+    osculating arc. Analytic path (``analytic`` = profile parameters, see
+    :func:`analytic_point`): starting from the nearest sample, Newton iterations
+    on (c - p) . c' = 0 with the osculating-circle step, so the contact point is
+    the exact closest point of the analytic profile (never clamped).
+    table: (points (n,2), normals (n,2), kappa (n,), polar (n,), spacing, phi (n,)).
     Returns (c (N,2), n (N,2), kappa (N,), clamped (N,) bool, sampled distance (N,)).
     """
-    P, Nn, K, polar, h = table
+    P, Nn, K, polar, h = table[:5]
     n = len(P)
     beta = np.mod(np.arctan2(pin_local[:, 1], pin_local[:, 0]), 2 * np.pi)
     i0 = np.searchsorted(polar, beta)
@@ -58,6 +86,16 @@ def search(table, pin_local, window):
     d2 = np.sum((P[idx] - pin_local[:, None, :]) ** 2, axis=2)
     best = idx[np.arange(len(beta)), np.argmin(d2, axis=1)]
     ci, ni, ki = P[best], Nn[best], K[best]
+    if analytic is not None:
+        phi = table[5][best]
+        for _ in range(ANALYTIC_ITERATIONS):
+            c, nn, kk, ds = analytic_point(analytic, phi)
+            w = pin_local - c
+            # the curve runs clockwise for increasing phi: the arc direction is -perp(n)
+            dsn = _dot(w, -_perp(nn)) / (1.0 + kk * _dot(w, nn))
+            phi = phi + dsn / ds
+        c, nn, kk, _ = analytic_point(analytic, phi)
+        return c, nn, kk, np.zeros(len(phi), bool), np.linalg.norm(pin_local - ci, axis=1)
     ti = _perp(ni)
     wi = pin_local - ci
     # projection onto the sample's osculating arc (second order in the arc parameter t),
@@ -72,12 +110,13 @@ def search(table, pin_local, window):
     return c, nn, ki, clamped, np.linalg.norm(pin_local - ci, axis=1)
 
 
-def evaluate(pose, vel, fparams, iparams, tables, window):
+def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
     """Evaluate all pin-slice contacts.
 
     pose, vel: (nb+1, 3) absolute poses and velocities, last row the ground.
     fparams (N, 12), iparams (N, 4): packed parameters (columns C_*, J_*).
     tables: list of profile tables (see :func:`search`), indexed by J_TABLE.
+    analytic: None (discrete path) or a list of analytic profile parameters per table.
     Returns Q (N,6), dQdq (N,6,6), dQdv (N,6,6), obs (N, 8).
     """
     fp = np.asarray(fparams, float)
@@ -95,7 +134,8 @@ def evaluate(pose, vel, fparams, iparams, tables, window):
     dist = np.zeros(N)
     for tb in np.unique(ip[:, J_TABLE]):
         m = ip[:, J_TABLE] == tb
-        c_loc[m], n_loc[m], kap[m], clamped[m], dist[m] = search(tables[tb], pin_local[m], window)
+        c_loc[m], n_loc[m], kap[m], clamped[m], dist[m] = search(tables[tb], pin_local[m], window,
+                                                                 None if analytic is None else analytic[tb])
     a = _rot(qa[:, 2], c_loc)
     n = _rot(qa[:, 2], n_loc)
     t = _perp(n)

@@ -220,7 +220,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         kw.update(pin_overrides or {})
         meshes.append(WheelPinMesh(**kw))
     pin_set = CycloidPinSet(meshes, nw + 2, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
-                            precision=precision, device=device, name="pins")
+                            precision=precision, device=device, name="pins", search=d.wheels.search)
     elements = {"pins": ContactElement(mbs, nodes, pin_set)}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------

@@ -43,7 +43,8 @@ class Pins:
 class Wheels:
     """Cycloid wheels: assembly eccentricity e [m] and nominal generating eccentricity e_g [m]
     (separate inputs), width [m], axial midplanes [m], eccentric phases [deg], face-width slices,
-    profile table resolution, profile modifications [m, rad] and uniform clearance [m]."""
+    profile table resolution, profile modifications [m, rad], uniform clearance [m] and the
+    contact search ("discrete" table search or "analytic" closest point)."""
     eccentricity: float
     generating_eccentricity: float | None = None
     width: float
@@ -56,6 +57,7 @@ class Wheels:
     rotation_mod: float = 0.0
     clearance: float = 0.0
     n_teeth: int | None = None
+    search: str = "discrete"
 
     def __post_init__(self):
         check_positive("wheels.eccentricity", self.eccentricity)
@@ -67,6 +69,8 @@ class Wheels:
             raise RvtoolInputError(f"wheels: {len(self.midplanes)} wheels; valid range [1, 2]")
         if not isinstance(self.n_slices, int) or self.n_slices < 1:
             raise RvtoolInputError(f"wheels.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
+        if self.search not in ("discrete", "analytic"):
+            raise RvtoolInputError(f"wheels.search = {self.search!r}; valid choices are ['discrete', 'analytic']")
 
     @property
     def e_g(self):

@@ -94,7 +94,7 @@ class WheelPinMesh:
 def auto_window(profile, table, pin_radius, margin=1.5):
     """Search half-window [samples] that always contains the closest sample: the largest
     index distance between a point at the pin distance off the profile and its foot."""
-    P, Nn, K, polar, h = table
+    P, Nn, K, polar, h = table[:5]
     probe = P + (pin_radius * 1.2) * Nn
     beta = np.mod(np.arctan2(probe[:, 1], probe[:, 0]), 2 * np.pi)
     i0 = np.searchsorted(polar, beta)
@@ -107,15 +107,21 @@ class CycloidPinSet:
     """Evaluator of cycloid--pin meshes between ``n_bodies`` planar bodies.
 
     samples_per_tooth: profile table resolution (arc-length resampled).
+    search: "discrete" (window search and osculating-arc projection on the table) or
+    "analytic" (Newton iterations on (c - p) . c' = 0 of the analytic profile from the
+    nearest sample; equidistant, offset and rotation modifications only).
     backend "warp" (default, one launch) or "numpy"; precision "float64" or "float32".
     """
 
     def __init__(self, meshes, n_bodies, *, samples_per_tooth=120, backend="warp", precision="float64",
-                 device="cpu", name="pins"):
+                 device="cpu", name="pins", search="discrete"):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one WheelPinMesh")
         if backend not in ("warp", "numpy"):
             raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
+        if search not in ("discrete", "analytic"):
+            raise RvtoolInputError(f"search = {search!r} is not valid; valid choices are ['discrete', 'analytic']")
+        self.search = search
         if samples_per_tooth < 8:
             raise RvtoolInputError(f"samples_per_tooth = {samples_per_tooth} is outside the valid range [8, inf)")
         self.name = name
@@ -171,9 +177,11 @@ class CycloidPinSet:
         self.assembler = PairAssembler(self.iparams[:, 0], self.iparams[:, 1], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
+        self.analytic = ([m.profile.analytic_parameters() for m in self.meshes] if search == "analytic" else None)
         if backend == "warp":
             from warp_contacts.cycloid_pins import CycloidPinKernel
-            self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device)
+            self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device,
+                                            analytic=self.analytic)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
 
@@ -182,7 +190,7 @@ class CycloidPinSet:
         self._vel[:-1] = vel
         if self.backend == "warp":
             return self._kernel.evaluate(self._pose, self._vel)
-        return ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables, self.window)
+        return ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables, self.window, self.analytic)
 
     def evaluate(self, pose, vel, history=None, check=True):
         if check:

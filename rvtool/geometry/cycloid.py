@@ -146,7 +146,8 @@ class CycloidProfile:
     # -- tables for the contact search ---------------------------------------
     def table(self, n_samples):
         """Arc-length resampled profile: (points (n,2), outward normals (n,2), curvature (n,),
-        polar angle (n,), sample spacing [m]). Samples are ordered by increasing polar angle."""
+        polar angle (n,), sample spacing [m], generating angle phi (n,)). Samples are ordered by
+        increasing polar angle."""
         if n_samples < 8 * self.n_teeth:
             raise RvtoolInputError(f"n_samples = {n_samples} is too small; valid range [{8 * self.n_teeth}, inf) "
                                    f"(at least 8 per tooth)")
@@ -166,7 +167,15 @@ class CycloidProfile:
         kap = self.curvature_of_points(phi)
         polar = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
         order = np.argsort(polar)
-        return pts[order], nrm[order], kap[order], polar[order], total / n_samples
+        return pts[order], nrm[order], kap[order], polar[order], total / n_samples, phi[order]
+
+    def analytic_parameters(self):
+        """(R, K1, z_b, r_c, rotation) for the analytic closest-point path, which supports the
+        equidistant, offset and rotation modifications but not a tabulated r_c(phi)."""
+        if self.radial_mod_table is not None:
+            raise RvtoolInputError("search = 'analytic' does not support radial_mod_table; valid: search = 'discrete' "
+                                   "for a tabulated generating-radius modification")
+        return (self.R, self.K1, float(self.n_pins), self.pin_radius + self.equidistant_mod, self.rotation_mod)
 
 
 def pin_centres(profile: CycloidProfile, pin_centre_errors=None):
