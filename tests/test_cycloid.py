@@ -101,10 +101,12 @@ def _devices():
 
 
 @pytest.mark.parametrize("device", _devices())
-@pytest.mark.parametrize("precision,tol", [("float64", 1e-12), ("float32", 2e-2)])
+@pytest.mark.parametrize("precision,tol", [("float64", 1e-9), ("float32", 2e-2)])
 def test_kernel_matches_numpy_reference(precision, tol, device):
-    """float32: pin positions of 5e-2 m carry ~4e-9 m rounding against ~1e-6 m indentation,
-    so forces agree to ~5e-3; 2e-2 leaves margin."""
+    """The gap is a difference of positions ~5e-2 m for indentations ~1e-6 m, which amplifies
+    rounding by ~5e4. float64: another operation order (fused multiply-add on GPUs) gives
+    ~1e-16 x 5e4 ~ 1e-11 (measured 6e-11 on an H100, 0 on the CPU); 1e-9 leaves margin.
+    float32: ~4e-9 m rounding against ~1e-6 m gives ~5e-3; 2e-2 leaves margin."""
     s_w, pose, vel = _pin_scene(precision, "warp", device)
     s_n, _, _ = _pin_scene("float64", "numpy")
     a, b = s_w.evaluate(pose, vel), s_n.evaluate(pose, vel)
