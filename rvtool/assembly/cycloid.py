@@ -61,8 +61,10 @@ class CycloidModel:
     def regularization_force(self, q):
         """Largest force [N] (or moment [N m]) carried by the regularization springs at q."""
         out = 0.0
-        for body, c, k, _ in self.reg_springs:
-            out = max(out, abs(k * q[self.coordinate_index(body, c)]))
+        for body, c, k, obj in self.reg_springs:
+            k_now = self.mbs.GetObjectParameter(obj, "stiffness")
+            off = self.mbs.GetObjectParameter(obj, "offset")
+            out = max(out, abs(k_now * (q[self.coordinate_index(body, c)] - off)))
         return out
 
     @property
@@ -76,15 +78,22 @@ class CycloidModel:
     def set_input_angle(self, angle):
         """Prescribed input-shaft angle [rad] (quasi-static sequences)."""
         self.mbs.SetObjectParameter(self.drive, "offset", float(angle))
-        if self.journal_locks:
+        if self.journal_locks or self.reg_springs:
             kin = self.kinematic_state(angle)
             for body, c, obj in self.journal_locks:
                 self.mbs.SetObjectParameter(obj, "offset", float(kin[body, c] - self.reference[body, c]))
+            # the regularization springs hold each body near its kinematic position, not its
+            # reference, so that they carry no load along the rotation
+            for body, c, _, obj in self.reg_springs:
+                self.mbs.SetObjectParameter(obj, "offset", float(kin[body, c] - self.reference[body, c]))
 
     def set_input_speed(self, omega, angle0=0.0):
-        """Prescribed constant input speed omega [rad/s] from angle0 at t = 0."""
+        """Prescribed constant input speed omega [rad/s] from angle0 at t = 0. The static
+        regularization springs are switched off: inertia makes the dynamic problem regular."""
         self.mbs.SetObjectParameter(self.drive, "offsetUserFunction",
                                     lambda mbs, t, itemNumber, lOffset: angle0 + omega * t)
+        for _, _, _, obj in self.reg_springs:
+            self.mbs.SetObjectParameter(obj, "stiffness", 0.0)
 
     def set_output_torque(self, torque):
         """Torque on the flange rotation [N m] (positive counter-clockwise)."""
