@@ -14,8 +14,8 @@ evaluation):
 * bearings: ``eccentric_bearings`` (journal--wheel bore), ``main_bearing``
   (flange--housing), ``input_bearing`` (shaft--housing), either from rolling
   elements (``bearing_model="rolling"``, :mod:`rvtool.bearings`) or as one
-  lumped internal circle contact per bearing (``"lumped"``, linear radial
-  stiffness from the rolling-element model's small-load secant) for studies that
+  lumped internal circle contact per bearing (``"lumped"``, a radial power law
+  from Palmgren's element approach and Stribeck's load sharing) for studies that
   isolate the gearing.
 
 The input rotation is prescribed through a coordinate constraint (an angle
@@ -121,22 +121,26 @@ def _mass_wheel(design):
     return m, 0.5 * m * (r_o ** 2 + r_i ** 2)
 
 
-def lumped_needle_stiffness(design):
-    """Radial stiffness [N/m] of the eccentric needle bearing as a lumped contact: Palmgren
-    line contacts of the loaded rollers (about Z/4 effective rollers at a typical load)."""
+def lumped_needle_law(design):
+    """Lumped radial law F_r = K delta_r^(10/9) of the eccentric needle bearing: Palmgren's roller
+    approach delta = 3.84e-5 Q^0.9 / L^0.8 [mm, N] per race contact (two in series), and
+    Stribeck's line-contact sharing F_r = Z Q_max / 4.08. Returns (K [N m^-10/9], 10/9)."""
     b = design.eccentric_bearing
-    per_roller = secant_line_stiffness(300.0, b.roller_length)  # two races in series
-    return 0.25 * b.n_rollers * 0.5 * per_roller
+    L = b.roller_length * 1e3
+    k_mm = (1.0 / (2 * 3.84e-5 * L ** -0.8)) ** (1 / 0.9)      # Q = k_mm delta^(1/0.9), N and mm
+    return b.n_rollers / 4.08 * k_mm * 1e3 ** (1 / 0.9), 1 / 0.9
 
 
-def lumped_ball_stiffness(spec, material, load=2000.0):
-    """Radial secant stiffness [N/m] of a ball bearing at ``load`` from the Stribeck maximum
-    ball load and a steel ball point-contact approach (Palmgren: 4.36e-4 Q^(2/3) / D^(1/3) mm)."""
+def lumped_ball_law(spec):
+    """Lumped radial law F_r = K delta_r^(3/2) of a ball bearing (row or pair): Palmgren's ball
+    approach delta = 4.36e-4 Q^(2/3) / D^(1/3) [mm, N] per race contact (two in series) and
+    Stribeck's F_r = Z Q_max cos(alpha) / 4.37 with delta_max = delta_r cos(alpha).
+    Returns (K [N m^-3/2], 3/2)."""
     Z = spec.n_balls * (2 if spec.kind == "angular_contact_pair" else 1)
     ca = np.cos(np.deg2rad(spec.contact_angle_deg))
-    q_max = 5.0 * load / (Z * ca)
-    delta = 2 * 4.36e-4 * q_max ** (2 / 3) / (spec.ball_diameter * 1e3) ** (1 / 3) * 1e-3 / ca
-    return load / delta
+    D = spec.ball_diameter * 1e3
+    k_mm = (1.0 / (2 * 4.36e-4 * D ** (-1 / 3))) ** 1.5         # Q = k_mm delta^1.5, N and mm
+    return Z * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5, 1.5
 
 
 def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
@@ -255,7 +259,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     else:
         eb = d.eccentric_bearing
         r_j = eb.journal_radius
-        k_n = lumped_needle_stiffness(d)
+        k_n, p_n = lumped_needle_law(d)
         clear_n = eb.radial_clearance
         contacts = []
         for k in range(nw):
@@ -263,20 +267,22 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
             contacts.append(CircleContact(
                 body_a=SHAFT, body_b=1 + k, centre_a=(-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi)),
                 centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + clear_n + 1e-12, internal=True,
-                normal=NormalLaw(law="line", stiffness=k_n, damping=50.0, ramp_depth=1e-6), name=f"eccentric_bearing{k}"))
+                normal=NormalLaw(law="power", stiffness=k_n, exponent=p_n, damping=50.0, ramp_depth=1e-6),
+                name=f"eccentric_bearing{k}"))
         main = d.main_bearing
         if main.kind != "locked":
             contacts.append(CircleContact(
                 body_a=nw + 1, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0), radius_a=0.5 * main.pitch_diameter,
                 radius_b=0.5 * main.pitch_diameter + main.radial_clearance + 1e-12, internal=True,
-                normal=NormalLaw(law="line", stiffness=lumped_ball_stiffness(main, d.material), damping=200.0, ramp_depth=1e-6),
+                normal=NormalLaw(law="power", stiffness=lumped_ball_law(main)[0], exponent=1.5, damping=200.0, ramp_depth=1e-6),
                 name="main_bearing"))
         inp = d.input_bearing
         if inp.kind != "locked":
             contacts.append(CircleContact(
                 body_a=SHAFT, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0), radius_a=0.5 * inp.pitch_diameter,
                 radius_b=0.5 * inp.pitch_diameter + inp.radial_clearance + 1e-12, internal=True,
-                normal=NormalLaw(law="line", stiffness=2 * lumped_ball_stiffness(inp, d.material, 500.0), damping=50.0,
+                # two input bearings share the radial load
+                normal=NormalLaw(law="power", stiffness=2 * lumped_ball_law(inp)[0], exponent=1.5, damping=50.0,
                                  ramp_depth=1e-6),
                 name="input_bearing"))
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(contacts))

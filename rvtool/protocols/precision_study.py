@@ -51,8 +51,19 @@ def precision_study(design, *, quick, out_dir, bearing_model="lumped", points_pe
                                else abs(ratio) * 60.0 / design.input_speed_rpm)
     dyn_model = build(design, bearing_model=bearing_model)
     spec = RunSpec(end_time=dur, step=dynamic_step, abs_tol=1e-6, rel_tol=1e-8)
+    from ..observe import ObserverRegistry, WholeRun
+    observers = ObserverRegistry()
+    whole = WholeRun()
+    observers.register("whole_run", whole)
     dyn = dynamic_te(dyn_model, torque=T, speed_rpm=design.input_speed_rpm, duration=dur, run_spec=spec,
-                     out_dir=out_dir)
+                     out_dir=out_dir, observers=observers)
+    acc = whole.accumulator
+    dyn_peaks = {}
+    for fam, prefix in (("pins", "wheel"), ("output_pins", "output_pins"), ("eccentric_bearings", "eccentric_bearing"),
+                        ("main_bearings", "main_bearing"), ("input_bearings", "input_bearing")):
+        sel = [i for i, cid in enumerate(acc.ids) if cid.startswith(prefix)]
+        if sel:
+            dyn_peaks[fam] = float(np.max(acc.F_pk[sel]))
     rec = dyn["record"]
     dyn_met = te_metrics(dyn["te_uniform"], n_revolutions=dur * design.input_speed_rpm / 60.0 / abs(ratio))
 
@@ -88,7 +99,12 @@ def precision_study(design, *, quick, out_dir, bearing_model="lumped", points_pe
                     "us_per_step": 1e6 * rec.wall_s / max(rec.accepted_steps, 1),
                     "te_pp_arcsec": float(np.ptp(dyn["te"]) * ARCSEC), "te_rms_arcsec": dyn_met["rms"] * ARCSEC,
                     "te_orders": dyn_met["peak_orders"], "te_order_amplitudes_arcsec": dyn_met["peak_amplitudes"] * ARCSEC,
-                    "max_residual": rec.max_residual, "min_step_s": rec.to_dict()["min_step_s"]},
+                    "max_residual": rec.max_residual, "min_step_s": rec.to_dict()["min_step_s"],
+                    "peak_loads_N": dyn_peaks,
+                    "peak_loads_source": "accepted-step observers (WholeRun F_pk per contact identity)"},
+        "width_moments_at_rated_Nm": model.pin_set.width_moments(
+            model.elements["pins"].evaluate(0.0, model.elements["pins"].local(q_rated),
+                                            np.zeros(len(model.elements["pins"].local(q_rated)))).obs),
     }
     _plots(model, q_rated, F_rated, qs, met, dyn, out_dir, revs)
     settings = {"design": design.name, "bearing_model": bearing_model, "run_spec_dynamic": spec.to_dict(),
