@@ -13,7 +13,7 @@ from .equilibrium import StaticSolver
 from .precision import ARCSEC, dynamic_te, family_peaks, pin_forces, quasi_static_te, te_metrics
 
 
-def precision_study(design, *, quick, out_dir, bearing_model="lumped", points_per_mesh=None,
+def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_per_mesh=None,
                     output_revolutions=None, dynamic_duration=None, dynamic_step=2e-5):
     """Run the precision protocol on ``design``; returns the results dict (issue 5 keys)."""
     from .. import casekit
