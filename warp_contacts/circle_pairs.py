@@ -16,6 +16,7 @@ from .circle_geometry import circle_funcs
 from .circle_pairs_ref import (FRICTION_ANCHOR, FRICTION_REGULARIZED, I_BODY_A, I_BODY_B, I_FRICTION,
                                I_INTERNAL, N_FLOAT_PARAMS, N_INT_PARAMS, N_OBS)
 from .laws import law_funcs
+from .planar import LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
 
 
@@ -23,24 +24,11 @@ from .precision import resolve_device, scalar_types
 def _kernel(dtype):
     L = law_funcs(dtype)
     C = circle_funcs(dtype)
-    vec2 = C.vec2
+    G = planar_funcs(dtype)
+    vec2, perp, cross2, rot = C.vec2, G.perp, G.cross2, G.rot
     normal_force = L.normal_force
     friction_coefficient = L.friction_coefficient
     circle_gap = C.circle_gap
-
-    @wp.func
-    def perp(a: vec2):
-        return vec2(-a[1], a[0])
-
-    @wp.func
-    def cross2(a: vec2, b: vec2):
-        return a[0] * b[1] - a[1] * b[0]
-
-    @wp.func
-    def rot(th: dtype, x: vec2):
-        c = wp.cos(th)
-        s = wp.sin(th)
-        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
 
     @wp.kernel(module="unique")
     def eval_circle_pairs(
@@ -271,22 +259,12 @@ class CirclePairKernel:
         self.n_bodies = n_bodies
         self.kernel = _kernel(self.wdtype)
         d, dt = self.device, self.wdtype
-        # On the CPU the Warp arrays alias NumPy buffers (no copies per call); on a
-        # GPU inputs are copied in and outputs out, once per evaluation.
-        self._host = {
-            "pose": np.zeros((n_bodies + 1, 3), self.ndtype), "vel": np.zeros((n_bodies + 1, 3), self.ndtype),
-            "h_act_in": np.zeros(n, np.int32), "h_a_in": np.zeros((n, 2), self.ndtype),
-            "h_b_in": np.zeros((n, 2), self.ndtype),
-            "q": np.zeros((n, 6), self.ndtype), "dqdq": np.zeros((n, 6, 6), self.ndtype),
-            "dqdv": np.zeros((n, 6, 6), self.ndtype), "obs": np.zeros((n, N_OBS), self.ndtype),
-            "h_act_out": np.zeros(n, np.int32), "h_a_out": np.zeros((n, 2), self.ndtype),
-            "h_b_out": np.zeros((n, 2), self.ndtype)}
-        self._on_cpu = wp.get_device(d).is_cpu
-        self._dev = {}
-        for name, arr in self._host.items():
-            wdt = wp.int32 if arr.dtype == np.int32 else dt
-            self._dev[name] = (wp.array(arr, dtype=wdt, device=d, copy=False) if self._on_cpu
-                               else wp.zeros(arr.shape, dtype=wdt, device=d))
+        self._buf = LaunchBuffers({
+            "pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"), "h_act_in": (n, "int"),
+            "h_a_in": ((n, 2), "f"), "h_b_in": ((n, 2), "f"), "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"),
+            "dqdv": ((n, 6, 6), "f"), "obs": ((n, N_OBS), "f"), "h_act_out": (n, "int"), "h_a_out": ((n, 2), "f"),
+            "h_b_out": ((n, 2), "f")}, dt, self.ndtype, d)
+        self._dev = self._buf.dev
         self.fparams = wp.array(fparams, dtype=dt, device=d)
         self.iparams = wp.array(iparams, dtype=wp.int32, device=d)
         self._inputs = [self.fparams, self.iparams] + [self._dev[k] for k in ("pose", "vel", "h_act_in", "h_a_in", "h_b_in")]
@@ -301,7 +279,7 @@ class CirclePairKernel:
 
         The returned arrays are owned by this object and overwritten by the next call.
         """
-        h = self._host
+        h = self._buf.host
         h["pose"][...] = pose
         h["vel"][...] = vel
         names = ["pose", "vel"]
@@ -310,11 +288,7 @@ class CirclePairKernel:
             h["h_a_in"][...] = hist_a
             h["h_b_in"][...] = hist_b
             names += ["h_act_in", "h_a_in", "h_b_in"]
-        if not self._on_cpu:
-            for k in names:
-                self._dev[k].assign(h[k])
+        self._buf.upload(names)
         self._cmd.launch()
-        if not self._on_cpu:
-            for k in ("q", "dqdq", "dqdv", "obs", "h_act_out", "h_a_out", "h_b_out"):
-                h[k][...] = self._dev[k].numpy()
+        self._buf.download(("q", "dqdq", "dqdv", "obs", "h_act_out", "h_a_out", "h_b_out"))
         return h["q"], h["dqdq"], h["dqdv"], h["obs"], (h["h_act_out"], h["h_a_out"], h["h_b_out"])

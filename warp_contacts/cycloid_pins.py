@@ -13,38 +13,20 @@ import warp as wp
 from .circle_pairs_ref import N_OBS
 from .cycloid_pins_ref import N_FLOAT, N_INT
 from .laws import law_funcs
+from .planar import LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
 
 
 @functools.lru_cache(maxsize=None)
 def _kernel(dtype):
     L = law_funcs(dtype)
-    vec2 = wp.types.vector(2, dtype)
+    G = planar_funcs(dtype)
+    vec2, perp, cross2, rot, body_seed = G.vec2, G.perp, G.cross2, G.rot, G.body_seed
     normal_force = L.normal_force
     friction_coefficient = L.friction_coefficient
 
     @wp.func
-    def perp(a: vec2):
-        return vec2(-a[1], a[0])
-
-    @wp.func
-    def cross2(a: vec2, b: vec2):
-        return a[0] * b[1] - a[1] * b[0]
-
-    @wp.func
-    def rot(th: dtype, x: vec2):
-        c = wp.cos(th)
-        s = wp.sin(th)
-        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
-
-    @wp.func
-    def rot2(th: dtype, x: vec2):
-        c = wp.cos(th)
-        s = wp.sin(th)
-        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
-
-    @wp.func
-    def analytic_point(R: dtype, K1: dtype, zb: dtype, rc: dtype, rot: dtype, phi: dtype):
+    def analytic_point(R: dtype, K1: dtype, zb: dtype, rc: dtype, rot_angle: dtype, phi: dtype):
         """Profile point, outward normal, curvature and d(arc)/d(phi) (see the reference)."""
         s = wp.sin(phi)
         c = wp.cos(phi)
@@ -60,7 +42,7 @@ def _kernel(dtype):
         pt = E - rc * n
         kap = kE / (dtype(1.0) - rc * kE)
         ds = speed * (dtype(1.0) - rc * kE)
-        return rot2(rot, pt), rot2(rot, n), kap, ds
+        return rot(rot_angle, pt), rot(rot_angle, n), kap, ds
 
     @wp.kernel(module="unique")
     def eval_cycloid_pins(
@@ -209,38 +191,19 @@ def _kernel(dtype):
         den = dtype(1.0) + kap * hw
         wt = wp.dot(w, t)
         for j in range(12):
-            dqa = vec2(dtype(0.0), dtype(0.0))
-            dqb = vec2(dtype(0.0), dtype(0.0))
-            dva = vec2(dtype(0.0), dtype(0.0))
-            dvb = vec2(dtype(0.0), dtype(0.0))
-            dtha = dtype(0.0)
-            dthb = dtype(0.0)
-            dwa = dtype(0.0)
-            dwb = dtype(0.0)
-            if j == 0:
-                dqa = vec2(dtype(1.0), dtype(0.0))
-            elif j == 1:
-                dqa = vec2(dtype(0.0), dtype(1.0))
-            elif j == 2:
-                dtha = dtype(1.0)
-            elif j == 3:
-                dqb = vec2(dtype(1.0), dtype(0.0))
-            elif j == 4:
-                dqb = vec2(dtype(0.0), dtype(1.0))
-            elif j == 5:
-                dthb = dtype(1.0)
-            elif j == 6:
-                dva = vec2(dtype(1.0), dtype(0.0))
-            elif j == 7:
-                dva = vec2(dtype(0.0), dtype(1.0))
-            elif j == 8:
-                dwa = dtype(1.0)
-            elif j == 9:
-                dvb = vec2(dtype(1.0), dtype(0.0))
-            elif j == 10:
-                dvb = vec2(dtype(0.0), dtype(1.0))
+            # seeds: columns 0-5 move the coordinates, 6-11 the velocities
+            dqa, dtha, dqb, dthb = body_seed(j)
+            dva, dwa, dvb, dwb = body_seed(j - 6)
+            if j < 6:
+                dva = vec2(dtype(0.0), dtype(0.0))
+                dvb = vec2(dtype(0.0), dtype(0.0))
+                dwa = dtype(0.0)
+                dwb = dtype(0.0)
             else:
-                dwb = dtype(1.0)
+                dqa = vec2(dtype(0.0), dtype(0.0))
+                dqb = vec2(dtype(0.0), dtype(0.0))
+                dtha = dtype(0.0)
+                dthb = dtype(0.0)
             dca = dqa + dtha * perp(a)
             db = dthb * perp(b)
             dp = dqb + db
@@ -317,26 +280,19 @@ class CycloidPinKernel:
             wp.array(np.array([[0.0] * 6 if (analytic is None or analytic[k] is None) else [1.0, *analytic[k]]
                                for k in range(len(tables))], self.ndtype), dtype=dt, device=d),
             int(window)]
-        self._host = {"pose": np.zeros((n_bodies + 1, 3), self.ndtype), "vel": np.zeros((n_bodies + 1, 3), self.ndtype),
-                      "q": np.zeros((n, 6), self.ndtype), "dqdq": np.zeros((n, 6, 6), self.ndtype),
-                      "dqdv": np.zeros((n, 6, 6), self.ndtype), "obs": np.zeros((n, N_OBS), self.ndtype)}
-        self._on_cpu = wp.get_device(d).is_cpu
-        self._dev = {k: (wp.array(v, dtype=dt, device=d, copy=False) if self._on_cpu else wp.zeros(v.shape, dtype=dt, device=d))
-                     for k, v in self._host.items()}
-        self._model = model
-        self._cmd = wp.launch(_kernel(dt), dim=n, device=d, inputs=model + [self._dev["pose"], self._dev["vel"]],
-                              outputs=[self._dev[k] for k in ("q", "dqdq", "dqdv", "obs")], record_cmd=True)
+        self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),
+                                   "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
+                                   "obs": ((n, N_OBS), "f")}, dt, self.ndtype, d)
+        dev = self._buf.dev
+        self._cmd = wp.launch(_kernel(dt), dim=n, device=d, inputs=model + [dev["pose"], dev["vel"]],
+                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs")], record_cmd=True)
 
     def evaluate(self, pose, vel):
         """Returns (Q (N,6), dQdq, dQdv, obs (N,8)); arrays are reused by the next call."""
-        h = self._host
+        h = self._buf.host
         h["pose"][...] = pose
         h["vel"][...] = vel
-        if not self._on_cpu:
-            self._dev["pose"].assign(h["pose"])
-            self._dev["vel"].assign(h["vel"])
+        self._buf.upload(("pose", "vel"))
         self._cmd.launch()
-        if not self._on_cpu:
-            for k in ("q", "dqdq", "dqdv", "obs"):
-                h[k][...] = self._dev[k].numpy()
+        self._buf.download(("q", "dqdq", "dqdv", "obs"))
         return h["q"], h["dqdq"], h["dqdv"], h["obs"]

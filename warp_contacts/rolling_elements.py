@@ -7,27 +7,15 @@ import numpy as np
 import warp as wp
 
 from .circle_pairs_ref import N_OBS
+from .planar import LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
 from .rolling_elements_ref import KIND_BALL, N_FLOAT, N_INT
 
 
 @functools.lru_cache(maxsize=None)
 def _kernel(dtype):
-    vec2 = wp.types.vector(2, dtype)
-
-    @wp.func
-    def perp(v: vec2):
-        return vec2(-v[1], v[0])
-
-    @wp.func
-    def cross2(x: vec2, y: vec2):
-        return x[0] * y[1] - x[1] * y[0]
-
-    @wp.func
-    def rot(th: dtype, x: vec2):
-        c = wp.cos(th)
-        s = wp.sin(th)
-        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
+    G = planar_funcs(dtype)
+    vec2, perp, cross2, rot, body_seed = G.vec2, G.perp, G.cross2, G.rot, G.body_seed
 
     @wp.func
     def radial_law(kind: int, r: dtype, k: dtype, p: dtype, alpha: dtype, A: dtype, sax: dtype, c: dtype,
@@ -85,22 +73,7 @@ def _kernel(dtype):
         q_out[i, 4] = -fA[1]
         q_out[i, 5] = -cross2(b, fA)
         for j in range(6):
-            dxa = vec2(dtype(0.0), dtype(0.0))
-            dxb = vec2(dtype(0.0), dtype(0.0))
-            dtha = dtype(0.0)
-            dthb = dtype(0.0)
-            if j == 0:
-                dxa = vec2(dtype(1.0), dtype(0.0))
-            elif j == 1:
-                dxa = vec2(dtype(0.0), dtype(1.0))
-            elif j == 2:
-                dtha = dtype(1.0)
-            elif j == 3:
-                dxb = vec2(dtype(1.0), dtype(0.0))
-            elif j == 4:
-                dxb = vec2(dtype(0.0), dtype(1.0))
-            else:
-                dthb = dtype(1.0)
+            dxa, dtha, dxb, dthb = body_seed(j)
             da = dtha * perp(a)
             db = dthb * perp(b)
             dpsi = dtype(0.5) * ((dtype(1.0) - g) * dtha + (dtype(1.0) + g) * dthb)
@@ -138,23 +111,18 @@ class RollingElementKernel:
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
         n = len(fparams)
         dt = self.wdtype
-        self._host = {"pose": np.zeros((n_bodies + 1, 3), self.ndtype), "q": np.zeros((n, 6), self.ndtype),
-                      "dqdq": np.zeros((n, 6, 6), self.ndtype), "obs": np.zeros((n, N_OBS), self.ndtype)}
-        self._on_cpu = wp.get_device(d).is_cpu
-        self._dev = {k: (wp.array(v, dtype=dt, device=d, copy=False) if self._on_cpu else wp.zeros(v.shape, dtype=dt, device=d))
-                     for k, v in self._host.items()}
+        self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"),
+                                   "obs": ((n, N_OBS), "f")}, dt, self.ndtype, d)
+        dev = self._buf.dev
         self._cmd = wp.launch(_kernel(dt), dim=n, device=d,
                               inputs=[wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
-                                      self._dev["pose"]],
-                              outputs=[self._dev[k] for k in ("q", "dqdq", "obs")], record_cmd=True)
+                                      dev["pose"]],
+                              outputs=[dev[k] for k in ("q", "dqdq", "obs")], record_cmd=True)
 
     def evaluate(self, pose):
-        h = self._host
+        h = self._buf.host
         h["pose"][...] = pose
-        if not self._on_cpu:
-            self._dev["pose"].assign(h["pose"])
+        self._buf.upload(("pose",))
         self._cmd.launch()
-        if not self._on_cpu:
-            for k in ("q", "dqdq", "obs"):
-                h[k][...] = self._dev[k].numpy()
+        self._buf.download(("q", "dqdq", "obs"))
         return h["q"], h["dqdq"], h["obs"]
