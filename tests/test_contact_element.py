@@ -192,3 +192,15 @@ def test_bad_inputs_name_the_parameter():
         ev.evaluate(np.zeros((3, 3)), np.zeros((2, 3)))
     with pytest.raises(RvtoolInputError, match="pose contains non-finite"):
         ev.evaluate(np.array([[0, 0, 0], [np.nan, 0, 0]]), np.zeros((2, 3)))
+
+
+def test_auto_device_rule():
+    """"auto" uses the GPU only for sets above the measured crossover, and the CPU without one."""
+    import warp as wp
+    from warp_contacts.precision import AUTO_CUDA_MIN_CONTACTS, resolve_device
+    has_cuda = any(d.is_cuda for d in wp.get_devices())
+    assert resolve_device("auto", 10) == "cpu"
+    big = resolve_device("auto", AUTO_CUDA_MIN_CONTACTS)
+    assert big.startswith("cuda") if has_cuda else big == "cpu"
+    with pytest.raises(RvtoolInputError, match="device"):
+        resolve_device("tpu:0")

@@ -250,7 +250,7 @@ class CirclePairKernel:
 
     def __init__(self, fparams, iparams, n_bodies, precision="float64", device="cpu"):
         self.wdtype, self.ndtype = scalar_types(precision)
-        self.device = resolve_device(device)
+        self.device = resolve_device(device, len(fparams))
         self.precision = precision
         fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
         iparams = np.ascontiguousarray(iparams, dtype=np.int32)

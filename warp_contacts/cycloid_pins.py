@@ -260,7 +260,7 @@ class CycloidPinKernel:
 
     def __init__(self, fparams, iparams, tables, window, n_bodies, precision="float64", device="cpu", analytic=None):
         self.wdtype, self.ndtype = scalar_types(precision)
-        self.device = d = resolve_device(device)
+        self.device = d = resolve_device(device, len(fparams))
         fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
         iparams = np.ascontiguousarray(iparams, dtype=np.int32)
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT

@@ -442,7 +442,7 @@ class OutputPinKernel:
     def __init__(self, fparams, iparams, stations, n_rows_pose, mode="shared", precision="float64", device="cpu",
                  slice_tangent=False):
         self.wdtype, self.ndtype = scalar_types(precision)
-        self.device = resolve_device(device)
+        self.device = resolve_device(device, len(fparams))
         self.precision = precision
         self.mode = mode
         nf, ni, nq = (N_SHARED_F, N_SHARED_I, 9) if mode == "shared" else (N_PLAIN_F, N_PLAIN_I, 6)

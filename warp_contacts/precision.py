@@ -33,10 +33,22 @@ def _warp_ready():
     return True
 
 
-def resolve_device(device):
-    """Return a Warp device name for ``device`` ("cpu", "cuda", "cuda:N")."""
+#: Contacts per launch above which ``device="auto"`` picks the GPU. Measured with
+#: cases/bench_gpu.py on an H100 (float64, pose in and forces out per evaluation):
+#: a CUDA evaluation costs ~70-100 us at any small size, the CPU ~0.3-0.8 us per
+#: contact, so CUDA wins from ~1,000 contacts (crossover at 1,280 cycloid slices,
+#: 256 output-pin rows, 2,880 rolling elements).
+AUTO_CUDA_MIN_CONTACTS = 1000
+
+
+def resolve_device(device, n_contacts=None):
+    """Return a Warp device name for ``device`` ("cpu", "cuda", "cuda:N" or "auto": the
+    first CUDA device when present and ``n_contacts`` >= AUTO_CUDA_MIN_CONTACTS, else "cpu")."""
     _warp_ready()
     names = [d.alias for d in wp.get_devices()]
+    if device == "auto":
+        cuda = [n for n in names if n.startswith("cuda")]
+        return cuda[0] if cuda and (n_contacts or 0) >= AUTO_CUDA_MIN_CONTACTS else "cpu"
     if device == "cuda":
         device = "cuda:0"
     if device not in names:

@@ -105,7 +105,7 @@ class RollingElementKernel:
 
     def __init__(self, fparams, iparams, n_bodies, precision="float64", device="cpu"):
         self.wdtype, self.ndtype = scalar_types(precision)
-        d = resolve_device(device)
+        d = resolve_device(device, len(fparams))
         fparams = np.ascontiguousarray(fparams, self.ndtype)
         iparams = np.ascontiguousarray(iparams, np.int32)
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
