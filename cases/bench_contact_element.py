@@ -33,15 +33,6 @@ def _system(cset, poses, with_contacts, precision):
     return SC, mbs, el
 
 
-def _time_call(fn, min_time=0.2, max_reps=2000):
-    fn()
-    reps, t0 = 0, time.perf_counter()
-    while reps < max_reps and (time.perf_counter() - t0 < min_time or reps < 3):
-        fn()
-        reps += 1
-    return (time.perf_counter() - t0) / reps
-
-
 def bench(n_contacts, precision, steps):
     rng = np.random.default_rng(n_contacts)
     nb = int(np.clip(n_contacts // 10, 2, 100))
@@ -59,13 +50,13 @@ def bench(n_contacts, precision, steps):
         el._force(mbs, counter[0] * 1e-9, el.object_number, q, v)
         el._jacobian(mbs, counter[0] * 1e-9, el.object_number, q, v, 1.0, 0.0)
 
-    out["us_per_callback"] = 1e6 * _time_call(callback)
+    out["us_per_callback"] = 1e6 * casekit.time_call(callback)
     rec = simulate(mbs, spec, [el])
     out["us_per_step"] = 1e6 * rec.wall_s / rec.accepted_steps
     out["newton_per_step"] = rec.newton_iterations / rec.accepted_steps
     out["rejected_steps"] = rec.rejected_steps
     ev_np = ContactSetEvaluator(cset, backend="numpy")
-    out["numpy_us_per_callback"] = 1e6 * _time_call(lambda: ev_np.evaluate(poses, vels))
+    out["numpy_us_per_callback"] = 1e6 * casekit.time_call(lambda: ev_np.evaluate(poses, vels))
     ref = ev_np.evaluate(poses, vels).Q
     got = ContactSetEvaluator(cset, precision=precision).evaluate(poses, vels).Q
     out["force_rel_err_vs_numpy"] = float(np.max(np.abs(got - ref)) / np.max(np.abs(ref)))

@@ -23,15 +23,6 @@ N_PINS = 10
 N_BATCH = 1000
 
 
-def _time_call(fn, min_time=0.3, max_reps=5000):
-    fn()
-    reps, t0 = 0, time.perf_counter()
-    while reps < max_reps and (time.perf_counter() - t0 < min_time or reps < 3):
-        fn()
-        reps += 1
-    return (time.perf_counter() - t0) / reps
-
-
 def mechanism_poses(rng, n):
     """Flange at rest and two wheels displaced and turned so that the pins load unevenly."""
     base = np.array([[0.0, 0.0, 0.0], [60e-6, 20e-6, 1.5e-3], [-50e-6, -10e-6, 1.2e-3]])
@@ -77,15 +68,15 @@ def main(argv=None):
         r = ref.evaluate_shared(pose1, fp, ip, st)
         return r["Q"].sum(axis=0), r["dQdq"].sum(axis=0)
 
-    us_single = _time_call(warp_single, min_time) * 1e6
-    numpy_us_single = _time_call(numpy_single, min_time, max_reps=200) * 1e6
+    us_single = casekit.time_call(warp_single, min_time) * 1e6
+    numpy_us_single = casekit.time_call(numpy_single, min_time, max_reps=200) * 1e6
     (Qw, Kw), (Qn, Kn) = warp_single(), numpy_single()
     loaded = int(np.sum(ref.evaluate_shared(pose1, fp, ip, st)["slices"][..., ref.S_FORCE] > 0))
 
     fpb, ipb = batched_params(fp, ip, N_BATCH)
     poseb = mechanism_poses(rng, N_BATCH)
     kb = OutputPinKernel(fpb, ipb, st, 3 * N_BATCH, "shared", args.precision, args.device)
-    us_batched = _time_call(lambda: kb.evaluate(poseb), min_time, max_reps=50) * 1e6
+    us_batched = casekit.time_call(lambda: kb.evaluate(poseb), min_time, max_reps=50) * 1e6
     rb = {k: np.array(v) for k, v in kb.evaluate(poseb).items()}
     n_check = 50 if args.quick else N_BATCH          # NumPy reference over the batch (subset in --quick)
     rows = slice(0, n_check * N_PINS)

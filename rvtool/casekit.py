@@ -119,3 +119,13 @@ def save_figure(fig, out_dir, name):
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def time_call(fn, min_time=0.2, max_reps=2000):
+    """Mean wall time [s] of ``fn()`` over at least 3 calls and ``min_time`` seconds (one warm-up call)."""
+    fn()
+    reps, t0 = 0, time.perf_counter()
+    while reps < max_reps and (time.perf_counter() - t0 < min_time or reps < 3):
+        fn()
+        reps += 1
+    return (time.perf_counter() - t0) / reps

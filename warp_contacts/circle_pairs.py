@@ -26,6 +26,7 @@ def _kernel(dtype):
     C = circle_funcs(dtype)
     G = planar_funcs(dtype)
     vec2, perp, cross2, rot = C.vec2, G.perp, G.cross2, G.rot
+    store_pair_forces, store_pair_column = G.store_pair_forces, G.store_pair_column
     normal_force = L.normal_force
     friction_coefficient = L.friction_coefficient
     circle_gap = C.circle_gap
@@ -129,13 +130,8 @@ def _kernel(dtype):
             armA = ha
             armB = hb
 
-        fA = fnA + ftA
-        q_out[i, 0] = fA[0]
-        q_out[i, 1] = fA[1]
-        q_out[i, 2] = cross2(pa, fnA) + cross2(armA, ftA)
-        q_out[i, 3] = -fA[0]
-        q_out[i, 4] = -fA[1]
-        q_out[i, 5] = -(cross2(pb, fnA) + cross2(armB, ftA))
+        store_pair_forces(q_out, i, fnA + ftA, cross2(pa, fnA) + cross2(armA, ftA),
+                          -(cross2(pb, fnA) + cross2(armB, ftA)))
 
         for j in range(12):
             dqa = wp.vec3d(0.0, 0.0, 0.0)
@@ -189,20 +185,7 @@ def _kernel(dtype):
             dfA = dfnA + dftA
             dQa = cross2(dpa, fnA) + cross2(pa, dfnA) + cross2(darmA, ftA) + cross2(armA, dftA)
             dQb = -(cross2(dpb, fnA) + cross2(pb, dfnA) + cross2(darmB, ftA) + cross2(armB, dftA))
-            if j < 6:
-                dqdq_out[i, 0, j] = dfA[0]
-                dqdq_out[i, 1, j] = dfA[1]
-                dqdq_out[i, 2, j] = dQa
-                dqdq_out[i, 3, j] = -dfA[0]
-                dqdq_out[i, 4, j] = -dfA[1]
-                dqdq_out[i, 5, j] = dQb
-            else:
-                dqdv_out[i, 0, j - 6] = dfA[0]
-                dqdv_out[i, 1, j - 6] = dfA[1]
-                dqdv_out[i, 2, j - 6] = dQa
-                dqdv_out[i, 3, j - 6] = -dfA[0]
-                dqdv_out[i, 4, j - 6] = -dfA[1]
-                dqdv_out[i, 5, j - 6] = dQb
+            store_pair_column(dqdq_out, dqdv_out, i, j, dfA, dQa, dQb)
 
         # trial anchor history (committed by the driver only for accepted steps)
         act = 0

@@ -22,6 +22,7 @@ def _kernel(dtype):
     L = law_funcs(dtype)
     G = planar_funcs(dtype)
     vec2, perp, cross2, rot, body_seed = G.vec2, G.perp, G.cross2, G.rot, G.body_seed
+    store_pair_forces, store_pair_column = G.store_pair_forces, G.store_pair_column
     normal_force = L.normal_force
     friction_coefficient = L.friction_coefficient
 
@@ -181,12 +182,7 @@ def _kernel(dtype):
         ftA = ft * t
 
         fsum = fA + ftA
-        q_out[i, 0] = fsum[0]
-        q_out[i, 1] = fsum[1]
-        q_out[i, 2] = cross2(a, fsum)
-        q_out[i, 3] = -fsum[0]
-        q_out[i, 4] = -fsum[1]
-        q_out[i, 5] = -(cross2(b, fA) + cross2(bpc, ftA))
+        store_pair_forces(q_out, i, fsum, cross2(a, fsum), -(cross2(b, fA) + cross2(bpc, ftA)))
 
         den = dtype(1.0) + kap * hw
         wt = wp.dot(w, t)
@@ -227,20 +223,7 @@ def _kernel(dtype):
             dsum = dfA + dftA
             dQa = cross2(da, fsum) + cross2(a, dsum)
             dQb = -(cross2(db, fA) + cross2(b, dfA) + cross2(dbpc, ftA) + cross2(bpc, dftA))
-            if j < 6:
-                dqdq_out[i, 0, j] = dsum[0]
-                dqdq_out[i, 1, j] = dsum[1]
-                dqdq_out[i, 2, j] = dQa
-                dqdq_out[i, 3, j] = -dsum[0]
-                dqdq_out[i, 4, j] = -dsum[1]
-                dqdq_out[i, 5, j] = dQb
-            else:
-                dqdv_out[i, 0, j - 6] = dsum[0]
-                dqdv_out[i, 1, j - 6] = dsum[1]
-                dqdv_out[i, 2, j - 6] = dQa
-                dqdv_out[i, 3, j - 6] = -dsum[0]
-                dqdv_out[i, 4, j - 6] = -dsum[1]
-                dqdv_out[i, 5, j - 6] = dQb
+            store_pair_column(dqdq_out, dqdv_out, i, j, dsum, dQa, dQb)
 
         cp = c + (dtype(0.5) * (hw - r)) * nv
         obs_out[i, 0] = F

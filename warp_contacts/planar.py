@@ -49,7 +49,37 @@ def planar_funcs(dtype):
             dthb = dtype(1.0)
         return dxa, dtha, dxb, dthb
 
-    return types.SimpleNamespace(vec2=vec2, perp=perp, cross2=cross2, rot=rot, body_seed=body_seed)
+    @wp.func
+    def store_pair_forces(q_out: wp.array2d(dtype=dtype), i: int, f_a: vec2, m_a: dtype, m_b: dtype):
+        """Generalized forces of row i: (f_A, M_A) on body A and (-f_A, M_B) on body B."""
+        q_out[i, 0] = f_a[0]
+        q_out[i, 1] = f_a[1]
+        q_out[i, 2] = m_a
+        q_out[i, 3] = -f_a[0]
+        q_out[i, 4] = -f_a[1]
+        q_out[i, 5] = m_b
+
+    @wp.func
+    def store_pair_column(dqdq_out: wp.array3d(dtype=dtype), dqdv_out: wp.array3d(dtype=dtype), i: int, j: int,
+                          df_a: vec2, dm_a: dtype, dm_b: dtype):
+        """Tangent column j of row i: columns 0-5 go to dQ/dq, 6-11 to dQ/dv."""
+        if j < 6:
+            dqdq_out[i, 0, j] = df_a[0]
+            dqdq_out[i, 1, j] = df_a[1]
+            dqdq_out[i, 2, j] = dm_a
+            dqdq_out[i, 3, j] = -df_a[0]
+            dqdq_out[i, 4, j] = -df_a[1]
+            dqdq_out[i, 5, j] = dm_b
+        else:
+            dqdv_out[i, 0, j - 6] = df_a[0]
+            dqdv_out[i, 1, j - 6] = df_a[1]
+            dqdv_out[i, 2, j - 6] = dm_a
+            dqdv_out[i, 3, j - 6] = -df_a[0]
+            dqdv_out[i, 4, j - 6] = -df_a[1]
+            dqdv_out[i, 5, j - 6] = dm_b
+
+    return types.SimpleNamespace(vec2=vec2, perp=perp, cross2=cross2, rot=rot, body_seed=body_seed,
+                                 store_pair_forces=store_pair_forces, store_pair_column=store_pair_column)
 
 
 class LaunchBuffers:

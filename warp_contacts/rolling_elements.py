@@ -16,6 +16,7 @@ from .rolling_elements_ref import KIND_BALL, N_FLOAT, N_INT
 def _kernel(dtype):
     G = planar_funcs(dtype)
     vec2, perp, cross2, rot, body_seed = G.vec2, G.perp, G.cross2, G.rot, G.body_seed
+    store_pair_forces, store_pair_column = G.store_pair_forces, G.store_pair_column
 
     @wp.func
     def radial_law(kind: int, r: dtype, k: dtype, p: dtype, alpha: dtype, A: dtype, sax: dtype, c: dtype,
@@ -66,12 +67,7 @@ def _kernel(dtype):
         delta, F, fr, dfr = radial_law(kind, r, fparams[i, 7], fparams[i, 8], fparams[i, 9], fparams[i, 10],
                                        fparams[i, 11], fparams[i, 6], fparams[i, 12])
         fA = -fr * u
-        q_out[i, 0] = fA[0]
-        q_out[i, 1] = fA[1]
-        q_out[i, 2] = cross2(a, fA)
-        q_out[i, 3] = -fA[0]
-        q_out[i, 4] = -fA[1]
-        q_out[i, 5] = -cross2(b, fA)
+        store_pair_forces(q_out, i, fA, cross2(a, fA), -cross2(b, fA))
         for j in range(6):
             dxa, dtha, dxb, dthb = body_seed(j)
             da = dtha * perp(a)
@@ -81,12 +77,9 @@ def _kernel(dtype):
             dd = (dxa + da) - (dxb + db)
             dr = wp.dot(u, dd) + wp.dot(d, du)
             dfA = -(dfr * dr) * u - fr * du
-            dqdq_out[i, 0, j] = dfA[0]
-            dqdq_out[i, 1, j] = dfA[1]
-            dqdq_out[i, 2, j] = cross2(da, fA) + cross2(a, dfA)
-            dqdq_out[i, 3, j] = -dfA[0]
-            dqdq_out[i, 4, j] = -dfA[1]
-            dqdq_out[i, 5, j] = -(cross2(db, fA) + cross2(b, dfA))
+            # only coordinate columns (j < 6): the elements carry no velocity dependence
+            store_pair_column(dqdq_out, dqdq_out, i, j, dfA, cross2(da, fA) + cross2(a, dfA),
+                              -(cross2(db, fA) + cross2(b, dfA)))
         pos = vec2(pose_in[ib, 0], pose_in[ib, 1]) + b + (dtype(0.5) * fparams[i, 13]) * u
         obs_out[i, 0] = F
         obs_out[i, 1] = dtype(0.0)
