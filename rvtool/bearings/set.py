@@ -9,7 +9,7 @@ from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import Evaluation
+from ..contact.evaluator import Evaluation, all_finite
 from ..errors import RvtoolInputError
 from .spec import AngularContactPair, BallBearing, CrossedRollerBearing, RollerBearing, roller_lamina_stiffness
 
@@ -129,7 +129,7 @@ class BearingSet:
                 raise RvtoolInputError(f"pose must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
         Qc, dq, obs = self.raw(pose)
         n = 3 * self.n_bodies
-        finite = bool(np.all(np.isfinite(Qc)) and np.all(np.isfinite(dq)))
+        finite = all_finite(Qc, dq)
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
                           np.zeros((n, n)), np.array(obs, float), (), finite)
 

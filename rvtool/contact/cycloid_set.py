@@ -19,7 +19,7 @@ from ..geometry.cycloid import CycloidProfile, pin_centres
 from ..validation import check_finite, check_nonnegative, check_positive
 from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel, NormalLaw
-from .evaluator import Evaluation
+from .evaluator import Evaluation, all_finite
 
 
 def palmgren_line_approach(force, length):
@@ -199,7 +199,7 @@ class CycloidPinSet:
                 if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
                     raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
         Qc, dq, dv, obs = self.raw(pose, vel)
-        finite = bool(np.all(np.isfinite(Qc)) and np.all(np.isfinite(dq)) and np.all(np.isfinite(dv)))
+        finite = all_finite(Qc, dq, dv)
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
                           self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
 

@@ -30,6 +30,12 @@ class Evaluation:
     finite: bool
 
 
+def all_finite(*arrays):
+    """True if every entry is finite; one summation per array (a NaN or inf propagates into
+    the sum, and overflow of a finite sum is impossible at contact-force magnitudes)."""
+    return all(np.isfinite(np.sum(a)) for a in arrays)
+
+
 class ContactHistory:
     """Committed history of a set: anchor active flags, anchors in body
     coordinates [m], and the accumulated slip distance per contact [m] (the
@@ -126,7 +132,7 @@ class ContactSetEvaluator:
             self.check_state(pose, vel)
         Qc, dq, dv, obs, trial = self.raw(pose, vel, history)
         Q = self.assembler.vector(np.asarray(Qc, np.float64))
-        finite = bool(np.all(np.isfinite(Qc)) and np.all(np.isfinite(dq)) and np.all(np.isfinite(dv)))
+        finite = all_finite(Qc, dq, dv)
         # copies: the kernel's output buffers are reused by the next launch
         return Evaluation(Q, self.assembler.matrix(np.asarray(dq, np.float64)),
                           self.assembler.matrix(np.asarray(dv, np.float64)), np.array(obs, np.float64),

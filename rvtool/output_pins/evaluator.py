@@ -12,7 +12,7 @@ this family, so dQ/dv = 0.
 """
 import numpy as np
 
-from rvtool.contact.evaluator import Evaluation
+from rvtool.contact.evaluator import Evaluation, all_finite
 from warp_contacts import circle_pairs_ref as cref
 from warp_contacts import output_pins_ref as ref
 
@@ -143,7 +143,7 @@ class OutputPinEvaluator:
         r = self.raw(pose)
         Q = self.assembler.vector(np.asarray(r["Q"], np.float64))
         K = self.assembler.matrix(np.asarray(r["dQdq"], np.float64))
-        finite = bool(np.all(np.isfinite(Q)) and np.all(np.isfinite(K)))
+        finite = all_finite(Q, K)
         return Evaluation(Q, K, np.zeros_like(K), self._observations(r["slices"]), (), finite)
 
     def commit(self, pose, vel, evaluation=None):

@@ -52,18 +52,30 @@ def _evaluation_at(el, q):
     return el.evaluate(0.0, ql, v)
 
 
+BEARING_FAMILIES = ("eccentric_bearing", "main_bearing", "input_bearing")
+
+
+def _family_rows(el):
+    """{family: row indices} of an element, computed once per element."""
+    rows = getattr(el, "_family_rows", None)
+    if rows is None:
+        if el.name == "bearings":
+            rows = {fam + "s": np.array([i for i, cid in enumerate(el.ids) if cid.startswith(fam)], dtype=int)
+                    for fam in BEARING_FAMILIES}
+            rows = {k: v for k, v in rows.items() if len(v)}
+        else:
+            rows = {el.name: np.arange(len(el.ids))}
+        el._family_rows = rows
+    return rows
+
+
 def family_peaks(model, q):
     """Peak normal force [N] per contact family of the model at state q (zero velocity)."""
     out = {}
-    for name, el in model.elements.items():
+    for el in model.elements.values():
         ev = _evaluation_at(el, q)
-        if name == "bearings":
-            for fam in ("eccentric_bearing", "main_bearing", "input_bearing"):
-                sel = [i for i, cid in enumerate(el.ids) if cid.startswith(fam)]
-                if sel:
-                    out[fam + "s"] = float(np.max(ev.obs[sel, O_FN]))
-        else:
-            out[name] = float(np.max(ev.obs[:, O_FN]))
+        for fam, rows in _family_rows(el).items():
+            out[fam] = float(np.max(ev.obs[rows, O_FN]))
     return out
 
 
