@@ -1,0 +1,314 @@
+"""Torsional stiffness protocol: fixed input and housing, signed output-torque sequence.
+
+The protocol is data (:class:`TorqueSequence`): signed torque levels through
+loading to +T_rated, unloading, reversal to -T_rated and return to zero, with
+the ramp and dwell counts and the settling criterion (tail-angle span over the
+dwell) that a time-domain path uses. Path (b), :func:`quasi_static_stiffness`,
+is an equilibrium continuation: each level is reached from the previous
+equilibrium by warm-started Newton solves; the torque increment is halved
+when Newton fails or jumps (a step larger than ``max_step`` is rejected: in
+the backlash at zero load Newton can land in a far, spurious equilibrium).
+Contact history (friction anchors) is committed once per converged level.
+
+Post-processing: branch fits of Eq. (stiffness_fit) over 50-100 % of the
+rated torque per branch with R^2, lost motion at +-3 % of rated torque,
+zero-load return difference, and the condensed tangent K_t of
+Eq. (obs_condensed_stiffness) from the assembled contact Jacobians.
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RvtoolInputError, SolverFailure
+from ..validation import check_positive, check_range
+from .equilibrium import StaticSolver
+from .precision import _evaluation_at
+
+ARCMIN = np.pi / (180.0 * 60.0)   # rad per arcmin
+BRANCHES = ("pos_loading", "pos_unloading", "neg_loading", "neg_unloading")
+
+
+@dataclass(frozen=True, kw_only=True)
+class TorqueSequence:
+    """Signed output-torque sequence of the stiffness protocol.
+
+    rated_torque: T_rated [N m].
+    loading_step: level spacing on the first loading branch [fraction of T_rated].
+    other_step: level spacing on unloading, reversal and return [fraction of T_rated].
+    fine_levels: extra low-torque levels on every branch [fraction of T_rated]
+        (the +-3 % lost-motion levels and 1.5 % on first loading).
+    ramp_steps, dwell_steps: time steps of the torque ramp and of the dwell per
+        level (time-domain path; the paper commands 600 and 6000).
+    tail_fraction: final fraction of the dwell whose angle span is the settling measure [-].
+    settle_span_arcmin: acceptance threshold of the tail-angle span [arcmin].
+    """
+    rated_torque: float
+    loading_step: float = 0.05
+    other_step: float = 0.0625
+    fine_levels: tuple = (0.015, 0.03)
+    ramp_steps: int = 600
+    dwell_steps: int = 6000
+    tail_fraction: float = 0.25
+    settle_span_arcmin: float = 0.5
+
+    def __post_init__(self):
+        check_positive("rated_torque", self.rated_torque)
+        check_range("loading_step", self.loading_step, 0.0, 1.0, low_open=True)
+        check_range("other_step", self.other_step, 0.0, 1.0, low_open=True)
+        check_range("tail_fraction", self.tail_fraction, 0.0, 1.0, low_open=True)
+        check_positive("settle_span_arcmin", self.settle_span_arcmin)
+        for f in self.fine_levels:
+            check_range("fine_levels", f, 0.0, 1.0, low_open=True, high_open=True)
+        if self.ramp_steps < 1 or self.dwell_steps < 1:
+            raise RvtoolInputError(f"ramp_steps = {self.ramp_steps}, dwell_steps = {self.dwell_steps}; "
+                                   "both must be >= 1")
+
+    def fractions(self):
+        """(levels [fraction of T_rated], branch label per level). The peak levels
+        (+-1) and the zero at reversal belong to both adjacent branches in the fits."""
+        up = sorted(set(np.round(np.arange(0.0, 1.0 + 1e-9, self.loading_step), 10)) | set(self.fine_levels))
+        down = sorted(set(np.round(np.arange(0.0, 1.0 + 1e-9, self.other_step), 10)) |
+                      {f for f in self.fine_levels if f >= 0.03}, reverse=True)
+        levels, labels = [], []
+        levels += list(up)
+        labels += ["pos_loading"] * len(up)
+        levels += down[1:]
+        labels += ["pos_unloading"] * (len(down) - 1)
+        levels += [-f for f in down[::-1][1:]]
+        labels += ["neg_loading"] * (len(down) - 1)
+        levels += [-f for f in down[1:]]
+        labels += ["neg_unloading"] * (len(down) - 1)
+        return np.array(levels, float), labels
+
+    def levels(self):
+        """(torques [N m], branch labels)."""
+        f, labels = self.fractions()
+        return f * self.rated_torque, labels
+
+
+def rd40_sequence(rated_torque=140.0, **kw):
+    """The 74-level sequence: 0..T_rated in 5 % steps plus 1.5 % and 3 %; unloading,
+    reversal and return in 6.25 % steps plus 3 %."""
+    return TorqueSequence(rated_torque=rated_torque, **kw)
+
+
+# -- post-processing -------------------------------------------------------------------
+
+def branch_points(torque, labels, rated_torque, lo=0.5, hi=1.0):
+    """Indices per branch with lo*T_rated <= |T| <= hi*T_rated. The peak level ending one
+    branch also starts the next (the peak of loading is the first point of unloading)."""
+    torque = np.asarray(torque, float)
+    out = {}
+    for b in BRANCHES:
+        idx = [i for i, l in enumerate(labels) if l == b]
+        if b.endswith("unloading") and idx and idx[0] > 0:
+            idx = [idx[0] - 1] + idx
+        sel = [i for i in idx if lo * rated_torque - 1e-9 <= abs(torque[i]) <= hi * rated_torque + 1e-9]
+        out[b] = sel
+    return out
+
+
+def linear_fit(theta, torque):
+    """Eq. (stiffness_fit): least-squares T = K theta + b; returns (K, b, R^2)."""
+    x, y = np.asarray(theta, float), np.asarray(torque, float)
+    if len(x) < 2:
+        raise RvtoolInputError(f"a branch fit needs at least 2 points; got {len(x)}")
+    dx = x - x.mean()
+    sxx = float(dx @ dx)
+    if sxx == 0.0:
+        raise RvtoolInputError("a branch fit needs distinct angles; all angles are equal")
+    k = float(dx @ (y - y.mean())) / sxx
+    b = float(y.mean() - k * x.mean())
+    ss_res = float(np.sum((y - (k * x + b)) ** 2))
+    ss_tot = float(np.sum((y - y.mean()) ** 2))
+    return k, b, (1.0 - ss_res / ss_tot) if ss_tot > 0 else 1.0
+
+
+def branch_fits(torque, angle_arcmin, labels, rated_torque, lo=0.5, hi=1.0):
+    """Per branch: K [N m/arcmin], intercept [N m], R^2 and the number of points."""
+    out = {}
+    for b, idx in branch_points(torque, labels, rated_torque, lo, hi).items():
+        if len(idx) < 2:
+            out[b] = {"K_Nm_per_arcmin": None, "b_Nm": None, "R2": None, "points": len(idx)}
+            continue
+        k, c, r2 = linear_fit(np.asarray(angle_arcmin)[idx], np.asarray(torque)[idx])
+        out[b] = {"K_Nm_per_arcmin": k, "b_Nm": c, "R2": r2, "points": len(idx)}
+    return out
+
+
+def lost_motion(torque, angle_arcmin, rated_torque, fraction=0.03):
+    """Angle difference [arcmin] between the first +fraction and first -fraction levels
+    (the +-3 % definition: the width of the low-stiffness band around zero load)."""
+    torque = np.asarray(torque, float)
+    t = fraction * rated_torque
+    ip = np.flatnonzero(np.isclose(torque, t))
+    im = np.flatnonzero(np.isclose(torque, -t))
+    if not len(ip) or not len(im):
+        raise RvtoolInputError(f"lost motion needs levels at +-{fraction:g} T_rated = +-{t:g} N m; "
+                               "the sequence has none")
+    return float(angle_arcmin[ip[0]] - angle_arcmin[im[0]])
+
+
+def zero_load_return(torque, angle_arcmin):
+    """Final minus first zero-load angle [arcmin]."""
+    iz = np.flatnonzero(np.asarray(torque) == 0.0)
+    return float(angle_arcmin[iz[-1]] - angle_arcmin[iz[0]])
+
+
+def condensed_tangent(model, q):
+    """K_t [N m/rad] of Eq. (obs_condensed_stiffness) at state q: K^s assembled from the
+    contact Jacobians (K^s = -dQ/dq) and the regularization springs over the free
+    coordinates (all but the drive and locks), condensed on the output rotation."""
+    n = len(q)
+    K = np.zeros((n, n))
+    for el in model.elements.values():
+        ev = _evaluation_at(el, q)
+        ltg = el._ltg if el._ltg is not None else np.asarray(model.mbs.systemData.GetObjectLTGODE2(el.object_number))
+        K[np.ix_(ltg, ltg)] -= ev.dQdq
+    for body, c, _, obj in model.reg_springs:
+        i = model.coordinate_index(body, c)
+        K[i, i] += model.mbs.GetObjectParameter(obj, "stiffness")
+    fixed = {model.coordinate_index(0, 2)}
+    for obj in model.locks:
+        markers = model.mbs.GetObjectParameter(obj, "markerNumbers")
+        node = model.mbs.GetMarkerParameter(markers[1], "nodeNumber")
+        c = model.mbs.GetMarkerParameter(markers[1], "coordinate")
+        fixed.add(int(model.mbs.systemData.GetNodeLTGODE2(node)[c]))
+    i_out = model.coordinate_index(model.flange, 2)
+    r = [i for i in range(n) if i not in fixed and i != i_out]
+    k_rr = K[np.ix_(r, r)]
+    return float(K[i_out, i_out] - K[i_out, r] @ np.linalg.solve(k_rr, K[r, i_out]))
+
+
+# -- path (b): quasi-static continuation ----------------------------------------------
+
+@dataclass
+class ContinuationStats:
+    levels: int = 0
+    solves: int = 0
+    rejected_increments: int = 0
+    newton_iterations: int = 0
+    wall_s: float = 0.0
+
+    def to_dict(self):
+        return dict(self.__dict__)
+
+
+class Continuation:
+    """Equilibria of ``model`` at fixed input angle under a changing output torque.
+
+    max_step: largest accepted coordinate change per increment [m or rad] (a larger
+    Newton step is treated as a failure and the increment halved).
+    min_increment: smallest torque increment [N m] before :class:`SolverFailure`.
+    """
+
+    def __init__(self, model, *, input_angle=0.0, max_step=2e-3, min_increment=1e-4):
+        self.model = model
+        self.static = StaticSolver(model)
+        self.input_angle = input_angle
+        self.max_step = max_step
+        self.min_increment = min_increment
+        self.stats = ContinuationStats()
+        model.set_input_angle(input_angle)
+        model.set_output_torque(0.0)
+        self.torque = 0.0
+        self.q = self._start()
+
+    def _start(self):
+        s = self.static
+        for _ in range(3):
+            ok, q = s._solve(s.kinematic_vector(self.input_angle), ramp=False)
+            if ok:
+                return q
+        ok, q = s._solve(s.kinematic_vector(self.input_angle), ramp=True)
+        if not ok:
+            raise SolverFailure(f"no zero-load equilibrium at input angle {self.input_angle:.6g} rad")
+        return q
+
+    def _try(self, torque):
+        self.model.set_output_torque(torque)
+        it0 = self.static.stats.newton_iterations
+        ok, q = self.static._solve(self.q, ramp=False)
+        self.stats.newton_iterations += self.static.stats.newton_iterations - it0
+        self.stats.solves += 1
+        return ok and np.max(np.abs(q - self.q)) <= self.max_step, q
+
+    def go_to(self, torque):
+        """Continue to output torque [N m]; returns the equilibrium q."""
+        t0 = time.perf_counter()
+        t_now = self.torque
+        inc = torque - t_now
+        while t_now != torque:
+            target = torque if abs(torque - t_now) <= abs(inc) else t_now + inc
+            ok, q = self._try(target)
+            if ok:
+                self.q, t_now = q, target
+                inc *= 2 if abs(inc) < abs(torque - t_now) else 1
+            else:
+                self.stats.rejected_increments += 1
+                inc *= 0.5
+                if abs(inc) < self.min_increment:
+                    self.model.set_output_torque(t_now)
+                    raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
+                                        f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}")
+        self.torque = torque
+        self._commit()
+        self.stats.levels += 1
+        self.stats.wall_s += time.perf_counter() - t0
+        return self.q
+
+    def _commit(self):
+        """Commit the contact history (friction anchors) at the converged level."""
+        v = np.zeros_like(self.q)
+        for el in self.model.elements.values():
+            el.commit(self.q, v)
+
+
+def wheel_contact_stats(model, q):
+    """Per wheel: (sum of normal forces [N], max normal force [N]) of the pin mesh (slices summed per pin)."""
+    from .precision import pin_forces
+    pf = pin_forces(model, q)
+    return [float(np.sum(p)) for p in pf], [float(np.max(p)) for p in pf]
+
+
+def quasi_static_stiffness(model, sequence: TorqueSequence, *, input_angle=0.0, record=None):
+    """Path (b): run the torque sequence as an equilibrium continuation. Returns per-level
+    torque [N m], output angle [arcmin] (flange rotation from its kinematic position),
+    per-wheel pin-force sums and maxima [N], residual diagnostics and statistics."""
+    t0 = time.perf_counter()
+    torques, labels = sequence.levels()
+    cont = Continuation(model, input_angle=input_angle)
+    i_out = model.coordinate_index(model.flange, 2)
+    th_kin = model.kinematic_state(input_angle)[model.flange, 2] - model.reference[model.flange, 2]
+    angles, sums, maxs, reg = [], [], [], []
+    for k, t in enumerate(torques):
+        q = cont.go_to(float(t))
+        angles.append((q[i_out] - th_kin) / ARCMIN)
+        s, m = wheel_contact_stats(model, q)
+        sums.append(s)
+        maxs.append(m)
+        reg.append(model.regularization_force(q))
+        if record is not None:
+            record(k, t, q)
+    return {"torque_Nm": torques, "labels": labels, "angle_arcmin": np.array(angles),
+            "sum_Fn_N": np.array(sums), "max_Fn_N": np.array(maxs), "regularization_max": max(reg),
+            "q_final": cont.q, "continuation": cont, "stats": cont.stats.to_dict(),
+            "wall_s": time.perf_counter() - t0}
+
+
+def tangent_check(model, torque, *, input_angle=0.0, increment=None):
+    """At output torque [N m] (reached by continuation from zero): the condensed tangent K_t
+    and the finite-increment stiffness dT/dtheta from a central torque increment (default
+    1 % of |torque|). Both in N m/arcmin; their relative difference."""
+    cont = Continuation(model, input_angle=input_angle)
+    i_out = model.coordinate_index(model.flange, 2)
+    q = cont.go_to(torque)
+    kt = condensed_tangent(model, q) * ARCMIN
+    dt = increment or 0.01 * abs(torque)
+    th_p = cont.go_to(torque + dt)[i_out]
+    cont.go_to(torque)
+    th_m = cont.go_to(torque - dt)[i_out]
+    kfd = 2 * dt / ((th_p - th_m) / ARCMIN)
+    return {"Kt_condensed_Nm_per_arcmin": kt, "K_finite_increment_Nm_per_arcmin": float(kfd),
+            "rel_diff": float(abs(kt - kfd) / abs(kfd)), "increment_Nm": dt}

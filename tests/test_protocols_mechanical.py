@@ -1,0 +1,83 @@
+"""Mechanical protocols: stiffness (torque sequence, branch fits, lost motion, condensed tangent)."""
+import numpy as np
+import pytest
+
+from rvtool.errors import RvtoolInputError
+from rvtool.protocols import stiffness as S
+
+
+def test_sequence_has_74_levels_and_paper_branch_counts():
+    seq = S.rd40_sequence(140.0)
+    torque, labels = seq.levels()
+    assert len(torque) == 74
+    assert torque[0] == 0 and torque[-1] == 0 and torque.max() == 140 and torque.min() == -140
+    # Table tab:branch_stiffness: 11, 9, 9, 9 points with 70 <= |T| <= 140 N m
+    counts = {b: len(i) for b, i in S.branch_points(torque, labels, 140.0).items()}
+    assert counts == {"pos_loading": 11, "pos_unloading": 9, "neg_loading": 9, "neg_unloading": 9}
+
+
+def test_sequence_validation_names_parameter():
+    with pytest.raises(RvtoolInputError, match="rated_torque"):
+        S.TorqueSequence(rated_torque=-1.0)
+    with pytest.raises(RvtoolInputError, match="tail_fraction"):
+        S.TorqueSequence(rated_torque=1.0, tail_fraction=1.5)
+
+
+def test_linear_fit_recovers_exact_line_and_r2():
+    # Eq. (stiffness_fit) on T = 120 theta - 3 is exact: K = 120, b = -3, R^2 = 1
+    th = np.linspace(0.5, 1.0, 11)
+    k, b, r2 = S.linear_fit(th, 120 * th - 3)
+    assert k == pytest.approx(120, rel=1e-12) and b == pytest.approx(-3, abs=1e-10) and r2 == pytest.approx(1.0)
+    # with noise of known variance, R^2 = 1 - SS_res / SS_tot computed independently
+    rng = np.random.default_rng(0)
+    y = 120 * th + rng.normal(0, 1.0, th.size)
+    k, b, r2 = S.linear_fit(th, y)
+    kp, bp = np.polyfit(th, y, 1)
+    assert k == pytest.approx(kp, rel=1e-10) and b == pytest.approx(bp, rel=1e-10)
+    assert r2 == pytest.approx(1 - np.sum((y - (kp * th + bp)) ** 2) / np.sum((y - y.mean()) ** 2), rel=1e-12)
+    with pytest.raises(RvtoolInputError, match="at least 2"):
+        S.linear_fit([1.0], [1.0])
+
+
+def test_lost_motion_and_zero_return_on_synthetic_backlash():
+    # bilinear curve with dead band +-b: theta = sign(T) b + T / K; lost motion at +-3 % = 2 (b + 0.03 T_r / K)
+    seq = S.rd40_sequence(100.0)
+    torque, labels = seq.levels()
+    K, b = 50.0, 0.8
+    angle = np.sign(torque) * b + torque / K
+    angle[-1] += 0.1   # final zero-load state shifted
+    assert S.lost_motion(torque, angle, 100.0) == pytest.approx(2 * (b + 3.0 / K))
+    assert S.zero_load_return(torque, angle) == pytest.approx(0.1)
+    fits = S.branch_fits(torque, angle, labels, 100.0)
+    for f in fits.values():
+        assert f["K_Nm_per_arcmin"] == pytest.approx(K, rel=1e-10) and f["R2"] == pytest.approx(1.0)
+
+
+@pytest.fixture(scope="module")
+def rd40():
+    from rvtool.assembly.spec import load_design
+    from pathlib import Path
+    return load_design(str(Path(__file__).resolve().parents[1] / "cases" / "designs" / "rd40.toml"))
+
+
+def test_quasi_static_sequence_on_rd40(rd40):
+    from rvtool.assembly.cycloid import build
+    seq = S.TorqueSequence(rated_torque=rd40.rated_torque, loading_step=0.25, other_step=0.25)
+    model = build(rd40)
+    r = S.quasi_static_stiffness(model, seq)
+    t, a = r["torque_Nm"], r["angle_arcmin"]
+    # output deflection follows the sign of the torque and is odd-symmetric (frictionless model)
+    assert np.all(np.sign(a[np.abs(t) > 0]) == np.sign(t[np.abs(t) > 0]))
+    ip, im = np.argmax(t), np.argmin(t)
+    assert a[ip] == pytest.approx(-a[im], rel=1e-6)
+    # per wheel pin-force sums rise with load; regularization carries a negligible force
+    assert r["sum_Fn_N"][ip].min() > 10 * r["sum_Fn_N"][0].max()
+    assert r["regularization_max"] < 1e-2
+
+
+def test_condensed_tangent_matches_finite_increment(rd40):
+    from rvtool.assembly.cycloid import build
+    tc = S.tangent_check(build(rd40), 0.75 * rd40.rated_torque)
+    # central finite increment of 1 % torque: the curve's curvature over +-1 % and the contact
+    # Jacobian's neglected second-order geometric terms leave a few percent
+    assert tc["rel_diff"] < 0.05
