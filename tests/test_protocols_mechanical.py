@@ -81,3 +81,58 @@ def test_condensed_tangent_matches_finite_increment(rd40):
     # central finite increment of 1 % torque: the curve's curvature over +-1 % and the contact
     # Jacobian's neglected second-order geometric terms leave a few percent
     assert tc["rel_diff"] < 0.05
+
+
+# -- vibration: spectra of synthetic signals --------------------------------------------------
+
+from rvtool.protocols import vibration as V  # noqa: E402
+
+
+def test_amplitude_spectrum_recovers_sine_amplitudes_after_adaptive_resampling():
+    # x = 0.3 sin(2 pi 50 t) + 0.1 cos(2 pi 120 t) on adaptive (non-uniform) steps; on a 1 s
+    # record both are bin frequencies, so the one-sided amplitude equals A up to the
+    # linear-interpolation error ~ (omega dt)^2 / 8 relative (dt = 1e-4: 2e-4 at 120 Hz)
+    rng = np.random.default_rng(1)
+    dt = rng.uniform(0.5e-4, 1.5e-4, 20000)
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    t = t[t <= 1.0 + 1e-12]
+    t = np.append(t, 1.0) if t[-1] < 1.0 else t
+    x = 0.3 * np.sin(2 * np.pi * 50 * t) + 0.1 * np.cos(2 * np.pi * 120 * t)
+    t_u, x_u = V.uniform_resample(t, x, 1e-4)
+    f, a = V.amplitude_spectrum(x_u[:-1], 1e-4)
+    assert a[np.argmin(abs(f - 50))] == pytest.approx(0.3, rel=1e-3)
+    assert a[np.argmin(abs(f - 120))] == pytest.approx(0.1, rel=1e-3)
+    pos, _ = V.dominant(f, a, 2)
+    assert sorted(np.round(pos)) == [50, 120]
+
+
+def test_order_spectrum_follows_unwrapped_phase_under_varying_speed():
+    # order-40 response on a run-up: constant in shaft angle, smeared in time
+    t = np.linspace(0, 1, 200001)
+    phase = np.mod(2 * np.pi * (5 * t + 10 * t ** 2), 2 * np.pi)       # wrapped: must be unwrapped
+    true_phase = 2 * np.pi * (5 * t + 10 * t ** 2)
+    x = 0.2 * np.sin(40 * true_phase) + 0.05 * np.sin(3 * true_phase)
+    o, a = V.order_spectrum(phase, x, samples_per_rev=400)
+    assert a[np.argmin(abs(o - 40))] == pytest.approx(0.2, rel=1e-2)
+    assert a[np.argmin(abs(o - 3))] == pytest.approx(0.05, rel=1e-2)
+    assert o[1] == pytest.approx(1 / 15)   # 15 whole revolutions
+
+
+def test_bearing_markers_closed_form():
+    # FTF = f/2 (1 - d/D), BPFO = Z FTF for a radial bearing
+    m = V.bearing_frequencies(10.0, 8, 0.01, 0.05)
+    assert m["ftf"] == pytest.approx(5 * 0.8) and m["bpfo"] == pytest.approx(8 * 4.0) and m["bpfi"] == pytest.approx(48.0)
+
+
+def test_vibration_protocol_validation_and_short_run(rd40):
+    from rvtool.assembly.cycloid import build
+    from rvtool.solver import RunSpec
+    with pytest.raises(RvtoolInputError, match="speed_rpm"):
+        V.VibrationProtocol(speed_rpm=0.0, torque=1.0, duration=1.0)
+    p = V.VibrationProtocol(speed_rpm=1500.0, torque=rd40.rated_torque, duration=0.001)
+    run = V.driven_response(build(rd40), p, RunSpec(end_time=0.001, step=2e-5, abs_tol=1e-6, rel_tol=1e-8),
+                            coordinates={"wheel1_x": (1, 0)})
+    assert run["record"].accepted_steps == 50 and np.all(np.isfinite(run["responses"]["torsion"]))
+    # the input follows the drive: phase = omega t
+    assert run["phase_in"][-1] == pytest.approx(1500 * np.pi / 30 * 0.001, rel=1e-9)
+    assert V.marker_frequencies(rd40, 1500.0)["mesh_hz"] == pytest.approx(40 * 25.0)
