@@ -136,3 +136,37 @@ def test_vibration_protocol_validation_and_short_run(rd40):
     # the input follows the drive: phase = omega t
     assert run["phase_in"][-1] == pytest.approx(1500 * np.pi / 30 * 0.001, rel=1e-9)
     assert V.marker_frequencies(rd40, 1500.0)["mesh_hz"] == pytest.approx(40 * 25.0)
+
+
+# -- hard cases ---------------------------------------------------------------------------------
+
+from rvtool.protocols import hard_cases as H  # noqa: E402
+
+
+def test_single_nan_is_retried_and_persistent_nan_fails_loudly_with_state_saved(rd40, tmp_path):
+    import dataclasses
+    case = H.case_by_name("nan")
+    ok, _ = H.run_hard_case(case, rd40, quick=True)
+    assert ok["passed"] and ok["rejected_steps"] >= 1
+    assert ok["reject_reasons"]["non-finite contact force in a trial evaluation"] >= 1
+    bad, _ = H.run_hard_case(dataclasses.replace(case, nan_at_evaluation=tuple(range(30, 20000))), rd40,
+                             quick=True, out_dir=str(tmp_path))
+    assert not bad["passed"] and "non-finite contact force" in bad["message"]
+    assert bad["saved_state"] == str(tmp_path / "failed_state.npz")
+    saved = np.load(bad["saved_state"])
+    assert np.all(np.isfinite(saved["q"])) and 0 < float(saved["t"]) < case.quick_duration
+    # nothing written half-way: only the saved state, no results and no temporary files
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["failed_state.npz"]
+
+
+def test_hard_case_torque_history_and_validation():
+    c = H.case_by_name("reversal")
+    assert c.torque(0.0, 100.0) == 100.0 and c.torque(c.reverse_at_s + c.reverse_over_s, 100.0) == -100.0
+    assert c.torque(c.reverse_at_s + 0.5 * c.reverse_over_s, 100.0) == pytest.approx(0.0, abs=1e-12)
+    r = H.case_by_name("runup")
+    # linear speed ramp: theta = w t^2 / (2 t_r) until t_r
+    w = 3000 * np.pi / 30
+    assert r.input_angle(r.run_up_s) == pytest.approx(0.5 * w * r.run_up_s)
+    assert r.input_speed(2 * r.run_up_s) == pytest.approx(w)
+    with pytest.raises(RvtoolInputError, match="hard case"):
+        H.case_by_name("nope")
