@@ -40,6 +40,8 @@ class TorqueSequence:
         (the +-3 % lost-motion levels and 1.5 % on first loading).
     ramp_steps, dwell_steps: time steps of the torque ramp and of the dwell per
         level (time-domain path; the paper commands 600 and 6000).
+    reset_interval: kinetic reset (all velocities set to zero) every this many dwell
+        steps, and at each level (time-domain path; numerical relaxation, not damping).
     tail_fraction: final fraction of the dwell whose angle span is the settling measure [-].
     settle_span_arcmin: acceptance threshold of the tail-angle span [arcmin].
     """
@@ -49,6 +51,7 @@ class TorqueSequence:
     fine_levels: tuple = (0.015, 0.03)
     ramp_steps: int = 600
     dwell_steps: int = 6000
+    reset_interval: int = 250
     tail_fraction: float = 0.25
     settle_span_arcmin: float = 0.5
 
@@ -60,9 +63,9 @@ class TorqueSequence:
         check_positive("settle_span_arcmin", self.settle_span_arcmin)
         for f in self.fine_levels:
             check_range("fine_levels", f, 0.0, 1.0, low_open=True, high_open=True)
-        if self.ramp_steps < 1 or self.dwell_steps < 1:
-            raise RvtoolInputError(f"ramp_steps = {self.ramp_steps}, dwell_steps = {self.dwell_steps}; "
-                                   "both must be >= 1")
+        if self.ramp_steps < 1 or self.dwell_steps < 1 or self.reset_interval < 1:
+            raise RvtoolInputError(f"ramp_steps = {self.ramp_steps}, dwell_steps = {self.dwell_steps}, "
+                                   f"reset_interval = {self.reset_interval}; each must be >= 1")
 
     def fractions(self):
         """(levels [fraction of T_rated], branch label per level). The peak levels
@@ -312,3 +315,86 @@ def tangent_check(model, torque, *, input_angle=0.0, increment=None):
     kfd = 2 * dt / ((th_p - th_m) / ARCMIN)
     return {"Kt_condensed_Nm_per_arcmin": kt, "K_finite_increment_Nm_per_arcmin": float(kfd),
             "rel_diff": float(abs(kt - kfd) / abs(kfd)), "increment_Nm": dt}
+
+
+# -- path (a): dynamic settling with the implicit integrator -----------------------------------
+
+def dynamic_stiffness(model, sequence: TorqueSequence, *, step=2e-5, input_angle=0.0, run_spec=None,
+                      max_extra_dwells=2, out_dir=None):
+    """Path (a): the torque sequence in time with the generalized-alpha driver. Per level the
+    torque ramps linearly over ``ramp_steps`` steps of ``step`` [s], then dwells for
+    ``dwell_steps`` steps; velocities are reset to zero (kinetic reset) at each level and every
+    ``reset_interval`` dwell steps. A level is accepted when the output-angle span over the
+    last ``tail_fraction`` of the dwell is below ``settle_span_arcmin``; otherwise the dwell is
+    repeated up to ``max_extra_dwells`` times, after which the level is committed anyway
+    (a forced commit, counted). Starts from the static zero-load equilibrium."""
+    import dataclasses as dc
+
+    import exudyn as exu
+
+    from ..solver import RunSpec, simulate
+    t0 = time.perf_counter()
+    torques, labels = sequence.levels()
+    mbs = model.mbs
+    cont = Continuation(model, input_angle=input_angle)
+    q = cont.q.copy()
+    i_out = model.coordinate_index(model.flange, 2)
+    th_kin = model.kinematic_state(input_angle)[model.flange, 2] - model.reference[model.flange, 2]
+    base = run_spec or RunSpec(end_time=1.0, step=step, abs_tol=1e-6, rel_tol=1e-8)
+    elements = list(model.elements.values())
+    stats = {"steps": 0, "rejected_steps": 0, "kinetic_resets": 0, "forced_commits": 0, "extra_dwells": 0,
+             "max_residual": 0.0, "min_step_s": np.inf}
+    state = {"q": q}
+    trace = []
+
+    def run_chunk(n_steps, load_fn):
+        mbs.SetLoadParameter(model.load, "loadUserFunction", lambda mbs_, t, load: load_fn(t))
+        mbs.systemData.SetODE2Coordinates(state["q"], configuration=exu.ConfigurationType.Initial)
+        mbs.systemData.SetODE2Coordinates_t(np.zeros_like(state["q"]), configuration=exu.ConfigurationType.Initial)
+        stats["kinetic_resets"] += 1
+        angles = []
+
+        def rec(t, qq, vv):
+            angles.append(qq[i_out])
+            state["q"] = np.array(qq)
+
+        r = simulate(mbs, dc.replace(base, end_time=n_steps * step), elements, None, before_accept=rec,
+                     out_dir=out_dir)
+        stats["steps"] += r.accepted_steps
+        stats["rejected_steps"] += r.rejected_steps
+        stats["max_residual"] = max(stats["max_residual"], r.max_residual)
+        stats["min_step_s"] = min(stats["min_step_s"], r.min_step_s)
+        return angles
+
+    t_prev = 0.0
+    angles, spans, sums, maxs = [], [], [], []
+    t_ramp = sequence.ramp_steps * step
+    for k, t_lvl in enumerate(torques):
+        a, b = t_prev, float(t_lvl)
+        run_chunk(sequence.ramp_steps, lambda t, a=a, b=b: a + (b - a) * min(t / t_ramp, 1.0))
+        for attempt in range(1 + max_extra_dwells):
+            dwell = []
+            left = sequence.dwell_steps
+            while left > 0:
+                n = min(left, sequence.reset_interval)
+                dwell += run_chunk(n, lambda t, b=b: b)
+                left -= n
+            n_tail = max(2, int(round(sequence.tail_fraction * len(dwell))))
+            span = float(np.ptp(dwell[-n_tail:])) / ARCMIN
+            if span <= sequence.settle_span_arcmin:
+                break
+            stats["extra_dwells"] += 1
+        else:
+            stats["forced_commits"] += 1
+        trace.append(np.array(dwell))
+        spans.append(span)
+        angles.append((state["q"][i_out] - th_kin) / ARCMIN)
+        s_, m_ = wheel_contact_stats(model, state["q"])
+        sums.append(s_)
+        maxs.append(m_)
+        t_prev = b
+    mbs.SetLoadParameter(model.load, "loadUserFunction", 0)
+    stats["min_step_s"] = None if not np.isfinite(stats["min_step_s"]) else stats["min_step_s"]
+    return {"torque_Nm": torques, "labels": labels, "angle_arcmin": np.array(angles),
+            "tail_span_arcmin": np.array(spans), "sum_Fn_N": np.array(sums), "max_Fn_N": np.array(maxs),
+            "stats": stats, "wall_s": time.perf_counter() - t0, "step_s": step}
