@@ -18,7 +18,6 @@ import numpy as np
 
 from ..errors import RvtoolInputError
 from ..validation import check_positive
-from .equilibrium import StaticSolver
 from .precision import kinematic_velocity, transmission_error
 
 
@@ -139,11 +138,16 @@ def marker_frequencies(design, speed_rpm):
 
 # -- driven run ---------------------------------------------------------------------------
 
-def driven_response(model, protocol: VibrationProtocol, run_spec, *, coordinates=(), out_dir=None, observers=None):
+def driven_response(model, protocol: VibrationProtocol, run_spec, *, coordinates=(), out_dir=None, observers=None,
+                    static_tolerances=None, initial_state=None):
     """Run the protocol on ``model`` from the loaded quasi-static state at input angle 0.
 
     coordinates: dict name -> (body, coord) of recorded responses [m or rad]; the
     output torsion (TE [rad]) is always recorded as "torsion".
+    static_tolerances: (abs_tol [N], rel_tol [-]) of the loaded start's static solve (None: the
+    StaticSolver defaults; float32 contact evaluation needs rel_tol >= 1e-6).
+    initial_state: q0 to start from instead of the static solve (e.g. a float64 equilibrium
+    for a float32 run).
     Returns times, input phase, responses on the accepted steps and the run record.
     """
     import exudyn as exu
@@ -151,8 +155,19 @@ def driven_response(model, protocol: VibrationProtocol, run_spec, *, coordinates
     from ..solver import simulate
     omega = protocol.speed_rpm * 2 * np.pi / 60.0
     ratio = model.design.ratio
-    model.set_output_torque(-np.sign(ratio) * protocol.torque)
-    q0 = StaticSolver(model).solve(0.0)
+    torque = -np.sign(ratio) * protocol.torque
+    if initial_state is None:
+        # loaded start by torque continuation (increment halving, jump guard): a full-load
+        # Newton solve from the kinematic state can converge to a spurious far equilibrium
+        from .stiffness import Continuation
+        cont = Continuation(model, input_angle=0.0)
+        if static_tolerances is not None:
+            st = cont.static.settings.staticSolver.newton
+            st.absoluteTolerance, st.relativeTolerance = static_tolerances
+        q0 = cont.go_to(torque)
+    else:
+        model.set_output_torque(torque)
+        q0 = np.array(initial_state, float)
     v0 = np.zeros_like(q0)
     kv = kinematic_velocity(model, omega)
     for b, node in enumerate(model.nodes):
