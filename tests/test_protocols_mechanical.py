@@ -196,6 +196,7 @@ def test_driven_start_from_continuation_is_the_physical_equilibrium(rd40):
     from rvtool.solver import RunSpec
     d = replace(rd40, wheels={"search": "analytic"})
     p = V.VibrationProtocol(speed_rpm=1500.0, torque=d.rated_torque, duration=2e-4)
-    run = V.driven_response(build(d), p, RunSpec(end_time=2e-4, step=2e-5, abs_tol=1e-6, rel_tol=1e-8))
-    te0 = run["responses"]["torsion"]
-    assert np.all(np.abs(te0) * 180 / np.pi * 60 < 4.0)
+    run = V.driven_response(build(d), p, RunSpec(end_time=2e-4, step=2e-5, abs_tol=1e-6, rel_tol=1e-8),
+                            coordinates={"wheel1_y": (1, 1)})
+    # wheel centre stays on its journal: displacement within bearing and mesh compliance (< 20 um)
+    assert np.max(np.abs(run["responses"]["wheel1_y"])) < 20e-6
