@@ -35,6 +35,7 @@ class HardCase:
     duration, quick_duration: simulated time [s] of the full / --quick run.
     step: nominal step [s]. stiffness_factor: pin-contact stiffness multiplier [-].
     nan_at_evaluation: evaluation counters of the pin element to poison (fault injection).
+    wheel_kick: extra initial angular velocity of wheel 1 [rad/s] (excites rattle in the clearance).
     """
     name: str
     description: str
@@ -50,6 +51,7 @@ class HardCase:
     step: float = 2e-5
     stiffness_factor: float = 1.0
     nan_at_evaluation: tuple = ()
+    wheel_kick: float = 0.0
 
     def input_angle(self, t):
         w = self.speed_rpm * np.pi / 30.0
@@ -117,6 +119,8 @@ def run_hard_case(case: HardCase, design, *, quick=False, out_dir=None, criteria
         kv = kinematic_velocity(model, case.input_speed(0.0), case.input_angle(0.0))
         for b, node in enumerate(model.nodes):
             v0[np.asarray(mbs.systemData.GetNodeLTGODE2(node))] = kv[b]
+    if case.wheel_kick:
+        v0[model.coordinate_index(1, 2)] += case.wheel_kick
     model.set_input_speed(0.0)   # switches the static regularization off
     mbs.SetObjectParameter(model.drive, "offsetUserFunction", lambda mbs_, t, i, off: case.input_angle(t))
     mbs.SetLoadParameter(model.load, "loadUserFunction", lambda mbs_, t, load: sign * case.torque(t, rated))
@@ -221,8 +225,10 @@ CASES = (
              start_from_rest=True, run_up_s=0.0, duration=0.02, quick_duration=0.004),
     HardCase(name="runup", description="run-up 0 -> 3000 rpm input at rated torque (linear speed ramp)",
              speed_rpm=3000.0, run_up_s=0.02, start_from_rest=True, duration=0.03, quick_duration=0.006),
-    HardCase(name="rattle", description="zero-load rattle at 1500 rpm with 20 um profile clearance",
-             design_changes={"wheels": {"clearance": 20e-6}}, torque_fraction=0.0, duration=0.02, quick_duration=0.004),
+    HardCase(name="rattle", description="zero-load rattle at 1500 rpm with 20 um profile clearance, wheel 1 "
+             "spun by an extra 1 rad/s at t = 0 (the ideal symmetric assembly alone never touches the pins)",
+             design_changes={"wheels": {"clearance": 20e-6}}, torque_fraction=0.0, wheel_kick=1.0, duration=0.02,
+             quick_duration=0.004),
     HardCase(name="stiff100", description="pin-contact stiffness raised 100x at rated torque and 1500 rpm",
              stiffness_factor=100.0, duration=0.01, quick_duration=0.002),
     HardCase(name="nan", description="one forced NaN in a pin-contact evaluation mid-run (must be rejected and "
@@ -264,8 +270,13 @@ def criteria_runup(arr, stats, d, case):
 
 
 def criteria_rattle(arr, stats, d, case):
-    # at zero load the kinetic energy stays at the rigid value: no energy growth from contacts
-    return {"output_speed_error_final_half": _crit(_speed_follow(arr, d, 0.5), 0.05, "<=")}
+    # the kicked wheel crosses the clearance and hits the pins (impacts occur); contact damping
+    # and the integrator may only remove energy: the kinetic energy stays below its initial value
+    # plus the rigid drive share (no energy created by the impacts)
+    ke0 = float(arr["kinetic_J"][0])
+    return {"impacts_max_pin_sum_N": _crit(float(arr["pin_sum_N"].max()), 1.0, ">="),
+            "kinetic_energy_over_initial": _crit(float(arr["kinetic_J"].max()) / ke0, 1.05, "<=")}
+    # (no speed-following criterion: unloaded, the flange floats within the backlash)
 
 
 def criteria_stiff100(arr, stats, d, case):
