@@ -34,6 +34,7 @@ def main(argv=None):
     fits = S.branch_fits(torque, angle, labels, rated)
     t_ref = 0.75 * rated
     tc = S.tangent_check(build(design), t_ref)
+    tc1 = S.tangent_check(build(design), t_ref, increment=0.01 * t_ref)
     fit_k = fits["pos_loading"]["K_Nm_per_arcmin"]
 
     # path (a): the same levels in time (quick: a coarse sequence with short dwells)
@@ -61,7 +62,9 @@ def main(argv=None):
         "Kt_condensed_Nm_per_arcmin": tc["Kt_condensed_Nm_per_arcmin"],
         "Kt_at_torque_Nm": t_ref,
         "K_finite_increment_Nm_per_arcmin": tc["K_finite_increment_Nm_per_arcmin"],
-        "Kt_rel_diff_finite_increment": tc["rel_diff"],
+        "Kt_rel_diff_finite_increment": tc["rel_diff"], "finite_increment_Nm": tc["increment_Nm"],
+        "K_finite_increment_1pct_Nm_per_arcmin": tc1["K_finite_increment_Nm_per_arcmin"],
+        "Kt_rel_diff_finite_increment_1pct": tc1["rel_diff"],
         "Kt_rel_diff_branch_fit_pos_loading": abs(tc["Kt_condensed_Nm_per_arcmin"] - fit_k) / fit_k,
         "wall_s_quasistatic": qs["wall_s"],
         "wall_s_dynamic": dyn["wall_s"],
