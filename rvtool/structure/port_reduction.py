@@ -156,6 +156,7 @@ def reduce_ports(cb, spec: PortReductionSpec, modes: ParentModes | None = None) 
     local = None
     if spec.local_correction:
         R_rem = modes.reference_compliance - (H / w2) @ H.T
+        R_rem = 0.5 * (R_rem + R_rem.T)                          # exported blocks exactly symmetric
         local = np.array([R_rem[np.ix_(rows, rows)] for rows in cb.port_rows])
     Ceta = phi.T @ cb.damping @ phi
     return PortReducedModel(basis=phi, omega2=w2, damping=0.5 * (Ceta + Ceta.T), maps=H,
