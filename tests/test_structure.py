@@ -62,6 +62,25 @@ def test_parent_model_mass_ports_and_rigid_kernel(small, free_model):
     assert np.allclose(r, SMALL.inner_radius, atol=1e-9)
 
 
+def test_direction_ports_project_the_cartesian_compliance():
+    # a normal port samples n^T u at its vertex: its compliance is n^T C_xyz n, through the CB parent too
+    spec = AnnularHousingSpec(mesh_size=0.02, n_ports=4, n_mounts=6)
+    ports = tuple(NodalPort(name=p.name, point=p.point, directions=((math.cos(t), math.sin(t), 0.0),))
+                  for p, t in zip(spec.ports(), spec.port_angles()))
+    m = fe_model_from_geometry(spec.geometry(), mesh_size=spec.mesh_size, material=spec.material, ports=ports,
+                               supports=spec.supports(), damping=spec.damping)
+    assert m.port_matrix.shape == (4, m.n_dofs)
+    cart = np.zeros((12, m.n_dofs))
+    for g, p in enumerate(m.ports):
+        cart[3 * g:3 * g + 3, m.vertex_dofs(p.vertex)] = np.eye(3)
+    sc = SupportedCompliance(m.stiffness, m.port_matrix)
+    N = sla.block_diag(*[p.directions for p in m.ports])
+    C_xyz = sc.compliance(cart)
+    assert np.allclose(sc.compliance(), N @ C_xyz @ N.T, rtol=1e-12, atol=0)
+    modes = parent_modes(craig_bampton(m, n_modes=4))   # rtol: round-off times cond(K_r) ~ 1e6 (see module)
+    assert np.allclose(modes.reference_compliance, N @ C_xyz @ N.T, rtol=1e-9, atol=0)
+
+
 def test_rayleigh_calibration_reaches_zeta_at_both_frequencies():
     d = RayleighDamping(damping_ratio=0.02, calibration_frequencies=(500.0, 5000.0))
     a, b = d.coefficients()
