@@ -32,10 +32,16 @@ class StaticSolver:
     """Warm-started static solves of ``model`` (a model with ``mbs`` and ``kinematic_state``).
 
     abs_tol [N], rel_tol [-]: Newton tolerances on Exudyn's residual norm.
+    max_translation [m], max_rotation [rad]: plausibility bounds of the elastic deviation of
+    every body from its kinematic position (contact deformations are micrometres and
+    arcminutes; a larger deviation is a spurious Newton solution).
     """
 
-    def __init__(self, model, *, abs_tol=1e-6, rel_tol=1e-9, max_iterations=30, ramp_steps=20):
+    def __init__(self, model, *, abs_tol=1e-6, rel_tol=1e-9, max_iterations=30, ramp_steps=20,
+                 max_translation=5e-4, max_rotation=2e-2):
         self.model = model
+        self.max_translation = max_translation
+        self.max_rotation = max_rotation
         self.stats = EquilibriumStats()
         self.ramp_steps = ramp_steps
         with warnings.catch_warnings():
@@ -68,6 +74,18 @@ class StaticSolver:
         q = np.array(mbs.systemData.GetODE2Coordinates())
         return ok and np.all(np.isfinite(q)), q
 
+    def plausible(self, q, input_angle):
+        """Every body within the plausibility bounds of its kinematic position."""
+        if not np.all(np.isfinite(q)):
+            return False
+        dev = q - self.kinematic_vector(input_angle)
+        m = self.model
+        for node in m.nodes:
+            ltg = np.asarray(m.mbs.systemData.GetNodeLTGODE2(node))
+            if np.any(np.abs(dev[ltg[:2]]) > self.max_translation) or abs(dev[ltg[2]]) > self.max_rotation:
+                return False
+        return True
+
     def kinematic_vector(self, input_angle):
         """Kinematic state as displacement coordinates of the system's ODE2 vector."""
         m = self.model
@@ -86,14 +104,26 @@ class StaticSolver:
         if self.q is not None and previous_angle is not None:
             guess = self.q + self.kinematic_vector(input_angle) - self.kinematic_vector(previous_angle)
             ok, q = self._solve(guess, ramp=False)
+            ok = ok and self.plausible(q, input_angle)
         if not ok:
             if self.q is not None:
                 self.stats.ramped_restarts += 1
             ok, q = self._solve(self.kinematic_vector(input_angle), ramp=True)
+            ok = ok and self.plausible(q, input_angle)
+        if not ok:
+            self.stats.ramped_restarts += 1
+            steps = self.ramp_steps
+            self.ramp_steps = 5 * steps
+            try:
+                ok, q = self._solve(self.kinematic_vector(input_angle), ramp=True)
+            finally:
+                self.ramp_steps = steps
+            ok = ok and self.plausible(q, input_angle)
         self.stats.wall_s += time.perf_counter() - t0
         if not ok:
-            raise SolverFailure(f"no static equilibrium at input angle {input_angle:.6g} rad "
-                                f"(warm start and a {self.ramp_steps}-step load ramp both failed)")
+            raise SolverFailure(f"no plausible static equilibrium at input angle {input_angle:.6g} rad (warm start, "
+                                f"a {self.ramp_steps}-step and a {5 * self.ramp_steps}-step load ramp failed or left a "
+                                f"body more than {self.max_translation} m / {self.max_rotation} rad off its kinematic position)")
         self.stats.points += 1
         self.q = q
         return q
