@@ -1,43 +1,95 @@
-"""Warp kernel of the rolling-element bearing family (one thread per element or
-lamina, all bearings of a set in one launch). Mirrors
-:mod:`warp_contacts.rolling_elements_ref`, which documents the equations."""
+"""Warp kernel of the rolling-element bearing family (one thread per ball or
+roller lamina, all bearings of a set in one launch). Mirrors
+:mod:`warp_contacts.rolling_elements_ref` line by line; that module documents
+the equations, the parameter layout and the outputs."""
 import functools
 
 import numpy as np
 import warp as wp
 
 from .circle_pairs_ref import N_OBS
+from .laws import law_funcs
 from .planar import LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
-from .rolling_elements_ref import KIND_BALL, N_FLOAT, N_INT
+from .rolling_elements_ref import (HB_E0, HB_E1, HB_F0, HB_F1, HB_K_COEF, HB_K_EXP, KIND_BALL, N_AUX, N_FLOAT,
+                                   N_INT)
 
 
 @functools.lru_cache(maxsize=None)
 def _kernel(dtype):
     G = planar_funcs(dtype)
+    L = law_funcs(dtype)
     vec2, perp, cross2, rot, body_seed = G.vec2, G.perp, G.cross2, G.rot, G.body_seed
     store_pair_forces, store_pair_column = G.store_pair_forces, G.store_pair_column
+    normal_force, damping_ramp = L.normal_force, L.damping_ramp
+    kc, ke, e0, e1, f0, f1 = (dtype(HB_K_COEF), dtype(HB_K_EXP), dtype(HB_E0), dtype(HB_E1), dtype(HB_F0),
+                              dtype(HB_F1))
 
     @wp.func
-    def radial_law(kind: int, r: dtype, k: dtype, p: dtype, alpha: dtype, A: dtype, sax: dtype, c: dtype,
-                   crown: dtype):
-        """(delta, F, f_r, df_r/dr) of one row (see the reference)."""
+    def hertz_point_stiffness(rx: dtype, ry: dtype, e_eff: dtype):
+        """Hamrock--Brewe K [N m^-3/2] and d ln K / d r_x (see the reference)."""
+        ar = ry / rx
+        R = rx * ry / (rx + ry)
+        k = kc * wp.pow(ar, ke)
+        E = e0 + e1 / ar
+        F = f0 + f1 * wp.log(ar)
+        K = dtype(3.141592653589793) * k * e_eff * wp.sqrt(dtype(2.0) * E * R / dtype(9.0)) / (F * wp.sqrt(F))
+        dlnK_dar = ke / ar - dtype(0.5) * e1 / (ar * ar * E) - dtype(1.5) * f1 / (ar * F)
+        return K, dlnK_dar * (-ar / rx) + dtype(0.5) * ry / (rx * (rx + ry))
+
+    @wp.func
+    def ball_stiffness(cw: dtype, D: dtype, dm: dtype, fi: dtype, fo: dtype, e_eff: dtype):
+        """K(alpha) of one ball (inner and outer contacts in series) and dK / d cos(alpha)."""
+        g = D * cw / dm
+        dg = D / dm
+        Ki, dlki = hertz_point_stiffness(dtype(0.5) * D * (dtype(1.0) - g), fi * D / (dtype(2.0) * fi - dtype(1.0)), e_eff)
+        Ko, dlko = hertz_point_stiffness(dtype(0.5) * D * (dtype(1.0) + g), fo * D / (dtype(2.0) * fo - dtype(1.0)), e_eff)
+        dlki = dlki * (dtype(-0.5) * D * dg)
+        dlko = dlko * (dtype(0.5) * D * dg)
+        wi = wp.pow(Ki, dtype(-2.0) / dtype(3.0))
+        wo = wp.pow(Ko, dtype(-2.0) / dtype(3.0))
+        s = wi + wo
+        K = dtype(1.0) / (s * wp.sqrt(s))
+        return K, K * (wi * dlki + wo * dlko) / s
+
+    @wp.func
+    def lamina_law(r: dtype, rdot: dtype, k: dtype, p: dtype, alpha: dtype, c: dtype, crown: dtype, cd: dtype,
+                   dr: dtype):
+        """(delta, F, f_r, F sin(alpha), alpha, df_r/dr, df_r/drdot) of a roller lamina."""
         ca = wp.cos(alpha)
-        if kind == KIND_BALL:
-            ar = A * ca + r
-            az = A * wp.sin(alpha) + sax
-            L = wp.sqrt(ar * ar + az * az)
-            delta = L - A - c
-            if delta <= dtype(0.0) or L <= dtype(0.0):
-                return delta, dtype(0.0), dtype(0.0), dtype(0.0)
-            F = k * delta * wp.sqrt(delta)
-            dF = dtype(1.5) * k * wp.sqrt(delta)
-            return delta, F, F * ar / L, dF * (ar / L) * (ar / L) + F * (dtype(1.0) / L - ar * ar / (L * L * L))
+        sa = wp.sin(alpha)
         delta = r * ca - c - crown
-        if delta <= dtype(0.0):
-            return delta, dtype(0.0), dtype(0.0), dtype(0.0)
-        F = k * wp.pow(delta, p)
-        return delta, F, F * ca, p * F / delta * ca * ca
+        F, Fd, Fdd = normal_force(k, p, cd, dr, delta, rdot * ca)
+        return delta, F, F * ca, F * sa, alpha, Fd * ca * ca, Fdd * ca * ca
+
+    @wp.func
+    def ball_law(r: dtype, rdot: dtype, alpha0: dtype, A: dtype, sax: dtype, c: dtype, cd: dtype, dr: dtype,
+                 D: dtype, dm: dtype, fi: dtype, fo: dtype, e_eff: dtype, kscale: dtype):
+        """(delta, F, f_r, F sin(alpha_w), alpha_w, df_r/dr, df_r/drdot) of a ball, Eq. (ball_bearing)."""
+        ar = A * wp.cos(alpha0) + r
+        az = A * wp.sin(alpha0) + sax
+        Lc = wp.sqrt(ar * ar + az * az)
+        delta = Lc - A - c
+        alpha_w = wp.atan2(az, ar)
+        zero = dtype(0.0)
+        if delta <= zero or Lc <= zero:
+            return delta, zero, zero, zero, alpha_w, zero, zero
+        cw = ar / Lc
+        dcw = az * az / (Lc * Lc * Lc)
+        K, dKc = ball_stiffness(cw, D, dm, fi, fo, e_eff)
+        K = kscale * K
+        dKc = kscale * dKc
+        sd = wp.sqrt(delta)
+        Fel = K * delta * sd
+        dFel = dKc * dcw * delta * sd + dtype(1.5) * K * sd * cw
+        rho, drho = damping_ramp(delta, dr)
+        ddot = cw * rdot
+        F = Fel + cd * rho * ddot
+        if F <= zero:
+            return delta, zero, zero, zero, alpha_w, zero, zero
+        dF = dFel + cd * (drho * cw * ddot + rho * dcw * rdot)
+        dFd = cd * rho * cw
+        return delta, F, F * cw, F * az / Lc, alpha_w, dF * cw + F * dcw, dFd * cw
 
     @wp.kernel(module="unique")
     def eval_rolling(
@@ -46,10 +98,13 @@ def _kernel(dtype):
         iparams: wp.array2d(dtype=wp.int32),
         # Data in:
         pose_in: wp.array2d(dtype=dtype),
+        vel_in: wp.array2d(dtype=dtype),
         # Data out:
         q_out: wp.array2d(dtype=dtype),
         dqdq_out: wp.array3d(dtype=dtype),
+        dqdv_out: wp.array3d(dtype=dtype),
         obs_out: wp.array2d(dtype=dtype),
+        aux_out: wp.array2d(dtype=dtype),
     ):
         i = wp.tid()
         ia = iparams[i, 0]
@@ -57,30 +112,70 @@ def _kernel(dtype):
         kind = iparams[i, 2]
         tha = pose_in[ia, 2]
         thb = pose_in[ib, 2]
+        wa = vel_in[ia, 2]
+        wb = vel_in[ib, 2]
         a = rot(tha, vec2(fparams[i, 0], fparams[i, 1]))
         b = rot(thb, vec2(fparams[i, 2], fparams[i, 3]))
         g = fparams[i, 5]
-        psi = fparams[i, 4] + dtype(0.5) * ((dtype(1.0) - g) * tha + (dtype(1.0) + g) * thb)
+        one = dtype(1.0)
+        half = dtype(0.5)
+        psi = fparams[i, 4] + half * ((one - g) * tha + (one + g) * thb)
+        psid = half * ((one - g) * wa + (one + g) * wb)
         u = vec2(wp.cos(psi), wp.sin(psi))
+        pu = perp(u)
         d = (vec2(pose_in[ia, 0], pose_in[ia, 1]) + a) - (vec2(pose_in[ib, 0], pose_in[ib, 1]) + b)
+        w = (vec2(vel_in[ia, 0], vel_in[ia, 1]) + wa * perp(a)) - (vec2(vel_in[ib, 0], vel_in[ib, 1]) + wb * perp(b))
         r = wp.dot(d, u)
-        delta, F, fr, dfr = radial_law(kind, r, fparams[i, 7], fparams[i, 8], fparams[i, 9], fparams[i, 10],
-                                       fparams[i, 11], fparams[i, 6], fparams[i, 12])
+        rdot = wp.dot(w, u) + wp.dot(d, pu) * psid
+        delta = dtype(0.0)
+        F = dtype(0.0)
+        fr = dtype(0.0)
+        fzm = dtype(0.0)
+        alpha_w = dtype(0.0)
+        fr_r = dtype(0.0)
+        fr_rd = dtype(0.0)
+        if kind == KIND_BALL:
+            delta, F, fr, fzm, alpha_w, fr_r, fr_rd = ball_law(
+                r, rdot, fparams[i, 9], fparams[i, 11], fparams[i, 12], fparams[i, 6], fparams[i, 15],
+                fparams[i, 16], fparams[i, 17], fparams[i, 14], fparams[i, 18], fparams[i, 19], fparams[i, 20],
+                fparams[i, 21])
+        else:
+            delta, F, fr, fzm, alpha_w, fr_r, fr_rd = lamina_law(
+                r, rdot, fparams[i, 7], fparams[i, 8], fparams[i, 9], fparams[i, 6], fparams[i, 13],
+                fparams[i, 15], fparams[i, 16])
         fA = -fr * u
         store_pair_forces(q_out, i, fA, cross2(a, fA), -cross2(b, fA))
-        for j in range(6):
-            dxa, dtha, dxb, dthb = body_seed(j)
+        for j in range(12):
+            # seeds 0-5 are the coordinates (body_seed), 6-11 the velocities
+            dxa, dtha, dxb, dthb = body_seed(j % 6)
+            dva = vec2(dtype(0.0), dtype(0.0))
+            dvb = vec2(dtype(0.0), dtype(0.0))
+            dwa = dtype(0.0)
+            dwb = dtype(0.0)
+            if j >= 6:
+                dva = dxa
+                dvb = dxb
+                dwa = dtha
+                dwb = dthb
+                dxa = vec2(dtype(0.0), dtype(0.0))
+                dxb = vec2(dtype(0.0), dtype(0.0))
+                dtha = dtype(0.0)
+                dthb = dtype(0.0)
             da = dtha * perp(a)
             db = dthb * perp(b)
-            dpsi = dtype(0.5) * ((dtype(1.0) - g) * dtha + (dtype(1.0) + g) * dthb)
-            du = dpsi * perp(u)
+            dpsi = half * ((one - g) * dtha + (one + g) * dthb)
+            dpsid = half * ((one - g) * dwa + (one + g) * dwb)
+            du = dpsi * pu
             dd = (dxa + da) - (dxb + db)
-            dr = wp.dot(u, dd) + wp.dot(d, du)
-            dfA = -(dfr * dr) * u - fr * du
-            # only coordinate columns (j < 6): the elements carry no velocity dependence
-            store_pair_column(dqdq_out, dqdq_out, i, j, dfA, cross2(da, fA) + cross2(a, dfA),
+            dw = (dva + dwa * perp(a) + wa * perp(da)) - (dvb + dwb * perp(b) + wb * perp(db))
+            dr = wp.dot(dd, u) + wp.dot(d, du)
+            drdot = (wp.dot(dw, u) + wp.dot(w, du) + (wp.dot(dd, pu) - wp.dot(d, u) * dpsi) * psid
+                     + wp.dot(d, pu) * dpsid)
+            dfr = fr_r * dr + fr_rd * drdot
+            dfA = -dfr * u - fr * du
+            store_pair_column(dqdq_out, dqdv_out, i, j, dfA, cross2(da, fA) + cross2(a, dfA),
                               -(cross2(db, fA) + cross2(b, dfA)))
-        pos = vec2(pose_in[ib, 0], pose_in[ib, 1]) + b + (dtype(0.5) * fparams[i, 13]) * u
+        pos = vec2(pose_in[ib, 0], pose_in[ib, 1]) + b + (half * fparams[i, 14]) * u
         obs_out[i, 0] = F
         obs_out[i, 1] = dtype(0.0)
         obs_out[i, 2] = -delta
@@ -89,33 +184,44 @@ def _kernel(dtype):
         obs_out[i, 5] = u[0]
         obs_out[i, 6] = u[1]
         obs_out[i, 7] = dtype(0.0)
+        aux_out[i, 0] = -fr
+        aux_out[i, 1] = -fparams[i, 10] * fzm
+        aux_out[i, 2] = alpha_w
 
     return eval_rolling
 
 
 class RollingElementKernel:
-    """Device-resident evaluator of one rolling-element set (one launch per call)."""
+    """Device-resident evaluator of one rolling-element set (one recorded launch per call).
+
+    Parameters are uploaded once; per call the poses (and velocities) go in and
+    forces, tangent blocks, observations and the auxiliary axial values come out.
+    """
 
     def __init__(self, fparams, iparams, n_bodies, precision="float64", device="cpu"):
         self.wdtype, self.ndtype = scalar_types(precision)
-        d = resolve_device(device, len(fparams))
+        self.device = d = resolve_device(device, len(fparams))
         fparams = np.ascontiguousarray(fparams, self.ndtype)
         iparams = np.ascontiguousarray(iparams, np.int32)
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
         n = len(fparams)
         dt = self.wdtype
-        self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"),
-                                   "obs": ((n, N_OBS), "f")}, dt, self.ndtype, d)
+        self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),
+                                   "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
+                                   "obs": ((n, N_OBS), "f"), "aux": ((n, N_AUX), "f")}, dt, self.ndtype, d)
         dev = self._buf.dev
         self._cmd = wp.launch(_kernel(dt), dim=n, device=d,
                               inputs=[wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
-                                      dev["pose"]],
-                              outputs=[dev[k] for k in ("q", "dqdq", "obs")], record_cmd=True)
+                                      dev["pose"], dev["vel"]],
+                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs", "aux")], record_cmd=True)
 
-    def evaluate(self, pose):
+    def evaluate(self, pose, vel=None):
+        """Same results as :func:`rolling_elements_ref.evaluate` (NumPy arrays owned by this
+        object, overwritten by the next call); ``vel=None`` means zero velocities."""
         h = self._buf.host
         h["pose"][...] = pose
-        self._buf.upload(("pose",))
+        h["vel"][...] = 0.0 if vel is None else vel
+        self._buf.upload(("pose", "vel"))
         self._cmd.launch()
-        self._buf.download(("q", "dqdq", "obs"))
-        return h["q"], h["dqdq"], h["obs"]
+        self._buf.download(("q", "dqdq", "dqdv", "obs", "aux"))
+        return h["q"], h["dqdq"], h["dqdv"], h["obs"], h["aux"]

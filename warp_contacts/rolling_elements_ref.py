@@ -1,100 +1,212 @@
 """NumPy reference of rolling-element bearing contacts with analytic tangent
 (readable version of :mod:`warp_contacts.rolling_elements`).
 
-Each row is one rolling element (or one lamina of a sliced roller) between an
-inner-ring body A and an outer-ring body B (planar x, y, theta; axial
-translation and tilts held). The element sits at the cage angle
+Each row is one rolling element (a ball, or one lamina of a sliced roller)
+between an inner-ring body A and an outer-ring body B (planar x, y, theta;
+the rings' axial translation and tilts are held). Ring centres c_A = x_A +
+R(theta_A) xi_A and c_B likewise.
+
+Cage kinematics (epicyclic, no gross slip): element j sits at
 
     psi_j = psi_0j + [(1 - gamma) theta_A + (1 + gamma) theta_B] / 2,
+    gamma = D cos(alpha_0) / d_m,
 
-(epicyclic cage kinematics, gamma = D cos(alpha) / d_m), so it advances with
-the rings and rolling-element passage excites the structure. With the ring
-centres c_A, c_B and u_j = (cos psi_j, sin psi_j), the radial approach is
-r_j = (c_A - c_B) . u_j. Laws (Section "Distributed bearing support"):
+so it advances with the rings and rolling-element passage excites the
+structure. With u_j = (cos psi_j, sin psi_j) the radial approach of the inner
+raceway toward the element is r_j = (c_A - c_B) . u_j and its rate
+rdot_j = (v_cA - v_cB) . u_j + (c_A - c_B) . perp(u_j) psidot_j.
 
-* kind 0, roller lamina (cylindrical, needle, crossed roller):
-  delta = r cos(alpha) - c - crown, F = k delta^p (per lamina), radial part F cos(alpha);
-* kind 1, ball, Eq. (ball_bearing): a_r = A cos(alpha_0) + r, a_z = A sin(alpha_0) + s_a
-  (s_a the axial preload offset), delta = sqrt(a_r^2 + a_z^2) - A - c, F = K delta^(3/2),
-  working angle alpha = atan2(a_z, a_r), radial part F a_r / |a|.
+Element laws (paper, Section "Distributed bearing support"):
 
-The radial force acts on A as -f_r u_j through the ring centres. Tangent:
-dr = u . (dc_A - dc_B) + d . perp(u) dpsi with dpsi from the cage kinematics.
-Elements carry no damping (the rings' damping is declared elsewhere).
+* KIND_LAMINA, roller lamina (cylindrical, needle, crossed roller) with fixed
+  contact angle alpha (0 for radial rollers):
+  delta = r cos(alpha) - c - crown, F = max(0, k delta^p + c_d rho(delta) deltadot)
+  (Eq. (normal_force), p = 10/9 or 1), radial part f_r = F cos(alpha).
+* KIND_BALL, Eq. (ball_bearing): a_r = A cos(alpha_0) + r,
+  a_z = A sin(alpha_0) + s_a (s_a the axial approach that carries the
+  preload; held in the planar model), delta = sqrt(a_r^2 + a_z^2) - A - c,
+  working angle alpha_w = atan2(a_z, a_r), F = max(0, K(alpha_w) delta^(3/2)
+  + c_d rho(delta) deltadot), f_r = F cos(alpha_w). K(alpha_w) combines the
+  inner and outer Hertz point contacts, K = (K_i^(-2/3) + K_o^(-2/3))^(-3/2),
+  each from the Hamrock--Brewe closed form (:func:`hertz_point_stiffness`)
+  with the race curvatures of the working angle (gamma_w = D cos(alpha_w)/d_m),
+  times a per-row factor s_K (column R_KSCALE) that makes K exact at the free
+  contact angle (the specification computes it from the elliptic integrals;
+  the curve fits then only supply the weak angle dependence).
+
+The force on A is f_u u with f_u = -f_r, acting through the ring centres
+(a radial force has no moment about the ring centre; the moments in Q are
+those of the offsets xi). The axial component f_z = -sigma F sin(alpha_w)
+(sigma = +-1, the row's axial sense) and the working angle are returned as
+auxiliary observations: the planar model does not feed them back (no axial
+or tilt coordinates), they give the axial force and tilting moment of a row
+or a paired support.
+
+Tangent: forward mode over the 12 unit seeds (dq_A, dq_B, dv_A, dv_B); the
+law supplies df_r/dr and df_r/drdot, the kinematics dr and drdot including
+the rotation of u_j with the cage.
 """
 import numpy as np
 
+from . import laws_ref
 from .circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY, _cross, _dot, _perp, _rot
 
-(R_XI_A, R_XI_B, R_PSI0, R_GAMMA, R_CLEAR, R_K, R_P, R_ALPHA, R_A, R_SAX, R_CROWN, R_PITCH) = (
-    0, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13)
-N_FLOAT = 14
+# column layout of the packed float parameters (shared with the Warp kernel), SI units
+(R_XI_A, R_XI_B, R_PSI0, R_GAMMA, R_CLEAR, R_K, R_P, R_ALPHA, R_SIGMA, R_A, R_SAX, R_CROWN, R_PITCH,
+ R_DAMP, R_RAMP, R_DBALL, R_FI, R_FO, R_EMOD, R_KSCALE) = (0, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18,
+                                                          19, 20, 21)
+N_FLOAT = 22
 (K_BODY_A, K_BODY_B, K_KIND) = range(3)
 N_INT = 3
 KIND_LAMINA, KIND_BALL = 0, 1
+# auxiliary per-element output: force on A along u [N], axial force on A [N], working contact angle [rad]
+AUX_FU, AUX_FZ, AUX_ALPHA = range(3)
+N_AUX = 3
+
+# Brewe & Hamrock (1977) / Hamrock & Brewe (1983) curve fits of the ellipticity
+# parameter k = a/b, the complete elliptic integrals E(e) and F = K(e) as functions
+# of the radius ratio alpha_r = R_y / R_x (quoted within 3 % for 1 <= alpha_r <= 100)
+HB_K_COEF, HB_K_EXP = 1.0339, 0.6360
+HB_E0, HB_E1 = 1.0003, 0.5968
+HB_F0, HB_F1 = 1.5277, 0.6023
 
 
-def radial_law(kind, r, fp):
-    """(approach delta, normal force F, radial force f_r, d f_r / d r) per row."""
-    k, p, alpha, A, sax, c, crown = (fp[:, R_K], fp[:, R_P], fp[:, R_ALPHA], fp[:, R_A], fp[:, R_SAX],
-                                     fp[:, R_CLEAR], fp[:, R_CROWN])
-    ca = np.cos(alpha)
-    # roller lamina
-    d_l = r * ca - c - crown
-    dl = np.maximum(d_l, 0.0)
-    Fl = k * np.where(dl > 0, dl, 0.0) ** p
-    dFl = np.where(dl > 0, p * k * np.where(dl > 0, dl, 1.0) ** (p - 1), 0.0)
-    # ball
-    ar = A * ca + r
-    az = A * np.sin(alpha) + sax
+def hertz_point_stiffness(rx, ry, e_eff):
+    """Hertz point contact Q = K delta^(3/2): K [N m^-3/2] and d ln K / d r_x.
+
+    rx, ry: effective radii of relative curvature [m] in the rolling and the
+    transverse direction (1/R_x = 1/r_ax + 1/r_bx, concave radii negative),
+    e_eff: effective modulus E' = 2 / [(1 - nu_a^2)/E_a + (1 - nu_b^2)/E_b] [Pa].
+    Hamrock--Brewe: delta = F [9/(2 E R) (Q/(pi k E'))^2]^(1/3) with
+    1/R = 1/R_x + 1/R_y, so K = pi k E' sqrt(2 E R / 9) F^(-3/2).
+    """
+    ar = ry / rx
+    R = rx * ry / (rx + ry)
+    k = HB_K_COEF * ar ** HB_K_EXP
+    E = HB_E0 + HB_E1 / ar
+    F = HB_F0 + HB_F1 * np.log(ar)
+    K = np.pi * k * e_eff * np.sqrt(2.0 * E * R / 9.0) * F ** -1.5
+    dlnk_dar = HB_K_EXP / ar
+    dlnE_dar = -HB_E1 / (ar * ar * E)
+    dlnF_dar = HB_F1 / (ar * F)
+    dlnK_dar = dlnk_dar + 0.5 * dlnE_dar - 1.5 * dlnF_dar
+    dlnK_drx = dlnK_dar * (-ar / rx) + 0.5 * ry / (rx * (rx + ry))
+    return K, dlnK_drx
+
+
+def ball_stiffness(cos_alpha, D, dm, fi, fo, e_eff):
+    """K(alpha) [N m^-3/2] of one ball (inner and outer Hertz contacts in series) and dK/d cos(alpha).
+
+    Race curvatures at contact angle alpha (Harris & Kotzalas, Rolling Bearing
+    Analysis, 5th ed., ch. 2, gamma = D cos(alpha)/d_m): inner R_x = D (1 - gamma)/2,
+    outer R_x = D (1 + gamma)/2, both R_y = f D / (2 f - 1).
+    """
+    g = D * cos_alpha / dm
+    dg = D / dm
+    Ki, dlki = hertz_point_stiffness(0.5 * D * (1 - g), fi * D / (2 * fi - 1), e_eff)
+    Ko, dlko = hertz_point_stiffness(0.5 * D * (1 + g), fo * D / (2 * fo - 1), e_eff)
+    dlki = dlki * (-0.5 * D * dg)
+    dlko = dlko * (0.5 * D * dg)
+    wi, wo = Ki ** (-2.0 / 3.0), Ko ** (-2.0 / 3.0)
+    K = (wi + wo) ** -1.5
+    return K, K * (wi * dlki + wo * dlko) / (wi + wo)
+
+
+def lamina_law(r, rdot, fp):
+    """Roller lamina with fixed contact angle: (delta, F, f_r, F sin(alpha), alpha, df_r/dr, df_r/drdot)."""
+    alpha = fp[:, R_ALPHA]
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    delta = r * ca - fp[:, R_CLEAR] - fp[:, R_CROWN]
+    F, Fd, Fdd = laws_ref.normal_force(fp[:, R_K], fp[:, R_P], fp[:, R_DAMP], fp[:, R_RAMP], delta, rdot * ca)
+    return delta, F, F * ca, F * sa, alpha, Fd * ca * ca, Fdd * ca * ca
+
+
+def ball_law(r, rdot, fp):
+    """Ball of Eq. (ball_bearing), the working angle moving with the radial approach:
+    (delta, F, f_r, F sin(alpha_w), alpha_w, df_r/dr, df_r/drdot)."""
+    A, alpha0, cd = fp[:, R_A], fp[:, R_ALPHA], fp[:, R_DAMP]
+    ar = A * np.cos(alpha0) + r
+    az = A * np.sin(alpha0) + fp[:, R_SAX]
     L = np.sqrt(ar * ar + az * az)
-    d_b = L - A - c
-    db = np.maximum(d_b, 0.0)
-    Fb = k * db ** 1.5
-    dFb = 1.5 * k * np.sqrt(db)
     Ls = np.where(L > 0, L, 1.0)
-    frb = Fb * ar / Ls
-    dfrb = dFb * (ar / Ls) ** 2 + Fb * (1.0 / Ls - ar * ar / Ls ** 3)
-    ball = kind == KIND_BALL
-    delta = np.where(ball, d_b, d_l)
-    F = np.where(ball, Fb, Fl)
-    fr = np.where(ball, frb, Fl * ca)
-    dfr = np.where(ball, dfrb, dFl * ca * ca)
-    return delta, F, fr, dfr
+    delta = L - A - fp[:, R_CLEAR]
+    dp = np.where(delta > 0, delta, 0.0)
+    cw = ar / Ls                                   # cos(alpha_w)
+    dcw = az * az / Ls ** 3                        # d cos(alpha_w) / dr
+    K, dKc = ball_stiffness(cw, fp[:, R_DBALL], fp[:, R_PITCH], fp[:, R_FI], fp[:, R_FO], fp[:, R_EMOD])
+    K, dKc = fp[:, R_KSCALE] * K, fp[:, R_KSCALE] * dKc
+    Fel = K * dp ** 1.5
+    dFel = dKc * dcw * dp ** 1.5 + 1.5 * K * np.sqrt(dp) * cw
+    rho, drho = laws_ref.damping_ramp(delta, fp[:, R_RAMP])
+    ddot = cw * rdot
+    F = Fel + cd * rho * ddot
+    on = (delta > 0) & (F > 0)
+    F = np.where(on, F, 0.0)
+    dF = np.where(on, dFel + cd * (drho * cw * ddot + rho * dcw * rdot), 0.0)
+    dFd = np.where(on, cd * rho * cw, 0.0)
+    return delta, F, F * cw, F * az / Ls, np.arctan2(az, ar), dF * cw + F * dcw, dFd * cw
 
 
-def evaluate(pose, fparams, iparams):
-    """Q (N,6), dQdq (N,6,6), obs (N,8) at absolute poses (nb+1, 3) (last row ground)."""
+def element_law(kind, r, rdot, fp):
+    """Per row: approach delta [m], normal force F [N], radial force f_r [N], axial
+    magnitude F sin(alpha_w) [N], working angle alpha_w [rad], df_r/dr, df_r/drdot."""
+    out = tuple(np.zeros(len(r)) for _ in range(7))
+    for sel, law in ((kind == KIND_BALL, ball_law), (kind != KIND_BALL, lamina_law)):
+        if np.any(sel):
+            for o, v in zip(out, law(r[sel], rdot[sel], fp[sel])):
+                o[sel] = v
+    return out
+
+
+def evaluate(pose, vel, fparams, iparams):
+    """Evaluate all elements at absolute poses and velocities (nb+1, 3) (last row ground).
+
+    Returns Q (N,6), dQdq (N,6,6), dQdv (N,6,6), obs (N,8) (columns of
+    :mod:`circle_pairs_ref`: F, 0, gap = -delta, element centre on the pitch
+    circle, u, 0) and aux (N,3) (AUX_* columns).
+    """
     fp = np.asarray(fparams, float)
     ip = np.asarray(iparams)
     N = len(fp)
     qa, qb = pose[ip[:, K_BODY_A]], pose[ip[:, K_BODY_B]]
+    va, vb = vel[ip[:, K_BODY_A]], vel[ip[:, K_BODY_B]]
     a = _rot(qa[:, 2], fp[:, R_XI_A:R_XI_A + 2])
     b = _rot(qb[:, 2], fp[:, R_XI_B:R_XI_B + 2])
     g = fp[:, R_GAMMA]
     psi = fp[:, R_PSI0] + 0.5 * ((1 - g) * qa[:, 2] + (1 + g) * qb[:, 2])
+    psid = 0.5 * ((1 - g) * va[:, 2] + (1 + g) * vb[:, 2])
     u = np.column_stack([np.cos(psi), np.sin(psi)])
+    pu = _perp(u)
     d = (qa[:, :2] + a) - (qb[:, :2] + b)
+    w = (va[:, :2] + va[:, 2:3] * _perp(a)) - (vb[:, :2] + vb[:, 2:3] * _perp(b))
     r = _dot(d, u)
-    delta, F, fr, dfr = radial_law(ip[:, K_KIND], r, fp)
+    rdot = _dot(w, u) + _dot(d, pu) * psid
+    delta, F, fr, fzm, alpha_w, fr_r, fr_rd = element_law(ip[:, K_KIND], r, rdot, fp)
     fA = -fr[:, None] * u
     Q = np.zeros((N, 6))
     Q[:, 0:2] = fA
     Q[:, 2] = _cross(a, fA)
     Q[:, 3:5] = -fA
     Q[:, 5] = -_cross(b, fA)
-    dQ = np.zeros((N, 6, 6))
-    for j in range(6):
-        s = np.zeros(6)
+    dQ = np.zeros((N, 6, 12))
+    for j in range(12):
+        s = np.zeros(12)
         s[j] = 1.0
-        dqa, dqb = s[:3], s[3:]
+        dqa, dqb, dva, dvb = s[0:3], s[3:6], s[6:9], s[9:12]
         da = dqa[2] * _perp(a)
         db = dqb[2] * _perp(b)
         dpsi = 0.5 * ((1 - g) * dqa[2] + (1 + g) * dqb[2])
-        du = _perp(u) * dpsi[:, None]
+        dpsid = 0.5 * ((1 - g) * dva[2] + (1 + g) * dvb[2])
+        du = pu * dpsi[:, None]
         dd = (dqa[:2] + da) - (dqb[:2] + db)
-        dr = _dot(u, dd) + _dot(d, du)
-        dfA = -(dfr * dr)[:, None] * u - fr[:, None] * du
+        dw = ((dva[:2] + dva[2] * _perp(a) + va[:, 2:3] * _perp(da))
+              - (dvb[:2] + dvb[2] * _perp(b) + vb[:, 2:3] * _perp(db)))
+        dr = _dot(dd, u) + _dot(d, du)
+        # perp(du) = -u dpsi
+        drdot = (_dot(dw, u) + _dot(w, du) + (_dot(dd, pu) - _dot(d, u) * dpsi) * psid
+                 + _dot(d, pu) * dpsid)
+        dfr = fr_r * dr + fr_rd * drdot
+        dfA = -dfr[:, None] * u - fr[:, None] * du
         dQ[:, 0:2, j] = dfA
         dQ[:, 2, j] = _cross(da, fA) + _cross(a, dfA)
         dQ[:, 3:5, j] = -dfA
@@ -102,7 +214,7 @@ def evaluate(pose, fparams, iparams):
     obs = np.zeros((N, N_OBS))
     obs[:, O_FN] = F
     obs[:, O_GAP] = -delta
-    pos = qb[:, :2] + b + 0.5 * fp[:, R_PITCH][:, None] * u
-    obs[:, O_PX:O_PY + 1] = pos
+    obs[:, O_PX:O_PY + 1] = qb[:, :2] + b + 0.5 * fp[:, R_PITCH][:, None] * u
     obs[:, O_NX:O_NY + 1] = u
-    return Q, dQ, obs
+    aux = np.column_stack([-fr, -fp[:, R_SIGMA] * fzm, alpha_w])
+    return Q, dQ[:, :, :6], dQ[:, :, 6:], obs, aux

@@ -1,5 +1,9 @@
-"""Bearings from rolling elements: specifications, the element set evaluator and checks."""
-from .spec import AngularContactPair, BallBearing, CrossedRollerBearing, RollerBearing
-from .set import BearingSet, Mounting
+"""Bearings from rolling elements: specifications, Hertz constants, the element set evaluator and checks."""
+from .hertz import HertzConstants, hertz_constants, roller_stiffness
+from .set import BearingLoads, BearingSet, Mounting
+from .spec import (AngularContactPair, Arrangement, BallBearing, CrossedRollerBearing, CylindricalRollerBearing,
+                   LaminaLaw, NeedleBearing)
 
-__all__ = ["AngularContactPair", "BallBearing", "CrossedRollerBearing", "RollerBearing", "BearingSet", "Mounting"]
+__all__ = ["AngularContactPair", "Arrangement", "BallBearing", "BearingLoads", "BearingSet", "CrossedRollerBearing",
+           "CylindricalRollerBearing", "HertzConstants", "LaminaLaw", "Mounting", "NeedleBearing", "hertz_constants",
+           "roller_stiffness"]

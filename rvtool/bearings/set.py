@@ -1,5 +1,23 @@
 """A set of rolling-element bearings between planar bodies, evaluated in one
-kernel launch; follows the evaluator protocol of the Exudyn contact element."""
+kernel launch; follows the evaluator protocol of
+:class:`exudyn_user_elements.contact_element.ContactElement`.
+
+Each :class:`Mounting` puts one bearing between an inner-ring body and an
+outer-ring body (``GROUND`` allowed for either). Every ball, and every lamina
+of every roller, is one row of the packed parameters
+(:mod:`warp_contacts.rolling_elements_ref`). Row ids:
+
+* ball bearings: ``"<mounting>/row<k>/ball<j>"`` (k = 0 for a single row, 0 and 1 for a pair),
+* roller bearings (cylindrical, needle, crossed): ``"<mounting>/roller<j>/slice<s>"``.
+
+Example (RD-40, bodies 0 = shaft, 1 = wheel, 3 = flange)::
+
+    s = BearingSet([Mounting(name="eccentric_bearing0", bearing=needle, inner=0, outer=1,
+                             inner_centre=(0.0, 8e-4)),
+                    Mounting(name="main_bearing", bearing=main, inner=3, outer=GROUND)], n_bodies=4)
+    ev = s.evaluate(pose, vel)          # Evaluation(Q, dQdq, dQdv, obs, (), finite)
+    loads = s.resultants(pose)          # per mounting: force, axial force, tilting moment
+"""
 import math
 from dataclasses import dataclass
 
@@ -9,15 +27,21 @@ from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import Evaluation, all_finite
+from ..contact.evaluator import BACKENDS, Evaluation, all_finite
 from ..errors import RvtoolInputError
-from .spec import AngularContactPair, BallBearing, CrossedRollerBearing, RollerBearing, roller_lamina_stiffness
+from ..validation import check_finite
+from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
 
 
 @dataclass(frozen=True, kw_only=True)
 class Mounting:
-    """Where a bearing sits: inner ring on body ``inner`` at ``inner_centre`` and outer ring on
-    body ``outer`` at ``outer_centre`` (body coordinates [m]); cage phase psi_0 [rad]."""
+    """Where a bearing sits.
+
+    name: prefix of its row ids (no "/"). bearing: a bearing specification.
+    inner, outer: body indices of the inner- and outer-ring bodies (``GROUND`` = -1).
+    inner_centre, outer_centre: ring centres in body coordinates [m] (ground: global).
+    cage_phase: psi_0 [rad], the angle of element 0 at zero ring rotations.
+    """
     name: str
     bearing: object
     inner: int
@@ -26,119 +50,205 @@ class Mounting:
     outer_centre: tuple = (0.0, 0.0)
     cage_phase: float = 0.0
 
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name or "/" in self.name:
+            raise RvtoolInputError(f"name = {self.name!r} must be a non-empty string without '/'")
+        if not isinstance(self.bearing, (CylindricalRollerBearing, BallBearing, AngularContactPair)):
+            raise RvtoolInputError(f"bearing of type {type(self.bearing).__name__} is not a bearing specification; valid: "
+                                   "CylindricalRollerBearing, NeedleBearing, CrossedRollerBearing, BallBearing, "
+                                   "AngularContactPair")
+        for nm in ("inner_centre", "outer_centre"):
+            v = np.asarray(getattr(self, nm), dtype=float)
+            if v.shape != (2,):
+                raise RvtoolInputError(f"{nm} must have 2 components [m]; got shape {v.shape}")
+            check_finite(nm, v)
+        check_finite("cage_phase", self.cage_phase)
+        if self.inner == self.outer:
+            raise RvtoolInputError(f"inner and outer must be different bodies; both are {self.inner}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class BearingLoads:
+    """Resultant of one mounting's elements on its inner ring, about the inner-ring centre
+    at the mounting's axial centre: force (2,) [N], axial_force [N], tilting_moment
+    (M_x, M_y) [N m], row_axial_forces (one per ball row) [N]. The axial force and moment
+    are observations (the planar model holds the axial and tilt coordinates)."""
+    force: np.ndarray
+    axial_force: float
+    tilting_moment: np.ndarray
+    row_axial_forces: tuple
+
 
 class NoHistory:
     """Rolling elements carry no contact memory."""
 
 
-def _rows(m):
-    """Packed rows (float (n, N_FLOAT), kind (n,), ids) of one mounted bearing."""
+def _base_row(m, psi0, gamma, pitch, alpha, sigma):
+    r = np.zeros(ref.N_FLOAT)
+    r[ref.R_XI_A:ref.R_XI_A + 2] = m.inner_centre
+    r[ref.R_XI_B:ref.R_XI_B + 2] = m.outer_centre
+    r[ref.R_PSI0], r[ref.R_GAMMA], r[ref.R_PITCH] = psi0, gamma, pitch
+    r[ref.R_ALPHA], r[ref.R_SIGMA] = alpha, sigma
+    return r
+
+
+def _pack(m):
+    """Rows of one mounting: (float rows, kinds, ids, element radius rho [m], axial station z [m], row index)."""
     b = m.bearing
-    rows, kinds, ids = [], [], []
-
-    def base(psi0, gamma, pitch):
-        r = np.zeros(ref.N_FLOAT)
-        r[ref.R_XI_A:ref.R_XI_A + 2] = m.inner_centre
-        r[ref.R_XI_B:ref.R_XI_B + 2] = m.outer_centre
-        r[ref.R_PSI0], r[ref.R_GAMMA], r[ref.R_PITCH] = psi0, gamma, pitch
-        return r
-
-    if isinstance(b, (RollerBearing, CrossedRollerBearing)):
-        gamma = b.roller_diameter / b.pitch_diameter
-        k = roller_lamina_stiffness(b.roller_length, b.n_slices)
-        zs = (np.arange(b.n_slices) + 0.5) / b.n_slices * 2 - 1        # -1 ... 1 along the roller
-        crown = (b.crowning if isinstance(b, RollerBearing) else 0.0) * zs ** 2
+    rows, kinds, ids, rho, z, row_of = [], [], [], [], [], []
+    if isinstance(b, CylindricalRollerBearing):
+        alpha = b.contact_angle
+        gamma = b.roller_diameter * math.cos(alpha) / b.pitch_diameter
+        k, crown, zeta = b.slice_stiffness, b.slice_crowning, b.slice_positions
+        crossed = alpha > 0
         for j in range(b.n_rollers):
-            alpha = 0.0 if isinstance(b, RollerBearing) else (b.contact_angle if j % 2 == 0 else -b.contact_angle)
+            sigma = -1.0 if (crossed and j % 2) else 1.0
             for s in range(b.n_slices):
-                r = base(m.cage_phase + 2 * math.pi * j / b.n_rollers, gamma, b.pitch_diameter)
-                r[ref.R_K], r[ref.R_P], r[ref.R_ALPHA] = k, 10.0 / 9.0, alpha
-                r[ref.R_CLEAR], r[ref.R_CROWN] = b.radial_clearance, crown[s]
+                r = _base_row(m, m.cage_phase + 2 * math.pi * j / b.n_rollers, gamma, b.pitch_diameter, alpha, sigma)
+                r[ref.R_K], r[ref.R_P], r[ref.R_CLEAR], r[ref.R_CROWN] = k[s], b.exponent, b.radial_clearance, crown[s]
+                r[ref.R_DAMP], r[ref.R_RAMP] = b.damping / b.n_slices, b.ramp_depth
                 rows.append(r)
                 kinds.append(ref.KIND_LAMINA)
-                ids.append(f"{m.name}/roller{j}/s{s}")
-        return rows, kinds, ids
-    rows_def = []
-    if isinstance(b, AngularContactPair):
-        rows_def = [("row0", b.row, 1.0), ("row1", b.row, -1.0)]
-    elif isinstance(b, BallBearing):
-        rows_def = [("", b, 1.0)]
-    else:
-        raise RvtoolInputError(f"bearing of type {type(b).__name__} is not a known bearing; valid: RollerBearing, "
-                               "BallBearing, AngularContactPair, CrossedRollerBearing")
-    for tag, row, sign in rows_def:
+                ids.append(f"{m.name}/roller{j}/slice{s}")
+                # lamina centre: along the generator (-sigma sin(alpha), cos(alpha)) from the roller centre
+                rho.append(0.5 * b.pitch_diameter - sigma * zeta[s] * math.sin(alpha))
+                z.append(zeta[s] * math.cos(alpha))
+                row_of.append(0)
+        return rows, kinds, ids, rho, z, row_of
+    stations = b.stations() if isinstance(b, AngularContactPair) else ((0.0, 1.0),)
+    ball_rows = b.rows if isinstance(b, AngularContactPair) else (b,)
+    for k, (row, (zr, sigma)) in enumerate(zip(ball_rows, stations)):
         gamma = row.ball_diameter * math.cos(row.contact_angle) / row.pitch_diameter
         for j in range(row.n_balls):
-            r = base(m.cage_phase + 2 * math.pi * j / row.n_balls, gamma, row.pitch_diameter)
-            # in the planar model the opposite contact angle of the second row only changes
-            # the sign of its axial component; the preload offset loads both rows alike
-            r[ref.R_K], r[ref.R_P], r[ref.R_ALPHA] = row.stiffness, 1.5, row.contact_angle
-            r[ref.R_A], r[ref.R_SAX], r[ref.R_CLEAR] = row.groove_centre_distance, row.axial_preload_offset, row.radial_clearance
+            r = _base_row(m, m.cage_phase + 2 * math.pi * j / row.n_balls, gamma, row.pitch_diameter,
+                          row.contact_angle, sigma)
+            r[ref.R_A], r[ref.R_SAX], r[ref.R_CLEAR] = (row.groove_centre_distance, row.axial_preload_offset,
+                                                        row.radial_clearance)
+            r[ref.R_DAMP], r[ref.R_RAMP] = row.damping, row.ramp_depth
+            r[ref.R_DBALL], r[ref.R_FI], r[ref.R_FO], r[ref.R_EMOD] = (row.ball_diameter, row.inner_curvature,
+                                                                      row.outer_curvature, row.effective_modulus)
+            r[ref.R_KSCALE] = row.stiffness_scale
             rows.append(r)
             kinds.append(ref.KIND_BALL)
-            ids.append(f"{m.name}/{tag + '/' if tag else ''}ball{j}")
-    return rows, kinds, ids
+            ids.append(f"{m.name}/row{k}/ball{j}")
+            rho.append(0.5 * row.pitch_diameter)
+            z.append(zr)
+            row_of.append(k)
+    return rows, kinds, ids, rho, z, row_of
 
 
 class BearingSet:
-    """Any number of mounted bearings between ``n_bodies`` bodies, one kernel launch."""
+    """Any number of mounted bearings between ``n_bodies`` planar bodies, one kernel launch.
+
+    mountings: sequence of :class:`Mounting`. name: element name. backend: "warp"
+    (default) or "numpy" (the reference). precision: "float64" or "float32" (warp
+    only). device: Warp device ("cpu", "cuda:N", "auto").
+    """
 
     def __init__(self, mountings, n_bodies, *, name="bearings", backend="warp", precision="float64", device="cpu"):
-        if backend not in ("warp", "numpy"):
-            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
-        if not mountings:
-            raise RvtoolInputError("mountings must contain at least one Mounting")
-        self.name, self.n_bodies, self.backend = name, n_bodies, backend
+        if backend not in BACKENDS:
+            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are {list(BACKENDS)}")
+        if isinstance(n_bodies, bool) or not isinstance(n_bodies, (int, np.integer)) or n_bodies < 1:
+            raise RvtoolInputError(f"n_bodies = {n_bodies!r} is outside the valid range [1, inf)")
+        if len(mountings) == 0:
+            raise RvtoolInputError("mountings must contain at least one Mounting (got 0)")
+        self.name, self.n_bodies, self.backend, self.precision = name, int(n_bodies), backend, precision
         self.mountings = tuple(mountings)
+        names = [m.name for m in self.mountings]
+        if len(set(names)) != len(names):
+            raise RvtoolInputError(f"mounting names must be unique; got {names}")
         self.history = NoHistory()
-        fp, ip, ids, owner = [], [], [], []
+        fp, ip, ids, owner, rho, z, row_of = [], [], [], [], [], [], []
+        g = n_bodies
         for k, m in enumerate(self.mountings):
+            if not isinstance(m, Mounting):
+                raise RvtoolInputError(f"mountings[{k}] must be a Mounting; got {type(m).__name__}")
             for nm in ("inner", "outer"):
                 b = getattr(m, nm)
-                if not (b == GROUND or 0 <= b < n_bodies):
-                    raise RvtoolInputError(f"mountings[{k}].{nm} = {b} is outside the valid range [0, {n_bodies - 1}] or GROUND")
-            rows, kinds, rid = _rows(m)
-            g = n_bodies
-            for r, kd in zip(rows, kinds):
-                fp.append(r)
-                ip.append((g if m.inner == GROUND else m.inner, g if m.outer == GROUND else m.outer, kd))
-                owner.append(k)
+                if not (b == GROUND or (isinstance(b, (int, np.integer)) and 0 <= b < n_bodies)):
+                    raise RvtoolInputError(f"mountings[{k}].{nm} = {b!r} is outside the valid range "
+                                           f"[0, {n_bodies - 1}] or GROUND (-1)")
+            rows, kinds, rid, r_rho, r_z, r_row = _pack(m)
+            fp += rows
+            ip += [(g if m.inner == GROUND else m.inner, g if m.outer == GROUND else m.outer, kd) for kd in kinds]
             ids += rid
+            owner += [k] * len(rows)
+            rho += r_rho
+            z += r_z
+            row_of += r_row
         self.fparams = np.array(fp)
         self.iparams = np.array(ip, dtype=np.int32)
         self.ids = tuple(ids)
         self.owner = np.array(owner)
+        #: per element: radius [m] and axial station [m] of its centre, ball-row index
+        self.element_radius, self.element_station, self.element_row = np.array(rho), np.array(z), np.array(row_of)
         self.assembler = PairAssembler(self.iparams[:, 0], self.iparams[:, 1], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
+        self._vel = np.zeros((n_bodies + 1, 3))
         if backend == "warp":
             from warp_contacts.rolling_elements import RollingElementKernel
             self._kernel = RollingElementKernel(self.fparams, self.iparams, n_bodies, precision, device)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
 
-    def raw(self, pose):
+    def raw(self, pose, vel=None):
+        """Per-element results (Q (N,6), dQdq, dQdv, obs (N,8), aux (N,3)) at poses and
+        velocities (nb, 3); ``vel=None`` means at rest."""
         self._pose[:-1] = pose
+        self._vel[:-1] = 0.0 if vel is None else vel
         if self.backend == "warp":
-            return self._kernel.evaluate(self._pose)
-        return ref.evaluate(self._pose, self.fparams, self.iparams)
+            return self._kernel.evaluate(self._pose, self._vel)
+        return ref.evaluate(self._pose, self._vel, self.fparams, self.iparams)
+
+    def check_state(self, pose, vel):
+        """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
+        for nm, arr in (("pose", pose), ("vel", vel)):
+            if arr is None:
+                continue
+            a = np.asarray(arr)
+            if a.shape != (self.n_bodies, 3):
+                raise RvtoolInputError(f"{nm} must have shape ({self.n_bodies}, 3) for bearing set '{self.name}' "
+                                       f"(x, y, theta per body); got {a.shape}")
+            if not np.all(np.isfinite(a)):
+                raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf); valid: finite reals")
 
     def evaluate(self, pose, vel=None, history=None, check=True):
+        """Assembled :class:`Evaluation` at absolute poses/velocities (nb, 3) (no history)."""
         if check:
-            a = np.asarray(pose)
-            if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                raise RvtoolInputError(f"pose must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, obs = self.raw(pose)
-        n = 3 * self.n_bodies
-        finite = all_finite(Qc, dq)
+            self.check_state(pose, vel)
+        Qc, dq, dv, obs, _ = self.raw(pose, vel)
+        finite = all_finite(Qc, dq, dv)
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          np.zeros((n, n)), np.array(obs, float), (), finite)
+                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
 
     def commit(self, pose, vel=None, evaluation=None):
-        return np.array(evaluation.obs if evaluation is not None else self.raw(pose)[2], float)
+        """Observations (N, 8) at the accepted state (nothing to commit)."""
+        return np.array(evaluation.obs if evaluation is not None else self.raw(pose, vel)[3], float)
 
-    def mounting_loads(self, obs):
-        """Per mounting: resultant force [N] on the inner ring from its elements."""
-        f = obs[:, ref.O_FN][:, None] * obs[:, ref.O_NX:ref.O_NY + 1]
-        out = np.zeros((len(self.mountings), 2))
-        np.add.at(out, self.owner, -f)
+    def resultants(self, pose, vel=None):
+        """{mounting name: :class:`BearingLoads`} on the inner rings at the given state.
+
+        Element force on the inner ring f = f_u u + f_z e_z acts at its centre
+        rho u + z e_z, so the moment about the mounting centre is
+        M = (rho f_z - z f_u) (u x e_z), summed as Eq. (width_resultant).
+        """
+        _, _, _, obs, aux = self.raw(pose, vel)
+        obs, aux = np.asarray(obs, float), np.asarray(aux, float)
+        u = obs[:, ref.O_NX:ref.O_NY + 1]
+        fu, fz = aux[:, ref.AUX_FU], aux[:, ref.AUX_FZ]
+        arm = self.element_radius * fz - self.element_station * fu
+        out = {}
+        for k, m in enumerate(self.mountings):
+            sel = self.owner == k
+            rows = self.element_row[sel]
+            n_rows = 2 if isinstance(m.bearing, AngularContactPair) else 1
+            out[m.name] = BearingLoads(
+                force=np.sum(fu[sel, None] * u[sel], axis=0), axial_force=float(np.sum(fz[sel])),
+                tilting_moment=np.sum(arm[sel, None] * np.column_stack([u[sel, 1], -u[sel, 0]]), axis=0),
+                row_axial_forces=tuple(float(np.sum(fz[sel][rows == r])) for r in range(n_rows))
+                if not isinstance(m.bearing, CylindricalRollerBearing) else ())
         return out
+
+    def element_loads(self, obs):
+        """Per mounting: the normal force of each element [N] (obs column O_FN), in id order."""
+        return {m.name: np.asarray(obs)[self.owner == k, ref.O_FN] for k, m in enumerate(self.mountings)}

@@ -1,50 +1,99 @@
-"""Rolling-element bearing specifications (frozen, validated on construction).
+"""Rolling-element bearing specifications: frozen, keyword-only, validated on
+construction (errors name the parameter, its value and the valid range).
 
-Element stiffness from Palmgren's empirical steel contact approaches (Harris &
-Kotzalas, Rolling Bearing Analysis, ch. 6): a ball on one race
-delta = 2.18e-4 Q^(2/3) D^(-1/3) [mm, N] (so 4.36e-4 for inner plus outer), a
-roller on one race delta = 1.92e-5 Q^0.9 L^(-0.8) [mm, N, mm] (3.84e-5 for both).
-Point contacts that carry the same load combine as
-K = (K_i^(-2/3) + K_o^(-2/3))^(-3/2) (paper, after Eq. (ball_bearing)).
+Element laws (paper, Section "Distributed bearing support"): balls follow
+Eq. (ball_bearing) with Hertz constants (:mod:`rvtool.bearings.hertz`);
+rollers are sliced along their length into laminae, each with the law of
+Eq. (normal_force) (Palmgren's 10/9 power law, or its secant at a reference
+roller load for the linear law) and a per-slice crowning drop.
+
+RD-40 examples (issue 5)::
+
+    needle = NeedleBearing(inner_radius=0.012, roller_diameter=0.003, roller_length=0.008,
+                           n_rollers=16, radial_clearance=5e-6, n_slices=4)
+    row = BallBearing(n_balls=16, ball_diameter=7.938e-3, pitch_diameter=0.068,
+                      contact_angle=math.radians(25), inner_curvature=0.52, outer_curvature=0.52,
+                      youngs_modulus=206e9, poisson_ratio=0.3, axial_preload=200.0)
+    main = AngularContactPair(rows=(row, row), row_spacing=0.040, arrangement="back_to_back")
 """
 import math
 from dataclasses import dataclass
+from enum import Enum
+from functools import cached_property
+
+import numpy as np
+
+from warp_contacts.rolling_elements_ref import ball_stiffness
 
 from ..errors import RvtoolInputError
-from ..validation import check_nonnegative, check_positive, check_range
+from ..validation import check_finite, check_nonnegative, check_positive, check_range
+from .hertz import HertzConstants, effective_modulus, hertz_constants, roller_stiffness
+
+#: Largest interference (negative radial clearance) as a fraction of the element diameter:
+#: beyond it the small-deformation contact laws no longer describe the fit.
+MAX_INTERFERENCE = 0.002
+#: Largest radial clearance as a fraction of the element diameter.
+MAX_CLEARANCE = 0.01
 
 
-def ball_race_stiffness(ball_diameter):
-    """K of one ball--race point contact [N m^-3/2] (Palmgren, one race)."""
-    k_mm = (1.0 / (2.18e-4 * (ball_diameter * 1e3) ** (-1 / 3))) ** 1.5   # Q = k delta^1.5, N and mm
-    return k_mm * 1e3 ** 1.5
+class LaminaLaw(str, Enum):
+    """Elastic law of a roller lamina: Palmgren's power law (p = 10/9) or linear (p = 1)."""
+    POWER = "power"
+    LINEAR = "linear"
 
 
-def combine_point_contacts(k_inner, k_outer):
-    """Series combination of two point contacts carrying the same load (exponent 3/2)."""
-    return (k_inner ** (-2 / 3) + k_outer ** (-2 / 3)) ** (-1.5)
+class Arrangement(str, Enum):
+    """Paired angular-contact rows: back-to-back (O, DB) or face-to-face (X, DF)."""
+    BACK_TO_BACK = "back_to_back"
+    FACE_TO_FACE = "face_to_face"
 
 
-def roller_lamina_stiffness(length, n_slices):
-    """Coefficient k [N m^-10/9] of one lamina of length L/n of a roller on both races
-    (Palmgren 3.84e-5 Q^0.9 L^-0.8 [mm], per lamina the length share L / n)."""
-    lam = length / n_slices * 1e3
-    k_mm = (1.0 / (3.84e-5 * lam ** (-0.8))) ** (1 / 0.9)
-    return k_mm * 1e3 ** (1 / 0.9)
+def _enum(obj, name, cls):
+    value = getattr(obj, name)
+    try:
+        object.__setattr__(obj, name, cls(value))
+    except ValueError:
+        raise RvtoolInputError(f"{name} = {value!r} is not one of the valid choices {[m.value for m in cls]}") from None
 
 
-def _count(name, n, low):
-    if not isinstance(n, int) or n < low:
-        raise RvtoolInputError(f"{name} = {n!r} is outside the valid range [{low}, inf) (integer)")
+def _count(name, n, low, high=None):
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < low or (high is not None and n > high):
+        raise RvtoolInputError(f"{name} = {n!r} is outside the valid range [{low}, {high if high else 'inf'}] (integer)")
+
+
+def _fit(count_name, n, diameter, pitch_diameter):
+    """Elements must fit around the pitch circle without touching: n D < pi d_m."""
+    n_max = math.ceil(math.pi * pitch_diameter / diameter) - 1
+    if n > n_max:
+        raise RvtoolInputError(f"{count_name} = {n} elements of diameter {diameter} m do not fit on the pitch circle "
+                               f"of diameter {pitch_diameter} m; valid range [3, {n_max}]")
+
+
+def _per_slice(name, value, n_slices, check):
+    """A scalar or one value per slice -> tuple of n_slices floats, each checked."""
+    arr = np.atleast_1d(np.asarray(value, dtype=float))
+    if arr.shape not in ((1,), (n_slices,)):
+        raise RvtoolInputError(f"{name} must be a number or hold n_slices = {n_slices} values; got {arr.size}")
+    check(name, arr)
+    return tuple(float(v) for v in np.broadcast_to(arr, (n_slices,)))
 
 
 @dataclass(frozen=True, kw_only=True)
-class RollerBearing:
-    """Cylindrical or needle roller bearing, rollers sliced along their length.
+class CylindricalRollerBearing:
+    """Cylindrical roller bearing, rollers sliced along their length (radial normal).
 
-    inner_radius: raceway radius of the inner ring (journal) [m]; roller_diameter D [m];
-    roller_length L [m]; n_rollers Z; radial_clearance c [m] (diametral / 2);
-    n_slices laminae; crowning: drop at the roller ends [m] (parabolic).
+    inner_radius: raceway radius of the inner ring or journal [m].
+    roller_diameter: D [m]. roller_length: effective length l [m]. n_rollers: Z.
+    radial_clearance: c [m] (half the diametral clearance; negative = interference,
+    down to -0.2 % of D).
+    n_slices: laminae per roller. crowning: drop of the generator [m], either the
+    drop at the roller ends of a parabolic crown (scalar) or one drop per slice.
+    law: "power" (Palmgren, k delta^(10/9)) or "linear" (the secant of the power
+    law at ``reference_roller_load``, N).
+    lamina_stiffness: None (the law above, shared by the laminae in proportion to
+    their length) or a coefficient per lamina [N m^-p] (scalar or one per slice).
+    damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
+    of Eq. (normal_force).
     """
     inner_radius: float
     roller_diameter: float
@@ -52,39 +101,132 @@ class RollerBearing:
     n_rollers: int
     radial_clearance: float = 0.0
     n_slices: int = 4
-    crowning: float = 0.0
+    crowning: float | tuple = 0.0
+    law: LaminaLaw = LaminaLaw.POWER
+    reference_roller_load: float = 1000.0
+    lamina_stiffness: float | tuple | None = None
+    damping: float = 0.0
+    ramp_depth: float = 1e-6
 
     def __post_init__(self):
         check_positive("inner_radius", self.inner_radius)
         check_positive("roller_diameter", self.roller_diameter)
         check_positive("roller_length", self.roller_length)
         _count("n_rollers", self.n_rollers, 3)
-        _count("n_slices", self.n_slices, 1)
-        check_range("radial_clearance", self.radial_clearance, -0.01 * self.roller_diameter, 0.01 * self.roller_diameter)
-        check_nonnegative("crowning", self.crowning)
-        pitch = 2 * self.inner_radius + self.roller_diameter
-        if self.n_rollers * self.roller_diameter >= math.pi * pitch:
-            raise RvtoolInputError(f"n_rollers = {self.n_rollers} rollers of {self.roller_diameter} m do not fit on the "
-                                   f"pitch circle of {pitch} m; valid range [3, {int(math.pi * pitch / self.roller_diameter)}]")
+        _count("n_slices", self.n_slices, 1, 64)
+        check_range("radial_clearance", self.radial_clearance, -MAX_INTERFERENCE * self.roller_diameter,
+                    MAX_CLEARANCE * self.roller_diameter)
+        _enum(self, "law", LaminaLaw)
+        check_positive("reference_roller_load", self.reference_roller_load)
+        check_nonnegative("damping", self.damping)
+        check_positive("ramp_depth", self.ramp_depth)
+        _per_slice("crowning", self.crowning, self.n_slices, check_nonnegative)
+        if self.lamina_stiffness is not None:
+            _per_slice("lamina_stiffness", self.lamina_stiffness, self.n_slices, check_positive)
+        _fit("n_rollers", self.n_rollers, self.roller_diameter, self.pitch_diameter)
 
     @property
     def pitch_diameter(self):
+        """d_m = 2 r_i + D [m]."""
         return 2 * self.inner_radius + self.roller_diameter
+
+    @property
+    def contact_angle(self):
+        """0: a radial roller."""
+        return 0.0
+
+    @property
+    def exponent(self):
+        """p of the lamina law."""
+        return 10.0 / 9.0 if self.law == LaminaLaw.POWER else 1.0
+
+    @property
+    def slice_positions(self):
+        """Lamina centres along the roller, from its middle [m] (n_slices,)."""
+        n = self.n_slices
+        return ((np.arange(n) + 0.5) / n - 0.5) * self.roller_length
+
+    @property
+    def slice_crowning(self):
+        """Crowning drop of each lamina [m] (n_slices,): per-slice values, or the parabolic
+        crown (2 zeta / l)^2 times the end drop."""
+        if np.ndim(self.crowning) == 0:
+            return float(self.crowning) * (2 * self.slice_positions / self.roller_length) ** 2
+        return np.asarray(self.crowning, dtype=float)
+
+    @property
+    def roller_coefficient(self):
+        """Coefficient of the whole roller [N m^-p] (both raceways): Palmgren's k for the
+        power law, the secant Q_ref / delta(Q_ref) for the linear law."""
+        k = roller_stiffness(self.roller_length)
+        if self.law == LaminaLaw.POWER:
+            return k
+        return self.reference_roller_load / (self.reference_roller_load / k) ** 0.9
+
+    @property
+    def slice_stiffness(self):
+        """Coefficient of each lamina [N m^-p] (n_slices,); with no override, the roller
+        coefficient in proportion to the lamina length (a uniform approach then loads
+        the roller as the unsliced law, whatever n_slices)."""
+        if self.lamina_stiffness is None:
+            return np.full(self.n_slices, self.roller_coefficient / self.n_slices)
+        return np.array(_per_slice("lamina_stiffness", self.lamina_stiffness, self.n_slices, check_positive))
+
+
+@dataclass(frozen=True, kw_only=True)
+class NeedleBearing(CylindricalRollerBearing):
+    """Needle roller bearing (long thin rollers, typically running directly on the
+    journal, whose radius is ``inner_radius``); fields as :class:`CylindricalRollerBearing`.
+
+    RD-40 eccentric bearing: ``NeedleBearing(inner_radius=0.012, roller_diameter=0.003,
+    roller_length=0.008, n_rollers=16, radial_clearance=5e-6)``.
+    """
+
+
+@dataclass(frozen=True, kw_only=True)
+class CrossedRollerBearing(CylindricalRollerBearing):
+    """Crossed-roller row: consecutive rollers alternate the contact angle +alpha, -alpha
+    (their axial components cancel pairwise; the planar model carries the radial parts).
+
+    Fields as :class:`CylindricalRollerBearing` (crowning, law and slices act along
+    each roller's generator) plus contact_angle: alpha [rad] in (0, pi/2), 45 deg typical.
+    """
+    contact_angle: float = math.pi / 4
+    n_slices: int = 2
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_range("contact_angle", self.contact_angle, 0.0, math.pi / 2, low_open=True, high_open=True)
 
 
 @dataclass(frozen=True, kw_only=True)
 class BallBearing:
-    """Ball bearing row: n_balls Z, ball_diameter D [m], pitch_diameter d_m [m], contact_angle
-    alpha_0 [rad], inner/outer groove curvature ratios f_i, f_o (> 0.5), radial_clearance c [m],
-    axial_preload_offset s_a [m] (axial approach of the rings from preload; light preload ~ 5 um)."""
+    """Ball bearing row (deep-groove for contact_angle = 0, else angular contact).
+
+    n_balls: Z. ball_diameter: D [m]. pitch_diameter: d_m [m].
+    contact_angle: free contact angle alpha_0 [rad] in [0, pi/2).
+    inner_curvature, outer_curvature: groove curvature ratios f_i, f_o = r_groove / D in (0.5, 1].
+    youngs_modulus: E [Pa]; poisson_ratio: nu [-] (balls and rings of one material).
+    radial_clearance: c_b [m] of Eq. (ball_bearing) (negative = interference, down to -0.2 % of D).
+    axial_preload: F_a [N] pressing the rings axially; it sets the axial approach
+    s_a (:attr:`axial_preload_offset`) that the planar model then holds.
+    damping: c_d per ball [N s/m]; ramp_depth: delta_r [m] of Eq. (normal_force).
+
+    RD-40 main-bearing row: ``BallBearing(n_balls=16, ball_diameter=7.938e-3,
+    pitch_diameter=0.068, contact_angle=math.radians(25), axial_preload=200.0)``.
+    """
     n_balls: int
     ball_diameter: float
     pitch_diameter: float
     contact_angle: float = 0.0
     inner_curvature: float = 0.52
     outer_curvature: float = 0.52
+    youngs_modulus: float = 206e9
+    poisson_ratio: float = 0.3
     radial_clearance: float = 0.0
-    axial_preload_offset: float = 0.0
+    axial_preload: float = 0.0
+    damping: float = 0.0
+    ramp_depth: float = 1e-6
 
     def __post_init__(self):
         _count("n_balls", self.n_balls, 3)
@@ -93,58 +235,112 @@ class BallBearing:
         check_range("contact_angle", self.contact_angle, 0.0, math.pi / 2, high_open=True)
         check_range("inner_curvature", self.inner_curvature, 0.5, 1.0, low_open=True)
         check_range("outer_curvature", self.outer_curvature, 0.5, 1.0, low_open=True)
-        check_range("radial_clearance", self.radial_clearance, -0.01 * self.ball_diameter, 0.01 * self.ball_diameter)
-        check_range("axial_preload_offset", self.axial_preload_offset, 0.0, 0.01 * self.ball_diameter)
-        if self.n_balls * self.ball_diameter >= math.pi * self.pitch_diameter:
-            raise RvtoolInputError(f"n_balls = {self.n_balls} balls of {self.ball_diameter} m do not fit on the pitch circle "
-                                   f"of {self.pitch_diameter} m; valid range [3, {int(math.pi * self.pitch_diameter / self.ball_diameter)}]")
+        check_positive("youngs_modulus", self.youngs_modulus)
+        check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
+        check_range("radial_clearance", self.radial_clearance, -MAX_INTERFERENCE * self.ball_diameter,
+                    MAX_CLEARANCE * self.ball_diameter)
+        check_nonnegative("axial_preload", self.axial_preload)
+        check_finite("axial_preload", self.axial_preload)
+        check_nonnegative("damping", self.damping)
+        check_positive("ramp_depth", self.ramp_depth)
+        _fit("n_balls", self.n_balls, self.ball_diameter, self.pitch_diameter)
 
     @property
     def groove_centre_distance(self):
-        """A = (f_i + f_o - 1) D [m]."""
+        """A = (f_i + f_o - 1) D [m], the unloaded distance of the groove curvature centres."""
         return (self.inner_curvature + self.outer_curvature - 1.0) * self.ball_diameter
 
     @property
+    def effective_modulus(self):
+        """E' = E / (1 - nu^2) [Pa]."""
+        return effective_modulus(self.youngs_modulus, self.poisson_ratio)
+
+    @cached_property
+    def hertz(self) -> HertzConstants:
+        """Hertz constants at the free contact angle (complete elliptic integrals)."""
+        return hertz_constants(ball_diameter=self.ball_diameter, pitch_diameter=self.pitch_diameter,
+                               contact_angle=self.contact_angle, inner_curvature=self.inner_curvature,
+                               outer_curvature=self.outer_curvature, youngs_modulus=self.youngs_modulus,
+                               poisson_ratio=self.poisson_ratio, method="exact")
+
+    @cached_property
+    def stiffness_scale(self):
+        """s_K = K_exact(alpha_0) / K_Hamrock-Brewe(alpha_0): the kernels' K(alpha) is the
+        closed form times s_K, exact at the free angle (the curve fits give the angle dependence)."""
+        return self.hertz.combined / float(ball_stiffness(np.cos(self.contact_angle), self.ball_diameter,
+                                                          self.pitch_diameter, self.inner_curvature,
+                                                          self.outer_curvature, self.effective_modulus)[0])
+
+    @property
     def stiffness(self):
-        """K [N m^-3/2] of one ball (inner and outer contacts in series)."""
-        k = ball_race_stiffness(self.ball_diameter)
-        return combine_point_contacts(k, k)
+        """K [N m^-3/2] of one ball at the free contact angle (inner and outer contacts in series)."""
+        return self.hertz.combined
+
+    def stiffness_at(self, contact_angle):
+        """K(alpha) [N m^-3/2] of one ball at working angle alpha [rad] (the kernels' law)."""
+        return self.stiffness_scale * float(ball_stiffness(np.cos(contact_angle), self.ball_diameter,
+                                                           self.pitch_diameter, self.inner_curvature,
+                                                           self.outer_curvature, self.effective_modulus)[0])
+
+    def axial_force_at(self, axial_approach):
+        """Axial force [N] of the row at zero radial displacement and axial approach s_a [m]:
+        Z K(alpha_w) delta^(3/2) sin(alpha_w), a = (A cos alpha_0, A sin alpha_0 + s_a), Eq. (ball_bearing)."""
+        A, al = self.groove_centre_distance, self.contact_angle
+        ar, az = A * math.cos(al), A * math.sin(al) + axial_approach
+        L = math.hypot(ar, az)
+        delta = max(L - A - self.radial_clearance, 0.0)
+        return self.n_balls * self.stiffness_at(math.atan2(az, ar)) * delta ** 1.5 * az / L
+
+    @cached_property
+    def axial_preload_offset(self):
+        """s_a [m]: the axial approach at which the row carries ``axial_preload`` (0 without preload)."""
+        if self.axial_preload == 0:
+            return 0.0
+        from scipy.optimize import brentq
+        hi = 1e-6
+        while self.axial_force_at(hi) < self.axial_preload:
+            hi *= 2
+        return brentq(lambda s: self.axial_force_at(s) - self.axial_preload, 0.0, hi, xtol=1e-16, rtol=1e-14)
 
 
 @dataclass(frozen=True, kw_only=True)
 class AngularContactPair:
-    """Two angular-contact rows with opposite contact angles (back-to-back or face-to-face),
-    row_spacing [m] apart; in the planar model both carry radial load, their axial force
-    and tilting moment are observations."""
-    row: BallBearing
+    """Two angular-contact rows ``rows`` = (row 0, row 1), row_spacing [m] apart
+    (row 0 at -spacing/2, row 1 at +spacing/2 from the mounting's axial centre),
+    arrangement "back_to_back" (contact lines diverge toward the axis: pressure
+    centres outside the rows) or "face_to_face".
+
+    In the planar model both rows carry radial load through their balls; the
+    axial force and tilting moment of each row and of the pair are computed
+    from the same element forces as observations (:meth:`BearingSet.resultants`)
+    and are not fed back (no axial or tilt coordinates yet).
+
+    RD-40 main bearing: ``AngularContactPair(rows=(row, row), row_spacing=0.040)``.
+    """
+    rows: tuple
     row_spacing: float
-    arrangement: str = "back_to_back"
+    arrangement: Arrangement = Arrangement.BACK_TO_BACK
 
     def __post_init__(self):
+        if not (isinstance(self.rows, (tuple, list)) and len(self.rows) == 2):
+            raise RvtoolInputError(f"rows must hold 2 BallBearing rows; got {self.rows!r}")
+        object.__setattr__(self, "rows", tuple(self.rows))
+        for k, row in enumerate(self.rows):
+            if not isinstance(row, BallBearing):
+                raise RvtoolInputError(f"rows[{k}] must be a BallBearing; got {type(row).__name__}")
+            if row.contact_angle <= 0:
+                raise RvtoolInputError(f"rows[{k}].contact_angle = {row.contact_angle} is outside the valid range "
+                                       "(0, pi/2) for an angular-contact pair")
         check_positive("row_spacing", self.row_spacing)
-        if self.arrangement not in ("back_to_back", "face_to_face"):
-            raise RvtoolInputError(f"arrangement = {self.arrangement!r}; valid: ['back_to_back', 'face_to_face']")
-        if self.row.contact_angle <= 0:
-            raise RvtoolInputError("row.contact_angle must be > 0 for an angular-contact pair (valid range (0, pi/2))")
+        _enum(self, "arrangement", Arrangement)
+
+    def stations(self):
+        """((axial position z [m], axial sense sigma) of row 0, of row 1): sigma is the sign
+        of the axial component of a row's contact line; the line through a ball centre at
+        (rho, z) meets the axis at z - sigma rho tan(alpha)."""
+        s = 0.5 * self.row_spacing
+        sig = 1.0 if self.arrangement == Arrangement.BACK_TO_BACK else -1.0
+        return ((-s, sig), (s, -sig))
 
 
-@dataclass(frozen=True, kw_only=True)
-class CrossedRollerBearing:
-    """Crossed-roller row: rollers alternate the contact angle +-alpha (45 deg typical)."""
-    inner_radius: float
-    roller_diameter: float
-    roller_length: float
-    n_rollers: int
-    contact_angle: float = math.pi / 4
-    radial_clearance: float = 0.0
-    n_slices: int = 2
-
-    def __post_init__(self):
-        RollerBearing(inner_radius=self.inner_radius, roller_diameter=self.roller_diameter,
-                      roller_length=self.roller_length, n_rollers=self.n_rollers,
-                      radial_clearance=self.radial_clearance, n_slices=self.n_slices)
-        check_range("contact_angle", self.contact_angle, 0.0, math.pi / 2, low_open=True, high_open=True)
-
-    @property
-    def pitch_diameter(self):
-        return 2 * self.inner_radius + self.roller_diameter
+BEARING_TYPES = (CylindricalRollerBearing, BallBearing, AngularContactPair)
