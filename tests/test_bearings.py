@@ -310,10 +310,15 @@ def test_bearing_set_as_exudyn_contact_element():
 
 
 def test_ids_name_mounting_row_and_element():
-    s, _, _ = _set(backend="numpy")
+    s, pose, vel = _set(backend="numpy")
     assert "main_bearing/row0/ball3" in s.ids and "main_bearing/row1/ball15" in s.ids
     assert "input_bearing/row0/ball9" in s.ids and "eccentric_bearing/roller15/slice3" in s.ids
     assert len(s.ids) == len(set(s.ids)) == 10 + 16 * 4 + 32 + 20 * 3 + 30 * 3
+    obs = s.evaluate(pose, vel).obs
+    per = s.element_loads(obs)
+    assert [len(per[k]) for k in ("input_bearing", "eccentric_bearing", "main_bearing", "crossed")] == [10, 16, 32, 30]
+    assert abs(np.sum(per["eccentric_bearing"]) - np.sum(obs[[i for i, c in enumerate(s.ids)
+                                                               if c.startswith("eccentric")], R.O_FN])) < 1e-9
 
 
 def test_bad_inputs_name_the_parameter():

@@ -250,5 +250,12 @@ class BearingSet:
         return out
 
     def element_loads(self, obs):
-        """Per mounting: the normal force of each element [N] (obs column O_FN), in id order."""
-        return {m.name: np.asarray(obs)[self.owner == k, ref.O_FN] for k, m in enumerate(self.mountings)}
+        """{mounting name: normal force of each rolling element [N]} from observations (N, 8):
+        balls as they are, rollers summed over their laminae (element order as in the ids)."""
+        fn = np.asarray(obs)[:, ref.O_FN]
+        out = {}
+        for k, m in enumerate(self.mountings):
+            f = fn[self.owner == k]
+            b = m.bearing
+            out[m.name] = f.reshape(b.n_rollers, b.n_slices).sum(axis=1) if isinstance(b, CylindricalRollerBearing) else f
+        return out
