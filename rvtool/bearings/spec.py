@@ -212,6 +212,12 @@ class BallBearing:
     s_a (:attr:`axial_preload_offset`) that the planar model then holds.
     damping: c_d per ball [N s/m]; ramp_depth: delta_r [m] of Eq. (normal_force).
 
+    Planar model: the rings' axial displacement and tilts are held, so each ball's
+    axial approach stays at its preload value and only the radial part F cos(alpha_w)
+    acts on the bodies; the axial force and tilting moment are computed from the same
+    element forces as observations (:meth:`BearingSet.resultants`) and are not fed back
+    until tilt and axial coordinates exist.
+
     RD-40 main-bearing row: ``BallBearing(n_balls=16, ball_diameter=7.938e-3,
     pitch_diameter=0.068, contact_angle=math.radians(25), axial_preload=200.0)``.
     """
