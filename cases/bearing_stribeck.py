@@ -59,12 +59,12 @@ def main(argv=None):
     ac = BallBearing(**RD40_BALLS, contact_angle=math.radians(25.0))
     loads = [RADIAL_LOAD] if args.quick else [100.0, 300.0, 1000.0, 3000.0, 5000.0, 10000.0]
     sweep = [_check(ac, F, backend, Jr)[1] for F in loads]
-    results["angular_contact_25deg"] = {"radial_load_N": loads,
-                                        "q_max_N": [s["q_max_N"] for s in sweep],
-                                        "q_max_exact_integral_N": [s["q_max_exact_integral_N"] for s in sweep],
-                                        "rel_err_vs_exact": [s["rel_err_vs_exact"] for s in sweep],
-                                        "working_angle_max_load_deg": [float(s["working_angle_deg"][np.argmax(s["load_distribution_N"])])
-                                                                       for s in sweep]}
+    results["angular_contact_25deg"] = {
+        "radial_load_N": loads,
+        "q_max_N": [s["q_max_N"] for s in sweep],
+        "q_max_exact_integral_N": [s["q_max_exact_integral_N"] for s in sweep],
+        "rel_err_vs_exact": [s["rel_err_vs_exact"] for s in sweep],
+        "working_angle_max_load_deg": [float(s["working_angle_deg"][np.argmax(s["load_distribution_N"])]) for s in sweep]}
     results["wall_s"] = time.perf_counter() - t0
 
     import matplotlib.pyplot as plt
