@@ -1,0 +1,86 @@
+"""Panel pressure vs Hertz line contact: steel cylinder R = 3 mm on a flat and in a concave R = 12 mm body.
+
+b = 8 mm, F = 1000 N, panels N = 129 ... 4097 over a fixed domain of +-3 Hertz half-widths (flat case).
+Errors against the Hertz closed form (p0, a, tau_max = 0.300 p0 at 0.786 a) and against the finest grid.
+"""
+import time
+
+import numpy as np
+
+from rvtool import casekit
+from rvtool.pressure import PanelContact, solve_panels, subsurface_stress
+
+E, NU, R1, R2, B, F = 210e9, 0.3, 3e-3, 12e-3, 8e-3, 1000.0
+
+
+def _gap(x, case):
+    h = R1 - np.sqrt(R1 ** 2 - x ** 2)
+    if case == "concave":
+        h -= R2 - np.sqrt(R2 ** 2 - x ** 2)  # conformal: gap is the difference of the two circles
+    return h
+
+
+def main(argv=None):
+    args = casekit.parse_args(argv, description=__doc__)
+    t_all = time.perf_counter()
+    e_star = E / (2 * (1 - NU ** 2))
+    ns = [129, 257, 513, 1025] if args.quick else [129, 257, 513, 1025, 2049, 4097]
+    a_flat = np.sqrt(4 * F / B * R1 / (np.pi * e_star))
+    half = 3 * a_flat * np.sqrt(R1 * R2 / (R2 - R1) / R1)  # domain covers the (wider) conformal contact
+    results = {}
+    figs = {}
+    for case, rr in (("flat", R1), ("concave", R1 * R2 / (R2 - R1))):
+        a = np.sqrt(4 * F / B * rr / (np.pi * e_star))
+        p0 = 2 * F / B / (np.pi * a)
+        out = {k: [] for k in ("N", "p_raw_over_p0", "halfwidth_over_b_hertz", "e1_vs_finest", "tau_max_over_p0",
+                               "tau_max_depth_over_b", "load_residual_rel", "wall_s")}
+        fields = []
+        for n in ns:
+            x = np.linspace(-half, half, n)
+            t0 = time.perf_counter()
+            r = solve_panels(PanelContact(face_width=B, e_star=e_star, force=F), x, _gap(x, case))
+            wall = time.perf_counter() - t0
+            z = np.linspace(a / 200, 2.5 * a, 250)
+            s = subsurface_stress(x, r.pressure, z, nu=NU)
+            i = np.unravel_index(s["tau_max"].argmax(), s["tau_max"].shape)
+            out["N"].append(n)
+            out["p_raw_over_p0"].append(r.p_raw / p0)
+            out["halfwidth_over_b_hertz"].append(0.5 * r.span / a)
+            out["tau_max_over_p0"].append(float(s["tau_max"].max() / p0))
+            out["tau_max_depth_over_b"].append(float(z[i[0]] / a))
+            out["load_residual_rel"].append(r.load_residual)
+            out["wall_s"].append(wall)
+            fields.append((x, r.pressure))
+        xf, pf = fields[-1]
+        for x, p in fields:
+            # relative L1 difference to the finest field, finest interpolated onto the coarse centres
+            out["e1_vs_finest"].append(float(np.sum(np.abs(p - np.interp(x, xf, pf))) / np.sum(np.abs(np.interp(x, xf, pf)))))
+        out["hertz_p0_Pa"] = p0
+        out["hertz_halfwidth_m"] = a
+        results[case] = out
+        figs[case] = (fields[-1], s, z, a, p0)
+    wall_s = time.perf_counter() - t_all
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 3, figsize=(14, 4))
+    for case, ((x, p), s, z, a, p0) in figs.items():
+        xx = np.linspace(-a, a, 400)
+        ax[0].plot(x / a, p / p0, label=f"{case} panels")
+        ax[0].plot(xx / a, np.sqrt(1 - (xx / a) ** 2), "k--", lw=0.8)
+    ax[0].set_xlim(-1.5, 1.5); ax[0].set_xlabel("x/a"); ax[0].set_ylabel("p/p0"); ax[0].legend()
+    (x, p), s, z, a, p0 = figs["flat"]
+    m = np.abs(x) < 2 * a
+    c = ax[1].contourf(x[m] / a, z / a, s["tau_max"][:, m] / p0, 20); fig.colorbar(c, ax=ax[1])
+    ax[1].invert_yaxis(); ax[1].set_title("flat: tau_max/p0"); ax[1].set_xlabel("x/a"); ax[1].set_ylabel("z/a")
+    c = ax[2].contourf(x[m] / a, z / a, s["von_mises"][:, m] / p0, 20); fig.colorbar(c, ax=ax[2])
+    ax[2].invert_yaxis(); ax[2].set_title("flat: von Mises/p0")
+    casekit.save_figure(fig, args.out, "pressure_hertz")
+    settings = {"E_Pa": E, "nu": NU, "R1_m": R1, "R2_concave_m": R2, "b_m": B, "F_N": F, "domain_halfwidth_m": half,
+                "quick": args.quick, "solver": "active set, bordered dense solve from Toeplitz column, FFT gap"}
+    casekit.write_results(args.out, results, settings, wall_s)
+    return results
+
+
+if __name__ == "__main__":
+    main()
