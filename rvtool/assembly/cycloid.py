@@ -133,13 +133,13 @@ def lumped_needle_law(design):
 
 def lumped_ball_law(spec):
     """Lumped radial law F_r = K delta_r^(3/2) of a ball bearing (row or pair): Palmgren's ball
-    approach delta = 4.36e-4 Q^(2/3) / D^(1/3) [mm, N] per race contact (two in series) and
+    approach delta = 4.36e-4 Q^(2/3) / D^(1/3) [mm, N] for both race contacts together and
     Stribeck's F_r = Z Q_max cos(alpha) / 4.37 with delta_max = delta_r cos(alpha).
     Returns (K [N m^-3/2], 3/2)."""
     Z = spec.n_balls * (2 if spec.kind == "angular_contact_pair" else 1)
     ca = np.cos(np.deg2rad(spec.contact_angle_deg))
     D = spec.ball_diameter * 1e3
-    k_mm = (1.0 / (2 * 4.36e-4 * D ** (-1 / 3))) ** 1.5         # Q = k_mm delta^1.5, N and mm
+    k_mm = (1.0 / (4.36e-4 * D ** (-1 / 3))) ** 1.5             # Q = k_mm delta^1.5, N and mm
     return Z * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5, 1.5
 
 
