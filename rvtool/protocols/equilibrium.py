@@ -4,8 +4,10 @@ Each equilibrium is a Newton solve of the static residual (contact forces,
 loads, constraints) at prescribed controls, warm-started from the previous
 equilibrium shifted by the kinematic increment; loads are applied in full
 (no load factor). If a warm start fails, the point is re-solved from the
-kinematic state with the load ramped over ``ramp_steps`` steps. A point that
-still fails raises :class:`SolverFailure` naming the control values.
+kinematic state by a homotopy in the regularization stiffness (stiff springs
+first, then the model's own), then with the load ramped over ``ramp_steps``
+steps. A point that still fails raises :class:`SolverFailure` naming the
+control values.
 """
 import time
 import warnings
@@ -74,6 +76,33 @@ class StaticSolver:
         q = np.array(mbs.systemData.GetODE2Coordinates())
         return ok and np.all(np.isfinite(q)), q
 
+    STIFFENING = (1e6, 1e4, 1e2, 1.0)
+
+    def _stiffened_start(self, input_angle):
+        """Homotopy in the regularization stiffness: solve from the kinematic state with the
+        springs stiffened by each factor of ``STIFFENING`` in turn, warm-starting each solve
+        from the last. Free play (clearances, output-pin backlash) leaves the kinematic state
+        with almost no stiffness in some directions, where a full Newton step under load jumps
+        to a far, periodic copy of the engagement; stiff springs keep the first steps local and
+        the final solve (factor 1) is the unmodified problem."""
+        springs = getattr(self.model, "reg_springs", ())
+        if not springs:
+            return False, None
+        mbs = self.model.mbs
+        q = self.kinematic_vector(input_angle)
+        ok = False
+        try:
+            for f in self.STIFFENING:
+                for _, _, k, obj in springs:
+                    mbs.SetObjectParameter(obj, "stiffness", k * f)
+                ok, q = self._solve(q, ramp=False)
+                if not ok:
+                    break
+        finally:
+            for _, _, k, obj in springs:
+                mbs.SetObjectParameter(obj, "stiffness", k)
+        return ok and self.plausible(q, input_angle), q
+
     def plausible(self, q, input_angle):
         """Every body within the plausibility bounds of its kinematic position."""
         if not np.all(np.isfinite(q)):
@@ -108,6 +137,8 @@ class StaticSolver:
         if not ok:
             if self.q is not None:
                 self.stats.ramped_restarts += 1
+            ok, q = self._stiffened_start(input_angle)
+        if not ok:
             ok, q = self._solve(self.kinematic_vector(input_angle), ramp=True)
             ok = ok and self.plausible(q, input_angle)
         if not ok:

@@ -19,10 +19,14 @@ from .equilibrium import StaticSolver
 ARCSEC = 180.0 / np.pi * 3600.0
 
 
-def transmission_error(theta_in, theta_out, ratio):
-    """Eq. (obs_te) [rad] from unwrapped angle histories and the signed ratio i."""
-    theta_in = np.unwrap(np.asarray(theta_in, float))
-    theta_out = np.unwrap(np.asarray(theta_out, float))
+def transmission_error(theta_in, theta_out, ratio, *, unwrap=True):
+    """Eq. (obs_te) [rad] from angle histories and the signed ratio i. unwrap=True unwraps
+    sampled (wrapped) angles; histories of integrated coordinates are already continuous and
+    may be sampled more coarsely than pi per sample, so they are passed with unwrap=False."""
+    theta_in = np.asarray(theta_in, float)
+    theta_out = np.asarray(theta_out, float)
+    if unwrap:
+        theta_in, theta_out = np.unwrap(theta_in), np.unwrap(theta_out)
     return (theta_out - theta_out[0]) - (theta_in - theta_in[0]) / ratio
 
 
@@ -110,7 +114,7 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None):
             record(k, a, q)
     wall = time.perf_counter() - t0
     th_in, th_out = np.array(th_in), np.array(th_out)
-    return {"theta_in": th_in, "theta_out": th_out, "te": transmission_error(th_in, th_out, ratio),
+    return {"theta_in": th_in, "theta_out": th_out, "te": transmission_error(th_in, th_out, ratio, unwrap=False),
             "peak_loads": peaks, "stats": solver.stats.to_dict(), "wall_s": wall,
             "regularization_max": model.regularization_force(solver.q)}
 

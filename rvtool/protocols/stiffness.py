@@ -204,9 +204,10 @@ class Continuation:
     max_step: largest accepted coordinate change per increment [m or rad] (a larger
     Newton step is treated as a failure and the increment halved).
     min_increment: smallest torque increment [N m] before :class:`SolverFailure`.
+    initial_torque: output torque [N m] of the first equilibrium (found by a load ramp).
     """
 
-    def __init__(self, model, *, input_angle=0.0, max_step=2e-3, min_increment=1e-4):
+    def __init__(self, model, *, input_angle=0.0, max_step=2e-3, min_increment=1e-4, initial_torque=0.0):
         self.model = model
         self.static = StaticSolver(model)
         self.input_angle = input_angle
@@ -214,20 +215,24 @@ class Continuation:
         self.min_increment = min_increment
         self.stats = ContinuationStats()
         model.set_input_angle(input_angle)
-        model.set_output_torque(0.0)
-        self.torque = 0.0
+        # a loaded start is regular even where free play leaves the zero-load state ill-posed
+        model.set_output_torque(float(initial_torque))
+        self.torque = float(initial_torque)
         self.q = self._start()
 
     def _start(self):
+        """First equilibrium: Newton from the kinematic state, else the static solver's load
+        ramps; both only accept states within its plausibility bounds (a full Newton step at
+        load can land in a far, periodic copy of the output-pin engagement)."""
         s = self.static
-        for _ in range(3):
-            ok, q = s._solve(s.kinematic_vector(self.input_angle), ramp=False)
-            if ok:
-                return q
-        ok, q = s._solve(s.kinematic_vector(self.input_angle), ramp=True)
-        if not ok:
-            raise SolverFailure(f"no zero-load equilibrium at input angle {self.input_angle:.6g} rad")
-        return q
+        ok, q = s._solve(s.kinematic_vector(self.input_angle), ramp=False)
+        if ok and s.plausible(q, self.input_angle):
+            return q
+        try:
+            return s.solve(self.input_angle)
+        except SolverFailure:
+            raise SolverFailure(f"no equilibrium at input angle {self.input_angle:.6g} rad and output torque "
+                                f"{self.torque:.6g} N m") from None
 
     def _try(self, torque):
         self.model.set_output_torque(torque)

@@ -1,0 +1,157 @@
+"""Manufacturing variants of a cycloid design and the per-variant figures protocol.
+
+A :class:`Variant` is a set of deviations from a nominal
+:class:`~rvtool.assembly.spec.CycloidDesign` (all SI units):
+
+* ``eccentricity_error`` [m]: assembly eccentricity e = e_g + error (the nominal
+  generating eccentricity e_g of the profile is unchanged),
+* ``pin_centre_errors`` (z_b, 2) [m]: ring-pin centre errors in the housing frame,
+* ``pin_radius_error`` [m]: actual pin radius r_p + error (profile generated with r_p),
+* ``equidistant_mod`` / ``offset_mod`` [m]: profile modifications added to the design's,
+* ``pin_clearance`` [m]: uniform added gap at every pin contact (added to the design's),
+* ``bearing_clearance`` [m]: eccentric-bearing radial clearance (replaces the design's).
+
+:meth:`Variant.apply` turns it into ``(design, build_kwargs)`` for
+:func:`rvtool.assembly.cycloid.build`; the batched path applies the same deviations to
+each copy, so both paths model exactly the same reducer.
+
+:func:`variant_figures` is the per-variant reference protocol of the tolerance Monte
+Carlo (issue 8): quasi-static TE over one output revolution at ``n_te_points``
+input angles (a prime count, so that the samples fall at spread mesh phases instead
+of aliasing onto one) under ``te_torque_fraction`` of the rated torque, the maximum
+pin force over those states, and the lost motion at +-3 % of the rated torque from a
+short torque continuation (+3 % -> -3 %) at input angle 0.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import RvtoolInputError
+from .validation import check_finite, check_nonnegative, check_range
+
+ARCSEC = 180.0 / np.pi * 3600.0
+ARCMIN = 180.0 / np.pi * 60.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class Variant:
+    """Deviations of one manufactured reducer from the nominal design (see module docstring)."""
+    index: int = 0
+    eccentricity_error: float = 0.0
+    pin_centre_errors: tuple | None = None
+    pin_radius_error: float = 0.0
+    equidistant_mod: float = 0.0
+    offset_mod: float = 0.0
+    pin_clearance: float = 0.0
+    bearing_clearance: float | None = None
+
+    def __post_init__(self):
+        for nm in ("eccentricity_error", "pin_radius_error", "equidistant_mod", "offset_mod", "pin_clearance"):
+            check_finite(nm, getattr(self, nm))
+        if self.bearing_clearance is not None:
+            check_nonnegative("bearing_clearance", self.bearing_clearance)
+        if self.pin_centre_errors is not None:
+            e = np.asarray(self.pin_centre_errors, float)
+            if e.ndim != 2 or e.shape[1] != 2:
+                raise RvtoolInputError(f"pin_centre_errors must have shape (n_pins, 2); got {e.shape}")
+            check_finite("pin_centre_errors", e)
+
+    def apply(self, design):
+        """(design', build kwargs) of this variant of ``design``."""
+        from .assembly.spec import replace
+        w = design.wheels
+        e = w.e_g + self.eccentricity_error
+        if e <= 0:
+            raise RvtoolInputError(f"eccentricity_error = {self.eccentricity_error} m leaves a non-positive eccentricity; "
+                                   f"valid range ({-w.e_g}, inf) m")
+        wheels = {"eccentricity": e, "generating_eccentricity": w.e_g,
+                  "equidistant_mod": w.equidistant_mod + self.equidistant_mod,
+                  "offset_mod": w.offset_mod + self.offset_mod,
+                  "clearance": w.clearance + self.pin_clearance}
+        sections = {"wheels": wheels}
+        if self.bearing_clearance is not None:
+            sections["eccentric_bearing"] = {"radial_clearance": self.bearing_clearance}
+        d = replace(design, **sections)
+        overrides = {}
+        if self.pin_centre_errors is not None:
+            e = np.asarray(self.pin_centre_errors, float)
+            if e.shape != (design.pins.n_pins, 2):
+                raise RvtoolInputError(f"pin_centre_errors must have shape ({design.pins.n_pins}, 2); got {e.shape}")
+            overrides["pin_centre_errors"] = e
+        if self.pin_radius_error != 0.0:
+            rp = design.pins.pin_radius + self.pin_radius_error
+            if rp <= 0:
+                raise RvtoolInputError(f"pin_radius_error = {self.pin_radius_error} m; valid range "
+                                       f"({-design.pins.pin_radius}, inf) m")
+            overrides["pin_radius"] = rp
+        return d, ({"pin_overrides": overrides} if overrides else {})
+
+
+@dataclass(frozen=True, kw_only=True)
+class VariantProtocol:
+    """Per-variant figures: TE over one output revolution at ``n_te_points`` equally spaced
+    input angles (prime: spread mesh phases) under ``te_torque_fraction`` x T_rated, maximum
+    pin force over those states [N], and lost motion [arcmin] at +-``lost_motion_fraction``
+    x T_rated from a continuation +f -> -f at input angle 0 (levels in steps of
+    ``lost_motion_step`` x T_rated, so that Newton starts near each level).
+    bearing_model: "lumped" or "rolling" (as :func:`rvtool.assembly.cycloid.build`)."""
+    n_te_points: int = 401
+    te_torque_fraction: float = 1.0
+    lost_motion_fraction: float = 0.03
+    lost_motion_step: float = 0.01
+    bearing_model: str = "lumped"
+
+    def __post_init__(self):
+        if not isinstance(self.n_te_points, (int, np.integer)) or self.n_te_points < 3:
+            raise RvtoolInputError(f"n_te_points = {self.n_te_points!r} is outside the valid range [3, inf) (integer)")
+        check_range("te_torque_fraction", self.te_torque_fraction, 0.0, 2.0)
+        check_range("lost_motion_fraction", self.lost_motion_fraction, 0.0, 1.0, low_open=True)
+        check_range("lost_motion_step", self.lost_motion_step, 0.0, self.lost_motion_fraction, low_open=True)
+        if self.bearing_model not in ("lumped", "rolling"):
+            raise RvtoolInputError(f"bearing_model = {self.bearing_model!r}; valid choices are ['lumped', 'rolling']")
+
+    def input_angles(self, design):
+        """Input angles [rad] covering one output revolution (endpoint excluded)."""
+        n_rev = abs(design.ratio)
+        return 2 * np.pi * n_rev * np.arange(self.n_te_points) / self.n_te_points
+
+    def lost_motion_torques(self, design):
+        """Torque levels [N m] from +f (reached by a load ramp: loaded states are regular) down
+        to -f; lost motion = output angle at +f minus output angle at -f."""
+        f, s = self.lost_motion_fraction, self.lost_motion_step
+        n = int(np.ceil(f / s - 1e-9))
+        return np.linspace(f, -f, 2 * n + 1) * design.rated_torque
+
+
+def variant_figures(design, variant: Variant, protocol: VariantProtocol = VariantProtocol(), **build_kw):
+    """Reference per-variant run (one Exudyn system per variant). Returns a dict with
+    ``te_pp_arcsec``, ``te_rms_arcsec``, ``max_pin_force_N``, ``lost_motion_arcmin``,
+    ``newton_iterations`` and ``wall_s``."""
+    import time
+
+    from .assembly.cycloid import build
+    from .protocols.equilibrium import StaticSolver
+    from .protocols.precision import pin_forces, quasi_static_te, te_metrics
+    from .protocols.stiffness import Continuation
+
+    t0 = time.perf_counter()
+    d, kw = variant.apply(design)
+    model = build(d, bearing_model=protocol.bearing_model, **kw, **build_kw)
+    fmax = [0.0]
+
+    def rec(k, a, q):
+        fmax[0] = max(fmax[0], float(np.max(pin_forces(model, q))))
+
+    solver = StaticSolver(model)
+    r = quasi_static_te(model, torque=protocol.te_torque_fraction * d.rated_torque,
+                        input_angles=protocol.input_angles(d), solver=solver, record=rec)
+    met = te_metrics(r["te"])
+    torques = protocol.lost_motion_torques(d)
+    cont = Continuation(model, input_angle=0.0, initial_torque=float(torques[0]))
+    i_out = model.coordinate_index(model.flange, 2)
+    angles = [cont.q[i_out]] + [cont.go_to(float(t))[i_out] for t in torques[1:]]
+    lm = (angles[0] - angles[-1]) * ARCMIN   # the +f level minus the -f level
+    return {"te_pp_arcsec": met["pp"] * ARCSEC, "te_rms_arcsec": met["rms"] * ARCSEC, "max_pin_force_N": fmax[0],
+            "lost_motion_arcmin": float(lm),
+            "newton_iterations": int(r["stats"]["newton_iterations"] + cont.stats.newton_iterations),
+            "wall_s": time.perf_counter() - t0}
