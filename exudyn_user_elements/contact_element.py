@@ -9,6 +9,16 @@ tangent of Eq. (assembled_contact_tangent) in Exudyn's convention for
 The kernel result is cached per state, so the Jacobian at the state of the
 preceding residual costs no second launch.
 
+Elastic supports through ports: with ``ports=PortBodies(structure, rows)`` the
+element also spans the structural coordinates eta of a
+:class:`~exudyn_user_elements.reduced_structure.ReducedStructure`. The evaluator
+then sees n_virtual extra planar bodies ("port bodies", appended after the rigid
+ones) whose poses are the port displacements (u_x, u_y, 0) = (H_x eta, H_y eta, 0);
+with T = blockdiag(I, P) (P stacks the x, y, theta rows per port body, theta rows
+zero), the element returns Q = T^T Q_b and dQ/dq = T^T (dQ_b/dq_b) T: the
+constant-map contraction of Eq. (port_runtime_transform), exact, with all
+rigid--port and port--port blocks.
+
 The callbacks keep Exudyn's exact signatures and contain no physics; the
 physics lives in :mod:`warp_contacts` and :mod:`rvtool.contact`.
 """
@@ -21,6 +31,32 @@ from rvtool.contact.evaluator import ContactSetEvaluator, Evaluation
 from rvtool.errors import RvtoolInputError
 from rvtool.observe.registry import ContactSnapshot
 from warp_contacts import circle_pairs_ref as ref
+
+
+class PortBodies:
+    """Port bodies of a contact element on an elastic structure.
+
+    structure: :class:`exudyn_user_elements.reduced_structure.ReducedStructure`;
+    rows: (n_virtual, 2) row indices of the structure's port maps H giving the x and y
+    displacement [m] of each port body (its rotation is zero: a nodal port carries
+    translations only).
+    """
+
+    def __init__(self, structure, rows):
+        rows = np.asarray(rows, dtype=int)
+        H = np.asarray(structure.reduced.maps, float)
+        if rows.ndim != 2 or rows.shape[1] != 2 or len(rows) < 1:
+            raise RvtoolInputError(f"rows must have shape (n_virtual, 2) with n_virtual >= 1; got {rows.shape}")
+        if rows.min() < 0 or rows.max() >= H.shape[0]:
+            raise RvtoolInputError(f"rows must lie in [0, {H.shape[0] - 1}] (port-map rows); got [{rows.min()}, {rows.max()}]")
+        self.structure = structure
+        self.rows = rows
+        self.n_virtual = len(rows)
+        self.n_eta = H.shape[1]
+        P = np.zeros((3 * self.n_virtual, self.n_eta))
+        P[0::3] = H[rows[:, 0]]
+        P[1::3] = H[rows[:, 1]]
+        self.P = P
 
 
 class ContactElement:
@@ -40,9 +76,11 @@ class ContactElement:
         evaluation at exactly the accepted state that commit may reuse)
     backend, precision, device : evaluation options (see ContactSetEvaluator),
         used when ``contact_set`` is a CircleContactSet
+    ports : :class:`PortBodies` or None; the set's bodies are then the rigid ``nodes``
+        followed by the port bodies (``contact_set.n_bodies = len(nodes) + n_virtual``)
     """
 
-    def __init__(self, mbs, nodes, contact_set, *, backend="warp", precision="float64", device="cpu"):
+    def __init__(self, mbs, nodes, contact_set, *, backend="warp", precision="float64", device="cpu", ports=None):
         nodes = [int(n) for n in nodes]
         if isinstance(contact_set, CircleContactSet):
             evaluator = ContactSetEvaluator(contact_set, backend=backend, precision=precision, device=device)
@@ -52,9 +90,10 @@ class ContactElement:
                 if not hasattr(evaluator, attr):
                     raise RvtoolInputError(f"contact_set must be a CircleContactSet or a contact evaluator; "
                                            f"{type(contact_set).__name__} lacks '{attr}'")
-        if len(nodes) != evaluator.n_bodies:
-            raise RvtoolInputError(f"nodes has {len(nodes)} entries but contact_set.n_bodies = {evaluator.n_bodies}; "
-                                   "they must be equal")
+        n_virtual = 0 if ports is None else ports.n_virtual
+        if len(nodes) + n_virtual != evaluator.n_bodies:
+            raise RvtoolInputError(f"nodes has {len(nodes)} entries and ports {n_virtual} bodies but contact_set.n_bodies = "
+                                   f"{evaluator.n_bodies}; they must add up")
         ref_coords = []
         for n in nodes:
             if n < 0 or n >= mbs.systemData.NumberOfNodes():
@@ -67,9 +106,11 @@ class ContactElement:
         self.name = evaluator.name
         self.ids = evaluator.ids
         self.nodes = nodes
-        self.reference = np.array(ref_coords)
+        self.reference = np.array(ref_coords).reshape(-1, 3)
         self.evaluator = evaluator
-        self.n = 3 * len(nodes)
+        self.ports = ports
+        self.n_rigid = 3 * len(nodes)
+        self.n = self.n_rigid + (0 if ports is None else ports.n_eta)
         self.n_force_calls = 0
         self.n_jacobian_calls = 0
         self.n_evaluations = 0
@@ -78,7 +119,7 @@ class ContactElement:
         self._key = None
         self._ev = None
         self.object_number = mbs.AddObject(ObjectGenericODE2(
-            nodeNumbers=nodes, massMatrix=np.zeros((self.n, self.n)),
+            nodeNumbers=nodes + ([] if ports is None else [ports.structure.node]), massMatrix=np.zeros((self.n, self.n)),
             forceUserFunction=self._force, jacobianUserFunction=self._jacobian,
             visualization=VObjectGenericODE2(show=False)))
         self.mbs = mbs
@@ -87,8 +128,26 @@ class ContactElement:
 
     # -- pure evaluation -------------------------------------------------
     def pose_velocity(self, q, q_t):
-        """Absolute body poses and velocities (nb, 3) from element coordinates."""
-        return self.reference + np.asarray(q, float).reshape(-1, 3), np.asarray(q_t, float).reshape(-1, 3)
+        """Absolute body poses and velocities (nb, 3) from element coordinates (port bodies last)."""
+        q, q_t = np.asarray(q, float), np.asarray(q_t, float)
+        nr = self.n_rigid
+        pose = self.reference + q[:nr].reshape(-1, 3)
+        vel = q_t[:nr].reshape(-1, 3)
+        if self.ports is None:
+            return pose, vel
+        P = self.ports.P
+        return (np.vstack([pose, (P @ q[nr:]).reshape(-1, 3)]), np.vstack([vel, (P @ q_t[nr:]).reshape(-1, 3)]))
+
+    def _contract(self, ev):
+        """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T with T = blockdiag(I, P) (see module docstring)."""
+        nr, P = self.n_rigid, self.ports.P
+
+        def vec(Q):
+            return np.concatenate([Q[:nr], P.T @ Q[nr:]])
+
+        def mat(J):
+            return np.block([[J[:nr, :nr], J[:nr, nr:] @ P], [P.T @ J[nr:, :nr], P.T @ J[nr:, nr:] @ P]])
+        return Evaluation(vec(ev.Q), mat(ev.dQdq), mat(ev.dQdv), ev.obs, ev.trial_history, ev.finite)
 
     def evaluate(self, t, q, q_t):
         """Cached evaluation at element coordinates (trial: committed history is only read)."""
@@ -105,6 +164,8 @@ class ContactElement:
                                                       np.full((n, n), np.nan), None, None, False)
                 return self._ev
             ev = self.evaluator.evaluate(pose, vel, check=False)
+            if self.ports is not None:
+                ev = self._contract(ev)
             self.n_evaluations += 1
             if self.n_evaluations in self.inject_nan_at:
                 ev.Q = ev.Q * np.nan

@@ -1,7 +1,11 @@
 """Builder: a :class:`~rvtool.assembly.spec.CycloidDesign` -> an Exudyn system.
 
 Bodies (planar rigid, x, y, theta): 0 the input eccentric shaft, 1..n the
-wheels, n+1 the output flange; the housing with the ring pins is the ground.
+wheels, n+1 the output flange. The housing with the ring pins is the ground
+(``housing.model = "rigid"``) or an elastic housing represented through ports
+(``"ports"``, :mod:`rvtool.assembly.housing`): its structural coordinates eta
+form one more node, and each ring pin k is a port body of the pin-mesh element
+whose pose is the port displacement H_k eta (Eq. port_runtime_transform).
 Assembly phase: the journal of wheel k sits at angle phi_k on the shaft
 (opposed journals for two wheels) and the wheel's profile is turned by
 -phi_k / z_g, the conjugate tooth phase, so every wheel starts in mesh.
@@ -22,6 +26,7 @@ The input rotation is prescribed through a coordinate constraint (an angle
 for quasi-static sequences, a speed for driven runs); the output load is a
 torque on the flange rotation.
 """
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,7 +34,7 @@ import exudyn as exu
 from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNodeCoordinate, NodePointGround,
                                   NodeRigidBody2D, ObjectRigidBody2D)
 
-from exudyn_user_elements.contact_element import ContactElement
+from exudyn_user_elements.contact_element import ContactElement, PortBodies
 
 from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiffness
@@ -57,6 +62,7 @@ class CycloidModel:
     reg_springs: list = field(default_factory=list)
     journal_locks: list = field(default_factory=list)
     reference: np.ndarray = None
+    housing: object = None          # ReducedStructure of an elastic housing, or None (rigid)
 
     def regularization_force(self, q):
         """Largest force [N] (or moment [N m]) carried by the regularization springs at q."""
@@ -232,9 +238,19 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                   name=f"wheel{k}")
         kw.update(pin_overrides or {})
         meshes.append(WheelPinMesh(**kw))
-    pin_set = CycloidPinSet(meshes, nw + 2, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
+    housing, ports, n_pin_bodies = None, None, nw + 2
+    if d.housing.model == "ports":
+        from exudyn_user_elements.reduced_structure import ReducedStructure
+        from .housing import housing_ports
+        reduced, _, _ = housing_ports(d)
+        housing = ReducedStructure(mbs, reduced, name="housing")
+        zb = d.pins.n_pins
+        ports = PortBodies(housing, np.array([reduced.port_rows[k][:2] for k in range(zb)]))
+        n_pin_bodies = nw + 2 + zb
+        meshes = [dataclasses.replace(m, pin_bodies=tuple(range(nw + 2, nw + 2 + zb))) for m in meshes]
+    pin_set = CycloidPinSet(meshes, n_pin_bodies, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
                             precision=precision, device=device, name="pins", search=d.wheels.search)
-    elements = {"pins": ContactElement(mbs, nodes, pin_set)}
+    elements = {"pins": ContactElement(mbs, nodes, pin_set, ports=ports)}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
     from ..output_pins.calibration import hertz_calibrated_coefficient
@@ -290,4 +306,4 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, nodes=nodes, elements=elements, pin_set=pin_set, drive=drive,
                         load=load, n_wheels=nw, locks=locks, profiles=profiles, reg_springs=reg_springs,
-                        journal_locks=journal_locks, reference=ref)
+                        journal_locks=journal_locks, reference=ref, housing=housing)

@@ -158,6 +158,65 @@ class BallBearingSpec:
 
 
 @dataclass(frozen=True, kw_only=True)
+class Housing:
+    """Housing carrying the ring pins.
+
+    model: "rigid" (the pins are ground) or "ports" (an elastic annular housing, NGSolve
+    tetrahedra, reduced by Craig--Bampton and the port reduction of the structural
+    section; one planar port (x, y) per ring pin at the pin's angle on the bore, at
+    mid-height; the pin centres move with their ports).
+    inner_radius, outer_radius, height [m]; mesh_size [m] (nominal tetrahedron size);
+    n_mounts: translational mount springs at equal angles on the lower face, at
+    mount_radius [m] (0 = midway between the radii), each mount_stiffness [N/m] per direction;
+    n_fixed_interface_modes: Craig--Bampton modes of the parent; n_modes, n_residual:
+    retained parent modes and residual attachment modes of the port reduction (n_residual = -1:
+    one per port row, so that the static port compliance equals the parent's to round-off);
+    damping_ratio [-] (Rayleigh, calibrated at 500 and 5000 Hz);
+    youngs_modulus [Pa], poisson_ratio [-], density [kg/m^3]: the housing material (None: the
+    design's [material], e.g. set them for an aluminium housing).
+    """
+    model: str = "rigid"
+    youngs_modulus: float | None = None
+    poisson_ratio: float | None = None
+    density: float | None = None
+    inner_radius: float = 0.0545
+    outer_radius: float = 0.075
+    height: float = 0.030
+    mesh_size: float = 0.004
+    n_mounts: int = 12
+    mount_radius: float = 0.0
+    mount_stiffness: float = 2e8
+    n_fixed_interface_modes: int = 20
+    n_modes: int = 12
+    n_residual: int = -1
+    damping_ratio: float = 0.02
+
+    def __post_init__(self):
+        if self.model not in ("rigid", "ports"):
+            raise RvtoolInputError(f"housing.model = {self.model!r}; valid choices are ['rigid', 'ports']")
+        check_positive("housing.inner_radius", self.inner_radius)
+        check_range("housing.outer_radius", self.outer_radius, self.inner_radius, math.inf, low_open=True)
+        check_positive("housing.height", self.height)
+        check_range("housing.mesh_size", self.mesh_size, 0.0, self.height, low_open=True)
+        for nm, lo in (("n_mounts", 1), ("n_fixed_interface_modes", 0), ("n_modes", 0), ("n_residual", -1)):
+            v = getattr(self, nm)
+            if not isinstance(v, int) or v < lo:
+                raise RvtoolInputError(f"housing.{nm} = {v!r} is outside the valid range [{lo}, inf) (integer)")
+        if self.n_residual != -1 and self.n_modes + self.n_residual < 1:
+            raise RvtoolInputError("housing.n_modes + housing.n_residual = 0; valid range [1, inf)")
+        if self.mount_radius != 0.0:
+            check_range("housing.mount_radius", self.mount_radius, self.inner_radius, self.outer_radius)
+        check_positive("housing.mount_stiffness", self.mount_stiffness)
+        check_range("housing.damping_ratio", self.damping_ratio, 0.0, 1.0, high_open=True)
+        if self.youngs_modulus is not None:
+            check_positive("housing.youngs_modulus", self.youngs_modulus)
+        if self.poisson_ratio is not None:
+            check_range("housing.poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
+        if self.density is not None:
+            check_positive("housing.density", self.density)
+
+
+@dataclass(frozen=True, kw_only=True)
 class Bodies:
     """Retained planar coordinates per body (subset of x, y, theta) and rigid-body data
     (shaft and flange masses [kg] and polar inertias [kg m^2]; wheels from their geometry)."""
@@ -192,6 +251,7 @@ class CycloidDesign:
     main_bearing: BallBearingSpec
     input_bearing: BallBearingSpec
     bodies: Bodies = field(default_factory=Bodies)
+    housing: Housing = field(default_factory=Housing)
 
     def __post_init__(self):
         if self.n_wheels != len(self.wheels.midplanes):
@@ -206,6 +266,10 @@ class CycloidDesign:
         if self.output_pins.hole_radius < needed - 1e-4:
             raise RvtoolInputError(f"output_pins.hole_radius = {self.output_pins.hole_radius} m cannot pass the eccentric "
                                    f"motion; valid range [{needed:.6g}, inf) m (pin radius + eccentricity)")
+        r_pins = self.pins.pin_circle_radius + self.pins.pin_radius
+        if self.housing.model == "ports" and self.housing.inner_radius < r_pins - 1e-12:
+            raise RvtoolInputError(f"housing.inner_radius = {self.housing.inner_radius} m cuts through the ring pins; "
+                                   f"valid range [{r_pins:.6g}, outer_radius) m (pin circle radius + pin radius)")
 
     @property
     def ratio(self):
@@ -215,7 +279,7 @@ class CycloidDesign:
 
 _SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact": PinContact,
              "output_pins": OutputPins, "eccentric_bearing": EccentricBearing, "main_bearing": BallBearingSpec,
-             "input_bearing": BallBearingSpec, "bodies": Bodies}
+             "input_bearing": BallBearingSpec, "bodies": Bodies, "housing": Housing}
 
 
 def _build(cls, section, data):
@@ -234,7 +298,7 @@ def design_from_dict(d):
     d = dict(d)
     kw = {}
     for sec, cls in _SECTIONS.items():
-        if sec not in d and sec != "bodies":
+        if sec not in d and sec not in ("bodies", "housing"):
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
         kw[sec] = _build(cls, sec, d.pop(sec, {}))
     return _build(CycloidDesign, "design", {**d, **kw})

@@ -40,6 +40,9 @@ class WheelPinMesh:
     """Engagement of one wheel (body ``wheel_body``) with the ring pins (body ``pin_body``).
 
     profile: the wheel's :class:`CycloidProfile` (wheel coordinates).
+    pin_body: body carrying all pins; pin_bodies: optionally one body per pin (z_b,)
+    overriding pin_body, e.g. the port bodies of an elastic housing whose pose is the
+    port displacement (the pin centres are then given in the housing frame).
     pin_radius: actual pin radius r_p [m] (may differ from the generating radius).
     pin_centre_errors: (z_b, 2) pin-centre errors [m] in the pin body's frame.
     normal_deviation: (z_b,) wheel normal deviation per pin station [m] (positive = material removed).
@@ -54,6 +57,7 @@ class WheelPinMesh:
     profile: CycloidProfile
     wheel_body: int
     pin_body: int = GROUND
+    pin_bodies: tuple | None = None
     pin_radius: float | None = None
     pin_centre_errors: tuple | None = None
     normal_deviation: tuple | None = None
@@ -81,6 +85,8 @@ class WheelPinMesh:
         if self.friction.model == FrictionModel.ANCHOR:
             raise RvtoolInputError("friction.model = ANCHOR is not available for cycloid-pin contacts; valid: NONE, REGULARIZED")
         zb = self.profile.n_pins
+        if self.pin_bodies is not None and np.shape(self.pin_bodies) != (zb,):
+            raise RvtoolInputError(f"pin_bodies must have shape ({zb},); got {np.shape(self.pin_bodies)}")
         if self.normal_deviation is not None and np.shape(self.normal_deviation) != (zb,):
             raise RvtoolInputError(f"normal_deviation must have shape ({zb},); got {np.shape(self.normal_deviation)}")
 
@@ -134,8 +140,9 @@ class CycloidPinSet:
         fp, ip, ids, mesh_of, pin_of = [], [], [], [], []
         window = 0
         for m_i, m in enumerate(self.meshes):
-            for nm in ("wheel_body", "pin_body"):
-                b = getattr(m, nm)
+            pin_bodies = (m.pin_body,) * m.profile.n_pins if m.pin_bodies is None else tuple(int(b) for b in m.pin_bodies)
+            for nm, b in [("wheel_body", m.wheel_body), ("pin_body", m.pin_body)] + \
+                    [(f"pin_bodies[{k}]", b) for k, b in enumerate(pin_bodies)]:
                 if not (b == GROUND or 0 <= b < n_bodies):
                     raise RvtoolInputError(f"meshes[{m_i}].{nm} = {b} is outside the valid range [0, {n_bodies - 1}] or GROUND")
             prof = m.profile
@@ -162,7 +169,8 @@ class CycloidPinSet:
                     row[ref.C_Z], row[ref.C_TX], row[ref.C_TY] = z, m.tilt_x, m.tilt_y
                     fp.append(row)
                     g = n_bodies
-                    ip.append((g if m.wheel_body == GROUND else m.wheel_body, g if m.pin_body == GROUND else m.pin_body,
+                    pb = pin_bodies[k]
+                    ip.append((g if m.wheel_body == GROUND else m.wheel_body, g if pb == GROUND else pb,
                                int(f.model), m_i))
                     ids.append(f"{m.name}/pin{k}/s{s_i}")
                     mesh_of.append(m_i)
