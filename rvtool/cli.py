@@ -1,4 +1,6 @@
-"""Command line: ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``.
+"""Command line: ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
+``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
+tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.sweep`).
 
 The studies are the scripts in the repository's ``cases/`` folder (see
 ``rvtool.casekit`` for their convention). ``list`` reads each script's module
@@ -135,6 +137,20 @@ def _cmd_version(args):
     return 0
 
 
+def _cmd_sweep(args, parser):
+    from rvtool.errors import RvtoolInputError
+    from rvtool.sweep import main_sweep  # imported here: it loads Exudyn and Dask
+
+    if not os.path.isfile(args.spec):
+        parser.error(f"sweep spec not found: {args.spec}")
+    try:
+        main_sweep(args.spec, scheduler=args.scheduler, out_dir=args.out, quiet=args.quiet)
+    except RvtoolInputError as exc:
+        print(f"rvtool: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    return 0
+
+
 def build_parser():
     """The ``rvtool`` argument parser with its subcommands."""
     from rvtool import __version__
@@ -154,6 +170,14 @@ def build_parser():
     run.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/CASE)")
     sub.add_parser("version", help="print the versions of rvtool and the packages results depend on",
                    description="Print the versions recorded in every results.json provenance.")
+    sweep = sub.add_parser("sweep", help="run a parameter study or the tolerance Monte Carlo on Dask",
+                           description="Run the sweep described by the TOML file SPEC (format: rvtool.sweep) on a "
+                                       "Dask LocalCluster or an existing scheduler; writes results.csv and results.json.")
+    sweep.add_argument("spec", metavar="SPEC", help="sweep specification (TOML)")
+    sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="address of an existing Dask scheduler (default: start a LocalCluster)")
+    sweep.add_argument("--out", default=None, metavar="DIR", help="output directory (default: the spec's output_dir)")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
 
@@ -167,6 +191,8 @@ def main(argv=None):
         return _cmd_run(args, parser)
     if args.command == "version":
         return _cmd_version(args)
+    if args.command == "sweep":
+        return _cmd_sweep(args, parser)
     parser.print_help(sys.stderr)
     return EXIT_USAGE
 

@@ -10,8 +10,9 @@ maximum pin force, lost motion), in one of three modes:
   workers, default one per core, each limited to one BLAS/OpenMP thread, so that the
   workers do not oversubscribe the cores), or on any ``concurrent.futures.Executor`` passed
   in (e.g. a Dask ``Client.get_executor()``, see :mod:`rvtool.sweep`);
-* ``"batched"``: one task per chunk through ``rvtool.batched.batched_variant_figures``
-  (all variants of a chunk in one Exudyn system);
+* ``"batched"``: one batch per chunk through ``rvtool.batched.batched_variant_figures``
+  (all variants of a chunk in one Exudyn system), in this process (which holds the device),
+  or one task per chunk on a given executor;
 * ``"serial"``: in this process, one variant after the other.
 
 Resumable: the variants are grouped in chunks of ``chunk_size`` consecutive indices; a
@@ -135,14 +136,19 @@ def run_variant(design, variant, protocol, build_kw=None):
     return _record(variant, fig)
 
 
-def run_batch(design, variants, protocol, device="cpu", build_kw=None):
-    """Records of variants run together in one Exudyn system (rvtool.batched). If the batched run
-    raises, every variant of the batch is recorded as failed with that error."""
+def _batched_function():
     try:
         from .batched import batched_variant_figures
     except ImportError as exc:
         raise RvtoolInputError(f"mode = 'batched' needs rvtool.batched.batched_variant_figures, which is not "
                                f"available ({exc}); valid modes here are ['pool', 'serial']") from None
+    return batched_variant_figures
+
+
+def run_batch(design, variants, protocol, device="cpu", build_kw=None):
+    """Records of variants run together in one Exudyn system (rvtool.batched). If the batched run
+    raises, every variant of the batch is recorded as failed with that error."""
+    batched_variant_figures = _batched_function()
     t0 = time.perf_counter()
     try:
         figs = batched_variant_figures(design, variants, protocol, device=device, **(build_kw or {}))
@@ -242,7 +248,17 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
     def variants_of(i):
         return [sample_variant(tolerances, design, k, settings.seed) for k in range(*chunks[i])]
 
-    if settings.mode == "serial":
+    if settings.mode == "batched":
+        _batched_function()   # fail early, in this process, when the batched path is missing
+    if settings.mode == "batched" and executor is None:
+        # one batched system at a time in this process: it is the one that holds the device
+        for i in pending:
+            recs = run_batch(design, variants_of(i), protocol, settings.device, build_kw)
+            done += len(recs)
+            if progress is not None:
+                progress(done, total)
+            finish_chunk(i, recs)
+    elif settings.mode == "serial":
         for i in pending:
             recs = []
             for v in variants_of(i):

@@ -1,0 +1,185 @@
+"""Tolerance distributions, seeded sampling and the resumable tolerance Monte Carlo (issue 8)."""
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+
+from rvtool.assembly.spec import load_design
+from rvtool.errors import RvtoolInputError
+from rvtool.montecarlo import (MonteCarloSettings, fingerprint, order_statistic_ci, read_chunk, run_monte_carlo,
+                               run_variant, summarize)
+from rvtool.tolerances import (Fixed, Normal, ToleranceSpec, TruncatedNormal, Uniform, load_tolerances,
+                               sample_variant, sample_variants, spec_from_dict)
+from rvtool.variants import Variant, VariantProtocol
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DESIGN = os.path.join(ROOT, "cases", "designs", "rd40.toml")
+TOLERANCES = os.path.join(ROOT, "cases", "designs", "rd40_tolerances.toml")
+# tiny per-variant protocol: 7 TE points (5 would alias onto one mesh phase of RD-40)
+PROTOCOL = VariantProtocol(n_te_points=7)
+BUILD = {"regularization": (1000.0, 10.0)}   # as the cases: lets the lost-motion continuation cross free play
+
+
+@pytest.fixture(scope="module")
+def design():
+    return load_design(DESIGN)
+
+
+@pytest.fixture(scope="module")
+def tol():
+    return load_tolerances(TOLERANCES)
+
+
+def _figures(records):
+    """Records without the wall times (the only non-deterministic entries)."""
+    return [{k: v for k, v in r.items() if k != "wall_s"} for r in records]
+
+
+def test_sampling_reproducible_per_index(design, tol):
+    batch = sample_variants(tol, design, 12, seed=7)
+    part = sample_variants(tol, design, 4, seed=7, start=8)
+    for a, b in zip(batch[8:], part):
+        assert a.index == b.index
+        assert np.array_equal(a.pin_centre_errors, b.pin_centre_errors)
+        assert (a.eccentricity_error, a.pin_clearance, a.bearing_clearance) == \
+               (b.eccentricity_error, b.pin_clearance, b.bearing_clearance)
+    assert np.array_equal(sample_variant(tol, design, 3, 7).pin_centre_errors, batch[3].pin_centre_errors)
+    other = sample_variant(tol, design, 3, 8)
+    assert not np.array_equal(other.pin_centre_errors, batch[3].pin_centre_errors)
+    assert batch[3].pin_centre_errors.shape == (design.pins.n_pins, 2)
+
+
+def test_sampling_matches_declared_moments(design):
+    # Reference moments in closed form: uniform (a+b)/2 and (b-a)^2/12; the truncated normal's from
+    # scipy.stats.truncnorm (independent of the inverse-CDF sampler and of the moments() formula).
+    from scipy.stats import truncnorm
+    spec = ToleranceSpec(eccentricity_error=Normal(mean=1e-6, std=2e-6),
+                         pin_centre_errors=TruncatedNormal(mean=1e-6, std=2e-6, low=0.0, high=4e-6),
+                         pin_clearance=Uniform(low=1e-6, high=9e-6),
+                         bearing_clearance=TruncatedNormal(mean=5e-6, std=2e-6, low=1e-6))
+    vs = sample_variants(spec, design, 4000, seed=1)
+    tn = truncnorm((0.0 - 1e-6) / 2e-6, (4e-6 - 1e-6) / 2e-6, loc=1e-6, scale=2e-6)
+    tn2 = truncnorm((1e-6 - 5e-6) / 2e-6, np.inf, loc=5e-6, scale=2e-6)
+    cases = [(np.array([v.eccentricity_error for v in vs]), 1e-6, 4e-12),
+             (np.concatenate([v.pin_centre_errors.ravel() for v in vs]), tn.mean(), tn.var()),
+             (np.array([v.pin_clearance for v in vs]), 5e-6, (8e-6) ** 2 / 12),
+             (np.array([v.bearing_clearance for v in vs]), tn2.mean(), tn2.var())]
+    for x, m, var in cases:
+        n = len(x)
+        # 5 standard errors of the mean and of the variance (4th moment bounded by 3 var^2 here)
+        assert abs(x.mean() - m) < 5 * math.sqrt(var / n)
+        assert abs(x.var() - var) < 5 * math.sqrt(2 * var ** 2 / n)
+    assert np.all(np.concatenate([v.pin_centre_errors.ravel() for v in vs]) >= 0.0)
+    for dist, ref in ((spec.pin_centre_errors, tn), (spec.bearing_clearance, tn2)):
+        m, v = dist.moments()
+        assert m == pytest.approx(ref.mean(), rel=1e-12) and v == pytest.approx(ref.var(), rel=1e-10)
+
+
+def test_tolerance_file_validation(design, tol):
+    assert tol.pin_clearance.moments()[0] > 0          # nominal reducers are not preloaded on average
+    assert tol.bearing_clearance.support()[0] >= 0
+    with pytest.raises(RvtoolInputError, match=r"tolerances.pin_clearance.std"):
+        spec_from_dict({"tolerances": {"pin_clearance": {"dist": "normal", "std": -1e-6}}})
+    with pytest.raises(RvtoolInputError, match=r"tolerances.pin_clearance.high"):
+        spec_from_dict({"pin_clearance": {"dist": "uniform", "low": 2e-6, "high": 1e-6}})
+    with pytest.raises(RvtoolInputError, match=r"unknown keys \['pin_clearanc'\]"):
+        spec_from_dict({"pin_clearanc": {"dist": "fixed", "value": 0.0}})
+    with pytest.raises(RvtoolInputError, match=r"tolerances.offset_mod.dist"):
+        spec_from_dict({"offset_mod": {"dist": "gauss", "std": 1e-6}})
+    with pytest.raises(RvtoolInputError, match=r"tolerances.offset_mod \(uniform\) has unknown keys \['std'\]"):
+        spec_from_dict({"offset_mod": {"dist": "uniform", "low": 0.0, "high": 1e-6, "std": 1.0}})
+    with pytest.raises(RvtoolInputError, match=r"bearing_clearance.*valid range \[0, inf\)"):
+        ToleranceSpec(bearing_clearance=Normal(mean=5e-6, std=1e-6))
+    with pytest.raises(RvtoolInputError, match=r"tolerances.eccentricity_error reaches"):
+        sample_variants(ToleranceSpec(eccentricity_error=Normal(std=2e-4)), design, 1, 0)
+    assert sample_variant(ToleranceSpec(offset_mod=Fixed(value=2e-6)), design, 0, 0).offset_mod == 2e-6
+
+
+def test_order_statistic_ci_coverage():
+    # Coverage of [X_(l), X_(u)] for the p-quantile is sum_{j=l}^{u-1} C(n, j) p^j (1-p)^(n-j)
+    # (the number of samples below x_p is binomial), evaluated here with exact integer binomials.
+    p = 0.95
+    for n in (100, 400, 1000):
+        x = np.arange(1, n + 1, dtype=float)        # ranks as values: the interval returns ranks
+        lo, hi = order_statistic_ci(x, p)
+        l, u = int(lo), int(hi)
+        cover = sum(math.comb(n, j) * p ** j * (1 - p) ** (n - j) for j in range(l, u))
+        assert cover >= 0.95 and l < 0.95 * n < u
+    assert order_statistic_ci(np.arange(1.0, 21.0), p)[1] is None   # n = 20: no upper rank exists
+
+
+def test_summarize_against_numpy():
+    rng = np.random.default_rng(0)
+    x = rng.normal(3.0, 0.5, 200)
+    recs = [{"status": "ok", "te_pp_arcsec": v} for v in x] + [{"status": "failed", "te_pp_arcsec": None}]
+    s = summarize(recs, figures=("te_pp_arcsec",))
+    t = s["te_pp_arcsec"]
+    assert s["n_failed"] == 1 and t["n"] == 200
+    assert t["mean"] == pytest.approx(x.mean(), rel=1e-14) and t["std"] == pytest.approx(x.std(ddof=1), rel=1e-12)
+    assert t["p95"] == pytest.approx(np.percentile(x, 95), rel=1e-14)
+    half = 1.971956544 * x.std(ddof=1) / math.sqrt(200)   # t_{0.975, 199}
+    assert t["mean_ci"][1] - t["mean"] == pytest.approx(half, rel=1e-8)
+    assert t["p95_ci"][0] <= t["p95"] <= t["p95_ci"][1]
+
+
+def test_failed_variant_is_recorded(design):
+    rec = run_variant(design, Variant(index=5, eccentricity_error=-1e-3), PROTOCOL)
+    assert rec["status"] == "failed" and rec["index"] == 5 and "eccentricity_error" in rec["error"]
+    assert rec["te_pp_arcsec"] is None
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(design, tol, tmp_path_factory):
+    out = tmp_path_factory.mktemp("mc_full")
+    settings = MonteCarloSettings(n_variants=2, seed=11, chunk_size=1, mode="serial")
+    return run_monte_carlo(design, tol, PROTOCOL, settings, str(out), build_kw=BUILD)
+
+
+def test_resumed_study_equals_uninterrupted(design, tol, uninterrupted, tmp_path):
+    settings = MonteCarloSettings(n_variants=2, seed=11, chunk_size=1, mode="serial")
+
+    class Interrupt(Exception):
+        pass
+
+    def kill(i, recs):
+        raise Interrupt(i)
+
+    with pytest.raises(Interrupt):
+        run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), on_chunk=kill, build_kw=BUILD)
+    files = sorted(f for f in os.listdir(tmp_path) if f.startswith("chunk_"))
+    assert files == ["chunk_00000.json"]                 # the first chunk was written, atomically
+    assert not [f for f in os.listdir(tmp_path) if f.endswith(".tmp")]
+    resumed = run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), build_kw=BUILD)
+    assert resumed["chunks_loaded"] == 1 and resumed["chunks_run"] == 1
+    assert all(r["status"] == "ok" for r in uninterrupted["records"]), uninterrupted["records"]
+    assert _figures(resumed["records"]) == _figures(uninterrupted["records"])
+    assert resumed["summary"]["te_pp_arcsec"]["mean"] == uninterrupted["summary"]["te_pp_arcsec"]["mean"]
+    # a chunk written under other settings (here: another seed) is not reused
+    fp = fingerprint(design, tol, PROTOCOL, 12, 1, BUILD)
+    assert read_chunk(str(tmp_path), 0, fp, range(0, 1)) is None
+    with open(os.path.join(tmp_path, "chunk_00000.json")) as fh:
+        assert json.load(fh)["fingerprint"] == resumed["fingerprint"]
+
+
+def test_pool_equals_serial(design, tol, uninterrupted, tmp_path):
+    settings = MonteCarloSettings(n_variants=2, seed=11, chunk_size=1, mode="pool", workers=2)
+    res = run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), build_kw=BUILD)
+    assert _figures(res["records"]) == _figures(uninterrupted["records"])
+
+
+def test_batched_mode(design, tol, uninterrupted, tmp_path):
+    settings = MonteCarloSettings(n_variants=2, seed=11, chunk_size=2, mode="batched", workers=1)
+    try:
+        from rvtool.batched import batched_variant_figures  # noqa: F401  (absent before issue 8 part 2 lands)
+    except ImportError:
+        with pytest.raises(RvtoolInputError, match="batched"):
+            run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), build_kw=BUILD)
+        return
+    res = run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), build_kw=BUILD)
+    for a, b in zip(res["records"], uninterrupted["records"]):
+        assert a["status"] == b["status"] == "ok"
+        for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N"):
+            # one system of B copies vs one system per variant: equal up to the Newton tolerance
+            assert a[nm] == pytest.approx(b[nm], rel=1e-6, abs=1e-6)
