@@ -136,19 +136,28 @@ def run_variant(design, variant, protocol, build_kw=None):
     return _record(variant, fig)
 
 
-def _batched_function():
+def _batched_function(build_kw=None):
+    """rvtool.batched.batched_variant_figures, checked to accept the build options (the batched
+    path builds its own system: options it does not take would silently model another reducer)."""
+    import inspect
     try:
         from .batched import batched_variant_figures
     except ImportError as exc:
         raise RvtoolInputError(f"mode = 'batched' needs rvtool.batched.batched_variant_figures, which is not "
                                f"available ({exc}); valid modes here are ['pool', 'serial']") from None
+    params = inspect.signature(batched_variant_figures).parameters
+    if not any(p.kind == p.VAR_KEYWORD for p in params.values()):
+        extra = sorted(set(build_kw or {}) - set(params))
+        if extra:
+            raise RvtoolInputError(f"build options {extra} are not accepted by the batched path "
+                                   f"(rvtool.batched.batched_variant_figures); valid: none, or run mode 'pool'")
     return batched_variant_figures
 
 
 def run_batch(design, variants, protocol, device="cpu", build_kw=None):
     """Records of variants run together in one Exudyn system (rvtool.batched). If the batched run
     raises, every variant of the batch is recorded as failed with that error."""
-    batched_variant_figures = _batched_function()
+    batched_variant_figures = _batched_function(build_kw)
     t0 = time.perf_counter()
     try:
         figs = batched_variant_figures(design, variants, protocol, device=device, **(build_kw or {}))
@@ -249,7 +258,7 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
         return [sample_variant(tolerances, design, k, settings.seed) for k in range(*chunks[i])]
 
     if settings.mode == "batched":
-        _batched_function()   # fail early, in this process, when the batched path is missing
+        _batched_function(build_kw)   # fail early, in this process, when the batched path is missing
     if settings.mode == "batched" and executor is None:
         # one batched system at a time in this process: it is the one that holds the device
         for i in pending:

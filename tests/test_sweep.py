@@ -1,0 +1,105 @@
+"""Sweeps on Dask: spec loading, a grid with one deliberately failing task, the CLI, and the
+Monte Carlo through a Dask executor (small LocalClusters with processes=False: fast)."""
+import csv
+import json
+import os
+
+import pytest
+
+from rvtool import cli
+from rvtool.assembly.spec import load_design
+from rvtool.errors import RvtoolInputError
+from rvtool.montecarlo import MonteCarloSettings, run_monte_carlo
+from rvtool.sweep import load_sweep_spec, point_model, run_sweep
+from rvtool.tolerances import load_tolerances
+from rvtool.variants import Variant, VariantProtocol, variant_figures
+
+pytest.importorskip("dask.distributed")
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DESIGNS = os.path.join(ROOT, "cases", "designs")
+BUILD = {"regularization": (1.0e4, 100.0)}
+FIGS = ("te_pp_arcsec", "te_rms_arcsec", "max_pin_force_N", "lost_motion_arcmin", "newton_iterations")
+
+
+def _spec(tmp_path, body, head=""):
+    path = tmp_path / "spec.toml"
+    path.write_text(f'design = "{os.path.join(DESIGNS, "rd40.toml")}"\n' + head + body)
+    return str(path)
+
+
+SMALL = """
+[protocol]
+n_te_points = 23
+[build]
+regularization = [1.0e4, 100.0]
+[cluster]
+n_workers = 1
+threads_per_worker = 1
+processes = false
+"""
+
+
+def test_spec_loading(tmp_path):
+    spec = load_sweep_spec(os.path.join(DESIGNS, "sweep_rd40.toml"))
+    d = load_design(spec.design_path)
+    pts = spec.points(d)
+    assert len(pts) == 25 and pts[1] == {"eccentricity_error": -4e-6, "pin_clearance": 2.5e-6}
+    assert spec.build["regularization"] == (1.0e4, 100.0)
+    dd, v = point_model(d, {"eccentricity_error": 1e-6, "wheels.clearance": 2e-6})
+    assert v == Variant(eccentricity_error=1e-6) and dd.wheels.clearance == 2e-6
+    with pytest.raises(RvtoolInputError, match="unknown keys"):
+        load_sweep_spec(_spec(tmp_path, 'colour = "red"\n[parameters]\npin_clearance = [0.0]\n'))
+    bad = load_sweep_spec(_spec(tmp_path, '[parameters]\n"wheels.colour" = [0.0]\n'))
+    with pytest.raises(RvtoolInputError, match="parameters.wheels.colour"):
+        bad.points(d)
+    with pytest.raises(RvtoolInputError, match="n_te_points"):
+        load_sweep_spec(_spec(tmp_path, '[protocol]\nn_te_points = 1\n[parameters]\npin_clearance = [0.0]\n'))
+
+
+def test_cli_sweep_with_failing_task(tmp_path):
+    # point 1 is impossible (e + error < 0): its task fails, the sweep completes and marks its row
+    path = _spec(tmp_path, SMALL + "[parameters]\neccentricity_error = [1e-6, -1e-3]\npin_clearance = [2e-6]\n")
+    out = tmp_path / "out"
+    assert cli.main(["sweep", path, "--out", str(out), "--quiet"]) == 0
+    with open(out / "results.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["status"] for r in rows] == ["ok", "failed"]
+    assert "eccentricity_error" in rows[1]["error"] and rows[1]["te_pp_arcsec"] == ""
+    data = json.loads((out / "results.json").read_text())
+    # the ok row is the reference protocol run directly on the same variant
+    ref = variant_figures(load_design(os.path.join(DESIGNS, "rd40.toml")),
+                          Variant(eccentricity_error=1e-6, pin_clearance=2e-6), VariantProtocol(n_te_points=23), **BUILD)
+    for nm in FIGS:
+        assert data[0][nm] == ref[nm]
+    assert data[0]["wall_s"] > 0 and data[1]["status"] == "failed"
+
+
+def test_cli_sweep_usage_errors(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["sweep", str(tmp_path / "missing.toml")])
+    path = _spec(tmp_path, SMALL + "[parameters]\nnot_a_parameter = [1.0]\n")
+    assert cli.main(["sweep", path, "--quiet"]) == cli.EXIT_USAGE
+    assert "not_a_parameter" in capsys.readouterr().err
+
+
+def test_monte_carlo_on_dask_equals_serial(tmp_path):
+    # each Dask task is one variant; chunk files make it resumable exactly as the pool path
+    path = _spec(tmp_path, SMALL + f'[monte_carlo]\ntolerances = "{os.path.join(DESIGNS, "rd40_tolerances.toml")}"\n'
+                 f'n_variants = 2\nseed = 2\nchunk_size = 1\n', head='study = "monte_carlo"\n')
+    res = run_sweep(load_sweep_spec(path), out_dir=str(tmp_path / "out"), progress=False)
+    assert len(res["rows"]) == 2
+    assert sorted(os.listdir(tmp_path / "out" / "chunks")) == ["chunk_00000.json", "chunk_00001.json"]
+    d = load_design(os.path.join(DESIGNS, "rd40.toml"))
+    ref = run_monte_carlo(d, load_tolerances(os.path.join(DESIGNS, "rd40_tolerances.toml")),
+                          VariantProtocol(n_te_points=23), MonteCarloSettings(n_variants=2, seed=2, chunk_size=1,
+                                                                             mode="serial"),
+                          str(tmp_path / "serial"), build_kw=BUILD)
+    # identical records, failed ones included (a failure is a deterministic result of the variant)
+    assert any(r["status"] == "ok" for r in res["rows"])
+    assert res["failed"] == ref["summary"]["n_failed"]
+    for a, b in zip(res["rows"], ref["records"]):
+        assert {k: v for k, v in a.items() if k != "wall_s"} == {k: v for k, v in b.items() if k != "wall_s"}
+    # a second run of the same spec loads every chunk and runs nothing
+    again = run_sweep(load_sweep_spec(path), out_dir=str(tmp_path / "out"), progress=False)
+    assert [r["wall_s"] for r in again["rows"]] == [r["wall_s"] for r in res["rows"]]
