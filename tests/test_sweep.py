@@ -103,3 +103,16 @@ def test_monte_carlo_on_dask_equals_serial(tmp_path):
     # a second run of the same spec loads every chunk and runs nothing
     again = run_sweep(load_sweep_spec(path), out_dir=str(tmp_path / "out"), progress=False)
     assert [r["wall_s"] for r in again["rows"]] == [r["wall_s"] for r in res["rows"]]
+
+
+def test_cli_sweep_on_existing_scheduler(tmp_path):
+    from dask.distributed import LocalCluster
+    path = _spec(tmp_path, SMALL + "[parameters]\npin_clearance = [1e-6]\n")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        out = tmp_path / "out"
+        before = cluster.scheduler.transition_counter
+        assert cli.main(["sweep", path, "--scheduler", cluster.scheduler_address, "--out", str(out), "--quiet"]) == 0
+        # the sweep connected to this cluster: its scheduler moved the task through its states
+        assert cluster.scheduler.transition_counter > before
+    rows = json.loads((out / "results.json").read_text())
+    assert len(rows) == 1 and rows[0]["status"] == "ok" and rows[0]["pin_clearance"] == 1e-6
