@@ -4,7 +4,7 @@ Each equilibrium is a Newton solve of the static residual (contact forces,
 loads, constraints) at prescribed controls, warm-started from the previous
 equilibrium shifted by the kinematic increment; loads are applied in full
 (no load factor). If a warm start fails, the point is re-solved from the
-kinematic state by a homotopy in the regularization stiffness (stiff springs
+previous equilibrium in angle sub-steps, then from the kinematic state by a homotopy in the regularization stiffness (stiff springs
 first, then the model's own), then with the load ramped over ``ramp_steps``
 steps. A point that still fails raises :class:`SolverFailure` naming the
 control values.
@@ -24,6 +24,8 @@ class EquilibriumStats:
     points: int = 0
     newton_iterations: int = 0
     ramped_restarts: int = 0
+    substep_restarts: int = 0
+    shifted_points: int = 0
     wall_s: float = 0.0
 
     def to_dict(self):
@@ -59,6 +61,7 @@ class StaticSolver:
         ss.linearSolver.solverType = exu.LinearSolverType.EXUdense if n <= 30 else exu.LinearSolverType.EigenSparse
         self.settings = ss
         self.q = None
+        self.last_angle = None
 
     def _solve(self, q_init, ramp):
         mbs = self.model.mbs
@@ -75,6 +78,46 @@ class StaticSolver:
         self.stats.newton_iterations += int(solver.it.newtonStepsCount)
         q = np.array(mbs.systemData.GetODE2Coordinates())
         return ok and np.all(np.isfinite(q)), q
+
+    SHIFTS = (1e-7, -1e-7, 1e-6, -1e-6, 1e-5, -1e-5)
+
+    def _shifted(self, previous_angle, input_angle):
+        """Warm-started solves at input angles shifted by each of ``SHIFTS`` [rad]. Without a line
+        search, Newton can cycle when the equilibrium lies on a contact activation kink (measured:
+        RD-40 single wheel, a band of about +-1e-7 rad of input angle); a shifted point is an exact
+        equilibrium at its own (recorded) angle, and a 1e-5 rad input shift moves the output-angle
+        sample by 2.6e-7 rad / 39, far below the sampling step."""
+        for da in self.SHIFTS:
+            a = input_angle + da
+            self.model.set_input_angle(a)
+            ok, q = self._solve(self.q + self.kinematic_vector(a) - self.kinematic_vector(previous_angle), ramp=False)
+            if ok and self.plausible(q, a):
+                self.stats.shifted_points += 1
+                return True, q, a
+        self.model.set_input_angle(input_angle)
+        return False, None, input_angle
+
+    SUBSTEPS = (2, 8)
+
+    def _substeps(self, previous_angle, input_angle):
+        """Continuation in the input angle: reach ``input_angle`` from the last equilibrium in n
+        warm-started sub-steps (each n of ``SUBSTEPS``). Newton can cycle at a contact activation
+        kink (a rolling element or a pin entering) from one starting point and converge from a
+        nearby one; the sub-step states are intermediate and not recorded."""
+        for n in self.SUBSTEPS:
+            q, a_prev, ok = self.q, previous_angle, True
+            for a in previous_angle + (input_angle - previous_angle) * np.arange(1, n + 1) / n:
+                self.model.set_input_angle(a)
+                ok, q = self._solve(q + self.kinematic_vector(a) - self.kinematic_vector(a_prev), ramp=False)
+                ok = ok and self.plausible(q, a)
+                a_prev = a
+                if not ok:
+                    break
+            if ok:
+                self.stats.substep_restarts += 1
+                return True, q
+        self.model.set_input_angle(input_angle)
+        return False, None
 
     STIFFENING = (1e6, 1e4, 1e2, 1.0)
 
@@ -126,14 +169,21 @@ class StaticSolver:
         return q
 
     def solve(self, input_angle, previous_angle=None):
-        """Equilibrium at ``input_angle`` with the model's current loads; returns q."""
+        """Equilibrium at ``input_angle`` with the model's current loads; returns q. The angle
+        actually solved is ``self.last_angle`` (it differs from ``input_angle`` only for a point
+        shifted off an activation kink, see :meth:`_shifted`)."""
         t0 = time.perf_counter()
         self.model.set_input_angle(input_angle)
         ok = False
+        used = input_angle
         if self.q is not None and previous_angle is not None:
             guess = self.q + self.kinematic_vector(input_angle) - self.kinematic_vector(previous_angle)
             ok, q = self._solve(guess, ramp=False)
             ok = ok and self.plausible(q, input_angle)
+            if not ok:
+                ok, q = self._substeps(previous_angle, input_angle)
+            if not ok:
+                ok, q, used = self._shifted(previous_angle, input_angle)
         if not ok:
             if self.q is not None:
                 self.stats.ramped_restarts += 1
@@ -154,7 +204,9 @@ class StaticSolver:
         if not ok:
             raise SolverFailure(f"no plausible static equilibrium at input angle {input_angle:.6g} rad (warm start, "
                                 f"a {self.ramp_steps}-step and a {5 * self.ramp_steps}-step load ramp failed or left a "
-                                f"body more than {self.max_translation} m / {self.max_rotation} rad off its kinematic position)")
+                                f"body more than {self.max_translation} m / {self.max_rotation} rad off its kinematic position; "
+                                f"angle sub-steps and shifts of up to 1e-5 rad failed too)")
         self.stats.points += 1
         self.q = q
+        self.last_angle = used
         return q
