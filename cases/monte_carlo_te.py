@@ -31,9 +31,9 @@ TOLERANCES = os.path.join(HERE, "designs", "rd40_tolerances.toml")
 SEED = 2026
 N_TE = 53
 """TE input angles per output revolution. The input step 2 pi 39/53 turns the eccentric by -95 deg
-per point; counts whose step is a large positive turn (29, 31, 79, 101, 211, 401) make most
-warm starts of the static solver fail (restarts from the kinematic state: 10-40x slower, and
-some variants fail), counts with a negative or small turn (23, 37, 41, 47, 53, 797) do not."""
+per point; counts whose step is a large positive turn (29, 31, 79, 101, 211, 401) make the
+static solver's warm starts need angle sub-steps or cold restarts (15-40x slower), counts with
+a negative or small turn (23, 37, 41, 47, 53, 797) do not."""
 DENSE_TE = 797
 """Reference sampling of the error statement (turn of +17.6 deg per point: warm starts hold)."""
 REGULARIZATION = (1.0e4, 100.0)

@@ -22,7 +22,8 @@ rename: a chunk file is either complete or absent). Every file carries a fingerp
 of the design, tolerances, protocol, seed and chunk size; a restarted study loads the
 chunks with a matching fingerprint and index range and runs only the others, so it
 returns the same records as an uninterrupted run (all figures except the wall times
-are deterministic functions of the variant). A variant whose run raises (a
+are deterministic functions of the variant). The fingerprint does not cover the code:
+after a change of the solver or the builder, start in a fresh folder. A variant whose run raises (a
 :class:`~rvtool.errors.SolverFailure`, or an invalid sampled variant) is recorded with
 ``status = "failed"`` and its error; it does not stop the study.
 
