@@ -1,14 +1,18 @@
 """Panel pressure vs Hertz line contact: steel cylinder R = 3 mm on a flat and in a concave R = 12 mm body.
 
-b = 8 mm, F = 1000 N, panels N = 129 ... 4097 over a fixed domain of +-3 Hertz half-widths (flat case).
-Errors against the Hertz closed form (p0, a, tau_max = 0.300 p0 at 0.786 a) and against the finest grid.
+b = 8 mm, F = 1000 N, panels N = 129 ... 4097 over one fixed domain (+-3 half-widths of the wider,
+conformal contact). Errors against the Hertz closed form (p0, a, tau_max = 0.300 p0 at 0.786 a) and
+e1 of Eq. (pressure_field_difference) against the finest grid. Tangential tractions: the flat contact's
+finest pressure with Coulomb sliding q = mu p (mu = 0.2, 0.3) against the closed-form sliding Hertz
+field (McEwen 1949; Johnson 1985 Sec. 7.2): tau_max and von Mises maxima and depths, surface sxx at
+the trailing edge (2 mu p0).
 """
 import time
 
 import numpy as np
 
 from rvtool import casekit
-from rvtool.pressure import PanelContact, solve_panels, subsurface_stress
+from rvtool.pressure import PanelContact, field_difference, sliding_hertz_stress, solve_panels, subsurface_stress
 
 E, NU, R1, R2, B, F = 210e9, 0.3, 3e-3, 12e-3, 8e-3, 1000.0
 
@@ -18,6 +22,33 @@ def _gap(x, case):
     if case == "concave":
         h -= R2 - np.sqrt(R2 ** 2 - x ** 2)  # conformal: gap is the difference of the two circles
     return h
+
+
+def _maximum(field, z, x):
+    i = np.unravel_index(field.argmax(), field.shape)
+    return float(field[i]), float(z[i[0]]), float(x[i[1]])
+
+
+def _sliding(x, p, a, p0):
+    """Sliding (q = mu p) stress of the panel pressure vs the closed form, per mu."""
+    z = np.linspace(0.0, 1.5 * a, 301)
+    xr = np.linspace(-1.5 * a, 1.5 * a, 3001)
+    out = {}
+    for mu in (0.2, 0.3):
+        s = subsurface_stress(x, p, z, nu=NU, mu=mu)
+        c = sliding_hertz_stress(xr, z, a, p0, mu, nu=NU)
+        rec = {}
+        for key in ("tau_max", "von_mises"):
+            v, d, xm = _maximum(s[key], z, x)
+            vr, dr, xr_m = _maximum(c[key], z, xr)
+            rec.update({f"{key}_over_p0": v / p0, f"{key}_depth_over_b": d / a, f"{key}_x_over_b": xm / a,
+                        f"{key}_closed_form_over_p0": vr / p0, f"{key}_closed_form_depth_over_b": dr / a,
+                        f"{key}_closed_form_x_over_b": xr_m / a})
+        j = int(np.argmin(np.abs(x + a)))
+        rec["sxx_trailing_edge_over_mu_p0"] = float(s["sxx"][0, j] / (mu * p0))  # closed form: 2 (tension)
+        rec["x_trailing_sample_over_b"] = float(x[j] / a)
+        out[f"mu={mu}"] = rec
+    return out
 
 
 def main(argv=None):
@@ -52,13 +83,13 @@ def main(argv=None):
             out["wall_s"].append(wall)
             fields.append((x, r.pressure))
         xf, pf = fields[-1]
-        for x, p in fields:
-            # relative L1 difference to the finest field, finest interpolated onto the coarse centres
-            out["e1_vs_finest"].append(float(np.sum(np.abs(p - np.interp(x, xf, pf))) / np.sum(np.abs(np.interp(x, xf, pf)))))
+        out["e1_vs_finest"] = [field_difference(x, p, xf, pf) for x, p in fields]
         out["hertz_p0_Pa"] = p0
         out["hertz_halfwidth_m"] = a
         results[case] = out
         figs[case] = (fields[-1], s, z, a, p0)
+        if case == "flat":
+            results["sliding"] = _sliding(xf, pf, a, p0)
     wall_s = time.perf_counter() - t_all
     import matplotlib
     matplotlib.use("Agg")
