@@ -15,7 +15,12 @@ is itself symmetric Toeplitz: two Levinson solves (O(m^2),
 ``scipy.linalg.solve_toeplitz``) give u = A_aa^-1 1 and v = A_aa^-1 h_a, then
 delta = (F + sum v) / sum u and f = delta u - v, whose sum is F to round-off.
 A non-contiguous active set (several lobes) falls back to a dense solve of the
-bordered system. A dense LU of a 2,000-panel active block costs ~0.3 s per
+bordered system. Block pivoting can cycle between active sets when there are
+several lobes; on a repeated set the iteration continues with primal-feasible
+steps (Lawson-Hanson type: add the most violated panel alone; move from the
+last feasible forces towards the subproblem solution until a force reaches
+zero and release it), along which the convex energy 1/2 f^T A f + h^T f
+decreases, so no set repeats. A dense LU of a 2,000-panel active block costs ~0.3 s per
 active-set iteration and up to ~10 iterations are needed, which is what made
 the 4097-panel solve slow on busy cores; Levinson costs milliseconds. CG on
 the full grid (Polonsky-Keer) was not chosen: it converges to a tolerance,
@@ -108,10 +113,11 @@ def _bordered_solve(col, idx, h, F):
         return delta * u - v, delta
     K = np.empty((m + 1, m + 1))
     K[:m, :m] = col[np.abs(idx[:, None] - idx[None, :])]
+    # the load row written as -1^T f = -F keeps the bordered matrix symmetric (indefinite: LDL^T)
     K[:m, m] = -1.0
-    K[m, :m] = 1.0
+    K[m, :m] = -1.0
     K[m, m] = 0.0
-    sol = scipy.linalg.solve(K, np.concatenate([-h[idx], [F]]), assume_a="sym")
+    sol = scipy.linalg.solve(K, np.concatenate([-h[idx], [-F]]), assume_a="sym")
     return sol[:m], sol[m]
 
 
@@ -148,16 +154,38 @@ def solve_panels(contact, x, gap0, max_iter=200, initial_active=None):
         active[np.argsort(h)[: max(3, n // 50)]] = True
     if not active.any():
         active[np.argmin(h)] = True
+    # last primal-feasible iterate (f >= 0, sum f = F): all load on the smallest gap
     f = np.zeros(n)
+    f[np.argmin(h)] = F
     delta = 0.0
+    seen = set()
+    safeguarded = False
     for it in range(1, max_iter + 1):
         idx = np.flatnonzero(active)
         fa, delta = _bordered_solve(col, idx, h, F)
         if np.any(fa < 0):
-            # drop the negative forces, keep the rest for the next solve
-            active[idx[fa < 0]] = False
+            if safeguarded:
+                # step from the feasible f towards the subproblem solution until a force reaches
+                # zero, and release those panels: the convex objective does not increase
+                fi = f[idx]
+                neg = fa < 0
+                alpha = np.min(fi[neg] / (fi[neg] - fa[neg]))
+                f = np.zeros(n)
+                f[idx] = fi + alpha * (fa - fi)
+                active[idx[f[idx] <= 1e-14 * F]] = False
+                f[~active] = 0.0
+            else:
+                # block pivoting: drop the negative forces, keep the rest for the next solve
+                active[idx[fa < 0]] = False
             if not active.any():
                 active[np.argmin(h)] = True
+            key = active.tobytes()
+            if key in seen and not safeguarded:
+                # a repeated active set: block pivoting cycles (several lobes); continue from the last
+                # feasible iterate with the safeguarded steps
+                safeguarded = True
+                active = f > 0
+            seen.add(key)
             continue
         f = np.zeros(n)
         f[idx] = fa
@@ -166,7 +194,16 @@ def solve_panels(contact, x, gap0, max_iter=200, initial_active=None):
         viol = (~active) & (g < -tol)
         if not viol.any():
             break
-        active |= viol
+        if safeguarded:
+            # one panel at a time, the most violated: its force in the enlarged subproblem is
+            # positive (Lawson-Hanson), so the energy decreases strictly
+            active[np.argmin(np.where(viol, g, np.inf))] = True
+        else:
+            active |= viol
+        key = active.tobytes()
+        if key in seen and not safeguarded:
+            safeguarded = True
+        seen.add(key)
     else:
         raise RuntimeError(f"solve_panels: active set not settled after {max_iter} iterations")
     g[active] = 0.0
