@@ -1,0 +1,132 @@
+"""All contact families of B independent reducer copies, one kernel launch per family.
+
+The copies are numbered c = 0..B-1 and own the bodies c nb .. c nb + nb - 1 of one
+body list (nb bodies per copy, the layout of :func:`rvtool.assembly.cycloid.build`).
+Each family is one evaluator over all B nb bodies, so one launch evaluates every
+contact of every copy. No contact couples two copies, so the tangent of the whole
+batch is block diagonal: :class:`CopyBlockAssembler` scatters the per-contact rows
+(Q (N, 3m), dQ/dq (N, 3m, 3m) for m bodies per row, Eq. (contact_mapping)) straight
+into per-copy blocks (B, 3 nb) and (B, 3 nb, 3 nb) instead of a dense (3 nb B)^2
+matrix (which at B = 1000 and nb = 4 would be 1.1 GB per family).
+
+Pure NumPy/Warp: testable without Exudyn (:mod:`exudyn_user_elements.batched_element`
+puts it into an Exudyn system).
+"""
+import time
+
+import numpy as np
+
+from ..errors import RvtoolInputError
+
+
+class CopyBlockAssembler:
+    """Scatter per-row generalized forces and tangents into per-copy blocks.
+
+    bodies: (N, m) global body indices of each row's m bodies (``n_copies * nb`` or more
+    = the ground row of the kernels' padded pose array: dropped). Every row must couple
+    bodies of one copy only (raises :class:`RvtoolInputError` otherwise): that is what
+    makes the batch tangent block diagonal.
+    """
+
+    def __init__(self, bodies, nb, n_copies):
+        bodies = np.asarray(bodies, dtype=np.int64)
+        n_rows, m = bodies.shape
+        ground = bodies >= nb * n_copies
+        copy = np.where(ground, -1, bodies // nb)
+        row_copy = copy.max(axis=1)
+        if np.any(row_copy < 0):
+            raise RvtoolInputError("a contact row couples only ground; every row needs a body of one copy")
+        if np.any((copy >= 0) & (copy != row_copy[:, None])):
+            bad = int(np.flatnonzero(np.any((copy >= 0) & (copy != row_copy[:, None]), axis=1))[0])
+            raise RvtoolInputError(f"contact row {bad} couples bodies {bodies[bad].tolist()} of different copies "
+                                   f"(nb = {nb} bodies per copy); copies must be independent")
+        self.nb, self.n_copies = nb, n_copies
+        self.n = n = 3 * nb
+        self.row_copy = row_copy
+        local = 3 * (bodies % nb)[:, :, None] + np.arange(3)            # (N, m, 3)
+        local = np.where(ground[:, :, None], -1, local).reshape(n_rows, 3 * m)
+        self.vec_mask = local >= 0
+        self.vec_idx = (row_copy[:, None] * n + local)[self.vec_mask]
+        rows = np.repeat(local[:, :, None], 3 * m, axis=2)
+        cols = np.repeat(local[:, None, :], 3 * m, axis=1)
+        self.mat_mask = (rows >= 0) & (cols >= 0)
+        self.mat_idx = (row_copy[:, None, None] * n * n + rows * n + cols)[self.mat_mask]
+
+    def vector(self, Q):
+        """(B, 3 nb) from per-row forces (N, 3m)."""
+        return np.bincount(self.vec_idx, weights=np.asarray(Q, np.float64)[self.vec_mask],
+                           minlength=self.n_copies * self.n).reshape(self.n_copies, self.n)
+
+    def blocks(self, K):
+        """(B, 3 nb, 3 nb) from per-row tangents (N, 3m, 3m)."""
+        return np.bincount(self.mat_idx, weights=np.asarray(K, np.float64)[self.mat_mask],
+                           minlength=self.n_copies * self.n * self.n).reshape(self.n_copies, self.n, self.n)
+
+
+class BatchEvaluation:
+    """Result of one batch evaluation: per-copy forces Q (B, 3 nb) [N, N m], tangents
+    dQ/dq and dQ/dv (B, 3 nb, 3 nb), per-copy finiteness (B,), and the cycloid-pin
+    observation rows (N_pins, 8) (for pin forces)."""
+
+    def __init__(self, Q, dQdq, dQdv, finite, pin_obs):
+        self.Q, self.dQdq, self.dQdv, self.finite, self.pin_obs = Q, dQdq, dQdv, finite, pin_obs
+
+
+class BatchContactEvaluator:
+    """Evaluate the families (pins, output pins, bearings) of all copies at global body
+    poses/velocities (B nb, 3).
+
+    pin_set: :class:`rvtool.contact.cycloid_set.CycloidPinSet` over all B nb bodies;
+    output_kernel: :class:`warp_contacts.output_pins.OutputPinKernel` (plain mode) over
+    the concatenated rows of all copies; bearings:
+    :class:`rvtool.contact.evaluator.ContactSetEvaluator` over all B nb bodies.
+    ``timing`` accumulates the wall time [s] spent in the three launches ("kernels")
+    and in the block scatter ("scatter").
+    """
+
+    def __init__(self, pin_set, output_kernel, output_bodies, bearings, nb, n_copies):
+        self.pin_set, self.output_kernel, self.bearings = pin_set, output_kernel, bearings
+        self.nb, self.n_copies = nb, n_copies
+        nt = nb * n_copies
+        for nm, n in (("pin_set", pin_set.n_bodies), ("bearings", bearings.n_bodies)):
+            if n != nt:
+                raise RvtoolInputError(f"{nm}.n_bodies = {n}; the batch has {n_copies} x {nb} = {nt} bodies")
+        self.pin_asm = CopyBlockAssembler(pin_set.iparams[:, :2], nb, n_copies)
+        self.op_asm = CopyBlockAssembler(output_bodies, nb, n_copies)
+        self.brg_asm = CopyBlockAssembler(bearings.iparams[:, :2], nb, n_copies)
+        self._pose = np.zeros((nt + 1, 3))       # ground row last (the kernels' padding)
+        self.pin_copy = self.pin_asm.row_copy
+        self.timing = {"kernels": 0.0, "scatter": 0.0, "launches": 0}
+        self.inject_nan = {}                      # fault injection (tests): {copy: set of evaluation counters}
+        self.n_evaluations = 0
+
+    def evaluate(self, pose, vel):
+        """:class:`BatchEvaluation` at absolute poses and velocities (B nb, 3)."""
+        t0 = time.perf_counter()
+        Qp, Kp, Dp, obs = self.pin_set.raw(pose, vel)
+        self._pose[:-1] = pose
+        r = self.output_kernel.evaluate(self._pose)
+        Qb, Kb, Db, _, _ = self.bearings.raw(pose, vel)
+        t1 = time.perf_counter()
+        A, O, Bg = self.pin_asm, self.op_asm, self.brg_asm
+        Q = A.vector(Qp) + O.vector(r["Q"]) + Bg.vector(Qb)
+        K = A.blocks(Kp) + O.blocks(r["dQdq"]) + Bg.blocks(Kb)
+        D = A.blocks(Dp) + Bg.blocks(Db)          # the output-pin family has no damping
+        # a NaN or inf of one copy stays in that copy's block: per-copy finiteness
+        finite = np.isfinite(Q.sum(axis=1) + K.sum(axis=(1, 2)) + D.sum(axis=(1, 2)))
+        self.n_evaluations += 1
+        for c, when in self.inject_nan.items():
+            if self.n_evaluations in when:
+                Q[c] = np.nan
+                finite[c] = False
+        self.timing["kernels"] += t1 - t0
+        self.timing["scatter"] += time.perf_counter() - t1
+        self.timing["launches"] += 3
+        return BatchEvaluation(Q, K, D, finite, np.array(obs, np.float64))
+
+    def pin_forces(self, pin_obs):
+        """(B, n_wheels, z_b) pin normal forces [N] (slices summed) from pin observation rows."""
+        pf = self.pin_set.pin_forces(pin_obs)                  # (B n_wheels, z_b), meshes copy-major
+        return pf.reshape(self.n_copies, -1, pf.shape[1])
+
+
