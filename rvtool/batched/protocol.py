@@ -264,6 +264,27 @@ class BatchedStaticSolver:
         return m.evaluator.pin_forces(ev.pin_obs).reshape(m.n_copies, -1).max(axis=1)
 
 
+def _try_split(solver, q, t_now, target, mask, max_step):
+    """Try the torque increments ``target`` for the copies in ``mask`` (the others parked at their
+    accepted equilibrium q, torque t_now: Newton leaves them in place). Exudyn's Newton fails for
+    the whole batch when one copy fails (and restores the start state), so a failed batch is split
+    in halves until the failing copies are isolated (log2 B extra solves per failing copy).
+    Accepted copies are written into q; returns the accepted mask."""
+    solver.set_torques(np.where(mask, target, t_now))
+    ok, qn = solver._solve(q)
+    if ok:
+        acc = mask & np.all(np.isfinite(qn), axis=1) & (np.max(np.abs(qn - q), axis=1) <= max_step)
+        q[acc] = qn[acc]
+        return acc
+    idx = np.flatnonzero(mask)
+    if len(idx) == 1:
+        return np.zeros_like(mask)
+    lo, hi = np.zeros_like(mask), np.zeros_like(mask)
+    lo[idx[:len(idx) // 2]] = True
+    hi[idx[len(idx) // 2:]] = True
+    return _try_split(solver, q, t_now, target, lo, max_step) | _try_split(solver, q, t_now, target, hi, max_step)
+
+
 def _continuation(solver, torques, max_step=2e-3, min_increment=1e-4):
     """Per-copy torque continuation at the current angle through the levels ``torques``
     (B, L) [N m], as :class:`rvtool.protocols.stiffness.Continuation` (start: Newton from
@@ -290,12 +311,8 @@ def _continuation(solver, torques, max_step=2e-3, min_increment=1e-4):
             if not np.any(active):
                 break
             target = np.where(np.abs(level - t_now) <= np.abs(inc), level, t_now + inc)
-            solver.set_torques(np.where(active, target, t_now))
-            ok, qn = solver._solve(q)
-            step = np.max(np.abs(qn - q), axis=1)
-            acc = active & solver.converged(ok, qn) & (step <= max_step)
+            acc = _try_split(solver, q, t_now, target, active, max_step)
             rej = active & ~acc
-            q[acc] = qn[acc]
             grow = np.abs(inc) < np.abs(level - target)
             t_now = np.where(acc, target, t_now)
             inc = np.where(acc & grow, 2 * inc, np.where(rej, 0.5 * inc, inc))
@@ -303,7 +320,6 @@ def _continuation(solver, torques, max_step=2e-3, min_increment=1e-4):
             if np.any(stalled):
                 solver.dead |= stalled
                 solver.stats.failed_copies += int(stalled.sum())
-                solver._set_factors(np.where(solver.dead, 1e6, 1.0))
                 q[stalled] = solver.kin[stalled]
         out[:, j] = q[:, i_out]
     solver.qc = q
