@@ -98,6 +98,8 @@ class BatchContactEvaluator:
         self.pin_copy = self.pin_asm.row_copy
         self.timing = {"kernels": 0.0, "scatter": 0.0, "launches": 0}
         self.inject_nan = {}                      # fault injection (tests): {copy: set of evaluation counters}
+        # parked copies contribute no contact forces (their results are ignored; see protocol)
+        self.masked = np.zeros(n_copies, bool)
         self.n_evaluations = 0
 
     def evaluate(self, pose, vel):
@@ -119,6 +121,9 @@ class BatchContactEvaluator:
             if self.n_evaluations in when:
                 Q[c] = np.nan
                 finite[c] = False
+        if np.any(self.masked):
+            m = self.masked
+            Q[m], K[m], D[m], finite[m] = 0.0, 0.0, 0.0, True
         self.timing["kernels"] += t1 - t0
         self.timing["scatter"] += time.perf_counter() - t1
         self.timing["launches"] += 3

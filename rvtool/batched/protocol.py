@@ -127,6 +127,14 @@ class BatchedStaticSolver:
                 mbs.SetObjectParameter(obj, "stiffness", float(k * factors[c]))
         self.factor = np.array(factors, float)
 
+    def park(self, copies):
+        """Switch off the contact forces of ``copies`` (B,) bool (None: only the failed copies)
+        for the next solves: their results are ignored, and a copy whose contacts fail (NaN)
+        cannot then make the batch Newton fail for the others."""
+        ev = self.model.evaluator
+        ev.masked = self.dead.copy() if copies is None else (np.asarray(copies, bool) | self.dead)
+        self.model.elements.invalidate()
+
     # -- one batch Newton solve ----------------------------------------------------
     def _solve(self, qc):
         m = self.model
@@ -203,8 +211,7 @@ class BatchedStaticSolver:
             try:
                 for f in self.STIFFENING:
                     # parked (dead) copies stay on stiff springs at their kinematic state
-                    self._set_factors(np.where(alive | self.dead, f if f > 1 else 1.0, 1.0)
-                                      * np.where(self.dead, 1e6, 1.0) ** (~alive))
+                    self._set_factors(np.where(self.dead, 1e6, np.where(alive, f, 1.0)))
                     ok, qn = self._solve(start)
                     conv = self.converged(ok, qn)
                     alive &= conv
@@ -220,6 +227,7 @@ class BatchedStaticSolver:
                 self.dead[c] = True
                 self.stats.failed_copies += 1
                 self._set_factors(np.where(self.dead, 1e6, 1.0))
+                self.park(None)
                 q[c] = self.kin[c]
             else:
                 q[c] = qc
@@ -254,7 +262,6 @@ class BatchedStaticSolver:
             qv = s.solve(self.angle, previous_angle)
         except SolverFailure:
             return None
-        self.stats.newton_iterations += 0  # counted in the per-variant solver's own stats
         return qv[idx]
 
     def pin_forces(self, qc):
@@ -271,7 +278,11 @@ def _try_split(solver, q, t_now, target, mask, max_step):
     in halves until the failing copies are isolated (log2 B extra solves per failing copy).
     Accepted copies are written into q; returns the accepted mask."""
     solver.set_torques(np.where(mask, target, t_now))
-    ok, qn = solver._solve(q)
+    solver.park(~mask)
+    try:
+        ok, qn = solver._solve(q)
+    finally:
+        solver.park(None)
     if ok:
         acc = mask & np.all(np.isfinite(qn), axis=1) & (np.max(np.abs(qn - q), axis=1) <= max_step)
         q[acc] = qn[acc]
@@ -320,6 +331,8 @@ def _continuation(solver, torques, max_step=2e-3, min_increment=1e-4):
             if np.any(stalled):
                 solver.dead |= stalled
                 solver.stats.failed_copies += int(stalled.sum())
+                solver._set_factors(np.where(solver.dead, 1e6, 1.0))
+                solver.park(None)
                 q[stalled] = solver.kin[stalled]
         out[:, j] = q[:, i_out]
     solver.qc = q
