@@ -161,6 +161,9 @@ def pin_contact(model, q, wheel, pin, *, obs=None, extent=1e-3):
         raise RvtoolInputError(f"wheel = {wheel}, pin = {pin}: the contact carries no load at this state")
     mesh = ps.meshes[int(wheel)]
     prof = mesh.profile
+    rp = mesh.pin_radius if mesh.pin_radius is not None else prof.pin_radius
+    if not 0 < extent < rp:
+        raise RvtoolInputError(f"extent = {extent!r} m is outside the valid range (0, pin radius {rp} m)")
     ql = el.local(q)
     pose, _ = el.pose_velocity(ql, 0 * ql)
     wpose = pose[mesh.wheel_body]
@@ -179,11 +182,8 @@ def pin_contact(model, q, wheel, pin, *, obs=None, extent=1e-3):
     ws, wn = w @ t, w @ n
     order = np.argsort(ws)
     wheel_n = scipy.interpolate.CubicSpline(ws[order], wn[order])
-    rp = mesh.pin_radius if mesh.pin_radius is not None else prof.pin_radius
     c = pin_centres(prof)[int(pin)] - p0
     cs, cn = c @ t, c @ n
-    if extent >= rp:
-        raise RvtoolInputError(f"extent = {extent!r} m is outside the valid range (0, pin radius {rp} m)")
 
     def gap(x):
         # mating-circle branch: the side of the pin facing the wheel (towards -sign(cn))
