@@ -85,7 +85,10 @@ class BatchedStaticSolver:
         st.verboseMode = 0
         st.useLoadFactor = False
         st.numberOfLoadSteps = 1
-        st.adaptiveStep = True
+        # without a load factor the loads do not depend on the pseudo-time, so Exudyn's adaptive
+        # step would only repeat a failed Newton from the same start; a failure goes to the
+        # homotopy / bisection / per-variant ladder at once instead
+        st.adaptiveStep = False
         ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
         self.settings = ss
         B, nb = model.n_copies, model.nb
