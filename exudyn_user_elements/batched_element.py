@@ -94,7 +94,8 @@ class BatchedContactElements:
     def _block(self, c, q, q_t):
         q = np.asarray(q, float)
         q_t = np.asarray(q_t, float)
-        if self._q is None or not (np.array_equal(q, self._q[c], equal_nan=True) and np.array_equal(q_t, self._v[c], equal_nan=True)):
+        if self._q is None or not (np.array_equal(q, self._q[c], equal_nan=True)
+                                   and np.array_equal(q_t, self._v[c], equal_nan=True)):
             sd = self.mbs.systemData
             qa = np.asarray(sd.GetODE2Coordinates(configuration=exu.ConfigurationType.Current))[self.ltg]
             va = np.asarray(sd.GetODE2Coordinates_t(configuration=exu.ConfigurationType.Current))[self.ltg]

@@ -28,7 +28,7 @@ Limits (raise :class:`RvtoolInputError`): lumped bearings and a rigid housing
 only (rolling-bearing sets and housing ports are not batched), no anchor
 friction (quasi-static protocols commit no history).
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import exudyn as exu
@@ -181,7 +181,6 @@ class BatchedCycloidModel:
     elements: object
     ltg: np.ndarray
     nb: int
-    reg: list = field(default_factory=list)   # (B, n_springs) arrays: global index, stiffness, spring objects
 
     @property
     def n_copies(self):

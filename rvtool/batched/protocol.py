@@ -193,7 +193,7 @@ class BatchedStaticSolver:
         kin_prev = self.kin if (self.qc is not None and previous_angle is not None) else None
         self.set_angle(angle)
         B = self.model.n_copies
-        q = np.where(self.dead[:, None], self.kin, self.kin)
+        q = self.kin.copy()
         good = np.zeros(B, bool)
         if kin_prev is not None:
             guess = np.where(self.dead[:, None], self.kin, self.qc + self.kin - kin_prev)
