@@ -68,7 +68,7 @@ class StaticSolver:
         st = self.settings.staticSolver
         st.useLoadFactor = ramp
         st.numberOfLoadSteps = self.ramp_steps if ramp else 1
-        st.adaptiveStep = True
+        st.adaptiveStep = ramp   # without a load factor a retry repeats the same Newton from the same start
         mbs.systemData.SetODE2Coordinates(q_init, configuration=exu.ConfigurationType.Initial)
         solver = exu.MainSolverStatic()
         try:
