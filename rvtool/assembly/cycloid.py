@@ -149,43 +149,26 @@ def lumped_ball_law(spec):
     return Z * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5, 1.5
 
 
-def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
-          pin_overrides=None, rigid_supports=False, regularization=(100.0, 0.1)):
-    """Assemble ``design`` into an Exudyn system; returns a :class:`CycloidModel`.
-
-    pin_overrides: dict of WheelPinMesh fields applied to every wheel (e.g.
-    ``{"pin_centre_errors": ..., "normal": NormalLaw(...)}``).
-    rigid_supports: shaft and flange centres held on the axis and the wheel
-    centres held on their journals (translation constraints that follow the
-    input angle): the rigid-body idealization of the classical load-sharing
-    analysis. The bearings then carry no load.
-    regularization: (k_translation [N/m], k_rotation [N m/rad]) of weak springs from
-    every free coordinate to its reference (a numerical setting: free play in
-    clearances leaves equilibrium directions without stiffness at zero load; at
-    100 N/m and 10 um they carry 1e-3 N against contact loads of 1e2-1e3 N; the
-    forces they carry are reported by the protocols). (0, 0) removes them.
-    """
-    if bearing_model not in ("lumped", "rolling"):
-        raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
+def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1)):
+    """Bodies of one reducer in ``mbs``: shaft, wheels and flange (``NodeRigidBody2D`` at their
+    reference poses), the coordinate locks of undeclared coordinates, the input drive, the
+    regularization springs and the output load (see :func:`build` for the options). ``mg`` is a
+    ground coordinate marker. Returns a dict with nodes, reference (nb, 3), locks,
+    journal_locks, drive, reg_springs and load."""
     d = design
     nw = d.n_wheels
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    zg = d.pins.n_pins - 1
     m_w, J_w = _mass_wheel(d)
-    nodes = []
     ref = np.zeros((nw + 2, 3))
     for k in range(nw):
         phi = np.deg2rad(d.wheels.phases_deg[k])
         ref[1 + k, :2] = (-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi))
     masses = [(d.bodies.shaft_mass, d.bodies.shaft_inertia)] + [(m_w, J_w)] * nw + \
              [(d.bodies.flange_mass, d.bodies.flange_inertia)]
+    nodes = []
     for b in range(nw + 2):
         n = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=list(ref[b])))
         mbs.AddObject(ObjectRigidBody2D(nodeNumber=n, mass=masses[b][0], inertia=masses[b][1]))
         nodes.append(n)
-    ground = mbs.AddNode(NodePointGround())
-    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
 
     def marker(body, c):
         return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[body], coordinate=c))
@@ -215,8 +198,15 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                     reg_springs.append((body, c, k_reg, mbs.AddObject(CoordinateSpringDamper(
                         markerNumbers=[mg, marker(body, c)], stiffness=k_reg))))
     load = mbs.AddLoad(LoadCoordinate(markerNumber=marker(nw + 1, 2), load=0.0))
+    return {"nodes": nodes, "reference": ref, "locks": locks, "journal_locks": journal_locks, "drive": drive,
+            "reg_springs": reg_springs, "load": load}
 
-    # -- ring pins ---------------------------------------------------------------
+
+def pin_meshes(design, *, offset=0, pin_overrides=None, prefix=""):
+    """(profiles, :class:`WheelPinMesh` per wheel) of one reducer whose bodies start at index
+    ``offset`` (wheel k is body offset + 1 + k); pins on ground; names ``prefix + "wheel{k}"``."""
+    d = design
+    zg = d.pins.n_pins - 1
     pc = d.pin_contact
     width = d.wheels.width
     if pc.law == "power":
@@ -226,18 +216,103 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         law = NormalLaw(law="line", stiffness=k_line, damping=pc.damping, ramp_depth=1e-6)
     friction = FrictionLaw(model=FrictionModel.REGULARIZED if pc.mu > 0 else FrictionModel.NONE, mu_kinetic=pc.mu)
     profiles, meshes = [], []
-    for k in range(nw):
+    for k in range(d.n_wheels):
         phi = np.deg2rad(d.wheels.phases_deg[k])
         prof = CycloidProfile(pin_circle_radius=d.pins.pin_circle_radius, pin_radius=d.pins.pin_radius,
                               n_pins=d.pins.n_pins, generating_eccentricity=d.wheels.e_g,
                               equidistant_mod=d.wheels.equidistant_mod, offset_mod=d.wheels.offset_mod,
                               rotation_mod=d.wheels.rotation_mod - phi / zg)
         profiles.append(prof)
-        kw = dict(profile=prof, wheel_body=1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
+        kw = dict(profile=prof, wheel_body=offset + 1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
                   wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,
-                  name=f"wheel{k}")
+                  name=f"{prefix}wheel{k}")
         kw.update(pin_overrides or {})
         meshes.append(WheelPinMesh(**kw))
+    return profiles, meshes
+
+
+def output_pin_mechanism(design):
+    """Plain flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach)."""
+    from ..output_pins.calibration import hertz_calibrated_coefficient
+    from ..output_pins.spec import OutputPinMechanism, PinMode
+    d = design
+    op = d.output_pins
+    width = d.wheels.width
+    k_op = hertz_calibrated_coefficient(op.reference_force, op.pin_radius, op.hole_radius, width,
+                                        d.material.youngs_modulus, d.material.poisson_ratio)
+    return OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
+                              n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
+                              coefficient=k_op, contact_length=width, n_slices=op.n_slices,
+                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN)
+
+
+def lumped_bearing_contacts(design, *, offset=0, prefix=""):
+    """Lumped bearings of one reducer whose bodies start at ``offset``: one internal circle contact
+    per eccentric bearing (needle law), the main bearing (flange--ground) and the two input
+    bearings (shaft--ground) unless locked; names ``prefix + family``."""
+    d = design
+    nw = d.n_wheels
+    eb = d.eccentric_bearing
+    r_j = eb.journal_radius
+    k_n, p_n = lumped_needle_law(d)
+    contacts = []
+    for k in range(nw):
+        phi = np.deg2rad(d.wheels.phases_deg[k])
+        contacts.append(CircleContact(
+            body_a=offset + SHAFT, body_b=offset + 1 + k,
+            centre_a=(-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi)),
+            centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + eb.radial_clearance + 1e-12, internal=True,
+            normal=NormalLaw(law="power", stiffness=k_n, exponent=p_n, damping=50.0, ramp_depth=1e-6),
+            name=f"{prefix}eccentric_bearing{k}"))
+    main = d.main_bearing
+    if main.kind != "locked":
+        contacts.append(CircleContact(
+            body_a=offset + nw + 1, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0),
+            radius_a=0.5 * main.pitch_diameter, radius_b=0.5 * main.pitch_diameter + main.radial_clearance + 1e-12,
+            internal=True, normal=NormalLaw(law="power", stiffness=lumped_ball_law(main)[0], exponent=1.5,
+                                            damping=200.0, ramp_depth=1e-6),
+            name=f"{prefix}main_bearing"))
+    inp = d.input_bearing
+    if inp.kind != "locked":
+        contacts.append(CircleContact(
+            body_a=offset + SHAFT, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0),
+            radius_a=0.5 * inp.pitch_diameter, radius_b=0.5 * inp.pitch_diameter + inp.radial_clearance + 1e-12,
+            # two input bearings share the radial load
+            internal=True, normal=NormalLaw(law="power", stiffness=2 * lumped_ball_law(inp)[0], exponent=1.5,
+                                            damping=50.0, ramp_depth=1e-6),
+            name=f"{prefix}input_bearing"))
+    return contacts
+
+
+def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
+          pin_overrides=None, rigid_supports=False, regularization=(100.0, 0.1)):
+    """Assemble ``design`` into an Exudyn system; returns a :class:`CycloidModel`.
+
+    pin_overrides: dict of WheelPinMesh fields applied to every wheel (e.g.
+    ``{"pin_centre_errors": ..., "normal": NormalLaw(...)}``).
+    rigid_supports: shaft and flange centres held on the axis and the wheel
+    centres held on their journals (translation constraints that follow the
+    input angle): the rigid-body idealization of the classical load-sharing
+    analysis. The bearings then carry no load.
+    regularization: (k_translation [N/m], k_rotation [N m/rad]) of weak springs from
+    every free coordinate to its reference (a numerical setting: free play in
+    clearances leaves equilibrium directions without stiffness at zero load; at
+    100 N/m and 10 um they carry 1e-3 N against contact loads of 1e2-1e3 N; the
+    forces they carry are reported by the protocols). (0, 0) removes them.
+    """
+    if bearing_model not in ("lumped", "rolling"):
+        raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
+    d = design
+    nw = d.n_wheels
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddNode(NodePointGround())
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    bodies = add_bodies(mbs, d, mg, rigid_supports=rigid_supports, regularization=regularization)
+    nodes = bodies["nodes"]
+
+    # -- ring pins ---------------------------------------------------------------
+    profiles, meshes = pin_meshes(d, pin_overrides=pin_overrides)
     housing, ports, n_pin_bodies = None, None, nw + 2
     if d.housing.model == "ports":
         from exudyn_user_elements.reduced_structure import ReducedStructure
@@ -253,18 +328,10 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     elements = {"pins": ContactElement(mbs, nodes, pin_set, ports=ports)}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
-    from ..output_pins.calibration import hertz_calibrated_coefficient
     from ..output_pins.evaluator import OutputPinEvaluator
-    from ..output_pins.spec import OutputPinMechanism, PinMode
-    op = d.output_pins
-    k_op = hertz_calibrated_coefficient(op.reference_force, op.pin_radius, op.hole_radius, width,
-                                        d.material.youngs_modulus, d.material.poisson_ratio)
-    mech = OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
-                              n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
-                              coefficient=k_op, contact_length=width, n_slices=op.n_slices,
-                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN)
-    op_eval = OutputPinEvaluator(mech, name="output_pins", flange=nw + 1, wheels=tuple(range(1, nw + 1)),
-                                 n_bodies=nw + 2, backend=backend, precision=precision, device=device)
+    op_eval = OutputPinEvaluator(output_pin_mechanism(d), name="output_pins", flange=nw + 1,
+                                 wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2, backend=backend,
+                                 precision=precision, device=device)
     elements["output_pins"] = ContactElement(mbs, nodes, op_eval)
 
     # -- bearings -----------------------------------------------------------------
@@ -273,37 +340,10 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         for name, ev in rolling_bearing_sets(d, nw, backend=backend, precision=precision, device=device).items():
             elements[name] = ContactElement(mbs, nodes, ev)
     else:
-        eb = d.eccentric_bearing
-        r_j = eb.journal_radius
-        k_n, p_n = lumped_needle_law(d)
-        clear_n = eb.radial_clearance
-        contacts = []
-        for k in range(nw):
-            phi = np.deg2rad(d.wheels.phases_deg[k])
-            contacts.append(CircleContact(
-                body_a=SHAFT, body_b=1 + k, centre_a=(-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi)),
-                centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + clear_n + 1e-12, internal=True,
-                normal=NormalLaw(law="power", stiffness=k_n, exponent=p_n, damping=50.0, ramp_depth=1e-6),
-                name=f"eccentric_bearing{k}"))
-        main = d.main_bearing
-        if main.kind != "locked":
-            contacts.append(CircleContact(
-                body_a=nw + 1, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0), radius_a=0.5 * main.pitch_diameter,
-                radius_b=0.5 * main.pitch_diameter + main.radial_clearance + 1e-12, internal=True,
-                normal=NormalLaw(law="power", stiffness=lumped_ball_law(main)[0], exponent=1.5, damping=200.0, ramp_depth=1e-6),
-                name="main_bearing"))
-        inp = d.input_bearing
-        if inp.kind != "locked":
-            contacts.append(CircleContact(
-                body_a=SHAFT, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0), radius_a=0.5 * inp.pitch_diameter,
-                radius_b=0.5 * inp.pitch_diameter + inp.radial_clearance + 1e-12, internal=True,
-                # two input bearings share the radial load
-                normal=NormalLaw(law="power", stiffness=2 * lumped_ball_law(inp)[0], exponent=1.5, damping=50.0,
-                                 ramp_depth=1e-6),
-                name="input_bearing"))
-        bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(contacts))
+        bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
         elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
     mbs.Assemble()
-    return CycloidModel(design=d, SC=SC, mbs=mbs, nodes=nodes, elements=elements, pin_set=pin_set, drive=drive,
-                        load=load, n_wheels=nw, locks=locks, profiles=profiles, reg_springs=reg_springs,
-                        journal_locks=journal_locks, reference=ref, housing=housing)
+    return CycloidModel(design=d, SC=SC, mbs=mbs, nodes=nodes, elements=elements, pin_set=pin_set, drive=bodies["drive"],
+                        load=bodies["load"], n_wheels=nw, locks=bodies["locks"], profiles=profiles,
+                        reg_springs=bodies["reg_springs"], journal_locks=bodies["journal_locks"],
+                        reference=bodies["reference"], housing=housing)

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..structure import (AnnularHousingSpec, ElasticMaterial, NodalPort, NodalSpring, PortReductionSpec, RayleighDamping,
+from ..structure import (AnnularHousingSpec, ElasticMaterial, NodalPort, PortReductionSpec, RayleighDamping,
                          craig_bampton, fe_model_from_geometry, parent_modes, reduce_ports)
 
 CALIBRATION_HZ = (500.0, 5000.0)
@@ -47,9 +47,8 @@ def _reduced(housing, material, n_pins):
     ports = tuple(NodalPort(name=f"pin{k}", point=(h.inner_radius * math.cos(a), h.inner_radius * math.sin(a), 0.5 * h.height),
                             directions=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)))
                   for k, a in enumerate(pin_port_angles(n_pins)))
-    supports = tuple(NodalSpring(point=s.point, stiffness=s.stiffness) for s in spec.supports())
     fe = fe_model_from_geometry(spec.geometry(), mesh_size=h.mesh_size, material=spec.material, ports=ports,
-                                supports=supports, damping=spec.damping, info={"component": "reducer housing"})
+                                supports=spec.supports(), damping=spec.damping, info={"component": "reducer housing"})
     cb = craig_bampton(fe, n_modes=h.n_fixed_interface_modes)
     modes = parent_modes(cb)
     n_res = h.n_residual if h.n_residual >= 0 else min(2 * n_pins, len(modes.omega2) - h.n_modes)

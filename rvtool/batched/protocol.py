@@ -28,14 +28,13 @@ continuation +f -> -f at input angle 0 with the adaptive increments of
 own output load, so copies continue at their own increments in the same solves).
 """
 import time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import exudyn as exu
 
 from ..errors import SolverFailure
-from ..protocols.equilibrium import StaticSolver
+from ..protocols.equilibrium import StaticSolver, static_settings
 from ..protocols.precision import te_metrics, transmission_error
 from ..variants import ARCMIN, ARCSEC, VariantProtocol
 from .assembly import build_batched
@@ -74,22 +73,15 @@ class BatchedStaticSolver:
                          max_translation=max_translation, max_rotation=max_rotation)
         self.build_kw = build_kw or {}
         self.stats = BatchStats()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
-            ss = exu.SimulationSettings()
-            ss.solutionSettings.writeSolutionToFile = False
+        ss = static_settings(abs_tol=abs_tol, rel_tol=rel_tol, max_iterations=max_iterations,
+                             solver_type=exu.LinearSolverType.EigenSparse)
         st = ss.staticSolver
-        st.newton.absoluteTolerance = abs_tol
-        st.newton.relativeTolerance = rel_tol
-        st.newton.maxIterations = max_iterations
-        st.verboseMode = 0
         st.useLoadFactor = False
         st.numberOfLoadSteps = 1
         # without a load factor the loads do not depend on the pseudo-time, so Exudyn's adaptive
         # step would only repeat a failed Newton from the same start; a failure goes to the
         # homotopy / bisection / per-variant ladder at once instead
         st.adaptiveStep = False
-        ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
         self.settings = ss
         B, nb = model.n_copies, model.nb
         n = 3 * nb

@@ -19,6 +19,22 @@ import exudyn as exu
 from ..errors import SolverFailure
 
 
+def static_settings(*, abs_tol, rel_tol, max_iterations, solver_type):
+    """Exudyn settings of the static solver: Newton tolerances abs_tol [N] and rel_tol [-],
+    iteration limit, linear solver, quiet and without a solution file."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        ss = exu.SimulationSettings()
+        ss.solutionSettings.writeSolutionToFile = False
+    st = ss.staticSolver
+    st.newton.absoluteTolerance = abs_tol
+    st.newton.relativeTolerance = rel_tol
+    st.newton.maxIterations = max_iterations
+    st.verboseMode = 0
+    ss.linearSolver.solverType = solver_type
+    return ss
+
+
 @dataclass
 class EquilibriumStats:
     points: int = 0
@@ -48,17 +64,9 @@ class StaticSolver:
         self.max_rotation = max_rotation
         self.stats = EquilibriumStats()
         self.ramp_steps = ramp_steps
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
-            ss = exu.SimulationSettings()
-            ss.solutionSettings.writeSolutionToFile = False
-        st = ss.staticSolver
-        st.newton.absoluteTolerance = abs_tol
-        st.newton.relativeTolerance = rel_tol
-        st.newton.maxIterations = max_iterations
-        st.verboseMode = 0
         n = model.mbs.systemData.ODE2Size()
-        ss.linearSolver.solverType = exu.LinearSolverType.EXUdense if n <= 30 else exu.LinearSolverType.EigenSparse
+        ss = static_settings(abs_tol=abs_tol, rel_tol=rel_tol, max_iterations=max_iterations,
+                             solver_type=exu.LinearSolverType.EXUdense if n <= 30 else exu.LinearSolverType.EigenSparse)
         self.settings = ss
         self.q = None
         self.last_angle = None
