@@ -8,7 +8,8 @@ copies at once, with per-copy plausibility and a per-variant fallback.
 """
 from .assembly import BatchedCycloidModel, build_batched
 from .evaluator import BatchContactEvaluator, CopyBlockAssembler
-from .protocol import BatchedStaticSolver, batched_variant_figures
+from .protocol import batched_variant_figures
+from .solver import BatchedStaticSolver
 
 __all__ = ["BatchedCycloidModel", "build_batched", "BatchContactEvaluator", "CopyBlockAssembler",
            "BatchedStaticSolver", "batched_variant_figures"]
