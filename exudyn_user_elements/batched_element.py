@@ -86,6 +86,9 @@ class BatchedContactElements:
     def _set(self, q, v):
         self._ev = self.evaluate_state(q, v)
         self._q, self._v = q, v
+        # per-copy byte keys: the callbacks' cache test is one bytes comparison (a few 100 ns)
+        # instead of two array comparisons (~10 us per callback, 2 B callbacks per iteration)
+        self._keys = [qc.tobytes() + vc.tobytes() for qc, vc in zip(q, v)]
         self.n_batch_evaluations += 1
 
     def invalidate(self):
@@ -94,8 +97,7 @@ class BatchedContactElements:
     def _block(self, c, q, q_t):
         q = np.asarray(q, float)
         q_t = np.asarray(q_t, float)
-        if self._q is None or not (np.array_equal(q, self._q[c], equal_nan=True)
-                                   and np.array_equal(q_t, self._v[c], equal_nan=True)):
+        if self._q is None or q.tobytes() + q_t.tobytes() != self._keys[c]:
             sd = self.mbs.systemData
             qa = np.asarray(sd.GetODE2Coordinates(configuration=exu.ConfigurationType.Current))[self.ltg]
             va = np.asarray(sd.GetODE2Coordinates_t(configuration=exu.ConfigurationType.Current))[self.ltg]
@@ -120,7 +122,9 @@ class BatchedContactElements:
             t0 = time.perf_counter()
             self.n_jacobian_calls += 1
             ev = self._block(c, q, q_t)
-            J = -(fODE2 * ev.dQdq[c] + fODE2_t * ev.dQdv[c])
+            J = -fODE2 * ev.dQdq[c]
+            if fODE2_t != 0.0:       # the static solver's velocity factor is zero: no damping blocks
+                J -= fODE2_t * ev.dQdv[c]
             self.timing["callbacks"] += time.perf_counter() - t0
             return J
         return jacobian

@@ -127,6 +127,43 @@ def test_windowed_search_finds_the_global_nearest_sample():
     assert not np.any(clamped)
 
 
+@pytest.mark.parametrize("modification", [{}, {"equidistant_mod": 2e-5, "offset_mod": -1e-5}])
+def test_pin_curve_window_holds_the_nearest_sample_within_the_band(modification):
+    """Points at every sample's normal, (1 +- band) r_p off the profile (and between), with a
+    random tangential scatter of a few samples: the window search returns the global nearest
+    sample; points beyond the band are never given a distance below the true one."""
+    pr = _profile(**modification)
+    mesh = WheelPinMesh(profile=pr, wheel_body=0, face_width=0.008, normal=NormalLaw(law="line", stiffness=1e8))
+    s = CycloidPinSet([mesh], 1, backend="numpy", search_band=0.05)
+    tab = s.tables[0]
+    P, N, h = tab[0], tab[1], tab[4]
+    assert s.window <= 20            # vs 56 with the profile-keyed polar search
+    rng = np.random.default_rng(3)
+    i = rng.integers(0, len(P), 4000)
+    f = rng.uniform(0.95, 1.05, len(i))
+    t = np.column_stack([-N[:, 1], N[:, 0]])[i]
+    pts = P[i] + (f * pr.pin_radius)[:, None] * N[i] + (rng.uniform(-3, 3, len(i)) * h)[:, None] * t
+    glob = np.min(np.linalg.norm(P[None, :, :] - pts[:, None, :], axis=2), axis=1)
+    _, _, _, _, dist = ref.search(tab, pts, s.window)
+    np.testing.assert_allclose(dist, glob, rtol=0, atol=1e-15)
+    far = P[i] + (rng.uniform(1.05, 1.6, len(i)) * pr.pin_radius)[:, None] * N[i]
+    glob = np.min(np.linalg.norm(P[None, :, :] - far[:, None, :], axis=2), axis=1)
+    _, _, _, _, dist = ref.search(tab, far, s.window)
+    assert np.all(dist >= glob - 1e-15)
+    with pytest.raises(RvtoolInputError, match="search_band"):
+        CycloidPinSet([mesh], 1, backend="numpy", search_band=0.0)
+
+
+def test_identical_profiles_share_one_table():
+    law = NormalLaw(law="line", stiffness=1e8)
+    a = WheelPinMesh(profile=_profile(), wheel_body=0, face_width=0.008, normal=law)
+    b = WheelPinMesh(profile=_profile(), wheel_body=1, face_width=0.008, normal=law)
+    c = WheelPinMesh(profile=_profile(equidistant_mod=1e-5), wheel_body=2, face_width=0.008, normal=law)
+    s = CycloidPinSet([a, b, c], 3, backend="numpy")
+    assert len(s.tables) == 2
+    assert s.iparams[:, ref.J_TABLE].tolist() == [0] * 40 + [0] * 40 + [1] * 40
+
+
 @pytest.mark.parametrize("damping", [0.0, 30.0])
 def test_pin_tangent_matches_central_differences(damping):
     """Away from switching (no slice within 3 FD steps (3e-9 m) of opening)."""

@@ -97,16 +97,51 @@ class WheelPinMesh:
         return (np.arange(n) + 0.5) * b / n - 0.5 * b
 
 
-def auto_window(profile, table, pin_radius, margin=1.5):
-    """Search half-window [samples] that always contains the closest sample: the largest
-    index distance between a point at the pin distance off the profile and its foot."""
+def pin_curve_table(table, pin_radius):
+    """The profile table ordered for the search of a pin of radius ``pin_radius`` [m].
+
+    The kernel's first guess is a binary search of the pin centre's polar angle in the
+    table's polar column. Keyed on the profile points' own polar angles, that guess is off
+    by the angle between a pin centre and its foot on the profile (up to ~50 samples on
+    RD-40), which the search window must cover for every slice and evaluation. Keyed on the
+    polar angle of the pin-centre curve P + r_p N (where a touching pin's centre lies, the
+    epitrochoid for an unmodified profile), the guess is the foot itself for a touching pin
+    and a few samples off for a pin within +-0.2 r_p of contact, so the window shrinks by
+    an order of magnitude at the same guarantee (:func:`auto_window`).
+
+    Returns the table (points, normals, curvature, key polar angle, spacing, phi) circularly
+    shifted so that the key starts at its smallest value in [0, 2 pi) (the kernel indexes
+    modulo n), or the table unchanged when the pin-centre curve is not star-shaped about
+    the wheel centre (its polar angle not monotone), where only the profile's key is sorted.
+    """
+    P, Nn, K, polar, h, phi = table
+    probe = P + pin_radius * Nn
+    key = np.arctan2(probe[:, 1], probe[:, 0])
+    step = np.diff(np.unwrap(np.concatenate([key, key[:1]])))
+    if not (np.all(step > 0.0) and abs(np.sum(step) - 2 * np.pi) < 1e-9):
+        return table
+    key = np.mod(key, 2 * np.pi)
+    k0 = int(np.argmin(key))
+    roll = lambda a: np.roll(a, -k0, axis=0)
+    return roll(P), roll(Nn), roll(K), roll(key), h, roll(phi)
+
+
+def auto_window(profile, table, pin_radius, band=0.05, margin=1.5):
+    """Search half-window [samples] that contains the closest sample of every pin centre
+    within ``band`` x r_p of contact (distance to the profile in [(1 - band) r_p,
+    (1 + band) r_p]): the largest index distance between such a point and its foot, with a
+    margin. Farther pins may be given a farther sample: their gap is then overestimated,
+    never underestimated (the sample distance bounds the true distance from above), so a
+    pin beyond the band off contact still carries no force."""
     P, Nn, K, polar, h = table[:5]
-    probe = P + (pin_radius * 1.2) * Nn
-    beta = np.mod(np.arctan2(probe[:, 1], probe[:, 0]), 2 * np.pi)
-    i0 = np.searchsorted(polar, beta)
     n = len(P)
-    off = np.abs(((i0 - np.arange(n)) + n // 2) % n - n // 2)
-    return int(np.ceil(margin * off.max())) + 2
+    off = 0
+    for dist in np.linspace(1.0 - band, 1.0 + band, 9):
+        probe = P + (pin_radius * dist) * Nn
+        beta = np.mod(np.arctan2(probe[:, 1], probe[:, 0]), 2 * np.pi)
+        i0 = np.searchsorted(polar, beta)
+        off = max(off, int(np.abs(((i0 - np.arange(n)) + n // 2) % n - n // 2).max()))
+    return int(np.ceil(margin * off)) + 2
 
 
 class CycloidPinSet:
@@ -116,11 +151,14 @@ class CycloidPinSet:
     search: "discrete" (window search and osculating-arc projection on the table) or
     "analytic" (Newton iterations on (c - p) . c' = 0 of the analytic profile from the
     nearest sample; equidistant, offset and rotation modifications only).
+    search_band: the window holds the nearest sample of every pin centre within
+    search_band x r_p of contact (see :func:`auto_window`); default 0.05 (150 um on RD-40,
+    window 33 samples instead of 113 for the profile-keyed search).
     backend "warp" (default, one launch) or "numpy"; precision "float64" or "float32".
     """
 
     def __init__(self, meshes, n_bodies, *, samples_per_tooth=120, backend="warp", precision="float64",
-                 device="cpu", name="pins", search="discrete"):
+                 device="cpu", name="pins", search="discrete", search_band=0.05):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one WheelPinMesh")
         if backend not in ("warp", "numpy"):
@@ -128,6 +166,10 @@ class CycloidPinSet:
         if search not in ("discrete", "analytic"):
             raise RvtoolInputError(f"search = {search!r} is not valid; valid choices are ['discrete', 'analytic']")
         self.search = search
+        if not (isinstance(search_band, (int, float)) and 0.0 < search_band <= 0.5):
+            raise RvtoolInputError(f"search_band = {search_band!r} is outside the valid range (0, 0.5] "
+                                   f"(fraction of the pin radius)")
+        self.search_band = float(search_band)
         if samples_per_tooth < 8:
             raise RvtoolInputError(f"samples_per_tooth = {samples_per_tooth} is outside the valid range [8, inf)")
         self.name = name
@@ -137,6 +179,8 @@ class CycloidPinSet:
         self.precision = precision
         self.history = type("NoHistory", (), {})()
         self.tables = []
+        self.analytic = [] if search == "analytic" else None
+        table_of = {}            # identical tables are stored once (B copies of one design: one table)
         fp, ip, ids, mesh_of, pin_of = [], [], [], [], []
         window = 0
         for m_i, m in enumerate(self.meshes):
@@ -146,10 +190,18 @@ class CycloidPinSet:
                 if not (b == GROUND or 0 <= b < n_bodies):
                     raise RvtoolInputError(f"meshes[{m_i}].{nm} = {b} is outside the valid range [0, {n_bodies - 1}] or GROUND")
             prof = m.profile
-            tab = prof.table(samples_per_tooth * prof.n_teeth)
-            self.tables.append(tab)
             rp = prof.pin_radius if m.pin_radius is None else m.pin_radius
-            window = max(window, auto_window(prof, tab, rp))
+            # the table depends on the (frozen, hashable) profile and the pin radius only
+            key = (prof, float(rp))
+            if key not in table_of:
+                tab = pin_curve_table(prof.table(samples_per_tooth * prof.n_teeth), rp)
+                ana = prof.analytic_parameters() if search == "analytic" else None
+                table_of[key] = len(self.tables)
+                self.tables.append(tab)
+                if ana is not None:
+                    self.analytic.append(ana)
+                window = max(window, auto_window(prof, tab, rp, band=search_band))
+            tb = table_of[key]
             pins = pin_centres(prof, m.pin_centre_errors)
             dev = np.zeros(prof.n_pins) if m.normal_deviation is None else np.asarray(m.normal_deviation, float)
             zs = m.slice_z
@@ -171,7 +223,7 @@ class CycloidPinSet:
                     g = n_bodies
                     pb = pin_bodies[k]
                     ip.append((g if m.wheel_body == GROUND else m.wheel_body, g if pb == GROUND else pb,
-                               int(f.model), m_i))
+                               int(f.model), tb))
                     ids.append(f"{m.name}/pin{k}/s{s_i}")
                     mesh_of.append(m_i)
                     pin_of.append(k)
@@ -185,7 +237,6 @@ class CycloidPinSet:
         self.assembler = PairAssembler(self.iparams[:, 0], self.iparams[:, 1], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
-        self.analytic = ([m.profile.analytic_parameters() for m in self.meshes] if search == "analytic" else None)
         if backend == "warp":
             from warp_contacts.cycloid_pins import CycloidPinKernel
             self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device,
