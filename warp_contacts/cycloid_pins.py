@@ -18,7 +18,7 @@ from .precision import resolve_device, scalar_types
 
 
 @functools.lru_cache(maxsize=None)
-def _kernel(dtype):
+def _kernel(dtype, velocity_tangent=True):
     L = law_funcs(dtype)
     G = planar_funcs(dtype)
     vec2, perp, cross2, rot, body_seed = G.vec2, G.perp, G.cross2, G.rot, G.body_seed
@@ -44,6 +44,9 @@ def _kernel(dtype):
         kap = kE / (dtype(1.0) - rc * kE)
         ds = speed * (dtype(1.0) - rc * kE)
         return rot(rot_angle, pt), rot(rot_angle, n), kap, ds
+
+    # a compile-time trip count (Warp unrolls the seed loop; a runtime bound measured 1.7x slower)
+    N_SEEDS = 12 if velocity_tangent else 6
 
     @wp.kernel(module="unique")
     def eval_cycloid_pins(
@@ -186,8 +189,9 @@ def _kernel(dtype):
 
         den = dtype(1.0) + kap * hw
         wt = wp.dot(w, t)
-        for j in range(12):
-            # seeds: columns 0-5 move the coordinates, 6-11 the velocities
+        for j in range(N_SEEDS):
+            # seeds: columns 0-5 move the coordinates, 6-11 the velocities (12 seeds; 6 when the
+            # velocity tangent is switched off, see CycloidPinKernel.velocity_tangent)
             dqa, dtha, dqb, dthb = body_seed(j)
             dva, dwa, dvb, dwb = body_seed(j - 6)
             if j < 6:
@@ -263,12 +267,25 @@ class CycloidPinKernel:
             wp.array(np.array([[0.0] * 6 if (analytic is None or analytic[k] is None) else [1.0, *analytic[k]]
                                for k in range(len(tables))], self.ndtype), dtype=dt, device=d),
             int(window)]
+        self._model = model
         self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),
                                    "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
                                    "obs": ((n, N_OBS), "f")}, dt, self.ndtype, d)
+        self.velocity_tangent = True
+        self._record()
+
+    def _record(self):
         dev = self._buf.dev
-        self._cmd = wp.launch(_kernel(dt), dim=n, device=d, inputs=model + [dev["pose"], dev["vel"]],
+        self._cmd = wp.launch(_kernel(self.wdtype, self.velocity_tangent), dim=self.n, device=self.device,
+                              inputs=self._model + [dev["pose"], dev["vel"]],
                               outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs")], record_cmd=True)
+
+    def set_velocity_tangent(self, on):
+        """Switch the velocity tangent dQ/dv on (default) or off. Off, the kernel skips the six
+        velocity seeds of the tangent loop (about a third of its work) and dQ/dv is returned as
+        None: for static solves, whose residual does not depend on velocities."""
+        self.velocity_tangent = bool(on)
+        self._record()
 
     def evaluate(self, pose, vel):
         """Returns (Q (N,6), dQdq, dQdv, obs (N,8)); arrays are reused by the next call."""
@@ -277,5 +294,8 @@ class CycloidPinKernel:
         h["vel"][...] = vel
         self._buf.upload(("pose", "vel"))
         self._cmd.launch()
+        if not self.velocity_tangent:
+            self._buf.download(("q", "dqdq", "obs"))
+            return h["q"], h["dqdq"], None, h["obs"]
         self._buf.download(("q", "dqdq", "dqdv", "obs"))
         return h["q"], h["dqdq"], h["dqdv"], h["obs"]

@@ -107,16 +107,25 @@ class CycloidModel:
 
     def kinematic_state(self, input_angle):
         """Rigid, clearance-free kinematic positions of all bodies at ``input_angle`` (initial guess)."""
-        d = self.design
-        q = np.zeros((len(self.nodes), 3))
-        q[SHAFT, 2] = input_angle
-        zg = d.pins.n_pins - 1
-        for k in range(self.n_wheels):
-            psi = input_angle + np.deg2rad(d.wheels.phases_deg[k])
-            e = d.wheels.eccentricity
-            q[1 + k] = (-e * np.sin(psi), e * np.cos(psi), -input_angle / zg)
-        q[self.flange, 2] = -input_angle / zg
-        return q
+        return kinematic_poses(self.design, np.asarray([float(input_angle)]))[0]
+
+
+def kinematic_poses(design, input_angles):
+    """Rigid, clearance-free kinematic poses (n, nb, 3) of shaft, wheels and flange at input
+    angles (n,) [rad]: wheel k centred at e (-sin psi_k, cos psi_k), psi_k = angle + phase_k,
+    wheels and flange turned by -angle / z_g."""
+    d = design
+    a = np.asarray(input_angles, float)
+    nw = d.n_wheels
+    q = np.zeros((len(a), nw + 2, 3))
+    q[:, SHAFT, 2] = a
+    zg = d.pins.n_pins - 1
+    e = d.wheels.eccentricity
+    psi = a[:, None] + np.deg2rad(np.asarray(d.wheels.phases_deg[:nw], float))[None, :]
+    q[:, 1:nw + 1, 0] = -e * np.sin(psi)
+    q[:, 1:nw + 1, 1] = e * np.cos(psi)
+    q[:, 1:, 2] = -a[:, None] / zg
+    return q
 
 
 def _mass_wheel(design):

@@ -34,8 +34,8 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround
 
-from ..assembly.cycloid import (CycloidModel, add_bodies, lumped_bearing_contacts, output_pin_mechanism,
-                               pin_meshes)
+from ..assembly.cycloid import (CycloidModel, add_bodies, kinematic_poses, lumped_bearing_contacts,
+                               output_pin_mechanism, pin_meshes)
 from ..assembly.spec import CycloidDesign
 from ..contact.circle_set import CircleContactSet
 from ..contact.cycloid_set import CycloidPinSet
@@ -97,10 +97,39 @@ class BatchedCycloidModel:
     def n_copies(self):
         return len(self.copies)
 
+    def __post_init__(self):
+        # copies grouped by equal design (kinematic poses vectorized per group), and the
+        # offset-carrying objects of every copy: (object, copy, body, coordinate)
+        groups = {}
+        for c, m in enumerate(self.copies):
+            groups.setdefault(m.design, []).append(c)
+        self._groups = [(d, np.array(cs)) for d, cs in groups.items()]
+        self._reference = np.array([m.reference for m in self.copies])
+        self._offset_objects = [(obj, c, b, k) for c, m in enumerate(self.copies)
+                                for b, k, obj in m.journal_locks] + \
+                               [(obj, c, b, k) for c, m in enumerate(self.copies) for b, k, _, obj in m.reg_springs]
+        self._kin_key = None
+
+    def _kinematic(self, angle):
+        """(B, nb, 3) kinematic poses at input angle(s) [rad], cached for the last angles."""
+        a = np.broadcast_to(np.asarray(angle, float), (self.n_copies,))
+        if self._kin_key is None or not np.array_equal(self._kin_key, a):
+            kin = np.zeros_like(self._reference)
+            for d, cs in self._groups:
+                kin[cs] = kinematic_poses(d, a[cs])
+            self._kin_key, self._kin = a.copy(), kin
+        return self._kin
+
     def set_input_angle(self, angle):
-        """Prescribed input angle [rad] of every copy."""
-        for m in self.copies:
-            m.set_input_angle(angle)
+        """Prescribed input angle [rad]: a scalar for every copy or one per copy (B,) (what
+        :meth:`CycloidModel.set_input_angle` does per copy, with the poses vectorized)."""
+        a = np.broadcast_to(np.asarray(angle, float), (self.n_copies,))
+        dev = self._kinematic(a) - self._reference
+        mbs = self.mbs
+        for m, ai in zip(self.copies, a):
+            mbs.SetObjectParameter(m.drive, "offset", float(ai))
+        for obj, c, b, k in self._offset_objects:
+            mbs.SetObjectParameter(obj, "offset", float(dev[c, b, k]))
 
     def set_output_torques(self, torques):
         """Output torque [N m] per copy (scalar: the same for all)."""
@@ -109,8 +138,9 @@ class BatchedCycloidModel:
             m.set_output_torque(float(ti))
 
     def kinematic_vectors(self, angle):
-        """(B, 3 nb) kinematic displacement coordinates of every copy at input angle [rad]."""
-        return np.array([(m.kinematic_state(angle) - m.reference).ravel() for m in self.copies])
+        """(B, 3 nb) kinematic displacement coordinates of every copy at input angle [rad]
+        (a scalar or one per copy)."""
+        return (self._kinematic(angle) - self._reference).reshape(self.n_copies, -1)
 
     def to_global(self, qc, out=None):
         """Global ODE2 vector from per-copy coordinates (B, 3 nb)."""
@@ -155,7 +185,8 @@ def build_batched(design: CycloidDesign, variants, *, bearing_model="lumped", ba
         b = add_bodies(mbs, d_c, mg, regularization=regularization)
         copies.append(CycloidModel(design=d_c, SC=SC, mbs=mbs, nodes=b["nodes"], elements={}, pin_set=None,
                                    drive=b["drive"], load=b["load"], n_wheels=nw, locks=b["locks"],
-                                   reg_springs=b["reg_springs"], reference=b["reference"]))
+                                   reg_springs=b["reg_springs"], journal_locks=b["journal_locks"],
+                                   reference=b["reference"]))
         m_c, ct_c, (fp, ip, st) = copy_contacts(d_c, kw_c, c * nb)
         meshes += m_c
         contacts += ct_c

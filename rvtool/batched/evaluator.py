@@ -74,9 +74,11 @@ class BatchEvaluation:
     observation rows (N_pins, 8) (for pin forces). dQ/dv is assembled on first access:
     the static solver never asks for it (its velocity factor is zero)."""
 
-    def __init__(self, Q, dQdq, dQdv, finite, pin_obs):
+    def __init__(self, Q, dQdq, dQdv, finite, pin_obs, normal_forces=None):
         self.Q, self.dQdq, self.finite, self.pin_obs = Q, dQdq, finite, pin_obs
         self._dQdv = dQdv
+        # per-row normal forces [N] of the output-pin and bearing families (family peaks)
+        self.normal_forces = normal_forces or {}
 
     @property
     def dQdv(self):
@@ -114,6 +116,11 @@ class BatchContactEvaluator:
         # parked copies contribute no contact forces (their results are ignored; see protocol)
         self.masked = np.zeros(n_copies, bool)
         self.n_evaluations = 0
+        # row masks of the peak-load families (names as rvtool.protocols.precision.family_peaks)
+        fam = [cid.split("/")[-1] for cid in bearings.ids]
+        self.bearing_families = {f + "s": np.array([c.startswith(f) for c in fam])
+                                 for f in ("eccentric_bearing", "main_bearing", "input_bearing")}
+        self.bearing_families = {k: v for k, v in self.bearing_families.items() if v.any()}
 
     def evaluate(self, pose, vel):
         """:class:`BatchEvaluation` at absolute poses and velocities (B nb, 3)."""
@@ -121,27 +128,31 @@ class BatchContactEvaluator:
         Qp, Kp, Dp, obs = self.pin_set.raw(pose, vel)
         self._pose[:-1] = pose
         r = self.output_kernel.evaluate(self._pose)
-        Qb, Kb, Db, _, _ = self.bearings.raw(pose, vel)
+        Qb, Kb, Db, brg_obs, _ = self.bearings.raw(pose, vel)
         t1 = time.perf_counter()
         A, O, Bg = self.pin_asm, self.op_asm, self.brg_asm
         Q = A.vector(Qp) + O.vector(r["Q"]) + Bg.vector(Qb)
         K = A.blocks(Kp) + O.blocks(r["dQdq"]) + Bg.blocks(Kb)
         # a NaN or inf of one copy stays in that copy's block: per-copy finiteness (the
         # damping rows are checked per row here, their blocks are assembled on demand)
-        d_bad = ~np.isfinite(Dp.reshape(len(Dp), -1).sum(axis=1))
-        b_bad = ~np.isfinite(Db.reshape(len(Db), -1).sum(axis=1))
-        d_finite = np.ones(self.n_copies, bool)
-        d_finite[A.row_copy[d_bad]] = False
-        d_finite[Bg.row_copy[b_bad]] = False
-        finite = np.isfinite(Q.sum(axis=1) + K.sum(axis=(1, 2))) & d_finite
-        Dp, Db = np.array(Dp, np.float64), np.array(Db, np.float64)   # kernel buffers are reused by the next call
+        finite = np.isfinite(Q.sum(axis=1) + K.sum(axis=(1, 2)))
         masked = self.masked.copy()
+        if Dp is None:
+            def damping():
+                raise RuntimeError("dQ/dv was not computed: the batch evaluator is in static mode "
+                                   "(set_static(False) for solves that need the velocity tangent)")
+        else:
+            d_bad = ~np.isfinite(Dp.reshape(len(Dp), -1).sum(axis=1))
+            b_bad = ~np.isfinite(Db.reshape(len(Db), -1).sum(axis=1))
+            finite[A.row_copy[d_bad]] = False
+            finite[Bg.row_copy[b_bad]] = False
+            Dp, Db = np.array(Dp, np.float64), np.array(Db, np.float64)   # kernel buffers are reused next call
 
-        def damping():
-            # the output-pin family has no damping
-            D = A.blocks(Dp) + Bg.blocks(Db)
-            D[masked] = 0.0
-            return D
+            def damping():
+                # the output-pin family has no damping
+                D = A.blocks(Dp) + Bg.blocks(Db)
+                D[masked] = 0.0
+                return D
         self.n_evaluations += 1
         for c, when in self.inject_nan.items():
             if self.n_evaluations in when:
@@ -152,7 +163,32 @@ class BatchContactEvaluator:
         self.timing["kernels"] += t1 - t0
         self.timing["scatter"] += time.perf_counter() - t1
         self.timing["launches"] += 3
-        return BatchEvaluation(Q, K, damping, finite, np.array(obs, np.float64))
+        from warp_contacts.circle_pairs_ref import O_FN
+        from warp_contacts.output_pins_ref import S_FORCE
+        forces = {"output_pins": np.max(np.asarray(r["slices"])[..., S_FORCE], axis=1),
+                  "bearings": np.array(np.asarray(brg_obs)[:, O_FN])}
+        return BatchEvaluation(Q, K, damping, finite, np.array(obs, np.float64), forces)
+
+    def set_static(self, on):
+        """Static mode: no velocity tangent (the cycloid-pin kernel skips its velocity seeds and
+        :attr:`BatchEvaluation.dQdv` raises). Static solves never need it (velocity factor 0)."""
+        self.pin_set.set_velocity_tangent(not on)
+
+    def family_peaks(self, ev):
+        """{family: (B,) peak normal force [N]} of a :class:`BatchEvaluation` (zero velocity
+        states: families as :func:`rvtool.protocols.precision.family_peaks`)."""
+        from warp_contacts.circle_pairs_ref import O_FN
+
+        def per_copy(rows_copy, f):
+            out = np.zeros(self.n_copies)
+            np.maximum.at(out, rows_copy, f)
+            return out
+        out = {"pins": per_copy(self.pin_asm.row_copy, ev.pin_obs[:, O_FN]),
+               "output_pins": per_copy(self.op_asm.row_copy, ev.normal_forces["output_pins"])}
+        fb = ev.normal_forces["bearings"]
+        for name, m in self.bearing_families.items():
+            out[name] = per_copy(self.brg_asm.row_copy[m], fb[m])
+        return out
 
     def pin_forces(self, pin_obs):
         """(B, n_wheels, z_b) pin normal forces [N] (slices summed) from pin observation rows."""

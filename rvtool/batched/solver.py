@@ -73,6 +73,7 @@ class BatchedStaticSolver:
         # homotopy / bisection / per-variant ladder at once instead
         st.adaptiveStep = False
         self.settings = ss
+        model.evaluator.set_static(True)        # static residual: no velocity tangent needed
         B, nb = model.n_copies, model.nb
         n = 3 * nb
         # per-copy bounds and free coordinates (all but the drive and the locks)
@@ -91,6 +92,8 @@ class BatchedStaticSolver:
         self.factor = np.ones(B)
         self.torque = np.zeros(B)
         self.angle = None
+        self.angles = self.solved_angles = None     # (B,) prescribed and solved input angles [rad]
+        self._history = []                          # [(angles, deviation from kinematic)] of the last accepted solves
         self.dead = np.zeros(B, bool)
         self.qc = None                                 # (B, 3 nb) accepted states
         self._pv = {}
@@ -101,9 +104,13 @@ class BatchedStaticSolver:
         self.model.set_output_torques(self.torque)
 
     def set_angle(self, angle):
-        self.angle = float(angle)
-        self.model.set_input_angle(angle)
-        self.kin = self.model.kinematic_vectors(angle)
+        """Input angle [rad]: a scalar (every copy; ``self.angle`` a float) or one per copy (B,)."""
+        a = np.asarray(angle, float)
+        self.angles = np.broadcast_to(a, (self.model.n_copies,)).copy()
+        self.angle = float(a) if a.ndim == 0 else self.angles
+        self.solved_angles = self.angles.copy()
+        self.model.set_input_angle(self.angles)
+        self.kin = self.model.kinematic_vectors(self.angles)
 
     def _set_factors(self, factors):
         mbs = self.model.mbs
@@ -169,21 +176,42 @@ class BatchedStaticSolver:
         return self.residuals(qc) <= self.abs_tol
 
     # -- equilibria ---------------------------------------------------------------------
-    def solve(self, angle, previous_angle=None):
-        """Equilibria of all copies at ``angle`` [rad] with the current torques; returns (B, 3 nb).
-        Failed copies (see module docstring) hold NaN rows and are listed in ``dead``."""
-        kin_prev = self.kin if (self.qc is not None and previous_angle is not None) else None
+    def solve(self, angle, previous_angle=None, predictor="constant"):
+        """Equilibria of all copies at ``angle`` [rad] (scalar or (B,)) with the current torques;
+        returns (B, 3 nb). Failed copies (see module docstring) hold NaN rows and are listed in
+        ``dead``; ``solved_angles`` holds the angle actually solved per copy (it differs from
+        the prescribed one only for a copy solved by the per-variant path off an activation kink).
+
+        predictor: warm start from the previous equilibrium (``previous_angle`` given):
+        "constant" keeps each copy's elastic deviation from its kinematic state; "secant"
+        extrapolates it linearly in the input angle from the last two accepted solves of a
+        sequence (measured on RD-40: 2.0 instead of 3.0 Newton iterations per point).
+        """
+        if predictor not in ("constant", "secant"):
+            from ..errors import RvtoolInputError
+            raise RvtoolInputError(f"predictor = {predictor!r}; valid choices are ['constant', 'secant']")
+        warm = self.qc is not None and previous_angle is not None
+        kin_prev = self.kin if warm else None
         self.set_angle(angle)
         B = self.model.n_copies
         q = self.kin.copy()
         good = np.zeros(B, bool)
-        if kin_prev is not None:
-            guess = np.where(self.dead[:, None], self.kin, self.qc + self.kin - kin_prev)
+        if not warm:
+            self._history = []
+        if warm:
+            dev = self.qc - kin_prev
+            h = self._history
+            if predictor == "secant" and len(h) == 2 and np.array_equal(h[1][0], np.broadcast_to(previous_angle, (B,))):
+                span = h[1][0] - h[0][0]
+                ratio = np.divide(self.angles - h[1][0], span, out=np.zeros(B), where=span != 0.0)
+                dev = dev + ratio[:, None] * (h[1][1] - h[0][1])
+            guess = np.where(self.dead[:, None], self.kin, self.kin + dev)
             ok, qn = self._solve(guess)
             good = self.converged(ok, qn) & self.plausible(qn) & ~self.dead
             q[good] = qn[good]
         q, good = self.complete(q, good, previous_angle)
         self.qc = q
+        self._history = (self._history + [(self.angles.copy(), q - self.kin)])[-2:]
         return np.where(self.dead[:, None], np.nan, q)
 
     def complete(self, q, good, previous_angle):
@@ -207,7 +235,8 @@ class BatchedStaticSolver:
             q[won] = start[won]
             good = good | won
         for c in np.flatnonzero(~good & ~self.dead):
-            qc = self._per_variant(c, previous_angle)
+            qc = self._per_variant(c, None if previous_angle is None else
+                                   float(np.broadcast_to(previous_angle, (len(good),))[c]))
             if qc is None:
                 self.dead[c] = True
                 self.stats.failed_copies += 1
@@ -244,9 +273,10 @@ class BatchedStaticSolver:
         else:
             s.q, previous_angle = None, None
         try:
-            qv = s.solve(self.angle, previous_angle)
+            qv = s.solve(float(self.angles[c]), previous_angle)
         except SolverFailure:
             return None
+        self.solved_angles[c] = s.last_angle
         return qv[idx]
 
     def pin_forces(self, qc):

@@ -244,12 +244,23 @@ class CycloidPinSet:
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
 
+    velocity_tangent = True
+
+    def set_velocity_tangent(self, on):
+        """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None
+        for it and the kernel skips the velocity seeds)."""
+        self.velocity_tangent = bool(on)
+        if self.backend == "warp":
+            self._kernel.set_velocity_tangent(on)
+
     def raw(self, pose, vel):
         self._pose[:-1] = pose
         self._vel[:-1] = vel
         if self.backend == "warp":
             return self._kernel.evaluate(self._pose, self._vel)
-        return ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables, self.window, self.analytic)
+        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables, self.window,
+                                      self.analytic)
+        return Q, dq, (dv if self.velocity_tangent else None), obs
 
     def evaluate(self, pose, vel, history=None, check=True):
         if check:
