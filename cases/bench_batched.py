@@ -9,6 +9,11 @@ Reports variants per second of each, the winner per B, the time per batch Newton
 iteration split into Exudyn (assembly + sparse solve), Python callbacks and kernels
 (launch + block scatter), and the largest difference of the figures between the two
 paths. Full: B = 1, 4, 16, 64, 256 with 7 TE points; --quick: B = 1, 4 with 5 points.
+
+Options for a GPU machine: ``--device cuda:0`` runs the batched kernels there, ``--sizes
+256,1024`` sets the batch sizes, ``--pool-max N`` runs the pool on at most N of the B
+variants (its rate, variants per second over all cores, does not depend on B; the
+figures are compared on those N).
 """
 import os
 import sys
@@ -43,12 +48,21 @@ def _one(args):
         return {"status": "failed", "error": str(exc)}
 
 
+def _extra(parser):
+    parser.add_argument("--device", default="cpu", help="Warp device of the batched kernels (cpu, cuda:0)")
+    parser.add_argument("--sizes", default=None, help="comma-separated batch sizes")
+    parser.add_argument("--pool-max", type=int, default=None, help="largest number of variants run by the pool")
+    parser.add_argument("--te-points", type=int, default=None, help="TE points per variant")
+
+
 def main(argv=None):
-    args = casekit.parse_args(argv, __doc__)
+    args = casekit.parse_args(argv, __doc__, extra=_extra)
     t_start = time.perf_counter()
     design = load_design(DESIGN_PATH)
     sizes = (1, 4) if args.quick else (1, 4, 16, 64, 256)
-    protocol = VariantProtocol(n_te_points=5 if args.quick else 7)
+    if args.sizes:
+        sizes = tuple(int(x) for x in args.sizes.split(","))
+    protocol = VariantProtocol(n_te_points=args.te_points or (5 if args.quick else 7))
     workers = os.cpu_count() or 1
     out = {"batch_sizes": list(sizes), "batched_variants_per_s": [], "pool_variants_per_s": [], "winner": [],
            "breakdown": [], "max_abs_diff_vs_per_variant": {k: 0.0 for k in FIGURES}, "pool_workers": workers,
@@ -56,22 +70,28 @@ def main(argv=None):
     for B in sizes:
         vs = sample_variants(B)
         t0 = time.perf_counter()
-        res, model, solver = batched_variant_figures(design, vs, protocol, return_model=True)
+        res, model, solver = batched_variant_figures(design, vs, protocol, return_model=True, device=args.device)
         tb = time.perf_counter() - t0
+        n_pool = B if args.pool_max is None else min(B, args.pool_max)
         t0 = time.perf_counter()
         with ProcessPoolExecutor(max_workers=workers) as ex:
-            ref = list(ex.map(_one, [(design, v, protocol) for v in vs]))
+            ref = list(ex.map(_one, [(design, v, protocol) for v in vs[:n_pool]]))
         tp = time.perf_counter() - t0
         out["batched_variants_per_s"].append(B / tb)
-        out["pool_variants_per_s"].append(B / tp)
-        out["winner"].append("batched" if B / tb > B / tp else "pool")
+        out["pool_variants_per_s"].append(n_pool / tp)
+        out["winner"].append("batched" if B / tb > n_pool / tp else "pool")
         st = solver.stats
         it = max(st.newton_iterations, 1)
-        out["breakdown"].append({"B": B, "wall_batched_s": tb, "wall_pool_s": tp, "newton_iterations": st.newton_iterations,
+        out["breakdown"].append({"B": B, "pool_variants": n_pool, "wall_batched_s": tb, "wall_pool_s": tp,
+                                 "newton_iterations": st.newton_iterations,
                                  "batch_solves": st.solves,
                                  "exudyn_assembly_solve_ms_per_it": 1e3 * (st.solve_s - st.callback_s) / it,
                                  "python_callbacks_ms_per_it": 1e3 * (st.callback_s - st.kernel_s) / it,
                                  "kernels_ms_per_it": 1e3 * st.kernel_s / it,
+                                 "kernel_launch_and_transfer_ms_per_eval": 1e3 * model.evaluator.timing["kernels"]
+                                 / max(model.evaluator.n_evaluations, 1),
+                                 "block_scatter_ms_per_eval": 1e3 * model.evaluator.timing["scatter"]
+                                 / max(model.evaluator.n_evaluations, 1),
                                  "outside_solves_s": tb - st.solve_s})
         out["failed_copies"].append(st.failed_copies)
         out["fallbacks"].append(st.fallbacks)
@@ -81,11 +101,13 @@ def main(argv=None):
                 continue
             for k in FIGURES:
                 out["max_abs_diff_vs_per_variant"][k] = max(out["max_abs_diff_vs_per_variant"][k], abs(r[k] - p[k]))
-        print(f"B={B}: batched {B / tb:.2f} variants/s ({tb:.1f} s), pool {B / tp:.2f} variants/s ({tp:.1f} s)")
+        print(f"B={B}: batched {B / tb:.2f} variants/s ({tb:.1f} s), pool {n_pool / tp:.2f} variants/s ({tp:.1f} s)",
+              flush=True)
     wall = time.perf_counter() - t_start
     out["wall_s"] = wall
-    return casekit.write_results(args.out, out, settings={"n_te_points": protocol.n_te_points, "sizes": list(sizes)},
-                                 wall_s=wall)
+    return casekit.write_results(args.out, out, settings={"n_te_points": protocol.n_te_points, "sizes": list(sizes),
+                                                          "device": args.device, "pool_max": args.pool_max},
+                                 wall_s=wall, device=args.device)
 
 
 if __name__ == "__main__":
