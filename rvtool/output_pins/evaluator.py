@@ -12,6 +12,7 @@ this family, so dQ/dv = 0.
 """
 import numpy as np
 
+from rvtool.contact.assembly import BlockAssembler
 from rvtool.contact.evaluator import Evaluation, all_finite
 from warp_contacts import circle_pairs_ref as cref
 from warp_contacts import output_pins_ref as ref
@@ -26,33 +27,6 @@ GROUND = -1
 
 class NoHistory:
     """Committed history of a family without history variables (no arrays)."""
-
-
-class BlockAssembler:
-    """Scatter per-row triples of m bodies, Q (N, 3m) and K (N, 3m, 3m), into 3 n_bodies coordinates.
-
-    Rows of the ground (index n_bodies) are dropped.
-    """
-
-    def __init__(self, bodies, n_bodies):
-        bodies = np.asarray(bodies)
-        m = bodies.shape[1]
-        self.n = n = 3 * n_bodies
-        gidx = (3 * bodies[:, :, None] + np.arange(3)).reshape(len(bodies), 3 * m)
-        gidx = np.where(np.repeat(bodies >= n_bodies, 3, axis=1), -1, gidx)
-        self.vec_mask = gidx >= 0
-        self.vec_idx = gidx[self.vec_mask]
-        rows = np.repeat(gidx[:, :, None], 3 * m, axis=2)
-        cols = np.repeat(gidx[:, None, :], 3 * m, axis=1)
-        self.mat_mask = (rows >= 0) & (cols >= 0)
-        self.mat_idx = (rows * n + cols)[self.mat_mask]
-
-    def vector(self, Q):
-        return np.bincount(self.vec_idx, weights=np.asarray(Q, float)[self.vec_mask], minlength=self.n)
-
-    def matrix(self, K):
-        return np.bincount(self.mat_idx, weights=np.asarray(K, float)[self.mat_mask],
-                           minlength=self.n * self.n).reshape(self.n, self.n)
 
 
 class OutputPinEvaluator:
