@@ -37,23 +37,26 @@ from rvtool.variants import VariantProtocol  # noqa: E402
 def _per_variant_te(args):
     """TE p-p [arcsec] of one variant by the sequential path (None if it fails)."""
     from rvtool.assembly.cycloid import build
+    from rvtool.protocols.equilibrium import StaticSolver
     from rvtool.protocols.precision import quasi_static_te
-    design, v, angles = args
+    design, v, angles, max_it, reg, start = args
     d, kw = v.apply(design)
     try:
-        r = quasi_static_te(build(d, **kw), torque=d.rated_torque, input_angles=angles)
+        m = build(d, **kw, regularization=reg)
+        r = quasi_static_te(m, torque=d.rated_torque, input_angles=angles,
+                            solver=StaticSolver(m, max_iterations=max_it), warm_start=start == "warm")
     except Exception:                 # a failed variant is a row of the study, not the end of it
         return None
     return te_metrics(r["te"])["pp"] * ARCSEC
 
 
-def batched_te(design, variants, angles, device):
+def batched_te(design, variants, angles, device, max_it, reg, start):
     """TE p-p [arcsec] per variant (NaN: failed) and timing of the batched path."""
     from rvtool.batched import build_batched
     from rvtool.batched.solver import BatchedStaticSolver
     t0 = time.perf_counter()
-    model = build_batched(design, variants, device=device)
-    solver = BatchedStaticSolver(model)
+    model = build_batched(design, variants, device=device, regularization=reg)
+    solver = BatchedStaticSolver(model, max_iterations=max_it, build_kw={"regularization": reg})
     build_s = time.perf_counter() - t0
     ratio = np.array([m.design.ratio for m in model.copies])
     solver.set_torques(-np.sign(ratio) * np.array([m.design.rated_torque for m in model.copies]))
@@ -62,7 +65,7 @@ def batched_te(design, variants, angles, device):
     th_out, prev = [], None
     t1 = time.perf_counter()
     for a in angles:
-        q = solver.solve(a, prev, predictor="secant")
+        q = solver.solve(a, prev if start == "warm" else None, predictor="secant")
         prev = a
         th_out.append(ref_out + q[:, i_out])
     solve_s = time.perf_counter() - t1
@@ -89,6 +92,12 @@ def _extra(parser):
     parser.add_argument("--sizes", default=None, help="comma-separated batch sizes")
     parser.add_argument("--pool-max", type=int, default=64, help="largest number of variants run by the pool")
     parser.add_argument("--te-points", type=int, default=None, help="TE points per variant")
+    parser.add_argument("--max-iterations", type=int, default=30, help="Newton iterations per solve (both paths)")
+    parser.add_argument("--start", default="warm", choices=("homotopy", "warm"),
+                        help="start of each TE point: the stiffness homotopy from the kinematic state, or the "
+                             "previous point's equilibrium (both paths)")
+    parser.add_argument("--regularization", default="1e4,100",
+                        help="builder regularization springs [N/m],[N m/rad] (the Monte Carlo's; both paths)")
 
 
 def main(argv=None):
@@ -99,19 +108,23 @@ def main(argv=None):
     n_te = args.te_points or (13 if args.quick else VariantProtocol().n_te_points)
     angles = VariantProtocol(n_te_points=n_te).input_angles(design)
     workers = os.cpu_count() or 1
+    reg = tuple(float(x) for x in args.regularization.split(","))
     variants = sample_variants(max(sizes))
     n_pool = min(args.pool_max, max(sizes))
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=workers) as ex:
-        pool_pp = list(ex.map(_per_variant_te, [(design, v, angles) for v in variants[:n_pool]]))
+        pool_pp = list(ex.map(_per_variant_te, [(design, v, angles, args.max_iterations, reg, args.start) for v in variants[:n_pool]]))
     pool_s = time.perf_counter() - t0
     pool_rate = n_pool / pool_s
     out = {"batch_sizes": list(sizes), "device": args.device, "te_points": n_te, "pool_workers": workers,
            "pool_variants": n_pool, "pool_variants_per_s": pool_rate, "pool_failed": sum(p is None for p in pool_pp),
            "batched_variants_per_s": [], "batched_variants_per_s_with_build": [], "winner": [], "speedup_vs_pool": [],
            "breakdown": [], "te_pp_max_abs_diff_arcsec": 0.0}
+    settings = {"te_points": n_te, "sizes": list(sizes), "pool_max": args.pool_max, "predictor": "secant",
+                "abs_tol_N": 1e-6, "max_iterations": args.max_iterations, "regularization": list(reg),
+                "start": args.start}
     for B in sizes:
-        pp, br = batched_te(design, variants[:B], angles, args.device)
+        pp, br = batched_te(design, variants[:B], angles, args.device, args.max_iterations, reg, args.start)
         rate = B / br["solve_s"]
         out["batched_variants_per_s"].append(rate)
         out["batched_variants_per_s_with_build"].append(B / (br["solve_s"] + br["build_s"]))
@@ -123,12 +136,10 @@ def main(argv=None):
                 out["te_pp_max_abs_diff_arcsec"] = max(out["te_pp_max_abs_diff_arcsec"], abs(a - b))
         print(f"B={B}: batched {rate:.1f} variants/s (+build {br['build_s']:.1f} s), pool {pool_rate:.1f} variants/s",
               flush=True)
-    wall = time.perf_counter() - t_start
-    out["wall_s"] = wall
-    return casekit.write_results(args.out, out, settings={"te_points": n_te, "sizes": list(sizes),
-                                                          "pool_max": args.pool_max, "predictor": "secant",
-                                                          "abs_tol_N": 1e-6},
-                                 wall_s=wall, device=args.device)
+        # written after every batch size: a long GPU run leaves its finished sizes behind
+        out["wall_s"] = time.perf_counter() - t_start
+        res = casekit.write_results(args.out, out, settings=settings, wall_s=out["wall_s"], device=args.device)
+    return res
 
 
 if __name__ == "__main__":

@@ -193,7 +193,7 @@ class StaticSolver:
             if not ok:
                 ok, q, used = self._shifted(previous_angle, input_angle)
         if not ok:
-            if self.q is not None:
+            if self.q is not None and previous_angle is not None:
                 self.stats.ramped_restarts += 1
             ok, q = self._stiffened_start(input_angle)
         if not ok:
