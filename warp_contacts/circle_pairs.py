@@ -273,5 +273,14 @@ class CirclePairKernel:
             names += ["h_act_in", "h_a_in", "h_b_in"]
         self._buf.upload(names)
         self._cmd.launch()
-        self._buf.download(("q", "dqdq", "dqdv", "obs", "h_act_out", "h_a_out", "h_b_out"))
-        return h["q"], h["dqdq"], h["dqdv"], h["obs"], (h["h_act_out"], h["h_a_out"], h["h_b_out"])
+        names = [k for k in ("q", "dqdq", "dqdv", "obs", "h_act_out", "h_a_out", "h_b_out")
+                 if k not in self.keep_on_device]
+        self._buf.download(names)
+        g = {k: (h[k] if k in names else None) for k in h}
+        return g["q"], g["dqdq"], g["dqdv"], g["obs"], (g["h_act_out"], g["h_a_out"], g["h_b_out"])
+
+    # outputs left on the device (returned as None; read them with device_array)
+    keep_on_device = frozenset()
+
+    def device_array(self, name):
+        return self._dev[name]

@@ -294,8 +294,14 @@ class CycloidPinKernel:
         h["vel"][...] = vel
         self._buf.upload(("pose", "vel"))
         self._cmd.launch()
-        if not self.velocity_tangent:
-            self._buf.download(("q", "dqdq", "obs"))
-            return h["q"], h["dqdq"], None, h["obs"]
-        self._buf.download(("q", "dqdq", "dqdv", "obs"))
-        return h["q"], h["dqdq"], h["dqdv"], h["obs"]
+        names = [k for k in ("q", "dqdq", "dqdv", "obs") if k not in self.keep_on_device
+                 and (k != "dqdv" or self.velocity_tangent)]
+        self._buf.download(names)
+        return tuple(h[k] if k in names else None for k in ("q", "dqdq", "dqdv", "obs"))
+
+    # outputs left on the device (returned as None; read them with device_array), e.g. the
+    # per-row tangents that a device-side block scatter sums (warp_contacts.block_scatter)
+    keep_on_device = frozenset()
+
+    def device_array(self, name):
+        return self._buf.dev[name]

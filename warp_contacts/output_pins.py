@@ -480,6 +480,12 @@ class OutputPinKernel:
         self._cmd = wp.launch(kernel, dim=n, device=d, inputs=inputs, outputs=[D[k] for k in self._out_names],
                               record_cmd=True)
 
+    # outputs left on the device (returned as None; read them with device_array)
+    keep_on_device = frozenset()
+
+    def device_array(self, name):
+        return self._dev[name]
+
     def evaluate(self, pose, tilt=None):
         """Results in the layout of :mod:`output_pins_ref` (arrays owned by this object, overwritten next call).
 
@@ -502,8 +508,10 @@ class OutputPinKernel:
         self._cmd.launch()
         if not self._on_cpu:
             for k in self._out_names:
-                h[k][...] = self._dev[k].numpy()
-        out = {"Q": h["q"], "dQdq": h["dqdq"], "tilt_moments": h["tilt_m"], "slices": h["slices"]}
+                if k not in self.keep_on_device:
+                    h[k][...] = self._dev[k].numpy()
+        g = {k: (None if k in self.keep_on_device else v) for k, v in h.items()}
+        out = {"Q": g["q"], "dQdq": g["dqdq"], "tilt_moments": g["tilt_m"], "slices": g["slices"]}
         if self.mode == "shared":
             out["pin"] = h["pin"]
             out["sleeve_tangent"] = h["sleeve_du"]

@@ -46,6 +46,7 @@ class CopyBlockAssembler:
         self.row_copy = row_copy
         local = 3 * (bodies % nb)[:, :, None] + np.arange(3)            # (N, m, 3)
         local = np.where(ground[:, :, None], -1, local).reshape(n_rows, 3 * m)
+        self.local = local                       # (N, 3m) local coordinate of each row entry, -1: ground
         pos = pair_index(local, n)
         self._vec = RowScatter(np.where(local >= 0, row_copy[:, None] * n + local, -1), n_copies * n)
         self._mat = RowScatter(np.where(pos >= 0, row_copy[:, None, None] * n * n + pos, -1), n_copies * n * n)
@@ -107,6 +108,8 @@ class BatchContactEvaluator:
         # parked copies contribute no contact forces (their results are ignored; see protocol)
         self.masked = np.zeros(n_copies, bool)
         self.n_evaluations = 0
+        self._scatter = None
+        self.device_scatter = False
         # row masks of the peak-load families (names as rvtool.protocols.precision.family_peaks)
         fam = [cid.split("/")[-1] for cid in bearings.ids]
         self.bearing_families = {f + "s": np.array([c.startswith(f) for c in fam])
@@ -122,8 +125,12 @@ class BatchContactEvaluator:
         Qb, Kb, Db, brg_obs, _ = self.bearings.raw(pose, vel)
         t1 = time.perf_counter()
         A, O, Bg = self.pin_asm, self.op_asm, self.brg_asm
-        Q = A.vector(Qp) + O.vector(r["Q"]) + Bg.vector(Qb)
-        K = A.blocks(Kp) + O.blocks(r["dQdq"]) + Bg.blocks(Kb)
+        if self.device_scatter:
+            pk, ok, bk = self._device_kernels()
+            Q, K = self._scatter([(k.device_array("q"), k.device_array("dqdq")) for k in (pk, ok, bk)])
+        else:
+            Q = A.vector(Qp) + O.vector(r["Q"]) + Bg.vector(Qb)
+            K = A.blocks(Kp) + O.blocks(r["dQdq"]) + Bg.blocks(Kb)
         # a NaN or inf of one copy stays in that copy's block: per-copy finiteness (the
         # damping rows are checked per row here, their blocks are assembled on demand)
         finite = np.isfinite(Q.sum(axis=1) + K.sum(axis=(1, 2)))
@@ -162,8 +169,32 @@ class BatchContactEvaluator:
 
     def set_static(self, on):
         """Static mode: no velocity tangent (the cycloid-pin kernel skips its velocity seeds and
-        :attr:`BatchEvaluation.dQdv` raises). Static solves never need it (velocity factor 0)."""
+        :attr:`BatchEvaluation.dQdv` raises). Static solves never need it (velocity factor 0).
+        On a GPU, static mode also sums the per-row forces and tangents into the per-copy
+        blocks on the device (:class:`warp_contacts.block_scatter.BlockScatter`): only B
+        blocks cross to the host instead of every row's tangent."""
         self.pin_set.set_velocity_tangent(not on)
+        kernels = self._device_kernels()
+        if kernels is None:
+            return
+        if on and self._scatter is None:
+            from warp_contacts.block_scatter import BlockScatter
+            pk = kernels[0]
+            self._scatter = BlockScatter([(a.local, a.row_copy) for a in (self.pin_asm, self.op_asm, self.brg_asm)],
+                                         self.n_copies, self.pin_asm.n, pk.wdtype, pk.device)
+        self.device_scatter = bool(on)
+        for k, names in zip(kernels, ({"q", "dqdq"}, {"q", "dqdq"}, {"q", "dqdq", "dqdv"})):
+            k.keep_on_device = frozenset(names) if on else frozenset()
+
+    def _device_kernels(self):
+        """(pin, output-pin, bearing) kernels if all three run on a GPU, else None."""
+        import warp as wp
+        ks = (getattr(self.pin_set, "_kernel", None), self.output_kernel, getattr(self.bearings, "_kernel", None))
+        if any(k is None or not hasattr(k, "device_array") for k in ks):
+            return None
+        if any(wp.get_device(k.device).is_cpu for k in ks):
+            return None
+        return ks
 
     def family_peaks(self, ev):
         """{family: (B,) peak normal force [N]} of a :class:`BatchEvaluation` (zero velocity
