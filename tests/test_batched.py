@@ -51,6 +51,18 @@ def test_batched_equals_per_variant(batched):
     assert np.max(np.abs(res[1]["q_te"] - q_ref)) < 1e-9
 
 
+def test_batched_regularization_equals_per_variant():
+    # the Monte Carlo's stiffer regularization (1e4 N/m, 100 N m/rad) must reach the batched build:
+    # with the default (100, 0.1) the pin-clearance variant's lost motion differs by far more than 1e-6 arcmin
+    reg = (1e4, 100.0)
+    v = _variants()[1]
+    r = batched_variant_figures(DESIGN, [v], PROTOCOL, regularization=reg)[0]
+    ref = variant_figures(DESIGN, v, PROTOCOL, regularization=reg)
+    assert r["status"] == "ok"
+    assert abs(r["te_pp_arcsec"] - ref["te_pp_arcsec"]) < 1e-4
+    assert abs(r["lost_motion_arcmin"] - ref["lost_motion_arcmin"]) < 1e-6
+
+
 def test_block_structure_matches_per_variant_elements():
     vs = _variants()[:2]
     model = build_batched(DESIGN, vs)

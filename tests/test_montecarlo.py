@@ -171,8 +171,8 @@ def test_pool_equals_serial(design, tol, uninterrupted, tmp_path):
 
 
 def test_batched_mode(design, tmp_path):
-    # no free play here (eccentricity errors >= 0 close the pin mesh): the batched path builds with
-    # the default regularization springs, under which the lost-motion continuation stalls in free play
+    # no free play here (eccentricity errors >= 0 close the pin mesh); the batched path takes the
+    # builder's regularization, so batched and serial run the same reducer under BUILD
     spec = ToleranceSpec(eccentricity_error=TruncatedNormal(mean=1e-6, std=0.5e-6, low=0.0))
     settings = MonteCarloSettings(n_variants=2, seed=2, chunk_size=2, mode="batched")
     try:
@@ -181,11 +181,11 @@ def test_batched_mode(design, tmp_path):
         with pytest.raises(RvtoolInputError, match="batched"):
             run_monte_carlo(design, spec, PROTOCOL, settings, str(tmp_path))
         return
-    with pytest.raises(RvtoolInputError, match=r"build options \['regularization'\]"):
-        run_monte_carlo(design, spec, PROTOCOL, settings, str(tmp_path / "b0"), build_kw=BUILD)
-    res = run_monte_carlo(design, spec, PROTOCOL, settings, str(tmp_path / "b"))
+    res = run_monte_carlo(design, spec, PROTOCOL, settings, str(tmp_path / "b"), build_kw=BUILD)
     ref = run_monte_carlo(design, spec, PROTOCOL, MonteCarloSettings(n_variants=2, seed=2, chunk_size=2, mode="serial"),
-                          str(tmp_path / "s"))
+                          str(tmp_path / "s"), build_kw=BUILD)
+    with pytest.raises(RvtoolInputError, match=r"build options \['bearing_stiffness'\]"):
+        run_monte_carlo(design, spec, PROTOCOL, settings, str(tmp_path / "b0"), build_kw={"bearing_stiffness": 1.0})
     for a, b in zip(res["records"], ref["records"]):
         assert a["status"] == b["status"] == "ok", (a["error"], b["error"])
         for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N"):

@@ -87,7 +87,8 @@ def _continuation(solver, torques, max_step=2e-3, min_increment=1e-4):
 
 
 def batched_variant_figures(design, variants, protocol: VariantProtocol = VariantProtocol(), *, device="cpu",
-                            backend="warp", return_model=False, inject_nan=None):
+                            backend="warp", return_model=False, inject_nan=None,
+                            regularization=(100.0, 0.1)):
     """:func:`rvtool.variants.variant_figures` for all ``variants`` in one Exudyn system.
 
     Returns one dict per variant with the keys of ``variant_figures`` (``te_pp_arcsec``,
@@ -96,18 +97,21 @@ def batched_variant_figures(design, variants, protocol: VariantProtocol = Varian
     ("ok" or "failed": figures NaN), ``error`` and ``q_te`` ((n_te_points, 3 nb) equilibrium
     coordinates of the copy, body-major x, y, theta). With ``return_model=True`` returns
     (list, model, solver). inject_nan: {copy: evaluation counters} fault injection (tests).
+    regularization: builder regularization springs (translational [N/m], rotational [N m/rad]),
+    passed to the batched build and to the solver's per-variant fallback so both model the same
+    reducer as ``variant_figures(..., regularization=...)``.
     """
     t0 = time.perf_counter()
     variants = list(variants)
     if protocol.bearing_model != "lumped":
         from ..errors import RvtoolInputError
         raise RvtoolInputError(f"protocol.bearing_model = {protocol.bearing_model!r}; the batched path supports ['lumped']")
-    model = build_batched(design, variants, device=device, backend=backend)
+    model = build_batched(design, variants, device=device, backend=backend, regularization=regularization)
     if inject_nan:
         model.evaluator.inject_nan = {int(c): set(v) for c, v in inject_nan.items()}
     B = model.n_copies
     designs = [m.design for m in model.copies]
-    solver = BatchedStaticSolver(model)
+    solver = BatchedStaticSolver(model, build_kw={"regularization": regularization})
     ratio = np.array([d.ratio for d in designs])
     solver.set_torques(-np.sign(ratio) * protocol.te_torque_fraction * np.array([d.rated_torque for d in designs]))
     i_out = 3 * (model.nb - 1) + 2
