@@ -120,6 +120,7 @@ def _record(variant, figures=None, error=None, wall_s=None):
     for nm in FIGURES + ("newton_iterations",):
         v = None if figures is None else figures.get(nm)
         rec[nm] = None if v is None else (int(v) if nm == "newton_iterations" else float(v))
+    rec["lost_motion_method"] = None if figures is None else figures.get("lost_motion_method")
     rec["wall_s"] = float(figures["wall_s"]) if figures is not None and "wall_s" in figures else wall_s
     rec["status"] = "ok" if error is None else "failed"
     rec["error"] = error

@@ -86,6 +86,21 @@ def _continuation(solver, torques, max_step=2e-3, min_increment=1e-4):
     return out
 
 
+def _lost_motion_fallback(design, variant, protocol, regularization):
+    """(lost motion [arcmin], method, None) of one variant by :func:`variant_lost_motion` on its
+    own model (load control, then spring control), or (NaN, None, error) if both fail."""
+    from ..assembly.cycloid import build
+    from ..errors import SolverFailure
+    from ..variants import variant_lost_motion
+    d, kw = variant.apply(design)
+    model = build(d, bearing_model="lumped", regularization=regularization, **kw)
+    try:
+        r = variant_lost_motion(model, d, protocol)
+    except SolverFailure as exc:
+        return np.nan, None, f"SolverFailure: {exc}"
+    return r["lost_motion_arcmin"], r["method"], None
+
+
 def batched_variant_figures(design, variants, protocol: VariantProtocol = VariantProtocol(), *, device="cpu",
                             backend="warp", return_model=False, inject_nan=None,
                             regularization=(100.0, 0.1)):
@@ -129,13 +144,28 @@ def batched_variant_figures(design, variants, protocol: VariantProtocol = Varian
     q_te = np.array(q_te)
     tq = np.array([protocol.lost_motion_torques(d) for d in designs])
     solver.set_angle(0.0)
+    dead_te = solver.dead.copy()
     lm_angles = _continuation(solver, tq)
+    lm = (lm_angles[:, 0] - lm_angles[:, -1]) * ARCMIN
+    method = np.where(np.isfinite(lm), "load", None).astype(object)
+    lm_error = {}
+    for c in np.flatnonzero(solver.dead & ~dead_te):
+        # the continuation stalled for this copy alone: its TE stands, and its lost motion comes
+        # from the per-variant path's fallback (spring control), as in variant_figures
+        lm[c], method[c], lm_error[c] = _lost_motion_fallback(design, variants[c], protocol, regularization)
     wall = time.perf_counter() - t0
     out = []
     for c in range(B):
-        if solver.dead[c]:
+        if c in lm_error and lm_error[c] is not None:
             out.append({"te_pp_arcsec": np.nan, "te_rms_arcsec": np.nan, "max_pin_force_N": np.nan,
-                        "lost_motion_arcmin": np.nan, "newton_iterations": solver.stats.newton_iterations,
+                        "lost_motion_arcmin": np.nan, "lost_motion_method": None,
+                        "newton_iterations": solver.stats.newton_iterations, "wall_s": wall / B,
+                        "status": "failed", "error": lm_error[c], "q_te": q_te[:, c]})
+            continue
+        if dead_te[c]:
+            out.append({"te_pp_arcsec": np.nan, "te_rms_arcsec": np.nan, "max_pin_force_N": np.nan,
+                        "lost_motion_arcmin": np.nan, "lost_motion_method": None,
+                        "newton_iterations": solver.stats.newton_iterations,
                         "wall_s": wall / B, "status": "failed",
                         "error": "no plausible equilibrium (batch, homotopy and per-variant path failed)",
                         "q_te": q_te[:, c]})
@@ -144,7 +174,7 @@ def batched_variant_figures(design, variants, protocol: VariantProtocol = Varian
         met = te_metrics(te)
         out.append({"te_pp_arcsec": met["pp"] * ARCSEC, "te_rms_arcsec": met["rms"] * ARCSEC,
                     "max_pin_force_N": float(fmax[c]),
-                    "lost_motion_arcmin": float((lm_angles[c, 0] - lm_angles[c, -1]) * ARCMIN),
+                    "lost_motion_arcmin": float(lm[c]), "lost_motion_method": method[c],
                     "newton_iterations": solver.stats.newton_iterations, "wall_s": wall / B,
                     "status": "ok", "error": None, "q_te": q_te[:, c]})
     return (out, model, solver) if return_model else out
