@@ -2,16 +2,17 @@
 
 1,000 variants (--quick: 20; --variants N overrides) drawn from
 cases/designs/rd40_tolerances.toml (seed 2026, reproducible per variant index), each
-run by the per-variant reference protocol rvtool.variants.variant_figures: quasi-static
-TE over one output revolution at N_TE input angles under the rated torque, the maximum
-pin force over those states, and the lost motion at +-3 % of the rated torque. The
-study runs on a process pool over all cores (one BLAS thread per worker) and writes
-one chunk file per 10 variants (atomic rename), so an interrupted run resumes with
---resume. Reported: mean, std, p5/p50/p95 with a Student-t 95 % CI of the mean and a
+run by the protocol of rvtool.variants.variant_figures: quasi-static TE over one output
+revolution at N_TE input angles under the rated torque, the maximum pin force over those
+states, and the lost motion at +-3 % of the rated torque (load-controlled continuation,
+spring control where it fails). --mode batched (default): each chunk of CHUNK_BATCHED
+variants is one Exudyn system (rvtool.batched), chunks side by side in a process pool over
+all cores; --mode pool: one Exudyn system per variant in the pool (chunks of 10). Each
+finished chunk is one file (atomic rename), so an interrupted run resumes with --resume. Reported: mean, std, p5/p50/p95 with a Student-t 95 % CI of the mean and a
 distribution-free order-statistic 95 % CI of p95; histograms. Error statement of the
 TE sampling: the p-p at N_TE points against a dense sampling (DENSE_TE points) on a
-few variants. The batched path (rvtool.batched, all variants of a chunk in one Exudyn
-system) is timed on a subset when it exists.
+few variants. Both modes are timed on the same first COMPARE variants (--quick: 4), with
+their largest figure differences (the batched path against the per-variant reference).
 """
 import os
 import shutil
@@ -36,6 +37,11 @@ static solver's warm starts need angle sub-steps or cold restarts (15-40x slower
 a negative or small turn (23, 37, 41, 47, 53, 797) do not."""
 DENSE_TE = 797
 """Reference sampling of the error statement (turn of +17.6 deg per point: warm starts hold)."""
+CHUNK_BATCHED = 16
+"""Variants per batched system: the fastest batch size on one CPU core (cases/bench_batched_te.py,
+53 TE points: 17.3 variants/s at B = 16, 10.9 at B = 64)."""
+COMPARE = 64
+"""Variants timed in both modes (each mode's pool started from nothing, like a study)."""
 REGULARIZATION = (1.0e4, 100.0)
 """Builder regularization springs [N/m, N m/rad] (default 100, 0.1): with pin clearance the
 lost-motion continuation crosses free play, where the default rotational spring turns every
@@ -47,6 +53,9 @@ def _extra(parser):
     parser.add_argument("--variants", type=int, default=None, help="number of variants (default 1000, --quick 20)")
     parser.add_argument("--workers", type=int, default=None, help="pool processes (default: all cores)")
     parser.add_argument("--resume", action="store_true", help="reuse finished chunks in OUT/chunks")
+    parser.add_argument("--mode", default="batched", choices=("batched", "pool"),
+                        help="batched: chunks of 16 variants per Exudyn system in a process pool; "
+                             "pool: one variant per task (default batched)")
 
 
 def _hist(ax, x, label, s):
@@ -68,13 +77,14 @@ def main(argv=None):
     chunk_dir = os.path.join(args.out, "chunks")
     if not args.resume and os.path.isdir(chunk_dir):
         shutil.rmtree(chunk_dir)   # a timed study starts from nothing unless asked to resume
-    settings = MonteCarloSettings(n_variants=n, seed=SEED, chunk_size=10, mode="pool", workers=args.workers)
+    chunk = CHUNK_BATCHED if args.mode == "batched" else 10
+    settings = MonteCarloSettings(n_variants=n, seed=SEED, chunk_size=chunk, mode=args.mode, workers=args.workers)
     res = run_monte_carlo(design, tol, protocol, settings, chunk_dir, build_kw=build_kw,
                           progress=text_progress(label="variants"))
     s = res["summary"]
     # rate over the variants run now (a resumed study loads the others from its chunk files)
     n_run = n - res["chunks_loaded"] * settings.chunk_size
-    pool_rate = n_run / res["wall_s"] if n_run > 0 else None
+    rate = n_run / res["wall_s"] if n_run > 0 else None
     recs = res["records"]
     ok = [r for r in recs if r["status"] == "ok"]
 
@@ -97,38 +107,25 @@ def main(argv=None):
     bias = {nm: (None if nom_default[nm] is None or nom[nm] is None else nom[nm] - nom_default[nm])
             for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")}
 
-    # Batched path on a subset, when rvtool.batched provides it
-    batched_rate, batched_note, batched_agreement = None, None, None
-    try:
-        from rvtool.batched import batched_variant_figures  # noqa: F401
-    except ImportError as exc:
-        batched_note = f"rvtool.batched.batched_variant_figures not available ({exc}): not measured"
-    else:
-        nb = min(n, 4 if args.quick else 16)
-        bdir = os.path.join(args.out, "chunks_batched")
-        shutil.rmtree(bdir, ignore_errors=True)
-        bset = MonteCarloSettings(n_variants=nb, seed=SEED, chunk_size=nb, mode="batched")
-        import inspect
-        takes = set(inspect.signature(batched_variant_figures).parameters)
-        bkw = {k: v for k, v in build_kw.items() if k in takes}
-        try:
-            bres = run_monte_carlo(design, tol, protocol, bset, bdir, build_kw=bkw)
-        except Exception as exc:  # a failing experimental path is reported, not fatal to the study
-            batched_note = f"batched run raised {type(exc).__name__}: {exc}"
-        else:
-            bok = [r for r in bres["records"] if r["status"] == "ok"]
-            # a rate of failed runs is no throughput: reported only when variants succeeded
-            batched_rate = len(bok) / bres["wall_s"] if bok else None
-            pairs = [(a, b) for a, b in zip(bres["records"], recs[:nb]) if a["status"] == b["status"] == "ok"]
-            batched_agreement = {"variants": nb, "batched_ok": len(bok), "both_ok": len(pairs),
-                                 "build_options_not_passed": sorted(set(build_kw) - set(bkw)),
-                                 "max_abs_diff_te_pp_arcsec": max((abs(a["te_pp_arcsec"] - b["te_pp_arcsec"])
-                                                                   for a, b in pairs), default=None),
-                                 "first_error": next((r["error"] for r in bres["records"] if r["error"]), None)}
-            batched_note = (f"batched: one system of {nb} variants on cpu (rate over its successful variants); "
-                            f"pool: {n_run} variants on {settings.workers or os.cpu_count()} workers"
-                            + (f"; the batched path does not take {sorted(set(build_kw) - set(bkw))}, so it ran "
-                               f"with the builder's default regularization" if set(build_kw) - set(bkw) else ""))
+    # Both modes on the same first variants: rate and agreement (per-variant path = reference)
+    nc = min(n, 4 if args.quick else COMPARE)
+    cmp_recs, cmp_rate = {}, {}
+    for mode in ("pool", "batched"):
+        cdir = os.path.join(args.out, f"chunks_compare_{mode}")
+        shutil.rmtree(cdir, ignore_errors=True)
+        cset = MonteCarloSettings(n_variants=nc, seed=SEED, chunk_size=CHUNK_BATCHED if mode == "batched" else 10,
+                                  mode=mode, workers=args.workers)
+        cres = run_monte_carlo(design, tol, protocol, cset, cdir, build_kw=build_kw)
+        cmp_recs[mode] = cres["records"]
+        ok_n = sum(r["status"] == "ok" for r in cres["records"])
+        # a rate of failed runs is no throughput: reported only when variants succeeded
+        cmp_rate[mode] = ok_n / cres["wall_s"] if ok_n else None
+    pairs = [(a, b) for a, b in zip(cmp_recs["batched"], cmp_recs["pool"]) if a["status"] == b["status"] == "ok"]
+    agreement = {"variants": nc, "both_ok": len(pairs),
+                 "status_differs": sum(a["status"] != b["status"] for a, b in zip(cmp_recs["batched"], cmp_recs["pool"])),
+                 **{f"max_abs_diff_{nm}": max((abs(a[nm] - b[nm]) for a, b in pairs), default=None)
+                    for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")}}
+    methods = {m: sum(r.get("lost_motion_method") == m for r in recs) for m in ("load", "spring")}
 
     import matplotlib.pyplot as plt
     fig, axs = plt.subplots(1, 3, figsize=(12, 3.4))
@@ -144,12 +141,15 @@ def main(argv=None):
         "te_pp_arcsec_p95": s["te_pp_arcsec"].get("p95"),
         "lost_motion_arcmin_mean": s["lost_motion_arcmin"].get("mean"),
         "wall_s": res["wall_s"],
-        "variants_per_s": pool_rate,
-        "mode": "pool",
-        "pool_variants_per_s": pool_rate,
-        "batched_variants_per_s": batched_rate,
-        "batched_note": batched_note,
-        "batched_agreement": batched_agreement,
+        "variants_per_s": rate,
+        "mode": args.mode,
+        "pool_variants_per_s": cmp_rate["pool"],
+        "batched_variants_per_s": cmp_rate["batched"],
+        "mode_comparison_note": (f"both modes on the first {nc} variants, each in a process pool of "
+                                 f"{settings.workers or os.cpu_count()} workers started for it (batched: "
+                                 f"{CHUNK_BATCHED} variants per Exudyn system on cpu); rates over successful variants"),
+        "batched_agreement": agreement,
+        "lost_motion_methods": methods,
         "te_pp_arcsec_mean_ci": s["te_pp_arcsec"].get("mean_ci"),
         "te_pp_arcsec_p95_ci": s["te_pp_arcsec"].get("p95_ci"),
         "lost_motion_arcmin_mean_ci": s["lost_motion_arcmin"].get("mean_ci"),
@@ -172,7 +172,7 @@ def main(argv=None):
     }
     return casekit.write_results(args.out, results, settings={
         "variants": n, "seed": SEED, "tolerances": os.path.relpath(TOLERANCES, HERE), "protocol": repr(protocol),
-        "chunk_size": settings.chunk_size, "workers": settings.workers or os.cpu_count(), "build": build_kw,
+        "mode": args.mode, "chunk_size": settings.chunk_size, "workers": settings.workers or os.cpu_count(), "build": build_kw,
         "quick": args.quick}, wall_s=wall)
 
 

@@ -118,8 +118,12 @@ def test_failing_copy_does_not_corrupt_others(batched):
     # copy 1 is rescued point by point by the per-variant path (its own model has no fault) ...
     assert solver.stats.fallbacks >= PROTOCOL.n_te_points
     assert np.max(np.abs(res[1]["q_te"] - _per_variant_states(vs[1]))) < 1e-9
-    # ... but its batched torque continuation stalls: reported failed, not a wrong number
-    assert res[1]["status"] == "failed" and np.isnan(res[1]["lost_motion_arcmin"])
+    # ... its batched torque continuation stalls, and its lost motion comes from its own model
+    # as in the per-variant path (load control there), not a wrong number from the faulty copy
+    from rvtool.variants import variant_figures
+    ref = variant_figures(DESIGN, vs[1], PROTOCOL)
+    assert res[1]["status"] == "ok" and res[1]["lost_motion_method"] == ref["lost_motion_method"] == "load"
+    assert abs(res[1]["lost_motion_arcmin"] - ref["lost_motion_arcmin"]) <= 1e-6
 
 
 def test_bad_input():
