@@ -41,7 +41,8 @@ CHUNK_BATCHED = 16
 """Variants per batched system: the fastest batch size on one CPU core (cases/bench_batched_te.py,
 53 TE points: 17.3 variants/s at B = 16, 10.9 at B = 64)."""
 COMPARE = 64
-"""Variants timed in both modes (each mode's pool started from nothing, like a study)."""
+"""Variants timed in both modes, at least two batches per worker (each mode's pool started from
+nothing, like a study)."""
 REGULARIZATION = (1.0e4, 100.0)
 """Builder regularization springs [N/m, N m/rad] (default 100, 0.1): with pin clearance the
 lost-motion continuation crosses free play, where the default rotational spring turns every
@@ -108,7 +109,8 @@ def main(argv=None):
             for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")}
 
     # Both modes on the same first variants: rate and agreement (per-variant path = reference)
-    nc = min(n, 4 if args.quick else COMPARE)
+    # at least two batches per worker, else the batched mode leaves workers idle
+    nc = min(n, 4 if args.quick else max(COMPARE, 2 * CHUNK_BATCHED * (settings.workers or os.cpu_count() or 1)))
     cmp_recs, cmp_rate = {}, {}
     for mode in ("pool", "batched"):
         cdir = os.path.join(args.out, f"chunks_compare_{mode}")

@@ -24,7 +24,8 @@ def _variants():
 
 @pytest.fixture(scope="module")
 def batched():
-    return batched_variant_figures(DESIGN, _variants(), PROTOCOL, return_model=True)
+    # the batched torque continuation, so that it is compared with the per-variant path
+    return batched_variant_figures(DESIGN, _variants(), PROTOCOL, return_model=True, lost_motion="batched")
 
 
 def _per_variant_states(v):
@@ -111,7 +112,7 @@ def test_failing_copy_does_not_corrupt_others(batched):
     vs = _variants()[:2]
     # copy 1 returns NaN forces at every evaluation: the batch Newton fails whenever it takes part
     res, _, solver = batched_variant_figures(DESIGN, vs, PROTOCOL, return_model=True,
-                                             inject_nan={1: range(1, 10 ** 7)})
+                                             inject_nan={1: range(1, 10 ** 7)}, lost_motion="batched")
     assert res[0]["status"] == "ok"
     for k in ("te_pp_arcsec", "max_pin_force_N", "lost_motion_arcmin"):
         assert abs(res[0][k] - res_ok[0][k]) <= 1e-6 * max(1.0, abs(res_ok[0][k]))
@@ -131,3 +132,5 @@ def test_bad_input():
         build_batched(DESIGN, [])
     with pytest.raises(RvtoolInputError, match="bearing_model"):
         build_batched(DESIGN, [Variant()], bearing_model="rolling")
+    with pytest.raises(RvtoolInputError, match="lost_motion"):
+        batched_variant_figures(DESIGN, [Variant()], PROTOCOL, lost_motion="spring")

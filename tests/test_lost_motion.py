@@ -115,7 +115,7 @@ def test_batched_lost_motion_fallback_equals_per_variant(design, tol):
     from rvtool.variants import variant_figures
     p = VariantProtocol(n_te_points=5)
     vs = [sample_variant(tol, design, k, SEED) for k in (1, 67)]
-    b = batched_variant_figures(design, vs, p, regularization=REG)
+    b = batched_variant_figures(design, vs, p, regularization=REG, lost_motion="batched")
     for v, rb in zip(vs, b):
         rv = variant_figures(design, v, p, regularization=REG)
         assert rb["status"] == "ok"
