@@ -8,7 +8,8 @@ states, and the lost motion at +-3 % of the rated torque (load-controlled contin
 spring control where it fails). --mode batched (default): each chunk of CHUNK_BATCHED
 variants is one Exudyn system (rvtool.batched), chunks side by side in a process pool over
 all cores; --mode pool: one Exudyn system per variant in the pool (chunks of 10). Each
-finished chunk is one file (atomic rename), so an interrupted run resumes with --resume. Reported: mean, std, p5/p50/p95 with a Student-t 95 % CI of the mean and a
+finished chunk is one file (atomic rename), so an interrupted run resumes with --resume.
+Reported: mean, std, p5/p50/p95 with a Student-t 95 % CI of the mean and a
 distribution-free order-statistic 95 % CI of p95; histograms. Error statement of the
 TE sampling: the p-p at N_TE points against a dense sampling (DENSE_TE points) on a
 few variants. Both modes are timed on the same first COMPARE variants (--quick: 4), with
@@ -108,7 +109,9 @@ def main(argv=None):
     bias = {nm: (None if nom_default[nm] is None or nom[nm] is None else nom[nm] - nom_default[nm])
             for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")}
 
-    # Both modes on the same first variants: rate and agreement (per-variant path = reference)
+    # Both modes on the same first variants: rate and agreement (per-variant path = reference).
+    # The study's own run of these variants is not reused: its rate is over all n, and each
+    # mode's rate here includes the start of its own pool, so the two are timed alike.
     # at least two batches per worker, else the batched mode leaves workers idle
     nc = min(n, 4 if args.quick else max(COMPARE, 2 * CHUNK_BATCHED * (settings.workers or os.cpu_count() or 1)))
     cmp_recs, cmp_rate = {}, {}

@@ -267,7 +267,8 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
     if settings.mode == "batched" and executor is None and (settings.device != "cpu" or n_workers == 1):
         # one batched system at a time in this process: it is the one that holds the device
         # (on the CPU with several workers, batches run side by side in the pool below: one
-        # batch of chunk_size copies per process, measured 3x the per-variant pool on 2 cores)
+        # batch of chunk_size copies per process: on 2 cores 3.3x the per-variant pool for TE alone,
+        # 1.15x for the whole protocol with lost motion, cases/bench_batched_te.py and monte_carlo_te)
         for i in pending:
             recs = run_batch(design, variants_of(i), protocol, settings.device, build_kw)
             done += len(recs)

@@ -161,7 +161,7 @@ def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtoc
     stall in the free play, 5 of the first 100 Monte Carlo variants of RD-40) by spring control
     (:func:`rvtool.protocols.lost_motion.lost_motion`), which marches the flange through the
     free play and starts at a larger torque if needed. Both give the same figure where both
-    succeed (to 1e-7 arcmin on those 100 variants). Returns ``lost_motion_arcmin``, ``method``
+    succeed (to 4e-7 arcmin on those 100 variants). Returns ``lost_motion_arcmin``, ``method``
     ("load" or "spring") and ``newton_iterations``; raises :class:`SolverFailure` naming both
     errors if both fail."""
     from .errors import SolverFailure

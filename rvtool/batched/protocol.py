@@ -163,27 +163,22 @@ def batched_variant_figures(design, variants, protocol: VariantProtocol = Varian
         lm = np.full(B, np.nan)
         redo = ~dead_te
     method = np.where(np.isfinite(lm), "load", None).astype(object)
-    lm_error = {}
+    error = {int(c): "no plausible equilibrium (batch, homotopy and per-variant path failed)"
+             for c in np.flatnonzero(dead_te)}
     for c in np.flatnonzero(redo):
-        # the continuation stalled for this copy alone: its TE stands, and its lost motion comes
-        # from the per-variant path's fallback (spring control), as in variant_figures
-        lm[c], method[c], lm_error[c] = _lost_motion_fallback(design, variants[c], protocol, regularization)
+        # every copy with a TE (per_variant), or one whose batched continuation stalled: the lost
+        # motion of the per-variant path on the copy's own model, as in variant_figures
+        lm[c], method[c], err = _lost_motion_fallback(design, variants[c], protocol, regularization)
+        if err is not None:
+            error[int(c)] = err
     wall = time.perf_counter() - t0
     out = []
     for c in range(B):
-        if c in lm_error and lm_error[c] is not None:
+        if c in error:
             out.append({"te_pp_arcsec": np.nan, "te_rms_arcsec": np.nan, "max_pin_force_N": np.nan,
                         "lost_motion_arcmin": np.nan, "lost_motion_method": None,
                         "newton_iterations": solver.stats.newton_iterations, "wall_s": wall / B,
-                        "status": "failed", "error": lm_error[c], "q_te": q_te[:, c]})
-            continue
-        if dead_te[c]:
-            out.append({"te_pp_arcsec": np.nan, "te_rms_arcsec": np.nan, "max_pin_force_N": np.nan,
-                        "lost_motion_arcmin": np.nan, "lost_motion_method": None,
-                        "newton_iterations": solver.stats.newton_iterations,
-                        "wall_s": wall / B, "status": "failed",
-                        "error": "no plausible equilibrium (batch, homotopy and per-variant path failed)",
-                        "q_te": q_te[:, c]})
+                        "status": "failed", "error": error[c], "q_te": q_te[:, c]})
             continue
         te = transmission_error(angles, th_out[:, c], ratio[c], unwrap=False)
         met = te_metrics(te)
