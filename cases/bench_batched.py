@@ -26,10 +26,11 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 
 from rvtool import casekit  # noqa: E402
 from rvtool.assembly.spec import load_design  # noqa: E402
-from rvtool.batched import batched_variant_figures  # noqa: E402
+from rvtool.variants.batched import batched_variant_figures  # noqa: E402
 from rvtool.variants import Variant, VariantProtocol, variant_figures  # noqa: E402
+from rvtool import designs
 
-DESIGN_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN_PATH = designs.path("rd40")
 FIGURES = ("te_pp_arcsec", "max_pin_force_N", "lost_motion_arcmin")
 
 

@@ -32,24 +32,25 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from bench_batched import DESIGN_PATH, sample_variants  # noqa: E402
 from rvtool import casekit  # noqa: E402
 from rvtool.assembly.spec import load_design  # noqa: E402
-from rvtool.protocols.precision import ARCSEC, te_metrics, transmission_error  # noqa: E402
+from rvtool.units import ARCSEC_PER_RAD # noqa: E402
+from rvtool.protocols.precision import te_metrics, transmission_error # noqa: E402
 from rvtool.variants import VariantProtocol  # noqa: E402
 
 
 def _per_variant_te(args):
     """TE p-p [arcsec] of one variant by the sequential path (None if it fails)."""
     from rvtool.assembly.cycloid import build
-    from rvtool.protocols.equilibrium import StaticSolver
+    from rvtool.solver.static import StaticSolver
     from rvtool.protocols.precision import quasi_static_te
     design, v, angles, max_it, reg, start = args
-    d, kw = v.apply(design)
+    d = v.apply(design)
     try:
-        m = build(d, **kw, regularization=reg)
+        m = build(d, regularization=reg)
         r = quasi_static_te(m, torque=d.rated_torque, input_angles=angles,
                             solver=StaticSolver(m, max_iterations=max_it), warm_start=start == "warm")
     except Exception:                 # a failed variant is a row of the study, not the end of it
         return None
-    return te_metrics(r["te"])["pp"] * ARCSEC
+    return te_metrics(r["te"])["pp"] * ARCSEC_PER_RAD
 
 
 def _warm_worker(args):
@@ -66,7 +67,7 @@ def _warm_worker(args):
 def batched_te(design, variants, angles, device, max_it, reg, start):
     """TE p-p [arcsec] per variant (NaN: failed) and timing of the batched path."""
     from rvtool.batched import build_batched
-    from rvtool.batched.solver import BatchedStaticSolver
+    from rvtool.solver.batched import BatchedStaticSolver
     t0 = time.perf_counter()
     model = build_batched(design, variants, device=device, regularization=reg)
     solver = BatchedStaticSolver(model, max_iterations=max_it, build_kw={"regularization": reg})
@@ -84,7 +85,7 @@ def batched_te(design, variants, angles, device, max_it, reg, start):
     solve_s = time.perf_counter() - t1
     th_out = np.array(th_out)
     pp = np.array([np.nan if solver.dead[c] else
-                   te_metrics(transmission_error(angles, th_out[:, c], ratio[c], unwrap=False))["pp"] * ARCSEC
+                   te_metrics(transmission_error(angles, th_out[:, c], ratio[c], unwrap=False))["pp"] * ARCSEC_PER_RAD
                    for c in range(len(variants))])
     st = solver.stats
     ev = model.evaluator

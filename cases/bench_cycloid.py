@@ -21,10 +21,12 @@ from rvtool import casekit
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design
 from rvtool.batched.sequence import batched_quasi_static_te
-from rvtool.protocols.precision import ARCSEC, dynamic_te, quasi_static_te
+from rvtool.units import ARCSEC_PER_RAD
+from rvtool.protocols.precision import dynamic_te, quasi_static_te
 from rvtool.solver import RunSpec
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN = designs.path("rd40")
 
 
 def _instrument(model):
@@ -98,7 +100,7 @@ def main(argv=None):
         "quasistatic_batched_workers": bq["workers"],
         "quasistatic_batched_newton_per_solve": bq["stats"]["newton_iterations"] / bq["stats"]["solves"],
         "quasistatic_batched_homotopy_copies": bq["stats"]["homotopy_copies"],
-        "quasistatic_batched_te_max_abs_diff_arcsec": float(np.max(np.abs(bq["te"] - qs["te"])) * ARCSEC),
+        "quasistatic_batched_te_max_abs_diff_arcsec": float(np.max(np.abs(bq["te"] - qs["te"])) * ARCSEC_PER_RAD),
         "quasistatic_batched_peak_load_max_rel_diff": max(
             abs(bq["peak_loads"][k] - v) / max(v, 1.0) for k, v in qs["peak_loads"].items()),
         "quasistatic_target_met": None if bq_full is None else bool(bq_full < 20.0),
@@ -111,7 +113,7 @@ def main(argv=None):
                               "exudyn_and_driver": 1e6 * (per_step - cb)},
         "newton_per_step": rec.newton_iterations / rec.accepted_steps,
         "rejected_steps": rec.rejected_steps,
-        "te_pp_quasistatic_arcsec": float(np.ptp(qs["te"]) * ARCSEC),
+        "te_pp_quasistatic_arcsec": float(np.ptp(qs["te"]) * ARCSEC_PER_RAD),
         "wall_s": time.perf_counter() - t_all,
     }
     settings = {"points_per_mesh_cycle": 40, "dynamic_step_s": step, "run_spec": spec.to_dict(), "bearing_model": "lumped",

@@ -19,8 +19,9 @@ from rvtool import casekit
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design
 from warp_contacts.precision import resolve_device
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN = designs.path("rd40")
 
 
 def _replicate(fparams, iparams, body_cols, n_bodies, B):

@@ -7,14 +7,14 @@ rated-state pin forces at zero input angle, peak loads per contact family
 and a driven run at the rated speed (one output revolution; --quick: four
 mesh cycles).
 """
-import os
 import time
 
 from rvtool import casekit
 from rvtool.assembly.spec import load_design
 from rvtool.protocols.precision_study import precision_study
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN = designs.path("rd40")
 
 
 def main(argv=None):

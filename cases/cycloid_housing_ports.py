@@ -11,7 +11,6 @@ driven run at the rated speed over one input revolution (--quick: four mesh cycl
 forces and active pins with the rigid and the elastic housing, the largest
 port displacement and the reduction's static error against the parent.
 """
-import os
 import time
 
 import numpy as np
@@ -20,12 +19,13 @@ from rvtool import casekit
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.housing import housing_ports
 from rvtool.assembly.spec import load_design, replace
-from rvtool.protocols.equilibrium import StaticSolver
-from rvtool.protocols.precision import pin_forces
+from rvtool.solver.static import StaticSolver
+from rvtool.protocols.precision import mesh_forces
+from rvtool.units import ARCMIN_PER_RAD
 from rvtool.protocols.precision_study import precision_study
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
-ARCMIN = 180.0 / np.pi * 60.0
+DESIGN = designs.path("rd40")
 
 
 def rated_state(design, bearing_model):
@@ -35,9 +35,9 @@ def rated_state(design, bearing_model):
     t = time.perf_counter()
     q = solver.solve(0.0)
     wall = time.perf_counter() - t
-    F = pin_forces(m, q)
+    F = mesh_forces(m, q)
     th = q[m.coordinate_index(m.flange, 2)] - (m.kinematic_state(0.0)[m.flange, 2] - m.reference[m.flange, 2])
-    out = {"flange_angle_arcmin": float(th * ARCMIN), "pin_forces_N": F, "peak_pin_force_N": float(F.max()),
+    out = {"flange_angle_arcmin": float(th * ARCMIN_PER_RAD), "pin_forces_N": F, "peak_pin_force_N": float(F.max()),
            "n_active_pins": (F > 1e-6 * F.max()).sum(axis=1), "solve_s": wall,
            "newton_iterations": solver.stats.newton_iterations}
     if m.housing is not None:

@@ -13,7 +13,6 @@ sum_j l_j^2 over the loaded half (T_w the torque on one wheel). The common
 approximation F_max = 4 T_w / (K1 z_g R_z) (from S = 1, a sine distribution)
 is reported beside it.
 """
-import os
 import time
 
 import numpy as np
@@ -21,10 +20,11 @@ import numpy as np
 from rvtool import casekit
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design, replace
-from rvtool.protocols.equilibrium import StaticSolver
-from rvtool.protocols.precision import pin_forces
+from rvtool.solver.static import StaticSolver
+from rvtool.protocols.precision import mesh_forces
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN = designs.path("rd40")
 
 
 def closed_form(design, wheel, torque_per_wheel):
@@ -54,7 +54,7 @@ def main(argv=None):
     T = design.rated_torque
     model.set_output_torque(-np.sign(design.ratio) * T)
     q = solver.solve(0.0)
-    F = pin_forces(model, q)
+    F = mesh_forces(model, q)
     rows, cf_all = [], []
     for w in range(design.n_wheels):
         fmax_cf, cf, fmax_sin = closed_form(design, w, T / design.n_wheels)

@@ -3,14 +3,14 @@
 The same protocol as cycloid_double_wheel on the single-wheel variant of
 RD-40 (one wheel of 16 mm width at the flange midplane, journal phase 0).
 """
-import os
 import time
 
 from rvtool import casekit
 from rvtool.assembly.spec import load_design, replace
 from rvtool.protocols.precision_study import precision_study
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN = designs.path("rd40")
 
 
 def single_wheel(design):

@@ -1,10 +1,10 @@
 """Hard case 'runup' on RD-40 (double wheel): see rvtool.protocols.hard_cases.CASES for the histories
 and pass/fail criteria; writes passed, criteria, rejected_steps, min_step_s, max_residual, message."""
-from rvtool.protocols.hard_cases import case_main
+from rvtool.casekit import hard_case_main
 
 
 def main(argv=None):
-    return case_main("runup", argv, __doc__)
+    return hard_case_main("runup", argv, __doc__)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Tolerance Monte Carlo of RD-40: TE p-p, lost motion and max pin force over sampled manufacturing variants.
 
 1,000 variants (--quick: 20; --variants N overrides) drawn from
-cases/designs/rd40_tolerances.toml (seed 2026, reproducible per variant index), each
+rvtool/designs/rd40_tolerances.toml (seed 2026, reproducible per variant index), each
 run by the protocol of rvtool.variants.variant_figures: quasi-static TE over one output
 revolution at N_TE input angles under the rated torque, the maximum pin force over those
 states, and the lost motion at +-3 % of the rated torque (load-controlled continuation,
@@ -23,13 +23,14 @@ import numpy as np
 
 from rvtool import casekit
 from rvtool.assembly.spec import load_design
-from rvtool.montecarlo import MonteCarloSettings, run_monte_carlo, run_variant, text_progress
-from rvtool.tolerances import load_tolerances, sample_variant
+from rvtool.variants.montecarlo import MonteCarloSettings, run_monte_carlo, run_variant, text_progress
+from rvtool.variants.tolerances import load_tolerances, sample_variant
 from rvtool.variants import VariantProtocol
+from rvtool import designs
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-DESIGN = os.path.join(HERE, "designs", "rd40.toml")
-TOLERANCES = os.path.join(HERE, "designs", "rd40_tolerances.toml")
+DESIGN = designs.path("rd40")
+TOLERANCES = designs.path("rd40_tolerances")
 SEED = 2026
 N_TE = 53
 """TE input angles per output revolution. The input step 2 pi 39/53 turns the eccentric by -95 deg

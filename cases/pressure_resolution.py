@@ -16,6 +16,7 @@ from rvtool import casekit
 from rvtool.pressure import subsurface_stress
 from rvtool.pressure.state import candidates
 from rvtool.pressure.study import domain_halfwidth, resolution_study, select_contact
+from rvtool import designs
 
 WINDOW = 20e-6          # m, fixed window of the mean pressure (about half a pin contact's span)
 N_SELECT = 257          # selection resolution (the paper's presentation grid)
@@ -41,8 +42,8 @@ def main(argv=None):
     t_all = time.perf_counter()
     from rvtool.assembly.cycloid import build
     from rvtool.assembly.spec import load_design
-    from rvtool.protocols.equilibrium import StaticSolver
-    design = load_design("cases/designs/rd40.toml")
+    from rvtool.solver.static import StaticSolver
+    design = load_design(designs.path("rd40"))
     m = build(design, bearing_model="rolling")
     torque = design.rated_torque
     m.set_output_torque(torque)

@@ -18,8 +18,9 @@ from rvtool import casekit
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design
 from rvtool.protocols import stiffness as S
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN = designs.path("rd40")
 
 
 def main(argv=None):
@@ -57,7 +58,7 @@ def main(argv=None):
     results = {
         "torque_Nm": torque, "angle_arcmin": angle, "branch_labels": labels,
         "branch_fits": fits,
-        "lost_motion_arcmin": S.lost_motion(torque, angle, rated),
+        "lost_motion_arcmin": S.lost_motion_from_levels(torque, angle, rated),
         "zero_load_return_arcmin": S.zero_load_return(torque, angle),
         "Kt_condensed_Nm_per_arcmin": tc["Kt_condensed_Nm_per_arcmin"],
         "Kt_at_torque_Nm": t_ref,
@@ -74,7 +75,7 @@ def main(argv=None):
         "angle_max_diff_paths_high_load_arcmin": float(np.max(np.abs(dyn["angle_arcmin"] - ref_angle)[hi])),
         "dynamic": {"torque_Nm": dyn["torque_Nm"], "angle_arcmin": dyn["angle_arcmin"],
                     "tail_span_arcmin": dyn["tail_span_arcmin"], "branch_fits": dfits,
-                    "lost_motion_arcmin": S.lost_motion(dyn["torque_Nm"], dyn["angle_arcmin"], rated)
+                    "lost_motion_arcmin": S.lost_motion_from_levels(dyn["torque_Nm"], dyn["angle_arcmin"], rated)
                     if np.any(np.isclose(dyn["torque_Nm"], 0.03 * rated)) else None,
                     "zero_load_return_arcmin": S.zero_load_return(dyn["torque_Nm"], dyn["angle_arcmin"]),
                     "max_tail_span_arcmin": float(np.max(dyn["tail_span_arcmin"])),

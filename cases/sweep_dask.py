@@ -1,6 +1,6 @@
 """Dask sweep of RD-40: eccentricity error x pin clearance (5 x 5) on a LocalCluster, TE p-p heat map.
 
-The grid and the per-point protocol come from cases/designs/sweep_rd40.toml (the file
+The grid and the per-point protocol come from rvtool/designs/sweep_rd40.toml (the file
 `rvtool sweep` reads): each of the 25 points is one Dask task running
 rvtool.variants.variant_figures (quasi-static TE over one output revolution, max pin
 force, lost motion) on a LocalCluster of 2 worker processes with one thread each. A
@@ -15,10 +15,11 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.sweep import load_sweep_spec, run_sweep
+from rvtool.variants.sweep import load_sweep_spec, run_sweep
+from rvtool import designs
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SPEC = os.path.join(HERE, "designs", "sweep_rd40.toml")
+SPEC = designs.path("sweep_rd40")
 
 
 def heat_map(rows, spec, out_dir, key="te_pp_arcsec", label="TE p-p [arcsec]"):

@@ -6,7 +6,6 @@ grid and shaft-order spectra from the unwrapped input phase; mesh (z_p f_in) and
 bearing markers. Reference: the quasi-static TE at the same input angles (the
 low-speed limit); its mesh-order amplitude is reported beside the dynamic one.
 """
-import os
 import time
 
 import numpy as np
@@ -15,10 +14,12 @@ from rvtool import casekit
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design
 from rvtool.protocols import vibration as V
-from rvtool.protocols.precision import ARCSEC, quasi_static_te
+from rvtool.units import ARCSEC_PER_RAD
+from rvtool.protocols.precision import quasi_static_te
 from rvtool.solver import RunSpec
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN = designs.path("rd40")
 
 
 def _amp_at(x, a, x0):
@@ -55,16 +56,16 @@ def main(argv=None):
     a_qs_mesh, _ = _amp_at(o_qs, a_qs, zp)
     rec = run["record"]
     results = {
-        "frequencies_hz": sp["frequencies_hz"], "spectrum": sp["spectrum"] * ARCSEC,
+        "frequencies_hz": sp["frequencies_hz"], "spectrum": sp["spectrum"] * ARCSEC_PER_RAD,
         "spectrum_unit": "arcsec (torsion amplitude)",
-        "orders": sp["orders"], "order_spectrum": sp["order_spectrum"] * ARCSEC,
+        "orders": sp["orders"], "order_spectrum": sp["order_spectrum"] * ARCSEC_PER_RAD,
         "mesh_frequency_hz": markers["mesh_hz"], "mesh_order": zp,
-        "dominant_orders": dom_o, "dominant_order_amplitudes_arcsec": dom_a * ARCSEC,
+        "dominant_orders": dom_o, "dominant_order_amplitudes_arcsec": dom_a * ARCSEC_PER_RAD,
         "markers_hz": markers,
         "wheel1_x_spectrum_m": sw["spectrum"], "wheel1_x_dominant_hz": V.dominant(sw["frequencies_hz"], sw["spectrum"], 4)[0],
-        "torsion_pp_arcsec": float(np.ptp(run["responses"]["torsion"])) * ARCSEC,
-        "mesh_order_amplitude_arcsec": a_dyn_mesh * ARCSEC,
-        "mesh_order_amplitude_quasistatic_arcsec": a_qs_mesh * ARCSEC,
+        "torsion_pp_arcsec": float(np.ptp(run["responses"]["torsion"])) * ARCSEC_PER_RAD,
+        "mesh_order_amplitude_arcsec": a_dyn_mesh * ARCSEC_PER_RAD,
+        "mesh_order_amplitude_quasistatic_arcsec": a_qs_mesh * ARCSEC_PER_RAD,
         "mesh_order_rel_diff_vs_quasistatic": abs(a_dyn_mesh - a_qs_mesh) / max(a_qs_mesh, 1e-30),
         "wall_s_dynamic": run["wall_s"], "wall_s_quasistatic_reference": wall_qs,
         "accepted_steps": rec.accepted_steps, "rejected_steps": rec.rejected_steps,
@@ -79,14 +80,14 @@ def main(argv=None):
 def _plot(out, sp, markers, zp):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.5))
-    ax[0].semilogy(sp["frequencies_hz"][1:], sp["spectrum"][1:] * ARCSEC + 1e-12)
+    ax[0].semilogy(sp["frequencies_hz"][1:], sp["spectrum"][1:] * ARCSEC_PER_RAD + 1e-12)
     ax[0].axvline(markers["mesh_hz"], color="r", ls="--", lw=0.8, label="mesh")
     for k, name in enumerate(("eccentric_bearing", "main_bearing", "input_bearing")):
         ax[0].axvline(markers[name]["bpfo"], color=f"C{k + 1}", ls=":", lw=0.8, label=f"{name} BPFO")
     ax[0].set_xlabel("frequency [Hz]")
     ax[0].set_ylabel("torsion amplitude [arcsec]")
     ax[0].legend(fontsize=6)
-    ax[1].semilogy(sp["orders"][1:], sp["order_spectrum"][1:] * ARCSEC + 1e-12)
+    ax[1].semilogy(sp["orders"][1:], sp["order_spectrum"][1:] * ARCSEC_PER_RAD + 1e-12)
     ax[1].axvline(zp, color="r", ls="--", lw=0.8)
     ax[1].set_xlabel("input shaft order [-]")
     casekit.save_figure(fig, out, "vibration")

@@ -7,7 +7,6 @@ samples; --quick: step/2, 2 slices, 2x samples). Wall time is the integration's.
 120 samples per tooth, float64, full Newton, discrete search): time step, spectral radius,
 slices, profile samples, search method, precision and Newton mode.
 """
-import os
 import time
 
 import numpy as np
@@ -16,11 +15,13 @@ from rvtool import casekit
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design, replace
 from rvtool.errors import RvtoolInputError
-from rvtool.protocols.precision import ARCSEC, pin_forces
+from rvtool.units import ARCSEC_PER_RAD
+from rvtool.protocols.precision import mesh_forces
 from rvtool.protocols.vibration import VibrationProtocol, driven_response
 from rvtool.solver import RunSpec
+from rvtool import designs
 
-DESIGN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "designs", "rd40.toml")
+DESIGN = designs.path("rd40")
 BASE = {"step": 2e-5, "spectral_radius": 0.8, "n_slices": 1, "samples_per_tooth": 120, "precision": "float64",
         "newton_mode": "full", "search": "discrete"}
 
@@ -37,12 +38,12 @@ def run_setting(design, s, duration):
     if s["precision"] == "float32":
         # the float32 static start fails in Exudyn's static solver (reported); start from the
         # float64 equilibrium of the same design
-        from rvtool.protocols.stiffness import Continuation
+        from rvtool.solver.continuation import Continuation
         q0 = Continuation(build(d)).go_to(-np.sign(d.ratio) * d.rated_torque)
     run = driven_response(model, proto, spec, initial_state=q0)
     wall = run["record"].wall_s   # the integration only: the loaded static start is common to all settings
     q_end = np.array(model.mbs.systemData.GetODE2Coordinates())
-    forces = np.concatenate([np.asarray(f) for f in pin_forces(model, q_end)])
+    forces = np.concatenate([np.asarray(f) for f in mesh_forces(model, q_end)])
     return {"t": run["t"], "te": run["responses"]["torsion"]}, forces, wall, run["record"]
 
 
@@ -85,7 +86,7 @@ def main(argv=None):
                                  accepted_steps=rec.accepted_steps))
         walls.append(wall)
         te_err.append(err / scale)
-        te_err_abs.append(err * ARCSEC)
+        te_err_abs.append(err * ARCSEC_PER_RAD)
         pf_err.append(float(np.max(np.abs(f - f_ref)) / np.max(f_ref)))
 
     def cheapest(ok):
@@ -97,7 +98,7 @@ def main(argv=None):
         "pin_force_err_rel": pf_err,
         "cheapest_1pct": cheapest(lambda i: te_err[i] <= 0.01),
         "cheapest_01arcsec": cheapest(lambda i: te_err_abs[i] <= 0.1),
-        "reference": dict(ref_setting, wall_s=wall_ref, te_pp_arcsec=scale * ARCSEC, max_pin_force_N=float(np.max(f_ref))),
+        "reference": dict(ref_setting, wall_s=wall_ref, te_pp_arcsec=scale * ARCSEC_PER_RAD, max_pin_force_N=float(np.max(f_ref))),
         "te_err_rel_definition": "max |TE - TE_ref| over the second mesh cycle / peak-to-peak TE_ref",
         "pin_force_err_rel_definition": "max |F - F_ref| over all pins of both wheels at the end / max F_ref",
     }

@@ -11,6 +11,7 @@ A case script computes in ``main(argv)`` and returns the results dict::
                                      precision="float64", device="cpu")
 """
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -129,3 +130,46 @@ def time_call(fn, min_time=0.2, max_reps=2000):
         fn()
         reps += 1
     return (time.perf_counter() - t0) / reps
+
+
+# -- hard cases ----------------------------------------------------------------------------
+
+def hard_case_main(name, argv=None, doc=None, extra=None, design="rd40"):
+    """Shared ``main`` of the cases/hard_*.py scripts: run, judge, plot, write results.json.
+    ``extra(result, arr, design, quick, out)`` may add sub-runs and criteria."""
+    from . import designs
+    from .assembly.spec import load_design
+    from .protocols.hard_cases import CRITERIA, case_by_name, run_hard_case
+    args = parse_args(argv, doc)
+    t_start = time.perf_counter()
+    design = load_design(designs.path(design))
+    case = case_by_name(name)
+    result, arr = run_hard_case(case, design, quick=args.quick, out_dir=os.path.join(args.out, "state"),
+                                criteria_fn=CRITERIA.get(name))
+    if extra is not None:
+        extra(result, arr, design, args.quick, args.out)
+        result["passed"] = bool(result["passed"] and all(c["passed"] for c in result["criteria"].values()))
+        if result["saved_state"] is None:
+            result["message"] = ("finished: " if result["passed"] else "finished but failed: ") + ", ".join(
+                f"{k}={'ok' if c['passed'] else 'FAIL'}" for k, c in result["criteria"].items())
+    result["energy_balance"] = ("not evaluated: the driver records neither the drive constraint's work nor "
+                                "the contact dissipation; kinetic energy is bounded instead (criterion)")
+    _plot_hard_case(args.out, name, arr)
+    settings = {"case": dataclasses.asdict(case), "quick": args.quick, "design": design.name}
+    return write_results(args.out, result, settings=settings, wall_s=time.perf_counter() - t_start)
+
+
+def _plot_hard_case(out, name, arr):
+    import matplotlib.pyplot as plt
+
+    from .units import ARCSEC_PER_RAD
+    fig, ax = plt.subplots(1, 3, figsize=(12, 3))
+    ax[0].plot(arr["t"] * 1e3, arr["te"] * ARCSEC_PER_RAD)
+    ax[0].set_ylabel("TE [arcsec]")
+    ax[1].plot(arr["t"] * 1e3, arr["pin_sum_N"])
+    ax[1].set_ylabel("pin-force sum [N]")
+    ax[2].plot(arr["t"] * 1e3, arr["kinetic_J"])
+    ax[2].set_ylabel("kinetic energy [J]")
+    for a in ax:
+        a.set_xlabel("t [ms]")
+    save_figure(fig, out, f"hard_{name}")

@@ -139,7 +139,7 @@ def _cmd_version(args):
 
 def _cmd_sweep(args, parser):
     from rvtool.errors import RvtoolInputError
-    from rvtool.sweep import main_sweep  # imported here: it loads Exudyn and Dask
+    from rvtool.variants.sweep import main_sweep  # imported here: it loads Exudyn and Dask
 
     if not os.path.isfile(args.spec):
         parser.error(f"sweep spec not found: {args.spec}")

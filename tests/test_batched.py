@@ -4,13 +4,15 @@ import pytest
 
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design
-from rvtool.batched import CopyBlockAssembler, batched_variant_figures, build_batched
+from rvtool.batched import CopyBlockAssembler, build_batched
+from rvtool.variants.batched import batched_variant_figures
 from rvtool.errors import RvtoolInputError
-from rvtool.protocols.equilibrium import StaticSolver
+from rvtool.solver.static import StaticSolver
 from rvtool.protocols.precision import quasi_static_te
 from rvtool.variants import Variant, VariantProtocol, variant_figures
+from rvtool import designs
 
-DESIGN = load_design("cases/designs/rd40.toml")
+DESIGN = load_design(designs.path("rd40"))
 PROTOCOL = VariantProtocol(n_te_points=5)
 
 
@@ -29,8 +31,8 @@ def batched():
 
 
 def _per_variant_states(v):
-    d, kw = v.apply(DESIGN)
-    m = build(d, **kw)
+    d = v.apply(DESIGN)
+    m = build(d)
     qs = []
     quasi_static_te(m, torque=d.rated_torque, input_angles=PROTOCOL.input_angles(d), solver=StaticSolver(m),
                     record=lambda k, a, q: qs.append(q.copy()))
@@ -74,8 +76,8 @@ def test_block_structure_matches_per_variant_elements():
     ev = el.evaluate_state(q, np.zeros_like(q))
     # reference: the per-variant system's own contact elements at the same state, summed
     for c, v in enumerate(vs):
-        d, kw = v.apply(DESIGN)
-        m = build(d, **kw)
+        d = v.apply(DESIGN)
+        m = build(d)
         Q, K = np.zeros(3 * model.nb), np.zeros((3 * model.nb, 3 * model.nb))
         for e in m.elements.values():
             r = e.evaluate(0.0, q[c], np.zeros_like(q[c]))

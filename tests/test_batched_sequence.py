@@ -7,10 +7,12 @@ from rvtool.assembly.spec import load_design
 from rvtool.batched import build_batched
 from rvtool.batched.sequence import _segments, batched_quasi_static_te
 from rvtool.errors import RvtoolInputError
-from rvtool.protocols.precision import ARCSEC, quasi_static_te
+from rvtool.units import ARCSEC_PER_RAD
+from rvtool.protocols.precision import quasi_static_te
 from rvtool.variants import Variant
+from rvtool import designs
 
-DESIGN = load_design("cases/designs/rd40.toml")
+DESIGN = load_design(designs.path("rd40"))
 # 1.5 mesh cycles at 40 points per cycle: segments cross contact activations
 ANGLES = np.arange(60) * (2 * np.pi / 40) / 40
 
@@ -28,7 +30,7 @@ def test_equals_the_sequential_path(sequential, copies, predictor):
     r = batched_quasi_static_te(DESIGN, torque=DESIGN.rated_torque, input_angles=ANGLES, copies=copies,
                                 predictor=predictor, abs_tol=1e-6)
     np.testing.assert_array_equal(r["theta_in"], sequential["theta_in"])
-    assert np.max(np.abs(r["te"] - sequential["te"])) * ARCSEC < 1e-6
+    assert np.max(np.abs(r["te"] - sequential["te"])) * ARCSEC_PER_RAD < 1e-6
     assert r["peak_loads"].keys() == sequential["peak_loads"].keys()
     for fam, f in sequential["peak_loads"].items():
         assert abs(r["peak_loads"][fam] - f) <= 1e-7 * max(f, 1.0), fam
@@ -40,12 +42,12 @@ def test_default_tolerance_and_two_workers(sequential):
     processes give the points of one."""
     r = batched_quasi_static_te(DESIGN, torque=DESIGN.rated_torque, input_angles=ANGLES, copies=6, workers=2)
     assert r["workers"] == 2
-    assert np.max(np.abs(r["te"] - sequential["te"])) * ARCSEC < 1e-4
+    assert np.max(np.abs(r["te"] - sequential["te"])) * ARCSEC_PER_RAD < 1e-4
     one = batched_quasi_static_te(DESIGN, torque=DESIGN.rated_torque, input_angles=ANGLES, copies=6)
     # not bit-identical: a batch Newton iterates until all its copies converge, and the two
     # processes hold 3 copies each
     np.testing.assert_array_equal(r["theta_in"], one["theta_in"])
-    assert np.max(np.abs(r["te"] - one["te"])) * ARCSEC < 1e-4
+    assert np.max(np.abs(r["te"] - one["te"])) * ARCSEC_PER_RAD < 1e-4
 
 
 def test_segments_cover_every_angle_once():

@@ -30,3 +30,20 @@ def test_case_quick(name, tmp_path):
         assert key in prov, f"{name}: provenance lacks {key!r}"
     wall = prov.get("wall_s_total")
     assert isinstance(wall, (int, float)) and wall >= 0, f"{name}: wall time {wall!r} is not a duration"
+    # a case's own pass/fail figures: every "passed" it writes must be true
+    failed = [path for path, ok in _passed_flags(data) if ok is not True]
+    assert not failed, f"{name}: its own criteria failed at {failed}"
+
+
+def _passed_flags(obj, path=""):
+    """(key path, value) of every "passed" entry in a results dict (provenance excluded)."""
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            if k == "provenance":
+                continue
+            if k == "passed":
+                yield path + "/passed", v
+            yield from _passed_flags(v, f"{path}/{k}")
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj):
+            yield from _passed_flags(v, f"{path}[{i}]")

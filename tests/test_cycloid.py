@@ -9,9 +9,10 @@ from rvtool.contact.cycloid_set import CycloidPinSet, WheelPinMesh
 from rvtool.errors import RvtoolInputError
 from rvtool.geometry.cycloid import CycloidProfile, pin_centres
 from warp_contacts import cycloid_pins_ref as ref
+from rvtool import designs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-RD40 = os.path.join(ROOT, "cases", "designs", "rd40.toml")
+RD40 = designs.path("rd40")
 
 
 def _profile(**kw):
@@ -192,7 +193,7 @@ def test_pin_tangent_matches_central_differences(damping):
 def rated_rd40():
     from rvtool.assembly.cycloid import build
     from rvtool.assembly.spec import load_design, replace
-    from rvtool.protocols.equilibrium import StaticSolver
+    from rvtool.solver.static import StaticSolver
     # main-bearing clearance keeps the (unloaded, symmetric) main bearing off its activation kink,
     # where central differences would straddle the switch
     d = replace(load_design(RD40), wheels={"samples_per_tooth": 60}, main_bearing={"radial_clearance": 2e-6})

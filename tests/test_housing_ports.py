@@ -5,14 +5,14 @@ the Craig--Bampton parent, independent of the reduced basis and of the contact e
 central differences of the element's generalized forces; the rigid-housing model as the
 stiff limit.
 """
-import pathlib
+from rvtool import designs
 
 import numpy as np
 import pytest
 
 from warp_contacts.circle_pairs_ref import O_FN, O_NX, O_NY
 
-RD40 = pathlib.Path(__file__).resolve().parents[1] / "cases" / "designs" / "rd40.toml"
+RD40 = designs.path("rd40")
 # a coarser mesh than the default keeps the reduction at ~2 s; the checks do not depend on it
 HOUSING = {"model": "ports", "mesh_size": 0.006}
 
@@ -25,7 +25,7 @@ def _design(**housing):
 
 def _rated(d):
     from rvtool.assembly.cycloid import build
-    from rvtool.protocols.equilibrium import StaticSolver
+    from rvtool.solver.static import StaticSolver
     m = build(d)
     m.set_output_torque(d.rated_torque)
     q = StaticSolver(m).solve(0.0)

@@ -10,17 +10,20 @@ import os
 import numpy as np
 import pytest
 
+from rvtool import designs
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design
 from rvtool.errors import RvtoolInputError, SolverFailure
-from rvtool.protocols.equilibrium import StaticSolver
-from rvtool.protocols.lost_motion import flange_rotation_spring, lost_motion
-from rvtool.protocols.stiffness import Continuation
-from rvtool.tolerances import load_tolerances, sample_variant
-from rvtool.variants import ARCMIN, VariantProtocol, variant_lost_motion
+from rvtool.solver.static import StaticSolver
+from rvtool.protocols.lost_motion import lost_motion
+from rvtool.solver.spring_march import output_rotation_spring
+from rvtool.solver.continuation import Continuation
+from rvtool.variants.tolerances import load_tolerances, sample_variant
+from rvtool.units import ARCMIN_PER_RAD
+from rvtool.variants import VariantProtocol, variant_lost_motion
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DESIGNS = os.path.join(ROOT, "cases", "designs")
+DESIGNS = str(designs.HERE)
 REG = (1.0e4, 100.0)
 SEED = 2026
 
@@ -36,13 +39,13 @@ def tol():
 
 
 def _model(design, tol, k, reg=REG):
-    d, kw = sample_variant(tol, design, k, SEED).apply(design)
-    return d, build(d, bearing_model="lumped", regularization=reg, **kw)
+    d = sample_variant(tol, design, k, SEED).apply(design)
+    return d, build(d, bearing_model="lumped", regularization=reg)
 
 
 def _load_controlled(model, design, levels):
     cont = Continuation(model, input_angle=0.0, initial_torque=float(levels[0]))
-    i = model.coordinate_index(model.flange, 2)
+    i = model.output_index
     return [cont.q[i]] + [cont.go_to(float(t))[i] for t in levels[1:]]
 
 
@@ -56,7 +59,7 @@ def test_spring_control_equals_load_control(design, tol, k):
     # the two paths stop at different Newton iterates: agreement to the solver tolerance
     assert abs(r["theta_plus"] - ang[0]) < 1e-10
     assert abs(r["theta_minus"] - ang[-1]) < 1e-10
-    assert r["lost_motion_rad"] * ARCMIN == pytest.approx((ang[0] - ang[-1]) * ARCMIN, abs=1e-6)
+    assert r["lost_motion_rad"] * ARCMIN_PER_RAD == pytest.approx((ang[0] - ang[-1]) * ARCMIN_PER_RAD, abs=1e-6)
     assert r["lost_motion_rad"] > 0
 
 
@@ -77,7 +80,7 @@ def test_spring_states_are_load_controlled_equilibria(design, tol):
         ok, q2 = s._solve(q, ramp=False)
         assert ok
         assert np.max(np.abs(q2 - q)) < 1e-10
-    assert 1.0 < r["lost_motion_rad"] * ARCMIN < 10.0
+    assert 1.0 < r["lost_motion_rad"] * ARCMIN_PER_RAD < 10.0
 
 
 def test_variant_lost_motion_fallback_order(design, tol):
@@ -95,7 +98,7 @@ def test_snap_through_fails_loudly(design, tol):
     with pytest.raises(SolverFailure, match="load control .* spring control"):
         variant_lost_motion(m, d)
     # the model is left as built: flange spring and output torque restored
-    obj, k_reg = flange_rotation_spring(m)
+    obj, k_reg = output_rotation_spring(m)
     assert k_reg == REG[1] and m.mbs.GetObjectParameter(obj, "stiffness") == REG[1]
 
 
@@ -111,7 +114,7 @@ def test_input_errors(design, tol):
 
 
 def test_batched_lost_motion_fallback_equals_per_variant(design, tol):
-    from rvtool.batched import batched_variant_figures
+    from rvtool.variants.batched import batched_variant_figures
     from rvtool.variants import variant_figures
     p = VariantProtocol(n_te_points=5)
     vs = [sample_variant(tol, design, k, SEED) for k in (1, 67)]

@@ -8,15 +8,16 @@ import pytest
 
 from rvtool.assembly.spec import load_design
 from rvtool.errors import RvtoolInputError
-from rvtool.montecarlo import (MonteCarloSettings, fingerprint, order_statistic_ci, read_chunk, run_monte_carlo,
+from rvtool.variants.montecarlo import (MonteCarloSettings, fingerprint, order_statistic_ci, read_chunk, run_monte_carlo,
                                run_variant, summarize)
-from rvtool.tolerances import (Fixed, Normal, ToleranceSpec, TruncatedNormal, Uniform, load_tolerances,
+from rvtool.variants.tolerances import (Fixed, Normal, ToleranceSpec, TruncatedNormal, Uniform, load_tolerances,
                                sample_variant, sample_variants, spec_from_dict)
 from rvtool.variants import Variant, VariantProtocol
+from rvtool import designs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DESIGN = os.path.join(ROOT, "cases", "designs", "rd40.toml")
-TOLERANCES = os.path.join(ROOT, "cases", "designs", "rd40_tolerances.toml")
+DESIGN = designs.path("rd40")
+TOLERANCES = designs.path("rd40_tolerances")
 # small per-variant protocol: 23 TE points (0.1 s: the eccentric turns -110 deg per point, where the
 # static solver's warm starts hold; 5 points would alias onto one mesh phase of RD-40)
 PROTOCOL = VariantProtocol(n_te_points=23)
@@ -176,7 +177,7 @@ def test_batched_mode(design, tmp_path):
     spec = ToleranceSpec(eccentricity_error=TruncatedNormal(mean=1e-6, std=0.5e-6, low=0.0))
     settings = MonteCarloSettings(n_variants=2, seed=2, chunk_size=2, mode="batched")
     try:
-        from rvtool.batched import batched_variant_figures  # noqa: F401  (absent before issue 8 part 2 lands)
+        from rvtool.variants.batched import batched_variant_figures  # noqa: F401  (absent before issue 8 part 2 lands)
     except ImportError:
         with pytest.raises(RvtoolInputError, match="batched"):
             run_monte_carlo(design, spec, PROTOCOL, settings, str(tmp_path))

@@ -4,6 +4,7 @@ import pytest
 import scipy.integrate
 
 from rvtool.pressure import PanelContact, influence_column, panel_integral, solve_panels, subsurface_stress
+from rvtool import designs
 
 E_STAR = 210e9 / (2 * (1 - 0.3 ** 2))
 R, B, F = 3e-3, 8e-3, 1000.0
@@ -51,8 +52,8 @@ def test_gap_datum_resolution_invariant():
     from rvtool.assembly.cycloid import build
     from rvtool.assembly.spec import load_design
     from rvtool.pressure.state import pin_contact_gap
-    from rvtool.protocols.equilibrium import StaticSolver
-    m = build(load_design("cases/designs/rd40.toml"))
+    from rvtool.solver.static import StaticSolver
+    m = build(load_design(designs.path("rd40")))
     m.set_output_torque(140.0)
     q = StaticSolver(m).solve(0.0)
     el = m.elements["pins"]
@@ -204,18 +205,17 @@ def test_two_lobe_active_set_dense_path_is_complementary():
 def rated_rolling():
     from rvtool.assembly.cycloid import build
     from rvtool.assembly.spec import load_design
-    from rvtool.protocols.equilibrium import StaticSolver
-    m = build(load_design("cases/designs/rd40.toml"), bearing_model="rolling")
+    from rvtool.solver.static import StaticSolver
+    m = build(load_design(designs.path("rd40")), bearing_model="rolling")
     m.set_output_torque(140.0)
     return m, StaticSolver(m).solve(0.0)
 
 
 def test_output_pin_and_needle_contacts_from_state(rated_rolling):
     from rvtool.pressure.state import candidates, needle_contact, output_pin_contact
-    from rvtool.protocols.precision import _evaluation_at
     m, q = rated_rolling
     d = m.design
-    obs = _evaluation_at(m.elements["output_pins"], q).obs
+    obs = m.elements["output_pins"].evaluation_at(q).obs
     el = m.elements["output_pins"]
     c = output_pin_contact(m, q, 0, 2)
     rows = [i for i, cid in enumerate(el.ids) if cid.startswith("output_pins/pin2/wheel0/")]
@@ -227,7 +227,7 @@ def test_output_pin_and_needle_contacts_from_state(rated_rolling):
     assert c.radius == pytest.approx(rp * rh / (rh - rp))
     # needle: roller load = sum of its laminae
     elb = m.elements["bearings"]
-    ob = _evaluation_at(elb, q).obs
+    ob = elb.evaluation_at(q).obs
     nj = max(candidates(m, q, "needles", 0, "journal"), key=lambda k: k.force)
     j = int(nj.name.split("roller")[1].split("/")[0])
     rows = [i for i, cid in enumerate(elb.ids) if cid.startswith(f"eccentric_bearing0/roller{j}/")]
@@ -250,14 +250,13 @@ def test_lumped_needle_stribeck():
     from rvtool.assembly.cycloid import build
     from rvtool.assembly.spec import load_design
     from rvtool.pressure.state import needle_contact
-    from rvtool.protocols.equilibrium import StaticSolver
-    from rvtool.protocols.precision import _evaluation_at
+    from rvtool.solver.static import StaticSolver
     from rvtool.errors import RvtoolInputError
-    m = build(load_design("cases/designs/rd40.toml"), bearing_model="lumped")
+    m = build(load_design(designs.path("rd40")), bearing_model="lumped")
     m.set_output_torque(140.0)
     q = StaticSolver(m).solve(0.0)
     el = m.elements["bearings"]
-    fr = _evaluation_at(el, q).obs[list(el.ids).index("eccentric_bearing1"), 0]
+    fr = el.evaluation_at(q).obs[list(el.ids).index("eccentric_bearing1"), 0]
     c = needle_contact(m, q, 1, None, "journal")
     assert c.force == pytest.approx(4.08 * fr / m.design.eccentric_bearing.n_rollers, rel=1e-15)  # Stribeck
     with pytest.raises(RvtoolInputError, match="roller"):

@@ -2,8 +2,10 @@
 import numpy as np
 import pytest
 
+from rvtool.bearings.frequencies import bearing_frequencies
 from rvtool.errors import RvtoolInputError
 from rvtool.protocols import stiffness as S
+from rvtool import designs
 
 
 def test_sequence_has_74_levels_and_paper_branch_counts():
@@ -46,7 +48,7 @@ def test_lost_motion_and_zero_return_on_synthetic_backlash():
     K, b = 50.0, 0.8
     angle = np.sign(torque) * b + torque / K
     angle[-1] += 0.1   # final zero-load state shifted
-    assert S.lost_motion(torque, angle, 100.0) == pytest.approx(2 * (b + 3.0 / K))
+    assert S.lost_motion_from_levels(torque, angle, 100.0) == pytest.approx(2 * (b + 3.0 / K))
     assert S.zero_load_return(torque, angle) == pytest.approx(0.1)
     fits = S.branch_fits(torque, angle, labels, 100.0)
     for f in fits.values():
@@ -57,7 +59,7 @@ def test_lost_motion_and_zero_return_on_synthetic_backlash():
 def rd40():
     from rvtool.assembly.spec import load_design
     from pathlib import Path
-    return load_design(str(Path(__file__).resolve().parents[1] / "cases" / "designs" / "rd40.toml"))
+    return load_design(designs.path("rd40"))
 
 
 def test_quasi_static_sequence_on_rd40(rd40):
@@ -121,7 +123,7 @@ def test_order_spectrum_follows_unwrapped_phase_under_varying_speed():
 
 def test_bearing_markers_closed_form():
     # FTF = f/2 (1 - d/D), BPFO = Z FTF for a radial bearing
-    m = V.bearing_frequencies(10.0, 8, 0.01, 0.05)
+    m = bearing_frequencies(10.0, 8, 0.01, 0.05)
     assert m["ftf"] == pytest.approx(5 * 0.8) and m["bpfo"] == pytest.approx(8 * 4.0) and m["bpfi"] == pytest.approx(48.0)
 
 

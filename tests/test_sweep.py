@@ -6,18 +6,19 @@ import os
 
 import pytest
 
+from rvtool import designs
 from rvtool import cli
 from rvtool.assembly.spec import load_design
 from rvtool.errors import RvtoolInputError
-from rvtool.montecarlo import MonteCarloSettings, run_monte_carlo
-from rvtool.sweep import load_sweep_spec, point_model, run_sweep
-from rvtool.tolerances import load_tolerances
+from rvtool.variants.montecarlo import MonteCarloSettings, run_monte_carlo
+from rvtool.variants.sweep import load_sweep_spec, point_model, run_sweep
+from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants import Variant, VariantProtocol, variant_figures
 
 pytest.importorskip("dask.distributed")
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-DESIGNS = os.path.join(ROOT, "cases", "designs")
+DESIGNS = str(designs.HERE)
 BUILD = {"regularization": (1.0e4, 100.0)}
 FIGS = ("te_pp_arcsec", "te_rms_arcsec", "max_pin_force_N", "lost_motion_arcmin", "newton_iterations")
 

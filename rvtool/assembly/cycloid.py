@@ -40,92 +40,112 @@ from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, Fricti
 from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiffness
 from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile
-from .spec import CycloidDesign
+from ..geometry.eccentric import journal_centre, journal_velocity
+from ..model import BodyCoordinate, Family, ReducerModel
+from .spec import CycloidDesign, replace
 
 SHAFT = 0
 
 
-@dataclass
-class CycloidModel:
-    """An assembled cycloid reducer: Exudyn system plus the handles protocols need."""
-    design: CycloidDesign
-    SC: object
-    mbs: object
-    nodes: list
-    elements: dict
-    pin_set: CycloidPinSet
-    drive: int
-    load: int
-    n_wheels: int
-    locks: list = field(default_factory=list)
-    profiles: list = field(default_factory=list)
-    reg_springs: list = field(default_factory=list)
-    journal_locks: list = field(default_factory=list)
-    reference: np.ndarray = None
-    housing: object = None          # ReducedStructure of an elastic housing, or None (rigid)
+class CycloidKinematics:
+    """Rigid, clearance-free kinematics of a cycloid drive (fixed pins, output through the
+    wheels): body 0 the shaft at the input angle a, wheel k on the journal of phase phi_k
+    (:mod:`rvtool.geometry.eccentric`), wheels and flange turned by -a / z_g."""
 
-    def regularization_force(self, q):
-        """Largest force [N] (or moment [N m]) carried by the regularization springs at q."""
-        out = 0.0
-        for body, c, k, obj in self.reg_springs:
-            k_now = self.mbs.GetObjectParameter(obj, "stiffness")
-            off = self.mbs.GetObjectParameter(obj, "offset")
-            out = max(out, abs(k_now * (q[self.coordinate_index(body, c)] - off)))
-        return out
+    def __init__(self, design):
+        self.eccentricity = design.wheels.eccentricity
+        self.phases = np.deg2rad(np.asarray(design.wheels.phases_deg[:design.n_wheels], float))
+        self.z_g = design.pins.n_pins - 1
+        self.n_wheels = design.n_wheels
+
+    def poses(self, input_angles):
+        """(n, nb, 3) poses at input angles (n,) [rad]."""
+        a = np.asarray(input_angles, float)
+        nw = self.n_wheels
+        q = np.zeros((len(a), nw + 2, 3))
+        q[:, SHAFT, 2] = a
+        q[:, 1:nw + 1, 0], q[:, 1:nw + 1, 1] = journal_centre(self.eccentricity, self.phases[None, :], a[:, None])
+        q[:, 1:, 2] = -a[:, None] / self.z_g
+        return q
+
+    def velocities(self, input_angle, omega_in):
+        """(nb, 3) velocities at input angle [rad] and input speed omega_in [rad/s]."""
+        nw = self.n_wheels
+        v = np.zeros((nw + 2, 3))
+        v[SHAFT, 2] = omega_in
+        for k in range(nw):
+            vx, vy = journal_velocity(self.eccentricity, self.phases[k], input_angle, omega_in)
+            v[1 + k] = (vx, vy, -omega_in / self.z_g)
+        v[nw + 1, 2] = -omega_in / self.z_g
+        return v
+
+
+def kinematic_poses(design, input_angles):
+    """(n, nb, 3) rigid, clearance-free poses of shaft, wheels and flange at input angles (n,) [rad]."""
+    return CycloidKinematics(design).poses(input_angles)
+
+
+@dataclass
+class CycloidModel(ReducerModel):
+    """An assembled cycloid reducer: the :class:`~rvtool.model.ReducerModel` plus the
+    cycloid's own handles (pin set, wheel profiles, wheel count, housing)."""
+    pin_set: CycloidPinSet = None
+    profiles: list = field(default_factory=list)
+    n_wheels: int = 1
+    housing: object = None          # ReducedStructure of an elastic housing, or None (rigid)
 
     @property
     def flange(self):
         return self.n_wheels + 1
 
-    def coordinate_index(self, body, coord):
-        """Global ODE2 index of ``coord`` (0 x, 1 y, 2 theta) of ``body``."""
-        return int(self.mbs.systemData.GetNodeLTGODE2(self.nodes[body])[coord])
+    def pin_forces(self, q):
+        """Per wheel, per pin normal force [N] (slices summed) at the static state q: (n_wheels, z_b)."""
+        return self.pin_set.pin_forces(self.elements["pins"].evaluation_at(q).obs)
 
-    def set_input_angle(self, angle):
-        """Prescribed input-shaft angle [rad] (quasi-static sequences)."""
-        self.mbs.SetObjectParameter(self.drive, "offset", float(angle))
-        if self.journal_locks or self.reg_springs:
-            kin = self.kinematic_state(angle)
-            for body, c, obj in self.journal_locks:
-                self.mbs.SetObjectParameter(obj, "offset", float(kin[body, c] - self.reference[body, c]))
-            # the regularization springs hold each body near its kinematic position, not its
-            # reference, so that they carry no load along the rotation
-            for body, c, _, obj in self.reg_springs:
-                self.mbs.SetObjectParameter(obj, "offset", float(kin[body, c] - self.reference[body, c]))
+    def mesh_width_moments(self, q):
+        return self.pin_set.width_moments(self.elements["pins"].evaluation_at(q).obs)
 
-    def set_input_speed(self, omega, angle0=0.0):
-        """Prescribed constant input speed omega [rad/s] from angle0 at t = 0. The static
-        regularization springs are switched off: inertia makes the dynamic problem regular."""
-        self.mbs.SetObjectParameter(self.drive, "offsetUserFunction",
-                                    lambda mbs, t, itemNumber, lOffset: angle0 + omega * t)
-        for _, _, _, obj in self.reg_springs:
-            self.mbs.SetObjectParameter(obj, "stiffness", 0.0)
+    def refined_design(self):
+        """Twice the profile samples per tooth."""
+        return replace(self.design, wheels={"samples_per_tooth": 2 * self.design.wheels.samples_per_tooth})
 
-    def set_output_torque(self, torque):
-        """Torque on the flange rotation [N m] (positive counter-clockwise)."""
-        self.mbs.SetLoadParameter(self.load, "load", float(torque))
+    def resolution_settings(self):
+        w = self.design.wheels
+        return {"samples_per_tooth": w.samples_per_tooth, "n_slices": w.n_slices, "search_window": self.pin_set.window}
 
-    def kinematic_state(self, input_angle):
-        """Rigid, clearance-free kinematic positions of all bodies at ``input_angle`` (initial guess)."""
-        return kinematic_poses(self.design, np.asarray([float(input_angle)]))[0]
+    def marker_frequencies(self, speed_rpm):
+        """Mesh and bearing marker frequencies [Hz] at input speed [rpm]."""
+        from ..bearings.frequencies import bearing_frequencies
+        f_in = speed_rpm / 60.0
+        zp = self.design.pins.n_pins
+        zg = zp - 1
+        f_out = f_in / zg
+        eb, mb, ib = self.design.eccentric_bearing, self.design.main_bearing, self.design.input_bearing
+        return {
+            "input_hz": f_in, "output_hz": f_out, "mesh_hz": zp * f_in,
+            # eccentric needle bearing: journal (input) against the wheel bore (wheel speed -f_out)
+            "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
+                                                     2 * eb.journal_radius + eb.roller_diameter),
+            "main_bearing": bearing_frequencies(f_out, mb.n_balls, mb.ball_diameter, mb.pitch_diameter,
+                                                mb.contact_angle_deg),
+            "input_bearing": bearing_frequencies(f_in, ib.n_balls, ib.ball_diameter, ib.pitch_diameter),
+        }
 
+    def draw_section(self, ax, q):
+        """Wheel profiles at their state-q poses, the ring pins and the contact forces."""
+        import matplotlib.pyplot as plt
 
-def kinematic_poses(design, input_angles):
-    """Rigid, clearance-free kinematic poses (n, nb, 3) of shaft, wheels and flange at input
-    angles (n,) [rad]: wheel k centred at e (-sin psi_k, cos psi_k), psi_k = angle + phase_k,
-    wheels and flange turned by -angle / z_g."""
-    d = design
-    a = np.asarray(input_angles, float)
-    nw = d.n_wheels
-    q = np.zeros((len(a), nw + 2, 3))
-    q[:, SHAFT, 2] = a
-    zg = d.pins.n_pins - 1
-    e = d.wheels.eccentricity
-    psi = a[:, None] + np.deg2rad(np.asarray(d.wheels.phases_deg[:nw], float))[None, :]
-    q[:, 1:nw + 1, 0] = -e * np.sin(psi)
-    q[:, 1:nw + 1, 1] = e * np.cos(psi)
-    q[:, 1:, 2] = -a[:, None] / zg
-    return q
+        from ..geometry.cycloid import pin_centres
+        for k, prof in enumerate(self.profiles):
+            x = self.reference[1 + k] + q[[self.coordinate_index(1 + k, c) for c in range(3)]]
+            pts = prof.points(np.linspace(0, 2 * np.pi, 4000))
+            c, s = np.cos(x[2]), np.sin(x[2])
+            ax.plot(x[0] + c * pts[:, 0] - s * pts[:, 1], x[1] + s * pts[:, 0] + c * pts[:, 1], lw=0.8,
+                    label=f"wheel {k}")
+        for p in pin_centres(self.profiles[0]):
+            ax.add_patch(plt.Circle(p, self.design.pins.pin_radius, fill=False, color="k", lw=0.6))
+        super().draw_section(ax, q)
+        ax.legend(fontsize=8)
 
 
 def _mass_wheel(design):
@@ -169,8 +189,7 @@ def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 
     m_w, J_w = _mass_wheel(d)
     ref = np.zeros((nw + 2, 3))
     for k in range(nw):
-        phi = np.deg2rad(d.wheels.phases_deg[k])
-        ref[1 + k, :2] = (-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi))
+        ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, np.deg2rad(d.wheels.phases_deg[k]))
     masses = [(d.bodies.shaft_mass, d.bodies.shaft_inertia)] + [(m_w, J_w)] * nw + \
              [(d.bodies.flange_mass, d.bodies.flange_inertia)]
     nodes = []
@@ -211,9 +230,10 @@ def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 
             "reg_springs": reg_springs, "load": load}
 
 
-def pin_meshes(design, *, offset=0, pin_overrides=None, prefix=""):
+def pin_meshes(design, *, offset=0, prefix=""):
     """(profiles, :class:`WheelPinMesh` per wheel) of one reducer whose bodies start at index
-    ``offset`` (wheel k is body offset + 1 + k); pins on ground; names ``prefix + "wheel{k}"``."""
+    ``offset`` (wheel k is body offset + 1 + k); pins on ground with the design's pin
+    deviations; names ``prefix + "wheel{k}"``."""
     d = design
     zg = d.pins.n_pins - 1
     pc = d.pin_contact
@@ -235,7 +255,10 @@ def pin_meshes(design, *, offset=0, pin_overrides=None, prefix=""):
         kw = dict(profile=prof, wheel_body=offset + 1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
                   wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,
                   name=f"{prefix}wheel{k}")
-        kw.update(pin_overrides or {})
+        if d.pins.centre_errors is not None:
+            kw["pin_centre_errors"] = np.asarray(d.pins.centre_errors, float)
+        if d.pins.radius_error != 0.0:
+            kw["pin_radius"] = d.pins.pin_radius + d.pins.radius_error
         meshes.append(WheelPinMesh(**kw))
     return profiles, meshes
 
@@ -266,10 +289,9 @@ def lumped_bearing_contacts(design, *, offset=0, prefix=""):
     k_n, p_n = lumped_needle_law(d)
     contacts = []
     for k in range(nw):
-        phi = np.deg2rad(d.wheels.phases_deg[k])
         contacts.append(CircleContact(
             body_a=offset + SHAFT, body_b=offset + 1 + k,
-            centre_a=(-d.wheels.eccentricity * np.sin(phi), d.wheels.eccentricity * np.cos(phi)),
+            centre_a=journal_centre(d.wheels.eccentricity, np.deg2rad(d.wheels.phases_deg[k])),
             centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + eb.radial_clearance + 1e-12, internal=True,
             normal=NormalLaw(law="power", stiffness=k_n, exponent=p_n, damping=50.0, ramp_depth=1e-6),
             name=f"{prefix}eccentric_bearing{k}"))
@@ -294,11 +316,9 @@ def lumped_bearing_contacts(design, *, offset=0, prefix=""):
 
 
 def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
-          pin_overrides=None, rigid_supports=False, regularization=(100.0, 0.1)):
+          rigid_supports=False, regularization=(100.0, 0.1)):
     """Assemble ``design`` into an Exudyn system; returns a :class:`CycloidModel`.
 
-    pin_overrides: dict of WheelPinMesh fields applied to every wheel (e.g.
-    ``{"pin_centre_errors": ..., "normal": NormalLaw(...)}``).
     rigid_supports: shaft and flange centres held on the axis and the wheel
     centres held on their journals (translation constraints that follow the
     input angle): the rigid-body idealization of the classical load-sharing
@@ -321,7 +341,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     nodes = bodies["nodes"]
 
     # -- ring pins ---------------------------------------------------------------
-    profiles, meshes = pin_meshes(d, pin_overrides=pin_overrides)
+    profiles, meshes = pin_meshes(d)
     housing, ports, n_pin_bodies = None, None, nw + 2
     if d.housing.model == "ports":
         from exudyn_user_elements.reduced_structure import ReducedStructure
@@ -352,7 +372,33 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
         elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
     mbs.Assemble()
-    return CycloidModel(design=d, SC=SC, mbs=mbs, nodes=nodes, elements=elements, pin_set=pin_set, drive=bodies["drive"],
-                        load=bodies["load"], n_wheels=nw, locks=bodies["locks"], profiles=profiles,
+    return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
+                        families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
+                        output=BodyCoordinate("flange", "theta"), ratio=d.ratio, kinematics=CycloidKinematics(d),
+                        drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"], locks=bodies["locks"],
                         reg_springs=bodies["reg_springs"], journal_locks=bodies["journal_locks"],
-                        reference=bodies["reference"], housing=housing)
+                        structures={} if housing is None else {"housing": housing},
+                        mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
+                        housing=housing)
+
+
+def body_names(n_wheels):
+    """Body names in node order: the shaft, the wheels, the flange."""
+    return ("shaft",) + tuple(f"wheel{k}" for k in range(n_wheels)) + ("flange",)
+
+
+BEARING_FAMILIES = {"eccentric_bearing": Family.ECCENTRIC_BEARINGS, "main_bearing": Family.MAIN_BEARINGS,
+                    "input_bearing": Family.INPUT_BEARINGS}
+
+
+def contact_families(elements):
+    """{Family: (element name, rows)}: the pin mesh and output pins are one element each;
+    the bearings element's rows split by mounting name."""
+    fams = {Family.PINS: ("pins", np.arange(len(elements["pins"].ids))),
+            Family.OUTPUT_PINS: ("output_pins", np.arange(len(elements["output_pins"].ids)))}
+    ids = elements["bearings"].ids
+    for prefix, fam in BEARING_FAMILIES.items():
+        rows = np.array([i for i, cid in enumerate(ids) if cid.startswith(prefix)], dtype=int)
+        if len(rows):
+            fams[fam] = ("bearings", rows)
+    return fams

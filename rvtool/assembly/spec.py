@@ -6,8 +6,10 @@ import math
 import tomllib
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ..errors import RvtoolInputError
-from ..validation import check_nonnegative, check_positive, check_range
+from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
 
@@ -27,16 +29,28 @@ class Material:
 
 @dataclass(frozen=True, kw_only=True)
 class Pins:
-    """Ring pins: n_pins (z_b), pin_circle_radius R_z [m], pin_radius r_p [m]."""
+    """Ring pins: n_pins (z_b), pin_circle_radius R_z [m], pin_radius r_p [m] (the generating
+    radius of the wheel profile). Manufacturing deviations (part of the design, so a variant is
+    a design): radius_error [m], the actual pin radius minus r_p; centre_errors: None or
+    (z_b, 2) pin-centre errors [m] in the housing frame."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
+    radius_error: float = 0.0
+    centre_errors: tuple | None = None
 
     def __post_init__(self):
         if not isinstance(self.n_pins, int) or self.n_pins < 3:
             raise RvtoolInputError(f"pins.n_pins = {self.n_pins!r} is outside the valid range [3, inf) (integer)")
         check_positive("pins.pin_circle_radius", self.pin_circle_radius)
         check_positive("pins.pin_radius", self.pin_radius)
+        check_range("pins.radius_error", self.radius_error, -self.pin_radius, math.inf, low_open=True)
+        if self.centre_errors is not None:
+            e = np.asarray(self.centre_errors, float)
+            if e.shape != (self.n_pins, 2):
+                raise RvtoolInputError(f"pins.centre_errors must have shape ({self.n_pins}, 2) (one (x, y) per pin); "
+                                       f"got {e.shape}")
+            check_finite("pins.centre_errors", e)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -275,6 +289,18 @@ class CycloidDesign:
     def ratio(self):
         """Signed nominal ratio i = omega_in / omega_out (fixed pins, output through the wheel): -z_g."""
         return -(self.pins.n_pins - 1)
+
+    def replace(self, **sections):
+        """A copy with sections replaced by dicts of changed fields (see :func:`replace`)."""
+        return replace(self, **sections)
+
+    def with_mesh_stiffness_factor(self, factor):
+        """A copy whose pin-contact law is the line law at ``factor`` times the current stiffness
+        (the secant stiffness at the reference force where none is given)."""
+        from ..contact.cycloid_set import secant_line_stiffness
+        pc = self.pin_contact
+        k = pc.stiffness if pc.stiffness > 0 else secant_line_stiffness(pc.reference_force, self.wheels.width)
+        return replace(self, pin_contact={"law": "line", "stiffness": factor * k})
 
 
 _SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact": PinContact,

@@ -34,19 +34,20 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround
 
-from ..assembly.cycloid import (CycloidModel, add_bodies, kinematic_poses, lumped_bearing_contacts,
-                               output_pin_mechanism, pin_meshes)
+from ..assembly.cycloid import (CycloidKinematics, CycloidModel, add_bodies, body_names, kinematic_poses,
+                               lumped_bearing_contacts, output_pin_mechanism, pin_meshes)
 from ..assembly.spec import CycloidDesign
 from ..contact.circle_set import CircleContactSet
 from ..contact.cycloid_set import CycloidPinSet
 from ..contact.evaluator import ContactSetEvaluator
 from ..errors import RvtoolInputError
+from ..model import BodyCoordinate
 from ..output_pins.spec import PinMode
 from ..validation import check_choice
 from .evaluator import BatchContactEvaluator
 
 
-def copy_contacts(design, build_kw, offset):
+def copy_contacts(design, offset):
     """Contact definitions of one copy whose bodies start at global index ``offset``
     (shaft ``offset``, wheels ``offset + 1..n``, flange ``offset + n + 1``): the builder's own
     :func:`~rvtool.assembly.cycloid.pin_meshes`, :func:`~rvtool.assembly.cycloid.output_pin_mechanism`
@@ -57,7 +58,7 @@ def copy_contacts(design, build_kw, offset):
     """
     prefix = f"copy{offset}/"
     nw = design.n_wheels
-    _, meshes = pin_meshes(design, offset=offset, pin_overrides=build_kw.get("pin_overrides"), prefix=prefix)
+    _, meshes = pin_meshes(design, offset=offset, prefix=prefix)
     mech = output_pin_mechanism(design)
     fp, ip = mech.packed(offset + nw + 1, tuple(range(offset + 1, offset + nw + 1)))
     return meshes, lumped_bearing_contacts(design, offset=offset, prefix=prefix), (fp, ip, mech.stations)
@@ -179,15 +180,17 @@ def build_batched(design: CycloidDesign, variants, *, bearing_model="lumped", ba
     mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
     copies, meshes, contacts, op_f, op_i = [], [], [], [], []
     stations = None
-    for c, (d_c, kw_c) in enumerate(applied):
+    for c, d_c in enumerate(applied):
         if d_c.n_wheels != nw:
             raise RvtoolInputError(f"variant {c} has n_wheels = {d_c.n_wheels}; all copies need {nw}")
         b = add_bodies(mbs, d_c, mg, regularization=regularization)
-        copies.append(CycloidModel(design=d_c, SC=SC, mbs=mbs, nodes=b["nodes"], elements={}, pin_set=None,
-                                   drive=b["drive"], load=b["load"], n_wheels=nw, locks=b["locks"],
-                                   reg_springs=b["reg_springs"], journal_locks=b["journal_locks"],
-                                   reference=b["reference"]))
-        m_c, ct_c, (fp, ip, st) = copy_contacts(d_c, kw_c, c * nb)
+        copies.append(CycloidModel(design=d_c, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=b["nodes"], elements={},
+                                   families={}, input=BodyCoordinate("shaft", "theta"),
+                                   output=BodyCoordinate("flange", "theta"), ratio=d_c.ratio,
+                                   kinematics=CycloidKinematics(d_c), drive=b["drive"], load=b["load"],
+                                   reference=b["reference"], locks=b["locks"], reg_springs=b["reg_springs"],
+                                   journal_locks=b["journal_locks"], mesh_period=2 * np.pi / d_c.pins.n_pins, n_wheels=nw))
+        m_c, ct_c, (fp, ip, st) = copy_contacts(d_c, c * nb)
         meshes += m_c
         contacts += ct_c
         op_f.append(fp)

@@ -50,9 +50,9 @@ def _single_thread():
 def _run(design, angles, torque, build_kw, device, predictor, abs_tol):
     """One process: all segments of ``angles`` (B, L) side by side. Returns per-point arrays
     (B, L): solved input angles, flange angles, and per-copy family peaks, stats."""
-    from ..variants import Variant
+    from ..variants.variant import Variant
     from .assembly import build_batched
-    from .solver import BatchedStaticSolver
+    from ..solver.batched import BatchedStaticSolver
 
     t0 = time.perf_counter()
     B, L = angles.shape

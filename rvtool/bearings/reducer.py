@@ -2,6 +2,7 @@
 import math
 
 from ..contact.circle_set import GROUND
+from ..geometry.eccentric import journal_centre
 from .set import BearingSet, Mounting
 from .spec import AngularContactPair, BallBearing, NeedleBearing
 
@@ -26,10 +27,9 @@ def rolling_bearing_sets(design, n_wheels, *, backend="warp", precision="float64
                            n_slices=eb.n_slices)
     mounts = []
     for k in range(n_wheels):
-        phi = math.radians(d.wheels.phases_deg[k])
-        e = d.wheels.eccentricity
+        centre = journal_centre(d.wheels.eccentricity, math.radians(d.wheels.phases_deg[k]))
         mounts.append(Mounting(name=f"eccentric_bearing{k}", bearing=needle, inner=0, outer=1 + k,
-                               inner_centre=(-e * math.sin(phi), e * math.cos(phi))))
+                               inner_centre=tuple(float(c) for c in centre)))
     mb = d.main_bearing
     if mb.kind != "locked":
         row = _ball_row(mb, d.material)

@@ -26,6 +26,7 @@ import scipy.interpolate
 
 from rvtool.errors import RvtoolInputError
 from rvtool.geometry.cycloid import pin_centres
+from rvtool.model import Family
 from warp_contacts.circle_pairs_ref import O_FN, O_FT, O_NX, O_NY, O_PX, O_PY
 
 #: Stribeck's factor of a line-contact bearing with zero clearance, Q_max = 4.08 F_r / Z
@@ -101,8 +102,7 @@ def _e_star(design):
 
 def _evaluation_obs(el, q):
     """Observation array (N, 8) of element ``el`` at the accepted state q (zero velocity)."""
-    from rvtool.protocols.precision import _evaluation_at
-    return np.asarray(_evaluation_at(el, q).obs, float)
+    return np.asarray(el.evaluation_at(q).obs, float)
 
 
 def _circle_pair_gap(r1, r2, conformal):
@@ -150,9 +150,9 @@ def pin_contact(model, q, wheel, pin, *, obs=None, extent=1e-3):
     0.12 um into the gap, finer than the 4097-panel spacing of a pin contact (28 nm), and moved its
     peak pressure by 0.2 %.
     """
-    el = model.elements["pins"]
+    el = model.family_element(Family.PINS)
     obs = _evaluation_obs(el, q) if obs is None else obs
-    ps = model.pin_set
+    ps = model.family_element(Family.PINS).evaluator
     rows = np.flatnonzero((ps.mesh_of == wheel) & (ps.pin_of == pin))
     if rows.size == 0:
         raise RvtoolInputError(f"wheel = {wheel}, pin = {pin}: no such cycloid pin contact")
@@ -205,7 +205,7 @@ def pin_contact(model, q, wheel, pin, *, obs=None, extent=1e-3):
 def pin_contact_gap(model, q, contact, x):
     """Gap [m] at x [m] and force [N] of the cycloid pin contact of observation row ``contact``
     (its wheel and pin; slices merged). Kept for callers of the row-based interface."""
-    ps = model.pin_set
+    ps = model.family_element(Family.PINS).evaluator
     c = pin_contact(model, q, int(ps.mesh_of[contact]), int(ps.pin_of[contact]))
     return c.gap(x), c.force
 
@@ -217,7 +217,7 @@ def _frame(n):
 
 def output_pin_contact(model, q, wheel, pin, *, obs=None):
     """Output pin ``pin`` in its hole of wheel ``wheel`` (convex pin in a concave hole, conformal)."""
-    el = model.elements["output_pins"]
+    el = model.family_element(Family.OUTPUT_PINS)
     obs = _evaluation_obs(el, q) if obs is None else obs
     prefix = f"output_pins/pin{pin}/wheel{wheel}/"
     rows = np.array([i for i, cid in enumerate(el.ids) if cid.startswith(prefix)], dtype=int)
@@ -247,7 +247,7 @@ def needle_contact(model, q, wheel, roller, race, *, obs=None):
         raise RvtoolInputError(f"race = {race!r}; valid choices are ['journal', 'bore']")
     d = model.design
     eb = d.eccentric_bearing
-    el = model.elements["bearings"]
+    el = model.family_element(Family.ECCENTRIC_BEARINGS)
     obs = _evaluation_obs(el, q) if obs is None else obs
     name = f"eccentric_bearing{wheel}"
     if any(cid.startswith(name + "/roller") for cid in el.ids):
@@ -288,13 +288,13 @@ def needle_contact(model, q, wheel, roller, race, *, obs=None):
 def candidates(model, q, family, wheel, race="journal"):
     """All loaded contacts of ``family`` ("pins", "output_pins", "needles") of wheel ``wheel`` at q."""
     if family == "pins":
-        el = model.elements["pins"]
+        el = model.family_element(Family.PINS)
         obs = _evaluation_obs(el, q)
-        ps = model.pin_set
+        ps = model.family_element(Family.PINS).evaluator
         loaded = sorted({int(p) for p, m, f in zip(ps.pin_of, ps.mesh_of, obs[:, O_FN]) if m == wheel and f > 0})
         return [pin_contact(model, q, wheel, p, obs=obs) for p in loaded]
     if family == "output_pins":
-        el = model.elements["output_pins"]
+        el = model.family_element(Family.OUTPUT_PINS)
         obs = _evaluation_obs(el, q)
         out = []
         for p in range(model.design.output_pins.n_pins):
@@ -303,7 +303,7 @@ def candidates(model, q, family, wheel, race="journal"):
                 out.append(output_pin_contact(model, q, wheel, p, obs=obs))
         return out
     if family == "needles":
-        el = model.elements["bearings"]
+        el = model.family_element(Family.ECCENTRIC_BEARINGS)
         obs = _evaluation_obs(el, q)
         name = f"eccentric_bearing{wheel}"
         if not any(cid.startswith(name + "/roller") for cid in el.ids):

@@ -18,7 +18,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RvtoolInputError, SolverFailure
-from .precision import ARCSEC, kinematic_velocity, transmission_error
+from warp_contacts.circle_pairs_ref import O_FN
+
+from ..solver.continuation import Continuation
+from ..units import ARCSEC_PER_RAD
+from .precision import transmission_error
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -35,7 +39,7 @@ class HardCase:
     duration, quick_duration: simulated time [s] of the full / --quick run.
     step: nominal step [s]. stiffness_factor: pin-contact stiffness multiplier [-].
     nan_at_evaluation: evaluation counters of the pin element to poison (fault injection).
-    wheel_kick: extra initial angular velocity of wheel 1 [rad/s] (excites rattle in the clearance).
+    wheel_kick: extra initial angular velocity [rad/s] of ``kick_body`` (excites rattle in the clearance).
     """
     name: str
     description: str
@@ -52,6 +56,7 @@ class HardCase:
     stiffness_factor: float = 1.0
     nan_at_evaluation: tuple = ()
     wheel_kick: float = 0.0
+    kick_body: str = "wheel0"
 
     def input_angle(self, t):
         w = self.speed_rpm * np.pi / 30.0
@@ -87,14 +92,11 @@ def _body_masses(model):
 
 
 def build_case_model(case: HardCase, design):
-    from ..assembly.cycloid import build
-    from ..assembly.spec import replace
-    from ..contact.cycloid_set import secant_line_stiffness
-    d = replace(design, **case.design_changes) if case.design_changes else design
+    """(model, design) of the case: the design with its changes and mesh stiffness factor."""
+    from ..assembly import build
+    d = design.replace(**case.design_changes) if case.design_changes else design
     if case.stiffness_factor != 1.0:
-        pc = d.pin_contact
-        k = pc.stiffness if pc.stiffness > 0 else secant_line_stiffness(pc.reference_force, d.wheels.width)
-        d = replace(d, pin_contact={"law": "line", "stiffness": case.stiffness_factor * k})
+        d = d.with_mesh_stiffness_factor(case.stiffness_factor)
     return build(d), d
 
 
@@ -112,28 +114,23 @@ def run_hard_case(case: HardCase, design, *, quick=False, out_dir=None, criteria
     mbs = model.mbs
     # loaded start by torque continuation (increment halving, jump guard): a full-load Newton
     # solve from the kinematic state can converge to a spurious far equilibrium
-    from .stiffness import Continuation
     q0 = Continuation(model, input_angle=case.input_angle(0.0)).go_to(sign * case.torque(0.0, rated))
     v0 = np.zeros_like(q0)
     if not case.start_from_rest:
-        kv = kinematic_velocity(model, case.input_speed(0.0), case.input_angle(0.0))
-        for b, node in enumerate(model.nodes):
-            v0[np.asarray(mbs.systemData.GetNodeLTGODE2(node))] = kv[b]
+        v0 = model.body_vector(model.kinematic_state(case.input_angle(0.0), case.input_speed(0.0)).velocities)
     if case.wheel_kick:
-        v0[model.coordinate_index(1, 2)] += case.wheel_kick
-    model.set_input_speed(0.0)   # switches the static regularization off
-    mbs.SetObjectParameter(model.drive, "offsetUserFunction", lambda mbs_, t, i, off: case.input_angle(t))
-    mbs.SetLoadParameter(model.load, "loadUserFunction", lambda mbs_, t, load: sign * case.torque(t, rated))
+        v0[model.coordinate_index(case.kick_body, "theta")] += case.wheel_kick
+    model.set_input_motion(case.input_angle)   # also switches the static regularization off
+    model.set_output_torque_function(lambda t: sign * case.torque(t, rated))
     mbs.Assemble()
     mbs.systemData.SetODE2Coordinates(q0, configuration=exu.ConfigurationType.Initial)
     mbs.systemData.SetODE2Coordinates_t(v0, configuration=exu.ConfigurationType.Initial)
-    pins = model.elements["pins"]
+    pins = model.family_element(model.main_mesh)
     if case.nan_at_evaluation:
         n0 = pins.n_evaluations
         pins.inject_nan_at = {n0 + int(k) for k in case.nan_at_evaluation}
     masses = _body_masses(model)
-    i_in, i_out = model.coordinate_index(0, 2), model.coordinate_index(model.flange, 2)
-    from .precision import O_FN
+    i_in, i_out = model.input_index, model.output_index
     rec = {"t": [0.0], "theta_in": [q0[i_in]], "theta_out": [q0[i_out]],
            "pin_sum_N": [float(np.sum(pins.evaluate(0.0, pins.local(q0), pins.local(v0)).obs[:, O_FN]))],
            "kinetic_J": [0.5 * float(masses @ v0 ** 2)], "finite": [True]}
@@ -149,7 +146,7 @@ def run_hard_case(case: HardCase, design, *, quick=False, out_dir=None, criteria
     t0 = time.perf_counter()
     failure, saved = None, None
     try:
-        run = simulate(mbs, spec, list(model.elements.values()), None, before_accept=record, out_dir=out_dir)
+        run = simulate(mbs, spec, model.contact_elements(), None, before_accept=record, out_dir=out_dir)
         stats = run.to_dict()
     except SolverFailure as exc:
         failure = str(exc)
@@ -160,21 +157,21 @@ def run_hard_case(case: HardCase, design, *, quick=False, out_dir=None, criteria
     arr["te"] = transmission_error(arr["theta_in"], arr["theta_out"], d.ratio)
     crit = {}
     if failure is None:
-        crit["finished"] = _crit(arr["t"][-1], duration * (1 - 1e-9), ">=")
-        crit["finite_state"] = _crit(int(np.all(arr["finite"])), 1, ">=")
+        crit["finished"] = criterion(arr["t"][-1], duration * (1 - 1e-9), ">=")
+        crit["finite_state"] = criterion(int(np.all(arr["finite"])), 1, ">=")
         # no silent garbage: kinetic energy within 10x the rigid kinematic value at the top
         # speed and TE within 20 arcmin (several times lost motion plus rated wind-up, ~6 arcmin)
-        kin = kinematic_velocity(model, case.speed_rpm * np.pi / 30.0)
-        ke_ref = 0.5 * float(masses @ _flat(model, kin) ** 2)
-        crit["kinetic_energy_bound"] = _crit(float(arr["kinetic_J"].max()) / ke_ref, 10.0, "<=")
-        crit["te_bound_arcsec"] = _crit(float(np.max(np.abs(arr["te"] - arr["te"][0]))) * ARCSEC, 1200.0, "<=")
+        kin = model.kinematic_state(0.0, case.speed_rpm * np.pi / 30.0).velocities
+        ke_ref = 0.5 * float(masses @ model.body_vector(kin) ** 2)
+        crit["kinetic_energy_bound"] = criterion(float(arr["kinetic_J"].max()) / ke_ref, 10.0, "<=")
+        crit["te_bound_arcsec"] = criterion(float(np.max(np.abs(arr["te"] - arr["te"][0]))) * ARCSEC_PER_RAD, 1200.0, "<=")
         if criteria_fn is not None:
             crit.update(criteria_fn(arr, stats, d, case))
         passed = all(c["passed"] for c in crit.values())
         msg = ("finished: " if passed else "finished but failed: ") + \
               ", ".join(f"{k}={'ok' if c['passed'] else 'FAIL'}" for k, c in crit.items())
     else:
-        crit["failed_with_saved_state"] = _crit(int(saved is not None), 1, ">=")
+        crit["failed_with_saved_state"] = criterion(int(saved is not None), 1, ">=")
         passed = False
         msg = failure
     return {
@@ -184,19 +181,13 @@ def run_hard_case(case: HardCase, design, *, quick=False, out_dir=None, criteria
         "max_residual": stats["max_residual"] if stats else None,
         "message": msg, "saved_state": saved, "accepted_steps": stats["accepted_steps"] if stats else None,
         "reject_reasons": stats["reject_reasons"] if stats else None, "wall_s": wall,
-        "te_pp_arcsec": float(np.ptp(arr["te"])) * ARCSEC, "kinetic_max_J": float(arr["kinetic_J"].max()),
+        "te_pp_arcsec": float(np.ptp(arr["te"])) * ARCSEC_PER_RAD, "kinetic_max_J": float(arr["kinetic_J"].max()),
         "pin_sum_min_N": float(arr["pin_sum_N"].min()), "pin_sum_max_N": float(arr["pin_sum_N"].max()),
     }, arr
 
 
-def _flat(model, per_body):
-    v = np.zeros(model.mbs.systemData.ODE2Size())
-    for b, node in enumerate(model.nodes):
-        v[np.asarray(model.mbs.systemData.GetNodeLTGODE2(node))] = per_body[b]
-    return v
-
-
-def _crit(value, limit, op):
+def criterion(value, limit, op):
+    """A pass/fail criterion: {value, limit ("<= x" or ">= x"), passed}."""
     ok = {"<=": value <= limit, ">=": value >= limit}[op]
     return {"value": value, "limit": f"{op} {limit}", "passed": bool(ok)}
 
@@ -250,23 +241,23 @@ def criteria_reversal(arr, stats, d, case):
     before = arr["pin_sum_N"][t <= case.reverse_at_s]
     after = t > case.reverse_at_s
     loaded = float(np.median(before))
-    te = arr["te"] * ARCSEC
+    te = arr["te"] * ARCSEC_PER_RAD
     return {
         # the mesh unloads while the torque passes zero (contact loss) ...
-        "contact_loss_min_over_loaded": _crit(float(arr["pin_sum_N"][after].min()) / loaded, 0.1, "<="),
+        "contact_loss_min_over_loaded": criterion(float(arr["pin_sum_N"][after].min()) / loaded, 0.1, "<="),
         # ... and is loaded again on the other flank (re-impact)
-        "reloaded_over_loaded": _crit(float(arr["pin_sum_N"][-1]) / loaded, 0.5, ">="),
+        "reloaded_over_loaded": criterion(float(arr["pin_sum_N"][-1]) / loaded, 0.5, ">="),
         # the output crosses the backlash: TE moves by more than the wind-up of one side
-        "te_shift_arcsec": _crit(float(abs(te[-1] - te[t <= case.reverse_at_s][-1])), 60.0, ">="),
+        "te_shift_arcsec": criterion(float(abs(te[-1] - te[t <= case.reverse_at_s][-1])), 60.0, ">="),
     }
 
 
 def criteria_startup(arr, stats, d, case):
-    return {"output_speed_error_final_half": _crit(_speed_follow(arr, d, 0.5), 0.05, "<=")}
+    return {"output_speed_error_final_half": criterion(_speed_follow(arr, d, 0.5), 0.05, "<=")}
 
 
 def criteria_runup(arr, stats, d, case):
-    return {"output_speed_error_final_fifth": _crit(_speed_follow(arr, d, 0.2), 0.05, "<=")}
+    return {"output_speed_error_final_fifth": criterion(_speed_follow(arr, d, 0.2), 0.05, "<=")}
 
 
 def criteria_rattle(arr, stats, d, case):
@@ -274,63 +265,20 @@ def criteria_rattle(arr, stats, d, case):
     # and the integrator may only remove energy: the kinetic energy stays below its initial value
     # plus the rigid drive share (no energy created by the impacts)
     ke0 = float(arr["kinetic_J"][0])
-    return {"impacts_max_pin_sum_N": _crit(float(arr["pin_sum_N"].max()), 1.0, ">="),
-            "kinetic_energy_over_initial": _crit(float(arr["kinetic_J"].max()) / ke0, 1.05, "<=")}
+    return {"impacts_max_pin_sum_N": criterion(float(arr["pin_sum_N"].max()), 1.0, ">="),
+            "kinetic_energy_over_initial": criterion(float(arr["kinetic_J"].max()) / ke0, 1.05, "<=")}
     # (no speed-following criterion: unloaded, the flange floats within the backlash)
 
 
 def criteria_stiff100(arr, stats, d, case):
-    return {"output_speed_error_final_half": _crit(_speed_follow(arr, d, 0.5), 0.05, "<=")}
+    return {"output_speed_error_final_half": criterion(_speed_follow(arr, d, 0.5), 0.05, "<=")}
 
 
 def criteria_nan(arr, stats, d, case):
     reasons = stats.get("reject_reasons", {}) if stats else {}
-    return {"nan_rejected_and_retried": _crit(int(reasons.get("non-finite contact force in a trial evaluation", 0)),
+    return {"nan_rejected_and_retried": criterion(int(reasons.get("non-finite contact force in a trial evaluation", 0)),
                                               1, ">=")}
 
 
 CRITERIA = {"reversal": criteria_reversal, "startup": criteria_startup, "runup": criteria_runup,
             "rattle": criteria_rattle, "stiff100": criteria_stiff100, "nan": criteria_nan}
-
-
-def case_main(name, argv=None, doc=None, extra=None):
-    """Shared ``main`` of the cases/hard_*.py scripts: run, judge, plot, write results.json.
-    ``extra(result, arr, design, quick, out)`` may add sub-runs and criteria."""
-    import os
-
-    from .. import casekit
-    from ..assembly.spec import load_design
-    args = casekit.parse_args(argv, doc)
-    t_start = time.perf_counter()
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    design = load_design(os.path.join(root, "cases", "designs", "rd40.toml"))
-    case = case_by_name(name)
-    result, arr = run_hard_case(case, design, quick=args.quick, out_dir=os.path.join(args.out, "state"),
-                                criteria_fn=CRITERIA.get(name))
-    if extra is not None:
-        extra(result, arr, design, args.quick, args.out)
-        result["passed"] = bool(result["passed"] and all(c["passed"] for c in result["criteria"].values()))
-        if result["saved_state"] is None:
-            result["message"] = ("finished: " if result["passed"] else "finished but failed: ") + ", ".join(
-                f"{k}={'ok' if c['passed'] else 'FAIL'}" for k, c in result["criteria"].items())
-    result["energy_balance"] = ("not evaluated: the driver records neither the drive constraint's work nor "
-                                "the contact dissipation; kinetic energy is bounded instead (criterion)")
-    _plot(args.out, name, arr)
-    settings = {"case": dataclasses.asdict(case), "quick": args.quick, "design": design.name}
-    return casekit.write_results(args.out, result, settings=settings, wall_s=time.perf_counter() - t_start)
-
-
-def _plot(out, name, arr):
-    import matplotlib.pyplot as plt
-
-    from .. import casekit
-    fig, ax = plt.subplots(1, 3, figsize=(12, 3))
-    ax[0].plot(arr["t"] * 1e3, arr["te"] * ARCSEC)
-    ax[0].set_ylabel("TE [arcsec]")
-    ax[1].plot(arr["t"] * 1e3, arr["pin_sum_N"])
-    ax[1].set_ylabel("pin-force sum [N]")
-    ax[2].plot(arr["t"] * 1e3, arr["kinetic_J"])
-    ax[2].set_ylabel("kinetic energy [J]")
-    for a in ax:
-        a.set_xlabel("t [ms]")
-    casekit.save_figure(fig, out, f"hard_{name}")

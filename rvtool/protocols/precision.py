@@ -12,11 +12,7 @@ import time
 
 import numpy as np
 
-from warp_contacts.circle_pairs_ref import O_FN
-
-from .equilibrium import StaticSolver
-
-ARCSEC = 180.0 / np.pi * 3600.0
+from ..solver.static import StaticSolver
 
 
 def transmission_error(theta_in, theta_out, ratio, *, unwrap=True):
@@ -46,47 +42,15 @@ def te_metrics(te, *, n_revolutions=1.0, n_peaks=10, remove_mean=True):
             "orders": orders, "amplitudes": amp, "peak_orders": orders[idx], "peak_amplitudes": amp[idx]}
 
 
-def _evaluation_at(el, q):
-    """The element's evaluation at state q with zero velocity, reusing the solver's last
-    (cached) evaluation when it was made at exactly this state."""
-    ql = el.local(q)
-    v = np.zeros(len(ql))
-    if el._key is not None and el._key[1] == np.asarray(ql, float).tobytes() and el._key[2] == v.tobytes():
-        return el._ev
-    return el.evaluate(0.0, ql, v)
-
-
-BEARING_FAMILIES = ("eccentric_bearing", "main_bearing", "input_bearing")
-
-
-def _family_rows(el):
-    """{family: row indices} of an element, computed once per element."""
-    rows = getattr(el, "_family_rows", None)
-    if rows is None:
-        if el.name == "bearings":
-            rows = {fam + "s": np.array([i for i, cid in enumerate(el.ids) if cid.startswith(fam)], dtype=int)
-                    for fam in BEARING_FAMILIES}
-            rows = {k: v for k, v in rows.items() if len(v)}
-        else:
-            rows = {el.name: np.arange(len(el.ids))}
-        el._family_rows = rows
-    return rows
-
-
 def family_peaks(model, q):
-    """Peak normal force [N] per contact family of the model at state q (zero velocity)."""
-    out = {}
-    for el in model.elements.values():
-        ev = _evaluation_at(el, q)
-        for fam, rows in _family_rows(el).items():
-            out[fam] = float(np.max(ev.obs[rows, O_FN]))
-    return out
+    """Peak row normal force [N] per contact family of the model at state q (zero velocity)."""
+    return model.family_peaks(q)
 
 
-def pin_forces(model, q):
-    """Per wheel, per pin normal force [N] (slices summed) at state q."""
-    el = model.elements["pins"]
-    return el.evaluator.pin_forces(_evaluation_at(el, q).obs)
+def mesh_forces(model, q):
+    """Per member of the main mesh (a wheel), the normal force of each contact [N] (slices
+    summed) at state q: (n_members, n_contacts)."""
+    return np.array(list(model.observe(q, model.main_mesh).per_member().values()))
 
 
 def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, warm_start=True):
@@ -98,12 +62,11 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
     starts every point with the solver's stiffness homotopy from the kinematic state, which
     is cheaper for points far apart (e.g. 53 points over an output revolution, 4.6 rad of
     input angle apart, where a warm start is no closer than the kinematic state)."""
-    ratio = model.design.ratio
+    ratio = model.ratio
     solver = solver or StaticSolver(model)
     model.set_output_torque(-np.sign(ratio) * torque)
-    i_out = model.coordinate_index(model.flange, 2)
-    i_in = model.coordinate_index(0, 2)
-    ref_out = model.mbs.GetNodeParameter(model.nodes[model.flange], "referenceCoordinates")[2]
+    i_out = model.output_index
+    ref_out = model.reference_value(model.output)
     th_in, th_out = [], []
     peaks = {}
     prev = None
@@ -114,7 +77,7 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
         prev = a
         th_in.append(a)
         th_out.append(ref_out + q[i_out])
-        for fam, f in family_peaks(model, q).items():
+        for fam, f in model.family_peaks(q).items():
             peaks[fam] = max(peaks.get(fam, 0.0), f)
         if record is not None:
             record(k, a, q)
@@ -123,20 +86,6 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
     return {"theta_in": th_in, "theta_out": th_out, "te": transmission_error(th_in, th_out, ratio, unwrap=False),
             "peak_loads": peaks, "stats": solver.stats.to_dict(), "wall_s": wall,
             "regularization_max": model.regularization_force(solver.q)}
-
-
-def kinematic_velocity(model, omega_in, input_angle=0.0):
-    """Rigid kinematic velocities (nb, 3) at input speed omega_in [rad/s]."""
-    d = model.design
-    zg = d.pins.n_pins - 1
-    v = np.zeros((len(model.nodes), 3))
-    v[0, 2] = omega_in
-    for k in range(model.n_wheels):
-        psi = input_angle + np.deg2rad(d.wheels.phases_deg[k])
-        e = d.wheels.eccentricity
-        v[1 + k] = (-e * np.cos(psi) * omega_in, -e * np.sin(psi) * omega_in, -omega_in / zg)
-    v[model.flange, 2] = -omega_in / zg
-    return v
 
 
 def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, out_dir=None, on_start=None):
@@ -148,14 +97,11 @@ def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, 
 
     from ..solver import simulate
     omega = speed_rpm * 2 * np.pi / 60.0
-    ratio = model.design.ratio
+    ratio = model.ratio
     solver = StaticSolver(model)
     model.set_output_torque(-np.sign(ratio) * torque)
     q0 = solver.solve(0.0)
-    v0 = np.zeros_like(q0)
-    kv = kinematic_velocity(model, omega)
-    for b, node in enumerate(model.nodes):
-        v0[np.asarray(model.mbs.systemData.GetNodeLTGODE2(node))] = kv[b]
+    v0 = model.body_vector(model.kinematic_state(0.0, omega).velocities)
     mbs = model.mbs
     mbs.systemData.SetODE2Coordinates(q0, configuration=exu.ConfigurationType.Initial)
     mbs.systemData.SetODE2Coordinates_t(v0, configuration=exu.ConfigurationType.Initial)
@@ -163,9 +109,8 @@ def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, 
     mbs.Assemble()
     mbs.systemData.SetODE2Coordinates(q0, configuration=exu.ConfigurationType.Initial)
     mbs.systemData.SetODE2Coordinates_t(v0, configuration=exu.ConfigurationType.Initial)
-    i_out = model.coordinate_index(model.flange, 2)
-    i_in = model.coordinate_index(0, 2)
-    ref_out = mbs.GetNodeParameter(model.nodes[model.flange], "referenceCoordinates")[2]
+    i_out, i_in = model.output_index, model.input_index
+    ref_out = model.reference_value(model.output)
     t_rec, th_in, th_out = [0.0], [q0[i_in]], [ref_out + q0[i_out]]
 
     def record(t, q, v):
@@ -177,7 +122,7 @@ def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, 
     spec = dataclasses.replace(run_spec, end_time=duration)
     if on_start is not None:
         on_start()
-    rec = simulate(mbs, spec, list(model.elements.values()), observers, before_accept=record, out_dir=out_dir)
+    rec = simulate(mbs, spec, model.contact_elements(), observers, before_accept=record, out_dir=out_dir)
     t_rec, th_in, th_out = map(np.array, (t_rec, th_in, th_out))
     te = transmission_error(th_in, th_out, ratio)
     n_uniform = max(16, int(round(duration / run_spec.step)))

@@ -20,12 +20,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import RvtoolInputError, SolverFailure
+from ..errors import RvtoolInputError
 from ..validation import check_positive, check_range
-from .equilibrium import StaticSolver
-from .precision import _evaluation_at
+from ..solver.continuation import Continuation
+from ..units import RAD_PER_ARCMIN
 
-ARCMIN = np.pi / (180.0 * 60.0)   # rad per arcmin
 BRANCHES = ("pos_loading", "pos_unloading", "neg_loading", "neg_unloading")
 
 
@@ -140,7 +139,7 @@ def branch_fits(torque, angle_arcmin, labels, rated_torque, lo=0.5, hi=1.0):
     return out
 
 
-def lost_motion(torque, angle_arcmin, rated_torque, fraction=0.03):
+def lost_motion_from_levels(torque, angle_arcmin, rated_torque, fraction=0.03):
     """Angle difference [arcmin] between the first +fraction and first -fraction levels
     (the +-3 % definition: the width of the low-stiffness band around zero load)."""
     torque = np.asarray(torque, float)
@@ -165,20 +164,13 @@ def condensed_tangent(model, q):
     coordinates (all but the drive and locks), condensed on the output rotation."""
     n = len(q)
     K = np.zeros((n, n))
-    for el in model.elements.values():
-        ev = _evaluation_at(el, q)
-        ltg = el._ltg if el._ltg is not None else np.asarray(model.mbs.systemData.GetObjectLTGODE2(el.object_number))
-        K[np.ix_(ltg, ltg)] -= ev.dQdq
-    for body, c, _, obj in model.reg_springs:
-        i = model.coordinate_index(body, c)
-        K[i, i] += model.mbs.GetObjectParameter(obj, "stiffness")
-    fixed = {model.coordinate_index(0, 2)}
-    for obj in model.locks:
-        markers = model.mbs.GetObjectParameter(obj, "markerNumbers")
-        node = model.mbs.GetMarkerParameter(markers[1], "nodeNumber")
-        c = model.mbs.GetMarkerParameter(markers[1], "coordinate")
-        fixed.add(int(model.mbs.systemData.GetNodeLTGODE2(node)[c]))
-    i_out = model.coordinate_index(model.flange, 2)
+    for el in model.contact_elements():
+        ltg = el.coordinate_indices
+        K[np.ix_(ltg, ltg)] -= el.evaluation_at(q).dQdq
+    for i, k in model.regularization_stiffness():
+        K[i, i] += k
+    fixed = model.fixed_coordinates()
+    i_out = model.output_index
     r = [i for i in range(n) if i not in fixed and i != i_out]
     k_rr = K[np.ix_(r, r)]
     return float(K[i_out, i_out] - K[i_out, r] @ np.linalg.solve(k_rr, K[r, i_out]))
@@ -186,114 +178,27 @@ def condensed_tangent(model, q):
 
 # -- path (b): quasi-static continuation ----------------------------------------------
 
-@dataclass
-class ContinuationStats:
-    levels: int = 0
-    solves: int = 0
-    rejected_increments: int = 0
-    newton_iterations: int = 0
-    wall_s: float = 0.0
-
-    def to_dict(self):
-        return dict(self.__dict__)
-
-
-class Continuation:
-    """Equilibria of ``model`` at fixed input angle under a changing output torque.
-
-    max_step: largest accepted coordinate change per increment [m or rad] (a larger
-    Newton step is treated as a failure and the increment halved).
-    min_increment: smallest torque increment [N m] before :class:`SolverFailure`.
-    initial_torque: output torque [N m] of the first equilibrium (found by a load ramp).
-    """
-
-    def __init__(self, model, *, input_angle=0.0, max_step=2e-3, min_increment=1e-4, initial_torque=0.0):
-        self.model = model
-        self.static = StaticSolver(model)
-        self.input_angle = input_angle
-        self.max_step = max_step
-        self.min_increment = min_increment
-        self.stats = ContinuationStats()
-        model.set_input_angle(input_angle)
-        # a loaded start is regular even where free play leaves the zero-load state ill-posed
-        model.set_output_torque(float(initial_torque))
-        self.torque = float(initial_torque)
-        self.q = self._start()
-
-    def _start(self):
-        """First equilibrium: Newton from the kinematic state, else the static solver's load
-        ramps; both only accept states within its plausibility bounds (a full Newton step at
-        load can land in a far, periodic copy of the output-pin engagement)."""
-        s = self.static
-        ok, q = s._solve(s.kinematic_vector(self.input_angle), ramp=False)
-        if ok and s.plausible(q, self.input_angle):
-            return q
-        try:
-            return s.solve(self.input_angle)
-        except SolverFailure:
-            raise SolverFailure(f"no equilibrium at input angle {self.input_angle:.6g} rad and output torque "
-                                f"{self.torque:.6g} N m") from None
-
-    def _try(self, torque):
-        self.model.set_output_torque(torque)
-        it0 = self.static.stats.newton_iterations
-        ok, q = self.static._solve(self.q, ramp=False)
-        self.stats.newton_iterations += self.static.stats.newton_iterations - it0
-        self.stats.solves += 1
-        return ok and np.max(np.abs(q - self.q)) <= self.max_step, q
-
-    def go_to(self, torque):
-        """Continue to output torque [N m]; returns the equilibrium q."""
-        t0 = time.perf_counter()
-        t_now = self.torque
-        inc = torque - t_now
-        while t_now != torque:
-            target = torque if abs(torque - t_now) <= abs(inc) else t_now + inc
-            ok, q = self._try(target)
-            if ok:
-                self.q, t_now = q, target
-                inc *= 2 if abs(inc) < abs(torque - t_now) else 1
-            else:
-                self.stats.rejected_increments += 1
-                inc *= 0.5
-                if abs(inc) < self.min_increment:
-                    self.model.set_output_torque(t_now)
-                    raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
-                                        f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}")
-        self.torque = torque
-        self._commit()
-        self.stats.levels += 1
-        self.stats.wall_s += time.perf_counter() - t0
-        return self.q
-
-    def _commit(self):
-        """Commit the contact history (friction anchors) at the converged level."""
-        v = np.zeros_like(self.q)
-        for el in self.model.elements.values():
-            el.commit(self.q, v)
-
-
-def wheel_contact_stats(model, q):
-    """Per wheel: (sum of normal forces [N], max normal force [N]) of the pin mesh (slices summed per pin)."""
-    from .precision import pin_forces
-    pf = pin_forces(model, q)
-    return [float(np.sum(p)) for p in pf], [float(np.max(p)) for p in pf]
+def mesh_contact_stats(model, q):
+    """Per member of the model's main mesh (a wheel): (sum of normal forces [N], max normal
+    force [N]) over its contacts (slices summed per contact)."""
+    members = model.observe(q, model.main_mesh).per_member()
+    return [float(np.sum(f)) for f in members.values()], [float(np.max(f)) for f in members.values()]
 
 
 def quasi_static_stiffness(model, sequence: TorqueSequence, *, input_angle=0.0, record=None):
     """Path (b): run the torque sequence as an equilibrium continuation. Returns per-level
-    torque [N m], output angle [arcmin] (flange rotation from its kinematic position),
+    torque [N m], output angle [arcmin] (output rotation from its kinematic position),
     per-wheel pin-force sums and maxima [N], residual diagnostics and statistics."""
     t0 = time.perf_counter()
     torques, labels = sequence.levels()
     cont = Continuation(model, input_angle=input_angle)
-    i_out = model.coordinate_index(model.flange, 2)
-    th_kin = model.kinematic_state(input_angle)[model.flange, 2] - model.reference[model.flange, 2]
+    i_out = model.output_index
+    th_kin = model.kinematic_output(input_angle)
     angles, sums, maxs, reg = [], [], [], []
     for k, t in enumerate(torques):
         q = cont.go_to(float(t))
-        angles.append((q[i_out] - th_kin) / ARCMIN)
-        s, m = wheel_contact_stats(model, q)
+        angles.append((q[i_out] - th_kin) / RAD_PER_ARCMIN)
+        s, m = mesh_contact_stats(model, q)
         sums.append(s)
         maxs.append(m)
         reg.append(model.regularization_force(q))
@@ -311,14 +216,14 @@ def tangent_check(model, torque, *, input_angle=0.0, increment=None):
     0.1 % of |torque|: a 1 % increment at 105 N m of RD-40 already crosses a change of the
     contact set, a slope kink, and differs by 2.3 %). Both in N m/arcmin; their relative difference."""
     cont = Continuation(model, input_angle=input_angle)
-    i_out = model.coordinate_index(model.flange, 2)
+    i_out = model.output_index
     q = cont.go_to(torque)
-    kt = condensed_tangent(model, q) * ARCMIN
+    kt = condensed_tangent(model, q) * RAD_PER_ARCMIN
     dt = increment or 0.001 * abs(torque)
     th_p = cont.go_to(torque + dt)[i_out]
     cont.go_to(torque)
     th_m = cont.go_to(torque - dt)[i_out]
-    kfd = 2 * dt / ((th_p - th_m) / ARCMIN)
+    kfd = 2 * dt / ((th_p - th_m) / RAD_PER_ARCMIN)
     return {"Kt_condensed_Nm_per_arcmin": kt, "K_finite_increment_Nm_per_arcmin": float(kfd),
             "rel_diff": float(abs(kt - kfd) / abs(kfd)), "increment_Nm": dt}
 
@@ -344,17 +249,17 @@ def dynamic_stiffness(model, sequence: TorqueSequence, *, step=2e-5, input_angle
     mbs = model.mbs
     cont = Continuation(model, input_angle=input_angle)
     q = cont.q.copy()
-    i_out = model.coordinate_index(model.flange, 2)
-    th_kin = model.kinematic_state(input_angle)[model.flange, 2] - model.reference[model.flange, 2]
+    i_out = model.output_index
+    th_kin = model.kinematic_output(input_angle)
     base = run_spec or RunSpec(end_time=1.0, step=step, abs_tol=1e-6, rel_tol=1e-8)
-    elements = list(model.elements.values())
+    elements = model.contact_elements()
     stats = {"steps": 0, "rejected_steps": 0, "kinetic_resets": 0, "forced_commits": 0, "extra_dwells": 0,
              "max_residual": 0.0, "min_step_s": np.inf}
     state = {"q": q}
     trace = []
 
     def run_chunk(n_steps, load_fn):
-        mbs.SetLoadParameter(model.load, "loadUserFunction", lambda mbs_, t, load: load_fn(t))
+        model.set_output_torque_function(load_fn)
         mbs.systemData.SetODE2Coordinates(state["q"], configuration=exu.ConfigurationType.Initial)
         mbs.systemData.SetODE2Coordinates_t(np.zeros_like(state["q"]), configuration=exu.ConfigurationType.Initial)
         stats["kinetic_resets"] += 1
@@ -386,7 +291,7 @@ def dynamic_stiffness(model, sequence: TorqueSequence, *, step=2e-5, input_angle
                 dwell += run_chunk(n, lambda t, b=b: b)
                 left -= n
             n_tail = max(2, int(round(sequence.tail_fraction * len(dwell))))
-            span = float(np.ptp(dwell[-n_tail:])) / ARCMIN
+            span = float(np.ptp(dwell[-n_tail:])) / RAD_PER_ARCMIN
             if span <= sequence.settle_span_arcmin:
                 break
             stats["extra_dwells"] += 1
@@ -394,12 +299,12 @@ def dynamic_stiffness(model, sequence: TorqueSequence, *, step=2e-5, input_angle
             stats["forced_commits"] += 1
         trace.append(np.array(dwell))
         spans.append(span)
-        angles.append((state["q"][i_out] - th_kin) / ARCMIN)
-        s_, m_ = wheel_contact_stats(model, state["q"])
+        angles.append((state["q"][i_out] - th_kin) / RAD_PER_ARCMIN)
+        s_, m_ = mesh_contact_stats(model, state["q"])
         sums.append(s_)
         maxs.append(m_)
         t_prev = b
-    mbs.SetLoadParameter(model.load, "loadUserFunction", 0)
+    model.set_output_torque_function(None)
     stats["min_step_s"] = None if not np.isfinite(stats["min_step_s"]) else stats["min_step_s"]
     return {"torque_Nm": torques, "labels": labels, "angle_arcmin": np.array(angles),
             "tail_span_arcmin": np.array(spans), "sum_Fn_N": np.array(sums), "max_Fn_N": np.array(maxs),

@@ -18,7 +18,8 @@ import numpy as np
 
 from ..errors import RvtoolInputError
 from ..validation import check_positive
-from .precision import kinematic_velocity, transmission_error
+from ..solver.continuation import Continuation
+from .precision import transmission_error
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -109,31 +110,10 @@ def dominant(freqs, amp, n=5):
 
 # -- marker frequencies -------------------------------------------------------------------
 
-def bearing_frequencies(ring_speed_hz, n_elements, element_diameter, pitch_diameter, contact_angle_deg=0.0):
-    """Rolling-bearing marker frequencies [Hz] at relative ring speed f_r: FTF = f_r/2 (1 - g),
-    BPFO = Z FTF, BPFI = Z f_r/2 (1 + g), BSF = D/(2d) f_r (1 - g^2), g = d cos(alpha)/D."""
-    g = element_diameter * np.cos(np.deg2rad(contact_angle_deg)) / pitch_diameter
-    f = abs(ring_speed_hz)
-    return {"ftf": f / 2 * (1 - g), "bpfo": n_elements * f / 2 * (1 - g), "bpfi": n_elements * f / 2 * (1 + g),
-            "bsf": pitch_diameter / (2 * element_diameter) * f * (1 - g * g)}
-
-
-def marker_frequencies(design, speed_rpm):
-    """Mesh and bearing marker frequencies [Hz] of a cycloid design at input speed [rpm]."""
-    f_in = speed_rpm / 60.0
-    zp = design.pins.n_pins
-    zg = zp - 1
-    f_out = f_in / zg
-    eb, mb, ib = design.eccentric_bearing, design.main_bearing, design.input_bearing
-    return {
-        "input_hz": f_in, "output_hz": f_out, "mesh_hz": zp * f_in,
-        # eccentric needle bearing: journal (input) against the wheel bore (wheel speed -f_out)
-        "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
-                                                 2 * eb.journal_radius + eb.roller_diameter),
-        "main_bearing": bearing_frequencies(f_out, mb.n_balls, mb.ball_diameter, mb.pitch_diameter,
-                                            mb.contact_angle_deg),
-        "input_bearing": bearing_frequencies(f_in, ib.n_balls, ib.ball_diameter, ib.pitch_diameter),
-    }
+def marker_frequencies(model, speed_rpm):
+    """Mesh and bearing marker frequencies [Hz] of ``model`` at input speed [rpm] (the
+    topology lists its own markers)."""
+    return model.marker_frequencies(speed_rpm)
 
 
 # -- driven run ---------------------------------------------------------------------------
@@ -154,12 +134,11 @@ def driven_response(model, protocol: VibrationProtocol, run_spec, *, coordinates
 
     from ..solver import simulate
     omega = protocol.speed_rpm * 2 * np.pi / 60.0
-    ratio = model.design.ratio
+    ratio = model.ratio
     torque = -np.sign(ratio) * protocol.torque
     if initial_state is None:
         # loaded start by torque continuation (increment halving, jump guard): a full-load
         # Newton solve from the kinematic state can converge to a spurious far equilibrium
-        from .stiffness import Continuation
         cont = Continuation(model, input_angle=0.0)
         if static_tolerances is not None:
             st = cont.static.settings.staticSolver.newton
@@ -168,10 +147,7 @@ def driven_response(model, protocol: VibrationProtocol, run_spec, *, coordinates
     else:
         model.set_output_torque(torque)
         q0 = np.array(initial_state, float)
-    v0 = np.zeros_like(q0)
-    kv = kinematic_velocity(model, omega)
-    for b, node in enumerate(model.nodes):
-        v0[np.asarray(model.mbs.systemData.GetNodeLTGODE2(node))] = kv[b]
+    v0 = model.body_vector(model.kinematic_state(0.0, omega).velocities)
     mbs = model.mbs
     model.set_input_speed(omega)
     mbs.Assemble()
@@ -179,9 +155,8 @@ def driven_response(model, protocol: VibrationProtocol, run_spec, *, coordinates
     mbs.systemData.SetODE2Coordinates_t(v0, configuration=exu.ConfigurationType.Initial)
     coords = dict(coordinates)
     idx = {name: model.coordinate_index(b, c) for name, (b, c) in coords.items()}
-    i_out = model.coordinate_index(model.flange, 2)
-    i_in = model.coordinate_index(0, 2)
-    ref_out = mbs.GetNodeParameter(model.nodes[model.flange], "referenceCoordinates")[2]
+    i_out, i_in = model.output_index, model.input_index
+    ref_out = model.reference_value(model.output)
     rec_t, rec_in, rec_out = [0.0], [q0[i_in]], [ref_out + q0[i_out]]
     rec_x = {n: [q0[i]] for n, i in idx.items()}
 
@@ -194,7 +169,7 @@ def driven_response(model, protocol: VibrationProtocol, run_spec, *, coordinates
 
     spec = dataclasses.replace(run_spec, end_time=protocol.duration)
     t0 = time.perf_counter()
-    rec = simulate(mbs, spec, list(model.elements.values()), observers, before_accept=record, out_dir=out_dir)
+    rec = simulate(mbs, spec, model.contact_elements(), observers, before_accept=record, out_dir=out_dir)
     t, th_in, th_out = map(np.array, (rec_t, rec_in, rec_out))
     resp = {"torsion": transmission_error(th_in, th_out, ratio)}
     resp.update({n: np.array(x) for n, x in rec_x.items()})

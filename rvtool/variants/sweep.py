@@ -58,9 +58,9 @@ import time
 import tomllib
 from dataclasses import dataclass, field
 
-from .errors import RvtoolInputError
+from ..errors import RvtoolInputError
 from .montecarlo import FIGURES, MonteCarloSettings, run_monte_carlo, text_progress
-from .variants import Variant, VariantProtocol, variant_figures
+from .variant import Variant, VariantProtocol, variant_figures
 
 VARIANT_PARAMETERS = ("eccentricity_error", "pin_radius_error", "equidistant_mod", "offset_mod", "pin_clearance",
                       "bearing_clearance")
@@ -161,7 +161,7 @@ def load_sweep_spec(path):
 
 def point_model(design, params):
     """(design', Variant) of one grid point."""
-    from .assembly.spec import replace
+    from ..assembly.spec import replace
     vkw, sections = {}, {}
     for nm, v in params.items():
         if nm in VARIANT_PARAMETERS:
@@ -266,7 +266,7 @@ def run_grid(client, design, spec, progress=None):
 def run_sweep(spec: SweepSpec, *, scheduler=None, out_dir=None, progress=True, client=None):
     """Run a sweep; returns ``{"rows", "failed", "wall_s", "table": [csv, json], "out_dir"}`` (plus
     ``summary`` for the Monte Carlo). ``client``: an existing dask.distributed.Client to use."""
-    from .assembly.spec import load_design
+    from ..assembly.spec import load_design
     t0 = time.perf_counter()
     out_dir = out_dir or spec.output_dir
     design = load_design(spec.design_path)

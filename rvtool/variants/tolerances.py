@@ -36,8 +36,8 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.special import ndtr, ndtri
 
-from .errors import RvtoolInputError
-from .validation import check_finite, check_range
+from ..errors import RvtoolInputError
+from ..validation import check_finite, check_range
 
 FIELDS = ("eccentricity_error", "pin_centre_errors", "pin_radius_error", "equidistant_mod", "offset_mod",
           "pin_clearance", "bearing_clearance")
@@ -250,7 +250,7 @@ def load_tolerances(path):
 def sample_variant(spec, design, k, seed):
     """Variant with index k: every field drawn from ``default_rng([seed, k])`` in the order of
     FIELDS (a field without a distribution draws nothing)."""
-    from .variants import Variant
+    from .variant import Variant
     if int(k) < 0 or int(seed) < 0:
         raise RvtoolInputError(f"variant index {k} and seed {seed}: valid range [0, inf) (integers)")
     rng = np.random.default_rng([int(seed), int(k)])

@@ -47,9 +47,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import RvtoolInputError
+from ..errors import RvtoolInputError
 from .tolerances import sample_variant
-from .variants import VariantProtocol, variant_figures
+from .variant import VariantProtocol, variant_figures
 
 FIGURES = ("te_pp_arcsec", "te_rms_arcsec", "max_pin_force_N", "lost_motion_arcmin")
 """Figures of :func:`rvtool.variants.variant_figures` that the study reports distributions of."""

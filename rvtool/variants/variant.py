@@ -11,7 +11,7 @@ A :class:`Variant` is a set of deviations from a nominal
 * ``pin_clearance`` [m]: uniform added gap at every pin contact (added to the design's),
 * ``bearing_clearance`` [m]: eccentric-bearing radial clearance (replaces the design's).
 
-:meth:`Variant.apply` turns it into ``(design, build_kwargs)`` for
+:meth:`Variant.apply` turns it into a design for
 :func:`rvtool.assembly.cycloid.build`; the batched path applies the same deviations to
 each copy, so both paths model exactly the same reducer.
 
@@ -26,11 +26,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import RvtoolInputError
-from .validation import check_finite, check_nonnegative, check_range
+from ..errors import RvtoolInputError
+from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
+from ..validation import check_finite, check_nonnegative, check_range
 
-ARCSEC = 180.0 / np.pi * 3600.0
-ARCMIN = 180.0 / np.pi * 60.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -57,8 +56,8 @@ class Variant:
             check_finite("pin_centre_errors", e)
 
     def apply(self, design):
-        """(design', build kwargs) of this variant of ``design``."""
-        from .assembly.spec import replace
+        """The design of this variant of ``design`` (deviations written into its sections)."""
+        from ..assembly.spec import replace
         w = design.wheels
         e = w.e_g + self.eccentricity_error
         if e <= 0:
@@ -71,20 +70,20 @@ class Variant:
         sections = {"wheels": wheels}
         if self.bearing_clearance is not None:
             sections["eccentric_bearing"] = {"radial_clearance": self.bearing_clearance}
-        d = replace(design, **sections)
-        overrides = {}
+        pins = {}
         if self.pin_centre_errors is not None:
             e = np.asarray(self.pin_centre_errors, float)
             if e.shape != (design.pins.n_pins, 2):
                 raise RvtoolInputError(f"pin_centre_errors must have shape ({design.pins.n_pins}, 2); got {e.shape}")
-            overrides["pin_centre_errors"] = e
+            pins["centre_errors"] = tuple(map(tuple, e))
         if self.pin_radius_error != 0.0:
-            rp = design.pins.pin_radius + self.pin_radius_error
-            if rp <= 0:
+            if design.pins.pin_radius + self.pin_radius_error <= 0:
                 raise RvtoolInputError(f"pin_radius_error = {self.pin_radius_error} m; valid range "
                                        f"({-design.pins.pin_radius}, inf) m")
-            overrides["pin_radius"] = rp
-        return d, ({"pin_overrides": overrides} if overrides else {})
+            pins["radius_error"] = design.pins.radius_error + self.pin_radius_error
+        if pins:
+            sections["pins"] = pins
+        return replace(design, **sections)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -129,24 +128,24 @@ def variant_figures(design, variant: Variant, protocol: VariantProtocol = Varian
     ``lost_motion_method`` (see :func:`variant_lost_motion`), ``newton_iterations`` and ``wall_s``."""
     import time
 
-    from .assembly.cycloid import build
-    from .protocols.equilibrium import StaticSolver
-    from .protocols.precision import pin_forces, quasi_static_te, te_metrics
+    from ..assembly import build
+    from ..solver.static import StaticSolver
+    from ..protocols.precision import mesh_forces, quasi_static_te, te_metrics
 
     t0 = time.perf_counter()
-    d, kw = variant.apply(design)
-    model = build(d, bearing_model=protocol.bearing_model, **kw, **build_kw)
+    d = variant.apply(design)
+    model = build(d, bearing_model=protocol.bearing_model, **build_kw)
     fmax = [0.0]
 
     def rec(k, a, q):
-        fmax[0] = max(fmax[0], float(np.max(pin_forces(model, q))))
+        fmax[0] = max(fmax[0], float(np.max(mesh_forces(model, q))))
 
     solver = StaticSolver(model)
     r = quasi_static_te(model, torque=protocol.te_torque_fraction * d.rated_torque,
                         input_angles=protocol.input_angles(d), solver=solver, record=rec)
     met = te_metrics(r["te"])
     lm = variant_lost_motion(model, d, protocol)
-    return {"te_pp_arcsec": met["pp"] * ARCSEC, "te_rms_arcsec": met["rms"] * ARCSEC, "max_pin_force_N": fmax[0],
+    return {"te_pp_arcsec": met["pp"] * ARCSEC_PER_RAD, "te_rms_arcsec": met["rms"] * ARCSEC_PER_RAD, "max_pin_force_N": fmax[0],
             "lost_motion_arcmin": lm["lost_motion_arcmin"], "lost_motion_method": lm["method"],
             "newton_iterations": int(r["stats"]["newton_iterations"] + lm["newton_iterations"]),
             "wall_s": time.perf_counter() - t0}
@@ -164,16 +163,16 @@ def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtoc
     succeed (to 4e-7 arcmin on those 100 variants). Returns ``lost_motion_arcmin``, ``method``
     ("load" or "spring") and ``newton_iterations``; raises :class:`SolverFailure` naming both
     errors if both fail."""
-    from .errors import SolverFailure
-    from .protocols.lost_motion import lost_motion
-    from .protocols.stiffness import Continuation
+    from ..errors import SolverFailure
+    from ..protocols.lost_motion import lost_motion
+    from ..solver.continuation import Continuation
 
     torques = protocol.lost_motion_torques(design)
-    i_out = model.coordinate_index(model.flange, 2)
+    i_out = model.output_index
     try:
         cont = Continuation(model, input_angle=0.0, initial_torque=float(torques[0]))
         angles = [cont.q[i_out]] + [cont.go_to(float(t))[i_out] for t in torques[1:]]
-        return {"lost_motion_arcmin": float((angles[0] - angles[-1]) * ARCMIN), "method": "load",
+        return {"lost_motion_arcmin": float((angles[0] - angles[-1]) * ARCMIN_PER_RAD), "method": "load",
                 "newton_iterations": int(cont.static.stats.newton_iterations)}
     except SolverFailure as exc:
         load_error = str(exc)
@@ -183,5 +182,5 @@ def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtoc
     except (SolverFailure, RvtoolInputError) as exc:
         raise SolverFailure(f"lost motion failed under load control ({load_error}) and under spring control "
                             f"({exc})") from None
-    return {"lost_motion_arcmin": float(r["lost_motion_rad"] * ARCMIN), "method": "spring",
+    return {"lost_motion_arcmin": float(r["lost_motion_rad"] * ARCMIN_PER_RAD), "method": "spring",
             "newton_iterations": int(r["stats"]["newton_iterations"])}

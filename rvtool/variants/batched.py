@@ -12,9 +12,10 @@ import time
 import numpy as np
 
 from ..protocols.precision import te_metrics, transmission_error
-from ..variants import ARCMIN, ARCSEC, VariantProtocol
-from .assembly import build_batched
-from .solver import BatchedStaticSolver
+from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
+from .variant import VariantProtocol
+from ..batched.assembly import build_batched
+from ..solver.batched import BatchedStaticSolver
 
 
 def _try_split(solver, q, t_now, target, mask, max_step):
@@ -89,11 +90,11 @@ def _continuation(solver, torques, max_step=2e-3, min_increment=1e-4):
 def _lost_motion_fallback(design, variant, protocol, regularization):
     """(lost motion [arcmin], method, None) of one variant by :func:`variant_lost_motion` on its
     own model (load control, then spring control), or (NaN, None, error) if both fail."""
-    from ..assembly.cycloid import build
+    from ..assembly import build
     from ..errors import SolverFailure
-    from ..variants import variant_lost_motion
-    d, kw = variant.apply(design)
-    model = build(d, bearing_model="lumped", regularization=regularization, **kw)
+    from .variant import variant_lost_motion
+    d = variant.apply(design)
+    model = build(d, bearing_model="lumped", regularization=regularization)
     try:
         r = variant_lost_motion(model, d, protocol)
     except SolverFailure as exc:
@@ -157,7 +158,7 @@ def batched_variant_figures(design, variants, protocol: VariantProtocol = Varian
         tq = np.array([protocol.lost_motion_torques(d) for d in designs])
         solver.set_angle(0.0)
         lm_angles = _continuation(solver, tq)
-        lm = (lm_angles[:, 0] - lm_angles[:, -1]) * ARCMIN
+        lm = (lm_angles[:, 0] - lm_angles[:, -1]) * ARCMIN_PER_RAD
         redo = solver.dead & ~dead_te
     else:
         lm = np.full(B, np.nan)
@@ -182,7 +183,7 @@ def batched_variant_figures(design, variants, protocol: VariantProtocol = Varian
             continue
         te = transmission_error(angles, th_out[:, c], ratio[c], unwrap=False)
         met = te_metrics(te)
-        out.append({"te_pp_arcsec": met["pp"] * ARCSEC, "te_rms_arcsec": met["rms"] * ARCSEC,
+        out.append({"te_pp_arcsec": met["pp"] * ARCSEC_PER_RAD, "te_rms_arcsec": met["rms"] * ARCSEC_PER_RAD,
                     "max_pin_force_N": float(fmax[c]),
                     "lost_motion_arcmin": float(lm[c]), "lost_motion_method": method[c],
                     "newton_iterations": solver.stats.newton_iterations, "wall_s": wall / B,

@@ -11,12 +11,12 @@ control values.
 """
 import time
 import warnings
-from dataclasses import dataclass
 
 import numpy as np
 import exudyn as exu
 
 from ..errors import SolverFailure
+from .stats import SolverStats
 
 
 def static_settings(*, abs_tol, rel_tol, max_iterations, solver_type):
@@ -35,21 +35,8 @@ def static_settings(*, abs_tol, rel_tol, max_iterations, solver_type):
     return ss
 
 
-@dataclass
-class EquilibriumStats:
-    points: int = 0
-    newton_iterations: int = 0
-    ramped_restarts: int = 0
-    substep_restarts: int = 0
-    shifted_points: int = 0
-    wall_s: float = 0.0
-
-    def to_dict(self):
-        return dict(self.__dict__)
-
-
 class StaticSolver:
-    """Warm-started static solves of ``model`` (a model with ``mbs`` and ``kinematic_state``).
+    """Warm-started static solves of a :class:`~rvtool.model.ReducerModel` with its fallback ladder.
 
     abs_tol [N], rel_tol [-]: Newton tolerances on Exudyn's residual norm.
     max_translation [m], max_rotation [rad]: plausibility bounds of the elastic deviation of
@@ -62,7 +49,7 @@ class StaticSolver:
         self.model = model
         self.max_translation = max_translation
         self.max_rotation = max_rotation
-        self.stats = EquilibriumStats()
+        self.stats = SolverStats()
         self.ramp_steps = ramp_steps
         n = model.mbs.systemData.ODE2Size()
         ss = static_settings(abs_tol=abs_tol, rel_tol=rel_tol, max_iterations=max_iterations,
@@ -71,7 +58,8 @@ class StaticSolver:
         self.q = None
         self.last_angle = None
 
-    def _solve(self, q_init, ramp):
+    def newton(self, q_init, ramp=False):
+        """One Newton solve from q_init (ramp: with Exudyn's load factor over ``ramp_steps``); (ok, q)."""
         mbs = self.model.mbs
         st = self.settings.staticSolver
         st.useLoadFactor = ramp
@@ -98,7 +86,7 @@ class StaticSolver:
         for da in self.SHIFTS:
             a = input_angle + da
             self.model.set_input_angle(a)
-            ok, q = self._solve(self.q + self.kinematic_vector(a) - self.kinematic_vector(previous_angle), ramp=False)
+            ok, q = self.newton(self.q + self.kinematic_vector(a) - self.kinematic_vector(previous_angle), ramp=False)
             if ok and self.plausible(q, a):
                 self.stats.shifted_points += 1
                 return True, q, a
@@ -116,7 +104,7 @@ class StaticSolver:
             q, a_prev, ok = self.q, previous_angle, True
             for a in previous_angle + (input_angle - previous_angle) * np.arange(1, n + 1) / n:
                 self.model.set_input_angle(a)
-                ok, q = self._solve(q + self.kinematic_vector(a) - self.kinematic_vector(a_prev), ramp=False)
+                ok, q = self.newton(q + self.kinematic_vector(a) - self.kinematic_vector(a_prev), ramp=False)
                 ok = ok and self.plausible(q, a)
                 a_prev = a
                 if not ok:
@@ -129,14 +117,14 @@ class StaticSolver:
 
     STIFFENING = (1e6, 1e4, 1e2, 1.0)
 
-    def _stiffened_start(self, input_angle):
+    def stiffened_start(self, input_angle):
         """Homotopy in the regularization stiffness: solve from the kinematic state with the
         springs stiffened by each factor of ``STIFFENING`` in turn, warm-starting each solve
         from the last. Free play (clearances, output-pin backlash) leaves the kinematic state
         with almost no stiffness in some directions, where a full Newton step under load jumps
         to a far, periodic copy of the engagement; stiff springs keep the first steps local and
         the final solve (factor 1) is the unmodified problem."""
-        springs = getattr(self.model, "reg_springs", ())
+        springs = self.model.reg_springs
         if not springs:
             return False, None
         mbs = self.model.mbs
@@ -146,7 +134,7 @@ class StaticSolver:
             for f in self.STIFFENING:
                 for _, _, k, obj in springs:
                     mbs.SetObjectParameter(obj, "stiffness", k * f)
-                ok, q = self._solve(q, ramp=False)
+                ok, q = self.newton(q, ramp=False)
                 if not ok:
                     break
         finally:
@@ -170,7 +158,7 @@ class StaticSolver:
         """Kinematic state as displacement coordinates of the system's ODE2 vector."""
         m = self.model
         q = np.zeros(m.mbs.systemData.ODE2Size())
-        kin = m.kinematic_state(input_angle)
+        kin = m.kinematic_state(input_angle).poses
         for b, node in enumerate(m.nodes):
             ref = np.asarray(m.mbs.GetNodeParameter(node, "referenceCoordinates"))
             q[np.asarray(m.mbs.systemData.GetNodeLTGODE2(node))] = kin[b] - ref
@@ -186,7 +174,7 @@ class StaticSolver:
         used = input_angle
         if self.q is not None and previous_angle is not None:
             guess = self.q + self.kinematic_vector(input_angle) - self.kinematic_vector(previous_angle)
-            ok, q = self._solve(guess, ramp=False)
+            ok, q = self.newton(guess, ramp=False)
             ok = ok and self.plausible(q, input_angle)
             if not ok:
                 ok, q = self._substeps(previous_angle, input_angle)
@@ -195,16 +183,16 @@ class StaticSolver:
         if not ok:
             if self.q is not None and previous_angle is not None:
                 self.stats.ramped_restarts += 1
-            ok, q = self._stiffened_start(input_angle)
+            ok, q = self.stiffened_start(input_angle)
         if not ok:
-            ok, q = self._solve(self.kinematic_vector(input_angle), ramp=True)
+            ok, q = self.newton(self.kinematic_vector(input_angle), ramp=True)
             ok = ok and self.plausible(q, input_angle)
         if not ok:
             self.stats.ramped_restarts += 1
             steps = self.ramp_steps
             self.ramp_steps = 5 * steps
             try:
-                ok, q = self._solve(self.kinematic_vector(input_angle), ramp=True)
+                ok, q = self.newton(self.kinematic_vector(input_angle), ramp=True)
             finally:
                 self.ramp_steps = steps
             ok = ok and self.plausible(q, input_angle)

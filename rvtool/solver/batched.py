@@ -1,6 +1,6 @@
 """Quasi-static solves of all copies of a :class:`~rvtool.batched.assembly.BatchedCycloidModel`.
 
-:class:`BatchedStaticSolver` mirrors :class:`rvtool.protocols.equilibrium.StaticSolver`
+:class:`BatchedStaticSolver` mirrors :class:`rvtool.solver.static.StaticSolver`
 on all copies at once: the same Exudyn static-solver settings (EigenSparse), the
 same warm start (previous equilibrium shifted by each copy's kinematic increment),
 the same regularization-stiffness homotopy (``StaticSolver.STIFFENING``) and the
@@ -27,7 +27,7 @@ import numpy as np
 import exudyn as exu
 
 from ..errors import SolverFailure
-from ..protocols.equilibrium import StaticSolver, static_settings
+from .static import StaticSolver, static_settings
 
 
 @dataclass
@@ -252,8 +252,8 @@ class BatchedStaticSolver:
         if c not in self._pv:
             from ..assembly.cycloid import build
             m = self.model
-            d, kw = m.variants[c].apply(m.design)
-            pm = build(d, bearing_model="lumped", **kw, **self.build_kw)
+            d = m.variants[c].apply(m.design)
+            pm = build(d, bearing_model="lumped", **self.build_kw)
             idx = np.concatenate([np.asarray(pm.mbs.systemData.GetNodeLTGODE2(n), int) for n in pm.nodes])
             o = self.opts
             self._pv[c] = (pm, StaticSolver(pm, abs_tol=o["abs_tol"], rel_tol=o["rel_tol"],

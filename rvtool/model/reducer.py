@@ -1,0 +1,341 @@
+"""The topology-neutral reducer model: what every topology builder returns and the
+only view of a reducer that solvers, protocols and cases use.
+
+Contract (paper: "Transmission topology and reaction-force closure",
+"Coordinates and motion of the load-carrying bodies"):
+
+* **Bodies.** ``body_names`` lists the load-carrying bodies in node order
+  (planar rigid bodies, retained coordinates x, y, theta; a coordinate the
+  design locks is held by a constraint and stays in the vector at zero).
+  Elastic structures (a ported housing) are ``structures``; their coordinates
+  follow the bodies'. ``reference`` (nb, 3) holds the bodies' reference poses;
+  the state q is the displacement from them.
+* **Input and output.** ``input`` and ``output`` are :class:`BodyCoordinate`
+  (body name, coordinate) of the driven and the loaded rotation; ``ratio`` is
+  the signed nominal ratio i = omega_in / omega_out that the builder derives
+  from the topology (gear graph, tooth counts), never typed in.
+* **Kinematics.** ``kinematic_state(input_angle, input_speed)`` gives the
+  rigid, clearance-free poses and velocities of every body from the topology's
+  one kinematics definition (initial guesses, plausibility bounds, TE
+  reference, initial velocities of driven runs).
+* **Controls.** ``set_input_angle`` (quasi-static), ``set_input_speed`` and
+  ``set_input_motion`` (driven runs: the static regularization is switched off),
+  ``set_output_torque`` and ``set_output_torque_function`` on the output
+  coordinate. The output torque acts on the output rotation, positive
+  counter-clockwise; protocols resist the nominal output rotation with
+  ``-sign(ratio) T``.
+* **Contacts.** ``elements`` are the Exudyn contact elements (each one kernel
+  launch per evaluation); contact families are addressed by :class:`Family`
+  and observed at a static state with ``observe(q, family)``: per row (slice,
+  lamina, ball) the normal force, position, normal and identity, and per
+  physical contact (a pin, a roller, a tooth pair: slices summed) through
+  :meth:`FamilyObservation.per_contact`.
+* **Regularization.** Weak springs from free coordinates to their kinematic
+  positions (a numerical setting for free play at zero load);
+  ``regularization_force(q)`` reports the largest force they carry and
+  ``regularization_stiffness()`` their diagonal stiffness.
+
+A new topology subclasses :class:`ReducerModel` (or instantiates it) with its own
+body list, kinematics object (``poses(angles) -> (n, nb, 3)`` and
+``velocities(angle, omega) -> (nb, 3)``) and family map; nothing in the solvers or
+protocols changes.
+"""
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from warp_contacts.circle_pairs_ref import O_FN, O_NX, O_NY, O_PX, O_PY
+
+from ..errors import RvtoolInputError
+
+COORDINATES = ("x", "y", "theta")
+
+
+class Family(str, Enum):
+    """Contact families of a reducer; the values are the keys of reported figures."""
+    PINS = "pins"                              # cycloid wheel -- ring pin
+    OUTPUT_PINS = "output_pins"                # flange pin -- wheel hole
+    ECCENTRIC_BEARINGS = "eccentric_bearings"  # journal -- wheel bore
+    MAIN_BEARINGS = "main_bearings"            # output -- housing
+    INPUT_BEARINGS = "input_bearings"          # input shaft -- housing
+    INVOLUTE_STAGE = "involute_stage"          # involute tooth pairs (preliminary stage, small-tooth-difference mesh)
+    CRANK_BEARINGS = "crank_bearings"          # crankshaft -- carrier (RV)
+
+
+@dataclass(frozen=True)
+class BodyCoordinate:
+    """One coordinate of one body: body name and coordinate name ("x", "y", "theta")."""
+    body: str
+    coordinate: str
+
+    def __post_init__(self):
+        if self.coordinate not in COORDINATES:
+            raise RvtoolInputError(f"coordinate = {self.coordinate!r}; valid choices are {list(COORDINATES)}")
+
+
+@dataclass(frozen=True)
+class KinematicState:
+    """Rigid kinematic poses (nb, 3) [m, rad] and velocities (nb, 3) [m/s, rad/s] of every body."""
+    poses: np.ndarray
+    velocities: np.ndarray
+
+
+def physical_contact(row_id):
+    """Identity of the physical contact of an observation row: the row id without its
+    slice or lamina component (``wheel0/pin3/s1`` -> ``wheel0/pin3``,
+    ``eccentric_bearing0/roller2/slice0`` -> ``eccentric_bearing0/roller2``)."""
+    head, _, last = row_id.rpartition("/")
+    if head and (last.startswith("slice") or (last.startswith("s") and last[1:].isdigit())):
+        return head
+    return row_id
+
+
+@dataclass(frozen=True)
+class FamilyObservation:
+    """A contact family at one state: per row (slice, lamina or whole contact) the identity,
+    normal force [N], contact position [m] and unit normal, all rows of the element's
+    observation columns (:mod:`warp_contacts.circle_pairs_ref`) in ``obs``."""
+    family: Family
+    ids: tuple
+    obs: np.ndarray
+
+    @property
+    def normal_force(self):
+        return self.obs[:, O_FN]
+
+    @property
+    def position(self):
+        return self.obs[:, O_PX:O_PY + 1]
+
+    @property
+    def normal(self):
+        return self.obs[:, O_NX:O_NY + 1]
+
+    @property
+    def peak(self):
+        """Largest row normal force [N]."""
+        return float(np.max(self.obs[:, O_FN]))
+
+    def per_contact(self):
+        """(contact ids, normal force per physical contact [N]): rows summed per contact
+        (Eq. width_resultant's force part), contacts in order of first appearance."""
+        contact = [physical_contact(r) for r in self.ids]
+        names = list(dict.fromkeys(contact))
+        index = {c: k for k, c in enumerate(names)}
+        out = np.zeros(len(names))
+        np.add.at(out, np.fromiter((index[c] for c in contact), int, len(contact)), self.obs[:, O_FN])
+        return tuple(names), out
+
+    def per_member(self):
+        """{member: per-contact normal forces [N]}: the physical contacts grouped by the first
+        component of their identity (a wheel of a pin mesh, a mounting of a bearing family)."""
+        names, forces = self.per_contact()
+        out = {}
+        for name, f in zip(names, forces):
+            out.setdefault(name.split("/")[0], []).append(f)
+        return {k: np.array(v) for k, v in out.items()}
+
+
+@dataclass
+class ReducerModel:
+    """An assembled reducer (see the module docstring for the contract).
+
+    Builders fill the fields; ``families`` maps each :class:`Family` present to
+    (element name, row indices of that element's observation rows); ``main_mesh`` is
+    the family of the reducing mesh whose per-member loads the protocols report.
+    """
+    design: object
+    SC: object
+    mbs: object
+    body_names: tuple
+    nodes: list
+    elements: dict
+    families: dict
+    input: BodyCoordinate
+    output: BodyCoordinate
+    ratio: float
+    kinematics: object
+    drive: int
+    load: int
+    reference: np.ndarray
+    locks: list = field(default_factory=list)
+    reg_springs: list = field(default_factory=list)
+    journal_locks: list = field(default_factory=list)
+    structures: dict = field(default_factory=dict)
+    main_mesh: Family = Family.PINS
+    mesh_period: float = None       # input angle [rad] of one mesh cycle of the main mesh
+
+    # -- coordinates -------------------------------------------------------
+    def body_index(self, body):
+        """Index of a body given by name or index."""
+        if isinstance(body, str):
+            try:
+                return self.body_names.index(body)
+            except ValueError:
+                raise RvtoolInputError(f"body = {body!r}; valid bodies are {list(self.body_names)}") from None
+        return int(body)
+
+    def coordinate_index(self, body, coord):
+        """Global ODE2 index of coordinate ``coord`` (0/"x", 1/"y", 2/"theta") of ``body`` (name or index)."""
+        c = COORDINATES.index(coord) if isinstance(coord, str) else int(coord)
+        return int(self.mbs.systemData.GetNodeLTGODE2(self.nodes[self.body_index(body)])[c])
+
+    @property
+    def input_index(self):
+        return self.coordinate_index(self.input.body, self.input.coordinate)
+
+    @property
+    def output_index(self):
+        return self.coordinate_index(self.output.body, self.output.coordinate)
+
+    def reference_value(self, bc):
+        """Reference value of a :class:`BodyCoordinate` (the state is measured from it)."""
+        return float(self.reference[self.body_index(bc.body), COORDINATES.index(bc.coordinate)])
+
+    def fixed_coordinates(self):
+        """Global indices held by the drive and the coordinate locks."""
+        mbs = self.mbs
+        fixed = {self.input_index}
+        for obj in self.locks:
+            marker = mbs.GetObjectParameter(obj, "markerNumbers")[1]
+            node = mbs.GetMarkerParameter(marker, "nodeNumber")
+            c = mbs.GetMarkerParameter(marker, "coordinate")
+            fixed.add(int(mbs.systemData.GetNodeLTGODE2(node)[c]))
+        return fixed
+
+    def body_vector(self, per_body):
+        """A global ODE2 vector from per-body rows (nb, 3) (structural coordinates zero)."""
+        v = np.zeros(self.mbs.systemData.ODE2Size())
+        for b, node in enumerate(self.nodes):
+            v[np.asarray(self.mbs.systemData.GetNodeLTGODE2(node))] = per_body[b]
+        return v
+
+    # -- kinematics ----------------------------------------------------------
+    def kinematic_state(self, input_angle, input_speed=0.0):
+        """:class:`KinematicState` at ``input_angle`` [rad] and ``input_speed`` [rad/s]."""
+        poses = self.kinematics.poses(np.asarray([float(input_angle)]))[0]
+        return KinematicState(poses, self.kinematics.velocities(float(input_angle), float(input_speed)))
+
+    def kinematic_output(self, input_angle):
+        """Kinematic output coordinate [rad or m] measured from its reference."""
+        kin = self.kinematic_state(input_angle).poses
+        b, c = self.body_index(self.output.body), COORDINATES.index(self.output.coordinate)
+        return kin[b, c] - self.reference[b, c]
+
+    # -- controls --------------------------------------------------------------
+    def set_input_angle(self, angle):
+        """Prescribed input angle [rad] (quasi-static sequences); journal locks and
+        regularization springs follow the kinematic positions so they carry no load."""
+        self.mbs.SetObjectParameter(self.drive, "offset", float(angle))
+        if self.journal_locks or self.reg_springs:
+            kin = self.kinematic_state(angle).poses
+            for body, c, obj in self.journal_locks:
+                self.mbs.SetObjectParameter(obj, "offset", float(kin[body, c] - self.reference[body, c]))
+            for body, c, _, obj in self.reg_springs:
+                self.mbs.SetObjectParameter(obj, "offset", float(kin[body, c] - self.reference[body, c]))
+
+    def set_input_motion(self, angle_of_time):
+        """Prescribed input angle [rad] as a function of time [s] (driven runs). The static
+        regularization springs are switched off: inertia makes the dynamic problem regular."""
+        self.mbs.SetObjectParameter(self.drive, "offsetUserFunction",
+                                    lambda mbs, t, itemNumber, lOffset: angle_of_time(t))
+        for _, _, _, obj in self.reg_springs:
+            self.mbs.SetObjectParameter(obj, "stiffness", 0.0)
+
+    def set_input_speed(self, omega, angle0=0.0):
+        """Prescribed constant input speed omega [rad/s] from angle0 at t = 0."""
+        self.set_input_motion(lambda t: angle0 + omega * t)
+
+    def set_output_torque(self, torque):
+        """Torque on the output rotation [N m] (positive counter-clockwise)."""
+        self.mbs.SetLoadParameter(self.load, "load", float(torque))
+
+    def set_output_torque_function(self, torque_of_time):
+        """Output torque [N m] as a function of time [s]; None removes it (the constant load applies)."""
+        fn = 0 if torque_of_time is None else (lambda mbs, t, load: torque_of_time(t))
+        self.mbs.SetLoadParameter(self.load, "loadUserFunction", fn)
+
+    # -- regularization ------------------------------------------------------------
+    def regularization_force(self, q):
+        """Largest force [N] (or moment [N m]) carried by the regularization springs at q."""
+        out = 0.0
+        for body, c, k, obj in self.reg_springs:
+            k_now = self.mbs.GetObjectParameter(obj, "stiffness")
+            off = self.mbs.GetObjectParameter(obj, "offset")
+            out = max(out, abs(k_now * (q[self.coordinate_index(body, c)] - off)))
+        return out
+
+    def regularization_stiffness(self):
+        """[(global index, stiffness)] of the regularization springs as they are now."""
+        return [(self.coordinate_index(body, c), self.mbs.GetObjectParameter(obj, "stiffness"))
+                for body, c, _, obj in self.reg_springs]
+
+    def regularization_spring(self, bc):
+        """(Exudyn object, stiffness at build) of the regularization spring on a
+        :class:`BodyCoordinate`, or None where it has none."""
+        b, c = self.body_index(bc.body), COORDINATES.index(bc.coordinate)
+        for body, cc, k, obj in self.reg_springs:
+            if body == b and cc == c and k > 0:
+                return obj, k
+        return None
+
+    # -- contacts ----------------------------------------------------------------
+    def observe(self, q, family):
+        """:class:`FamilyObservation` of ``family`` at the static state q (zero velocity)."""
+        try:
+            name, rows = self.families[Family(family)]
+        except (KeyError, ValueError):
+            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
+                                   f"{[f.value for f in self.families]}") from None
+        el = self.elements[name]
+        obs = el.evaluation_at(q).obs
+        return FamilyObservation(Family(family), tuple(el.ids[i] for i in rows), obs[rows])
+
+    def family_peaks(self, q):
+        """{family value: largest row normal force [N]} at the static state q."""
+        out = {}
+        for fam, (name, rows) in self.families.items():
+            out[fam.value] = float(np.max(self.elements[name].evaluation_at(q).obs[rows, O_FN]))
+        return out
+
+    def mesh_width_moments(self, q):
+        """Eq. (width_resultant) moments of the main mesh per member, where the topology
+        slices its mesh across the face width; None otherwise."""
+        return None
+
+    def refined_design(self):
+        """The design at the topology's refined numerical resolution (the reference of the
+        resolution error statements)."""
+        raise NotImplementedError(f"{type(self).__name__} declares no refined resolution")
+
+    def resolution_settings(self):
+        """The numerical resolution settings of the model (reported with its figures)."""
+        return {}
+
+    def draw_section(self, ax, q):
+        """Transverse section at state q: the contact forces of every family (arrows along the
+        normals at the contact points). Topologies add their outlines."""
+        scale = 0.01 / max(max(self.family_peaks(q).values()), 1e-9)
+        for fam in self.families:
+            ob = self.observe(q, fam)
+            on = ob.normal_force > 0
+            f = ob.normal_force[on, None] * ob.normal[on]
+            ax.quiver(ob.position[on, 0], ob.position[on, 1], -f[:, 0] * scale, -f[:, 1] * scale, angles="xy",
+                      scale_units="xy", scale=1, width=0.003, color="r" if fam == self.main_mesh else "b")
+        ax.set_aspect("equal")
+        ax.set(xlabel="x [m]", ylabel="y [m]")
+
+    def family_element(self, family):
+        """The contact element that carries ``family`` (fault injection, per-step sums)."""
+        return self.elements[self.families[Family(family)][0]]
+
+    def contact_elements(self):
+        """The contact elements (solvers and the driver evaluate and commit them)."""
+        return list(self.elements.values())
+
+    def commit_contacts(self, q, v=None):
+        """Commit every element's contact history at an accepted static state."""
+        v = np.zeros_like(q) if v is None else v
+        for el in self.elements.values():
+            el.commit(q, v)

@@ -1,0 +1,87 @@
+"""Load continuation: equilibria at a fixed input angle under a changing output torque.
+
+Each level is reached from the previous equilibrium by warm-started Newton solves; the
+torque increment is halved when Newton fails or jumps (a step larger than ``max_step``
+is rejected: in the backlash at zero load Newton can land in a far, spurious
+equilibrium). Contact history (friction anchors) is committed once per converged level.
+"""
+import time
+
+import numpy as np
+
+from ..errors import SolverFailure
+from .static import StaticSolver
+from .stats import SolverStats
+
+
+class Continuation:
+    """Equilibria of ``model`` at fixed input angle under a changing output torque.
+
+    max_step: largest accepted coordinate change per increment [m or rad] (a larger
+    Newton step is treated as a failure and the increment halved).
+    min_increment: smallest torque increment [N m] before :class:`SolverFailure`.
+    initial_torque: output torque [N m] of the first equilibrium (found by a load ramp).
+    """
+
+    def __init__(self, model, *, input_angle=0.0, max_step=2e-3, min_increment=1e-4, initial_torque=0.0):
+        self.model = model
+        self.static = StaticSolver(model)
+        self.input_angle = input_angle
+        self.max_step = max_step
+        self.min_increment = min_increment
+        self.stats = SolverStats()
+        model.set_input_angle(input_angle)
+        # a loaded start is regular even where free play leaves the zero-load state ill-posed
+        model.set_output_torque(float(initial_torque))
+        self.torque = float(initial_torque)
+        self.q = self._start()
+
+    def _start(self):
+        """First equilibrium: Newton from the kinematic state, else the static solver's load
+        ramps; both only accept states within its plausibility bounds (a full Newton step at
+        load can land in a far, periodic copy of the output-pin engagement)."""
+        s = self.static
+        ok, q = s.newton(s.kinematic_vector(self.input_angle), ramp=False)
+        if ok and s.plausible(q, self.input_angle):
+            return q
+        try:
+            return s.solve(self.input_angle)
+        except SolverFailure:
+            raise SolverFailure(f"no equilibrium at input angle {self.input_angle:.6g} rad and output torque "
+                                f"{self.torque:.6g} N m") from None
+
+    def _try(self, torque):
+        self.model.set_output_torque(torque)
+        it0 = self.static.stats.newton_iterations
+        ok, q = self.static.newton(self.q, ramp=False)
+        self.stats.newton_iterations += self.static.stats.newton_iterations - it0
+        self.stats.solves += 1
+        return ok and np.max(np.abs(q - self.q)) <= self.max_step, q
+
+    def go_to(self, torque):
+        """Continue to output torque [N m]; returns the equilibrium q."""
+        t0 = time.perf_counter()
+        t_now = self.torque
+        inc = torque - t_now
+        while t_now != torque:
+            target = torque if abs(torque - t_now) <= abs(inc) else t_now + inc
+            ok, q = self._try(target)
+            if ok:
+                self.q, t_now = q, target
+                inc *= 2 if abs(inc) < abs(torque - t_now) else 1
+            else:
+                self.stats.rejected_steps += 1
+                inc *= 0.5
+                if abs(inc) < self.min_increment:
+                    self.model.set_output_torque(t_now)
+                    raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
+                                        f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}")
+        self.torque = torque
+        self._commit()
+        self.stats.levels += 1
+        self.stats.wall_s += time.perf_counter() - t0
+        return self.q
+
+    def _commit(self):
+        """Commit the contact history (friction anchors) at the converged level."""
+        self.model.commit_contacts(self.q)
