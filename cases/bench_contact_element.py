@@ -47,8 +47,8 @@ def bench(n_contacts, precision, steps):
 
     def callback():
         counter[0] += 1  # a new time value defeats the cache, as in a new Newton iterate
-        el._force(mbs, counter[0] * 1e-9, el.object_number, q, v)
-        el._jacobian(mbs, counter[0] * 1e-9, el.object_number, q, v, 1.0, 0.0)
+        el.force_callback(mbs, counter[0] * 1e-9, el.object_number, q, v)
+        el.jacobian_callback(mbs, counter[0] * 1e-9, el.object_number, q, v, 1.0, 0.0)
 
     out["us_per_callback"] = 1e6 * casekit.time_call(callback)
     rec = simulate(mbs, spec, [el])

@@ -41,7 +41,7 @@ def main(argv=None):
     run = V.driven_response(model, proto, spec, coordinates={"wheel1_x": (1, 0)}, out_dir=args.out)
     sp = V.vibration_spectra(run, proto, "torsion")
     sw = V.vibration_spectra(run, proto, "wheel1_x")
-    markers = V.marker_frequencies(design, speed)
+    markers = V.marker_frequencies(model, speed)
     zp = design.pins.n_pins
     dom_o, dom_a = V.dominant(sp["orders"], sp["order_spectrum"], 6)
 

@@ -120,7 +120,7 @@ class ContactElement:
         self._ev = None
         self.object_number = mbs.AddObject(ObjectGenericODE2(
             nodeNumbers=nodes + ([] if ports is None else [ports.structure.node]), massMatrix=np.zeros((self.n, self.n)),
-            forceUserFunction=self._force, jacobianUserFunction=self._jacobian,
+            forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,
             visualization=VObjectGenericODE2(show=False)))
         self.mbs = mbs
         self._ltg = None
@@ -176,11 +176,11 @@ class ContactElement:
         return self._ev
 
     # -- Exudyn callbacks (exact signatures) ------------------------------
-    def _force(self, mbs, t, itemNumber, q, q_t):
+    def force_callback(self, mbs, t, itemNumber, q, q_t):
         self.n_force_calls += 1
         return self.evaluate(t, q, q_t).Q
 
-    def _jacobian(self, mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
+    def jacobian_callback(self, mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
         self.n_jacobian_calls += 1
         ev = self.evaluate(t, q, q_t)
         return -(fODE2 * ev.dQdq + fODE2_t * ev.dQdv)

@@ -80,7 +80,7 @@ class PortCouplingElement:
         self.n_evaluations = 0
         self.object_number = mbs.AddObject(ObjectGenericODE2(
             name=name, nodeNumbers=rigid_nodes + [structure.node], massMatrix=np.zeros((self.n, self.n)),
-            forceUserFunction=self._force, jacobianUserFunction=self._jacobian,
+            forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,
             visualization=VObjectGenericODE2(show=False)))
 
     def evaluate(self, t, q, q_t):
@@ -95,10 +95,10 @@ class PortCouplingElement:
         return self._ev
 
     # -- Exudyn callbacks (exact signatures) ------------------------------
-    def _force(self, mbs, t, itemNumber, q, q_t):
+    def force_callback(self, mbs, t, itemNumber, q, q_t):
         return self.evaluate(t, q, q_t)[0]
 
-    def _jacobian(self, mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
+    def jacobian_callback(self, mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
         _, J, D = self.evaluate(t, q, q_t)
         return -(fODE2 * J + fODE2_t * D)
 

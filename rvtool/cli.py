@@ -1,6 +1,6 @@
 """Command line: ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
 ``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
-tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.sweep`).
+tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`).
 
 The studies are the scripts in the repository's ``cases/`` folder (see
 ``rvtool.casekit`` for their convention). ``list`` reads each script's module
@@ -171,7 +171,7 @@ def build_parser():
     sub.add_parser("version", help="print the versions of rvtool and the packages results depend on",
                    description="Print the versions recorded in every results.json provenance.")
     sweep = sub.add_parser("sweep", help="run a parameter study or the tolerance Monte Carlo on Dask",
-                           description="Run the sweep described by the TOML file SPEC (format: rvtool.sweep) on a "
+                           description="Run the sweep described by the TOML file SPEC (format: rvtool.variants.sweep) on a "
                                        "Dask LocalCluster or an existing scheduler; writes results.csv and results.json.")
     sweep.add_argument("spec", metavar="SPEC", help="sweep specification (TOML)")
     sweep.add_argument("--scheduler", default=None, metavar="ADDRESS",

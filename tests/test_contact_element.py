@@ -145,8 +145,8 @@ def test_exudyn_callbacks_use_exudyn_jacobian_convention():
     el = ContactElement(mbs, nodes, cset)
     mbs.Assemble()
     q, v = pose.ravel(), vel.ravel()
-    Q = el._force(mbs, 0.0, el.object_number, q, v)
-    J = el._jacobian(mbs, 0.0, el.object_number, q, v, 2.0, 3.0)
+    Q = el.force_callback(mbs, 0.0, el.object_number, q, v)
+    J = el.jacobian_callback(mbs, 0.0, el.object_number, q, v, 2.0, 3.0)
     ev = el.evaluate(0.0, q, v)
     np.testing.assert_allclose(J, -(2.0 * ev.dQdq + 3.0 * ev.dQdv))
     assert el.n_evaluations == 1, "the Jacobian at the residual's state must reuse the cached launch"

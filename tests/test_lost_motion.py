@@ -77,7 +77,7 @@ def test_spring_states_are_load_controlled_equilibria(design, tol):
     s = StaticSolver(m)
     for q, t in ((r["q_plus"], f), (r["q_minus"], -f)):
         m.set_output_torque(t)
-        ok, q2 = s._solve(q, ramp=False)
+        ok, q2 = s.newton(q, ramp=False)
         assert ok
         assert np.max(np.abs(q2 - q)) < 1e-10
     assert 1.0 < r["lost_motion_rad"] * ARCMIN_PER_RAD < 10.0

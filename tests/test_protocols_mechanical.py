@@ -138,7 +138,7 @@ def test_vibration_protocol_validation_and_short_run(rd40):
     assert run["record"].accepted_steps == 50 and np.all(np.isfinite(run["responses"]["torsion"]))
     # the input follows the drive: phase = omega t
     assert run["phase_in"][-1] == pytest.approx(1500 * np.pi / 30 * 0.001, rel=1e-9)
-    assert V.marker_frequencies(rd40, 1500.0)["mesh_hz"] == pytest.approx(40 * 25.0)
+    assert V.marker_frequencies(build(rd40), 1500.0)["mesh_hz"] == pytest.approx(40 * 25.0)
 
 
 # -- hard cases ---------------------------------------------------------------------------------

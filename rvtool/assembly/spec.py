@@ -251,7 +251,7 @@ class Bodies:
 
 @dataclass(frozen=True, kw_only=True)
 class CycloidDesign:
-    """A single-stage cycloid drive with one or two wheels (see cases/designs/rd40.toml)."""
+    """A single-stage cycloid drive with one or two wheels (see rvtool/designs/rd40.toml)."""
     name: str
     n_wheels: int
     rated_torque: float

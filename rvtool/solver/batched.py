@@ -128,7 +128,7 @@ class BatchedStaticSolver:
         self.model.elements.invalidate()
 
     # -- one batch Newton solve ----------------------------------------------------
-    def _solve(self, qc):
+    def newton(self, qc):
         m = self.model
         mbs = m.mbs
         el = m.elements
@@ -206,7 +206,7 @@ class BatchedStaticSolver:
                 ratio = np.divide(self.angles - h[1][0], span, out=np.zeros(B), where=span != 0.0)
                 dev = dev + ratio[:, None] * (h[1][1] - h[0][1])
             guess = np.where(self.dead[:, None], self.kin, self.kin + dev)
-            ok, qn = self._solve(guess)
+            ok, qn = self.newton(guess)
             good = self.converged(ok, qn) & self.plausible(qn) & ~self.dead
             q[good] = qn[good]
         q, good = self.complete(q, good, previous_angle)
@@ -225,7 +225,7 @@ class BatchedStaticSolver:
                 for f in self.STIFFENING:
                     # parked (dead) copies stay on stiff springs at their kinematic state
                     self._set_factors(np.where(self.dead, 1e6, np.where(alive, f, 1.0)))
-                    ok, qn = self._solve(start)
+                    ok, qn = self.newton(start)
                     conv = self.converged(ok, qn)
                     alive &= conv
                     start = np.where(alive[:, None], qn, np.where(todo[:, None] | self.dead[:, None], self.kin, q))

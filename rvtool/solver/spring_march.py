@@ -74,7 +74,7 @@ class SpringControl:
         cont = Continuation(model, input_angle=input_angle, initial_torque=float(start_torque))
         model.set_output_torque(0.0)
         self.phi = float(cont.q[self.i_out] + start_torque / self.k_s)
-        ok, q = self._solve(self.phi, cont.q)
+        ok, q = self.solve_at(self.phi, cont.q)
         if not ok:
             self.restore()
             raise SolverFailure(f"no spring-controlled equilibrium at the start (output torque {start_torque:.6g} N m)")
@@ -96,7 +96,7 @@ class SpringControl:
         """Output torque [N m] carried by the control spring at state q and target phi."""
         return self.k_s * (phi - q[self.i_out])
 
-    def _solve(self, phi, q_start):
+    def solve_at(self, phi, q_start):
         """Warm-started equilibrium at target phi; (ok, q)."""
         self._apply(phi)
         s = self.static
@@ -116,7 +116,7 @@ class SpringControl:
         step = phi - cur_phi
         while cur_phi != phi:
             nxt = phi if abs(phi - cur_phi) <= abs(step) else cur_phi + step
-            ok, q = self._solve(nxt, cur_q)
+            ok, q = self.solve_at(nxt, cur_q)
             if ok:
                 cur_phi, cur_q = nxt, q
                 continue
@@ -127,7 +127,7 @@ class SpringControl:
         else:
             return cur_phi, cur_q
         for d in (1e-11, -1e-11, 1e-10, -1e-10, 1e-9, -1e-9):
-            ok, q = self._solve(phi + d, cur_q)
+            ok, q = self.solve_at(phi + d, cur_q)
             if ok:
                 return phi + d, q
         # last resort: the static solver's homotopy in the regularization stiffness from the

@@ -27,7 +27,7 @@ def _try_split(solver, q, t_now, target, mask, max_step):
     solver.set_torques(np.where(mask, target, t_now))
     solver.park(~mask)
     try:
-        ok, qn = solver._solve(q)
+        ok, qn = solver.newton(q)
     finally:
         solver.park(None)
     if ok:
@@ -53,7 +53,7 @@ def _continuation(solver, torques, max_step=2e-3, min_increment=1e-4):
     i_out = 3 * (m.nb - 1) + 2
     solver.set_torques(torques[:, 0])
     solver.set_angle(solver.angle)
-    ok, qn = solver._solve(solver.kin)
+    ok, qn = solver.newton(solver.kin)
     good = solver.converged(ok, qn) & solver.plausible(qn) & ~solver.dead
     q = np.where(good[:, None], qn, solver.kin)
     q, good = solver.complete(q, good, None)

@@ -1,7 +1,7 @@
 """Tolerance Monte Carlo protocol (issue 8): per-variant figures of sampled
 manufacturing variants, resumable, with distributions and confidence intervals.
 
-Variants k = 0 .. n-1 are drawn by :func:`rvtool.tolerances.sample_variant` (each from
+Variants k = 0 .. n-1 are drawn by :func:`rvtool.variants.tolerances.sample_variant` (each from
 its own seeded generator) and run by the per-variant reference protocol
 :func:`rvtool.variants.variant_figures` (quasi-static TE over one output revolution,
 maximum pin force, lost motion), in one of three modes:
@@ -9,7 +9,7 @@ maximum pin force, lost motion), in one of three modes:
 * ``"pool"``: one task per variant on a ``concurrent.futures.ProcessPoolExecutor`` (spawned
   workers, default one per core, each limited to one BLAS/OpenMP thread, so that the
   workers do not oversubscribe the cores), or on any ``concurrent.futures.Executor`` passed
-  in (e.g. a Dask ``Client.get_executor()``, see :mod:`rvtool.sweep`);
+  in (e.g. a Dask ``Client.get_executor()``, see :mod:`rvtool.variants.sweep`);
 * ``"batched"``: one batch per chunk through ``rvtool.batched.batched_variant_figures``
   (all variants of a chunk in one Exudyn system), in this process (which holds the device),
   or one task per chunk on a given executor;

@@ -9,7 +9,7 @@ its row with ``status = "failed"`` and the error, and the sweep goes on. The res
 is tidy, one row per run: the parameters, the figures (te_pp_arcsec, te_rms_arcsec,
 max_pin_force_N, lost_motion_arcmin, newton_iterations), wall_s, status and error; it is
 written as ``results.csv`` and ``results.json`` in the output folder (the Monte Carlo also
-keeps its resumable chunk files in ``chunks/`` there, see :mod:`rvtool.montecarlo`).
+keeps its resumable chunk files in ``chunks/`` there, see :mod:`rvtool.variants.montecarlo`).
 
 SPEC format (TOML; relative paths in it are relative to the SPEC file)::
 
@@ -29,7 +29,7 @@ SPEC format (TOML; relative paths in it are relative to the SPEC file)::
     "wheels.clearance" = [0.0, 2e-6]                        # ... or "section.field" of the design
 
     [monte_carlo]                   # study = "monte_carlo"
-    tolerances = "rd40_tolerances.toml"   # file with a [tolerances] table (rvtool.tolerances)
+    tolerances = "rd40_tolerances.toml"   # file with a [tolerances] table (rvtool.variants.tolerances)
     n_variants = 100
     seed = 0
     chunk_size = 10                 # variants per result file (and per task when batched)
