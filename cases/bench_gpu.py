@@ -75,7 +75,7 @@ def main(argv=None):
     batches = [1, 16, 256] if args.quick else [1, 16, 256, 4096, 65536]
     model = build(load_design(DESIGN), bearing_model="rolling")
     nb = len(model.nodes)
-    base = model.kinematic_state(0.0)
+    base = model.kinematic_state(0.0).poses
     rng = np.random.default_rng(0)
     rows = {}
     for B in batches:
