@@ -234,7 +234,7 @@ def test_output_pin_and_needle_contacts_from_state(rated_rolling):
     assert nj.force == ob[rows, 0].sum()
     nb = needle_contact(m, q, 0, j, "bore")
     eb = d.eccentric_bearing
-    rr, rj, rb = 0.5 * eb.roller_diameter, eb.journal_radius, eb.journal_radius + eb.roller_diameter + eb.radial_clearance
+    rr, rj, rb = 0.5 * eb.roller_diameter, eb.inner_radius, eb.inner_radius + eb.roller_diameter + eb.radial_clearance
     assert nj.radius == pytest.approx(rr * rj / (rr + rj)) and nb.radius == pytest.approx(rr * rb / (rb - rr))
     assert nb.force == nj.force and nb.face_width == eb.roller_length
     # conformal line contact: panel peak and span vs Hertz with the equivalent radius

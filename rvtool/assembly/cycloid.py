@@ -125,7 +125,7 @@ class CycloidModel(ReducerModel):
             "input_hz": f_in, "output_hz": f_out, "mesh_hz": zp * f_in,
             # eccentric needle bearing: journal (input) against the wheel bore (wheel speed -f_out)
             "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
-                                                     2 * eb.journal_radius + eb.roller_diameter),
+                                                     2 * eb.inner_radius + eb.roller_diameter),
             "main_bearing": bearing_frequencies(f_out, mb.n_balls, mb.ball_diameter, mb.pitch_diameter,
                                                 mb.contact_angle_deg),
             "input_bearing": bearing_frequencies(f_in, ib.n_balls, ib.ball_diameter, ib.pitch_diameter),
@@ -151,7 +151,7 @@ class CycloidModel(ReducerModel):
 def _mass_wheel(design):
     d = design
     r_o = d.pins.pin_circle_radius - d.pins.pin_radius
-    r_i = d.eccentric_bearing.journal_radius + d.eccentric_bearing.roller_diameter
+    r_i = d.eccentric_bearing.inner_radius + d.eccentric_bearing.roller_diameter
     m = np.pi * (r_o ** 2 - r_i ** 2) * d.wheels.width * d.material.density
     return m, 0.5 * m * (r_o ** 2 + r_i ** 2)
 
@@ -285,7 +285,7 @@ def lumped_bearing_contacts(design, *, offset=0, prefix=""):
     d = design
     nw = d.n_wheels
     eb = d.eccentric_bearing
-    r_j = eb.journal_radius
+    r_j = eb.inner_radius
     k_n, p_n = lumped_needle_law(d)
     contacts = []
     for k in range(nw):

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..bearings.spec import NeedleBearing
 from ..errors import RvtoolInputError
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
@@ -131,24 +132,6 @@ class OutputPins:
 
 
 @dataclass(frozen=True, kw_only=True)
-class EccentricBearing:
-    """Needle bearing between journal and wheel bore: journal_radius [m], n_rollers,
-    roller_diameter [m], roller_length [m], radial_clearance [m], n_slices."""
-    journal_radius: float
-    n_rollers: int
-    roller_diameter: float
-    roller_length: float
-    radial_clearance: float = 0.0
-    n_slices: int = 4
-
-    def __post_init__(self):
-        check_positive("eccentric_bearing.journal_radius", self.journal_radius)
-        check_positive("eccentric_bearing.roller_diameter", self.roller_diameter)
-        check_positive("eccentric_bearing.roller_length", self.roller_length)
-        check_nonnegative("eccentric_bearing.radial_clearance", self.radial_clearance)
-
-
-@dataclass(frozen=True, kw_only=True)
 class BallBearingSpec:
     """Ball bearing (row or back-to-back pair): kind ("deep_groove" | "angular_contact_pair"),
     n_balls, ball_diameter [m], pitch_diameter [m], contact_angle_deg, groove_curvature_ratio,
@@ -261,7 +244,7 @@ class CycloidDesign:
     wheels: Wheels
     pin_contact: PinContact
     output_pins: OutputPins
-    eccentric_bearing: EccentricBearing
+    eccentric_bearing: NeedleBearing
     main_bearing: BallBearingSpec
     input_bearing: BallBearingSpec
     bodies: Bodies = field(default_factory=Bodies)
@@ -304,7 +287,7 @@ class CycloidDesign:
 
 
 _SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact": PinContact,
-             "output_pins": OutputPins, "eccentric_bearing": EccentricBearing, "main_bearing": BallBearingSpec,
+             "output_pins": OutputPins, "eccentric_bearing": NeedleBearing, "main_bearing": BallBearingSpec,
              "input_bearing": BallBearingSpec, "bodies": Bodies, "housing": Housing}
 
 
@@ -318,6 +301,10 @@ def _build(cls, section, data):
         return cls(**kw)
     except TypeError as exc:
         raise RvtoolInputError(f"[{section}]: {exc}") from None
+    except RvtoolInputError as exc:
+        # a component spec validates its own fields; the design file's key path names the section
+        msg = str(exc)
+        raise RvtoolInputError(msg if msg.startswith(section + ".") or section == "design" else f"{section}.{msg}") from None
 
 
 def design_from_dict(d):

@@ -4,7 +4,7 @@ import math
 from ..contact.circle_set import GROUND
 from ..geometry.eccentric import journal_centre
 from .set import BearingSet, Mounting
-from .spec import AngularContactPair, BallBearing, NeedleBearing
+from .spec import AngularContactPair, BallBearing
 
 
 def _ball_row(spec, material):
@@ -21,10 +21,7 @@ def rolling_bearing_sets(design, n_wheels, *, backend="warp", precision="float64
     bearings (shaft -> housing), body indices as in :mod:`rvtool.assembly.cycloid`
     (0 shaft, 1..n_wheels wheels, n_wheels + 1 flange)."""
     d = design
-    eb = d.eccentric_bearing
-    needle = NeedleBearing(inner_radius=eb.journal_radius, roller_diameter=eb.roller_diameter,
-                           roller_length=eb.roller_length, n_rollers=eb.n_rollers, radial_clearance=eb.radial_clearance,
-                           n_slices=eb.n_slices)
+    needle = d.eccentric_bearing            # the design section is the component spec
     mounts = []
     for k in range(n_wheels):
         centre = journal_centre(d.wheels.eccentricity, math.radians(d.wheels.phases_deg[k]))

@@ -272,10 +272,10 @@ def needle_contact(model, q, wheel, roller, race, *, obs=None):
         raise RvtoolInputError(f"{cid}: the needle carries no load at this state")
     r_roll = 0.5 * eb.roller_diameter
     if race == "journal":
-        gap = _circle_pair_gap(r_roll, eb.journal_radius, conformal=False)
-        r_eq = r_roll * eb.journal_radius / (r_roll + eb.journal_radius)
+        gap = _circle_pair_gap(r_roll, eb.inner_radius, conformal=False)
+        r_eq = r_roll * eb.inner_radius / (r_roll + eb.inner_radius)
     else:
-        r_bore = eb.journal_radius + eb.roller_diameter + eb.radial_clearance
+        r_bore = eb.inner_radius + eb.roller_diameter + eb.radial_clearance
         gap = _circle_pair_gap(r_roll, r_bore, conformal=True)
         r_eq = r_roll * r_bore / (r_bore - r_roll)
     t, n = _frame(nrm)
