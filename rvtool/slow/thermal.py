@@ -307,7 +307,8 @@ def steady_fixed_point(network: ThermalNetwork, source_of_temperature, T_start, 
     the source drift |Q_k - Q_{k-1}| / |Q_k| <= source_tol_rel (both checked,
     as the appendix requires; the iteration count is not warm-up time).
     relaxation omega in (0, 1]. Raises :class:`FixedPointNotConverged` after
-    max_iterations source evaluations.
+    max_iterations source evaluations, or earlier when an iterate leaves the
+    physical range (non-finite or <= 0 K).
     """
     check_finite("relaxation", relaxation)
     check_range("relaxation", relaxation, 0.0, 1.0, low_open=True)
@@ -333,12 +334,15 @@ def steady_fixed_point(network: ThermalNetwork, source_of_temperature, T_start, 
         if residual <= temperature_tol_K and drift <= source_tol_rel:
             return FixedPointResult(temperature=T, sources=Q, iterations=k, temperature_residual_K=residual,
                                     source_drift_rel=drift, converged=True, history=tuple(history))
-        T = _temperatures("T (fixed-point iterate)", T + relaxation * (T_star - T), n)
-        Q_prev = Q
-    result = FixedPointResult(temperature=T, sources=Q, iterations=max_iterations, temperature_residual_K=residual,
+        T_next = T + relaxation * (T_star - T)
+        if not np.all(np.isfinite(T_next) & (T_next > 0.0)):  # the iteration diverged to a non-physical field
+            break
+        T, Q_prev = T_next, Q
+    result = FixedPointResult(temperature=T, sources=Q, iterations=len(history), temperature_residual_K=residual,
                               source_drift_rel=drift, converged=False, history=tuple(history))
-    raise FixedPointNotConverged(f"steady thermal fixed point not converged after {max_iterations} iterations: "
-                                 f"temperature residual {residual:.3e} K (tol {temperature_tol_K:.3e}), source drift "
+    raise FixedPointNotConverged(f"steady thermal fixed point not converged after {len(history)} iterations"
+                                 f"{' (diverged to a non-physical temperature)' if len(history) < max_iterations else ''}"
+                                 f": temperature residual {residual:.3e} K (tol {temperature_tol_K:.3e}), source drift "
                                  f"{drift:.3e} (tol {source_tol_rel:.3e}); try a smaller relaxation", result)
 
 
