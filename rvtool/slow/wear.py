@@ -224,7 +224,7 @@ class WearModel:
         bad = ~np.isfinite(k) | (k < 0.0)
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
-            raise RvtoolInputError(f"k_w(lambda = {lam[i]!r}) = {k[i]!r} at contact {exposure.ids[i]!r} is outside "
+            raise RvtoolInputError(f"k_w(lambda = {float(lam[i])!r}) = {float(k[i])!r} at contact {exposure.ids[i]!r} is outside "
                                    "the valid range [0, inf) m^2/N")
         area = np.array([self.area(i) for i in exposure.ids])
         dh = k * exposure.I_s / area * s
