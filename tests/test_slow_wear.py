@@ -70,6 +70,7 @@ def test_limited_updates_conserve_represented_service_time():
     assert surf.limited_updates == 86                   # the last one covers the remainder unlimited
     assert surf.depth["pins/0"] == pytest.approx(K * F * V * T / AREA, rel=REL)
     assert surf.offsets().offset("pins/0") == pytest.approx(K * F * V * T / AREA, rel=REL)
+    assert surf.max_depth() == surf.depth["pins/0"]
 
 
 def test_association_shares_and_shared_bins():

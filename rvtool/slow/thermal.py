@@ -135,15 +135,23 @@ class ThermalNetwork:
         return np.linalg.solve(np.diag(c) + self.conductance_matrix, c * T + self._rhs(Q))
 
     def march(self, T, Q, duration: float, dtau: float) -> np.ndarray:
-        """Eq. (obs_thermal) over ``duration`` [s] (>= 0) with constant Q: steps of dtau, the last one shortened."""
+        """Eq. (obs_thermal) over ``duration`` [s] (>= 0) with constant Q: steps of dtau, the last one shortened.
+
+        The step matrix C/dtau + L_T is factorized once for the full steps.
+        """
+        from scipy.linalg import lu_factor, lu_solve
         check_finite("duration", duration)
         check_nonnegative("duration", duration)
         check_finite("dtau", dtau)
         check_positive("dtau", dtau)
         T = _temperatures("T", T, len(self.nodes))
+        rhs = self._rhs(Q)
         n_full = int(duration // dtau)
-        for _ in range(n_full):
-            T = self.step(T, Q, dtau)
+        if n_full:
+            c = self.capacity / dtau
+            lu = lu_factor(np.diag(c) + self.conductance_matrix)
+            for _ in range(n_full):
+                T = lu_solve(lu, c * T + rhs)
         rest = duration - n_full * dtau
         if rest > 1e-12 * dtau:  # a remainder at round-off level of the division is no step
             T = self.step(T, Q, rest)
