@@ -101,8 +101,8 @@ def compare_with_resolve(*, residual, jacobian_q, jacobian_zeta, forces, forces_
 
     residual(q, zeta) -> (n,); jacobian_q, jacobian_zeta: its Jacobians;
     forces(q, zeta) -> (p,) normal loads [N]; forces_q, forces_zeta: their
-    Jacobians. q0 must satisfy max|R(q0, zeta0)| <= equilibrium_tol * max|R_q q0|
-    scale (checked: the linearization is about an equilibrium).
+    Jacobians. q0 must satisfy max|R(q0, zeta0)| <= equilibrium_tol * max|F_n(q0, zeta0)|
+    (checked: the linearization is about an equilibrium).
     """
     q0 = np.array(q0, dtype=np.float64)
     z0 = np.atleast_1d(np.array(zeta0, dtype=np.float64))
