@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from rvtool.errors import RvtoolInputError
-from rvtool.observe import AcceptedStep, ContactSnapshot, ObserverRegistry, StepRecorder, TimeWindows
+from rvtool.observe import AcceptedStep, ContactSnapshot, ObserverRegistry, PhaseWindows, StepRecorder, TimeWindows
 from rvtool.slow.exposure import ExposureObserver, WindowExposure
 
 REL = 1e-13
@@ -43,6 +43,23 @@ def test_constant_load_windows_are_closed_form():
         np.testing.assert_allclose(x.I_m, F ** 3 * 2.0 ** -4, rtol=REL)
         np.testing.assert_allclose(x.mean_force, F, rtol=REL)
         np.testing.assert_allclose(x.position[:, :2], [[0.01, 0.02]] * 2, rtol=REL)
+
+
+def test_phase_window_of_the_consumer():
+    # a cage-cycle window: phase phi = q_0 advancing at omega = 3 rad/s, period 2 pi / 4 rad -> tau_w = pi / 6 s;
+    # the steps (dt = 0.01 s) do not divide the period, so boundary steps are apportioned in time
+    omega, period, dt = 3.0, 2 * np.pi / 4, 0.01
+    obs = ExposureObserver(PhaseWindows([1.0], period, m=3.0))
+    reg = ObserverRegistry()
+    reg.register("cage", obs)
+    for k in range(200):
+        reg.on_accepted(AcceptedStep(index=k, t_start=k * dt, dt=dt, q_start=[omega * k * dt],
+                                     q_end=[omega * (k + 1) * dt], snapshots={"pins": _snap([50.0], [0.2])}))
+    done = obs.completed()
+    assert len(done) == 3
+    for x in done:
+        assert x.tau_w == pytest.approx(period / omega, rel=1e-12)
+        assert x.I_s[0] == pytest.approx(50.0 * 0.2 * period / omega, rel=1e-12)
 
 
 def test_settling_is_excluded_and_partial_windows_are_dropped():

@@ -103,6 +103,8 @@ def test_film_dependent_coefficient():
     full = model.increment(_window(), 100.0)                               # lambda = 0: boundary
     thin = model.increment(_window(), 100.0, film_parameter={"pins/0": 1.5})
     assert thin.contact_increment[0] == pytest.approx(full.contact_increment[0] / math.e, rel=REL)
+    # a contact the lubrication saw unloaded has lambda = inf: no asperity load, no wear
+    assert kw(math.inf) == 0.0
 
 
 def test_negative_wear_coefficient_and_bad_inputs_are_named():

@@ -207,10 +207,13 @@ class MixedFriction:
         check_positive("sharpness", self.sharpness)
 
     def asperity_share(self, lam):
-        """f_a(lambda) = exp(-(lambda / lambda_t)^n) [-], lambda >= 0."""
-        check_finite("lambda", lam)
-        check_nonnegative("lambda", lam)
-        return np.exp(-(np.asarray(lam, dtype=np.float64) / self.transition_lambda) ** self.sharpness)
+        """f_a(lambda) = exp(-(lambda / lambda_t)^n) [-], lambda in [0, inf] (inf: an unloaded contact, f_a = 0)."""
+        lam = np.asarray(lam, dtype=np.float64)
+        bad = np.isnan(lam) | (lam < 0.0)
+        if np.any(bad):
+            raise RvtoolInputError(f"lambda = {np.atleast_1d(lam[bad])[:4].tolist()} is outside the valid range "
+                                   "[0, inf]")
+        return np.exp(-(lam / self.transition_lambda) ** self.sharpness)
 
     def mu(self, lam):
         """Mixed friction coefficient [-]."""
