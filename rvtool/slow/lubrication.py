@@ -24,7 +24,7 @@ entrainment speed u = (u1 + u2) / 2):
 * point contact, Hamrock & Dowson (1977):
   h_min / R_x = 3.63 U^0.68 G^0.49 W^-0.073 (1 - exp(-0.68 k)),
   W = w / (E' R_x^2), ellipticity k = 1.0339 (R_y / R_x)^0.636
-  (Hamrock & Brewe 1983 approximation), R_x along the entrainment.
+  (Brewe & Hamrock 1977 approximation), R_x along the entrainment.
 
 Mixed friction (a Stribeck-type interpolation, declared here; its three
 parameters are inputs, not calibrated values):
@@ -153,7 +153,7 @@ def film_thickness_line(*, load_per_length, radius, entrainment_speed, viscosity
 
 
 def ellipticity(radius_x, radius_y):
-    """k = 1.0339 (R_y / R_x)^0.636 (Hamrock & Brewe 1983) [-]."""
+    """k = 1.0339 (R_y / R_x)^0.636 (Brewe & Hamrock 1977) [-]."""
     return 1.0339 * (_positive_all("radius_y", radius_y) / _positive_all("radius_x", radius_x)) ** 0.636
 
 
