@@ -29,10 +29,10 @@ large ends face sigma e_z (sigma = +1 or -1):
   F_f = (2/3) E' sqrt(R_e) delta_f^(3/2), E' = E / (1 - nu^2)); see
   :mod:`warp_contacts.tapered_rollers_ref`.
 
-The pressure line of the cup through the roller's mid-length meets the axis
-at the row's load centre z_row + sigma (rho_o tan alpha_o + z-offset of the
-contact point), :attr:`TaperedRollerBearing.load_centre_offset`; a pair's
-effective spread is the distance between its two load centres.
+The cup normal through the middle of the roller's contact line meets the
+axis at the row's load centre, z_row + sigma :attr:`TaperedRollerBearing.load_centre_offset`
+(on the large-end side); a pair's effective spread is the distance between
+its two load centres.
 
 RV crank support (chosen, plausible for a 30204-class bearing)::
 
@@ -137,7 +137,6 @@ class TaperedRollerBearing:
             raise RvtoolInputError(f"rib_contact = {self.rib_contact!r} must be True or False")
         if self.rib_end_radius is not None:
             check_positive("rib_end_radius", self.rib_end_radius)
-        check_nonnegative("rib_clearance", self.rib_clearance)
         check_range("rib_clearance", self.rib_clearance, 0.0, 0.01 * self.roller_diameter)
         check_positive("youngs_modulus", self.youngs_modulus)
         check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
