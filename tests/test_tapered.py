@@ -117,8 +117,8 @@ def test_relative_tangents_match_central_differences(m):
               (e.cage_rate_sensitivity[m],
                _central(lambda x: at(cr=put(CAGE_RATE, x[0])), CAGE_RATE[m:m + 1].copy(), 1e-3)[:, 0])]
     for analytic, fd in checks:
-        assert np.linalg.norm(analytic - fd) <= FD_RTOL * max(np.linalg.norm(fd), 1e-300) or \
-            np.linalg.norm(analytic) == np.linalg.norm(fd) == 0.0
+        # (the elastic-rib mounting has no damping: both sides are exactly zero there)
+        assert np.linalg.norm(analytic - fd) <= FD_RTOL * np.linalg.norm(fd)
     # the elastic part of the tangent is symmetric (a potential: the rib elimination keeps it so)
     Ke = s.relative(Q5).stiffness[m]
     assert np.linalg.norm(Ke - Ke.T) <= 1e-10 * np.linalg.norm(Ke)

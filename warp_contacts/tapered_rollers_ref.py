@@ -31,7 +31,7 @@ play) and a the roller's axial position along its own axis (below);
 F_s = max(0, k_s delta_s^p + c_d rho(delta_s) delta_s_dot) of Eq. (normal_force),
 delta_s_dot = g_s . q_dot + (h_s . q) psi_dot.
 
-Rib contact (column I_RIB):
+Rib contact (integer column RI_RIB):
 
 * 0, cone and rib lumped (rigid rib, the classical model): the laminae use
   the cup contact points and the cup normal n_o = (cos alpha_o, -sigma sin alpha_o)
