@@ -325,7 +325,7 @@ def test_tapered_set_as_exudyn_contact_element():
     el = ContactElement(mbs, nodes, s)
     mbs.Assemble()
     q, v = pose.ravel(), vel.ravel()
-    np.testing.assert_allclose(el._force(mbs, 0.0, el.object_number, q, v), s.evaluate(pose, vel).Q, rtol=1e-12)
+    np.testing.assert_allclose(el.force_callback(mbs, 0.0, el.object_number, q, v), s.evaluate(pose, vel).Q, rtol=1e-12)
     assert el.ids == s.ids and el.commit(q, v).normal_force.shape == (len(s.ids),)
     assert "crank_bearing/row1/roller13/slice2" in s.ids and "support/row0/roller0/slice0" in s.ids
 
