@@ -270,7 +270,8 @@ class EnergyAccount:
             ltg = np.asarray(sd.GetObjectLTGODE2(i), int)
             mats = []
             for key in ("massMatrix", "stiffnessMatrix", "dampingMatrix"):
-                a = np.asarray(d[key], np.float64)
+                m = d[key]
+                a = np.asarray(m.Convert2DenseMatrix() if hasattr(m, "Convert2DenseMatrix") else m, np.float64)
                 mats.append(a if a.size else None)
             K = mats[1]
             if K is not None and np.abs(K - K.T).max() > STIFFNESS_SYMMETRY_TOL * max(np.abs(K).max(), 1e-300):

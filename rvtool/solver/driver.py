@@ -204,8 +204,6 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
     rec.rejected_steps = rec.attempts - rec.accepted_steps
     rec.end_time = state["t_prev"]
     rec.jacobian_updates = int(solver.it.newtonJacobiCount)
-    if energy is not None and state.get("started"):
-        rec.energy = energy.results()
     if not ok or rec.end_time < spec.end_time * (1 - 1e-9) - 1e-12:
         path = _save_state(out_dir, state, elements, rec, spec)
         msg = (f"solver failed at t = {rec.end_time:.6g} s of {spec.end_time:.6g} s after {rec.accepted_steps} accepted "
@@ -214,6 +212,8 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
         if error is not None:
             msg += f"; exception: {error}"
         raise SolverFailure(msg, path)
+    if energy is not None:
+        rec.energy = energy.results()
     return rec
 
 
