@@ -179,11 +179,13 @@ def _evaluator(device):
     return ev
 
 
-# Central differences with h = 1e-9 (m, rad, m/s, rad/s) on a contact with 2 um overlap: truncation
-# ~ h^2 F''' ~ 1e-8 of the tangent scale (F ~ delta^1.5), round-off ~ eps |Q| / h ~ 1e-12 of it;
-# a missing chain-rule term is O(1). Both stick and slip states sit 3x away from the cone edge,
+# Central differences on a contact with 2 um overlap. Positions: h = 1e-9 (m, rad), truncation
+# ~ h^2 F''' ~ 1e-8 of the tangent scale (F ~ delta^1.5, dQ/dq ~ 1e7 N/m), round-off
+# ~ eps |Q| / h ~ 6e-6 N/m ~ 1e-12 of it. Velocities: the force is linear in them away from the
+# clamps, so h = 1e-6 (m/s, rad/s) has no truncation and round-off ~ 6e-9 of a tangent scale ~ 6 N s/m.
+# A missing chain-rule term is O(1). Both stick and slip states sit 3x away from the cone edge,
 # so no difference crosses it.
-FD_H = 1e-9
+FD_H = {"q": 1e-9, "v": 1e-6}
 FD_RTOL = 1e-6
 
 
@@ -203,9 +205,9 @@ def test_tangent_matches_central_differences(device, regime, shift):
             Q_pm = []
             for sign in (1.0, -1.0):
                 p, v = pose.copy(), vel.copy()
-                (p if which == "q" else v)[j // 3, j % 3] += sign * FD_H
+                (p if which == "q" else v)[j // 3, j % 3] += sign * FD_H[which]
                 Q_pm.append(np.array(ev(p, v, fp, ip, *hist)[0][0]))
-            fd[:, j] = (Q_pm[0] - Q_pm[1]) / (2 * FD_H)
+            fd[:, j] = (Q_pm[0] - Q_pm[1]) / (2 * FD_H[which])
         scale = np.abs(J[0]).max()
         np.testing.assert_allclose(J[0], fd, rtol=0, atol=FD_RTOL * scale, err_msg=f"dQ/d{which} in {regime}")
 
