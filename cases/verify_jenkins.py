@@ -33,6 +33,7 @@ import numpy as np
 
 from rvtool import casekit
 from rvtool.contact.scenes import jenkins_element
+from rvtool.observe import ObserverRegistry
 from rvtool.observe.energy import EnergyAccount
 from rvtool.protocols.hysteresis import Cycle, jenkins_branch, loop_integral, zero_torque_width
 from rvtool.solver import RunSpec, simulate
@@ -91,7 +92,6 @@ def run(quick=False, steps_per_cycle=None, loops=None, spectral_radius=0.8):
     spec = RunSpec(end_time=dwell + period / 4 + loops * period, step=period / n, spectral_radius=spectral_radius,
                    abs_tol=1e-6, rel_tol=1e-8)
     samples = _Samples(el, i_d, i_b)
-    from rvtool.observe import ObserverRegistry
     reg = ObserverRegistry()
     reg.register("samples", samples)
     account = EnergyAccount(mbs, [el])
