@@ -103,3 +103,66 @@ def block_on_belt(*, normal_load=100.0, mu=0.3, tangential_stiffness=1e6, spring
     el = ContactElement(mbs, [nb, nbelt], cset, backend=backend, precision=precision)
     mbs.Assemble()
     return SC, mbs, el
+
+
+def jenkins_element(*, normal_load=100.0, mu=0.3, tangential_stiffness=1e6, spring=1e5, amplitude=1e-3,
+                    frequency=1.0, dwell=0.0, block_mass=0.05, drive_mass=0.01, surface_radius=100.0,
+                    normal_damping=200.0, backend="warp", precision="float64"):
+    """A Jenkins element: a spring in series with a Coulomb slider, driven
+    through a prescribed displacement.
+
+    A drive coordinate rests for ``dwell`` [s] and then follows
+    x_d(t) = ``amplitude`` sin(2 pi ``frequency`` (t - ``dwell``)) [m] (a
+    ``CoordinateConstraint`` with an offset function: the prescribed motion
+    whose reaction does the drive work). Anchors are committed at accepted
+    steps only, so the first step from t_0 carries no tangential force; a dwell
+    of one step lets the anchor form at rest. A spring of stiffness
+    ``spring`` [N/m] ties it to a block (planar rigid body, rotation locked,
+    mass ``block_mass`` [kg]) that is pressed with ``normal_load`` [N] onto
+    the ground. The block--ground contact is a circle of radius 5 mm on a
+    ground circle of ``surface_radius`` [m] (nearly flat) with the anchor
+    friction model (coefficient ``mu``, tangential stiffness
+    ``tangential_stiffness`` [N/m]): the slider of friction force
+    F_c = mu F_N, regularized in stick by the anchor spring k_t in series
+    with the spring.
+
+    Returns (SystemContainer, mbs, ContactElement, items) with items the
+    object/node numbers {"drive_node", "block_node", "drive", "spring", "load"}.
+    """
+    import exudyn as exu
+    from exudyn.itemInterface import (CoordinateConstraint, CoordinateSpringDamper, LoadCoordinate,
+                                      MarkerNodeCoordinate, Node1D, NodePointGround, NodeRigidBody2D, ObjectMass1D,
+                                      ObjectRigidBody2D)
+
+    from exudyn_user_elements.contact_element import ContactElement
+
+    r_block, k_point = 5e-3, 1e10
+    delta0 = (normal_load / k_point) ** (2.0 / 3.0)
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ng = mbs.AddNode(NodePointGround())
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ng, coordinate=0))
+    nd = mbs.AddNode(Node1D(referenceCoordinates=[0.0]))
+    mbs.AddObject(ObjectMass1D(nodeNumber=nd, mass=drive_mass))
+    md = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nd, coordinate=0))
+    nb = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, r_block - delta0, 0.0]))
+    mbs.AddObject(ObjectRigidBody2D(nodeNumber=nb, mass=block_mass, inertia=1e-6))
+    mk = [mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nb, coordinate=i)) for i in range(3)]
+    w = 2 * np.pi * frequency
+
+    def drive_x(mbs_, t, itemNumber, lOffset):
+        return amplitude * np.sin(w * (t - dwell)) if t > dwell else 0.0
+
+    drive = mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, md], offsetUserFunction=drive_x))
+    mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, mk[2]]))
+    spring_obj = mbs.AddObject(CoordinateSpringDamper(markerNumbers=[md, mk[0]], stiffness=spring))
+    load = mbs.AddLoad(LoadCoordinate(markerNumber=mk[1], load=-normal_load))
+    cset = CircleContactSet(name="slider", n_bodies=1, contacts=(CircleContact(
+        body_a=0, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, -surface_radius), radius_a=r_block,
+        radius_b=surface_radius, normal=NormalLaw(law="point", stiffness=k_point, damping=normal_damping,
+                                                  ramp_depth=1e-6),
+        friction=FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=mu, tangential_stiffness=tangential_stiffness),
+        name="slider/block"),))
+    el = ContactElement(mbs, [nb], cset, backend=backend, precision=precision)
+    mbs.Assemble()
+    return SC, mbs, el, {"drive_node": nd, "block_node": nb, "drive": drive, "spring": spring_obj, "load": load}

@@ -45,6 +45,7 @@ class RunRecord:
     wall_s: float = 0.0
     reject_reasons: dict = field(default_factory=dict)
     times: list = field(default_factory=list)
+    energy: dict | None = None  # EnergyAccount.results() when the run kept an energy account
 
     def to_dict(self):
         d = dict(self.__dict__)
@@ -82,7 +83,7 @@ def _settings(spec: RunSpec, n_coordinates):
 
 
 def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None = None, *,
-             rotational=None, out_dir=None, reject_attempts=(), before_accept=None):
+             rotational=None, out_dir=None, reject_attempts=(), before_accept=None, energy=None):
     """Run ``mbs`` (assembled, or assembled here) over ``spec.end_time``.
 
     elements: contact elements (:class:`exudyn_user_elements.ContactElement`).
@@ -90,6 +91,10 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
     rotational: boolean mask over ODE2 coordinates for the W scaling.
     out_dir: where the last accepted state is saved if the run fails.
     reject_attempts: attempt numbers (1-based) to reject by force (tests).
+    energy: an :class:`rvtool.observe.energy.EnergyAccount` of ``mbs`` and
+    ``elements``, sampled at t_0 and at every accepted state after its history
+    commit; its balance is returned in ``RunRecord.energy``. None (default):
+    nothing is sampled.
     Returns a :class:`RunRecord`; raises :class:`SolverFailure` on failure.
     """
     import warnings
@@ -158,12 +163,16 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
         if not state.get("started"):
             # Exudyn's initial FinishStep (t = t_0) is not an accepted step
             state["started"] = True
+            if energy is not None:
+                energy.start(t, mbs_.systemData.GetODE2Coordinates(), mbs_.systemData.GetODE2Coordinates_t())
             return True
         state["open"] = False
         dt = t - state["t_prev"]
         q = np.array(mbs_.systemData.GetODE2Coordinates())
         v = np.array(mbs_.systemData.GetODE2Coordinates_t())
         snaps = {e.name: e.commit(q, v, t) for e in elements}
+        if energy is not None:
+            energy.accept(t, q, v)
         if observers is not None:
             observers.on_accepted(AcceptedStep(index=rec.accepted_steps, t_start=state["t_prev"], dt=dt,
                                                q_start=state["q_prev"], q_end=q, snapshots=snaps))
@@ -203,6 +212,8 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
         if error is not None:
             msg += f"; exception: {error}"
         raise SolverFailure(msg, path)
+    if energy is not None:
+        rec.energy = energy.results()
     return rec
 
 
