@@ -93,6 +93,9 @@ N_PLAIN_F = 11
 J_FLANGE, J_WHEEL = 0, 1
 N_PLAIN_I = 2
 
+# ---- generalized coordinates of a row: the (x, y, theta) triple of each body starts at ----
+X_FLANGE, X_WHEEL0, X_WHEEL1 = 0, 3, 6     # Eq. (supp_pin_coordinates) order; plain rows: flange, wheel
+
 # ---- per-slice output columns ----
 S_FORCE, S_APPROACH, S_GEOM, S_NX, S_NY, S_PX, S_PY = range(7)
 N_SLICE_COLS = 7

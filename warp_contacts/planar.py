@@ -37,6 +37,11 @@ def planar_funcs(dtype):
     vec2 = wp.types.vector(2, dtype)
 
     @wp.func
+    def body_pose(pose: wp.array2d(dtype=dtype), b: int):
+        """Position x_b [m] and angle theta_b [rad] of pose row b (rows are (x, y, theta))."""
+        return vec2(pose[b, 0], pose[b, 1]), pose[b, 2]
+
+    @wp.func
     def body_state(pose: wp.array2d(dtype=dtype), vel: wp.array2d(dtype=dtype), b: int):
         """Position x_b [m], angle theta_b [rad], velocity v_b [m/s] and angular velocity
         omega_b [rad/s] of pose/velocity row b (rows are (x, y, theta) and (vx, vy, omega))."""
@@ -151,7 +156,7 @@ def planar_funcs(dtype):
         obs_out[i, O_NY] = normal[1]
         obs_out[i, O_FT] = ft
 
-    return types.SimpleNamespace(vec2=vec2, perp=perp, cross2=cross2, rot=rot, body_state=body_state,
+    return types.SimpleNamespace(vec2=vec2, perp=perp, cross2=cross2, rot=rot, body_pose=body_pose, body_state=body_state,
                                  param_vec2=param_vec2, row_vec2=row_vec2,
                                  store_row_vec2=store_row_vec2, body_seed=body_seed, pair_seed=pair_seed,
                                  store_pair_forces=store_pair_forces, store_pair_column=store_pair_column,
