@@ -49,48 +49,15 @@ def _kernel(dtype, velocity_tangent=True):
         ds = speed * (dtype(1.0) - rc * kE)
         return rot(rot_angle, pt), rot(rot_angle, n), kap, ds
 
-    # the seed loop's trip count is a compile-time constant, so Warp unrolls it (see planar.N_SEEDS);
-    # without the velocity tangent only the coordinate seeds run
-    n_seeds = N_SEEDS if velocity_tangent else N_COORD_SEEDS
-
-    @wp.kernel(module="unique")
-    def eval_cycloid_pins(
-        # Model:
-        fparams: wp.array2d(dtype=dtype),
-        iparams: wp.array2d(dtype=wp.int32),
-        tab_pts: wp.array2d(dtype=dtype),
-        tab_nrm: wp.array2d(dtype=dtype),
-        tab_kap: wp.array(dtype=dtype),
-        tab_polar: wp.array(dtype=dtype),
-        tab_offset: wp.array(dtype=wp.int32),
-        tab_len: wp.array(dtype=wp.int32),
-        tab_h: wp.array(dtype=dtype),
-        tab_phi: wp.array(dtype=dtype),
-        tab_ana: wp.array2d(dtype=dtype),
-        window: int,
-        # Data in:
-        pose_in: wp.array2d(dtype=dtype),
-        vel_in: wp.array2d(dtype=dtype),
-        # Data out:
-        q_out: wp.array2d(dtype=dtype),
-        dqdq_out: wp.array3d(dtype=dtype),
-        dqdv_out: wp.array3d(dtype=dtype),
-        obs_out: wp.array2d(dtype=dtype),
-    ):
-        i = wp.tid()
-        tb = iparams[i, J_TABLE]
-        xa, tha, vxa, wa = body_state(pose_in, vel_in, iparams[i, J_BODY_A])
-        xb, thb, vxb, wb = body_state(pose_in, vel_in, iparams[i, J_BODY_B])
-        r = fparams[i, C_RP]
-        zs = fparams[i, C_Z]
-        tx = fparams[i, C_TX]
-        ty = fparams[i, C_TY]
-
-        b = rot(thb, param_vec2(fparams, i, C_XI_B))
-        p = xb + b
-        pl = rot(-tha, p - xa)
-
-        # -- discrete search: binary search of the polar angle, then a window ----
+    @wp.func
+    def locate(pl: vec2, tb: int, tab_pts: wp.array2d(dtype=dtype), tab_nrm: wp.array2d(dtype=dtype),
+               tab_kap: wp.array(dtype=dtype), tab_polar: wp.array(dtype=dtype), tab_offset: wp.array(dtype=wp.int32),
+               tab_len: wp.array(dtype=wp.int32), tab_h: wp.array(dtype=dtype), tab_phi: wp.array(dtype=dtype),
+               tab_ana: wp.array2d(dtype=dtype), window: int):
+        """Contact location of the pin centre pl (wheel coordinates) on profile table tb, as
+        :func:`cycloid_pins_ref.search`: binary search of the polar angle, a window of samples,
+        projection on the nearest sample's osculating arc (or Newton on the analytic profile).
+        Returns point, unit normal, curvature, the clamped flag and the squared sample distance."""
         off = tab_offset[tb]
         n = tab_len[tb]
         two_pi = dtype(6.283185307179586)
@@ -143,6 +110,50 @@ def _kernel(dtype, velocity_tangent=True):
             nl = na
             kap = ka
             clamped = False
+        return cl, nl, kap, clamped, bestd
+
+    # the seed loop's trip count is a compile-time constant, so Warp unrolls it (see planar.N_SEEDS);
+    # without the velocity tangent only the coordinate seeds run
+    n_seeds = N_SEEDS if velocity_tangent else N_COORD_SEEDS
+
+    @wp.kernel(module="unique")
+    def eval_cycloid_pins(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        tab_pts: wp.array2d(dtype=dtype),
+        tab_nrm: wp.array2d(dtype=dtype),
+        tab_kap: wp.array(dtype=dtype),
+        tab_polar: wp.array(dtype=dtype),
+        tab_offset: wp.array(dtype=wp.int32),
+        tab_len: wp.array(dtype=wp.int32),
+        tab_h: wp.array(dtype=dtype),
+        tab_phi: wp.array(dtype=dtype),
+        tab_ana: wp.array2d(dtype=dtype),
+        window: int,
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        vel_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        dqdv_out: wp.array3d(dtype=dtype),
+        obs_out: wp.array2d(dtype=dtype),
+    ):
+        i = wp.tid()
+        xa, tha, vxa, wa = body_state(pose_in, vel_in, iparams[i, J_BODY_A])
+        xb, thb, vxb, wb = body_state(pose_in, vel_in, iparams[i, J_BODY_B])
+        r = fparams[i, C_RP]
+        zs = fparams[i, C_Z]
+        tx = fparams[i, C_TX]
+        ty = fparams[i, C_TY]
+
+        b = rot(thb, param_vec2(fparams, i, C_XI_B))
+        p = xb + b
+        pl = rot(-tha, p - xa)
+
+        cl, nl, kap, clamped, bestd = locate(pl, iparams[i, J_TABLE], tab_pts, tab_nrm, tab_kap, tab_polar,
+                                             tab_offset, tab_len, tab_h, tab_phi, tab_ana, window)
 
         a = rot(tha, cl)
         nv = rot(tha, nl)

@@ -113,6 +113,31 @@ def _funcs(dtype):
         return Fc0, Fc1, dFc0, dFc1, up0, up1, dup0, dup1
 
     @wp.func
+    def sleeve_update(u: vec2, dux: vec9, duy: vec9, Fc0: dtype, Fc1: dtype, dFc0: vec9, dFc1: vec9, n0: vec2,
+                      dn0x: vec9, dn0y: vec9, n1: vec2, dn1x: vec9, dn1y: vec9, K0: dtype, K1: dtype, dK0: vec9,
+                      dK1: vec9, relax: dtype, kfloor: dtype, clear: dtype):
+        """One projected sleeve update of Eq. (supp_pin_fit) with its tangent: a relaxed step along the
+        net force on the sleeve, projected onto the clearance disk. Returns (u, du_x, du_y)."""
+        g = Fc0 * n0 + Fc1 * n1
+        dgx = n0[0] * dFc0 + Fc0 * dn0x + n1[0] * dFc1 + Fc1 * dn1x
+        dgy = n0[1] * dFc0 + Fc0 * dn0y + n1[1] * dFc1 + Fc1 * dn1y
+        Kt = K0 + K1
+        dKt = dK0 + dK1
+        if Kt <= kfloor:
+            Kt = kfloor
+            dKt = vec9()
+        w = u - (relax / Kt) * g
+        dwx = dux - (relax / Kt) * dgx + (relax * g[0] / (Kt * Kt)) * dKt
+        dwy = duy - (relax / Kt) * dgy + (relax * g[1] / (Kt * Kt)) * dKt
+        wl = wp.sqrt(w[0] * w[0] + w[1] * w[1])
+        if wl > clear:
+            # projection onto the clearance disk: d(c w/|w|) = c (I - w_hat w_hat^T) dw / |w|
+            wh = w / wl
+            wdw = wh[0] * dwx + wh[1] * dwy
+            return clear * wh, (clear / wl) * (dwx - wh[0] * wdw), (clear / wl) * (dwy - wh[1] * wdw)
+        return w, dwx, dwy
+
+    @wp.func
     def wheel_react(a: vec2, dax: vec9, day: vec9, b: vec2, u: vec2, dux: vec9, duy: vec9, up: dtype, dup: vec9,
                     clr: dtype, ks: dtype, p: dtype, dfloor: dtype, rsum: dtype, pf: vec2, ph: vec2, xw: vec2,
                     tf: vec2, tw: vec2, zw: dtype, cw: int, stations: wp.array(dtype=dtype),
@@ -213,8 +238,8 @@ def _funcs(dtype):
         tilt_out[i, body, 1] = m[1]
 
     return dict(vec2=vec2, vec9=vec9, seed=seed, rot=G.rot, unit=unit, wheel_open=wheel_open, closure=closure,
-                wheel_react=wheel_react, separation=separation, body_pose=G.body_pose, param_vec2=G.param_vec2,
-                row_vec2=G.row_vec2, store_row_vec2=G.store_row_vec2, store_triple=store_triple,
+                wheel_react=wheel_react, separation=separation, sleeve_update=sleeve_update, body_pose=G.body_pose, param_vec2=G.param_vec2,
+                row_vec2=G.row_vec2, store_triple=store_triple,
                 store_triple_column=store_triple_column, store_tilt_moment=store_tilt_moment)
 
 
@@ -223,8 +248,8 @@ def _shared_kernel(dtype):
     F = _funcs(dtype)
     vec2, vec9 = F["vec2"], F["vec9"]
     rot, unit, wheel_open, closure = F["rot"], F["unit"], F["wheel_open"], F["closure"]
-    wheel_react, separation = F["wheel_react"], F["separation"]
-    body_pose, param_vec2, row_vec2, store_row_vec2 = F["body_pose"], F["param_vec2"], F["row_vec2"], F["store_row_vec2"]
+    wheel_react, separation, sleeve_update = F["wheel_react"], F["separation"], F["sleeve_update"]
+    body_pose, param_vec2, row_vec2 = F["body_pose"], F["param_vec2"], F["row_vec2"]
     store_triple, store_triple_column, store_tilt_moment = (F["store_triple"], F["store_triple_column"],
                                                             F["store_tilt_moment"])
 
@@ -296,30 +321,8 @@ def _shared_kernel(dtype):
             m1L, n1, m1dL, dn1x, dn1y = unit(a1 + smean * bb1 + u, da1x + dux, da1y + duy, dfloor)
             Fc0, Fc1, dFc0, dFc1, up0, up1, dup0, dup1 = closure(F00, F01, K0, K1, dF00, dF01, dK0, dK1, n0, dn0x,
                                                                 dn0y, n1, dn1x, dn1y, c00, c11, cross, detfloor)
-            g = Fc0 * n0 + Fc1 * n1
-            dgx = n0[0] * dFc0 + Fc0 * dn0x + n1[0] * dFc1 + Fc1 * dn1x
-            dgy = n0[1] * dFc0 + Fc0 * dn0y + n1[1] * dFc1 + Fc1 * dn1y
-            Kt = K0 + K1
-            dKt = dK0 + dK1
-            if Kt <= kfloor:
-                Kt = kfloor
-                dKt = vec9()
-            # Eq. (supp_pin_fit): relaxed step along the net force on the sleeve
-            w = u - (relax / Kt) * g
-            dwx = dux - (relax / Kt) * dgx + (relax * g[0] / (Kt * Kt)) * dKt
-            dwy = duy - (relax / Kt) * dgy + (relax * g[1] / (Kt * Kt)) * dKt
-            wl = wp.sqrt(w[0] * w[0] + w[1] * w[1])
-            if wl > clear:
-                # projection onto the clearance disk: d(c w/|w|) = c (I - w_hat w_hat^T) dw / |w|
-                wh = w / wl
-                wdw = wh[0] * dwx + wh[1] * dwy
-                dux = (clear / wl) * (dwx - wh[0] * wdw)
-                duy = (clear / wl) * (dwy - wh[1] * wdw)
-                u = clear * wh
-            else:
-                dux = dwx
-                duy = dwy
-                u = w
+            u, dux, duy = sleeve_update(u, dux, duy, Fc0, Fc1, dFc0, dFc1, n0, dn0x, dn0y, n1, dn1x, dn1y, K0, K1,
+                                        dK0, dK1, relax, kfloor, clear)
 
         F00, K0, dF00, dK0 = wheel_open(a0, da0x, da0y, bb0, u, dux, duy, clr0, ks, p, dmin, dfloor, stations)
         F01, K1, dF01, dK1 = wheel_open(a1, da1x, da1y, bb1, u, dux, duy, clr1, ks, p, dmin, dfloor, stations)
