@@ -14,9 +14,10 @@ import warp as wp
 
 from .circle_geometry import circle_funcs
 from .circle_pairs_ref import (FRICTION_ANCHOR, FRICTION_REGULARIZED, I_BODY_A, I_BODY_B, I_FRICTION,
-                               I_INTERNAL, N_FLOAT_PARAMS, N_INT_PARAMS, N_OBS)
+                               I_INTERNAL, N_FLOAT_PARAMS, N_INT_PARAMS, N_OBS, P_C, P_DR, P_K, P_KT, P_MUK, P_MUS,
+                               P_P, P_RA, P_RB, P_VREG, P_VS, P_XI_A, P_XI_B)
 from .laws import law_funcs
-from .planar import LaunchBuffers, planar_funcs
+from .planar import N_SEEDS, LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
 
 
@@ -26,7 +27,10 @@ def _kernel(dtype):
     C = circle_funcs(dtype)
     G = planar_funcs(dtype)
     vec2, perp, cross2, rot = C.vec2, G.perp, G.cross2, G.rot
-    store_pair_forces, store_pair_column = G.store_pair_forces, G.store_pair_column
+    body_state, param_vec2, row_vec2, store_row_vec2, pair_seed = (G.body_state, G.param_vec2, G.row_vec2,
+                                                                 G.store_row_vec2, G.pair_seed)
+    store_pair_forces, store_pair_column, store_pair_observation = (G.store_pair_forces, G.store_pair_column,
+                                                                    G.store_pair_observation)
     normal_force = L.normal_force
     friction_coefficient = L.friction_coefficient
     circle_gap = C.circle_gap
@@ -52,35 +56,20 @@ def _kernel(dtype):
         hist_b_out: wp.array2d(dtype=dtype),
     ):
         i = wp.tid()
-        ia = iparams[i, 0]
-        ib = iparams[i, 1]
-        internal = iparams[i, 2]
-        mode = iparams[i, 3]
+        internal = iparams[i, I_INTERNAL]
+        mode = iparams[i, I_FRICTION]
         s = dtype(1.0)
         if internal != 0:
             s = dtype(-1.0)
-        xa = vec2(pose_in[ia, 0], pose_in[ia, 1])
-        xb = vec2(pose_in[ib, 0], pose_in[ib, 1])
-        tha = pose_in[ia, 2]
-        thb = pose_in[ib, 2]
-        vxa = vec2(vel_in[ia, 0], vel_in[ia, 1])
-        vxb = vec2(vel_in[ib, 0], vel_in[ib, 1])
-        wa = vel_in[ia, 2]
-        wb = vel_in[ib, 2]
-        ra = fparams[i, 4]
-        rb = fparams[i, 5]
-        k = fparams[i, 6]
-        p = fparams[i, 7]
-        c = fparams[i, 8]
-        dr = fparams[i, 9]
-        muk = fparams[i, 10]
-        mus = fparams[i, 11]
-        vs = fparams[i, 12]
-        vreg = fparams[i, 13]
-        kt = fparams[i, 14]
+        xa, tha, vxa, wa = body_state(pose_in, vel_in, iparams[i, I_BODY_A])
+        xb, thb, vxb, wb = body_state(pose_in, vel_in, iparams[i, I_BODY_B])
+        ra = fparams[i, P_RA]
+        rb = fparams[i, P_RB]
+        muk = fparams[i, P_MUK]
+        kt = fparams[i, P_KT]
 
-        pa = rot(tha, vec2(fparams[i, 0], fparams[i, 1]))
-        pb = rot(thb, vec2(fparams[i, 2], fparams[i, 3]))
+        pa = rot(tha, param_vec2(fparams, i, P_XI_A))
+        pb = rot(thb, param_vec2(fparams, i, P_XI_B))
         g, n, Lc = circle_gap(xa + pa, xb + pb, ra, rb, internal)
         Ls = Lc
         if Ls <= dtype(0.0):
@@ -90,7 +79,8 @@ def _kernel(dtype):
         w = (vxb + wb * perp(pb)) - (vxa + wa * perp(pa))
         Ldot = wp.dot(n, w)
         delta_dot = -s * Ldot
-        F, Fd, Fdd = normal_force(k, p, c, dr, delta, delta_dot)
+        F, Fd, Fdd = normal_force(fparams[i, P_K], fparams[i, P_P], fparams[i, P_C], fparams[i, P_DR], delta,
+                                  delta_dot)
         fnA = (-s * F) * n
 
         aa = pa + (s * ra) * n
@@ -100,9 +90,9 @@ def _kernel(dtype):
         vrel = ua - ub
         vt = wp.dot(t, vrel)
 
-        mu, dmu = friction_coefficient(muk, mus, vs, vreg, vt)
-        hla = vec2(hist_a_in[i, 0], hist_a_in[i, 1])
-        hlb = vec2(hist_b_in[i, 0], hist_b_in[i, 1])
+        mu, dmu = friction_coefficient(muk, fparams[i, P_MUS], fparams[i, P_VS], fparams[i, P_VREG], vt)
+        hla = row_vec2(hist_a_in, i)
+        hlb = row_vec2(hist_b_in, i)
         ha = rot(tha, hla)
         hb = rot(thb, hlb)
         e = (xa + ha) - (xb + hb)
@@ -133,28 +123,17 @@ def _kernel(dtype):
         store_pair_forces(q_out, i, fnA + ftA, cross2(pa, fnA) + cross2(armA, ftA),
                           -(cross2(pb, fnA) + cross2(armB, ftA)))
 
-        for j in range(12):
-            dqa = wp.vec3d(0.0, 0.0, 0.0)
-            dqb = wp.vec3d(0.0, 0.0, 0.0)
-            dva = wp.vec3d(0.0, 0.0, 0.0)
-            dvb = wp.vec3d(0.0, 0.0, 0.0)
-            if j < 3:
-                dqa[j] = wp.float64(1.0)
-            elif j < 6:
-                dqb[j - 3] = wp.float64(1.0)
-            elif j < 9:
-                dva[j - 6] = wp.float64(1.0)
-            else:
-                dvb[j - 9] = wp.float64(1.0)
-            dpa = dtype(dqa[2]) * perp(pa)
-            dpb = dtype(dqb[2]) * perp(pb)
-            dd = (vec2(dtype(dqb[0]), dtype(dqb[1])) + dpb) - (vec2(dtype(dqa[0]), dtype(dqa[1])) + dpa)
+        for j in range(N_SEEDS):
+            dxa, dtha, dxb, dthb, dva, dwa, dvb, dwb = pair_seed(j)
+            dpa = dtha * perp(pa)
+            dpb = dthb * perp(pb)
+            dd = (dxb + dpb) - (dxa + dpa)
             dL = wp.dot(n, dd)
             dn = (dd - dL * n) / Ls
             dt = perp(dn)
             ddelta = -s * dL
-            dvca = vec2(dtype(dva[0]), dtype(dva[1])) + dtype(dva[2]) * perp(pa) + wa * perp(dpa)
-            dvcb = vec2(dtype(dvb[0]), dtype(dvb[1])) + dtype(dvb[2]) * perp(pb) + wb * perp(dpb)
+            dvca = dva + dwa * perp(pa) + wa * perp(dpa)
+            dvcb = dvb + dwb * perp(pb) + wb * perp(dpb)
             dw = dvcb - dvca
             dLdot = wp.dot(dn, w) + wp.dot(n, dw)
             ddelta_dot = -s * dLdot
@@ -162,12 +141,12 @@ def _kernel(dtype):
             dfnA = -s * (dF * n + F * dn)
             daa = dpa + (s * ra) * dn
             dbb = dpb - rb * dn
-            dua = vec2(dtype(dva[0]), dtype(dva[1])) + dtype(dva[2]) * perp(aa) + wa * perp(daa)
-            dub = vec2(dtype(dvb[0]), dtype(dvb[1])) + dtype(dvb[2]) * perp(bb) + wb * perp(dbb)
+            dua = dva + dwa * perp(aa) + wa * perp(daa)
+            dub = dvb + dwb * perp(bb) + wb * perp(dbb)
             dvt = wp.dot(dt, vrel) + wp.dot(t, dua - dub)
-            dha = dtype(dqa[2]) * perp(ha)
-            dhb = dtype(dqb[2]) * perp(hb)
-            de = (vec2(dtype(dqa[0]), dtype(dqa[1])) + dha) - (vec2(dtype(dqb[0]), dtype(dqb[1])) + dhb)
+            dha = dtha * perp(ha)
+            dhb = dthb * perp(hb)
+            de = (dxa + dha) - (dxb + dhb)
             dst = wp.dot(dt, e) + wp.dot(t, de)
             dft_mag = dtype(0.0)
             if reg:
@@ -205,20 +184,10 @@ def _kernel(dtype):
                 na = rot(-tha, aa)
                 nbv = rot(-thb, bb)
         hist_active_out[i] = act
-        hist_a_out[i, 0] = na[0]
-        hist_a_out[i, 1] = na[1]
-        hist_b_out[i, 0] = nbv[0]
-        hist_b_out[i, 1] = nbv[1]
+        store_row_vec2(hist_a_out, i, na)
+        store_row_vec2(hist_b_out, i, nbv)
 
-        cp = dtype(0.5) * ((xa + aa) + (xb + bb))
-        obs_out[i, 0] = F
-        obs_out[i, 1] = vt
-        obs_out[i, 2] = g
-        obs_out[i, 3] = cp[0]
-        obs_out[i, 4] = cp[1]
-        obs_out[i, 5] = n[0]
-        obs_out[i, 6] = n[1]
-        obs_out[i, 7] = ft_mag
+        store_pair_observation(obs_out, i, F, vt, g, dtype(0.5) * ((xa + aa) + (xb + bb)), n, ft_mag)
 
     return eval_circle_pairs
 

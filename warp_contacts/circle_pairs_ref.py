@@ -29,36 +29,37 @@ the bound holds (committed only for accepted steps).
 import numpy as np
 
 from . import laws_ref
+from .planar_ref import cross2, dot, perp, rot
 
-# column layout of the packed float parameters (shared with the Warp kernel)
-P_XI_A, P_XI_B, P_RA, P_RB, P_K, P_P, P_C, P_DR, P_MUK, P_MUS, P_VS, P_VREG, P_KT = 0, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14
+# ---- packed float parameters (one row per contact; named here once, used by the Warp kernel,
+# this reference and the packer rvtool.contact.circle_set; SI units) ----
+P_XI_A = 0          # (2) centre xi_A of circle A in body-A coordinates [m]
+P_XI_B = 2          # (2) centre xi_B of circle B in body-B coordinates [m]
+P_RA = 4            # radius r_A [m]
+P_RB = 5            # radius r_B, or the enclosing radius R_B of an internal contact [m]
+P_K = 6             # normal-law coefficient k [N m^-p]
+P_P = 7             # normal-law exponent p [-]
+P_C = 8             # damping coefficient c [N s/m]
+P_DR = 9            # damping ramp depth delta_r [m]
+P_MUK = 10          # kinetic friction coefficient mu_k [-]
+P_MUS = 11          # static (Stribeck peak) friction coefficient mu_s [-]
+P_VS = 12           # Stribeck velocity v_s [m/s]
+P_VREG = 13         # regularization velocity v_reg [m/s]
+P_KT = 14           # anchor tangential stiffness k_t [N/m]
 N_FLOAT_PARAMS = 15
-# column layout of the integer parameters
-I_BODY_A, I_BODY_B, I_INTERNAL, I_FRICTION = 0, 1, 2, 3
+# ---- packed integer parameters ----
+I_BODY_A = 0        # pose row of body A (the ground is the last row)
+I_BODY_B = 1        # pose row of body B
+I_INTERNAL = 2      # 1: A inside the enclosing circle B, 0: external contact
+I_FRICTION = 3      # friction mode FRICTION_*
 N_INT_PARAMS = 4
-# observation columns: normal force, tangential slip velocity, gap, contact point (2), normal (2),
-# tangential force on A along t = perp(n)
+# ---- observation columns (shared by every pair family) ----
+# normal force [N], tangential slip velocity [m/s], gap [m], contact point (2) [m], unit normal (2),
+# tangential force on A along t = perp(n) [N]
 O_FN, O_VT, O_GAP, O_PX, O_PY, O_NX, O_NY, O_FT = range(8)
 N_OBS = 8
 
 FRICTION_NONE, FRICTION_REGULARIZED, FRICTION_ANCHOR = 0, 1, 2
-
-
-def _perp(a):
-    return np.stack([-a[..., 1], a[..., 0]], axis=-1)
-
-
-def _cross(a, b):
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _rot(theta, xi):
-    c, s = np.cos(theta), np.sin(theta)
-    return np.stack([c * xi[..., 0] - s * xi[..., 1], s * xi[..., 0] + c * xi[..., 1]], axis=-1)
-
-
-def _dot(a, b):
-    return np.sum(a * b, axis=-1)
 
 
 def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
@@ -89,19 +90,19 @@ def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
     xi_a, xi_b = fp[:, P_XI_A:P_XI_A + 2], fp[:, P_XI_B:P_XI_B + 2]
     ra, rb = fp[:, P_RA], fp[:, P_RB]
 
-    pa, pb = _rot(qa[:, 2], xi_a), _rot(qb[:, 2], xi_b)
+    pa, pb = rot(qa[:, 2], xi_a), rot(qb[:, 2], xi_b)
     ca, cb = qa[:, :2] + pa, qb[:, :2] + pb
     d = cb - ca
     L = np.linalg.norm(d, axis=1)
     Ls = np.where(L > 0, L, 1.0)
     n = np.where((L > 0)[:, None], d / Ls[:, None], np.array([1.0, 0.0]))
-    t = _perp(n)
+    t = perp(n)
     g = np.where(s > 0, L - ra - rb, rb - ra - L)
     delta = -g
-    vca = va[:, :2] + va[:, 2:3] * _perp(pa)
-    vcb = vb[:, :2] + vb[:, 2:3] * _perp(pb)
+    vca = va[:, :2] + va[:, 2:3] * perp(pa)
+    vcb = vb[:, :2] + vb[:, 2:3] * perp(pb)
     w = vcb - vca
-    Ldot = _dot(n, w)
+    Ldot = dot(n, w)
     delta_dot = -s * Ldot
     F, Fd, Fdd = laws_ref.normal_force(fp[:, P_K], fp[:, P_P], fp[:, P_C], fp[:, P_DR], delta, delta_dot)
     fnA = (-s * F)[:, None] * n
@@ -109,17 +110,17 @@ def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
     # material contact points and their relative tangential velocity
     aa = pa + (s * ra)[:, None] * n
     bb = pb - rb[:, None] * n
-    ua = va[:, :2] + va[:, 2:3] * _perp(aa)
-    ub = vb[:, :2] + vb[:, 2:3] * _perp(bb)
+    ua = va[:, :2] + va[:, 2:3] * perp(aa)
+    ub = vb[:, :2] + vb[:, 2:3] * perp(bb)
     vrel = ua - ub
-    vt = _dot(t, vrel)
+    vt = dot(t, vrel)
 
     # friction
     mu, dmu = laws_ref.friction_coefficient(fp[:, P_MUK], fp[:, P_MUS], fp[:, P_VS], fp[:, P_VREG], vt)
-    ha = _rot(qa[:, 2], np.asarray(hist_a, float))
-    hb = _rot(qb[:, 2], np.asarray(hist_b, float))
+    ha = rot(qa[:, 2], np.asarray(hist_a, float))
+    hb = rot(qb[:, 2], np.asarray(hist_b, float))
     e = (qa[:, :2] + ha) - (qb[:, :2] + hb)
-    st = _dot(t, e)
+    st = dot(t, e)
     kt = fp[:, P_KT]
     lim = fp[:, P_MUK] * F
     contact = delta > 0
@@ -137,38 +138,38 @@ def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
 
     Q = np.zeros((N, 6))
     Q[:, 0:2] = fnA + ftA
-    Q[:, 2] = _cross(pa, fnA) + _cross(armA, ftA)
+    Q[:, 2] = cross2(pa, fnA) + cross2(armA, ftA)
     Q[:, 3:5] = -(fnA + ftA)
-    Q[:, 5] = -(_cross(pb, fnA) + _cross(armB, ftA))
+    Q[:, 5] = -(cross2(pb, fnA) + cross2(armB, ftA))
 
     dQ = np.zeros((N, 6, 12))
     for j in range(12):
         seed = np.zeros(12)
         seed[j] = 1.0
         dqa, dqb, dva, dvb = seed[0:3], seed[3:6], seed[6:9], seed[9:12]
-        dpa = dqa[2] * _perp(pa)
-        dpb = dqb[2] * _perp(pb)
+        dpa = dqa[2] * perp(pa)
+        dpb = dqb[2] * perp(pb)
         dd = (dqb[:2] + dpb) - (dqa[:2] + dpa)
-        dL = _dot(n, dd)
+        dL = dot(n, dd)
         dn = (dd - n * dL[:, None]) / Ls[:, None]
-        dt = _perp(dn)
+        dt = perp(dn)
         ddelta = -s * dL
-        dvca = dva[:2] + dva[2] * _perp(pa) + va[:, 2:3] * _perp(dpa)
-        dvcb = dvb[:2] + dvb[2] * _perp(pb) + vb[:, 2:3] * _perp(dpb)
+        dvca = dva[:2] + dva[2] * perp(pa) + va[:, 2:3] * perp(dpa)
+        dvcb = dvb[:2] + dvb[2] * perp(pb) + vb[:, 2:3] * perp(dpb)
         dw = dvcb - dvca
-        dLdot = _dot(dn, w) + _dot(n, dw)
+        dLdot = dot(dn, w) + dot(n, dw)
         ddelta_dot = -s * dLdot
         dF = Fd * ddelta + Fdd * ddelta_dot
         dfnA = (-s)[:, None] * (dF[:, None] * n + F[:, None] * dn)
         daa = dpa + (s * ra)[:, None] * dn
         dbb = dpb - rb[:, None] * dn
-        dua = dva[:2] + dva[2] * _perp(aa) + va[:, 2:3] * _perp(daa)
-        dub = dvb[:2] + dvb[2] * _perp(bb) + vb[:, 2:3] * _perp(dbb)
-        dvt = _dot(dt, vrel) + _dot(t, dua - dub)
-        dha = dqa[2] * _perp(ha)
-        dhb = dqb[2] * _perp(hb)
+        dua = dva[:2] + dva[2] * perp(aa) + va[:, 2:3] * perp(daa)
+        dub = dvb[:2] + dvb[2] * perp(bb) + vb[:, 2:3] * perp(dbb)
+        dvt = dot(dt, vrel) + dot(t, dua - dub)
+        dha = dqa[2] * perp(ha)
+        dhb = dqb[2] * perp(hb)
         de = (dqa[:2] + dha) - (dqb[:2] + dhb)
-        dst = _dot(dt, e) + _dot(t, de)
+        dst = dot(dt, e) + dot(t, de)
         dft_mag = np.where(reg, -(dF * mu + F * dmu * dvt), 0.0)
         dft_mag = np.where(stick, -kt * dst, dft_mag)
         dft_mag = np.where(slip, -fp[:, P_MUK] * dF * sg, dft_mag)
@@ -176,17 +177,17 @@ def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
         darmA = np.where(anchored[:, None], dha, daa)
         darmB = np.where(anchored[:, None], dhb, dbb)
         dQ[:, 0:2, j] = dfnA + dftA
-        dQ[:, 2, j] = _cross(dpa, fnA) + _cross(pa, dfnA) + _cross(darmA, ftA) + _cross(armA, dftA)
+        dQ[:, 2, j] = cross2(dpa, fnA) + cross2(pa, dfnA) + cross2(darmA, ftA) + cross2(armA, dftA)
         dQ[:, 3:5, j] = -(dfnA + dftA)
-        dQ[:, 5, j] = -(_cross(dpb, fnA) + _cross(pb, dfnA) + _cross(darmB, ftA) + _cross(armB, dftA))
+        dQ[:, 5, j] = -(cross2(dpb, fnA) + cross2(pb, dfnA) + cross2(darmB, ftA) + cross2(armB, dftA))
 
     # trial history: keep anchors while sticking, project on slip, open on separation
     new_a = np.zeros((N, 2))
     new_b = np.zeros((N, 2))
-    ca_loc = _rot(-qa[:, 2], aa)
-    cb_loc = _rot(-qb[:, 2], bb)
+    ca_loc = rot(-qa[:, 2], aa)
+    cb_loc = rot(-qb[:, 2], bb)
     st_lim = np.where(kt > 0, sg * lim / np.where(kt > 0, kt, 1.0), 0.0)
-    ha_new = _rot(-qa[:, 2], ha - (st - st_lim)[:, None] * t)
+    ha_new = rot(-qa[:, 2], ha - (st - st_lim)[:, None] * t)
     new_a = np.where(anchored[:, None], np.where(slip[:, None], ha_new, np.asarray(hist_a, float)), ca_loc)
     new_b = np.where(anchored[:, None], np.asarray(hist_b, float), cb_loc)
     act = (contact & (mode == FRICTION_ANCHOR)).astype(np.int32)

@@ -10,10 +10,12 @@ import functools
 import numpy as np
 import warp as wp
 
-from .circle_pairs_ref import N_OBS
-from .cycloid_pins_ref import N_FLOAT, N_INT
+from .circle_pairs_ref import FRICTION_REGULARIZED, N_OBS
+from .cycloid_pins_ref import (A_ANALYTIC, A_K1, A_R, A_RC, A_ROT, A_ZB, ANALYTIC_ITERATIONS, C_C, C_DR, C_E, C_K,
+                               C_MUK, C_MUS, C_P, C_RP, C_TX, C_TY, C_VREG, C_VS, C_XI_B, C_Z, J_BODY_A, J_BODY_B,
+                               J_FRICTION, J_TABLE, N_ANALYTIC, N_FLOAT, N_INT)
 from .laws import law_funcs
-from .planar import LaunchBuffers, planar_funcs
+from .planar import N_COORD_SEEDS, N_SEEDS, LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
 
 
@@ -21,8 +23,10 @@ from .precision import resolve_device, scalar_types
 def _kernel(dtype, velocity_tangent=True):
     L = law_funcs(dtype)
     G = planar_funcs(dtype)
-    vec2, perp, cross2, rot, body_seed = G.vec2, G.perp, G.cross2, G.rot, G.body_seed
-    store_pair_forces, store_pair_column = G.store_pair_forces, G.store_pair_column
+    vec2, perp, cross2, rot = G.vec2, G.perp, G.cross2, G.rot
+    body_state, param_vec2, row_vec2, pair_seed = G.body_state, G.param_vec2, G.row_vec2, G.pair_seed
+    store_pair_forces, store_pair_column, store_pair_observation = (G.store_pair_forces, G.store_pair_column,
+                                                                    G.store_pair_observation)
     normal_force = L.normal_force
     friction_coefficient = L.friction_coefficient
 
@@ -38,15 +42,79 @@ def _kernel(dtype, velocity_tangent=True):
         ddE = R * vec2(-s + K1 * zb * S, -c + K1 * zb * C)
         speed = wp.length(dE)
         tau = dE / speed
-        n = vec2(-tau[1], tau[0])
+        n = perp(tau)
         kE = -(dE[0] * ddE[1] - dE[1] * ddE[0]) / (speed * speed * speed)
         pt = E - rc * n
         kap = kE / (dtype(1.0) - rc * kE)
         ds = speed * (dtype(1.0) - rc * kE)
         return rot(rot_angle, pt), rot(rot_angle, n), kap, ds
 
-    # a compile-time trip count (Warp unrolls the seed loop; a runtime bound measured 1.7x slower)
-    N_SEEDS = 12 if velocity_tangent else 6
+    @wp.func
+    def locate(pl: vec2, tb: int, tab_pts: wp.array2d(dtype=dtype), tab_nrm: wp.array2d(dtype=dtype),
+               tab_kap: wp.array(dtype=dtype), tab_polar: wp.array(dtype=dtype), tab_offset: wp.array(dtype=wp.int32),
+               tab_len: wp.array(dtype=wp.int32), tab_h: wp.array(dtype=dtype), tab_phi: wp.array(dtype=dtype),
+               tab_ana: wp.array2d(dtype=dtype), window: int):
+        """Contact location of the pin centre pl (wheel coordinates) on profile table tb, as
+        :func:`cycloid_pins_ref.search`: binary search of the polar angle, a window of samples,
+        projection on the nearest sample's osculating arc (or Newton on the analytic profile).
+        Returns point, unit normal, curvature, the clamped flag and the squared sample distance."""
+        off = tab_offset[tb]
+        n = tab_len[tb]
+        two_pi = dtype(6.283185307179586)
+        beta = wp.atan2(pl[1], pl[0])
+        if beta < dtype(0.0):
+            beta = beta + two_pi
+        lo = int(0)
+        hi = n
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if tab_polar[off + mid] < beta:
+                lo = mid + 1
+            else:
+                hi = mid
+        best = int(0)
+        bestd = dtype(1.0e30)
+        for jw in range(2 * window + 1):
+            idx = (lo + jw - window + n) % n
+            d = pl - row_vec2(tab_pts, off + idx)
+            d2 = wp.dot(d, d)
+            if d2 < bestd:
+                bestd = d2
+                best = idx
+        ci = row_vec2(tab_pts, off + best)
+        ni = row_vec2(tab_nrm, off + best)
+        kap = tab_kap[off + best]
+        ti = perp(ni)
+        wi = pl - ci
+        tt = wp.dot(wi, ti) / (dtype(1.0) + kap * wp.dot(wi, ni))
+        hh = tab_h[tb]
+        clamped = wp.abs(tt) > hh
+        tt = wp.clamp(tt, -hh, hh)
+        cl = ci + tt * ti - (dtype(0.5) * kap * tt * tt) * ni
+        nl = wp.normalize(ni + (kap * tt) * ti)
+        if tab_ana[tb, A_ANALYTIC] > dtype(0.0):
+            # analytic closest point: Newton on (c - p) . c' = 0 from the nearest sample
+            aR = tab_ana[tb, A_R]
+            aK1 = tab_ana[tb, A_K1]
+            azb = tab_ana[tb, A_ZB]
+            arc = tab_ana[tb, A_RC]
+            arot = tab_ana[tb, A_ROT]
+            phi = tab_phi[off + best]
+            for it in range(ANALYTIC_ITERATIONS):
+                pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
+                wa_ = pl - pa
+                dsn = wp.dot(wa_, -perp(na)) / (dtype(1.0) + ka * wp.dot(wa_, na))
+                phi = phi + dsn / dsa
+            pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
+            cl = pa
+            nl = na
+            kap = ka
+            clamped = False
+        return cl, nl, kap, clamped, bestd
+
+    # the seed loop's trip count is a compile-time constant, so Warp unrolls it (see planar.N_SEEDS);
+    # without the velocity tangent only the coordinate seeds run
+    n_seeds = N_SEEDS if velocity_tangent else N_COORD_SEEDS
 
     @wp.kernel(module="unique")
     def eval_cycloid_pins(
@@ -73,89 +141,19 @@ def _kernel(dtype, velocity_tangent=True):
         obs_out: wp.array2d(dtype=dtype),
     ):
         i = wp.tid()
-        ia = iparams[i, 0]
-        ib = iparams[i, 1]
-        mode = iparams[i, 2]
-        tb = iparams[i, 3]
-        xa = vec2(pose_in[ia, 0], pose_in[ia, 1])
-        xb = vec2(pose_in[ib, 0], pose_in[ib, 1])
-        tha = pose_in[ia, 2]
-        thb = pose_in[ib, 2]
-        vxa = vec2(vel_in[ia, 0], vel_in[ia, 1])
-        vxb = vec2(vel_in[ib, 0], vel_in[ib, 1])
-        wa = vel_in[ia, 2]
-        wb = vel_in[ib, 2]
-        r = fparams[i, 2]
-        e_off = fparams[i, 3]
-        k = fparams[i, 4]
-        p_exp = fparams[i, 5]
-        c_damp = fparams[i, 6]
-        dr = fparams[i, 7]
-        muk = fparams[i, 8]
-        mus = fparams[i, 9]
-        vs = fparams[i, 10]
-        vreg = fparams[i, 11]
-        zs = fparams[i, 12]
-        tx = fparams[i, 13]
-        ty = fparams[i, 14]
+        xa, tha, vxa, wa = body_state(pose_in, vel_in, iparams[i, J_BODY_A])
+        xb, thb, vxb, wb = body_state(pose_in, vel_in, iparams[i, J_BODY_B])
+        r = fparams[i, C_RP]
+        zs = fparams[i, C_Z]
+        tx = fparams[i, C_TX]
+        ty = fparams[i, C_TY]
 
-        b = rot(thb, vec2(fparams[i, 0], fparams[i, 1]))
+        b = rot(thb, param_vec2(fparams, i, C_XI_B))
         p = xb + b
         pl = rot(-tha, p - xa)
 
-        # -- discrete search: binary search of the polar angle, then a window ----
-        off = tab_offset[tb]
-        n = tab_len[tb]
-        two_pi = dtype(6.283185307179586)
-        beta = wp.atan2(pl[1], pl[0])
-        if beta < dtype(0.0):
-            beta = beta + two_pi
-        lo = int(0)
-        hi = n
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if tab_polar[off + mid] < beta:
-                lo = mid + 1
-            else:
-                hi = mid
-        best = int(0)
-        bestd = dtype(1.0e30)
-        for jw in range(2 * window + 1):
-            idx = (lo + jw - window + n) % n
-            d = pl - vec2(tab_pts[off + idx, 0], tab_pts[off + idx, 1])
-            d2 = wp.dot(d, d)
-            if d2 < bestd:
-                bestd = d2
-                best = idx
-        ci = vec2(tab_pts[off + best, 0], tab_pts[off + best, 1])
-        ni = vec2(tab_nrm[off + best, 0], tab_nrm[off + best, 1])
-        kap = tab_kap[off + best]
-        ti = perp(ni)
-        wi = pl - ci
-        tt = wp.dot(wi, ti) / (dtype(1.0) + kap * wp.dot(wi, ni))
-        hh = tab_h[tb]
-        clamped = wp.abs(tt) > hh
-        tt = wp.clamp(tt, -hh, hh)
-        cl = ci + tt * ti - (dtype(0.5) * kap * tt * tt) * ni
-        nl = wp.normalize(ni + (kap * tt) * ti)
-        if tab_ana[tb, 0] > dtype(0.0):
-            # analytic closest point: Newton on (c - p) . c' = 0 from the nearest sample
-            aR = tab_ana[tb, 1]
-            aK1 = tab_ana[tb, 2]
-            azb = tab_ana[tb, 3]
-            arc = tab_ana[tb, 4]
-            arot = tab_ana[tb, 5]
-            phi = tab_phi[off + best]
-            for it in range(4):
-                pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
-                wa_ = pl - pa
-                dsn = wp.dot(wa_, -perp(na)) / (dtype(1.0) + ka * wp.dot(wa_, na))
-                phi = phi + dsn / dsa
-            pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
-            cl = pa
-            nl = na
-            kap = ka
-            clamped = False
+        cl, nl, kap, clamped, bestd = locate(pl, iparams[i, J_TABLE], tab_pts, tab_nrm, tab_kap, tab_polar,
+                                             tab_offset, tab_len, tab_h, tab_phi, tab_ana, window)
 
         a = rot(tha, cl)
         nv = rot(tha, nl)
@@ -163,6 +161,7 @@ def _kernel(dtype, velocity_tangent=True):
         c = xa + a
         w = p - c
         hw = wp.dot(nv, w)
+        e_off = fparams[i, C_E]
         e_tilt = zs * (ty * nv[0] - tx * nv[1])
         g = hw - r + e_off + e_tilt
         if clamped:
@@ -172,13 +171,14 @@ def _kernel(dtype, velocity_tangent=True):
         vp = vxb + wb * perp(b)
         u = vp - vc
         delta_dot = -wp.dot(nv, u)
-        F, Fd, Fdd = normal_force(k, p_exp, c_damp, dr, delta, delta_dot)
+        F, Fd, Fdd = normal_force(fparams[i, C_K], fparams[i, C_P], fparams[i, C_C], fparams[i, C_DR], delta,
+                                  delta_dot)
         fA = -F * nv
         bpc = b - r * nv
         vpc = vxb + wb * perp(bpc)
         vt = wp.dot(t, vc - vpc)
-        mu, dmu = friction_coefficient(muk, mus, vs, vreg, vt)
-        reg = mode == 1 and F > dtype(0.0)
+        mu, dmu = friction_coefficient(fparams[i, C_MUK], fparams[i, C_MUS], fparams[i, C_VS], fparams[i, C_VREG], vt)
+        reg = iparams[i, J_FRICTION] == FRICTION_REGULARIZED and F > dtype(0.0)
         ft = dtype(0.0)
         if reg:
             ft = -F * mu
@@ -189,21 +189,8 @@ def _kernel(dtype, velocity_tangent=True):
 
         den = dtype(1.0) + kap * hw
         wt = wp.dot(w, t)
-        for j in range(N_SEEDS):
-            # seeds: columns 0-5 move the coordinates, 6-11 the velocities (12 seeds; 6 when the
-            # velocity tangent is switched off, see CycloidPinKernel.velocity_tangent)
-            dqa, dtha, dqb, dthb = body_seed(j)
-            dva, dwa, dvb, dwb = body_seed(j - 6)
-            if j < 6:
-                dva = vec2(dtype(0.0), dtype(0.0))
-                dvb = vec2(dtype(0.0), dtype(0.0))
-                dwa = dtype(0.0)
-                dwb = dtype(0.0)
-            else:
-                dqa = vec2(dtype(0.0), dtype(0.0))
-                dqb = vec2(dtype(0.0), dtype(0.0))
-                dtha = dtype(0.0)
-                dthb = dtype(0.0)
+        for j in range(n_seeds):
+            dqa, dtha, dqb, dthb, dva, dwa, dvb, dwb = pair_seed(j)
             dca = dqa + dtha * perp(a)
             db = dthb * perp(b)
             dp = dqb + db
@@ -229,17 +216,20 @@ def _kernel(dtype, velocity_tangent=True):
             dQb = -(cross2(db, fA) + cross2(b, dfA) + cross2(dbpc, ftA) + cross2(bpc, dftA))
             store_pair_column(dqdq_out, dqdv_out, i, j, dsum, dQa, dQb)
 
-        cp = c + (dtype(0.5) * (hw - r)) * nv
-        obs_out[i, 0] = F
-        obs_out[i, 1] = vt
-        obs_out[i, 2] = g
-        obs_out[i, 3] = cp[0]
-        obs_out[i, 4] = cp[1]
-        obs_out[i, 5] = nv[0]
-        obs_out[i, 6] = nv[1]
-        obs_out[i, 7] = ft
+        store_pair_observation(obs_out, i, F, vt, g, c + (dtype(0.5) * (hw - r)) * nv, nv, ft)
 
     return eval_cycloid_pins
+
+
+def _analytic_rows(tables, analytic, ndtype):
+    """One analytic row per profile table (columns A_* of cycloid_pins_ref); all zero for a
+    table searched on its samples."""
+    rows = np.zeros((len(tables), N_ANALYTIC), ndtype)
+    for k in range(len(tables)):
+        if analytic is not None and analytic[k] is not None:
+            rows[k, A_ANALYTIC] = 1.0
+            rows[k, A_R:A_ROT + 1] = analytic[k]
+    return rows
 
 
 class CycloidPinKernel:
@@ -264,8 +254,7 @@ class CycloidPinKernel:
             wp.array(offs, dtype=wp.int32, device=d), wp.array(np.array(lens, np.int32), dtype=wp.int32, device=d),
             wp.array(np.array([tb[4] for tb in tables], self.ndtype), dtype=dt, device=d),
             wp.array(np.concatenate([tb[5] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
-            wp.array(np.array([[0.0] * 6 if (analytic is None or analytic[k] is None) else [1.0, *analytic[k]]
-                               for k in range(len(tables))], self.ndtype), dtype=dt, device=d),
+            wp.array(_analytic_rows(tables, analytic, self.ndtype), dtype=dt, device=d),
             int(window)]
         self._model = model
         self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),

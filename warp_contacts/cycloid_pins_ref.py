@@ -33,15 +33,36 @@ points (kappa = 0), where an osculating centre would be at infinity.
 import numpy as np
 
 from . import laws_ref
-from .circle_pairs_ref import N_OBS, O_FN, O_FT, O_GAP, O_NX, O_NY, O_PX, O_PY, O_VT, _cross, _dot, _perp, _rot
+from .circle_pairs_ref import FRICTION_REGULARIZED, N_OBS, O_FN, O_FT, O_GAP, O_NX, O_NY, O_PX, O_PY, O_VT
+from .planar_ref import cross2, dot, perp, rot
 
-# float parameter columns
-(C_XI_B, C_RP, C_E, C_K, C_P, C_C, C_DR, C_MUK, C_MUS, C_VS, C_VREG, C_Z, C_TX, C_TY) = (
-    0, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14)
+# ---- packed float parameters (one row per pin slice; named here once, used by the Warp kernel,
+# this reference and the packer rvtool.contact.cycloid_set; SI units) ----
+C_XI_B = 0          # (2) pin centre in body-B (pin carrier) coordinates [m]
+C_RP = 2            # pin radius r_p [m]
+C_E = 3             # deviation sum e of the slice (clearance, errors, crowning, skew) [m]
+C_K = 4             # per-slice normal-law coefficient k_s [N m^-p]
+C_P = 5             # normal-law exponent p [-]
+C_C = 6             # per-slice damping coefficient [N s/m]
+C_DR = 7            # damping ramp depth delta_r [m]
+C_MUK = 8           # kinetic friction coefficient mu_k [-]
+C_MUS = 9           # static (Stribeck peak) friction coefficient mu_s [-]
+C_VS = 10           # Stribeck velocity v_s [m/s]
+C_VREG = 11         # regularization velocity v_reg [m/s]
+C_Z = 12            # axial station z of the slice [m]
+C_TX = 13           # relative tilt Delta theta_x of wheel and pin [rad]
+C_TY = 14           # relative tilt Delta theta_y [rad]
 N_FLOAT = 15
-# integer parameter columns
-(J_BODY_A, J_BODY_B, J_FRICTION, J_TABLE) = range(4)
+# ---- packed integer parameters ----
+J_BODY_A = 0        # pose row of the wheel (body A)
+J_BODY_B = 1        # pose row of the pin carrier (body B)
+J_FRICTION = 2      # friction mode (circle_pairs_ref.FRICTION_NONE or FRICTION_REGULARIZED)
+J_TABLE = 3         # index of the profile table
 N_INT = 4
+# columns of a profile table's analytic row (Warp kernel): a flag (1.0: analytic search) and
+# the profile parameters of :func:`analytic_point` in their order
+(A_ANALYTIC, A_R, A_K1, A_ZB, A_RC, A_ROT) = range(6)
+N_ANALYTIC = 6
 
 
 ANALYTIC_ITERATIONS = 4
@@ -50,21 +71,19 @@ ANALYTIC_ITERATIONS = 4
 def analytic_point(params, phi):
     """Analytic profile point, outward normal and curvature at generating angle phi
     (Eq. (cycloid_geometry) with equidistant, offset and rotation modifications)."""
-    R, K1, zb, rc, rot = params
+    R, K1, zb, rc, rot_angle = params
     s, c, S, C = np.sin(phi), np.cos(phi), np.sin(zb * phi), np.cos(zb * phi)
     E = R * np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1)
     dE = R * np.stack([c - K1 * C, -s + K1 * S], axis=-1)
     ddE = R * np.stack([-s + K1 * zb * S, -c + K1 * zb * C], axis=-1)
     speed = np.linalg.norm(dE, axis=-1)
     tau = dE / speed[..., None]
-    n = np.stack([-tau[..., 1], tau[..., 0]], axis=-1)
+    n = perp(tau)
     kE = -(dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]) / speed ** 3
     pt = E - rc * n
     kap = kE / (1.0 - rc * kE)
     dsdphi = speed * (1.0 - rc * kE)     # arc length of the offset curve per unit phi
-    cr, sr = np.cos(rot), np.sin(rot)
-    rotm = lambda v: np.stack([cr * v[..., 0] - sr * v[..., 1], sr * v[..., 0] + cr * v[..., 1]], axis=-1)
-    return rotm(pt), rotm(n), kap, dsdphi
+    return rot(rot_angle, pt), rot(rot_angle, n), kap, dsdphi
 
 
 def search(table, pin_local, window, analytic=None):
@@ -92,15 +111,15 @@ def search(table, pin_local, window, analytic=None):
             c, nn, kk, ds = analytic_point(analytic, phi)
             w = pin_local - c
             # the curve runs clockwise for increasing phi: the arc direction is -perp(n)
-            dsn = _dot(w, -_perp(nn)) / (1.0 + kk * _dot(w, nn))
+            dsn = dot(w, -perp(nn)) / (1.0 + kk * dot(w, nn))
             phi = phi + dsn / ds
         c, nn, kk, _ = analytic_point(analytic, phi)
         return c, nn, kk, np.zeros(len(phi), bool), np.linalg.norm(pin_local - ci, axis=1)
-    ti = _perp(ni)
+    ti = perp(ni)
     wi = pin_local - ci
     # projection onto the sample's osculating arc (second order in the arc parameter t),
     # the same local geometry the tangent differentiates
-    t = _dot(wi, ti) / (1.0 + ki * _dot(wi, ni))
+    t = dot(wi, ti) / (1.0 + ki * dot(wi, ni))
     # permitted local interval: up to the neighbouring samples
     clamped = np.abs(t) > h
     t = np.clip(t, -h, h)
@@ -124,9 +143,9 @@ def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
     N = len(fp)
     ia, ib = ip[:, J_BODY_A], ip[:, J_BODY_B]
     qa, qb, va, vb = pose[ia], pose[ib], vel[ia], vel[ib]
-    b = _rot(qb[:, 2], fp[:, C_XI_B:C_XI_B + 2])
+    b = rot(qb[:, 2], fp[:, C_XI_B:C_XI_B + 2])
     p = qb[:, :2] + b
-    pin_local = _rot(-qa[:, 2], p - qa[:, :2])
+    pin_local = rot(-qa[:, 2], p - qa[:, :2])
     c_loc = np.zeros((N, 2))
     n_loc = np.zeros((N, 2))
     kap = np.zeros(N)
@@ -136,65 +155,65 @@ def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
         m = ip[:, J_TABLE] == tb
         c_loc[m], n_loc[m], kap[m], clamped[m], dist[m] = search(tables[tb], pin_local[m], window,
                                                                  None if analytic is None else analytic[tb])
-    a = _rot(qa[:, 2], c_loc)
-    n = _rot(qa[:, 2], n_loc)
-    t = _perp(n)
+    a = rot(qa[:, 2], c_loc)
+    n = rot(qa[:, 2], n_loc)
+    t = perp(n)
     c = qa[:, :2] + a
     w = p - c
-    hw = _dot(n, w)
+    hw = dot(n, w)
     r = fp[:, C_RP]
     z, tx, ty = fp[:, C_Z], fp[:, C_TX], fp[:, C_TY]
     g = np.where(clamped, dist, hw) - r + fp[:, C_E] + z * (ty * n[:, 0] - tx * n[:, 1])
     delta = -g
-    vc = va[:, :2] + va[:, 2:3] * _perp(a)
-    vp = vb[:, :2] + vb[:, 2:3] * _perp(b)
+    vc = va[:, :2] + va[:, 2:3] * perp(a)
+    vp = vb[:, :2] + vb[:, 2:3] * perp(b)
     u = vp - vc
-    delta_dot = -_dot(n, u)
+    delta_dot = -dot(n, u)
     F, Fd, Fdd = laws_ref.normal_force(fp[:, C_K], fp[:, C_P], fp[:, C_C], fp[:, C_DR], delta, delta_dot)
     fA = -F[:, None] * n
     bpc = b - r[:, None] * n
-    vpc = vb[:, :2] + vb[:, 2:3] * _perp(bpc)
-    vt = _dot(t, vc - vpc)
+    vpc = vb[:, :2] + vb[:, 2:3] * perp(bpc)
+    vt = dot(t, vc - vpc)
     mu, dmu = laws_ref.friction_coefficient(fp[:, C_MUK], fp[:, C_MUS], fp[:, C_VS], fp[:, C_VREG], vt)
-    reg = (ip[:, J_FRICTION] == 1) & (F > 0)
+    reg = (ip[:, J_FRICTION] == FRICTION_REGULARIZED) & (F > 0)
     ft = np.where(reg, -F * mu, 0.0)
     ftA = ft[:, None] * t
 
     Q = np.zeros((N, 6))
     Q[:, 0:2] = fA + ftA
-    Q[:, 2] = _cross(a, fA + ftA)
+    Q[:, 2] = cross2(a, fA + ftA)
     Q[:, 3:5] = -(fA + ftA)
-    Q[:, 5] = -(_cross(b, fA) + _cross(bpc, ftA))
+    Q[:, 5] = -(cross2(b, fA) + cross2(bpc, ftA))
 
     den = 1.0 + kap * hw
-    wt = _dot(w, t)
+    wt = dot(w, t)
     dQ = np.zeros((N, 6, 12))
     for j in range(12):
         s = np.zeros(12)
         s[j] = 1.0
         dqa, dqb, dva, dvb = s[0:3], s[3:6], s[6:9], s[9:12]
-        dca = dqa[:2] + dqa[2] * _perp(a)
-        db = dqb[2] * _perp(b)
+        dca = dqa[:2] + dqa[2] * perp(a)
+        db = dqb[2] * perp(b)
         dp = dqb[:2] + db
         D = dp - dca
-        dn = t * ((kap * _dot(t, D) + dqa[2]) / den)[:, None]
-        dt = _perp(dn)
-        dg = _dot(n, D) + wt * _dot(t, dn) + z * (ty * dn[:, 0] - tx * dn[:, 1])
-        da = dqa[2] * _perp(a) + t * ((_dot(t, D) - dqa[2] * hw) / den)[:, None]
-        dvc = dva[:2] + dva[2] * _perp(a) + va[:, 2:3] * _perp(da)
-        dvp = dvb[:2] + dvb[2] * _perp(b) + vb[:, 2:3] * _perp(db)
-        ddelta_dot = -(_dot(dn, u) + _dot(n, dvp - dvc))
+        dn = t * ((kap * dot(t, D) + dqa[2]) / den)[:, None]
+        dt = perp(dn)
+        dg = dot(n, D) + wt * dot(t, dn) + z * (ty * dn[:, 0] - tx * dn[:, 1])
+        da = dqa[2] * perp(a) + t * ((dot(t, D) - dqa[2] * hw) / den)[:, None]
+        dvc = dva[:2] + dva[2] * perp(a) + va[:, 2:3] * perp(da)
+        dvp = dvb[:2] + dvb[2] * perp(b) + vb[:, 2:3] * perp(db)
+        ddelta_dot = -(dot(dn, u) + dot(n, dvp - dvc))
         dF = Fd * (-dg) + Fdd * ddelta_dot
         dfA = -(dF[:, None] * n + F[:, None] * dn)
         dbpc = db - r[:, None] * dn
-        dvpc = dvb[:2] + dvb[2] * _perp(bpc) + vb[:, 2:3] * _perp(dbpc)
-        dvt = _dot(dt, vc - vpc) + _dot(t, dvc - dvpc)
+        dvpc = dvb[:2] + dvb[2] * perp(bpc) + vb[:, 2:3] * perp(dbpc)
+        dvt = dot(dt, vc - vpc) + dot(t, dvc - dvpc)
         dft = np.where(reg, -(dF * mu + F * dmu * dvt), 0.0)
         dftA = dft[:, None] * t + ft[:, None] * dt
         dQ[:, 0:2, j] = dfA + dftA
-        dQ[:, 2, j] = _cross(da, fA + ftA) + _cross(a, dfA + dftA)
+        dQ[:, 2, j] = cross2(da, fA + ftA) + cross2(a, dfA + dftA)
         dQ[:, 3:5, j] = -(dfA + dftA)
-        dQ[:, 5, j] = -(_cross(db, fA) + _cross(b, dfA) + _cross(dbpc, ftA) + _cross(bpc, dftA))
+        dQ[:, 5, j] = -(cross2(db, fA) + cross2(b, dfA) + cross2(dbpc, ftA) + cross2(bpc, dftA))
 
     obs = np.zeros((N, N_OBS))
     obs[:, O_FN] = F

@@ -15,37 +15,29 @@ import functools
 import numpy as np
 import warp as wp
 
-from .output_pins_ref import (I_FLANGE, I_UPDATES, I_WHEEL0, I_WHEEL1, J_FLANGE, J_WHEEL, N_PIN_COLS, N_PLAIN_F,
-                              N_PLAIN_I, N_SHARED_F, N_SHARED_I, N_SLICE_COLS)
+from . import output_pins_ref as ref
+from .planar import planar_funcs
 from .precision import resolve_device, scalar_types
 
 
 @functools.lru_cache(maxsize=None)
 def _funcs(dtype):
     """Warp functions of the output-pin family for scalar type ``dtype``."""
-    vec2 = wp.types.vector(2, dtype)
+    G = planar_funcs(dtype)
+    vec2, cross2 = G.vec2, G.cross2
     vec9 = wp.types.vector(9, dtype)
 
     @wp.func
     def seed(k: int):
+        """Unit tangent of coordinate k (0..8: the (x, y, theta) triples starting at X_FLANGE, X_WHEEL0, X_WHEEL1)."""
         e = vec9()
         e[k] = dtype(1.0)
         return e
 
     @wp.func
-    def rot(th: dtype, x: vec2):
-        c = wp.cos(th)
-        s = wp.sin(th)
-        return vec2(c * x[0] - s * x[1], s * x[0] + c * x[1])
-
-    @wp.func
     def tilt_offset(t: vec2, z: dtype):
         """Planar offset (theta_y z, -theta_x z) of a point at axial plane z (small tilts)."""
         return vec2(t[1] * z, -t[0] * z)
-
-    @wp.func
-    def cross2(a: vec2, b: vec2):
-        return a[0] * b[1] - a[1] * b[0]
 
     @wp.func
     def unit(v: vec2, dvx: vec9, dvy: vec9, floor: dtype):
@@ -121,6 +113,31 @@ def _funcs(dtype):
         return Fc0, Fc1, dFc0, dFc1, up0, up1, dup0, dup1
 
     @wp.func
+    def sleeve_update(u: vec2, dux: vec9, duy: vec9, Fc0: dtype, Fc1: dtype, dFc0: vec9, dFc1: vec9, n0: vec2,
+                      dn0x: vec9, dn0y: vec9, n1: vec2, dn1x: vec9, dn1y: vec9, K0: dtype, K1: dtype, dK0: vec9,
+                      dK1: vec9, relax: dtype, kfloor: dtype, clear: dtype):
+        """One projected sleeve update of Eq. (supp_pin_fit) with its tangent: a relaxed step along the
+        net force on the sleeve, projected onto the clearance disk. Returns (u, du_x, du_y)."""
+        g = Fc0 * n0 + Fc1 * n1
+        dgx = n0[0] * dFc0 + Fc0 * dn0x + n1[0] * dFc1 + Fc1 * dn1x
+        dgy = n0[1] * dFc0 + Fc0 * dn0y + n1[1] * dFc1 + Fc1 * dn1y
+        Kt = K0 + K1
+        dKt = dK0 + dK1
+        if Kt <= kfloor:
+            Kt = kfloor
+            dKt = vec9()
+        w = u - (relax / Kt) * g
+        dwx = dux - (relax / Kt) * dgx + (relax * g[0] / (Kt * Kt)) * dKt
+        dwy = duy - (relax / Kt) * dgy + (relax * g[1] / (Kt * Kt)) * dKt
+        wl = wp.sqrt(w[0] * w[0] + w[1] * w[1])
+        if wl > clear:
+            # projection onto the clearance disk: d(c w/|w|) = c (I - w_hat w_hat^T) dw / |w|
+            wh = w / wl
+            wdw = wh[0] * dwx + wh[1] * dwy
+            return clear * wh, (clear / wl) * (dwx - wh[0] * wdw), (clear / wl) * (dwy - wh[1] * wdw)
+        return w, dwx, dwy
+
+    @wp.func
     def wheel_react(a: vec2, dax: vec9, day: vec9, b: vec2, u: vec2, dux: vec9, duy: vec9, up: dtype, dup: vec9,
                     clr: dtype, ks: dtype, p: dtype, dfloor: dtype, rsum: dtype, pf: vec2, ph: vec2, xw: vec2,
                     tf: vec2, tw: vec2, zw: dtype, cw: int, stations: wp.array(dtype=dtype),
@@ -162,8 +179,8 @@ def _funcs(dtype):
             arm_f = pf + tilt_offset(tf, zf) + u
             darm_wx = (-ph[1]) * seed(cw + 2)
             darm_wy = ph[0] * seed(cw + 2)
-            darm_fx = dux + (-pf[1]) * seed(2)
-            darm_fy = duy + pf[0] * seed(2)
+            darm_fx = dux + (-pf[1]) * seed(ref.X_FLANGE + 2)
+            darm_fy = duy + pf[0] * seed(ref.X_FLANGE + 2)
             fx += fv[0]
             fy += fv[1]
             mw += cross2(arm_w, fv)
@@ -177,13 +194,13 @@ def _funcs(dtype):
             mtw += vec2(-s * fv[1], s * fv[0])
             r = wheel * ns + js
             pc = xw + arm_w + (dtype(0.5) * (L + rsum)) * n
-            slice_out[row, r, 0] = F
-            slice_out[row, r, 1] = de
-            slice_out[row, r, 2] = d
-            slice_out[row, r, 3] = n[0]
-            slice_out[row, r, 4] = n[1]
-            slice_out[row, r, 5] = pc[0]
-            slice_out[row, r, 6] = pc[1]
+            slice_out[row, r, ref.S_FORCE] = F
+            slice_out[row, r, ref.S_APPROACH] = de
+            slice_out[row, r, ref.S_GEOM] = d
+            slice_out[row, r, ref.S_NX] = n[0]
+            slice_out[row, r, ref.S_NY] = n[1]
+            slice_out[row, r, ref.S_PX] = pc[0]
+            slice_out[row, r, ref.S_PY] = pc[1]
             if write_tan != 0:
                 for j in range(9):
                     slice_df_out[row, r, 0, j] = dfvx[j]
@@ -195,12 +212,35 @@ def _funcs(dtype):
         """e_s = a + s b (pin minus hole centre in slice plane s) and the tangent of a."""
         a = (xf + pf + tilt_offset(tf, zw)) - (xw + ph)
         b = tilt_offset(tf, dtype(1.0)) - tilt_offset(tw, dtype(1.0))
-        dax = seed(0) - pf[1] * seed(2) - seed(cw) + ph[1] * seed(cw + 2)
-        day = seed(1) + pf[0] * seed(2) - seed(cw + 1) - ph[0] * seed(cw + 2)
+        dax = seed(ref.X_FLANGE) - pf[1] * seed(ref.X_FLANGE + 2) - seed(cw) + ph[1] * seed(cw + 2)
+        day = seed(ref.X_FLANGE + 1) + pf[0] * seed(ref.X_FLANGE + 2) - seed(cw + 1) - ph[0] * seed(cw + 2)
         return a, b, dax, day
 
-    return dict(vec2=vec2, vec9=vec9, seed=seed, rot=rot, unit=unit, wheel_open=wheel_open, closure=closure,
-                wheel_react=wheel_react, separation=separation, cross2=cross2)
+    @wp.func
+    def store_triple(q_out: wp.array2d(dtype=dtype), i: int, k: int, fx: dtype, fy: dtype, m: dtype):
+        """(F_x, F_y, M_z) on the body whose coordinates start at k."""
+        q_out[i, k] = fx
+        q_out[i, k + 1] = fy
+        q_out[i, k + 2] = m
+
+    @wp.func
+    def store_triple_column(dqdq_out: wp.array3d(dtype=dtype), i: int, k: int, j: int, dfx: dtype, dfy: dtype,
+                            dm: dtype):
+        """Tangent column j of the triple at k."""
+        dqdq_out[i, k, j] = dfx
+        dqdq_out[i, k + 1, j] = dfy
+        dqdq_out[i, k + 2, j] = dm
+
+    @wp.func
+    def store_tilt_moment(tilt_out: wp.array3d(dtype=dtype), i: int, body: int, m: vec2):
+        """Tilt moments (M_x, M_y) on body slot ``body`` (0 flange, 1 and 2 the wheels)."""
+        tilt_out[i, body, 0] = m[0]
+        tilt_out[i, body, 1] = m[1]
+
+    return dict(vec2=vec2, vec9=vec9, seed=seed, rot=G.rot, unit=unit, wheel_open=wheel_open, closure=closure,
+                wheel_react=wheel_react, separation=separation, sleeve_update=sleeve_update, body_pose=G.body_pose, param_vec2=G.param_vec2,
+                row_vec2=G.row_vec2, store_triple=store_triple,
+                store_triple_column=store_triple_column, store_tilt_moment=store_tilt_moment)
 
 
 @functools.lru_cache(maxsize=None)
@@ -208,7 +248,10 @@ def _shared_kernel(dtype):
     F = _funcs(dtype)
     vec2, vec9 = F["vec2"], F["vec9"]
     rot, unit, wheel_open, closure = F["rot"], F["unit"], F["wheel_open"], F["closure"]
-    wheel_react, separation = F["wheel_react"], F["separation"]
+    wheel_react, separation, sleeve_update = F["wheel_react"], F["separation"], F["sleeve_update"]
+    body_pose, param_vec2, row_vec2 = F["body_pose"], F["param_vec2"], F["row_vec2"]
+    store_triple, store_triple_column, store_tilt_moment = (F["store_triple"], F["store_triple_column"],
+                                                            F["store_tilt_moment"])
 
     @wp.kernel(enable_backward=False, module="unique")
     def eval_shared_pins(
@@ -230,79 +273,56 @@ def _shared_kernel(dtype):
         slice_df_out: wp.array4d(dtype=dtype),
     ):
         i = wp.tid()
-        bf = iparams[i, 0]
-        b0 = iparams[i, 1]
-        b1 = iparams[i, 2]
-        nupd = iparams[i, 3]
+        bf = iparams[i, ref.I_FLANGE]
+        b0 = iparams[i, ref.I_WHEEL0]
+        b1 = iparams[i, ref.I_WHEEL1]
         ns = stations.shape[0]
         smean = dtype(0.0)
         for js in range(ns):
             smean += stations[js]
         smean = smean / dtype(ns)
-        ks = fparams[i, 10] / dtype(ns)
-        p = fparams[i, 11]
-        rp = fparams[i, 6]
-        rh = fparams[i, 7]
-        clr0 = rh - rp + fparams[i, 8]
-        clr1 = rh - rp + fparams[i, 9]
-        z0 = fparams[i, 12]
-        z1 = fparams[i, 13]
-        c00 = fparams[i, 14] + fparams[i, 17]
-        c11 = fparams[i, 15] + fparams[i, 17]
-        cross = fparams[i, 16]
-        clear = fparams[i, 18]
-        relax = fparams[i, 19]
-        kfloor = fparams[i, 20]
-        detfloor = fparams[i, 21]
-        dfloor = fparams[i, 22]
-        dmin = fparams[i, 23]
+        ks = fparams[i, ref.P_K] / dtype(ns)
+        p = fparams[i, ref.P_EXP]
+        rp = fparams[i, ref.P_R_PIN]
+        rh = fparams[i, ref.P_R_HOLE]
+        clr0 = rh - rp + fparams[i, ref.P_OFF0]
+        clr1 = rh - rp + fparams[i, ref.P_OFF1]
+        z0 = fparams[i, ref.P_Z0]
+        z1 = fparams[i, ref.P_Z1]
+        c00 = fparams[i, ref.P_C00] + fparams[i, ref.P_CIN]
+        c11 = fparams[i, ref.P_C11] + fparams[i, ref.P_CIN]
+        cross = fparams[i, ref.P_C01]
+        clear = fparams[i, ref.P_CLEAR]
+        relax = fparams[i, ref.P_RELAX]
+        kfloor = fparams[i, ref.P_KFLOOR]
+        detfloor = fparams[i, ref.P_DETFLOOR]
+        dfloor = fparams[i, ref.P_DISTFLOOR]
+        dmin = fparams[i, ref.P_DMIN]
 
-        xf = vec2(pose_in[bf, 0], pose_in[bf, 1])
-        x0 = vec2(pose_in[b0, 0], pose_in[b0, 1])
-        x1 = vec2(pose_in[b1, 0], pose_in[b1, 1])
-        tf = vec2(tilt_in[bf, 0], tilt_in[bf, 1])
-        t0 = vec2(tilt_in[b0, 0], tilt_in[b0, 1])
-        t1 = vec2(tilt_in[b1, 0], tilt_in[b1, 1])
-        pf = rot(pose_in[bf, 2], vec2(fparams[i, 0], fparams[i, 1]))
-        ph0 = rot(pose_in[b0, 2], vec2(fparams[i, 2], fparams[i, 3]))
-        ph1 = rot(pose_in[b1, 2], vec2(fparams[i, 4], fparams[i, 5]))
-        a0, bb0, da0x, da0y = separation(xf, pf, tf, z0, x0, ph0, t0, 3)
-        a1, bb1, da1x, da1y = separation(xf, pf, tf, z1, x1, ph1, t1, 6)
+        xf, thf = body_pose(pose_in, bf)
+        x0, th0 = body_pose(pose_in, b0)
+        x1, th1 = body_pose(pose_in, b1)
+        tf = row_vec2(tilt_in, bf)
+        t0 = row_vec2(tilt_in, b0)
+        t1 = row_vec2(tilt_in, b1)
+        pf = rot(thf, param_vec2(fparams, i, ref.P_XI_PIN))
+        ph0 = rot(th0, param_vec2(fparams, i, ref.P_XI_HOLE0))
+        ph1 = rot(th1, param_vec2(fparams, i, ref.P_XI_HOLE1))
+        a0, bb0, da0x, da0y = separation(xf, pf, tf, z0, x0, ph0, t0, ref.X_WHEEL0)
+        a1, bb1, da1x, da1y = separation(xf, pf, tf, z1, x1, ph1, t1, ref.X_WHEEL1)
 
         u = vec2()
         dux = vec9()
         duy = vec9()
-        for it in range(nupd):
+        for it in range(iparams[i, ref.I_UPDATES]):
             F00, K0, dF00, dK0 = wheel_open(a0, da0x, da0y, bb0, u, dux, duy, clr0, ks, p, dmin, dfloor, stations)
             F01, K1, dF01, dK1 = wheel_open(a1, da1x, da1y, bb1, u, dux, duy, clr1, ks, p, dmin, dfloor, stations)
             m0L, n0, m0dL, dn0x, dn0y = unit(a0 + smean * bb0 + u, da0x + dux, da0y + duy, dfloor)
             m1L, n1, m1dL, dn1x, dn1y = unit(a1 + smean * bb1 + u, da1x + dux, da1y + duy, dfloor)
             Fc0, Fc1, dFc0, dFc1, up0, up1, dup0, dup1 = closure(F00, F01, K0, K1, dF00, dF01, dK0, dK1, n0, dn0x,
                                                                 dn0y, n1, dn1x, dn1y, c00, c11, cross, detfloor)
-            g = Fc0 * n0 + Fc1 * n1
-            dgx = n0[0] * dFc0 + Fc0 * dn0x + n1[0] * dFc1 + Fc1 * dn1x
-            dgy = n0[1] * dFc0 + Fc0 * dn0y + n1[1] * dFc1 + Fc1 * dn1y
-            Kt = K0 + K1
-            dKt = dK0 + dK1
-            if Kt <= kfloor:
-                Kt = kfloor
-                dKt = vec9()
-            # Eq. (supp_pin_fit): relaxed step along the net force on the sleeve
-            w = u - (relax / Kt) * g
-            dwx = dux - (relax / Kt) * dgx + (relax * g[0] / (Kt * Kt)) * dKt
-            dwy = duy - (relax / Kt) * dgy + (relax * g[1] / (Kt * Kt)) * dKt
-            wl = wp.sqrt(w[0] * w[0] + w[1] * w[1])
-            if wl > clear:
-                # projection onto the clearance disk: d(c w/|w|) = c (I - w_hat w_hat^T) dw / |w|
-                wh = w / wl
-                wdw = wh[0] * dwx + wh[1] * dwy
-                dux = (clear / wl) * (dwx - wh[0] * wdw)
-                duy = (clear / wl) * (dwy - wh[1] * wdw)
-                u = clear * wh
-            else:
-                dux = dwx
-                duy = dwy
-                u = w
+            u, dux, duy = sleeve_update(u, dux, duy, Fc0, Fc1, dFc0, dFc1, n0, dn0x, dn0y, n1, dn1x, dn1y, K0, K1,
+                                        dK0, dK1, relax, kfloor, clear)
 
         F00, K0, dF00, dK0 = wheel_open(a0, da0x, da0y, bb0, u, dux, duy, clr0, ks, p, dmin, dfloor, stations)
         F01, K1, dF01, dK1 = wheel_open(a1, da1x, da1y, bb1, u, dux, duy, clr1, ks, p, dmin, dfloor, stations)
@@ -312,56 +332,41 @@ def _shared_kernel(dtype):
                                                             n1, dn1x, dn1y, c00, c11, cross, detfloor)
         rsum = rp + rh
         fx0, fy0, mw0, mf0, dfx0, dfy0, dmw0, dmf0, mtf0, mtw0, fw0 = wheel_react(
-            a0, da0x, da0y, bb0, u, dux, duy, up0, dup0, clr0, ks, p, dfloor, rsum, pf, ph0, x0, tf, t0, z0, 3,
+            a0, da0x, da0y, bb0, u, dux, duy, up0, dup0, clr0, ks, p, dfloor, rsum, pf, ph0, x0, tf, t0, z0, ref.X_WHEEL0,
             stations, i, 0, write_tan, slice_out, slice_df_out)
         fx1, fy1, mw1, mf1, dfx1, dfy1, dmw1, dmf1, mtf1, mtw1, fw1 = wheel_react(
-            a1, da1x, da1y, bb1, u, dux, duy, up1, dup1, clr1, ks, p, dfloor, rsum, pf, ph1, x1, tf, t1, z1, 6,
+            a1, da1x, da1y, bb1, u, dux, duy, up1, dup1, clr1, ks, p, dfloor, rsum, pf, ph1, x1, tf, t1, z1, ref.X_WHEEL1,
             stations, i, 1, write_tan, slice_out, slice_df_out)
 
-        q_out[i, 0] = -(fx0 + fx1)
-        q_out[i, 1] = -(fy0 + fy1)
-        q_out[i, 2] = mf0 + mf1
-        q_out[i, 3] = fx0
-        q_out[i, 4] = fy0
-        q_out[i, 5] = mw0
-        q_out[i, 6] = fx1
-        q_out[i, 7] = fy1
-        q_out[i, 8] = mw1
+        store_triple(q_out, i, ref.X_FLANGE, -(fx0 + fx1), -(fy0 + fy1), mf0 + mf1)
+        store_triple(q_out, i, ref.X_WHEEL0, fx0, fy0, mw0)
+        store_triple(q_out, i, ref.X_WHEEL1, fx1, fy1, mw1)
         for j in range(9):
-            dqdq_out[i, 0, j] = -(dfx0[j] + dfx1[j])
-            dqdq_out[i, 1, j] = -(dfy0[j] + dfy1[j])
-            dqdq_out[i, 2, j] = dmf0[j] + dmf1[j]
-            dqdq_out[i, 3, j] = dfx0[j]
-            dqdq_out[i, 4, j] = dfy0[j]
-            dqdq_out[i, 5, j] = dmw0[j]
-            dqdq_out[i, 6, j] = dfx1[j]
-            dqdq_out[i, 7, j] = dfy1[j]
-            dqdq_out[i, 8, j] = dmw1[j]
+            store_triple_column(dqdq_out, i, ref.X_FLANGE, j, -(dfx0[j] + dfx1[j]), -(dfy0[j] + dfy1[j]),
+                                dmf0[j] + dmf1[j])
+            store_triple_column(dqdq_out, i, ref.X_WHEEL0, j, dfx0[j], dfy0[j], dmw0[j])
+            store_triple_column(dqdq_out, i, ref.X_WHEEL1, j, dfx1[j], dfy1[j], dmw1[j])
             sleeve_du_out[i, 0, j] = dux[j]
             sleeve_du_out[i, 1, j] = duy[j]
-        mtf = mtf0 + mtf1
-        tilt_out[i, 0, 0] = mtf[0]
-        tilt_out[i, 0, 1] = mtf[1]
-        tilt_out[i, 1, 0] = mtw0[0]
-        tilt_out[i, 1, 1] = mtw0[1]
-        tilt_out[i, 2, 0] = mtw1[0]
-        tilt_out[i, 2, 1] = mtw1[1]
-        pin_out[i, 0] = u[0]
-        pin_out[i, 1] = u[1]
-        pin_out[i, 2] = Fc0
-        pin_out[i, 3] = Fc1
-        pin_out[i, 4] = up0
-        pin_out[i, 5] = up1
-        pin_out[i, 6] = K0
-        pin_out[i, 7] = K1
-        pin_out[i, 8] = F00
-        pin_out[i, 9] = F01
-        pin_out[i, 10] = fw0
-        pin_out[i, 11] = fw1
-        pin_out[i, 12] = n0[0]
-        pin_out[i, 13] = n0[1]
-        pin_out[i, 14] = n1[0]
-        pin_out[i, 15] = n1[1]
+        store_tilt_moment(tilt_out, i, 0, mtf0 + mtf1)
+        store_tilt_moment(tilt_out, i, 1, mtw0)
+        store_tilt_moment(tilt_out, i, 2, mtw1)
+        pin_out[i, ref.U_X] = u[0]
+        pin_out[i, ref.U_Y] = u[1]
+        pin_out[i, ref.FC0] = Fc0
+        pin_out[i, ref.FC1] = Fc1
+        pin_out[i, ref.UP0] = up0
+        pin_out[i, ref.UP1] = up1
+        pin_out[i, ref.K0] = K0
+        pin_out[i, ref.K1] = K1
+        pin_out[i, ref.FOPEN0] = F00
+        pin_out[i, ref.FOPEN1] = F01
+        pin_out[i, ref.FW0] = fw0
+        pin_out[i, ref.FW1] = fw1
+        pin_out[i, ref.N0X] = n0[0]
+        pin_out[i, ref.N0Y] = n0[1]
+        pin_out[i, ref.N1X] = n1[0]
+        pin_out[i, ref.N1Y] = n1[1]
 
     return eval_shared_pins
 
@@ -371,6 +376,9 @@ def _plain_kernel(dtype):
     F = _funcs(dtype)
     vec2, vec9 = F["vec2"], F["vec9"]
     rot, wheel_react, separation = F["rot"], F["wheel_react"], F["separation"]
+    body_pose, param_vec2, row_vec2 = F["body_pose"], F["param_vec2"], F["row_vec2"]
+    store_triple, store_triple_column, store_tilt_moment = (F["store_triple"], F["store_triple_column"],
+                                                            F["store_tilt_moment"])
 
     @wp.kernel(enable_backward=False, module="unique")
     def eval_plain_pins(
@@ -390,41 +398,34 @@ def _plain_kernel(dtype):
         slice_df_out: wp.array4d(dtype=dtype),
     ):
         i = wp.tid()
-        bf = iparams[i, 0]
-        bw = iparams[i, 1]
+        bf = iparams[i, ref.J_FLANGE]
+        bw = iparams[i, ref.J_WHEEL]
         ns = stations.shape[0]
-        ks = fparams[i, 7] / dtype(ns)
-        xf = vec2(pose_in[bf, 0], pose_in[bf, 1])
-        xw = vec2(pose_in[bw, 0], pose_in[bw, 1])
-        tf = vec2(tilt_in[bf, 0], tilt_in[bf, 1])
-        tw = vec2(tilt_in[bw, 0], tilt_in[bw, 1])
-        pf = rot(pose_in[bf, 2], vec2(fparams[i, 0], fparams[i, 1]))
-        ph = rot(pose_in[bw, 2], vec2(fparams[i, 2], fparams[i, 3]))
-        zw = fparams[i, 9]
-        a, b, dax, day = separation(xf, pf, tf, zw, xw, ph, tw, 3)
-        clr = fparams[i, 5] - fparams[i, 4] + fparams[i, 6]
+        ks = fparams[i, ref.Q_K] / dtype(ns)
+        xf, thf = body_pose(pose_in, bf)
+        xw, thw = body_pose(pose_in, bw)
+        tf = row_vec2(tilt_in, bf)
+        tw = row_vec2(tilt_in, bw)
+        pf = rot(thf, param_vec2(fparams, i, ref.Q_XI_PIN))
+        ph = rot(thw, param_vec2(fparams, i, ref.Q_XI_HOLE))
+        zw = fparams[i, ref.Q_Z]
+        # the plain pair's coordinates are (flange, wheel): the wheel triple takes the place of wheel 0
+        a, b, dax, day = separation(xf, pf, tf, zw, xw, ph, tw, ref.X_WHEEL0)
+        r_pin = fparams[i, ref.Q_R_PIN]
+        r_hole = fparams[i, ref.Q_R_HOLE]
+        clr = r_hole - r_pin + fparams[i, ref.Q_OFF]
         # a rigid pin without sleeve: zero sleeve offset and zero station deflection
         fx, fy, mw, mf, dfx, dfy, dmw, dmf, mtf, mtw, fw = wheel_react(
-            a, dax, day, b, vec2(), vec9(), vec9(), dtype(0.0), vec9(), clr, ks, fparams[i, 8], fparams[i, 10],
-            fparams[i, 4] + fparams[i, 5], pf, ph, xw, tf, tw, zw, 3, stations, i, 0, write_tan, slice_out,
-            slice_df_out)
-        q_out[i, 0] = -fx
-        q_out[i, 1] = -fy
-        q_out[i, 2] = mf
-        q_out[i, 3] = fx
-        q_out[i, 4] = fy
-        q_out[i, 5] = mw
+            a, dax, day, b, vec2(), vec9(), vec9(), dtype(0.0), vec9(), clr, ks, fparams[i, ref.Q_EXP],
+            fparams[i, ref.Q_DISTFLOOR], r_pin + r_hole, pf, ph, xw, tf, tw, zw, ref.X_WHEEL0, stations, i, 0,
+            write_tan, slice_out, slice_df_out)
+        store_triple(q_out, i, ref.X_FLANGE, -fx, -fy, mf)
+        store_triple(q_out, i, ref.X_WHEEL0, fx, fy, mw)
         for j in range(6):
-            dqdq_out[i, 0, j] = -dfx[j]
-            dqdq_out[i, 1, j] = -dfy[j]
-            dqdq_out[i, 2, j] = dmf[j]
-            dqdq_out[i, 3, j] = dfx[j]
-            dqdq_out[i, 4, j] = dfy[j]
-            dqdq_out[i, 5, j] = dmw[j]
-        tilt_out[i, 0, 0] = mtf[0]
-        tilt_out[i, 0, 1] = mtf[1]
-        tilt_out[i, 1, 0] = mtw[0]
-        tilt_out[i, 1, 1] = mtw[1]
+            store_triple_column(dqdq_out, i, ref.X_FLANGE, j, -dfx[j], -dfy[j], dmf[j])
+            store_triple_column(dqdq_out, i, ref.X_WHEEL0, j, dfx[j], dfy[j], dmw[j])
+        store_tilt_moment(tilt_out, i, 0, mtf)
+        store_tilt_moment(tilt_out, i, 1, mtw)
 
     return eval_plain_pins
 
@@ -445,7 +446,7 @@ class OutputPinKernel:
         self.device = resolve_device(device, len(fparams))
         self.precision = precision
         self.mode = mode
-        nf, ni, nq = (N_SHARED_F, N_SHARED_I, 9) if mode == "shared" else (N_PLAIN_F, N_PLAIN_I, 6)
+        nf, ni, nq = (ref.N_SHARED_F, ref.N_SHARED_I, 9) if mode == "shared" else (ref.N_PLAIN_F, ref.N_PLAIN_I, 6)
         fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
         iparams = np.ascontiguousarray(iparams, dtype=np.int32)
         assert fparams.shape[1] == nf and iparams.shape[1] == ni
@@ -456,10 +457,10 @@ class OutputPinKernel:
         dft_shape = (n, nw * ns, 2, 9) if slice_tangent else (1, 1, 2, 9)
         h = {"pose": np.zeros((n_rows_pose, 3), self.ndtype), "tilt": np.zeros((n_rows_pose, 2), self.ndtype),
              "q": np.zeros((n, nq), self.ndtype), "dqdq": np.zeros((n, nq, nq), self.ndtype),
-             "tilt_m": np.zeros((n, nw + 1, 2), self.ndtype), "slices": np.zeros((n, nw * ns, N_SLICE_COLS), self.ndtype),
+             "tilt_m": np.zeros((n, nw + 1, 2), self.ndtype), "slices": np.zeros((n, nw * ns, ref.N_SLICE_COLS), self.ndtype),
              "slice_df": np.zeros(dft_shape, self.ndtype)}
         if mode == "shared":
-            h["pin"] = np.zeros((n, N_PIN_COLS), self.ndtype)
+            h["pin"] = np.zeros((n, ref.N_PIN_COLS), self.ndtype)
             h["sleeve_du"] = np.zeros((n, 2, 9), self.ndtype)
         self._host = h
         self._on_cpu = wp.get_device(self.device).is_cpu
@@ -529,11 +530,16 @@ class OutputPinKernel:
 # value that the adjoint can replay.
 @functools.lru_cache(maxsize=None)
 def _adjoint_kernel(dtype, static_slices, static_updates):
-    vec2 = wp.types.vector(2, dtype)
+    F = _funcs(dtype)
+    vec2, body_pose, param_vec2, store_triple = F["vec2"], F["body_pose"], F["param_vec2"], F["store_triple"]
     unrolled = static_slices > 0
 
     @wp.func
-    def rot(th: dtype, x: vec2):
+    def rot_per_use(th: dtype, x: vec2):
+        """R(theta) x with cos and sin evaluated at each use. Forward values equal planar ``rot``;
+        the reverse sweep then adds the theta adjoint term by term, the order in which the
+        reported adjoint figures (cases/shared_pin.py) were computed: ``rot``, which shares
+        one cos/sin pair, moves them by about 2e-14 relative (measured)."""
         return vec2(wp.cos(th) * x[0] - wp.sin(th) * x[1], wp.sin(th) * x[0] + wp.cos(th) * x[1])
 
     @wp.func
@@ -582,29 +588,29 @@ def _adjoint_kernel(dtype, static_slices, static_updates):
                           stations: wp.array(dtype=dtype), pose_in: wp.array2d(dtype=dtype),
                           q_out: wp.array2d(dtype=dtype)):
         i = wp.tid()
-        bf = iparams[i, 0]
-        b0 = iparams[i, 1]
-        b1 = iparams[i, 2]
+        bf = iparams[i, ref.I_FLANGE]
+        b0 = iparams[i, ref.I_WHEEL0]
+        b1 = iparams[i, ref.I_WHEEL1]
         ns = stations.shape[0]
-        ks = fparams[i, 10] / dtype(ns)
-        p = fparams[i, 11]
-        clr0 = fparams[i, 7] - fparams[i, 6] + fparams[i, 8]
-        clr1 = fparams[i, 7] - fparams[i, 6] + fparams[i, 9]
-        c00 = fparams[i, 14] + fparams[i, 17]
-        c11 = fparams[i, 15] + fparams[i, 17]
-        cross = fparams[i, 16]
-        clear = fparams[i, 18]
-        relax = fparams[i, 19]
-        kfloor = fparams[i, 20]
-        detfloor = fparams[i, 21]
-        dfloor = fparams[i, 22]
-        dmin = fparams[i, 23]
-        xf = vec2(pose_in[bf, 0], pose_in[bf, 1])
-        x0 = vec2(pose_in[b0, 0], pose_in[b0, 1])
-        x1 = vec2(pose_in[b1, 0], pose_in[b1, 1])
-        pf = rot(pose_in[bf, 2], vec2(fparams[i, 0], fparams[i, 1]))
-        ph0 = rot(pose_in[b0, 2], vec2(fparams[i, 2], fparams[i, 3]))
-        ph1 = rot(pose_in[b1, 2], vec2(fparams[i, 4], fparams[i, 5]))
+        ks = fparams[i, ref.P_K] / dtype(ns)
+        p = fparams[i, ref.P_EXP]
+        clr0 = fparams[i, ref.P_R_HOLE] - fparams[i, ref.P_R_PIN] + fparams[i, ref.P_OFF0]
+        clr1 = fparams[i, ref.P_R_HOLE] - fparams[i, ref.P_R_PIN] + fparams[i, ref.P_OFF1]
+        c00 = fparams[i, ref.P_C00] + fparams[i, ref.P_CIN]
+        c11 = fparams[i, ref.P_C11] + fparams[i, ref.P_CIN]
+        cross = fparams[i, ref.P_C01]
+        clear = fparams[i, ref.P_CLEAR]
+        relax = fparams[i, ref.P_RELAX]
+        kfloor = fparams[i, ref.P_KFLOOR]
+        detfloor = fparams[i, ref.P_DETFLOOR]
+        dfloor = fparams[i, ref.P_DISTFLOOR]
+        dmin = fparams[i, ref.P_DMIN]
+        xf, thf = body_pose(pose_in, bf)
+        x0, th0 = body_pose(pose_in, b0)
+        x1, th1 = body_pose(pose_in, b1)
+        pf = rot_per_use(thf, param_vec2(fparams, i, ref.P_XI_PIN))
+        ph0 = rot_per_use(th0, param_vec2(fparams, i, ref.P_XI_HOLE0))
+        ph1 = rot_per_use(th1, param_vec2(fparams, i, ref.P_XI_HOLE1))
         # planar (untilted) separations: every slice of a wheel shares e_i
         e0 = (xf + pf) - (x0 + ph0)
         e1 = (xf + pf) - (x1 + ph1)
@@ -633,7 +639,7 @@ def _adjoint_kernel(dtype, static_slices, static_updates):
                     if wl > clear:
                         u = (clear / wl) * w
         else:
-            nupd = iparams[i, 3]
+            nupd = iparams[i, ref.I_UPDATES]
             for it in range(nupd + 1):
                 F00, K0 = wheel_open(e0, u, clr0, ks, p, dmin, dfloor, ns)
                 F01, K1 = wheel_open(e1, u, clr1, ks, p, dmin, dfloor, ns)
@@ -650,15 +656,10 @@ def _adjoint_kernel(dtype, static_slices, static_updates):
         f0 = ks * wp.pow(wp.max(dist(e0 + u, dfloor) - clr0 - up0, dtype(0.0)), p) * dtype(ns) * n0
         f1 = ks * wp.pow(wp.max(dist(e1 + u, dfloor) - clr1 - up1, dtype(0.0)), p) * dtype(ns) * n1
         arm = pf + u
-        q_out[i, 0] = -(f0[0] + f1[0])
-        q_out[i, 1] = -(f0[1] + f1[1])
-        q_out[i, 2] = -(arm[0] * (f0[1] + f1[1]) - arm[1] * (f0[0] + f1[0]))
-        q_out[i, 3] = f0[0]
-        q_out[i, 4] = f0[1]
-        q_out[i, 5] = ph0[0] * f0[1] - ph0[1] * f0[0]
-        q_out[i, 6] = f1[0]
-        q_out[i, 7] = f1[1]
-        q_out[i, 8] = ph1[0] * f1[1] - ph1[1] * f1[0]
+        store_triple(q_out, i, ref.X_FLANGE, -(f0[0] + f1[0]), -(f0[1] + f1[1]),
+                     -(arm[0] * (f0[1] + f1[1]) - arm[1] * (f0[0] + f1[0])))
+        store_triple(q_out, i, ref.X_WHEEL0, f0[0], f0[1], ph0[0] * f0[1] - ph0[1] * f0[0])
+        store_triple(q_out, i, ref.X_WHEEL1, f1[0], f1[1], ph1[0] * f1[1] - ph1[1] * f1[0])
 
     return shared_pin_forces
 
@@ -676,7 +677,7 @@ def shared_pin_adjoint_jacobian(fparams, iparams, stations, pose, unrolled, prec
     iparams = np.ascontiguousarray(iparams, np.int32)
     n = fparams.shape[0]
     if unrolled:
-        nupd = set(int(v) for v in iparams[:, I_UPDATES])
+        nupd = set(int(v) for v in iparams[:, ref.I_UPDATES])
         assert len(nupd) == 1, "the unrolled kernel needs one update count for all pins"
         kernel = _adjoint_kernel(wdt, len(stations), nupd.pop())
     else:

@@ -51,6 +51,8 @@ diagnostic of Eq. (moment_comparison_error)).
 """
 import numpy as np
 
+from .planar_ref import cross2, perp, rot
+
 # ---- shared-pin packed float parameters (one row per pin; SI units) ----
 P_XI_PIN = 0        # (2) pin centre in flange coordinates [m]
 P_XI_HOLE0 = 2      # (2) hole centre in wheel-0 coordinates [m]
@@ -91,6 +93,9 @@ N_PLAIN_F = 11
 J_FLANGE, J_WHEEL = 0, 1
 N_PLAIN_I = 2
 
+# ---- generalized coordinates of a row: the (x, y, theta) triple of each body starts at ----
+X_FLANGE, X_WHEEL0, X_WHEEL1 = 0, 3, 6     # Eq. (supp_pin_coordinates) order; plain rows: flange, wheel
+
 # ---- per-slice output columns ----
 S_FORCE, S_APPROACH, S_GEOM, S_NX, S_NY, S_PX, S_PY = range(7)
 N_SLICE_COLS = 7
@@ -107,19 +112,6 @@ N_PIN_COLS = 16
 
 
 # ------------------------------------------------------------------ helpers
-def _perp(a):
-    return np.stack([-a[..., 1], a[..., 0]], axis=-1)
-
-
-def _cross(a, b):
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _rot(theta, xi):
-    c, s = np.cos(theta), np.sin(theta)
-    return np.stack([c * xi[..., 0] - s * xi[..., 1], s * xi[..., 0] + c * xi[..., 1]], axis=-1)
-
-
 def _norm(v):
     # sqrt of the sum of squares (not np.abs), so that complex steps propagate
     return np.sqrt(v[..., 0] * v[..., 0] + v[..., 1] * v[..., 1])
@@ -140,7 +132,7 @@ def _seed_block(nseed, col0, arm):
     J = np.zeros((n, 2, nseed), dtype=arm.dtype)
     J[:, 0, col0] = 1.0
     J[:, 1, col0 + 1] = 1.0
-    J[:, :, col0 + 2] = _perp(arm)
+    J[:, :, col0 + 2] = perp(arm)
     return J
 
 
@@ -193,8 +185,8 @@ def evaluate_plain(pose, fparams, iparams, stations, tilt=None, tangent=True):
     f, w = ip[:, J_FLANGE], ip[:, J_WHEEL]
     qf, qw = pose[f], pose[w]
     tf, tw = tilt[f], tilt[w]
-    pf = _rot(qf[:, 2], fp[:, Q_XI_PIN:Q_XI_PIN + 2])
-    ph = _rot(qw[:, 2], fp[:, Q_XI_HOLE:Q_XI_HOLE + 2])
+    pf = rot(qf[:, 2], fp[:, Q_XI_PIN:Q_XI_PIN + 2])
+    ph = rot(qw[:, 2], fp[:, Q_XI_HOLE:Q_XI_HOLE + 2])
     zw = fp[:, Q_Z]
     a = (qf[:, :2] + pf + _tilt_offset(tf, zw)) - (qw[:, :2] + ph)
     b = _tilt_offset(tf, np.ones(N)) - _tilt_offset(tw, np.ones(N))
@@ -217,9 +209,9 @@ def evaluate_plain(pose, fparams, iparams, stations, tilt=None, tangent=True):
         arm_w = ph + _tilt_offset(tw, s * np.ones(N))         # hole centre from the wheel origin
         arm_f = pf + _tilt_offset(tf, zw + s)                 # pin centre from the flange origin
         Q[:, 0:2] -= fv
-        Q[:, 2] -= _cross(arm_f, fv)
+        Q[:, 2] -= cross2(arm_f, fv)
         Q[:, 3:5] += fv
-        Q[:, 5] += _cross(arm_w, fv)
+        Q[:, 5] += cross2(arm_w, fv)
         Mt[:, 0] -= np.stack([-(zw + s) * fv[:, 1], (zw + s) * fv[:, 0]], axis=-1)
         Mt[:, 1] += np.stack([-s * fv[:, 1], s * fv[:, 0]], axis=-1)
         hc = qw[:, :2] + arm_w
@@ -231,9 +223,9 @@ def evaluate_plain(pose, fparams, iparams, stations, tilt=None, tangent=True):
         if tangent:
             dfv = dF[:, None, :] * n[:, :, None] + F[:, None, None] * dn
             darm_f = np.zeros((N, 2, 6))
-            darm_f[:, :, 2] = _perp(pf)
+            darm_f[:, :, 2] = perp(pf)
             darm_w = np.zeros((N, 2, 6))
-            darm_w[:, :, 5] = _perp(ph)
+            darm_w[:, :, 5] = perp(ph)
             dQ[:, 0:2] -= dfv
             dQ[:, 2] -= _dcross(arm_f, darm_f, fv, dfv)
             dQ[:, 3:5] += dfv
@@ -361,14 +353,14 @@ def evaluate_shared(pose, fparams, iparams, stations, tilt=None, tangent=True):
     ones = np.ones(N)
     bf = ip[:, I_FLANGE]
     qf, tf = pose[bf], tilt[bf]
-    pf = _rot(qf[:, 2], fp[:, P_XI_PIN:P_XI_PIN + 2])
+    pf = rot(qf[:, 2], fp[:, P_XI_PIN:P_XI_PIN + 2])
     a, da, b, ph, tw, qw, zw = [], [], [], [], [], [], []
     for i in range(2):
         bw = ip[:, I_WHEEL0 + i]
         qw.append(pose[bw])
         tw.append(tilt[bw])
         zw.append(fp[:, P_Z0 + i])
-        ph.append(_rot(qw[i][:, 2], fp[:, P_XI_HOLE0 + 2 * i:P_XI_HOLE0 + 2 * i + 2]))
+        ph.append(rot(qw[i][:, 2], fp[:, P_XI_HOLE0 + 2 * i:P_XI_HOLE0 + 2 * i + 2]))
         # e_is = a_i + s b_i: pin centre minus hole centre in slice plane s (no sleeve offset)
         a.append((qf[:, :2] + pf + _tilt_offset(tf, zw[i])) - (qw[i][:, :2] + ph[i]))
         b.append(_tilt_offset(tf, ones) - _tilt_offset(tw[i], ones))
@@ -427,9 +419,9 @@ def evaluate_shared(pose, fparams, iparams, stations, tilt=None, tangent=True):
             zf = zw[i] + s
             arm_f = pf + _tilt_offset(tf, zf) + u              # force line passes the sleeve centre
             Q[:, 0:2] -= fv
-            Q[:, 2] -= _cross(arm_f, fv)
+            Q[:, 2] -= cross2(arm_f, fv)
             Q[:, 3 + 3 * i:5 + 3 * i] += fv
-            Q[:, 5 + 3 * i] += _cross(arm_w, fv)
+            Q[:, 5 + 3 * i] += cross2(arm_w, fv)
             Mt[:, 0] -= np.stack([-zf * fv[:, 1], zf * fv[:, 0]], axis=-1)
             Mt[:, 1 + i] += np.stack([-s * fv[:, 1], s * fv[:, 0]], axis=-1)
             hc = qw[i][:, :2] + arm_w
@@ -442,9 +434,9 @@ def evaluate_shared(pose, fparams, iparams, stations, tilt=None, tangent=True):
                 dfv = dF[:, None, :] * n[:, :, None] + F[:, None, None] * c["dn"][i][js]
                 dfs[:, i, js] = dfv
                 darm_w = np.zeros((N, 2, 9))
-                darm_w[:, :, 5 + 3 * i] = _perp(ph[i])
+                darm_w[:, :, 5 + 3 * i] = perp(ph[i])
                 darm_f = du.copy()
-                darm_f[:, :, 2] += _perp(pf)
+                darm_f[:, :, 2] += perp(pf)
                 dQ[:, 0:2] -= dfv
                 dQ[:, 2] -= _dcross(arm_f, darm_f, fv, dfv)
                 dQ[:, 3 + 3 * i:5 + 3 * i] += dfv

@@ -9,18 +9,22 @@ import warp as wp
 
 from .circle_pairs_ref import N_OBS
 from .laws import law_funcs
-from .planar import LaunchBuffers, planar_funcs
+from .planar import N_SEEDS, LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
-from .rolling_elements_ref import (HB_E0, HB_E1, HB_F0, HB_F1, HB_K_COEF, HB_K_EXP, KIND_BALL, N_AUX, N_FLOAT,
-                                   N_INT)
+from .rolling_elements_ref import (AUX_ALPHA, AUX_FU, AUX_FZ, HB_E0, HB_E1, HB_F0, HB_F1, HB_K_COEF, HB_K_EXP, K_BODY_A,
+                                   K_BODY_B, K_KIND, KIND_BALL, N_AUX, N_FLOAT, N_INT, R_A, R_ALPHA, R_CLEAR, R_CROWN,
+                                   R_DAMP, R_DBALL, R_EMOD, R_FI, R_FO, R_GAMMA, R_K, R_KSCALE, R_P, R_PITCH, R_PSI0,
+                                   R_RAMP, R_SAX, R_SIGMA, R_XI_A, R_XI_B)
 
 
 @functools.lru_cache(maxsize=None)
 def _kernel(dtype):
     G = planar_funcs(dtype)
     L = law_funcs(dtype)
-    vec2, perp, cross2, rot, body_seed = G.vec2, G.perp, G.cross2, G.rot, G.body_seed
-    store_pair_forces, store_pair_column = G.store_pair_forces, G.store_pair_column
+    vec2, perp, cross2, rot = G.vec2, G.perp, G.cross2, G.rot
+    body_state, param_vec2, pair_seed = G.body_state, G.param_vec2, G.pair_seed
+    store_pair_forces, store_pair_column, store_pair_observation = (G.store_pair_forces, G.store_pair_column,
+                                                                    G.store_pair_observation)
     normal_force, damping_ramp = L.normal_force, L.damping_ramp
     kc, ke, e0, e1, f0, f1 = (dtype(HB_K_COEF), dtype(HB_K_EXP), dtype(HB_E0), dtype(HB_E1), dtype(HB_F0),
                               dtype(HB_F1))
@@ -107,24 +111,19 @@ def _kernel(dtype):
         aux_out: wp.array2d(dtype=dtype),
     ):
         i = wp.tid()
-        ia = iparams[i, 0]
-        ib = iparams[i, 1]
-        kind = iparams[i, 2]
-        tha = pose_in[ia, 2]
-        thb = pose_in[ib, 2]
-        wa = vel_in[ia, 2]
-        wb = vel_in[ib, 2]
-        a = rot(tha, vec2(fparams[i, 0], fparams[i, 1]))
-        b = rot(thb, vec2(fparams[i, 2], fparams[i, 3]))
-        g = fparams[i, 5]
+        xa, tha, vxa, wa = body_state(pose_in, vel_in, iparams[i, K_BODY_A])
+        xb, thb, vxb, wb = body_state(pose_in, vel_in, iparams[i, K_BODY_B])
+        a = rot(tha, param_vec2(fparams, i, R_XI_A))
+        b = rot(thb, param_vec2(fparams, i, R_XI_B))
+        g = fparams[i, R_GAMMA]
         one = dtype(1.0)
         half = dtype(0.5)
-        psi = fparams[i, 4] + half * ((one - g) * tha + (one + g) * thb)
+        psi = fparams[i, R_PSI0] + half * ((one - g) * tha + (one + g) * thb)
         psid = half * ((one - g) * wa + (one + g) * wb)
         u = vec2(wp.cos(psi), wp.sin(psi))
         pu = perp(u)
-        d = (vec2(pose_in[ia, 0], pose_in[ia, 1]) + a) - (vec2(pose_in[ib, 0], pose_in[ib, 1]) + b)
-        w = (vec2(vel_in[ia, 0], vel_in[ia, 1]) + wa * perp(a)) - (vec2(vel_in[ib, 0], vel_in[ib, 1]) + wb * perp(b))
+        d = (xa + a) - (xb + b)
+        w = (vxa + wa * perp(a)) - (vxb + wb * perp(b))
         r = wp.dot(d, u)
         rdot = wp.dot(w, u) + wp.dot(d, pu) * psid
         delta = dtype(0.0)
@@ -134,33 +133,19 @@ def _kernel(dtype):
         alpha_w = dtype(0.0)
         fr_r = dtype(0.0)
         fr_rd = dtype(0.0)
-        if kind == KIND_BALL:
+        if iparams[i, K_KIND] == KIND_BALL:
             delta, F, fr, fzm, alpha_w, fr_r, fr_rd = ball_law(
-                r, rdot, fparams[i, 9], fparams[i, 11], fparams[i, 12], fparams[i, 6], fparams[i, 15],
-                fparams[i, 16], fparams[i, 17], fparams[i, 14], fparams[i, 18], fparams[i, 19], fparams[i, 20],
-                fparams[i, 21])
+                r, rdot, fparams[i, R_ALPHA], fparams[i, R_A], fparams[i, R_SAX], fparams[i, R_CLEAR],
+                fparams[i, R_DAMP], fparams[i, R_RAMP], fparams[i, R_DBALL], fparams[i, R_PITCH], fparams[i, R_FI],
+                fparams[i, R_FO], fparams[i, R_EMOD], fparams[i, R_KSCALE])
         else:
             delta, F, fr, fzm, alpha_w, fr_r, fr_rd = lamina_law(
-                r, rdot, fparams[i, 7], fparams[i, 8], fparams[i, 9], fparams[i, 6], fparams[i, 13],
-                fparams[i, 15], fparams[i, 16])
+                r, rdot, fparams[i, R_K], fparams[i, R_P], fparams[i, R_ALPHA], fparams[i, R_CLEAR],
+                fparams[i, R_CROWN], fparams[i, R_DAMP], fparams[i, R_RAMP])
         fA = -fr * u
         store_pair_forces(q_out, i, fA, cross2(a, fA), -cross2(b, fA))
-        for j in range(12):
-            # seeds 0-5 are the coordinates (body_seed), 6-11 the velocities
-            dxa, dtha, dxb, dthb = body_seed(j % 6)
-            dva = vec2(dtype(0.0), dtype(0.0))
-            dvb = vec2(dtype(0.0), dtype(0.0))
-            dwa = dtype(0.0)
-            dwb = dtype(0.0)
-            if j >= 6:
-                dva = dxa
-                dvb = dxb
-                dwa = dtha
-                dwb = dthb
-                dxa = vec2(dtype(0.0), dtype(0.0))
-                dxb = vec2(dtype(0.0), dtype(0.0))
-                dtha = dtype(0.0)
-                dthb = dtype(0.0)
+        for j in range(N_SEEDS):
+            dxa, dtha, dxb, dthb, dva, dwa, dvb, dwb = pair_seed(j)
             da = dtha * perp(a)
             db = dthb * perp(b)
             dpsi = half * ((one - g) * dtha + (one + g) * dthb)
@@ -175,18 +160,11 @@ def _kernel(dtype):
             dfA = -dfr * u - fr * du
             store_pair_column(dqdq_out, dqdv_out, i, j, dfA, cross2(da, fA) + cross2(a, dfA),
                               -(cross2(db, fA) + cross2(b, dfA)))
-        pos = vec2(pose_in[ib, 0], pose_in[ib, 1]) + b + (half * fparams[i, 14]) * u
-        obs_out[i, 0] = F
-        obs_out[i, 1] = dtype(0.0)
-        obs_out[i, 2] = -delta
-        obs_out[i, 3] = pos[0]
-        obs_out[i, 4] = pos[1]
-        obs_out[i, 5] = u[0]
-        obs_out[i, 6] = u[1]
-        obs_out[i, 7] = dtype(0.0)
-        aux_out[i, 0] = -fr
-        aux_out[i, 1] = -fparams[i, 10] * fzm
-        aux_out[i, 2] = alpha_w
+        zero = dtype(0.0)
+        store_pair_observation(obs_out, i, F, zero, -delta, xb + b + (half * fparams[i, R_PITCH]) * u, u, zero)
+        aux_out[i, AUX_FU] = -fr
+        aux_out[i, AUX_FZ] = -fparams[i, R_SIGMA] * fzm
+        aux_out[i, AUX_ALPHA] = alpha_w
 
     return eval_rolling
 

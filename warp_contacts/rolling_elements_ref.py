@@ -49,14 +49,36 @@ the rotation of u_j with the cage.
 import numpy as np
 
 from . import laws_ref
-from .circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY, _cross, _dot, _perp, _rot
+from .circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY
+from .planar_ref import cross2, dot, perp, rot
 
-# column layout of the packed float parameters (shared with the Warp kernel), SI units
-(R_XI_A, R_XI_B, R_PSI0, R_GAMMA, R_CLEAR, R_K, R_P, R_ALPHA, R_SIGMA, R_A, R_SAX, R_CROWN, R_PITCH,
- R_DAMP, R_RAMP, R_DBALL, R_FI, R_FO, R_EMOD, R_KSCALE) = (0, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18,
-                                                          19, 20, 21)
+# ---- packed float parameters (one row per ball or roller lamina; named here once, used by the
+# Warp kernel, this reference and the packer rvtool.bearings.set; SI units) ----
+R_XI_A = 0          # (2) inner-ring centre xi_A in body-A coordinates [m]
+R_XI_B = 2          # (2) outer-ring centre xi_B in body-B coordinates [m]
+R_PSI0 = 4          # element phase psi_0j [rad]
+R_GAMMA = 5         # cage ratio gamma = D cos(alpha_0) / d_m [-]
+R_CLEAR = 6         # radial clearance c [m]
+R_K = 7             # lamina coefficient k [N m^-p]
+R_P = 8             # lamina exponent p [-]
+R_ALPHA = 9         # contact angle alpha (lamina) or free contact angle alpha_0 (ball) [rad]
+R_SIGMA = 10        # axial sense sigma of the row (+1 or -1) [-]
+R_A = 11            # ball: groove-centre distance A [m]
+R_SAX = 12          # ball: axial approach s_a that carries the preload [m]
+R_CROWN = 13        # lamina crowning drop [m]
+R_PITCH = 14        # pitch diameter d_m [m]
+R_DAMP = 15         # damping coefficient c_d [N s/m]
+R_RAMP = 16         # damping ramp depth [m]
+R_DBALL = 17        # ball diameter D [m]
+R_FI = 18           # inner race conformity f_i [-]
+R_FO = 19           # outer race conformity f_o [-]
+R_EMOD = 20         # effective modulus E' [Pa]
+R_KSCALE = 21       # stiffness factor s_K at the free contact angle [-]
 N_FLOAT = 22
-(K_BODY_A, K_BODY_B, K_KIND) = range(3)
+# ---- packed integer parameters ----
+K_BODY_A = 0        # pose row of the inner-ring body A
+K_BODY_B = 1        # pose row of the outer-ring body B
+K_KIND = 2          # element kind KIND_*
 N_INT = 3
 KIND_LAMINA, KIND_BALL = 0, 1
 # auxiliary per-element output: force on A along u [N], axial force on A [N], working contact angle [rad]
@@ -170,51 +192,54 @@ def evaluate(pose, vel, fparams, iparams):
     N = len(fp)
     qa, qb = pose[ip[:, K_BODY_A]], pose[ip[:, K_BODY_B]]
     va, vb = vel[ip[:, K_BODY_A]], vel[ip[:, K_BODY_B]]
-    a = _rot(qa[:, 2], fp[:, R_XI_A:R_XI_A + 2])
-    b = _rot(qb[:, 2], fp[:, R_XI_B:R_XI_B + 2])
+    a = rot(qa[:, 2], fp[:, R_XI_A:R_XI_A + 2])
+    b = rot(qb[:, 2], fp[:, R_XI_B:R_XI_B + 2])
     g = fp[:, R_GAMMA]
     psi = fp[:, R_PSI0] + 0.5 * ((1 - g) * qa[:, 2] + (1 + g) * qb[:, 2])
     psid = 0.5 * ((1 - g) * va[:, 2] + (1 + g) * vb[:, 2])
     u = np.column_stack([np.cos(psi), np.sin(psi)])
-    pu = _perp(u)
+    pu = perp(u)
     d = (qa[:, :2] + a) - (qb[:, :2] + b)
-    w = (va[:, :2] + va[:, 2:3] * _perp(a)) - (vb[:, :2] + vb[:, 2:3] * _perp(b))
-    r = _dot(d, u)
-    rdot = _dot(w, u) + _dot(d, pu) * psid
+    w = (va[:, :2] + va[:, 2:3] * perp(a)) - (vb[:, :2] + vb[:, 2:3] * perp(b))
+    r = dot(d, u)
+    rdot = dot(w, u) + dot(d, pu) * psid
     delta, F, fr, fzm, alpha_w, fr_r, fr_rd = element_law(ip[:, K_KIND], r, rdot, fp)
     fA = -fr[:, None] * u
     Q = np.zeros((N, 6))
     Q[:, 0:2] = fA
-    Q[:, 2] = _cross(a, fA)
+    Q[:, 2] = cross2(a, fA)
     Q[:, 3:5] = -fA
-    Q[:, 5] = -_cross(b, fA)
+    Q[:, 5] = -cross2(b, fA)
     dQ = np.zeros((N, 6, 12))
     for j in range(12):
         s = np.zeros(12)
         s[j] = 1.0
         dqa, dqb, dva, dvb = s[0:3], s[3:6], s[6:9], s[9:12]
-        da = dqa[2] * _perp(a)
-        db = dqb[2] * _perp(b)
+        da = dqa[2] * perp(a)
+        db = dqb[2] * perp(b)
         dpsi = 0.5 * ((1 - g) * dqa[2] + (1 + g) * dqb[2])
         dpsid = 0.5 * ((1 - g) * dva[2] + (1 + g) * dvb[2])
         du = pu * dpsi[:, None]
         dd = (dqa[:2] + da) - (dqb[:2] + db)
-        dw = ((dva[:2] + dva[2] * _perp(a) + va[:, 2:3] * _perp(da))
-              - (dvb[:2] + dvb[2] * _perp(b) + vb[:, 2:3] * _perp(db)))
-        dr = _dot(dd, u) + _dot(d, du)
+        dw = ((dva[:2] + dva[2] * perp(a) + va[:, 2:3] * perp(da))
+              - (dvb[:2] + dvb[2] * perp(b) + vb[:, 2:3] * perp(db)))
+        dr = dot(dd, u) + dot(d, du)
         # perp(du) = -u dpsi
-        drdot = (_dot(dw, u) + _dot(w, du) + (_dot(dd, pu) - _dot(d, u) * dpsi) * psid
-                 + _dot(d, pu) * dpsid)
+        drdot = (dot(dw, u) + dot(w, du) + (dot(dd, pu) - dot(d, u) * dpsi) * psid
+                 + dot(d, pu) * dpsid)
         dfr = fr_r * dr + fr_rd * drdot
         dfA = -dfr[:, None] * u - fr[:, None] * du
         dQ[:, 0:2, j] = dfA
-        dQ[:, 2, j] = _cross(da, fA) + _cross(a, dfA)
+        dQ[:, 2, j] = cross2(da, fA) + cross2(a, dfA)
         dQ[:, 3:5, j] = -dfA
-        dQ[:, 5, j] = -(_cross(db, fA) + _cross(b, dfA))
+        dQ[:, 5, j] = -(cross2(db, fA) + cross2(b, dfA))
     obs = np.zeros((N, N_OBS))
     obs[:, O_FN] = F
     obs[:, O_GAP] = -delta
     obs[:, O_PX:O_PY + 1] = qb[:, :2] + b + 0.5 * fp[:, R_PITCH][:, None] * u
     obs[:, O_NX:O_NY + 1] = u
-    aux = np.column_stack([-fr, -fp[:, R_SIGMA] * fzm, alpha_w])
+    aux = np.zeros((N, N_AUX))
+    aux[:, AUX_FU] = -fr
+    aux[:, AUX_FZ] = -fp[:, R_SIGMA] * fzm
+    aux[:, AUX_ALPHA] = alpha_w
     return Q, dQ[:, :, :6], dQ[:, :, 6:], obs, aux

@@ -16,6 +16,8 @@ import time
 
 import numpy as np
 
+from warp_contacts import circle_pairs_ref, cycloid_pins_ref
+
 from ..contact.assembly import RowScatter, pair_index
 from ..errors import RvtoolInputError
 
@@ -98,9 +100,11 @@ class BatchContactEvaluator:
         for nm, n in (("pin_set", pin_set.n_bodies), ("bearings", bearings.n_bodies)):
             if n != nt:
                 raise RvtoolInputError(f"{nm}.n_bodies = {n}; the batch has {n_copies} x {nb} = {nt} bodies")
-        self.pin_asm = CopyBlockAssembler(pin_set.iparams[:, :2], nb, n_copies)
+        self.pin_asm = CopyBlockAssembler(
+            pin_set.iparams[:, [cycloid_pins_ref.J_BODY_A, cycloid_pins_ref.J_BODY_B]], nb, n_copies)
         self.op_asm = CopyBlockAssembler(output_bodies, nb, n_copies)
-        self.brg_asm = CopyBlockAssembler(bearings.iparams[:, :2], nb, n_copies)
+        self.brg_asm = CopyBlockAssembler(
+            bearings.iparams[:, [circle_pairs_ref.I_BODY_A, circle_pairs_ref.I_BODY_B]], nb, n_copies)
         self._pose = np.zeros((nt + 1, 3))       # ground row last (the kernels' padding)
         self.pin_copy = self.pin_asm.row_copy
         self.timing = {"kernels": 0.0, "scatter": 0.0, "launches": 0}

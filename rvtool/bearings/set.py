@@ -170,7 +170,11 @@ class BearingSet:
                                            f"[0, {n_bodies - 1}] or GROUND (-1)")
             rows, kinds, rid, r_rho, r_z, r_row = _pack(m)
             fp += rows
-            ip += [(g if m.inner == GROUND else m.inner, g if m.outer == GROUND else m.outer, kd) for kd in kinds]
+            irows = np.zeros((len(kinds), ref.N_INT), np.int32)
+            irows[:, ref.K_BODY_A] = g if m.inner == GROUND else m.inner
+            irows[:, ref.K_BODY_B] = g if m.outer == GROUND else m.outer
+            irows[:, ref.K_KIND] = kinds
+            ip += list(irows)
             ids += rid
             owner += [k] * len(rows)
             rho += r_rho
@@ -182,7 +186,7 @@ class BearingSet:
         self.owner = np.array(owner)
         #: per element: radius [m] and axial station [m] of its centre, ball-row index
         self.element_radius, self.element_station, self.element_row = np.array(rho), np.array(z), np.array(row_of)
-        self.assembler = PairAssembler(self.iparams[:, 0], self.iparams[:, 1], n_bodies)
+        self.assembler = PairAssembler(self.iparams[:, ref.K_BODY_A], self.iparams[:, ref.K_BODY_B], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
         if backend == "warp":

@@ -172,6 +172,7 @@ class CircleContactSet:
             f = c.friction
             fp[i, ref.P_MUK], fp[i, ref.P_MUS] = f.mu_kinetic, f.mu_s
             fp[i, ref.P_VS], fp[i, ref.P_VREG], fp[i, ref.P_KT] = f.stribeck_speed, f.regularization_speed, f.tangential_stiffness
-            ip[i] = (g if c.body_a == GROUND else c.body_a, g if c.body_b == GROUND else c.body_b,
-                     int(c.internal), int(f.model))
+            ip[i, ref.I_BODY_A] = g if c.body_a == GROUND else c.body_a
+            ip[i, ref.I_BODY_B] = g if c.body_b == GROUND else c.body_b
+            ip[i, ref.I_INTERNAL], ip[i, ref.I_FRICTION] = int(c.internal), int(f.model)
         return fp, ip

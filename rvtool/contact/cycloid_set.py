@@ -222,8 +222,11 @@ class CycloidPinSet:
                     fp.append(row)
                     g = n_bodies
                     pb = pin_bodies[k]
-                    ip.append((g if m.wheel_body == GROUND else m.wheel_body, g if pb == GROUND else pb,
-                               int(f.model), tb))
+                    irow = np.zeros(ref.N_INT, np.int32)
+                    irow[ref.J_BODY_A] = g if m.wheel_body == GROUND else m.wheel_body
+                    irow[ref.J_BODY_B] = g if pb == GROUND else pb
+                    irow[ref.J_FRICTION], irow[ref.J_TABLE] = int(f.model), tb
+                    ip.append(irow)
                     ids.append(f"{m.name}/pin{k}/s{s_i}")
                     mesh_of.append(m_i)
                     pin_of.append(k)
@@ -234,7 +237,7 @@ class CycloidPinSet:
         self.mesh_of = np.array(mesh_of)
         self.pin_of = np.array(pin_of)
         self.n_contacts = len(fp)
-        self.assembler = PairAssembler(self.iparams[:, 0], self.iparams[:, 1], n_bodies)
+        self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
         if backend == "warp":

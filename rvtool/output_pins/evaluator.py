@@ -63,11 +63,11 @@ class OutputPinEvaluator:
         self.fparams, self.iparams = mechanism.packed(fl, wheels)
         ns = mechanism.n_slices
         if self.mode == PinMode.SHARED:
-            bodies = self.iparams[:, :3]
+            bodies = self.iparams[:, [ref.I_FLANGE, ref.I_WHEEL0, ref.I_WHEEL1]]
             self.ids = tuple(f"{name}/pin{p}/wheel{w}/slice{s}" for p in range(mechanism.n_pins)
                              for w in range(2) for s in range(ns))
         else:
-            bodies = self.iparams[:, :2]
+            bodies = self.iparams[:, [ref.J_FLANGE, ref.J_WHEEL]]
             self.ids = tuple(f"{name}/pin{p}/wheel{w}/slice{s}" for p in range(mechanism.n_pins)
                              for w in range(mechanism.n_wheels) for s in range(ns))
         self.assembler = BlockAssembler(bodies, self.n_bodies)
