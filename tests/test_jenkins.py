@@ -23,6 +23,7 @@ import warp as wp
 
 from rvtool.contact.circle_set import CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 from rvtool.errors import RvtoolInputError
+from warp_contacts.planar_ref import perp, rot
 from warp_contacts import circle_pairs_ref as ref
 from warp_contacts.precision import resolve_device
 
@@ -148,10 +149,10 @@ def _anchored_pair(model=FrictionModel.ANCHOR, kt=1e7, mu=0.3):
     fp, ip = cset.packed()
     # place B so that the circles overlap by 2 um along a skew direction, both bodies rotated
     tha, thb = 0.3, -0.2
-    ca = ref._rot(np.array(tha), np.array([1e-3, 0.5e-3]))
+    ca = rot(np.array(tha), np.array([1e-3, 0.5e-3]))
     u = np.array([math.cos(0.7), math.sin(0.7)])
     cb = ca + u * (3e-3 + 4e-3 - 2e-6)
-    pose = np.array([[0.0, 0.0, tha], [*(cb - ref._rot(np.array(thb), np.array([-0.5e-3, 0.2e-3]))), thb], [0, 0, 0]])
+    pose = np.array([[0.0, 0.0, tha], [*(cb - rot(np.array(thb), np.array([-0.5e-3, 0.2e-3]))), thb], [0, 0, 0]])
     vel = np.array([[1e-3, -2e-3, 0.4], [-1e-3, 0.5e-3, -0.3], [0, 0, 0]])
     return fp, ip, pose, vel
 
@@ -160,8 +161,8 @@ def _history_at(fp, ip, pose, vel, shift):
     """Anchors at the current material points with A's anchor moved by ``shift`` [m] along t."""
     zero = (np.zeros(1, np.int32), np.zeros((1, 2)), np.zeros((1, 2)))
     *_, obs, (act, a, b) = ref.evaluate(pose, vel, fp, ip, *zero)
-    t = ref._perp(obs[:, ref.O_NX:ref.O_NY + 1])
-    a = a + shift * ref._rot(np.array([-pose[0, 2]]), t)
+    t = perp(obs[:, ref.O_NX:ref.O_NY + 1])
+    a = a + shift * rot(np.array([-pose[0, 2]]), t)
     return act, a, b
 
 
