@@ -155,7 +155,8 @@ def planar_funcs(dtype):
         obs_out[i, O_NY] = normal[1]
         obs_out[i, O_FT] = ft
 
-    return types.SimpleNamespace(vec2=vec2, perp=perp, cross2=cross2, rot=rot, body_pose=body_pose, body_state=body_state,
+    return types.SimpleNamespace(vec2=vec2, perp=perp, cross2=cross2, rot=rot, body_pose=body_pose,
+                                 body_state=body_state,
                                  param_vec2=param_vec2, row_vec2=row_vec2,
                                  store_row_vec2=store_row_vec2, body_seed=body_seed, pair_seed=pair_seed,
                                  store_pair_forces=store_pair_forces, store_pair_column=store_pair_column,
