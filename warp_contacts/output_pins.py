@@ -703,7 +703,7 @@ def shared_pin_adjoint_jacobian(fparams, iparams, stations, pose, unrolled, prec
         tape.backward(grads={qa: wp.array(seed, dtype=wdt, device=device)})
         g = pa.grad.numpy().astype(np.float64)
         for k in range(n):
-            bodies = iparams[k, :3]
+            bodies = iparams[k, [ref.I_FLANGE, ref.I_WHEEL0, ref.I_WHEEL1]]
             J[k, r][bodies] = g[bodies]   # each pose row feeds only the pins that read it
         tape.zero()
     return Q, J
