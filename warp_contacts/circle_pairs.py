@@ -17,7 +17,8 @@ from .circle_pairs_ref import (FRICTION_ANCHOR, FRICTION_REGULARIZED, I_BODY_A, 
                                I_INTERNAL, N_FLOAT_PARAMS, N_INT_PARAMS, N_OBS, P_C, P_DR, P_K, P_KT, P_MUK, P_MUS,
                                P_P, P_RA, P_RB, P_VREG, P_VS, P_XI_A, P_XI_B)
 from .laws import law_funcs
-from .planar import N_SEEDS, LaunchBuffers, planar_funcs
+from .planar import LaunchBuffers, planar_funcs
+from .planar_ref import N_SEEDS
 from .precision import resolve_device, scalar_types
 
 

@@ -29,7 +29,7 @@ the bound holds (committed only for accepted steps).
 import numpy as np
 
 from . import laws_ref
-from .planar_ref import cross2, dot, perp, rot
+from .planar_ref import N_COORD_SEEDS, N_SEEDS, cross2, dot, perp, pair_seeds, rot
 
 # ---- packed float parameters (one row per contact; named here once, used by the Warp kernel,
 # this reference and the packer rvtool.contact.circle_set; SI units) ----
@@ -142,11 +142,8 @@ def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
     Q[:, 3:5] = -(fnA + ftA)
     Q[:, 5] = -(cross2(pb, fnA) + cross2(armB, ftA))
 
-    dQ = np.zeros((N, 6, 12))
-    for j in range(12):
-        seed = np.zeros(12)
-        seed[j] = 1.0
-        dqa, dqb, dva, dvb = seed[0:3], seed[3:6], seed[6:9], seed[9:12]
+    dQ = np.zeros((N, 6, N_SEEDS))
+    for j, dqa, dqb, dva, dvb in pair_seeds():
         dpa = dqa[2] * perp(pa)
         dpb = dqb[2] * perp(pb)
         dd = (dqb[:2] + dpb) - (dqa[:2] + dpa)
@@ -201,4 +198,4 @@ def evaluate(pose, vel, fparams, iparams, hist_active, hist_a, hist_b):
     obs[:, O_PX:O_PY + 1] = 0.5 * ((qa[:, :2] + aa) + (qb[:, :2] + bb))
     obs[:, O_NX:O_NY + 1] = n
     obs[:, O_FT] = ft_mag
-    return Q, dQ[:, :, :6], dQ[:, :, 6:], obs, (act, new_a, new_b)
+    return Q, dQ[:, :, :N_COORD_SEEDS], dQ[:, :, N_COORD_SEEDS:], obs, (act, new_a, new_b)

@@ -15,7 +15,8 @@ from .cycloid_pins_ref import (A_ANALYTIC, A_K1, A_R, A_RC, A_ROT, A_ZB, ANALYTI
                                C_MUK, C_MUS, C_P, C_RP, C_TX, C_TY, C_VREG, C_VS, C_XI_B, C_Z, J_BODY_A, J_BODY_B,
                                J_FRICTION, J_TABLE, N_ANALYTIC, N_FLOAT, N_INT)
 from .laws import law_funcs
-from .planar import N_COORD_SEEDS, N_SEEDS, LaunchBuffers, planar_funcs
+from .planar import LaunchBuffers, planar_funcs
+from .planar_ref import N_COORD_SEEDS, N_SEEDS
 from .precision import resolve_device, scalar_types
 
 
@@ -112,7 +113,7 @@ def _kernel(dtype, velocity_tangent=True):
             clamped = False
         return cl, nl, kap, clamped, bestd
 
-    # the seed loop's trip count is a compile-time constant, so Warp unrolls it (see planar.N_SEEDS);
+    # the seed loop's trip count is a compile-time constant, so Warp unrolls it (see planar);
     # without the velocity tangent only the coordinate seeds run
     n_seeds = N_SEEDS if velocity_tangent else N_COORD_SEEDS
 

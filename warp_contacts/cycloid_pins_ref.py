@@ -34,7 +34,7 @@ import numpy as np
 
 from . import laws_ref
 from .circle_pairs_ref import FRICTION_REGULARIZED, N_OBS, O_FN, O_FT, O_GAP, O_NX, O_NY, O_PX, O_PY, O_VT
-from .planar_ref import cross2, dot, perp, rot
+from .planar_ref import N_COORD_SEEDS, N_SEEDS, cross2, dot, perp, pair_seeds, rot
 
 # ---- packed float parameters (one row per pin slice; named here once, used by the Warp kernel,
 # this reference and the packer rvtool.contact.cycloid_set; SI units) ----
@@ -187,11 +187,8 @@ def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
 
     den = 1.0 + kap * hw
     wt = dot(w, t)
-    dQ = np.zeros((N, 6, 12))
-    for j in range(12):
-        s = np.zeros(12)
-        s[j] = 1.0
-        dqa, dqb, dva, dvb = s[0:3], s[3:6], s[6:9], s[9:12]
+    dQ = np.zeros((N, 6, N_SEEDS))
+    for j, dqa, dqb, dva, dvb in pair_seeds():
         dca = dqa[:2] + dqa[2] * perp(a)
         db = dqb[2] * perp(b)
         dp = dqb[:2] + db
@@ -222,4 +219,4 @@ def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
     obs[:, O_PX:O_PY + 1] = c + 0.5 * (hw - r)[:, None] * n
     obs[:, O_NX:O_NY + 1] = n
     obs[:, O_FT] = ft
-    return Q, dQ[:, :, :6], dQ[:, :, 6:], obs
+    return Q, dQ[:, :, :N_COORD_SEEDS], dQ[:, :, N_COORD_SEEDS:], obs

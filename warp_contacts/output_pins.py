@@ -9,6 +9,10 @@ mode with all seed directions carried at once: each scalar has a ``vec9``
 tangent, each planar vector a pair of them, so the fixed sleeve updates are
 differentiated in one pass (Eq. (moment_chain_rule) force-arm term
 included).
+
+Parameter, coordinate and output columns are named once in the reference and
+used here as ``ref.NAME`` (qualified, because some column names, e.g. the pin
+outputs K0/K1, equal the symbols of the physics).
 """
 import functools
 
@@ -238,8 +242,8 @@ def _funcs(dtype):
         tilt_out[i, body, 1] = m[1]
 
     return dict(vec2=vec2, vec9=vec9, seed=seed, rot=G.rot, unit=unit, wheel_open=wheel_open, closure=closure,
-                wheel_react=wheel_react, separation=separation, sleeve_update=sleeve_update, body_pose=G.body_pose, param_vec2=G.param_vec2,
-                row_vec2=G.row_vec2, store_triple=store_triple,
+                wheel_react=wheel_react, separation=separation, sleeve_update=sleeve_update,
+                body_pose=G.body_pose, param_vec2=G.param_vec2, row_vec2=G.row_vec2, store_triple=store_triple,
                 store_triple_column=store_triple_column, store_tilt_moment=store_tilt_moment)
 
 
@@ -332,11 +336,11 @@ def _shared_kernel(dtype):
                                                             n1, dn1x, dn1y, c00, c11, cross, detfloor)
         rsum = rp + rh
         fx0, fy0, mw0, mf0, dfx0, dfy0, dmw0, dmf0, mtf0, mtw0, fw0 = wheel_react(
-            a0, da0x, da0y, bb0, u, dux, duy, up0, dup0, clr0, ks, p, dfloor, rsum, pf, ph0, x0, tf, t0, z0, ref.X_WHEEL0,
-            stations, i, 0, write_tan, slice_out, slice_df_out)
+            a0, da0x, da0y, bb0, u, dux, duy, up0, dup0, clr0, ks, p, dfloor, rsum, pf, ph0, x0, tf, t0, z0,
+            ref.X_WHEEL0, stations, i, 0, write_tan, slice_out, slice_df_out)
         fx1, fy1, mw1, mf1, dfx1, dfy1, dmw1, dmf1, mtf1, mtw1, fw1 = wheel_react(
-            a1, da1x, da1y, bb1, u, dux, duy, up1, dup1, clr1, ks, p, dfloor, rsum, pf, ph1, x1, tf, t1, z1, ref.X_WHEEL1,
-            stations, i, 1, write_tan, slice_out, slice_df_out)
+            a1, da1x, da1y, bb1, u, dux, duy, up1, dup1, clr1, ks, p, dfloor, rsum, pf, ph1, x1, tf, t1, z1,
+            ref.X_WHEEL1, stations, i, 1, write_tan, slice_out, slice_df_out)
 
         store_triple(q_out, i, ref.X_FLANGE, -(fx0 + fx1), -(fy0 + fy1), mf0 + mf1)
         store_triple(q_out, i, ref.X_WHEEL0, fx0, fy0, mw0)
@@ -699,7 +703,7 @@ def shared_pin_adjoint_jacobian(fparams, iparams, stations, pose, unrolled, prec
         tape.backward(grads={qa: wp.array(seed, dtype=wdt, device=device)})
         g = pa.grad.numpy().astype(np.float64)
         for k in range(n):
-            bodies = iparams[k, :3]
+            bodies = iparams[k, [ref.I_FLANGE, ref.I_WHEEL0, ref.I_WHEEL1]]
             J[k, r][bodies] = g[bodies]   # each pose row feeds only the pins that read it
         tape.zero()
     return Q, J

@@ -7,8 +7,8 @@ host/device buffers of a recorded launch.
 The NumPy twins of the vector helpers are in :mod:`warp_contacts.planar_ref`.
 A pair family's kernel reads like this (see :mod:`warp_contacts.circle_pairs`)::
 
-    ia = iparams[i, I_BODY_A]                      # columns named in the family's _ref module
-    xa, tha, vxa, wa = body_state(pose_in, vel_in, ia)
+    # columns are named once, in the family's _ref module (I_BODY_A, P_XI_A, ...)
+    xa, tha, vxa, wa = body_state(pose_in, vel_in, iparams[i, I_BODY_A])
     pa = rot(tha, param_vec2(fparams, i, P_XI_A))
     ...
     for j in range(N_SEEDS):                       # compile-time trip count: Warp unrolls it
@@ -23,12 +23,11 @@ import numpy as np
 import warp as wp
 
 from .circle_pairs_ref import O_FN, O_FT, O_GAP, O_NX, O_NY, O_PX, O_PY, O_VT
+from .planar_ref import N_COORD_SEEDS
 
-#: Seeds of the pair tangent: 6 coordinate seeds (q_A, q_B), then 6 velocity seeds (v_A, v_B).
-#: Kernels loop over a compile-time count (12, or 6 without the velocity tangent) so that
-#: Warp unrolls the loop (a runtime bound measured 1.7x slower on the cycloid family).
-N_COORD_SEEDS = 6
-N_SEEDS = 12
+# Seeds of the pair tangent: planar_ref.N_SEEDS (coordinates, then velocities). Kernels loop
+# over a compile-time count (N_SEEDS, or N_COORD_SEEDS without the velocity tangent) so that
+# Warp unrolls the loop (a runtime bound measured 1.7x slower on the cycloid family).
 
 
 @functools.lru_cache(maxsize=None)
@@ -107,8 +106,8 @@ def planar_funcs(dtype):
         dv_B, domega_B), one of them zero."""
         zero2 = vec2(dtype(0.0), dtype(0.0))
         zero = dtype(0.0)
-        dxa, dtha, dxb, dthb = body_seed(j % 6)
-        if j < 6:
+        dxa, dtha, dxb, dthb = body_seed(j % N_COORD_SEEDS)
+        if j < N_COORD_SEEDS:
             return dxa, dtha, dxb, dthb, zero2, zero, zero2, zero
         return zero2, zero, zero2, zero, dxa, dtha, dxb, dthb
 
@@ -156,7 +155,8 @@ def planar_funcs(dtype):
         obs_out[i, O_NY] = normal[1]
         obs_out[i, O_FT] = ft
 
-    return types.SimpleNamespace(vec2=vec2, perp=perp, cross2=cross2, rot=rot, body_pose=body_pose, body_state=body_state,
+    return types.SimpleNamespace(vec2=vec2, perp=perp, cross2=cross2, rot=rot, body_pose=body_pose,
+                                 body_state=body_state,
                                  param_vec2=param_vec2, row_vec2=row_vec2,
                                  store_row_vec2=store_row_vec2, body_seed=body_seed, pair_seed=pair_seed,
                                  store_pair_forces=store_pair_forces, store_pair_column=store_pair_column,

@@ -2,6 +2,11 @@
 references use them; vectorized over leading axes, complex-step safe)."""
 import numpy as np
 
+#: Seeds of the forward-mode pair tangent: 6 coordinate seeds (q_A, q_B), then 6 velocity
+#: seeds (v_A, v_B); dQ/dq is columns 0-5 of the (6, N_SEEDS) tangent, dQ/dv columns 6-11.
+N_COORD_SEEDS = 6
+N_SEEDS = 12
+
 
 def perp(a):
     """a rotated by +90 degrees: (-a_y, a_x)."""
@@ -22,3 +27,12 @@ def rot(theta, xi):
 def dot(a, b):
     """Dot product over the last axis."""
     return np.sum(a * b, axis=-1)
+
+
+def pair_seeds():
+    """The unit seeds of the pair tangent in column order: yields (j, dq_A, dq_B, dv_A, dv_B),
+    each a (3,) unit or zero direction over (x, y, theta) or (vx, vy, omega)."""
+    for j in range(N_SEEDS):
+        seed = np.zeros(N_SEEDS)
+        seed[j] = 1.0
+        yield j, seed[0:3], seed[3:6], seed[6:9], seed[9:12]

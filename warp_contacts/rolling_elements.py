@@ -9,7 +9,8 @@ import warp as wp
 
 from .circle_pairs_ref import N_OBS
 from .laws import law_funcs
-from .planar import N_SEEDS, LaunchBuffers, planar_funcs
+from .planar import LaunchBuffers, planar_funcs
+from .planar_ref import N_SEEDS
 from .precision import resolve_device, scalar_types
 from .rolling_elements_ref import (AUX_ALPHA, AUX_FU, AUX_FZ, HB_E0, HB_E1, HB_F0, HB_F1, HB_K_COEF, HB_K_EXP, K_BODY_A,
                                    K_BODY_B, K_KIND, KIND_BALL, N_AUX, N_FLOAT, N_INT, R_A, R_ALPHA, R_CLEAR, R_CROWN,

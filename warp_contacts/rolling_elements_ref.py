@@ -50,7 +50,7 @@ import numpy as np
 
 from . import laws_ref
 from .circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY
-from .planar_ref import cross2, dot, perp, rot
+from .planar_ref import N_COORD_SEEDS, N_SEEDS, cross2, dot, perp, pair_seeds, rot
 
 # ---- packed float parameters (one row per ball or roller lamina; named here once, used by the
 # Warp kernel, this reference and the packer rvtool.bearings.set; SI units) ----
@@ -210,11 +210,8 @@ def evaluate(pose, vel, fparams, iparams):
     Q[:, 2] = cross2(a, fA)
     Q[:, 3:5] = -fA
     Q[:, 5] = -cross2(b, fA)
-    dQ = np.zeros((N, 6, 12))
-    for j in range(12):
-        s = np.zeros(12)
-        s[j] = 1.0
-        dqa, dqb, dva, dvb = s[0:3], s[3:6], s[6:9], s[9:12]
+    dQ = np.zeros((N, 6, N_SEEDS))
+    for j, dqa, dqb, dva, dvb in pair_seeds():
         da = dqa[2] * perp(a)
         db = dqb[2] * perp(b)
         dpsi = 0.5 * ((1 - g) * dqa[2] + (1 + g) * dqb[2])
@@ -242,4 +239,4 @@ def evaluate(pose, vel, fparams, iparams):
     aux[:, AUX_FU] = -fr
     aux[:, AUX_FZ] = -fp[:, R_SIGMA] * fzm
     aux[:, AUX_ALPHA] = alpha_w
-    return Q, dQ[:, :, :6], dQ[:, :, 6:], obs, aux
+    return Q, dQ[:, :, :N_COORD_SEEDS], dQ[:, :, N_COORD_SEEDS:], obs, aux
