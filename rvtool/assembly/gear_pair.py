@@ -58,6 +58,16 @@ class GearPairModel:
         from line 0 is +F r_bB for an external pair, -F r_bB for an internal one)."""
         return -self.pair.eps * line_load * self.pair.gear_a.face_width * self.pair.gear_b.base_radius
 
+    #: stiffness per face width [N/m^2] of the first guess of a loaded state (14 N/(mm um), a
+    #: typical single-pair value); only a Newton starting point, never a result
+    GUESS_STIFFNESS = 14e9
+
+    def loaded_guess(self, theta_a, line_load):
+        """First guess of gear B's angle under ``line_load`` [N/m]: the kinematic angle backed off
+        by the approach w / GUESS_STIFFNESS along the line of action."""
+        back = line_load / self.GUESS_STIFFNESS / self.pair.gear_b.base_radius
+        return self.kinematic_angle_b(theta_a) - self.pair.eps * back
+
     def state_vector(self, theta_a, theta_b):
         q = np.zeros(self.mbs.systemData.ODE2Size())
         q[np.asarray(self.mbs.systemData.GetNodeLTGODE2(self.nodes[0]))[2]] = theta_a
@@ -123,11 +133,15 @@ class GearPairStatics:
 
     def solve(self, theta_a, theta_b_guess):
         """Equilibrium at input angle theta_a from the guess of gear B's angle; returns theta_B.
-        Raises :class:`SolverFailure` naming the angle when Newton does not converge."""
+        A failed Newton solve is retried from :meth:`GearPairModel.loaded_guess` at the current
+        load, then with Exudyn's load ramp. Raises :class:`SolverFailure` naming the angle."""
         m = self.model
         m.set_input_angle(theta_a)
-        q0 = m.state_vector(theta_a, theta_b_guess) - m.state_vector(0.0, m.phase)
-        for ramp in (False, True):
+        torque = float(m.mbs.GetLoadParameter(m.load, "load"))
+        line_load = -torque / (m.pair.eps * m.pair.gear_a.face_width * m.pair.gear_b.base_radius)
+        for guess, ramp in ((theta_b_guess, False), (m.loaded_guess(theta_a, line_load), False),
+                            (m.loaded_guess(theta_a, line_load), True)):
+            q0 = m.state_vector(theta_a, guess) - m.state_vector(0.0, m.phase)
             st = self.settings.staticSolver
             st.useLoadFactor = ramp
             st.numberOfLoadSteps = 20 if ramp else 1
@@ -136,7 +150,7 @@ class GearPairStatics:
             solver = exu.MainSolverStatic()
             try:
                 ok = solver.SolveSystem(m.mbs, self.settings)
-            except Exception:  # Exudyn raises on a singular tangent: retried with a load ramp
+            except Exception:  # Exudyn raises on a singular tangent: the next start is tried
                 ok = False
             self.newton_iterations += int(solver.it.newtonStepsCount)
             q = np.array(m.mbs.systemData.GetODE2Coordinates())
