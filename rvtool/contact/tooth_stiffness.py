@@ -74,11 +74,14 @@ def _load(gear: InvoluteGear, u):
     return P, -gear.eps * dT
 
 
-def beam_compliance(gear: InvoluteGear, u, n_sections=400):
-    """(c'_bending, c'_shear, c'_axial) [m^2/N] per unit face width at roll angles u."""
+def beam_compliance(gear: InvoluteGear, u, n_sections=400, section=None):
+    """(c'_bending, c'_shear, c'_axial) [m^2/N] per unit face width at roll angles u.
+
+    section: the tooth half-section (xi, y) from the root (default
+    :meth:`InvoluteGear.half_section`); the beam starts at its first point."""
     E, nu = gear.youngs_modulus, gear.poisson_ratio
     G = E / (2 * (1 + nu))
-    sec = gear.half_section()
+    sec = gear.half_section() if section is None else np.asarray(section, float)
     order = np.argsort(sec[:, 0])
     xi_tab, y_tab = sec[order, 0], sec[order, 1]
     axis = np.array([1.0, 0.0]) if not gear.internal else np.array([-1.0, 0.0])

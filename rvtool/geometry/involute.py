@@ -471,10 +471,12 @@ class InvolutePair:
 
     @property
     def zero_backlash_pressure_angle(self):
-        """alpha_w of inv alpha_w = inv alpha + 2 tan alpha (x_B + eps x_A) / (z_B + eps z_A) (ISO 21771)."""
+        """alpha_w of inv alpha_w = inv alpha + 2 tan alpha eps (x_A + x_B) / (z_B + eps z_A): the tooth
+        thicknesses on the working circles fill the working pitch (ISO 21771; for an internal gear
+        this is ISO's formula with z_2 < 0 and its profile shift x_2 = x_B)."""
         A, B = self.gear_a, self.gear_b
         a = A.alpha
-        return inv_inverse(float(inv(a)) + 2 * math.tan(a) * (B.profile_shift + self.eps * A.profile_shift)
+        return inv_inverse(float(inv(a)) + 2 * math.tan(a) * self.eps * (A.profile_shift + B.profile_shift)
                            / (B.n_teeth + self.eps * A.n_teeth))
 
     @property
