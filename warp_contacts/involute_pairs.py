@@ -427,8 +427,9 @@ def _kernel(dtype, velocity_tangent=True):
             Fel, Fd, FC, FhA, FhB, FK = series_force(delta, C, hA, hB, K, fp[i, GEAR_A + G_E], fp[i, GEAR_A + G_NU],
                                                      fp[i, GEAR_B + G_E], fp[i, GEAR_B + G_NU], fp[i, C_BS])
         t = perp(n)
-        rA = cA - OA
-        rB = cB - OB
+        cp = dtype(0.5) * (cA + cB)
+        rA = cp - OA
+        rB = cp - OB
         vA = vOA + wA * perp(rA)
         vB = vOB + wB * perp(rB)
         ddot = -wp.dot(n, vB - vA)
@@ -467,8 +468,9 @@ def _kernel(dtype, velocity_tangent=True):
             ddelta = -dg
             dFel = Fd * ddelta + FC * dC + FhA * dhA + FhB * dhB + FK * dK
             dt = perp(dn)
-            drA = dcA - dOA
-            drB = dcB - dOB
+            dcp = dtype(0.5) * (dcA + dcB)
+            drA = dcp - dOA
+            drB = dcp - dOB
             dvA = dvOA + dwA * perp(rA) + wA * perp(drA)
             dvB = dvOB + dwB * perp(rB) + wB * perp(drB)
             dddot = -(wp.dot(dn, vB - vA) + wp.dot(n, dvB - dvA))
@@ -483,7 +485,6 @@ def _kernel(dtype, velocity_tangent=True):
             store_pair_column(dqdq_out, dqdv_out, i, jseed, dfA, cross2(drA, fA) + cross2(rA, dfA),
                               -(cross2(drB, fA) + cross2(rB, dfA)))
 
-        cp = dtype(0.5) * (cA + cB)
         obs_out[i, O_FN] = Fn
         obs_out[i, O_VT] = vt
         obs_out[i, O_GAP] = g

@@ -40,8 +40,8 @@ safeguarded Newton iteration (bracket [0, delta c_t^-1], bisection when a step l
 the force derivatives follow by implicit differentiation. Damping ramp Eq. (normal_force);
 regularized friction Eq. (friction) with the material sliding velocity of the two flanks.
 
-Generalized forces Q = G^T f (Eq. (contact_mapping)), f acting on A at its flank point c_A
-and -f on B at c_B; the tangent in forward mode over the 12 seeds (q_A, q_B, v_A, v_B)
+Generalized forces Q = G^T f (Eq. (contact_mapping)), f acting on A and -f on B at the contact
+point c = (c_A + c_B) / 2 (material points of both bodies there); the tangent in forward mode over the 12 seeds (q_A, q_B, v_A, v_B)
 with the mode, the teeth and the wrapped roll angles frozen: both terms of Eq.
 (assembled_contact_tangent) (moving arms c - O and normal, and the force response,
 including the migration of the contact along both flanks through c'(u), h(u), R(u), e(u)).
@@ -453,8 +453,13 @@ def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64):
         Fel, Fd, FC, FhA, FhB, FK = (np.where(on, x, 0.0) for x in (Fel, Fd, FC, FhA, FhB, FK))
         n = geo["n"][0]
         t = _perp(n)
+        # the force acts at the contact point c = (c_A + c_B) / 2 on both bodies (on the line of both
+        # flank points, so the normal moments equal those at c_A and c_B); friction and damping use the
+        # material velocities there, so the sliding speed vanishes exactly at the pitch point and the
+        # power identity of Eq. (contact_mapping) holds
         cA, cB = geo["cA"][0], geo["cB"][0]
-        rA, rB = cA - OA, cB - OB
+        cm = 0.5 * (cA + cB)
+        rA, rB = cm - OA, cm - OB
         vA = vOA + _col(wA) * _perp(rA)
         vB = vOB + _col(wB) * _perp(rB)
         ddot = -_dot(n, vB - vA)
@@ -482,8 +487,8 @@ def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64):
             dFel = Fd * ddelta + FC * dgt["C"][1] + FhA * dgt["hA"][1] + FhB * dgt["hB"][1] + FK * dgt["K"][1]
             dn = dgeo["n"][1]
             dt = _perp(dn)
-            dcA, dcB = dgeo["cA"][1], dgeo["cB"][1]
-            drA, drB = dcA - dOA, dcB - dOB
+            dcm = 0.5 * (dgeo["cA"][1] + dgeo["cB"][1])
+            drA, drB = dcm - dOA, dcm - dOB
             dvA = dvOA + _col(dwA) * _perp(rA) + _col(wA) * _perp(drA)
             dvB = dvOB + _col(dwB) * _perp(rB) + _col(wB) * _perp(drB)
             dddot = -(_dot(dn, vB - vA) + _dot(n, dvB - dvA))
@@ -498,7 +503,7 @@ def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64):
         obs[rows, O_FN] = Fn
         obs[rows, O_VT] = vt
         obs[rows, O_GAP] = g
-        obs[rows, O_PX:O_PY + 1] = 0.5 * (cA + cB)
+        obs[rows, O_PX:O_PY + 1] = cm
         obs[rows, O_NX:O_NY + 1] = n
         obs[rows, O_FT] = Ft
         obs[rows, O_VROLL] = 0.5 * _dot(t, vA + vB)
