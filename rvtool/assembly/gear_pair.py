@@ -48,8 +48,7 @@ class GearPairModel:
         self.mbs.SetObjectParameter(self.drive, "offset", float(theta_a))
 
     def set_output_torque(self, torque):
-        """Load torque on gear B [N m] (negative loads line 0: gear A drives counter-clockwise... see
-        :meth:`line_load_torque`)."""
+        """Load torque on gear B [N m] (see :meth:`line_load_torque` for the sign that loads line 0)."""
         self.mbs.SetLoadParameter(self.load, "load", float(torque))
 
     def line_load_torque(self, line_load):
