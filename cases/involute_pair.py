@@ -5,10 +5,11 @@ Two rigid gear bodies in an Exudyn system (rvtool.assembly.gear_pair), one invol
 element (warp_contacts.involute_pairs, Eq. (series_contact) with the potential-energy tooth
 model and Weber's line-contact approach). Quasi-static: the pinion angle is prescribed, the
 wheel carries a load torque, each point is a static equilibrium warm-started from the last.
-TE is measured on the wheel: theta_B - (theta_B0 + (z_A/z_B) ... rigid conjugate) [rad].
+TE is measured on the wheel: theta_B - (theta_B0 - (z_A/z_B) theta_A) [rad] (rigid conjugate motion).
 
 Inputs from the FZG type C specification: m = 4.5 mm, z = 16/24, a = 91.5 mm, alpha = 20 deg,
-b = 14 mm, x = +0.1817/+0.1715, d_a = 82.46/118.36 mm, steel. Chosen (declared here, not from a
+b = 14 mm, x = +0.1817/+0.1715, steel; d_a = 82.46/118.36 mm as recalled from that specification
+(not checked against a source here). Chosen (declared here, not from a
 source): ISO 53 profile A basic rack; tooth thickness allowance 0.05 mm per gear (backlash, so
 that only the drive flanks carry load); bore diameters 30/40 mm (fillet foundation); tip edge
 radius 0.02 m; rated load 1000 N/mm (the largest line load studied; "1 % of rated" = 10 N/mm);
