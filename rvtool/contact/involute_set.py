@@ -1,0 +1,234 @@
+"""Involute gear-mesh contact sets: specification (data) and evaluator.
+
+One :class:`GearMesh` describes the engagement of an external gear A (body ``body_a``) with
+an external or internal gear B (body ``body_b``): the pair geometry
+(:class:`~rvtool.geometry.involute.InvolutePair`, modifications and pitch deviations
+included), the face-width slices with their axial stations, the declared relative tilt and
+skew of Eq. (skew), a clearance, damping and friction. The bodies' poses place the gears:
+a gear's body frame is its own frame (centre at the body origin, tooth 0 on the body's
+x axis), so the same set serves fixed centres, floating centres (bearing-supported) and an
+eccentric wheel in a ring gear of a small-tooth-difference stage. The normal law is the
+series relation of Eq. (series_contact) with the potential-energy tooth compliance of
+:mod:`rvtool.contact.tooth_stiffness`.
+
+:class:`InvoluteContactSet` evaluates any number of meshes in one kernel launch and follows
+the evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
+"""
+from dataclasses import dataclass, field
+import math
+
+import numpy as np
+
+from warp_contacts import involute_pairs_ref as ref
+
+from ..errors import RvtoolInputError
+from ..geometry.involute import InvolutePair
+from ..validation import check_finite, check_nonnegative, check_positive
+from .assembly import PairAssembler
+from .circle_set import GROUND, FrictionLaw, FrictionModel
+from .evaluator import Evaluation, all_finite
+from .tooth_stiffness import POLY_DEGREE, ToothCompliance
+
+assert POLY_DEGREE + 1 == ref.POLY_TERMS
+
+
+@dataclass(frozen=True, kw_only=True)
+class GearMesh:
+    """Engagement of gear A (body ``body_a``) with gear B (body ``body_b``, default ground).
+
+    pair: :class:`InvolutePair` (its centre distance is the nominal one; the contact uses the
+    actual body positions). n_slices: equal face-width slices (face width of gear A).
+    window: teeth of A evaluated on either side of the one nearest the pitch point (default
+    ceil(epsilon_alpha / 2) + 1). lines: lines of action evaluated (0, 1 or both: both flanks).
+    clearance: uniform added gap [m]. tilt_x, tilt_y: relative tilt of A and B [rad];
+    skew: psi [rad] (Eq. (skew)); gear_z: axial station of the mesh midplane [m].
+    damping: c [N s/m] of the whole mesh (divided among the slices); ramp_depth: delta_r [m].
+    friction: NONE or REGULARIZED (element-wise coefficient).
+    """
+    pair: InvolutePair
+    body_a: int
+    body_b: int = GROUND
+    n_slices: int = 1
+    window: int | None = None
+    lines: tuple = (0, 1)
+    clearance: float = 0.0
+    tilt_x: float = 0.0
+    tilt_y: float = 0.0
+    skew: float = 0.0
+    gear_z: float = 0.0
+    damping: float = 0.0
+    ramp_depth: float = 1e-6
+    friction: FrictionLaw = field(default_factory=FrictionLaw)
+    name: str = "mesh"
+
+    def __post_init__(self):
+        if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, (int, np.integer)) or self.n_slices < 1:
+            raise RvtoolInputError(f"{self.name}.n_slices = {self.n_slices!r} is outside the valid range [1, inf) (integer)")
+        if self.window is not None and (not isinstance(self.window, (int, np.integer)) or self.window < 0):
+            raise RvtoolInputError(f"{self.name}.window = {self.window!r} is outside the valid range [0, inf) (integer)")
+        if not self.lines or any(ln not in (0, 1) for ln in self.lines) or len(set(self.lines)) != len(self.lines):
+            raise RvtoolInputError(f"{self.name}.lines = {self.lines!r} is not valid; valid: a non-empty subset of (0, 1)")
+        for nm in ("clearance", "tilt_x", "tilt_y", "skew", "gear_z"):
+            check_finite(f"{self.name}.{nm}", getattr(self, nm))
+        check_nonnegative(f"{self.name}.damping", self.damping)
+        check_positive(f"{self.name}.ramp_depth", self.ramp_depth)
+        if self.friction.model == FrictionModel.ANCHOR:
+            raise RvtoolInputError(f"{self.name}.friction.model = ANCHOR is not available for gear meshes; "
+                                   "valid: NONE, REGULARIZED")
+
+    @property
+    def face_width(self):
+        return self.pair.gear_a.face_width
+
+    @property
+    def slice_z(self):
+        """Axial stations of the slice midpoints relative to the mesh midplane [m]."""
+        b, n = self.face_width, self.n_slices
+        return (np.arange(n) + 0.5) * b / n - 0.5 * b
+
+    @property
+    def window_teeth(self):
+        return int(math.ceil(0.5 * self.pair.transverse_contact_ratio)) + 1 if self.window is None else int(self.window)
+
+
+def gear_block(gear, compliance: ToothCompliance, u_ref):
+    """The N_GEAR float parameters of one gear (columns G_* of the reference)."""
+    blk = np.zeros(ref.N_GEAR)
+    blk[ref.G_RB] = gear.base_radius
+    blk[ref.G_PSI] = gear.base_half_angle
+    blk[ref.G_EPS] = gear.eps
+    blk[ref.G_ULO], blk[ref.G_UHI] = gear.involute_range
+    blk[ref.G_UREF] = u_ref
+    ue, rho_c, chi = gear.edge
+    blk[ref.G_RHO_C], blk[ref.G_CHI], blk[ref.G_RHO_E], blk[ref.G_UEDGE] = rho_c, chi, gear.edge_radius, ue
+    blk[ref.G_UTIP:ref.G_B + 1] = gear.modification_parameters()
+    blk[ref.G_PMID], blk[ref.G_PHALF] = compliance.u_mid, compliance.u_half
+    blk[ref.G_E], blk[ref.G_NU] = gear.youngs_modulus, gear.poisson_ratio
+    blk[ref.G_PC:ref.G_PC + ref.POLY_TERMS] = compliance.compliance_coefficients
+    blk[ref.G_PH:ref.G_PH + ref.POLY_TERMS] = compliance.depth_coefficients
+    return blk
+
+
+class InvoluteContactSet:
+    """Evaluator of involute gear meshes between ``n_bodies`` planar bodies.
+
+    backend "warp" (default, one launch) or "numpy" (the reference); precision "float64"
+    (default) or "float32"; device "cpu", "cuda" or "auto".
+    Per-row observations: columns O_* of :mod:`warp_contacts.involute_pairs_ref` (normal and
+    friction force, sliding and rolling speed, gap, contact point and normal, roll angles,
+    contact mode, teeth and the series-law tangent k_t).
+    """
+
+    def __init__(self, meshes, n_bodies, *, backend="warp", precision="float64", device="cpu", name="gears"):
+        if len(meshes) == 0:
+            raise RvtoolInputError("meshes must contain at least one GearMesh")
+        if backend not in ("warp", "numpy"):
+            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
+        if precision not in ("float64", "float32"):
+            raise RvtoolInputError(f"precision = {precision!r} is not valid; valid choices are ['float32', 'float64']")
+        self.name = name
+        self.meshes = tuple(meshes)
+        self.n_bodies = n_bodies
+        self.backend = backend
+        self.precision = precision
+        self.history = type("NoHistory", (), {})()
+        self.compliance = {}
+        fp, ip, ids, mesh_of, dev = [], [], [], [], []
+        offset = 0
+        for m_i, m in enumerate(self.meshes):
+            for nm, b in (("body_a", m.body_a), ("body_b", m.body_b)):
+                if not (b == GROUND or 0 <= b < n_bodies):
+                    raise RvtoolInputError(f"meshes[{m_i}].{nm} = {b} is outside the valid range [0, {n_bodies - 1}] or GROUND")
+            pr = m.pair
+            A, B = pr.gear_a, pr.gear_b
+            for g in (A, B):
+                if g not in self.compliance:
+                    self.compliance[g] = ToothCompliance.of(g)
+            u_ref_a = 0.5 * sum(pr.path_of_contact()) / A.base_radius
+            ga = gear_block(A, self.compliance[A], u_ref_a)
+            gb = gear_block(B, self.compliance[B], float(pr.roll_b(u_ref_a)))
+            off_a, off_b = offset, offset + A.n_teeth
+            dev.extend([A.pitch_deviation_angles(), B.pitch_deviation_angles()])
+            offset += A.n_teeth + B.n_teeth
+            bs = m.face_width / m.n_slices
+            f = m.friction
+            W = m.window_teeth
+            for line in m.lines:
+                for w in range(-W, W + 1):
+                    for s_i, z in enumerate(m.slice_z):
+                        row = np.zeros(ref.N_FLOAT)
+                        row[ref.GEAR_A:ref.GEAR_A + ref.N_GEAR] = ga
+                        row[ref.GEAR_B:ref.GEAR_B + ref.N_GEAR] = gb
+                        row[ref.C_Z], row[ref.C_BS], row[ref.C_E] = z, bs, m.clearance
+                        row[ref.C_TX], row[ref.C_TY], row[ref.C_TANPSI] = m.tilt_x, m.tilt_y, math.tan(m.skew)
+                        row[ref.C_C], row[ref.C_DR] = m.damping / m.n_slices, m.ramp_depth
+                        row[ref.C_MUK], row[ref.C_MUS], row[ref.C_VS], row[ref.C_VREG] = (
+                            f.mu_kinetic, f.mu_s, f.stribeck_speed, f.regularization_speed)
+                        fp.append(row)
+                        g = n_bodies
+                        ip.append((g if m.body_a == GROUND else m.body_a, g if m.body_b == GROUND else m.body_b,
+                                   int(f.model), line, w, off_a, A.n_teeth, off_b, B.n_teeth))
+                        ids.append(f"{m.name}/line{line}/w{w:+d}/s{s_i}")
+                        mesh_of.append(m_i)
+        self.fparams = np.array(fp)
+        self.iparams = np.array(ip, dtype=np.int32)
+        self.deviations = np.concatenate(dev)
+        self.ids = tuple(ids)
+        self.mesh_of = np.array(mesh_of)
+        self.n_contacts = len(fp)
+        self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
+        self._pose = np.zeros((n_bodies + 1, 3))
+        self._vel = np.zeros((n_bodies + 1, 3))
+        self.velocity_tangent = True
+        if backend == "warp":
+            from warp_contacts.involute_pairs import InvolutePairKernel
+            self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device)
+
+    def set_velocity_tangent(self, on):
+        """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None for it)."""
+        self.velocity_tangent = bool(on)
+        if self.backend == "warp":
+            self._kernel.set_velocity_tangent(on)
+
+    def raw(self, pose, vel):
+        """Per-row (Q (N,6), dQdq (N,6,6), dQdv (N,6,6) or None, obs (N, N_OBS)) at poses (nb, 3)."""
+        self._pose[:-1] = pose
+        self._vel[:-1] = vel
+        if self.backend == "warp":
+            return self._kernel.evaluate(self._pose, self._vel)
+        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.deviations)
+        return Q, dq, (dv if self.velocity_tangent else None), obs
+
+    def evaluate(self, pose, vel, history=None, check=True):
+        if check:
+            for nm, a in (("pose", pose), ("vel", vel)):
+                a = np.asarray(a)
+                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
+                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
+        Qc, dq, dv, obs = self.raw(pose, vel)
+        dv = np.zeros_like(dq) if dv is None else dv
+        finite = all_finite(Qc, dq, dv)
+        return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
+                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
+
+    def commit(self, pose, vel, evaluation=None):
+        if evaluation is not None:
+            return np.array(evaluation.obs, float)
+        return np.array(self.raw(pose, vel)[3], float)
+
+    def mesh_stiffness(self, obs):
+        """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along
+        the line of action at this state, bodies held)."""
+        out = np.zeros(len(self.meshes))
+        np.add.at(out, self.mesh_of, obs[:, ref.O_KT])
+        return out
+
+    def width_moments(self, obs):
+        """Eq. (width_resultant): per mesh, the moments (M_x, M_y) [N m] of the slice forces on
+        gear A about the mesh midplane (x_s - O has the axial component z_s)."""
+        z = self.fparams[:, ref.C_Z]
+        f = -obs[:, ref.O_FN][:, None] * obs[:, ref.O_NX:ref.O_NY + 1] + obs[:, ref.O_FT][:, None] * np.column_stack(
+            [-obs[:, ref.O_NY], obs[:, ref.O_NX]])
+        M = np.zeros((len(self.meshes), 2))
+        np.add.at(M, self.mesh_of, np.column_stack([-z * f[:, 1], z * f[:, 0]]))
+        return M

@@ -1,0 +1,543 @@
+"""Warp kernel of the involute tooth-pair contact family (candidate selection, line-of-action
+or tip-edge geometry, series law, friction and analytic tangent in one launch; one thread
+per tooth-pair slice).
+
+Mirrors :mod:`warp_contacts.involute_pairs_ref` function by function (``select``,
+``geom_line``, ``geom_corner_a``, ``geom_corner_b``, ``gap_terms``, ``series_force``); see
+there for the equations. The parameter columns are the reference's named constants.
+"""
+import functools
+
+import numpy as np
+import warp as wp
+
+from .involute_pairs_ref import (
+    C_BS, C_C, C_DR, C_E, C_MUK, C_MUS, C_TANPSI, C_TX, C_TY, C_VREG, C_VS, C_Z, G_B, G_CA, G_CAL, G_CB, G_CF, G_CHI,
+    G_E, G_EPS, G_FHB, G_NU, G_PC, G_PH, G_PHALF, G_PMID, G_PSI, G_QA, G_QF, G_RB, G_RHO_C, G_RHO_E, G_UCA, G_UCF,
+    G_UEDGE, G_UHALF, G_UHI, G_ULO, G_UMID, G_UREF, G_UROOT, G_UTIP, GEAR_A, GEAR_B, J_BODY_A, J_BODY_B, J_FRICTION,
+    J_LINE, J_NA, J_NB, J_TOOTH_A, J_TOOTH_B, J_WINDOW, MODE_CORNER_A, MODE_CORNER_B, MODE_LINE, MODE_OPEN, N_FLOAT,
+    N_INT, N_OBS, O_FN, O_FT, O_GAP, O_KT, O_MODE, O_NX, O_NY, O_PX, O_PY, O_TOOTH_A, O_TOOTH_B, O_UA, O_UB, O_VROLL,
+    O_VT, OPEN_GAP, POLY_TERMS, SERIES_MAX_ITERATIONS, SERIES_RTOL)
+from .laws import law_funcs
+from .planar import LaunchBuffers, planar_funcs
+from .precision import resolve_device, scalar_types
+
+
+@functools.lru_cache(maxsize=None)
+def _kernel(dtype, velocity_tangent=True):
+    L = law_funcs(dtype)
+    P = planar_funcs(dtype)
+    vec2, perp, cross2, body_seed = P.vec2, P.perp, P.cross2, P.body_seed
+    store_pair_forces, store_pair_column = P.store_pair_forces, P.store_pair_column
+    damping_ramp, friction_coefficient = L.damping_ramp, L.friction_coefficient
+    np_dtype = np.float64 if dtype == wp.float64 else np.float32
+    RTOL = SERIES_RTOL[np_dtype]
+    TWO_PI = dtype(2.0 * np.pi)
+    PI = dtype(np.pi)
+
+    @wp.func
+    def unit(phi: dtype):
+        return vec2(wp.cos(phi), wp.sin(phi))
+
+    @wp.func
+    def nearest(x: dtype):
+        return wp.floor(x + dtype(0.5))
+
+    @wp.func
+    def wrap(x: dtype):
+        return x + PI - TWO_PI * wp.floor((x + PI) / TWO_PI) - PI
+
+    @wp.func
+    def imod(a: int, n: int):
+        return ((a % n) + n) % n
+
+    @wp.func
+    def poly(fp: wp.array2d(dtype=dtype), i: int, g: int, base: int, u: dtype):
+        """Gear polynomial (compliance base G_PC or depth G_PH) and its u-derivative."""
+        half = fp[i, g + G_PHALF]
+        t = (u - fp[i, g + G_PMID]) / half
+        v = dtype(0.0)
+        dv = dtype(0.0)
+        for m in range(POLY_TERMS):
+            dv = dv * t + v
+            v = v * t + fp[i, g + base + POLY_TERMS - 1 - m]
+        return v, dv / half
+
+    @wp.func
+    def relief(amt: dtype, st: dtype, en: dtype, q: dtype, u: dtype):
+        if amt <= dtype(0.0):
+            return dtype(0.0), dtype(0.0)
+        span = en - st
+        t = (u - st) / span
+        if t <= dtype(0.0):
+            return dtype(0.0), dtype(0.0)
+        return amt * wp.pow(t, q), amt * q * wp.pow(t, q - dtype(1.0)) / span
+
+    @wp.func
+    def modification(fp: wp.array2d(dtype=dtype), i: int, g: int, u: dtype, z: dtype):
+        ea, dea = relief(fp[i, g + G_CA], fp[i, g + G_UCA], fp[i, g + G_UTIP], fp[i, g + G_QA], u)
+        ef, def_ = relief(fp[i, g + G_CF], fp[i, g + G_UCF], fp[i, g + G_UROOT], fp[i, g + G_QF], u)
+        w = (u - fp[i, g + G_UMID]) / fp[i, g + G_UHALF]
+        b = fp[i, g + G_B]
+        cal = fp[i, g + G_CAL]
+        e = ea + ef + cal * w * w + fp[i, g + G_CB] * (dtype(2.0) * z / b) * (dtype(2.0) * z / b) + fp[i, g + G_FHB] * z / b
+        return e, dea + def_ + dtype(2.0) * cal * w / fp[i, g + G_UHALF]
+
+    @wp.func
+    def weber(F: dtype, hA: dtype, hB: dtype, K: dtype, EA: dtype, nuA: dtype, EB: dtype, nuB: dtype, bs: dtype):
+        CA = dtype(2.0) * (dtype(1.0) - nuA * nuA) / (PI * EA * bs)
+        CB = dtype(2.0) * (dtype(1.0) - nuB * nuB) / (PI * EB * bs)
+        estar = dtype(1.0) / ((dtype(1.0) - nuA * nuA) / EA + (dtype(1.0) - nuB * nuB) / EB)
+        aH = wp.sqrt(dtype(4.0) * F / (PI * bs * estar * K))
+        dH = F * (CA * (wp.log(dtype(2.0) * hA / aH) - nuA / (dtype(2.0) * (dtype(1.0) - nuA)))
+                  + CB * (wp.log(dtype(2.0) * hB / aH) - nuB / (dtype(2.0) * (dtype(1.0) - nuB))))
+        return dH, dH / F - dtype(0.5) * (CA + CB), CA, CB
+
+    @wp.func
+    def series_force(delta: dtype, C: dtype, hA: dtype, hB: dtype, K: dtype, EA: dtype, nuA: dtype, EB: dtype,
+                     nuB: dtype, bs: dtype):
+        """F and (dF/d delta, dF/dC, dF/dh_A, dF/dh_B, dF/dK) of Eq. (series_contact)."""
+        lo = dtype(0.0)
+        hi = delta / C
+        dHh, dHdh, CA, CB = weber(hi, hA, hB, K, EA, nuA, EB, nuB, bs)
+        bad = not (C * hi + dHh - delta >= dtype(0.0))
+        F = dtype(0.5) * hi
+        if not bad:
+            for it in range(SERIES_MAX_ITERATIONS):
+                dH, dHd, CA_, CB_ = weber(F, hA, hB, K, EA, nuA, EB, nuB, bs)
+                G = C * F + dH - delta
+                Gp = C + dHd
+                if G < dtype(0.0):
+                    lo = F
+                else:
+                    hi = F
+                Fn = F - G / Gp
+                if not (Fn > lo and Fn < hi and Gp > dtype(0.0)):
+                    Fn = dtype(0.5) * (lo + hi)
+                done = wp.abs(Fn - F) <= dtype(RTOL) * Fn
+                F = Fn
+                if done:
+                    break
+        dH, dHd, CA2, CB2 = weber(F, hA, hB, K, EA, nuA, EB, nuB, bs)
+        Gp = C + dHd
+        if bad or not (Gp > dtype(0.0)):
+            nan = wp.nan
+            return dtype(nan), dtype(nan), dtype(nan), dtype(nan), dtype(nan), dtype(nan)
+        return F, dtype(1.0) / Gp, -F / Gp, -F * CA2 / hA / Gp, -F * CB2 / hB / Gp, -F * dtype(0.5) * (CA2 + CB2) / K / Gp
+
+    @wp.func
+    def foot(Pc: vec2, dPc: vec2, O: vec2, dO: vec2, rb: dtype, omega: dtype):
+        w = Pc - O
+        dw = dPc - dO
+        rho = wp.length(w)
+        drho = wp.dot(w, dw) / rho
+        lam = wp.sqrt(wp.max(rho * rho - rb * rb, dtype(0.0)))
+        lam_s = lam
+        if lam <= dtype(0.0):
+            lam_s = dtype(1.0)
+        phit = wp.atan2(w[1], w[0]) + omega * wp.acos(wp.clamp(rb / rho, dtype(-1.0), dtype(1.0)))
+        dphit = cross2(w, dw) / (rho * rho) + omega * rb * drho / (rho * lam_s)
+        return phit, dphit, lam, rho * drho / lam_s, rho > rb
+
+    @wp.func
+    def tooth_angle(ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), i: int, which: int, k: int):
+        """2 pi k / z + deviation of tooth k of gear A (which = 0) or B (which = 1)."""
+        z = ip[i, J_NA]
+        off = ip[i, J_TOOTH_A]
+        if which == 1:
+            z = ip[i, J_NB]
+            off = ip[i, J_TOOTH_B]
+        return TWO_PI * dtype(k) / dtype(z) + dev[off + k]
+
+    @wp.func
+    def geom_line(fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), i: int,
+                  OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
+                  dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype):
+        eps = fp[i, GEAR_B + G_EPS]
+        s = dtype(1.0)
+        if ip[i, J_LINE] != 0:
+            s = dtype(-1.0)
+        omega = s * eps
+        rba = fp[i, GEAR_A + G_RB]
+        rbb = fp[i, GEAR_B + G_RB]
+        D = OB - OA
+        dD = dOB - dOA
+        a = wp.length(D)
+        da = wp.dot(D, dD) / a
+        beta = wp.atan2(D[1], D[0])
+        dbeta = cross2(D, dD) / (a * a)
+        Rs = rbb + eps * rba
+        aw = wp.acos(Rs / a)
+        sw = wp.sin(aw)
+        daw = Rs * da / (a * a * sw)
+        phia = beta + s * aw
+        if eps < dtype(0.0):
+            phia = beta + s * (PI - aw)
+        dphia = dbeta + s * eps * daw
+        ea = unit(phia)
+        d = -omega * perp(ea)
+        dd = (omega * dphia) * ea
+        TA = OA + rba * ea
+        dTA = dOA + (rba * dphia) * perp(ea)
+        TB = OB - (eps * rbb) * ea
+        dTB = dOB - (eps * rbb * dphia) * perp(ea)
+        Ll = eps * a * sw
+        dL = eps * da / sw
+        ua = (omega * (phia - tha + omega * fp[i, GEAR_A + G_PSI]) - omega * tooth_angle(ip, dev, i, 0, k)
+              - TWO_PI * off_a)
+        phib = phia
+        if eps > dtype(0.0):
+            phib = phia + PI
+        ub = (omega * (phib - thb + omega * eps * fp[i, GEAR_B + G_PSI]) - omega * tooth_angle(ip, dev, i, 1, j)
+              - TWO_PI * off_b)
+        dua = omega * (dphia - dtha)
+        dub = omega * (dphia - dthb)
+        cA = TA + (rba * ua) * d
+        dcA = dTA + (rba * dua) * d + (rba * ua) * dd
+        cB = TB - (eps * rbb * ub) * d
+        dcB = dTB - (eps * rbb * dub) * d - (eps * rbb * ub) * dd
+        g = Ll - rba * ua - eps * rbb * ub
+        dg = dL - rba * dua - eps * rbb * dub
+        return g, dg, d, dd, cA, dcA, cB, dcB, ua, dua, ub, dub, rba * ua, rba * dua, rbb * ub, rbb * dub, eps
+
+    @wp.func
+    def geom_corner_a(fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), i: int,
+                      OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
+                      dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype):
+        eps = fp[i, GEAR_B + G_EPS]
+        s = dtype(1.0)
+        if ip[i, J_LINE] != 0:
+            s = dtype(-1.0)
+        omega = s * eps
+        rbb = fp[i, GEAR_B + G_RB]
+        ang = tha + tooth_angle(ip, dev, i, 0, k) - omega * fp[i, GEAR_A + G_PSI] + omega * fp[i, GEAR_A + G_CHI]
+        rc = fp[i, GEAR_A + G_RHO_C]
+        Pc = OA + rc * unit(ang)
+        dPc = dOA + (rc * dtha) * perp(unit(ang))
+        phit, dphit, lam, dlam, ok = foot(Pc, dPc, OB, dOB, rbb, omega)
+        ub = (omega * (phit - thb + omega * eps * fp[i, GEAR_B + G_PSI]) - omega * tooth_angle(ip, dev, i, 1, j)
+              - TWO_PI * off_b)
+        dub = omega * (dphit - dthb)
+        et = unit(phit)
+        dT = -omega * perp(et)
+        ddT = (omega * dphit) * et
+        n = -eps * dT
+        dn = -eps * ddT
+        cB = OB + rbb * et + (rbb * ub) * dT
+        dcB = dOB + (rbb * dphit) * perp(et) + (rbb * dub) * dT + (rbb * ub) * ddT
+        rho_e = fp[i, GEAR_A + G_RHO_E]
+        cA = Pc + rho_e * n
+        dcA = dPc + rho_e * dn
+        ue = fp[i, GEAR_A + G_UEDGE]
+        zero = dtype(0.0)
+        return (eps * (lam - rbb * ub) - rho_e, eps * (dlam - rbb * dub), n, dn, cA, dcA, cB, dcB, ue, zero, ub, dub,
+                rho_e, zero, rbb * ub, rbb * dub, eps)
+
+    @wp.func
+    def geom_corner_b(fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), i: int,
+                      OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
+                      dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype):
+        eps = fp[i, GEAR_B + G_EPS]
+        s = dtype(1.0)
+        if ip[i, J_LINE] != 0:
+            s = dtype(-1.0)
+        omega = s * eps
+        rba = fp[i, GEAR_A + G_RB]
+        ang = thb + tooth_angle(ip, dev, i, 1, j) - omega * eps * fp[i, GEAR_B + G_PSI] + omega * fp[i, GEAR_B + G_CHI]
+        rc = fp[i, GEAR_B + G_RHO_C]
+        Pc = OB + rc * unit(ang)
+        dPc = dOB + (rc * dthb) * perp(unit(ang))
+        phit, dphit, lam, dlam, ok = foot(Pc, dPc, OA, dOA, rba, omega)
+        ua = (omega * (phit - tha + omega * fp[i, GEAR_A + G_PSI]) - omega * tooth_angle(ip, dev, i, 0, k)
+              - TWO_PI * off_a)
+        dua = omega * (dphit - dtha)
+        et = unit(phit)
+        n = -omega * perp(et)
+        dn = (omega * dphit) * et
+        cA = OA + rba * et + (rba * ua) * n
+        dcA = dOA + (rba * dphit) * perp(et) + (rba * dua) * n + (rba * ua) * dn
+        rho_e = fp[i, GEAR_B + G_RHO_E]
+        cB = Pc - rho_e * n
+        dcB = dPc - rho_e * dn
+        ue = fp[i, GEAR_B + G_UEDGE]
+        zero = dtype(0.0)
+        return (lam - rba * ua - rho_e, dlam - rba * dua, n, dn, cA, dcA, cB, dcB, ua, dua, ue, zero,
+                rba * ua, rba * dua, rho_e, zero, dtype(1.0))
+
+    @wp.func
+    def geometry(mode: int, fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype),
+                 i: int, OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
+                 dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype):
+        if mode == MODE_CORNER_A:
+            return geom_corner_a(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb)
+        if mode == MODE_CORNER_B:
+            return geom_corner_b(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb)
+        return geom_line(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb)
+
+    @wp.func
+    def gap_terms(fp: wp.array2d(dtype=dtype), i: int, g0: dtype, dg0: dtype, n: vec2, dn: vec2, ua: dtype, dua: dtype,
+                  ub: dtype, dub: dtype, RA: dtype, dRA: dtype, RB: dtype, dRB: dtype, sB: dtype):
+        z = fp[i, C_Z]
+        eA, deA = modification(fp, i, GEAR_A, ua, z)
+        eB, deB = modification(fp, i, GEAR_B, ub, z)
+        tx = fp[i, C_TX]
+        ty = fp[i, C_TY]
+        g = g0 + eA + eB + fp[i, C_E] + z * (ty * n[0] - tx * n[1]) + z * fp[i, C_TANPSI]
+        dg = dg0 + deA * dua + deB * dub + z * (ty * dn[0] - tx * dn[1])
+        cA, dcA = poly(fp, i, GEAR_A, G_PC, ua)
+        cB, dcB = poly(fp, i, GEAR_B, G_PC, ub)
+        hA, dhA = poly(fp, i, GEAR_A, G_PH, ua)
+        hB, dhB = poly(fp, i, GEAR_B, G_PH, ub)
+        bs = fp[i, C_BS]
+        K = dtype(1.0) / RA + sB / RB
+        dK = -dRA / (RA * RA) - sB * dRB / (RB * RB)
+        return g, dg, (cA + cB) / bs, (dcA * dua + dcB * dub) / bs, hA, dhA * dua, hB, dhB * dub, K, dK
+
+    N_SEEDS = 12 if velocity_tangent else 6
+
+    @wp.kernel(module="unique")
+    def eval_involute_pairs(
+        # Model:
+        fp: wp.array2d(dtype=dtype),
+        ip: wp.array2d(dtype=wp.int32),
+        dev: wp.array(dtype=dtype),
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        vel_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        dqdv_out: wp.array3d(dtype=dtype),
+        obs_out: wp.array2d(dtype=dtype),
+    ):
+        i = wp.tid()
+        ia = ip[i, J_BODY_A]
+        ib = ip[i, J_BODY_B]
+        OA = vec2(pose_in[ia, 0], pose_in[ia, 1])
+        OB = vec2(pose_in[ib, 0], pose_in[ib, 1])
+        tha = pose_in[ia, 2]
+        thb = pose_in[ib, 2]
+        vOA = vec2(vel_in[ia, 0], vel_in[ia, 1])
+        vOB = vec2(vel_in[ib, 0], vel_in[ib, 1])
+        wA = vel_in[ia, 2]
+        wB = vel_in[ib, 2]
+        for c in range(6):
+            q_out[i, c] = dtype(0.0)
+            for c2 in range(6):
+                dqdq_out[i, c, c2] = dtype(0.0)
+                dqdv_out[i, c, c2] = dtype(0.0)
+        for c in range(N_OBS):
+            obs_out[i, c] = dtype(0.0)
+        obs_out[i, O_GAP] = dtype(OPEN_GAP)
+
+        # -- selection (primal): line of action, teeth, mode ------------------------
+        eps = fp[i, GEAR_B + G_EPS]
+        s = dtype(1.0)
+        if ip[i, J_LINE] != 0:
+            s = dtype(-1.0)
+        omega = s * eps
+        rba = fp[i, GEAR_A + G_RB]
+        rbb = fp[i, GEAR_B + G_RB]
+        za = ip[i, J_NA]
+        zb = ip[i, J_NB]
+        D = OB - OA
+        a = wp.length(D)
+        beta = wp.atan2(D[1], D[0])
+        cw = (rbb + eps * rba) / a
+        mode = MODE_OPEN
+        k = int(0)
+        j = int(0)
+        off_a = dtype(0.0)
+        off_b = dtype(0.0)
+        if cw < dtype(1.0):
+            aw = wp.acos(cw)
+            phia = beta + s * aw
+            if eps < dtype(0.0):
+                phia = beta + s * (PI - aw)
+            Ll = eps * a * wp.sin(aw)
+            uref = fp[i, GEAR_A + G_UREF]
+            U0a = omega * (phia - tha + omega * fp[i, GEAR_A + G_PSI])
+            kstar = int(omega * nearest((U0a - uref) * dtype(za) / TWO_PI))
+            k = imod(kstar + ip[i, J_WINDOW], za)
+            Xa = U0a - omega * tooth_angle(ip, dev, i, 0, k)
+            ua = uref + wrap(Xa - uref)
+            ubt = eps * (Ll - rba * ua) / rbb
+            phib = phia
+            if eps > dtype(0.0):
+                phib = phia + PI
+            U0b = omega * (phib - thb + omega * eps * fp[i, GEAR_B + G_PSI])
+            j = imod(int(omega * nearest((U0b - ubt) * dtype(zb) / TWO_PI)), zb)
+            Xb = U0b - omega * tooth_angle(ip, dev, i, 1, j)
+            ub = ubt + wrap(Xb - ubt)
+            off_a = nearest((Xa - ua) / TWO_PI)
+            off_b = nearest((Xb - ub) / TWO_PI)
+            in_a = ua >= fp[i, GEAR_A + G_ULO] and ua <= fp[i, GEAR_A + G_UHI]
+            in_b = ub >= fp[i, GEAR_B + G_ULO] and ub <= fp[i, GEAR_B + G_UHI]
+            past_a = ua > fp[i, GEAR_A + G_UHI]
+            past_b = ub < fp[i, GEAR_B + G_ULO]
+            if eps > dtype(0.0):
+                past_b = ub > fp[i, GEAR_B + G_UHI]
+            zero2 = vec2(dtype(0.0), dtype(0.0))
+            if in_a and in_b:
+                mode = MODE_LINE
+            elif past_a:
+                # tip edge of A: its foot on B's flank decides the tooth of B and the admissibility
+                ang = tha + tooth_angle(ip, dev, i, 0, k) - omega * fp[i, GEAR_A + G_PSI] + omega * fp[i, GEAR_A + G_CHI]
+                Pc = OA + fp[i, GEAR_A + G_RHO_C] * unit(ang)
+                phit, dphit, lam, dlam, okf = foot(Pc, zero2, OB, zero2, rbb, omega)
+                Xb0 = omega * (phit - thb + omega * eps * fp[i, GEAR_B + G_PSI])
+                ubt2 = lam / rbb
+                j = imod(int(omega * nearest((Xb0 - ubt2) * dtype(zb) / TWO_PI)), zb)
+                Xb2 = Xb0 - omega * tooth_angle(ip, dev, i, 1, j)
+                ub2 = ubt2 + wrap(Xb2 - ubt2)
+                off_b = nearest((Xb2 - ub2) / TWO_PI)
+                if okf and ub2 >= fp[i, GEAR_B + G_ULO] and ub2 <= fp[i, GEAR_B + G_UHI]:
+                    mode = MODE_CORNER_A
+            elif past_b:
+                ang = thb + tooth_angle(ip, dev, i, 1, j) - omega * eps * fp[i, GEAR_B + G_PSI] + omega * fp[i, GEAR_B + G_CHI]
+                Pc = OB + fp[i, GEAR_B + G_RHO_C] * unit(ang)
+                phit, dphit, lam, dlam, okf = foot(Pc, zero2, OA, zero2, rba, omega)
+                Xa2 = omega * (phit - tha + omega * fp[i, GEAR_A + G_PSI]) - omega * tooth_angle(ip, dev, i, 0, k)
+                uat = lam / rba
+                ua2 = uat + wrap(Xa2 - uat)
+                off_a = nearest((Xa2 - ua2) / TWO_PI)
+                if okf and ua2 >= fp[i, GEAR_A + G_ULO] and ua2 <= fp[i, GEAR_A + G_UHI]:
+                    mode = MODE_CORNER_B
+        obs_out[i, O_MODE] = dtype(mode)
+        obs_out[i, O_TOOTH_A] = dtype(k)
+        obs_out[i, O_TOOTH_B] = dtype(j)
+        if mode == MODE_OPEN:
+            return
+
+        # -- primal geometry, gap and forces ----------------------------------------
+        z2 = vec2(dtype(0.0), dtype(0.0))
+        zs = dtype(0.0)
+        g0, dg0, n, dn0, cA, dcA0, cB, dcB0, ua, dua0, ub, dub0, RA, dRA0, RB, dRB0, sB = geometry(
+            mode, fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, z2, zs, z2, zs)
+        g, dg_, C, dC_, hA, dhA_, hB, dhB_, K, dK_ = gap_terms(fp, i, g0, zs, n, z2, ua, zs, ub, zs, RA, zs, RB, zs, sB)
+        delta = -g
+        on = delta > dtype(0.0)
+        Fel = dtype(0.0)
+        Fd = dtype(0.0)
+        FC = dtype(0.0)
+        FhA = dtype(0.0)
+        FhB = dtype(0.0)
+        FK = dtype(0.0)
+        if on:
+            Fel, Fd, FC, FhA, FhB, FK = series_force(delta, C, hA, hB, K, fp[i, GEAR_A + G_E], fp[i, GEAR_A + G_NU],
+                                                     fp[i, GEAR_B + G_E], fp[i, GEAR_B + G_NU], fp[i, C_BS])
+        t = perp(n)
+        cp = dtype(0.5) * (cA + cB)
+        rA = cp - OA
+        rB = cp - OB
+        vA = vOA + wA * perp(rA)
+        vB = vOB + wB * perp(rB)
+        ddot = -wp.dot(n, vB - vA)
+        r, dr = damping_ramp(delta, fp[i, C_DR])
+        cdamp = fp[i, C_C]
+        Fn = Fel + cdamp * r * ddot
+        act = on and Fn > dtype(0.0)
+        if not act:
+            Fn = dtype(0.0)
+        vt = wp.dot(t, vA - vB)
+        mu, dmu = friction_coefficient(fp[i, C_MUK], fp[i, C_MUS], fp[i, C_VS], fp[i, C_VREG], vt)
+        fric = act and ip[i, J_FRICTION] == 1
+        Ft = dtype(0.0)
+        if fric:
+            Ft = -Fn * mu
+        fA = -Fn * n + Ft * t
+        store_pair_forces(q_out, i, fA, cross2(rA, fA), -cross2(rB, fA))
+
+        for jseed in range(N_SEEDS):
+            dOA, dtha, dOB, dthb = body_seed(jseed)
+            dvOA, dwA, dvOB, dwB = body_seed(jseed - 6)
+            if jseed < 6:
+                dvOA = z2
+                dvOB = z2
+                dwA = zs
+                dwB = zs
+            else:
+                dOA = z2
+                dOB = z2
+                dtha = zs
+                dthb = zs
+            g0s, dg0, ns, dn, cAs, dcA, cBs, dcB, uas, dua, ubs, dub, RAs, dRA, RBs, dRB, sBs = geometry(
+                mode, fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb)
+            gs, dg, Cs, dC, hAs, dhA, hBs, dhB, Ks, dK = gap_terms(fp, i, g0s, dg0, ns, dn, uas, dua, ubs, dub, RAs, dRA,
+                                                                    RBs, dRB, sBs)
+            ddelta = -dg
+            dFel = Fd * ddelta + FC * dC + FhA * dhA + FhB * dhB + FK * dK
+            dt = perp(dn)
+            dcp = dtype(0.5) * (dcA + dcB)
+            drA = dcp - dOA
+            drB = dcp - dOB
+            dvA = dvOA + dwA * perp(rA) + wA * perp(drA)
+            dvB = dvOB + dwB * perp(rB) + wB * perp(drB)
+            dddot = -(wp.dot(dn, vB - vA) + wp.dot(n, dvB - dvA))
+            dFn = dtype(0.0)
+            if act:
+                dFn = dFel + cdamp * (dr * ddelta * ddot + r * dddot)
+            dvt = wp.dot(dt, vA - vB) + wp.dot(t, dvA - dvB)
+            dFt = dtype(0.0)
+            if fric:
+                dFt = -(dFn * mu + Fn * dmu * dvt)
+            dfA = -dFn * n - Fn * dn + dFt * t + Ft * dt
+            store_pair_column(dqdq_out, dqdv_out, i, jseed, dfA, cross2(drA, fA) + cross2(rA, dfA),
+                              -(cross2(drB, fA) + cross2(rB, dfA)))
+
+        obs_out[i, O_FN] = Fn
+        obs_out[i, O_VT] = vt
+        obs_out[i, O_GAP] = g
+        obs_out[i, O_PX] = cp[0]
+        obs_out[i, O_PY] = cp[1]
+        obs_out[i, O_NX] = n[0]
+        obs_out[i, O_NY] = n[1]
+        obs_out[i, O_FT] = Ft
+        obs_out[i, O_VROLL] = dtype(0.5) * wp.dot(t, vA + vB)
+        obs_out[i, O_UA] = ua
+        obs_out[i, O_UB] = ub
+        obs_out[i, O_KT] = Fd
+
+    return eval_involute_pairs
+
+
+class InvolutePairKernel:
+    """Device-resident evaluator of one involute contact set (one launch per call)."""
+
+    def __init__(self, fparams, iparams, deviations, n_bodies, precision="float64", device="cpu"):
+        self.wdtype, self.ndtype = scalar_types(precision)
+        self.device = d = resolve_device(device, len(fparams))
+        fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
+        iparams = np.ascontiguousarray(iparams, dtype=np.int32)
+        assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
+        self.n = n = len(fparams)
+        dt = self.wdtype
+        self._model = [wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
+                       wp.array(np.asarray(deviations, self.ndtype), dtype=dt, device=d)]
+        self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),
+                                   "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
+                                   "obs": ((n, N_OBS), "f")}, dt, self.ndtype, d)
+        self.velocity_tangent = True
+        self._record()
+
+    def _record(self):
+        dev = self._buf.dev
+        self._cmd = wp.launch(_kernel(self.wdtype, self.velocity_tangent), dim=self.n, device=self.device,
+                              inputs=self._model + [dev["pose"], dev["vel"]],
+                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs")], record_cmd=True)
+
+    def set_velocity_tangent(self, on):
+        """Velocity tangent on (default) or off (the kernel skips the six velocity seeds; dQ/dv is None)."""
+        self.velocity_tangent = bool(on)
+        self._record()
+
+    def evaluate(self, pose, vel):
+        """Returns (Q (N,6), dQdq, dQdv or None, obs (N, N_OBS)); arrays are reused by the next call."""
+        h = self._buf.host
+        h["pose"][...] = pose
+        h["vel"][...] = vel
+        self._buf.upload(("pose", "vel"))
+        self._cmd.launch()
+        names = ["q", "dqdq", "obs"] + (["dqdv"] if self.velocity_tangent else [])
+        self._buf.download(names)
+        return h["q"], h["dqdq"], (h["dqdv"] if self.velocity_tangent else None), h["obs"]
