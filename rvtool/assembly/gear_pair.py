@@ -22,7 +22,7 @@ from exudyn_user_elements.contact_element import ContactElement
 from ..contact.involute_set import GearMesh, InvoluteContactSet
 from ..errors import RvtoolInputError, SolverFailure
 from ..geometry.involute import InvolutePair
-from ..protocols.equilibrium import static_settings
+from ..solver.static import static_settings
 
 STEEL_DENSITY = 7850.0
 """kg/m^3 (gear body inertia as a solid disk on the reference circle; irrelevant to statics)."""
