@@ -55,8 +55,6 @@ def _kernels(model, B, device):
     return out
 
 
-def _dev(k):
-    return k._buf.dev if hasattr(k, "_buf") else k._dev
 
 
 def _time(fn, reps):
@@ -100,29 +98,28 @@ def main(argv=None):
                     r[key].append(None)
                 continue
             kg, _ = gpu_k[fam]
-            D = _dev(kg)
 
             def cuda_eval():
-                D["pose"].assign(pose)
+                kg.device_array("pose").assign(pose)
                 if with_vel:
-                    D["vel"].assign(vel)
-                kg._cmd.launch()
-                return D["q"].numpy()
+                    kg.device_array("vel").assign(vel)
+                kg.launch_recorded()
+                return kg.device_array("q").numpy()
             q_gpu = cuda_eval()
             r["max_rel_err_cuda_vs_cpu"].append(float(np.max(np.abs(q_gpu - q_cpu)) / max(np.max(np.abs(q_cpu)), 1e-30)))
             t = _time(cuda_eval, reps)
             r["us_per_eval_cuda"].append(1e6 * t)
             r["contacts_per_s_cuda"].append(n / t)
             with wp.ScopedCapture(device="cuda:0") as cap:
-                kg._cmd.launch()
+                kg.launch_recorded()
             graph = cap.graph
 
             def graph_eval():
-                D["pose"].assign(pose)
+                kg.device_array("pose").assign(pose)
                 if with_vel:
-                    D["vel"].assign(vel)
+                    kg.device_array("vel").assign(vel)
                 wp.capture_launch(graph)
-                return D["q"].numpy()
+                return kg.device_array("q").numpy()
             r["us_per_eval_cuda_graph"].append(1e6 * _time(graph_eval, reps))
     for fam, r in rows.items():
         cross = None

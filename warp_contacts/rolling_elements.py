@@ -194,6 +194,13 @@ class RollingElementKernel:
                                       dev["pose"], dev["vel"]],
                               outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs", "aux")], record_cmd=True)
 
+    def device_array(self, name):
+        return self._buf.dev[name]
+    def launch_recorded(self):
+        """Replay the recorded launch on the device-resident arrays as they are (no host
+        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``)."""
+        self._cmd.launch()
+
     def evaluate(self, pose, vel=None):
         """Same results as :func:`rolling_elements_ref.evaluate` (NumPy arrays owned by this
         object, overwritten by the next call); ``vel=None`` means zero velocities."""
