@@ -114,7 +114,7 @@ class BatchContactEvaluator:
         self.n_evaluations = 0
         self._scatter = None
         self.device_scatter = False
-        # row masks of the peak-load families (names as rvtool.protocols.precision.family_peaks)
+        # row masks of the peak-load families (names as rvtool.model.ReducerModel.family_peaks)
         fam = [cid.split("/")[-1] for cid in bearings.ids]
         self.bearing_families = {f + "s": np.array([c.startswith(f) for c in fam])
                                  for f in ("eccentric_bearing", "main_bearing", "input_bearing")}
@@ -202,7 +202,7 @@ class BatchContactEvaluator:
 
     def family_peaks(self, ev):
         """{family: (B,) peak normal force [N]} of a :class:`BatchEvaluation` (zero velocity
-        states: families as :func:`rvtool.protocols.precision.family_peaks`)."""
+        states: families as :func:`rvtool.model.ReducerModel.family_peaks`)."""
         from warp_contacts.circle_pairs_ref import O_FN
 
         def per_copy(rows_copy, f):

@@ -42,11 +42,6 @@ def te_metrics(te, *, n_revolutions=1.0, n_peaks=10, remove_mean=True):
             "orders": orders, "amplitudes": amp, "peak_orders": orders[idx], "peak_amplitudes": amp[idx]}
 
 
-def family_peaks(model, q):
-    """Peak row normal force [N] per contact family of the model at state q (zero velocity)."""
-    return model.family_peaks(q)
-
-
 def mesh_forces(model, q):
     """Per member of the main mesh (a wheel), the normal force of each contact [N] (slices
     summed) at state q: (n_members, n_contacts)."""

@@ -9,7 +9,7 @@ from ..assembly import build
 from ..solver import RunSpec
 from ..solver.static import StaticSolver
 from ..units import ARCSEC_PER_RAD
-from .precision import dynamic_te, family_peaks, mesh_forces, quasi_static_te, te_metrics
+from .precision import dynamic_te, mesh_forces, quasi_static_te, te_metrics
 
 
 def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_per_mesh=None,
@@ -30,7 +30,7 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
     model.set_output_torque(-np.sign(ratio) * T)
     q_rated = solver.solve(0.0)
     F_rated = mesh_forces(model, q_rated)
-    peaks_rated = family_peaks(model, q_rated)
+    peaks_rated = model.family_peaks(q_rated)
 
     # quasi-static TE over the interval
     qs = quasi_static_te(model, torque=T, input_angles=angles)

@@ -157,12 +157,7 @@ class StaticSolver:
     def kinematic_vector(self, input_angle):
         """Kinematic state as displacement coordinates of the system's ODE2 vector."""
         m = self.model
-        q = np.zeros(m.mbs.systemData.ODE2Size())
-        kin = m.kinematic_state(input_angle).poses
-        for b, node in enumerate(m.nodes):
-            ref = np.asarray(m.mbs.GetNodeParameter(node, "referenceCoordinates"))
-            q[np.asarray(m.mbs.systemData.GetNodeLTGODE2(node))] = kin[b] - ref
-        return q
+        return m.body_vector(m.kinematic_state(input_angle).poses - m.reference)
 
     def solve(self, input_angle, previous_angle=None):
         """Equilibrium at ``input_angle`` with the model's current loads; returns q. The angle
