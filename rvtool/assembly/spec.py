@@ -291,7 +291,11 @@ _SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact"
              "input_bearing": BallBearingSpec, "bodies": Bodies, "housing": Housing}
 
 
-def _build(cls, section, data):
+def build_section(cls, section, data):
+    """Construct the component spec ``cls`` from the design-file table ``data`` of ``[section]``:
+    lists become tuples, unknown keys and type errors are reported with the section name, and a
+    component's own validation error is prefixed with the section so it names the key path
+    (e.g. ``wheels.eccentricity``). Every topology's design loader uses this one function."""
     names = {f.name for f in dataclasses.fields(cls)}
     unknown = set(data) - names
     if unknown:
@@ -313,8 +317,8 @@ def design_from_dict(d):
     for sec, cls in _SECTIONS.items():
         if sec not in d and sec not in ("bodies", "housing"):
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
-        kw[sec] = _build(cls, sec, d.pop(sec, {}))
-    return _build(CycloidDesign, "design", {**d, **kw})
+        kw[sec] = build_section(cls, sec, d.pop(sec, {}))
+    return build_section(CycloidDesign, "design", {**d, **kw})
 
 
 def load_design(path):
