@@ -36,10 +36,10 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNo
 
 from exudyn_user_elements.contact_element import ContactElement, PortBodies
 
+from ..bearings.reducer import ball_rows
 from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiffness
 from ..errors import RvtoolInputError
-from ..geometry.cycloid import CycloidProfile
 from ..geometry.eccentric import journal_centre, journal_velocity
 from ..model import BodyCoordinate, Family, ReducerModel
 from .spec import CycloidDesign, replace
@@ -54,7 +54,7 @@ class CycloidKinematics:
 
     def __init__(self, design):
         self.eccentricity = design.wheels.eccentricity
-        self.phases = np.deg2rad(np.asarray(design.wheels.phases_deg[:design.n_wheels], float))
+        self.phases = np.asarray(design.wheels.phases[:design.n_wheels], float)
         self.z_g = design.pins.n_pins - 1
         self.n_wheels = design.n_wheels
 
@@ -121,15 +121,18 @@ class CycloidModel(ReducerModel):
         zg = zp - 1
         f_out = f_in / zg
         eb, mb, ib = self.design.eccentric_bearing, self.design.main_bearing, self.design.input_bearing
-        return {
+        out = {
             "input_hz": f_in, "output_hz": f_out, "mesh_hz": zp * f_in,
             # eccentric needle bearing: journal (input) against the wheel bore (wheel speed -f_out)
             "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
                                                      2 * eb.inner_radius + eb.roller_diameter),
-            "main_bearing": bearing_frequencies(f_out, mb.n_balls, mb.ball_diameter, mb.pitch_diameter,
-                                                mb.contact_angle_deg),
-            "input_bearing": bearing_frequencies(f_in, ib.n_balls, ib.ball_diameter, ib.pitch_diameter),
         }
+        for name, spec, f_ring in (("main_bearing", mb, f_out), ("input_bearing", ib, f_in)):
+            if spec is not None:
+                row = ball_rows(spec)[0]
+                out[name] = bearing_frequencies(f_ring, row.n_balls, row.ball_diameter, row.pitch_diameter,
+                                                row.contact_angle)
+        return out
 
     def draw_section(self, ax, q):
         """Wheel profiles at their state-q poses, the ring pins and the contact forces."""
@@ -169,13 +172,16 @@ def lumped_needle_law(design):
 def lumped_ball_law(spec):
     """Lumped radial law F_r = K delta_r^(3/2) of a ball bearing (row or pair): Palmgren's ball
     approach delta = 4.36e-4 Q^(2/3) / D^(1/3) [mm, N] for both race contacts together and
-    Stribeck's F_r = Z Q_max cos(alpha) / 4.37 with delta_max = delta_r cos(alpha).
+    Stribeck's F_r = Z Q_max cos(alpha) / 4.37 with delta_max = delta_r cos(alpha) per row; the
+    rows of a pair carry the radial load side by side (their K add).
     Returns (K [N m^-3/2], 3/2)."""
-    Z = spec.n_balls * (2 if spec.kind == "angular_contact_pair" else 1)
-    ca = np.cos(np.deg2rad(spec.contact_angle_deg))
-    D = spec.ball_diameter * 1e3
-    k_mm = (1.0 / (4.36e-4 * D ** (-1 / 3))) ** 1.5             # Q = k_mm delta^1.5, N and mm
-    return Z * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5, 1.5
+    K = 0.0
+    for row in ball_rows(spec):
+        ca = np.cos(row.contact_angle)
+        D = row.ball_diameter * 1e3
+        k_mm = (1.0 / (4.36e-4 * D ** (-1 / 3))) ** 1.5             # Q = k_mm delta^1.5, N and mm
+        K += row.n_balls * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5
+    return K, 1.5
 
 
 def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1)):
@@ -189,7 +195,7 @@ def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 
     m_w, J_w = _mass_wheel(d)
     ref = np.zeros((nw + 2, 3))
     for k in range(nw):
-        ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, np.deg2rad(d.wheels.phases_deg[k]))
+        ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, d.wheels.phases[k])
     masses = [(d.bodies.shaft_mass, d.bodies.shaft_inertia)] + [(m_w, J_w)] * nw + \
              [(d.bodies.flange_mass, d.bodies.flange_inertia)]
     nodes = []
@@ -232,8 +238,8 @@ def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 
 
 def pin_meshes(design, *, offset=0, prefix=""):
     """(profiles, :class:`WheelPinMesh` per wheel) of one reducer whose bodies start at index
-    ``offset`` (wheel k is body offset + 1 + k); pins on ground with the design's pin
-    deviations; names ``prefix + "wheel{k}"``."""
+    ``offset`` (wheel k is body offset + 1 + k): the design's profile turned to wheel k's
+    assembly phase, pins on ground with the design's pin deviations; names ``prefix + "wheel{k}"``."""
     d = design
     zg = d.pins.n_pins - 1
     pc = d.pin_contact
@@ -246,11 +252,8 @@ def pin_meshes(design, *, offset=0, prefix=""):
     friction = FrictionLaw(model=FrictionModel.REGULARIZED if pc.mu > 0 else FrictionModel.NONE, mu_kinetic=pc.mu)
     profiles, meshes = [], []
     for k in range(d.n_wheels):
-        phi = np.deg2rad(d.wheels.phases_deg[k])
-        prof = CycloidProfile(pin_circle_radius=d.pins.pin_circle_radius, pin_radius=d.pins.pin_radius,
-                              n_pins=d.pins.n_pins, generating_eccentricity=d.wheels.e_g,
-                              equidistant_mod=d.wheels.equidistant_mod, offset_mod=d.wheels.offset_mod,
-                              rotation_mod=d.wheels.rotation_mod - phi / zg)
+        # the conjugate tooth phase of a journal at phi_k: every wheel starts in mesh
+        prof = dataclasses.replace(d.profile, rotation_mod=d.profile.rotation_mod - d.wheels.phases[k] / zg)
         profiles.append(prof)
         kw = dict(profile=prof, wheel_body=offset + 1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
                   wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,
@@ -261,21 +264,6 @@ def pin_meshes(design, *, offset=0, prefix=""):
             kw["pin_radius"] = d.pins.pin_radius + d.pins.radius_error
         meshes.append(WheelPinMesh(**kw))
     return profiles, meshes
-
-
-def output_pin_mechanism(design):
-    """Plain flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach)."""
-    from ..output_pins.calibration import hertz_calibrated_coefficient
-    from ..output_pins.spec import OutputPinMechanism, PinMode
-    d = design
-    op = d.output_pins
-    width = d.wheels.width
-    k_op = hertz_calibrated_coefficient(op.reference_force, op.pin_radius, op.hole_radius, width,
-                                        d.material.youngs_modulus, d.material.poisson_ratio)
-    return OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
-                              n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
-                              coefficient=k_op, contact_length=width, n_slices=op.n_slices,
-                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN)
 
 
 def lumped_bearing_contacts(design, *, offset=0, prefix=""):
@@ -291,23 +279,25 @@ def lumped_bearing_contacts(design, *, offset=0, prefix=""):
     for k in range(nw):
         contacts.append(CircleContact(
             body_a=offset + SHAFT, body_b=offset + 1 + k,
-            centre_a=journal_centre(d.wheels.eccentricity, np.deg2rad(d.wheels.phases_deg[k])),
+            centre_a=journal_centre(d.wheels.eccentricity, d.wheels.phases[k]),
             centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + eb.radial_clearance + 1e-12, internal=True,
             normal=NormalLaw(law="power", stiffness=k_n, exponent=p_n, damping=50.0, ramp_depth=1e-6),
             name=f"{prefix}eccentric_bearing{k}"))
     main = d.main_bearing
-    if main.kind != "locked":
+    if main is not None:
+        row = ball_rows(main)[0]       # the lumped circle of a pair: its first row's pitch circle and clearance
         contacts.append(CircleContact(
             body_a=offset + nw + 1, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0),
-            radius_a=0.5 * main.pitch_diameter, radius_b=0.5 * main.pitch_diameter + main.radial_clearance + 1e-12,
+            radius_a=0.5 * row.pitch_diameter, radius_b=0.5 * row.pitch_diameter + row.radial_clearance + 1e-12,
             internal=True, normal=NormalLaw(law="power", stiffness=lumped_ball_law(main)[0], exponent=1.5,
                                             damping=200.0, ramp_depth=1e-6),
             name=f"{prefix}main_bearing"))
     inp = d.input_bearing
-    if inp.kind != "locked":
+    if inp is not None:
+        row = ball_rows(inp)[0]
         contacts.append(CircleContact(
             body_a=offset + SHAFT, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0),
-            radius_a=0.5 * inp.pitch_diameter, radius_b=0.5 * inp.pitch_diameter + inp.radial_clearance + 1e-12,
+            radius_a=0.5 * row.pitch_diameter, radius_b=0.5 * row.pitch_diameter + row.radial_clearance + 1e-12,
             # two input bearings share the radial load
             internal=True, normal=NormalLaw(law="power", stiffness=2 * lumped_ball_law(inp)[0], exponent=1.5,
                                             damping=50.0, ramp_depth=1e-6),
@@ -358,7 +348,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
     from ..output_pins.evaluator import OutputPinEvaluator
-    op_eval = OutputPinEvaluator(output_pin_mechanism(d), name="output_pins", flange=nw + 1,
+    op_eval = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
                                  wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2, backend=backend,
                                  precision=precision, device=device)
     elements["output_pins"] = ContactElement(mbs, nodes, op_eval)

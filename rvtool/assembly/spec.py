@@ -1,6 +1,29 @@
-"""Cycloid reducer specification: plain data (TOML) loaded into frozen
-dataclasses and validated on load; errors name the parameter (with its
-section) and its valid range."""
+"""Cycloid reducer specification: one tree of component specs loaded from a design file.
+
+Every section of a design file IS a component spec (frozen dataclass, SI units, validated on
+construction): ``[profile]`` a :class:`~rvtool.geometry.cycloid.CycloidProfile`, ``[output_pins]``
+an :class:`~rvtool.output_pins.spec.OutputPinMechanism`, ``[eccentric_bearing]`` a
+:class:`~rvtool.bearings.spec.NeedleBearing`, ``[main_bearing]`` / ``[input_bearing]`` a
+:class:`~rvtool.bearings.spec.BallBearing` or :class:`~rvtool.bearings.spec.AngularContactPair`
+(by ``kind``), and ``[pins]``, ``[wheels]``, ``[pin_contact]``, ``[bodies]``, ``[housing]`` the
+classes below. The file's keys are the spec's field names; no code copies fields from one spec
+into another. Three loader rules, all in :func:`build_section` and :func:`design_from_dict`:
+
+* units: the file is SI except angles, which it gives in degrees under the field name plus
+  ``_deg`` (``phases_deg``, ``contact_angle_deg``, ``phase_deg``); :func:`build_section` converts
+  them to the field [rad] (the only place a unit is converted);
+* links (:data:`LINKS`): a key that another section already states (the profile's pin circle, the
+  output pins' contact length = the wheel width, ...) may be left out and then takes that value,
+  so the file states each quantity once; material constants of a component default to
+  ``[material]`` (:data:`MATERIAL_KEYS`);
+* a ``kind`` key selects the spec class of a bearing section (:data:`BEARING_KINDS`); an
+  angular-contact pair's section lists the pair's keys and its (identical) rows' keys.
+
+Validation errors name the key path in the file (``main_bearing.ball_diameter``) and the valid
+range. A design keeps its file-form data (:attr:`CycloidDesign.source`), so :func:`replace`
+re-loads the changed data and the links follow a change (e.g. of the wheel width).
+"""
+import copy
 import dataclasses
 import math
 import tomllib
@@ -8,7 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..bearings.spec import NeedleBearing
+from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
+from ..geometry.cycloid import CycloidProfile
+from ..output_pins.spec import OutputPinMechanism
 from ..errors import RvtoolInputError
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
@@ -56,20 +81,17 @@ class Pins:
 
 @dataclass(frozen=True, kw_only=True)
 class Wheels:
-    """Cycloid wheels: assembly eccentricity e [m] and nominal generating eccentricity e_g [m]
-    (separate inputs), width [m], axial midplanes [m], eccentric phases [deg], face-width slices,
-    profile table resolution, profile modifications [m, rad], uniform clearance [m] and the
+    """Cycloid wheels: assembly eccentricity e [m] of the journals (the profile's generating
+    eccentricity e_g is ``profile.generating_eccentricity``, a separate input), width [m], axial
+    midplanes [m] and eccentric journal phases [rad] (file: ``phases_deg``), one per wheel,
+    face-width slices, profile table resolution, uniform clearance [m] at the pins and the
     contact search ("discrete" table search or "analytic" closest point)."""
     eccentricity: float
-    generating_eccentricity: float | None = None
     width: float
     midplanes: tuple = (0.0,)
-    phases_deg: tuple = (0.0,)
+    phases: tuple = (0.0,)
     n_slices: int = 1
     samples_per_tooth: int = 120
-    equidistant_mod: float = 0.0
-    offset_mod: float = 0.0
-    rotation_mod: float = 0.0
     clearance: float = 0.0
     n_teeth: int | None = None
     search: str = "discrete"
@@ -77,19 +99,16 @@ class Wheels:
     def __post_init__(self):
         check_positive("wheels.eccentricity", self.eccentricity)
         check_positive("wheels.width", self.width)
-        if len(self.midplanes) != len(self.phases_deg):
-            raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases_deg "
-                                   f"({len(self.phases_deg)}) must have one entry per wheel")
+        if len(self.midplanes) != len(self.phases):
+            raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases "
+                                   f"({len(self.phases)}) must have one entry per wheel")
         if not 1 <= len(self.midplanes) <= 2:
             raise RvtoolInputError(f"wheels: {len(self.midplanes)} wheels; valid range [1, 2]")
+        check_finite("wheels.phases", np.asarray(self.phases, float))
         if not isinstance(self.n_slices, int) or self.n_slices < 1:
             raise RvtoolInputError(f"wheels.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
         if self.search not in ("discrete", "analytic"):
             raise RvtoolInputError(f"wheels.search = {self.search!r}; valid choices are ['discrete', 'analytic']")
-
-    @property
-    def e_g(self):
-        return self.eccentricity if self.generating_eccentricity is None else self.generating_eccentricity
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -112,46 +131,6 @@ class PinContact:
         check_positive("pin_contact.reference_force", self.reference_force)
         check_nonnegative("pin_contact.damping", self.damping)
         check_nonnegative("pin_contact.mu", self.mu)
-
-
-@dataclass(frozen=True, kw_only=True)
-class OutputPins:
-    """Flange pins in wheel holes: n_pins, pin_circle_radius [m], pin_radius [m], hole_radius [m],
-    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices."""
-    n_pins: int
-    pin_circle_radius: float
-    pin_radius: float
-    hole_radius: float
-    reference_force: float = 1000.0
-    n_slices: int = 4
-
-    def __post_init__(self):
-        check_positive("output_pins.pin_circle_radius", self.pin_circle_radius)
-        check_positive("output_pins.pin_radius", self.pin_radius)
-        check_range("output_pins.hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
-
-
-@dataclass(frozen=True, kw_only=True)
-class BallBearingSpec:
-    """Ball bearing (row or back-to-back pair): kind ("deep_groove" | "angular_contact_pair"),
-    n_balls, ball_diameter [m], pitch_diameter [m], contact_angle_deg, groove_curvature_ratio,
-    radial_clearance [m], axial_preload [N], row_spacing [m]."""
-    kind: str = "deep_groove"
-    n_balls: int
-    ball_diameter: float
-    pitch_diameter: float
-    contact_angle_deg: float = 0.0
-    groove_curvature_ratio: float = 0.52
-    radial_clearance: float = 0.0
-    axial_preload: float = 0.0
-    row_spacing: float = 0.0
-
-    def __post_init__(self):
-        if self.kind not in ("deep_groove", "angular_contact_pair", "locked"):
-            raise RvtoolInputError(f"bearing kind = {self.kind!r}; valid: ['deep_groove', 'angular_contact_pair', 'locked']")
-        check_positive("ball_diameter", self.ball_diameter)
-        check_positive("pitch_diameter", self.pitch_diameter)
-        check_range("groove_curvature_ratio", self.groove_curvature_ratio, 0.5, 1.0, low_open=True)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -234,21 +213,26 @@ class Bodies:
 
 @dataclass(frozen=True, kw_only=True)
 class CycloidDesign:
-    """A single-stage cycloid drive with one or two wheels (see rvtool/designs/rd40.toml)."""
+    """A single-stage cycloid drive with one or two wheels (see rvtool/designs/rd40.toml): the
+    tree of component specs, one per section. ``main_bearing`` / ``input_bearing`` are None
+    where the file says ``kind = "locked"`` (the body held on its axis, no bearing law)."""
     name: str
     n_wheels: int
     rated_torque: float
     input_speed_rpm: float
     material: Material
     pins: Pins
+    profile: CycloidProfile
     wheels: Wheels
     pin_contact: PinContact
-    output_pins: OutputPins
+    output_pins: OutputPinMechanism
     eccentric_bearing: NeedleBearing
-    main_bearing: BallBearingSpec
-    input_bearing: BallBearingSpec
+    main_bearing: BallBearing | AngularContactPair | None
+    input_bearing: BallBearing | None
     bodies: Bodies = field(default_factory=Bodies)
     housing: Housing = field(default_factory=Housing)
+    #: the file-form data this design was loaded from (what :func:`replace` changes and re-loads)
+    source: dict | None = field(default=None, compare=False, hash=False, repr=False)
 
     def __post_init__(self):
         if self.n_wheels != len(self.wheels.midplanes):
@@ -259,6 +243,14 @@ class CycloidDesign:
         if zg != self.pins.n_pins - 1:
             raise RvtoolInputError(f"wheels.n_teeth = {zg} with pins.n_pins = {self.pins.n_pins}: only Z_pins = Z_wheel + 1 "
                                    f"is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
+        # the profile is generated by the ring it meshes with (it may leave these keys out)
+        for key in ("n_pins", "pin_circle_radius", "pin_radius"):
+            if getattr(self.profile, key) != getattr(self.pins, key):
+                raise RvtoolInputError(f"profile.{key} = {getattr(self.profile, key)!r} differs from pins.{key}; "
+                                       f"valid value {getattr(self.pins, key)!r} (leave the key out to take it)")
+        if self.output_pins.n_wheels != self.n_wheels:
+            raise RvtoolInputError(f"output_pins.wheel_midplanes has {self.output_pins.n_wheels} entries; valid: one per "
+                                   f"wheel ({self.n_wheels}; leave the key out to take wheels.midplanes)")
         needed = self.wheels.eccentricity + self.output_pins.pin_radius
         if self.output_pins.hole_radius < needed - 1e-4:
             raise RvtoolInputError(f"output_pins.hole_radius = {self.output_pins.hole_radius} m cannot pass the eccentric "
@@ -286,21 +278,65 @@ class CycloidDesign:
         return replace(self, pin_contact={"law": "line", "stiffness": factor * k})
 
 
-_SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact": PinContact,
-             "output_pins": OutputPins, "eccentric_bearing": NeedleBearing, "main_bearing": BallBearingSpec,
-             "input_bearing": BallBearingSpec, "bodies": Bodies, "housing": Housing}
+#: Bearing sections: the ``kind`` key selects the component spec (None: the body is held, no bearing).
+BEARING_KINDS = {"deep_groove": BallBearing, "angular_contact": BallBearing,
+                 "angular_contact_pair": AngularContactPair, "locked": None}
+
+#: Sections of a cycloid design file and their component specs (bearing sections: by ``kind``), in
+#: dependency order (a section's links read sections before it).
+SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "profile": CycloidProfile,
+            "pin_contact": PinContact, "output_pins": OutputPinMechanism, "eccentric_bearing": NeedleBearing,
+            "main_bearing": BEARING_KINDS, "input_bearing": BEARING_KINDS, "bodies": Bodies, "housing": Housing}
+OPTIONAL_SECTIONS = ("profile", "bodies", "housing")
+
+#: Keys a section may leave out because another section states the quantity:
+#: section -> {key: "section.key" it takes}. The file states each quantity once.
+LINKS = {
+    # the wheel profile is generated by the ring it meshes with; e_g = e unless given separately
+    "profile": {"n_pins": "pins.n_pins", "pin_circle_radius": "pins.pin_circle_radius",
+                "pin_radius": "pins.pin_radius", "generating_eccentricity": "wheels.eccentricity"},
+    # flange pins run in holes on their own pin circle, along the wheels' width, at the wheels' midplanes
+    "output_pins": {"hole_circle_radius": "output_pins.pin_circle_radius", "contact_length": "wheels.width",
+                    "wheel_midplanes": "wheels.midplanes"},
+}
+
+#: Material constants a component spec may declare; where its section leaves them out they are [material]'s.
+MATERIAL_KEYS = ("youngs_modulus", "poisson_ratio", "density")
+
+
+def _file_units(cls, section, data):
+    """The one unit conversion of a design file: ``NAME_deg`` [deg] -> field NAME [rad] of ``cls``
+    (a number or a list of numbers); every other key is SI already."""
+    names = {f.name for f in dataclasses.fields(cls)}
+    out = {}
+    for key, value in data.items():
+        stem = key[:-4] if key.endswith("_deg") else None
+        if stem is not None and stem in names and key not in names:
+            if stem in data:
+                raise RvtoolInputError(f"[{section}] gives both {stem} [rad] and {key} [deg]; give one")
+            try:
+                out[stem] = (tuple(float(np.deg2rad(v)) for v in value) if isinstance(value, (list, tuple))
+                             else float(np.deg2rad(value)))
+            except TypeError:
+                raise RvtoolInputError(f"{section}.{key} = {value!r} must be a number of degrees (or a list)") from None
+        else:
+            out[key] = value
+    return out
 
 
 def build_section(cls, section, data):
     """Construct the component spec ``cls`` from the design-file table ``data`` of ``[section]``:
-    lists become tuples, unknown keys and type errors are reported with the section name, and a
-    component's own validation error is prefixed with the section so it names the key path
+    ``NAME_deg`` keys become the field NAME in radians (the one unit conversion), lists become
+    tuples, unknown keys and type errors are reported with the section name, and a component's own
+    validation error is prefixed with the section so it names the key path
     (e.g. ``wheels.eccentricity``). Every topology's design loader uses this one function."""
+    data = _file_units(cls, section, data)
     names = {f.name for f in dataclasses.fields(cls)}
     unknown = set(data) - names
     if unknown:
         raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(names)}")
-    kw = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
+    kw = {k: tuple(tuple(e) if isinstance(e, list) else e for e in v) if isinstance(v, list) else v
+          for k, v in data.items()}
     try:
         return cls(**kw)
     except TypeError as exc:
@@ -311,14 +347,65 @@ def build_section(cls, section, data):
         raise RvtoolInputError(msg if msg.startswith(section + ".") or section == "design" else f"{section}.{msg}") from None
 
 
+def _bearing_section(section, data):
+    """A bearing section: ``kind`` selects the spec; a pair's keys that are not the pair's own
+    are those of its two identical rows."""
+    data = dict(data)
+    kind = data.pop("kind", "deep_groove")
+    if kind not in BEARING_KINDS:
+        raise RvtoolInputError(f"{section}.kind = {kind!r}; valid choices are {list(BEARING_KINDS)}")
+    cls = BEARING_KINDS[kind]
+    if cls is None:
+        if data:
+            raise RvtoolInputError(f"[{section}] is locked (no bearing): keys {sorted(data)} are not used")
+        return None
+    if kind == "angular_contact" and _file_units(BallBearing, section, data).get("contact_angle", 0.0) <= 0:
+        raise RvtoolInputError(f"{section}.contact_angle_deg must be in (0, 90) deg for kind = 'angular_contact'")
+    if cls is AngularContactPair:
+        own = {f.name for f in dataclasses.fields(AngularContactPair)} - {"rows"}
+        row = build_section(BallBearing, section, {k: v for k, v in data.items() if k not in own})
+        return build_section(AngularContactPair, section, {**{k: v for k, v in data.items() if k in own},
+                                                           "rows": (row, row)})
+    return build_section(cls, section, data)
+
+
+def _with_links(section, cls, data, built):
+    """``data`` with the keys it leaves out filled from :data:`LINKS` (from the specs already
+    built, or from the section's own keys) and from [material]."""
+    out = dict(data)
+    names = {f.name for f in dataclasses.fields(cls)} if cls is not None else set()
+    for key, path in LINKS.get(section, {}).items():
+        if key in out or key + "_deg" in out:
+            continue
+        src, src_key = path.split(".")
+        if src == section:
+            if src_key in out:
+                out[key] = out[src_key]
+        else:
+            out[key] = getattr(built[src], src_key)
+    for key in MATERIAL_KEYS:
+        if key in names and key not in out:
+            out[key] = getattr(built["material"], key)
+    return out
+
+
 def design_from_dict(d):
+    """A validated :class:`CycloidDesign` from file-form data (the parsed TOML of a design file)."""
+    source = copy.deepcopy(dict(d))
     d = dict(d)
-    kw = {}
-    for sec, cls in _SECTIONS.items():
-        if sec not in d and sec not in ("bodies", "housing"):
+    built = {}
+    for sec, cls in SECTIONS.items():       # in dependency order: a link reads a section built before
+        if sec not in d and sec not in OPTIONAL_SECTIONS:
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
-        kw[sec] = build_section(cls, sec, d.pop(sec, {}))
-    return build_section(CycloidDesign, "design", {**d, **kw})
+        data = d.pop(sec, {})
+        if not isinstance(data, dict):
+            raise RvtoolInputError(f"[{sec}] must be a table of keys; got {data!r}")
+        if cls is BEARING_KINDS:
+            kind = BEARING_KINDS.get(data.get("kind", "deep_groove"))
+            built[sec] = _bearing_section(sec, _with_links(sec, kind and BallBearing, data, built))
+        else:
+            built[sec] = build_section(cls, sec, _with_links(sec, cls, data, built))
+    return build_section(CycloidDesign, "design", {**d, **built, "source": source})
 
 
 def load_design(path):
@@ -327,11 +414,26 @@ def load_design(path):
         return design_from_dict(tomllib.load(fh))
 
 
+def _merge(table, changes):
+    """``table`` with ``changes`` written in; a key replaces its ``_deg`` form and vice versa."""
+    out = dict(table)
+    for key, value in changes.items():
+        out.pop(key[:-4] if key.endswith("_deg") else key + "_deg", None)
+        out[key] = [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, tuple) else value
+    return out
+
+
 def replace(design, **sections):
-    """A copy of ``design`` with sections replaced by dicts of changed fields, e.g.
-    ``replace(d, wheels={"n_slices": 4}, n_wheels=1)``."""
-    kw = {}
-    for k, v in sections.items():
-        cur = getattr(design, k)
-        kw[k] = dataclasses.replace(cur, **v) if isinstance(v, dict) else v
-    return dataclasses.replace(design, **kw)
+    """A copy of ``design`` with sections replaced by dicts of changed keys (file keys: field names,
+    or ``NAME_deg`` for an angle in degrees) and top-level values, e.g.
+    ``replace(d, wheels={"n_slices": 4}, n_wheels=1)``. The changed file-form data is loaded
+    again, so links follow (a new wheel width is the output pins' contact length)."""
+    if design.source is None:
+        raise RvtoolInputError("replace needs a design loaded from file-form data (load_design / design_from_dict)")
+    data = copy.deepcopy(design.source)
+    for key, value in sections.items():
+        if isinstance(value, dict):
+            data[key] = _merge(data.get(key, {}), value)
+        else:
+            data[key] = value
+    return design_from_dict(data)

@@ -13,6 +13,7 @@ condensation with a massless sleeve and the station compliance of Eq.
 import math
 from dataclasses import dataclass, field
 from enum import Enum
+from functools import cached_property
 
 import numpy as np
 
@@ -20,7 +21,7 @@ from warp_contacts import output_pins_ref as ref
 
 from ..errors import RvtoolInputError
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
-from .calibration import PIN_EXPONENT
+from .calibration import PIN_EXPONENT, hertz_calibrated_coefficient
 
 
 class PinMode(str, Enum):
@@ -89,7 +90,10 @@ class OutputPinMechanism:
     hole_circle_radius: radius of the hole centres on each wheel [m].
     n_pins: number of pins, equally spaced from ``phase`` [rad].
     pin_radius: outer pin (sleeve) radius r_p [m]; hole_radius: R_h [m] > r_p.
-    coefficient: whole-contact coefficient k [N m^-p]; exponent: p [-] (10/9).
+    coefficient: whole-contact coefficient k [N m^-p], or None: k calibrated so that the law
+    meets the Hertz pin-in-hole approach at ``reference_force`` [N] (pin and flange of
+    ``youngs_modulus`` [Pa], ``poisson_ratio`` [-]); :attr:`law_coefficient` is the k in use.
+    exponent: p [-] (10/9).
     contact_length: axial contact width [m], integrated by ``n_slices`` equal-weight
     midpoint slices (stations s relative to each wheel midplane).
     wheel_midplanes: axial positions z_i of the wheel midplanes relative to the flange [m].
@@ -102,7 +106,10 @@ class OutputPinMechanism:
     phase: float = 0.0
     pin_radius: float
     hole_radius: float
-    coefficient: float
+    coefficient: float | None = None
+    reference_force: float = 1000.0
+    youngs_modulus: float = 206e9
+    poisson_ratio: float = 0.3
     exponent: float = PIN_EXPONENT
     contact_length: float
     n_slices: int = 4
@@ -125,7 +132,11 @@ class OutputPinMechanism:
         check_finite("phase", self.phase)
         check_positive("pin_radius", self.pin_radius)
         check_range("hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
-        check_nonnegative("coefficient", self.coefficient)
+        if self.coefficient is not None:
+            check_nonnegative("coefficient", self.coefficient)
+        check_positive("reference_force", self.reference_force)
+        check_positive("youngs_modulus", self.youngs_modulus)
+        check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
         check_range("exponent", self.exponent, 1.0)
         check_positive("contact_length", self.contact_length)
         if not isinstance(self.n_slices, (int, np.integer)) or self.n_slices < 1:
@@ -151,6 +162,16 @@ class OutputPinMechanism:
     @property
     def n_wheels(self):
         return len(self.wheel_midplanes)
+
+    @cached_property
+    def law_coefficient(self):
+        """k [N m^-p] of the contact law: ``coefficient``, or the Hertz calibration at
+        ``reference_force`` over ``contact_length`` where it is None."""
+        if self.coefficient is not None:
+            return self.coefficient
+        return hertz_calibrated_coefficient(self.reference_force, self.pin_radius, self.hole_radius,
+                                            self.contact_length, self.youngs_modulus, self.poisson_ratio,
+                                            exponent=self.exponent)
 
     @property
     def stations(self):
@@ -181,7 +202,7 @@ class OutputPinMechanism:
             fp[:, ref.P_XI_HOLE1:ref.P_XI_HOLE1 + 2] = xh
             fp[:, ref.P_R_PIN], fp[:, ref.P_R_HOLE] = self.pin_radius, self.hole_radius
             fp[:, ref.P_OFF0], fp[:, ref.P_OFF1] = self.gap_offsets
-            fp[:, ref.P_K], fp[:, ref.P_EXP] = self.coefficient, self.exponent
+            fp[:, ref.P_K], fp[:, ref.P_EXP] = self.law_coefficient, self.exponent
             fp[:, ref.P_Z0], fp[:, ref.P_Z1] = self.wheel_midplanes
             c = self.compliance
             fp[:, ref.P_C00], fp[:, ref.P_C11] = c.self_compliance_0, c.self_compliance_1
@@ -200,7 +221,7 @@ class OutputPinMechanism:
             fp[k, ref.Q_XI_PIN:ref.Q_XI_PIN + 2] = xp[pin]
             fp[k, ref.Q_XI_HOLE:ref.Q_XI_HOLE + 2] = xh[pin]
             fp[k, ref.Q_R_PIN], fp[k, ref.Q_R_HOLE] = self.pin_radius, self.hole_radius
-            fp[k, ref.Q_OFF], fp[k, ref.Q_K], fp[k, ref.Q_EXP] = self.gap_offsets[w], self.coefficient, self.exponent
+            fp[k, ref.Q_OFF], fp[k, ref.Q_K], fp[k, ref.Q_EXP] = self.gap_offsets[w], self.law_coefficient, self.exponent
             fp[k, ref.Q_Z], fp[k, ref.Q_DISTFLOOR] = self.wheel_midplanes[w], self.sleeve.distance_floor
             ip[k] = (flange, wheels[w])
         return fp, ip
