@@ -34,6 +34,8 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround
 
+from warp_contacts import output_pins_ref as ref
+
 from ..assembly.cycloid import (CycloidKinematics, CycloidModel, add_bodies, body_names, kinematic_poses,
                                lumped_bearing_contacts, pin_meshes)
 from ..assembly.spec import CycloidDesign
@@ -205,7 +207,7 @@ def build_batched(design: CycloidDesign, variants, *, bearing_model="lumped", ba
         op_kernel = OutputPinKernel(op_f, op_i, stations, n_total + 1, PinMode.PLAIN.value, precision, device)
     else:
         op_kernel = _NumpyPlainPins(op_f, op_i, stations)
-    evaluator = BatchContactEvaluator(pin_set, op_kernel, op_i[:, :2], bearings, nb, B)
+    evaluator = BatchContactEvaluator(pin_set, op_kernel, op_i[:, [ref.J_FLANGE, ref.J_WHEEL]], bearings, nb, B)
     elements = BatchedContactElements(mbs, [m.nodes for m in copies], evaluator)
     mbs.Assemble()
     ltg = np.array([np.concatenate([np.asarray(mbs.systemData.GetNodeLTGODE2(n), int) for n in m.nodes])

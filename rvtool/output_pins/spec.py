@@ -211,7 +211,8 @@ class OutputPinMechanism:
             fp[:, ref.P_CLEAR], fp[:, ref.P_RELAX], fp[:, ref.P_KFLOOR] = s.clearance, s.relaxation, s.tangent_floor
             fp[:, ref.P_DETFLOOR], fp[:, ref.P_DISTFLOOR] = s.determinant_floor, s.distance_floor
             fp[:, ref.P_DMIN] = s.indentation_floor
-            ip[:] = (flange, wheels[0], wheels[1], s.updates)
+            ip[:, ref.I_FLANGE], ip[:, ref.I_WHEEL0], ip[:, ref.I_WHEEL1] = flange, wheels[0], wheels[1]
+            ip[:, ref.I_UPDATES] = s.updates
             return fp, ip
         n = self.n_pins * self.n_wheels
         fp = np.zeros((n, ref.N_PLAIN_F))
@@ -223,7 +224,7 @@ class OutputPinMechanism:
             fp[k, ref.Q_R_PIN], fp[k, ref.Q_R_HOLE] = self.pin_radius, self.hole_radius
             fp[k, ref.Q_OFF], fp[k, ref.Q_K], fp[k, ref.Q_EXP] = self.gap_offsets[w], self.law_coefficient, self.exponent
             fp[k, ref.Q_Z], fp[k, ref.Q_DISTFLOOR] = self.wheel_midplanes[w], self.sleeve.distance_floor
-            ip[k] = (flange, wheels[w])
+            ip[k, ref.J_FLANGE], ip[k, ref.J_WHEEL] = flange, wheels[w]
         return fp, ip
 
 
