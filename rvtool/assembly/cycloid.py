@@ -140,7 +140,7 @@ class CycloidModel(ReducerModel):
 
         from ..geometry.cycloid import pin_centres
         for k, prof in enumerate(self.profiles):
-            x = self.reference[1 + k] + q[[self.coordinate_index(1 + k, c) for c in range(3)]]
+            x = self.body_pose(q, 1 + k)
             pts = prof.points(np.linspace(0, 2 * np.pi, 4000))
             c, s = np.cos(x[2]), np.sin(x[2])
             ax.plot(x[0] + c * pts[:, 0] - s * pts[:, 1], x[1] + s * pts[:, 0] + c * pts[:, 1], lw=0.8,
@@ -369,7 +369,18 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                         reg_springs=bodies["reg_springs"], journal_locks=bodies["journal_locks"],
                         structures={} if housing is None else {"housing": housing},
                         mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
-                        housing=housing)
+                        housing=housing, family_specs=family_specs(d, meshes), material=d.material)
+
+
+def family_specs(design, meshes):
+    """{Family: component spec} of the families present: the wheel--pin meshes (one per wheel), the
+    output-pin mechanism and each bearing section's spec."""
+    specs = {Family.PINS: tuple(meshes), Family.OUTPUT_PINS: design.output_pins,
+             Family.ECCENTRIC_BEARINGS: design.eccentric_bearing}
+    for fam, spec in ((Family.MAIN_BEARINGS, design.main_bearing), (Family.INPUT_BEARINGS, design.input_bearing)):
+        if spec is not None:
+            specs[fam] = spec
+    return specs
 
 
 def body_names(n_wheels):
