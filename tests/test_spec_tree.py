@@ -91,3 +91,22 @@ def test_locked_bearing_is_none():
     raw["input_bearing"] = {"kind": "locked", "n_balls": 10}
     with pytest.raises(RvtoolInputError, match=r"\[input_bearing\] is locked"):
         design_from_dict(raw)
+
+
+def test_housing_structure_is_the_annular_housing_spec():
+    from rvtool.structure import AnnularHousingSpec, RayleighDamping
+    d = replace(load_design(RD40), housing={"model": "ports"})
+    st = d.housing.structure
+    assert isinstance(st, AnnularHousingSpec) and isinstance(st.damping, RayleighDamping)
+    assert st.n_ports == d.pins.n_pins and st.material == d.material
+    # nested tables merge key by key; the material link follows [material]
+    d2 = replace(d, housing={"structure": {"mesh_size": 0.006}}, material={"density": 2700.0})
+    assert d2.housing.structure.mesh_size == 0.006 and d2.housing.structure.height == st.height
+    assert d2.housing.structure.material.density == 2700.0
+    with pytest.raises(RvtoolInputError, match=r"housing\.structure\.damping\.damping_ratio"):
+        replace(d, housing={"structure": {"damping": {"damping_ratio": 1.5}}})
+    raw = _raw()
+    del raw["housing"]["structure"]
+    raw["housing"]["model"] = "ports"
+    with pytest.raises(RvtoolInputError, match=r"housing.model = 'ports' needs the table \[housing.structure\]"):
+        design_from_dict(raw)

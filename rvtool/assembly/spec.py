@@ -1,21 +1,23 @@
 """Cycloid reducer specification: one tree of component specs loaded from a design file.
 
 Every section of a design file IS a component spec (frozen dataclass, SI units, validated on
-construction): ``[profile]`` a :class:`~rvtool.geometry.cycloid.CycloidProfile`, ``[output_pins]``
+construction): ``[material]`` an :class:`~rvtool.structure.ElasticMaterial`, ``[profile]`` a
+:class:`~rvtool.geometry.cycloid.CycloidProfile`, ``[output_pins]``
 an :class:`~rvtool.output_pins.spec.OutputPinMechanism`, ``[eccentric_bearing]`` a
 :class:`~rvtool.bearings.spec.NeedleBearing`, ``[main_bearing]`` / ``[input_bearing]`` a
 :class:`~rvtool.bearings.spec.BallBearing` or :class:`~rvtool.bearings.spec.AngularContactPair`
-(by ``kind``), and ``[pins]``, ``[wheels]``, ``[pin_contact]``, ``[bodies]``, ``[housing]`` the
-classes below. The file's keys are the spec's field names; no code copies fields from one spec
-into another. Three loader rules, all in :func:`build_section` and :func:`design_from_dict`:
+(by ``kind``), ``[housing.structure]`` an :class:`~rvtool.structure.AnnularHousingSpec`, and
+``[pins]`` (the ring), ``[wheels]``, ``[pin_contact]``, ``[bodies]``, ``[housing]`` the classes
+below. The file's keys are the spec's field names (a sub-table is a nested spec); no code copies
+fields from one spec into another. Three loader rules, all in :func:`build_section` and :func:`design_from_dict`:
 
 * units: the file is SI except angles, which it gives in degrees under the field name plus
   ``_deg`` (``phases_deg``, ``contact_angle_deg``, ``phase_deg``); :func:`build_section` converts
   them to the field [rad] (the only place a unit is converted);
 * links (:data:`LINKS`): a key that another section already states (the profile's pin circle, the
   output pins' contact length = the wheel width, ...) may be left out and then takes that value,
-  so the file states each quantity once; material constants of a component default to
-  ``[material]`` (:data:`MATERIAL_KEYS`);
+  so the file states each quantity once (material constants of a component default to
+  ``[material]``);
 * a ``kind`` key selects the spec class of a bearing section (:data:`BEARING_KINDS`); an
   angular-contact pair's section lists the pair's keys and its (identical) rows' keys.
 
@@ -27,6 +29,7 @@ import copy
 import dataclasses
 import math
 import tomllib
+import typing
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,23 +37,11 @@ import numpy as np
 from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ..geometry.cycloid import CycloidProfile
 from ..output_pins.spec import OutputPinMechanism
+from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..errors import RvtoolInputError
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
-
-
-@dataclass(frozen=True, kw_only=True)
-class Material:
-    """youngs_modulus [Pa], poisson_ratio [-], density [kg/m^3]."""
-    youngs_modulus: float = 206e9
-    poisson_ratio: float = 0.3
-    density: float = 7850.0
-
-    def __post_init__(self):
-        check_positive("material.youngs_modulus", self.youngs_modulus)
-        check_range("material.poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
-        check_positive("material.density", self.density)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -137,59 +128,34 @@ class PinContact:
 class Housing:
     """Housing carrying the ring pins.
 
-    model: "rigid" (the pins are ground) or "ports" (an elastic annular housing, NGSolve
-    tetrahedra, reduced by Craig--Bampton and the port reduction of the structural
-    section; one planar port (x, y) per ring pin at the pin's angle on the bore, at
-    mid-height; the pin centres move with their ports).
-    inner_radius, outer_radius, height [m]; mesh_size [m] (nominal tetrahedron size);
-    n_mounts: translational mount springs at equal angles on the lower face, at
-    mount_radius [m] (0 = midway between the radii), each mount_stiffness [N/m] per direction;
-    n_fixed_interface_modes: Craig--Bampton modes of the parent; n_modes, n_residual:
-    retained parent modes and residual attachment modes of the port reduction (n_residual = -1:
-    one per port row, so that the static port compliance equals the parent's to round-off);
-    damping_ratio [-] (Rayleigh, calibrated at 500 and 5000 Hz);
-    youngs_modulus [Pa], poisson_ratio [-], density [kg/m^3]: the housing material (None: the
-    design's [material], e.g. set them for an aluminium housing).
+    model: "rigid" (the pins are ground; ``structure`` unused) or "ports" (an elastic housing,
+    NGSolve tetrahedra, reduced by Craig--Bampton and the port reduction of the structural
+    section; one planar port (x, y) per ring pin at the pin's angle on the bore, at the
+    structure's port height; the pin centres move with their ports).
+    structure: the :class:`~rvtool.structure.AnnularHousingSpec` (file: ``[housing.structure]``
+    with ``[housing.structure.material]`` and ``[housing.structure.damping]``; its ``n_ports`` is
+    the ring's pin count and its material [material]'s unless given).
+    n_fixed_interface_modes: Craig--Bampton modes of the parent; n_modes, n_residual: retained
+    parent modes and residual attachment modes of the port reduction (n_residual = -1: one per
+    port row, so that the static port compliance equals the parent's to round-off).
     """
     model: str = "rigid"
-    youngs_modulus: float | None = None
-    poisson_ratio: float | None = None
-    density: float | None = None
-    inner_radius: float = 0.0545
-    outer_radius: float = 0.075
-    height: float = 0.030
-    mesh_size: float = 0.004
-    n_mounts: int = 12
-    mount_radius: float = 0.0
-    mount_stiffness: float = 2e8
+    structure: AnnularHousingSpec | None = None
     n_fixed_interface_modes: int = 20
     n_modes: int = 12
     n_residual: int = -1
-    damping_ratio: float = 0.02
 
     def __post_init__(self):
         if self.model not in ("rigid", "ports"):
             raise RvtoolInputError(f"housing.model = {self.model!r}; valid choices are ['rigid', 'ports']")
-        check_positive("housing.inner_radius", self.inner_radius)
-        check_range("housing.outer_radius", self.outer_radius, self.inner_radius, math.inf, low_open=True)
-        check_positive("housing.height", self.height)
-        check_range("housing.mesh_size", self.mesh_size, 0.0, self.height, low_open=True)
-        for nm, lo in (("n_mounts", 1), ("n_fixed_interface_modes", 0), ("n_modes", 0), ("n_residual", -1)):
+        if self.model == "ports" and not isinstance(self.structure, AnnularHousingSpec):
+            raise RvtoolInputError("housing.model = 'ports' needs the table [housing.structure] (an AnnularHousingSpec)")
+        for nm, lo in (("n_fixed_interface_modes", 0), ("n_modes", 0), ("n_residual", -1)):
             v = getattr(self, nm)
             if not isinstance(v, int) or v < lo:
                 raise RvtoolInputError(f"housing.{nm} = {v!r} is outside the valid range [{lo}, inf) (integer)")
         if self.n_residual != -1 and self.n_modes + self.n_residual < 1:
             raise RvtoolInputError("housing.n_modes + housing.n_residual = 0; valid range [1, inf)")
-        if self.mount_radius != 0.0:
-            check_range("housing.mount_radius", self.mount_radius, self.inner_radius, self.outer_radius)
-        check_positive("housing.mount_stiffness", self.mount_stiffness)
-        check_range("housing.damping_ratio", self.damping_ratio, 0.0, 1.0, high_open=True)
-        if self.youngs_modulus is not None:
-            check_positive("housing.youngs_modulus", self.youngs_modulus)
-        if self.poisson_ratio is not None:
-            check_range("housing.poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
-        if self.density is not None:
-            check_positive("housing.density", self.density)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -220,7 +186,7 @@ class CycloidDesign:
     n_wheels: int
     rated_torque: float
     input_speed_rpm: float
-    material: Material
+    material: ElasticMaterial
     pins: Pins
     profile: CycloidProfile
     wheels: Wheels
@@ -256,9 +222,13 @@ class CycloidDesign:
             raise RvtoolInputError(f"output_pins.hole_radius = {self.output_pins.hole_radius} m cannot pass the eccentric "
                                    f"motion; valid range [{needed:.6g}, inf) m (pin radius + eccentricity)")
         r_pins = self.pins.pin_circle_radius + self.pins.pin_radius
-        if self.housing.model == "ports" and self.housing.inner_radius < r_pins - 1e-12:
-            raise RvtoolInputError(f"housing.inner_radius = {self.housing.inner_radius} m cuts through the ring pins; "
+        st = self.housing.structure
+        if self.housing.model == "ports" and st.inner_radius < r_pins - 1e-12:
+            raise RvtoolInputError(f"housing.structure.inner_radius = {st.inner_radius} m cuts through the ring pins; "
                                    f"valid range [{r_pins:.6g}, outer_radius) m (pin circle radius + pin radius)")
+        if self.housing.model == "ports" and st.n_ports != self.pins.n_pins:
+            raise RvtoolInputError(f"housing.structure.n_ports = {st.n_ports}; valid value pins.n_pins = {self.pins.n_pins} "
+                                   "(one port per ring pin; leave the key out to take it)")
 
     @property
     def ratio(self):
@@ -284,24 +254,30 @@ BEARING_KINDS = {"deep_groove": BallBearing, "angular_contact": BallBearing,
 
 #: Sections of a cycloid design file and their component specs (bearing sections: by ``kind``), in
 #: dependency order (a section's links read sections before it).
-SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "profile": CycloidProfile,
+SECTIONS = {"material": ElasticMaterial, "pins": Pins, "wheels": Wheels, "profile": CycloidProfile,
             "pin_contact": PinContact, "output_pins": OutputPinMechanism, "eccentric_bearing": NeedleBearing,
             "main_bearing": BEARING_KINDS, "input_bearing": BEARING_KINDS, "bodies": Bodies, "housing": Housing}
 OPTIONAL_SECTIONS = ("profile", "bodies", "housing")
 
-#: Keys a section may leave out because another section states the quantity:
-#: section -> {key: "section.key" it takes}. The file states each quantity once.
+_ELASTIC = {"youngs_modulus": "material.youngs_modulus", "poisson_ratio": "material.poisson_ratio"}
+
+#: Keys a table may leave out because another section states the quantity:
+#: table path -> {key: "section.key" it takes, or "section": that whole section's spec}. The file states each quantity once; a key the
+#: table gives is kept. A link into the table's own section reads the table's own key.
 LINKS = {
     # the wheel profile is generated by the ring it meshes with; e_g = e unless given separately
     "profile": {"n_pins": "pins.n_pins", "pin_circle_radius": "pins.pin_circle_radius",
                 "pin_radius": "pins.pin_radius", "generating_eccentricity": "wheels.eccentricity"},
-    # flange pins run in holes on their own pin circle, along the wheels' width, at the wheels' midplanes
+    # flange pins run in holes on their own pin circle, along the wheels' width, at the wheels' midplanes;
+    # pins and flange of the design's material
     "output_pins": {"hole_circle_radius": "output_pins.pin_circle_radius", "contact_length": "wheels.width",
-                    "wheel_midplanes": "wheels.midplanes"},
+                    "wheel_midplanes": "wheels.midplanes", **_ELASTIC},
+    # balls and rings of the design's material (a locked bearing takes nothing)
+    "main_bearing": dict(_ELASTIC),
+    "input_bearing": dict(_ELASTIC),
+    # one housing port per ring pin; the housing of the design's material
+    "housing.structure": {"n_ports": "pins.n_pins", "material": "material"},
 }
-
-#: Material constants a component spec may declare; where its section leaves them out they are [material]'s.
-MATERIAL_KEYS = ("youngs_modulus", "poisson_ratio", "density")
 
 
 def _file_units(cls, section, data):
@@ -324,19 +300,35 @@ def _file_units(cls, section, data):
     return out
 
 
+def _spec_class(f):
+    """The component-spec class of dataclass field ``f`` (also inside ``X | None``), or None."""
+    for t in (f.type, *typing.get_args(f.type)):
+        if dataclasses.is_dataclass(t) and isinstance(t, type):
+            return t
+    return None
+
+
 def build_section(cls, section, data):
     """Construct the component spec ``cls`` from the design-file table ``data`` of ``[section]``:
     ``NAME_deg`` keys become the field NAME in radians (the one unit conversion), lists become
-    tuples, unknown keys and type errors are reported with the section name, and a component's own
-    validation error is prefixed with the section so it names the key path
+    tuples, a sub-table of a field whose type is a component spec is built the same way (key path
+    ``section.field``), unknown keys and type errors are reported with the section name, and a
+    component's own validation error is prefixed with the section so it names the key path
     (e.g. ``wheels.eccentricity``). Every topology's design loader uses this one function."""
     data = _file_units(cls, section, data)
-    names = {f.name for f in dataclasses.fields(cls)}
-    unknown = set(data) - names
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = set(data) - set(fields)
     if unknown:
-        raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(names)}")
-    kw = {k: tuple(tuple(e) if isinstance(e, list) else e for e in v) if isinstance(v, list) else v
-          for k, v in data.items()}
+        raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(fields)}")
+    kw = {}
+    for k, v in data.items():
+        sub = _spec_class(fields[k])
+        if isinstance(v, dict) and sub is not None:
+            kw[k] = build_section(sub, f"{section}.{k}", v)
+        elif isinstance(v, list):
+            kw[k] = tuple(tuple(e) if isinstance(e, list) else e for e in v)
+        else:
+            kw[k] = v
     try:
         return cls(**kw)
     except TypeError as exc:
@@ -369,23 +361,30 @@ def _bearing_section(section, data):
     return build_section(cls, section, data)
 
 
-def _with_links(section, cls, data, built):
-    """``data`` with the keys it leaves out filled from :data:`LINKS` (from the specs already
-    built, or from the section's own keys) and from [material]."""
-    out = dict(data)
-    names = {f.name for f in dataclasses.fields(cls)} if cls is not None else set()
-    for key, path in LINKS.get(section, {}).items():
-        if key in out or key + "_deg" in out:
+def _with_links(section, data, built):
+    """``data`` with the keys it leaves out filled from :data:`LINKS` (from the sections already
+    built, or from the table's own keys)."""
+    out = copy.deepcopy(data)
+    for path, links in LINKS.items():
+        head, *rest = path.split(".")
+        if head != section:
             continue
-        src, src_key = path.split(".")
-        if src == section:
-            if src_key in out:
-                out[key] = out[src_key]
-        else:
-            out[key] = getattr(built[src], src_key)
-    for key in MATERIAL_KEYS:
-        if key in names and key not in out:
-            out[key] = getattr(built["material"], key)
+        table = out
+        for part in rest:            # a sub-table the file does not give takes no links
+            table = table.get(part) if isinstance(table.get(part), dict) else None
+            if table is None:
+                break
+        if table is None:
+            continue
+        for key, src in links.items():
+            if key in table or key + "_deg" in table:
+                continue
+            src_section, _, src_key = src.partition(".")
+            if src_section == section and not rest:
+                if src_key in table:
+                    table[key] = table[src_key]
+            else:               # a key of a section built before, or (no key) that whole section's spec
+                table[key] = getattr(built[src_section], src_key) if src_key else built[src_section]
     return out
 
 
@@ -401,10 +400,10 @@ def design_from_dict(d):
         if not isinstance(data, dict):
             raise RvtoolInputError(f"[{sec}] must be a table of keys; got {data!r}")
         if cls is BEARING_KINDS:
-            kind = BEARING_KINDS.get(data.get("kind", "deep_groove"))
-            built[sec] = _bearing_section(sec, _with_links(sec, kind and BallBearing, data, built))
+            locked = BEARING_KINDS.get(data.get("kind", "deep_groove"), BallBearing) is None
+            built[sec] = _bearing_section(sec, data if locked else _with_links(sec, data, built))
         else:
-            built[sec] = build_section(cls, sec, _with_links(sec, cls, data, built))
+            built[sec] = build_section(cls, sec, _with_links(sec, data, built))
     return build_section(CycloidDesign, "design", {**d, **built, "source": source})
 
 
@@ -415,11 +414,15 @@ def load_design(path):
 
 
 def _merge(table, changes):
-    """``table`` with ``changes`` written in; a key replaces its ``_deg`` form and vice versa."""
+    """``table`` with ``changes`` written in (sub-tables merged key by key); a key replaces its
+    ``_deg`` form and vice versa."""
     out = dict(table)
     for key, value in changes.items():
         out.pop(key[:-4] if key.endswith("_deg") else key + "_deg", None)
-        out[key] = [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, tuple) else value
+        if isinstance(value, dict):
+            out[key] = _merge(out.get(key, {}) if isinstance(out.get(key), dict) else {}, value)
+        else:
+            out[key] = [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, tuple) else value
     return out
 
 
@@ -430,10 +433,4 @@ def replace(design, **sections):
     again, so links follow (a new wheel width is the output pins' contact length)."""
     if design.source is None:
         raise RvtoolInputError("replace needs a design loaded from file-form data (load_design / design_from_dict)")
-    data = copy.deepcopy(design.source)
-    for key, value in sections.items():
-        if isinstance(value, dict):
-            data[key] = _merge(data.get(key, {}), value)
-        else:
-            data[key] = value
-    return design_from_dict(data)
+    return design_from_dict(_merge(copy.deepcopy(design.source), sections))
