@@ -293,11 +293,18 @@ class ReducerModel:
         return FamilyObservation(Family(family), tuple(el.ids[i] for i in rows), obs[rows])
 
     def family_peaks(self, q):
-        """{family value: largest row normal force [N]} at the static state q."""
+        """{family value: largest row normal force [N]} (one slice or lamina) at the static state q;
+        :meth:`family_contact_peaks` gives the per-contact figure."""
         out = {}
         for fam, (name, rows) in self.families.items():
             out[fam.value] = float(np.max(self.elements[name].evaluation_at(q).obs[rows, O_FN]))
         return out
+
+    def family_contact_peaks(self, q):
+        """{family value: largest normal force of one physical contact [N]} at the static state
+        q: the rows (slices, laminae) of each contact summed first (:meth:`FamilyObservation.per_contact`),
+        the load a pin, a roller or a ball carries. :meth:`family_peaks` gives the largest row."""
+        return {fam.value: float(np.max(self.observe(q, fam).per_contact()[1])) for fam in self.families}
 
     def mesh_width_moments(self, q):
         """Eq. (width_resultant) moments of the main mesh per member, where the topology

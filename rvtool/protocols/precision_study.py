@@ -12,6 +12,9 @@ from ..units import ARCSEC_PER_RAD
 from .precision import dynamic_te, mesh_forces, quasi_static_te, te_metrics
 
 
+FAMILIES = ("pins", "eccentric_bearings", "main_bearings", "output_pins", "input_bearings")
+
+
 def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_per_mesh=None,
                     output_revolutions=None, dynamic_duration=None, dynamic_step=2e-5):
     """Run the precision protocol on ``design``; returns the results dict (issue 5 keys)."""
@@ -30,7 +33,7 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
     model.set_output_torque(-np.sign(ratio) * T)
     q_rated = solver.solve(0.0)
     F_rated = mesh_forces(model, q_rated)
-    peaks_rated = model.family_peaks(q_rated)
+    peaks_rated = model.family_contact_peaks(q_rated)
 
     # quasi-static TE over the interval
     qs = quasi_static_te(model, torque=T, input_angles=angles)
@@ -49,19 +52,22 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
                                else abs(ratio) * 60.0 / design.input_speed_rpm)
     dyn_model = build(design, bearing_model=bearing_model)
     spec = RunSpec(end_time=dur, step=dynamic_step, abs_tol=1e-6, rel_tol=1e-8)
-    from ..observe import ObserverRegistry, WholeRun
+    from ..observe import ContactPeaks, ObserverRegistry, WholeRun
     observers = ObserverRegistry()
     whole = WholeRun()
     observers.register("whole_run", whole)
+    contact_peaks = ContactPeaks()
+    observers.register("contact_peaks", contact_peaks)
     dyn = dynamic_te(dyn_model, torque=T, speed_rpm=design.input_speed_rpm, duration=dur, run_spec=spec,
                      out_dir=out_dir, observers=observers)
     acc = whole.accumulator
-    dyn_peaks = {}
+    dyn_peaks, dyn_slice_peaks = {}, {}
     for fam, prefix in (("pins", "wheel"), ("output_pins", "output_pins"), ("eccentric_bearings", "eccentric_bearing"),
                         ("main_bearings", "main_bearing"), ("input_bearings", "input_bearing")):
         sel = [i for i, cid in enumerate(acc.ids) if cid.startswith(prefix)]
         if sel:
-            dyn_peaks[fam] = float(np.max(acc.F_pk[sel]))
+            dyn_slice_peaks[fam] = float(np.max(acc.F_pk[sel]))
+            dyn_peaks[fam] = contact_peaks.peak(prefix)
     rec = dyn["record"]
     dyn_met = te_metrics(dyn["te_uniform"], n_revolutions=dur * design.input_speed_rpm / 60.0 / abs(ratio))
 
@@ -75,11 +81,10 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
         "te_interval": {"output_revolutions": revs, "points": n_pts, "points_per_mesh_cycle": ppm,
                         "mesh_cycle": "2 pi / z_b of input rotation"},
         "pin_forces_at_rated_N": F_rated,
-        "peak_loads_N": {"pins": qs["peak_loads"].get("pins"),
-                         "eccentric_bearings": qs["peak_loads"].get("eccentric_bearings"),
-                         "main_bearings": qs["peak_loads"].get("main_bearings"),
-                         "output_pins": qs["peak_loads"].get("output_pins"),
-                         "input_bearings": qs["peak_loads"].get("input_bearings")},
+        # per physical contact (slices and laminae summed): the load a pin, roller or ball carries
+        "peak_loads_N": {f: qs["peak_contact_loads"].get(f) for f in FAMILIES},
+        # per row (one axial slice or lamina): the figures reported as peak loads before issue 21
+        "peak_slice_loads_N": {f: qs["peak_loads"].get(f) for f in FAMILIES},
         "peak_loads_at_rated_N": peaks_rated,
         "n_active_pins": (F_rated > 1e-6 * max(F_rated.max(), 1.0)).sum(axis=1),
         "wall_s": time.perf_counter() - t_all,
@@ -99,7 +104,9 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
                     "te_orders": dyn_met["peak_orders"], "te_order_amplitudes_arcsec": dyn_met["peak_amplitudes"] * ARCSEC_PER_RAD,
                     "max_residual": rec.max_residual, "min_step_s": rec.to_dict()["min_step_s"],
                     "peak_loads_N": dyn_peaks,
-                    "peak_loads_source": "accepted-step observers (WholeRun F_pk per contact identity)"},
+                    "peak_slice_loads_N": dyn_slice_peaks,
+                    "peak_loads_source": "accepted-step observers: ContactPeaks (rows summed per physical "
+                                         "contact, then the largest step) and WholeRun F_pk (per row)"},
         "width_moments_at_rated_Nm": model.mesh_width_moments(q_rated),
     }
     _plots(model, q_rated, F_rated, qs, met, dyn, out_dir, revs)
