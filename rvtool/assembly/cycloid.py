@@ -244,6 +244,11 @@ def pin_meshes(design, *, offset=0, prefix=""):
         k_line = pc.stiffness if (pc.law == "line" and pc.stiffness > 0) else secant_line_stiffness(pc.reference_force, width)
         law = NormalLaw(law="line", stiffness=k_line, damping=pc.damping, ramp_depth=1e-6)
     friction = FrictionLaw(model=FrictionModel.REGULARIZED if pc.mu > 0 else FrictionModel.NONE, mu_kinetic=pc.mu)
+    C = pin_station_compliance(d, Family.PINS)
+    if C is not None and law.law != "line":
+        raise RvtoolInputError(f"pins.support.model = {d.pins.support.model.value!r} needs a linear pin-contact law "
+                               f"(the beam in series with it is then exact); pin_contact.law = {pc.law!r}; "
+                               "valid: 'line' or 'secant'")
     profiles, meshes = [], []
     for k in range(d.n_wheels):
         phi = np.deg2rad(d.wheels.phases_deg[k])
@@ -252,8 +257,11 @@ def pin_meshes(design, *, offset=0, prefix=""):
                               equidistant_mod=d.wheels.equidistant_mod, offset_mod=d.wheels.offset_mod,
                               rotation_mod=d.wheels.rotation_mod - phi / zg)
         profiles.append(prof)
+        # elastic ring pin: the beam's self-compliance at this wheel's station in series with the
+        # linear contact law, 1/k = 1/k_c + C_kk (Eq. series_contact; allocated once per pin and station)
+        law_k = law if C is None else dataclasses.replace(law, stiffness=1.0 / (1.0 / law.stiffness + C[k, k]))
         kw = dict(profile=prof, wheel_body=offset + 1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
-                  wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,
+                  wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law_k, friction=friction,
                   name=f"{prefix}wheel{k}")
         if d.pins.centre_errors is not None:
             kw["pin_centre_errors"] = np.asarray(d.pins.centre_errors, float)
@@ -263,19 +271,48 @@ def pin_meshes(design, *, offset=0, prefix=""):
     return profiles, meshes
 
 
+def pin_station_compliance(design, family):
+    """Beam station compliance C (n_wheels, n_wheels) [m/N] of one ring pin (``Family.PINS``) or
+    output pin (``Family.OUTPUT_PINS``) at the wheel stations (midplanes, contact width = wheel
+    width; :meth:`rvtool.structure.pin_beam.PinBeam.station_compliance`), or None for a rigid pin."""
+    from ..structure.pin_beam import pin_beam
+    d = design
+    spec, section = (d.pins, "pins") if Family(family) == Family.PINS else (d.output_pins, "output_pins")
+    beam = pin_beam(spec.support, spec.pin_radius, d.material)
+    if beam is None:
+        return None
+    try:
+        return beam.station_compliance(d.wheels.midplanes, d.wheels.width)
+    except RvtoolInputError as exc:
+        raise RvtoolInputError(f"{section}.{exc}") from None
+
+
 def output_pin_mechanism(design):
-    """Plain flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach)."""
+    """Flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach):
+    plain rigid pins, or with ``output_pins.support`` elastic the shared-pin closure of Eqs.
+    (pin_compliance, pin_local_closure) with the beam's station compliance and the sleeve fixed
+    on the pin (zero sleeve clearance: the shared mode then equals the plain mode at C = 0)."""
     from ..output_pins.calibration import hertz_calibrated_coefficient
-    from ..output_pins.spec import OutputPinMechanism, PinMode
+    from ..output_pins.spec import OutputPinMechanism, PinMode, SharedPinCompliance, SleeveFit
     d = design
     op = d.output_pins
     width = d.wheels.width
     k_op = hertz_calibrated_coefficient(op.reference_force, op.pin_radius, op.hole_radius, width,
                                         d.material.youngs_modulus, d.material.poisson_ratio)
+    C = pin_station_compliance(d, Family.OUTPUT_PINS)
+    kw = {}
+    if C is not None:
+        if d.n_wheels != 2:
+            raise RvtoolInputError(f"output_pins.support.model = {op.support.model.value!r} with n_wheels = "
+                                   f"{d.n_wheels}: the elastic output pin uses the two-wheel shared-pin closure "
+                                   "(Eq. pin_local_closure); valid: n_wheels = 2 or output_pins.support.model = 'rigid'")
+        kw = dict(mode=PinMode.SHARED, sleeve=SleeveFit(clearance=0.0),
+                  compliance=SharedPinCompliance(self_compliance_0=C[0, 0], self_compliance_1=C[1, 1],
+                                                 cross_compliance=C[0, 1]))
     return OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
                               n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
                               coefficient=k_op, contact_length=width, n_slices=op.n_slices,
-                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN)
+                              wheel_midplanes=tuple(d.wheels.midplanes), **{"mode": PinMode.PLAIN, **kw})
 
 
 def lumped_bearing_contacts(design, *, offset=0, prefix=""):
