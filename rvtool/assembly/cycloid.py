@@ -41,7 +41,7 @@ from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiff
 from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile
 from ..geometry.eccentric import journal_centre, journal_velocity
-from ..model import BodyCoordinate, Family, ReducerModel
+from ..model import BodyCoordinate, ClearanceVariant, Family, ReducerModel, SeriesBeam
 from .spec import CycloidDesign, replace
 
 SHAFT = 0
@@ -112,6 +112,73 @@ class CycloidModel(ReducerModel):
     def resolution_settings(self):
         w = self.design.wheels
         return {"samples_per_tooth": w.samples_per_tooth, "n_slices": w.n_slices, "search_window": self.pin_set.window}
+
+    def series_compliance(self, family):
+        """Elastic pins (``pins.support``, ``output_pins.support``): ring pins as per-row compliance
+        inside the series line law (row = slice: n_slices C_kk for wheel k), output pins as the
+        station self-compliance C_ww per (pin, wheel) contact beside the contact approach (the
+        shared-pin closure subtracts the deflection from the approach it reports)."""
+        fam = Family(family)
+        if fam not in (Family.PINS, Family.OUTPUT_PINS):
+            return None
+        C = pin_station_compliance(self.design, fam)
+        if C is None:
+            return None
+        if fam == Family.PINS:
+            ns = self.design.wheels.n_slices
+            rows = np.array([ns * C[int(r.split("/")[0][5:]), int(r.split("/")[0][5:])]
+                             for r in self.elements["pins"].ids])
+            return SeriesBeam("ring_pin_bending", fam, rows, inside_rows=True, per_contact=False)
+        names = dict.fromkeys(r.rpartition("/")[0] for r in self.elements["output_pins"].ids)
+        c = np.array([C[int(n.split("/wheel")[1]), int(n.split("/wheel")[1])] for n in names])
+        return SeriesBeam("output_pin_bending", fam, c, inside_rows=False, per_contact=True)
+
+    def hertz_peaks(self, q):
+        """Largest Hertz line-contact peak p0 [Pa] of the loaded ring-pin, output-pin and needle
+        contacts (both races) of every wheel (:func:`rvtool.pressure.state.candidates`)."""
+        from ..pressure.state import candidates
+        out = {}
+        for fam, races in (("pins", (None,)), ("output_pins", (None,)), ("needles", ("journal", "bore"))):
+            p = [c.hertz_peak for w in range(self.n_wheels) for r in races
+                 for c in (candidates(self, q, fam, w) if r is None else candidates(self, q, fam, w, race=r))]
+            if p:
+                out[fam] = max(p)
+        return out
+
+    def clearance_variants(self):
+        """Output-pin hole clearance c_h = R_h - r_p - e (estimate 2 c_h / R_op: one pin at right
+        angles to the eccentricity closes it by a rotation c_h / R_op of the flange relative to the
+        wheel, each way), eccentric-bearing clearance c_b (estimate 2 c_b / (e z_c): a wheel shift
+        c_b across the journal turns the wheel by c_b / (e z_c) through the pin mesh, each way),
+        input-bearing clearance (estimate 2 c / (e z_c) for one wheel; 0 for opposed wheels, whose
+        tangential shifts cancel), main-bearing clearance (estimate 0: the flange centre shift does
+        not turn it) and the uniform profile clearance c_w (estimate 2 c_w / (e z_b), the largest
+        pin-force lever arm e z_b). Clearances the design does not have are left out."""
+        d = self.design
+        e, zc, zb = d.wheels.eccentricity, d.pins.n_pins - 1, d.pins.n_pins
+        op = d.output_pins
+        out = []
+        c_h = op.hole_radius - op.pin_radius - e
+        if c_h > 0:
+            out.append(ClearanceVariant(
+                "output_pin_holes", c_h, 2 * c_h / op.pin_circle_radius,
+                lambda x: replace(x, output_pins={"hole_radius": x.output_pins.pin_radius + x.wheels.eccentricity}),
+                lambda x, o: replace(x, output_pins={"hole_radius": o.output_pins.hole_radius})))
+        sections = (("eccentric_bearings", "eccentric_bearing", 2 / (e * zc)),
+                    ("input_bearing", "input_bearing", 2 / (e * zc) if d.n_wheels == 1 else 0.0),
+                    ("main_bearing", "main_bearing", 0.0))
+        for name, sec, factor in sections:
+            c = getattr(d, sec).radial_clearance
+            if getattr(getattr(d, sec), "kind", "") != "locked" and c > 0:
+                out.append(ClearanceVariant(name, c, factor * c,
+                                            lambda x, s=sec: replace(x, **{s: {"radial_clearance": 0.0}}),
+                                            lambda x, o, s=sec: replace(x, **{s: {"radial_clearance":
+                                                                                  getattr(o, s).radial_clearance}})))
+        if d.wheels.clearance > 0:
+            out.append(ClearanceVariant("profile_clearance", d.wheels.clearance, 2 * d.wheels.clearance / (e * zb),
+                                        lambda x: replace(x, wheels={"clearance": 0.0}),
+                                        lambda x, o: replace(x, wheels={"clearance": o.wheels.clearance})))
+        return out
 
     def marker_frequencies(self, speed_rpm):
         """Mesh and bearing marker frequencies [Hz] at input speed [rpm]."""
