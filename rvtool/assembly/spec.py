@@ -10,6 +10,7 @@ import numpy as np
 
 from ..bearings.spec import NeedleBearing
 from ..errors import RvtoolInputError
+from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
@@ -28,19 +29,32 @@ class Material:
         check_positive("material.density", self.density)
 
 
+def _support(section, value):
+    """A :class:`PinSupport` from a design sub-table (dict) or an instance; errors name
+    ``section.support.<key>``."""
+    if isinstance(value, PinSupport):
+        return value
+    if not isinstance(value, dict):
+        raise RvtoolInputError(f"{section}.support = {value!r} must be a table (model, ends, shear, shear_coefficient)")
+    return build_section(PinSupport, f"{section}.support", value)
+
+
 @dataclass(frozen=True, kw_only=True)
 class Pins:
     """Ring pins: n_pins (z_b), pin_circle_radius R_z [m], pin_radius r_p [m] (the generating
     radius of the wheel profile). Manufacturing deviations (part of the design, so a variant is
     a design): radius_error [m], the actual pin radius minus r_p; centre_errors: None or
-    (z_b, 2) pin-centre errors [m] in the housing frame."""
+    (z_b, 2) pin-centre errors [m] in the housing frame. support: the pin as a beam
+    (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-table ``[pins.support]``; rigid by default)."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
     radius_error: float = 0.0
     centre_errors: tuple | None = None
+    support: PinSupport = field(default_factory=PinSupport)
 
     def __post_init__(self):
+        object.__setattr__(self, "support", _support("pins", self.support))
         if not isinstance(self.n_pins, int) or self.n_pins < 3:
             raise RvtoolInputError(f"pins.n_pins = {self.n_pins!r} is outside the valid range [3, inf) (integer)")
         check_positive("pins.pin_circle_radius", self.pin_circle_radius)
@@ -117,15 +131,18 @@ class PinContact:
 @dataclass(frozen=True, kw_only=True)
 class OutputPins:
     """Flange pins in wheel holes: n_pins, pin_circle_radius [m], pin_radius [m], hole_radius [m],
-    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices."""
+    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices; support: the pin as a
+    beam (sub-table ``[output_pins.support]``; rigid by default)."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
     hole_radius: float
     reference_force: float = 1000.0
     n_slices: int = 4
+    support: PinSupport = field(default_factory=PinSupport)
 
     def __post_init__(self):
+        object.__setattr__(self, "support", _support("output_pins", self.support))
         check_positive("output_pins.pin_circle_radius", self.pin_circle_radius)
         check_positive("output_pins.pin_radius", self.pin_radius)
         check_range("output_pins.hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
