@@ -55,7 +55,7 @@ class CycloidSlowInputs:
     lambda_transition: float = 1.0
     friction_sharpness: float = 2.0
     roughness: float = 0.2e-6
-    wear_boundary_coefficient: float = 1e-18
+    wear_boundary_coefficient: float = 2.5e-19
     wear_area_pins: float = 2.5e-5
     wear_area_output_pins: float = 3.0e-5
 

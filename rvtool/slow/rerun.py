@@ -27,11 +27,12 @@ import numpy as np
 from ..errors import RvtoolInputError
 from ..protocols import stiffness as S
 from ..protocols.lost_motion import lost_motion
-from ..protocols.precision import quasi_static_te, te_metrics
+from ..protocols.precision import te_metrics, transmission_error
 from ..solver.static import StaticSolver
 from ..units import ARCSEC_PER_RAD, RAD_PER_ARCMIN
 from ..validation import check_finite, check_positive, check_range
 from .offsets import GapOffsets
+from .reducer_windows import loaded_start
 
 FIGURES = ("te_pp_arcsec", "te_rms_arcsec", "lost_motion_arcmin", "K_Nm_per_arcmin")
 
@@ -82,30 +83,27 @@ class MatchedProtocol:
                 "stiffness_fractions": self.stiffness_fractions, "rated_torque_Nm": self.rated_torque}
 
 
-def contact_loads(model, torque, angle) -> dict:
-    """{"<family>/<contact>": normal force [N]} at the equilibrium at input ``angle`` under ``torque``."""
-    solver = StaticSolver(model)
-    model.set_output_torque(-np.sign(model.ratio) * torque)
-    q = solver.solve(angle)
+def contact_loads_at(model, q) -> dict:
+    """{"<family>/<contact>": normal force [N]} at the static state q."""
     out = {}
     for fam in model.families:
         names, F = model.observe(q, fam).per_contact()
         out.update({f"{fam.value}/{c}": float(f) for c, f in zip(names, F)})
-    model.set_output_torque(0.0)
     return out
 
 
 def loaded_stiffness(model, protocol: MatchedProtocol) -> float:
     """K [N m/arcmin] of Eq. (stiffness_fit): least-squares slope of the output torque over the output
     rotation (from its kinematic position) at the protocol's levels, at the mounting's input angle."""
-    solver = StaticSolver(model)
+    fractions = sorted(protocol.stiffness_fractions)
+    solver = loaded_start(model, fractions[0] * protocol.rated_torque, protocol.input_angle)
     th_kin = model.kinematic_output(protocol.input_angle)
     i_out = model.output_index
     torques, angles = [], []
-    for f in protocol.stiffness_fractions:
+    for f in fractions:
         T = f * protocol.rated_torque
         model.set_output_torque(-np.sign(model.ratio) * T)
-        q = solver.solve(protocol.input_angle, protocol.input_angle if solver.q is not None else None)
+        q = solver.solve(protocol.input_angle, protocol.input_angle)
         torques.append(T)
         angles.append(abs(q[i_out] - th_kin) / RAD_PER_ARCMIN)
     model.set_output_torque(0.0)
@@ -120,14 +118,23 @@ def run_matched(model, protocol: MatchedProtocol) -> dict:
     if not isinstance(protocol, MatchedProtocol):
         raise RvtoolInputError(f"protocol must be a MatchedProtocol; got {type(protocol).__name__}")
     t0 = time.perf_counter()
-    qs = quasi_static_te(model, torque=protocol.torque, input_angles=np.array(protocol.te_angles))
-    met = te_metrics(qs["te"], n_revolutions=protocol.output_revolutions)
+    # TE (Eq. (obs_te)) over the protocol's angles, warm-started from the loaded start
+    solver = loaded_start(model, protocol.torque, protocol.reference_angle)
+    loads = contact_loads_at(model, solver.q)
+    i_out, ref_out = model.output_index, model.reference_value(model.output)
+    th_in, th_out, prev = [], [], protocol.reference_angle
+    for a in protocol.te_angles:
+        q = solver.solve(a, prev)
+        prev = solver.last_angle
+        th_in.append(prev)
+        th_out.append(ref_out + q[i_out])
+    te = transmission_error(np.array(th_in), np.array(th_out), model.ratio, unwrap=False)
+    met = te_metrics(te, n_revolutions=protocol.output_revolutions)
     model.set_output_torque(0.0)
     lm = lost_motion(model, torque_level=protocol.lost_motion_torque, input_angle=protocol.input_angle)
     K = loaded_stiffness(model, protocol)
-    loads = contact_loads(model, protocol.torque, protocol.reference_angle)
     return {"te_pp_arcsec": met["pp"] * ARCSEC_PER_RAD, "te_rms_arcsec": met["rms"] * ARCSEC_PER_RAD,
-            "te_arcsec": (qs["te"] - np.mean(qs["te"])) * ARCSEC_PER_RAD,
+            "te_arcsec": (te - np.mean(te)) * ARCSEC_PER_RAD,
             "lost_motion_arcmin": lm["lost_motion_rad"] / RAD_PER_ARCMIN,
             "K_Nm_per_arcmin": K, "contact_loads_N": loads,
             "wall_s": time.perf_counter() - t0}
