@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 from ..model import Family
 from .lubrication import FilmContact, Lubrication, MixedFriction, RoelandsViscosity, reduced_modulus
-from .offsets import match_selector
 from .orchestrator import ThermalCoupling
 from .thermal import (BearingClearanceExpansion, CycloidEnvelopeExpansion, SlidingLossSources, ThermalGapChannel,
                       ThermalNetwork)
@@ -135,8 +134,8 @@ def lubrication(design, inputs: CycloidSlowInputs, exposure) -> Lubrication:
     """Film contacts of the families. Entrainment u = (u1 + u2) / 2: pins (fixed in the housing)
     and plain output pins have one moving surface at the contact, so u = half the load-weighted
     sliding speed I_s / I_F of the family in ``exposure`` (the cold window); the needles roll at
-    u = omega_rel R_i (R_o - ... ) ~ omega_rel R_i / 2 (inner-race speed relative to the cage,
-    both surfaces moving). Line contacts; the lumped eccentric bearing's load per length is that
+    u = omega_rel R_i / 2 (inner-race surface speed relative to the wheel bore, halved: the
+    cage-frame speed of both surfaces, declared approximation). Line contacts; the lumped eccentric bearing's load per length is that
     of the most loaded roller (Stribeck: Q_max = 4.08 F_r / Z), hence length = Z L / 4.08."""
     E = reduced_modulus(design.material.youngs_modulus, design.material.poisson_ratio,
                         design.material.youngs_modulus, design.material.poisson_ratio)
@@ -208,5 +207,4 @@ def family_of(contact_id: str) -> str:
 
 
 __all__ = ["CycloidSlowInputs", "thermal_network", "thermal_coupling", "gap_channels", "lubrication", "wear_model",
-           "friction_law", "friction", "heat_capacities", "HEAT_PARTITION", "NODES", "T_AMBIENT", "family_of",
-           "match_selector"]
+           "friction_law", "friction", "heat_capacities", "HEAT_PARTITION", "NODES", "T_AMBIENT", "family_of"]
