@@ -17,7 +17,8 @@ fields from one spec into another. Three loader rules, all in :func:`build_secti
 * links (:data:`LINKS`): a key that another section already states (the profile's pin circle, the
   output pins' contact length = the wheel width, ...) may be left out and then takes that value,
   so the file states each quantity once (material constants of a component default to
-  ``[material]``);
+  ``[material]``); :data:`DERIVED` keys follow from a section's own (an elastic output pin's
+  shared-pin closure from its ``[output_pins.support]``);
 * a ``kind`` key selects the spec class of a bearing section (:data:`BEARING_KINDS`); an
   angular-contact pair's section lists the pair's keys and its (identical) rows' keys.
 
@@ -37,8 +38,9 @@ import numpy as np
 from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ..geometry.cycloid import CycloidProfile
 from ..output_pins.spec import OutputPinMechanism
-from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..errors import RvtoolInputError
+from ..structure import AnnularHousingSpec, ElasticMaterial
+from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
@@ -49,12 +51,14 @@ class Pins:
     """Ring pins: n_pins (z_b), pin_circle_radius R_z [m], pin_radius r_p [m] (the generating
     radius of the wheel profile). Manufacturing deviations (part of the design, so a variant is
     a design): radius_error [m], the actual pin radius minus r_p; centre_errors: None or
-    (z_b, 2) pin-centre errors [m] in the housing frame."""
+    (z_b, 2) pin-centre errors [m] in the housing frame. support: the pin as a beam
+    (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-table ``[pins.support]``; rigid by default)."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
     radius_error: float = 0.0
     centre_errors: tuple | None = None
+    support: PinSupport = field(default_factory=PinSupport)
 
     def __post_init__(self):
         if not isinstance(self.n_pins, int) or self.n_pins < 3:
@@ -281,6 +285,35 @@ LINKS = {
 }
 
 
+def _elastic_output_pins(table, built):
+    """Keys an elastic output pin (``[output_pins.support]`` not rigid) derives, where the table
+    leaves them out: the shared-pin closure of Eqs. (pin_compliance, pin_local_closure) with the
+    beam's station compliance at the wheel stations and the sleeve fixed on the pin (clearance 0:
+    the shared mode then equals the plain mode at C = 0)."""
+    from ..structure.pin_beam import pin_beam
+    support = build_section(PinSupport, "output_pins.support", table.get("support", {}))
+    beam = pin_beam(support, table.get("pin_radius"), built["material"])
+    if beam is None:
+        return {}
+    z = tuple(table["wheel_midplanes"])
+    if len(z) != 2:
+        raise RvtoolInputError(f"output_pins.support.model = {support.model.value!r} with n_wheels = {len(z)}: the "
+                               "elastic output pin uses the two-wheel shared-pin closure (Eq. pin_local_closure); "
+                               "valid: n_wheels = 2 or output_pins.support.model = 'rigid'")
+    try:
+        C = beam.station_compliance(z, table["contact_length"])
+    except RvtoolInputError as exc:
+        raise RvtoolInputError(f"output_pins.{exc}") from None
+    return {"mode": "shared", "sleeve": {"clearance": 0.0},
+            "compliance": {"self_compliance_0": float(C[0, 0]), "self_compliance_1": float(C[1, 1]),
+                           "cross_compliance": float(C[0, 1])}}
+
+
+#: Keys a section derives from its own (linked) keys where it leaves them out: section -> function
+#: (table, sections built before) -> {key: value}.
+DERIVED = {"output_pins": _elastic_output_pins}
+
+
 def _file_units(cls, section, data):
     """The one unit conversion of a design file: ``NAME_deg`` [deg] -> field NAME [rad] of ``cls``
     (a number or a list of numbers); every other key is SI already."""
@@ -404,7 +437,10 @@ def design_from_dict(d):
             locked = BEARING_KINDS.get(data.get("kind", "deep_groove"), BallBearing) is None
             built[sec] = _bearing_section(sec, data if locked else _with_links(sec, data, built))
         else:
-            built[sec] = build_section(cls, sec, _with_links(sec, data, built))
+            data = _with_links(sec, data, built)
+            if sec in DERIVED:
+                data = {**DERIVED[sec](data, built), **data}
+            built[sec] = build_section(cls, sec, data)
     return build_section(CycloidDesign, "design", {**d, **built, "source": source})
 
 

@@ -20,6 +20,7 @@ import numpy as np
 from warp_contacts import output_pins_ref as ref
 
 from ..errors import RvtoolInputError
+from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 from .calibration import PIN_EXPONENT, hertz_calibrated_coefficient
 
@@ -99,6 +100,11 @@ class OutputPinMechanism:
     wheel_midplanes: axial positions z_i of the wheel midplanes relative to the flange [m].
     gap_offsets: u_off of Eq. (output_gap) per wheel [m] (e.g. thermal; positive opens).
     mode: :class:`PinMode`; compliance and sleeve: shared mode only.
+    support: the pin as a beam (:class:`~rvtool.structure.pin_beam.PinSupport`; rigid by default).
+    An elastic pin runs the shared-pin closure of Eqs. (pin_compliance, pin_local_closure) with
+    its beam's station compliance as ``compliance`` (a design loader derives mode, compliance
+    and a sleeve fixed on the pin, clearance 0, from the support; see
+    :mod:`rvtool.assembly.spec`).
     """
     pin_circle_radius: float
     hole_circle_radius: float
@@ -118,6 +124,7 @@ class OutputPinMechanism:
     mode: PinMode = PinMode.PLAIN
     compliance: SharedPinCompliance | None = None
     sleeve: SleeveFit = field(default_factory=SleeveFit)
+    support: PinSupport = field(default_factory=PinSupport)
 
     def __post_init__(self):
         try:
@@ -158,6 +165,11 @@ class OutputPinMechanism:
                 raise RvtoolInputError(f"compliance = {self.compliance!r} must be a SharedPinCompliance in shared mode")
         if not isinstance(self.sleeve, SleeveFit):
             raise RvtoolInputError(f"sleeve = {self.sleeve!r} must be a SleeveFit")
+        if not isinstance(self.support, PinSupport):
+            raise RvtoolInputError(f"support = {self.support!r} must be a PinSupport")
+        if self.support.elastic and self.mode != PinMode.SHARED:
+            raise RvtoolInputError(f"support.model = {self.support.model.value!r} (an elastic pin) needs mode = 'shared' "
+                                   "with the beam's station compliance; valid: mode = 'shared' or support.model = 'rigid'")
 
     @property
     def n_wheels(self):

@@ -51,7 +51,8 @@ def mesh_forces(model, q):
 def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, warm_start=True):
     """Sequence of equilibria at prescribed input angles under output torque ``torque`` [N m]
     (applied to resist the nominal output rotation). Returns angle histories, TE [rad],
-    per-family peak loads over the sequence and solver statistics.
+    per-family peak loads over the sequence (``peak_loads``: largest row, a slice or lamina;
+    ``peak_contact_loads``: largest physical contact, rows summed) and solver statistics.
 
     warm_start: start each point from the previous equilibrium (dense sequences); False
     starts every point with the solver's stiffness homotopy from the kinematic state, which
@@ -63,7 +64,7 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
     i_out = model.output_index
     ref_out = model.reference_value(model.output)
     th_in, th_out = [], []
-    peaks = {}
+    peaks, contact_peaks = {}, {}
     prev = None
     t0 = time.perf_counter()
     for k, a in enumerate(input_angles):
@@ -74,12 +75,14 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
         th_out.append(ref_out + q[i_out])
         for fam, f in model.family_peaks(q).items():
             peaks[fam] = max(peaks.get(fam, 0.0), f)
+        for fam, f in model.family_contact_peaks(q).items():
+            contact_peaks[fam] = max(contact_peaks.get(fam, 0.0), f)
         if record is not None:
             record(k, a, q)
     wall = time.perf_counter() - t0
     th_in, th_out = np.array(th_in), np.array(th_out)
     return {"theta_in": th_in, "theta_out": th_out, "te": transmission_error(th_in, th_out, ratio, unwrap=False),
-            "peak_loads": peaks, "stats": solver.stats.to_dict(), "wall_s": wall,
+            "peak_loads": peaks, "peak_contact_loads": contact_peaks, "stats": solver.stats.to_dict(), "wall_s": wall,
             "regularization_max": model.regularization_force(solver.q)}
 
 

@@ -162,6 +162,17 @@ def condensed_tangent(model, q):
     """K_t [N m/rad] of Eq. (obs_condensed_stiffness) at state q: K^s assembled from the
     contact Jacobians (K^s = -dQ/dq) and the regularization springs over the free
     coordinates (all but the drive and locks), condensed on the output rotation."""
+    K = assembled_stiffness(model, q)
+    fixed = model.fixed_coordinates()
+    i_out = model.output_index
+    r = [i for i in range(len(q)) if i not in fixed and i != i_out]
+    k_rr = K[np.ix_(r, r)]
+    return float(K[i_out, i_out] - K[i_out, r] @ np.linalg.solve(k_rr, K[r, i_out]))
+
+
+def assembled_stiffness(model, q):
+    """K^s (n, n) [N/m, N m/rad] at state q over all coordinates: minus the contact Jacobians
+    plus the regularization springs (Eq. obs_condensed_stiffness before condensation)."""
     n = len(q)
     K = np.zeros((n, n))
     for el in model.contact_elements():
@@ -169,11 +180,16 @@ def condensed_tangent(model, q):
         K[np.ix_(ltg, ltg)] -= el.evaluation_at(q).dQdq
     for i, k in model.regularization_stiffness():
         K[i, i] += k
+    return K
+
+
+def free_stiffness(model, q):
+    """(K^s over the free coordinates (all but the drive and the locks), their global indices,
+    the position of the output rotation among them)."""
     fixed = model.fixed_coordinates()
-    i_out = model.output_index
-    r = [i for i in range(n) if i not in fixed and i != i_out]
-    k_rr = K[np.ix_(r, r)]
-    return float(K[i_out, i_out] - K[i_out, r] @ np.linalg.solve(k_rr, K[r, i_out]))
+    free = [i for i in range(len(q)) if i not in fixed]
+    K = assembled_stiffness(model, q)
+    return K[np.ix_(free, free)], free, free.index(model.output_index)
 
 
 # -- path (b): quasi-static continuation ----------------------------------------------
