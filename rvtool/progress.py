@@ -34,9 +34,11 @@ class _Lines:
         self.stream, self.total, self.desc, self.unit, self.interval = stream, total, desc, unit, interval_s
         self.t0 = self.last = time.perf_counter()
         self.done = 0.0
+        self.printed = None
         self.closed = False
 
     def _line(self):
+        self.printed = self.done
         el = time.perf_counter() - self.t0
         if self.total:
             frac = min(self.done / self.total, 1.0)
@@ -56,7 +58,8 @@ class _Lines:
     def close(self):
         if not self.closed:
             self.closed = True
-            self._line()
+            if self.printed != self.done:
+                self._line()
 
 
 class _Bar:
