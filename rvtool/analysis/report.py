@@ -28,7 +28,7 @@ def _fmt(v):
         return f"[{', '.join(_fmt(x) for x in v[:8])}, ... ({len(v)} values)]"
     if isinstance(v, list):
         return "[" + ", ".join(_fmt(x) for x in v) + "]"
-    return "&mdash;" if v is None else str(v)
+    return "\u2014" if v is None else str(v)
 
 
 def _img(path, alt):
