@@ -113,10 +113,11 @@ def valid_range(cls, kw, name):
                 found.append(m.group(1))
         integer = " (integer)" if isinstance(value, int) else ""
         if not found:
-            other = [msg for msg in (_probe_message(cls, kw, name, int(p) if isinstance(value, int) else p)
-                                     for p in PROBES) if msg]
+            probes = [int(p) if isinstance(value, int) else p for p in PROBES]
+            other = [(msg, p) for msg, p in ((_probe_message(cls, kw, name, p), p) for p in probes) if msg]
             if other:
-                return "constrained: " + other[0].split(";")[0][:120]
+                msg, p = other[0]
+                return "constrained by other keys: " + msg.split(";")[0].replace(str(p), "VALUE")[:120]
             return "any finite number" + integer
         return " and ".join(found) + integer
     if isinstance(value, (list, tuple)):
