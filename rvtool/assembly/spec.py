@@ -380,6 +380,10 @@ def build_section(cls, section, data):
 
 def design_from_dict(d):
     d = dict(d)
+    topology = d.pop("topology", "cycloid")   # the key of rvtool.assembly.topologies; this loader is the cycloid's
+    if topology != "cycloid":
+        raise RvtoolInputError(f"topology = {topology!r}: this is the cycloid loader; load the file with "
+                               "rvtool.load_design (rvtool.assembly.topologies), which picks the topology's loader")
     kw = {}
     for sec, cls in _SECTIONS.items():
         if sec not in d and sec not in ("bodies", "housing"):
