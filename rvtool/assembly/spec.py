@@ -202,7 +202,7 @@ class CycloidDesign:
     bodies: Bodies = field(default_factory=Bodies)
     housing: Housing = field(default_factory=Housing)
     #: the file-form data this design was loaded from (what :func:`replace` changes and re-loads)
-    source: dict | None = field(default=None, compare=False, hash=False, repr=False)
+    source: dict | None = field(default=None, compare=False, hash=False, repr=False, metadata={"file": False})
 
     def __post_init__(self):
         if self.n_wheels != len(self.wheels.midplanes):
@@ -342,6 +342,68 @@ def _spec_class(f):
     return None
 
 
+def _field_types(cls):
+    import typing
+    try:
+        return typing.get_type_hints(cls)
+    except Exception:  # an annotation that does not resolve: no type check for that spec
+        return {}
+
+
+_TOML_KINDS = {float: "a number", int: "an integer", str: "text", bool: "true or false", tuple: "a list"}
+
+
+def _type_ok(value, tp):
+    """Whether a design-file value fits the field annotation ``tp`` (bool is not a number; a list
+    fits a tuple; a spec section fits its dataclass; Enum fields take their text value)."""
+    import enum
+    import types
+    import typing
+    if tp is None or tp is typing.Any or tp is object:
+        return True
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        return any(_type_ok(value, a) for a in typing.get_args(tp))
+    if tp is type(None):
+        return value is None
+    if origin is not None:
+        tp = origin
+    if not isinstance(tp, type):
+        return True
+    if tp is float:
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    if tp is int:
+        return isinstance(value, int) and not isinstance(value, bool)
+    if tp is bool:
+        return isinstance(value, bool)
+    if tp in (tuple, list):
+        return isinstance(value, (list, tuple))
+    if issubclass(tp, enum.Enum):
+        return isinstance(value, (str, tp))
+    if tp is str:
+        return isinstance(value, str)
+    return True
+
+
+def _check_finite_numbers(key, value):
+    """NaN and infinity are never design values (TOML can write them: ``nan``, ``inf``)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise RvtoolInputError(f"{key} = {value!r} must be finite (valid range: finite real numbers)")
+    if isinstance(value, (list, tuple)):
+        for v in value:
+            _check_finite_numbers(key, v)
+
+
+def _check_type(key, value, tp):
+    _check_finite_numbers(key, value)
+    if not _type_ok(value, tp):
+        import typing
+        args = [a for a in (typing.get_args(tp) or (tp,)) if a is not type(None)]
+        want = " or ".join(dict.fromkeys(_TOML_KINDS.get(typing.get_origin(a) or a, getattr(a, "__name__", str(a)))
+                                         for a in args))
+        raise RvtoolInputError(f"{key} = {value!r} has the wrong type; valid: {want}")
+
+
 def build_section(cls, section, data):
     """Construct the component spec ``cls`` from the design-file table ``data`` of ``[section]``:
     ``NAME_deg`` keys become the field NAME in radians (the one unit conversion), lists become
@@ -349,20 +411,22 @@ def build_section(cls, section, data):
     ``section.field``), unknown keys and type errors are reported with the section name, and a
     component's own validation error is prefixed with the section so it names the key path
     (e.g. ``wheels.eccentricity``). Every topology's design loader uses this one function."""
+    if not isinstance(data, dict):
+        raise RvtoolInputError(f"[{section}] must be a table of keys; got {type(data).__name__} {data!r}")
     data = _file_units(cls, section, data)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = set(data) - set(fields)
     if unknown:
         raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(fields)}")
+    hints = _field_types(cls)
     kw = {}
     for k, v in data.items():
         sub = _spec_class(fields[k])
         if isinstance(v, dict) and sub is not None:
             kw[k] = build_section(sub, f"{section}.{k}", v)
-        elif isinstance(v, list):
-            kw[k] = tuple(tuple(e) if isinstance(e, list) else e for e in v)
-        else:
-            kw[k] = v
+            continue
+        _check_type(k if section == "design" else f"{section}.{k}", v, hints.get(k))
+        kw[k] = tuple(tuple(e) if isinstance(e, list) else e for e in v) if isinstance(v, list) else v
     try:
         return cls(**kw)
     except TypeError as exc:
@@ -373,20 +437,29 @@ def build_section(cls, section, data):
         raise RvtoolInputError(msg if msg.startswith(section + ".") or section == "design" else f"{section}.{msg}") from None
 
 
+def _bearing_kind(section, data):
+    """The ``kind`` key of a bearing section (default "deep_groove"), checked."""
+    kind = data.get("kind", "deep_groove")
+    if not isinstance(kind, str) or kind not in BEARING_KINDS:
+        raise RvtoolInputError(f"{section}.kind = {kind!r}; valid choices are {list(BEARING_KINDS)}")
+    return kind
+
+
 def _bearing_section(section, data):
     """A bearing section: ``kind`` selects the spec; a pair's keys that are not the pair's own
     are those of its two identical rows."""
     data = dict(data)
-    kind = data.pop("kind", "deep_groove")
-    if kind not in BEARING_KINDS:
-        raise RvtoolInputError(f"{section}.kind = {kind!r}; valid choices are {list(BEARING_KINDS)}")
+    kind = _bearing_kind(section, data)
+    data.pop("kind", None)
     cls = BEARING_KINDS[kind]
     if cls is None:
         if data:
             raise RvtoolInputError(f"[{section}] is locked (no bearing): keys {sorted(data)} are not used")
         return None
-    if kind == "angular_contact" and _file_units(BallBearing, section, data).get("contact_angle", 0.0) <= 0:
-        raise RvtoolInputError(f"{section}.contact_angle_deg must be in (0, 90) deg for kind = 'angular_contact'")
+    angle = _file_units(BallBearing, section, data).get("contact_angle", 0.0)
+    if kind == "angular_contact" and not (isinstance(angle, (int, float)) and angle > 0):
+        raise RvtoolInputError(f"{section}.contact_angle_deg = {angle!r} rad; valid range (0, 90) deg for "
+                               "kind = 'angular_contact'")
     if cls is AngularContactPair:
         own = {f.name for f in dataclasses.fields(AngularContactPair)} - {"rows"}
         row = build_section(BallBearing, section, {k: v for k, v in data.items() if k not in own})
@@ -426,6 +499,10 @@ def design_from_dict(d):
     """A validated :class:`CycloidDesign` from file-form data (the parsed TOML of a design file)."""
     source = copy.deepcopy(dict(d))
     d = dict(d)
+    topology = d.pop("topology", "cycloid")   # the key of rvtool.assembly.topologies; this loader is the cycloid's
+    if topology != "cycloid":
+        raise RvtoolInputError(f"topology = {topology!r}: this is the cycloid loader; load the file with "
+                               "rvtool.load_design (rvtool.assembly.topologies), which picks the topology's loader")
     built = {}
     for sec, cls in SECTIONS.items():       # in dependency order: a link reads a section built before
         if sec not in d and sec not in OPTIONAL_SECTIONS:
@@ -434,7 +511,7 @@ def design_from_dict(d):
         if not isinstance(data, dict):
             raise RvtoolInputError(f"[{sec}] must be a table of keys; got {data!r}")
         if cls is BEARING_KINDS:
-            locked = BEARING_KINDS.get(data.get("kind", "deep_groove"), BallBearing) is None
+            locked = BEARING_KINDS[_bearing_kind(sec, data)] is None
             built[sec] = _bearing_section(sec, data if locked else _with_links(sec, data, built))
         else:
             data = _with_links(sec, data, built)

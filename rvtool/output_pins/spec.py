@@ -89,7 +89,7 @@ class OutputPinMechanism:
 
     pin_circle_radius: radius of the pin centres on the flange [m].
     hole_circle_radius: radius of the hole centres on each wheel [m].
-    n_pins: number of pins, equally spaced from ``phase`` [rad].
+    n_pins: number of pins, equally spaced from the first at ``phase``; phase: angle of the first pin [rad].
     pin_radius: outer pin (sleeve) radius r_p [m]; hole_radius: R_h [m] > r_p.
     coefficient: whole-contact coefficient k [N m^-p], or None: k calibrated so that the law
     meets the Hertz pin-in-hole approach at ``reference_force`` [N] (pin and flange of
