@@ -139,30 +139,31 @@ class FamilyObservation:
 
 @dataclass(frozen=True)
 class SeriesBeam:
-    """A beam (an elastic pin) in series with a family's contacts, for the stiffness budget.
+    """The beams of a family's pins (elastic pins), for the stiffness budget.
 
-    path: budget entry name (e.g. ``"ring_pin_bending"``); family: the contact family; compliance [m/N]: per observation row
-    (``per_contact`` False) or per physical contact in :meth:`FamilyObservation.per_contact`
-    order (True, the beam loaded by the contact's resultant); inside_rows: True where the rows'
-    observed approach (-gap) already contains the beam's deflection (a series law), False where
-    the contact law sees only the contact approach (the beam acts on the resultant beside it)."""
+    path: budget entry name (e.g. ``"ring_pin_bending"``); family: the contact family;
+    compliance: station compliance C (n_s, n_s) [m/N] of one pin (the same for every pin);
+    pin, station: (rows,) the pin and the station of every observation row of the family;
+    stiffened: ``stiffened(q, factor)`` -> (global coordinate indices, dQ/dq of the family's
+    element with the beams' stiffness times ``factor``, everything else at state q).
+    The observed approach of a row excludes the beam's deflection (the contact approach)."""
     path: str
     family: Family
     compliance: np.ndarray
-    inside_rows: bool
-    per_contact: bool
+    pin: np.ndarray
+    station: np.ndarray
+    stiffened: object
 
     def energy(self, model, q, dF_rows):
-        """sum c F'^2 [m/N x (N per unit)^2]: the beam's strain energy (x2) for row force increments dF_rows."""
-        if not self.per_contact:
-            return float(np.sum(self.compliance * dF_rows ** 2))
-        ob = model.observe(q, self.family)
-        contact = [physical_contact(r) for r in ob.ids]
-        names = list(dict.fromkeys(contact))
-        index = {c: k for k, c in enumerate(names)}
-        sums = np.zeros(len(names))
-        np.add.at(sums, [index[c] for c in contact], dF_rows)
-        return float(np.sum(self.compliance * sums ** 2))
+        """sum over pins of f^T C f [m/N x N^2]: the beams' strain energy (x2) for row force
+        increments dF_rows (N,), f_ps = sum of dF n over the rows of pin p at station s (the
+        vector resultant on the station; Eq. pin_compliance's coupling n_0 . n_1 in the
+        vector form)."""
+        n = model.observe(q, self.family).normal
+        n_p, n_s = int(self.pin.max()) + 1, self.compliance.shape[0]
+        f = np.zeros((n_p, n_s, 2))
+        np.add.at(f, (self.pin, self.station), np.asarray(dF_rows)[:, None] * n)
+        return float(np.einsum("pkx,kl,plx->", f, self.compliance, f))
 
 
 @dataclass(frozen=True)

@@ -12,12 +12,15 @@ give its approach Jacobian G_r and its normal stiffness k_r = (dF_r . G_r)/(G_r 
 elastic tangent is K_f = sum_r k_r G_r G_r^T, and its share of the output compliance is its strain
 energy in the mode, u^T K_f u / C (the shares of springs in series are their compliance
 fractions; Euler's theorem for a network homogeneous in its stiffnesses makes the energy shares
-sum to one). A beam in series with a family's contacts (``series_compliance``) takes c F^2 of
-that energy. What the rows do not carry (the regularization springs and the geometric stiffness
-of loaded contacts whose normals turn, F_r d^2 delta_r/dq^2, and the beams' cross-station terms)
-is the entry ``geometric_and_regularization``, so that the shares sum to one exactly.
+sum to one). The beams of elastic pins (``series_compliance``) are closed per pin with their full
+station compliance (:mod:`rvtool.contact.pin_closure`): the rows observe the contact approach
+only, and the beams' energy is sum_p f_p^T C f_p over the station resultants f_p of the mode's
+row force increments. What the rows and beams do not carry (the regularization springs and the
+geometric stiffness of loaded contacts whose normals turn, F_r d^2 delta_r/dq^2) is the entry
+``geometric_and_regularization``, so that the shares sum to one exactly.
 The second view switches each family to rigid in turn: K' = K + (lambda - 1) K_f with
-lambda = 1e6, and its share is (C - C'_f)/C. For families in series along the torque path the
+lambda = 1e6, and its share is (C - C'_f)/C; a family's beams likewise, by condensing the pins
+with lambda K_b at the same state. For families in series along the torque path the
 two views agree; a family that also positions other bodies (the bearings carrying the wheels)
 loses, when rigid, the relaxation it permits elsewhere, and its rigid share differs from its
 energy share by that coupling; both are reported with their difference.
@@ -85,15 +88,26 @@ def stiffness_budget(model, q):
         rigid[fam] = (C - Cr) / C
         beam = model.series_compliance(fam)
         if beam is not None:
-            b_energy = beam.energy(model, q, dF_mode)
-            shares[beam.path] = b_energy / C
-            if beam.inside_rows:
-                energy -= b_energy
+            shares[beam.path] = beam.energy(model, q, dF_mode) / C
+            rigid[beam.path] = (C - _stiffened_compliance(model, q, K, free, e, i_out, beam)) / C
         shares[fam] = energy / C
     shares["geometric_and_regularization"] = 1.0 - sum(shares.values())
     return {"shares": shares, "rigid_shares": rigid, "K_t_Nm_per_arcmin": RAD_PER_ARCMIN / C,
-            "residual": "geometric stiffness of loaded contacts, regularization springs and beam "
-                        "cross-station terms (what the rows' normal stiffness does not carry)"}
+            "residual": "geometric stiffness of loaded contacts and regularization springs (what the "
+                        "rows' normal stiffness and the beams do not carry)"}
+
+
+def _stiffened_compliance(model, q, K, free, e, i_out, beam):
+    """Output compliance with the beams of ``beam`` stiffened by RIGID_FACTOR at state q: the
+    element's tangent replaced by its condensation with lambda K_b (module docstring)."""
+    ltg, dQ_rigid = beam.stiffened(q, RIGID_FACTOR)
+    _, dQ = beam.stiffened(q, 1.0)
+    pos = {g: k for k, g in enumerate(free)}
+    loc = [k for k, g in enumerate(ltg) if g in pos]
+    glob = [pos[ltg[k]] for k in loc]
+    Kr = K.copy()
+    Kr[np.ix_(glob, glob)] -= (dQ_rigid - dQ)[np.ix_(loc, loc)]   # K^s = -dQ/dq
+    return float(np.linalg.solve(Kr, e)[i_out])
 
 
 def lost_motion_budget(design, *, fraction=0.03, bearing_model="rolling", input_angle=0.0):
