@@ -54,3 +54,24 @@ def test_datasheet_verdict_flips_at_the_allowable():
     with pytest.raises(RvtoolInputError, match="max_lost_motion"):
         Allowables(min_torsional_stiffness=1, max_lost_motion=-1, max_hertz_pins=1, max_hertz_output_pins=1,
                    max_hertz_needles=1, max_pin_bending_stress=1)
+
+
+def test_datasheet_pin_bending_entry_flips_at_the_allowable():
+    from rvtool.protocols.datasheet import datasheet
+    a = load_allowables(designs.path("rd40_allowables"))
+    assert a.assumed_output_pin_support.model.value == "cantilever"
+
+    def sheet(sigma):
+        b = {"sigma_max_Pa": sigma, "tau_max_Pa": 1e7, "pin": 3, "z_m": -0.012,
+             "support": {"model": "cantilever", "ends": [-0.012, 0.012], "shear": True}, "support_source": "declared"}
+        return datasheet(rated_torque=140.0, ratio=-39.0, branch_slopes={}, secant=150.0, lost_motion_arcmin=0.5,
+                         hertz_peaks={}, pin_bending_stress={"pins": None, "output_pins": b}, bearing_loads={},
+                         resolution_error=1e-4, allowables=a)
+    ok, bad = sheet(a.max_pin_bending_stress), sheet(a.max_pin_bending_stress * (1 + 1e-9))
+    assert ok["pin_bending_stress"]["meets_allowable"] is True
+    assert bad["pin_bending_stress"]["meets_allowable"] is False
+    assert "output pins" in bad["pin_bending_stress"]["reason"] and "cantilever" in bad["pin_bending_stress"]["reason"]
+    assert ok["pin_bending_stress_pins"]["value"] is None and ok["pin_bending_stress_pins"]["meets_allowable"] is None
+    with pytest.raises(RvtoolInputError, match="assumed_ring_pin_support"):
+        Allowables(min_torsional_stiffness=1, max_lost_motion=1, max_hertz_pins=1, max_hertz_output_pins=1,
+                   max_hertz_needles=1, max_pin_bending_stress=1, assumed_ring_pin_support={"model": "rigid"})

@@ -64,3 +64,58 @@ def test_rigid_is_nothing():
     assert output_pin_mechanism(d).mode == PinMode.PLAIN
     _, meshes = pin_meshes(d)
     assert all(m.pin_bodies is None for m in meshes)
+
+
+@pytest.mark.parametrize("shear", [False, True])
+def test_bending_moment_against_closed_forms(shear):
+    a, P, q = 0.3 * L, 1000.0, 1000.0 / L
+    b = L - a
+    W = np.pi * R ** 3 / 4
+
+    def m_max(model, points, loads):
+        beam = PinBeam(PinSupport(model=model, ends=(0.0, L), shear=shear), R, E, NU)
+        return np.abs(beam.internal_forces(points, loads)[1][:, 0]).max()
+    # point load P at a: cantilever P a at the clamp; simply supported P a b / L under the load
+    # (statically determinate: shear deformation leaves the moments as they are)
+    assert m_max("cantilever", [a], [[P, 0]]) == pytest.approx(P * a, rel=1e-12)
+    assert m_max("simply_supported", [a], [[P, 0]]) == pytest.approx(P * a * b / L, rel=1e-12)
+    if not shear:
+        # clamped--clamped (indeterminate, Euler--Bernoulli): P a b^2 / L^2 at the nearer clamp
+        assert m_max("clamped_clamped", [a], [[P, 0]]) == pytest.approx(P * a * b * b / L ** 2, rel=1e-12)
+    # uniform q over the span as one station: q L^2/2, q L^2/8, q L^2/12 (the symmetric
+    # clamped--clamped moment does not depend on shear); the lumped Gauss-point loads reproduce
+    # them to 1e-9 (measured 5e-10)
+    for model, ref in (("cantilever", q * L * L / 2), ("simply_supported", q * L * L / 8),
+                       ("clamped_clamped", q * L * L / 12)):
+        beam = PinBeam(PinSupport(model=model, ends=(0.0, L), shear=shear), R, E, NU)
+        sigma, tau, _ = beam.station_stresses([0.5 * L], L, [[0.6 * q * L, 0.8 * q * L]])
+        assert sigma * W == pytest.approx(ref, rel=1e-9)
+    # shear: a cantilever carries the whole load at the clamp, 4 V / (3 A)
+    sigma, tau, z = PinBeam(PinSupport(model="cantilever", ends=(0.0, L), shear=shear), R, E, NU).station_stresses(
+        [0.5 * L], L, [[P, 0.0]])
+    assert tau == pytest.approx(4 * P / (3 * np.pi * R * R), rel=1e-12) and z == pytest.approx(0.0)
+
+
+def test_rd40_pin_bending_from_station_loads():
+    from rvtool.assembly import build
+    from rvtool.solver.static import StaticSolver
+    d = load_design(designs.path("rd40"))
+    m = build(d, bearing_model="lumped")
+    m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+    q = StaticSolver(m).solve(0.0)
+    assert m.pin_bending(q, "output_pins") is None            # rigid pins and nothing assumed
+    cant = PinSupport(model="cantilever", ends=(-0.012, 0.012))
+    b = m.pin_bending(q, "output_pins", cant)
+    loads = m.pin_station_loads(q, "output_pins")
+    # the station resultants are the per-contact loads
+    assert np.linalg.norm(loads, axis=2).max() == pytest.approx(m.family_contact_peaks(q)["output_pins"], rel=1e-12)
+    # each RD-40 output pin is loaded by one wheel only at this state: a cantilever with its load
+    # F at the station centre z_s (uniform over the width) has M = F (z_s - z_clamp) at the clamp
+    F = np.linalg.norm(loads, axis=2)
+    p = b["pin"]
+    k = int(np.argmax(F[p]))
+    assert F[p].min() == 0.0
+    r = d.output_pins.pin_radius
+    M = F[p, k] * (d.wheels.midplanes[k] + 0.012)
+    assert b["sigma_max_Pa"] == pytest.approx(M / (np.pi * r ** 3 / 4), rel=1e-9)
+    assert b["z_m"] == pytest.approx(-0.012) and b["support_source"].startswith("assumed")

@@ -124,15 +124,7 @@ class CycloidModel(ReducerModel):
         if C is None:
             return None
         name = "pins" if fam == Family.PINS else "output_pins"
-        ids = self.elements[name].ids
-        # row ids: pins "wheel{k}/pin{p}/s{i}", output pins "output_pins/pin{p}/wheel{k}/slice{i}"
-        parts = [r.split("/") for r in ids]
-        if fam == Family.PINS:
-            pin = np.array([int(x[1][3:]) for x in parts])
-            station = np.array([int(x[0][5:]) for x in parts])
-        else:
-            pin = np.array([int(x[1][3:]) for x in parts])
-            station = np.array([int(x[2][5:]) for x in parts])
+        pin, station = self.pin_station_rows(fam)
         closure = self.elements[name].evaluator
 
         def stiffened(q, factor, el=self.elements[name]):
@@ -142,6 +134,61 @@ class CycloidModel(ReducerModel):
             return el.coordinate_indices, closure.condense(red, beam_factor=factor)[1]
         return SeriesBeam("ring_pin_bending" if fam == Family.PINS else "output_pin_bending", fam, C, pin, station,
                           stiffened)
+
+    def pin_station_rows(self, family):
+        """(pin (rows,), station (rows,)) of every observation row of the ring pins
+        (``wheel{k}/pin{p}/s{i}``) or the output pins (``output_pins/pin{p}/wheel{k}/slice{i}``):
+        the station of a row is its wheel."""
+        fam = Family(family)
+        name, rows = self.families[fam]
+        parts = [self.elements[name].ids[i].split("/") for i in rows]
+        if fam == Family.PINS:
+            return np.array([int(x[1][3:]) for x in parts]), np.array([int(x[0][5:]) for x in parts])
+        if fam == Family.OUTPUT_PINS:
+            return np.array([int(x[1][3:]) for x in parts]), np.array([int(x[2][5:]) for x in parts])
+        raise RvtoolInputError(f"family = {fam.value!r} has no pins; valid: 'pins', 'output_pins'")
+
+    def pin_station_loads(self, q, family):
+        """Vector resultant (n_pins, n_wheels, 2) [N] of the contact forces on every ring pin or
+        output pin at each wheel station, static state q (the force on a pin points along the
+        profile normal of its cycloid contact and against the wheel-force direction of an
+        output-pin contact)."""
+        fam = Family(family)
+        pin, station = self.pin_station_rows(fam)
+        ob = self.observe(q, fam)
+        sign = 1.0 if fam == Family.PINS else -1.0
+        n_pins = self.design.pins.n_pins if fam == Family.PINS else self.design.output_pins.n_pins
+        f = np.zeros((n_pins, self.n_wheels, 2))
+        np.add.at(f, (pin, station), sign * ob.normal_force[:, None] * ob.normal)
+        return f
+
+    def pin_bending(self, q, family, support=None):
+        """Largest bending and shear stress of the ring pins (``"pins"``) or output pins at the
+        static state q from their station loads (:meth:`pin_station_loads`) on the declared
+        support (``pins.support`` / ``output_pins.support``), or on ``support``
+        (:class:`~rvtool.structure.pin_beam.PinSupport`) where the design's pins are rigid (an
+        assumption the caller names). Returns a dict (``sigma_max_Pa``, ``tau_max_Pa``, ``pin``,
+        ``z_m``, ``support``, ``support_source``) or None (rigid pins and no support given)."""
+        from ..structure.pin_beam import PinBeam
+        fam = Family(family)
+        spec = self.design.pins if fam == Family.PINS else self.design.output_pins
+        source = "declared"
+        sup = spec.support
+        if not sup.elastic:
+            if support is None:
+                return None
+            sup, source = support, "assumed (the design's pins are rigid)"
+        beam = PinBeam(sup, spec.pin_radius, self.design.material.youngs_modulus, self.design.material.poisson_ratio)
+        loads = self.pin_station_loads(q, fam)
+        best, tau = {"sigma_max_Pa": 0.0, "pin": None, "z_m": None}, 0.0
+        for p in np.flatnonzero(np.any(loads != 0.0, axis=(1, 2))):
+            s, t, z = beam.station_stresses(self.design.wheels.midplanes, self.design.wheels.width, loads[p])
+            tau = max(tau, t)
+            if s > best["sigma_max_Pa"]:
+                best = {"sigma_max_Pa": s, "pin": int(p), "z_m": z}
+        best.update(tau_max_Pa=tau, support={"model": sup.model.value, "ends": list(sup.ends), "shear": sup.shear},
+                    support_source=source)
+        return best
 
     def hertz_peaks(self, q):
         """Largest Hertz line-contact peak p0 [Pa] of the loaded ring-pin, output-pin and needle

@@ -352,6 +352,12 @@ class ReducerModel:
         (rigid pins, the "nothing" variant)."""
         return None
 
+    def pin_bending(self, q, family, support=None):
+        """Largest bending stress of the pins of ``family`` at state q (dict, see the topology),
+        or None where the topology has no pins of that family or they are rigid and no
+        ``support`` is assumed."""
+        return None
+
     def hertz_peaks(self, q):
         """{family group: largest Hertz peak pressure [Pa]} of the loaded contacts at state q, where
         the topology provides the local contact geometry; {} otherwise."""

@@ -201,7 +201,10 @@ def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated,
     sheet = datasheet(rated_torque=design.rated_torque, ratio=float(model.ratio),
                       branch_slopes={b: f["K_Nm_per_arcmin"] for b, f in fits.items()}, secant=secant,
                       lost_motion_arcmin=lm["total_arcmin"], hertz_peaks=model.hertz_peaks(q_rated),
-                      pin_bending_stress=None,
+                      pin_bending_stress={
+                          "pins": model.pin_bending(q_rated, "pins", allowables.assumed_ring_pin_support),
+                          "output_pins": model.pin_bending(q_rated, "output_pins",
+                                                           allowables.assumed_output_pin_support)},
                       bearing_loads={f: v for f, v in peaks_rated.items() if f not in ("pins", "output_pins")},
                       resolution_error=res_err, allowables=allowables)
     sheet["resolution_error"]["reference"] = {"default": model.resolution_settings(),
