@@ -209,8 +209,12 @@ class CycloidModel(ReducerModel):
         c_b across the journal turns the wheel by c_b / (e z_c) through the pin mesh, each way),
         input-bearing clearance (estimate 2 c / (e z_c) for one wheel; 0 for opposed wheels, whose
         tangential shifts cancel), main-bearing clearance (estimate 0: the flange centre shift does
-        not turn it) and the uniform profile clearance c_w (estimate 2 c_w / (e z_b), the largest
-        pin-force lever arm e z_b). Clearances the design does not have are left out."""
+        not turn it), the uniform profile clearance c_w and the equidistant, offset and rotation
+        modifications (``wheels.clearance``, ``equidistant_mod``, ``offset_mod``, ``rotation_mod``;
+        each one's estimate is the wheels' free play it causes alone,
+        :func:`rvtool.geometry.cycloid.modification_play`: about 2 c / (e z_c) for c_w and
+        delta_eq, 0 for a rotation, which only shifts the phase). Clearances and modifications the
+        design does not have are left out."""
         d = self.design
         e, zc, zb = d.wheels.eccentricity, d.pins.n_pins - 1, d.pins.n_pins
         op = d.output_pins
@@ -231,10 +235,18 @@ class CycloidModel(ReducerModel):
                                             lambda x, s=sec: replace(x, **{s: {"radial_clearance": 0.0}}),
                                             lambda x, o, s=sec: replace(x, **{s: {"radial_clearance":
                                                                                   getattr(o, s).radial_clearance}})))
-        if d.wheels.clearance > 0:
-            out.append(ClearanceVariant("profile_clearance", d.wheels.clearance, 2 * d.wheels.clearance / (e * zb),
-                                        lambda x: replace(x, wheels={"clearance": 0.0}),
-                                        lambda x, o: replace(x, wheels={"clearance": o.wheels.clearance})))
+        # the uniform profile clearance and the profile modifications: the wheels' free play against
+        # the pins from the normal gaps and lever arms at each pin (geometry.cycloid.modification_play)
+        from ..geometry.cycloid import modification_play
+        centres = journal_centre(e, np.deg2rad(np.asarray(d.wheels.phases_deg[:d.n_wheels], float)), 0.0)
+        centres = np.column_stack(centres)
+        for key, name in (("clearance", "profile_clearance"), ("equidistant_mod", "equidistant_mod"),
+                          ("offset_mod", "offset_mod"), ("rotation_mod", "rotation_mod")):
+            v = getattr(d.wheels, key)
+            if v != 0.0:
+                est = modification_play(d.pins.pin_circle_radius, zb, e, centres, **{key: v})[0]
+                out.append(ClearanceVariant(name, v, est, lambda x, k=key: replace(x, wheels={k: 0.0}),
+                                            lambda x, o, k=key: replace(x, wheels={k: getattr(o.wheels, k)})))
         return out
 
     def marker_frequencies(self, speed_rpm):
