@@ -119,3 +119,22 @@ def test_rd40_pin_bending_from_station_loads():
     M = F[p, k] * (d.wheels.midplanes[k] + 0.012)
     assert b["sigma_max_Pa"] == pytest.approx(M / (np.pi * r ** 3 / 4), rel=1e-9)
     assert b["z_m"] == pytest.approx(-0.012) and b["support_source"].startswith("assumed")
+
+
+def test_support_compliance_in_series():
+    # springs of compliance c_s at the supports: a cantilever's clamp translates by P c_s (tip
+    # P L^3/(3EI) + P L/kGA + P c_s); a simply supported pin under a central load sinks by the mean
+    # of its support motions, P c_s / 2 (P L^3/(48 EI) + P L/(4 kGA) + P c_s/2); the moments stay
+    # (statically determinate)
+    cs = 2e-9
+    cant = PinBeam(PinSupport(model="cantilever", ends=(0.0, L), support_compliance=cs), R, E, NU)
+    rigid = PinBeam(PinSupport(model="cantilever", ends=(0.0, L)), R, E, NU)
+    assert cant.influence([L], [L])[0, 0] == pytest.approx(rigid.influence([L], [L])[0, 0] + cs, rel=1e-10)
+    ss = PinBeam(PinSupport(model="simply_supported", ends=(0.0, L), support_compliance=cs), R, E, NU)
+    EI, kGA = ss.EI, ss.kGA
+    assert ss.influence([0.5 * L], [0.5 * L])[0, 0] == pytest.approx(L ** 3 / (48 * EI) + L / (4 * kGA) + cs / 2,
+                                                                      rel=1e-10)
+    assert np.abs(ss.internal_forces([0.3 * L], [[1000.0, 0]])[1][:, 0]).max() == pytest.approx(1000 * 0.21 * L,
+                                                                                              rel=1e-10)
+    with pytest.raises(RvtoolInputError, match="support_compliance"):
+        PinSupport(model="cantilever", ends=(0.0, L), support_compliance=-1.0)

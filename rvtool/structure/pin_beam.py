@@ -52,11 +52,15 @@ class PinSupport:
         midplanes (cantilever: clamped at z_a, free end at z_b).
     shear: True = Timoshenko (bending + shear), False = Euler--Bernoulli (bending only).
     shear_coefficient: kappa [-]; None = Cowper's value of a solid circle from the material.
+    support_compliance: radial compliance [m/N] of each support (the groove or bore the pin
+        sits in; a spring on the deflection at z_a and, where held, z_b; rotations stay held
+        where the model holds them); 0 = rigid supports.
     """
     model: Support = Support.RIGID
     ends: tuple = (0.0, 0.0)
     shear: bool = True
     shear_coefficient: float | None = None
+    support_compliance: float = 0.0
 
     def __post_init__(self):
         try:
@@ -74,6 +78,7 @@ class PinSupport:
             raise RvtoolInputError(f"shear = {self.shear!r} must be true or false")
         if self.shear_coefficient is not None:
             check_range("shear_coefficient", self.shear_coefficient, 0.0, 1.0, low_open=True)
+        check_range("support_compliance", self.support_compliance, 0.0, math.inf)
 
     @property
     def elastic(self):
@@ -200,17 +205,32 @@ class PinBeam:
         for e in range(n - 1):
             s = slice(2 * e, 2 * e + 4)
             K[s, s] += self._element(nodes[e + 1] - nodes[e])
+        if self.support.support_compliance > 0.0:
+            for d in self._support_springs(nodes):
+                K[d, d] += 1.0 / self.support.support_compliance
         return K
 
     def _held_dofs(self, nodes):
+        """Held dofs; with a support compliance the deflection dofs at the supports are free and
+        carry springs instead (added to the stiffness by :meth:`_stiffness`)."""
         za, zb = self.support.ends
         ia, ib = np.searchsorted(nodes, za), np.searchsorted(nodes, zb)
         m = self.support.model
         if m == Support.CANTILEVER:
-            return [2 * ia, 2 * ia + 1]
-        if m == Support.SIMPLY_SUPPORTED:
-            return [2 * ia, 2 * ib]
-        return [2 * ia, 2 * ia + 1, 2 * ib, 2 * ib + 1]
+            held = [2 * ia, 2 * ia + 1]
+        elif m == Support.SIMPLY_SUPPORTED:
+            held = [2 * ia, 2 * ib]
+        else:
+            held = [2 * ia, 2 * ia + 1, 2 * ib, 2 * ib + 1]
+        if self.support.support_compliance > 0.0:
+            held = [h for h in held if h % 2 == 1]
+        return held
+
+    def _support_springs(self, nodes):
+        """Deflection dofs of the supports (the springs of a support compliance)."""
+        za, zb = self.support.ends
+        ia, ib = np.searchsorted(nodes, za), np.searchsorted(nodes, zb)
+        return [2 * ia] if self.support.model == Support.CANTILEVER else [2 * ia, 2 * ib]
 
     def station_compliance(self, centres, width, n_sub=16):
         """C (k, k) [m/N] between stations of ``width`` [m] centred at ``centres`` (k,) [m]:
