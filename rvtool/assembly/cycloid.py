@@ -123,17 +123,18 @@ class CycloidModel(ReducerModel):
         C = pin_station_compliance(self.design, fam)
         if C is None:
             return None
-        name = "pins" if fam == Family.PINS else "output_pins"
-        pin, station = self.pin_station_rows(fam)
-        closure = self.elements[name].evaluator
+        el = self.elements["pins" if fam == Family.PINS else "output_pins"]
+        closure = el.evaluator
 
-        def stiffened(q, factor, el=self.elements[name]):
+        def pose(q):
             ql = el.local(q)
-            pose, vel = el.pose_velocity(ql, 0 * ql)
-            _, _, red, _ = closure.solve(pose, vel)
+            return el.pose_velocity(ql, 0 * ql)
+
+        def stiffened(q, factor):
+            _, _, red, _ = closure.solve(*pose(q))
             return el.coordinate_indices, closure.condense(red, beam_factor=factor)[1]
-        return SeriesBeam("ring_pin_bending" if fam == Family.PINS else "output_pin_bending", fam, C, pin, station,
-                          stiffened)
+        return SeriesBeam("ring_pin_bending" if fam == Family.PINS else "output_pin_bending", fam, C,
+                          lambda q: closure.deflections(pose(q)[0]), stiffened)
 
     def pin_station_rows(self, family):
         """(pin (rows,), station (rows,)) of every observation row of the ring pins

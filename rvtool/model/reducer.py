@@ -143,27 +143,24 @@ class SeriesBeam:
 
     path: budget entry name (e.g. ``"ring_pin_bending"``); family: the contact family;
     compliance: station compliance C (n_s, n_s) [m/N] of one pin (the same for every pin);
-    pin, station: (rows,) the pin and the station of every observation row of the family;
+    deflections: ``deflections(q)`` -> (n_pins, n_s, 2) station deflections [m] at state q;
     stiffened: ``stiffened(q, factor)`` -> (global coordinate indices, dQ/dq of the family's
     element with the beams' stiffness times ``factor``, everything else at state q).
     The observed approach of a row excludes the beam's deflection (the contact approach)."""
     path: str
     family: Family
     compliance: np.ndarray
-    pin: np.ndarray
-    station: np.ndarray
+    deflections: object
     stiffened: object
 
-    def energy(self, model, q, dF_rows):
-        """sum over pins of f^T C f [m/N x N^2]: the beams' strain energy (x2) for row force
-        increments dF_rows (N,), f_ps = sum of dF n over the rows of pin p at station s (the
-        vector resultant on the station; Eq. pin_compliance's coupling n_0 . n_1 in the
-        vector form)."""
-        n = model.observe(q, self.family).normal
-        n_p, n_s = int(self.pin.max()) + 1, self.compliance.shape[0]
-        f = np.zeros((n_p, n_s, 2))
-        np.add.at(f, (self.pin, self.station), np.asarray(dF_rows)[:, None] * n)
-        return float(np.einsum("pkx,kl,plx->", f, self.compliance, f))
+    def energy(self, q, dq, step=1e-9):
+        """sum over pins of du^T K_b du [m/N x N^2 per unit^2] with K_b = C^-1: the beams' strain
+        energy (x2) along the state increment dq (n,), du by central differences of the station
+        deflections over +-step [m] of the largest entry of dq (the closure is solved to 1e-16 m
+        of deflection, 1e-7 of such a step)."""
+        h = step / max(float(np.abs(dq).max()), 1e-300)
+        du = (self.deflections(q + h * dq) - self.deflections(q - h * dq)) / (2 * h)
+        return float(np.einsum("pkx,kl,plx->", du, np.linalg.inv(self.compliance), du))
 
 
 @dataclass(frozen=True)
