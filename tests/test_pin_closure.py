@@ -4,6 +4,7 @@ import itertools
 
 import numpy as np
 import pytest
+import warp as wp
 
 from rvtool import designs
 from rvtool.assembly import build
@@ -21,13 +22,18 @@ K = 2e8                                       # linear contact law [N/m] (expone
 C = np.array([[2.0e-9, 1.2e-9], [1.2e-9, 3.0e-9]])   # station compliance [m/N], SPD
 
 
-def one_pin(backend="numpy"):
+DEVICES = ["cpu", pytest.param("cuda:0", marks=pytest.mark.skipif(
+    wp.get_cuda_device_count() == 0, reason="no CUDA device"))]
+
+
+def one_pin(backend="numpy", device="cpu"):
     """One pin on the flange (body 0) at (R, 0) in the holes of two wheels (bodies 1, 2); the
     station bodies 3, 4 are the pin at the wheel stations."""
     mech = OutputPinMechanism(pin_circle_radius=R, hole_circle_radius=R, n_pins=1, phase=0.0, pin_radius=R_PIN,
                               hole_radius=R_HOLE, coefficient=K, exponent=1.0, contact_length=0.01, n_slices=2,
                               wheel_midplanes=(-0.006, 0.006), mode=PinMode.PLAIN)
-    inner = OutputPinEvaluator(mech, flange=0, wheels=(1, 2), n_bodies=5, backend=backend, flange_bodies=[3, 4])
+    inner = OutputPinEvaluator(mech, flange=0, wheels=(1, 2), n_bodies=5, backend=backend, device=device,
+                               flange_bodies=[3, 4])
     return ElasticPinClosure(inner, n_bodies=3, carrier=0, station_compliance=C, station=[[0, 1]])
 
 
@@ -150,3 +156,18 @@ def test_budget_with_elastic_pins_closes():
         assert b["sensitivity_shares"][path] == pytest.approx(s[path], abs=1e-4)
     for fam in ("pins", "output_pins", "eccentric_bearings"):
         assert b["sensitivity_shares"][fam] == pytest.approx(s[fam], abs=1e-4)
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_closure_on_the_warp_kernel_per_device(device):
+    # the closure is NumPy around the family's kernel: the Warp kernel with per-row station bodies
+    # (flange_bodies) against the NumPy reference, same closure; float64 kernels agree with the
+    # reference to round-off, amplified by the Newton solve's conditioning (1 + K C ~ 2): 1e-9
+    pose = np.zeros((3, 3))
+    pose[1] = (-(CLEAR + 2e-6), 0.4e-6, 1e-5)
+    pose[2] = (CLEAR + 1e-6, -0.3e-6, -2e-5)
+    ref = one_pin("numpy").evaluate(pose, 0 * pose)
+    ev = one_pin("warp", device).evaluate(pose, 0 * pose)
+    assert ev.finite
+    assert np.abs(ev.Q - ref.Q).max() < 1e-9 * np.abs(ref.Q).max()
+    assert np.abs(ev.dQdq - ref.dQdq).max() < 1e-9 * np.abs(ref.dQdq).max()
