@@ -139,6 +139,8 @@ def _example_kwargs(cls, table):
 
 
 def _plain(v):
+    if dataclasses.is_dataclass(v) and not isinstance(v, type):   # a nested component spec: its sub-table
+        return {f.name: _plain(getattr(v, f.name)) for f in dataclasses.fields(v) if getattr(v, f.name) is not None}
     if isinstance(v, tuple):
         return [_plain(x) for x in v]
     if hasattr(v, "value") and not isinstance(v, (int, float, str)):   # an Enum: its file value
