@@ -391,6 +391,35 @@ class ReducerModel:
         ax.set_aspect("equal")
         ax.set(xlabel="x [m]", ylabel="y [m]")
 
+    def set_gap_offsets(self, family, offsets):
+        """Slow-state gap offsets [m] of ``family``: ``offsets`` maps physical contact ids (those of
+        :meth:`FamilyObservation.per_contact`) to an offset (positive opens the gap; unnamed
+        contacts 0), written into the family's contact element for the next contact evaluation.
+        Absolute, not increments; all zeros restore the built element bit for bit."""
+        try:
+            name, rows = self.families[Family(family)]
+        except (KeyError, ValueError):
+            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
+                                   f"{[f.value for f in self.families]}") from None
+        el = self.elements[name]
+        contact = [physical_contact(el.ids[i]) for i in rows]
+        unknown = sorted(set(offsets) - set(contact))
+        if unknown:
+            raise RvtoolInputError(f"gap offsets name contacts {unknown[:4]} that family {Family(family).value!r} "
+                                   f"lacks; valid: {list(dict.fromkeys(contact))[:4]} ...")
+        full = np.array(el.gap_offsets, dtype=np.float64)
+        full[rows] = [float(offsets.get(c, 0.0)) for c in contact]
+        el.set_gap_offsets(full)
+
+    def gap_offsets(self, family):
+        """{physical contact id: gap offset [m]} in force for ``family`` (first row of each contact)."""
+        name, rows = self.families[Family(family)]
+        el = self.elements[name]
+        out = {}
+        for i in rows:
+            out.setdefault(physical_contact(el.ids[i]), float(el.gap_offsets[i]))
+        return out
+
     def family_element(self, family):
         """The contact element that carries ``family`` (fault injection, per-step sums)."""
         return self.elements[self.families[Family(family)][0]]

@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 
+from .. import progress
 from ..solver.static import StaticSolver
 
 
@@ -67,7 +68,7 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
     peaks, contact_peaks = {}, {}
     prev = None
     t0 = time.perf_counter()
-    for k, a in enumerate(input_angles):
+    for k, a in enumerate(progress.track(input_angles, desc="quasi-static TE", unit="point")):
         q = solver.solve(a, prev if warm_start else None)
         a = solver.last_angle      # the solved angle (a kink shift of <= 1e-5 rad is recorded, not hidden)
         prev = a
@@ -111,16 +112,18 @@ def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, 
     ref_out = model.reference_value(model.output)
     t_rec, th_in, th_out = [0.0], [q0[i_in]], [ref_out + q0[i_out]]
 
-    def record(t, q, v):
-        t_rec.append(t)
-        th_in.append(q[i_in])
-        th_out.append(ref_out + q[i_out])
-
     import dataclasses
     spec = dataclasses.replace(run_spec, end_time=duration)
     if on_start is not None:
         on_start()
-    rec = simulate(mbs, spec, model.contact_elements(), observers, before_accept=record, out_dir=out_dir)
+    with progress.task(duration, desc="dynamic TE run", unit="s") as advance:
+        def record(t, q, v):
+            t_rec.append(t)
+            th_in.append(q[i_in])
+            th_out.append(ref_out + q[i_out])
+            advance(t)
+
+        rec = simulate(mbs, spec, model.contact_elements(), observers, before_accept=record, out_dir=out_dir)
     t_rec, th_in, th_out = map(np.array, (t_rec, th_in, th_out))
     te = transmission_error(th_in, th_out, ratio)
     n_uniform = max(16, int(round(duration / run_spec.step)))

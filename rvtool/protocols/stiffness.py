@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import progress
 from ..errors import RvtoolInputError
 from ..validation import check_positive, check_range
 from ..solver.continuation import Continuation
@@ -211,7 +212,7 @@ def quasi_static_stiffness(model, sequence: TorqueSequence, *, input_angle=0.0, 
     i_out = model.output_index
     th_kin = model.kinematic_output(input_angle)
     angles, sums, maxs, reg = [], [], [], []
-    for k, t in enumerate(torques):
+    for k, t in enumerate(progress.track(torques, desc="stiffness levels", unit="level")):
         q = cont.go_to(float(t))
         angles.append((q[i_out] - th_kin) / RAD_PER_ARCMIN)
         s, m = mesh_contact_stats(model, q)
@@ -296,7 +297,7 @@ def dynamic_stiffness(model, sequence: TorqueSequence, *, step=2e-5, input_angle
     t_prev = 0.0
     angles, spans, sums, maxs = [], [], [], []
     t_ramp = sequence.ramp_steps * step
-    for k, t_lvl in enumerate(torques):
+    for k, t_lvl in enumerate(progress.track(torques, desc="dynamic stiffness levels", unit="level")):
         a, b = t_prev, float(t_lvl)
         run_chunk(sequence.ramp_steps, lambda t, a=a, b=b: a + (b - a) * min(t / t_ramp, 1.0))
         for attempt in range(1 + max_extra_dwells):
