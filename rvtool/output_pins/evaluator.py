@@ -36,10 +36,13 @@ class OutputPinEvaluator:
     the wheels (one per wheel midplane of the mechanism); n_bodies: number of
     bodies of the contact element. backend "warp" | "numpy", precision
     "float64" | "float32", device "cpu" | "cuda:N".
+    flange_bodies: plain mode only, optionally the body carrying the pin of every (pin, wheel)
+    row (pins outer, wheels inner) instead of ``flange``: the station bodies of elastic pins
+    (:mod:`rvtool.contact.pin_closure`).
     """
 
     def __init__(self, mechanism: OutputPinMechanism, *, name="output_pins", flange=0, wheels=None, n_bodies=None,
-                 backend="warp", precision="float64", device="cpu"):
+                 backend="warp", precision="float64", device="cpu", flange_bodies=None):
         if not isinstance(mechanism, OutputPinMechanism):
             raise RvtoolInputError(f"mechanism must be an OutputPinMechanism; got {type(mechanism).__name__}")
         check_choice("backend", backend, ("warp", "numpy"))
@@ -61,6 +64,13 @@ class OutputPinEvaluator:
         self.mode = mechanism.mode
         self.stations = mechanism.stations
         self.fparams, self.iparams = mechanism.packed(fl, wheels)
+        if flange_bodies is not None:
+            fb = np.asarray(flange_bodies, int)
+            if self.mode != PinMode.PLAIN or fb.shape != (len(self.iparams),) or fb.min() < 0 or fb.max() >= self.n_bodies:
+                raise RvtoolInputError(f"flange_bodies must give one body in [0, {self.n_bodies - 1}] per plain "
+                                       f"(pin, wheel) row ({len(self.iparams)}); got shape {fb.shape} in mode "
+                                       f"{self.mode.value!r}")
+            self.iparams[:, ref.J_FLANGE] = fb
         ns = mechanism.n_slices
         if self.mode == PinMode.SHARED:
             bodies = self.iparams[:, [ref.I_FLANGE, ref.I_WHEEL0, ref.I_WHEEL1]]
