@@ -184,6 +184,7 @@ class ReducerWindows:
         self.last_q = None
         self.last_te = None
         self.last_friction_power = None
+        self.last_states = ()     # (input angle [rad], accepted duration [s], q) of the last window's steps
         self.friction_written = set()
 
     # -- contact identities ------------------------------------------------------------
@@ -249,7 +250,7 @@ class ReducerWindows:
         observer = ExposureObserver(TimeWindows(self.window_angle / omega, m=p.m))
         da = self.window_angle / p.steps
         i_out = model.output_index
-        te, work = [], 0.0
+        te, work, states = [], 0.0, []
         try:
             self._prescribe(a0)
             # every window starts loaded from a cold start at a fraction of the torque: the offsets written
@@ -267,6 +268,7 @@ class ReducerWindows:
                                                   q_start=q_prev, q_end=q, snapshots={SNAPSHOT: snap}))
                 if j <= p.steps:
                     te.append(q[i_out] - model.kinematic_output(a))
+                    states.append((a, (a - a_prev) / omega, q))
                     work += self._friction_power(q) * (a - a_prev) / omega
                 q_prev, a_prev = q, a
         finally:
@@ -274,6 +276,7 @@ class ReducerWindows:
                 model.set_prescribed_velocity(None)
         self.last_q = q_prev
         self.last_te = np.array(te)
+        self.last_states = tuple(states)
         self.last_friction_power = work * omega / (p.steps * da)
         done = observer.completed()
         if not done:
