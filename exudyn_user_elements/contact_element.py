@@ -235,7 +235,7 @@ class ContactElement:
         Absolute, not increments: zeros restore the built element."""
         if not callable(getattr(self.evaluator, "set_gap_offsets", None)):
             raise RvtoolInputError(f"contact set {self.name!r} ({type(self.evaluator).__name__}) takes no gap "
-                                   "offsets; valid: cycloid pins, circle contacts, output pins")
+                                   "offsets; valid: cycloid pins, circle contacts, output pins, rolling-element bearings")
         off = np.array(offsets, dtype=np.float64)
         self.evaluator.set_gap_offsets(off)
         self.gap_offsets = off
