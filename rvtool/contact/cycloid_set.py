@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from warp_contacts import cycloid_pins_ref as ref
+from warp_contacts.circle_pairs_ref import FRICTION_REGULARIZED
 
 from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile, pin_centres
@@ -284,11 +285,52 @@ class CycloidPinSet:
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per slice row (positive opens the gap), added to the deviation sum e of
         Eq. (gap), absolute over the built rows; zeros restore the built rows bit for bit."""
-        off = gap_offset_rows(offsets, self.n_contacts, self.name)
+        self._slow_gap = gap_offset_rows(offsets, self.n_contacts, self.name)
+        self._upload_slow_state()
+
+    def set_friction_coefficients(self, mu):
+        """Slow-state friction coefficient [-] per slice row (coupled lubrication), written as the
+        kinetic and static coefficient of Eq. (friction) (no Stribeck peak), absolute over the built
+        rows; None restores the built coefficients bit for bit. Only rows built with regularized
+        friction carry it (a row built without friction has no tangential law to write into)."""
+        if mu is None:
+            self._slow_mu = None
+        else:
+            m = np.array(mu, dtype=np.float64)
+            if m.shape != (self.n_contacts,):
+                raise RvtoolInputError(f"friction coefficients of contact set {self.name!r} must have shape "
+                                       f"({self.n_contacts},), one per observation row; got {m.shape}")
+            if not np.all(np.isfinite(m)) or np.any(m < 0.0):
+                raise RvtoolInputError(f"friction coefficients of contact set {self.name!r} are outside the valid "
+                                       "range [0, inf)")
+            off = self.iparams[:, ref.J_FRICTION] != FRICTION_REGULARIZED
+            if np.any(off & (m != 0.0)):
+                raise RvtoolInputError(f"contact set {self.name!r} was built without friction (pin_contact.mu = 0); "
+                                       "a friction coefficient needs pin_contact.mu in (0, inf)")
+            self._slow_mu = m
+        self._upload_slow_state()
+
+    def built_friction(self):
+        """Kinetic friction coefficient [-] per row as built (the design's pin_contact.mu)."""
+        return np.array(getattr(self, "_built_fparams", self.fparams)[:, ref.C_MUK])
+
+    @property
+    def friction_rows(self):
+        """Rows built with regularized friction (bool, (N,))."""
+        return self.iparams[:, ref.J_FRICTION] == FRICTION_REGULARIZED
+
+    def _upload_slow_state(self):
         if not hasattr(self, "_built_fparams"):
             self._built_fparams = self.fparams.copy()
         fp = self._built_fparams.copy()
-        fp[:, ref.C_E] += off
+        gap = getattr(self, "_slow_gap", None)
+        if gap is not None:
+            fp[:, ref.C_E] += gap
+        mu = getattr(self, "_slow_mu", None)
+        if mu is not None:
+            rows = self.friction_rows
+            fp[rows, ref.C_MUK] = mu[rows]
+            fp[rows, ref.C_MUS] = mu[rows]
         self.fparams = fp
         if self.backend == "warp":
             self._kernel.set_parameters(fp)

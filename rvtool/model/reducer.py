@@ -420,6 +420,46 @@ class ReducerModel:
             out.setdefault(physical_contact(el.ids[i]), float(el.gap_offsets[i]))
         return out
 
+    def set_friction(self, family, mu):
+        """Slow-state friction coefficients [-] of ``family`` (coupled lubrication): ``mu`` maps
+        physical contact ids to mu (unnamed contacts keep their built coefficient), or None restores
+        the built coefficients. Written into the contact law of Eq. (friction) of the family's rows
+        built with friction (cycloid pins with ``pin_contact.mu`` > 0; other families: named error)."""
+        try:
+            name, rows = self.families[Family(family)]
+        except (KeyError, ValueError):
+            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
+                                   f"{[f.value for f in self.families]}") from None
+        el = self.elements[name]
+        if mu is None:
+            el.set_friction_coefficients(None)
+            return
+        contact = [physical_contact(el.ids[i]) for i in rows]
+        unknown = sorted(set(mu) - set(contact))
+        if unknown:
+            raise RvtoolInputError(f"friction names contacts {unknown[:4]} that family {Family(family).value!r} "
+                                   f"lacks; valid: {list(dict.fromkeys(contact))[:4]} ...")
+        if not callable(getattr(el.evaluator, "set_friction_coefficients", None)):
+            raise RvtoolInputError(f"family {Family(family).value!r} has no friction coefficient to write; valid: "
+                                   "cycloid pins")
+        built = el.evaluator.built_friction() if callable(getattr(el.evaluator, "built_friction", None)) else None
+        full = np.array(built if built is not None else np.zeros(len(el.ids)), dtype=np.float64)
+        full[rows] = [float(mu.get(c, full[i])) for c, i in zip(contact, rows)]
+        el.set_friction_coefficients(full)
+
+    def set_prescribed_velocity(self, v):
+        """Velocity (global ODE2 vector [m/s, rad/s]) at which every contact element evaluates in the
+        following static solves, or None (zero velocity, the default). Quasi-static windows at input
+        speed prescribe ``body_vector(kinematic_state(a, omega).velocities)`` so that velocity
+        dependent laws (regularized friction, Eq. (friction)) see the steady sliding speed."""
+        if v is not None:
+            v = np.asarray(v, dtype=np.float64)
+            n = self.mbs.systemData.ODE2Size()
+            if v.shape != (n,):
+                raise RvtoolInputError(f"prescribed velocity must have shape ({n},) (the ODE2 vector); got {v.shape}")
+        for el in self.elements.values():
+            el.set_prescribed_velocity(v)
+
     def family_element(self, family):
         """The contact element that carries ``family`` (fault injection, per-step sums)."""
         return self.elements[self.families[Family(family)][0]]
