@@ -178,15 +178,16 @@ def lumped_ball_law(spec):
     return Z * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5, 1.5
 
 
-def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1)):
+def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1), wheel_mass=None):
     """Bodies of one reducer in ``mbs``: shaft, wheels and flange (``NodeRigidBody2D`` at their
     reference poses), the coordinate locks of undeclared coordinates, the input drive, the
     regularization springs and the output load (see :func:`build` for the options). ``mg`` is a
-    ground coordinate marker. Returns a dict with nodes, reference (nb, 3), locks,
-    journal_locks, drive, reg_springs and load."""
+    ground coordinate marker. wheel_mass: (mass [kg], polar inertia [kg m^2]) of each wheel
+    (default: the cycloid wheel's annulus; other eccentric-wheel topologies pass their own).
+    Returns a dict with nodes, reference (nb, 3), locks, journal_locks, drive, reg_springs and load."""
     d = design
     nw = d.n_wheels
-    m_w, J_w = _mass_wheel(d)
+    m_w, J_w = _mass_wheel(d) if wheel_mass is None else wheel_mass
     ref = np.zeros((nw + 2, 3))
     for k in range(nw):
         ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, np.deg2rad(d.wheels.phases_deg[k]))

@@ -321,10 +321,23 @@ def design_from_dict(d):
     return build_section(CycloidDesign, "design", {**d, **kw})
 
 
+TOPOLOGIES = ("cycloid", "std_involute")
+"""Values of a design file's ``topology`` key (absent: "cycloid")."""
+
+
 def load_design(path):
-    """Load a design TOML file into a validated :class:`CycloidDesign`."""
+    """Load a design TOML file into its validated design: the file's ``topology`` key picks the
+    specification (absent or "cycloid": :class:`CycloidDesign`; "std_involute":
+    :class:`rvtool.assembly.std_spec.StdInvoluteDesign`)."""
     with open(path, "rb") as fh:
-        return design_from_dict(tomllib.load(fh))
+        data = tomllib.load(fh)
+    topology = data.pop("topology", "cycloid")
+    if topology == "std_involute":
+        from .std_spec import design_from_dict as std_design_from_dict
+        return std_design_from_dict(data)
+    if topology != "cycloid":
+        raise RvtoolInputError(f"topology = {topology!r} is not valid; valid choices are {list(TOPOLOGIES)}")
+    return design_from_dict(data)
 
 
 def replace(design, **sections):

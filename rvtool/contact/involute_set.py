@@ -44,6 +44,10 @@ class GearMesh:
     skew: psi [rad] (Eq. (skew)); gear_z: axial station of the mesh midplane [m].
     damping: c [N s/m] of the whole mesh (divided among the slices); ramp_depth: delta_r [m].
     friction: NONE or REGULARIZED (element-wise coefficient).
+    phase_a, phase_b: angle [rad] of tooth 0 of gear A (B) from its body's x axis: a rigid turn
+    of the tooth pattern against the body frame (e.g. a wheel's teeth against its output holes).
+    Default 0; a turn by whole pitches renumbers the teeth (tooth k carries the pitch deviation
+    of tooth k - n), so only the remainder within +-half a pitch enters the tooth-angle table.
     """
     pair: InvolutePair
     body_a: int
@@ -59,6 +63,8 @@ class GearMesh:
     damping: float = 0.0
     ramp_depth: float = 1e-6
     friction: FrictionLaw = field(default_factory=FrictionLaw)
+    phase_a: float = 0.0
+    phase_b: float = 0.0
     name: str = "mesh"
 
     def __post_init__(self):
@@ -68,7 +74,7 @@ class GearMesh:
             raise RvtoolInputError(f"{self.name}.window = {self.window!r} is outside the valid range [0, inf) (integer)")
         if not self.lines or any(ln not in (0, 1) for ln in self.lines) or len(set(self.lines)) != len(self.lines):
             raise RvtoolInputError(f"{self.name}.lines = {self.lines!r} is not valid; valid: a non-empty subset of (0, 1)")
-        for nm in ("clearance", "tilt_x", "tilt_y", "skew", "gear_z"):
+        for nm in ("clearance", "tilt_x", "tilt_y", "skew", "gear_z", "phase_a", "phase_b"):
             check_finite(f"{self.name}.{nm}", getattr(self, nm))
         check_nonnegative(f"{self.name}.damping", self.damping)
         check_positive(f"{self.name}.ramp_depth", self.ramp_depth)
@@ -85,6 +91,16 @@ class GearMesh:
         """Axial stations of the slice midpoints relative to the mesh midplane [m]."""
         b, n = self.face_width, self.n_slices
         return (np.arange(n) + 0.5) * b / n - 0.5 * b
+
+    def tooth_angle_table(self):
+        """(gear A, gear B) tooth-angle deviations [rad] per tooth: pitch deviations plus the
+        mounting phase, whole pitches of the phase taken out by renumbering the teeth."""
+        out = []
+        for gear, phase in ((self.pair.gear_a, self.phase_a), (self.pair.gear_b, self.phase_b)):
+            pitch = 2 * np.pi / gear.n_teeth
+            n = int(np.floor(phase / pitch + 0.5))
+            out.append(np.roll(gear.pitch_deviation_angles(), n) + (phase - n * pitch))
+        return tuple(out)
 
     @property
     def window_teeth(self):
@@ -148,7 +164,7 @@ class InvoluteContactSet:
             ga = gear_block(A, self.compliance[A], u_ref_a)
             gb = gear_block(B, self.compliance[B], float(pr.roll_b(u_ref_a)))
             off_a, off_b = offset, offset + A.n_teeth
-            dev.extend([A.pitch_deviation_angles(), B.pitch_deviation_angles()])
+            dev.extend(m.tooth_angle_table())
             offset += A.n_teeth + B.n_teeth
             bs = m.face_width / m.n_slices
             f = m.friction
