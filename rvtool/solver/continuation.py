@@ -73,14 +73,35 @@ class Continuation:
                 self.stats.rejected_steps += 1
                 inc *= 0.5
                 if abs(inc) < self.min_increment:
-                    self.model.set_output_torque(t_now)
-                    raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
-                                        f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}")
+                    q = self._restart(torque)
+                    if q is None:
+                        self.model.set_output_torque(t_now)
+                        raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
+                                            f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}"
+                                            "; the restart from the kinematic state failed too")
+                    self.q, t_now = q, torque
         self.torque = torque
         self._commit()
         self.stats.levels += 1
         self.stats.wall_s += time.perf_counter() - t0
         return self.q
+
+    def _restart(self, torque):
+        """The level ``torque`` solved afresh by the static solver's ladder (homotopy in the
+        regularization stiffness from the kinematic state, then load ramps), or None. Used only
+        where the increments have stalled: in free play whose only stiffness is the weak
+        regularization (a mesh with backlash and a force law without stiffness at zero approach,
+        e.g. an involute mesh), Newton from the previous equilibrium cycles between contact states
+        at any increment, while the homotopy reaches the level. A frictionless model's level is
+        path-independent; a model with history gets the state of a fresh loading, so the restart
+        is counted (``ramped_restarts``)."""
+        self.model.set_output_torque(torque)
+        try:
+            q = self.static.solve(self.input_angle)
+        except SolverFailure:
+            return None
+        self.stats.ramped_restarts += 1
+        return q
 
     def _commit(self):
         """Commit the contact history (friction anchors) at the converged level."""
