@@ -197,6 +197,7 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
                             drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"],
                             locks=bodies["locks"], reg_springs=bodies["reg_springs"],
                             journal_locks=bodies["journal_locks"], main_mesh=Family.INVOLUTE_STAGE,
+                            continuation_restarts=True,
                             mesh_period=2 * np.pi / d.ring.n_teeth, gear_set=gear_set, pair=d.pair, n_wheels=nw,
                             tooth_phases=phases)
 

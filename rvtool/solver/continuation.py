@@ -30,6 +30,7 @@ class Continuation:
         self.max_step = max_step
         self.min_increment = min_increment
         self.stats = SolverStats()
+        self.restarts = bool(getattr(model, "continuation_restarts", False))
         model.set_input_angle(input_angle)
         # a loaded start is regular even where free play leaves the zero-load state ill-posed
         model.set_output_torque(float(initial_torque))
@@ -73,12 +74,12 @@ class Continuation:
                 self.stats.rejected_steps += 1
                 inc *= 0.5
                 if abs(inc) < self.min_increment:
-                    q = self._restart(torque)
+                    q = self._restart(torque) if self.restarts else None
                     if q is None:
                         self.model.set_output_torque(t_now)
                         raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
                                             f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}"
-                                            "; the restart from the kinematic state failed too")
+                                            + ("; the restart from the kinematic state failed too" if self.restarts else ""))
                     self.q, t_now = q, torque
         self.torque = torque
         self._commit()
@@ -88,7 +89,8 @@ class Continuation:
 
     def _restart(self, torque):
         """The level ``torque`` solved afresh by the static solver's ladder (homotopy in the
-        regularization stiffness from the kinematic state, then load ramps), or None. Used only
+        regularization stiffness from the kinematic state, then load ramps), or None; only for
+        models that declare ``continuation_restarts`` (existing models keep their behaviour). Used only
         where the increments have stalled: in free play whose only stiffness is the weak
         regularization (a mesh with backlash and a force law without stiffness at zero approach,
         e.g. an involute mesh), Newton from the previous equilibrium cycles between contact states
