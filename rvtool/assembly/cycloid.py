@@ -392,10 +392,12 @@ BEARING_FAMILIES = {"eccentric_bearing": Family.ECCENTRIC_BEARINGS, "main_bearin
                     "input_bearing": Family.INPUT_BEARINGS}
 
 
-def contact_families(elements):
-    """{Family: (element name, rows)}: the pin mesh and output pins are one element each;
-    the bearings element's rows split by mounting name."""
-    fams = {Family.PINS: ("pins", np.arange(len(elements["pins"].ids))),
+def contact_families(elements, mesh=("pins", Family.PINS)):
+    """{Family: (element name, rows)}: the reducing mesh (``mesh`` = (element name, family); the pin
+    mesh here) and the output pins are one element each; the bearings element's rows split by
+    mounting name. Shared by the eccentric-wheel topologies."""
+    name, family = mesh
+    fams = {family: (name, np.arange(len(elements[name].ids))),
             Family.OUTPUT_PINS: ("output_pins", np.arange(len(elements["output_pins"].ids)))}
     ids = elements["bearings"].ids
     for prefix, fam in BEARING_FAMILIES.items():

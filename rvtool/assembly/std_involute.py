@@ -42,7 +42,7 @@ from ..contact.involute_set import GearMesh, InvoluteContactSet
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre
 from ..model import BodyCoordinate, Family, ReducerModel
-from .cycloid import (BEARING_FAMILIES, CycloidKinematics, add_bodies, body_names, lumped_bearing_contacts,
+from .cycloid import (CycloidKinematics, add_bodies, body_names, contact_families, lumped_bearing_contacts,
                       output_pin_mechanism)
 from .spec import replace
 from .std_spec import StdInvoluteDesign
@@ -192,7 +192,7 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
         elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
     mbs.Assemble()
     return StdInvoluteModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
-                            families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
+                            families=contact_families(elements, mesh=("gears", Family.INVOLUTE_STAGE)), input=BodyCoordinate("shaft", "theta"),
                             output=BodyCoordinate("flange", "theta"), ratio=d.ratio, kinematics=StdKinematics(d),
                             drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"],
                             locks=bodies["locks"], reg_springs=bodies["reg_springs"],
@@ -200,16 +200,3 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
                             continuation_restarts=True,
                             mesh_period=2 * np.pi / d.ring.n_teeth, gear_set=gear_set, pair=d.pair, n_wheels=nw,
                             tooth_phases=phases)
-
-
-def contact_families(elements):
-    """{Family: (element name, rows)}: the gear meshes and the output pins are one element each;
-    the bearings element's rows split by mounting name."""
-    fams = {Family.INVOLUTE_STAGE: ("gears", np.arange(len(elements["gears"].ids))),
-            Family.OUTPUT_PINS: ("output_pins", np.arange(len(elements["output_pins"].ids)))}
-    ids = elements["bearings"].ids
-    for prefix, fam in BEARING_FAMILIES.items():
-        rows = np.array([i for i, cid in enumerate(ids) if cid.startswith(prefix)], dtype=int)
-        if len(rows):
-            fams[fam] = ("bearings", rows)
-    return fams
