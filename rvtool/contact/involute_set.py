@@ -24,9 +24,8 @@ from warp_contacts import involute_pairs_ref as ref
 from ..errors import RvtoolInputError
 from ..geometry.involute import InvolutePair
 from ..validation import check_finite, check_nonnegative, check_positive
-from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel
-from .evaluator import Evaluation, all_finite
+from .pair_set import PairFamilySet, check_backend
 from .tooth_stiffness import POLY_DEGREE, ToothCompliance
 
 assert POLY_DEGREE + 1 == ref.POLY_TERMS
@@ -125,7 +124,7 @@ def gear_block(gear, compliance: ToothCompliance, u_ref):
     return blk
 
 
-class InvoluteContactSet:
+class InvoluteContactSet(PairFamilySet):
     """Evaluator of involute gear meshes between ``n_bodies`` planar bodies.
 
     backend "warp" (default, one launch) or "numpy" (the reference); precision "float64"
@@ -138,16 +137,11 @@ class InvoluteContactSet:
     def __init__(self, meshes, n_bodies, *, backend="warp", precision="float64", device="cpu", name="gears"):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one GearMesh")
-        if backend not in ("warp", "numpy"):
-            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
-        if precision not in ("float64", "float32"):
-            raise RvtoolInputError(f"precision = {precision!r} is not valid; valid choices are ['float32', 'float64']")
+        check_backend(backend, precision)
         self.name = name
         self.meshes = tuple(meshes)
-        self.n_bodies = n_bodies
         self.backend = backend
         self.precision = precision
-        self.history = type("NoHistory", (), {})()
         self.compliance = {}
         fp, ip, ids, mesh_of, dev = [], [], [], [], []
         offset = 0
@@ -192,45 +186,13 @@ class InvoluteContactSet:
         self.ids = tuple(ids)
         self.mesh_of = np.array(mesh_of)
         self.n_contacts = len(fp)
-        self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
-        self._pose = np.zeros((n_bodies + 1, 3))
-        self._vel = np.zeros((n_bodies + 1, 3))
-        self.velocity_tangent = True
+        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
         if backend == "warp":
             from warp_contacts.involute_pairs import InvolutePairKernel
             self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device)
 
-    def set_velocity_tangent(self, on):
-        """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None for it)."""
-        self.velocity_tangent = bool(on)
-        if self.backend == "warp":
-            self._kernel.set_velocity_tangent(on)
-
-    def raw(self, pose, vel):
-        """Per-row (Q (N,6), dQdq (N,6,6), dQdv (N,6,6) or None, obs (N, N_OBS)) at poses (nb, 3)."""
-        self._pose[:-1] = pose
-        self._vel[:-1] = vel
-        if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel)
-        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.deviations)
-        return Q, dq, (dv if self.velocity_tangent else None), obs
-
-    def evaluate(self, pose, vel, history=None, check=True):
-        if check:
-            for nm, a in (("pose", pose), ("vel", vel)):
-                a = np.asarray(a)
-                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, dv, obs = self.raw(pose, vel)
-        dv = np.zeros_like(dq) if dv is None else dv
-        finite = all_finite(Qc, dq, dv)
-        return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
-
-    def commit(self, pose, vel, evaluation=None):
-        if evaluation is not None:
-            return np.array(evaluation.obs, float)
-        return np.array(self.raw(pose, vel)[3], float)
+    def reference(self, pose, vel):
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations)
 
     def mesh_stiffness(self, obs):
         """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along
