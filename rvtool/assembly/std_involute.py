@@ -3,7 +3,11 @@
 
 Bodies (planar rigid, x, y, theta), as in the cycloid drive (:func:`rvtool.assembly.cycloid.add_bodies`):
 0 the eccentric input shaft, 1..n the external involute wheels on its journals, n+1 the
-output flange. The internal ring gear is the ground (rigid housing). Contact sets, each one
+output flange. The internal ring gear is the ground (rigid housing, ``housing.model = "rigid"``) or,
+with ``"ports"``, a port body that moves rigidly with the least-squares rigid motion of
+:data:`RING_PORTS` bore ports of the elastic annular housing of :mod:`rvtool.assembly.housing`
+(the housing's translation and torsion under the tooth forces; the bore's ovalization is not
+represented, the bearings stay grounded as in the cycloid drive). Contact sets, each one
 Exudyn contact element with one kernel launch per evaluation:
 
 * ``gears``: the wheel--ring meshes (:class:`~rvtool.contact.involute_set.InvoluteContactSet`,
@@ -46,6 +50,11 @@ from .cycloid import (CycloidKinematics, add_bodies, body_names, contact_familie
                       output_pin_mechanism)
 from .spec import replace
 from .std_spec import StdInvoluteDesign
+
+RING_PORTS = 16
+"""Bore ports of an elastic housing (``housing.model = "ports"``) whose least-squares rigid motion
+carries the ring gear (:meth:`PortBodies.rigid_fit`); chosen: 16 equally spaced ports average the
+bore's translation and torsion (a rigid fit needs 2; more only enlarge the reduced basis)."""
 
 LOADED_LINE = 0
 """The line of action that carries the protocols' resisting output torque -sign(i) T (i < 0 for
@@ -90,6 +99,7 @@ class StdInvoluteModel(ReducerModel):
     pair: object = None
     n_wheels: int = 1
     tooth_phases: tuple = ()
+    housing: object = None          # ReducedStructure of an elastic housing, or None (rigid)
 
     @property
     def flange(self):
@@ -135,9 +145,10 @@ def wheel_mass(design):
     return m, 0.5 * m * (r_o ** 2 + r_i ** 2)
 
 
-def gear_meshes(design, *, offset=0, prefix=""):
+def gear_meshes(design, *, offset=0, prefix="", ring=GROUND):
     """(:class:`GearMesh` per wheel, tooth phases [rad]) of one reducer whose bodies start at index
-    ``offset`` (wheel k is body offset + 1 + k, the ring is ground); names ``prefix + "wheel{k}"``."""
+    ``offset`` (wheel k is body offset + 1 + k; the ring is body ``ring``, default ground); names
+    ``prefix + "wheel{k}"``."""
     d = design
     ms = d.mesh
     friction = FrictionLaw(model=FrictionModel.REGULARIZED if ms.mu > 0 else FrictionModel.NONE, mu_kinetic=ms.mu)
@@ -146,7 +157,7 @@ def gear_meshes(design, *, offset=0, prefix=""):
         c = journal_centre(d.wheels.eccentricity, math.radians(d.wheels.phases_deg[k]))
         phase = wheel_tooth_phase(d.pair, math.atan2(c[1], c[0]))
         phases.append(phase)
-        meshes.append(GearMesh(pair=d.pair, body_a=offset + 1 + k, body_b=GROUND, n_slices=ms.n_slices, window=ms.window,
+        meshes.append(GearMesh(pair=d.pair, body_a=offset + 1 + k, body_b=ring, n_slices=ms.n_slices, window=ms.window,
                                clearance=ms.clearance, gear_z=d.wheels.midplanes[k], damping=ms.damping,
                                ramp_depth=ms.ramp_depth, friction=friction, phase_a=phase, name=f"{prefix}wheel{k}"))
     return meshes, tuple(phases)
@@ -173,9 +184,20 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
     bodies = add_bodies(mbs, d, mg, regularization=regularization, wheel_mass=wheel_mass(d))
     nodes = bodies["nodes"]
 
-    meshes, phases = gear_meshes(d)
-    gear_set = InvoluteContactSet(meshes, nw + 2, backend=backend, precision=precision, device=device, name="gears")
-    elements = {"gears": ContactElement(mbs, nodes, gear_set)}
+    housing, ports, ring = None, None, GROUND
+    if d.housing.model == "ports":
+        from exudyn_user_elements.contact_element import PortBodies
+        from exudyn_user_elements.reduced_structure import ReducedStructure
+        from .housing import annulus_ports, pin_port_angles
+        reduced, _, _ = annulus_ports(d.housing, d.material, RING_PORTS)
+        housing = ReducedStructure(mbs, reduced, name="housing")
+        ports = PortBodies.rigid_fit(housing, np.array([reduced.port_rows[k][:2] for k in range(RING_PORTS)]),
+                                     pin_port_angles(RING_PORTS), d.housing.inner_radius)
+        ring = nw + 2
+    meshes, phases = gear_meshes(d, ring=ring)
+    gear_set = InvoluteContactSet(meshes, nw + 2 + (ports is not None), backend=backend, precision=precision,
+                                  device=device, name="gears")
+    elements = {"gears": ContactElement(mbs, nodes, gear_set, ports=ports)}
 
     from ..output_pins.evaluator import OutputPinEvaluator
     op_eval = OutputPinEvaluator(output_pin_mechanism(d), name="output_pins", flange=nw + 1,
@@ -199,4 +221,5 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
                             journal_locks=bodies["journal_locks"], main_mesh=Family.INVOLUTE_STAGE,
                             continuation_restarts=True,
                             mesh_period=2 * np.pi / d.ring.n_teeth, gear_set=gear_set, pair=d.pair, n_wheels=nw,
-                            tooth_phases=phases)
+                            tooth_phases=phases, structures={} if housing is None else {"housing": housing},
+                            housing=housing)

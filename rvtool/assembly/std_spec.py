@@ -17,7 +17,8 @@ difference z_ring - z_wheel in [1, 4]; the internal pair at centre distance
 a = ``wheels.eccentricity`` (the eccentricity IS the working centre distance) is checked by
 :class:`~rvtool.geometry.involute.InvolutePair` for involute, trochoid (tip) and, with
 ``mesh.radial_assembly = true``, tip-to-tip interference in radial assembly; a non-negative
-backlash; output holes that pass the eccentric motion and lie inside the wheel's root circle.
+backlash; output holes that pass the eccentric motion and lie inside the wheel's root circle;
+an elastic housing (``housing.model = "ports"``) whose bore clears the ring's root circle.
 Errors name the design key (``wheel.*``, ``ring.*``, ``wheels.eccentricity``).
 """
 import dataclasses
@@ -147,9 +148,9 @@ class StdInvoluteDesign:
         if R.face_width < span - 1e-12:
             raise RvtoolInputError(f"ring.face_width = {R.face_width} m does not cover the wheels; valid range "
                                    f"[{span:.6g}, inf) m (midplane span + wheels.width)")
-        if self.housing.model != "rigid":
-            raise RvtoolInputError(f"housing.model = {self.housing.model!r} is not available for the {TOPOLOGY} "
-                                   "topology; valid choices are ['rigid']")
+        if self.housing.model == "ports" and self.housing.inner_radius < R.root_radius - 1e-12:
+            raise RvtoolInputError(f"housing.inner_radius = {self.housing.inner_radius} m cuts through the ring's teeth; "
+                                   f"valid range [{R.root_radius:.6g}, outer_radius) m (the ring's root radius)")
         e = self.wheels.eccentricity
         op = self.output_pins
         needed = e + op.pin_radius
