@@ -193,3 +193,19 @@ def test_ported_housing_turns_the_ring_and_the_output_by_the_kinematic_factor(de
     ring = el.pose_velocity(ql, np.zeros_like(ql))[0][-1]
     assert abs(ring[0]) < 1e-6 and abs(ring[1]) < 1e-6 and ring[2] > 0
     assert th["ports"] - th["rigid"] == pytest.approx(ring[2] * (1 - 1 / ported.ratio), rel=1e-3)
+
+
+def test_single_wheel_variant(design):
+    """One wheel (the topology takes one or two): it assembles conjugate, carries the rated torque
+    alone, and its unbalanced radial mesh force reaches the main and input bearings."""
+    from rvtool.solver.continuation import Continuation
+    # one wheel of twice the width (as RD-40's single-wheel variant)
+    one = design.replace(n_wheels=1, wheels={"midplanes": (0.0,), "phases_deg": (0.0,), "width": 0.016},
+                         wheel={"face_width": 0.016}, eccentric_bearing={"roller_length": 0.016})
+    m = build(one)
+    assert m.body_names == ("shaft", "wheel0", "flange") and m.ratio == design.ratio
+    q = Continuation(m, input_angle=0.3).go_to(-np.sign(m.ratio) * one.rated_torque)
+    peaks = m.family_peaks(q)
+    assert peaks["main_bearings"] > 100.0 and peaks["input_bearings"] > 100.0
+    forces = m.observe(q, Family.INVOLUTE_STAGE).per_member()["wheel0"]
+    assert int(np.sum(forces > 0.005 * forces.sum())) >= 3

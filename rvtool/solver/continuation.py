@@ -74,36 +74,45 @@ class Continuation:
                 self.stats.rejected_steps += 1
                 inc *= 0.5
                 if abs(inc) < self.min_increment:
-                    q = self._restart(torque) if self.restarts else None
-                    if q is None:
+                    restarted = self._restart(t_now, torque) if self.restarts else None
+                    if restarted is None:
                         self.model.set_output_torque(t_now)
                         raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
                                             f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}"
-                                            + ("; the restart from the kinematic state failed too" if self.restarts else ""))
-                    self.q, t_now = q, torque
+                                            + ("; the restarts from the kinematic state failed too" if self.restarts else ""))
+                    self.q, t_now = restarted
+                    inc = torque - t_now
         self.torque = torque
         self._commit()
         self.stats.levels += 1
         self.stats.wall_s += time.perf_counter() - t0
         return self.q
 
-    def _restart(self, torque):
-        """The level ``torque`` solved afresh by the static solver's ladder (homotopy in the
-        regularization stiffness from the kinematic state, then load ramps), or None; only for
-        models that declare ``continuation_restarts`` (existing models keep their behaviour). Used only
-        where the increments have stalled: in free play whose only stiffness is the weak
-        regularization (a mesh with backlash and a force law without stiffness at zero approach,
-        e.g. an involute mesh), Newton from the previous equilibrium cycles between contact states
-        at any increment, while the homotopy reaches the level. A frictionless model's level is
-        path-independent; a model with history gets the state of a fresh loading, so the restart
-        is counted (``ramped_restarts``)."""
-        self.model.set_output_torque(torque)
-        try:
-            q = self.static.solve(self.input_angle)
-        except SolverFailure:
-            return None
-        self.stats.ramped_restarts += 1
-        return q
+    RESTART_FRACTIONS = (1.0, 0.5, 0.1)
+    """Targets of a restart as fractions of the remaining torque step, tried in turn."""
+
+    def _restart(self, t_now, torque):
+        """(q, level) of a level between ``t_now`` and ``torque`` [N m] (fractions
+        :data:`RESTART_FRACTIONS` of the step, tried in turn) solved afresh by the static solver's
+        ladder (homotopy in the regularization stiffness from the kinematic state, then load
+        ramps), or None; only for models that declare ``continuation_restarts`` (existing models
+        keep their behaviour). Used only where the increments have stalled: in free play whose
+        only stiffness is the weak regularization (a mesh with backlash and a force law without
+        stiffness at zero approach, e.g. an involute mesh), Newton from the previous equilibrium
+        cycles between contact states at any increment, while the homotopy reaches a loaded level
+        (a smaller one where the full level is too far from the kinematic state); the continuation
+        goes on from there. A frictionless model's level is path-independent; a model with history
+        gets the state of a fresh loading, so the restart is counted (``ramped_restarts``)."""
+        for f in self.RESTART_FRACTIONS:
+            target = t_now + f * (torque - t_now)
+            self.model.set_output_torque(target)
+            try:
+                q = self.static.solve(self.input_angle)
+            except SolverFailure:
+                continue
+            self.stats.ramped_restarts += 1
+            return q, target
+        return None
 
     def _commit(self):
         """Commit the contact history (friction anchors) at the converged level."""
