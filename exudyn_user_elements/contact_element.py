@@ -64,7 +64,8 @@ class PortBodies:
         ``rows`` (x, y rows per port) at polar ``angles`` [rad] on a circle of ``radius`` [m]
         (equally spaced): x, y the mean port translation, theta the mean tangential displacement
         over the radius. A ring gear carried by an elastic housing moves so (the housing's
-        translation and torsion; ovalization of the bore is not represented)."""
+        translation and torsion; ovalization of the bore is not represented). ``rows`` stays the
+        fitted ports' rows; ``P`` is the one body's (x, y, theta) map."""
         rows = np.asarray(rows, dtype=int)
         out = cls(structure, rows)
         Hx, Hy = out.P[0::3], out.P[1::3]
