@@ -58,6 +58,22 @@ class PortBodies:
         P[1::3] = H[rows[:, 1]]
         self.P = P
 
+    @classmethod
+    def rigid_fit(cls, structure, rows, angles, radius):
+        """One port body that moves rigidly with the least-squares rigid motion of the ports
+        ``rows`` (x, y rows per port) at polar ``angles`` [rad] on a circle of ``radius`` [m]
+        (equally spaced): x, y the mean port translation, theta the mean tangential displacement
+        over the radius. A ring gear carried by an elastic housing moves so (the housing's
+        translation and torsion; ovalization of the bore is not represented). ``rows`` stays the
+        fitted ports' rows; ``P`` is the one body's (x, y, theta) map."""
+        rows = np.asarray(rows, dtype=int)
+        out = cls(structure, rows)
+        Hx, Hy = out.P[0::3], out.P[1::3]
+        a = np.asarray(angles, float)[:, None]
+        out.P = np.vstack([Hx.mean(axis=0), Hy.mean(axis=0), (-np.sin(a) * Hx + np.cos(a) * Hy).mean(axis=0) / radius])
+        out.n_virtual = 1
+        return out
+
 
 class ContactElement:
     """A contact set attached to an Exudyn system.

@@ -16,11 +16,16 @@ from .involute_pairs_ref import (
     G_E, G_EPS, G_FHB, G_NU, G_PC, G_PH, G_PHALF, G_PMID, G_PSI, G_QA, G_QF, G_RB, G_RHO_C, G_RHO_E, G_UCA, G_UCF,
     G_UEDGE, G_UHALF, G_UHI, G_ULO, G_UMID, G_UREF, G_UROOT, G_UTIP, GEAR_A, GEAR_B, J_BODY_A, J_BODY_B, J_FRICTION,
     J_LINE, J_NA, J_NB, J_TOOTH_A, J_TOOTH_B, J_WINDOW, MODE_CORNER_A, MODE_CORNER_B, MODE_LINE, MODE_OPEN, N_FLOAT,
-    N_INT, N_OBS, O_FN, O_FT, O_GAP, O_KT, O_MODE, O_NX, O_NY, O_PX, O_PY, O_TOOTH_A, O_TOOTH_B, O_UA, O_UB, O_VROLL,
-    O_VT, OPEN_GAP, POLY_TERMS, SERIES_MAX_ITERATIONS, SERIES_RTOL)
+    N_INT, N_OBS, O_GAP, O_KT, O_MODE, O_TOOTH_A, O_TOOTH_B, O_UA, O_UB, O_VROLL, OPEN_GAP, POLY_TERMS,
+    SERIES_MAX_ITERATIONS, SERIES_RTOL)
+from . import circle_pairs_ref, involute_pairs_ref
 from .laws import law_funcs
 from .planar import LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
+
+# the first observation columns are the contact element's (written by planar.store_pair_observation)
+assert all(getattr(involute_pairs_ref, c) == getattr(circle_pairs_ref, c)
+           for c in ("O_FN", "O_VT", "O_GAP", "O_PX", "O_PY", "O_NX", "O_NY", "O_FT"))
 
 
 @functools.lru_cache(maxsize=None)
@@ -29,6 +34,7 @@ def _kernel(dtype, velocity_tangent=True):
     P = planar_funcs(dtype)
     vec2, perp, cross2, body_seed = P.vec2, P.perp, P.cross2, P.body_seed
     store_pair_forces, store_pair_column = P.store_pair_forces, P.store_pair_column
+    body_state, store_pair_observation = P.body_state, P.store_pair_observation
     damping_ramp, friction_coefficient = L.damping_ramp, L.friction_coefficient
     np_dtype = np.float64 if dtype == wp.float64 else np.float32
     RTOL = SERIES_RTOL[np_dtype]
@@ -313,14 +319,8 @@ def _kernel(dtype, velocity_tangent=True):
         i = wp.tid()
         ia = ip[i, J_BODY_A]
         ib = ip[i, J_BODY_B]
-        OA = vec2(pose_in[ia, 0], pose_in[ia, 1])
-        OB = vec2(pose_in[ib, 0], pose_in[ib, 1])
-        tha = pose_in[ia, 2]
-        thb = pose_in[ib, 2]
-        vOA = vec2(vel_in[ia, 0], vel_in[ia, 1])
-        vOB = vec2(vel_in[ib, 0], vel_in[ib, 1])
-        wA = vel_in[ia, 2]
-        wB = vel_in[ib, 2]
+        OA, tha, vOA, wA = body_state(pose_in, vel_in, ia)
+        OB, thb, vOB, wB = body_state(pose_in, vel_in, ib)
         for c in range(6):
             q_out[i, c] = dtype(0.0)
             for c2 in range(6):
@@ -485,14 +485,7 @@ def _kernel(dtype, velocity_tangent=True):
             store_pair_column(dqdq_out, dqdv_out, i, jseed, dfA, cross2(drA, fA) + cross2(rA, dfA),
                               -(cross2(drB, fA) + cross2(rB, dfA)))
 
-        obs_out[i, O_FN] = Fn
-        obs_out[i, O_VT] = vt
-        obs_out[i, O_GAP] = g
-        obs_out[i, O_PX] = cp[0]
-        obs_out[i, O_PY] = cp[1]
-        obs_out[i, O_NX] = n[0]
-        obs_out[i, O_NY] = n[1]
-        obs_out[i, O_FT] = Ft
+        store_pair_observation(obs_out, i, Fn, vt, g, cp, n, Ft)
         obs_out[i, O_VROLL] = dtype(0.5) * wp.dot(t, vA + vB)
         obs_out[i, O_UA] = ua
         obs_out[i, O_UB] = ub

@@ -315,15 +315,16 @@ def lumped_ball_law(spec):
     return Z * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5, 1.5
 
 
-def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1)):
+def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1), wheel_mass=None):
     """Bodies of one reducer in ``mbs``: shaft, wheels and flange (``NodeRigidBody2D`` at their
     reference poses), the coordinate locks of undeclared coordinates, the input drive, the
     regularization springs and the output load (see :func:`build` for the options). ``mg`` is a
-    ground coordinate marker. Returns a dict with nodes, reference (nb, 3), locks,
-    journal_locks, drive, reg_springs and load."""
+    ground coordinate marker. wheel_mass: (mass [kg], polar inertia [kg m^2]) of each wheel
+    (default: the cycloid wheel's annulus; other eccentric-wheel topologies pass their own).
+    Returns a dict with nodes, reference (nb, 3), locks, journal_locks, drive, reg_springs and load."""
     d = design
     nw = d.n_wheels
-    m_w, J_w = _mass_wheel(d)
+    m_w, J_w = _mass_wheel(d) if wheel_mass is None else wheel_mass
     ref = np.zeros((nw + 2, 3))
     for k in range(nw):
         ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, np.deg2rad(d.wheels.phases_deg[k]))
@@ -577,10 +578,12 @@ BEARING_FAMILIES = {"eccentric_bearing": Family.ECCENTRIC_BEARINGS, "main_bearin
                     "input_bearing": Family.INPUT_BEARINGS}
 
 
-def contact_families(elements):
-    """{Family: (element name, rows)}: the pin mesh and output pins are one element each;
-    the bearings element's rows split by mounting name."""
-    fams = {Family.PINS: ("pins", np.arange(len(elements["pins"].ids))),
+def contact_families(elements, mesh=("pins", Family.PINS)):
+    """{Family: (element name, rows)}: the reducing mesh (``mesh`` = (element name, family); the pin
+    mesh here) and the output pins are one element each; the bearings element's rows split by
+    mounting name. Shared by the eccentric-wheel topologies."""
+    name, family = mesh
+    fams = {family: (name, np.arange(len(elements[name].ids))),
             Family.OUTPUT_PINS: ("output_pins", np.arange(len(elements["output_pins"].ids)))}
     ids = elements["bearings"].ids
     for prefix, fam in BEARING_FAMILIES.items():

@@ -3,7 +3,6 @@ dataclasses and validated on load; errors name the parameter (with its
 section) and its valid range."""
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -410,9 +409,10 @@ def design_from_dict(d):
 
 
 def load_design(path):
-    """Load a design TOML file into a validated :class:`CycloidDesign`."""
-    with open(path, "rb") as fh:
-        return design_from_dict(tomllib.load(fh))
+    """Load a design TOML file into its validated design: the file's ``topology`` key picks the
+    topology's loader (:mod:`rvtool.assembly.topologies`; absent: "cycloid", :class:`CycloidDesign`)."""
+    from . import topologies
+    return topologies.design_from_table(topologies.read_table(path))
 
 
 def replace(design, **sections):

@@ -18,9 +18,9 @@ from warp_contacts.circle_pairs_ref import FRICTION_REGULARIZED
 from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile, pin_centres
 from ..validation import check_finite, check_nonnegative, check_positive
-from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel, NormalLaw
-from .evaluator import Evaluation, all_finite, gap_offset_rows
+from .evaluator import gap_offset_rows
+from .pair_set import PairFamilySet, check_backend
 
 
 def palmgren_line_approach(force, length):
@@ -145,7 +145,7 @@ def auto_window(profile, table, pin_radius, band=0.05, margin=1.5):
     return int(np.ceil(margin * off)) + 2
 
 
-class CycloidPinSet:
+class CycloidPinSet(PairFamilySet):
     """Evaluator of cycloid--pin meshes between ``n_bodies`` planar bodies.
 
     samples_per_tooth: profile table resolution (arc-length resampled).
@@ -162,8 +162,7 @@ class CycloidPinSet:
                  device="cpu", name="pins", search="discrete", search_band=0.05):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one WheelPinMesh")
-        if backend not in ("warp", "numpy"):
-            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
+        check_backend(backend, precision)
         if search not in ("discrete", "analytic"):
             raise RvtoolInputError(f"search = {search!r} is not valid; valid choices are ['discrete', 'analytic']")
         self.search = search
@@ -175,10 +174,8 @@ class CycloidPinSet:
             raise RvtoolInputError(f"samples_per_tooth = {samples_per_tooth} is outside the valid range [8, inf)")
         self.name = name
         self.meshes = tuple(meshes)
-        self.n_bodies = n_bodies
         self.backend = backend
         self.precision = precision
-        self.history = type("NoHistory", (), {})()
         self.tables = []
         self.analytic = [] if search == "analytic" else None
         table_of = {}            # identical tables are stored once (B copies of one design: one table)
@@ -238,9 +235,7 @@ class CycloidPinSet:
         self.mesh_of = np.array(mesh_of)
         self.pin_of = np.array(pin_of)
         self.n_contacts = len(fp)
-        self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
-        self._pose = np.zeros((n_bodies + 1, 3))
-        self._vel = np.zeros((n_bodies + 1, 3))
+        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
         if backend == "warp":
             from warp_contacts.cycloid_pins import CycloidPinKernel
             self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device,
@@ -248,39 +243,8 @@ class CycloidPinSet:
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
 
-    velocity_tangent = True
-
-    def set_velocity_tangent(self, on):
-        """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None
-        for it and the kernel skips the velocity seeds)."""
-        self.velocity_tangent = bool(on)
-        if self.backend == "warp":
-            self._kernel.set_velocity_tangent(on)
-
-    def raw(self, pose, vel):
-        self._pose[:-1] = pose
-        self._vel[:-1] = vel
-        if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel)
-        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables, self.window,
-                                      self.analytic)
-        return Q, dq, (dv if self.velocity_tangent else None), obs
-
-    def evaluate(self, pose, vel, history=None, check=True):
-        if check:
-            for nm, a in (("pose", pose), ("vel", vel)):
-                a = np.asarray(a)
-                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, dv, obs = self.raw(pose, vel)
-        finite = all_finite(Qc, dq, dv)
-        return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
-
-    def commit(self, pose, vel, evaluation=None):
-        if evaluation is not None:
-            return np.array(evaluation.obs, float)
-        return np.array(self.raw(pose, vel)[3], float)
+    def reference(self, pose, vel):
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.tables, self.window, self.analytic)
 
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per slice row (positive opens the gap), added to the deviation sum e of

@@ -24,9 +24,8 @@ from warp_contacts import involute_pairs_ref as ref
 from ..errors import RvtoolInputError
 from ..geometry.involute import InvolutePair
 from ..validation import check_finite, check_nonnegative, check_positive
-from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel
-from .evaluator import Evaluation, all_finite
+from .pair_set import PairFamilySet, check_backend
 from .tooth_stiffness import POLY_DEGREE, ToothCompliance
 
 assert POLY_DEGREE + 1 == ref.POLY_TERMS
@@ -44,6 +43,10 @@ class GearMesh:
     skew: psi [rad] (Eq. (skew)); gear_z: axial station of the mesh midplane [m].
     damping: c [N s/m] of the whole mesh (divided among the slices); ramp_depth: delta_r [m].
     friction: NONE or REGULARIZED (element-wise coefficient).
+    phase_a, phase_b: angle [rad] of tooth 0 of gear A (B) from its body's x axis: a rigid turn
+    of the tooth pattern against the body frame (e.g. a wheel's teeth against its output holes).
+    Default 0; a turn by whole pitches renumbers the teeth (tooth k carries the pitch deviation
+    of tooth k - n), so only the remainder within +-half a pitch enters the tooth-angle table.
     """
     pair: InvolutePair
     body_a: int
@@ -59,6 +62,8 @@ class GearMesh:
     damping: float = 0.0
     ramp_depth: float = 1e-6
     friction: FrictionLaw = field(default_factory=FrictionLaw)
+    phase_a: float = 0.0
+    phase_b: float = 0.0
     name: str = "mesh"
 
     def __post_init__(self):
@@ -68,7 +73,7 @@ class GearMesh:
             raise RvtoolInputError(f"{self.name}.window = {self.window!r} is outside the valid range [0, inf) (integer)")
         if not self.lines or any(ln not in (0, 1) for ln in self.lines) or len(set(self.lines)) != len(self.lines):
             raise RvtoolInputError(f"{self.name}.lines = {self.lines!r} is not valid; valid: a non-empty subset of (0, 1)")
-        for nm in ("clearance", "tilt_x", "tilt_y", "skew", "gear_z"):
+        for nm in ("clearance", "tilt_x", "tilt_y", "skew", "gear_z", "phase_a", "phase_b"):
             check_finite(f"{self.name}.{nm}", getattr(self, nm))
         check_nonnegative(f"{self.name}.damping", self.damping)
         check_positive(f"{self.name}.ramp_depth", self.ramp_depth)
@@ -85,6 +90,16 @@ class GearMesh:
         """Axial stations of the slice midpoints relative to the mesh midplane [m]."""
         b, n = self.face_width, self.n_slices
         return (np.arange(n) + 0.5) * b / n - 0.5 * b
+
+    def tooth_angle_table(self):
+        """(gear A, gear B) tooth-angle deviations [rad] per tooth: pitch deviations plus the
+        mounting phase, whole pitches of the phase taken out by renumbering the teeth."""
+        out = []
+        for gear, phase in ((self.pair.gear_a, self.phase_a), (self.pair.gear_b, self.phase_b)):
+            pitch = 2 * np.pi / gear.n_teeth
+            n = int(np.floor(phase / pitch + 0.5))
+            out.append(np.roll(gear.pitch_deviation_angles(), n) + (phase - n * pitch))
+        return tuple(out)
 
     @property
     def window_teeth(self):
@@ -109,7 +124,7 @@ def gear_block(gear, compliance: ToothCompliance, u_ref):
     return blk
 
 
-class InvoluteContactSet:
+class InvoluteContactSet(PairFamilySet):
     """Evaluator of involute gear meshes between ``n_bodies`` planar bodies.
 
     backend "warp" (default, one launch) or "numpy" (the reference); precision "float64"
@@ -122,16 +137,11 @@ class InvoluteContactSet:
     def __init__(self, meshes, n_bodies, *, backend="warp", precision="float64", device="cpu", name="gears"):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one GearMesh")
-        if backend not in ("warp", "numpy"):
-            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
-        if precision not in ("float64", "float32"):
-            raise RvtoolInputError(f"precision = {precision!r} is not valid; valid choices are ['float32', 'float64']")
+        check_backend(backend, precision)
         self.name = name
         self.meshes = tuple(meshes)
-        self.n_bodies = n_bodies
         self.backend = backend
         self.precision = precision
-        self.history = type("NoHistory", (), {})()
         self.compliance = {}
         fp, ip, ids, mesh_of, dev = [], [], [], [], []
         offset = 0
@@ -148,7 +158,7 @@ class InvoluteContactSet:
             ga = gear_block(A, self.compliance[A], u_ref_a)
             gb = gear_block(B, self.compliance[B], float(pr.roll_b(u_ref_a)))
             off_a, off_b = offset, offset + A.n_teeth
-            dev.extend([A.pitch_deviation_angles(), B.pitch_deviation_angles()])
+            dev.extend(m.tooth_angle_table())
             offset += A.n_teeth + B.n_teeth
             bs = m.face_width / m.n_slices
             f = m.friction
@@ -176,45 +186,13 @@ class InvoluteContactSet:
         self.ids = tuple(ids)
         self.mesh_of = np.array(mesh_of)
         self.n_contacts = len(fp)
-        self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
-        self._pose = np.zeros((n_bodies + 1, 3))
-        self._vel = np.zeros((n_bodies + 1, 3))
-        self.velocity_tangent = True
+        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
         if backend == "warp":
             from warp_contacts.involute_pairs import InvolutePairKernel
             self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device)
 
-    def set_velocity_tangent(self, on):
-        """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None for it)."""
-        self.velocity_tangent = bool(on)
-        if self.backend == "warp":
-            self._kernel.set_velocity_tangent(on)
-
-    def raw(self, pose, vel):
-        """Per-row (Q (N,6), dQdq (N,6,6), dQdv (N,6,6) or None, obs (N, N_OBS)) at poses (nb, 3)."""
-        self._pose[:-1] = pose
-        self._vel[:-1] = vel
-        if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel)
-        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.deviations)
-        return Q, dq, (dv if self.velocity_tangent else None), obs
-
-    def evaluate(self, pose, vel, history=None, check=True):
-        if check:
-            for nm, a in (("pose", pose), ("vel", vel)):
-                a = np.asarray(a)
-                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, dv, obs = self.raw(pose, vel)
-        dv = np.zeros_like(dq) if dv is None else dv
-        finite = all_finite(Qc, dq, dv)
-        return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
-
-    def commit(self, pose, vel, evaluation=None):
-        if evaluation is not None:
-            return np.array(evaluation.obs, float)
-        return np.array(self.raw(pose, vel)[3], float)
+    def reference(self, pose, vel):
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations)
 
     def mesh_stiffness(self, obs):
         """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along

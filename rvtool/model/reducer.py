@@ -30,6 +30,8 @@ Contract (paper: "Transmission topology and reaction-force closure",
   lamina, ball) the normal force, position, normal and identity, and per
   physical contact (a pin, a roller, a tooth pair: slices summed) through
   :meth:`FamilyObservation.per_contact`.
+* **Continuation restarts.** ``continuation_restarts`` lets a stalled load continuation
+  re-solve the level from the kinematic state (free play without stiffness at zero load).
 * **Regularization.** Weak springs from free coordinates to their kinematic
   positions (a numerical setting for free play at zero load);
   ``regularization_force(q)`` reports the largest force they carry and
@@ -203,6 +205,10 @@ class ReducerModel:
     structures: dict = field(default_factory=dict)
     main_mesh: Family = Family.PINS
     mesh_period: float = None       # input angle [rad] of one mesh cycle of the main mesh
+    #: a load continuation whose increments stall may restart the level from the static solver's
+    #: ladder (:meth:`rvtool.solver.continuation.Continuation.go_to`): set by topologies whose
+    #: zero-load state is free play without contact stiffness (a backlashed involute mesh)
+    continuation_restarts: bool = False
 
     # -- coordinates -------------------------------------------------------
     def body_index(self, body):
