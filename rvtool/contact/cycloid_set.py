@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import cycloid_pins_ref as ref
 
 from ..errors import RvtoolInputError
@@ -19,7 +20,7 @@ from ..geometry.cycloid import CycloidProfile, pin_centres
 from ..validation import check_finite, check_nonnegative, check_positive
 from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel, NormalLaw
-from .evaluator import Evaluation, all_finite
+from .evaluator import ContactHistory, Evaluation, all_finite
 
 
 def palmgren_line_approach(force, length):
@@ -52,7 +53,12 @@ class WheelPinMesh:
     crowning: drop at the slice edges [m], parabolic across the width.
     tilt_x, tilt_y: declared relative tilt of wheel and pins [rad]; skew: psi [rad] (Eq. (skew)).
     normal: law for the whole contact; the coefficient is divided among the slices.
-    friction: NONE or REGULARIZED.
+    friction: NONE, REGULARIZED or ANCHOR (stick--slip anchors per slice, Eq. (friction) anchor
+    model; the tangential stiffness k_t is the whole contact's and divided among the slices like
+    the normal coefficient). An ANCHOR law with mu_kinetic = 0 runs the frictionless code.
+    anchor_release_distance: d_rel [m] above which an anchor's separation releases it (the
+    contact migrated, :mod:`warp_contacts.anchor_ref`); None: 10 % of the pin radius, three
+    orders above the stick stroke mu F_n / k_t of a loaded pin and far below a lobe's length.
     """
     profile: CycloidProfile
     wheel_body: int
@@ -72,6 +78,7 @@ class WheelPinMesh:
     normal: NormalLaw
     friction: FrictionLaw = field(default_factory=FrictionLaw)
     name: str = "wheel"
+    anchor_release_distance: float | None = None
 
     def __post_init__(self):
         check_positive("face_width", self.face_width)
@@ -82,13 +89,18 @@ class WheelPinMesh:
             check_finite(nm, getattr(self, nm))
         if self.pin_radius is not None:
             check_positive("pin_radius", self.pin_radius)
-        if self.friction.model == FrictionModel.ANCHOR:
-            raise RvtoolInputError("friction.model = ANCHOR is not available for cycloid-pin contacts; valid: NONE, REGULARIZED")
+        if self.anchor_release_distance is not None:
+            check_positive("anchor_release_distance", self.anchor_release_distance)
         zb = self.profile.n_pins
         if self.pin_bodies is not None and np.shape(self.pin_bodies) != (zb,):
             raise RvtoolInputError(f"pin_bodies must have shape ({zb},); got {np.shape(self.pin_bodies)}")
         if self.normal_deviation is not None and np.shape(self.normal_deviation) != (zb,):
             raise RvtoolInputError(f"normal_deviation must have shape ({zb},); got {np.shape(self.normal_deviation)}")
+
+    @property
+    def anchors(self):
+        """True where the mesh carries anchors (ANCHOR law with mu > 0)."""
+        return self.friction.model == FrictionModel.ANCHOR and self.friction.mu_kinetic > 0.0
 
     @property
     def slice_z(self):
@@ -181,7 +193,7 @@ class CycloidPinSet:
         self.tables = []
         self.analytic = [] if search == "analytic" else None
         table_of = {}            # identical tables are stored once (B copies of one design: one table)
-        fp, ip, ids, mesh_of, pin_of = [], [], [], [], []
+        fp, ip, ids, mesh_of, pin_of, ap = [], [], [], [], [], []
         window = 0
         for m_i, m in enumerate(self.meshes):
             pin_bodies = (m.pin_body,) * m.profile.n_pins if m.pin_bodies is None else tuple(int(b) for b in m.pin_bodies)
@@ -225,8 +237,17 @@ class CycloidPinSet:
                     irow = np.zeros(ref.N_INT, np.int32)
                     irow[ref.J_BODY_A] = g if m.wheel_body == GROUND else m.wheel_body
                     irow[ref.J_BODY_B] = g if pb == GROUND else pb
-                    irow[ref.J_FRICTION], irow[ref.J_TABLE] = int(f.model), tb
+                    # mu = 0 under the anchor law is the frictionless contact (its code path, its figures)
+                    model = f.model if (f.model != FrictionModel.ANCHOR or m.anchors) else FrictionModel.NONE
+                    irow[ref.J_FRICTION], irow[ref.J_TABLE] = int(model), tb
                     ip.append(irow)
+                    arow = np.zeros(anchor_ref.N_ANCHOR)
+                    if m.anchors:
+                        arow[anchor_ref.ANCHOR_KT] = f.tangential_stiffness / m.n_slices
+                        arow[anchor_ref.ANCHOR_MU] = f.mu_kinetic
+                        arow[anchor_ref.ANCHOR_RELEASE] = (0.1 * rp if m.anchor_release_distance is None
+                                                           else m.anchor_release_distance)
+                    ap.append(arow)
                     ids.append(f"{m.name}/pin{k}/s{s_i}")
                     mesh_of.append(m_i)
                     pin_of.append(k)
@@ -237,13 +258,18 @@ class CycloidPinSet:
         self.mesh_of = np.array(mesh_of)
         self.pin_of = np.array(pin_of)
         self.n_contacts = len(fp)
+        self.anchor = bool(np.any(self.iparams[:, ref.J_FRICTION] == FrictionModel.ANCHOR))
+        self.anchor_params = np.array(ap) if self.anchor else None
+        if self.anchor:
+            # committed anchors (wheel and pin-body coordinates) and slip distance per slice
+            self.history = ContactHistory(self.n_contacts)
         self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
         if backend == "warp":
             from warp_contacts.cycloid_pins import CycloidPinKernel
             self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device,
-                                            analytic=self.analytic)
+                                            analytic=self.analytic, anchor_params=self.anchor_params)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
 
@@ -256,14 +282,28 @@ class CycloidPinSet:
         if self.backend == "warp":
             self._kernel.set_velocity_tangent(on)
 
-    def raw(self, pose, vel):
+    def raw(self, pose, vel, history=None):
+        """Per-row (Q, dQdq, dQdv, obs); with anchors a fifth result, the trial history
+        (flags, anchor_A, anchor_B, slip distance) from the committed ``history`` (default: the
+        set's own); trials never change the committed history."""
         self._pose[:-1] = pose
         self._vel[:-1] = vel
+        if not self.anchor:
+            if self.backend == "warp":
+                return self._kernel.evaluate(self._pose, self._vel)
+            Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables, self.window,
+                                          self.analytic)
+            return Q, dq, (dv if self.velocity_tangent else None), obs
+        hist = history or self.history
         if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel)
-        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables, self.window,
-                                      self.analytic)
-        return Q, dq, (dv if self.velocity_tangent else None), obs
+            Q, dq, dv, obs, (flag, a, b) = self._kernel.evaluate_anchor(self._pose, self._vel, *hist.as_tuple())
+        else:
+            Q, dq, dv, obs, (flag, a, b) = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables,
+                                                        self.window, self.analytic,
+                                                        anchor=(self.anchor_params, *hist.as_tuple()))
+            dv = dv if self.velocity_tangent else None
+        slip = hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
+        return Q, dq, dv, obs, (np.array(flag), np.array(a), np.array(b), slip)
 
     def evaluate(self, pose, vel, history=None, check=True):
         if check:
@@ -271,15 +311,25 @@ class CycloidPinSet:
                 a = np.asarray(a)
                 if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
                     raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, dv, obs = self.raw(pose, vel)
+        r = self.raw(pose, vel, history)
+        Qc, dq, dv, obs = r[:4]
         finite = all_finite(Qc, dq, dv)
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
+                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float),
+                          r[4] if self.anchor else (), finite)
 
     def commit(self, pose, vel, evaluation=None):
-        if evaluation is not None:
-            return np.array(evaluation.obs, float)
-        return np.array(self.raw(pose, vel)[3], float)
+        """Commit the trial history at the accepted state (anchors only; ``evaluation``: the
+        cached trial at exactly this state from the committed history) and return its
+        observation rows (N, 8)."""
+        if evaluation is None:
+            r = self.raw(pose, vel)
+            obs, trial = r[3], (r[4] if self.anchor else None)
+        else:
+            obs, trial = evaluation.obs, evaluation.trial_history
+        if self.anchor:
+            self.history.assign(trial)
+        return np.array(obs, float)
 
     def pin_forces(self, obs):
         """Per mesh, per pin: normal force summed over the slices [N] -> (n_meshes, z_b)."""
