@@ -209,3 +209,106 @@ def test_bad_friction_inputs_are_named():
         FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=0.1, tangential_stiffness=0.0)
     with pytest.raises(RvtoolInputError, match="anchor_release_distance"):
         _pin_set(anchor_release_distance=-1e-6)
+
+
+# -- output pins (plain mode): anchors per slice row ------------------------------------------
+
+def _output_pins(backend="numpy", device="cpu", mu=MU, model=FrictionModel.ANCHOR, **kw):
+    from rvtool.output_pins import OutputPinEvaluator, PinMode, shared_pin_study_mechanism
+    mech = shared_pin_study_mechanism(0.0, n_pins=4, mode=PinMode.PLAIN, compliance=None,
+                                      friction=FrictionLaw(model=model, mu_kinetic=mu, tangential_stiffness=KT), **kw)
+    return OutputPinEvaluator(mech, backend=backend, device=device)
+
+
+def _pin_pose(dtheta=0.0):
+    """Flange at rest, both wheels displaced by ~70 um (every pin loaded on some slices) and
+    the wheels turned by dtheta [rad] relative to the committed state."""
+    q = np.array([[0.0, 0.0, 0.0], [60e-6, 20e-6, 1e-4 + dtheta], [-55e-6, -35e-6, -2e-4 + dtheta]])
+    return q
+
+
+def _pin_branches(ev, pose):
+    e = ev.evaluate(pose, np.zeros((3, 3)))
+    fn, ft = e.obs[:, cref.O_FN], e.obs[:, cref.O_FT]
+    on = fn > 0
+    slip = on & np.isclose(np.abs(ft), MU * fn, rtol=1e-12)
+    return e, on & ~slip, slip
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_output_pin_anchor_kernel_matches_reference(device):
+    """Tolerance: positions of ~3.5e-2 m against approaches of ~1e-5 m (rounding amplified
+    ~3e3, and ~5e4 by the 10/9 law's stiffness at small approaches): 1e-9 of the largest entry."""
+    w, n = _output_pins("warp", device), _output_pins("numpy")
+    for ev in (w, n):
+        ev.commit(_pin_pose(), np.zeros((3, 3)))
+    np.testing.assert_array_equal(w.history.active, n.history.active)
+    np.testing.assert_allclose(w.history.anchor_a, n.history.anchor_a, rtol=0, atol=1e-15)
+    ew, stick, slip = _pin_branches(w, _pin_pose(3e-5))
+    en, _, _ = _pin_branches(n, _pin_pose(3e-5))
+    assert stick.any() and slip.any()
+    for x, y in ((ew.Q, en.Q), (ew.dQdq, en.dQdq), (ew.obs, en.obs)):
+        assert np.max(np.abs(x - y)) <= 1e-9 * np.max(np.abs(y))
+    np.testing.assert_array_equal(ew.trial_history[0], en.trial_history[0])
+    np.testing.assert_allclose(ew.trial_history[1], en.trial_history[1], rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "warp"])
+@pytest.mark.parametrize("dtheta,branch", [(1e-6, "stick"), (1e-4, "slip")])
+def test_output_pin_anchor_tangent_matches_central_differences(backend, dtheta, branch):
+    """As for the pin slices: FD steps of 1e-10 m / 1e-9 rad change s by <= 4e-11 m, far inside
+    every row's margin to the stick/slip switch (asserted); relative error 1e-5."""
+    ev = _output_pins(backend)
+    ev.commit(_pin_pose(), np.zeros((3, 3)))
+    pose = _pin_pose(dtheta)
+    e, stick, slip = _pin_branches(ev, pose)
+    assert (stick if branch == "stick" else slip).sum() >= 4
+    fn, ft = e.obs[:, cref.O_FN], e.obs[:, cref.O_FT]
+    assert np.all(np.abs(MU * fn[stick] - np.abs(ft[stick])) > KT / 4 * 1e-10 * 10)
+    K = np.zeros((9, 9))
+    for j in range(9):
+        b, c = divmod(j, 3)
+        h = 1e-10 if c < 2 else 1e-9
+        P = pose.copy()
+        P[b, c] += h
+        qp = ev.evaluate(P, np.zeros((3, 3))).Q
+        P[b, c] -= 2 * h
+        K[:, j] = (qp - ev.evaluate(P, np.zeros((3, 3))).Q) / (2 * h)
+    assert np.linalg.norm(e.dQdq - K) / np.linalg.norm(K) < 1e-5
+
+
+def test_output_pin_stick_slip_and_trials():
+    ev = _output_pins()
+    ev.commit(_pin_pose(), np.zeros((3, 3)))
+    before = ev.history.copy()
+    for k in range(3):                                      # trials never move the committed anchors
+        ev.evaluate(_pin_pose(1e-5 * (k + 1)), np.zeros((3, 3)))
+    for name in ("active", "anchor_a", "anchor_b", "slip_distance"):
+        np.testing.assert_array_equal(getattr(ev.history, name), getattr(before, name))
+    e, stick, slip = _pin_branches(ev, _pin_pose(3e-5))
+    ev.commit(_pin_pose(3e-5), np.zeros((3, 3)), e)
+    np.testing.assert_array_equal(ev.history.anchor_a[stick], before.anchor_a[stick])
+    assert np.all(ev.history.slip_distance[stick] == 0.0) and np.all(ev.history.slip_distance[slip] > 0.0)
+    np.testing.assert_allclose(np.abs(e.obs[slip, cref.O_FT]), MU * e.obs[slip, cref.O_FN], rtol=1e-14)
+    # the friction forces balance between flange and wheels (an internal force pair)
+    from rvtool.output_pins import diagnostics as diag
+    force, _ = diag.balance(e.Q, _pin_pose(3e-5).reshape(-1))
+    np.testing.assert_allclose(force, 0.0, atol=1e-12 * np.max(np.abs(e.Q)))
+
+
+def test_output_pin_mu_zero_and_bad_inputs():
+    from rvtool.output_pins import PinMode, shared_pin_study_mechanism
+    a = _output_pins("warp", mu=0.0)
+    b = _output_pins("warp", mu=0.0, model=FrictionModel.NONE)
+    assert not a.anchor
+    ea, eb = a.evaluate(_pin_pose(), np.zeros((3, 3))), b.evaluate(_pin_pose(), np.zeros((3, 3)))
+    np.testing.assert_array_equal(ea.Q, eb.Q)
+    np.testing.assert_array_equal(ea.dQdq, eb.dQdq)
+    with pytest.raises(RvtoolInputError, match="plain"):
+        shared_pin_study_mechanism(0.0, friction=FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=0.1,
+                                                             tangential_stiffness=KT))
+    with pytest.raises(RvtoolInputError, match="friction.model"):
+        shared_pin_study_mechanism(0.0, mode=PinMode.PLAIN, compliance=None,
+                                   friction=FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=0.1))
+    with pytest.raises(RvtoolInputError, match="anchor_release_distance"):
+        _output_pins(anchor_release_distance=0.0)
