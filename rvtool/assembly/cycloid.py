@@ -243,7 +243,7 @@ def pin_meshes(design, *, offset=0, prefix=""):
     else:
         k_line = pc.stiffness if (pc.law == "line" and pc.stiffness > 0) else secant_line_stiffness(pc.reference_force, width)
         law = NormalLaw(law="line", stiffness=k_line, damping=pc.damping, ramp_depth=1e-6)
-    friction = FrictionLaw(model=FrictionModel.REGULARIZED if pc.mu > 0 else FrictionModel.NONE, mu_kinetic=pc.mu)
+    friction = pin_friction_law(design, law.stiffness)
     profiles, meshes = [], []
     for k in range(d.n_wheels):
         phi = np.deg2rad(d.wheels.phases_deg[k])
@@ -263,6 +263,42 @@ def pin_meshes(design, *, offset=0, prefix=""):
     return profiles, meshes
 
 
+def mindlin_tangential_ratio(poisson_ratio):
+    """k_t / k_n = 2 (1 - nu) / (2 - nu) of two elastic bodies of one material (Mindlin's
+    tangential compliance of a Hertz contact; 0.82 for steel): the default anchor stiffness
+    relative to the contact's normal secant stiffness."""
+    return 2.0 * (1.0 - poisson_ratio) / (2.0 - poisson_ratio)
+
+
+def pin_friction_law(design, normal_stiffness):
+    """FrictionLaw of the cycloid--pin contact from ``[pin_contact]``: none for mu = 0, the
+    regularized law of Eq. (friction) or the anchor model (k_t from the design, else Mindlin's
+    ratio of ``normal_stiffness`` [N/m], the whole contact's line stiffness)."""
+    pc = design.pin_contact
+    if pc.mu == 0.0:
+        return FrictionLaw()
+    if pc.friction_model == "regularized":
+        return FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=pc.mu)
+    if pc.tangential_stiffness == 0.0 and pc.law == "power" and pc.exponent != 1.0:
+        raise RvtoolInputError("pin_contact.tangential_stiffness must be given (> 0 N/m) for the anchor model with "
+                               "a power law of exponent != 1 (no secant stiffness in N/m to derive it from)")
+    kt = pc.tangential_stiffness or mindlin_tangential_ratio(design.material.poisson_ratio) * normal_stiffness
+    return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=pc.mu, tangential_stiffness=kt)
+
+
+def output_pin_friction_law(design, coefficient):
+    """FrictionLaw of the output pins from ``[output_pins]``: none for mu = 0, else the anchor
+    model with k_t from the design or Mindlin's ratio of the 10/9 law's secant stiffness
+    F_ref / delta(F_ref) at the calibration load (``coefficient`` k [N m^-10/9])."""
+    from ..output_pins.calibration import PIN_EXPONENT
+    op = design.output_pins
+    if op.mu == 0.0:
+        return FrictionLaw()
+    secant = op.reference_force / (op.reference_force / coefficient) ** (1.0 / PIN_EXPONENT)
+    kt = op.tangential_stiffness or mindlin_tangential_ratio(design.material.poisson_ratio) * secant
+    return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=op.mu, tangential_stiffness=kt)
+
+
 def output_pin_mechanism(design):
     """Plain flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach)."""
     from ..output_pins.calibration import hertz_calibrated_coefficient
@@ -275,7 +311,8 @@ def output_pin_mechanism(design):
     return OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
                               n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
                               coefficient=k_op, contact_length=width, n_slices=op.n_slices,
-                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN)
+                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN,
+                              friction=output_pin_friction_law(d, k_op))
 
 
 def lumped_bearing_contacts(design, *, offset=0, prefix=""):

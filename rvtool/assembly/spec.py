@@ -96,13 +96,17 @@ class Wheels:
 class PinContact:
     """Cycloid--pin contact law: law ("line", "power", "secant"), stiffness [N/m] (whole contact;
     0 with "line" = secant stiffness at reference_force), exponent (power law), reference_force [N],
-    damping [N s/m], mu [-] (regularized friction; 0 = none)."""
+    damping [N s/m], mu [-] (0 = no friction), friction_model ("regularized": Eq. (friction)
+    velocity law; "anchor": stick--slip anchors per slice), tangential_stiffness [N/m] of the
+    anchors (whole contact; 0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the normal secant stiffness)."""
     law: str = "line"
     stiffness: float = 0.0
     exponent: float = 1.0
     reference_force: float = 500.0
     damping: float = 0.0
     mu: float = 0.0
+    friction_model: str = "regularized"
+    tangential_stiffness: float = 0.0
 
     def __post_init__(self):
         if self.law not in ("line", "power", "secant"):
@@ -112,23 +116,33 @@ class PinContact:
         check_positive("pin_contact.reference_force", self.reference_force)
         check_nonnegative("pin_contact.damping", self.damping)
         check_nonnegative("pin_contact.mu", self.mu)
+        if self.friction_model not in ("regularized", "anchor"):
+            raise RvtoolInputError(f"pin_contact.friction_model = {self.friction_model!r}; valid choices are "
+                                   "['regularized', 'anchor']")
+        check_nonnegative("pin_contact.tangential_stiffness", self.tangential_stiffness)
 
 
 @dataclass(frozen=True, kw_only=True)
 class OutputPins:
     """Flange pins in wheel holes: n_pins, pin_circle_radius [m], pin_radius [m], hole_radius [m],
-    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices."""
+    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices, mu [-] of the anchor
+    (stick--slip) friction per slice (0 = none), tangential_stiffness [N/m] of the anchors (whole
+    contact; 0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the 10/9 law's secant at reference_force)."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
     hole_radius: float
     reference_force: float = 1000.0
     n_slices: int = 4
+    mu: float = 0.0
+    tangential_stiffness: float = 0.0
 
     def __post_init__(self):
         check_positive("output_pins.pin_circle_radius", self.pin_circle_radius)
         check_positive("output_pins.pin_radius", self.pin_radius)
         check_range("output_pins.hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
+        check_nonnegative("output_pins.mu", self.mu)
+        check_nonnegative("output_pins.tangential_stiffness", self.tangential_stiffness)
 
 
 @dataclass(frozen=True, kw_only=True)
