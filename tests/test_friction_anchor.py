@@ -37,11 +37,11 @@ KT = 1e8          # whole-contact tangential stiffness [N/m]
 PROFILE = CycloidProfile(pin_circle_radius=0.05, pin_radius=0.003, n_pins=40, generating_eccentricity=0.0008)
 
 
-def _pin_set(backend="numpy", device="cpu", precision="float64", mu=MU, model=FrictionModel.ANCHOR, **kw):
+def _pin_set(backend="numpy", device="cpu", precision="float64", mu=MU, model=FrictionModel.ANCHOR, search="discrete", **kw):
     mesh = WheelPinMesh(profile=PROFILE, wheel_body=0, pin_body=1, face_width=0.008, n_slices=2, clearance=5e-7,
                         normal=NormalLaw(law="line", stiffness=2e8, damping=0.0, ramp_depth=2e-6),
                         friction=FrictionLaw(model=model, mu_kinetic=mu, tangential_stiffness=KT), **kw)
-    return CycloidPinSet([mesh], 2, backend=backend, device=device, precision=precision)
+    return CycloidPinSet([mesh], 2, backend=backend, device=device, precision=precision, search=search)
 
 
 def _pose(dtheta=0.0):

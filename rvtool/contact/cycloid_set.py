@@ -331,6 +331,14 @@ class CycloidPinSet:
             self.history.assign(trial)
         return np.array(obs, float)
 
+    def energy_law(self):
+        """The per-slice constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        the slice's normal coefficient and exponent, anchor stiffness and friction code."""
+        from ..observe.energy import ContactEnergyLaw
+        kt = (self.anchor_params[:, anchor_ref.ANCHOR_KT] if self.anchor else np.zeros(self.n_contacts))
+        return ContactEnergyLaw(normal_stiffness=self.fparams[:, ref.C_K], normal_exponent=self.fparams[:, ref.C_P],
+                                tangential_stiffness=kt, friction_model=self.iparams[:, ref.J_FRICTION].copy())
+
     def pin_forces(self, obs):
         """Per mesh, per pin: normal force summed over the slices [N] -> (n_meshes, z_b)."""
         out = np.zeros((len(self.meshes), max(m.profile.n_pins for m in self.meshes)))

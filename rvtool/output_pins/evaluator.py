@@ -115,6 +115,22 @@ class OutputPinEvaluator:
             obs[:, cref.O_FT] = np.asarray(ft, np.float64).reshape(-1)
         return obs
 
+    def energy_law(self):
+        """The per-slice constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        slice coefficient k / n_s and exponent of the plain rows, anchor stiffness and friction code
+        (the shared mode's condensed law has no per-slice potential: refused by name)."""
+        from ..observe.energy import ContactEnergyLaw
+        if self.mode != PinMode.PLAIN:
+            raise RvtoolInputError(f"the energy account needs mode = 'plain' output pins; {self.name!r} is "
+                                   f"{self.mode.value!r}")
+        ns = len(self.stations)
+        n = len(self.ids)
+        k = np.repeat(self.fparams[:, ref.Q_K] / ns, ns)
+        p = np.repeat(self.fparams[:, ref.Q_EXP], ns)
+        kt = self.anchor_params[:, anchor_ref.ANCHOR_KT] if self.anchor else np.zeros(n)
+        model = np.full(n, cref.FRICTION_ANCHOR if self.anchor else cref.FRICTION_NONE, np.int32)
+        return ContactEnergyLaw(normal_stiffness=k, normal_exponent=p, tangential_stiffness=kt, friction_model=model)
+
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
         for name, arr in (("pose", pose), ("vel", vel)):
