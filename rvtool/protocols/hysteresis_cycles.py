@@ -46,13 +46,23 @@ class CycleSequence:
 
     rated_torque: T_rated [N m]. step: level spacing on every branch [fraction of
     T_rated]. fine_levels: extra low-torque levels on every branch [fraction]
-    (default the +-3 % lost-motion level). n_cycles: cycles after the preload (>= 2:
-    the last is compared with the one before).
+    (default the +-3 % lost-motion level; levels near zero resolve the free-play
+    crossing, where the loop's trapezoidal ∮T dθ has its largest quadrature error).
+    n_cycles: cycles after the preload (>= 2: the last is compared with the one before).
+    ramp_steps, dwell_steps, reset_interval, tail_fraction, settle_span_arcmin: the
+    time-domain settings of path (a), as in
+    :class:`rvtool.protocols.stiffness.TorqueSequence` (the sequence runs through
+    :func:`rvtool.protocols.stiffness.dynamic_stiffness` unchanged).
     """
     rated_torque: float
     step: float = 0.0625
     fine_levels: tuple = (0.03,)
     n_cycles: int = 2
+    ramp_steps: int = 10
+    dwell_steps: int = 50
+    reset_interval: int = 25
+    tail_fraction: float = 0.25
+    settle_span_arcmin: float = 0.5
 
     def __post_init__(self):
         check_positive("rated_torque", self.rated_torque)
@@ -62,6 +72,11 @@ class CycleSequence:
         if not isinstance(self.n_cycles, (int, np.integer)) or self.n_cycles < 2:
             raise RvtoolInputError(f"n_cycles = {self.n_cycles!r} is outside the valid range [2, inf) (an integer): "
                                    "repeatability compares a cycle with its predecessor")
+        check_range("tail_fraction", self.tail_fraction, 0.0, 1.0, low_open=True)
+        check_positive("settle_span_arcmin", self.settle_span_arcmin)
+        if self.ramp_steps < 1 or self.dwell_steps < 1 or self.reset_interval < 1:
+            raise RvtoolInputError(f"ramp_steps = {self.ramp_steps}, dwell_steps = {self.dwell_steps}, "
+                                   f"reset_interval = {self.reset_interval}; each must be >= 1")
 
     def fractions(self):
         """Positive level fractions in increasing order (no zero, 1 included)."""
@@ -84,6 +99,20 @@ class CycleSequence:
     def preload(self):
         """Virgin preload fractions from zero to -1 (the first reversal point)."""
         return np.concatenate([[0.0], -self.fractions()])
+
+    def levels(self):
+        """(torques [N m], labels) of the whole protocol: the preload (label "preload") and the
+        cycles, the interface of :func:`rvtool.protocols.stiffness.dynamic_stiffness`."""
+        fr, labels = self.cycle()
+        pre = self.preload()
+        f = np.concatenate([pre] + [fr] * self.n_cycles)
+        return f * self.rated_torque, ["preload"] * len(pre) + labels * self.n_cycles
+
+    def split(self, values):
+        """Per-level values of :meth:`levels` (e.g. angles of a path) -> one array per cycle."""
+        n_pre, n_cyc = len(self.preload()), len(self.cycle()[0])
+        values = np.asarray(values)
+        return [values[n_pre + c * n_cyc:n_pre + (c + 1) * n_cyc] for c in range(self.n_cycles)]
 
 
 @dataclass(frozen=True)
@@ -122,6 +151,20 @@ def catalogue_figures(torque, angle_rad, labels, rated_torque):
     return CatalogueFigures(H.zero_torque_width(cyc) / RAD_PER_ARCMIN,
                             midpoint_lost_motion(cyc.torque, arcmin, labels, rated_torque),
                             S.branch_fits(cyc.torque, arcmin, labels, rated_torque), H.loop_integral(cyc))
+
+
+def loop_quadrature_bound(cycle):
+    """Error bound [J] of the trapezoidal ∮T dθ of a :class:`rvtool.protocols.hysteresis.Cycle`
+    on its levels: on every interval that crosses zero torque the free play leaves T(θ)
+    unresolved, and the exact work lies within max(|T_a|, |T_b|) |Δθ| of the trapezoid; on the
+    loaded branches the trapezoid's error is estimated from the same loop on every second level
+    (|L_h - L_2h|, three times the O(h^2) error of L_h)."""
+    T, th = cycle.torque, cycle.angle
+    T2, th2 = np.append(T, T[0]), np.append(th, th[0])
+    cross = T2[:-1] * T2[1:] < 0
+    crossing = float(np.sum(np.maximum(np.abs(T2[:-1]), np.abs(T2[1:]))[cross] * np.abs(np.diff(th2))[cross]))
+    coarse = H.Cycle(torque=T[::2], angle=th[::2])
+    return crossing + abs(H.loop_integral(cycle) - H.loop_integral(coarse))
 
 
 def energy_laws(model):
