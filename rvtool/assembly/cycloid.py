@@ -408,6 +408,13 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     else:
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
         elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
+    if d.bearing_friction.model != "none":
+        # the friction torque of every bearing, a loss element of its own (switched off: absent)
+        if bearing_model != "lumped":
+            raise RvtoolInputError("bearing_friction.model = 'palmgren' needs bearing_model = 'lumped' (the "
+                                   "bearing loads are read per bearing identity from the lumped set)")
+        elements["bearing_friction"] = ContactElement(mbs, nodes, bearing_friction_evaluator(
+            d, bset, elements["bearings"].evaluator))
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
@@ -417,6 +424,28 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                         structures={} if housing is None else {"housing": housing},
                         mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
                         housing=housing)
+
+
+def bearing_friction_evaluator(design, bearing_set, load_source):
+    """Palmgren friction torque on every lumped bearing of ``bearing_set`` (identity = the bearing's
+    contact name; needle law for the eccentric bearings, ball law for the main and input bearings,
+    pitch diameters from the design)."""
+    from ..bearings.friction_element import BearingFrictionEvaluator, BearingLoss
+    from ..bearings.friction_torque import PalmgrenFrictionTorque
+    d, bf = design, design.bearing_friction
+    eb = d.eccentric_bearing
+    losses = []
+    for row, c in enumerate(bearing_set.contacts):
+        if c.name.startswith("eccentric_bearing"):
+            f0, f1, dm = bf.f0_needle, bf.f1_needle, 2 * eb.inner_radius + eb.roller_diameter
+        elif c.name == "main_bearing":
+            f0, f1, dm = bf.f0_ball, bf.f1_ball, d.main_bearing.pitch_diameter
+        else:
+            f0, f1, dm = bf.f0_ball, bf.f1_ball, d.input_bearing.pitch_diameter
+        model = PalmgrenFrictionTorque(f0=f0, f1=f1, pitch_diameter=dm, kinematic_viscosity=bf.kinematic_viscosity,
+                                       regularization_speed=bf.regularization_speed)
+        losses.append(BearingLoss(c.name, c.body_a, c.body_b, model, (row,)))
+    return BearingFrictionEvaluator(losses, bearing_set.n_bodies, load_source)
 
 
 def body_names(n_wheels):
