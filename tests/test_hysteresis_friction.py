@@ -116,3 +116,44 @@ def test_design_friction_inputs_are_named():
         replace(d, pin_contact={"friction_model": "coulomb"})
     with pytest.raises(RvtoolInputError, match="pin_contact.tangential_stiffness"):
         build(replace(d, pin_contact={"mu": 0.05, "friction_model": "anchor", "law": "power", "exponent": 1.5}))
+
+
+def test_reducer_anchors_are_a_function_of_the_accepted_states_only():
+    """RD-40 with anchors on both families under the production driver: a torque ramp at fixed
+    input with forced rejections. Replaying the accepted states through a fresh model (its own
+    commits from the same static start) reproduces every committed anchor, flag and slip distance
+    bit for bit: rejected attempts and Newton iterations never reached the history."""
+    import exudyn as exu
+
+    from rvtool.solver import RunSpec, simulate
+    from rvtool.solver.continuation import Continuation
+
+    def start():
+        model = build(_design(0.05))
+        q = Continuation(model).go_to(60.0)
+        return model, q
+
+    model, q0 = start()
+    fams = ("pins", "output_pins")
+    rows = []
+
+    def keep(t, q, v):
+        rows.append((q.copy(), v.copy(), {f: model.elements[f].evaluator.history.copy() for f in fams}))
+
+    model.set_output_torque_function(lambda t: 60.0 + 40.0 * min(t / 2e-4, 1.0))
+    mbs = model.mbs
+    mbs.systemData.SetODE2Coordinates(q0, configuration=exu.ConfigurationType.Initial)
+    mbs.systemData.SetODE2Coordinates_t(np.zeros_like(q0), configuration=exu.ConfigurationType.Initial)
+    rec = simulate(mbs, RunSpec(end_time=3e-4, step=2e-5, abs_tol=1e-6, rel_tol=1e-8), model.contact_elements(),
+                   reject_attempts=(3, 7, 11), before_accept=keep)
+    assert rec.rejected_steps >= 3 and len(rows) == rec.accepted_steps >= 10
+    moved = rows[-1][2]["pins"].slip_distance.max() + rows[-1][2]["output_pins"].slip_distance.max()
+    assert moved > 0.0                          # the ramp made anchors slip
+    replay, q1 = start()
+    np.testing.assert_array_equal(q1, q0)
+    for q, v, hist in rows:
+        replay.commit_contacts(q, v)
+        for f in fams:
+            h = replay.elements[f].evaluator.history
+            for name in ("active", "anchor_a", "anchor_b", "slip_distance"):
+                np.testing.assert_array_equal(getattr(h, name), getattr(hist[f], name))
