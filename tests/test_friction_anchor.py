@@ -1,6 +1,6 @@
 """Anchor (stick--slip) friction on the reducer contact families (issue 17).
 
-For the cycloid--pin slices (and, below, the output-pin slices):
+For the cycloid--pin slices (below: the output-pin slices and the involute tooth pairs):
 
 * the Warp kernel against the NumPy reference on every available device, in a
   state with sticking and slipping rows;
@@ -312,3 +312,100 @@ def test_output_pin_mu_zero_and_bad_inputs():
                                    friction=FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=0.1))
     with pytest.raises(RvtoolInputError, match="anchor_release_distance"):
         _output_pins(anchor_release_distance=0.0)
+
+
+# -- involute tooth pairs: anchors per row (window slot), released when the slot's teeth change ----
+
+def _gear_set(backend="numpy", device="cpu", mu=MU, model=FrictionModel.ANCHOR, **kw):
+    from rvtool.contact.involute_set import GearMesh, InvoluteContactSet
+    from test_involute_pairs import fzg
+    mesh = GearMesh(pair=fzg(), body_a=0, body_b=1, n_slices=2,
+                    friction=FrictionLaw(model=model, mu_kinetic=mu, tangential_stiffness=KT), **kw)
+    return InvoluteContactSet([mesh], 2, backend=backend, device=device)
+
+
+def _gear_pose(dy=0.0, turn=0.0):
+    """FZG pair loaded by a turn of gear B (3e-4 rad), gear B shifted by dy [m] across the centre
+    line (sliding at both tooth pairs in mesh); both gears turned rigidly by ``turn`` [rad of A]."""
+    from test_involute_pairs import fzg, poses
+    p = poses(fzg(), [0.01 + turn], 3e-4)[0]
+    p[1, 1] += dy
+    return p
+
+
+def _gear_branches(s, pose):
+    from warp_contacts import involute_pairs_ref as iref
+    e = s.evaluate(pose, VEL)
+    fn, ft = e.obs[:, iref.O_FN], e.obs[:, iref.O_FT]
+    on = fn > 0
+    slip = on & np.isclose(np.abs(ft), MU * fn, rtol=1e-12)
+    return e, on & ~slip, slip
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_involute_anchor_kernel_matches_reference(device):
+    """Tolerance as test_involute_pairs' float64 kernel test (1e-9 of the largest entry); a shift
+    of 4.5 um makes one tooth pair slip while the other sticks."""
+    w, n = _gear_set("warp", device), _gear_set("numpy")
+    for s in (w, n):
+        s.commit(_gear_pose(), VEL)
+    np.testing.assert_array_equal(w.history.active, n.history.active)
+    np.testing.assert_allclose(w.history.anchor_a, n.history.anchor_a, rtol=0, atol=1e-15)
+    ew, stick, slip = _gear_branches(w, _gear_pose(4.5e-6))
+    en, _, _ = _gear_branches(n, _gear_pose(4.5e-6))
+    assert stick.any() and slip.any()
+    for x, y in ((ew.Q, en.Q), (ew.dQdq, en.dQdq), (ew.obs[:, :8], en.obs[:, :8])):
+        assert np.max(np.abs(x - y)) <= 1e-9 * np.max(np.abs(y))
+    np.testing.assert_array_equal(ew.trial_history[0], en.trial_history[0])
+    np.testing.assert_allclose(ew.trial_history[1], en.trial_history[1], rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "warp"])
+@pytest.mark.parametrize("dy,branch", [(1e-7, "stick"), (1e-5, "slip")])
+def test_involute_anchor_tangent_matches_central_differences(backend, dy, branch):
+    """Steps of 1e-10 m / 1e-9 rad change s by ~1e-10 m, inside every stick row's margin (asserted);
+    the series law's iteration stops at 1e-14 relative, so the FD round-off is ~1e-14 |Q| / h ~ 1e-6
+    of the entries: relative error 1e-5."""
+    s = _gear_set(backend)
+    s.commit(_gear_pose(), VEL)
+    pose = _gear_pose(dy)
+    e, stick, slip = _gear_branches(s, pose)
+    assert (stick if branch == "stick" else slip).sum() >= 2
+    from warp_contacts import involute_pairs_ref as iref
+    fn, ft = e.obs[:, iref.O_FN], e.obs[:, iref.O_FT]
+    assert np.all(np.abs(MU * fn[stick] - np.abs(ft[stick])) > KT / 2 * 1e-10 * 10)
+    K = np.zeros((6, 6))
+    for j in range(6):
+        b, c = divmod(j, 3)
+        h = 1e-10 if c < 2 else 1e-9
+        P = pose.copy()
+        P[b, c] += h
+        qp = s.evaluate(P, VEL).Q
+        P[b, c] -= 2 * h
+        K[:, j] = (qp - s.evaluate(P, VEL).Q) / (2 * h)
+    assert np.linalg.norm(e.dQdq - K) / np.linalg.norm(K) < 1e-5
+
+
+def test_involute_anchor_released_when_the_teeth_change():
+    """Turning both gears rigidly by one pitch of A moves every window slot to the next tooth pair:
+    the committed anchors of the old pair are a base pitch away, released (zero friction force,
+    FORMED) and no slip distance is counted; a small sliding shift before that sticks."""
+    from rvtool.contact.circle_set import FrictionModel as FM
+    s = _gear_set()
+    s.commit(_gear_pose(), VEL)
+    pitch = 2 * np.pi / 16
+    e = s.evaluate(_gear_pose(turn=pitch), VEL)
+    on = e.obs[:, 0] > 0
+    assert on.any()
+    assert np.all(e.obs[:, 7] == 0.0)
+    assert np.all(e.trial_history[0][on] == anchor_ref.HISTORY_FORMED)
+    assert np.all(e.trial_history[3] == 0.0)
+    plain = _gear_set(model=FM.NONE, mu=0.0).evaluate(_gear_pose(turn=pitch), VEL)
+    np.testing.assert_array_equal(e.Q, plain.Q)
+    # mu = 0 under the anchor law: the frictionless code, bit-identical
+    z = _gear_set("warp", mu=0.0)
+    assert not z.anchor
+    np.testing.assert_array_equal(z.evaluate(_gear_pose(1e-6), VEL).Q,
+                                  _gear_set("warp", mu=0.0, model=FM.NONE).evaluate(_gear_pose(1e-6), VEL).Q)
+    with pytest.raises(RvtoolInputError, match="anchor_release_distance"):
+        _gear_set(anchor_release_distance=-1.0)

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import involute_pairs_ref as ref
 
 from ..errors import RvtoolInputError
@@ -26,7 +27,7 @@ from ..geometry.involute import InvolutePair
 from ..validation import check_finite, check_nonnegative, check_positive
 from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel
-from .evaluator import Evaluation, all_finite
+from .evaluator import ContactHistory, Evaluation, all_finite
 from .tooth_stiffness import POLY_DEGREE, ToothCompliance
 
 assert POLY_DEGREE + 1 == ref.POLY_TERMS
@@ -43,7 +44,10 @@ class GearMesh:
     clearance: uniform added gap [m]. tilt_x, tilt_y: relative tilt of A and B [rad];
     skew: psi [rad] (Eq. (skew)); gear_z: axial station of the mesh midplane [m].
     damping: c [N s/m] of the whole mesh (divided among the slices); ramp_depth: delta_r [m].
-    friction: NONE or REGULARIZED (element-wise coefficient).
+    friction: NONE, REGULARIZED (element-wise coefficient) or ANCHOR (stick--slip anchors per row,
+    Eq. (friction) anchor model, k_t of the whole mesh divided among the slices; mu = 0: the
+    frictionless code). anchor_release_distance: d_rel [m] of :mod:`warp_contacts.anchor_ref`;
+    None: 10 % of gear A's base pitch (a row's next tooth pair starts a base pitch away).
     """
     pair: InvolutePair
     body_a: int
@@ -60,6 +64,7 @@ class GearMesh:
     ramp_depth: float = 1e-6
     friction: FrictionLaw = field(default_factory=FrictionLaw)
     name: str = "mesh"
+    anchor_release_distance: float | None = None
 
     def __post_init__(self):
         if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, (int, np.integer)) or self.n_slices < 1:
@@ -72,9 +77,13 @@ class GearMesh:
             check_finite(f"{self.name}.{nm}", getattr(self, nm))
         check_nonnegative(f"{self.name}.damping", self.damping)
         check_positive(f"{self.name}.ramp_depth", self.ramp_depth)
-        if self.friction.model == FrictionModel.ANCHOR:
-            raise RvtoolInputError(f"{self.name}.friction.model = ANCHOR is not available for gear meshes; "
-                                   "valid: NONE, REGULARIZED")
+        if self.anchor_release_distance is not None:
+            check_positive(f"{self.name}.anchor_release_distance", self.anchor_release_distance)
+
+    @property
+    def anchors(self):
+        """True where the mesh carries anchors (ANCHOR law with mu > 0)."""
+        return self.friction.model == FrictionModel.ANCHOR and self.friction.mu_kinetic > 0.0
 
     @property
     def face_width(self):
@@ -133,7 +142,7 @@ class InvoluteContactSet:
         self.precision = precision
         self.history = type("NoHistory", (), {})()
         self.compliance = {}
-        fp, ip, ids, mesh_of, dev = [], [], [], [], []
+        fp, ip, ids, mesh_of, dev, ap = [], [], [], [], [], []
         offset = 0
         for m_i, m in enumerate(self.meshes):
             for nm, b in (("body_a", m.body_a), ("body_b", m.body_b)):
@@ -166,8 +175,18 @@ class InvoluteContactSet:
                             f.mu_kinetic, f.mu_s, f.stribeck_speed, f.regularization_speed)
                         fp.append(row)
                         g = n_bodies
+                        # mu = 0 under the anchor law is the frictionless mesh (its code path, its figures)
+                        model = f.model if (f.model != FrictionModel.ANCHOR or m.anchors) else FrictionModel.NONE
                         ip.append((g if m.body_a == GROUND else m.body_a, g if m.body_b == GROUND else m.body_b,
-                                   int(f.model), line, w, off_a, A.n_teeth, off_b, B.n_teeth))
+                                   int(model), line, w, off_a, A.n_teeth, off_b, B.n_teeth))
+                        arow = np.zeros(anchor_ref.N_ANCHOR)
+                        if m.anchors:
+                            arow[anchor_ref.ANCHOR_KT] = f.tangential_stiffness / m.n_slices
+                            arow[anchor_ref.ANCHOR_MU] = f.mu_kinetic
+                            arow[anchor_ref.ANCHOR_RELEASE] = (0.1 * 2 * math.pi * A.base_radius / A.n_teeth
+                                                               if m.anchor_release_distance is None
+                                                               else m.anchor_release_distance)
+                        ap.append(arow)
                         ids.append(f"{m.name}/line{line}/w{w:+d}/s{s_i}")
                         mesh_of.append(m_i)
         self.fparams = np.array(fp)
@@ -176,13 +195,19 @@ class InvoluteContactSet:
         self.ids = tuple(ids)
         self.mesh_of = np.array(mesh_of)
         self.n_contacts = len(fp)
+        self.anchor = bool(np.any(self.iparams[:, ref.J_FRICTION] == FrictionModel.ANCHOR))
+        self.anchor_params = np.array(ap) if self.anchor else None
+        if self.anchor:
+            # committed anchors (A and B coordinates) and slip distance per row
+            self.history = ContactHistory(self.n_contacts)
         self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
         self.velocity_tangent = True
         if backend == "warp":
             from warp_contacts.involute_pairs import InvolutePairKernel
-            self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device)
+            self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device,
+                                              anchor_params=self.anchor_params)
 
     def set_velocity_tangent(self, on):
         """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None for it)."""
@@ -190,14 +215,26 @@ class InvoluteContactSet:
         if self.backend == "warp":
             self._kernel.set_velocity_tangent(on)
 
-    def raw(self, pose, vel):
-        """Per-row (Q (N,6), dQdq (N,6,6), dQdv (N,6,6) or None, obs (N, N_OBS)) at poses (nb, 3)."""
+    def raw(self, pose, vel, history=None):
+        """Per-row (Q (N,6), dQdq (N,6,6), dQdv (N,6,6) or None, obs (N, N_OBS)) at poses (nb, 3);
+        with anchors a fifth result, the trial history (flags, anchor_A, anchor_B, slip distance)
+        from the committed ``history`` (default: the set's own)."""
         self._pose[:-1] = pose
         self._vel[:-1] = vel
+        if not self.anchor:
+            if self.backend == "warp":
+                return self._kernel.evaluate(self._pose, self._vel)
+            Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.deviations)
+            return Q, dq, (dv if self.velocity_tangent else None), obs
+        hist = history or self.history
         if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel)
-        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.deviations)
-        return Q, dq, (dv if self.velocity_tangent else None), obs
+            Q, dq, dv, obs, (flag, a, b) = self._kernel.evaluate_anchor(self._pose, self._vel, *hist.as_tuple())
+        else:
+            Q, dq, dv, obs, (flag, a, b) = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams,
+                                                        self.deviations, anchor=(self.anchor_params, *hist.as_tuple()))
+            dv = dv if self.velocity_tangent else None
+        slip = hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
+        return Q, dq, dv, obs, (np.array(flag), np.array(a), np.array(b), slip)
 
     def evaluate(self, pose, vel, history=None, check=True):
         if check:
@@ -205,16 +242,26 @@ class InvoluteContactSet:
                 a = np.asarray(a)
                 if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
                     raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, dv, obs = self.raw(pose, vel)
+        r = self.raw(pose, vel, history)
+        Qc, dq, dv, obs = r[:4]
         dv = np.zeros_like(dq) if dv is None else dv
         finite = all_finite(Qc, dq, dv)
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
+                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float),
+                          r[4] if self.anchor else (), finite)
 
     def commit(self, pose, vel, evaluation=None):
-        if evaluation is not None:
-            return np.array(evaluation.obs, float)
-        return np.array(self.raw(pose, vel)[3], float)
+        """Commit the trial history at the accepted state (anchors only; ``evaluation``: the
+        cached trial at exactly this state from the committed history) and return its
+        observation rows."""
+        if evaluation is None:
+            r = self.raw(pose, vel)
+            obs, trial = r[3], (r[4] if self.anchor else None)
+        else:
+            obs, trial = evaluation.obs, evaluation.trial_history
+        if self.anchor:
+            self.history.assign(trial)
+        return np.array(obs, float)
 
     def mesh_stiffness(self, obs):
         """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along
