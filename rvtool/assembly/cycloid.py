@@ -381,7 +381,7 @@ def pin_meshes(design, *, offset=0, prefix=""):
     else:
         k_line = pc.stiffness if (pc.law == "line" and pc.stiffness > 0) else secant_line_stiffness(pc.reference_force, width)
         law = NormalLaw(law="line", stiffness=k_line, damping=pc.damping, ramp_depth=1e-6)
-    friction = FrictionLaw(model=FrictionModel.REGULARIZED if pc.mu > 0 else FrictionModel.NONE, mu_kinetic=pc.mu)
+    friction = pin_friction_law(design, law.stiffness)
     profiles, meshes = [], []
     for k in range(d.n_wheels):
         phi = np.deg2rad(d.wheels.phases_deg[k])
@@ -417,6 +417,42 @@ def pin_station_compliance(design, family):
         raise RvtoolInputError(f"{section}.{exc}") from None
 
 
+def mindlin_tangential_ratio(poisson_ratio):
+    """k_t / k_n = 2 (1 - nu) / (2 - nu) of two elastic bodies of one material (Mindlin's
+    tangential compliance of a Hertz contact; 0.82 for steel): the default anchor stiffness
+    relative to the contact's normal secant stiffness."""
+    return 2.0 * (1.0 - poisson_ratio) / (2.0 - poisson_ratio)
+
+
+def pin_friction_law(design, normal_stiffness):
+    """FrictionLaw of the cycloid--pin contact from ``[pin_contact]``: none for mu = 0, the
+    regularized law of Eq. (friction) or the anchor model (k_t from the design, else Mindlin's
+    ratio of ``normal_stiffness`` [N/m], the whole contact's line stiffness)."""
+    pc = design.pin_contact
+    if pc.mu == 0.0:
+        return FrictionLaw()
+    if pc.friction_model == "regularized":
+        return FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=pc.mu)
+    if pc.tangential_stiffness == 0.0 and pc.law == "power" and pc.exponent != 1.0:
+        raise RvtoolInputError("pin_contact.tangential_stiffness must be given (> 0 N/m) for the anchor model with "
+                               "a power law of exponent != 1 (no secant stiffness in N/m to derive it from)")
+    kt = pc.tangential_stiffness or mindlin_tangential_ratio(design.material.poisson_ratio) * normal_stiffness
+    return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=pc.mu, tangential_stiffness=kt)
+
+
+def output_pin_friction_law(design, coefficient):
+    """FrictionLaw of the output pins from ``[output_pins]``: none for mu = 0, else the anchor
+    model with k_t from the design or Mindlin's ratio of the 10/9 law's secant stiffness
+    F_ref / delta(F_ref) at the calibration load (``coefficient`` k [N m^-10/9])."""
+    from ..output_pins.calibration import PIN_EXPONENT
+    op = design.output_pins
+    if op.mu == 0.0:
+        return FrictionLaw()
+    secant = op.reference_force / (op.reference_force / coefficient) ** (1.0 / PIN_EXPONENT)
+    kt = op.tangential_stiffness or mindlin_tangential_ratio(design.material.poisson_ratio) * secant
+    return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=op.mu, tangential_stiffness=kt)
+
+
 def output_pin_mechanism(design):
     """Flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach),
     plain pins; with ``output_pins.support`` elastic, :func:`build` closes their beams per pin
@@ -431,7 +467,8 @@ def output_pin_mechanism(design):
     return OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
                               n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
                               coefficient=k_op, contact_length=width, n_slices=op.n_slices,
-                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN)
+                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN,
+                              friction=output_pin_friction_law(d, k_op))
 
 
 def elastic_pin_stations(design, n_pins):
@@ -558,6 +595,13 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     else:
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
         elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
+    if d.bearing_friction.model != "none":
+        # the friction torque of every bearing, a loss element of its own (switched off: absent)
+        if bearing_model != "lumped":
+            raise RvtoolInputError("bearing_friction.model = 'palmgren' needs bearing_model = 'lumped' (the "
+                                   "bearing loads are read per bearing identity from the lumped set)")
+        elements["bearing_friction"] = ContactElement(mbs, nodes, bearing_friction_evaluator(
+            d, bset, elements["bearings"].evaluator))
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
@@ -567,6 +611,28 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                         structures={} if housing is None else {"housing": housing},
                         mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
                         housing=housing)
+
+
+def bearing_friction_evaluator(design, bearing_set, load_source):
+    """Palmgren friction torque on every lumped bearing of ``bearing_set`` (identity = the bearing's
+    contact name; needle law for the eccentric bearings, ball law for the main and input bearings,
+    pitch diameters from the design)."""
+    from ..bearings.friction_element import BearingFrictionEvaluator, BearingLoss
+    from ..bearings.friction_torque import PalmgrenFrictionTorque
+    d, bf = design, design.bearing_friction
+    eb = d.eccentric_bearing
+    losses = []
+    for row, c in enumerate(bearing_set.contacts):
+        if c.name.startswith("eccentric_bearing"):
+            f0, f1, dm = bf.f0_needle, bf.f1_needle, 2 * eb.inner_radius + eb.roller_diameter
+        elif c.name == "main_bearing":
+            f0, f1, dm = bf.f0_ball, bf.f1_ball, d.main_bearing.pitch_diameter
+        else:
+            f0, f1, dm = bf.f0_ball, bf.f1_ball, d.input_bearing.pitch_diameter
+        model = PalmgrenFrictionTorque(f0=f0, f1=f1, pitch_diameter=dm, kinematic_viscosity=bf.kinematic_viscosity,
+                                       regularization_speed=bf.regularization_speed)
+        losses.append(BearingLoss(c.name, c.body_a, c.body_b, model, (row,)))
+    return BearingFrictionEvaluator(losses, bearing_set.n_bodies, load_source)
 
 
 def body_names(n_wheels):

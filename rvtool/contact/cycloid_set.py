@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import cycloid_pins_ref as ref
 from warp_contacts.circle_pairs_ref import FRICTION_REGULARIZED
 
@@ -53,7 +54,12 @@ class WheelPinMesh:
     crowning: drop at the slice edges [m], parabolic across the width.
     tilt_x, tilt_y: declared relative tilt of wheel and pins [rad]; skew: psi [rad] (Eq. (skew)).
     normal: law for the whole contact; the coefficient is divided among the slices.
-    friction: NONE or REGULARIZED.
+    friction: NONE, REGULARIZED or ANCHOR (stick--slip anchors per slice, Eq. (friction) anchor
+    model; the tangential stiffness k_t is the whole contact's and divided among the slices like
+    the normal coefficient). An ANCHOR law with mu_kinetic = 0 runs the frictionless code.
+    anchor_release_distance: d_rel [m] above which an anchor's separation releases it (the
+    contact migrated, :mod:`warp_contacts.anchor_ref`); None: 10 % of the pin radius, three
+    orders above the stick stroke mu F_n / k_t of a loaded pin and far below a lobe's length.
     """
     profile: CycloidProfile
     wheel_body: int
@@ -73,6 +79,7 @@ class WheelPinMesh:
     normal: NormalLaw
     friction: FrictionLaw = field(default_factory=FrictionLaw)
     name: str = "wheel"
+    anchor_release_distance: float | None = None
 
     def __post_init__(self):
         check_positive("face_width", self.face_width)
@@ -83,13 +90,18 @@ class WheelPinMesh:
             check_finite(nm, getattr(self, nm))
         if self.pin_radius is not None:
             check_positive("pin_radius", self.pin_radius)
-        if self.friction.model == FrictionModel.ANCHOR:
-            raise RvtoolInputError("friction.model = ANCHOR is not available for cycloid-pin contacts; valid: NONE, REGULARIZED")
+        if self.anchor_release_distance is not None:
+            check_positive("anchor_release_distance", self.anchor_release_distance)
         zb = self.profile.n_pins
         if self.pin_bodies is not None and np.shape(self.pin_bodies) != (zb,):
             raise RvtoolInputError(f"pin_bodies must have shape ({zb},); got {np.shape(self.pin_bodies)}")
         if self.normal_deviation is not None and np.shape(self.normal_deviation) != (zb,):
             raise RvtoolInputError(f"normal_deviation must have shape ({zb},); got {np.shape(self.normal_deviation)}")
+
+    @property
+    def anchors(self):
+        """True where the mesh carries anchors (ANCHOR law with mu > 0)."""
+        return self.friction.model == FrictionModel.ANCHOR and self.friction.mu_kinetic > 0.0
 
     @property
     def slice_z(self):
@@ -179,7 +191,7 @@ class CycloidPinSet(PairFamilySet):
         self.tables = []
         self.analytic = [] if search == "analytic" else None
         table_of = {}            # identical tables are stored once (B copies of one design: one table)
-        fp, ip, ids, mesh_of, pin_of = [], [], [], [], []
+        fp, ip, ids, mesh_of, pin_of, ap = [], [], [], [], [], []
         window = 0
         for m_i, m in enumerate(self.meshes):
             pin_bodies = (m.pin_body,) * m.profile.n_pins if m.pin_bodies is None else tuple(int(b) for b in m.pin_bodies)
@@ -223,8 +235,17 @@ class CycloidPinSet(PairFamilySet):
                     irow = np.zeros(ref.N_INT, np.int32)
                     irow[ref.J_BODY_A] = g if m.wheel_body == GROUND else m.wheel_body
                     irow[ref.J_BODY_B] = g if pb == GROUND else pb
-                    irow[ref.J_FRICTION], irow[ref.J_TABLE] = int(f.model), tb
+                    # mu = 0 under the anchor law is the frictionless contact (its code path, its figures)
+                    model = f.model if (f.model != FrictionModel.ANCHOR or m.anchors) else FrictionModel.NONE
+                    irow[ref.J_FRICTION], irow[ref.J_TABLE] = int(model), tb
                     ip.append(irow)
+                    arow = np.zeros(anchor_ref.N_ANCHOR)
+                    if m.anchors:
+                        arow[anchor_ref.ANCHOR_KT] = f.tangential_stiffness / m.n_slices
+                        arow[anchor_ref.ANCHOR_MU] = f.mu_kinetic
+                        arow[anchor_ref.ANCHOR_RELEASE] = (0.1 * rp if m.anchor_release_distance is None
+                                                           else m.anchor_release_distance)
+                    ap.append(arow)
                     ids.append(f"{m.name}/pin{k}/s{s_i}")
                     mesh_of.append(m_i)
                     pin_of.append(k)
@@ -235,16 +256,20 @@ class CycloidPinSet(PairFamilySet):
         self.mesh_of = np.array(mesh_of)
         self.pin_of = np.array(pin_of)
         self.n_contacts = len(fp)
-        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
+        anchor = bool(np.any(self.iparams[:, ref.J_FRICTION] == FrictionModel.ANCHOR))
+        # committed anchors (wheel and pin-body coordinates) and slip distance per slice
+        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies,
+                             anchor_params=np.array(ap) if anchor else None)
         if backend == "warp":
             from warp_contacts.cycloid_pins import CycloidPinKernel
             self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device,
-                                            analytic=self.analytic)
+                                            analytic=self.analytic, anchor_params=self.anchor_params)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
 
-    def reference(self, pose, vel):
-        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.tables, self.window, self.analytic)
+    def reference(self, pose, vel, anchor=None):
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.tables, self.window, self.analytic,
+                            **({} if anchor is None else {"anchor": anchor}))
 
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per slice row (positive opens the gap), added to the deviation sum e of
@@ -298,6 +323,14 @@ class CycloidPinSet(PairFamilySet):
         self.fparams = fp
         if self.backend == "warp":
             self._kernel.set_parameters(fp)
+
+    def energy_law(self):
+        """The per-slice constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        the slice's normal coefficient and exponent, anchor stiffness and friction code."""
+        from ..observe.energy import ContactEnergyLaw
+        kt = (self.anchor_params[:, anchor_ref.ANCHOR_KT] if self.anchor else np.zeros(self.n_contacts))
+        return ContactEnergyLaw(normal_stiffness=self.fparams[:, ref.C_K], normal_exponent=self.fparams[:, ref.C_P],
+                                tangential_stiffness=kt, friction_model=self.iparams[:, ref.J_FRICTION].copy())
 
     def pin_forces(self, obs):
         """Per mesh, per pin: normal force summed over the slices [N] -> (n_meshes, z_b)."""

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import involute_pairs_ref as ref
 
 from ..errors import RvtoolInputError
@@ -42,7 +43,10 @@ class GearMesh:
     clearance: uniform added gap [m]. tilt_x, tilt_y: relative tilt of A and B [rad];
     skew: psi [rad] (Eq. (skew)); gear_z: axial station of the mesh midplane [m].
     damping: c [N s/m] of the whole mesh (divided among the slices); ramp_depth: delta_r [m].
-    friction: NONE or REGULARIZED (element-wise coefficient).
+    friction: NONE, REGULARIZED (element-wise coefficient) or ANCHOR (stick--slip anchors per row,
+    Eq. (friction) anchor model, k_t of the whole mesh divided among the slices; mu = 0: the
+    frictionless code). anchor_release_distance: d_rel [m] of :mod:`warp_contacts.anchor_ref`;
+    None: 10 % of gear A's base pitch (a row's next tooth pair starts a base pitch away).
     phase_a, phase_b: angle [rad] of tooth 0 of gear A (B) from its body's x axis: a rigid turn
     of the tooth pattern against the body frame (e.g. a wheel's teeth against its output holes).
     Default 0; a turn by whole pitches renumbers the teeth (tooth k carries the pitch deviation
@@ -65,6 +69,7 @@ class GearMesh:
     phase_a: float = 0.0
     phase_b: float = 0.0
     name: str = "mesh"
+    anchor_release_distance: float | None = None
 
     def __post_init__(self):
         if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, (int, np.integer)) or self.n_slices < 1:
@@ -77,9 +82,13 @@ class GearMesh:
             check_finite(f"{self.name}.{nm}", getattr(self, nm))
         check_nonnegative(f"{self.name}.damping", self.damping)
         check_positive(f"{self.name}.ramp_depth", self.ramp_depth)
-        if self.friction.model == FrictionModel.ANCHOR:
-            raise RvtoolInputError(f"{self.name}.friction.model = ANCHOR is not available for gear meshes; "
-                                   "valid: NONE, REGULARIZED")
+        if self.anchor_release_distance is not None:
+            check_positive(f"{self.name}.anchor_release_distance", self.anchor_release_distance)
+
+    @property
+    def anchors(self):
+        """True where the mesh carries anchors (ANCHOR law with mu > 0)."""
+        return self.friction.model == FrictionModel.ANCHOR and self.friction.mu_kinetic > 0.0
 
     @property
     def face_width(self):
@@ -143,7 +152,7 @@ class InvoluteContactSet(PairFamilySet):
         self.backend = backend
         self.precision = precision
         self.compliance = {}
-        fp, ip, ids, mesh_of, dev = [], [], [], [], []
+        fp, ip, ids, mesh_of, dev, ap = [], [], [], [], [], []
         offset = 0
         for m_i, m in enumerate(self.meshes):
             for nm, b in (("body_a", m.body_a), ("body_b", m.body_b)):
@@ -176,8 +185,18 @@ class InvoluteContactSet(PairFamilySet):
                             f.mu_kinetic, f.mu_s, f.stribeck_speed, f.regularization_speed)
                         fp.append(row)
                         g = n_bodies
+                        # mu = 0 under the anchor law is the frictionless mesh (its code path, its figures)
+                        model = f.model if (f.model != FrictionModel.ANCHOR or m.anchors) else FrictionModel.NONE
                         ip.append((g if m.body_a == GROUND else m.body_a, g if m.body_b == GROUND else m.body_b,
-                                   int(f.model), line, w, off_a, A.n_teeth, off_b, B.n_teeth))
+                                   int(model), line, w, off_a, A.n_teeth, off_b, B.n_teeth))
+                        arow = np.zeros(anchor_ref.N_ANCHOR)
+                        if m.anchors:
+                            arow[anchor_ref.ANCHOR_KT] = f.tangential_stiffness / m.n_slices
+                            arow[anchor_ref.ANCHOR_MU] = f.mu_kinetic
+                            arow[anchor_ref.ANCHOR_RELEASE] = (0.1 * 2 * math.pi * A.base_radius / A.n_teeth
+                                                               if m.anchor_release_distance is None
+                                                               else m.anchor_release_distance)
+                        ap.append(arow)
                         ids.append(f"{m.name}/line{line}/w{w:+d}/s{s_i}")
                         mesh_of.append(m_i)
         self.fparams = np.array(fp)
@@ -186,13 +205,18 @@ class InvoluteContactSet(PairFamilySet):
         self.ids = tuple(ids)
         self.mesh_of = np.array(mesh_of)
         self.n_contacts = len(fp)
-        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
+        anchor = bool(np.any(self.iparams[:, ref.J_FRICTION] == FrictionModel.ANCHOR))
+        # committed anchors (A and B coordinates) and slip distance per row
+        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies,
+                             anchor_params=np.array(ap) if anchor else None)
         if backend == "warp":
             from warp_contacts.involute_pairs import InvolutePairKernel
-            self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device)
+            self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device,
+                                              anchor_params=self.anchor_params)
 
-    def reference(self, pose, vel):
-        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations)
+    def reference(self, pose, vel, anchor=None):
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations,
+                            **({} if anchor is None else {"anchor": anchor}))
 
     def mesh_stiffness(self, obs):
         """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along

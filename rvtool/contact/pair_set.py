@@ -5,8 +5,13 @@ by one Warp launch (or their NumPy reference) and scattered by a
 (:class:`~rvtool.contact.involute_set.InvoluteContactSet`).
 
 A family builds its parameter rows, then calls :meth:`PairFamilySet.init_evaluation` with its
-body pairs; it provides ``self._kernel`` (backend "warp": ``evaluate(pose, vel)`` and
-``set_velocity_tangent(on)``) and :meth:`PairFamilySet.reference` (backend "numpy"). The
+body pairs (and, for stick--slip rows, its anchor parameter columns of
+:mod:`warp_contacts.anchor_ref`); it provides ``self._kernel`` (backend "warp":
+``evaluate(pose, vel)``, with anchors ``evaluate_anchor(pose, vel, *history)``, and
+``set_velocity_tangent(on)``) and :meth:`PairFamilySet.reference` (backend "numpy"; with
+anchors it takes ``anchor=(params, *history)`` and returns the trial anchors as a fifth result).
+Anchors follow the paper's "History ownership, retries, and acceptance": trials read the
+committed history only, :meth:`PairFamilySet.commit` writes it once per accepted step. The
 protocol of :class:`exudyn_user_elements.contact_element.ContactElement` (``raw``,
 ``evaluate``, ``commit``, ``set_velocity_tangent``, ``ids``, ``history``) is implemented here
 once. The ground is the padded last row of the pose arrays (index ``n_bodies``).
@@ -15,7 +20,9 @@ import numpy as np
 
 from ..errors import RvtoolInputError
 from .assembly import PairAssembler
-from .evaluator import Evaluation, all_finite
+from warp_contacts import anchor_ref
+
+from .evaluator import ContactHistory, Evaluation, all_finite
 
 BACKENDS = ("warp", "numpy")
 PRECISIONS = ("float64", "float32")
@@ -38,17 +45,22 @@ class PairFamilySet:
 
     velocity_tangent = True
 
-    def init_evaluation(self, body_a, body_b, n_bodies):
-        """Assembler of the rows' body pairs (ground = ``n_bodies``), empty history and the padded
-        pose and velocity buffers."""
+    def init_evaluation(self, body_a, body_b, n_bodies, anchor_params=None):
+        """Assembler of the rows' body pairs (ground = ``n_bodies``), the padded pose and velocity
+        buffers and the committed history: per-row anchors and slip distance when
+        ``anchor_params`` (N, N_ANCHOR) is given (stick--slip rows), else none."""
         self.n_bodies = n_bodies
-        self.history = NoHistory()
+        self.anchor = anchor_params is not None
+        self.anchor_params = None if anchor_params is None else np.array(anchor_params)
+        self.history = ContactHistory(len(body_a)) if self.anchor else NoHistory()
         self.assembler = PairAssembler(body_a, body_b, n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
 
-    def reference(self, pose, vel):
-        """(Q, dQ/dq, dQ/dv, obs) per row from the NumPy reference at padded poses and velocities."""
+    def reference(self, pose, vel, anchor=None):
+        """(Q, dQ/dq, dQ/dv, obs) per row from the NumPy reference at padded poses and velocities;
+        with ``anchor`` = (params, *committed history) a fifth result, the trial (flags, anchor_A,
+        anchor_B)."""
         raise NotImplementedError
 
     def set_velocity_tangent(self, on):
@@ -58,14 +70,26 @@ class PairFamilySet:
         if self.backend == "warp":
             self._kernel.set_velocity_tangent(on)
 
-    def raw(self, pose, vel):
-        """Per-row (Q (N, 6), dQdq (N, 6, 6), dQdv (N, 6, 6) or None, obs) at body poses (nb, 3)."""
+    def raw(self, pose, vel, history=None):
+        """Per-row (Q (N, 6), dQdq (N, 6, 6), dQdv (N, 6, 6) or None, obs) at body poses (nb, 3);
+        with anchors a fifth result, the trial history (flags, anchor_A, anchor_B, slip distance)
+        from the committed ``history`` (default: the set's own); trials never change it."""
         self._pose[:-1] = pose
         self._vel[:-1] = vel
+        if not self.anchor:
+            if self.backend == "warp":
+                return self._kernel.evaluate(self._pose, self._vel)
+            Q, dq, dv, obs = self.reference(self._pose, self._vel)
+            return Q, dq, (dv if self.velocity_tangent else None), obs
+        hist = history or self.history
         if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel)
-        Q, dq, dv, obs = self.reference(self._pose, self._vel)
-        return Q, dq, (dv if self.velocity_tangent else None), obs
+            Q, dq, dv, obs, (flag, a, b) = self._kernel.evaluate_anchor(self._pose, self._vel, *hist.as_tuple())
+        else:
+            Q, dq, dv, obs, (flag, a, b) = self.reference(self._pose, self._vel,
+                                                          anchor=(self.anchor_params, *hist.as_tuple()))
+            dv = dv if self.velocity_tangent else None
+        slip = hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
+        return Q, dq, dv, obs, (np.array(flag), np.array(a), np.array(b), slip)
 
     def evaluate(self, pose, vel, history=None, check=True):
         if check:
@@ -73,14 +97,22 @@ class PairFamilySet:
                 a = np.asarray(a)
                 if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
                     raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, dv, obs = self.raw(pose, vel)
+        r = self.raw(pose, vel, history)
+        Qc, dq, dv, obs = r[:4]
         dv = np.zeros_like(dq) if dv is None else dv
         finite = all_finite(Qc, dq, dv)
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
+                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float),
+                          r[4] if self.anchor else (), finite)
 
     def commit(self, pose, vel, evaluation=None):
-        """No history to commit: the observations at the accepted state."""
-        if evaluation is not None:
-            return np.array(evaluation.obs, float)
-        return np.array(self.raw(pose, vel)[3], float)
+        """Commit the trial history at the accepted state (anchors only; ``evaluation``: the cached
+        trial at exactly this state from the committed history) and return its observation rows."""
+        if evaluation is None:
+            r = self.raw(pose, vel)
+            obs, trial = r[3], (r[4] if self.anchor else None)
+        else:
+            obs, trial = evaluation.obs, evaluation.trial_history
+        if self.anchor:
+            self.history.assign(trial)
+        return np.array(obs, float)
