@@ -1,0 +1,259 @@
+"""Device-resident batched static Newton: B independent equilibria of one topology on cpu or cuda.
+
+Each copy p is one variant of a design (:class:`rvtool.batched.device_copies.CopyParameters`)
+at its own input angle and output torque. One iteration, for all copies at once and without
+leaving the device:
+
+1. ``scatter_poses``: absolute poses reference + q of every copy into the contact kernels'
+   pose arrays;
+2. the existing contact kernels in static mode (cycloid pins without the velocity tangent,
+   plain output pins, lumped bearings as circle pairs), each one launch over the rows of all
+   copies, results left on the device (``launch_recorded``);
+3. ``newton_step`` (:mod:`warp_contacts.batched_newton`): per copy, the residual and dense
+   tangent block by a deterministic sum over its own rows, regularization springs (times the
+   copy's homotopy factor), the output torque and the fixed coordinates (drive, locks), a
+   dense solve with partial pivoting, step limiting, plausibility bounds and the per-copy
+   stage/status bookkeeping (warm start -> regularization homotopy -> failed).
+
+The loop runs until no copy is active: on a CUDA device as one CUDA graph with
+``wp.capture_while`` on the active-copy counter (no host round trip per iteration); on the
+CPU (or where conditional graphs are not available) as a host loop reading the counter.
+Every copy's iteration count is bounded (``max_iterations`` per stage), so the loop ends.
+
+Exudyn's :class:`rvtool.solver.static.StaticSolver` solves the same residual (contact
+forces + springs + torque over the free coordinates, Eq. (contact_mapping)) and is the
+oracle of the tests; copies that fail here are handed to it by the protocol
+(:mod:`rvtool.batched.device_te`).
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+from warp_contacts.batched_newton import kernels
+from warp_contacts.batched_newton_ref import ACTIVE, CONVERGED, FAILED
+from warp_contacts.precision import resolve_device
+
+from ..errors import RvtoolInputError
+from .static import StaticSolver
+
+
+@dataclass(frozen=True, kw_only=True)
+class DeviceNewtonSettings:
+    """Tolerances and bounds of the device Newton (SI units).
+
+    abs_tol [N, N m]: residual norm over the free coordinates (StaticSolver's default).
+    max_iterations: Newton iterations per stage (warm start, each homotopy stage).
+    max_translation [m], max_rotation [rad]: plausibility bounds of every coordinate from its
+    kinematic value (StaticSolver's).
+    max_step_translation [m], max_step_rotation [rad]: step limits (1/5 of the bounds: a
+    converging Newton on micrometre contact deformations takes far smaller steps).
+    homotopy: on a failed warm start, run the regularization-stiffness homotopy
+    (``stiffening`` factors, StaticSolver.STIFFENING) from the kinematic state.
+    graph: on CUDA, run the loop as a conditional CUDA graph (False: host loop).
+    """
+    abs_tol: float = 1e-6
+    max_iterations: int = 30
+    max_translation: float = 5e-4
+    max_rotation: float = 2e-2
+    max_step_translation: float = 1e-4
+    max_step_rotation: float = 4e-3
+    homotopy: bool = True
+    stiffening: tuple = StaticSolver.STIFFENING
+    graph: bool = True
+
+    def __post_init__(self):
+        for nm in ("abs_tol", "max_translation", "max_rotation", "max_step_translation", "max_step_rotation"):
+            v = getattr(self, nm)
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+                raise RvtoolInputError(f"device_newton.{nm} = {v!r} is outside the valid range (0, inf)")
+        if not (isinstance(self.max_iterations, (int, np.integer)) and self.max_iterations >= 1):
+            raise RvtoolInputError(f"device_newton.max_iterations = {self.max_iterations!r} is outside the valid "
+                                   f"range [1, inf) (integer)")
+        if len(self.stiffening) < 1 or self.stiffening[-1] != 1.0:
+            raise RvtoolInputError(f"device_newton.stiffening = {self.stiffening!r}; the last factor must be 1.0 "
+                                   f"(the unmodified problem)")
+
+
+@dataclass
+class DeviceSolve:
+    """Result of :meth:`DeviceNewton.solve` for P copies: states q (P, 3 nb) [m, rad]
+    (displacements from each copy's reference), status (P,) (CONVERGED / FAILED), the
+    stage that converged (-1: warm start, s: homotopy stage), Newton iterations per copy,
+    residual norms [N], loop iterations (device sweeps) and the wall time [s] of the loop."""
+    q: np.ndarray
+    status: np.ndarray
+    stage: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    sweeps: int
+    loop_s: float
+    setup_s: float
+
+    @property
+    def converged(self):
+        return self.status == CONVERGED
+
+
+class DeviceNewton:
+    """Batched static Newton of the copies of one :class:`CopyParameters` on one Warp device.
+
+    device: "cpu", "cuda" or "cuda:N". Kernels and buffers are built per call of
+    :meth:`solve` for its P copies (per-copy rows gathered from the variants' rows).
+    """
+
+    def __init__(self, params, *, device="cpu", settings: DeviceNewtonSettings = DeviceNewtonSettings()):
+        self.params = params
+        self.settings = settings
+        self.device = resolve_device(device)
+        self.wdtype = wp.float64
+        self._scatter, self._step = kernels(wp.float64)
+        self.last_path = None
+
+    # -- per-copy rows -------------------------------------------------------------------
+    def _rows(self, vi):
+        """Kernel parameter rows of copies with variant indices vi (P,): global body indices
+        (copy p owns bodies p nb .. p nb + nb - 1; ground = P nb)."""
+        from warp_contacts import circle_pairs_ref as cref
+        from warp_contacts import cycloid_pins_ref as pref
+        from warp_contacts import output_pins_ref as oref
+        pr = self.params
+        nb, P = pr.nb, len(vi)
+        g = P * nb
+        base = (np.arange(P) * nb)[:, None]
+
+        def glob(local):
+            return np.where(local >= nb, g, local + base).astype(np.int32)
+
+        pin_f = pr.pin_f[vi].reshape(-1, pr.pin_f.shape[-1])
+        pin_i = pr.pin_i[vi].copy()
+        for c in (pref.J_BODY_A, pref.J_BODY_B):
+            pin_i[:, :, c] = glob(pin_i[:, :, c])
+        brg_f = pr.brg_f[vi].reshape(-1, pr.brg_f.shape[-1])
+        brg_i = np.broadcast_to(pr.brg_i, (P,) + pr.brg_i.shape).copy()
+        for c in (cref.I_BODY_A, cref.I_BODY_B):
+            brg_i[:, :, c] = glob(brg_i[:, :, c])
+        op_f = np.broadcast_to(pr.op_f, (P,) + pr.op_f.shape).reshape(-1, pr.op_f.shape[-1])
+        op_i = np.broadcast_to(pr.op_i, (P,) + pr.op_i.shape).copy()
+        for c in (oref.J_FLANGE, oref.J_WHEEL):
+            op_i[:, :, c] = glob(op_i[:, :, c])
+        return (pin_f, pin_i.reshape(-1, pin_i.shape[-1]), brg_f, brg_i.reshape(-1, brg_i.shape[-1]), op_f,
+                op_i.reshape(-1, op_i.shape[-1]))
+
+    def _contact_kernels(self, vi):
+        from warp_contacts.circle_pairs import CirclePairKernel
+        from warp_contacts.cycloid_pins import CycloidPinKernel
+        from warp_contacts.output_pins import OutputPinKernel
+        from ..output_pins.spec import PinMode
+        pr = self.params
+        P = len(vi)
+        nt = P * pr.nb
+        pin_f, pin_i, brg_f, brg_i, op_f, op_i = self._rows(vi)
+        pins = CycloidPinKernel(pin_f, pin_i, pr.tables, pr.window, nt, "float64", self.device, analytic=pr.analytic)
+        pins.set_velocity_tangent(False)          # static residual: no velocity seeds
+        brg = CirclePairKernel(brg_f, brg_i, nt, "float64", self.device)
+        op = OutputPinKernel(op_f, op_i, pr.stations, nt + 1, PinMode.PLAIN.value, "float64", self.device)
+        return pins, op, brg
+
+    # -- solve -----------------------------------------------------------------------------
+    def solve(self, variant_index, angles, torques, q_start):
+        """Equilibria of P copies: variant indices (P,), input angles (P,) [rad], output
+        torques (P,) [N m] (on the flange rotation), starting states (P, 3 nb) (a warm start;
+        fixed coordinates are set from the angle). Returns a :class:`DeviceSolve`."""
+        t0 = time.perf_counter()
+        pr, st = self.params, self.settings
+        vi = np.asarray(variant_index, np.int64)
+        a = np.asarray(angles, float)
+        P = len(vi)
+        if a.shape != (P,) or np.shape(torques) != (P,) or np.shape(q_start) != (P, pr.n):
+            raise RvtoolInputError(f"device Newton inputs: variant_index (P,), angles (P,), torques (P,), q_start "
+                                   f"(P, {pr.n}) with P = {P}; got {a.shape}, {np.shape(torques)}, {np.shape(q_start)}")
+        if np.any((vi < 0) | (vi >= len(pr.variants))):
+            raise RvtoolInputError(f"variant_index must lie in [0, {len(pr.variants) - 1}]")
+        kin = pr.kinematic(vi, a)
+        q0 = np.array(q_start, float)
+        fixed = ~pr.free
+        q0[:, fixed] = kin[:, fixed]
+        if not np.all(np.isfinite(q0)):
+            raise RvtoolInputError("q_start must be finite (valid: a finite warm start per copy)")
+        d = self.device
+        pins, op, brg = self._contact_kernels(vi)
+        arr = lambda x, dt=wp.float64: wp.array(np.ascontiguousarray(x), dtype=dt, device=d)
+        n = pr.n
+        ref = arr(pr.reference[vi].reshape(P, n))
+        q = arr(q0)
+        model = [arr(pr.loc_pin, wp.int32), arr(pr.loc_op, wp.int32), arr(pr.loc_brg, wp.int32), arr(kin),
+                 arr(np.broadcast_to(pr.spring_k, (P, n))), arr(pr.free.astype(np.int32), wp.int32),
+                 arr(np.asarray(torques, float)), int(pr.output_index), arr(np.asarray(st.stiffening, float)),
+                 float(st.abs_tol), int(st.max_iterations), float(st.max_step_translation),
+                 float(st.max_step_rotation), float(st.max_translation), float(st.max_rotation), int(st.homotopy)]
+        rows_in = [pins.device_array("q"), pins.device_array("dqdq"), op.device_array("q"), op.device_array("dqdq"),
+                   brg.device_array("q"), brg.device_array("dqdq")]
+        status = wp.zeros(P, dtype=wp.int32, device=d)
+        stage = arr(np.full(P, -1, np.int32), wp.int32)
+        iters = wp.zeros(P, dtype=wp.int32, device=d)
+        total = wp.zeros(P, dtype=wp.int32, device=d)
+        resid = wp.zeros(P, dtype=wp.float64, device=d)
+        scratch = [wp.zeros((P, n), dtype=wp.float64, device=d), wp.zeros((P, n, n), dtype=wp.float64, device=d),
+                   wp.zeros((P, n), dtype=wp.float64, device=d)]
+        active = arr(np.array([P], np.int32), wp.int32)
+        poses = [pins.device_array("pose"), op.device_array("pose"), brg.device_array("pose")]
+        state = [q, status, stage, iters, total, resid] + scratch + [active]
+
+        def body():
+            active.zero_()
+            wp.launch(self._scatter, dim=(P, n), inputs=[ref, q], outputs=poses, device=d)
+            pins.launch_recorded()
+            op.launch_recorded()
+            brg.launch_recorded()
+            wp.launch(self._step, dim=P, inputs=model + rows_in, outputs=state, device=d)
+
+        on_gpu = not wp.get_device(d).is_cpu
+        wp.synchronize_device(d)
+        t1 = time.perf_counter()
+        sweeps = 0
+        graph = None
+        if on_gpu and st.graph:
+            try:
+                with wp.ScopedCapture(device=d) as cap:
+                    wp.capture_while(active, body)
+                graph = cap.graph
+            except Exception:          # conditional graph nodes need CUDA >= 12.4 drivers: host loop then
+                graph = None
+                active.assign(np.array([P], np.int32))
+        t1 = time.perf_counter()
+        if graph is not None:
+            wp.capture_launch(graph)
+            wp.synchronize_device(d)
+            self.last_path = "cuda_graph"
+            sweeps = -1
+        else:
+            self.last_path = "host_loop"
+            while True:
+                body()
+                sweeps += 1
+                if int(active.numpy()[0]) == 0:
+                    break
+        loop_s = time.perf_counter() - t1
+        tot = total.numpy()
+        if sweeps < 0:
+            sweeps = int(tot.max()) if P else 0
+        return DeviceSolve(q=q.numpy(), status=status.numpy(), stage=stage.numpy(), iterations=tot,
+                           residual=resid.numpy(), sweeps=sweeps, loop_s=loop_s, setup_s=t1 - t0)
+
+    def pin_normal_forces(self, variant_index, q):
+        """(P, R_p) cycloid-pin slice normal forces [N] of copies at states q (P, 3 nb) (one
+        evaluation of the pin kernel; for the max pin force of a protocol)."""
+        from warp_contacts.circle_pairs_ref import O_FN
+        vi = np.asarray(variant_index, np.int64)
+        pins, _, _ = self._contact_kernels(vi)
+        pr = self.params
+        pose = np.zeros((len(vi) * pr.nb + 1, 3))
+        pose[:-1] = (pr.reference[vi] + np.asarray(q).reshape(len(vi), pr.nb, 3)).reshape(-1, 3)
+        pins.keep_on_device = frozenset({"dqdq"})
+        _, _, _, obs = pins.evaluate(pose, np.zeros_like(pose))
+        return np.array(obs[:, O_FN]).reshape(len(vi), -1)
+
+
+__all__ = ["DeviceNewton", "DeviceNewtonSettings", "DeviceSolve", "ACTIVE", "CONVERGED", "FAILED"]
