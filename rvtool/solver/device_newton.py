@@ -81,7 +81,8 @@ class DeviceSolve:
     """Result of :meth:`DeviceNewton.solve` for P copies: states q (P, 3 nb) [m, rad]
     (displacements from each copy's reference), status (P,) (CONVERGED / FAILED), the
     stage that converged (-1: warm start, s: homotopy stage), Newton iterations per copy,
-    residual norms [N], loop iterations (device sweeps) and the wall time [s] of the loop."""
+    residual norms [N], loop iterations (device sweeps), the wall times [s] of the loop and of
+    the set-up (rows, kernels, uploads), and optionally the pin slice forces (P, R_p) [N]."""
     q: np.ndarray
     status: np.ndarray
     stage: np.ndarray
@@ -90,6 +91,7 @@ class DeviceSolve:
     sweeps: int
     loop_s: float
     setup_s: float
+    pin_forces: np.ndarray = None
 
     @property
     def converged(self):
@@ -157,10 +159,12 @@ class DeviceNewton:
         return pins, op, brg
 
     # -- solve -----------------------------------------------------------------------------
-    def solve(self, variant_index, angles, torques, q_start):
+    def solve(self, variant_index, angles, torques, q_start, *, pin_forces=False):
         """Equilibria of P copies: variant indices (P,), input angles (P,) [rad], output
         torques (P,) [N m] (on the flange rotation), starting states (P, 3 nb) (a warm start;
-        fixed coordinates are set from the angle). Returns a :class:`DeviceSolve`."""
+        fixed coordinates are set from the angle). pin_forces: also return the cycloid-pin
+        slice normal forces (P, R_p) [N] at the final states (one more pin launch). Returns a
+        :class:`DeviceSolve`."""
         t0 = time.perf_counter()
         pr, st = self.params, self.settings
         vi = np.asarray(variant_index, np.int64)
@@ -211,7 +215,6 @@ class DeviceNewton:
 
         on_gpu = not wp.get_device(d).is_cpu
         wp.synchronize_device(d)
-        t1 = time.perf_counter()
         sweeps = 0
         graph = None
         if on_gpu and st.graph:
@@ -236,24 +239,18 @@ class DeviceNewton:
                 if int(active.numpy()[0]) == 0:
                     break
         loop_s = time.perf_counter() - t1
+        forces = None
+        if pin_forces:
+            from warp_contacts.circle_pairs_ref import O_FN
+            wp.launch(self._scatter, dim=(P, n), inputs=[ref, q], outputs=poses, device=d)
+            pins.launch_recorded()
+            forces = pins.device_array("obs").numpy()[:, O_FN].reshape(P, -1)
         tot = total.numpy()
         if sweeps < 0:
             sweeps = int(tot.max()) if P else 0
         return DeviceSolve(q=q.numpy(), status=status.numpy(), stage=stage.numpy(), iterations=tot,
-                           residual=resid.numpy(), sweeps=sweeps, loop_s=loop_s, setup_s=t1 - t0)
-
-    def pin_normal_forces(self, variant_index, q):
-        """(P, R_p) cycloid-pin slice normal forces [N] of copies at states q (P, 3 nb) (one
-        evaluation of the pin kernel; for the max pin force of a protocol)."""
-        from warp_contacts.circle_pairs_ref import O_FN
-        vi = np.asarray(variant_index, np.int64)
-        pins, _, _ = self._contact_kernels(vi)
-        pr = self.params
-        pose = np.zeros((len(vi) * pr.nb + 1, 3))
-        pose[:-1] = (pr.reference[vi] + np.asarray(q).reshape(len(vi), pr.nb, 3)).reshape(-1, 3)
-        pins.keep_on_device = frozenset({"dqdq"})
-        _, _, _, obs = pins.evaluate(pose, np.zeros_like(pose))
-        return np.array(obs[:, O_FN]).reshape(len(vi), -1)
+                           residual=resid.numpy(), sweeps=sweeps, loop_s=loop_s, setup_s=t1 - t0,
+                           pin_forces=forces)
 
 
 __all__ = ["DeviceNewton", "DeviceNewtonSettings", "DeviceSolve", "ACTIVE", "CONVERGED", "FAILED"]
