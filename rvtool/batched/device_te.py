@@ -71,8 +71,9 @@ class _Fallback:
             m = build(self.variants[v].apply(self.design), bearing_model="lumped", regularization=self.reg)
             idx = np.concatenate([np.asarray(m.mbs.systemData.GetNodeLTGODE2(n), int) for n in m.nodes])
             s = self.settings
-            self._models[v] = (m, StaticSolver(m, abs_tol=s.abs_tol, max_iterations=s.max_iterations,
-                                               max_translation=s.max_translation, max_rotation=s.max_rotation), idx)
+            # the per-variant path with its own iteration limit and ladder (not the device budget)
+            self._models[v] = (m, StaticSolver(m, abs_tol=s.abs_tol, max_translation=s.max_translation,
+                                               max_rotation=s.max_rotation), idx)
         m, solver, idx = self._models[v]
         m.set_output_torque(float(torque))
         solver.q = np.zeros(m.mbs.systemData.ODE2Size())
