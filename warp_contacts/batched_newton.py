@@ -10,7 +10,9 @@ circle-pair kernels.
 
 ``scatter_poses`` writes the absolute poses reference + q of every copy into the pose arrays
 of the contact kernels (their ground row stays zero); ``count_active`` is folded into the
-step (an integer atomic: its sum does not depend on the order).
+step (an integer atomic: its sum does not depend on the order); ``sweep_gate`` counts the
+sweeps and ends a loop after a cap (the solver then continues the remaining copies in a
+smaller launch).
 """
 import functools
 
@@ -21,7 +23,7 @@ from .batched_newton_ref import ACTIVE, CONVERGED, FAILED, WARM
 
 @functools.lru_cache(maxsize=None)
 def kernels(dtype):
-    """(scatter_poses, newton_step) for scalar type ``dtype``."""
+    """(scatter_poses, newton_step, sweep_gate) for scalar type ``dtype``."""
 
     @wp.func
     def add_rows(qr: wp.array2d(dtype=dtype), kr: wp.array3d(dtype=dtype), loc: wp.array2d(dtype=wp.int32), p: int,
@@ -218,4 +220,17 @@ def kernels(dtype):
         if status[p] == ACTIVE:
             wp.atomic_add(active, 0, 1)
 
-    return scatter_poses, newton_step
+    @wp.kernel(module="unique")
+    def sweep_gate(
+        # Model:
+        cap: int,
+        # Data out:
+        counter: wp.array(dtype=wp.int32),
+        active: wp.array(dtype=wp.int32),
+    ):
+        """Count the sweeps of a loop and end it (active = 0) after ``cap`` of them."""
+        counter[0] = counter[0] + 1
+        if counter[0] >= cap:
+            active[0] = 0
+
+    return scatter_poses, newton_step, sweep_gate

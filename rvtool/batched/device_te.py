@@ -116,7 +116,7 @@ def device_te(design, variants, angles, *, torque=None, regularization=(1e4, 100
     status = np.empty(P, int)
     iters = np.empty(P, int)
     forces = np.zeros(P)
-    loop_s, sweeps, copy_sweeps = nom.loop_s, nom.sweeps, nom.sweeps * A
+    loop_s, sweeps, copy_sweeps = nom.loop_s, nom.sweeps, nom.copy_sweeps
     for s0 in range(0, P, chunk):
         sl = slice(s0, min(P, s0 + chunk))
         guess = params.kinematic(vi[sl], angles[ai[sl]]) + nominal_dev[ai[sl]]
@@ -124,7 +124,7 @@ def device_te(design, variants, angles, *, torque=None, regularization=(1e4, 100
         q[sl], status[sl], iters[sl] = r.q, r.status, r.iterations
         loop_s += r.loop_s
         sweeps += r.sweeps
-        copy_sweeps += r.sweeps * (sl.stop - sl.start)
+        copy_sweeps += r.copy_sweeps
         if pin_forces:
             nw, zb = params.nb - 2, design.pins.n_pins
             forces[sl] = r.pin_forces.reshape(len(r.q), nw, zb, -1).sum(axis=3).max(axis=(1, 2))
@@ -154,7 +154,7 @@ def device_te(design, variants, angles, *, torque=None, regularization=(1e4, 100
     fmax = np.where(bad, np.nan, forces.reshape(V, A).max(axis=1)) if pin_forces else np.full(V, np.nan)
     stats = {"pairs": P, "chunks": -(-P // chunk), "chunk_pairs": chunk,
              "newton_iterations_per_point": float(iters.mean()),
-             "sweeps": int(sweeps), "device_loop_s": loop_s,
+             "sweeps": int(sweeps), "copy_sweeps": int(copy_sweeps), "device_loop_s": loop_s,
              "us_per_copy_iteration": 1e6 * loop_s / max(copy_sweeps, 1),
              "fallback_copies": n_fallback, "failed_copies": int(failed.sum()), "failed_variants": int(bad.sum()),
              "nominal_failed_points": int(np.sum(nom.status != CONVERGED)),
