@@ -42,7 +42,8 @@ DEFAULT_CHUNK = {"cpu": 2048, "cuda": 65536}
 class DeviceTE:
     """Per-variant results of :func:`device_te` (V variants, A angles): solved input angles and
     flange rotations (V, A) [rad], TE (V, A) [rad], TE peak-to-peak and RMS [arcsec] and max pin
-    force over the TE states [N] (V,) (NaN: failed), status per variant ("ok"/"failed"), and
+    force over the TE states [N] (V,) (NaN: failed), status per variant ("ok"/"failed"), device
+    Newton iterations and points that fell back to Exudyn per variant (V,), and
     ``stats`` (pairs, Newton iterations per point, device loop sweeps and wall time, us per
     copy iteration, fallback and failed copies, the loop path)."""
     theta_in: np.ndarray
@@ -52,6 +53,8 @@ class DeviceTE:
     te_rms_arcsec: np.ndarray
     max_pin_force_N: np.ndarray
     status: list
+    iterations: np.ndarray
+    fallback_points: np.ndarray
     stats: dict = field(default_factory=dict)
 
 
@@ -132,6 +135,7 @@ def device_te(design, variants, angles, *, torque=None, regularization=(1e4, 100
     theta_in = angles[ai].copy()
     failed = status != CONVERGED
     n_fallback = int(failed.sum())
+    fallback_points = failed.reshape(V, A).sum(axis=1)
     if np.any(failed) and fallback:
         fb = _Fallback(design, variants, regularization, settings)
         for p in np.flatnonzero(failed):
@@ -161,4 +165,5 @@ def device_te(design, variants, angles, *, torque=None, regularization=(1e4, 100
              "path": newton.last_path, "device": newton.device, "setup_s": setup_s,
              "device_s": device_s, "wall_s": time.perf_counter() - t0}
     return DeviceTE(theta_in=th_in, theta_out=th_out, te=te, te_pp_arcsec=pp, te_rms_arcsec=rms, max_pin_force_N=fmax,
-                    status=["failed" if b else "ok" for b in bad], stats=stats)
+                    status=["failed" if b else "ok" for b in bad], iterations=iters.reshape(V, A).sum(axis=1),
+                    fallback_points=fallback_points, stats=stats)

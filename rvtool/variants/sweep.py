@@ -34,7 +34,9 @@ SPEC format (TOML; relative paths in it are relative to the SPEC file)::
     seed = 0
     chunk_size = 10                 # variants per result file (and per task when batched)
     batched = false                 # true: one task per chunk through rvtool.batched
-    device = "cpu"                  # device of the batched path
+    mode = "auto"                   # optional, overrides batched: pool, batched, device or auto
+                                    # (device: TE of a chunk on the device Newton; auto: the fastest)
+    device = "cpu"                  # device of the batched / device path ("auto": a GPU if present)
 
     [cluster]                       # LocalCluster settings (ignored with a scheduler address)
     scheduler = ""                  # address of an existing scheduler; "" = start a LocalCluster
@@ -67,7 +69,7 @@ VARIANT_PARAMETERS = ("eccentricity_error", "pin_radius_error", "equidistant_mod
 """Scalar Variant fields that a grid may sweep."""
 
 STUDIES = ("grid", "monte_carlo")
-ROW_TAIL = FIGURES + ("newton_iterations", "wall_s", "status", "error")
+ROW_TAIL = FIGURES + ("te_path", "te_fallback_points", "newton_iterations", "wall_s", "status", "error")
 """Columns after the parameters in every row."""
 
 
@@ -145,7 +147,7 @@ def load_sweep_spec(path):
         raise RvtoolInputError(f"sweep spec [protocol]/[cluster]: {exc}") from None
     build = {k: tuple(v) if isinstance(v, list) else v for k, v in data.get("build", {}).items()}
     mc = dict(data.get("monte_carlo", {}))
-    mc_valid = {"tolerances", "n_variants", "seed", "chunk_size", "batched", "device"}
+    mc_valid = {"tolerances", "n_variants", "seed", "chunk_size", "batched", "device", "mode"}
     if set(mc) - mc_valid:
         raise RvtoolInputError(f"[monte_carlo] has unknown keys {sorted(set(mc) - mc_valid)}; valid keys are {sorted(mc_valid)}")
     if "tolerances" in mc:
@@ -281,7 +283,7 @@ def run_sweep(spec: SweepSpec, *, scheduler=None, out_dir=None, progress=True, c
             tol = load_tolerances(mc["tolerances"])
             settings = MonteCarloSettings(n_variants=int(mc["n_variants"]), seed=int(mc.get("seed", 0)),
                                           chunk_size=int(mc.get("chunk_size", 10)),
-                                          mode="batched" if mc.get("batched", False) else "pool",
+                                          mode=mc.get("mode", "batched" if mc.get("batched", False) else "pool"),
                                           device=mc.get("device", "cpu"))
             res = run_monte_carlo(design, tol, spec.protocol, settings, os.path.join(out_dir, "chunks"),
                                   executor=cl.get_executor(pure=False), progress=prog, build_kw=spec.build)
@@ -291,6 +293,8 @@ def run_sweep(spec: SweepSpec, *, scheduler=None, out_dir=None, progress=True, c
            "table": table, "out_dir": out_dir}
     if summary is not None:
         out["summary"] = summary
+        # which TE path ran and how many TE points fell back from the device Newton to Exudyn
+        out.update({k: res[k] for k in ("mode", "device", "te_paths", "te_fallback_points")})
     return out
 
 
