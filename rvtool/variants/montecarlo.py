@@ -365,7 +365,7 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
     recs = [r for i in sorted(records) for r in records[i]]
     return {"records": recs, "summary": summarize(recs), "chunks_loaded": n_loaded, "chunks_run": len(pending),
             "wall_s": time.perf_counter() - t0, "fingerprint": fp, "mode": mode, "device": device,
-            "te_paths": sorted({str(r.get("te_path")) for r in recs}),
+            "te_paths": sorted({r["te_path"] for r in recs if r.get("te_path")}),
             "te_fallback_points": sum(int(r.get("te_fallback_points") or 0) for r in recs)}
 
 
