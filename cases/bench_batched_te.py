@@ -20,7 +20,9 @@ rated torque, the Monte Carlo's regularization):
 Keys (lists per V): ``device_newton_variants_per_s``, ``ratio`` (device / pool),
 ``newton_iterations_per_point`` (mean per copy), ``us_per_copy_iteration`` (device loop wall
 per copy and sweep), ``fallback_copies``; ``pool_variants_per_s``; ``te_max_abs_diff_arcsec``
-(TE p-p, device vs pool, on the variants both ran). ``--exudyn-batched SIZES`` adds the
+(TE p-p, device vs pool, on the variants both ran). On the CPU, ``--device-workers N`` splits
+the variants over N warmed processes (Warp's CPU kernels run on one core each), so that both
+paths use all cores. ``--exudyn-batched SIZES`` adds the
 earlier batched-Exudyn path (B copies in one Exudyn system) under ``exudyn_batched``.
 --quick: V = 8 with 13 TE points.
 """
@@ -106,6 +108,24 @@ def batched_te(design, variants, angles, device, max_it, reg, start):
     return pp, breakdown
 
 
+def _device_share(args):
+    """Device Newton TE of one share of the variants in a worker process (cpu: one core each)."""
+    from rvtool.batched.device_te import device_te
+    design, variants, angles, reg, device, settings, chunk = args
+    r = device_te(design, variants, angles, regularization=reg, device=device, settings=settings, chunk_pairs=chunk,
+                  pin_forces=False)
+    return r.te_pp_arcsec, r.stats
+
+
+def _warm_device(args):
+    """Kernel load and compilation in a device worker, before the timed run."""
+    from rvtool.batched.device_te import device_te
+    design, variants, angles, reg, pause = args
+    device_te(design, variants, angles, regularization=reg)
+    time.sleep(pause)
+    return os.getpid()
+
+
 def _extra(parser):
     parser.add_argument("--device", default="cpu", help="Warp device of the device Newton (cpu, cuda:0)")
     parser.add_argument("--variants", default=None, help="comma-separated variant counts V")
@@ -115,6 +135,8 @@ def _extra(parser):
     parser.add_argument("--chunk-pairs", type=int, default=None, help="copies per device loop (default per device)")
     parser.add_argument("--regularization", default="1e4,100",
                         help="builder regularization springs [N/m],[N m/rad] (the Monte Carlo's; both paths)")
+    parser.add_argument("--device-workers", type=int, default=1,
+                        help="cpu only: processes the device Newton's variants are split over (one core each)")
     parser.add_argument("--exudyn-batched", default=None,
                         help="also time the batched-Exudyn path at these comma-separated batch sizes")
 
@@ -144,6 +166,7 @@ def main(argv=None):
     pool_s = time.perf_counter() - t0
     pool_rate = n_pool / pool_s
     settings = {"te_points": n_te, "variants": list(sizes), "device": args.device, "pool_workers": workers,
+                "device_workers": args.device_workers if not on_gpu else 1,
                 "pool_variants": n_pool, "pool_failed": sum(p is None for p in pool_pp), "pool_warmup_s": pool_warmup_s,
                 "pool_workers_warmed": warmed, "abs_tol_N": 1e-6, "max_iterations": args.max_iterations,
                 "regularization": list(reg), "chunk_pairs": args.chunk_pairs, "device_stats": []}
@@ -153,20 +176,40 @@ def main(argv=None):
     dn_settings = DeviceNewtonSettings(max_iterations=args.max_iterations)
     # warm-up: kernel compilation (and the first CUDA context use) is not part of the rate
     device_te(design, variants[:1], angles[:2], regularization=reg, device=args.device, settings=dn_settings)
+    nw = args.device_workers if not on_gpu else 1
+    dex = None
+    if nw > 1:
+        dex = ProcessPoolExecutor(max_workers=nw)
+        list(dex.map(_warm_device, [(design, variants[:1], angles[:2], reg, 2.0)] * nw))
     for V in sizes:
         t0 = time.perf_counter()
-        r = device_te(design, variants[:V], angles, regularization=reg, device=args.device, settings=dn_settings,
-                      chunk_pairs=args.chunk_pairs, pin_forces=False)
+        if dex is None:
+            r = device_te(design, variants[:V], angles, regularization=reg, device=args.device, settings=dn_settings,
+                          chunk_pairs=args.chunk_pairs, pin_forces=False)
+            pp, st = r.te_pp_arcsec, r.stats
+        else:
+            shares = np.array_split(np.arange(V), nw)
+            res = list(dex.map(_device_share, [(design, [variants[i] for i in sh], angles, reg, args.device,
+                                                dn_settings, args.chunk_pairs) for sh in shares]))
+            pp = np.concatenate([x[0] for x in res])
+            sts = [x[1] for x in res]
+            st = dict(sts[0])
+            for k in ("fallback_copies", "failed_copies", "copy_sweeps", "pairs"):
+                st[k] = sum(x[k] for x in sts)
+            st["device_loop_s"] = max(x["device_loop_s"] for x in sts)
+            st["newton_iterations_per_point"] = sum(x["newton_iterations_per_point"] * x["pairs"] for x in sts) / st["pairs"]
+            # per process: loop wall over the copies it iterated (the processes run side by side)
+            st["us_per_copy_iteration"] = sum(1e6 * x["device_loop_s"] for x in sts) / st["copy_sweeps"]
+            st["path"] = f"{sts[0]['path']} x {nw} processes"
         wall = time.perf_counter() - t0
         rate = V / wall
-        st = r.stats
         out["device_newton_variants_per_s"].append(rate)
         out["ratio"].append(rate / pool_rate)
         out["newton_iterations_per_point"].append(st["newton_iterations_per_point"])
         out["us_per_copy_iteration"].append(st["us_per_copy_iteration"])
         out["fallback_copies"].append(st["fallback_copies"])
         settings["device_stats"].append({"V": V, **st})
-        for a, b in zip(r.te_pp_arcsec[:n_pool], pool_pp):
+        for a, b in zip(pp[:n_pool], pool_pp):
             if b is not None and np.isfinite(a):
                 out["te_max_abs_diff_arcsec"] = max(out["te_max_abs_diff_arcsec"], abs(a - b))
         print(f"V={V}: device Newton {rate:.1f} variants/s ({st['path']}, {st['newton_iterations_per_point']:.2f} "
@@ -174,6 +217,8 @@ def main(argv=None):
               f"pool {pool_rate:.1f} variants/s, ratio {rate / pool_rate:.2f}", flush=True)
         res = casekit.write_results(args.out, out, settings=settings, wall_s=time.perf_counter() - t_start,
                                     device=args.device)
+    if dex is not None:
+        dex.shutdown()
     if args.exudyn_batched:
         out["exudyn_batched"] = []
         for B in (int(x) for x in args.exudyn_batched.split(",")):
