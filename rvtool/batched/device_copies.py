@@ -30,6 +30,7 @@ import numpy as np
 
 from warp_contacts import circle_pairs_ref as cref
 from warp_contacts import cycloid_pins_ref as pref
+from warp_contacts import output_pins_ref as oref
 
 from ..assembly.cycloid import CycloidKinematics, lumped_bearing_contacts
 from ..assembly.spec import CycloidDesign
@@ -247,5 +248,5 @@ def copy_parameters(design: CycloidDesign, variants, *, regularization=(100.0, 0
                           op_f=op_f, op_i=op_i, stations=np.asarray(stations, float),
                           loc_pin=_local_map(pin_i[0][:, [pref.J_BODY_A, pref.J_BODY_B]], nb),
                           loc_brg=_local_map(bi[:, [cref.I_BODY_A, cref.I_BODY_B]], nb),
-                          loc_op=_local_map(op_i[:, :2], nb), reference=reference, eccentricity=ecc, free=free,
+                          loc_op=_local_map(op_i[:, [oref.J_FLANGE, oref.J_WHEEL]], nb), reference=reference, eccentricity=ecc, free=free,
                           spring_k=spring_k)
