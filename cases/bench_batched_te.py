@@ -3,7 +3,7 @@ warmed process pool of per-variant runs over all CPU cores, in the same run (iss
 
 For each variant count V (``--variants``) the same V seeded RD-40 variants
 (``bench_batched.sample_variants``) get the quasi-static TE of the Monte Carlo protocol
-(``VariantProtocol().n_te_points`` equally spaced input angles over one output revolution,
+(``TE_POINTS`` = 53 equally spaced input angles over one output revolution,
 rated torque, the Monte Carlo's regularization):
 
 (a) device Newton: :func:`rvtool.batched.device_te.device_te` on ``--device``: every
@@ -42,6 +42,10 @@ from rvtool.assembly.spec import load_design  # noqa: E402
 from rvtool.units import ARCSEC_PER_RAD # noqa: E402
 from rvtool.protocols.precision import te_metrics, transmission_error # noqa: E402
 from rvtool.variants import VariantProtocol  # noqa: E402
+
+
+TE_POINTS = 53
+"""TE points per variant: the Monte Carlo's (cases/monte_carlo_te.py N_TE)."""
 
 
 def _per_variant_te(args):
@@ -150,7 +154,7 @@ def main(argv=None):
     on_gpu = args.device.startswith("cuda")
     sizes = (tuple(int(x) for x in args.variants.split(",")) if args.variants else
              (8,) if args.quick else (1024, 8192) if on_gpu else (64, 256))
-    n_te = args.te_points or (13 if args.quick else VariantProtocol().n_te_points)
+    n_te = args.te_points or (13 if args.quick else TE_POINTS)
     angles = VariantProtocol(n_te_points=n_te).input_angles(design)
     workers = os.cpu_count() or 1
     reg = tuple(float(x) for x in args.regularization.split(","))
