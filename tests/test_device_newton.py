@@ -143,7 +143,7 @@ def test_step_kernel_matches_reference(params, device):
     norms = ref.newton_step(rows, qr, kin, spring_k, params.free, torque, params.output_index, sr, gr, ir, tr, **kw)
     f64 = wp.float64
     arr = lambda x, dt=f64: wp.array(np.ascontiguousarray(x), dtype=dt, device=device)
-    scatter, step, _ = kernels(f64)
+    scatter, step = kernels(f64)[:2]
     qd, sd, gd, idd, td = arr(q), arr(status, wp.int32), arr(stage, wp.int32), arr(iters, wp.int32), wp.zeros(B, dtype=wp.int32, device=device)
     res = wp.zeros(B, dtype=f64, device=device)
     active = wp.zeros(1, dtype=wp.int32, device=device)
@@ -266,3 +266,32 @@ def test_failed_copies_go_to_the_exudyn_path(design, variants):
     assert r.stats["fallback_copies"] == 2 and r.stats["failed_copies"] == 0 and r.status == ["ok"]
     _, te_ref = _oracle(design, variants[0], angles)
     assert np.max(np.abs(r.te[0] - te_ref)) * ARCSEC_PER_RAD <= 1e-6
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_gather_kernels_match_reference(params, device):
+    """The device-side row refill equals its NumPy reference exactly (pure copies and integer
+    index arithmetic): float rows by variant, and body columns made global per copy with the
+    ground row last."""
+    _skip_absent(device)
+    from warp_contacts import batched_newton_ref as ref
+    from warp_contacts import cycloid_pins_ref as pref
+    from warp_contacts.batched_newton import kernels
+    gather_rows, gather_bodies = kernels(wp.float64)[3:]
+    vi = np.array([2, 0, 3, 3, 1], np.int32)
+    P, R = len(vi), params.pin_f.shape[1]
+    out_f = wp.zeros((P * R, pref.N_FLOAT), dtype=wp.float64, device=device)
+    wp.launch(gather_rows, dim=(P, R), inputs=[wp.array(params.pin_f, dtype=wp.float64, device=device),
+                                              wp.array(vi, dtype=wp.int32, device=device)], outputs=[out_f],
+              device=device)
+    assert np.array_equal(out_f.numpy(), ref.gather_rows(params.pin_f, vi))
+    out_i = wp.zeros((P * R, pref.N_INT), dtype=wp.int32, device=device)
+    cols = [pref.J_BODY_A, pref.J_BODY_B]
+    wp.launch(gather_bodies, dim=(P, R), inputs=[wp.array(params.pin_i, dtype=wp.int32, device=device),
+                                                wp.array(np.array(cols, np.int32), dtype=wp.int32, device=device),
+                                                params.nb, wp.array(vi, dtype=wp.int32, device=device)],
+              outputs=[out_i], device=device)
+    expected = ref.gather_bodies(params.pin_i, vi, cols, params.nb)
+    assert np.array_equal(out_i.numpy(), expected)
+    assert expected[:, pref.J_BODY_B].max() == P * params.nb          # the pins sit on the ground row
+    assert set(expected[R:2 * R, pref.J_BODY_A]) == {params.nb + 1, params.nb + 2}   # copy 1's wheels

@@ -12,7 +12,8 @@ circle-pair kernels.
 of the contact kernels (their ground row stays zero); ``count_active`` is folded into the
 step (an integer atomic: its sum does not depend on the order); ``sweep_gate`` counts the
 sweeps and ends a loop after a cap (the solver then continues the remaining copies in a
-smaller launch).
+smaller launch); ``gather_rows`` / ``gather_bodies`` fill the contact kernels' parameter
+rows of every copy from its variant's rows on the device (no per-copy host work).
 """
 import functools
 
@@ -23,7 +24,7 @@ from .batched_newton_ref import ACTIVE, CONVERGED, FAILED, WARM
 
 @functools.lru_cache(maxsize=None)
 def kernels(dtype):
-    """(scatter_poses, newton_step, sweep_gate) for scalar type ``dtype``."""
+    """(scatter_poses, newton_step, sweep_gate, gather_rows, gather_bodies) for ``dtype``."""
 
     @wp.func
     def add_rows(qr: wp.array2d(dtype=dtype), kr: wp.array3d(dtype=dtype), loc: wp.array2d(dtype=wp.int32), p: int,
@@ -233,4 +234,45 @@ def kernels(dtype):
         if counter[0] >= cap:
             active[0] = 0
 
-    return scatter_poses, newton_step, sweep_gate
+    @wp.kernel(module="unique")
+    def gather_rows(
+        # Model:
+        rows: wp.array3d(dtype=dtype),
+        # Data in:
+        variant: wp.array(dtype=wp.int32),
+        # Data out:
+        out: wp.array2d(dtype=dtype),
+    ):
+        """Row r of copy p = row r of its variant: out[p R + r, :] = rows[variant[p], r, :]."""
+        p, r = wp.tid()
+        nr = rows.shape[1]
+        for c in range(rows.shape[2]):
+            out[p * nr + r, c] = rows[variant[p], r, c]
+
+    @wp.kernel(module="unique")
+    def gather_bodies(
+        # Model:
+        rows: wp.array3d(dtype=wp.int32),
+        body_cols: wp.array(dtype=wp.int32),
+        nb: int,
+        # Data in:
+        variant: wp.array(dtype=wp.int32),
+        # Data out:
+        out: wp.array2d(dtype=wp.int32),
+    ):
+        """Integer rows of copy p from its variant's, with the body columns made global: copy p
+        owns bodies p nb .. p nb + nb - 1, a local index >= nb is the ground row P nb."""
+        p, r = wp.tid()
+        nr = rows.shape[1]
+        n_copies = variant.shape[0]
+        for c in range(rows.shape[2]):
+            v = rows[variant[p], r, c]
+            for k in range(body_cols.shape[0]):
+                if body_cols[k] == c:
+                    if v >= nb:
+                        v = n_copies * nb
+                    else:
+                        v = p * nb + v
+            out[p * nr + r, c] = v
+
+    return scatter_poses, newton_step, sweep_gate, gather_rows, gather_bodies

@@ -128,3 +128,20 @@ def newton_step(rows, q, kin, spring_k, free, torque, out_index, status, stage, 
         else:
             status[p] = FAILED
     return norms
+
+
+def gather_rows(rows, variant):
+    """(P R, C) rows of P copies from the rows (V, R, C) of their variants (P,)."""
+    return np.asarray(rows)[np.asarray(variant)].reshape(-1, np.shape(rows)[2])
+
+
+def gather_bodies(rows, variant, body_cols, nb):
+    """As :func:`gather_rows` for integer rows whose columns ``body_cols`` hold local body
+    indices (0..nb-1, >= nb: ground): copy p's bodies become p nb + local, the ground P nb."""
+    variant = np.asarray(variant)
+    P = len(variant)
+    out = np.asarray(rows)[variant].copy()
+    base = (np.arange(P) * nb)[:, None]
+    for c in body_cols:
+        out[:, :, c] = np.where(out[:, :, c] >= nb, P * nb, out[:, :, c] + base)
+    return out.reshape(-1, out.shape[2])

@@ -253,6 +253,10 @@ class CirclePairKernel:
     keep_on_device = frozenset()
 
     def device_array(self, name):
+        """A device array of the recorded launch: a data buffer or the row parameters
+        ("fparams", "iparams", read in place by the recorded launch)."""
+        if name in ("fparams", "iparams"):
+            return getattr(self, name)
         return self._dev[name]
 
     def launch_recorded(self):

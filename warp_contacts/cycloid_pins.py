@@ -294,6 +294,11 @@ class CycloidPinKernel:
     keep_on_device = frozenset()
 
     def device_array(self, name):
+        """A device array of the recorded launch: a data buffer (pose, vel, q, dqdq, dqdv, obs) or
+        the row parameters ("fparams", "iparams"), which a device-side refill may overwrite
+        between launches (the recorded launch reads them in place)."""
+        if name in ("fparams", "iparams"):
+            return self._model[0 if name == "fparams" else 1]
         return self._buf.dev[name]
 
     def launch_recorded(self):

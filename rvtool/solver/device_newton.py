@@ -120,52 +120,64 @@ class DeviceNewton:
         self.settings = settings
         self.device = resolve_device(device)
         self.wdtype = wp.float64
-        self._scatter, self._step, self._gate = kernels(wp.float64)
+        self._scatter, self._step, self._gate, self._gather_rows, self._gather_bodies = kernels(wp.float64)
+        self._var = None
+        self._kernel_cache = {}
         self.last_path = None
 
     # -- per-copy rows -------------------------------------------------------------------
-    def _rows(self, vi):
-        """Kernel parameter rows of copies with variant indices vi (P,): global body indices
-        (copy p owns bodies p nb .. p nb + nb - 1; ground = P nb)."""
-        from warp_contacts import circle_pairs_ref as cref
-        from warp_contacts import cycloid_pins_ref as pref
-        from warp_contacts import output_pins_ref as oref
-        pr = self.params
-        nb, P = pr.nb, len(vi)
-        g = P * nb
-        base = (np.arange(P) * nb)[:, None]
-
-        def glob(local):
-            return np.where(local >= nb, g, local + base).astype(np.int32)
-
-        pin_f = pr.pin_f[vi].reshape(-1, pr.pin_f.shape[-1])
-        pin_i = pr.pin_i[vi].copy()
-        for c in (pref.J_BODY_A, pref.J_BODY_B):
-            pin_i[:, :, c] = glob(pin_i[:, :, c])
-        brg_f = pr.brg_f[vi].reshape(-1, pr.brg_f.shape[-1])
-        brg_i = np.broadcast_to(pr.brg_i, (P,) + pr.brg_i.shape).copy()
-        for c in (cref.I_BODY_A, cref.I_BODY_B):
-            brg_i[:, :, c] = glob(brg_i[:, :, c])
-        op_f = np.broadcast_to(pr.op_f, (P,) + pr.op_f.shape).reshape(-1, pr.op_f.shape[-1])
-        op_i = np.broadcast_to(pr.op_i, (P,) + pr.op_i.shape).copy()
-        for c in (oref.J_FLANGE, oref.J_WHEEL):
-            op_i[:, :, c] = glob(op_i[:, :, c])
-        return (pin_f, pin_i.reshape(-1, pin_i.shape[-1]), brg_f, brg_i.reshape(-1, brg_i.shape[-1]), op_f,
-                op_i.reshape(-1, op_i.shape[-1]))
+    def _variant_arrays(self):
+        """The variants' rows on the device, uploaded once: (rows (V or 1, R, C), is_int, body
+        columns) per family parameter array, in the order pins f/i, output pins f/i, bearings f/i."""
+        if self._var is None:
+            from warp_contacts import circle_pairs_ref as cref
+            from warp_contacts import cycloid_pins_ref as pref
+            from warp_contacts import output_pins_ref as oref
+            pr, d = self.params, self.device
+            f = lambda x: wp.array(np.ascontiguousarray(x, np.float64), dtype=wp.float64, device=d)
+            i = lambda x: wp.array(np.ascontiguousarray(x, np.int32), dtype=wp.int32, device=d)
+            cols = lambda c: i(np.array(c, np.int32))
+            self._var = [(f(pr.pin_f), None), (i(pr.pin_i), cols([pref.J_BODY_A, pref.J_BODY_B])),
+                         (f(pr.op_f[None]), None), (i(pr.op_i[None]), cols([oref.J_FLANGE, oref.J_WHEEL])),
+                         (f(pr.brg_f), None), (i(pr.brg_i[None]), cols([cref.I_BODY_A, cref.I_BODY_B]))]
+        return self._var
 
     def _contact_kernels(self, vi):
+        """The contact kernels over P = len(vi) copies, their parameter rows filled on the device
+        from the variants' rows (``gather_rows`` / ``gather_bodies``; reference
+        :func:`warp_contacts.batched_newton_ref.gather_rows`). Kernel objects are kept per P
+        (the chunk size recurs) and refilled for every launch."""
         from warp_contacts.circle_pairs import CirclePairKernel
         from warp_contacts.cycloid_pins import CycloidPinKernel
         from warp_contacts.output_pins import OutputPinKernel
         from ..output_pins.spec import PinMode
-        pr = self.params
+        pr, d = self.params, self.device
         P = len(vi)
         nt = P * pr.nb
-        pin_f, pin_i, brg_f, brg_i, op_f, op_i = self._rows(vi)
-        pins = CycloidPinKernel(pin_f, pin_i, pr.tables, pr.window, nt, "float64", self.device, analytic=pr.analytic)
-        pins.set_velocity_tangent(False)          # static residual: no velocity seeds
-        brg = CirclePairKernel(brg_f, brg_i, nt, "float64", self.device)
-        op = OutputPinKernel(op_f, op_i, pr.stations, nt + 1, PinMode.PLAIN.value, "float64", self.device)
+        if P not in self._kernel_cache:
+            if len(self._kernel_cache) >= 2:              # the chunk size and the last compaction size
+                self._kernel_cache.pop(next(iter(self._kernel_cache)))
+            z = lambda a, dt=np.float64: np.zeros((P * a.shape[-2], a.shape[-1]), dt)
+            pin_i0 = np.tile(pr.pin_i[0], (P, 1))        # valid table indices until the refill
+            pins = CycloidPinKernel(z(pr.pin_f), pin_i0, pr.tables, pr.window, nt, "float64", d,
+                                    analytic=pr.analytic)
+            pins.set_velocity_tangent(False)          # static residual: no velocity seeds
+            op = OutputPinKernel(z(pr.op_f), z(pr.op_i, np.int32), pr.stations, nt + 1, PinMode.PLAIN.value,
+                                 "float64", d)
+            brg = CirclePairKernel(z(pr.brg_f), z(pr.brg_i, np.int32), nt, "float64", d)
+            self._kernel_cache[P] = (pins, op, brg)
+        pins, op, brg = self._kernel_cache[P]
+        v = wp.array(np.asarray(vi, np.int32), dtype=wp.int32, device=d)
+        v0 = wp.zeros(P, dtype=wp.int32, device=d)     # the output-pin rows and bearing bodies: one set for all
+        targets = [(pins, "fparams", v), (pins, "iparams", v), (op, "fparams", v0), (op, "iparams", v0),
+                   (brg, "fparams", v), (brg, "iparams", v0)]
+        for (rows, cols), (kern, name, var) in zip(self._variant_arrays(), targets):
+            out = kern.device_array(name)
+            if cols is None:
+                wp.launch(self._gather_rows, dim=(P, rows.shape[1]), inputs=[rows, var], outputs=[out], device=d)
+            else:
+                wp.launch(self._gather_bodies, dim=(P, rows.shape[1]), inputs=[rows, cols, pr.nb, var],
+                          outputs=[out], device=d)
         return pins, op, brg
 
     # -- solve -----------------------------------------------------------------------------
