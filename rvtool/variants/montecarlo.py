@@ -72,12 +72,14 @@ MODES = ("pool", "batched", "serial", "device", "auto")
 
 def resolve_mode(mode, device):
     """(mode, device) that a study runs: ``"auto"`` -> the device Newton on the first CUDA device
-    if one is present, else on the CPU. Measured (cases/bench_batched_te.py, TE of the Monte
-    Carlo protocol, 2 loaded CPU cores, same run): device Newton on one core 4.9 variants/s,
-    batched Exudyn (B = 16) 1.35, per-variant pool 4.7 on both cores; on the GPU the device
-    Newton avoids the per-copy host work that held the batched Exudyn path to 0.47x of the
-    all-core pool (README, "Device-resident batched Newton"). ``device="auto"`` with the other
-    modes picks as :func:`warp_contacts.precision.resolve_device` for a large batch."""
+    if one is present, else on the CPU. Measured for the TE of the Monte Carlo protocol
+    (cases/bench_batched_te.py, 53 points, 2 loaded CPU cores, one run): device Newton 9.7
+    variants/s on two processes, batched Exudyn 4.9 on one (B = 16), per-variant pool 1.8 on
+    two: on the CPU the device Newton and the batched Exudyn path are on par per core, both
+    well ahead of the pool; on a GPU the device Newton has no per-copy host work, which held
+    the batched Exudyn path to 0.47x of a 16-core pool (README, "GPU execution").
+    ``device="auto"`` with the other modes picks as
+    :func:`warp_contacts.precision.resolve_device` for a large batch."""
     if mode != "auto" and device != "auto":
         return mode, device
     from warp_contacts.precision import resolve_device
