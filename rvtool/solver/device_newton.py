@@ -111,15 +111,14 @@ class DeviceSolve:
 class DeviceNewton:
     """Batched static Newton of the copies of one :class:`CopyParameters` on one Warp device.
 
-    device: "cpu", "cuda" or "cuda:N". Kernels and buffers are built per call of
-    :meth:`solve` for its P copies (per-copy rows gathered from the variants' rows).
+    device: "cpu", "cuda" or "cuda:N". The variants' rows go to the device once; the contact
+    kernels of a launch of P copies are kept per P and their rows refilled on the device.
     """
 
     def __init__(self, params, *, device="cpu", settings: DeviceNewtonSettings = DeviceNewtonSettings()):
         self.params = params
         self.settings = settings
         self.device = resolve_device(device)
-        self.wdtype = wp.float64
         self._scatter, self._step, self._gate, self._gather_rows, self._gather_bodies = kernels(wp.float64)
         self._var = None
         self._kernel_cache = {}
@@ -127,8 +126,9 @@ class DeviceNewton:
 
     # -- per-copy rows -------------------------------------------------------------------
     def _variant_arrays(self):
-        """The variants' rows on the device, uploaded once: (rows (V or 1, R, C), is_int, body
-        columns) per family parameter array, in the order pins f/i, output pins f/i, bearings f/i."""
+        """The variants' rows on the device, uploaded once: (rows (V or 1, R, C), body columns or
+        None for float rows) per parameter array, in the order pins f/i, output pins f/i,
+        bearings f/i."""
         if self._var is None:
             from warp_contacts import circle_pairs_ref as cref
             from warp_contacts import cycloid_pins_ref as pref
