@@ -19,7 +19,7 @@ import functools
 
 import warp as wp
 
-from .batched_newton_ref import ACTIVE, CONVERGED, FAILED, WARM
+from .batched_newton_ref import ACTIVE, CONVERGED, FAILED, ROW_ENTRIES, WARM
 
 
 @functools.lru_cache(maxsize=None)
@@ -31,14 +31,14 @@ def kernels(dtype):
                  r: wp.array2d(dtype=dtype), A: wp.array3d(dtype=dtype)):
         """r[p] += sum of the rows' forces, A[p] -= sum of their tangents (rows of copy p in order)."""
         nr = loc.shape[0]
-        k = loc.shape[1]
         for rr in range(nr):
             row = p * nr + rr
-            for a in range(k):
+            # ROW_ENTRIES is a compile-time trip count: Warp unrolls both loops
+            for a in range(ROW_ENTRIES):
                 la = loc[rr, a]
                 if la >= 0:
                     r[p, la] = r[p, la] + qr[row, a]
-                    for b in range(k):
+                    for b in range(ROW_ENTRIES):
                         lb = loc[rr, b]
                         if lb >= 0:
                             A[p, la, lb] = A[p, la, lb] - kr[row, a, b]

@@ -31,6 +31,7 @@ import numpy as np
 
 ACTIVE, CONVERGED, FAILED = 0, 1, 2
 WARM = -1                 # stage of a warm start (regularization factor 1)
+ROW_ENTRIES = 6           # entries of a contact row: two planar bodies (x, y, theta) each
 
 
 def is_rotation(n):

@@ -116,6 +116,11 @@ class DeviceNewton:
     """
 
     def __init__(self, params, *, device="cpu", settings: DeviceNewtonSettings = DeviceNewtonSettings()):
+        from warp_contacts.batched_newton_ref import ROW_ENTRIES
+        for nm in ("loc_pin", "loc_op", "loc_brg"):
+            if getattr(params, nm).shape[1] != ROW_ENTRIES:
+                raise RvtoolInputError(f"params.{nm} has {getattr(params, nm).shape[1]} entries per row; the Newton "
+                                       f"step sums rows of two planar bodies ({ROW_ENTRIES} entries)")
         self.params = params
         self.settings = settings
         self.device = resolve_device(device)
