@@ -289,9 +289,9 @@ def test_gather_kernels_match_reference(params, device):
     cols = [pref.J_BODY_A, pref.J_BODY_B]
     wp.launch(gather_bodies, dim=(P, R), inputs=[wp.array(params.pin_i, dtype=wp.int32, device=device),
                                                 wp.array(np.array(cols, np.int32), dtype=wp.int32, device=device),
-                                                params.nb, wp.array(vi, dtype=wp.int32, device=device)],
+                                                params.nb, P * params.nb, wp.array(vi, dtype=wp.int32, device=device)],
               outputs=[out_i], device=device)
-    expected = ref.gather_bodies(params.pin_i, vi, cols, params.nb)
+    expected = ref.gather_bodies(params.pin_i, vi, cols, params.nb, P * params.nb)
     assert np.array_equal(out_i.numpy(), expected)
     assert expected[:, pref.J_BODY_B].max() == P * params.nb          # the pins sit on the ground row
     assert set(expected[R:2 * R, pref.J_BODY_A]) == {params.nb + 1, params.nb + 2}   # copy 1's wheels

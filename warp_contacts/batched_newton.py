@@ -255,22 +255,23 @@ def kernels(dtype):
         rows: wp.array3d(dtype=wp.int32),
         body_cols: wp.array(dtype=wp.int32),
         nb: int,
+        ground: int,
         # Data in:
         variant: wp.array(dtype=wp.int32),
         # Data out:
         out: wp.array2d(dtype=wp.int32),
     ):
         """Integer rows of copy p from its variant's, with the body columns made global: copy p
-        owns bodies p nb .. p nb + nb - 1, a local index >= nb is the ground row P nb."""
+        owns bodies p nb .. p nb + nb - 1, a local index >= nb is the pose array's ground row
+        ``ground`` (its last row, which stays zero)."""
         p, r = wp.tid()
         nr = rows.shape[1]
-        n_copies = variant.shape[0]
         for c in range(rows.shape[2]):
             v = rows[variant[p], r, c]
             for k in range(body_cols.shape[0]):
                 if body_cols[k] == c:
                     if v >= nb:
-                        v = n_copies * nb
+                        v = ground
                     else:
                         v = p * nb + v
             out[p * nr + r, c] = v

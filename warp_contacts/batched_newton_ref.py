@@ -136,13 +136,14 @@ def gather_rows(rows, variant):
     return np.asarray(rows)[np.asarray(variant)].reshape(-1, np.shape(rows)[2])
 
 
-def gather_bodies(rows, variant, body_cols, nb):
+def gather_bodies(rows, variant, body_cols, nb, ground):
     """As :func:`gather_rows` for integer rows whose columns ``body_cols`` hold local body
-    indices (0..nb-1, >= nb: ground): copy p's bodies become p nb + local, the ground P nb."""
+    indices (0..nb-1, >= nb: ground): copy p's bodies become p nb + local, the ground the pose
+    array's row ``ground``."""
     variant = np.asarray(variant)
     P = len(variant)
     out = np.asarray(rows)[variant].copy()
     base = (np.arange(P) * nb)[:, None]
     for c in body_cols:
-        out[:, :, c] = np.where(out[:, :, c] >= nb, P * nb, out[:, :, c] + base)
+        out[:, :, c] = np.where(out[:, :, c] >= nb, ground, out[:, :, c] + base)
     return out.reshape(-1, out.shape[2])

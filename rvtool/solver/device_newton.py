@@ -112,7 +112,8 @@ class DeviceNewton:
     """Batched static Newton of the copies of one :class:`CopyParameters` on one Warp device.
 
     device: "cpu", "cuda" or "cuda:N". The variants' rows go to the device once; the contact
-    kernels of a launch of P copies are kept per P and their rows refilled on the device.
+    kernel objects are built once per capacity (the chunk size) and their rows refilled on the
+    device for every launch, compacted launches included.
     """
 
     def __init__(self, params, *, device="cpu", settings: DeviceNewtonSettings = DeviceNewtonSettings()):
@@ -148,42 +149,49 @@ class DeviceNewton:
         return self._var
 
     def _contact_kernels(self, vi):
-        """The contact kernels over P = len(vi) copies, their parameter rows filled on the device
-        from the variants' rows (``gather_rows`` / ``gather_bodies``; reference
-        :func:`warp_contacts.batched_newton_ref.gather_rows`). Kernel objects are kept per P
-        (the chunk size recurs) and refilled for every launch."""
+        """The contact kernels for P = len(vi) copies: kernel objects of some capacity >= P (built
+        once per capacity: the chunk size; a compacted or last, smaller batch reuses them and
+        evaluates only its first P copies' rows, ``launch_recorded(n_rows)``), their parameter
+        rows of copies 0..P-1 filled on the device from the variants' rows (``gather_rows`` /
+        ``gather_bodies``; reference :func:`warp_contacts.batched_newton_ref.gather_rows`).
+        Returns (pins, output pins, bearings, capacity)."""
         from warp_contacts.circle_pairs import CirclePairKernel
         from warp_contacts.cycloid_pins import CycloidPinKernel
         from warp_contacts.output_pins import OutputPinKernel
         from ..output_pins.spec import PinMode
         pr, d = self.params, self.device
         P = len(vi)
-        nt = P * pr.nb
-        if P not in self._kernel_cache:
-            if len(self._kernel_cache) >= 2:              # the chunk size and the last compaction size
-                self._kernel_cache.pop(next(iter(self._kernel_cache)))
-            z = lambda a, dt=np.float64: np.zeros((P * a.shape[-2], a.shape[-1]), dt)
-            pin_i0 = np.tile(pr.pin_i[0], (P, 1))        # valid table indices until the refill
+        fits = [c for c in self._kernel_cache if c >= P]
+        if fits:
+            cap = min(fits)
+        else:
+            cap = P
+            if len(self._kernel_cache) >= 2:              # bound the device memory held
+                self._kernel_cache.pop(min(self._kernel_cache))
+            nt = cap * pr.nb
+            z = lambda a, dt=np.float64: np.zeros((cap * a.shape[-2], a.shape[-1]), dt)
+            pin_i0 = np.tile(pr.pin_i[0], (cap, 1))      # valid table indices until the refill
             pins = CycloidPinKernel(z(pr.pin_f), pin_i0, pr.tables, pr.window, nt, "float64", d,
                                     analytic=pr.analytic)
             pins.set_velocity_tangent(False)          # static residual: no velocity seeds
             op = OutputPinKernel(z(pr.op_f), z(pr.op_i, np.int32), pr.stations, nt + 1, PinMode.PLAIN.value,
                                  "float64", d)
             brg = CirclePairKernel(z(pr.brg_f), z(pr.brg_i, np.int32), nt, "float64", d)
-            self._kernel_cache[P] = (pins, op, brg)
-        pins, op, brg = self._kernel_cache[P]
+            self._kernel_cache[cap] = (pins, op, brg)
+        pins, op, brg = self._kernel_cache[cap]
         v = wp.array(np.asarray(vi, np.int32), dtype=wp.int32, device=d)
         v0 = wp.zeros(P, dtype=wp.int32, device=d)     # the output-pin rows and bearing bodies: one set for all
         targets = [(pins, "fparams", v), (pins, "iparams", v), (op, "fparams", v0), (op, "iparams", v0),
                    (brg, "fparams", v), (brg, "iparams", v0)]
+        ground = cap * pr.nb                            # the pose arrays' last row: never written
         for (rows, cols), (kern, name, var) in zip(self._variant_arrays(), targets):
             out = kern.device_array(name)
             if cols is None:
                 wp.launch(self._gather_rows, dim=(P, rows.shape[1]), inputs=[rows, var], outputs=[out], device=d)
             else:
-                wp.launch(self._gather_bodies, dim=(P, rows.shape[1]), inputs=[rows, cols, pr.nb, var],
+                wp.launch(self._gather_bodies, dim=(P, rows.shape[1]), inputs=[rows, cols, pr.nb, ground, var],
                           outputs=[out], device=d)
-        return pins, op, brg
+        return pins, op, brg, cap
 
     # -- solve -----------------------------------------------------------------------------
     def solve(self, variant_index, angles, torques, q_start, *, pin_forces=False):
@@ -246,7 +254,8 @@ class DeviceNewton:
         t0 = time.perf_counter()
         pr, st = self.params, self.settings
         P, n, d = len(vi), pr.n, self.device
-        pins, op, brg = self._contact_kernels(vi)
+        pins, op, brg, _ = self._contact_kernels(vi)
+        n_pin, n_op, n_brg = (P * pr.pin_f.shape[1], P * pr.op_f.shape[0], P * pr.brg_f.shape[1])
         arr = lambda x, dt=wp.float64: wp.array(np.ascontiguousarray(x), dtype=dt, device=d)
         ref = arr(pr.reference[vi].reshape(P, n))
         q = arr(state["q"])
@@ -271,9 +280,9 @@ class DeviceNewton:
         def body():
             active.zero_()
             wp.launch(self._scatter, dim=(P, n), inputs=[ref, q], outputs=poses, device=d)
-            pins.launch_recorded()
-            op.launch_recorded()
-            brg.launch_recorded()
+            pins.launch_recorded(n_pin)
+            op.launch_recorded(n_op)
+            brg.launch_recorded(n_brg)
             wp.launch(self._step, dim=P, inputs=model + rows_in, outputs=outputs, device=d)
             wp.launch(self._gate, dim=1, inputs=[cap], outputs=[counter, active], device=d)
 
@@ -302,8 +311,8 @@ class DeviceNewton:
         if pin_forces:
             from warp_contacts.circle_pairs_ref import O_FN
             wp.launch(self._scatter, dim=(P, n), inputs=[ref, q], outputs=poses, device=d)
-            pins.launch_recorded()
-            forces = pins.device_array("obs").numpy()[:, O_FN].reshape(P, -1)
+            pins.launch_recorded(n_pin)
+            forces = pins.device_array("obs").numpy()[:n_pin, O_FN].reshape(P, -1)
         out = {"q": q.numpy(), "status": status.numpy(), "stage": stage.numpy(), "iters": iters.numpy(),
                "total": total.numpy(), "residual": resid.numpy()}
         return out, int(counter.numpy()[0]), t2 - t1, t1 - t0, forces
