@@ -20,7 +20,7 @@ maximum pin force, lost motion), in one of three modes:
   variant), on ``device`` ("cpu": chunks side by side in the pool; "cuda:N": one chunk after
   another in this process);
 * ``"auto"``: the fastest measured path: ``"device"`` on the first GPU if there is one, else
-  ``"device"`` on the CPU (:func:`resolve_mode`).
+  ``"batched"`` on the CPU (:func:`resolve_mode`).
 
 Each record names its TE path (``te_path``) and the number of its TE points that fell back
 from the device Newton to Exudyn (``te_fallback_points``; None for the Exudyn modes).
@@ -72,19 +72,21 @@ MODES = ("pool", "batched", "serial", "device", "auto")
 
 def resolve_mode(mode, device):
     """(mode, device) that a study runs: ``"auto"`` -> the device Newton on the first CUDA device
-    if one is present, else on the CPU. Measured for the TE of the Monte Carlo protocol
-    (cases/bench_batched_te.py, 53 points, 2 loaded CPU cores, one run): device Newton 9.7
-    variants/s on two processes, batched Exudyn 4.9 on one (B = 16), per-variant pool 1.8 on
-    two: on the CPU the device Newton and the batched Exudyn path are on par per core, both
-    well ahead of the pool; on a GPU the device Newton has no per-copy host work, which held
-    the batched Exudyn path to 0.47x of a 16-core pool (README, "GPU execution").
-    ``device="auto"`` with the other modes picks as
+    if one is present, else the batched Exudyn path on the CPU. Measured for the TE of the Monte
+    Carlo protocol (cases/bench_batched_te.py, 53 points, 2 loaded CPU cores, two runs): per
+    core, batched Exudyn (B = 16) 4.90 and 11.1 variants/s, device Newton 4.84 and 9.4 (two
+    processes: 9.68 and 18.9), per-variant pool 0.9 and 1.7: on the CPU the two batched paths
+    are on par, the Exudyn one slightly ahead; on a GPU the device Newton has no per-copy host
+    work, which held the batched Exudyn path to 0.47x of a 16-core pool (README, "GPU
+    execution"). ``device="auto"`` with the other modes picks as
     :func:`warp_contacts.precision.resolve_device` for a large batch."""
     if mode != "auto" and device != "auto":
         return mode, device
     from warp_contacts.precision import resolve_device
     gpu = resolve_device("auto", n_contacts=10 ** 9)
-    return ("device" if mode == "auto" else mode), gpu
+    if mode == "auto":
+        return ("device", gpu) if gpu != "cpu" else ("batched", "cpu")
+    return mode, gpu
 
 
 @dataclass(frozen=True, kw_only=True)
