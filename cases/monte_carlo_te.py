@@ -10,7 +10,7 @@ variants is one Exudyn system (rvtool.batched), chunks side by side in a process
 all cores; --mode pool: one Exudyn system per variant in the pool (chunks of 10); --mode
 device: the TE of each chunk on the device Newton (--device cpu: chunks of CHUNK_DEVICE side
 by side in the pool; cuda:0: one after another), lost motion per variant; --mode auto: the
-fastest measured path (the device Newton; a GPU if present). ``te_path`` and
+fastest measured path (the device Newton on a GPU if present, else batched). ``te_path`` and
 ``fallback_copies`` say which TE path ran and how many TE points fell back to Exudyn. Each
 finished chunk is one file (atomic rename), so an interrupted run resumes with --resume.
 Reported: mean, std, p5/p50/p95 with a Student-t 95 % CI of the mean and a
@@ -67,7 +67,7 @@ def _extra(parser):
     parser.add_argument("--mode", default="batched", choices=("batched", "pool", "device", "auto"),
                         help="batched: chunks of 16 variants per Exudyn system in a process pool; "
                              "pool: one variant per task; device: the TE of each chunk on the device Newton "
-                             "(rvtool.solver.device_newton); auto: the fastest measured path (default batched)")
+                             "(rvtool.solver.device_newton); auto: device on a GPU, else batched (default batched)")
     parser.add_argument("--device", default="cpu", help="device of the batched / device modes (cpu, cuda:0, auto)")
 
 
