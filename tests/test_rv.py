@@ -1,0 +1,185 @@
+"""RV two-stage topology (issue 16): the ratio from the gear graph, kinematics, torque balance,
+crank load sharing at nominal geometry and with a crank phase error, element tangents at the
+rated state, and topology errors named with their key paths."""
+import math
+
+import numpy as np
+import pytest
+
+from rvtool import designs
+from rvtool.assembly import build
+from rvtool.assembly.rv import load_design
+from rvtool.assembly.rv.builder import RvModel
+from rvtool.assembly.rv.gear_graph import GearGraph
+from rvtool.errors import RvtoolInputError
+from rvtool.model import Family
+from rvtool.protocols.load_sharing import torque_balance_error
+from rvtool.solver.static import StaticSolver
+
+RV40E = designs.path("rv40e")
+
+
+@pytest.fixture(scope="module")
+def design():
+    return load_design(RV40E)
+
+
+@pytest.fixture(scope="module")
+def rated(design):
+    m = build(design)
+    s = StaticSolver(m)
+    m.set_output_torque(-np.sign(m.ratio) * design.rated_torque)
+    return m, s, s.solve(0.0)
+
+
+@pytest.mark.parametrize("z_sun, z_crank, n_pins, shift", [(18, 54, 40, 0.1), (15, 45, 40, 0.3), (21, 42, 40, 0.0),
+                                                            (18, 36, 30, 0.1)])
+def test_ratio_from_the_gear_graph(design, z_sun, z_crank, n_pins, shift):
+    """Fixed ring, input sun, carrier output: i = 1 + (z_crank gear / z_sun) z_pins (paper, RV two-stage),
+    from the linear solve over the graph's edges; equal to round-off of the solve (1e-12)."""
+    d = design.replace(sun_gear={"n_teeth": z_sun, "profile_shift": shift}, crank_gear={"n_teeth": z_crank,
+                                                                                      "profile_shift": -shift},
+                       pins={"n_pins": n_pins}, ratio_target=None)
+    i = GearGraph.of(d).ratio
+    assert abs(i - (1 + z_crank / z_sun * n_pins)) < 1e-12 * i
+    assert i > 0          # sun and carrier turn the same way
+
+
+def test_builder_dispatch_kinematics_and_families(design, rated):
+    m, _, _ = rated
+    assert isinstance(m, RvModel)
+    assert m.body_names == ("sun", "crank0", "crank1", "crank2", "wheel0", "wheel1", "carrier")
+    assert set(m.families) == {Family.PINS, Family.INVOLUTE_STAGE, Family.ECCENTRIC_BEARINGS, Family.CRANK_BEARINGS,
+                               Family.MAIN_BEARINGS}
+    # the carrier turns by s / i; kinematic velocities are the angle derivatives of the poses
+    # (central differences, h = 1e-6 rad: truncation ~ h^2 e z^2 ~ 1e-12 m/rad)
+    a, h, w = 0.7, 1e-6, 3.0
+    p = m.kinematics.poses(np.array([a - h, a, a + h]))
+    assert abs(p[1, -1, 2] - a / m.ratio) < 1e-14
+    v = m.kinematic_state(a, w).velocities
+    assert np.allclose(v, (p[2] - p[0]) / (2 * h) * w, rtol=0, atol=1e-9)
+    # zero load: the wheels float in the needle clearance (3 um, rolling along the pins and turning the
+    # carrier by up to ~6e-5 rad, the lost-motion band), held there by the regularization springs,
+    # which carry at most 100 N/m x 3 um = 3e-4 N (measured 2.6e-4 N at 1.3 rad, 3e-8 N at 0)
+    m2 = build(design)
+    q0 = StaticSolver(m2).solve(1.3)
+    assert m2.regularization_force(q0) < 1e-3
+
+
+def test_torque_balance(design, rated):
+    """Frictionless statics: |T - i T_in| / T. Pointwise it equals |i TE' + i U'/T| (the elastic energy
+    rate along the path; measured up to 3.4e-3 over a crank revolution, 1.6e-6 at input angle 0), whose
+    mean over a period of the meshes vanishes: the mean over one crank revolution sampled at 24 points
+    (spectral accuracy of the periodic mean) stays below 2e-4."""
+    m, s, q = rated
+    T = design.rated_torque
+    assert torque_balance_error(m, q, T) < 1e-4
+    m2 = build(design)
+    s2 = StaticSolver(m2)
+    m2.set_output_torque(-T)
+    crank_rev = 2 * np.pi / abs(m2.graph.crank_rate)
+    bal = []
+    prev = None
+    for a in np.arange(24) * crank_rev / 24:
+        qq = s2.solve(a, prev)
+        prev = s2.last_angle
+        bal.append((m2.ratio * m2.input_torque(qq) - T) / T)
+    assert abs(np.mean(bal)) < 2e-4
+
+
+def _mean_shares(design, n=12):
+    m = build(design)
+    s = StaticSolver(m)
+    m.set_output_torque(-design.rated_torque)
+    crank_rev = 2 * np.pi / abs(m.graph.crank_rate)
+    out, prev = [], None
+    for a in np.arange(n) * crank_rev / n:
+        q = s.solve(a, prev)
+        prev = s.last_angle
+        out.append(m.crank_load_share(q))
+    return np.array(out)
+
+
+def test_equal_crank_shares_at_nominal(design, rated):
+    """Nominal geometry: every crank carries 1/N_c of the torque on the carrier on average over a
+    crank revolution. Pointwise the shares swing by about +-0.023 with the crank angle (the crank's
+    own torque balance sets its journal loads), the same curve shifted by 120 deg for each crank; the
+    residual 6.5e-4 (measured) comes from what breaks the three-fold symmetry: 40 pins (not a multiple
+    of 3) and the discrete rollers. Tolerance 2e-3."""
+    m, _, q = rated
+    torques = m.crank_torques(q)
+    assert abs(np.sum(torques) - design.rated_torque) < 1e-4 * design.rated_torque   # carrier statics
+    sh = _mean_shares(design)
+    assert np.all(np.abs(sh.mean(axis=0) - 1 / 3) < 2e-3)
+    assert np.ptp(sh[:, 0]) > 0.02        # the swing is real, not an averaged-out constant
+
+
+def test_crank_phase_error_changes_the_share_with_the_right_sign(design):
+    """A crank whose eccentric lags in its driving rotation sense (the cranks turn with omega_k < 0, so a
+    positive phase error lags) engages later and carries less; one that leads carries more. Odd in the
+    error to first order."""
+    base = _mean_shares(design, 6).mean(axis=0)[0]
+    plus = _mean_shares(design.replace(cranks={"phase_errors_arcmin": (5.0, 0.0, 0.0)}), 6).mean(axis=0)[0]
+    minus = _mean_shares(design.replace(cranks={"phase_errors_arcmin": (-5.0, 0.0, 0.0)}), 6).mean(axis=0)[0]
+    assert GearGraph.of(design).crank_rate < 0
+    assert plus < base - 0.005 and minus > base + 0.005
+    assert abs((plus - base) + (minus - base)) < 0.2 * abs(plus - minus)
+
+
+def test_element_tangents_at_the_rated_state(rated):
+    """Every contact element's analytic tangent (pins, involute stage, needle, tapered and main
+    bearings) vs central differences at the RV rated state, with small velocities (damping terms).
+    h = 1e-9 m / 1e-8 rad: truncation h^2 Q''' and round-off eps Q / h both ~1e-7 relative;
+    tolerance 1e-5 (as for the cycloid elements)."""
+    m, _, q = rated
+    rng = np.random.default_rng(0)
+    for name, el in m.elements.items():
+        ql = el.local(q)
+        vl = rng.normal(0, 1e-4, ql.shape)
+        ev = el.evaluate(0.0, ql, vl)
+        K = np.zeros_like(ev.dQdq)
+        for j in range(len(ql)):
+            h = 1e-9 if j % 3 < 2 else 1e-8
+            qp, qm = ql.copy(), ql.copy()
+            qp[j] += h
+            qm[j] -= h
+            K[:, j] = (el.evaluate(1.0 + j, qp, vl).Q - el.evaluate(2.0 + j, qm, vl).Q) / (2 * h)
+        assert np.linalg.norm(ev.dQdq - K) / np.linalg.norm(K) < 1e-5, name
+
+
+def test_topology_errors_name_their_keys(design):
+    # tooth counts that do not give equal crank spacing for identical cranks
+    with pytest.raises(RvtoolInputError, match=r"sun_gear.n_teeth \+ crank_gear.n_teeth.*cranks.count"):
+        GearGraph.of(design.replace(sun_gear={"n_teeth": 17}, crank_gear={"n_teeth": 51}, ratio_target=None))
+    # a crank count the sun cannot mesh with: neighbouring crank gears overlap
+    with pytest.raises(RvtoolInputError, match=r"cranks.count = 3.*overlap.*valid range \[2, 2\]"):
+        GearGraph.of(design.replace(sun_gear={"n_teeth": 12, "profile_shift": 0.4},
+                                    crank_gear={"n_teeth": 84, "profile_shift": -0.4}, ratio_target=None))
+    with pytest.raises(RvtoolInputError, match=r"cranks.count = 4 is outside the valid range \[2, 3\]"):
+        design.replace(cranks={"count": 4})
+    # a ratio inconsistent with the declared target
+    with pytest.raises(RvtoolInputError, match=r"ratio_target = 120 is inconsistent.*i = 121"):
+        GearGraph.of(design.replace(ratio_target=120.0))
+    with pytest.raises(RvtoolInputError, match=r"wheels.phases_deg.*180"):
+        design.replace(wheels={"phases_deg": (0.0, 120.0)})
+    with pytest.raises(RvtoolInputError, match=r"cranks.phase_errors_arcmin has 2 entries"):
+        design.replace(cranks={"phase_errors_arcmin": (1.0, 2.0)})
+
+
+def test_design_file_errors_name_the_section(tmp_path):
+    import tomllib
+    from rvtool.assembly.rv.spec import design_from_dict
+    with open(RV40E, "rb") as fh:
+        data = tomllib.load(fh)
+    bad = dict(data, crank_gear=dict(data["crank_gear"], module=-1.0))
+    with pytest.raises(RvtoolInputError, match=r"crank_gear.module"):
+        design_from_dict(bad)
+    bad = dict(data, main_bearing=dict(data["main_bearing"], row=dict(data["main_bearing"]["row"], n_balls=2)))
+    with pytest.raises(RvtoolInputError, match=r"main_bearing.row.n_balls"):
+        design_from_dict(bad)
+    bad = dict(data, crank_bearing=dict(data["crank_bearing"], row_spacing=0.001))
+    with pytest.raises(RvtoolInputError, match=r"crank_bearing.row_spacing"):
+        design_from_dict(bad)
+    bad = dict(data, ratio_target=81.0)
+    with pytest.raises(RvtoolInputError, match=r"ratio_target"):
+        design_from_dict(bad)
