@@ -17,7 +17,7 @@ import numpy as np
 from rvtool import casekit, designs
 from rvtool.assembly import build
 from rvtool.assembly.rv import load_design
-from rvtool.protocols.load_sharing import contact_peaks, torque_balance_error
+from rvtool.protocols.load_sharing import contact_peaks, torque_balance_error, torque_balance_term
 from rvtool.protocols.precision import quasi_static_te, te_metrics
 from rvtool.protocols.stiffness import TorqueSequence, branch_fits, lost_motion_from_levels, quasi_static_stiffness
 from rvtool.solver.static import StaticSolver
@@ -66,7 +66,7 @@ def main(argv=None):
 
     def record(k, a, q):
         shares.append(model.crank_load_share(q))
-        balance.append((model.ratio * model.input_torque(q) - T) / T)
+        balance.append(torque_balance_term(model, q, T))
         contact_peaks(model, q, peaks)
 
     qs = quasi_static_te(build(design), torque=T, input_angles=angles, record=None)
@@ -104,7 +104,6 @@ def main(argv=None):
             "fraction_max_over_crank_revolution": shares.max(axis=0),
             "eccentric_bearing_resultant_N": {f"crank{k}": {f"wheel{j}": ecc0[f"eccentric_bearing_c{k}w{j}"]
                                                              for j in range(2)} for k in range(design.cranks.count)},
-            "eccentric_bearing_resultant_max_over_crank_revolution_N": None,
         },
         "torque_balance_rel_err": tb0,
         "peak_loads_N": {"per_physical_contact_over_te_sequence": peaks, "per_physical_contact_at_rated": peaks_rated},
@@ -112,7 +111,6 @@ def main(argv=None):
         "lost_motion_arcmin": lm,
         "wall_s": wall,
     }
-    del results["crank_load_share"]["eccentric_bearing_resultant_max_over_crank_revolution_N"]
     settings = {"design": design.name, "quick": args.quick, "backend": "warp", "device": "cpu",
                 **model.resolution_settings(),
                 "te_interval": {"input_angle_rad": float(crank_rev), "output_revolutions": revs, "points": n_pts,
