@@ -187,3 +187,35 @@ def test_design_file_errors_name_the_section(tmp_path):
     bad = dict(data, ratio_target=81.0)
     with pytest.raises(RvtoolInputError, match=r"ratio_target"):
         design_from_dict(bad)
+
+
+@pytest.fixture(scope="module")
+def three_stage():
+    return load_design(designs.path("rv_three_stage"))
+
+
+def test_three_stage_ratio_and_rated_state(three_stage):
+    """Offset pinion -> compound gear -> sun -> cranks: i = -(z_compound / z_pinion) (1 + (z_crank / z_sun) z_pins)
+    from the gear graph (to round-off); the rated state solves, the kinematic state carries no load
+    (regularization < 1e-3 N, see the two-stage test) and the torque balance at input angle 0 is
+    within the energy-rate bound of the two-stage test (measured 3.3e-3; the input stage's mesh
+    stiffness variation adds to U')."""
+    d = three_stage
+    m = build(d)
+    assert m.body_names[:2] == ("pinion", "sun")
+    closed = -(d.compound_gear.n_teeth / d.input_pinion.n_teeth) * (1 + d.crank_gear.n_teeth / d.sun_gear.n_teeth
+                                                                       * d.pins.n_pins)
+    assert abs(m.ratio - closed) < 1e-12 * abs(closed) and m.ratio < 0
+    s = StaticSolver(m)
+    assert m.regularization_force(s.solve(0.4)) < 1e-3
+    m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+    q = s.solve(0.4, 0.4)
+    assert torque_balance_error(m, q, d.rated_torque) < 1e-2
+    assert abs(np.sum(m.crank_torques(q)) - np.sign(m.ratio) * d.rated_torque) < 1e-4 * d.rated_torque   # carrier statics
+
+
+def test_topology_sections_must_match(design, three_stage):
+    with pytest.raises(RvtoolInputError, match=r"rv_three_stage.*input_pinion"):
+        design.replace(topology="rv_three_stage")
+    with pytest.raises(RvtoolInputError, match=r"rv_two_stage.*input_pinion"):
+        three_stage.replace(topology="rv_two_stage")
