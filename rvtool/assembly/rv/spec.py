@@ -174,9 +174,18 @@ class RvDesign:
         from ..spec import replace
         return replace(self, **sections)
 
+    def with_mesh_stiffness_factor(self, factor):
+        """A copy whose pin-contact law is the line law at ``factor`` times the current stiffness (as
+        :meth:`rvtool.assembly.spec.CycloidDesign.with_mesh_stiffness_factor`)."""
+        from ...contact.cycloid_set import secant_line_stiffness
+        from ..spec import replace
+        pc = self.pin_contact
+        k = pc.stiffness if pc.stiffness > 0 else secant_line_stiffness(pc.reference_force, self.wheels.width)
+        return replace(self, pin_contact={"law": "line", "stiffness": factor * k})
+
     def refined(self):
-        """The design at refined numerical resolution: twice the profile samples, involute slices and
-        bearing laminae (the reference of resolution error statements)."""
+        """The design at refined numerical resolution: twice the wheel-profile samples and the involute
+        slices (the reference of resolution error statements)."""
         w = dataclasses.replace(self.wheels, samples_per_tooth=2 * self.wheels.samples_per_tooth)
         st = dataclasses.replace(self.involute_stage, n_slices=2 * self.involute_stage.n_slices)
         return dataclasses.replace(self, wheels=w, involute_stage=st)
