@@ -219,3 +219,19 @@ def test_topology_sections_must_match(design, three_stage):
         design.replace(topology="rv_three_stage")
     with pytest.raises(RvtoolInputError, match=r"rv_two_stage.*input_pinion"):
         three_stage.replace(topology="rv_two_stage")
+
+
+def test_rv_tolerance_sampling(design, tmp_path):
+    """Variant k is reproducible from (seed, k); per-crank draws land in the cranks section; the sun's
+    pitch deviations close the circle; a needle-clearance support below zero is refused."""
+    from rvtool.variants.rv_tolerances import RvToleranceSpec, load_rv_tolerances, sample_rv_design
+    from rvtool.variants.tolerances import Normal
+    tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    d1, a = sample_rv_design(tol, design, 3, 7)
+    d2, b = sample_rv_design(tol, design, 3, 7)
+    assert a == b and d1 == d2
+    assert d1.cranks.phase_errors_arcmin == a["crank_phase_error"] and len(a["crank_phase_error"]) == 3
+    assert abs(sum(d1.sun_gear.single_pitch_deviations)) < 1e-18
+    assert 0.0 <= d1.eccentric_bearing.radial_clearance <= 3e-6
+    with pytest.raises(RvtoolInputError, match=r"tolerances.needle_clearance"):
+        RvToleranceSpec(needle_clearance=Normal(mean=0.0, std=1e-6))
