@@ -246,6 +246,28 @@ class RvModel(ReducerModel):
                 t -= float(el.evaluation_at(q).Q[hit[0]])
         return t
 
+    def marker_frequencies(self, speed_rpm):
+        """Mesh and bearing marker frequencies [Hz] at input speed [rpm] (rates from the gear graph):
+        input, output, crank (absolute and relative to the carrier), the cycloid mesh z_b f_crank, the
+        involute mesh(es) z f_relative, and the needle, tapered and main bearings at their relative
+        ring speeds."""
+        from ...bearings.frequencies import bearing_frequencies
+        d, r = self.design, self.graph.rates
+        f_in = speed_rpm / 60.0
+        f_c, f_k, f_s = r["carrier"] * f_in, r["crank"] * f_in, r["sun"] * f_in
+        f_rel = f_k - f_c                      # crank relative to the carrier and to the wheels
+        nb, tp, mb = d.eccentric_bearing, d.crank_bearing.rows[0], d.main_bearing.rows[0]
+        out = {"input_hz": f_in, "output_hz": abs(f_c), "crank_hz": abs(f_k), "crank_relative_hz": abs(f_rel),
+               "mesh_hz": d.pins.n_pins * abs(f_k), "involute_mesh_hz": d.sun_gear.n_teeth * abs(f_s - f_c),
+               "eccentric_bearing": bearing_frequencies(f_rel, nb.n_rollers, nb.roller_diameter, nb.pitch_diameter),
+               "crank_bearing": bearing_frequencies(f_rel, tp.n_rollers, tp.roller_diameter, tp.pitch_diameter,
+                                                    tp.cup_angle_deg),
+               "main_bearing": bearing_frequencies(f_c, mb.n_balls, mb.ball_diameter, mb.pitch_diameter,
+                                                   math.degrees(mb.contact_angle))}
+        if self.layout.three_stage:
+            out["input_stage_mesh_hz"] = d.input_pinion.n_teeth * f_in
+        return out
+
     def refined_design(self):
         return self.design.refined()
 
