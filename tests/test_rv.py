@@ -197,7 +197,7 @@ def three_stage():
 def test_three_stage_ratio_and_rated_state(three_stage):
     """Offset pinion -> compound gear -> sun -> cranks: i = -(z_compound / z_pinion) (1 + (z_crank / z_sun) z_pins)
     from the gear graph (to round-off); the rated state solves, the kinematic state carries no load
-    (regularization < 1e-3 N, see the two-stage test) and the torque balance at input angle 0 is
+    (regularization < 1e-3 N, see the two-stage test) and the torque balance at input angle 0.4 is
     within the energy-rate bound of the two-stage test (measured 7.3e-4 at 0.4 rad; the input stage's mesh
     stiffness variation adds to U')."""
     d = three_stage
