@@ -19,7 +19,7 @@ from rvtool import casekit, designs
 from rvtool.assembly import build
 from rvtool.assembly.rv import load_design as load_rv
 from rvtool.assembly.spec import load_design as load_cycloid
-from rvtool.protocols.precision import dynamic_te, quasi_static_te
+from rvtool.protocols.precision import dynamic_te, quasi_static_te, te_metrics
 from rvtool.solver import RunSpec
 from rvtool.units import ARCSEC_PER_RAD
 
@@ -54,6 +54,7 @@ def quasi_static_cost(design, n_points, **build_kw):
     angles = np.arange(n_points) * model.mesh_period / 40
     timers = instrument(model)
     qs = quasi_static_te(model, torque=design.rated_torque, input_angles=angles)
+    met = te_metrics(qs["te"], n_revolutions=n_points * model.mesh_period / 40 / (2 * np.pi * abs(model.ratio)), n_peaks=6)
     return {"points": n_points, "ms_per_point": 1e3 * qs["wall_s"] / n_points,
             "newton_per_point": qs["stats"]["newton_iterations"] / n_points,
             "callback_ms_per_point": 1e3 * timers["callback_s"] / n_points,
@@ -61,7 +62,9 @@ def quasi_static_cost(design, n_points, **build_kw):
             "exudyn_ms_per_point": 1e3 * (qs["wall_s"] - timers["callback_s"]) / n_points,
             "contact_rows": sum(len(el.ids) for el in model.elements.values()),
             "elements": len(model.elements), "coordinates": model.mbs.systemData.ODE2Size(),
-            "te_pp_arcsec": float(np.ptp(qs["te"]) * ARCSEC_PER_RAD), "wall_s": qs["wall_s"]}
+            "te_pp_arcsec": met["pp"] * ARCSEC_PER_RAD, "te_rms_arcsec": met["rms"] * ARCSEC_PER_RAD,
+            "te_orders": met["peak_orders"], "te_order_amplitudes_arcsec": met["peak_amplitudes"] * ARCSEC_PER_RAD,
+            "wall_s": qs["wall_s"]}
 
 
 def main(argv=None):
