@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import load_design
+from rvtool.assembly.topologies import load as load_design
 from rvtool.protocols.hard_cases import CASES, CRITERIA, criterion, run_hard_case
 from rvtool.units import ARCSEC_PER_RAD
 

@@ -23,7 +23,8 @@ import numpy as np
 
 from rvtool import casekit
 from rvtool.assembly.spec import load_design
-from rvtool.variants.montecarlo import MonteCarloSettings, run_monte_carlo, run_variant, text_progress
+from rvtool import progress
+from rvtool.variants.montecarlo import MonteCarloSettings, run_monte_carlo, run_variant
 from rvtool.variants.tolerances import load_tolerances, sample_variant
 from rvtool.variants import VariantProtocol
 from rvtool import designs
@@ -82,8 +83,9 @@ def main(argv=None):
         shutil.rmtree(chunk_dir)   # a timed study starts from nothing unless asked to resume
     chunk = CHUNK_BATCHED if args.mode == "batched" else 10
     settings = MonteCarloSettings(n_variants=n, seed=SEED, chunk_size=chunk, mode=args.mode, workers=args.workers)
-    res = run_monte_carlo(design, tol, protocol, settings, chunk_dir, build_kw=build_kw,
-                          progress=text_progress(label="variants"))
+    with progress.reporting("auto"):
+        res = run_monte_carlo(design, tol, protocol, settings, chunk_dir, build_kw=build_kw,
+                              progress=progress.callback("Monte Carlo", unit="variant"))
     s = res["summary"]
     # rate over the variants run now (a resumed study loads the others from its chunk files)
     n_run = n - res["chunks_loaded"] * settings.chunk_size

@@ -125,6 +125,7 @@ class ContactElement:
         self.mbs = mbs
         self._ltg = None
         self.last_obs = None            # observation array (N, 8) of the last accepted state
+        self.gap_offsets = np.zeros(len(self.ids))   # slow-state gap offsets per row [m] (set_gap_offsets)
 
     # -- pure evaluation -------------------------------------------------
     def pose_velocity(self, q, q_t):
@@ -223,6 +224,18 @@ class ContactElement:
         self.last_obs = obs
         return ContactSnapshot(ids=self.ids, normal_force=obs[:, ref.O_FN], slip_speed=np.abs(obs[:, ref.O_VT]),
                                position=obs[:, ref.O_PX:ref.O_PY + 1], normal=obs[:, ref.O_NX:ref.O_NY + 1])
+
+    def set_gap_offsets(self, offsets):
+        """Slow-state gap offsets [m] per observation row (positive opens the gap), written into the
+        evaluator's parameters for every following evaluation; the cached trial is dropped.
+        Absolute, not increments: zeros restore the built element."""
+        if not callable(getattr(self.evaluator, "set_gap_offsets", None)):
+            raise RvtoolInputError(f"contact set {self.name!r} ({type(self.evaluator).__name__}) takes no gap "
+                                   "offsets; valid: cycloid pins, circle contacts, output pins")
+        off = np.array(offsets, dtype=np.float64)
+        self.evaluator.set_gap_offsets(off)
+        self.gap_offsets = off
+        self._key = None
 
     def history_state(self):
         """Committed history arrays (for saving a failed run's state)."""

@@ -1,6 +1,13 @@
-"""Command line: ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
+"""Command line: ``rvtool analyze DESIGN [--protocols ...] [--quick] [--out DIR] [--device ...]
+[--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
+``rvtool designs [--format-doc]``, ``rvtool new --topology T [--name NAME]`` (a commented
+design template), ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
 ``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
 tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`).
+
+Input errors (a design key out of range, an unknown protocol or topology, a missing file) print
+one line ``rvtool: error: ...`` naming the key path and the valid range, exit with status 2
+and write nothing.
 
 The studies are the scripts in the repository's ``cases/`` folder (see
 ``rvtool.casekit`` for their convention). ``list`` reads each script's module
@@ -16,8 +23,9 @@ import os
 import sys
 from pathlib import Path
 
-DEFAULT_CASE = "verify_history"
-"""Case run (with ``--quick``) by a bare ``rvtool run``: a short demonstration."""
+DEFAULT_STUDY = ("rd40", "te,stiffness,lost_motion")
+"""Design and protocols of the short reducer study run (quick) by a bare ``rvtool run``; it needs
+no cases folder, so it works from a wheel."""
 
 CASES_ENV = "RVTOOL_CASES"
 """Environment variable that overrides the location of the cases folder."""
@@ -111,21 +119,109 @@ def run_case(name, quick=False, out=None):
 
 
 def _cmd_run(args, parser):
+    if args.case is None:
+        design, protocols = DEFAULT_STUDY
+        out = args.out or os.path.join("results", f"analyze_{design}")
+        return _analyze(design, protocols, quick=True, out=out, device="cpu", quiet=False, tolerances=None)
     folder = cases_dir()
     if not folder.is_dir():
         parser.error(_missing_folder_message(folder))
-    name = args.case if args.case is not None else DEFAULT_CASE
-    quick = args.quick or args.case is None
-    name = name[:-3] if name.endswith(".py") else name
+    name = args.case[:-3] if args.case.endswith(".py") else args.case
     available = discover_cases(folder)
     if name not in available:
         parser.error(f"unknown case {name!r} in {folder}; available cases: "
                      + (", ".join(available) if available else "(none)"))
-    results = run_case(name, quick=quick, out=args.out)
+    results = run_case(name, quick=args.quick, out=args.out)
     if not results.is_file():
         print(f"rvtool: error: case {name!r} finished but wrote no {results}", file=sys.stderr)
         return 1
     print(f"{name}: results written to {results}")
+    return 0
+
+
+def _input_error(exc):
+    """One line on stderr and the usage exit status (nothing has been written)."""
+    print(f"rvtool: error: {' '.join(str(exc).split())}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
+    from rvtool import progress
+    from rvtool.analysis import analyze
+    from rvtool.errors import RvtoolInputError
+    try:
+        # validated first: an input error writes nothing
+        from rvtool.analysis import load, resolve_device, select
+        select(protocols)
+        resolve_device(device)
+        load(design)
+    except RvtoolInputError as exc:
+        return _input_error(exc)
+    if out is None:
+        stem = os.path.splitext(os.path.basename(str(design)))[0]
+        out = os.path.join("results", f"analyze_{stem}")
+    with progress.reporting("quiet" if quiet else "auto"):
+        try:
+            res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances)
+        except RvtoolInputError as exc:
+            return _input_error(exc)
+    for r in res.results:
+        line = f"{r.name:<12} {r.status:<8} {r.wall_s:7.2f} s"
+        if r.status == "ok":
+            line += "  " + ", ".join(f"{f.name} = {f.value:.4g} {f.unit}" for f in r.figures[:3]
+                                     if isinstance(f.value, (int, float)))
+        else:
+            line += f"  {r.reason}"
+        print(line)
+    for w in res.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    print(f"{res.design_name}: results.json and report.html written to {os.path.abspath(out)}")
+    return 0 if res.ok else 1
+
+
+def _cmd_analyze(args):
+    return _analyze(args.design, args.protocols, quick=args.quick, out=args.out, device=args.device,
+                    quiet=args.quiet, tolerances=args.tolerances)
+
+
+def _cmd_designs(args):
+    from rvtool import designs
+    from rvtool.assembly import topologies
+    from rvtool.errors import RvtoolInputError
+    if args.format_doc:
+        from rvtool.designs.format import format_doc
+        sys.stdout.write(format_doc())
+        return 0
+    names = designs.design_names()
+    width = max((len(n) for n in names), default=0)
+    for n in names:
+        try:
+            d = topologies.load(n)
+            label = f"{topologies.topology_of(d)}: {d.name}"
+        except RvtoolInputError as exc:  # a shipped design that does not load is shown, not hidden
+            label = f"(does not load: {exc})"
+        print(f"{n:<{width}}  {label}  ({designs.path(n)})")
+    print("topologies: " + ", ".join(f"{t}" + ("" if topologies.available(t) is None else " (not available)")
+                                      for t in topologies.TOPOLOGIES))
+    return 0
+
+
+def _cmd_new(args):
+    from rvtool.assembly import topologies
+    from rvtool.errors import RvtoolInputError
+    name = args.name or "mine"
+    path = args.out or f"{name}.toml"
+    try:
+        topologies.get(args.topology)
+        from rvtool.designs.format import template
+        text = template(args.topology, name)
+    except RvtoolInputError as exc:
+        return _input_error(exc)
+    if os.path.exists(path):
+        return _input_error(f"{path} exists; choose another --name or --out (nothing was overwritten)")
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    print(f"{args.topology} design template written to {path}; check it with: rvtool analyze {path} --quick")
     return 0
 
 
@@ -160,12 +256,37 @@ def build_parser():
         description=f"rvtool {__version__}: precision gear reducer studies on Exudyn with Warp contact kernels.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    an = sub.add_parser("analyze", help="analyse a design: protocols, results.json, plots, report.html",
+                        description="Run protocols on DESIGN (a design file or the name of a shipped design, "
+                                    "see 'rvtool designs') and write results.json, PNG plots and a self-contained "
+                                    "report.html.")
+    an.add_argument("design", metavar="DESIGN", help="design file (TOML) or shipped design name (e.g. rd40)")
+    an.add_argument("--protocols", default=None, metavar="LIST",
+                    help="comma-separated protocols (default: all): te, stiffness, lost_motion, hysteresis, "
+                         "vibration, pressure, monte_carlo")
+    an.add_argument("--quick", action="store_true", help="short forms of the protocols (seconds each)")
+    an.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/analyze_DESIGN)")
+    an.add_argument("--device", default="cpu", metavar="DEVICE", help="auto, cpu (default) or cuda[:N]")
+    an.add_argument("--quiet", action="store_true", help="no progress output")
+    an.add_argument("--tolerances", default=None, metavar="FILE",
+                    help="tolerance file of the Monte Carlo (default: a shipped design's <name>_tolerances.toml)")
+    ds = sub.add_parser("designs", help="list the shipped designs and topologies",
+                        description="List the shipped reference designs; --format-doc prints the design file "
+                                    "format (every section and key, units, ranges) generated from the specs.")
+    ds.add_argument("--format-doc", action="store_true", help="print the design file format documentation (Markdown)")
+    nw = sub.add_parser("new", help="write a commented design template",
+                        description="Write NAME.toml: a design template of the topology with units and valid "
+                                    "ranges in comments, generated from the component specs.")
+    nw.add_argument("--topology", required=True, metavar="T", help="cycloid, rv2, rv3 or std-involute")
+    nw.add_argument("--name", default=None, help="design name and file stem (default: mine)")
+    nw.add_argument("--out", default=None, metavar="FILE", help="output file (default: NAME.toml)")
     sub.add_parser("list", help="list the cases (name and first docstring line)",
                    description="List the case scripts and the first line of each one's docstring.")
-    run = sub.add_parser("run", help="run a case in this process",
-                         description=f"Run cases/CASE.py's main(). Without CASE, runs {DEFAULT_CASE} --quick.")
+    run = sub.add_parser("run", help="run a case in this process (no CASE: a short reducer study)",
+                         description=f"Run cases/CASE.py's main(). Without CASE, runs the short reducer study "
+                                     f"'rvtool analyze {DEFAULT_STUDY[0]} --quick --protocols {DEFAULT_STUDY[1]}'.")
     run.add_argument("case", nargs="?", default=None, metavar="CASE",
-                     help=f"case name, as printed by 'rvtool list' (default: {DEFAULT_CASE}, with --quick)")
+                     help="case name, as printed by 'rvtool list' (default: the short reducer study)")
     run.add_argument("--quick", action="store_true", help="fast, reduced version of the study")
     run.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/CASE)")
     sub.add_parser("version", help="print the versions of rvtool and the packages results depend on",
@@ -185,6 +306,12 @@ def main(argv=None):
     """Entry point of the ``rvtool`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.command == "analyze":
+        return _cmd_analyze(args)
+    if args.command == "designs":
+        return _cmd_designs(args)
+    if args.command == "new":
+        return _cmd_new(args)
     if args.command == "list":
         return _cmd_list(args)
     if args.command == "run":

@@ -86,12 +86,16 @@ def test_run_writes_results(case_folder, tmp_path, capsys):
     assert str(out / "results.json") in capsys.readouterr().out
 
 
-def test_run_without_case_runs_default_quick(case_folder, tmp_path):
-    # A stand-in for the default case, so the test does not depend on the real study's cost.
-    (case_folder / f"{cli.DEFAULT_CASE}.py").write_text(DUMMY_CASE)
+def test_run_without_case_runs_the_short_reducer_study(tmp_path, monkeypatch):
+    # no cases folder needed (a wheel has none): the bare command analyses the shipped design
+    monkeypatch.setenv(cli.CASES_ENV, str(tmp_path / "no_cases_here"))
+    monkeypatch.chdir(tmp_path)
     assert cli.main(["run"]) == 0
-    data = json.loads((tmp_path / "results" / cli.DEFAULT_CASE / "results.json").read_text())
+    design, protocols = cli.DEFAULT_STUDY
+    data = json.loads((tmp_path / "results" / f"analyze_{design}" / "results.json").read_text())
     assert data["quick"] is True
+    assert data["protocols"] == protocols.split(",")
+    assert (tmp_path / "results" / f"analyze_{design}" / "report.html").is_file()
 
 
 def test_version(capsys):

@@ -178,8 +178,9 @@ def test_design_file_errors_name_the_section(tmp_path):
     bad = dict(data, crank_gear=dict(data["crank_gear"], module=-1.0))
     with pytest.raises(RvtoolInputError, match=r"crank_gear.module"):
         design_from_dict(bad)
-    bad = dict(data, main_bearing=dict(data["main_bearing"], row=dict(data["main_bearing"]["row"], n_balls=2)))
-    with pytest.raises(RvtoolInputError, match=r"main_bearing.row.n_balls"):
+    rows = [dict(data["main_bearing"]["rows"][0], n_balls=2), data["main_bearing"]["rows"][1]]
+    bad = dict(data, main_bearing=dict(data["main_bearing"], rows=rows))
+    with pytest.raises(RvtoolInputError, match=r"main_bearing.rows\[0\].n_balls"):
         design_from_dict(bad)
     bad = dict(data, crank_bearing=dict(data["crank_bearing"], row_spacing=0.001))
     with pytest.raises(RvtoolInputError, match=r"crank_bearing.row_spacing"):
@@ -215,10 +216,10 @@ def test_three_stage_ratio_and_rated_state(three_stage):
 
 
 def test_topology_sections_must_match(design, three_stage):
-    with pytest.raises(RvtoolInputError, match=r"rv_three_stage.*input_pinion"):
-        design.replace(topology="rv_three_stage")
-    with pytest.raises(RvtoolInputError, match=r"rv_two_stage.*input_pinion"):
-        three_stage.replace(topology="rv_two_stage")
+    with pytest.raises(RvtoolInputError, match=r"rv3.*input_pinion"):
+        design.replace(topology="rv3")
+    with pytest.raises(RvtoolInputError, match=r"rv2.*input_pinion"):
+        three_stage.replace(topology="rv2")
 
 
 def test_rv_tolerance_sampling(design, tmp_path):

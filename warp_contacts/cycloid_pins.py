@@ -300,3 +300,10 @@ class CycloidPinKernel:
         """Replay the recorded launch on the device-resident arrays as they are (no host
         transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``)."""
         self._cmd.launch()
+
+    def set_parameters(self, fparams):
+        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
+        launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
+        fp = np.ascontiguousarray(fparams, dtype=self.ndtype)
+        assert fp.shape == (self.n, N_FLOAT)
+        self._model[0].assign(fp)

@@ -295,7 +295,7 @@ def _kernel(dtype, velocity_tangent=True):
 
     N_SEEDS = 12 if velocity_tangent else 6
 
-    @wp.kernel(module="unique")
+    @wp.kernel(enable_backward=False, module="unique", module_options={"enable_backward": False, "max_unroll": 1})
     def eval_involute_pairs(
         # Model:
         fp: wp.array2d(dtype=dtype),

@@ -496,6 +496,13 @@ class OutputPinKernel:
         transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``)."""
         self._cmd.launch()
 
+    def set_parameters(self, fparams):
+        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
+        launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
+        fp = np.ascontiguousarray(fparams, dtype=self.ndtype)
+        assert fp.shape == tuple(self.fparams.shape)
+        self.fparams.assign(fp)
+
     def evaluate(self, pose, tilt=None):
         """Results in the layout of :mod:`output_pins_ref` (arrays owned by this object, overwritten next call).
 

@@ -41,7 +41,7 @@ from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiff
 from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile
 from ..geometry.eccentric import journal_centre, journal_velocity
-from ..model import BodyCoordinate, Family, ReducerModel
+from ..model import BodyCoordinate, ClearanceVariant, Family, ReducerModel, SeriesBeam
 from .spec import CycloidDesign, replace
 
 SHAFT = 0
@@ -112,6 +112,73 @@ class CycloidModel(ReducerModel):
     def resolution_settings(self):
         w = self.design.wheels
         return {"samples_per_tooth": w.samples_per_tooth, "n_slices": w.n_slices, "search_window": self.pin_set.window}
+
+    def series_compliance(self, family):
+        """Elastic pins (``pins.support``, ``output_pins.support``): ring pins as per-row compliance
+        inside the series line law (row = slice: n_slices C_kk for wheel k), output pins as the
+        station self-compliance C_ww per (pin, wheel) contact beside the contact approach (the
+        shared-pin closure subtracts the deflection from the approach it reports)."""
+        fam = Family(family)
+        if fam not in (Family.PINS, Family.OUTPUT_PINS):
+            return None
+        C = pin_station_compliance(self.design, fam)
+        if C is None:
+            return None
+        if fam == Family.PINS:
+            ns = self.design.wheels.n_slices
+            rows = np.array([ns * C[int(r.split("/")[0][5:]), int(r.split("/")[0][5:])]
+                             for r in self.elements["pins"].ids])
+            return SeriesBeam("ring_pin_bending", fam, rows, inside_rows=True, per_contact=False)
+        names = dict.fromkeys(r.rpartition("/")[0] for r in self.elements["output_pins"].ids)
+        c = np.array([C[int(n.split("/wheel")[1]), int(n.split("/wheel")[1])] for n in names])
+        return SeriesBeam("output_pin_bending", fam, c, inside_rows=False, per_contact=True)
+
+    def hertz_peaks(self, q):
+        """Largest Hertz line-contact peak p0 [Pa] of the loaded ring-pin, output-pin and needle
+        contacts (both races) of every wheel (:func:`rvtool.pressure.state.candidates`)."""
+        from ..pressure.state import candidates
+        out = {}
+        for fam, races in (("pins", (None,)), ("output_pins", (None,)), ("needles", ("journal", "bore"))):
+            p = [c.hertz_peak for w in range(self.n_wheels) for r in races
+                 for c in (candidates(self, q, fam, w) if r is None else candidates(self, q, fam, w, race=r))]
+            if p:
+                out[fam] = max(p)
+        return out
+
+    def clearance_variants(self):
+        """Output-pin hole clearance c_h = R_h - r_p - e (estimate 2 c_h / R_op: one pin at right
+        angles to the eccentricity closes it by a rotation c_h / R_op of the flange relative to the
+        wheel, each way), eccentric-bearing clearance c_b (estimate 2 c_b / (e z_c): a wheel shift
+        c_b across the journal turns the wheel by c_b / (e z_c) through the pin mesh, each way),
+        input-bearing clearance (estimate 2 c / (e z_c) for one wheel; 0 for opposed wheels, whose
+        tangential shifts cancel), main-bearing clearance (estimate 0: the flange centre shift does
+        not turn it) and the uniform profile clearance c_w (estimate 2 c_w / (e z_b), the largest
+        pin-force lever arm e z_b). Clearances the design does not have are left out."""
+        d = self.design
+        e, zc, zb = d.wheels.eccentricity, d.pins.n_pins - 1, d.pins.n_pins
+        op = d.output_pins
+        out = []
+        c_h = op.hole_radius - op.pin_radius - e
+        if c_h > 0:
+            out.append(ClearanceVariant(
+                "output_pin_holes", c_h, 2 * c_h / op.pin_circle_radius,
+                lambda x: replace(x, output_pins={"hole_radius": x.output_pins.pin_radius + x.wheels.eccentricity}),
+                lambda x, o: replace(x, output_pins={"hole_radius": o.output_pins.hole_radius})))
+        sections = (("eccentric_bearings", "eccentric_bearing", 2 / (e * zc)),
+                    ("input_bearing", "input_bearing", 2 / (e * zc) if d.n_wheels == 1 else 0.0),
+                    ("main_bearing", "main_bearing", 0.0))
+        for name, sec, factor in sections:
+            c = getattr(d, sec).radial_clearance
+            if getattr(getattr(d, sec), "kind", "") != "locked" and c > 0:
+                out.append(ClearanceVariant(name, c, factor * c,
+                                            lambda x, s=sec: replace(x, **{s: {"radial_clearance": 0.0}}),
+                                            lambda x, o, s=sec: replace(x, **{s: {"radial_clearance":
+                                                                                  getattr(o, s).radial_clearance}})))
+        if d.wheels.clearance > 0:
+            out.append(ClearanceVariant("profile_clearance", d.wheels.clearance, 2 * d.wheels.clearance / (e * zb),
+                                        lambda x: replace(x, wheels={"clearance": 0.0}),
+                                        lambda x, o: replace(x, wheels={"clearance": o.wheels.clearance})))
+        return out
 
     def marker_frequencies(self, speed_rpm):
         """Mesh and bearing marker frequencies [Hz] at input speed [rpm]."""
@@ -244,6 +311,11 @@ def pin_meshes(design, *, offset=0, prefix=""):
         k_line = pc.stiffness if (pc.law == "line" and pc.stiffness > 0) else secant_line_stiffness(pc.reference_force, width)
         law = NormalLaw(law="line", stiffness=k_line, damping=pc.damping, ramp_depth=1e-6)
     friction = FrictionLaw(model=FrictionModel.REGULARIZED if pc.mu > 0 else FrictionModel.NONE, mu_kinetic=pc.mu)
+    C = pin_station_compliance(d, Family.PINS)
+    if C is not None and law.law != "line":
+        raise RvtoolInputError(f"pins.support.model = {d.pins.support.model.value!r} needs a linear pin-contact law "
+                               f"(the beam in series with it is then exact); pin_contact.law = {pc.law!r}; "
+                               "valid: 'line' or 'secant'")
     profiles, meshes = [], []
     for k in range(d.n_wheels):
         phi = np.deg2rad(d.wheels.phases_deg[k])
@@ -252,8 +324,11 @@ def pin_meshes(design, *, offset=0, prefix=""):
                               equidistant_mod=d.wheels.equidistant_mod, offset_mod=d.wheels.offset_mod,
                               rotation_mod=d.wheels.rotation_mod - phi / zg)
         profiles.append(prof)
+        # elastic ring pin: the beam's self-compliance at this wheel's station in series with the
+        # linear contact law, 1/k = 1/k_c + C_kk (Eq. series_contact; allocated once per pin and station)
+        law_k = law if C is None else dataclasses.replace(law, stiffness=1.0 / (1.0 / law.stiffness + C[k, k]))
         kw = dict(profile=prof, wheel_body=offset + 1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
-                  wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,
+                  wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law_k, friction=friction,
                   name=f"{prefix}wheel{k}")
         if d.pins.centre_errors is not None:
             kw["pin_centre_errors"] = np.asarray(d.pins.centre_errors, float)
@@ -263,19 +338,48 @@ def pin_meshes(design, *, offset=0, prefix=""):
     return profiles, meshes
 
 
+def pin_station_compliance(design, family):
+    """Beam station compliance C (n_wheels, n_wheels) [m/N] of one ring pin (``Family.PINS``) or
+    output pin (``Family.OUTPUT_PINS``) at the wheel stations (midplanes, contact width = wheel
+    width; :meth:`rvtool.structure.pin_beam.PinBeam.station_compliance`), or None for a rigid pin."""
+    from ..structure.pin_beam import pin_beam
+    d = design
+    spec, section = (d.pins, "pins") if Family(family) == Family.PINS else (d.output_pins, "output_pins")
+    beam = pin_beam(spec.support, spec.pin_radius, d.material)
+    if beam is None:
+        return None
+    try:
+        return beam.station_compliance(d.wheels.midplanes, d.wheels.width)
+    except RvtoolInputError as exc:
+        raise RvtoolInputError(f"{section}.{exc}") from None
+
+
 def output_pin_mechanism(design):
-    """Plain flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach)."""
+    """Flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach):
+    plain rigid pins, or with ``output_pins.support`` elastic the shared-pin closure of Eqs.
+    (pin_compliance, pin_local_closure) with the beam's station compliance and the sleeve fixed
+    on the pin (zero sleeve clearance: the shared mode then equals the plain mode at C = 0)."""
     from ..output_pins.calibration import hertz_calibrated_coefficient
-    from ..output_pins.spec import OutputPinMechanism, PinMode
+    from ..output_pins.spec import OutputPinMechanism, PinMode, SharedPinCompliance, SleeveFit
     d = design
     op = d.output_pins
     width = d.wheels.width
     k_op = hertz_calibrated_coefficient(op.reference_force, op.pin_radius, op.hole_radius, width,
                                         d.material.youngs_modulus, d.material.poisson_ratio)
+    C = pin_station_compliance(d, Family.OUTPUT_PINS)
+    kw = {}
+    if C is not None:
+        if d.n_wheels != 2:
+            raise RvtoolInputError(f"output_pins.support.model = {op.support.model.value!r} with n_wheels = "
+                                   f"{d.n_wheels}: the elastic output pin uses the two-wheel shared-pin closure "
+                                   "(Eq. pin_local_closure); valid: n_wheels = 2 or output_pins.support.model = 'rigid'")
+        kw = dict(mode=PinMode.SHARED, sleeve=SleeveFit(clearance=0.0),
+                  compliance=SharedPinCompliance(self_compliance_0=C[0, 0], self_compliance_1=C[1, 1],
+                                                 cross_compliance=C[0, 1]))
     return OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
                               n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
                               coefficient=k_op, contact_length=width, n_slices=op.n_slices,
-                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN)
+                              wheel_midplanes=tuple(d.wheels.midplanes), **{"mode": PinMode.PLAIN, **kw})
 
 
 def lumped_bearing_contacts(design, *, offset=0, prefix=""):

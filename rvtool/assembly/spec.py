@@ -10,6 +10,7 @@ import numpy as np
 
 from ..bearings.spec import NeedleBearing
 from ..errors import RvtoolInputError
+from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
@@ -28,19 +29,32 @@ class Material:
         check_positive("material.density", self.density)
 
 
+def _support(section, value):
+    """A :class:`PinSupport` from a design sub-table (dict) or an instance; errors name
+    ``section.support.<key>``."""
+    if isinstance(value, PinSupport):
+        return value
+    if not isinstance(value, dict):
+        raise RvtoolInputError(f"{section}.support = {value!r} must be a table (model, ends, shear, shear_coefficient)")
+    return build_section(PinSupport, f"{section}.support", value)
+
+
 @dataclass(frozen=True, kw_only=True)
 class Pins:
     """Ring pins: n_pins (z_b), pin_circle_radius R_z [m], pin_radius r_p [m] (the generating
     radius of the wheel profile). Manufacturing deviations (part of the design, so a variant is
     a design): radius_error [m], the actual pin radius minus r_p; centre_errors: None or
-    (z_b, 2) pin-centre errors [m] in the housing frame."""
+    (z_b, 2) pin-centre errors [m] in the housing frame. support: the pin as a beam
+    (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-table ``[pins.support]``; rigid by default)."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
     radius_error: float = 0.0
     centre_errors: tuple | None = None
+    support: PinSupport = field(default_factory=PinSupport)
 
     def __post_init__(self):
+        object.__setattr__(self, "support", _support("pins", self.support))
         if not isinstance(self.n_pins, int) or self.n_pins < 3:
             raise RvtoolInputError(f"pins.n_pins = {self.n_pins!r} is outside the valid range [3, inf) (integer)")
         check_positive("pins.pin_circle_radius", self.pin_circle_radius)
@@ -117,15 +131,18 @@ class PinContact:
 @dataclass(frozen=True, kw_only=True)
 class OutputPins:
     """Flange pins in wheel holes: n_pins, pin_circle_radius [m], pin_radius [m], hole_radius [m],
-    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices."""
+    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices; support: the pin as a
+    beam (sub-table ``[output_pins.support]``; rigid by default)."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
     hole_radius: float
     reference_force: float = 1000.0
     n_slices: int = 4
+    support: PinSupport = field(default_factory=PinSupport)
 
     def __post_init__(self):
+        object.__setattr__(self, "support", _support("output_pins", self.support))
         check_positive("output_pins.pin_circle_radius", self.pin_circle_radius)
         check_positive("output_pins.pin_radius", self.pin_radius)
         check_range("output_pins.hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
@@ -291,15 +308,82 @@ _SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact"
              "input_bearing": BallBearingSpec, "bodies": Bodies, "housing": Housing}
 
 
+def _field_types(cls):
+    import typing
+    try:
+        return typing.get_type_hints(cls)
+    except Exception:  # an annotation that does not resolve: no type check for that spec
+        return {}
+
+
+_TOML_KINDS = {float: "a number", int: "an integer", str: "text", bool: "true or false", tuple: "a list"}
+
+
+def _type_ok(value, tp):
+    """Whether a design-file value fits the field annotation ``tp`` (bool is not a number; a list
+    fits a tuple; a spec section fits its dataclass; Enum fields take their text value)."""
+    import enum
+    import types
+    import typing
+    if tp is None or tp is typing.Any or tp is object:
+        return True
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        return any(_type_ok(value, a) for a in typing.get_args(tp))
+    if tp is type(None):
+        return value is None
+    if origin is not None:
+        tp = origin
+    if not isinstance(tp, type):
+        return True
+    if tp is float:
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+    if tp is int:
+        return isinstance(value, int) and not isinstance(value, bool)
+    if tp is bool:
+        return isinstance(value, bool)
+    if tp in (tuple, list):
+        return isinstance(value, (list, tuple))
+    if issubclass(tp, enum.Enum):
+        return isinstance(value, (str, tp))
+    if tp is str:
+        return isinstance(value, str)
+    return True
+
+
+def _check_finite_numbers(key, value):
+    """NaN and infinity are never design values (TOML can write them: ``nan``, ``inf``)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise RvtoolInputError(f"{key} = {value!r} must be finite (valid range: finite real numbers)")
+    if isinstance(value, (list, tuple)):
+        for v in value:
+            _check_finite_numbers(key, v)
+
+
+def _check_type(key, value, tp):
+    _check_finite_numbers(key, value)
+    if not _type_ok(value, tp):
+        import typing
+        args = [a for a in (typing.get_args(tp) or (tp,)) if a is not type(None)]
+        want = " or ".join(dict.fromkeys(_TOML_KINDS.get(typing.get_origin(a) or a, getattr(a, "__name__", str(a)))
+                                         for a in args))
+        raise RvtoolInputError(f"{key} = {value!r} has the wrong type; valid: {want}")
+
+
 def build_section(cls, section, data):
     """Construct the component spec ``cls`` from the design-file table ``data`` of ``[section]``:
     lists become tuples, unknown keys and type errors are reported with the section name, and a
     component's own validation error is prefixed with the section so it names the key path
     (e.g. ``wheels.eccentricity``). Every topology's design loader uses this one function."""
+    if not isinstance(data, dict):
+        raise RvtoolInputError(f"[{section}] must be a table of keys; got {type(data).__name__} {data!r}")
     names = {f.name for f in dataclasses.fields(cls)}
     unknown = set(data) - names
     if unknown:
         raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(names)}")
+    hints = _field_types(cls)
+    for k, v in data.items():
+        _check_type(k if section == "design" else f"{section}.{k}", v, hints.get(k))
     kw = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
     try:
         return cls(**kw)
@@ -313,6 +397,10 @@ def build_section(cls, section, data):
 
 def design_from_dict(d):
     d = dict(d)
+    topology = d.pop("topology", "cycloid")   # the key of rvtool.assembly.topologies; this loader is the cycloid's
+    if topology != "cycloid":
+        raise RvtoolInputError(f"topology = {topology!r}: this is the cycloid loader; load the file with "
+                               "rvtool.load_design (rvtool.assembly.topologies), which picks the topology's loader")
     kw = {}
     for sec, cls in _SECTIONS.items():
         if sec not in d and sec not in ("bodies", "housing"):

@@ -19,7 +19,7 @@ from ..geometry.cycloid import CycloidProfile, pin_centres
 from ..validation import check_finite, check_nonnegative, check_positive
 from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel, NormalLaw
-from .evaluator import Evaluation, all_finite
+from .evaluator import Evaluation, all_finite, gap_offset_rows
 
 
 def palmgren_line_approach(force, length):
@@ -280,6 +280,18 @@ class CycloidPinSet:
         if evaluation is not None:
             return np.array(evaluation.obs, float)
         return np.array(self.raw(pose, vel)[3], float)
+
+    def set_gap_offsets(self, offsets):
+        """Gap offsets [m] per slice row (positive opens the gap), added to the deviation sum e of
+        Eq. (gap), absolute over the built rows; zeros restore the built rows bit for bit."""
+        off = gap_offset_rows(offsets, self.n_contacts, self.name)
+        if not hasattr(self, "_built_fparams"):
+            self._built_fparams = self.fparams.copy()
+        fp = self._built_fparams.copy()
+        fp[:, ref.C_E] += off
+        self.fparams = fp
+        if self.backend == "warp":
+            self._kernel.set_parameters(fp)
 
     def pin_forces(self, obs):
         """Per mesh, per pin: normal force summed over the slices [N] -> (n_meshes, z_b)."""

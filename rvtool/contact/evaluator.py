@@ -30,6 +30,18 @@ class Evaluation:
     finite: bool
 
 
+def gap_offset_rows(offsets, n, name):
+    """Checked per-row gap offsets [m] (shape (n,), finite) of the contact set ``name``."""
+    off = np.array(offsets, dtype=np.float64)
+    if off.shape != (n,):
+        raise RvtoolInputError(f"gap offsets of contact set {name!r} must have shape ({n},), one per observation "
+                               f"row; got {off.shape}")
+    if not np.all(np.isfinite(off)):
+        raise RvtoolInputError(f"gap offsets of contact set {name!r} must be finite [m] (valid range: finite reals); "
+                               f"non-finite at rows {np.flatnonzero(~np.isfinite(off))[:4].tolist()}")
+    return off
+
+
 def all_finite(*arrays):
     """True if every entry is finite; one summation per array (a NaN or inf propagates into
     the sum, and overflow of a finite sum is impossible at contact-force magnitudes)."""
@@ -137,6 +149,20 @@ class ContactSetEvaluator:
         return Evaluation(Q, self.assembler.matrix(np.asarray(dq, np.float64)),
                           self.assembler.matrix(np.asarray(dv, np.float64)), np.array(obs, np.float64),
                           tuple(np.array(a) for a in trial), finite)
+
+    def set_gap_offsets(self, offsets):
+        """Gap offsets [m] per contact (positive opens the gap), absolute over the built
+        parameters: the enclosing radius R_B of an internal contact grows by the offset, the
+        radius r_B of an external one shrinks by it. Zeros restore the built rows bit for bit."""
+        off = gap_offset_rows(offsets, self.n_contacts, self.name)
+        if not hasattr(self, "_built_fparams"):
+            self._built_fparams = self.fparams.copy()
+        fp = self._built_fparams.copy()
+        sign = np.where(self.iparams[:, circle_pairs_ref.I_INTERNAL] != 0, 1.0, -1.0)
+        fp[:, circle_pairs_ref.P_RB] += sign * off
+        self.fparams = fp
+        if self.backend == "warp":
+            self._kernel.set_parameters(fp)
 
     def commit(self, pose, vel, evaluation=None):
         """Evaluate at the accepted state from the committed history and commit the result.

@@ -21,3 +21,31 @@ def path(name):
     if not p.is_file():
         raise RvtoolInputError(f"design = {name!r} is not a shipped design; valid choices are {names()}")
     return str(p)
+
+
+def kind(name):
+    """What a shipped file holds: "tolerances" (a ``[tolerances]`` table, the Monte Carlo's input),
+    "sweep" (a ``study`` key, ``rvtool sweep``'s input), "allowables" (an ``[allowables]`` table, the
+    datasheet's input) or "design" (a reducer design)."""
+    import tomllib
+    with open(path(name), "rb") as fh:
+        table = tomllib.load(fh)
+    if "tolerances" in table:
+        return "tolerances"
+    if "study" in table:
+        return "sweep"
+    if "allowables" in table:
+        return "allowables"
+    return "design"
+
+
+def design_names():
+    """Names of the shipped reducer designs (tolerance, sweep and allowables files left out)."""
+    return [n for n in names() if kind(n) == "design"]
+
+
+def tolerances_of(name):
+    """Name of the shipped tolerance file of shipped design ``name`` (``<name>_tolerances``), or None."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    companion = f"{stem}_tolerances"
+    return companion if companion in names() and kind(companion) == "tolerances" else None

@@ -137,6 +137,46 @@ class FamilyObservation:
         return {k: np.array(v) for k, v in out.items()}
 
 
+@dataclass(frozen=True)
+class SeriesBeam:
+    """A beam (an elastic pin) in series with a family's contacts, for the stiffness budget.
+
+    path: budget entry name (e.g. ``"ring_pin_bending"``); family: the contact family; compliance [m/N]: per observation row
+    (``per_contact`` False) or per physical contact in :meth:`FamilyObservation.per_contact`
+    order (True, the beam loaded by the contact's resultant); inside_rows: True where the rows'
+    observed approach (-gap) already contains the beam's deflection (a series law), False where
+    the contact law sees only the contact approach (the beam acts on the resultant beside it)."""
+    path: str
+    family: Family
+    compliance: np.ndarray
+    inside_rows: bool
+    per_contact: bool
+
+    def energy(self, model, q, dF_rows):
+        """sum c F'^2 [m/N x (N per unit)^2]: the beam's strain energy (x2) for row force increments dF_rows."""
+        if not self.per_contact:
+            return float(np.sum(self.compliance * dF_rows ** 2))
+        ob = model.observe(q, self.family)
+        contact = [physical_contact(r) for r in ob.ids]
+        names = list(dict.fromkeys(contact))
+        index = {c: k for k, c in enumerate(names)}
+        sums = np.zeros(len(names))
+        np.add.at(sums, [index[c] for c in contact], dF_rows)
+        return float(np.sum(self.compliance * sums ** 2))
+
+
+@dataclass(frozen=True)
+class ClearanceVariant:
+    """One clearance of a design for the lost-motion budget: name, its value [m], the closed-form
+    kinematic estimate of its lost motion [rad] (output angle), ``remove(design)`` -> the design
+    without it and ``restore(design, original)`` -> ``design`` with the original's value back."""
+    name: str
+    value: float
+    estimate_rad: float
+    remove: object
+    restore: object
+
+
 @dataclass
 class ReducerModel:
     """An assembled reducer (see the module docstring for the contract).
@@ -293,11 +333,32 @@ class ReducerModel:
         return FamilyObservation(Family(family), tuple(el.ids[i] for i in rows), obs[rows])
 
     def family_peaks(self, q):
-        """{family value: largest row normal force [N]} at the static state q."""
+        """{family value: largest row normal force [N]} (one slice or lamina) at the static state q;
+        :meth:`family_contact_peaks` gives the per-contact figure."""
         out = {}
         for fam, (name, rows) in self.families.items():
             out[fam.value] = float(np.max(self.elements[name].evaluation_at(q).obs[rows, O_FN]))
         return out
+
+    def family_contact_peaks(self, q):
+        """{family value: largest normal force of one physical contact [N]} at the static state
+        q: the rows (slices, laminae) of each contact summed first (:meth:`FamilyObservation.per_contact`),
+        the load a pin, a roller or a ball carries. :meth:`family_peaks` gives the largest row."""
+        return {fam.value: float(np.max(self.observe(q, fam).per_contact()[1])) for fam in self.families}
+
+    def series_compliance(self, family):
+        """The :class:`SeriesBeam` in series with ``family``'s contacts (elastic pins), or None
+        (rigid pins, the "nothing" variant)."""
+        return None
+
+    def hertz_peaks(self, q):
+        """{family group: largest Hertz peak pressure [Pa]} of the loaded contacts at state q, where
+        the topology provides the local contact geometry; {} otherwise."""
+        return {}
+
+    def clearance_variants(self):
+        """[:class:`ClearanceVariant`]: the design's clearances in the lost-motion budget's order."""
+        return []
 
     def mesh_width_moments(self, q):
         """Eq. (width_resultant) moments of the main mesh per member, where the topology
@@ -325,6 +386,35 @@ class ReducerModel:
                       scale_units="xy", scale=1, width=0.003, color="r" if fam == self.main_mesh else "b")
         ax.set_aspect("equal")
         ax.set(xlabel="x [m]", ylabel="y [m]")
+
+    def set_gap_offsets(self, family, offsets):
+        """Slow-state gap offsets [m] of ``family``: ``offsets`` maps physical contact ids (those of
+        :meth:`FamilyObservation.per_contact`) to an offset (positive opens the gap; unnamed
+        contacts 0), written into the family's contact element for the next contact evaluation.
+        Absolute, not increments; all zeros restore the built element bit for bit."""
+        try:
+            name, rows = self.families[Family(family)]
+        except (KeyError, ValueError):
+            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
+                                   f"{[f.value for f in self.families]}") from None
+        el = self.elements[name]
+        contact = [physical_contact(el.ids[i]) for i in rows]
+        unknown = sorted(set(offsets) - set(contact))
+        if unknown:
+            raise RvtoolInputError(f"gap offsets name contacts {unknown[:4]} that family {Family(family).value!r} "
+                                   f"lacks; valid: {list(dict.fromkeys(contact))[:4]} ...")
+        full = np.array(el.gap_offsets, dtype=np.float64)
+        full[rows] = [float(offsets.get(c, 0.0)) for c in contact]
+        el.set_gap_offsets(full)
+
+    def gap_offsets(self, family):
+        """{physical contact id: gap offset [m]} in force for ``family`` (first row of each contact)."""
+        name, rows = self.families[Family(family)]
+        el = self.elements[name]
+        out = {}
+        for i in rows:
+            out.setdefault(physical_contact(el.ids[i]), float(el.gap_offsets[i]))
+        return out
 
     def family_element(self, family):
         """The contact element that carries ``family`` (fault injection, per-step sums)."""

@@ -13,7 +13,7 @@ this family, so dQ/dv = 0.
 import numpy as np
 
 from rvtool.contact.assembly import BlockAssembler
-from rvtool.contact.evaluator import Evaluation, all_finite
+from rvtool.contact.evaluator import Evaluation, all_finite, gap_offset_rows
 from warp_contacts import circle_pairs_ref as cref
 from warp_contacts import output_pins_ref as ref
 
@@ -119,6 +119,29 @@ class OutputPinEvaluator:
         K = self.assembler.matrix(np.asarray(r["dQdq"], np.float64))
         finite = all_finite(Q, K)
         return Evaluation(Q, K, np.zeros_like(K), self._observations(r["slices"]), (), finite)
+
+    def set_gap_offsets(self, offsets):
+        """Gap offsets [m] per observation row (positive opens the gap), written to u_off of
+        Eq. (output_gap) of the row's (pin, wheel) contact, absolute over the built parameters;
+        the slices of one contact must carry one offset. Zeros restore the built rows bit for bit."""
+        off = gap_offset_rows(offsets, len(self.ids), self.name)
+        ns = self.mechanism.n_slices
+        per_contact = off.reshape(-1, ns)
+        if np.any(per_contact != per_contact[:, :1]):
+            raise RvtoolInputError(f"gap offsets of {self.name!r} differ between the slices of one (pin, wheel) "
+                                   "contact; valid: one offset per contact (u_off is a contact parameter)")
+        u = per_contact[:, 0]
+        if not hasattr(self, "_built_fparams"):
+            self._built_fparams = self.fparams.copy()
+        fp = self._built_fparams.copy()
+        if self.mode == PinMode.SHARED:           # rows per pin, ids per (pin, wheel 0/1)
+            fp[:, ref.P_OFF0] += u[0::2]
+            fp[:, ref.P_OFF1] += u[1::2]
+        else:                                      # rows per (pin, wheel), in id order
+            fp[:, ref.Q_OFF] += u
+        self.fparams = fp
+        if self.backend == "warp":
+            self._kernel.set_parameters(fp)
 
     def commit(self, pose, vel, evaluation=None):
         """Observation array (N, 8) at the accepted state (nothing to commit).

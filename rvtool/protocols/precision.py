@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 
+from .. import progress
 from ..solver.static import StaticSolver
 
 
@@ -51,7 +52,8 @@ def mesh_forces(model, q):
 def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, warm_start=True):
     """Sequence of equilibria at prescribed input angles under output torque ``torque`` [N m]
     (applied to resist the nominal output rotation). Returns angle histories, TE [rad],
-    per-family peak loads over the sequence and solver statistics.
+    per-family peak loads over the sequence (``peak_loads``: largest row, a slice or lamina;
+    ``peak_contact_loads``: largest physical contact, rows summed) and solver statistics.
 
     warm_start: start each point from the previous equilibrium (dense sequences); False
     starts every point with the solver's stiffness homotopy from the kinematic state, which
@@ -63,10 +65,10 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
     i_out = model.output_index
     ref_out = model.reference_value(model.output)
     th_in, th_out = [], []
-    peaks = {}
+    peaks, contact_peaks = {}, {}
     prev = None
     t0 = time.perf_counter()
-    for k, a in enumerate(input_angles):
+    for k, a in enumerate(progress.track(input_angles, desc="quasi-static TE", unit="point")):
         q = solver.solve(a, prev if warm_start else None)
         a = solver.last_angle      # the solved angle (a kink shift of <= 1e-5 rad is recorded, not hidden)
         prev = a
@@ -74,12 +76,14 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
         th_out.append(ref_out + q[i_out])
         for fam, f in model.family_peaks(q).items():
             peaks[fam] = max(peaks.get(fam, 0.0), f)
+        for fam, f in model.family_contact_peaks(q).items():
+            contact_peaks[fam] = max(contact_peaks.get(fam, 0.0), f)
         if record is not None:
             record(k, a, q)
     wall = time.perf_counter() - t0
     th_in, th_out = np.array(th_in), np.array(th_out)
     return {"theta_in": th_in, "theta_out": th_out, "te": transmission_error(th_in, th_out, ratio, unwrap=False),
-            "peak_loads": peaks, "stats": solver.stats.to_dict(), "wall_s": wall,
+            "peak_loads": peaks, "peak_contact_loads": contact_peaks, "stats": solver.stats.to_dict(), "wall_s": wall,
             "regularization_max": model.regularization_force(solver.q)}
 
 
@@ -108,16 +112,18 @@ def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, 
     ref_out = model.reference_value(model.output)
     t_rec, th_in, th_out = [0.0], [q0[i_in]], [ref_out + q0[i_out]]
 
-    def record(t, q, v):
-        t_rec.append(t)
-        th_in.append(q[i_in])
-        th_out.append(ref_out + q[i_out])
-
     import dataclasses
     spec = dataclasses.replace(run_spec, end_time=duration)
     if on_start is not None:
         on_start()
-    rec = simulate(mbs, spec, model.contact_elements(), observers, before_accept=record, out_dir=out_dir)
+    with progress.task(duration, desc="dynamic TE run", unit="s") as advance:
+        def record(t, q, v):
+            t_rec.append(t)
+            th_in.append(q[i_in])
+            th_out.append(ref_out + q[i_out])
+            advance(t)
+
+        rec = simulate(mbs, spec, model.contact_elements(), observers, before_accept=record, out_dir=out_dir)
     t_rec, th_in, th_out = map(np.array, (t_rec, th_in, th_out))
     te = transmission_error(th_in, th_out, ratio)
     n_uniform = max(16, int(round(duration / run_spec.step)))

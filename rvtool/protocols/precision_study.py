@@ -12,9 +12,14 @@ from ..units import ARCSEC_PER_RAD
 from .precision import dynamic_te, mesh_forces, quasi_static_te, te_metrics
 
 
+FAMILIES = ("pins", "eccentric_bearings", "main_bearings", "output_pins", "input_bearings")
+
+
 def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_per_mesh=None,
-                    output_revolutions=None, dynamic_duration=None, dynamic_step=2e-5):
-    """Run the precision protocol on ``design``; returns the results dict (issue 5 keys)."""
+                    output_revolutions=None, dynamic_duration=None, dynamic_step=2e-5, allowables=None):
+    """Run the precision protocol on ``design``; returns the results dict (issue 5 keys, and issue 21's
+    ``peak_slice_loads_N``, ``stiffness_budget``, ``lost_motion_budget_arcmin`` and ``datasheet``;
+    allowables: :class:`~rvtool.protocols.datasheet.Allowables`, default RD-40's declared table)."""
     t_all = time.perf_counter()
     model = build(design, bearing_model=bearing_model)
     ratio = model.ratio
@@ -30,7 +35,7 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
     model.set_output_torque(-np.sign(ratio) * T)
     q_rated = solver.solve(0.0)
     F_rated = mesh_forces(model, q_rated)
-    peaks_rated = model.family_peaks(q_rated)
+    peaks_rated = model.family_contact_peaks(q_rated)
 
     # quasi-static TE over the interval
     qs = quasi_static_te(model, torque=T, input_angles=angles)
@@ -49,21 +54,28 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
                                else abs(ratio) * 60.0 / design.input_speed_rpm)
     dyn_model = build(design, bearing_model=bearing_model)
     spec = RunSpec(end_time=dur, step=dynamic_step, abs_tol=1e-6, rel_tol=1e-8)
-    from ..observe import ObserverRegistry, WholeRun
+    from ..observe import ContactPeaks, ObserverRegistry, WholeRun
     observers = ObserverRegistry()
     whole = WholeRun()
     observers.register("whole_run", whole)
+    contact_peaks = ContactPeaks()
+    observers.register("contact_peaks", contact_peaks)
     dyn = dynamic_te(dyn_model, torque=T, speed_rpm=design.input_speed_rpm, duration=dur, run_spec=spec,
                      out_dir=out_dir, observers=observers)
     acc = whole.accumulator
-    dyn_peaks = {}
+    dyn_peaks, dyn_slice_peaks = {}, {}
     for fam, prefix in (("pins", "wheel"), ("output_pins", "output_pins"), ("eccentric_bearings", "eccentric_bearing"),
                         ("main_bearings", "main_bearing"), ("input_bearings", "input_bearing")):
         sel = [i for i, cid in enumerate(acc.ids) if cid.startswith(prefix)]
         if sel:
-            dyn_peaks[fam] = float(np.max(acc.F_pk[sel]))
+            dyn_slice_peaks[fam] = float(np.max(acc.F_pk[sel]))
+            dyn_peaks[fam] = contact_peaks.peak(prefix)
     rec = dyn["record"]
     dyn_met = te_metrics(dyn["te_uniform"], n_revolutions=dur * design.input_speed_rpm / 60.0 / abs(ratio))
+
+    # issue 21: stiffness and lost-motion budgets, datasheet with declared allowables
+    honest = honest_figures(design, model, q_rated, quick=quick, bearing_model=bearing_model,
+                            peaks_rated=peaks_rated, allowables=allowables)
 
     results = {
         "ratio_nominal": float(ratio),
@@ -75,11 +87,10 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
         "te_interval": {"output_revolutions": revs, "points": n_pts, "points_per_mesh_cycle": ppm,
                         "mesh_cycle": "2 pi / z_b of input rotation"},
         "pin_forces_at_rated_N": F_rated,
-        "peak_loads_N": {"pins": qs["peak_loads"].get("pins"),
-                         "eccentric_bearings": qs["peak_loads"].get("eccentric_bearings"),
-                         "main_bearings": qs["peak_loads"].get("main_bearings"),
-                         "output_pins": qs["peak_loads"].get("output_pins"),
-                         "input_bearings": qs["peak_loads"].get("input_bearings")},
+        # per physical contact (slices and laminae summed): the load a pin, roller or ball carries
+        "peak_loads_N": {f: qs["peak_contact_loads"].get(f) for f in FAMILIES},
+        # per row (one axial slice or lamina): the figures reported as peak loads before issue 21
+        "peak_slice_loads_N": {f: qs["peak_loads"].get(f) for f in FAMILIES},
         "peak_loads_at_rated_N": peaks_rated,
         "n_active_pins": (F_rated > 1e-6 * max(F_rated.max(), 1.0)).sum(axis=1),
         "wall_s": time.perf_counter() - t_all,
@@ -99,9 +110,15 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
                     "te_orders": dyn_met["peak_orders"], "te_order_amplitudes_arcsec": dyn_met["peak_amplitudes"] * ARCSEC_PER_RAD,
                     "max_residual": rec.max_residual, "min_step_s": rec.to_dict()["min_step_s"],
                     "peak_loads_N": dyn_peaks,
-                    "peak_loads_source": "accepted-step observers (WholeRun F_pk per contact identity)"},
+                    "peak_slice_loads_N": dyn_slice_peaks,
+                    "peak_loads_source": "accepted-step observers: ContactPeaks (rows summed per physical "
+                                         "contact, then the largest step) and WholeRun F_pk (per row)"},
         "width_moments_at_rated_Nm": model.mesh_width_moments(q_rated),
+        "stiffness_budget": honest["stiffness_budget"],
+        "lost_motion_budget_arcmin": honest["lost_motion_budget_arcmin"],
+        "datasheet": honest["datasheet"],
     }
+    _budget_plots(honest, out_dir)
     _plots(model, q_rated, F_rated, qs, met, dyn, out_dir, revs)
     settings = {"design": design.name, "bearing_model": bearing_model, "run_spec_dynamic": spec.to_dict(),
                 **model.resolution_settings(), "quick": quick}
@@ -136,3 +153,87 @@ def _plots(model, q, F, qs, met, dyn, out_dir, revs):
     ax.set(xlabel="pin index (clockwise from +y)", ylabel="normal force [N]", title="pin forces at the rated state")
     ax.legend(fontsize=8)
     casekit.save_figure(fig, out_dir, "pin_forces")
+
+
+def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated, allowables=None):
+    """Issue 21 figures at the rated state q_rated of ``model``: the stiffness budget (energy shares
+    and switch-to-rigid shares, :mod:`rvtool.protocols.budget`), the lost-motion budget at +-3 %
+    with its closed-form estimates, the branch stiffness slopes and catalogue secant (stiffness
+    sequence; --quick: 25 % level steps), the default-resolution error of the rated peak pin
+    force against 8x the profile samples, and the datasheet against ``allowables``."""
+    from .. import designs
+    from .budget import lost_motion_budget, stiffness_budget
+    from .datasheet import datasheet, load_allowables
+    from .stiffness import TorqueSequence, branch_fits, quasi_static_stiffness
+    from ..units import RAD_PER_ARCMIN
+    t0 = time.perf_counter()
+    allowables = allowables or load_allowables(designs.path("rd40_allowables"))
+    sb = stiffness_budget(model, q_rated)
+    energy = sb["shares"]
+    stiffness = {"shares": energy, "rigid_shares": sb["rigid_shares"],
+                 "rigid_minus_energy": {f: sb["rigid_shares"][f] - energy[f] for f in sb["rigid_shares"]},
+                 "rigid_shares_sum": float(sum(sb["rigid_shares"].values())),
+                 "K_t_Nm_per_arcmin": sb["K_t_Nm_per_arcmin"], "residual_entry": sb["residual"],
+                 "difference": "energy shares sum to one (springs in series share the compliance by their "
+                               "compliance); the switch-to-rigid shares add the internal relaxation a family "
+                               "permits elsewhere (the wheels float on bearings, output pins and ring pins at "
+                               "once, in parallel), so they exceed the energy shares and sum above one"}
+    lm = lost_motion_budget(design, bearing_model=bearing_model)
+    lm_out = dict(lm["budget_arcmin"])
+    lm_out["estimates"] = lm["estimates_arcmin"]
+    lm_out["total"] = lm["total_arcmin"]
+    step = 0.25 if quick else None
+    seq = TorqueSequence(rated_torque=design.rated_torque, **({"loading_step": step, "other_step": step} if quick else {}))
+    st = quasi_static_stiffness(build(design, bearing_model=bearing_model), seq)
+    fits = branch_fits(st["torque_Nm"], st["angle_arcmin"], st["labels"], design.rated_torque)
+    tq, ang = np.asarray(st["torque_Nm"]), np.asarray(st["angle_arcmin"])
+    i50 = int(np.flatnonzero(np.isclose(tq, 0.5 * design.rated_torque))[0])
+    i100 = int(np.flatnonzero(np.isclose(tq, design.rated_torque))[0])
+    secant = float((tq[i100] - tq[i50]) / (ang[i100] - ang[i50]))
+    # default resolution: rated peak pin force at the default against 8x the profile samples
+    fine = design
+    for _ in range(3):
+        fine = build(fine, bearing_model=bearing_model).refined_design()
+    m_fine = build(fine, bearing_model=bearing_model)
+    m_fine.set_output_torque(-np.sign(m_fine.ratio) * design.rated_torque)
+    f_fine = m_fine.family_contact_peaks(StaticSolver(m_fine).solve(0.0))["pins"]
+    res_err = float(abs(peaks_rated["pins"] - f_fine) / f_fine)
+    sheet = datasheet(rated_torque=design.rated_torque, ratio=float(model.ratio),
+                      branch_slopes={b: f["K_Nm_per_arcmin"] for b, f in fits.items()}, secant=secant,
+                      lost_motion_arcmin=lm["total_arcmin"], hertz_peaks=model.hertz_peaks(q_rated),
+                      pin_bending_stress=None,
+                      bearing_loads={f: v for f, v in peaks_rated.items() if f not in ("pins", "output_pins")},
+                      resolution_error=res_err, allowables=allowables)
+    sheet["resolution_error"]["reference"] = {"default": model.resolution_settings(),
+                                              "refined_samples_per_tooth": fine.wheels.samples_per_tooth,
+                                              "peak_pin_force_default_N": peaks_rated["pins"],
+                                              "peak_pin_force_refined_N": f_fine}
+    return {"stiffness_budget": stiffness, "lost_motion_budget_arcmin": lm_out, "datasheet": sheet,
+            "wall_s": time.perf_counter() - t0}
+
+
+def _budget_plots(h, out_dir):
+    import matplotlib.pyplot as plt
+
+    from .. import casekit
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4))
+    sb = h["stiffness_budget"]
+    names = list(sb["shares"])
+    ax[0].barh(names, [sb["shares"][n] for n in names], label="energy share (condensed tangent)")
+    ax[0].barh(list(sb["rigid_shares"]), list(sb["rigid_shares"].values()), height=0.4, label="switch to rigid")
+    ax[0].set(xlabel="share of output compliance [-]", title=f"stiffness budget, K_t {sb['K_t_Nm_per_arcmin']:.1f} N m/arcmin")
+    ax[0].legend(fontsize=7)
+    lm = h["lost_motion_budget_arcmin"]
+    parts = [k for k in lm if k not in ("estimates", "total")]
+    ax[1].barh(parts, [lm[k] for k in parts], label="simulated")
+    est = [lm["estimates"].get(k, np.nan) for k in parts]
+    ax[1].plot(est, parts, "k|", ms=14, label="closed-form estimate")
+    ax[1].set(xlabel="arcmin", title=f"lost motion +-3 %: {lm['total']:.3f} arcmin")
+    ax[1].legend(fontsize=7)
+    ds = h["datasheet"]
+    rows = [(k, v) for k, v in ds.items() if v.get("allowable") is not None and v.get("value") is not None]
+    ratio = [v["value"] / v["allowable"] for _, v in rows]
+    ax[2].barh([k for k, _ in rows], ratio, color=["g" if v["meets_allowable"] else "r" for _, v in rows])
+    ax[2].axvline(1.0, color="k", lw=0.8)
+    ax[2].set(xlabel="value / allowable", title="datasheet (green: pass)")
+    casekit.save_figure(fig, out_dir, "budgets_datasheet")

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import progress
 from ..errors import RvtoolInputError
 from ..validation import check_positive, check_range
 from ..solver.continuation import Continuation
@@ -162,6 +163,17 @@ def condensed_tangent(model, q):
     """K_t [N m/rad] of Eq. (obs_condensed_stiffness) at state q: K^s assembled from the
     contact Jacobians (K^s = -dQ/dq) and the regularization springs over the free
     coordinates (all but the drive and locks), condensed on the output rotation."""
+    K = assembled_stiffness(model, q)
+    fixed = model.fixed_coordinates()
+    i_out = model.output_index
+    r = [i for i in range(len(q)) if i not in fixed and i != i_out]
+    k_rr = K[np.ix_(r, r)]
+    return float(K[i_out, i_out] - K[i_out, r] @ np.linalg.solve(k_rr, K[r, i_out]))
+
+
+def assembled_stiffness(model, q):
+    """K^s (n, n) [N/m, N m/rad] at state q over all coordinates: minus the contact Jacobians
+    plus the regularization springs (Eq. obs_condensed_stiffness before condensation)."""
     n = len(q)
     K = np.zeros((n, n))
     for el in model.contact_elements():
@@ -169,11 +181,16 @@ def condensed_tangent(model, q):
         K[np.ix_(ltg, ltg)] -= el.evaluation_at(q).dQdq
     for i, k in model.regularization_stiffness():
         K[i, i] += k
+    return K
+
+
+def free_stiffness(model, q):
+    """(K^s over the free coordinates (all but the drive and the locks), their global indices,
+    the position of the output rotation among them)."""
     fixed = model.fixed_coordinates()
-    i_out = model.output_index
-    r = [i for i in range(n) if i not in fixed and i != i_out]
-    k_rr = K[np.ix_(r, r)]
-    return float(K[i_out, i_out] - K[i_out, r] @ np.linalg.solve(k_rr, K[r, i_out]))
+    free = [i for i in range(len(q)) if i not in fixed]
+    K = assembled_stiffness(model, q)
+    return K[np.ix_(free, free)], free, free.index(model.output_index)
 
 
 # -- path (b): quasi-static continuation ----------------------------------------------
@@ -195,7 +212,7 @@ def quasi_static_stiffness(model, sequence: TorqueSequence, *, input_angle=0.0, 
     i_out = model.output_index
     th_kin = model.kinematic_output(input_angle)
     angles, sums, maxs, reg = [], [], [], []
-    for k, t in enumerate(torques):
+    for k, t in enumerate(progress.track(torques, desc="stiffness levels", unit="level")):
         q = cont.go_to(float(t))
         angles.append((q[i_out] - th_kin) / RAD_PER_ARCMIN)
         s, m = mesh_contact_stats(model, q)
@@ -280,7 +297,7 @@ def dynamic_stiffness(model, sequence: TorqueSequence, *, step=2e-5, input_angle
     t_prev = 0.0
     angles, spans, sums, maxs = [], [], [], []
     t_ramp = sequence.ramp_steps * step
-    for k, t_lvl in enumerate(torques):
+    for k, t_lvl in enumerate(progress.track(torques, desc="dynamic stiffness levels", unit="level")):
         a, b = t_prev, float(t_lvl)
         run_chunk(sequence.ramp_steps, lambda t, a=a, b=b: a + (b - a) * min(t / t_ramp, 1.0))
         for attempt in range(1 + max_extra_dwells):

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import progress
 from ..errors import RvtoolInputError
 from ..validation import check_positive
 from ..solver.continuation import Continuation
@@ -160,16 +161,18 @@ def driven_response(model, protocol: VibrationProtocol, run_spec, *, coordinates
     rec_t, rec_in, rec_out = [0.0], [q0[i_in]], [ref_out + q0[i_out]]
     rec_x = {n: [q0[i]] for n, i in idx.items()}
 
-    def record(t, q, v):
-        rec_t.append(t)
-        rec_in.append(q[i_in])
-        rec_out.append(ref_out + q[i_out])
-        for n, i in idx.items():
-            rec_x[n].append(q[i])
-
     spec = dataclasses.replace(run_spec, end_time=protocol.duration)
     t0 = time.perf_counter()
-    rec = simulate(mbs, spec, model.contact_elements(), observers, before_accept=record, out_dir=out_dir)
+    with progress.task(protocol.duration, desc="driven run", unit="s") as advance:
+        def record(t, q, v):
+            rec_t.append(t)
+            rec_in.append(q[i_in])
+            rec_out.append(ref_out + q[i_out])
+            for n, i in idx.items():
+                rec_x[n].append(q[i])
+            advance(t)
+
+        rec = simulate(mbs, spec, model.contact_elements(), observers, before_accept=record, out_dir=out_dir)
     t, th_in, th_out = map(np.array, (rec_t, rec_in, rec_out))
     resp = {"torsion": transmission_error(th_in, th_out, ratio)}
     resp.update({n: np.array(x) for n, x in rec_x.items()})

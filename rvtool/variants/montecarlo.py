@@ -40,7 +40,6 @@ import json
 import math
 import multiprocessing
 import os
-import sys
 import tempfile
 import time
 from dataclasses import dataclass
@@ -367,20 +366,3 @@ def summarize(records, figures=FIGURES, level=0.95):
                    "mean_ci": [mean - half, mean + half], "p95_ci": list(order_statistic_ci(x, 0.95, level)),
                    "min": float(x[0]), "max": float(x[-1])}
     return out
-
-
-def text_progress(stream=None, label="variants", width=30):
-    """A progress(done, total) callback drawing a plain text bar on ``stream`` (stderr)."""
-    stream = stream or sys.stderr
-    t0 = time.perf_counter()
-
-    def progress(done, total):
-        frac = done / total if total else 1.0
-        bar = "#" * int(round(width * frac))
-        el = time.perf_counter() - t0
-        stream.write(f"\r[{bar:<{width}}] {done}/{total} {label} {el:7.1f} s")
-        if done >= total:
-            stream.write("\n")
-        stream.flush()
-
-    return progress

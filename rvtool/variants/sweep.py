@@ -59,7 +59,8 @@ import tomllib
 from dataclasses import dataclass, field
 
 from ..errors import RvtoolInputError
-from .montecarlo import FIGURES, MonteCarloSettings, run_monte_carlo, text_progress
+from .. import progress as progress_display
+from .montecarlo import FIGURES, MonteCarloSettings, run_monte_carlo
 from .variant import Variant, VariantProtocol, variant_figures
 
 VARIANT_PARAMETERS = ("eccentricity_error", "pin_radius_error", "equidistant_mod", "offset_mod", "pin_clearance",
@@ -265,12 +266,14 @@ def run_grid(client, design, spec, progress=None):
 
 def run_sweep(spec: SweepSpec, *, scheduler=None, out_dir=None, progress=True, client=None):
     """Run a sweep; returns ``{"rows", "failed", "wall_s", "table": [csv, json], "out_dir"}`` (plus
-    ``summary`` for the Monte Carlo). ``client``: an existing dask.distributed.Client to use."""
+    ``summary`` for the Monte Carlo). ``client``: an existing dask.distributed.Client to use.
+    progress: True (shown by the active :func:`rvtool.progress.reporting` context, silent
+    without one), False, or a ``progress(done, total)`` callback."""
     from ..assembly.spec import load_design
     t0 = time.perf_counter()
     out_dir = out_dir or spec.output_dir
     design = load_design(spec.design_path)
-    prog = text_progress(label="runs") if progress is True else (progress or None)
+    prog = progress_display.callback("sweep", unit="run") if progress is True else (progress or None)
     summary = None
     with (_nullcontext(client) if client is not None else _Cluster(spec.cluster, scheduler)) as cl:
         if spec.study == "grid":
@@ -309,7 +312,8 @@ def main_sweep(spec_path, scheduler=None, out_dir=None, quiet=False):
     """CLI entry: run the sweep of ``spec_path``; print a summary line; exit status 0 (failed rows
     are results, reported in the table and on stderr)."""
     spec = load_sweep_spec(spec_path)
-    res = run_sweep(spec, scheduler=scheduler, out_dir=out_dir, progress=not quiet)
+    with progress_display.reporting("quiet" if quiet else "auto"):
+        res = run_sweep(spec, scheduler=scheduler, out_dir=out_dir, progress=True)
     n = len(res["rows"])
     print(f"sweep: {n} runs, {res['failed']} failed, {res['wall_s']:.1f} s; table: {', '.join(res['table'])}")
     for r in res["rows"]:

@@ -1,9 +1,9 @@
 """RV reducers (two-stage and three-stage): specification (:mod:`.spec`), gear graph
 (:mod:`.gear_graph`: ratio, crank placement, assembly phases, topology errors) and the builder
 (:mod:`.builder`)."""
-from .spec import RvDesign, design_from_dict, load_design
+from .spec import RVDesign, design_from_dict, load_design
 
-__all__ = ["RvDesign", "design_from_dict", "load_design", "build"]
+__all__ = ["RVDesign", "design_from_dict", "load_design", "build"]
 
 
 def build(design, **options):

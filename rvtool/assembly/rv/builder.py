@@ -1,4 +1,4 @@
-"""Builder: an :class:`~rvtool.assembly.rv.spec.RvDesign` -> an :class:`RvModel` (a
+"""Builder: an :class:`~rvtool.assembly.rv.spec.RVDesign` -> an :class:`RvModel` (a
 :class:`~rvtool.model.ReducerModel`), paper Fig. load_paths (b): "preliminary gearing drives
 multiple floating cranks sharing the wheels and carrier"; "crank translations and the selected
 axial and tilt coordinates are determined through bearing forces".
@@ -45,14 +45,14 @@ from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
 from ..cycloid import pin_meshes
 from .gear_graph import GearGraph
-from .spec import RvDesign
+from .spec import RVDesign
 
 
 class Layout:
     """Body indices of an RV design: input body 0, the sun (0 or 1), cranks, wheels, carrier."""
 
     def __init__(self, design):
-        self.three_stage = design.topology == "rv_three_stage"
+        self.three_stage = design.topology == "rv3"
         self.n_cranks = design.cranks.count
         self.sun = 1 if self.three_stage else 0
         self.crank0 = self.sun + 1
@@ -302,7 +302,7 @@ FAMILY_ELEMENTS = {Family.PINS: "pins", Family.INVOLUTE_STAGE: "gears", Family.E
                    Family.CRANK_BEARINGS: "crank_bearings", Family.MAIN_BEARINGS: "main_bearings"}
 
 
-def build(design: RvDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1)):
+def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1)):
     """Assemble ``design`` into an Exudyn system; returns an :class:`RvModel`.
 
     regularization: (k_translation [N/m], k_rotation [N m/rad]) of weak springs from every free
@@ -310,8 +310,8 @@ def build(design: RvDesign, *, backend="warp", precision="float64", device="cpu"
     backlash and bearing clearances at zero load, as in the cycloid builder; the force they
     carry is reported by the protocols). (0, 0) removes them.
     """
-    if not isinstance(design, RvDesign):
-        raise RvtoolInputError(f"design must be an RvDesign; got {type(design).__name__}")
+    if not isinstance(design, RVDesign):
+        raise RvtoolInputError(f"design must be an RVDesign; got {type(design).__name__}")
     d = design
     graph = GearGraph.of(d)
     L = Layout(d)

@@ -132,7 +132,7 @@ class GearGraph:
                  {"wheel": 1.0, "crank": 1.0 / z_g},
                  {"wheel": 1.0, "carrier": -1.0}]
         input_pair, input_centre, sun0 = None, None, 0.0
-        if d.topology == "rv_three_stage":
+        if d.topology == "rv3":
             input_pair = InvolutePair(gear_a=d.input_pinion, gear_b=d.compound_gear)
             gam = math.radians(d.input_stage.direction_deg)
             input_centre = (input_pair.a * math.cos(gam), input_pair.a * math.sin(gam))

@@ -7,8 +7,8 @@ specs (:class:`~rvtool.bearings.spec.NeedleBearing`, :class:`~rvtool.bearings.ta
 RV-specific parts (crank count and crank manufacturing deviations, the involute-stage
 numerics, the rigid-body data, the three-stage input) are defined here.
 
-Topology keys (``topology``): ``"rv_two_stage"`` (input sun -> cranks) and
-``"rv_three_stage"`` (offset input pinion -> compound gear carrying the sun -> cranks).
+Topology keys (``topology``): ``"rv2"`` (input sun -> cranks) and
+``"rv3"`` (offset input pinion -> compound gear carrying the sun -> cranks).
 """
 import dataclasses
 import math
@@ -18,11 +18,11 @@ from dataclasses import dataclass, field
 from ...bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ...bearings.tapered import TaperedPair
 from ...errors import RvtoolInputError
-from ...geometry.involute import InvoluteGear
+from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
 from ...validation import check_finite, check_positive, check_range
 from ..spec import Material, PinContact, Pins, Wheels, build_section
 
-TOPOLOGIES = ("rv_two_stage", "rv_three_stage")
+TOPOLOGIES = ("rv2", "rv3")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -110,7 +110,7 @@ class InputStage:
 
 
 @dataclass(frozen=True, kw_only=True)
-class RvDesign:
+class RVDesign:
     """An RV reducer (see rvtool/designs/rv40e.toml). ``ratio_target``: the declared nominal
     ratio (catalogue), checked against the gear graph; None: not declared."""
     name: str
@@ -152,12 +152,12 @@ class RvDesign:
                                    f"Z_wheel + 1 is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
         if self.ratio_target is not None:
             check_positive("ratio_target", abs(self.ratio_target))
-        if self.topology == "rv_three_stage" and (self.input_pinion is None or self.compound_gear is None):
+        if self.topology == "rv3" and (self.input_pinion is None or self.compound_gear is None):
             missing = [s for s in ("input_pinion", "compound_gear") if getattr(self, s) is None]
-            raise RvtoolInputError(f"topology = 'rv_three_stage' needs the sections {missing}")
-        if self.topology == "rv_two_stage" and (self.input_pinion is not None or self.compound_gear is not None):
-            raise RvtoolInputError("topology = 'rv_two_stage' has no input_pinion / compound_gear sections; valid: "
-                                   "remove them or set topology = 'rv_three_stage'")
+            raise RvtoolInputError(f"topology = 'rv3' needs the sections {missing}")
+        if self.topology == "rv2" and (self.input_pinion is not None or self.compound_gear is not None):
+            raise RvtoolInputError("topology = 'rv2' has no input_pinion / compound_gear sections; valid: "
+                                   "remove them or set topology = 'rv3'")
 
     @property
     def n_wheels(self):
@@ -192,15 +192,49 @@ class RvDesign:
 
 
 def _gear(section, data):
-    return build_section(InvoluteGear, section, {"name": section, **data})
+    """An InvoluteGear from its table; the optional sub-tables ``rack`` (BasicRack) and
+    ``modification`` (FlankModification) are component specs too. The gear's name is the section
+    (its validation errors then name the key path)."""
+    data = _table(section, data)
+    for key, cls in (("rack", BasicRack), ("modification", FlankModification)):
+        if key in data:
+            data[key] = build_section(cls, f"{section}.{key}", _table(f"{section}.{key}", data[key]))
+    data["name"] = section
+    return build_section(InvoluteGear, section, data)
+
+
+def _table(section, data):
+    """``data`` as a dict, or an error naming the section when the file holds something else there."""
+    if not isinstance(data, dict):
+        raise RvtoolInputError(f"[{section}] must be a table of keys; got {type(data).__name__} {data!r}")
+    return dict(data)
 
 
 def _main_bearing(data):
-    data = dict(data)
-    if "row" not in data:
-        raise RvtoolInputError("[main_bearing.row] is missing: the angular-contact row (a BallBearing) of the pair")
-    row = build_section(BallBearing, "main_bearing.row", data.pop("row"))
-    return build_section(AngularContactPair, "main_bearing", {**data, "rows": (row, row)})
+    """The AngularContactPair from ``[main_bearing]`` with its two rows as ``[[main_bearing.rows]]``
+    tables (each a BallBearing spec) or one ``[main_bearing.row]`` table for both."""
+    data = _table("main_bearing", data)
+    if "row" in data:
+        table = data.pop("row")
+        data["rows"] = [table, table]
+    rows = data.get("rows")
+    if not (isinstance(rows, (list, tuple)) and len(rows) == 2):
+        raise RvtoolInputError(f"main_bearing.rows must hold 2 row tables (BallBearing specs); got {rows!r}")
+    data["rows"] = tuple(r if isinstance(r, BallBearing) else
+                         build_section(BallBearing, f"main_bearing.rows[{k}]", _table(f"main_bearing.rows[{k}]", r))
+                         for k, r in enumerate(rows))
+    return build_section(AngularContactPair, "main_bearing", data)
+
+
+def _crank_bearing(data):
+    """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables."""
+    data = _table("crank_bearing", data)
+    if "row" in data:
+        data["row"] = _table("crank_bearing.row", data["row"])
+    if isinstance(data.get("rows"), (list, tuple)):
+        data["rows"] = [r if not isinstance(r, dict) else _table(f"crank_bearing.rows[{k}]", r)
+                        for k, r in enumerate(data["rows"])]
+    return TaperedPair.from_mapping(data, "crank_bearing")
 
 
 _SECTIONS = {"material": lambda d: build_section(Material, "material", d),
@@ -212,7 +246,7 @@ _SECTIONS = {"material": lambda d: build_section(Material, "material", d),
              "involute_stage": lambda d: build_section(InvoluteStage, "involute_stage", d),
              "cranks": lambda d: build_section(Cranks, "cranks", d),
              "eccentric_bearing": lambda d: build_section(NeedleBearing, "eccentric_bearing", d),
-             "crank_bearing": lambda d: TaperedPair.from_mapping(d, "crank_bearing"),
+             "crank_bearing": lambda d: _crank_bearing(d),
              "main_bearing": _main_bearing,
              "bodies": lambda d: build_section(RvBodies, "bodies", d),
              "input_pinion": lambda d: _gear("input_pinion", d),
@@ -222,8 +256,8 @@ _OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input
 
 
 def design_from_dict(d):
-    """A validated :class:`RvDesign` from a design mapping (a parsed TOML file)."""
-    d = dict(d)
+    """A validated :class:`RVDesign` from a design mapping (a parsed TOML file)."""
+    d = _table("design", d)
     kw = {}
     for sec, make in _SECTIONS.items():
         if sec not in d:
@@ -231,13 +265,13 @@ def design_from_dict(d):
                 continue
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
         kw[sec] = make(d.pop(sec))
-    design = build_section(RvDesign, "design", {**d, **kw})
+    design = build_section(RVDesign, "design", {**d, **kw})
     from .gear_graph import GearGraph
     GearGraph.of(design)          # topology errors (spacing, crank count, declared ratio) at load
     return design
 
 
 def load_design(path):
-    """Load an RV design TOML file into a validated :class:`RvDesign`."""
+    """Load an RV design TOML file into a validated :class:`RVDesign`."""
     with open(path, "rb") as fh:
         return design_from_dict(tomllib.load(fh))

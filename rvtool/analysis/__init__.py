@@ -1,0 +1,120 @@
+"""``rvtool analyze``: run the registered protocols on one design and report typed figures.
+
+    from rvtool.analysis import analyze
+    res = analyze("rd40", protocols="te,stiffness", quick=True, out_dir="results/rd40")
+    res["stiffness"].figure("Kt_condensed").value      # N m/arcmin, with .error and .error_statement
+
+A design is a :class:`~rvtool.assembly.spec.CycloidDesign` (or another registered
+topology's design), a design file or a shipped design's name. Protocols
+(:mod:`rvtool.analysis.protocols`) build their models with :func:`rvtool.assembly.build`
+only, so every topology registered there is analysed; a protocol the topology does not
+support is reported as skipped with the reason. With ``out_dir`` the analysis writes
+``results.json`` (keys: ``design``, ``topology``, ``protocols`` -- the list that ran --,
+``skipped``, ``warnings``, one key per protocol, ``provenance``), one PNG per plot and
+``report.html`` (self-contained: plots embedded).
+"""
+import os
+import time
+from pathlib import Path
+
+from ..errors import RvtoolInputError
+from .registry import PROTOCOLS, Context, Unsupported, select
+from .results import AnalysisResult, Figure, ProtocolResult, finite_or_none
+
+DEVICES = ("auto", "cpu", "cuda")
+"""Valid ``device`` values ("cuda:N" also accepted)."""
+
+__all__ = ["analyze", "resolve_device", "load", "AnalysisResult", "ProtocolResult", "Figure", "PROTOCOLS"]
+
+
+def resolve_device(device):
+    """"auto" -> "cuda" where Warp sees a CUDA device, else "cpu"; "cpu", "cuda", "cuda:N" checked."""
+    if device not in DEVICES and not (isinstance(device, str) and device.startswith("cuda:") and device[5:].isdigit()):
+        raise RvtoolInputError(f"device = {device!r}; valid choices are {list(DEVICES)} or 'cuda:N'")
+    if device == "cpu":
+        return "cpu"
+    import warp as wp
+    n = wp.get_cuda_device_count()
+    if device == "auto":
+        return "cuda:0" if n > 0 else "cpu"
+    if n == 0:
+        raise RvtoolInputError(f"device = {device!r} but Warp finds no CUDA device; valid here: ['cpu', 'auto']")
+    return "cuda:0" if device == "cuda" else device
+
+
+def load(design):
+    """(design object, source text, shipped name or None) from a design object, a file path or a
+    shipped design's name."""
+    from .. import designs
+    from ..assembly import topologies
+    if isinstance(design, (str, Path)):
+        path = topologies.resolve_design_path(design)
+        shipped = Path(path).stem if Path(path).parent == designs.HERE else None
+        return topologies.design_from_table(topologies.read_table(path)), str(path), shipped
+    if not hasattr(design, "__dataclass_fields__"):
+        raise RvtoolInputError(f"design = {design!r}: a design object, a design file or a shipped design's name")
+    return design, f"<{type(design).__name__} object>", None
+
+
+def _run_one(proto, ctx):
+    t0 = time.perf_counter()
+    try:
+        outcome = proto.run(ctx)
+    except Unsupported as exc:
+        return ProtocolResult(proto.name, "skipped", proto.summary, reason=str(exc), wall_s=time.perf_counter() - t0)
+    except Exception as exc:  # a failed protocol is a result; the others still run
+        return ProtocolResult(proto.name, "failed", proto.summary, reason=f"{type(exc).__name__}: {exc}",
+                              wall_s=time.perf_counter() - t0)
+    warnings = list(outcome.warnings)
+    figures = []
+    for f in outcome.figures:
+        value, bad_v = finite_or_none(f.value)
+        error, bad_e = finite_or_none(f.error)
+        if bad_v or bad_e:
+            warnings.append(f"figure {f.name}: a non-finite {'value' if bad_v else 'error'} was computed and is "
+                            "reported as null")
+        figures.append(Figure(f.name, value, f.unit, f.description, error, f.error_unit, f.error_statement))
+    data, bad = finite_or_none(outcome.data)
+    if bad:
+        warnings.append("non-finite entries in the data are reported as null")
+    settings, _ = finite_or_none(outcome.settings)
+    return ProtocolResult(proto.name, "ok", proto.summary, tuple(figures), data, settings, tuple(warnings),
+                          tuple(p for p in outcome.plots if p), time.perf_counter() - t0)
+
+
+def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", tolerances=None):
+    """Run ``protocols`` (names, a comma-separated string or None for all) on ``design``;
+    returns an :class:`AnalysisResult`. Input errors (design, protocol names, device) raise
+    :class:`~rvtool.errors.RvtoolInputError` before anything is written. ``tolerances``: the
+    Monte Carlo's tolerance file (default: a shipped design's ``<name>_tolerances``)."""
+    t0 = time.perf_counter()
+    chosen = select(protocols)
+    dev = resolve_device(device)
+    obj, source, shipped = load(design)
+    from .. import designs
+    from ..assembly import topologies
+    if tolerances is None and shipped is not None and designs.tolerances_of(shipped):
+        tolerances = designs.path(designs.tolerances_of(shipped))
+    if tolerances is not None and not os.path.isfile(tolerances):
+        raise RvtoolInputError(f"tolerances file {str(tolerances)!r} not found")
+    ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances)
+    if out_dir is not None:
+        os.makedirs(out_dir, exist_ok=True)
+    results = tuple(_run_one(p, ctx) for p in chosen)
+    res = AnalysisResult(getattr(obj, "name", type(obj).__name__), topologies.topology_of(obj) or type(obj).__name__,
+                         source, bool(quick), dev, results, out_dir, time.perf_counter() - t0)
+    if out_dir is not None:
+        write(res)
+    return res
+
+
+def write(res):
+    """Write results.json and report.html of ``res`` into its output folder."""
+    from .. import casekit
+    from .report import write_report
+    settings = {"design_source": res.source, "quick": res.quick, "protocols_requested": [r.name for r in res.results],
+                "device": res.device}
+    data = casekit.write_results(res.out_dir, res.to_dict(), settings=settings, wall_s=res.wall_s,
+                                 precision="float64", device=res.device)
+    write_report(data, res.out_dir)
+    return data

@@ -1,0 +1,462 @@
+"""The built-in protocols of ``rvtool analyze``, each composed from the library the cases
+use, each figure with its error statement. Quick forms are short (seconds on a laptop core);
+full forms follow the case scripts' settings.
+
+* ``te`` -- quasi-static transmission error (Eq. obs_te) under the rated torque
+  (:func:`rvtool.protocols.precision.quasi_static_te`), refinement error against the
+  topology's refined resolution over one mesh cycle (as ``cases/cycloid_double_wheel.py``);
+* ``stiffness`` -- signed torque sequence by continuation, branch fits of Eq. (stiffness_fit),
+  condensed tangent of Eq. (obs_condensed_stiffness) against a finite increment
+  (as ``cases/stiffness_hysteresis.py``);
+* ``lost_motion`` -- at +-3 % of the rated torque from the stiffness sequence, checked
+  against the spring-controlled march (:func:`rvtool.protocols.lost_motion.lost_motion`);
+* ``hysteresis`` -- two closed loops +T -> -T -> +T; zero-torque width, loop integral and the
+  cycle-dissipation checks of :mod:`rvtool.protocols.hysteresis`;
+* ``vibration`` -- driven rotation at the rated speed and torque, spectra of the output
+  torsion, mesh-order amplitude against the quasi-static low-speed limit (as ``cases/vibration.py``);
+* ``pressure`` -- local pressure of the most loaded main-mesh contact per member at the rated
+  state, resolution sequence with e1 against the finest field (as ``cases/pressure_resolution.py``);
+* ``monte_carlo`` -- tolerance Monte Carlo of TE p-p, lost motion and peak mesh force
+  (:func:`rvtool.variants.montecarlo.run_monte_carlo`), when a tolerance file is given.
+"""
+import time
+
+import numpy as np
+
+from .. import progress
+from ..errors import RvtoolInputError, SolverFailure
+from ..model import Family
+from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD, RAD_PER_ARCMIN
+from .registry import Outcome, Unsupported, register
+from .results import Figure
+
+REGULARIZATION_WARN_FRACTION = 1e-3
+"""A regularization spring carrying more than this fraction of the rated torque (or of the
+largest contact force) is reported as a warning: the figure then depends on a numerical setting."""
+
+LOST_MOTION_FRACTION = 0.03
+"""Lost motion is measured at +-3 % of the rated torque (the +-3 % definition of the cases)."""
+
+
+def _mesh_period(model):
+    if not model.mesh_period:
+        raise Unsupported(f"{type(model).__name__} declares no mesh_period (input angle of one mesh cycle)")
+    return float(model.mesh_period)
+
+
+def _regularization_warning(out, force, rated):
+    if force is not None and force > REGULARIZATION_WARN_FRACTION * rated:
+        out.warnings.append(f"regularization springs carry up to {force:.3g} (N or N m), more than "
+                            f"{REGULARIZATION_WARN_FRACTION:g} x rated torque: the figures depend on them")
+
+
+def _solver_warnings(out, stats, what):
+    for key in ("rejected_steps", "ramped_restarts", "substep_restarts", "shifted_points"):
+        n = stats.get(key) if isinstance(stats, dict) else None
+        if n:
+            out.warnings.append(f"{what}: {n} {key.replace('_', ' ')} (solver fallbacks; figures converged)")
+
+
+# -- transmission error ----------------------------------------------------------------------
+
+def _te_angles(model, quick):
+    mesh = _mesh_period(model)
+    ppm = 4 if quick else 40
+    # quick: one input revolution; full: one output revolution (the declared interval of the cases)
+    revs_out = 1.0 / abs(model.ratio) if quick else 1.0
+    n = int(round(revs_out * abs(model.ratio) * (2 * np.pi / mesh) * ppm))
+    return np.arange(n) * mesh / ppm, revs_out, ppm
+
+
+@register("te", "quasi-static transmission error under the rated torque (Eq. obs_te), with its refinement error")
+def run_te(ctx):
+    from ..assembly import build
+    from ..protocols.precision import mesh_forces, quasi_static_te, te_metrics
+    rated = ctx.require("rated_torque")
+    out = Outcome()
+    model = ctx.build()
+    angles, revs, ppm = _te_angles(model, ctx.quick)
+    mesh = _mesh_period(model)
+    qs = quasi_static_te(model, torque=rated, input_angles=angles)
+    met = te_metrics(qs["te"], n_revolutions=revs)
+    # refinement reference: one mesh cycle at the topology's refined resolution and twice the points
+    window = np.arange(2 * ppm + 1) * mesh / (2 * ppm)
+    err, err_note = None, ""
+    try:
+        fine = model.refined_design()
+    except NotImplementedError as exc:
+        out.warnings.append(f"no refinement error: {exc}")
+        err_note = "not available: the topology declares no refined resolution"
+    else:
+        coarse = quasi_static_te(ctx.build(), torque=rated, input_angles=window[::2])
+        fine_run = quasi_static_te(build(fine) if ctx.device == "cpu" else build(fine, device=ctx.device),
+                                   torque=rated, input_angles=window)
+        err = float(np.max(np.abs(coarse["te"] - fine_run["te"][::2]))) * ARCSEC_PER_RAD
+        err_note = ("max |TE - TE_refined| over one mesh cycle; reference: the topology's refined resolution "
+                    f"({model.resolution_settings()}) at twice the points")
+    _solver_warnings(out, qs["stats"], "quasi-static TE")
+    _regularization_warning(out, qs["regularization_max"], rated)
+    te_as = qs["te"] * ARCSEC_PER_RAD
+    out.figures += [
+        Figure("te_pp", float(np.ptp(te_as)), "arcsec", "TE peak-to-peak over the interval", err, "arcsec", err_note),
+        Figure("te_rms", met["rms"] * ARCSEC_PER_RAD, "arcsec", "TE RMS about its mean", err, "arcsec", err_note),
+        Figure("te_mean_offset", met["mean"] * ARCSEC_PER_RAD, "arcsec", "mean TE (loaded wind-up of the output)",
+               err, "arcsec", err_note),
+        Figure("ratio", float(model.ratio), "-", "signed nominal ratio i = omega_in / omega_out (from the topology)"),
+    ]
+    for fam, f in sorted(qs["peak_loads"].items()):
+        out.figures.append(Figure(f"peak_load_{fam}", f, "N", f"largest {fam} contact-row force over the TE sequence"))
+    out.data = {"input_angle_rad": qs["theta_in"], "te_arcsec": te_as, "te_orders": met["peak_orders"],
+                "te_order_amplitudes_arcsec": met["peak_amplitudes"] * ARCSEC_PER_RAD,
+                "regularization_max": qs["regularization_max"], "solver": qs["stats"], "wall_s_sequence": qs["wall_s"]}
+    out.settings = {"torque_Nm": rated, "points": len(angles), "points_per_mesh_cycle": ppm,
+                    "output_revolutions": revs, "mesh_period_rad": mesh, **model.resolution_settings()}
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(11, 3.8))
+    ax[0].plot(np.rad2deg(qs["theta_in"] / abs(model.ratio)), te_as - np.mean(te_as), lw=0.8)
+    ax[0].set(xlabel="output angle [deg]", ylabel="TE - mean [arcsec]", title="quasi-static TE at rated torque")
+    o, a = met["orders"], met["amplitudes"] * ARCSEC_PER_RAD
+    ax[1].semilogy(o[1:], np.maximum(a[1:], 1e-8), lw=0.8)
+    ax[1].set(xlabel="output-shaft order [-]", ylabel="amplitude [arcsec]", title="TE order spectrum")
+    out.plots.append(ctx.save(fig, "te"))
+    # contact forces at the rated state, zero input angle
+    from ..solver.static import StaticSolver
+    m0 = ctx.build()
+    m0.set_output_torque(-np.sign(m0.ratio) * rated)
+    q0 = StaticSolver(m0).solve(0.0)
+    out.data["mesh_forces_at_rated_N"] = mesh_forces(m0, q0)
+    out.data["peak_loads_at_rated_N"] = m0.family_peaks(q0)
+    fig, ax = plt.subplots(figsize=(6, 6))
+    m0.draw_section(ax, q0)
+    ax.set_title(f"contact forces at {rated} N m, input angle 0")
+    out.plots.append(ctx.save(fig, "section"))
+    return out
+
+
+# -- stiffness, lost motion, hysteresis ----------------------------------------------------------
+
+def _sequence(ctx):
+    from ..protocols.stiffness import TorqueSequence
+    rated = ctx.require("rated_torque")
+    if ctx.quick:   # the cases' coarse sequence: 25 % steps plus the 1.5 / 3 % levels
+        return TorqueSequence(rated_torque=rated, loading_step=0.25, other_step=0.25)
+    return TorqueSequence(rated_torque=rated)
+
+
+def _stiffness_run(ctx):
+    """The signed torque sequence by continuation, once per analysis (stiffness and lost motion share it)."""
+    if "stiffness_run" not in ctx.cache:
+        from ..protocols.stiffness import quasi_static_stiffness
+        seq = _sequence(ctx)
+        ctx.cache["stiffness_run"] = (seq, quasi_static_stiffness(ctx.build(), seq))
+    return ctx.cache["stiffness_run"]
+
+
+@register("stiffness", "torsional stiffness: signed torque sequence, branch fits (Eq. stiffness_fit), condensed tangent")
+def run_stiffness(ctx):
+    from ..protocols import stiffness as S
+    rated = ctx.require("rated_torque")
+    out = Outcome()
+    seq, qs = _stiffness_run(ctx)
+    torque, angle, labels = qs["torque_Nm"], qs["angle_arcmin"], qs["labels"]
+    fits = S.branch_fits(torque, angle, labels, rated)
+    t_ref = 0.75 * rated
+    tc = S.tangent_check(ctx.build(), t_ref)
+    note = (f"condensed tangent K_t at {t_ref:g} N m against the central finite increment "
+            f"+-{tc['increment_Nm']:.3g} N m (relative difference)")
+    out.figures.append(Figure("Kt_condensed", tc["Kt_condensed_Nm_per_arcmin"], "N m/arcmin",
+                              f"condensed tangent stiffness at 75 % of the rated torque", tc["rel_diff"], "-", note))
+    for b, f in fits.items():
+        if f["K_Nm_per_arcmin"] is None:
+            out.warnings.append(f"branch {b}: {f['points']} points in 50-100 % of T_rated, no fit")
+            continue
+        rel = abs(f["K_Nm_per_arcmin"] - tc["Kt_condensed_Nm_per_arcmin"]) / abs(tc["Kt_condensed_Nm_per_arcmin"])
+        out.figures.append(Figure(f"K_{b}", f["K_Nm_per_arcmin"], "N m/arcmin",
+                                  f"secant fit over 50-100 % of T_rated, {b} ({f['points']} levels, R^2 = {f['R2']:.5f})",
+                                  rel, "-", "relative difference to the condensed tangent at 75 % T_rated "
+                                            "(the fit averages the curve's stiffening; R^2 < 1 measures it)"))
+    out.figures.append(Figure("zero_load_return", S.zero_load_return(torque, angle), "arcmin",
+                              "final minus first zero-load output angle"))
+    _solver_warnings(out, qs["stats"], "continuation")
+    _regularization_warning(out, qs["regularization_max"], rated)
+    out.data = {"torque_Nm": torque, "angle_arcmin": angle, "branch_labels": labels, "branch_fits": fits,
+                "tangent_check": tc, "continuation": qs["stats"], "regularization_max": qs["regularization_max"],
+                "wall_s_sequence": qs["wall_s"]}
+    out.settings = {"sequence": seq.__dict__, "levels": len(torque), "input_angle_rad": 0.0}
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(angle, torque, ".-", lw=0.8, label="continuation levels")
+    for b, f in fits.items():
+        if f["K_Nm_per_arcmin"] is not None:
+            x = np.array([np.min(angle), np.max(angle)])
+            ax.plot(x, f["K_Nm_per_arcmin"] * x + f["b_Nm"], "--", lw=0.7, label=f"fit {b}")
+    ax.set(xlabel="output angle [arcmin]", ylabel="output torque [N m]", ylim=(-1.15 * rated, 1.15 * rated),
+           title="torsional stiffness")
+    ax.legend(fontsize=7)
+    out.plots.append(ctx.save(fig, "stiffness"))
+    return out
+
+
+@register("lost_motion", "lost motion at +-3 % of the rated torque, checked against the spring-controlled march")
+def run_lost_motion(ctx):
+    from ..protocols.lost_motion import lost_motion
+    from ..protocols.stiffness import lost_motion_from_levels
+    rated = ctx.require("rated_torque")
+    out = Outcome()
+    _, qs = _stiffness_run(ctx)
+    lm_cont = lost_motion_from_levels(qs["torque_Nm"], qs["angle_arcmin"], rated, LOST_MOTION_FRACTION)
+    err, note = None, ""
+    try:
+        lm = lost_motion(ctx.build(), torque_level=LOST_MOTION_FRACTION * rated)
+        lm_march = lm["lost_motion_rad"] * ARCMIN_PER_RAD
+        err = abs(lm_cont - lm_march)
+        note = "|continuation - spring-controlled march| (an independent path through the free play)"
+        out.data["march"] = {"lost_motion_arcmin": lm_march, "start_torque_Nm": lm["start_torque"], "stats": lm["stats"]}
+    except SolverFailure as exc:
+        out.warnings.append(f"spring-controlled march failed ({exc}); no cross-check of the lost motion")
+        note = "not available: the spring-controlled march failed"
+    out.figures.append(Figure("lost_motion", lm_cont, "arcmin",
+                              f"output angle between +{LOST_MOTION_FRACTION:.0%} and -{LOST_MOTION_FRACTION:.0%} "
+                              "of T_rated on the first loading branches (continuation)", err, "arcmin", note))
+    out.settings = {"torque_fraction": LOST_MOTION_FRACTION, "torque_Nm": LOST_MOTION_FRACTION * rated}
+    return out
+
+
+def _loop_levels(ctx):
+    seq = _sequence(ctx)
+    s = seq.other_step
+    down = np.round(np.arange(1.0, -1.0 - 1e-9, -s), 10)
+    return np.concatenate([down, down[::-1][1:]]) * seq.rated_torque    # +T .. -T .. +T
+
+
+@register("hysteresis", "two closed loops +T -> -T -> +T: zero-torque width, loop integral, closure and repeatability")
+def run_hysteresis(ctx):
+    from ..protocols import hysteresis as H
+    from ..solver.continuation import Continuation
+    rated = ctx.require("rated_torque")
+    out = Outcome()
+    model = ctx.build()
+    cont = Continuation(model, input_angle=0.0)
+    i_out = model.output_index
+    th_kin = model.kinematic_output(0.0)
+    loop = _loop_levels(ctx)
+    cycles = []
+    first = np.linspace(0.0, rated, 5)[1:]           # virgin loading to +T, not part of a loop
+    levels = list(first) + list(loop) + list(loop[1:])
+    angles = []
+    for t in progress.track(levels, desc="hysteresis levels", unit="level"):
+        angles.append(float(cont.go_to(float(t))[i_out] - th_kin))
+    n0, n = len(first) - 1, len(loop)
+    a1 = np.array(angles[n0:n0 + n])
+    a2 = np.array(angles[n0 + n - 1:n0 + 2 * n - 1])
+    cycles = [H.Cycle(torque=loop, angle=a1), H.Cycle(torque=loop, angle=a2)]
+    tol = 1e-3 * RAD_PER_ARCMIN        # 0.001 arcmin: far below any reported angle, far above Newton's tolerance
+    width = H.zero_torque_width(cycles[1])
+    rep = H.repeatability(cycles[0], cycles[1], tolerance=tol)
+    gap_a, gap_t = H.closure_gap(cycles[1])
+    note = (f"repeatability of the second loop against the first (max angle difference at equal torque); "
+            f"declared tolerance {tol * ARCMIN_PER_RAD:g} arcmin")
+    out.figures.append(Figure("hysteresis_width", width * ARCMIN_PER_RAD, "arcmin",
+                              "angle between the descending and ascending zero-torque crossings of the second loop",
+                              rep.max_angle_diff * ARCMIN_PER_RAD, "arcmin", note))
+    try:
+        diss = H.cycle_dissipation(cycles[0], cycles[1], angle_tolerance=tol, torque_tolerance=1e-9 * rated)
+        out.figures.append(Figure("loop_dissipation", diss.loop_integral, "J", "closed-loop integral of T d(theta) "
+                                  "of the second loop (a dissipation: the loop closes and repeats)",
+                                  rep.max_angle_diff * rated, "J", "bound: repeatability angle x rated torque"))
+    except RvtoolInputError as exc:
+        out.warnings.append(f"no loop dissipation: {exc}")
+        out.figures.append(Figure("loop_integral", H.loop_integral(cycles[1]), "J",
+                                  "integral of T d(theta) over the second loop (NOT a dissipation: see warnings)"))
+    out.data = {"torque_Nm": loop, "angle_arcmin_loop1": a1 * ARCMIN_PER_RAD, "angle_arcmin_loop2": a2 * ARCMIN_PER_RAD,
+                "closure_gap_arcmin": gap_a * ARCMIN_PER_RAD, "closure_gap_Nm": gap_t, "continuation": cont.stats.to_dict()}
+    out.settings = {"loop_step_fraction": _sequence(ctx).other_step, "virgin_levels_Nm": first,
+                    "angle_tolerance_arcmin": tol * ARCMIN_PER_RAD}
+    _solver_warnings(out, cont.stats.to_dict(), "continuation")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(a1 * ARCMIN_PER_RAD, loop, ".-", lw=0.8, label="loop 1")
+    ax.plot(a2 * ARCMIN_PER_RAD, loop, "x--", lw=0.8, label="loop 2")
+    ax.set(xlabel="output angle [arcmin]", ylabel="output torque [N m]", title="hysteresis loops")
+    ax.legend(fontsize=7)
+    out.plots.append(ctx.save(fig, "hysteresis"))
+    return out
+
+
+# -- vibration ---------------------------------------------------------------------------------
+
+@register("vibration", "driven rotation at rated speed and torque: torsion spectra, mesh order vs the quasi-static limit")
+def run_vibration(ctx):
+    from ..protocols import vibration as V
+    from ..protocols.precision import quasi_static_te
+    from ..solver import RunSpec
+    rated, speed = ctx.require("rated_torque", "input_speed_rpm")
+    out = Outcome()
+    model = ctx.build()
+    mesh = _mesh_period(model)
+    revs = 0.25 if ctx.quick else 2.0          # input revolutions (cases/vibration.py)
+    step = 2e-5
+    duration = revs * 60.0 / speed
+    proto = V.VibrationProtocol(speed_rpm=speed, torque=rated, duration=duration, sample_step=step)
+    spec = RunSpec(end_time=duration, step=step, abs_tol=1e-6, rel_tol=1e-8)
+    run = V.driven_response(model, proto, spec)
+    sp = V.vibration_spectra(run, proto, "torsion")
+    mesh_order = 2 * np.pi / mesh
+    try:
+        markers = model.marker_frequencies(speed)
+    except (AttributeError, NotImplementedError) as exc:
+        markers = {}
+        out.warnings.append(f"no marker frequencies: {exc}")
+    # reference: quasi-static TE at the same input angles, 8 points per mesh cycle (the low-speed limit)
+    n_qs = int(round(revs * mesh_order * 8))
+    angles = np.arange(n_qs) * mesh / 8
+    qs = quasi_static_te(ctx.build(), torque=rated, input_angles=angles)
+    o_qs, a_qs = V.order_spectrum(angles, qs["te"], samples_per_rev=int(round(mesh_order * 8)))
+    i_d = int(np.argmin(np.abs(sp["orders"] - mesh_order)))
+    i_q = int(np.argmin(np.abs(o_qs - mesh_order)))
+    a_dyn, a_qs_mesh = float(sp["order_spectrum"][i_d]), float(a_qs[i_q])
+    rel = abs(a_dyn - a_qs_mesh) / a_qs_mesh if a_qs_mesh > 0 else None
+    rec = run["record"]
+    dom_o, dom_a = V.dominant(sp["orders"], sp["order_spectrum"], 6)
+    out.figures += [
+        Figure("torsion_pp", float(np.ptp(run["responses"]["torsion"])) * ARCSEC_PER_RAD, "arcsec",
+               "output torsion (dynamic TE) peak-to-peak over the run"),
+        Figure("mesh_order_amplitude", a_dyn * ARCSEC_PER_RAD, "arcsec",
+               f"torsion amplitude at the mesh order {mesh_order:.4g} (input-shaft orders)", rel, "-",
+               "relative difference to the quasi-static TE at the same input angles (the low-speed limit; "
+               "the difference is the dynamic amplification plus sampling error)"),
+        Figure("mesh_frequency", speed / 60.0 * mesh_order, "Hz", "mesh frequency at the rated input speed"),
+    ]
+    if rec.rejected_steps:
+        out.warnings.append(f"driven run: {rec.rejected_steps} rejected steps (step size halved and retried)")
+    out.data = {"frequencies_hz": sp["frequencies_hz"], "spectrum_arcsec": sp["spectrum"] * ARCSEC_PER_RAD,
+                "orders": sp["orders"], "order_spectrum_arcsec": sp["order_spectrum"] * ARCSEC_PER_RAD,
+                "dominant_orders": dom_o, "dominant_order_amplitudes_arcsec": dom_a * ARCSEC_PER_RAD,
+                "markers_hz": markers, "mesh_order_amplitude_quasistatic_arcsec": a_qs_mesh * ARCSEC_PER_RAD,
+                "accepted_steps": rec.accepted_steps, "rejected_steps": rec.rejected_steps,
+                "max_residual": rec.max_residual, "wall_s_run": run["wall_s"]}
+    out.settings = {"input_revolutions": revs, "speed_rpm": speed, "torque_Nm": rated, "run_spec": spec.to_dict()}
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(11, 3.6))
+    ax[0].semilogy(sp["frequencies_hz"][1:], sp["spectrum"][1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8)
+    ax[0].axvline(speed / 60.0 * mesh_order, color="r", ls="--", lw=0.8, label="mesh")
+    ax[0].set(xlabel="frequency [Hz]", ylabel="torsion amplitude [arcsec]")
+    ax[0].legend(fontsize=7)
+    ax[1].semilogy(sp["orders"][1:], sp["order_spectrum"][1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8, label="dynamic")
+    ax[1].semilogy(o_qs[1:], a_qs[1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8, label="quasi-static")
+    ax[1].axvline(mesh_order, color="r", ls="--", lw=0.8)
+    ax[1].set(xlabel="input-shaft order [-]", ylabel="amplitude [arcsec]")
+    ax[1].legend(fontsize=7)
+    out.plots.append(ctx.save(fig, "vibration"))
+    return out
+
+
+# -- pressure ----------------------------------------------------------------------------------
+
+PRESSURE_WINDOW = 20e-6
+"""Fixed window of the mean pressure [m] (cases/pressure_resolution.py)."""
+
+
+@register("pressure", "local pressure of the most loaded main-mesh contact per member at the rated state (panels)")
+def run_pressure(ctx):
+    from ..pressure.state import candidates
+    from ..pressure.study import domain_halfwidth, resolution_study, select_contact
+    from ..solver.static import StaticSolver
+    rated = ctx.require("rated_torque")
+    out = Outcome()
+    model = ctx.build()
+    if model.main_mesh != Family.PINS:
+        raise Unsupported(f"local pressure extraction is implemented for the cycloid-pin mesh; this model's main "
+                          f"mesh is {model.main_mesh.value!r}")
+    model.set_output_torque(-np.sign(model.ratio) * rated)
+    q = StaticSolver(model).solve(0.0)
+    members = model.observe(q, model.main_mesh).per_member()
+    ns = [129, 257, 513] if ctx.quick else [129, 257, 513, 1025, 2049, 4097]
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 3.6))
+    for k, member in enumerate(progress.track(list(members), desc="pressure", unit="member")):
+        cands = candidates(model, q, "pins", k)
+        best, _ = select_contact(cands, n_select=257, window=PRESSURE_WINDOW)
+        rec, fields = resolution_study(best, ns, half=domain_halfwidth(best), window=PRESSURE_WINDOW)
+        e1 = rec["e1_vs_4097_pct"][-2]      # key named after the case's finest grid; the reference is ns[-1]
+        out.figures.append(Figure(f"p_window_{member}", rec["p_window"][-1] / 1e6, "MPa",
+                                  f"largest {PRESSURE_WINDOW * 1e6:g} um window-mean pressure, {member} ({best.name})",
+                                  e1, "%", f"e1 field difference of N = {ns[-2]} against N = {ns[-1]} panels "
+                                           "(Eq. pressure_field_difference)"))
+        out.figures.append(Figure(f"hertz_p0_{member}", best.hertz_peak / 1e6, "MPa",
+                                  f"Hertz line-contact peak of the same contact (closed form, for comparison)"))
+        if not rec.get("converged", True):
+            out.warnings.append(f"{member}: pressure resolution not converged at N = {ns[-1]}")
+        out.data[member] = rec
+        x, p = fields[-1]
+        ax.plot(x * 1e6, p / 1e6, drawstyle="steps-mid", lw=0.8, label=f"{member}: {best.name}")
+    ax.set(xlabel="x [um]", ylabel="pressure [MPa]", title=f"pressure at {rated} N m, N = {ns[-1]}")
+    ax.legend(fontsize=7)
+    out.plots.append(ctx.save(fig, "pressure"))
+    out.settings = {"torque_Nm": rated, "input_angle_rad": 0.0, "panels": ns, "window_m": PRESSURE_WINDOW}
+    return out
+
+
+# -- Monte Carlo ---------------------------------------------------------------------------------
+
+MC_REGULARIZATION = (1.0e4, 100.0)
+"""Builder regularization springs [N/m, N m/rad] of the Monte Carlo variants, as in
+cases/monte_carlo_te.py: with pin clearance the lost-motion continuation crosses free play,
+where the default springs (100 N/m, 0.1 N m/rad) let it stall (measured here: 3 of 4 quick
+variants of RD-40 failed with the defaults)."""
+
+
+@register("monte_carlo", "tolerance Monte Carlo: TE p-p, lost motion and peak pin force over sampled variants")
+def run_monte_carlo(ctx):
+    import os
+    import tempfile
+
+    from ..variants import VariantProtocol
+    from ..variants.montecarlo import MonteCarloSettings
+    from ..variants.montecarlo import run_monte_carlo as mc
+    from ..variants.tolerances import load_tolerances
+    if ctx.tolerances is None:
+        raise Unsupported("no tolerance file: pass --tolerances FILE (a shipped design uses its "
+                          "<name>_tolerances.toml when there is one)")
+    tol = load_tolerances(ctx.tolerances)
+    try:
+        tol.check_design(ctx.design)
+    except (RvtoolInputError, AttributeError) as exc:
+        raise Unsupported(f"the tolerances do not apply to this design: {exc}") from None
+    out = Outcome()
+    n = 4 if ctx.quick else 200
+    protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53)
+    settings = MonteCarloSettings(n_variants=n, seed=2026, chunk_size=n if ctx.quick else 10,
+                                  mode="batched", workers=1 if ctx.quick else None, device=ctx.device)
+    with tempfile.TemporaryDirectory() as tmp:
+        chunk_dir = os.path.join(ctx.out_dir, "monte_carlo_chunks") if ctx.out_dir else tmp
+        res = mc(ctx.design, tol, protocol, settings, chunk_dir, build_kw={"regularization": MC_REGULARIZATION},
+                 progress=progress.callback("Monte Carlo", "variant"))
+    s = res["summary"]
+    if s["n_failed"]:
+        errs = sorted({r["error"] for r in res["records"] if r["status"] != "ok"})
+        out.warnings.append(f"{s['n_failed']} of {n} variants failed: {errs[:3]}")
+    for nm, unit in (("te_pp_arcsec", "arcsec"), ("lost_motion_arcmin", "arcmin"), ("max_pin_force_N", "N")):
+        st = s.get(nm, {})
+        if not st.get("n"):
+            out.warnings.append(f"{nm}: no successful variant")
+            continue
+        half = (st["mean_ci"][1] - st["mean_ci"][0]) / 2 if st["n"] > 1 else None
+        name = nm.rsplit("_", 1)[0]
+        out.figures.append(Figure(f"{name}_mean", st["mean"], unit, f"mean of {nm} over {st['n']} variants", half, unit,
+                                  "half-width of the 95 % Student-t confidence interval of the mean (sampling error)"))
+        out.figures.append(Figure(f"{name}_p95", st["p95"], unit, f"95th percentile of {nm}", None, unit,
+                                  f"95 % order-statistic interval {st['p95_ci']} (None: too few variants)"))
+    out.data = {"summary": s, "records": res["records"]}
+    out.settings = {"tolerances": str(ctx.tolerances), "n_variants": n, "seed": settings.seed, "mode": settings.mode,
+                    "regularization": MC_REGULARIZATION,
+                    "protocol": protocol.__dict__}
+    import matplotlib.pyplot as plt
+    ok = [r for r in res["records"] if r["status"] == "ok"]
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.4))
+    for a, nm, label in ((ax[0], "te_pp_arcsec", "TE p-p [arcsec]"), (ax[1], "lost_motion_arcmin", "lost motion [arcmin]")):
+        x = [r[nm] for r in ok if r.get(nm) is not None]
+        a.hist(x, bins=max(3, min(40, len(x) // 5)), color="0.6", edgecolor="k", lw=0.5)
+        a.set(xlabel=label, ylabel="variants")
+    out.plots.append(ctx.save(fig, "monte_carlo"))
+    return out

@@ -1,0 +1,88 @@
+"""One self-contained ``report.html`` from an analysis' results.json dict: a section per
+protocol (summary, status, figures with units, their errors and references, settings,
+warnings, plots embedded as base64 PNG), then the provenance. No script, no stylesheet or
+font from the network: the file opens offline and archives as one file."""
+import base64
+import html
+import json
+import os
+
+_CSS = """
+body{font-family:sans-serif;margin:2em auto;max-width:1100px;color:#222;background:#fff}
+h1{border-bottom:2px solid #345}h2{margin-top:2em;border-bottom:1px solid #ccc}
+table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:left;vertical-align:top}
+th{background:#eef}.ok{color:#070}.failed{color:#b00;font-weight:bold}.skipped{color:#777}
+.warn{background:#fff4d6;border-left:4px solid #e0a000;padding:4px 8px;margin:4px 0}
+img{max-width:100%;border:1px solid #ddd;margin:6px 0}pre{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:85%}
+"""
+
+
+def _e(x):
+    return html.escape(str(x))
+
+
+def _fmt(v):
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, list) and len(v) > 8:
+        return f"[{', '.join(_fmt(x) for x in v[:8])}, ... ({len(v)} values)]"
+    if isinstance(v, list):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    return "\u2014" if v is None else str(v)
+
+
+def _img(path, alt):
+    with open(path, "rb") as fh:
+        b64 = base64.b64encode(fh.read()).decode("ascii")
+    return f'<img alt="{_e(alt)}" src="data:image/png;base64,{b64}">'
+
+
+def _section(name, r, out_dir):
+    parts = [f'<h2 id="{_e(name)}">{_e(name)} <span class="{_e(r["status"])}">[{_e(r["status"])}]</span></h2>',
+             f"<p>{_e(r['summary'])}</p>"]
+    if r["reason"]:
+        parts.append(f'<p class="warn">{_e(r["reason"])}</p>')
+    if r["figures"]:
+        rows = "".join(f"<tr><td>{_e(k)}</td><td>{_e(_fmt(f['value']))}</td><td>{_e(f['unit'])}</td>"
+                       f"<td>{_e(_fmt(f['error']))} {_e(f['error_unit']) if f['error'] is not None else ''}</td>"
+                       f"<td>{_e(f['error_statement'])}</td><td>{_e(f['description'])}</td></tr>"
+                       for k, f in r["figures"].items())
+        parts.append("<table><tr><th>figure</th><th>value</th><th>unit</th><th>error</th>"
+                     f"<th>error against (reference)</th><th>what it is</th></tr>{rows}</table>")
+    for w in r["warnings"]:
+        parts.append(f'<p class="warn">warning: {_e(w)}</p>')
+    for p in r["plots"]:
+        path = os.path.join(out_dir, p)
+        if os.path.isfile(path):
+            parts.append(_img(path, f"{name}: {p}"))
+    if r["settings"]:
+        parts.append(f"<details><summary>settings</summary><pre>{_e(json.dumps(r['settings'], indent=1))}</pre></details>")
+    parts.append(f"<p>wall time {r['wall_s']:.2f} s</p>")
+    return "\n".join(parts)
+
+
+def render(data, out_dir):
+    """HTML text of the report of results dict ``data`` (plots read from ``out_dir``)."""
+    names = [k for k in data if isinstance(data[k], dict) and "status" in data[k] and "figures" in data[k]]
+    toc = " &middot; ".join(f'<a href="#{_e(n)}">{_e(n)}</a> <span class="{_e(data[n]["status"])}">'
+                            f'{_e(data[n]["status"])}</span>' for n in names)
+    head = (f"<h1>rvtool analysis: {_e(data['design'])}</h1>"
+            f"<p>topology {_e(data['topology'])}; design {_e(data['design_source'])}; "
+            f"{'quick' if data['quick'] else 'full'} protocols; device {_e(data['provenance']['device']['device'])}</p>"
+            f"<p>{toc}</p>")
+    warn = "".join(f'<p class="warn">{_e(w)}</p>' for w in data["warnings"]) or "<p>none</p>"
+    body = [head, "<h2>warnings</h2>", warn] + [_section(n, data[n], out_dir) for n in names]
+    body.append(f"<h2>provenance</h2><pre>{_e(json.dumps(data['provenance'], indent=1))}</pre>")
+    return ("<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<title>rvtool analysis: {_e(data['design'])}</title><style>{_CSS}</style></head><body>"
+            + "\n".join(body) + "</body></html>\n")
+
+
+def write_report(data, out_dir):
+    """Write ``out_dir/report.html``; returns its path."""
+    path = os.path.join(out_dir, "report.html")
+    tmp = path + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(render(data, out_dir))
+    os.replace(tmp, path)
+    return path

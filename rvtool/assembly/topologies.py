@@ -1,0 +1,162 @@
+"""Topology registry: the design file's ``topology`` key -> the design class and its loader.
+
+A design file names its topology at the top level (``topology = "cycloid"``; a file without
+the key is a cycloid design, as the first shipped designs are). Each topology registers
+
+* ``design``: "module:attribute" of its top-level design dataclass (a frozen dataclass whose
+  dataclass-typed fields are the file's sections: the component specs),
+* ``loader``: "module:attribute" of the function turning the file's table (a dict, the
+  ``topology`` key removed) into that design, raising
+  :class:`~rvtool.errors.RvtoolInputError` that names the key path,
+* ``reference``: the shipped design whose values the template of ``rvtool new`` shows.
+
+Modules are imported only when the topology is used, so a topology whose builder is not
+part of this installation is reported as unavailable, naming the missing module, instead
+of failing at import. A new topology registers itself here (one :func:`register` call) and
+dispatches its models from :func:`rvtool.assembly.build`; nothing in the loader, the
+templates, the format documentation or ``rvtool analyze`` changes.
+"""
+import importlib
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import RvtoolInputError
+
+DEFAULT_TOPOLOGY = "cycloid"
+"""Topology of a design file without a ``topology`` key."""
+
+
+@dataclass(frozen=True)
+class Topology:
+    """One registered topology (module docstring)."""
+    name: str
+    summary: str
+    design: str
+    loader: str
+    reference: str | None = None
+    provided_by: str = ""
+
+
+class TopologyUnavailable(RvtoolInputError):
+    """A registered topology whose design class or loader is not in this installation."""
+
+
+TOPOLOGIES = {}
+"""name -> :class:`Topology`, in registration order."""
+
+
+def register(topology: Topology):
+    """Add (or replace) a topology."""
+    TOPOLOGIES[topology.name] = topology
+    return topology
+
+
+register(Topology("cycloid", "single-stage cycloid drive, one or two wheels, output through pins in wheel holes",
+                  "rvtool.assembly.spec:CycloidDesign", "rvtool.assembly.spec:design_from_dict", "rd40",
+                  "rvtool/assembly/spec.py and rvtool/assembly/cycloid.py"))
+register(Topology("rv2", "RV two-stage reducer: involute preliminary stage, floating cranks, cycloid stage, carrier output",
+                  "rvtool.assembly.rv:RVDesign", "rvtool.assembly.rv:design_from_dict", "rv40e",
+                  "the RV builder of issue 16 (rvtool/assembly/rv/)"))
+register(Topology("rv3", "RV three-stage reducer",
+                  "rvtool.assembly.rv:RVDesign", "rvtool.assembly.rv:design_from_dict", "rv_three_stage",
+                  "the RV three-stage topology of issue 16 (rvtool/assembly/rv/)"))
+register(Topology("std-involute", "small-tooth-difference involute reducer: external wheel(s) in an internal ring gear",
+                  "rvtool.assembly.small_tooth:SmallToothDesign", "rvtool.assembly.small_tooth:design_from_dict", None,
+                  "the small-tooth-difference builder of issue 15 (rvtool/assembly/small_tooth.py)"))
+
+
+def get(name):
+    """The :class:`Topology` registered as ``name``."""
+    if not isinstance(name, str) or name not in TOPOLOGIES:
+        raise RvtoolInputError(f"topology = {name!r} is not a known topology; valid choices are {list(TOPOLOGIES)}")
+    return TOPOLOGIES[name]
+
+
+def _import(ref, topology):
+    module, _, attr = ref.partition(":")
+    try:
+        return getattr(importlib.import_module(module), attr)
+    except ModuleNotFoundError as exc:
+        if exc.name and module.startswith(exc.name):
+            raise TopologyUnavailable(f"topology = {topology.name!r} is not available in this installation: "
+                                      f"module {module} is missing (needs {topology.provided_by})") from None
+        raise
+    except AttributeError:
+        raise TopologyUnavailable(f"topology = {topology.name!r} is not available in this installation: "
+                                  f"{module} has no {attr} (needs {topology.provided_by})") from None
+
+
+def design_class(name):
+    """The design dataclass of topology ``name`` (raises :class:`TopologyUnavailable`)."""
+    top = get(name)
+    return _import(top.design, top)
+
+
+def available(name):
+    """None when topology ``name`` can be loaded, else the reason it cannot."""
+    try:
+        top = get(name)
+        _import(top.design, top)
+        _import(top.loader, top)
+    except RvtoolInputError as exc:
+        return str(exc)
+    return None
+
+
+def topology_of(design):
+    """Name of the registered topology whose design class ``design`` is an instance of (None if none)."""
+    for name, top in TOPOLOGIES.items():
+        if available(name) is None and isinstance(design, design_class(name)):
+            return name
+    return None
+
+
+def design_from_table(data):
+    """A validated design from a design file's table (the ``topology`` key picks the loader)."""
+    if not isinstance(data, dict):
+        raise RvtoolInputError(f"a design must be a table of sections; got {type(data).__name__}")
+    data = dict(data)
+    name = data.pop("topology", DEFAULT_TOPOLOGY)
+    top = get(name)
+    cls = _import(top.design, top)
+    loader = _import(top.loader, top)
+    import dataclasses
+    if dataclasses.is_dataclass(cls) and "topology" in {f.name for f in dataclasses.fields(cls)}:
+        data["topology"] = name   # a design class that records its topology keeps the key
+    return loader(data)
+
+
+def read_table(path):
+    """The TOML table of the design file at ``path`` (errors name the file and the line)."""
+    p = Path(path)
+    if not p.is_file():
+        raise RvtoolInputError(f"design file {str(path)!r} not found")
+    try:
+        with open(p, "rb") as fh:
+            return tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise RvtoolInputError(f"design file {str(path)!r} is not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise RvtoolInputError(f"design file {str(path)!r} is not UTF-8 text: {exc}") from None
+
+
+def resolve_design_path(design):
+    """Path of a design given as a file path or as the name of a shipped design
+    (``rd40``); a path that exists wins over a shipped name."""
+    from .. import designs
+    p = Path(design)
+    if p.is_file():
+        return str(p)
+    if p.suffix == ".toml" and (p.parent != Path(".") or not (designs.HERE / p.name).is_file()):
+        raise RvtoolInputError(f"design file {str(design)!r} not found")
+    stem = str(design)[:-5] if str(design).endswith(".toml") else str(design)
+    if stem in designs.design_names():
+        return designs.path(stem)
+    raise RvtoolInputError(f"design = {str(design)!r} is neither a design file nor a shipped design; "
+                           f"shipped designs are {designs.design_names()}")
+
+
+def load(design):
+    """A validated design from a file path or a shipped design's name."""
+    return design_from_table(read_table(resolve_design_path(design)))

@@ -1,0 +1,260 @@
+"""The design file format, read off the component specs themselves: ``rvtool new`` templates
+and the format documentation (``rvtool designs --format-doc``).
+
+Nothing here lists keys by hand. For a registered topology (:mod:`rvtool.assembly.topologies`)
+the top-level design dataclass gives the top-level keys and, through its dataclass-typed
+fields, the sections; each section's dataclass fields are its keys. Per key:
+
+* **unit and meaning** -- from ``field(metadata={"unit": ..., "doc": ...})`` where a spec sets
+  it, else from the spec's docstring (the text after the key's name up to its ``[unit]``);
+* **valid range** -- asked of the spec's own validation: the section is constructed with the
+  key set far below and far above its example value (and to an invalid string for text keys)
+  and the range or the choices quoted by the resulting :class:`~rvtool.errors.RvtoolInputError`
+  are reported. A range that depends on other keys is quoted at the example's values of those
+  keys (e.g. ``output_pins.hole_radius`` above ``output_pins.pin_radius``). So the documented
+  range is the range the loader enforces, by construction.
+* **example value** -- the topology's reference design (a shipped file) or the field default.
+
+The template is written with tomlkit (a TOML library that keeps comments), so the comments
+are TOML comments attached to their keys, not pasted strings.
+"""
+import dataclasses
+import re
+import tomllib
+import typing
+
+from ..errors import RvtoolInputError
+
+_RANGE = re.compile(r"valid range\s*(?:is\s*)?([\[\(][^\]\)]*[\]\)])")
+_CHOICES = re.compile(r"valid(?: choices are|:)?\s*(\[[^\]]*\])")
+PROBES = (-1e30, 1e30)
+"""Values far outside any physical range: the spec's validation quotes its bounds."""
+
+
+def _is_spec(tp):
+    return isinstance(tp, type) and dataclasses.is_dataclass(tp)
+
+
+def _hints(cls):
+    try:
+        return typing.get_type_hints(cls)
+    except Exception:  # an unresolvable annotation: fall back to the raw field types
+        return {f.name: f.type for f in dataclasses.fields(cls)}
+
+
+def sections(design_cls):
+    """(top-level fields, {section name: section dataclass}) of a design dataclass."""
+    hints = _hints(design_cls)
+    top, secs = [], {}
+    for f in dataclasses.fields(design_cls):
+        tp = hints.get(f.name, f.type)
+        if _is_spec(tp):
+            secs[f.name] = tp
+        else:
+            top.append(f)
+    return top, secs
+
+
+def describe(cls, name):
+    """(meaning, unit) of field ``name`` of spec ``cls`` (module docstring). The docstrings of
+    the spec and its bases are searched for ``name [unit]`` (a short symbol may stand between,
+    e.g. ``pin_circle_radius R_z [m]``) and ``name: meaning``."""
+    f = {x.name: x for x in dataclasses.fields(cls)}[name]
+    if "unit" in f.metadata or "doc" in f.metadata:
+        return f.metadata.get("doc", ""), f.metadata.get("unit", "")
+    meaning, unit = "", ""
+    for base in cls.__mro__:
+        doc = " ".join((base.__doc__ or "").split())
+        if not doc or base is object:
+            continue
+        if not unit:
+            m = re.search(rf"(?<![\w.]){re.escape(name)}(?![\w])([^\[\],;.]{{0,40}}?)\[([^\]]+)\]", doc)
+            if m:
+                unit = m.group(2)
+                meaning = meaning or m.group(1).strip(" :(-")
+        if not meaning:
+            m = re.search(rf"(?<![\w.]){re.escape(name)}:\s*([^.;]{{3,160}})", doc)
+            if m:
+                meaning = m.group(1).strip()
+                u = re.search(r"\[([^\]]+)\]\s*$", meaning)
+                unit = unit or (u.group(1) if u else "")
+    return meaning, unit
+
+
+def _probe_message(cls, kw, name, value):
+    """The validation message about ``name`` when the spec is built with ``name = value``
+    (None when it is accepted or the message is about another key)."""
+    try:
+        cls(**{**kw, name: value})
+    except RvtoolInputError as exc:
+        msg = str(exc)
+        return msg if re.search(rf"(?<![\w]){re.escape(name)}(?![\w])\s*(=|must|\(|contains|:)", msg) else None
+    except (TypeError, ValueError, OverflowError, MemoryError) as exc:
+        return f"{type(exc).__name__}: {exc}"
+    return None
+
+
+def valid_range(cls, kw, name):
+    """Valid range or choices of field ``name`` as the spec's validation states them
+    (constructed with the other fields at ``kw``); "" when the spec does not bound it."""
+    value = kw.get(name)
+    if isinstance(value, bool):
+        return "true or false"
+    if isinstance(value, str):
+        msg = _probe_message(cls, kw, name, "__not_a_choice__")
+        m = _CHOICES.search(msg or "")
+        return f"one of {m.group(1)}" if m else "text"
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        found = []
+        for probe in PROBES:
+            msg = _probe_message(cls, kw, name, int(probe) if isinstance(value, int) else probe)
+            m = _RANGE.search(msg or "")
+            if m and m.group(1) not in found:
+                found.append(m.group(1))
+        integer = " (integer)" if isinstance(value, int) else ""
+        if not found:
+            probes = [int(p) if isinstance(value, int) else p for p in PROBES]
+            other = [(msg, p) for msg, p in ((_probe_message(cls, kw, name, p), p) for p in probes) if msg]
+            if other:
+                msg, p = other[0]
+                return "constrained by other keys: " + msg.split(";")[0].replace(str(p), "VALUE")[:120]
+            return "any finite number" + integer
+        return " and ".join(found) + integer
+    if isinstance(value, (list, tuple)):
+        return "list"
+    return ""
+
+
+def _example_kwargs(cls, table):
+    kw = {}
+    for f in dataclasses.fields(cls):
+        if f.name in table:
+            v = table[f.name]
+            kw[f.name] = tuple(v) if isinstance(v, list) else v
+        elif f.default is not dataclasses.MISSING:
+            kw[f.name] = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            kw[f.name] = f.default_factory()
+    return kw
+
+
+def _plain(v):
+    if dataclasses.is_dataclass(v) and not isinstance(v, type):   # a nested component spec: its sub-table
+        return {f.name: _plain(getattr(v, f.name)) for f in dataclasses.fields(v) if getattr(v, f.name) is not None}
+    if isinstance(v, tuple):
+        return [_plain(x) for x in v]
+    if hasattr(v, "value") and not isinstance(v, (int, float, str)):   # an Enum: its file value
+        return v.value
+    return v
+
+
+def key_table(topology):
+    """[(section or "" for top level, key, example value, unit, valid range, meaning, required)] of
+    a topology, in the design class's field order."""
+    from .. import designs
+    from ..assembly import topologies
+    top = topologies.get(topology)
+    cls = topologies.design_class(topology)
+    table = {}
+    if top.reference:
+        with open(designs.path(top.reference), "rb") as fh:
+            table = tomllib.load(fh)
+    rows = []
+    top_fields, secs = sections(cls)
+    design = topologies.design_from_table(dict(table)) if table else None
+    for f in top_fields:
+        kw = {g.name: getattr(design, g.name) for g in dataclasses.fields(cls)} if design is not None else {}
+        meaning, unit = describe(cls, f.name)
+        value = table.get(f.name, None if f.default is dataclasses.MISSING else f.default)
+        rng = valid_range(cls, kw, f.name) if kw else ""
+        rows.append(("", f.name, _plain(value), unit, rng, meaning, f.default is dataclasses.MISSING))
+    for sec, scls in secs.items():
+        sec_table = table.get(sec, {})
+        kw = _example_kwargs(scls, sec_table)
+        for f in dataclasses.fields(scls):
+            meaning, unit = describe(scls, f.name)
+            required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+            value = _plain(kw.get(f.name))
+            rng = valid_range(scls, kw, f.name) if f.name in kw else ""
+            rows.append((sec, f.name, value, unit, rng, meaning, required))
+    return rows
+
+
+def _comment(unit, rng, meaning, required):
+    parts = [f"[{unit}]" if unit else "", rng and f"valid: {rng}", "" if required else "optional", meaning]
+    return "  ".join(p for p in parts if p)
+
+
+def template(topology, name=None):
+    """TOML text of a commented design template of ``topology`` (raises
+    :class:`~rvtool.assembly.topologies.TopologyUnavailable` when its spec is not installed)."""
+    import tomlkit
+
+    from ..assembly import topologies
+    top = topologies.get(topology)
+    cls = topologies.design_class(topology)
+    doc = tomlkit.document()
+    doc.add(tomlkit.comment(f"rvtool design: {top.summary}."))
+    doc.add(tomlkit.comment("SI units unless a key's name says otherwise (e.g. *_deg, *_rpm). Each key's comment: "
+                            "[unit], the valid range its spec enforces, optional (a default applies when the key "
+                            "is left out), meaning."))
+    doc.add(tomlkit.comment(f"Example values: {top.reference or 'field defaults'}. Check: rvtool analyze THIS_FILE --quick"))
+    doc.add(tomlkit.nl())
+    doc.add("topology", topology)
+    rows = key_table(topology)
+    _, secs = sections(cls)
+    tables = {}
+    for sec, key, value, unit, rng, meaning, required in rows:
+        if value is None or (sec == "" and key == "topology"):
+            continue    # an optional key without a value (TOML has no null): left out, its default applies;
+            # the topology key is written above (a design class may record it as a field)
+        if sec == "" and key == "name" and name is not None:
+            value = name
+        item = tomlkit.item(value)
+        text = _comment(unit, rng, meaning, required)
+        if text:
+            item.comment(text)
+        if sec == "":
+            doc.add(key, item)
+        else:
+            if sec not in tables:
+                t = tomlkit.table()
+                d = " ".join((secs[sec].__doc__ or "").split())
+                t.add(tomlkit.comment(f"{secs[sec].__name__}: {d[:300]}{'...' if len(d) > 300 else ''}"))
+                tables[sec] = t
+            tables[sec].add(key, item)
+    for sec, t in tables.items():
+        doc.add(tomlkit.nl())
+        doc.add(sec, t)
+    return tomlkit.dumps(doc)
+
+
+def format_doc():
+    """Markdown documentation of the design file format of every available topology."""
+    from ..assembly import topologies
+    out = ["# Design file format", "",
+           "Generated by `rvtool designs --format-doc` from the component specs (`rvtool/designs/format.py`): "
+           "keys, units and meanings from the specs' dataclass fields and docstrings, valid ranges from the "
+           "specs' own validation, example values from each topology's reference design. Do not edit by hand.",
+           "", "A design file is TOML. `topology` (top level) picks the topology (default `cycloid`); the other "
+           "top-level keys and the `[section]` tables below belong to that topology. A range shown with "
+           "numbers from other keys is the range at the reference design's values of those keys.", ""]
+    for name, top in topologies.TOPOLOGIES.items():
+        out.append(f"## `topology = \"{name}\"`: {top.summary}")
+        out.append("")
+        reason = topologies.available(name)
+        if reason:
+            out += [f"Not available in this installation: {reason}.", ""]
+            continue
+        _, secs = sections(topologies.design_class(name))
+        current = None
+        for sec, key, value, unit, rng, meaning, required in key_table(name):
+            if sec != current:
+                current = sec
+                title = "top level" if sec == "" else f"`[{sec}]` ({secs[sec].__name__})"
+                out += ["", f"### {title}", "", "| key | unit | valid range | required | example | meaning |",
+                        "|---|---|---|---|---|---|"]
+            ex = "" if value is None else f"`{value}`"
+            out.append(f"| `{key}` | {unit} | {rng} | {'yes' if required else 'no'} | {ex} | {meaning} |")
+        out.append("")
+    return "\n".join(out) + "\n"

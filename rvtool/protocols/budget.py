@@ -1,0 +1,122 @@
+"""Stiffness and lost-motion budgets (issue 21): which compliance and which clearance the
+output rotation owes what. Topology-neutral: only the :class:`~rvtool.model.ReducerModel`
+interface (``observe``, ``contact_elements``, ``series_compliance``, ``clearance_variants``,
+``refined_design``).
+
+**Stiffness budget.** At a static state q, the free-coordinate tangent K (Eq.
+obs_condensed_stiffness, :func:`~rvtool.protocols.stiffness.free_stiffness`) and a unit output
+torque give the condensed mode u = K^-1 e_theta, whose output component is the output
+compliance C = 1/K_t. Each observed contact row r (a slice, a lamina, a ball) has an approach
+delta_r = -gap_r and a normal force F_r; central differences of both along every free coordinate
+give its approach Jacobian G_r and its normal stiffness k_r = (dF_r . G_r)/(G_r . G_r). A family's
+elastic tangent is K_f = sum_r k_r G_r G_r^T, and its share of the output compliance is its strain
+energy in the mode, u^T K_f u / C (the shares of springs in series are their compliance
+fractions; Euler's theorem for a network homogeneous in its stiffnesses makes the energy shares
+sum to one). A beam in series with a family's contacts (``series_compliance``) takes c F^2 of
+that energy. What the rows do not carry (the regularization springs and the geometric stiffness
+of loaded contacts whose normals turn, F_r d^2 delta_r/dq^2, and the beams' cross-station terms)
+is the entry ``geometric_and_regularization``, so that the shares sum to one exactly.
+The second view switches each family to rigid in turn: K' = K + (lambda - 1) K_f with
+lambda = 1e6, and its share is (C - C'_f)/C. For families in series along the torque path the
+two views agree; a family that also positions other bodies (the bearings carrying the wheels)
+loses, when rigid, the relaxation it permits elsewhere, and its rigid share differs from its
+energy share by that coupling; both are reported with their difference.
+
+**Lost-motion budget.** Lost motion at +-``fraction`` of the rated torque (spring control,
+:func:`~rvtool.protocols.lost_motion.lost_motion`) with every clearance of
+``model.clearance_variants()`` removed is the ``elastic`` part; the clearances are then restored
+one at a time in the declared order, and each one's contribution is the increase it causes (the
+contributions sum to the lost motion of the design exactly). Beside each, its closed-form
+kinematic estimate from the model.
+"""
+import time
+
+import numpy as np
+
+from ..assembly import build
+from ..units import RAD_PER_ARCMIN
+from .lost_motion import lost_motion
+from .stiffness import free_stiffness
+
+RIGID_FACTOR = 1e6
+"""lambda of the switch-to-rigid view (1e6 times a family's stiffness leaves 1e-6 of its compliance)."""
+
+
+def row_jacobians(model, q, free, step=1e-9):
+    """{family value: (G (rows, n_free) approach Jacobian [m per m or rad], dF (rows, n_free) [N per
+    m or rad], F (rows,) [N])} by central differences of the observations along each free coordinate
+    (step [m or rad]: 1e-9 is 1e-3 of a typical contact approach at rated load, where the laws are
+    smooth, and 1e7 times the round-off of the approaches)."""
+    fams = list(model.families)
+    base = {f.value: model.observe(q, f) for f in fams}
+    G = {f.value: np.zeros((len(base[f.value].ids), len(free))) for f in fams}
+    dF = {f.value: np.zeros_like(G[f.value]) for f in fams}
+    for j, i in enumerate(free):
+        qp, qm = q.copy(), q.copy()
+        qp[i] += step
+        qm[i] -= step
+        for f in fams:
+            op, om = model.observe(qp, f), model.observe(qm, f)
+            G[f.value][:, j] = -(op.obs[:, 2] - om.obs[:, 2]) / (2 * step)     # approach = -gap (O_GAP = 2)
+            dF[f.value][:, j] = (op.normal_force - om.normal_force) / (2 * step)
+    return {f: (G[f], dF[f], base[f].normal_force) for f in G}
+
+
+def stiffness_budget(model, q):
+    """Budget of the output compliance at the static state q (module docstring). Returns
+    ``shares`` (path -> energy share, summing to one), ``rigid_shares`` (family -> (C - C'_f)/C),
+    ``K_t_Nm_per_arcmin`` and the residual entry's meaning."""
+    K, free, i_out = free_stiffness(model, q)
+    e = np.zeros(len(free))
+    e[i_out] = 1.0
+    u = np.linalg.solve(K, e)
+    C = float(u[i_out])
+    rows = row_jacobians(model, q, free)
+    shares, rigid = {}, {}
+    for fam, (G, dF, F) in rows.items():
+        gg = np.einsum("rj,rj->r", G, G)
+        act = (gg > 0) & (F > 0)
+        k = np.where(act, np.einsum("rj,rj->r", dF, G) / np.where(act, gg, 1.0), 0.0)
+        dd = G @ u                                           # approach increments in the mode
+        dF_mode = k * dd
+        energy = float(np.sum(k * dd * dd))
+        Kf = (G * k[:, None]).T @ G
+        Cr = float(np.linalg.solve(K + (RIGID_FACTOR - 1.0) * Kf, e)[i_out])
+        rigid[fam] = (C - Cr) / C
+        beam = model.series_compliance(fam)
+        if beam is not None:
+            b_energy = beam.energy(model, q, dF_mode)
+            shares[beam.path] = b_energy / C
+            if beam.inside_rows:
+                energy -= b_energy
+        shares[fam] = energy / C
+    shares["geometric_and_regularization"] = 1.0 - sum(shares.values())
+    return {"shares": shares, "rigid_shares": rigid, "K_t_Nm_per_arcmin": RAD_PER_ARCMIN / C,
+            "residual": "geometric stiffness of loaded contacts, regularization springs and beam "
+                        "cross-station terms (what the rows' normal stiffness does not carry)"}
+
+
+def lost_motion_budget(design, *, fraction=0.03, bearing_model="rolling", input_angle=0.0):
+    """Lost motion [arcmin] at +-fraction T_rated split into ``elastic`` and one contribution per
+    clearance of the model (module docstring); ``estimates_arcmin`` are the closed forms."""
+    t0 = time.perf_counter()
+    model = build(design, bearing_model=bearing_model)
+    variants = model.clearance_variants()
+    level = fraction * design.rated_torque
+    # elastic: every clearance removed; then restored one at a time in the declared order
+    current = design
+    for v in variants:
+        current = v.remove(current)
+    lm = [lost_motion(build(current, bearing_model=bearing_model), torque_level=level,
+                      input_angle=input_angle)["lost_motion_rad"]]
+    for v in variants:
+        current = v.restore(current, design)
+        lm.append(lost_motion(build(current, bearing_model=bearing_model), torque_level=level,
+                              input_angle=input_angle)["lost_motion_rad"])
+    out = {"elastic": lm[0] / RAD_PER_ARCMIN}
+    for k, v in enumerate(variants):
+        out[v.name] = (lm[k + 1] - lm[k]) / RAD_PER_ARCMIN
+    return {"budget_arcmin": out, "total_arcmin": lm[-1] / RAD_PER_ARCMIN,
+            "estimates_arcmin": {v.name: v.estimate_rad / RAD_PER_ARCMIN for v in variants},
+            "clearances_m": {v.name: v.value for v in variants}, "torque_level_Nm": level,
+            "wall_s": time.perf_counter() - t0}

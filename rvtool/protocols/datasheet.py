@@ -1,0 +1,88 @@
+"""Datasheet with declared allowables (issue 21): the figures a catalogue or a design review asks
+for, each with its unit, the declared allowable, pass/fail and a one-line reason. Topology-neutral:
+the caller hands in figures computed through the ReducerModel interface; entries that need a
+result the project does not compute yet say so ("not computed (...)") instead of a number.
+
+Allowables are a component spec (:class:`Allowables`, a design-review table such as
+``rvtool/designs/rd40_allowables.toml``, loaded with :func:`load_allowables`).
+"""
+import tomllib
+from dataclasses import dataclass
+
+from ..assembly.spec import build_section
+from ..validation import check_positive
+
+
+@dataclass(frozen=True, kw_only=True)
+class Allowables:
+    """Declared allowables of a design review (SI units).
+
+    min_torsional_stiffness: lowest accepted catalogue secant stiffness [N m/arcmin].
+    max_lost_motion: largest accepted lost motion at +-3 % rated torque [arcmin].
+    max_hertz_pins, max_hertz_output_pins, max_hertz_needles: largest accepted Hertz peak
+        pressure per family [Pa].
+    max_pin_bending_stress: largest accepted bending stress of an elastic pin [Pa].
+    max_resolution_error: largest accepted relative error of the rated peak pin force at the
+        default profile resolution against the refined one [-] (the project's 0.1 % statement).
+    """
+    min_torsional_stiffness: float
+    max_lost_motion: float
+    max_hertz_pins: float
+    max_hertz_output_pins: float
+    max_hertz_needles: float
+    max_pin_bending_stress: float
+    max_resolution_error: float = 1e-3
+
+    def __post_init__(self):
+        for name in ("min_torsional_stiffness", "max_lost_motion", "max_hertz_pins", "max_hertz_output_pins",
+                     "max_hertz_needles", "max_pin_bending_stress", "max_resolution_error"):
+            check_positive(name, getattr(self, name))
+
+
+def load_allowables(path):
+    """:class:`Allowables` from a TOML file with an ``[allowables]`` table (errors name ``allowables.<key>``)."""
+    with open(path, "rb") as fh:
+        return build_section(Allowables, "allowables", tomllib.load(fh).get("allowables", {}))
+
+
+def entry(value, unit, *, allowable=None, kind=None, reason=""):
+    """One datasheet row. kind "max": passes when value <= allowable; "min": value >= allowable;
+    None: informative (meets_allowable None). A value None is "not computed" and never passes."""
+    if value is None:
+        return {"value": None, "unit": unit, "allowable": allowable, "meets_allowable": None, "reason": reason}
+    if kind is None:
+        return {"value": value, "unit": unit, "allowable": None, "meets_allowable": None, "reason": reason or "declared"}
+    ok = bool(value <= allowable) if kind == "max" else bool(value >= allowable)
+    word = ("<=" if ok else ">") if kind == "max" else (">=" if ok else "<")
+    return {"value": value, "unit": unit, "allowable": allowable, "meets_allowable": ok,
+            "reason": reason or f"{value:.4g} {word} {'max' if kind == 'max' else 'min'} {allowable:.4g} {unit}"}
+
+
+def datasheet(*, rated_torque, ratio, branch_slopes, secant, lost_motion_arcmin, hertz_peaks, pin_bending_stress,
+              bearing_loads, resolution_error, allowables: Allowables):
+    """The datasheet dict. hertz_peaks: {"pins", "output_pins", "needles"} -> Pa; pin_bending_stress:
+    Pa or None (rigid pins); bearing_loads: family -> largest per-contact load [N];
+    resolution_error: relative error of the rated peak pin force at the default resolution."""
+    a = allowables
+    out = {"rated_torque": entry(rated_torque, "N m"), "ratio": entry(ratio, "-", reason="from the topology")}
+    for b, k in branch_slopes.items():
+        out[f"stiffness_{b}"] = entry(k, "N m/arcmin", reason="branch fit over 50-100 % T_rated (Eq. stiffness_fit)")
+    out["stiffness_secant"] = entry(secant, "N m/arcmin", allowable=a.min_torsional_stiffness, kind="min")
+    out["lost_motion"] = entry(lost_motion_arcmin, "arcmin", allowable=a.max_lost_motion, kind="max")
+    out["hysteresis"] = entry(None, "arcmin", reason="not computed (issue 17: hysteresis with anchor friction)")
+    for fam, allow in (("pins", a.max_hertz_pins), ("output_pins", a.max_hertz_output_pins),
+                       ("needles", a.max_hertz_needles)):
+        out[f"hertz_{fam}"] = entry(hertz_peaks.get(fam), "Pa", allowable=allow, kind="max")
+    out["pin_bending_stress"] = (entry(pin_bending_stress, "Pa", allowable=a.max_pin_bending_stress, kind="max")
+                                 if pin_bending_stress is not None else
+                                 entry(None, "Pa", allowable=a.max_pin_bending_stress,
+                                       reason="not computed: rigid pins have no beam; the beams' moments of "
+                                              "elastic pins are not evaluated yet"))
+    for fam, f in bearing_loads.items():
+        out[f"load_{fam}"] = entry(f, "N", reason="largest per-contact load at the rated state")
+    out["L10"] = entry(None, "h", reason="not computed (issue 18: bearing life)")
+    out["resolution_error"] = entry(resolution_error, "-", allowable=a.max_resolution_error, kind="max",
+                                    reason="" if resolution_error <= a.max_resolution_error else
+                                    f"rated peak pin force {100 * resolution_error:.3g} % off the refined "
+                                    f"resolution (> {100 * a.max_resolution_error:g} %)")
+    return out

@@ -1,0 +1,217 @@
+"""Property-based fuzzing of the design files (hypothesis).
+
+Every shipped design is perturbed (values out of range, wrong types, NaN/inf, missing and
+unknown keys and sections, swapped tooth counts). Property: loading gives either a validated
+design or an RvtoolInputError with a one-line message that names a key path of the file --
+never another exception (a traceback) and never a hang (hypothesis deadline per example).
+
+Cost control: the validation-only property runs 300 perturbations per shipped design (about 10 s for RD-40 on one core). A
+full ``rvtool analyze --quick --protocols te,stiffness`` (subprocess, with a timeout; exit 0,
+or 2 with one line and nothing written, or 1 where every failed protocol is a reported
+SolverFailure; no traceback; no NaN in results.json) runs on a small subset: FULL_EXAMPLES
+perturbations per design (marked slow: about 1-2 min).
+"""
+import copy
+import json
+import math
+import os
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rvtool import designs
+from rvtool.assembly import topologies
+from rvtool.errors import RvtoolInputError
+
+ROOT = Path(__file__).resolve().parents[1]
+N_VALIDATION = 300
+"""Perturbations per shipped design in the validation-only property (issue 20: at least 300)."""
+FULL_EXAMPLES = 3
+"""Perturbations per shipped design run through a whole quick analysis (subprocess)."""
+FULL_TIMEOUT_S = 240
+"""A quick te+stiffness analysis takes ~10 s; four minutes means a hang."""
+
+DESIGNS = designs.design_names()
+
+
+def _table(name):
+    with open(designs.path(name), "rb") as fh:
+        return tomllib.load(fh)
+
+
+def _leaves(table, prefix=()):
+    """Key paths of every value that is not a table."""
+    out = []
+    for k, v in table.items():
+        if isinstance(v, dict):
+            out += _leaves(v, prefix + (k,))
+        else:
+            out.append(prefix + (k,))
+    return out
+
+
+def _set(table, path, value):
+    t = table
+    for k in path[:-1]:
+        t = t[k]
+    t[path[-1]] = value
+
+
+def _get(table, path):
+    t = table
+    for k in path:
+        t = t[k]
+    return t
+
+
+def _delete(table, path):
+    t = table
+    for k in path[:-1]:
+        t = t[k]
+    del t[path[-1]]
+
+
+BAD_VALUES = st.one_of(
+    st.sampled_from([float("nan"), float("inf"), -float("inf"), 0, 0.0, -1, -1.0, 1e30, -1e30, 1e-300, 2**63 - 1,
+                     True, False, "", "x", [], [1.0], [[1.0, 2.0]], {"a": 1}]),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(min_value=-10**6, max_value=10**6),
+    st.text(max_size=8),
+)
+
+
+@st.composite
+def perturbation(draw, name):
+    """(description, perturbed table) of shipped design ``name``."""
+    table = _table(name)
+    leaves = _leaves(table)
+    sections = [k for k, v in table.items() if isinstance(v, dict)]
+    kind = draw(st.sampled_from(["value", "value", "scale", "missing_key", "missing_section", "unknown_key",
+                                 "unknown_section", "swap_counts", "section_not_table"]))
+    t = copy.deepcopy(table)
+    if kind == "value":
+        path = draw(st.sampled_from(leaves))
+        v = draw(BAD_VALUES)
+        _set(t, path, v)
+        return f"{'.'.join(path)} = {v!r}", t
+    if kind == "scale":
+        nums = [p for p in leaves if isinstance(_get(t, p), (int, float)) and not isinstance(_get(t, p), bool)]
+        path = draw(st.sampled_from(nums))
+        f = draw(st.sampled_from([-1.0, 0.0, 1e-6, 0.1, 0.5, 2.0, 10.0, 1e6]))
+        old = _get(t, path)
+        _set(t, path, type(old)(old * f) if isinstance(old, float) else int(old * f))
+        return f"{'.'.join(path)} x {f}", t
+    if kind == "missing_key":
+        path = draw(st.sampled_from(leaves))
+        _delete(t, path)
+        return f"missing {'.'.join(path)}", t
+    if kind == "missing_section":
+        sec = draw(st.sampled_from(sections))
+        del t[sec]
+        return f"missing [{sec}]", t
+    if kind == "unknown_key":
+        sec = draw(st.sampled_from(sections + [None]))
+        (t if sec is None else t[sec])["no_such_key"] = 1.0
+        return f"unknown key in [{sec}]", t
+    if kind == "unknown_section":
+        t["no_such_section"] = {"a": 1.0}
+        return "unknown section", t
+    if kind == "section_not_table":
+        sec = draw(st.sampled_from(sections))
+        t[sec] = draw(st.sampled_from([1.0, "x", [1, 2]]))
+        return f"[{sec}] not a table", t
+    # swap two integer counts (tooth counts, pin counts, roller counts)
+    ints = [p for p in leaves if isinstance(_get(t, p), int) and not isinstance(_get(t, p), bool)]
+    a, b = draw(st.sampled_from(ints)), draw(st.sampled_from(ints))
+    va, vb = _get(t, a), _get(t, b)
+    _set(t, a, vb)
+    _set(t, b, va)
+    return f"swap {'.'.join(a)} <-> {'.'.join(b)}", t
+
+
+def _key_names(table):
+    names = set()
+    for path in _leaves(table):
+        names.update(path)
+    names.update(k for k, v in table.items() if isinstance(v, dict))
+    return names | {"topology", "design"}
+
+
+def _check_load(name, desc, table):
+    try:
+        topologies.design_from_table(table)
+    except RvtoolInputError as exc:
+        msg = str(exc)
+        assert msg and "\n" not in msg.strip(), f"{desc}: multi-line error {msg!r}"
+        # names a key path of the file (a key or a section of the design)
+        assert any(k in msg for k in _key_names(_table(name))), f"{desc}: error names no key: {msg!r}"
+    # any other exception propagates: the property fails with the perturbation in the report
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_validation_fuzz(name):
+    @settings(max_examples=N_VALIDATION, deadline=5000, derandomize=True, database=None,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+    @given(perturbation(name))
+    def check(case):
+        desc, table = case
+        _check_load(name, desc, table)
+
+    check()
+
+
+def _has_nan(obj):
+    if isinstance(obj, dict):
+        return any(_has_nan(v) for v in obj.values())
+    if isinstance(obj, list):
+        return any(_has_nan(v) for v in obj)
+    if isinstance(obj, float):
+        return not math.isfinite(obj)
+    return isinstance(obj, str) and obj in ("nan", "inf", "-inf")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", DESIGNS)
+def test_full_quick_analysis_on_a_subset(name, tmp_path):
+    import tomlkit
+
+    @settings(max_examples=FULL_EXAMPLES, deadline=None, derandomize=True, database=None,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+    @given(perturbation(name))
+    def check(case):
+        desc, table = case
+        try:
+            topologies.design_from_table(copy.deepcopy(table))
+        except RvtoolInputError:
+            pass
+        d = tmp_path / f"case{len(list(tmp_path.iterdir()))}"
+        d.mkdir()
+        f = d / "fuzz.toml"
+        f.write_text(tomlkit.dumps(table))
+        env = dict(os.environ, MPLBACKEND="Agg",
+                   PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
+        proc = subprocess.run([sys.executable, "-m", "rvtool.cli", "analyze", str(f), "--quick", "--quiet",
+                               "--protocols", "te,stiffness", "--out", str(d / "out")],
+                              cwd=d, env=env, capture_output=True, text=True, timeout=FULL_TIMEOUT_S)
+        assert "Traceback" not in proc.stderr, f"{desc}: {proc.stderr[-3000:]}"
+        assert proc.returncode in (0, 1, 2), f"{desc}: exit {proc.returncode}\n{proc.stdout}\n{proc.stderr[-2000:]}"
+        if proc.returncode == 2:
+            assert not (d / "out").exists(), f"{desc}: an input error wrote output"
+            assert proc.stderr.strip().count("\n") == 0, proc.stderr
+            return
+        data = json.loads((d / "out" / "results.json").read_text())
+        assert not _has_nan({k: v for k, v in data.items() if k != "provenance"}), desc
+        if proc.returncode == 1:
+            # a design that validates but that the solvers cannot equilibrate (e.g. 1e6 x the rated
+            # torque): each failed protocol is reported with the solver's reason, nothing else failed
+            failed = [n for n in data["protocols"] if data[n]["status"] == "failed"]
+            assert failed, desc
+            for n in failed:
+                assert data[n]["reason"].startswith("SolverFailure"), f"{desc}: {n}: {data[n]['reason']}"
+
+    check()
