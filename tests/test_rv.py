@@ -238,13 +238,16 @@ def test_rv_tolerance_sampling(design, tmp_path):
         RvToleranceSpec(needle_clearance=Normal(mean=0.0, std=1e-6))
 
 
-def test_numpy_reference_backend_gives_the_same_rated_state(design):
-    """The RV model on the NumPy references of every family (backend="numpy") reaches the same rated
-    equilibrium as on the Warp kernels (float64: measured 6e-16; tolerance 1e-12 m / rad, the
-    Newton tolerance's effect on a state of this stiffness)."""
+@pytest.mark.parametrize("device", ["cpu", pytest.param("cuda:0", marks=pytest.mark.skipif(
+    __import__("warp").get_cuda_device_count() == 0, reason="no CUDA device"))])
+def test_reference_backend_and_devices_give_the_same_rated_state(design, device):
+    """The RV model on the NumPy references of every family (backend="numpy") and on the Warp
+    kernels of ``device`` reaches the same rated equilibrium (float64: measured 6e-16 on cpu;
+    tolerance 1e-12 m / rad: the kernels agree with their references to round-off, and both
+    solves take the same Newton path)."""
     qs = []
     for backend in ("warp", "numpy"):
-        m = build(design, backend=backend)
+        m = build(design, backend=backend, device=device) if backend == "warp" else build(design, backend=backend)
         s = StaticSolver(m)
         m.set_output_torque(-design.rated_torque)
         qs.append(s.solve(0.3))
