@@ -63,3 +63,10 @@ def housing_ports(design):
     """(PortReducedModel, reference port compliance C_ref [m/N] of the parent, info dict) of
     ``design.housing`` (model "ports"); port k carries ring pin k, rows (2k, 2k + 1) = (x, y)."""
     return _reduced(design.housing, design.material, design.pins.n_pins)
+
+
+def annulus_ports(housing, material, n_ports):
+    """As :func:`housing_ports` for ``n_ports`` bore ports at the angles of
+    :func:`pin_port_angles` (``housing``: the design's ``[housing]``, ``material`` its
+    ``[material]``); for topologies whose ring is not a set of pins."""
+    return _reduced(housing, material, int(n_ports))

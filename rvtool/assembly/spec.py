@@ -3,7 +3,6 @@ dataclasses and validated on load; errors name the parameter (with its
 section) and its valid range."""
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -110,13 +109,17 @@ class Wheels:
 class PinContact:
     """Cycloid--pin contact law: law ("line", "power", "secant"), stiffness [N/m] (whole contact;
     0 with "line" = secant stiffness at reference_force), exponent (power law), reference_force [N],
-    damping [N s/m], mu [-] (regularized friction; 0 = none)."""
+    damping [N s/m], mu [-] (0 = no friction), friction_model ("regularized": Eq. (friction)
+    velocity law; "anchor": stick--slip anchors per slice), tangential_stiffness [N/m] of the
+    anchors (whole contact; 0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the normal secant stiffness)."""
     law: str = "line"
     stiffness: float = 0.0
     exponent: float = 1.0
     reference_force: float = 500.0
     damping: float = 0.0
     mu: float = 0.0
+    friction_model: str = "regularized"
+    tangential_stiffness: float = 0.0
 
     def __post_init__(self):
         if self.law not in ("line", "power", "secant"):
@@ -126,13 +129,19 @@ class PinContact:
         check_positive("pin_contact.reference_force", self.reference_force)
         check_nonnegative("pin_contact.damping", self.damping)
         check_nonnegative("pin_contact.mu", self.mu)
+        if self.friction_model not in ("regularized", "anchor"):
+            raise RvtoolInputError(f"pin_contact.friction_model = {self.friction_model!r}; valid choices are "
+                                   "['regularized', 'anchor']")
+        check_nonnegative("pin_contact.tangential_stiffness", self.tangential_stiffness)
 
 
 @dataclass(frozen=True, kw_only=True)
 class OutputPins:
     """Flange pins in wheel holes: n_pins, pin_circle_radius [m], pin_radius [m], hole_radius [m],
     reference_force [N] of the Hertz calibration of the 10/9 law, n_slices; support: the pin as a
-    beam (sub-table ``[output_pins.support]``; rigid by default)."""
+    beam (sub-table ``[output_pins.support]``; rigid by default); mu [-] of the anchor (stick--slip)
+    friction per slice (0 = none), tangential_stiffness [N/m] of the anchors (whole contact; 0 =
+    Mindlin's ratio 2(1 - nu)/(2 - nu) of the 10/9 law's secant at reference_force)."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
@@ -140,12 +149,16 @@ class OutputPins:
     reference_force: float = 1000.0
     n_slices: int = 4
     support: PinSupport = field(default_factory=PinSupport)
+    mu: float = 0.0
+    tangential_stiffness: float = 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "support", _support("output_pins", self.support))
         check_positive("output_pins.pin_circle_radius", self.pin_circle_radius)
         check_positive("output_pins.pin_radius", self.pin_radius)
         check_range("output_pins.hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
+        check_nonnegative("output_pins.mu", self.mu)
+        check_nonnegative("output_pins.tangential_stiffness", self.tangential_stiffness)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -250,6 +263,34 @@ class Bodies:
 
 
 @dataclass(frozen=True, kw_only=True)
+class BearingFriction:
+    """Bearing friction torque as a loss on each bearing's relative rotation (optional section;
+    model "none" = no element, no cost): model ("none" | "palmgren", Palmgren's M = M0 + M1 of
+    :mod:`rvtool.bearings.friction_torque`), kinematic_viscosity nu [m^2/s] of the lubricant,
+    f0_ball, f1_ball (main and input ball bearings) and f0_needle, f1_needle (eccentric needle
+    bearings) [-], regularization_speed [rad/s] of the sign. The defaults are chosen here, inside the
+    ranges tabulated by Harris & Kotzalas (oil bath: f0 = 2 for angular-contact/deep-groove ball
+    bearings, 4 for needle bearings; f1 = 7e-4 ball, 5e-4 needle); ISO VG 32 at 40 degC."""
+    model: str = "none"
+    kinematic_viscosity: float = 3.2e-5
+    f0_ball: float = 2.0
+    f1_ball: float = 7e-4
+    f0_needle: float = 4.0
+    f1_needle: float = 5e-4
+    regularization_speed: float = 1e-2
+
+    def __post_init__(self):
+        if self.model not in ("none", "palmgren"):
+            raise RvtoolInputError(f"bearing_friction.model = {self.model!r}; valid choices are ['none', 'palmgren']")
+        check_positive("bearing_friction.kinematic_viscosity", self.kinematic_viscosity)
+        check_positive("bearing_friction.f0_ball", self.f0_ball)
+        check_nonnegative("bearing_friction.f1_ball", self.f1_ball)
+        check_positive("bearing_friction.f0_needle", self.f0_needle)
+        check_nonnegative("bearing_friction.f1_needle", self.f1_needle)
+        check_positive("bearing_friction.regularization_speed", self.regularization_speed)
+
+
+@dataclass(frozen=True, kw_only=True)
 class CycloidDesign:
     """A single-stage cycloid drive with one or two wheels (see rvtool/designs/rd40.toml)."""
     name: str
@@ -266,6 +307,7 @@ class CycloidDesign:
     input_bearing: BallBearingSpec
     bodies: Bodies = field(default_factory=Bodies)
     housing: Housing = field(default_factory=Housing)
+    bearing_friction: BearingFriction = field(default_factory=BearingFriction)
 
     def __post_init__(self):
         if self.n_wheels != len(self.wheels.midplanes):
@@ -305,7 +347,8 @@ class CycloidDesign:
 
 _SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact": PinContact,
              "output_pins": OutputPins, "eccentric_bearing": NeedleBearing, "main_bearing": BallBearingSpec,
-             "input_bearing": BallBearingSpec, "bodies": Bodies, "housing": Housing}
+             "input_bearing": BallBearingSpec, "bodies": Bodies, "housing": Housing,
+             "bearing_friction": BearingFriction}
 
 
 def _field_types(cls):
@@ -403,16 +446,17 @@ def design_from_dict(d):
                                "rvtool.load_design (rvtool.assembly.topologies), which picks the topology's loader")
     kw = {}
     for sec, cls in _SECTIONS.items():
-        if sec not in d and sec not in ("bodies", "housing"):
+        if sec not in d and sec not in ("bodies", "housing", "bearing_friction"):
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
         kw[sec] = build_section(cls, sec, d.pop(sec, {}))
     return build_section(CycloidDesign, "design", {**d, **kw})
 
 
 def load_design(path):
-    """Load a design TOML file into a validated :class:`CycloidDesign`."""
-    with open(path, "rb") as fh:
-        return design_from_dict(tomllib.load(fh))
+    """Load a design TOML file into its validated design: the file's ``topology`` key picks the
+    topology's loader (:mod:`rvtool.assembly.topologies`; absent: "cycloid", :class:`CycloidDesign`)."""
+    from . import topologies
+    return topologies.design_from_table(topologies.read_table(path))
 
 
 def replace(design, **sections):

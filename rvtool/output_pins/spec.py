@@ -16,8 +16,10 @@ from enum import Enum
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import output_pins_ref as ref
 
+from ..contact.circle_set import FrictionLaw, FrictionModel
 from ..errors import RvtoolInputError
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 from .calibration import PIN_EXPONENT
@@ -95,6 +97,11 @@ class OutputPinMechanism:
     wheel_midplanes: axial positions z_i of the wheel midplanes relative to the flange [m].
     gap_offsets: u_off of Eq. (output_gap) per wheel [m] (e.g. thermal; positive opens).
     mode: :class:`PinMode`; compliance and sleeve: shared mode only.
+    friction: NONE (default) or ANCHOR (plain mode): stick--slip anchors per slice (Eq.
+    (friction), anchor model), k_t the whole pin--hole contact's tangential stiffness, divided
+    among the slices like the coefficient; an ANCHOR law with mu_kinetic = 0 runs the
+    frictionless code. anchor_release_distance: d_rel [m] of :mod:`warp_contacts.anchor_ref`;
+    None: 10 % of the pin radius (far above the stick stroke mu F_n / k_t, far below a pin).
     """
     pin_circle_radius: float
     hole_circle_radius: float
@@ -111,6 +118,8 @@ class OutputPinMechanism:
     mode: PinMode = PinMode.PLAIN
     compliance: SharedPinCompliance | None = None
     sleeve: SleeveFit = field(default_factory=SleeveFit)
+    friction: FrictionLaw = field(default_factory=FrictionLaw)
+    anchor_release_distance: float | None = None
 
     def __post_init__(self):
         try:
@@ -147,6 +156,32 @@ class OutputPinMechanism:
                 raise RvtoolInputError(f"compliance = {self.compliance!r} must be a SharedPinCompliance in shared mode")
         if not isinstance(self.sleeve, SleeveFit):
             raise RvtoolInputError(f"sleeve = {self.sleeve!r} must be a SleeveFit")
+        if not isinstance(self.friction, FrictionLaw):
+            raise RvtoolInputError(f"friction = {self.friction!r} must be a FrictionLaw")
+        if self.friction.model not in (FrictionModel.NONE, FrictionModel.ANCHOR):
+            raise RvtoolInputError(f"friction.model = {self.friction.model.name} is not available for output pins; "
+                                   "valid: NONE, ANCHOR")
+        if self.anchors and self.mode == PinMode.SHARED:
+            raise RvtoolInputError("friction.model = ANCHOR is available for mode = 'plain' only (the shared-pin "
+                                   "condensation carries no tangential history)")
+        if self.anchor_release_distance is not None:
+            check_positive("anchor_release_distance", self.anchor_release_distance)
+
+    @property
+    def anchors(self):
+        """True where the pins carry anchors (ANCHOR law with mu > 0)."""
+        return self.friction.model == FrictionModel.ANCHOR and self.friction.mu_kinetic > 0.0
+
+    def anchor_params(self):
+        """(n_pins n_wheels n_slices, anchor_ref.N_ANCHOR) anchor columns of the slice rows, in the
+        order of the plain rows' slice observations."""
+        n = self.n_pins * self.n_wheels * self.n_slices
+        ap = np.zeros((n, anchor_ref.N_ANCHOR))
+        ap[:, anchor_ref.ANCHOR_KT] = self.friction.tangential_stiffness / self.n_slices
+        ap[:, anchor_ref.ANCHOR_MU] = self.friction.mu_kinetic
+        ap[:, anchor_ref.ANCHOR_RELEASE] = (0.1 * self.pin_radius if self.anchor_release_distance is None
+                                            else self.anchor_release_distance)
+        return ap
 
     @property
     def n_wheels(self):
