@@ -205,8 +205,9 @@ def template(topology, name=None):
     _, secs = sections(cls)
     tables = {}
     for sec, key, value, unit, rng, meaning, required in rows:
-        if value is None:
-            continue    # an optional key without a value (TOML has no null): left out, its default applies
+        if value is None or (sec == "" and key == "topology"):
+            continue    # an optional key without a value (TOML has no null): left out, its default applies;
+            # the topology key is written above (a design class may record it as a field)
         if sec == "" and key == "name" and name is not None:
             value = name
         item = tomlkit.item(value)
