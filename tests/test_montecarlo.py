@@ -198,8 +198,8 @@ def test_device_mode(design, tol, uninterrupted, tmp_path):
     """Mode "device" (TE on the device Newton, lost motion per variant) reproduces the serial
     per-variant study: TE to 1e-6 arcsec and max pin force to 1e-6 N (both paths converge the
     same equilibria to |residual| <= 1e-6 N), the lost motion exactly (the same function on the
-    same model); records name the TE path. "auto" resolves to the device Newton on a GPU, to
-    the batched Exudyn path on the CPU."""
+    same model); records name the TE path. "auto" resolves to the batched Exudyn path (the
+    fastest measured for this protocol, GPU or not)."""
     from rvtool.variants.montecarlo import resolve_mode
     settings = MonteCarloSettings(n_variants=2, seed=2, chunk_size=2, mode="device", workers=1)
     res = run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), build_kw=BUILD)
@@ -210,8 +210,7 @@ def test_device_mode(design, tol, uninterrupted, tmp_path):
         assert abs(a["max_pin_force_N"] - b["max_pin_force_N"]) <= 1e-6
         assert a["lost_motion_arcmin"] == b["lost_motion_arcmin"]
         assert a["te_fallback_points"] == 0 and b["te_path"] == "exudyn"
-    import warp as wp
-    wp.init()
-    assert resolve_mode("auto", "cpu") == (("device", "cuda:0") if wp.get_cuda_device_count() else ("batched", "cpu"))
+    # the full protocol (TE + per-variant lost motion) is fastest on batched Exudyn (resolve_mode's docstring)
+    assert resolve_mode("auto", "cpu") == ("batched", "cpu")
     with pytest.raises(RvtoolInputError, match="mode"):
         MonteCarloSettings(n_variants=2, mode="fast")

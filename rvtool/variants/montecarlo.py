@@ -19,8 +19,8 @@ maximum pin force, lost motion), in one of three modes:
   chunk in one device loop, failed pairs on the per-variant Exudyn path; lost motion per
   variant), on ``device`` ("cpu": chunks side by side in the pool; "cuda:N": one chunk after
   another in this process);
-* ``"auto"``: the fastest measured path: ``"device"`` on the first GPU if there is one, else
-  ``"batched"`` on the CPU (:func:`resolve_mode`).
+* ``"auto"``: the fastest measured path for this protocol (TE and lost motion): ``"batched"`` on
+  the CPU (:func:`resolve_mode`; ``"device"`` stays an explicit choice, see there).
 
 Each record names its TE path (``te_path``) and the number of its TE points that fell back
 from the device Newton to Exudyn (``te_fallback_points``; None for the Exudyn modes).
@@ -70,22 +70,25 @@ MODES = ("pool", "batched", "serial", "device", "auto")
 
 
 def resolve_mode(mode, device):
-    """(mode, device) that a study runs: ``"auto"`` -> the device Newton on the first CUDA device
-    if one is present, else the batched Exudyn path on the CPU. Measured for the TE of the Monte
-    Carlo protocol (cases/bench_batched_te.py, 53 points, 2 loaded CPU cores, two runs): per
-    core, batched Exudyn (B = 16) 4.90 and 11.1 variants/s, device Newton 4.84 and 9.4 (two
-    processes: 9.68 and 18.9), per-variant pool 0.9 and 1.7: on the CPU the two batched paths
-    are on par, the Exudyn one slightly ahead; on a GPU the device Newton has no per-copy host
-    work, which held the batched Exudyn path to 0.47x of a 16-core pool (README, "GPU
-    execution"). ``device="auto"`` with the other modes picks as
-    :func:`warp_contacts.precision.resolve_device` for a large batch."""
+    """(mode, device) that a study runs: ``"auto"`` -> the batched Exudyn path on the CPU.
+
+    Measured for the TE alone (cases/bench_batched_te.py, 53 points): on an H100 the device
+    Newton reaches 2,000-2,800 variants/s against 45.6 for a warmed 16-process pool (44-61x);
+    on 2 loaded CPU cores the device Newton (two processes) and batched Exudyn are on par.
+    But the Monte Carlo protocol also computes lost motion, per variant on Exudyn, and in
+    ``"device"`` mode on a GPU that runs one variant after another in the process holding the
+    device: the full 1,000-variant study on the H100 host took 292 s (3.4 variants/s) against
+    20.7 variants/s for the 16-process pool and 17.1 for batched Exudyn measured in the same
+    run (cases/monte_carlo_te.py --mode device, 2026-11-24). Until lost motion runs on the
+    device (or in the pool beside the device TE), ``"auto"`` picks the batched Exudyn path and
+    ``"device"`` is chosen explicitly for TE-dominated studies. ``device="auto"`` with the
+    other modes picks as :func:`warp_contacts.precision.resolve_device` for a large batch."""
     if mode != "auto" and device != "auto":
         return mode, device
     from warp_contacts.precision import resolve_device
-    gpu = resolve_device("auto", n_contacts=10 ** 9)
     if mode == "auto":
-        return ("device", gpu) if gpu != "cpu" else ("batched", "cpu")
-    return mode, gpu
+        return "batched", "cpu"
+    return mode, resolve_device("auto", n_contacts=10 ** 9)
 
 
 @dataclass(frozen=True, kw_only=True)
