@@ -7,7 +7,11 @@ revolution at N_TE input angles under the rated torque, the maximum pin force ov
 states, and the lost motion at +-3 % of the rated torque (load-controlled continuation,
 spring control where it fails). --mode batched (default): each chunk of CHUNK_BATCHED
 variants is one Exudyn system (rvtool.batched), chunks side by side in a process pool over
-all cores; --mode pool: one Exudyn system per variant in the pool (chunks of 10). Each
+all cores; --mode pool: one Exudyn system per variant in the pool (chunks of 10); --mode
+device: the TE of each chunk on the device Newton (--device cpu: chunks of CHUNK_DEVICE side
+by side in the pool; cuda:0: one after another), lost motion per variant; --mode auto: the
+fastest measured path (the device Newton on a GPU if present, else batched). ``te_path`` and
+``fallback_copies`` say which TE path ran and how many TE points fell back to Exudyn. Each
 finished chunk is one file (atomic rename), so an interrupted run resumes with --resume.
 Reported: mean, std, p5/p50/p95 with a Student-t 95 % CI of the mean and a
 distribution-free order-statistic 95 % CI of p95; histograms. Error statement of the
@@ -43,6 +47,10 @@ DENSE_TE = 797
 CHUNK_BATCHED = 16
 """Variants per batched system: the fastest batch size on one CPU core (cases/bench_batched_te.py,
 53 TE points: 17.3 variants/s at B = 16, 10.9 at B = 64)."""
+CHUNK_DEVICE = 16
+"""Variants per chunk of the device mode on the CPU (one chunk per pool process; each chunk is
+V x 53 device Newton copies). On a GPU, larger chunks fill it better (--variants and a larger
+chunk are then the lead's to choose)."""
 COMPARE = 64
 """Variants timed in both modes, at least two batches per worker (each mode's pool started from
 nothing, like a study)."""
@@ -57,9 +65,11 @@ def _extra(parser):
     parser.add_argument("--variants", type=int, default=None, help="number of variants (default 1000, --quick 20)")
     parser.add_argument("--workers", type=int, default=None, help="pool processes (default: all cores)")
     parser.add_argument("--resume", action="store_true", help="reuse finished chunks in OUT/chunks")
-    parser.add_argument("--mode", default="batched", choices=("batched", "pool"),
+    parser.add_argument("--mode", default="batched", choices=("batched", "pool", "device", "auto"),
                         help="batched: chunks of 16 variants per Exudyn system in a process pool; "
-                             "pool: one variant per task (default batched)")
+                             "pool: one variant per task; device: the TE of each chunk on the device Newton "
+                             "(rvtool.solver.device_newton); auto: device on a GPU, else batched (default batched)")
+    parser.add_argument("--device", default="cpu", help="device of the batched / device modes (cpu, cuda:0, auto)")
 
 
 def _hist(ax, x, label, s):
@@ -81,8 +91,9 @@ def main(argv=None):
     chunk_dir = os.path.join(args.out, "chunks")
     if not args.resume and os.path.isdir(chunk_dir):
         shutil.rmtree(chunk_dir)   # a timed study starts from nothing unless asked to resume
-    chunk = CHUNK_BATCHED if args.mode == "batched" else 10
-    settings = MonteCarloSettings(n_variants=n, seed=SEED, chunk_size=chunk, mode=args.mode, workers=args.workers)
+    chunk = CHUNK_BATCHED if args.mode == "batched" else CHUNK_DEVICE if args.mode in ("device", "auto") else 10
+    settings = MonteCarloSettings(n_variants=n, seed=SEED, chunk_size=chunk, mode=args.mode, workers=args.workers,
+                                  device=args.device)
     with progress.reporting("auto"):
         res = run_monte_carlo(design, tol, protocol, settings, chunk_dir, build_kw=build_kw,
                               progress=progress.callback("Monte Carlo", unit="variant"))
@@ -151,6 +162,8 @@ def main(argv=None):
         "wall_s": res["wall_s"],
         "variants_per_s": rate,
         "mode": args.mode,
+        "te_path": res["te_paths"],
+        "fallback_copies": res["te_fallback_points"],
         "pool_variants_per_s": cmp_rate["pool"],
         "batched_variants_per_s": cmp_rate["batched"],
         "mode_comparison_note": (f"both modes on the first {nc} variants, each in a process pool of "

@@ -14,7 +14,11 @@ Stiffness: condensed tangent K_t (Eq. obs_condensed_stiffness) at the rated torq
 zero input angle, rolling-element bearings) with rigid pins (rd40.toml) and with the declared
 supports (chosen here; RD-40 does not give them): ring pins simply supported in the two end
 covers at z = +-15 mm (the housing height), output pins cantilevered from the flange, clamped at
-z = -12 mm with the free end at +12 mm. --quick runs the same (it is a few static solves).
+z = -12 mm with the free end at +12 mm; each elastic pin closed exactly per pin with its full station
+compliance (rvtool/contact/pin_closure.py). Beside them (in the settings): the largest pin bending
+stress at the rated state of each variant (the same supports assumed where the pins are rigid) and
+the stiffness budget of the elastic-pin variant (energy, switch-to-rigid and sensitivity shares).
+--quick runs the same (it is a few static solves).
 """
 import time
 
@@ -23,6 +27,7 @@ import numpy as np
 from rvtool import casekit, designs
 from rvtool.assembly import build
 from rvtool.assembly.spec import load_design, replace
+from rvtool.protocols.budget import stiffness_budget
 from rvtool.protocols.stiffness import condensed_tangent
 from rvtool.solver.static import StaticSolver
 from rvtool.structure.pin_beam import PinBeam, PinSupport
@@ -74,23 +79,31 @@ def main(argv=None):
                 "elastic ring pins": replace(d, pins={"support": RING_SUPPORT}),
                 "elastic output pins": replace(d, output_pins={"support": OUTPUT_SUPPORT}),
                 "elastic pins": replace(d, pins={"support": RING_SUPPORT}, output_pins={"support": OUTPUT_SUPPORT})}
-    K = {}
+    K, stress = {}, {}
+    supports = {"pins": PinSupport(**RING_SUPPORT), "output_pins": PinSupport(**OUTPUT_SUPPORT)}
     for name, dv in variants.items():
-        K[name] = rated_stiffness(dv)[0]
+        K[name], model, q = rated_stiffness(dv)
+        # largest pin bending stress at the rated state: the declared supports where elastic, the
+        # same supports assumed where the pins are rigid
+        stress[name] = {f: model.pin_bending(q, f, supports[f])["sigma_max_Pa"] / 1e6 for f in supports}
+        if name == "elastic pins":
+            budget = stiffness_budget(model, q)
     results = {"beam_rel_err": max(c[-1] for c in checks),
                "K_rigid_pins_Nm_per_arcmin": K["rigid pins"],
                "K_elastic_pins_Nm_per_arcmin": K["elastic pins"]}
-    _plots(checks, K, args.out)
+    _plots(checks, K, budget, args.out)
     settings = {"design": d.name, "bearing_model": "rolling", "torque_Nm": d.rated_torque, "input_angle_rad": 0.0,
                 "ring_pin_support": RING_SUPPORT, "output_pin_support": OUTPUT_SUPPORT,
-                "K_by_variant_Nm_per_arcmin": K, "beam_checks": [list(c) for c in checks],
-                "beam_check_wall_s": t_beam, "quick": args.quick}
+                "K_by_variant_Nm_per_arcmin": K, "pin_bending_stress_MPa_by_variant": stress,
+                "stiffness_budget_elastic_pins": {k: budget[k] for k in ("shares", "rigid_shares",
+                                                                           "sensitivity_shares")},
+                "beam_checks": [list(c) for c in checks], "beam_check_wall_s": t_beam, "quick": args.quick}
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t0)
 
 
-def _plots(checks, K, out_dir):
+def _plots(checks, K, budget, out_dir):
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 2, figsize=(11, 3.8))
+    fig, ax = plt.subplots(1, 3, figsize=(16, 3.8))
     labels = [f"{c[0]}\n{c[1][:5]}, {c[2].split()[0]}" for c in checks]
     ax[0].bar(range(len(checks)), [max(c[-1], 1e-17) for c in checks])
     ax[0].set_yscale("log")
@@ -99,6 +112,12 @@ def _plots(checks, K, out_dir):
     ax[1].bar(range(len(K)), list(K.values()))
     ax[1].set_xticks(range(len(K)), list(K), rotation=20, fontsize=8)
     ax[1].set(ylabel="K_t at rated torque [N m/arcmin]", title="RD-40: rigid vs elastic pins")
+    names = list(budget["shares"])
+    ax[2].barh(names, [budget["shares"][n] for n in names], label="energy share (condensed tangent)")
+    rig = [n for n in names if n in budget["rigid_shares"]]
+    ax[2].barh(rig, [budget["rigid_shares"][n] for n in rig], height=0.4, label="switch to rigid")
+    ax[2].set(xlabel="share of output compliance [-]", title="RD-40, elastic pins: stiffness budget")
+    ax[2].legend(fontsize=7)
     casekit.save_figure(fig, out_dir, "pin_bending")
 
 

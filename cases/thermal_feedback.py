@@ -2,7 +2,7 @@
 Eq. (obs_thermal) with sources from accepted quasi-static windows, the single-node instance of
 Eq. (obs_single_node) against its closed form, the thermal gap channels (Eq. (obs_thermal_gap)
 on the pins, eccentric-bearing clearance increment) written into the next contact evaluation,
-and the matched precision / lost-motion / stiffness re-run cold against hot with the origin of
+and the matched precision / lost-motion / stiffness / vibration re-run cold against hot with the origin of
 each change per channel.
 
 Window: one input revolution (the load cycle of a ring pin) at the rated torque and speed,
@@ -37,14 +37,16 @@ by about 120 W per um, the loop gain of the fixed point exceeds 1 and no steady 
 
 def matched_protocol(design, model, quick):
     """TE over one input revolution (quick: 2 points per mesh) or one output revolution (full:
-    10 per mesh); lost motion at +-3 % T_rated; loaded stiffness at 50-100 % T_rated. Input angle 0
-    for the stiffness and lost-motion mounting."""
+    10 per mesh); lost motion at +-3 % T_rated; loaded stiffness at 50-100 % T_rated; vibration:
+    driven rotation at the rated speed and torque over 0.25 (quick) or 2 input revolutions. Input
+    angle 0 for the stiffness, lost-motion and vibration mounting."""
     T = design.rated_torque
     mesh = model.mesh_period
     ppm, revs = (2, 1.0 / abs(model.ratio)) if quick else (10, 1.0)
     n = int(round(revs * abs(model.ratio) * (2 * np.pi / mesh) * ppm))
     return MatchedProtocol(torque=T, te_angles=tuple(np.arange(n) * mesh / ppm), output_revolutions=revs,
-                           lost_motion_torque=0.03 * T, rated_torque=T, input_angle=0.0)
+                           lost_motion_torque=0.03 * T, rated_torque=T, input_angle=0.0,
+                           vibration_revolutions=0.25 if quick else 2.0, vibration_speed_rpm=design.input_speed_rpm)
 
 
 def main(argv=None):
@@ -122,6 +124,9 @@ def main(argv=None):
     details = {
         "origin": origin,
         "K_Nm_per_arcmin_cold": cold["K_Nm_per_arcmin"], "K_Nm_per_arcmin_hot": hot["K_Nm_per_arcmin"],
+        "vibration": {k: {"cold": cold[k], "hot": hot[k], "change": hot[k] - cold[k]}
+                      for k in ("torsion_pp_arcsec", "mesh_order_amplitude_arcsec",
+                                "mesh_order_amplitude_quasistatic_arcsec", "vibration_accepted_steps")},
         "fixed_point": {"history": fp.history, "sources_W": dict(zip(net.nodes, fp.sources.tolist())),
                         "wall_s": wall_fp, "windows": 2 * fp.iterations},
         "single_node": {"error_K": T1 - T1_exact, "backward_euler_bound_K": be_bound, "rise_K": rise,

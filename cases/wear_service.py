@@ -2,7 +2,7 @@
 windows, the contact-to-surface association of :func:`rvtool.slow.cycloid.wear_model` (ring pin
 at the wheel's station and wheel flank zone, output pin and wheel hole, 0.5 / 0.5), the
 single-channel limiter (largest contact increment <= 1 um per update; quick: 4 um), and the
-matched precision / lost-motion / stiffness re-run before and after 1,000 and 10,000 service
+matched precision / lost-motion / stiffness / vibration re-run before and after 1,000 and 10,000 service
 hours at the rated torque and speed, with the origin of each change.
 
 The thermal network runs without gap channels (temperatures set eta(T) and lambda of the
@@ -43,7 +43,9 @@ def main(argv=None):
     ppm, revs = (2, 1.0 / abs(probe.ratio)) if args.quick else (10, 1.0)
     n = int(round(revs * abs(probe.ratio) * (2 * np.pi / mesh) * ppm))
     protocol = MatchedProtocol(torque=T, te_angles=tuple(np.arange(n) * mesh / ppm), output_revolutions=revs,
-                               lost_motion_torque=0.03 * T, rated_torque=T, input_angle=0.0)
+                               lost_motion_torque=0.03 * T, rated_torque=T, input_angle=0.0,
+                               vibration_revolutions=0.25 if args.quick else 2.0,
+                               vibration_speed_rpm=design.input_speed_rpm)
     t0 = time.perf_counter()
     before = run_matched(probe, protocol)
     wall_before = time.perf_counter() - t0
@@ -83,6 +85,9 @@ def main(argv=None):
         }
         details["service"][f"{hours}_h"] = {
             "origin": origin, "updates": len(run.records), "windows_run": run.windows_run,
+            "vibration": {k: {"before": before[k], "after": after[k], "change": after[k] - before[k]}
+                          for k in ("torsion_pp_arcsec", "mesh_order_amplitude_arcsec",
+                                    "mesh_order_amplitude_quasistatic_arcsec", "vibration_accepted_steps")},
             "service_time_rel_err": service_err, "max_surface_depth_um": max(run.wear_depth.values()) * 1e6,
             "surface_depth_um": {b: d * 1e6 for b, d in run.wear_depth.items() if d != 0.0},
             "temperature_C": {k: v - 273.15 for k, v in run.temperature.items()},

@@ -58,6 +58,22 @@ class PortBodies:
         P[1::3] = H[rows[:, 1]]
         self.P = P
 
+    @classmethod
+    def rigid_fit(cls, structure, rows, angles, radius):
+        """One port body that moves rigidly with the least-squares rigid motion of the ports
+        ``rows`` (x, y rows per port) at polar ``angles`` [rad] on a circle of ``radius`` [m]
+        (equally spaced): x, y the mean port translation, theta the mean tangential displacement
+        over the radius. A ring gear carried by an elastic housing moves so (the housing's
+        translation and torsion; ovalization of the bore is not represented). ``rows`` stays the
+        fitted ports' rows; ``P`` is the one body's (x, y, theta) map."""
+        rows = np.asarray(rows, dtype=int)
+        out = cls(structure, rows)
+        Hx, Hy = out.P[0::3], out.P[1::3]
+        a = np.asarray(angles, float)[:, None]
+        out.P = np.vstack([Hx.mean(axis=0), Hy.mean(axis=0), (-np.sin(a) * Hx + np.cos(a) * Hy).mean(axis=0) / radius])
+        out.n_virtual = 1
+        return out
+
 
 class ContactElement:
     """A contact set attached to an Exudyn system.
@@ -126,6 +142,7 @@ class ContactElement:
         self._ltg = None
         self.last_obs = None            # observation array (N, 8) of the last accepted state
         self.gap_offsets = np.zeros(len(self.ids))   # slow-state gap offsets per row [m] (set_gap_offsets)
+        self.prescribed_velocity = None   # element-coordinate velocity of quasi-static windows at speed
 
     # -- pure evaluation -------------------------------------------------
     def pose_velocity(self, q, q_t):
@@ -154,6 +171,8 @@ class ContactElement:
         """Cached evaluation at element coordinates (trial: committed history is only read)."""
         q = np.asarray(q, dtype=float)
         q_t = np.asarray(q_t, dtype=float)
+        if self.prescribed_velocity is not None:
+            q_t = self.prescribed_velocity    # a quasi-static window at speed: see set_prescribed_velocity
         key = (float(t), q.tobytes(), q_t.tobytes())
         if key != self._key:
             pose, vel = self.pose_velocity(q, q_t)
@@ -198,11 +217,12 @@ class ContactElement:
         return np.asarray(q_global)[self.coordinate_indices]
 
     def evaluation_at(self, q_global):
-        """The evaluation at global state ``q_global`` with zero velocity (static states),
+        """The evaluation at global state ``q_global`` with zero velocity (static states; the
+        prescribed velocity where one is set),
         reusing the last cached evaluation when it was made at exactly this state (the
         converged Newton residual of a static solve)."""
         ql = np.asarray(self.local(q_global), float)
-        v = np.zeros(len(ql))
+        v = np.zeros(len(ql)) if self.prescribed_velocity is None else self.prescribed_velocity
         if self._key is not None and self._key[1] == ql.tobytes() and self._key[2] == v.tobytes():
             return self._ev
         return self.evaluate(0.0, ql, v)
@@ -231,10 +251,36 @@ class ContactElement:
         Absolute, not increments: zeros restore the built element."""
         if not callable(getattr(self.evaluator, "set_gap_offsets", None)):
             raise RvtoolInputError(f"contact set {self.name!r} ({type(self.evaluator).__name__}) takes no gap "
-                                   "offsets; valid: cycloid pins, circle contacts, output pins")
+                                   "offsets; valid: cycloid pins, circle contacts, output pins, rolling-element bearings")
         off = np.array(offsets, dtype=np.float64)
         self.evaluator.set_gap_offsets(off)
         self.gap_offsets = off
+        self._key = None
+
+    def set_friction_coefficients(self, mu):
+        """Slow-state friction coefficient [-] per observation row (coupled lubrication), or None to
+        restore the built coefficients; written into the evaluator, the cached trial is dropped."""
+        if not callable(getattr(self.evaluator, "set_friction_coefficients", None)):
+            raise RvtoolInputError(f"contact set {self.name!r} ({type(self.evaluator).__name__}) has no friction "
+                                   "coefficient to write; valid: cycloid pins")
+        self.evaluator.set_friction_coefficients(mu)
+        self._key = None
+
+    def set_prescribed_velocity(self, v_global):
+        """Velocity [m/s, rad/s] (global ODE2 vector) at which every following evaluation is made
+        instead of the solver's, or None (the solver's velocity; default). Static solves pass zero
+        velocity, so the regularized friction of Eq. (friction) is zero there; a quasi-static window
+        at input speed omega prescribes the kinematic velocities of its input angle, so the friction
+        law sees the sliding speed of the steady motion (static solves only: a dynamic run must
+        leave it None)."""
+        if v_global is None:
+            self.prescribed_velocity = None
+        else:
+            v = np.array(self.local(v_global), dtype=float)
+            if not np.all(np.isfinite(v)):
+                raise RvtoolInputError(f"prescribed velocity of contact set {self.name!r} must be finite; valid: "
+                                       "finite reals")
+            self.prescribed_velocity = v
         self._key = None
 
     def history_state(self):

@@ -138,7 +138,7 @@ def hard_case_main(name, argv=None, doc=None, extra=None, design="rd40"):
     """Shared ``main`` of the cases/hard_*.py scripts: run, judge, plot, write results.json.
     ``extra(result, arr, design, quick, out)`` may add sub-runs and criteria."""
     from . import designs
-    from .assembly.spec import load_design
+    from .assembly.topologies import load as load_design
     from .protocols.hard_cases import CRITERIA, case_by_name, run_hard_case
     args = parse_args(argv, doc)
     t_start = time.perf_counter()

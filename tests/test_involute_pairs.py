@@ -257,7 +257,8 @@ def test_internal_pair_contact_torques():
     (dict(lines=(2,)), r"mesh.lines"),
     (dict(window=-1), r"mesh.window"),
     (dict(clearance=float("nan")), r"mesh.clearance"),
-    (dict(friction=FrictionLaw(model=FrictionModel.ANCHOR, tangential_stiffness=1e8)), r"ANCHOR"),
+    # anchors are available since issue 17 (tests/test_friction_anchor.py); their release distance is checked
+    (dict(anchor_release_distance=0.0), r"mesh.anchor_release_distance"),
 ])
 def test_bad_mesh_inputs(kw, match):
     with pytest.raises(RvtoolInputError, match=match):

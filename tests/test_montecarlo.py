@@ -192,3 +192,25 @@ def test_batched_mode(design, tmp_path):
         for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N"):
             # one system of B copies vs one system per variant: equal up to the Newton tolerances
             assert a[nm] == pytest.approx(b[nm], rel=1e-6, abs=1e-6)
+
+
+def test_device_mode(design, tol, uninterrupted, tmp_path):
+    """Mode "device" (TE on the device Newton, lost motion per variant) reproduces the serial
+    per-variant study: TE to 1e-6 arcsec and max pin force to 1e-6 N (both paths converge the
+    same equilibria to |residual| <= 1e-6 N), the lost motion exactly (the same function on the
+    same model); records name the TE path. "auto" resolves to the batched Exudyn path (the
+    fastest measured for this protocol, GPU or not)."""
+    from rvtool.variants.montecarlo import resolve_mode
+    settings = MonteCarloSettings(n_variants=2, seed=2, chunk_size=2, mode="device", workers=1)
+    res = run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), build_kw=BUILD)
+    assert res["mode"] == "device" and res["te_paths"] == ["device_newton:cpu:host_loop"]
+    for a, b in zip(res["records"], uninterrupted["records"]):
+        assert a["status"] == b["status"] == "ok", (a["error"], b["error"])
+        assert abs(a["te_pp_arcsec"] - b["te_pp_arcsec"]) <= 1e-6
+        assert abs(a["max_pin_force_N"] - b["max_pin_force_N"]) <= 1e-6
+        assert a["lost_motion_arcmin"] == b["lost_motion_arcmin"]
+        assert a["te_fallback_points"] == 0 and b["te_path"] == "exudyn"
+    # the full protocol (TE + per-variant lost motion) is fastest on batched Exudyn (resolve_mode's docstring)
+    assert resolve_mode("auto", "cpu") == ("batched", "cpu")
+    with pytest.raises(RvtoolInputError, match="mode"):
+        MonteCarloSettings(n_variants=2, mode="fast")

@@ -253,12 +253,25 @@ class CirclePairKernel:
     keep_on_device = frozenset()
 
     def device_array(self, name):
+        """A device array of the recorded launch: a data buffer or the row parameters
+        ("fparams", "iparams", read in place by the recorded launch)."""
+        if name in ("fparams", "iparams"):
+            return getattr(self, name)
         return self._dev[name]
 
-    def launch_recorded(self):
+    def launch_recorded(self, n_rows=None):
         """Replay the recorded launch on the device-resident arrays as they are (no host
-        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``)."""
-        self._cmd.launch()
+        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
+        n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
+        arrays, e.g. by the device Newton); default all."""
+        if n_rows is None or int(n_rows) == self.n:
+            self._cmd.launch()
+            return
+        self._cmd.set_dim(int(n_rows))
+        try:
+            self._cmd.launch()
+        finally:
+            self._cmd.set_dim(self.n)
 
     def set_parameters(self, fparams):
         """Overwrite the packed float parameters (same shape) in place on the device; the recorded

@@ -10,7 +10,9 @@ import functools
 import numpy as np
 import warp as wp
 
-from .circle_pairs_ref import FRICTION_REGULARIZED, N_OBS
+from .anchor import anchor_funcs
+from .anchor_ref import N_ANCHOR
+from .circle_pairs_ref import FRICTION_ANCHOR, FRICTION_REGULARIZED, N_OBS
 from .cycloid_pins_ref import (A_ANALYTIC, A_K1, A_R, A_RC, A_ROT, A_ZB, ANALYTIC_ITERATIONS, C_C, C_DR, C_E, C_K,
                                C_MUK, C_MUS, C_P, C_RP, C_TX, C_TY, C_VREG, C_VS, C_XI_B, C_Z, J_BODY_A, J_BODY_B,
                                J_FRICTION, J_TABLE, N_ANALYTIC, N_FLOAT, N_INT)
@@ -21,13 +23,18 @@ from .precision import resolve_device, scalar_types
 
 
 @functools.lru_cache(maxsize=None)
-def _kernel(dtype, velocity_tangent=True):
+def _kernel(dtype, velocity_tangent=True, anchor=False):
+    """The family's kernel; ``anchor`` compiles the anchor friction of :mod:`anchor_ref` in
+    (without it the anchor arguments are never read and the code is the frictionless one)."""
     L = law_funcs(dtype)
+    A = anchor_funcs(dtype)
+    anchor_state, anchor_force_tangent, anchor_trial = A.anchor_state, A.anchor_force_tangent, A.anchor_trial
     G = planar_funcs(dtype)
     vec2, perp, cross2, rot = G.vec2, G.perp, G.cross2, G.rot
     body_state, param_vec2, row_vec2, pair_seed = G.body_state, G.param_vec2, G.row_vec2, G.pair_seed
     store_pair_forces, store_pair_column, store_pair_observation = (G.store_pair_forces, G.store_pair_column,
                                                                     G.store_pair_observation)
+    store_row_vec2 = G.store_row_vec2
     normal_force = L.normal_force
     friction_coefficient = L.friction_coefficient
 
@@ -132,14 +139,21 @@ def _kernel(dtype, velocity_tangent=True):
         tab_phi: wp.array(dtype=dtype),
         tab_ana: wp.array2d(dtype=dtype),
         window: int,
+        anchor_params: wp.array2d(dtype=dtype),
         # Data in:
         pose_in: wp.array2d(dtype=dtype),
         vel_in: wp.array2d(dtype=dtype),
+        hist_active_in: wp.array(dtype=wp.int32),
+        hist_a_in: wp.array2d(dtype=dtype),
+        hist_b_in: wp.array2d(dtype=dtype),
         # Data out:
         q_out: wp.array2d(dtype=dtype),
         dqdq_out: wp.array3d(dtype=dtype),
         dqdv_out: wp.array3d(dtype=dtype),
         obs_out: wp.array2d(dtype=dtype),
+        hist_active_out: wp.array(dtype=wp.int32),
+        hist_a_out: wp.array2d(dtype=dtype),
+        hist_b_out: wp.array2d(dtype=dtype),
     ):
         i = wp.tid()
         xa, tha, vxa, wa = body_state(pose_in, vel_in, iparams[i, J_BODY_A])
@@ -183,10 +197,35 @@ def _kernel(dtype, velocity_tangent=True):
         ft = dtype(0.0)
         if reg:
             ft = -F * mu
+        armA = a
+        armB = bpc
+        anchored = False
+        stick = False
+        slip = False
+        s_anc = dtype(0.0)
+        sg = dtype(0.0)
+        ha = vec2(dtype(0.0), dtype(0.0))
+        hb = vec2(dtype(0.0), dtype(0.0))
+        e_anc = vec2(dtype(0.0), dtype(0.0))
+        is_anchor = False
+        if wp.static(anchor):
+            is_anchor = iparams[i, J_FRICTION] == FRICTION_ANCHOR and delta > dtype(0.0)
+            ha = rot(tha, row_vec2(hist_a_in, i))
+            hb = rot(thb, row_vec2(hist_b_in, i))
+            e_anc = (xa + ha) - (xb + hb)
+            anchored, stick, slip, s_anc, sg, ft_anc = anchor_state(F, is_anchor, hist_active_in[i], e_anc, t,
+                                                                   anchor_params, i)
+            if anchored:
+                ft = ft_anc
+                armA = ha
+                armB = hb
         ftA = ft * t
 
         fsum = fA + ftA
-        store_pair_forces(q_out, i, fsum, cross2(a, fsum), -(cross2(b, fA) + cross2(bpc, ftA)))
+        if wp.static(anchor):
+            store_pair_forces(q_out, i, fsum, cross2(a, fA) + cross2(armA, ftA), -(cross2(b, fA) + cross2(armB, ftA)))
+        else:
+            store_pair_forces(q_out, i, fsum, cross2(a, fsum), -(cross2(b, fA) + cross2(bpc, ftA)))
 
         den = dtype(1.0) + kap * hw
         wt = wp.dot(w, t)
@@ -211,13 +250,39 @@ def _kernel(dtype, velocity_tangent=True):
             dft = dtype(0.0)
             if reg:
                 dft = -(dF * mu + F * dmu * dvt)
-            dftA = dft * t + ft * dt
-            dsum = dfA + dftA
-            dQa = cross2(da, fsum) + cross2(a, dsum)
-            dQb = -(cross2(db, fA) + cross2(b, dfA) + cross2(dbpc, ftA) + cross2(bpc, dftA))
-            store_pair_column(dqdq_out, dqdv_out, i, j, dsum, dQa, dQb)
+            if wp.static(anchor):
+                darmA = da
+                darmB = dbpc
+                if anchored:
+                    # anchors are material points: they turn with their bodies and do not migrate
+                    dha = dtha * perp(ha)
+                    dhb = dthb * perp(hb)
+                    dft = anchor_force_tangent(stick, slip, sg, e_anc, t, dF, dt, (dqa + dha) - (dqb + dhb),
+                                               anchor_params, i)
+                    darmA = dha
+                    darmB = dhb
+                dftA = dft * t + ft * dt
+                dsum = dfA + dftA
+                dQa = cross2(da, fA) + cross2(a, dfA) + cross2(darmA, ftA) + cross2(armA, dftA)
+                dQb = -(cross2(db, fA) + cross2(b, dfA) + cross2(darmB, ftA) + cross2(armB, dftA))
+                store_pair_column(dqdq_out, dqdv_out, i, j, dsum, dQa, dQb)
+            else:
+                dftA = dft * t + ft * dt
+                dsum = dfA + dftA
+                dQa = cross2(da, fsum) + cross2(a, dsum)
+                dQb = -(cross2(db, fA) + cross2(b, dfA) + cross2(dbpc, ftA) + cross2(bpc, dftA))
+                store_pair_column(dqdq_out, dqdv_out, i, j, dsum, dQa, dQb)
 
         store_pair_observation(obs_out, i, F, vt, g, c + (dtype(0.5) * (hw - r)) * nv, nv, ft)
+        if wp.static(anchor):
+            # trial history: a new anchor forms at the contact point c, as the profile's material
+            # point (wheel coordinates) and the pin's (pin-body coordinates); committed by the
+            # evaluator once per accepted step
+            flag, na, nb = anchor_trial(F, is_anchor, anchored, slip, s_anc, sg, t, tha, ha, row_vec2(hist_a_in, i),
+                                        row_vec2(hist_b_in, i), cl, rot(-thb, c - xb), anchor_params, i)
+            hist_active_out[i] = flag
+            store_row_vec2(hist_a_out, i, na)
+            store_row_vec2(hist_b_out, i, nb)
 
     return eval_cycloid_pins
 
@@ -236,7 +301,10 @@ def _analytic_rows(tables, analytic, ndtype):
 class CycloidPinKernel:
     """Device-resident evaluator of one cycloid--pin contact set (one launch per call)."""
 
-    def __init__(self, fparams, iparams, tables, window, n_bodies, precision="float64", device="cpu", analytic=None):
+    def __init__(self, fparams, iparams, tables, window, n_bodies, precision="float64", device="cpu", analytic=None,
+                 anchor_params=None):
+        """anchor_params: None (no anchors: the frictionless/regularized kernel), or (N, N_ANCHOR)
+        columns of :mod:`anchor_ref` for a set with anchor rows (use :meth:`evaluate_anchor`)."""
         self.wdtype, self.ndtype = scalar_types(precision)
         self.device = d = resolve_device(device, len(fparams))
         fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
@@ -257,18 +325,29 @@ class CycloidPinKernel:
             wp.array(np.concatenate([tb[5] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
             wp.array(_analytic_rows(tables, analytic, self.ndtype), dtype=dt, device=d),
             int(window)]
+        self.anchor = anchor_params is not None
+        # without anchors the history arguments are one-row placeholders the kernel never reads
+        nh = n if self.anchor else 1
+        ap = (np.zeros((1, N_ANCHOR)) if anchor_params is None else
+              np.ascontiguousarray(anchor_params, dtype=self.ndtype))
+        assert ap.shape == (nh, N_ANCHOR)
+        model.append(wp.array(ap.astype(self.ndtype), dtype=dt, device=d))
         self._model = model
         self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),
+                                   "h_act_in": (nh, "int"), "h_a_in": ((nh, 2), "f"), "h_b_in": ((nh, 2), "f"),
                                    "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
-                                   "obs": ((n, N_OBS), "f")}, dt, self.ndtype, d)
+                                   "obs": ((n, N_OBS), "f"), "h_act_out": (nh, "int"), "h_a_out": ((nh, 2), "f"),
+                                   "h_b_out": ((nh, 2), "f")}, dt, self.ndtype, d)
         self.velocity_tangent = True
         self._record()
 
     def _record(self):
         dev = self._buf.dev
-        self._cmd = wp.launch(_kernel(self.wdtype, self.velocity_tangent), dim=self.n, device=self.device,
-                              inputs=self._model + [dev["pose"], dev["vel"]],
-                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs")], record_cmd=True)
+        self._cmd = wp.launch(_kernel(self.wdtype, self.velocity_tangent, self.anchor), dim=self.n,
+                              device=self.device,
+                              inputs=self._model + [dev[k] for k in ("pose", "vel", "h_act_in", "h_a_in", "h_b_in")],
+                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs", "h_act_out", "h_a_out", "h_b_out")],
+                              record_cmd=True)
 
     def set_velocity_tangent(self, on):
         """Switch the velocity tangent dQ/dv on (default) or off. Off, the kernel skips the six
@@ -289,17 +368,45 @@ class CycloidPinKernel:
         self._buf.download(names)
         return tuple(h[k] if k in names else None for k in ("q", "dqdq", "dqdv", "obs"))
 
+    def evaluate_anchor(self, pose, vel, hist_active, hist_a, hist_b):
+        """:meth:`evaluate` with the committed anchor history in and the trial history
+        (flags (N,), anchor_A (N, 2), anchor_B (N, 2)) out as a fifth result."""
+        if not self.anchor:
+            raise RuntimeError("evaluate_anchor needs a kernel built with anchor_params")
+        h = self._buf.host
+        h["h_act_in"][...] = hist_active
+        h["h_a_in"][...] = hist_a
+        h["h_b_in"][...] = hist_b
+        self._buf.upload(("h_act_in", "h_a_in", "h_b_in"))
+        out = self.evaluate(pose, vel)
+        self._buf.download(("h_act_out", "h_a_out", "h_b_out"))
+        return out + ((h["h_act_out"], h["h_a_out"], h["h_b_out"]),)
+
     # outputs left on the device (returned as None; read them with device_array), e.g. the
     # per-row tangents that a device-side block scatter sums (warp_contacts.block_scatter)
     keep_on_device = frozenset()
 
     def device_array(self, name):
+        """A device array of the recorded launch: a data buffer (pose, vel, q, dqdq, dqdv, obs) or
+        the row parameters ("fparams", "iparams"), which a device-side refill may overwrite
+        between launches (the recorded launch reads them in place)."""
+        if name in ("fparams", "iparams"):
+            return self._model[0 if name == "fparams" else 1]
         return self._buf.dev[name]
 
-    def launch_recorded(self):
+    def launch_recorded(self, n_rows=None):
         """Replay the recorded launch on the device-resident arrays as they are (no host
-        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``)."""
-        self._cmd.launch()
+        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
+        n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
+        arrays, e.g. by the device Newton); default all."""
+        if n_rows is None or int(n_rows) == self.n:
+            self._cmd.launch()
+            return
+        self._cmd.set_dim(int(n_rows))
+        try:
+            self._cmd.launch()
+        finally:
+            self._cmd.set_dim(self.n)
 
     def set_parameters(self, fparams):
         """Overwrite the packed float parameters (same shape) in place on the device; the recorded

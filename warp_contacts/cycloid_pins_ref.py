@@ -32,8 +32,8 @@ points (kappa = 0), where an osculating centre would be at infinity.
 """
 import numpy as np
 
-from . import laws_ref
-from .circle_pairs_ref import FRICTION_REGULARIZED, N_OBS, O_FN, O_FT, O_GAP, O_NX, O_NY, O_PX, O_PY, O_VT
+from . import anchor_ref, laws_ref
+from .circle_pairs_ref import FRICTION_ANCHOR, FRICTION_REGULARIZED, N_OBS, O_FN, O_FT, O_GAP, O_NX, O_NY, O_PX, O_PY, O_VT
 from .planar_ref import N_COORD_SEEDS, N_SEEDS, cross2, dot, perp, pair_seeds, rot
 
 # ---- packed float parameters (one row per pin slice; named here once, used by the Warp kernel,
@@ -129,14 +129,20 @@ def search(table, pin_local, window, analytic=None):
     return c, nn, ki, clamped, np.linalg.norm(pin_local - ci, axis=1)
 
 
-def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
+def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None, anchor=None):
     """Evaluate all pin-slice contacts.
 
     pose, vel: (nb+1, 3) absolute poses and velocities, last row the ground.
     fparams (N, 12), iparams (N, 4): packed parameters (columns C_*, J_*).
     tables: list of profile tables (see :func:`search`), indexed by J_TABLE.
     analytic: None (discrete path) or a list of analytic profile parameters per table.
-    Returns Q (N,6), dQdq (N,6,6), dQdv (N,6,6), obs (N, 8).
+    anchor: None (no anchors), or (anchor_params (N, anchor_ref.N_ANCHOR), committed flags (N,),
+    anchors in wheel coordinates (N, 2), anchors in pin-body coordinates (N, 2)) for the rows
+    with J_FRICTION = FRICTION_ANCHOR (Eq. (friction), anchor model of :mod:`anchor_ref`: the
+    anchors form at the contact point, as material points of the wheel and of the pin; the
+    tangential force acts at the anchors).
+    Returns Q (N,6), dQdq (N,6,6), dQdv (N,6,6), obs (N, 8), and with ``anchor`` the trial
+    history (flags, anchor_A, anchor_B) as a fifth result.
     """
     fp = np.asarray(fparams, float)
     ip = np.asarray(iparams)
@@ -177,13 +183,23 @@ def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
     mu, dmu = laws_ref.friction_coefficient(fp[:, C_MUK], fp[:, C_MUS], fp[:, C_VS], fp[:, C_VREG], vt)
     reg = (ip[:, J_FRICTION] == FRICTION_REGULARIZED) & (F > 0)
     ft = np.where(reg, -F * mu, 0.0)
+    armA, armB = a, bpc
+    if anchor is not None:
+        ap, h_act, h_a, h_b = anchor
+        ap = np.asarray(ap, float)
+        is_anchor = ip[:, J_FRICTION] == FRICTION_ANCHOR
+        ha, hb, e_anc = anchor_ref.anchor_separation(qa[:, :2], qa[:, 2], qb[:, :2], qb[:, 2], h_a, h_b)
+        anchored, stick, slip, s_anc, sg, ft_anc = anchor_ref.state(F, is_anchor & (delta > 0), h_act, e_anc, t, ap)
+        ft = np.where(anchored, ft_anc, ft)
+        armA = np.where(anchored[:, None], ha, a)
+        armB = np.where(anchored[:, None], hb, bpc)
     ftA = ft[:, None] * t
 
     Q = np.zeros((N, 6))
     Q[:, 0:2] = fA + ftA
-    Q[:, 2] = cross2(a, fA + ftA)
+    Q[:, 2] = cross2(a, fA) + cross2(armA, ftA)
     Q[:, 3:5] = -(fA + ftA)
-    Q[:, 5] = -(cross2(b, fA) + cross2(bpc, ftA))
+    Q[:, 5] = -(cross2(b, fA) + cross2(armB, ftA))
 
     den = 1.0 + kap * hw
     wt = dot(w, t)
@@ -206,11 +222,19 @@ def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
         dvpc = dvb[:2] + dvb[2] * perp(bpc) + vb[:, 2:3] * perp(dbpc)
         dvt = dot(dt, vc - vpc) + dot(t, dvc - dvpc)
         dft = np.where(reg, -(dF * mu + F * dmu * dvt), 0.0)
+        darmA, darmB = da, dbpc
+        if anchor is not None:
+            # anchors are material points: they turn with their bodies and do not migrate
+            dha, dhb = dqa[2] * perp(ha), dqb[2] * perp(hb)
+            de = (dqa[:2] + dha) - (dqb[:2] + dhb)
+            dft = np.where(anchored, anchor_ref.force_tangent(stick, slip, sg, e_anc, t, dF, dt, de, ap), dft)
+            darmA = np.where(anchored[:, None], dha, da)
+            darmB = np.where(anchored[:, None], dhb, dbpc)
         dftA = dft[:, None] * t + ft[:, None] * dt
         dQ[:, 0:2, j] = dfA + dftA
-        dQ[:, 2, j] = cross2(da, fA + ftA) + cross2(a, dfA + dftA)
+        dQ[:, 2, j] = cross2(da, fA) + cross2(a, dfA) + cross2(darmA, ftA) + cross2(armA, dftA)
         dQ[:, 3:5, j] = -(dfA + dftA)
-        dQ[:, 5, j] = -(cross2(db, fA) + cross2(b, dfA) + cross2(dbpc, ftA) + cross2(bpc, dftA))
+        dQ[:, 5, j] = -(cross2(db, fA) + cross2(b, dfA) + cross2(darmB, ftA) + cross2(armB, dftA))
 
     obs = np.zeros((N, N_OBS))
     obs[:, O_FN] = F
@@ -219,4 +243,11 @@ def evaluate(pose, vel, fparams, iparams, tables, window, analytic=None):
     obs[:, O_PX:O_PY + 1] = c + 0.5 * (hw - r)[:, None] * n
     obs[:, O_NX:O_NY + 1] = n
     obs[:, O_FT] = ft
-    return Q, dQ[:, :, :N_COORD_SEEDS], dQ[:, :, N_COORD_SEEDS:], obs
+    if anchor is None:
+        return Q, dQ[:, :, :N_COORD_SEEDS], dQ[:, :, N_COORD_SEEDS:], obs
+    # a new anchor forms at the contact point c, as the profile's material point (wheel
+    # coordinates) and the pin's material point there (pin-body coordinates): zero separation,
+    # so the new anchor starts without force whatever the search's tangential residual
+    trial = anchor_ref.trial_history(F, is_anchor & (delta > 0), anchored, slip, s_anc, sg, t, qa[:, 2], qb[:, 2], ha,
+                                     hb, h_a, h_b, c_loc, rot(-qb[:, 2], c - qb[:, :2]), ap)
+    return Q, dQ[:, :, :N_COORD_SEEDS], dQ[:, :, N_COORD_SEEDS:], obs, trial

@@ -16,19 +16,32 @@ from .involute_pairs_ref import (
     G_E, G_EPS, G_FHB, G_NU, G_PC, G_PH, G_PHALF, G_PMID, G_PSI, G_QA, G_QF, G_RB, G_RHO_C, G_RHO_E, G_UCA, G_UCF,
     G_UEDGE, G_UHALF, G_UHI, G_ULO, G_UMID, G_UREF, G_UROOT, G_UTIP, GEAR_A, GEAR_B, J_BODY_A, J_BODY_B, J_FRICTION,
     J_LINE, J_NA, J_NB, J_TOOTH_A, J_TOOTH_B, J_WINDOW, MODE_CORNER_A, MODE_CORNER_B, MODE_LINE, MODE_OPEN, N_FLOAT,
-    N_INT, N_OBS, O_FN, O_FT, O_GAP, O_KT, O_MODE, O_NX, O_NY, O_PX, O_PY, O_TOOTH_A, O_TOOTH_B, O_UA, O_UB, O_VROLL,
-    O_VT, OPEN_GAP, POLY_TERMS, SERIES_MAX_ITERATIONS, SERIES_RTOL)
+    N_INT, N_OBS, O_GAP, O_KT, O_MODE, O_TOOTH_A, O_TOOTH_B, O_UA, O_UB, O_VROLL, OPEN_GAP, POLY_TERMS, SERIES_MAX_ITERATIONS, SERIES_RTOL)
+from . import circle_pairs_ref, involute_pairs_ref
+from .anchor import anchor_funcs
+from .anchor_ref import N_ANCHOR
+from .circle_pairs_ref import FRICTION_ANCHOR
 from .laws import law_funcs
 from .planar import LaunchBuffers, planar_funcs
 from .precision import resolve_device, scalar_types
 
+# the first observation columns are the contact element's (written by planar.store_pair_observation)
+assert all(getattr(involute_pairs_ref, c) == getattr(circle_pairs_ref, c)
+           for c in ("O_FN", "O_VT", "O_GAP", "O_PX", "O_PY", "O_NX", "O_NY", "O_FT"))
+
 
 @functools.lru_cache(maxsize=None)
-def _kernel(dtype, velocity_tangent=True):
+def _kernel(dtype, velocity_tangent=True, anchor=False):
+    """The family's kernel; ``anchor`` compiles the anchor friction of :mod:`anchor_ref` in
+    (without it the anchor arguments are never read and the code is the frictionless one)."""
     L = law_funcs(dtype)
     P = planar_funcs(dtype)
+    A = anchor_funcs(dtype)
+    anchor_state, anchor_force_tangent, anchor_trial = A.anchor_state, A.anchor_force_tangent, A.anchor_trial
     vec2, perp, cross2, body_seed = P.vec2, P.perp, P.cross2, P.body_seed
+    rot, row_vec2, store_row_vec2 = P.rot, P.row_vec2, P.store_row_vec2
     store_pair_forces, store_pair_column = P.store_pair_forces, P.store_pair_column
+    body_state, store_pair_observation = P.body_state, P.store_pair_observation
     damping_ramp, friction_coefficient = L.damping_ramp, L.friction_coefficient
     np_dtype = np.float64 if dtype == wp.float64 else np.float32
     RTOL = SERIES_RTOL[np_dtype]
@@ -301,26 +314,27 @@ def _kernel(dtype, velocity_tangent=True):
         fp: wp.array2d(dtype=dtype),
         ip: wp.array2d(dtype=wp.int32),
         dev: wp.array(dtype=dtype),
+        anchor_params: wp.array2d(dtype=dtype),
         # Data in:
         pose_in: wp.array2d(dtype=dtype),
         vel_in: wp.array2d(dtype=dtype),
+        hist_active_in: wp.array(dtype=wp.int32),
+        hist_a_in: wp.array2d(dtype=dtype),
+        hist_b_in: wp.array2d(dtype=dtype),
         # Data out:
         q_out: wp.array2d(dtype=dtype),
         dqdq_out: wp.array3d(dtype=dtype),
         dqdv_out: wp.array3d(dtype=dtype),
         obs_out: wp.array2d(dtype=dtype),
+        hist_active_out: wp.array(dtype=wp.int32),
+        hist_a_out: wp.array2d(dtype=dtype),
+        hist_b_out: wp.array2d(dtype=dtype),
     ):
         i = wp.tid()
         ia = ip[i, J_BODY_A]
         ib = ip[i, J_BODY_B]
-        OA = vec2(pose_in[ia, 0], pose_in[ia, 1])
-        OB = vec2(pose_in[ib, 0], pose_in[ib, 1])
-        tha = pose_in[ia, 2]
-        thb = pose_in[ib, 2]
-        vOA = vec2(vel_in[ia, 0], vel_in[ia, 1])
-        vOB = vec2(vel_in[ib, 0], vel_in[ib, 1])
-        wA = vel_in[ia, 2]
-        wB = vel_in[ib, 2]
+        OA, tha, vOA, wA = body_state(pose_in, vel_in, ia)
+        OB, thb, vOB, wB = body_state(pose_in, vel_in, ib)
         for c in range(6):
             q_out[i, c] = dtype(0.0)
             for c2 in range(6):
@@ -406,6 +420,11 @@ def _kernel(dtype, velocity_tangent=True):
         obs_out[i, O_MODE] = dtype(mode)
         obs_out[i, O_TOOTH_A] = dtype(k)
         obs_out[i, O_TOOTH_B] = dtype(j)
+        if wp.static(anchor):
+            # an open row has no anchor (overwritten below for a row in mesh)
+            hist_active_out[i] = 0
+            store_row_vec2(hist_a_out, i, vec2(dtype(0.0), dtype(0.0)))
+            store_row_vec2(hist_b_out, i, vec2(dtype(0.0), dtype(0.0)))
         if mode == MODE_OPEN:
             return
 
@@ -445,8 +464,35 @@ def _kernel(dtype, velocity_tangent=True):
         Ft = dtype(0.0)
         if fric:
             Ft = -Fn * mu
+        armA = rA
+        armB = rB
+        anchored = False
+        stick = False
+        slip = False
+        s_anc = dtype(0.0)
+        sg = dtype(0.0)
+        ha = vec2(dtype(0.0), dtype(0.0))
+        hb = vec2(dtype(0.0), dtype(0.0))
+        e_anc = vec2(dtype(0.0), dtype(0.0))
+        is_anchor = False
+        if wp.static(anchor):
+            is_anchor = on and ip[i, J_FRICTION] == FRICTION_ANCHOR
+            ha = rot(tha, row_vec2(hist_a_in, i))
+            hb = rot(thb, row_vec2(hist_b_in, i))
+            e_anc = (OA + ha) - (OB + hb)
+            anchored, stick, slip, s_anc, sg, ft_anc = anchor_state(Fn, is_anchor, hist_active_in[i], e_anc, t,
+                                                                   anchor_params, i)
+            if anchored:
+                Ft = ft_anc
+                armA = ha
+                armB = hb
         fA = -Fn * n + Ft * t
-        store_pair_forces(q_out, i, fA, cross2(rA, fA), -cross2(rB, fA))
+        fnA = -Fn * n
+        ftA = Ft * t
+        if wp.static(anchor):
+            store_pair_forces(q_out, i, fA, cross2(rA, fnA) + cross2(armA, ftA), -(cross2(rB, fnA) + cross2(armB, ftA)))
+        else:
+            store_pair_forces(q_out, i, fA, cross2(rA, fA), -cross2(rB, fA))
 
         for jseed in range(N_SEEDS):
             dOA, dtha, dOB, dthb = body_seed(jseed)
@@ -481,22 +527,41 @@ def _kernel(dtype, velocity_tangent=True):
             dFt = dtype(0.0)
             if fric:
                 dFt = -(dFn * mu + Fn * dmu * dvt)
-            dfA = -dFn * n - Fn * dn + dFt * t + Ft * dt
-            store_pair_column(dqdq_out, dqdv_out, i, jseed, dfA, cross2(drA, fA) + cross2(rA, dfA),
-                              -(cross2(drB, fA) + cross2(rB, dfA)))
+            if wp.static(anchor):
+                darmA = drA
+                darmB = drB
+                if anchored:
+                    # anchors are material points: they turn with their bodies and do not migrate
+                    dha = dtha * perp(ha)
+                    dhb = dthb * perp(hb)
+                    dFt = anchor_force_tangent(stick, slip, sg, e_anc, t, dFn, dt, (dOA + dha) - (dOB + dhb),
+                                               anchor_params, i)
+                    darmA = dha
+                    darmB = dhb
+                dfnA = -dFn * n - Fn * dn
+                dftA = dFt * t + Ft * dt
+                store_pair_column(dqdq_out, dqdv_out, i, jseed, dfnA + dftA,
+                                  cross2(drA, fnA) + cross2(rA, dfnA) + cross2(darmA, ftA) + cross2(armA, dftA),
+                                  -(cross2(drB, fnA) + cross2(rB, dfnA) + cross2(darmB, ftA) + cross2(armB, dftA)))
+            else:
+                dfA = -dFn * n - Fn * dn + dFt * t + Ft * dt
+                store_pair_column(dqdq_out, dqdv_out, i, jseed, dfA, cross2(drA, fA) + cross2(rA, dfA),
+                                  -(cross2(drB, fA) + cross2(rB, dfA)))
 
-        obs_out[i, O_FN] = Fn
-        obs_out[i, O_VT] = vt
-        obs_out[i, O_GAP] = g
-        obs_out[i, O_PX] = cp[0]
-        obs_out[i, O_PY] = cp[1]
-        obs_out[i, O_NX] = n[0]
-        obs_out[i, O_NY] = n[1]
-        obs_out[i, O_FT] = Ft
+        store_pair_observation(obs_out, i, Fn, vt, g, cp, n, Ft)
         obs_out[i, O_VROLL] = dtype(0.5) * wp.dot(t, vA + vB)
         obs_out[i, O_UA] = ua
         obs_out[i, O_UB] = ub
         obs_out[i, O_KT] = Fd
+        if wp.static(anchor):
+            # trial history: a new anchor forms at the contact point c as material points of both
+            # teeth; committed by the evaluator once per accepted step
+            flag, na, nb = anchor_trial(Fn, is_anchor, anchored, slip, s_anc, sg, t, tha, ha, row_vec2(hist_a_in, i),
+                                        row_vec2(hist_b_in, i), rot(-tha, cp - OA), rot(-thb, cp - OB),
+                                        anchor_params, i)
+            hist_active_out[i] = flag
+            store_row_vec2(hist_a_out, i, na)
+            store_row_vec2(hist_b_out, i, nb)
 
     return eval_involute_pairs
 
@@ -504,7 +569,9 @@ def _kernel(dtype, velocity_tangent=True):
 class InvolutePairKernel:
     """Device-resident evaluator of one involute contact set (one launch per call)."""
 
-    def __init__(self, fparams, iparams, deviations, n_bodies, precision="float64", device="cpu"):
+    def __init__(self, fparams, iparams, deviations, n_bodies, precision="float64", device="cpu", anchor_params=None):
+        """anchor_params: None (no anchors), or (N, N_ANCHOR) columns of :mod:`anchor_ref` (use
+        :meth:`evaluate_anchor`)."""
         self.wdtype, self.ndtype = scalar_types(precision)
         self.device = d = resolve_device(device, len(fparams))
         fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
@@ -512,19 +579,29 @@ class InvolutePairKernel:
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
         self.n = n = len(fparams)
         dt = self.wdtype
+        self.anchor = anchor_params is not None
+        # without anchors the history arguments are one-row placeholders the kernel never reads
+        nh = n if self.anchor else 1
+        ap = np.zeros((1, N_ANCHOR)) if anchor_params is None else np.asarray(anchor_params, float)
+        assert ap.shape == (nh, N_ANCHOR)
         self._model = [wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
-                       wp.array(np.asarray(deviations, self.ndtype), dtype=dt, device=d)]
+                       wp.array(np.asarray(deviations, self.ndtype), dtype=dt, device=d),
+                       wp.array(ap.astype(self.ndtype), dtype=dt, device=d)]
         self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),
+                                   "h_act_in": (nh, "int"), "h_a_in": ((nh, 2), "f"), "h_b_in": ((nh, 2), "f"),
                                    "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
-                                   "obs": ((n, N_OBS), "f")}, dt, self.ndtype, d)
+                                   "obs": ((n, N_OBS), "f"), "h_act_out": (nh, "int"), "h_a_out": ((nh, 2), "f"),
+                                   "h_b_out": ((nh, 2), "f")}, dt, self.ndtype, d)
         self.velocity_tangent = True
         self._record()
 
     def _record(self):
         dev = self._buf.dev
-        self._cmd = wp.launch(_kernel(self.wdtype, self.velocity_tangent), dim=self.n, device=self.device,
-                              inputs=self._model + [dev["pose"], dev["vel"]],
-                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs")], record_cmd=True)
+        self._cmd = wp.launch(_kernel(self.wdtype, self.velocity_tangent, self.anchor), dim=self.n,
+                              device=self.device,
+                              inputs=self._model + [dev[k] for k in ("pose", "vel", "h_act_in", "h_a_in", "h_b_in")],
+                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs", "h_act_out", "h_a_out", "h_b_out")],
+                              record_cmd=True)
 
     def set_velocity_tangent(self, on):
         """Velocity tangent on (default) or off (the kernel skips the six velocity seeds; dQ/dv is None)."""
@@ -541,3 +618,17 @@ class InvolutePairKernel:
         names = ["q", "dqdq", "obs"] + (["dqdv"] if self.velocity_tangent else [])
         self._buf.download(names)
         return h["q"], h["dqdq"], (h["dqdv"] if self.velocity_tangent else None), h["obs"]
+
+    def evaluate_anchor(self, pose, vel, hist_active, hist_a, hist_b):
+        """:meth:`evaluate` with the committed anchor history in and the trial history
+        (flags (N,), anchor_A (N, 2), anchor_B (N, 2)) out as a fifth result."""
+        if not self.anchor:
+            raise RuntimeError("evaluate_anchor needs a kernel built with anchor_params")
+        h = self._buf.host
+        h["h_act_in"][...] = hist_active
+        h["h_a_in"][...] = hist_a
+        h["h_b_in"][...] = hist_b
+        self._buf.upload(("h_act_in", "h_a_in", "h_b_in"))
+        out = self.evaluate(pose, vel)
+        self._buf.download(("h_act_out", "h_a_out", "h_b_out"))
+        return out + ((h["h_act_out"], h["h_a_out"], h["h_b_out"]),)

@@ -48,7 +48,8 @@ including the migration of the contact along both flanks through c'(u), h(u), R(
 """
 import numpy as np
 
-from . import laws_ref
+from . import anchor_ref, laws_ref
+from .planar_ref import rot as _rot
 
 # -- float parameter columns: one block per gear (A at GEAR_A, B at GEAR_B), then the row --
 (G_RB, G_PSI, G_EPS, G_ULO, G_UHI, G_UREF, G_RHO_C, G_CHI, G_RHO_E, G_UEDGE,
@@ -415,15 +416,25 @@ def _gap_terms(f, geo):
                 hB=(hB, dhB * dub), K=(K, dK))
 
 
-def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64):
+def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64, anchor=None):
     """Evaluate all rows. pose, vel: (nb+1, 3) with the ground last; fparams (N, N_FLOAT),
     iparams (N, N_INT); deviations: concatenated tooth-angle deviations [rad] (J_TOOTH_* offsets).
-    Returns Q (N,6), dQdq (N,6,6), dQdv (N,6,6), obs (N, N_OBS)."""
+    anchor: None, or (anchor_params (N, anchor_ref.N_ANCHOR), committed flags (N,), anchors in
+    A and in B coordinates (N, 2)) for the rows with J_FRICTION = FRICTION_ANCHOR (2): the anchor
+    model of :mod:`anchor_ref`, anchors formed at the contact point c as material points of both
+    teeth, the tangential force acting at the anchors. A row's teeth change as the gears turn (a
+    window slot): the old pair's anchors are then a base pitch away and released (d_rel).
+    Returns Q (N,6), dQdq (N,6,6), dQdv (N,6,6), obs (N, N_OBS), and with ``anchor`` the trial
+    history (flags, anchor_A, anchor_B) as a fifth result."""
     fp = np.asarray(fparams, float)
     ip = np.asarray(iparams)
     dev = np.asarray(deviations, float)
     N = len(fp)
     sel = select(pose, fp, ip, dev)
+    if anchor is not None:
+        ap_all, h_act_all, h_a_all, h_b_all = (np.asarray(x) for x in anchor)
+        ap_all = ap_all.astype(float)
+        trial = (np.zeros(N, np.int32), np.zeros((N, 2)), np.zeros((N, 2)))   # open rows: no anchor
     Q = np.zeros((N, 6))
     dQ = np.zeros((N, 6, 12))
     obs = np.zeros((N, N_OBS))
@@ -471,11 +482,31 @@ def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64):
         mu, dmu = laws_ref.friction_coefficient(f[:, C_MUK], f[:, C_MUS], f[:, C_VS], f[:, C_VREG], vt)
         fric = act & (ip[rows, J_FRICTION] == 1)
         Ft = np.where(fric, -Fn * mu, 0.0)
-        fA = -_col(Fn) * n + _col(Ft) * t
-        Q[rows, 0:2] = fA
-        Q[rows, 2] = _cross(rA, fA)
-        Q[rows, 3:5] = -fA
-        Q[rows, 5] = -_cross(rB, fA)
+        if anchor is not None:
+            ap = ap_all[rows]
+            thA, thB = pose[ia, 2], pose[ib, 2]
+            ha, hb, e_anc = anchor_ref.anchor_separation(OA, thA, OB, thB, h_a_all[rows], h_b_all[rows])
+            contact = on & (ip[rows, J_FRICTION] == 2)
+            anchored, stick, slip, s_anc, sg, ft_anc = anchor_ref.state(Fn, contact, h_act_all[rows], e_anc, t, ap)
+            Ft = np.where(anchored, ft_anc, Ft)
+            armA = np.where(anchored[:, None], ha, rA)
+            armB = np.where(anchored[:, None], hb, rB)
+            fnA, ftA = -_col(Fn) * n, _col(Ft) * t
+            fA = fnA + ftA
+            Q[rows, 0:2] = fA
+            Q[rows, 2] = _cross(rA, fnA) + _cross(armA, ftA)
+            Q[rows, 3:5] = -fA
+            Q[rows, 5] = -(_cross(rB, fnA) + _cross(armB, ftA))
+            tr = anchor_ref.trial_history(Fn, contact, anchored, slip, s_anc, sg, t, thA, thB, ha, hb, h_a_all[rows],
+                                          h_b_all[rows], _rot(-thA, cm - OA), _rot(-thB, cm - OB), ap)
+            for out, val in zip(trial, tr):
+                out[rows] = val
+        else:
+            fA = -_col(Fn) * n + _col(Ft) * t
+            Q[rows, 0:2] = fA
+            Q[rows, 2] = _cross(rA, fA)
+            Q[rows, 3:5] = -fA
+            Q[rows, 5] = -_cross(rB, fA)
         for jseed in range(12):
             sd = np.zeros((n_r, 12))
             sd[:, jseed] = 1.0
@@ -495,6 +526,20 @@ def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64):
             dFn = np.where(act, dFel + f[:, C_C] * (dr * ddelta * ddot + r * dddot), 0.0)
             dvt = _dot(dt, vA - vB) + _dot(t, dvA - dvB)
             dFt = np.where(fric, -(dFn * mu + Fn * dmu * dvt), 0.0)
+            if anchor is not None:
+                # anchors are material points: they turn with their bodies and do not migrate
+                dha, dhb = _col(dtha) * _perp(ha), _col(dthb) * _perp(hb)
+                de = (dOA + dha) - (dOB + dhb)
+                dFt = np.where(anchored, anchor_ref.force_tangent(stick, slip, sg, e_anc, t, dFn, dt, de, ap), dFt)
+                darmA = np.where(anchored[:, None], dha, drA)
+                darmB = np.where(anchored[:, None], dhb, drB)
+                dfnA = -_col(dFn) * n - _col(Fn) * dn
+                dftA = _col(dFt) * t + _col(Ft) * dt
+                dQ[rows, 0:2, jseed] = dfnA + dftA
+                dQ[rows, 2, jseed] = _cross(drA, fnA) + _cross(rA, dfnA) + _cross(darmA, ftA) + _cross(armA, dftA)
+                dQ[rows, 3:5, jseed] = -(dfnA + dftA)
+                dQ[rows, 5, jseed] = -(_cross(drB, fnA) + _cross(rB, dfnA) + _cross(darmB, ftA) + _cross(armB, dftA))
+                continue
             dfA = -_col(dFn) * n - _col(Fn) * dn + _col(dFt) * t + _col(Ft) * dt
             dQ[rows, 0:2, jseed] = dfA
             dQ[rows, 2, jseed] = _cross(drA, fA) + _cross(rA, dfA)
@@ -510,4 +555,6 @@ def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64):
         obs[rows, O_UA] = geo["ua"][0]
         obs[rows, O_UB] = geo["ub"][0]
         obs[rows, O_KT] = Fd
+    if anchor is not None:
+        return Q, dQ[:, :, :6], dQ[:, :, 6:], obs, trial
     return Q, dQ[:, :, :6], dQ[:, :, 6:], obs

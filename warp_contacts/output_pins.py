@@ -20,6 +20,8 @@ import numpy as np
 import warp as wp
 
 from . import output_pins_ref as ref
+from .anchor import anchor_funcs
+from .anchor_ref import N_ANCHOR
 from .planar import planar_funcs
 from .precision import resolve_device, scalar_types
 
@@ -434,6 +436,138 @@ def _plain_kernel(dtype):
     return eval_plain_pins
 
 
+@functools.lru_cache(maxsize=None)
+def _plain_anchor_kernel(dtype):
+    """The plain kernel with anchor friction per slice (:func:`output_pins_ref.evaluate_plain_anchor`):
+    a kernel of its own, so the frictionless plain kernel stays as it is."""
+    F = _funcs(dtype)
+    G = planar_funcs(dtype)
+    A = anchor_funcs(dtype)
+    vec2, vec9 = F["vec2"], F["vec9"]
+    rot, wheel_react, separation = F["rot"], F["wheel_react"], F["separation"]
+    body_pose, param_vec2, row_vec2 = F["body_pose"], F["param_vec2"], F["row_vec2"]
+    store_triple, store_triple_column, store_tilt_moment = (F["store_triple"], F["store_triple_column"],
+                                                            F["store_tilt_moment"])
+    perp, cross2, store_row_vec2 = G.perp, G.cross2, G.store_row_vec2
+    anchor_state, anchor_force_tangent, anchor_trial = A.anchor_state, A.anchor_force_tangent, A.anchor_trial
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def eval_plain_pins_anchor(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        stations: wp.array(dtype=dtype),
+        anchor_params: wp.array2d(dtype=dtype),
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        tilt_in: wp.array2d(dtype=dtype),
+        hist_active_in: wp.array(dtype=wp.int32),
+        hist_a_in: wp.array2d(dtype=dtype),
+        hist_b_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        tilt_out: wp.array3d(dtype=dtype),
+        slice_out: wp.array3d(dtype=dtype),
+        slice_df_out: wp.array4d(dtype=dtype),
+        ft_out: wp.array2d(dtype=dtype),
+        hist_active_out: wp.array(dtype=wp.int32),
+        hist_a_out: wp.array2d(dtype=dtype),
+        hist_b_out: wp.array2d(dtype=dtype),
+    ):
+        i = wp.tid()
+        bf = iparams[i, ref.J_FLANGE]
+        bw = iparams[i, ref.J_WHEEL]
+        ns = stations.shape[0]
+        ks = fparams[i, ref.Q_K] / dtype(ns)
+        xf, thf = body_pose(pose_in, bf)
+        xw, thw = body_pose(pose_in, bw)
+        tf = row_vec2(tilt_in, bf)
+        tw = row_vec2(tilt_in, bw)
+        pf = rot(thf, param_vec2(fparams, i, ref.Q_XI_PIN))
+        ph = rot(thw, param_vec2(fparams, i, ref.Q_XI_HOLE))
+        zw = fparams[i, ref.Q_Z]
+        a, b, dax, day = separation(xf, pf, tf, zw, xw, ph, tw, ref.X_WHEEL0)
+        r_pin = fparams[i, ref.Q_R_PIN]
+        r_hole = fparams[i, ref.Q_R_HOLE]
+        clr = r_hole - r_pin + fparams[i, ref.Q_OFF]
+        # the slice force tangents are written (write_tan = 1): the friction tangent reads them
+        fx, fy, mw, mf, dfx, dfy, dmw, dmf, mtf, mtw, fw = wheel_react(
+            a, dax, day, b, vec2(), vec9(), vec9(), dtype(0.0), vec9(), clr, ks, fparams[i, ref.Q_EXP],
+            fparams[i, ref.Q_DISTFLOOR], r_pin + r_hole, pf, ph, xw, tf, tw, zw, ref.X_WHEEL0, stations, i, 0,
+            1, slice_out, slice_df_out)
+        for r in range(ns):
+            k = i * ns + r
+            Fs = slice_out[i, r, ref.S_FORCE]
+            n = vec2(slice_out[i, r, ref.S_NX], slice_out[i, r, ref.S_NY])
+            pc = vec2(slice_out[i, r, ref.S_PX], slice_out[i, r, ref.S_PY])
+            contact = slice_out[i, r, ref.S_APPROACH] > dtype(0.0)
+            t = perp(n)
+            hla = row_vec2(hist_a_in, k)
+            hlb = row_vec2(hist_b_in, k)
+            ha = rot(thw, hla)
+            hb = rot(thf, hlb)
+            e = (xw + ha) - (xf + hb)
+            anchored, stick, slip, s_anc, sg, ft = anchor_state(Fs, contact, hist_active_in[k], e, t, anchor_params, k)
+            ftv = ft * t
+            if anchored:
+                fx += ftv[0]
+                fy += ftv[1]
+                mw += cross2(ha, ftv)
+                mf -= cross2(hb, ftv)
+                Fsafe = Fs
+                if Fsafe <= dtype(0.0):
+                    Fsafe = dtype(1.0)
+                for j in range(6):
+                    dfv = vec2(slice_df_out[i, r, 0, j], slice_df_out[i, r, 1, j])
+                    dF = wp.dot(n, dfv)
+                    dn = vec2(dtype(0.0), dtype(0.0))
+                    if Fs > dtype(0.0):
+                        dn = (dfv - dF * n) / Fsafe
+                    dt = perp(dn)
+                    # seed j moves the flange (0-2) or the wheel (3-5); anchors turn with their bodies
+                    dxw = vec2(dtype(0.0), dtype(0.0))
+                    dxf = vec2(dtype(0.0), dtype(0.0))
+                    dha = vec2(dtype(0.0), dtype(0.0))
+                    dhb = vec2(dtype(0.0), dtype(0.0))
+                    if j == 0:
+                        dxf = vec2(dtype(1.0), dtype(0.0))
+                    elif j == 1:
+                        dxf = vec2(dtype(0.0), dtype(1.0))
+                    elif j == 2:
+                        dhb = perp(hb)
+                    elif j == 3:
+                        dxw = vec2(dtype(1.0), dtype(0.0))
+                    elif j == 4:
+                        dxw = vec2(dtype(0.0), dtype(1.0))
+                    else:
+                        dha = perp(ha)
+                    dft = anchor_force_tangent(stick, slip, sg, e, t, dF, dt, (dxw + dha) - (dxf + dhb),
+                                               anchor_params, k)
+                    dftv = dft * t + ft * dt
+                    dfx[j] = dfx[j] + dftv[0]
+                    dfy[j] = dfy[j] + dftv[1]
+                    dmw[j] = dmw[j] + cross2(dha, ftv) + cross2(ha, dftv)
+                    dmf[j] = dmf[j] - (cross2(dhb, ftv) + cross2(hb, dftv))
+            ft_out[i, r] = ft
+            # trial history: a new anchor forms at the slice's contact point as material points of
+            # the wheel and of the flange; committed by the evaluator once per accepted step
+            flag, na, nb = anchor_trial(Fs, contact, anchored, slip, s_anc, sg, t, thw, ha, hla, hlb,
+                                        rot(-thw, pc - xw), rot(-thf, pc - xf), anchor_params, k)
+            hist_active_out[k] = flag
+            store_row_vec2(hist_a_out, k, na)
+            store_row_vec2(hist_b_out, k, nb)
+        store_triple(q_out, i, ref.X_FLANGE, -fx, -fy, mf)
+        store_triple(q_out, i, ref.X_WHEEL0, fx, fy, mw)
+        for j in range(6):
+            store_triple_column(dqdq_out, i, ref.X_FLANGE, j, -dfx[j], -dfy[j], dmf[j])
+            store_triple_column(dqdq_out, i, ref.X_WHEEL0, j, dfx[j], dfy[j], dmw[j])
+        store_tilt_moment(tilt_out, i, 0, mtf)
+        store_tilt_moment(tilt_out, i, 1, mtw)
+
+    return eval_plain_pins_anchor
+
+
 class OutputPinKernel:
     """Device-resident evaluator of a set of output pins (``mode`` "shared" or "plain").
 
@@ -445,7 +579,9 @@ class OutputPinKernel:
     """
 
     def __init__(self, fparams, iparams, stations, n_rows_pose, mode="shared", precision="float64", device="cpu",
-                 slice_tangent=False):
+                 slice_tangent=False, anchor_params=None):
+        """anchor_params: None, or (N ns, N_ANCHOR) anchor columns of the slice rows (plain mode
+        only): the plain kernel with anchor friction; evaluate then takes the committed history."""
         self.wdtype, self.ndtype = scalar_types(precision)
         self.device = resolve_device(device, len(fparams))
         self.precision = precision
@@ -457,8 +593,11 @@ class OutputPinKernel:
         self.n = n = fparams.shape[0]
         ns = len(stations)
         nw = 2 if mode == "shared" else 1
+        self.anchor = anchor_params is not None
+        if self.anchor and mode == "shared":
+            raise ValueError("anchor friction is implemented for the plain mode only")
         self.slice_tangent = bool(slice_tangent)
-        dft_shape = (n, nw * ns, 2, 9) if slice_tangent else (1, 1, 2, 9)
+        dft_shape = (n, nw * ns, 2, 9) if (slice_tangent or self.anchor) else (1, 1, 2, 9)
         h = {"pose": np.zeros((n_rows_pose, 3), self.ndtype), "tilt": np.zeros((n_rows_pose, 2), self.ndtype),
              "q": np.zeros((n, nq), self.ndtype), "dqdq": np.zeros((n, nq, nq), self.ndtype),
              "tilt_m": np.zeros((n, nw + 1, 2), self.ndtype), "slices": np.zeros((n, nw * ns, ref.N_SLICE_COLS), self.ndtype),
@@ -466,11 +605,23 @@ class OutputPinKernel:
         if mode == "shared":
             h["pin"] = np.zeros((n, ref.N_PIN_COLS), self.ndtype)
             h["sleeve_du"] = np.zeros((n, 2, 9), self.ndtype)
+        if self.anchor:
+            h.update(ft=np.zeros((n, ns), self.ndtype), anchor=np.ascontiguousarray(anchor_params, self.ndtype),
+                     h_a_in=np.zeros((n * ns, 2), self.ndtype), h_b_in=np.zeros((n * ns, 2), self.ndtype),
+                     h_a_out=np.zeros((n * ns, 2), self.ndtype), h_b_out=np.zeros((n * ns, 2), self.ndtype))
+            assert h["anchor"].shape == (n * ns, N_ANCHOR)
         self._host = h
         self._on_cpu = wp.get_device(self.device).is_cpu
         d, dt = self.device, self.wdtype
         self._dev = {k: (wp.array(v, dtype=dt, device=d, copy=False) if self._on_cpu
                          else wp.zeros(v.shape, dtype=dt, device=d)) for k, v in h.items()}
+        if self.anchor:
+            for k in ("h_act_in", "h_act_out"):
+                h[k] = np.zeros(n * ns, np.int32)
+                self._dev[k] = (wp.array(h[k], dtype=wp.int32, device=d, copy=False) if self._on_cpu
+                                else wp.zeros(n * ns, dtype=wp.int32, device=d))
+            if not self._on_cpu:
+                self._dev["anchor"].assign(h["anchor"])
         self.fparams = wp.array(fparams, dtype=dt, device=d)
         self.iparams = wp.array(iparams, dtype=wp.int32, device=d)
         self.stations = wp.array(np.asarray(stations, self.ndtype), dtype=dt, device=d)
@@ -478,10 +629,17 @@ class OutputPinKernel:
         if mode == "shared":
             kernel = _shared_kernel(dt)
             self._out_names = ("q", "dqdq", "tilt_m", "slices", "pin", "sleeve_du", "slice_df")
+        elif self.anchor:
+            kernel = _plain_anchor_kernel(dt)
+            self._out_names = ("q", "dqdq", "tilt_m", "slices", "slice_df", "ft", "h_act_out", "h_a_out", "h_b_out")
         else:
             kernel = _plain_kernel(dt)
             self._out_names = ("q", "dqdq", "tilt_m", "slices", "slice_df")
-        inputs = [self.fparams, self.iparams, self.stations, int(self.slice_tangent), D["pose"], D["tilt"]]
+        if self.anchor:
+            inputs = [self.fparams, self.iparams, self.stations, D["anchor"], D["pose"], D["tilt"], D["h_act_in"],
+                      D["h_a_in"], D["h_b_in"]]
+        else:
+            inputs = [self.fparams, self.iparams, self.stations, int(self.slice_tangent), D["pose"], D["tilt"]]
         self._cmd = wp.launch(kernel, dim=n, device=d, inputs=inputs, outputs=[D[k] for k in self._out_names],
                               record_cmd=True)
 
@@ -489,12 +647,25 @@ class OutputPinKernel:
     keep_on_device = frozenset()
 
     def device_array(self, name):
+        """A device array of the recorded launch: a data buffer or the row parameters
+        ("fparams", "iparams", read in place by the recorded launch)."""
+        if name in ("fparams", "iparams"):
+            return getattr(self, name)
         return self._dev[name]
 
-    def launch_recorded(self):
+    def launch_recorded(self, n_rows=None):
         """Replay the recorded launch on the device-resident arrays as they are (no host
-        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``)."""
-        self._cmd.launch()
+        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
+        n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
+        arrays, e.g. by the device Newton); default all."""
+        if n_rows is None or int(n_rows) == self.n:
+            self._cmd.launch()
+            return
+        self._cmd.set_dim(int(n_rows))
+        try:
+            self._cmd.launch()
+        finally:
+            self._cmd.set_dim(self.n)
 
     def set_parameters(self, fparams):
         """Overwrite the packed float parameters (same shape) in place on the device; the recorded
@@ -503,7 +674,7 @@ class OutputPinKernel:
         assert fp.shape == tuple(self.fparams.shape)
         self.fparams.assign(fp)
 
-    def evaluate(self, pose, tilt=None):
+    def evaluate(self, pose, tilt=None, history=None):
         """Results in the layout of :mod:`output_pins_ref` (arrays owned by this object, overwritten next call).
 
         pose: (n_rows_pose, 3) [m, m, rad]; tilt: (n_rows_pose, 2) [rad] or None (zero).
@@ -513,6 +684,10 @@ class OutputPinKernel:
         h = self._host
         h["pose"][...] = pose
         names = ["pose"]
+        if self.anchor:
+            # committed history (flags, anchor_A, anchor_B) of the slice rows
+            h["h_act_in"][...], h["h_a_in"][...], h["h_b_in"][...] = history
+            names += ["h_act_in", "h_a_in", "h_b_in"]
         if tilt is not None:
             h["tilt"][...] = tilt
             names.append("tilt")
@@ -534,6 +709,9 @@ class OutputPinKernel:
             out["sleeve_tangent"] = h["sleeve_du"]
         if self.slice_tangent:
             out["slice_force_tangent"] = h["slice_df"]
+        if self.anchor:
+            out["ft"] = h["ft"]
+            out["trial"] = (h["h_act_out"], h["h_a_out"], h["h_b_out"])
         return out
 
 

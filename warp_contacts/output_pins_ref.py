@@ -172,8 +172,9 @@ def evaluate_plain(pose, fparams, iparams, stations, tilt=None, tangent=True):
     tilt : (nb, 2) small tilts (theta_x, theta_y) [rad] or None (zero).
 
     Returns a dict with Q (N, 6) on (flange, wheel), dQdq (N, 6, 6) (or None),
-    tilt_moments (N, 2, 2) ((M_x, M_y) on flange and wheel) and slices
-    (N, ns, N_SLICE_COLS).
+    tilt_moments (N, 2, 2) ((M_x, M_y) on flange and wheel), slices
+    (N, ns, N_SLICE_COLS) and, with the tangent, slice_force_tangent (N, ns, 2, 6)
+    (d(force vector on the wheel)/dq per slice).
     """
     fp = np.asarray(fparams, np.float64)
     ip = np.asarray(iparams)
@@ -199,6 +200,7 @@ def evaluate_plain(pose, fparams, iparams, stations, tilt=None, tangent=True):
     Mt = np.zeros((N, 2, 2), dtype)
     S = np.zeros((N, ns, N_SLICE_COLS), dtype)
     da = (_seed_block(6, 0, pf) - _seed_block(6, 3, ph)) if tangent else None
+    dfs = np.zeros((N, ns, 2, 6)) if tangent else None
     for js in range(ns):
         s = stations[js]
         e = a + s * b
@@ -222,6 +224,7 @@ def evaluate_plain(pose, fparams, iparams, stations, tilt=None, tangent=True):
         S[:, js, S_PX:S_PY + 1] = hc + (0.5 * (L + fp[:, Q_R_PIN] + fp[:, Q_R_HOLE]))[:, None] * n
         if tangent:
             dfv = dF[:, None, :] * n[:, :, None] + F[:, None, None] * dn
+            dfs[:, js] = dfv
             darm_f = np.zeros((N, 2, 6))
             darm_f[:, :, 2] = perp(pf)
             darm_w = np.zeros((N, 2, 6))
@@ -230,7 +233,80 @@ def evaluate_plain(pose, fparams, iparams, stations, tilt=None, tangent=True):
             dQ[:, 2] -= _dcross(arm_f, darm_f, fv, dfv)
             dQ[:, 3:5] += dfv
             dQ[:, 5] += _dcross(arm_w, darm_w, fv, dfv)
-    return {"Q": Q, "dQdq": dQ, "tilt_moments": Mt, "slices": S}
+    return {"Q": Q, "dQdq": dQ, "tilt_moments": Mt, "slices": S, "slice_force_tangent": dfs}
+
+
+def evaluate_plain_anchor(pose, fparams, iparams, stations, anchor_params, hist_active, hist_a, hist_b, tilt=None):
+    """:func:`evaluate_plain` with anchor friction per slice (Eq. (friction), anchor model of
+    :mod:`anchor_ref`).
+
+    Every slice row k = i ns + s (the order of the slice observations) carries one anchor:
+    A is the wheel, B the flange; a new anchor forms at the slice's contact point as material
+    points of both bodies (planar section: the tilts are prescribed inputs and do not slide).
+    The slice's normal force F_s and normal n_s come from the normal law; its tangent from the
+    slice force tangent df_s = dF_s n_s + F_s dn_s, so dF_s = n_s . df_s and
+    dn_s = (df_s - n_s dF_s) / F_s. The tangential force F_t t (t = perp(n_s)) acts on the
+    wheel at its anchor and its opposite on the flange at the flange anchor.
+
+    anchor_params (N ns, anchor_ref.N_ANCHOR); committed flags (N ns,), anchors in wheel and
+    flange coordinates (N ns, 2). Returns the dict of :func:`evaluate_plain` with Q and dQdq
+    including friction, ``ft`` (N, ns) tangential force on the wheel along t [N] and ``trial``
+    (flags, anchor_A, anchor_B) of the slice rows.
+    """
+    from . import anchor_ref
+    res = evaluate_plain(pose, fparams, iparams, stations, tilt=tilt, tangent=True)
+    ip = np.asarray(iparams)
+    pose = np.asarray(pose, np.float64)
+    ap = np.asarray(anchor_params, np.float64)
+    N, ns = ip.shape[0], len(stations)
+    rows = np.repeat(np.arange(N), ns)                    # slice row k -> pair row
+    qf, qw = pose[ip[rows, J_FLANGE]], pose[ip[rows, J_WHEEL]]
+    S = res["slices"].reshape(N * ns, N_SLICE_COLS)
+    dfs = res["slice_force_tangent"].reshape(N * ns, 2, 6)
+    F, n = S[:, S_FORCE], S[:, S_NX:S_NY + 1]
+    pc = S[:, S_PX:S_PY + 1]
+    contact = S[:, S_APPROACH] > 0.0
+    t = perp(n)
+    ha, hb, e = anchor_ref.anchor_separation(qw[:, :2], qw[:, 2], qf[:, :2], qf[:, 2], hist_a, hist_b)
+    anchored, stick, slip, s_anc, sg, ft = anchor_ref.state(F, contact, hist_active, e, t, ap)
+    ftv = ft[:, None] * t
+    Q = res["Q"].copy()
+    dQ = res["dQdq"].copy()
+    np.add.at(Q, (rows, slice(X_WHEEL0, X_WHEEL0 + 2)), ftv)
+    np.add.at(Q, (rows, X_WHEEL0 + 2), cross2(ha, ftv))
+    np.add.at(Q, (rows, slice(X_FLANGE, X_FLANGE + 2)), -ftv)
+    np.add.at(Q, (rows, X_FLANGE + 2), -cross2(hb, ftv))
+    Fs = np.where(F > 0, F, 1.0)
+    for j in range(6):
+        df = dfs[:, :, j]
+        dF = np.sum(n * df, axis=1)
+        dn = np.where((F > 0)[:, None], (df - n * dF[:, None]) / Fs[:, None], 0.0)
+        dt = perp(dn)
+        # seed j moves the flange (0-2) or the wheel (3-5); anchors turn with their bodies
+        dxw = np.zeros((N * ns, 2))
+        dxf = np.zeros((N * ns, 2))
+        dha = np.zeros((N * ns, 2))
+        dhb = np.zeros((N * ns, 2))
+        if j < 2:
+            dxf[:, j] = 1.0
+        elif j == 2:
+            dhb = perp(hb)
+        elif j < 5:
+            dxw[:, j - 3] = 1.0
+        else:
+            dha = perp(ha)
+        de = (dxw + dha) - (dxf + dhb)
+        dft = anchor_ref.force_tangent(stick, slip, sg, e, t, dF, dt, de, ap)
+        dftv = dft[:, None] * t + ft[:, None] * dt
+        np.add.at(dQ, (rows, slice(X_WHEEL0, X_WHEEL0 + 2), j), dftv)
+        np.add.at(dQ, (rows, X_WHEEL0 + 2, j), cross2(dha, ftv) + cross2(ha, dftv))
+        np.add.at(dQ, (rows, slice(X_FLANGE, X_FLANGE + 2), j), -dftv)
+        np.add.at(dQ, (rows, X_FLANGE + 2, j), -(cross2(dhb, ftv) + cross2(hb, dftv)))
+    trial = anchor_ref.trial_history(F, contact, anchored, slip, s_anc, sg, t, qw[:, 2], qf[:, 2], ha, hb, hist_a,
+                                     hist_b, rot(-qw[:, 2], pc - qw[:, :2]), rot(-qf[:, 2], pc - qf[:, :2]), ap)
+    out = dict(res)
+    out.update(Q=Q, dQdq=dQ, ft=ft.reshape(N, ns), trial=trial)
+    return out
 
 
 def _dcross(r, dr, f, df):

@@ -189,8 +189,10 @@ class RollingElementKernel:
                                    "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
                                    "obs": ((n, N_OBS), "f"), "aux": ((n, N_AUX), "f")}, dt, self.ndtype, d)
         dev = self._buf.dev
+        self.n = n
+        self._fparams = wp.array(fparams, dtype=dt, device=d)
         self._cmd = wp.launch(_kernel(dt), dim=n, device=d,
-                              inputs=[wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
+                              inputs=[self._fparams, wp.array(iparams, dtype=wp.int32, device=d),
                                       dev["pose"], dev["vel"]],
                               outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs", "aux")], record_cmd=True)
 
@@ -200,6 +202,13 @@ class RollingElementKernel:
         """Replay the recorded launch on the device-resident arrays as they are (no host
         transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``)."""
         self._cmd.launch()
+
+    def set_parameters(self, fparams):
+        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
+        launch keeps pointing at them (slow-state clearance offsets between mechanical windows)."""
+        fp = np.ascontiguousarray(fparams, dtype=self.ndtype)
+        assert fp.shape == (self.n, N_FLOAT)
+        self._fparams.assign(fp)
 
     def evaluate(self, pose, vel=None):
         """Same results as :func:`rolling_elements_ref.evaluate` (NumPy arrays owned by this

@@ -418,6 +418,12 @@ def run_monte_carlo(ctx):
     if ctx.tolerances is None:
         raise Unsupported("no tolerance file: pass --tolerances FILE (a shipped design uses its "
                           "<name>_tolerances.toml when there is one)")
+    from ..assembly.spec import CycloidDesign
+    if not isinstance(ctx.design, CycloidDesign):
+        # the variants and the batched figures below are the cycloid drive's; the RV Monte Carlo
+        # (rvtool.variants.rv_tolerances) runs in cases/monte_carlo_rv.py
+        raise Unsupported(f"the tolerance Monte Carlo here covers the cycloid topology; {type(ctx.design).__name__}: "
+                          "see cases/monte_carlo_rv.py")
     tol = load_tolerances(ctx.tolerances)
     try:
         tol.check_design(ctx.design)

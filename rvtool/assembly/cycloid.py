@@ -42,6 +42,7 @@ from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, Fricti
 from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiffness
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre, journal_velocity
+from ..output_pins.calibration import mindlin_tangential_ratio  # noqa: F401 (public here too)
 from ..model import BodyCoordinate, ClearanceVariant, Family, ReducerModel, SeriesBeam
 from .spec import CycloidDesign, replace
 
@@ -115,24 +116,82 @@ class CycloidModel(ReducerModel):
         return {"samples_per_tooth": w.samples_per_tooth, "n_slices": w.n_slices, "search_window": self.pin_set.window}
 
     def series_compliance(self, family):
-        """Elastic pins (``pins.support``, ``output_pins.support``): ring pins as per-row compliance
-        inside the series line law (row = slice: n_slices C_kk for wheel k), output pins as the
-        station self-compliance C_ww per (pin, wheel) contact beside the contact approach (the
-        shared-pin closure subtracts the deflection from the approach it reports)."""
+        """Elastic pins (``pins.support``, ``output_pins.support``): the beam of every pin with its
+        station compliance over the wheel stations, closed exactly per pin
+        (:mod:`rvtool.contact.pin_closure`; the observed approach excludes the deflection)."""
         fam = Family(family)
         if fam not in (Family.PINS, Family.OUTPUT_PINS):
             return None
         C = pin_station_compliance(self.design, fam)
         if C is None:
             return None
+        el = self.elements["pins" if fam == Family.PINS else "output_pins"]
+        closure = el.evaluator
+
+        def pose(q):
+            ql = el.local(q)
+            return el.pose_velocity(ql, 0 * ql)
+
+        def stiffened(q, factor):
+            _, _, red, _ = closure.solve(*pose(q))
+            return el.coordinate_indices, closure.condense(red, beam_factor=factor)[1]
+        return SeriesBeam("ring_pin_bending" if fam == Family.PINS else "output_pin_bending", fam, C,
+                          lambda q: closure.deflections(pose(q)[0]), stiffened)
+
+    def pin_station_rows(self, family):
+        """(pin (rows,), station (rows,)) of every observation row of the ring pins
+        (``wheel{k}/pin{p}/s{i}``) or the output pins (``output_pins/pin{p}/wheel{k}/slice{i}``):
+        the station of a row is its wheel."""
+        fam = Family(family)
+        name, rows = self.families[fam]
+        parts = [self.elements[name].ids[i].split("/") for i in rows]
         if fam == Family.PINS:
-            ns = self.design.wheels.n_slices
-            rows = np.array([ns * C[int(r.split("/")[0][5:]), int(r.split("/")[0][5:])]
-                             for r in self.elements["pins"].ids])
-            return SeriesBeam("ring_pin_bending", fam, rows, inside_rows=True, per_contact=False)
-        names = dict.fromkeys(r.rpartition("/")[0] for r in self.elements["output_pins"].ids)
-        c = np.array([C[int(n.split("/wheel")[1]), int(n.split("/wheel")[1])] for n in names])
-        return SeriesBeam("output_pin_bending", fam, c, inside_rows=False, per_contact=True)
+            return np.array([int(x[1][3:]) for x in parts]), np.array([int(x[0][5:]) for x in parts])
+        if fam == Family.OUTPUT_PINS:
+            return np.array([int(x[1][3:]) for x in parts]), np.array([int(x[2][5:]) for x in parts])
+        raise RvtoolInputError(f"family = {fam.value!r} has no pins; valid: 'pins', 'output_pins'")
+
+    def pin_station_loads(self, q, family):
+        """Vector resultant (n_pins, n_wheels, 2) [N] of the contact forces on every ring pin or
+        output pin at each wheel station, static state q (the force on a pin points along the
+        profile normal of its cycloid contact and against the wheel-force direction of an
+        output-pin contact)."""
+        fam = Family(family)
+        pin, station = self.pin_station_rows(fam)
+        ob = self.observe(q, fam)
+        sign = 1.0 if fam == Family.PINS else -1.0
+        n_pins = self.design.pins.n_pins if fam == Family.PINS else self.design.output_pins.n_pins
+        f = np.zeros((n_pins, self.n_wheels, 2))
+        np.add.at(f, (pin, station), sign * ob.normal_force[:, None] * ob.normal)
+        return f
+
+    def pin_bending(self, q, family, support=None):
+        """Largest bending and shear stress of the ring pins (``"pins"``) or output pins at the
+        static state q from their station loads (:meth:`pin_station_loads`) on the declared
+        support (``pins.support`` / ``output_pins.support``), or on ``support``
+        (:class:`~rvtool.structure.pin_beam.PinSupport`) where the design's pins are rigid (an
+        assumption the caller names). Returns a dict (``sigma_max_Pa``, ``tau_max_Pa``, ``pin``,
+        ``z_m``, ``support``, ``support_source``) or None (rigid pins and no support given)."""
+        from ..structure.pin_beam import PinBeam
+        fam = Family(family)
+        spec = self.design.pins if fam == Family.PINS else self.design.output_pins
+        source = "declared"
+        sup = spec.support
+        if not sup.elastic:
+            if support is None:
+                return None
+            sup, source = support, "assumed (the design's pins are rigid)"
+        beam = PinBeam(sup, spec.pin_radius, self.design.material.youngs_modulus, self.design.material.poisson_ratio)
+        loads = self.pin_station_loads(q, fam)
+        best, tau = {"sigma_max_Pa": 0.0, "pin": None, "z_m": None}, 0.0
+        for p in np.flatnonzero(np.any(loads != 0.0, axis=(1, 2))):
+            s, t, z = beam.station_stresses(self.design.wheels.midplanes, self.design.wheels.width, loads[p])
+            tau = max(tau, t)
+            if s > best["sigma_max_Pa"]:
+                best = {"sigma_max_Pa": s, "pin": int(p), "z_m": z}
+        best.update(tau_max_Pa=tau, support={"model": sup.model.value, "ends": list(sup.ends), "shear": sup.shear},
+                    support_source=source)
+        return best
 
     def hertz_peaks(self, q):
         """Largest Hertz line-contact peak p0 [Pa] of the loaded ring-pin, output-pin and needle
@@ -153,8 +212,12 @@ class CycloidModel(ReducerModel):
         c_b across the journal turns the wheel by c_b / (e z_c) through the pin mesh, each way),
         input-bearing clearance (estimate 2 c / (e z_c) for one wheel; 0 for opposed wheels, whose
         tangential shifts cancel), main-bearing clearance (estimate 0: the flange centre shift does
-        not turn it) and the uniform profile clearance c_w (estimate 2 c_w / (e z_b), the largest
-        pin-force lever arm e z_b). Clearances the design does not have are left out."""
+        not turn it), the uniform profile clearance c_w and the equidistant, offset and rotation
+        modifications (``wheels.clearance``, ``equidistant_mod``, ``offset_mod``, ``rotation_mod``;
+        each one's estimate is the wheels' free play it causes alone,
+        :func:`rvtool.geometry.cycloid.modification_play`: about 2 c / (e z_c) for c_w and
+        delta_eq, 0 for a rotation, which only shifts the phase). Clearances and modifications the
+        design does not have are left out."""
         d = self.design
         e, zc, zb = d.wheels.eccentricity, d.pins.n_pins - 1, d.pins.n_pins
         op = d.output_pins
@@ -176,10 +239,18 @@ class CycloidModel(ReducerModel):
                                             lambda x, s=sec: replace(x, **{s: {"radial_clearance": 0.0}}),
                                             lambda x, o, s=sec: replace(x, **{s: {"radial_clearance":
                                                                                   _radial_clearance(getattr(o, s))}})))
-        if d.wheels.clearance > 0:
-            out.append(ClearanceVariant("profile_clearance", d.wheels.clearance, 2 * d.wheels.clearance / (e * zb),
-                                        lambda x: replace(x, wheels={"clearance": 0.0}),
-                                        lambda x, o: replace(x, wheels={"clearance": o.wheels.clearance})))
+        # the uniform profile clearance and the profile modifications: the wheels' free play against
+        # the pins from the normal gaps and lever arms at each pin (geometry.cycloid.modification_play)
+        from ..geometry.cycloid import modification_play
+        centres = journal_centre(e, np.asarray(d.wheels.phases[:d.n_wheels], float), 0.0)
+        centres = np.column_stack(centres)
+        for sec, key, name in (("wheels", "clearance", "profile_clearance"), ("profile", "equidistant_mod", "equidistant_mod"),
+                               ("profile", "offset_mod", "offset_mod"), ("profile", "rotation_mod", "rotation_mod")):
+            v = getattr(getattr(d, sec), key)
+            if v != 0.0:
+                est = modification_play(d.pins.pin_circle_radius, zb, e, centres, **{key: v})[0]
+                out.append(ClearanceVariant(name, v, est, lambda x, s=sec, k=key: replace(x, **{s: {k: 0.0}}),
+                                            lambda x, o, s=sec, k=key: replace(x, **{s: {k: getattr(getattr(o, s), k)}})))
         return out
 
     def marker_frequencies(self, speed_rpm):
@@ -260,15 +331,16 @@ def lumped_ball_law(spec):
     return K, 1.5
 
 
-def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1)):
+def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1), wheel_mass=None):
     """Bodies of one reducer in ``mbs``: shaft, wheels and flange (``NodeRigidBody2D`` at their
     reference poses), the coordinate locks of undeclared coordinates, the input drive, the
     regularization springs and the output load (see :func:`build` for the options). ``mg`` is a
-    ground coordinate marker. Returns a dict with nodes, reference (nb, 3), locks,
-    journal_locks, drive, reg_springs and load."""
+    ground coordinate marker. wheel_mass: (mass [kg], polar inertia [kg m^2]) of each wheel
+    (default: the cycloid wheel's annulus; other eccentric-wheel topologies pass their own).
+    Returns a dict with nodes, reference (nb, 3), locks, journal_locks, drive, reg_springs and load."""
     d = design
     nw = d.n_wheels
-    m_w, J_w = _mass_wheel(d)
+    m_w, J_w = _mass_wheel(d) if wheel_mass is None else wheel_mass
     ref = np.zeros((nw + 2, 3))
     for k in range(nw):
         ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, d.wheels.phases[k])
@@ -325,22 +397,14 @@ def pin_meshes(design, *, offset=0, prefix=""):
     else:
         k_line = pc.stiffness if (pc.law == "line" and pc.stiffness > 0) else secant_line_stiffness(pc.reference_force, width)
         law = NormalLaw(law="line", stiffness=k_line, damping=pc.damping, ramp_depth=1e-6)
-    friction = FrictionLaw(model=FrictionModel.REGULARIZED if pc.mu > 0 else FrictionModel.NONE, mu_kinetic=pc.mu)
-    C = pin_station_compliance(d, Family.PINS)
-    if C is not None and law.law != "line":
-        raise RvtoolInputError(f"pins.support.model = {d.pins.support.model.value!r} needs a linear pin-contact law "
-                               f"(the beam in series with it is then exact); pin_contact.law = {pc.law!r}; "
-                               "valid: 'line' or 'secant'")
+    friction = pin_friction_law(design, law.stiffness)
     profiles, meshes = [], []
     for k in range(d.n_wheels):
         # the conjugate tooth phase of a journal at phi_k: every wheel starts in mesh
         prof = dataclasses.replace(d.profile, rotation_mod=d.profile.rotation_mod - d.wheels.phases[k] / zg)
         profiles.append(prof)
-        # elastic ring pin: the beam's self-compliance at this wheel's station in series with the
-        # linear contact law, 1/k = 1/k_c + C_kk (Eq. series_contact; allocated once per pin and station)
-        law_k = law if C is None else dataclasses.replace(law, stiffness=1.0 / (1.0 / law.stiffness + C[k, k]))
         kw = dict(profile=prof, wheel_body=offset + 1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
-                  wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law_k, friction=friction,
+                  wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,
                   name=f"{prefix}wheel{k}")
         if d.pins.centre_errors is not None:
             kw["pin_centre_errors"] = np.asarray(d.pins.centre_errors, float)
@@ -351,26 +415,40 @@ def pin_meshes(design, *, offset=0, prefix=""):
 
 
 def pin_station_compliance(design, family):
-    """Beam station compliance C (n_wheels, n_wheels) [m/N] of one ring pin (``Family.PINS``: its
-    beam at the wheel stations, midplanes and contact width = wheel width;
-    :meth:`rvtool.structure.pin_beam.PinBeam.station_compliance`) or output pin
-    (``Family.OUTPUT_PINS``: the shared-pin compliance of the design's mechanism, which the loader
-    derived from the same beam), or None for a rigid pin."""
+    """Beam station compliance C (n_wheels, n_wheels) [m/N] of one ring pin (``Family.PINS``) or
+    output pin (``Family.OUTPUT_PINS``) at the wheel stations (midplanes, contact width = wheel
+    width; :meth:`rvtool.structure.pin_beam.PinBeam.station_compliance`), or None for a rigid pin."""
     from ..structure.pin_beam import pin_beam
     d = design
-    if Family(family) == Family.OUTPUT_PINS:
-        op = d.output_pins
-        if not op.support.elastic:
-            return None
-        c = op.compliance
-        return np.array([[c.self_compliance_0, c.cross_compliance], [c.cross_compliance, c.self_compliance_1]])
-    beam = pin_beam(d.pins.support, d.pins.pin_radius, d.material)
+    spec, section = (d.pins, "pins") if Family(family) == Family.PINS else (d.output_pins, "output_pins")
+    beam = pin_beam(spec.support, spec.pin_radius, d.material)
     if beam is None:
         return None
     try:
         return beam.station_compliance(d.wheels.midplanes, d.wheels.width)
     except RvtoolInputError as exc:
-        raise RvtoolInputError(f"pins.{exc}") from None
+        raise RvtoolInputError(f"{section}.{exc}") from None
+
+
+def pin_friction_law(design, normal_stiffness):
+    """FrictionLaw of the cycloid--pin contact from ``[pin_contact]``: none for mu = 0, the
+    regularized law of Eq. (friction) or the anchor model (k_t from the design, else Mindlin's
+    ratio of ``normal_stiffness`` [N/m], the whole contact's line stiffness)."""
+    pc = design.pin_contact
+    if pc.mu == 0.0:
+        return FrictionLaw()
+    if pc.friction_model == "regularized":
+        return FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=pc.mu)
+    if pc.tangential_stiffness == 0.0 and pc.law == "power" and pc.exponent != 1.0:
+        raise RvtoolInputError("pin_contact.tangential_stiffness must be given (> 0 N/m) for the anchor model with "
+                               "a power law of exponent != 1 (no secant stiffness in N/m to derive it from)")
+    kt = pc.tangential_stiffness or mindlin_tangential_ratio(design.material.poisson_ratio) * normal_stiffness
+    return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=pc.mu, tangential_stiffness=kt)
+
+
+def elastic_pin_stations(design, n_pins):
+    """(n_pins, n_wheels) station-body index of pin p at wheel k's station: p n_wheels + k."""
+    return np.arange(n_pins * design.n_wheels).reshape(n_pins, design.n_wheels)
 
 
 def lumped_bearing_contacts(design, *, offset=0, prefix=""):
@@ -449,15 +527,41 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         ports = PortBodies(housing, np.array([reduced.port_rows[k][:2] for k in range(zb)]))
         n_pin_bodies = nw + 2 + zb
         meshes = [dataclasses.replace(m, pin_bodies=tuple(range(nw + 2, nw + 2 + zb))) for m in meshes]
+    C_ring = pin_station_compliance(d, Family.PINS)
+    if C_ring is not None:
+        # elastic ring pins: wheel k meets pin p on the station body nw + 2 + p nw + k (Eq. series_contact)
+        if ports is not None:
+            raise RvtoolInputError("pins.support.model = "
+                                   f"{d.pins.support.model.value!r} with housing.model = 'ports': elastic ring pins on "
+                                   "an elastic housing are not implemented; valid: one of them rigid")
+        st = elastic_pin_stations(d, d.pins.n_pins)
+        meshes = [dataclasses.replace(m, pin_bodies=tuple(int(b) for b in nw + 2 + st[:, k]))
+                  for k, m in enumerate(meshes)]
+        n_pin_bodies = nw + 2 + st.size
     pin_set = CycloidPinSet(meshes, n_pin_bodies, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
                             precision=precision, device=device, name="pins", search=d.wheels.search)
-    elements = {"pins": ContactElement(mbs, nodes, pin_set, ports=ports)}
+    pin_eval = pin_set
+    if C_ring is not None:
+        from ..contact.pin_closure import ElasticPinClosure
+        pin_eval = ElasticPinClosure(pin_set, n_bodies=nw + 2, carrier=GROUND, station_compliance=C_ring, station=st)
+    elements = {"pins": ContactElement(mbs, nodes, pin_eval, ports=ports)}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
     from ..output_pins.evaluator import OutputPinEvaluator
-    op_eval = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
-                                 wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2, backend=backend,
-                                 precision=precision, device=device)
+    C_out = pin_station_compliance(d, Family.OUTPUT_PINS)
+    if C_out is None:
+        op_eval = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
+                                     wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2, backend=backend,
+                                     precision=precision, device=device)
+    else:
+        # elastic output pins: the (pin p, wheel k) contact acts on the station body nw + 2 + p nw + k,
+        # the flange translated by the deflection (rvtool.contact.pin_closure)
+        from ..contact.pin_closure import ElasticPinClosure
+        st = elastic_pin_stations(d, d.output_pins.n_pins)
+        inner = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
+                                   wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2 + st.size, backend=backend,
+                                   precision=precision, device=device, flange_bodies=nw + 2 + st.ravel())
+        op_eval = ElasticPinClosure(inner, n_bodies=nw + 2, carrier=nw + 1, station_compliance=C_out, station=st)
     elements["output_pins"] = ContactElement(mbs, nodes, op_eval)
 
     # -- bearings -----------------------------------------------------------------
@@ -468,6 +572,13 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     else:
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
         elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
+    if d.bearing_friction.model != "none":
+        # the friction torque of every bearing, a loss element of its own (switched off: absent)
+        if bearing_model != "lumped":
+            raise RvtoolInputError("bearing_friction.model = 'palmgren' needs bearing_model = 'lumped' (the "
+                                   "bearing loads are read per bearing identity from the lumped set)")
+        elements["bearing_friction"] = ContactElement(mbs, nodes, bearing_friction_evaluator(
+            d, bset, elements["bearings"].evaluator))
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
@@ -490,6 +601,28 @@ def family_specs(design, meshes):
     return specs
 
 
+def bearing_friction_evaluator(design, bearing_set, load_source):
+    """Palmgren friction torque on every lumped bearing of ``bearing_set`` (identity = the bearing's
+    contact name; needle law for the eccentric bearings, ball law for the main and input bearings,
+    pitch diameters from the design)."""
+    from ..bearings.friction_element import BearingFrictionEvaluator, BearingLoss
+    from ..bearings.friction_torque import PalmgrenFrictionTorque
+    d, bf = design, design.bearing_friction
+    eb = d.eccentric_bearing
+    losses = []
+    for row, c in enumerate(bearing_set.contacts):
+        if c.name.startswith("eccentric_bearing"):
+            f0, f1, dm = bf.f0_needle, bf.f1_needle, 2 * eb.inner_radius + eb.roller_diameter
+        elif c.name == "main_bearing":
+            f0, f1, dm = bf.f0_ball, bf.f1_ball, ball_rows(d.main_bearing)[0].pitch_diameter
+        else:
+            f0, f1, dm = bf.f0_ball, bf.f1_ball, d.input_bearing.pitch_diameter
+        model = PalmgrenFrictionTorque(f0=f0, f1=f1, pitch_diameter=dm, kinematic_viscosity=bf.kinematic_viscosity,
+                                       regularization_speed=bf.regularization_speed)
+        losses.append(BearingLoss(c.name, c.body_a, c.body_b, model, (row,)))
+    return BearingFrictionEvaluator(losses, bearing_set.n_bodies, load_source)
+
+
 def body_names(n_wheels):
     """Body names in node order: the shaft, the wheels, the flange."""
     return ("shaft",) + tuple(f"wheel{k}" for k in range(n_wheels)) + ("flange",)
@@ -499,10 +632,12 @@ BEARING_FAMILIES = {"eccentric_bearing": Family.ECCENTRIC_BEARINGS, "main_bearin
                     "input_bearing": Family.INPUT_BEARINGS}
 
 
-def contact_families(elements):
-    """{Family: (element name, rows)}: the pin mesh and output pins are one element each;
-    the bearings element's rows split by mounting name."""
-    fams = {Family.PINS: ("pins", np.arange(len(elements["pins"].ids))),
+def contact_families(elements, mesh=("pins", Family.PINS)):
+    """{Family: (element name, rows)}: the reducing mesh (``mesh`` = (element name, family); the pin
+    mesh here) and the output pins are one element each; the bearings element's rows split by
+    mounting name. Shared by the eccentric-wheel topologies."""
+    name, family = mesh
+    fams = {family: (name, np.arange(len(elements[name].ids))),
             Family.OUTPUT_PINS: ("output_pins", np.arange(len(elements["output_pins"].ids)))}
     ids = elements["bearings"].ids
     for prefix, fam in BEARING_FAMILIES.items():

@@ -54,3 +54,11 @@ def housing_ports(design):
     """(PortReducedModel, reference port compliance C_ref [m/N] of the parent, info dict) of
     ``design.housing`` (model "ports"); port k carries ring pin k, rows (2k, 2k + 1) = (x, y)."""
     return _reduced(design.housing)
+
+
+def annulus_ports(housing, n_ports):
+    """As :func:`housing_ports` for ``n_ports`` bore ports at the angles of
+    :func:`pin_port_angles` (``housing``: a design's ``[housing]`` whose ``structure`` is the
+    annulus); for topologies whose ring is not a set of pins."""
+    import dataclasses
+    return _reduced(dataclasses.replace(housing, structure=dataclasses.replace(housing.structure, n_ports=int(n_ports))))

@@ -17,8 +17,7 @@ fields from one spec into another. Three loader rules, all in :func:`build_secti
 * links (:data:`LINKS`): a key that another section already states (the profile's pin circle, the
   output pins' contact length = the wheel width, ...) may be left out and then takes that value,
   so the file states each quantity once (material constants of a component default to
-  ``[material]``); :data:`DERIVED` keys follow from a section's own (an elastic output pin's
-  shared-pin closure from its ``[output_pins.support]``);
+  ``[material]``); :data:`DERIVED` keys follow from a section's own (none for the cycloid);
 * a ``kind`` key selects the spec class of a bearing section (:data:`BEARING_KINDS`); an
   angular-contact pair's section lists the pair's keys and its (identical) rows' keys.
 
@@ -110,13 +109,17 @@ class Wheels:
 class PinContact:
     """Cycloid--pin contact law: law ("line", "power", "secant"), stiffness [N/m] (whole contact;
     0 with "line" = secant stiffness at reference_force), exponent (power law), reference_force [N],
-    damping [N s/m], mu [-] (regularized friction; 0 = none)."""
+    damping [N s/m], mu [-] (0 = no friction), friction_model ("regularized": Eq. (friction)
+    velocity law; "anchor": stick--slip anchors per slice), tangential_stiffness [N/m] of the
+    anchors (whole contact; 0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the normal secant stiffness)."""
     law: str = "line"
     stiffness: float = 0.0
     exponent: float = 1.0
     reference_force: float = 500.0
     damping: float = 0.0
     mu: float = 0.0
+    friction_model: str = "regularized"
+    tangential_stiffness: float = 0.0
 
     def __post_init__(self):
         if self.law not in ("line", "power", "secant"):
@@ -126,6 +129,10 @@ class PinContact:
         check_positive("pin_contact.reference_force", self.reference_force)
         check_nonnegative("pin_contact.damping", self.damping)
         check_nonnegative("pin_contact.mu", self.mu)
+        if self.friction_model not in ("regularized", "anchor"):
+            raise RvtoolInputError(f"pin_contact.friction_model = {self.friction_model!r}; valid choices are "
+                                   "['regularized', 'anchor']")
+        check_nonnegative("pin_contact.tangential_stiffness", self.tangential_stiffness)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -182,6 +189,34 @@ class Bodies:
 
 
 @dataclass(frozen=True, kw_only=True)
+class BearingFriction:
+    """Bearing friction torque as a loss on each bearing's relative rotation (optional section;
+    model "none" = no element, no cost): model ("none" | "palmgren", Palmgren's M = M0 + M1 of
+    :mod:`rvtool.bearings.friction_torque`), kinematic_viscosity nu [m^2/s] of the lubricant,
+    f0_ball, f1_ball (main and input ball bearings) and f0_needle, f1_needle (eccentric needle
+    bearings) [-], regularization_speed [rad/s] of the sign. The defaults are chosen here, inside the
+    ranges tabulated by Harris & Kotzalas (oil bath: f0 = 2 for angular-contact/deep-groove ball
+    bearings, 4 for needle bearings; f1 = 7e-4 ball, 5e-4 needle); ISO VG 32 at 40 degC."""
+    model: str = "none"
+    kinematic_viscosity: float = 3.2e-5
+    f0_ball: float = 2.0
+    f1_ball: float = 7e-4
+    f0_needle: float = 4.0
+    f1_needle: float = 5e-4
+    regularization_speed: float = 1e-2
+
+    def __post_init__(self):
+        if self.model not in ("none", "palmgren"):
+            raise RvtoolInputError(f"bearing_friction.model = {self.model!r}; valid choices are ['none', 'palmgren']")
+        check_positive("bearing_friction.kinematic_viscosity", self.kinematic_viscosity)
+        check_positive("bearing_friction.f0_ball", self.f0_ball)
+        check_nonnegative("bearing_friction.f1_ball", self.f1_ball)
+        check_positive("bearing_friction.f0_needle", self.f0_needle)
+        check_nonnegative("bearing_friction.f1_needle", self.f1_needle)
+        check_positive("bearing_friction.regularization_speed", self.regularization_speed)
+
+
+@dataclass(frozen=True, kw_only=True)
 class CycloidDesign:
     """A single-stage cycloid drive with one or two wheels (see rvtool/designs/rd40.toml): the
     tree of component specs, one per section. ``main_bearing`` / ``input_bearing`` are None
@@ -203,6 +238,7 @@ class CycloidDesign:
     housing: Housing = field(default_factory=Housing)
     #: the file-form data this design was loaded from (what :func:`replace` changes and re-loads)
     source: dict | None = field(default=None, compare=False, hash=False, repr=False, metadata={"file": False})
+    bearing_friction: BearingFriction = field(default_factory=BearingFriction)
 
     def __post_init__(self):
         if self.n_wheels != len(self.wheels.midplanes):
@@ -260,8 +296,9 @@ BEARING_KINDS = {"deep_groove": BallBearing, "angular_contact": BallBearing,
 #: dependency order (a section's links read sections before it).
 SECTIONS = {"material": ElasticMaterial, "pins": Pins, "wheels": Wheels, "profile": CycloidProfile,
             "pin_contact": PinContact, "output_pins": OutputPinMechanism, "eccentric_bearing": NeedleBearing,
-            "main_bearing": BEARING_KINDS, "input_bearing": BEARING_KINDS, "bodies": Bodies, "housing": Housing}
-OPTIONAL_SECTIONS = ("profile", "bodies", "housing")
+            "main_bearing": BEARING_KINDS, "input_bearing": BEARING_KINDS, "bodies": Bodies, "housing": Housing,
+            "bearing_friction": BearingFriction}
+OPTIONAL_SECTIONS = ("profile", "bodies", "housing", "bearing_friction")
 
 _ELASTIC = {"youngs_modulus": "material.youngs_modulus", "poisson_ratio": "material.poisson_ratio"}
 
@@ -285,33 +322,10 @@ LINKS = {
 }
 
 
-def _elastic_output_pins(table, built):
-    """Keys an elastic output pin (``[output_pins.support]`` not rigid) derives, where the table
-    leaves them out: the shared-pin closure of Eqs. (pin_compliance, pin_local_closure) with the
-    beam's station compliance at the wheel stations and the sleeve fixed on the pin (clearance 0:
-    the shared mode then equals the plain mode at C = 0)."""
-    from ..structure.pin_beam import pin_beam
-    support = build_section(PinSupport, "output_pins.support", table.get("support", {}))
-    beam = pin_beam(support, table.get("pin_radius"), built["material"])
-    if beam is None:
-        return {}
-    z = tuple(table["wheel_midplanes"])
-    if len(z) != 2:
-        raise RvtoolInputError(f"output_pins.support.model = {support.model.value!r} with n_wheels = {len(z)}: the "
-                               "elastic output pin uses the two-wheel shared-pin closure (Eq. pin_local_closure); "
-                               "valid: n_wheels = 2 or output_pins.support.model = 'rigid'")
-    try:
-        C = beam.station_compliance(z, table["contact_length"])
-    except RvtoolInputError as exc:
-        raise RvtoolInputError(f"output_pins.{exc}") from None
-    return {"mode": "shared", "sleeve": {"clearance": 0.0},
-            "compliance": {"self_compliance_0": float(C[0, 0]), "self_compliance_1": float(C[1, 1]),
-                           "cross_compliance": float(C[0, 1])}}
-
-
 #: Keys a section derives from its own (linked) keys where it leaves them out: section -> function
-#: (table, sections built before) -> {key: value}.
-DERIVED = {"output_pins": _elastic_output_pins}
+#: (table, sections built before) -> {key: value}. (An elastic output pin derives nothing: the
+#: builder closes its beam per pin, :class:`~rvtool.contact.pin_closure.ElasticPinClosure`.)
+DERIVED = {}
 
 
 def _file_units(cls, section, data):
@@ -468,11 +482,11 @@ def _bearing_section(section, data):
     return build_section(cls, section, data)
 
 
-def _with_links(section, data, built):
-    """``data`` with the keys it leaves out filled from :data:`LINKS` (from the sections already
-    built, or from the table's own keys)."""
+def _with_links(section, data, built, links=None):
+    """``data`` with the keys it leaves out filled from ``links`` (default :data:`LINKS`; from the
+    sections already built, or from the table's own keys)."""
     out = copy.deepcopy(data)
-    for path, links in LINKS.items():
+    for path, table_links in (LINKS if links is None else links).items():
         head, *rest = path.split(".")
         if head != section:
             continue
@@ -483,7 +497,7 @@ def _with_links(section, data, built):
                 break
         if table is None:
             continue
-        for key, src in links.items():
+        for key, src in table_links.items():
             if key in table or key + "_deg" in table:
                 continue
             src_section, _, src_key = src.partition(".")
@@ -495,6 +509,31 @@ def _with_links(section, data, built):
     return out
 
 
+def load_sections(d, sections, *, optional=(), links=None, derived=None):
+    """Build the component specs of ``sections`` ({section: spec class, or :data:`BEARING_KINDS`
+    for a bearing section}, in dependency order) from the file-form table ``d``, popping each
+    section from ``d``; ``links`` / ``derived``: a topology's :data:`LINKS` / :data:`DERIVED`
+    (default the cycloid's). Returns {section: spec}. Every topology's loader uses this one loop."""
+    links = LINKS if links is None else links
+    derived = DERIVED if derived is None else derived
+    built = {}
+    for sec, cls in sections.items():       # in dependency order: a link reads a section built before
+        if sec not in d and sec not in optional:
+            raise RvtoolInputError(f"section [{sec}] is missing from the design")
+        data = d.pop(sec, {})
+        if not isinstance(data, dict):
+            raise RvtoolInputError(f"[{sec}] must be a table of keys; got {data!r}")
+        if cls is BEARING_KINDS:
+            locked = BEARING_KINDS[_bearing_kind(sec, data)] is None
+            built[sec] = _bearing_section(sec, data if locked else _with_links(sec, data, built, links))
+        else:
+            data = _with_links(sec, data, built, links)
+            if sec in derived:
+                data = {**derived[sec](data, built), **data}
+            built[sec] = build_section(cls, sec, data)
+    return built
+
+
 def design_from_dict(d):
     """A validated :class:`CycloidDesign` from file-form data (the parsed TOML of a design file)."""
     source = copy.deepcopy(dict(d))
@@ -503,28 +542,15 @@ def design_from_dict(d):
     if topology != "cycloid":
         raise RvtoolInputError(f"topology = {topology!r}: this is the cycloid loader; load the file with "
                                "rvtool.load_design (rvtool.assembly.topologies), which picks the topology's loader")
-    built = {}
-    for sec, cls in SECTIONS.items():       # in dependency order: a link reads a section built before
-        if sec not in d and sec not in OPTIONAL_SECTIONS:
-            raise RvtoolInputError(f"section [{sec}] is missing from the design")
-        data = d.pop(sec, {})
-        if not isinstance(data, dict):
-            raise RvtoolInputError(f"[{sec}] must be a table of keys; got {data!r}")
-        if cls is BEARING_KINDS:
-            locked = BEARING_KINDS[_bearing_kind(sec, data)] is None
-            built[sec] = _bearing_section(sec, data if locked else _with_links(sec, data, built))
-        else:
-            data = _with_links(sec, data, built)
-            if sec in DERIVED:
-                data = {**DERIVED[sec](data, built), **data}
-            built[sec] = build_section(cls, sec, data)
+    built = load_sections(d, SECTIONS, optional=OPTIONAL_SECTIONS)
     return build_section(CycloidDesign, "design", {**d, **built, "source": source})
 
 
 def load_design(path):
-    """Load a design TOML file into a validated :class:`CycloidDesign`."""
-    with open(path, "rb") as fh:
-        return design_from_dict(tomllib.load(fh))
+    """Load a design TOML file into its validated design: the file's ``topology`` key picks the
+    topology's loader (:mod:`rvtool.assembly.topologies`; absent: "cycloid", :class:`CycloidDesign`)."""
+    from . import topologies
+    return topologies.design_from_table(topologies.read_table(path))
 
 
 def _merge(table, changes):
@@ -545,6 +571,8 @@ def replace(design, **sections):
     or ``NAME_deg`` for an angle in degrees) and top-level values, e.g.
     ``replace(d, wheels={"n_slices": 4}, n_wheels=1)``. The changed file-form data is loaded
     again, so links follow (a new wheel width is the output pins' contact length)."""
-    if design.source is None:
+    from . import topologies
+    source = getattr(design, "source", None)
+    if source is None:
         raise RvtoolInputError("replace needs a design loaded from file-form data (load_design / design_from_dict)")
-    return design_from_dict(_merge(copy.deepcopy(design.source), sections))
+    return topologies.design_from_table(_merge(copy.deepcopy(source), sections))

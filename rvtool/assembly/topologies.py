@@ -56,14 +56,14 @@ register(Topology("cycloid", "single-stage cycloid drive, one or two wheels, out
                   "rvtool.assembly.spec:CycloidDesign", "rvtool.assembly.spec:design_from_dict", "rd40",
                   "rvtool/assembly/spec.py and rvtool/assembly/cycloid.py"))
 register(Topology("rv2", "RV two-stage reducer: involute preliminary stage, floating cranks, cycloid stage, carrier output",
-                  "rvtool.assembly.rv:RVDesign", "rvtool.assembly.rv:design_from_dict", None,
-                  "the RV builder of issue 16 (rvtool/assembly/rv.py)"))
+                  "rvtool.assembly.rv:RVDesign", "rvtool.assembly.rv:design_from_dict", "rv40e",
+                  "the RV builder of issue 16 (rvtool/assembly/rv/)"))
 register(Topology("rv3", "RV three-stage reducer",
-                  "rvtool.assembly.rv:RVDesign", "rvtool.assembly.rv:design_from_dict", None,
-                  "the RV three-stage topology of issue 16 (rvtool/assembly/rv.py)"))
+                  "rvtool.assembly.rv:RVDesign", "rvtool.assembly.rv:design_from_dict", "rv_three_stage",
+                  "the RV three-stage topology of issue 16 (rvtool/assembly/rv/)"))
 register(Topology("std-involute", "small-tooth-difference involute reducer: external wheel(s) in an internal ring gear",
-                  "rvtool.assembly.small_tooth:SmallToothDesign", "rvtool.assembly.small_tooth:design_from_dict", None,
-                  "the small-tooth-difference builder of issue 15 (rvtool/assembly/small_tooth.py)"))
+                  "rvtool.assembly.std_spec:StdInvoluteDesign", "rvtool.assembly.std_spec:design_from_dict", "std_involute",
+                  "rvtool/assembly/std_spec.py and rvtool/assembly/std_involute.py"))
 
 
 def get(name):

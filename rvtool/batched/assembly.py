@@ -58,6 +58,11 @@ def copy_contacts(design, offset):
 
     Returns (wheel meshes, bearing circle contacts, output-pin (fparams, iparams, stations)).
     """
+    for sec in ("pins", "output_pins"):
+        if getattr(design, sec).support.elastic:
+            raise RvtoolInputError(f"{sec}.support.model = {getattr(design, sec).support.model.value!r}: elastic pins "
+                                   "are closed per pin in the sequential model only (rvtool.contact.pin_closure); "
+                                   "valid for batched copies: 'rigid'")
     prefix = f"copy{offset}/"
     nw = design.n_wheels
     _, meshes = pin_meshes(design, offset=offset, prefix=prefix)

@@ -27,7 +27,7 @@ from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, all_finite
+from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows
 from ..errors import RvtoolInputError
 from ..validation import check_finite
 from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
@@ -224,6 +224,21 @@ class BearingSet:
         finite = all_finite(Qc, dq, dv)
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
                           self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
+
+    def set_gap_offsets(self, offsets):
+        """Clearance offsets [m] per element row (positive opens the gap: a clearance increment, e.g.
+        the thermal one of Eq. (obs_thermal_gap) or wear of a race zone), added to the clearance c of
+        the element law (roller laminae: the radial clearance; balls: along the line of action,
+        the radial clearance of a radial bearing), absolute over the built rows; zeros restore the
+        built rows bit for bit."""
+        off = gap_offset_rows(offsets, len(self.ids), self.name)
+        if not hasattr(self, "_built_fparams"):
+            self._built_fparams = self.fparams.copy()
+        fp = self._built_fparams.copy()
+        fp[:, ref.R_CLEAR] += off
+        self.fparams = fp
+        if self.backend == "warp":
+            self._kernel.set_parameters(fp)
 
     def commit(self, pose, vel=None, evaluation=None):
         """Observations (N, 8) at the accepted state (nothing to commit)."""

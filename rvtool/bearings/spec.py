@@ -63,7 +63,12 @@ def _count(name, n, low, high=None):
 
 def _fit(count_name, n, diameter, pitch_diameter):
     """Elements must fit around the pitch circle without touching: n D < pi d_m."""
-    n_max = math.ceil(math.pi * pitch_diameter / diameter) - 1
+    ratio = math.pi * pitch_diameter / diameter
+    if not math.isfinite(ratio):
+        # finite radii can still overflow the pitch circle (found by tests/test_design_fuzz.py)
+        raise RvtoolInputError(f"pitch diameter {pitch_diameter} m / element diameter {diameter} m is not finite; "
+                               "valid: radii and diameters below ~1e300 m")
+    n_max = math.ceil(ratio) - 1
     if n > n_max:
         raise RvtoolInputError(f"{count_name} = {n} elements of diameter {diameter} m do not fit on the pitch circle "
                                f"of diameter {pitch_diameter} m; valid range [3, {n_max}]")

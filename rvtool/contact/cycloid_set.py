@@ -12,14 +12,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import cycloid_pins_ref as ref
+from warp_contacts.circle_pairs_ref import FRICTION_REGULARIZED
 
 from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile, pin_centres
 from ..validation import check_finite, check_nonnegative, check_positive
-from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel, NormalLaw
-from .evaluator import Evaluation, all_finite, gap_offset_rows
+from .evaluator import gap_offset_rows
+from .pair_set import PairFamilySet, check_backend
 
 
 def palmgren_line_approach(force, length):
@@ -52,7 +54,12 @@ class WheelPinMesh:
     crowning: drop at the slice edges [m], parabolic across the width.
     tilt_x, tilt_y: declared relative tilt of wheel and pins [rad]; skew: psi [rad] (Eq. (skew)).
     normal: law for the whole contact; the coefficient is divided among the slices.
-    friction: NONE or REGULARIZED.
+    friction: NONE, REGULARIZED or ANCHOR (stick--slip anchors per slice, Eq. (friction) anchor
+    model; the tangential stiffness k_t is the whole contact's and divided among the slices like
+    the normal coefficient). An ANCHOR law with mu_kinetic = 0 runs the frictionless code.
+    anchor_release_distance: d_rel [m] above which an anchor's separation releases it (the
+    contact migrated, :mod:`warp_contacts.anchor_ref`); None: 10 % of the pin radius, three
+    orders above the stick stroke mu F_n / k_t of a loaded pin and far below a lobe's length.
     """
     profile: CycloidProfile
     wheel_body: int
@@ -72,6 +79,7 @@ class WheelPinMesh:
     normal: NormalLaw
     friction: FrictionLaw = field(default_factory=FrictionLaw)
     name: str = "wheel"
+    anchor_release_distance: float | None = None
 
     def __post_init__(self):
         check_positive("face_width", self.face_width)
@@ -82,13 +90,18 @@ class WheelPinMesh:
             check_finite(nm, getattr(self, nm))
         if self.pin_radius is not None:
             check_positive("pin_radius", self.pin_radius)
-        if self.friction.model == FrictionModel.ANCHOR:
-            raise RvtoolInputError("friction.model = ANCHOR is not available for cycloid-pin contacts; valid: NONE, REGULARIZED")
+        if self.anchor_release_distance is not None:
+            check_positive("anchor_release_distance", self.anchor_release_distance)
         zb = self.profile.n_pins
         if self.pin_bodies is not None and np.shape(self.pin_bodies) != (zb,):
             raise RvtoolInputError(f"pin_bodies must have shape ({zb},); got {np.shape(self.pin_bodies)}")
         if self.normal_deviation is not None and np.shape(self.normal_deviation) != (zb,):
             raise RvtoolInputError(f"normal_deviation must have shape ({zb},); got {np.shape(self.normal_deviation)}")
+
+    @property
+    def anchors(self):
+        """True where the mesh carries anchors (ANCHOR law with mu > 0)."""
+        return self.friction.model == FrictionModel.ANCHOR and self.friction.mu_kinetic > 0.0
 
     @property
     def slice_z(self):
@@ -144,7 +157,7 @@ def auto_window(profile, table, pin_radius, band=0.05, margin=1.5):
     return int(np.ceil(margin * off)) + 2
 
 
-class CycloidPinSet:
+class CycloidPinSet(PairFamilySet):
     """Evaluator of cycloid--pin meshes between ``n_bodies`` planar bodies.
 
     samples_per_tooth: profile table resolution (arc-length resampled).
@@ -161,8 +174,7 @@ class CycloidPinSet:
                  device="cpu", name="pins", search="discrete", search_band=0.05):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one WheelPinMesh")
-        if backend not in ("warp", "numpy"):
-            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
+        check_backend(backend, precision)
         if search not in ("discrete", "analytic"):
             raise RvtoolInputError(f"search = {search!r} is not valid; valid choices are ['discrete', 'analytic']")
         self.search = search
@@ -174,14 +186,12 @@ class CycloidPinSet:
             raise RvtoolInputError(f"samples_per_tooth = {samples_per_tooth} is outside the valid range [8, inf)")
         self.name = name
         self.meshes = tuple(meshes)
-        self.n_bodies = n_bodies
         self.backend = backend
         self.precision = precision
-        self.history = type("NoHistory", (), {})()
         self.tables = []
         self.analytic = [] if search == "analytic" else None
         table_of = {}            # identical tables are stored once (B copies of one design: one table)
-        fp, ip, ids, mesh_of, pin_of = [], [], [], [], []
+        fp, ip, ids, mesh_of, pin_of, ap = [], [], [], [], [], []
         window = 0
         for m_i, m in enumerate(self.meshes):
             pin_bodies = (m.pin_body,) * m.profile.n_pins if m.pin_bodies is None else tuple(int(b) for b in m.pin_bodies)
@@ -225,8 +235,17 @@ class CycloidPinSet:
                     irow = np.zeros(ref.N_INT, np.int32)
                     irow[ref.J_BODY_A] = g if m.wheel_body == GROUND else m.wheel_body
                     irow[ref.J_BODY_B] = g if pb == GROUND else pb
-                    irow[ref.J_FRICTION], irow[ref.J_TABLE] = int(f.model), tb
+                    # mu = 0 under the anchor law is the frictionless contact (its code path, its figures)
+                    model = f.model if (f.model != FrictionModel.ANCHOR or m.anchors) else FrictionModel.NONE
+                    irow[ref.J_FRICTION], irow[ref.J_TABLE] = int(model), tb
                     ip.append(irow)
+                    arow = np.zeros(anchor_ref.N_ANCHOR)
+                    if m.anchors:
+                        arow[anchor_ref.ANCHOR_KT] = f.tangential_stiffness / m.n_slices
+                        arow[anchor_ref.ANCHOR_MU] = f.mu_kinetic
+                        arow[anchor_ref.ANCHOR_RELEASE] = (0.1 * rp if m.anchor_release_distance is None
+                                                           else m.anchor_release_distance)
+                    ap.append(arow)
                     ids.append(f"{m.name}/pin{k}/s{s_i}")
                     mesh_of.append(m_i)
                     pin_of.append(k)
@@ -237,61 +256,81 @@ class CycloidPinSet:
         self.mesh_of = np.array(mesh_of)
         self.pin_of = np.array(pin_of)
         self.n_contacts = len(fp)
-        self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
-        self._pose = np.zeros((n_bodies + 1, 3))
-        self._vel = np.zeros((n_bodies + 1, 3))
+        anchor = bool(np.any(self.iparams[:, ref.J_FRICTION] == FrictionModel.ANCHOR))
+        # committed anchors (wheel and pin-body coordinates) and slip distance per slice
+        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies,
+                             anchor_params=np.array(ap) if anchor else None)
         if backend == "warp":
             from warp_contacts.cycloid_pins import CycloidPinKernel
             self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device,
-                                            analytic=self.analytic)
+                                            analytic=self.analytic, anchor_params=self.anchor_params)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
 
-    velocity_tangent = True
-
-    def set_velocity_tangent(self, on):
-        """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None
-        for it and the kernel skips the velocity seeds)."""
-        self.velocity_tangent = bool(on)
-        if self.backend == "warp":
-            self._kernel.set_velocity_tangent(on)
-
-    def raw(self, pose, vel):
-        self._pose[:-1] = pose
-        self._vel[:-1] = vel
-        if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel)
-        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.tables, self.window,
-                                      self.analytic)
-        return Q, dq, (dv if self.velocity_tangent else None), obs
-
-    def evaluate(self, pose, vel, history=None, check=True):
-        if check:
-            for nm, a in (("pose", pose), ("vel", vel)):
-                a = np.asarray(a)
-                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, dv, obs = self.raw(pose, vel)
-        finite = all_finite(Qc, dq, dv)
-        return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
-
-    def commit(self, pose, vel, evaluation=None):
-        if evaluation is not None:
-            return np.array(evaluation.obs, float)
-        return np.array(self.raw(pose, vel)[3], float)
+    def reference(self, pose, vel, anchor=None):
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.tables, self.window, self.analytic,
+                            **({} if anchor is None else {"anchor": anchor}))
 
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per slice row (positive opens the gap), added to the deviation sum e of
         Eq. (gap), absolute over the built rows; zeros restore the built rows bit for bit."""
-        off = gap_offset_rows(offsets, self.n_contacts, self.name)
+        self._slow_gap = gap_offset_rows(offsets, self.n_contacts, self.name)
+        self._upload_slow_state()
+
+    def set_friction_coefficients(self, mu):
+        """Slow-state friction coefficient [-] per slice row (coupled lubrication), written as the
+        kinetic and static coefficient of Eq. (friction) (no Stribeck peak), absolute over the built
+        rows; None restores the built coefficients bit for bit. Only rows built with regularized
+        friction carry it (a row built without friction has no tangential law to write into)."""
+        if mu is None:
+            self._slow_mu = None
+        else:
+            m = np.array(mu, dtype=np.float64)
+            if m.shape != (self.n_contacts,):
+                raise RvtoolInputError(f"friction coefficients of contact set {self.name!r} must have shape "
+                                       f"({self.n_contacts},), one per observation row; got {m.shape}")
+            if not np.all(np.isfinite(m)) or np.any(m < 0.0):
+                raise RvtoolInputError(f"friction coefficients of contact set {self.name!r} are outside the valid "
+                                       "range [0, inf)")
+            off = self.iparams[:, ref.J_FRICTION] != FRICTION_REGULARIZED
+            if np.any(off & (m != 0.0)):
+                raise RvtoolInputError(f"contact set {self.name!r} was built without friction (pin_contact.mu = 0); "
+                                       "a friction coefficient needs pin_contact.mu in (0, inf)")
+            self._slow_mu = m
+        self._upload_slow_state()
+
+    def built_friction(self):
+        """Kinetic friction coefficient [-] per row as built (the design's pin_contact.mu)."""
+        return np.array(getattr(self, "_built_fparams", self.fparams)[:, ref.C_MUK])
+
+    @property
+    def friction_rows(self):
+        """Rows built with regularized friction (bool, (N,))."""
+        return self.iparams[:, ref.J_FRICTION] == FRICTION_REGULARIZED
+
+    def _upload_slow_state(self):
         if not hasattr(self, "_built_fparams"):
             self._built_fparams = self.fparams.copy()
         fp = self._built_fparams.copy()
-        fp[:, ref.C_E] += off
+        gap = getattr(self, "_slow_gap", None)
+        if gap is not None:
+            fp[:, ref.C_E] += gap
+        mu = getattr(self, "_slow_mu", None)
+        if mu is not None:
+            rows = self.friction_rows
+            fp[rows, ref.C_MUK] = mu[rows]
+            fp[rows, ref.C_MUS] = mu[rows]
         self.fparams = fp
         if self.backend == "warp":
             self._kernel.set_parameters(fp)
+
+    def energy_law(self):
+        """The per-slice constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        the slice's normal coefficient and exponent, anchor stiffness and friction code."""
+        from ..observe.energy import ContactEnergyLaw
+        kt = (self.anchor_params[:, anchor_ref.ANCHOR_KT] if self.anchor else np.zeros(self.n_contacts))
+        return ContactEnergyLaw(normal_stiffness=self.fparams[:, ref.C_K], normal_exponent=self.fparams[:, ref.C_P],
+                                tangential_stiffness=kt, friction_model=self.iparams[:, ref.J_FRICTION].copy())
 
     def pin_forces(self, obs):
         """Per mesh, per pin: normal force summed over the slices [N] -> (n_meshes, z_b)."""

@@ -19,14 +19,14 @@ import math
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import involute_pairs_ref as ref
 
 from ..errors import RvtoolInputError
 from ..geometry.involute import InvolutePair
 from ..validation import check_finite, check_nonnegative, check_positive
-from .assembly import PairAssembler
 from .circle_set import GROUND, FrictionLaw, FrictionModel
-from .evaluator import Evaluation, all_finite
+from .pair_set import PairFamilySet, check_backend
 from .tooth_stiffness import POLY_DEGREE, ToothCompliance
 
 assert POLY_DEGREE + 1 == ref.POLY_TERMS
@@ -43,7 +43,14 @@ class GearMesh:
     clearance: uniform added gap [m]. tilt_x, tilt_y: relative tilt of A and B [rad];
     skew: psi [rad] (Eq. (skew)); gear_z: axial station of the mesh midplane [m].
     damping: c [N s/m] of the whole mesh (divided among the slices); ramp_depth: delta_r [m].
-    friction: NONE or REGULARIZED (element-wise coefficient).
+    friction: NONE, REGULARIZED (element-wise coefficient) or ANCHOR (stick--slip anchors per row,
+    Eq. (friction) anchor model, k_t of the whole mesh divided among the slices; mu = 0: the
+    frictionless code). anchor_release_distance: d_rel [m] of :mod:`warp_contacts.anchor_ref`;
+    None: 10 % of gear A's base pitch (a row's next tooth pair starts a base pitch away).
+    phase_a, phase_b: angle [rad] of tooth 0 of gear A (B) from its body's x axis: a rigid turn
+    of the tooth pattern against the body frame (e.g. a wheel's teeth against its output holes).
+    Default 0; a turn by whole pitches renumbers the teeth (tooth k carries the pitch deviation
+    of tooth k - n), so only the remainder within +-half a pitch enters the tooth-angle table.
     """
     pair: InvolutePair
     body_a: int
@@ -59,7 +66,10 @@ class GearMesh:
     damping: float = 0.0
     ramp_depth: float = 1e-6
     friction: FrictionLaw = field(default_factory=FrictionLaw)
+    phase_a: float = 0.0
+    phase_b: float = 0.0
     name: str = "mesh"
+    anchor_release_distance: float | None = None
 
     def __post_init__(self):
         if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, (int, np.integer)) or self.n_slices < 1:
@@ -68,13 +78,17 @@ class GearMesh:
             raise RvtoolInputError(f"{self.name}.window = {self.window!r} is outside the valid range [0, inf) (integer)")
         if not self.lines or any(ln not in (0, 1) for ln in self.lines) or len(set(self.lines)) != len(self.lines):
             raise RvtoolInputError(f"{self.name}.lines = {self.lines!r} is not valid; valid: a non-empty subset of (0, 1)")
-        for nm in ("clearance", "tilt_x", "tilt_y", "skew", "gear_z"):
+        for nm in ("clearance", "tilt_x", "tilt_y", "skew", "gear_z", "phase_a", "phase_b"):
             check_finite(f"{self.name}.{nm}", getattr(self, nm))
         check_nonnegative(f"{self.name}.damping", self.damping)
         check_positive(f"{self.name}.ramp_depth", self.ramp_depth)
-        if self.friction.model == FrictionModel.ANCHOR:
-            raise RvtoolInputError(f"{self.name}.friction.model = ANCHOR is not available for gear meshes; "
-                                   "valid: NONE, REGULARIZED")
+        if self.anchor_release_distance is not None:
+            check_positive(f"{self.name}.anchor_release_distance", self.anchor_release_distance)
+
+    @property
+    def anchors(self):
+        """True where the mesh carries anchors (ANCHOR law with mu > 0)."""
+        return self.friction.model == FrictionModel.ANCHOR and self.friction.mu_kinetic > 0.0
 
     @property
     def face_width(self):
@@ -85,6 +99,16 @@ class GearMesh:
         """Axial stations of the slice midpoints relative to the mesh midplane [m]."""
         b, n = self.face_width, self.n_slices
         return (np.arange(n) + 0.5) * b / n - 0.5 * b
+
+    def tooth_angle_table(self):
+        """(gear A, gear B) tooth-angle deviations [rad] per tooth: pitch deviations plus the
+        mounting phase, whole pitches of the phase taken out by renumbering the teeth."""
+        out = []
+        for gear, phase in ((self.pair.gear_a, self.phase_a), (self.pair.gear_b, self.phase_b)):
+            pitch = 2 * np.pi / gear.n_teeth
+            n = int(np.floor(phase / pitch + 0.5))
+            out.append(np.roll(gear.pitch_deviation_angles(), n) + (phase - n * pitch))
+        return tuple(out)
 
     @property
     def window_teeth(self):
@@ -109,7 +133,7 @@ def gear_block(gear, compliance: ToothCompliance, u_ref):
     return blk
 
 
-class InvoluteContactSet:
+class InvoluteContactSet(PairFamilySet):
     """Evaluator of involute gear meshes between ``n_bodies`` planar bodies.
 
     backend "warp" (default, one launch) or "numpy" (the reference); precision "float64"
@@ -122,18 +146,13 @@ class InvoluteContactSet:
     def __init__(self, meshes, n_bodies, *, backend="warp", precision="float64", device="cpu", name="gears"):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one GearMesh")
-        if backend not in ("warp", "numpy"):
-            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
-        if precision not in ("float64", "float32"):
-            raise RvtoolInputError(f"precision = {precision!r} is not valid; valid choices are ['float32', 'float64']")
+        check_backend(backend, precision)
         self.name = name
         self.meshes = tuple(meshes)
-        self.n_bodies = n_bodies
         self.backend = backend
         self.precision = precision
-        self.history = type("NoHistory", (), {})()
         self.compliance = {}
-        fp, ip, ids, mesh_of, dev = [], [], [], [], []
+        fp, ip, ids, mesh_of, dev, ap = [], [], [], [], [], []
         offset = 0
         for m_i, m in enumerate(self.meshes):
             for nm, b in (("body_a", m.body_a), ("body_b", m.body_b)):
@@ -148,7 +167,7 @@ class InvoluteContactSet:
             ga = gear_block(A, self.compliance[A], u_ref_a)
             gb = gear_block(B, self.compliance[B], float(pr.roll_b(u_ref_a)))
             off_a, off_b = offset, offset + A.n_teeth
-            dev.extend([A.pitch_deviation_angles(), B.pitch_deviation_angles()])
+            dev.extend(m.tooth_angle_table())
             offset += A.n_teeth + B.n_teeth
             bs = m.face_width / m.n_slices
             f = m.friction
@@ -166,8 +185,18 @@ class InvoluteContactSet:
                             f.mu_kinetic, f.mu_s, f.stribeck_speed, f.regularization_speed)
                         fp.append(row)
                         g = n_bodies
+                        # mu = 0 under the anchor law is the frictionless mesh (its code path, its figures)
+                        model = f.model if (f.model != FrictionModel.ANCHOR or m.anchors) else FrictionModel.NONE
                         ip.append((g if m.body_a == GROUND else m.body_a, g if m.body_b == GROUND else m.body_b,
-                                   int(f.model), line, w, off_a, A.n_teeth, off_b, B.n_teeth))
+                                   int(model), line, w, off_a, A.n_teeth, off_b, B.n_teeth))
+                        arow = np.zeros(anchor_ref.N_ANCHOR)
+                        if m.anchors:
+                            arow[anchor_ref.ANCHOR_KT] = f.tangential_stiffness / m.n_slices
+                            arow[anchor_ref.ANCHOR_MU] = f.mu_kinetic
+                            arow[anchor_ref.ANCHOR_RELEASE] = (0.1 * 2 * math.pi * A.base_radius / A.n_teeth
+                                                               if m.anchor_release_distance is None
+                                                               else m.anchor_release_distance)
+                        ap.append(arow)
                         ids.append(f"{m.name}/line{line}/w{w:+d}/s{s_i}")
                         mesh_of.append(m_i)
         self.fparams = np.array(fp)
@@ -176,45 +205,18 @@ class InvoluteContactSet:
         self.ids = tuple(ids)
         self.mesh_of = np.array(mesh_of)
         self.n_contacts = len(fp)
-        self.assembler = PairAssembler(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies)
-        self._pose = np.zeros((n_bodies + 1, 3))
-        self._vel = np.zeros((n_bodies + 1, 3))
-        self.velocity_tangent = True
+        anchor = bool(np.any(self.iparams[:, ref.J_FRICTION] == FrictionModel.ANCHOR))
+        # committed anchors (A and B coordinates) and slip distance per row
+        self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies,
+                             anchor_params=np.array(ap) if anchor else None)
         if backend == "warp":
             from warp_contacts.involute_pairs import InvolutePairKernel
-            self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device)
+            self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device,
+                                              anchor_params=self.anchor_params)
 
-    def set_velocity_tangent(self, on):
-        """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None for it)."""
-        self.velocity_tangent = bool(on)
-        if self.backend == "warp":
-            self._kernel.set_velocity_tangent(on)
-
-    def raw(self, pose, vel):
-        """Per-row (Q (N,6), dQdq (N,6,6), dQdv (N,6,6) or None, obs (N, N_OBS)) at poses (nb, 3)."""
-        self._pose[:-1] = pose
-        self._vel[:-1] = vel
-        if self.backend == "warp":
-            return self._kernel.evaluate(self._pose, self._vel)
-        Q, dq, dv, obs = ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, self.deviations)
-        return Q, dq, (dv if self.velocity_tangent else None), obs
-
-    def evaluate(self, pose, vel, history=None, check=True):
-        if check:
-            for nm, a in (("pose", pose), ("vel", vel)):
-                a = np.asarray(a)
-                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
-        Qc, dq, dv, obs = self.raw(pose, vel)
-        dv = np.zeros_like(dq) if dv is None else dv
-        finite = all_finite(Qc, dq, dv)
-        return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
-                          self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
-
-    def commit(self, pose, vel, evaluation=None):
-        if evaluation is not None:
-            return np.array(evaluation.obs, float)
-        return np.array(self.raw(pose, vel)[3], float)
+    def reference(self, pose, vel, anchor=None):
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations,
+                            **({} if anchor is None else {"anchor": anchor}))
 
     def mesh_stiffness(self, obs):
         """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along

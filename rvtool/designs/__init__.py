@@ -25,7 +25,8 @@ def path(name):
 
 def kind(name):
     """What a shipped file holds: "tolerances" (a ``[tolerances]`` table, the Monte Carlo's input),
-    "sweep" (a ``study`` key, ``rvtool sweep``'s input) or "design" (a reducer design)."""
+    "sweep" (a ``study`` key, ``rvtool sweep``'s input), "allowables" (an ``[allowables]`` table, the
+    datasheet's input) or "design" (a reducer design)."""
     import tomllib
     with open(path(name), "rb") as fh:
         table = tomllib.load(fh)
@@ -33,11 +34,13 @@ def kind(name):
         return "tolerances"
     if "study" in table:
         return "sweep"
+    if "allowables" in table:
+        return "allowables"
     return "design"
 
 
 def design_names():
-    """Names of the shipped reducer designs (tolerance and sweep files left out)."""
+    """Names of the shipped reducer designs (tolerance, sweep and allowables files left out)."""
     return [n for n in names() if kind(n) == "design"]
 
 

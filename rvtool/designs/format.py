@@ -155,6 +155,8 @@ def _example_kwargs(cls, table):
 
 def _plain(v):
     import enum
+    if dataclasses.is_dataclass(v) and not isinstance(v, type):   # a nested component spec: its sub-table
+        return {f.name: _plain(getattr(v, f.name)) for f in dataclasses.fields(v) if getattr(v, f.name) is not None}
     if isinstance(v, tuple):
         return [_plain(x) for x in v]
     if isinstance(v, enum.Enum):            # an Enum (also a str Enum): its file value
@@ -258,8 +260,9 @@ def template(topology, name=None):
     classes = _table_classes(topology)
     tables = {}
     for sec, key, value, unit, rng, meaning, required in rows:
-        if value is None:
-            continue    # an optional key without a value (TOML has no null): left out, its default applies
+        if value is None or (sec == "" and key == "topology"):
+            continue    # an optional key without a value (TOML has no null): left out, its default applies;
+            # the topology key is written above (a design class may record it as a field)
         if sec == "" and key == "name" and name is not None:
             value = name
         item = tomlkit.item(value)

@@ -190,3 +190,41 @@ def pin_centres(profile: CycloidProfile, pin_centre_errors=None):
         check_finite("pin_centre_errors", e)
         p = p + e
     return p
+
+
+def modification_play(pin_circle_radius, n_pins, eccentricity, wheel_centres, *, clearance=0.0, equidistant_mod=0.0,
+                      offset_mod=0.0, rotation_mod=0.0):
+    """Angular free play [rad] of the wheels (turning together with the output) against the ring
+    pins from the uniform clearance c_w and the profile modifications, first order in them: the
+    closed-form kinematic estimate of their lost motion.
+
+    For pin i at p_i (:func:`pin_centres`) and wheel centre O_w (``wheel_centres`` (n_wheels, 2)
+    [m] about the ring centre), the conjugate contact normal passes through the pitch point
+    P = z_b O_w (distance e z_b from the ring centre), n_i = (p_i - P)/|p_i - P| (from the wheel
+    to the pin). In the pitch frame (pin i at phi_i from the line of centres, K_1 = e z_b / R_z,
+    S_i = sqrt(1 - 2 K_1 cos phi_i + K_1^2)) the normal gaps and lever arms are
+      r_i = (P - O_w) x n_i = -e z_c sin(phi_i)/S_i   (approach per unit wheel rotation; |r| <= e z_c),
+      gap_i = c_w + delta_eq - (delta_off/R_z) (p_i - O_w) . n_i - delta_rot r_i,
+    the offset scaling the pin-centre epitrochoid about the wheel centre and the rotation turning
+    the profile about it. A wheel rotation theta changes gap_i by -theta r_i; the wheels' free
+    range is theta in [max_{r<0} gap/r, min_{r>0} gap/r] (intersected over the wheels) and the
+    play is its length. A rotation modification alone shifts the range by -delta_rot (a phase,
+    no play); the uniform clearance and the equidistant modification give about 2 c / (e z_c).
+    Returns (play [rad], lower and upper limit [rad])."""
+    a = 2 * np.pi * np.arange(n_pins) / n_pins
+    p = pin_circle_radius * np.column_stack([np.sin(a), np.cos(a)])
+    lo, hi = -np.inf, np.inf
+    for ow in np.atleast_2d(np.asarray(wheel_centres, float)):
+        P = n_pins * ow
+        d = p - P
+        n = d / np.linalg.norm(d, axis=1)[:, None]
+        w = P - ow
+        r = w[0] * n[:, 1] - w[1] * n[:, 0]
+        v = p - ow
+        gap = (clearance + equidistant_mod - (offset_mod / pin_circle_radius) * np.einsum("ij,ij->i", v, n)
+               - rotation_mod * r)
+        tiny = 1e-9 * eccentricity * n_pins
+        pos, neg = r > tiny, r < -tiny
+        hi = min(hi, float(np.min(gap[pos] / r[pos])))
+        lo = max(lo, float(np.max(gap[neg] / r[neg])))
+    return hi - lo, lo, hi

@@ -34,6 +34,8 @@ Contract (paper: "Transmission topology and reaction-force closure",
   from (contact geometry for local studies such as the pressure resolution), and
   ``material`` the elastic constants (``youngs_modulus``, ``poisson_ratio``) of the
   load-carrying bodies.
+* **Continuation restarts.** ``continuation_restarts`` lets a stalled load continuation
+  re-solve the level from the kinematic state (free play without stiffness at zero load).
 * **Regularization.** Weak springs from free coordinates to their kinematic
   positions (a numerical setting for free play at zero load);
   ``regularization_force(q)`` reports the largest force they carry and
@@ -143,30 +145,28 @@ class FamilyObservation:
 
 @dataclass(frozen=True)
 class SeriesBeam:
-    """A beam (an elastic pin) in series with a family's contacts, for the stiffness budget.
+    """The beams of a family's pins (elastic pins), for the stiffness budget.
 
-    path: budget entry name (e.g. ``"ring_pin_bending"``); family: the contact family; compliance [m/N]: per observation row
-    (``per_contact`` False) or per physical contact in :meth:`FamilyObservation.per_contact`
-    order (True, the beam loaded by the contact's resultant); inside_rows: True where the rows'
-    observed approach (-gap) already contains the beam's deflection (a series law), False where
-    the contact law sees only the contact approach (the beam acts on the resultant beside it)."""
+    path: budget entry name (e.g. ``"ring_pin_bending"``); family: the contact family;
+    compliance: station compliance C (n_s, n_s) [m/N] of one pin (the same for every pin);
+    deflections: ``deflections(q)`` -> (n_pins, n_s, 2) station deflections [m] at state q;
+    stiffened: ``stiffened(q, factor)`` -> (global coordinate indices, dQ/dq of the family's
+    element with the beams' stiffness times ``factor``, everything else at state q).
+    The observed approach of a row excludes the beam's deflection (the contact approach)."""
     path: str
     family: Family
     compliance: np.ndarray
-    inside_rows: bool
-    per_contact: bool
+    deflections: object
+    stiffened: object
 
-    def energy(self, model, q, dF_rows):
-        """sum c F'^2 [m/N x (N per unit)^2]: the beam's strain energy (x2) for row force increments dF_rows."""
-        if not self.per_contact:
-            return float(np.sum(self.compliance * dF_rows ** 2))
-        ob = model.observe(q, self.family)
-        contact = [physical_contact(r) for r in ob.ids]
-        names = list(dict.fromkeys(contact))
-        index = {c: k for k, c in enumerate(names)}
-        sums = np.zeros(len(names))
-        np.add.at(sums, [index[c] for c in contact], dF_rows)
-        return float(np.sum(self.compliance * sums ** 2))
+    def energy(self, q, dq, step=1e-9):
+        """sum over pins of du^T K_b du [m/N x N^2 per unit^2] with K_b = C^-1: the beams' strain
+        energy (x2) along the state increment dq (n,), du by central differences of the station
+        deflections over +-step [m] of the largest entry of dq (the closure is solved to 1e-16 m
+        of deflection, 1e-7 of such a step)."""
+        h = step / max(float(np.abs(dq).max()), 1e-300)
+        du = (self.deflections(q + h * dq) - self.deflections(q - h * dq)) / (2 * h)
+        return float(np.einsum("pkx,kl,plx->", du, np.linalg.inv(self.compliance), du))
 
 
 @dataclass(frozen=True)
@@ -211,6 +211,10 @@ class ReducerModel:
     family_specs: dict = field(default_factory=dict)   # Family -> component spec(s) of its contacts
     material: object = None         # youngs_modulus [Pa], poisson_ratio [-] of the load-carrying bodies
     mesh_period: float = None       # input angle [rad] of one mesh cycle of the main mesh
+    #: a load continuation whose increments stall may restart the level from the static solver's
+    #: ladder (:meth:`rvtool.solver.continuation.Continuation.go_to`): set by topologies whose
+    #: zero-load state is free play without contact stiffness (a backlashed involute mesh)
+    continuation_restarts: bool = False
 
     # -- coordinates -------------------------------------------------------
     def body_index(self, body):
@@ -362,6 +366,12 @@ class ReducerModel:
         (rigid pins, the "nothing" variant)."""
         return None
 
+    def pin_bending(self, q, family, support=None):
+        """Largest bending stress of the pins of ``family`` at state q (dict, see the topology),
+        or None where the topology has no pins of that family or they are rigid and no
+        ``support`` is assumed."""
+        return None
+
     def hertz_peaks(self, q):
         """{family group: largest Hertz peak pressure [Pa]} of the loaded contacts at state q, where
         the topology provides the local contact geometry; {} otherwise."""
@@ -435,6 +445,46 @@ class ReducerModel:
         for i in rows:
             out.setdefault(physical_contact(el.ids[i]), float(el.gap_offsets[i]))
         return out
+
+    def set_friction(self, family, mu):
+        """Slow-state friction coefficients [-] of ``family`` (coupled lubrication): ``mu`` maps
+        physical contact ids to mu (unnamed contacts keep their built coefficient), or None restores
+        the built coefficients. Written into the contact law of Eq. (friction) of the family's rows
+        built with friction (cycloid pins with ``pin_contact.mu`` > 0; other families: named error)."""
+        try:
+            name, rows = self.families[Family(family)]
+        except (KeyError, ValueError):
+            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
+                                   f"{[f.value for f in self.families]}") from None
+        el = self.elements[name]
+        if mu is None:
+            el.set_friction_coefficients(None)
+            return
+        contact = [physical_contact(el.ids[i]) for i in rows]
+        unknown = sorted(set(mu) - set(contact))
+        if unknown:
+            raise RvtoolInputError(f"friction names contacts {unknown[:4]} that family {Family(family).value!r} "
+                                   f"lacks; valid: {list(dict.fromkeys(contact))[:4]} ...")
+        if not callable(getattr(el.evaluator, "set_friction_coefficients", None)):
+            raise RvtoolInputError(f"family {Family(family).value!r} has no friction coefficient to write; valid: "
+                                   "cycloid pins")
+        built = el.evaluator.built_friction() if callable(getattr(el.evaluator, "built_friction", None)) else None
+        full = np.array(built if built is not None else np.zeros(len(el.ids)), dtype=np.float64)
+        full[rows] = [float(mu.get(c, full[i])) for c, i in zip(contact, rows)]
+        el.set_friction_coefficients(full)
+
+    def set_prescribed_velocity(self, v):
+        """Velocity (global ODE2 vector [m/s, rad/s]) at which every contact element evaluates in the
+        following static solves, or None (zero velocity, the default). Quasi-static windows at input
+        speed prescribe ``body_vector(kinematic_state(a, omega).velocities)`` so that velocity
+        dependent laws (regularized friction, Eq. (friction)) see the steady sliding speed."""
+        if v is not None:
+            v = np.asarray(v, dtype=np.float64)
+            n = self.mbs.systemData.ODE2Size()
+            if v.shape != (n,):
+                raise RvtoolInputError(f"prescribed velocity must have shape ({n},) (the ODE2 vector); got {v.shape}")
+        for el in self.elements.values():
+            el.set_prescribed_velocity(v)
 
     def family_element(self, family):
         """The contact element that carries ``family`` (fault injection, per-step sums)."""

@@ -6,14 +6,17 @@ one :class:`~rvtool.output_pins.spec.OutputPinMechanism`. Every slice of
 every (pin, wheel) contact is one observed contact, with the columns of
 :mod:`warp_contacts.circle_pairs_ref` (normal force, zero slip speed,
 gap = -effective approach, contact point, direction of the force on the
-wheel, zero tangential force). The family has no committed history (no
-friction, no anchors); its history object is empty. Damping is not part of
-this family, so dQ/dv = 0.
+wheel, tangential force). Without friction the family has no committed
+history; its history object is empty. With anchor friction (plain mode,
+``mechanism.friction``) every slice row carries an anchor, committed once per
+accepted step (:class:`rvtool.contact.evaluator.ContactHistory`). Damping is
+not part of this family, so dQ/dv = 0.
 """
 import numpy as np
 
 from rvtool.contact.assembly import BlockAssembler
-from rvtool.contact.evaluator import Evaluation, all_finite, gap_offset_rows
+from rvtool.contact.evaluator import ContactHistory, Evaluation, all_finite, gap_offset_rows
+from warp_contacts import anchor_ref
 from warp_contacts import circle_pairs_ref as cref
 from warp_contacts import output_pins_ref as ref
 
@@ -36,10 +39,13 @@ class OutputPinEvaluator:
     the wheels (one per wheel midplane of the mechanism); n_bodies: number of
     bodies of the contact element. backend "warp" | "numpy", precision
     "float64" | "float32", device "cpu" | "cuda:N".
+    flange_bodies: plain mode only, optionally the body carrying the pin of every (pin, wheel)
+    row (pins outer, wheels inner) instead of ``flange``: the station bodies of elastic pins
+    (:mod:`rvtool.contact.pin_closure`).
     """
 
     def __init__(self, mechanism: OutputPinMechanism, *, name="output_pins", flange=0, wheels=None, n_bodies=None,
-                 backend="warp", precision="float64", device="cpu"):
+                 backend="warp", precision="float64", device="cpu", flange_bodies=None):
         if not isinstance(mechanism, OutputPinMechanism):
             raise RvtoolInputError(f"mechanism must be an OutputPinMechanism; got {type(mechanism).__name__}")
         check_choice("backend", backend, ("warp", "numpy"))
@@ -61,6 +67,13 @@ class OutputPinEvaluator:
         self.mode = mechanism.mode
         self.stations = mechanism.stations
         self.fparams, self.iparams = mechanism.packed(fl, wheels)
+        if flange_bodies is not None:
+            fb = np.asarray(flange_bodies, int)
+            if self.mode != PinMode.PLAIN or fb.shape != (len(self.iparams),) or fb.min() < 0 or fb.max() >= self.n_bodies:
+                raise RvtoolInputError(f"flange_bodies must give one body in [0, {self.n_bodies - 1}] per plain "
+                                       f"(pin, wheel) row ({len(self.iparams)}); got shape {fb.shape} in mode "
+                                       f"{self.mode.value!r}")
+            self.iparams[:, ref.J_FLANGE] = fb
         ns = mechanism.n_slices
         if self.mode == PinMode.SHARED:
             bodies = self.iparams[:, [ref.I_FLANGE, ref.I_WHEEL0, ref.I_WHEEL1]]
@@ -71,30 +84,62 @@ class OutputPinEvaluator:
             self.ids = tuple(f"{name}/pin{p}/wheel{w}/slice{s}" for p in range(mechanism.n_pins)
                              for w in range(mechanism.n_wheels) for s in range(ns))
         self.assembler = BlockAssembler(bodies, self.n_bodies)
-        self.history = NoHistory()
+        self.anchor = mechanism.anchors
+        self.anchor_params = mechanism.anchor_params() if self.anchor else None
+        self.history = ContactHistory(len(self.ids)) if self.anchor else NoHistory()
         self._pose = np.zeros((self.n_bodies + 1, 3))
         if backend == "warp":
             from warp_contacts.output_pins import OutputPinKernel
             self._kernel = OutputPinKernel(self.fparams, self.iparams, self.stations, self.n_bodies + 1,
-                                           self.mode.value, precision, device)
+                                           self.mode.value, precision, device, anchor_params=self.anchor_params)
 
-    def raw(self, pose):
-        """Per-row results (layout of :mod:`warp_contacts.output_pins_ref`) at poses (nb, 3)."""
+    def raw(self, pose, history=None):
+        """Per-row results (layout of :mod:`warp_contacts.output_pins_ref`) at poses (nb, 3); with
+        anchors also ``ft`` (N, ns) and the trial history ``trial`` (flags, anchor_A, anchor_B,
+        slip distance) from the committed ``history`` (default: the evaluator's own)."""
         self._pose[:-1] = pose
+        if self.anchor:
+            hist = history or self.history
+            if self.backend == "warp":
+                r = self._kernel.evaluate(self._pose, history=hist.as_tuple())
+            else:
+                r = ref.evaluate_plain_anchor(self._pose, self.fparams, self.iparams, self.stations,
+                                              self.anchor_params, *hist.as_tuple())
+            flag, a, b = (np.array(x) for x in r["trial"])
+            slip = hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
+            return dict(r, trial=(flag, a, b, slip))
         if self.backend == "warp":
             return self._kernel.evaluate(self._pose)
         if self.mode == PinMode.SHARED:
             return ref.evaluate_shared(self._pose, self.fparams, self.iparams, self.stations)
         return ref.evaluate_plain(self._pose, self.fparams, self.iparams, self.stations)
 
-    def _observations(self, slices):
+    def _observations(self, slices, ft=None):
         s = np.asarray(slices, np.float64).reshape(-1, ref.N_SLICE_COLS)
         obs = np.zeros((s.shape[0], cref.N_OBS))
         obs[:, cref.O_FN] = s[:, ref.S_FORCE]
         obs[:, cref.O_GAP] = -s[:, ref.S_APPROACH]
         obs[:, cref.O_PX:cref.O_PY + 1] = s[:, ref.S_PX:ref.S_PY + 1]
         obs[:, cref.O_NX:cref.O_NY + 1] = s[:, ref.S_NX:ref.S_NY + 1]
+        if ft is not None:
+            obs[:, cref.O_FT] = np.asarray(ft, np.float64).reshape(-1)
         return obs
+
+    def energy_law(self):
+        """The per-slice constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        slice coefficient k / n_s and exponent of the plain rows, anchor stiffness and friction code
+        (the shared mode's condensed law has no per-slice potential: refused by name)."""
+        from ..observe.energy import ContactEnergyLaw
+        if self.mode != PinMode.PLAIN:
+            raise RvtoolInputError(f"the energy account needs mode = 'plain' output pins; {self.name!r} is "
+                                   f"{self.mode.value!r}")
+        ns = len(self.stations)
+        n = len(self.ids)
+        k = np.repeat(self.fparams[:, ref.Q_K] / ns, ns)
+        p = np.repeat(self.fparams[:, ref.Q_EXP], ns)
+        kt = self.anchor_params[:, anchor_ref.ANCHOR_KT] if self.anchor else np.zeros(n)
+        model = np.full(n, cref.FRICTION_ANCHOR if self.anchor else cref.FRICTION_NONE, np.int32)
+        return ContactEnergyLaw(normal_stiffness=k, normal_exponent=p, tangential_stiffness=kt, friction_model=model)
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
@@ -109,16 +154,18 @@ class OutputPinEvaluator:
     def evaluate(self, pose, vel, history=None, check=True):
         """Assembled :class:`rvtool.contact.evaluator.Evaluation` at poses/velocities (nb, 3).
 
-        ``history`` is accepted for the protocol and unused (no history variables);
-        ``check=False`` skips the input checks (the contact element checks itself).
+        ``history``: the committed anchor history to read (default: the evaluator's own;
+        unused without anchors); ``check=False`` skips the input checks (the contact
+        element checks itself).
         """
         if check:
             self.check_state(pose, vel)
-        r = self.raw(pose)
+        r = self.raw(pose, history)
         Q = self.assembler.vector(np.asarray(r["Q"], np.float64))
         K = self.assembler.matrix(np.asarray(r["dQdq"], np.float64))
         finite = all_finite(Q, K)
-        return Evaluation(Q, K, np.zeros_like(K), self._observations(r["slices"]), (), finite)
+        return Evaluation(Q, K, np.zeros_like(K), self._observations(r["slices"], r.get("ft")),
+                          r["trial"] if self.anchor else (), finite)
 
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per observation row (positive opens the gap), written to u_off of
@@ -144,11 +191,16 @@ class OutputPinEvaluator:
             self._kernel.set_parameters(fp)
 
     def commit(self, pose, vel, evaluation=None):
-        """Observation array (N, 8) at the accepted state (nothing to commit).
+        """Commit the anchors (if any) at the accepted state and return its observation array (N, 8).
 
-        ``evaluation``: the element's cached evaluation at exactly this state, reused
-        instead of a second launch.
+        ``evaluation``: the element's cached evaluation at exactly this state from the
+        committed history, reused instead of a second launch.
         """
         if evaluation is not None:
+            if self.anchor:
+                self.history.assign(evaluation.trial_history)
             return np.array(evaluation.obs, np.float64)
-        return self._observations(self.raw(pose)["slices"])
+        r = self.raw(pose)
+        if self.anchor:
+            self.history.assign(r["trial"])
+        return self._observations(r["slices"], r.get("ft"))

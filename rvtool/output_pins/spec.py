@@ -17,12 +17,14 @@ from functools import cached_property
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import output_pins_ref as ref
 
+from ..contact.circle_set import FrictionLaw, FrictionModel
 from ..errors import RvtoolInputError
 from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
-from .calibration import PIN_EXPONENT, hertz_calibrated_coefficient
+from .calibration import PIN_EXPONENT, hertz_calibrated_coefficient, mindlin_tangential_ratio
 
 
 class PinMode(str, Enum):
@@ -101,10 +103,16 @@ class OutputPinMechanism:
     gap_offsets: u_off of Eq. (output_gap) per wheel [m] (e.g. thermal; positive opens).
     mode: :class:`PinMode`; compliance and sleeve: shared mode only.
     support: the pin as a beam (:class:`~rvtool.structure.pin_beam.PinSupport`; rigid by default).
-    An elastic pin runs the shared-pin closure of Eqs. (pin_compliance, pin_local_closure) with
-    its beam's station compliance as ``compliance`` (a design loader derives mode, compliance
-    and a sleeve fixed on the pin, clearance 0, from the support; see
-    :mod:`rvtool.assembly.spec`).
+    The mechanism's own contacts are those of rigid pins; an elastic pin is closed per pin by the
+    assembly (:class:`~rvtool.contact.pin_closure.ElasticPinClosure` with the beam's station
+    compliance, :func:`rvtool.assembly.cycloid.build`).
+    mu: friction coefficient [-] of the anchor (stick--slip) model per slice (Eq. (friction),
+    anchor model; plain mode; 0 = none); tangential_stiffness: k_t [N/m] of the whole pin--hole
+    contact, divided among the slices like the coefficient (0 = Mindlin's ratio 2(1 - nu)/(2 - nu)
+    of the law's secant stiffness at ``reference_force``); :attr:`friction` is the resulting
+    :class:`~rvtool.contact.circle_set.FrictionLaw`. anchor_release_distance: d_rel [m] of
+    :mod:`warp_contacts.anchor_ref`; None: 10 % of the pin radius (far above the stick stroke
+    mu F_n / k_t, far below a pin).
     """
     pin_circle_radius: float
     hole_circle_radius: float
@@ -125,6 +133,9 @@ class OutputPinMechanism:
     compliance: SharedPinCompliance | None = None
     sleeve: SleeveFit = field(default_factory=SleeveFit)
     support: PinSupport = field(default_factory=PinSupport)
+    mu: float = 0.0
+    tangential_stiffness: float = 0.0
+    anchor_release_distance: float | None = None
 
     def __post_init__(self):
         try:
@@ -167,9 +178,40 @@ class OutputPinMechanism:
             raise RvtoolInputError(f"sleeve = {self.sleeve!r} must be a SleeveFit")
         if not isinstance(self.support, PinSupport):
             raise RvtoolInputError(f"support = {self.support!r} must be a PinSupport")
-        if self.support.elastic and self.mode != PinMode.SHARED:
-            raise RvtoolInputError(f"support.model = {self.support.model.value!r} (an elastic pin) needs mode = 'shared' "
-                                   "with the beam's station compliance; valid: mode = 'shared' or support.model = 'rigid'")
+        check_nonnegative("mu", self.mu)
+        check_nonnegative("tangential_stiffness", self.tangential_stiffness)
+        if self.anchors and self.mode == PinMode.SHARED:
+            raise RvtoolInputError("mu > 0 (anchor friction) is available for mode = 'plain' only (the shared-pin "
+                                   "condensation carries no tangential history)")
+        if self.anchor_release_distance is not None:
+            check_positive("anchor_release_distance", self.anchor_release_distance)
+
+    @cached_property
+    def friction(self):
+        """The :class:`FrictionLaw` of the pins: none for mu = 0, else the anchor model with k_t =
+        ``tangential_stiffness`` or Mindlin's ratio of the law's secant stiffness F_ref /
+        delta(F_ref) at ``reference_force``."""
+        if self.mu == 0.0:
+            return FrictionLaw()
+        k, p, F = self.law_coefficient, self.exponent, self.reference_force
+        kt = self.tangential_stiffness or mindlin_tangential_ratio(self.poisson_ratio) * F / (F / k) ** (1.0 / p)
+        return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=self.mu, tangential_stiffness=kt)
+
+    @property
+    def anchors(self):
+        """True where the pins carry anchors (ANCHOR law with mu > 0)."""
+        return self.friction.model == FrictionModel.ANCHOR and self.friction.mu_kinetic > 0.0
+
+    def anchor_params(self):
+        """(n_pins n_wheels n_slices, anchor_ref.N_ANCHOR) anchor columns of the slice rows, in the
+        order of the plain rows' slice observations."""
+        n = self.n_pins * self.n_wheels * self.n_slices
+        ap = np.zeros((n, anchor_ref.N_ANCHOR))
+        ap[:, anchor_ref.ANCHOR_KT] = self.friction.tangential_stiffness / self.n_slices
+        ap[:, anchor_ref.ANCHOR_MU] = self.friction.mu_kinetic
+        ap[:, anchor_ref.ANCHOR_RELEASE] = (0.1 * self.pin_radius if self.anchor_release_distance is None
+                                            else self.anchor_release_distance)
+        return ap
 
     @property
     def n_wheels(self):

@@ -12,15 +12,24 @@ give its approach Jacobian G_r and its normal stiffness k_r = (dF_r . G_r)/(G_r 
 elastic tangent is K_f = sum_r k_r G_r G_r^T, and its share of the output compliance is its strain
 energy in the mode, u^T K_f u / C (the shares of springs in series are their compliance
 fractions; Euler's theorem for a network homogeneous in its stiffnesses makes the energy shares
-sum to one). A beam in series with a family's contacts (``series_compliance``) takes c F^2 of
-that energy. What the rows do not carry (the regularization springs and the geometric stiffness
-of loaded contacts whose normals turn, F_r d^2 delta_r/dq^2, and the beams' cross-station terms)
-is the entry ``geometric_and_regularization``, so that the shares sum to one exactly.
+sum to one). The beams of elastic pins (``series_compliance``) are closed per pin with their full
+station compliance (:mod:`rvtool.contact.pin_closure`): the rows observe the contact approach
+only, and the beams' energy is sum_p du_p^T K_b du_p over the station deflections du_p along the
+mode (K_b = C^-1; equal to f_p^T C f_p with f_p the increments of the station resultants,
+including the turn of the forces' directions). What the rows and beams do not carry (the regularization springs and the
+geometric stiffness of loaded contacts whose normals turn, F_r d^2 delta_r/dq^2) is the entry
+``geometric_and_regularization``, so that the shares sum to one exactly.
 The second view switches each family to rigid in turn: K' = K + (lambda - 1) K_f with
-lambda = 1e6, and its share is (C - C'_f)/C. For families in series along the torque path the
+lambda = 1e6, and its share is (C - C'_f)/C; a family's beams likewise, by condensing the pins
+with lambda K_b at the same state. For families in series along the torque path the
 two views agree; a family that also positions other bodies (the bearings carrying the wheels)
 loses, when rigid, the relaxation it permits elsewhere, and its rigid share differs from its
-energy share by that coupling; both are reported with their difference.
+energy share by that coupling; both are reported with their difference. The two views meet in the
+limit of a small switch: stiffening a path by (1 + epsilon) lowers the output compliance by
+epsilon times its energy share (dC/dlambda = -u^T K_f u, Rayleigh), reported as
+``sensitivity_shares``, which equal the energy shares up to the step's error. For the beams this is
+a check of the decomposition against the element's own condensed tangent; the finite switch then
+differs from it only by the load redistribution a rigid path causes.
 
 **Lost-motion budget.** Lost motion at +-``fraction`` of the rated torque (spring control,
 :func:`~rvtool.protocols.lost_motion.lost_motion`) with every clearance of
@@ -40,6 +49,11 @@ from .stiffness import free_stiffness
 
 RIGID_FACTOR = 1e6
 """lambda of the switch-to-rigid view (1e6 times a family's stiffness leaves 1e-6 of its compliance)."""
+
+SENSITIVITY_STEP = 1e-4
+"""epsilon of the infinitesimal switch: -(dC/dlambda)/C at lambda = 1 by central differences over
+1 +- epsilon (truncation O(epsilon^2) = 1e-8; round-off of the two solves, ~1e-9 of C for RD-40's
+tangent, over 2 epsilon: 1e-5)."""
 
 
 def row_jacobians(model, q, free, step=1e-9):
@@ -72,28 +86,45 @@ def stiffness_budget(model, q):
     u = np.linalg.solve(K, e)
     C = float(u[i_out])
     rows = row_jacobians(model, q, free)
-    shares, rigid = {}, {}
+    shares, rigid, sens = {}, {}, {}
     for fam, (G, dF, F) in rows.items():
         gg = np.einsum("rj,rj->r", G, G)
         act = (gg > 0) & (F > 0)
         k = np.where(act, np.einsum("rj,rj->r", dF, G) / np.where(act, gg, 1.0), 0.0)
         dd = G @ u                                           # approach increments in the mode
-        dF_mode = k * dd
         energy = float(np.sum(k * dd * dd))
         Kf = (G * k[:, None]).T @ G
         Cr = float(np.linalg.solve(K + (RIGID_FACTOR - 1.0) * Kf, e)[i_out])
         rigid[fam] = (C - Cr) / C
+        cp, cm = (float(np.linalg.solve(K + s * SENSITIVITY_STEP * Kf, e)[i_out]) for s in (1.0, -1.0))
+        sens[fam] = (cm - cp) / (2 * SENSITIVITY_STEP * C)
         beam = model.series_compliance(fam)
         if beam is not None:
-            b_energy = beam.energy(model, q, dF_mode)
-            shares[beam.path] = b_energy / C
-            if beam.inside_rows:
-                energy -= b_energy
+            dq = np.zeros(len(q))
+            dq[free] = u
+            shares[beam.path] = beam.energy(q, dq) / C
+            rigid[beam.path] = (C - _stiffened_compliance(model, q, K, free, e, i_out, beam, RIGID_FACTOR)) / C
+            cp, cm = (_stiffened_compliance(model, q, K, free, e, i_out, beam, 1.0 + s * SENSITIVITY_STEP)
+                      for s in (1.0, -1.0))
+            sens[beam.path] = (cm - cp) / (2 * SENSITIVITY_STEP * C)
         shares[fam] = energy / C
     shares["geometric_and_regularization"] = 1.0 - sum(shares.values())
-    return {"shares": shares, "rigid_shares": rigid, "K_t_Nm_per_arcmin": RAD_PER_ARCMIN / C,
-            "residual": "geometric stiffness of loaded contacts, regularization springs and beam "
-                        "cross-station terms (what the rows' normal stiffness does not carry)"}
+    return {"shares": shares, "rigid_shares": rigid, "sensitivity_shares": sens, "K_t_Nm_per_arcmin": RAD_PER_ARCMIN / C,
+            "residual": "geometric stiffness of loaded contacts and regularization springs (what the "
+                        "rows' normal stiffness and the beams do not carry)"}
+
+
+def _stiffened_compliance(model, q, K, free, e, i_out, beam, factor):
+    """Output compliance with the beams of ``beam`` stiffened by ``factor`` at state q: the
+    element's tangent replaced by its condensation with factor x K_b (module docstring)."""
+    ltg, dQ_rigid = beam.stiffened(q, factor)
+    _, dQ = beam.stiffened(q, 1.0)
+    pos = {g: k for k, g in enumerate(free)}
+    loc = [k for k, g in enumerate(ltg) if g in pos]
+    glob = [pos[ltg[k]] for k in loc]
+    Kr = K.copy()
+    Kr[np.ix_(glob, glob)] -= (dQ_rigid - dQ)[np.ix_(loc, loc)]   # K^s = -dQ/dq
+    return float(np.linalg.solve(Kr, e)[i_out])
 
 
 def lost_motion_budget(design, *, fraction=0.03, bearing_model="rolling", input_angle=0.0):

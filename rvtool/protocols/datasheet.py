@@ -10,6 +10,8 @@ import tomllib
 from dataclasses import dataclass
 
 from ..assembly.spec import build_section
+from ..errors import RvtoolInputError
+from ..structure.pin_beam import PinSupport
 from ..validation import check_positive
 
 
@@ -21,9 +23,14 @@ class Allowables:
     max_lost_motion: largest accepted lost motion at +-3 % rated torque [arcmin].
     max_hertz_pins, max_hertz_output_pins, max_hertz_needles: largest accepted Hertz peak
         pressure per family [Pa].
-    max_pin_bending_stress: largest accepted bending stress of an elastic pin [Pa].
+    max_pin_bending_stress: largest accepted bending stress sigma = M/W of a ring pin or an
+        output pin at the rated state [Pa].
     max_resolution_error: largest accepted relative error of the rated peak pin force at the
         default profile resolution against the refined one [-] (the project's 0.1 % statement).
+    assumed_ring_pin_support, assumed_output_pin_support: the support
+        (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-tables ``[allowables.assumed_ring_pin_support]``,
+        ...) the review assumes for the pin bending stress where the design's pins are rigid
+        (a declared support of the design takes precedence); None: the stress is not computed.
     """
     min_torsional_stiffness: float
     max_lost_motion: float
@@ -32,11 +39,21 @@ class Allowables:
     max_hertz_needles: float
     max_pin_bending_stress: float
     max_resolution_error: float = 1e-3
+    assumed_ring_pin_support: PinSupport | None = None
+    assumed_output_pin_support: PinSupport | None = None
 
     def __post_init__(self):
         for name in ("min_torsional_stiffness", "max_lost_motion", "max_hertz_pins", "max_hertz_output_pins",
                      "max_hertz_needles", "max_pin_bending_stress", "max_resolution_error"):
             check_positive(name, getattr(self, name))
+        for name in ("assumed_ring_pin_support", "assumed_output_pin_support"):
+            v = getattr(self, name)
+            if isinstance(v, dict):
+                v = build_section(PinSupport, name, v)
+                object.__setattr__(self, name, v)
+            if v is not None and (not isinstance(v, PinSupport) or not v.elastic):
+                raise RvtoolInputError(f"{name} = {v!r} must be a support table with model 'cantilever', "
+                                       "'simply_supported' or 'clamped_clamped'")
 
 
 def load_allowables(path):
@@ -61,8 +78,9 @@ def entry(value, unit, *, allowable=None, kind=None, reason=""):
 def datasheet(*, rated_torque, ratio, branch_slopes, secant, lost_motion_arcmin, hertz_peaks, pin_bending_stress,
               bearing_loads, resolution_error, allowables: Allowables):
     """The datasheet dict. hertz_peaks: {"pins", "output_pins", "needles"} -> Pa; pin_bending_stress:
-    Pa or None (rigid pins); bearing_loads: family -> largest per-contact load [N];
-    resolution_error: relative error of the rated peak pin force at the default resolution."""
+    {"pins", "output_pins"} -> the model's ``pin_bending`` dict or None (rigid pins, no assumed
+    support); bearing_loads: family -> largest per-contact load [N]; resolution_error: relative
+    error of the rated peak pin force at the default resolution."""
     a = allowables
     out = {"rated_torque": entry(rated_torque, "N m"), "ratio": entry(ratio, "-", reason="from the topology")}
     for b, k in branch_slopes.items():
@@ -73,11 +91,26 @@ def datasheet(*, rated_torque, ratio, branch_slopes, secant, lost_motion_arcmin,
     for fam, allow in (("pins", a.max_hertz_pins), ("output_pins", a.max_hertz_output_pins),
                        ("needles", a.max_hertz_needles)):
         out[f"hertz_{fam}"] = entry(hertz_peaks.get(fam), "Pa", allowable=allow, kind="max")
-    out["pin_bending_stress"] = (entry(pin_bending_stress, "Pa", allowable=a.max_pin_bending_stress, kind="max")
-                                 if pin_bending_stress is not None else
+    governing = None
+    for fam, label in (("pins", "ring pins"), ("output_pins", "output pins")):
+        b = (pin_bending_stress or {}).get(fam)
+        if b is None:
+            out[f"pin_bending_stress_{fam}"] = entry(None, "Pa", allowable=a.max_pin_bending_stress,
+                                                     reason=f"not computed: {label} rigid and no support assumed")
+            continue
+        sup = b["support"]
+        e = entry(b["sigma_max_Pa"], "Pa", allowable=a.max_pin_bending_stress, kind="max")
+        e["reason"] = (f"{label}: sigma = M/W {b['sigma_max_Pa'] / 1e6:.4g} MPa "
+                       f"{'<=' if e['meets_allowable'] else '>'} {a.max_pin_bending_stress / 1e6:.4g} MPa at pin "
+                       f"{b['pin']}, z = {1e3 * (b['z_m'] or 0.0):.3g} mm, {sup['model']} at {sup['ends']} m "
+                       f"({b['support_source']}); shear stress {b['tau_max_Pa'] / 1e6:.3g} MPa")
+        e["shear_stress_Pa"] = b["tau_max_Pa"]
+        out[f"pin_bending_stress_{fam}"] = e
+        if governing is None or b["sigma_max_Pa"] > out[governing]["value"]:
+            governing = f"pin_bending_stress_{fam}"
+    out["pin_bending_stress"] = (dict(out[governing]) if governing is not None else
                                  entry(None, "Pa", allowable=a.max_pin_bending_stress,
-                                       reason="not computed: rigid pins have no beam; the beams' moments of "
-                                              "elastic pins are not evaluated yet"))
+                                       reason="not computed: rigid pins and no support assumed"))
     for fam, f in bearing_loads.items():
         out[f"load_{fam}"] = entry(f, "N", reason="largest per-contact load at the rated state")
     out["L10"] = entry(None, "h", reason="not computed (issue 18: bearing life)")

@@ -171,13 +171,16 @@ def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated,
     sb = stiffness_budget(model, q_rated)
     energy = sb["shares"]
     stiffness = {"shares": energy, "rigid_shares": sb["rigid_shares"],
+                 "sensitivity_shares": sb["sensitivity_shares"],
                  "rigid_minus_energy": {f: sb["rigid_shares"][f] - energy[f] for f in sb["rigid_shares"]},
                  "rigid_shares_sum": float(sum(sb["rigid_shares"].values())),
                  "K_t_Nm_per_arcmin": sb["K_t_Nm_per_arcmin"], "residual_entry": sb["residual"],
                  "difference": "energy shares sum to one (springs in series share the compliance by their "
-                               "compliance); the switch-to-rigid shares add the internal relaxation a family "
-                               "permits elsewhere (the wheels float on bearings, output pins and ring pins at "
-                               "once, in parallel), so they exceed the energy shares and sum above one"}
+                               "compliance) and equal the sensitivity shares (the compliance lost by stiffening "
+                               "a path by 1 + 1e-4, per 1e-4: the infinitesimal switch to rigid); the finite "
+                               "switch-to-rigid shares add the load redistribution a rigid path causes (the "
+                               "wheels float on bearings, output pins and ring pins at once, in parallel), so "
+                               "they exceed the energy shares and sum above one"}
     lm = lost_motion_budget(design, bearing_model=bearing_model)
     lm_out = dict(lm["budget_arcmin"])
     lm_out["estimates"] = lm["estimates_arcmin"]
@@ -201,7 +204,10 @@ def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated,
     sheet = datasheet(rated_torque=design.rated_torque, ratio=float(model.ratio),
                       branch_slopes={b: f["K_Nm_per_arcmin"] for b, f in fits.items()}, secant=secant,
                       lost_motion_arcmin=lm["total_arcmin"], hertz_peaks=model.hertz_peaks(q_rated),
-                      pin_bending_stress=None,
+                      pin_bending_stress={
+                          "pins": model.pin_bending(q_rated, "pins", allowables.assumed_ring_pin_support),
+                          "output_pins": model.pin_bending(q_rated, "output_pins",
+                                                           allowables.assumed_output_pin_support)},
                       bearing_loads={f: v for f, v in peaks_rated.items() if f not in ("pins", "output_pins")},
                       resolution_error=res_err, allowables=allowables)
     sheet["resolution_error"]["reference"] = {"default": model.resolution_settings(),

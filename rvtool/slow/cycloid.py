@@ -33,7 +33,11 @@ class CycloidSlowInputs:
     mu_output_pins: declared sliding-loss coefficients [-] (observation mode and heat
     sources); lubricant (Roelands: eta_ref [Pa s] at T_ref [K], S0, Z; an ISO VG 68-like
     gear oil); friction law (mu_b, mu_f, lambda_t, n); roughness Rq [m] of both surfaces;
-    boundary wear coefficient k_b [m^2/N]; wear nominal areas [m^2] per family.
+    boundary wear coefficient k_b [m^2/N]; wear nominal areas [m^2] per family; contact
+    fatigue: Hertz-pressure S--N curve N = N_ref (p_ref / p0)^k of every line contact (p_ref
+    [Pa] at N_ref cycles: the contact endurance limit of case-hardened steel, ISO 6336-5 MQ
+    sigma_H,lim = 1500 MPa at 5e7 cycles; k = 8: Lundberg--Palmgren's line-contact element
+    exponent, life ~ Q^-4), i.e. a force--life exponent m = k / 2 = 4.
     """
     specific_heat: float = 460.0
     housing_film: float = 20.0
@@ -58,6 +62,9 @@ class CycloidSlowInputs:
     wear_boundary_coefficient: float = 2.5e-19
     wear_area_pins: float = 2.5e-5
     wear_area_output_pins: float = 3.0e-5
+    fatigue_reference_pressure: float = 1.5e9
+    fatigue_reference_cycles: float = 5e7
+    fatigue_pressure_exponent: float = 8.0
 
 
 def _housing_geometry(design):
@@ -215,5 +222,89 @@ def family_of(contact_id: str) -> str:
     return contact_id.split("/", 1)[0]
 
 
-__all__ = ["CycloidSlowInputs", "thermal_network", "thermal_coupling", "gap_channels", "lubrication", "wear_model",
+def _e_star(design):
+    m = design.material
+    return m.youngs_modulus / (2 * (1 - m.poisson_ratio ** 2))
+
+
+def contact_line_geometry(design) -> dict:
+    """Family -> (reduced radius R [m], loaded length b [m]) of the line contacts: ring pin against
+    the flank (R = r_p, the flank's curvature radius at the loaded contacts being an order of
+    magnitude above r_p; declared as in :func:`lubrication`), output pin in its hole (conformal),
+    needle on the journal (the inner, more conforming-less race)."""
+    d, eb, op = design, design.eccentric_bearing, design.output_pins
+    Rr, Ri = 0.5 * eb.roller_diameter, eb.inner_radius
+    return {Family.PINS.value: (d.pins.pin_radius, d.wheels.width),
+            Family.OUTPUT_PINS.value: (op.pin_radius * op.hole_radius / (op.hole_radius - op.pin_radius),
+                                       d.wheels.width),
+            Family.ECCENTRIC_BEARINGS.value: (Rr * Ri / (Rr + Ri), eb.roller_length)}
+
+
+def life_laws(design, inputs: CycloidSlowInputs, *, per_roller: bool, radius: dict | None = None) -> dict:
+    """Family -> :class:`~rvtool.slow.fatigue.ForceLifeLaw` of Eq. (obs_damage): the declared
+    Hertz-pressure S--N curve in force, F_ref = pi R b p_ref^2 / E* of the family's line contact
+    (``per_roller``: the eccentric bearing's contacts are single rollers (``bearing_model="rolling"``);
+    otherwise the lumped bearing force, whose most loaded roller carries 4.08 F / Z). radius: family
+    -> reduced radius R [m] replacing :func:`contact_line_geometry`'s (e.g. the ring pin's local
+    radius at its peak load from :func:`rvtool.pressure.state.pin_contact`)."""
+    from .fatigue import ForceLifeLaw, hertz_line_reference_force
+    E = _e_star(design)
+    m = 0.5 * inputs.fatigue_pressure_exponent
+    out = {}
+    geometry = contact_line_geometry(design)
+    for fam, R in dict(radius or {}).items():
+        if fam not in geometry:
+            raise RvtoolInputError(f"radius names family {fam!r}; valid: {sorted(geometry)}")
+        geometry[fam] = (R, geometry[fam][1])
+    for fam, (R, b) in geometry.items():
+        F_ref = hertz_line_reference_force(reference_pressure=inputs.fatigue_reference_pressure, radius=R,
+                                           length=b, reduced_modulus=E)
+        if fam == Family.ECCENTRIC_BEARINGS.value and not per_roller:
+            F_ref *= design.eccentric_bearing.n_rollers / 4.08
+        out[fam] = ForceLifeLaw(reference_life=inputs.fatigue_reference_cycles, reference_force=F_ref, exponent=m)
+    return out
+
+
+def cycle_rates(design, omega: float) -> dict:
+    """Family -> stress-cycle rate nu_c [1/s] of one contact (declared): a ring pin and an output
+    pin are loaded once per input revolution (the eccentricity direction turns with the input),
+    a needle passes a point of the journal's load zone at the cage speed relative to the journal,
+    (omega_rel / 2 pi)(1 + D / D_pw) / 2, omega_rel = omega z_p / (z_p - 1)."""
+    eb = design.eccentric_bearing
+    f_in = omega / (2 * math.pi)
+    z = design.pins.n_pins
+    f_rel = f_in * z / (z - 1)
+    dpw = 2 * eb.inner_radius + eb.roller_diameter
+    return {Family.PINS.value: f_in, Family.OUTPUT_PINS.value: f_in,
+            Family.ECCENTRIC_BEARINGS.value: 0.5 * f_rel * (1 + eb.roller_diameter / dpw)}
+
+
+def rating_geometries(design) -> dict:
+    """Bearing name (``bearing_model="rolling"`` mountings) -> (:class:`~rvtool.slow.fatigue.RatingGeometry`,
+    speed factor: relative ring speed / input speed)."""
+    from .fatigue import RatingGeometry
+    d, eb = design, design.eccentric_bearing
+    z = d.pins.n_pins
+    out = {}
+    needle = RatingGeometry(element="roller", n_elements=eb.n_rollers, element_diameter=eb.roller_diameter,
+                            pitch_diameter=2 * eb.inner_radius + eb.roller_diameter, roller_length=eb.roller_length)
+    for k in range(d.n_wheels):
+        out[f"eccentric_bearing{k}"] = (needle, z / (z - 1))
+    from ..bearings.reducer import ball_rows
+    mb, ib = d.main_bearing, d.input_bearing
+    if mb is not None:           # None: kind = "locked"
+        rows = ball_rows(mb)
+        r0 = rows[0]
+        out["main_bearing"] = (RatingGeometry(element="ball", n_elements=r0.n_balls, element_diameter=r0.ball_diameter,
+                                              pitch_diameter=r0.pitch_diameter, n_rows=len(rows),
+                                              contact_angle=r0.contact_angle), 1.0 / (z - 1))
+    if ib is not None:
+        g = RatingGeometry(element="ball", n_elements=ib.n_balls, element_diameter=ib.ball_diameter,
+                           pitch_diameter=ib.pitch_diameter, contact_angle=ib.contact_angle)
+        for k in range(2):
+            out[f"input_bearing{k}"] = (g, 1.0)
+    return out
+
+
+__all__ = ["CycloidSlowInputs", "life_laws", "cycle_rates", "rating_geometries", "contact_line_geometry", "thermal_network", "thermal_coupling", "gap_channels", "lubrication", "wear_model",
            "friction_law", "friction", "heat_capacities", "HEAT_PARTITION", "NODES", "T_AMBIENT", "family_of"]

@@ -157,13 +157,15 @@ class SpectrumDamage:
     repeats: float
 
 
-def miner_damage(stress_history, curve: SNCurve, *, repeats: float = 1.0) -> SpectrumDamage:
+def miner_damage(stress_history, curve: SNCurve, *, repeats: float = 1.0, periodic: bool = False) -> SpectrumDamage:
     """Rainflow-count ``stress_history`` [Pa] (ASTM E1049-85, ``rainflow`` package) and sum
     ``repeats`` (> 0) applications of it with Miner's rule on ``curve``.
 
-    The history is counted once: a repeated block's closing half cycles are
-    counted as halves in every repetition (conservative by at most one cycle
-    of the largest range per block).
+    periodic=False: the history is counted once; a repeated block's closing half cycles are
+    counted as halves in every repetition (conservative by at most one cycle of the largest
+    range per block). periodic=True: the history is one period of a repeated block (e.g. one
+    input revolution); it is rotated to start at its minimum and closed with it, so every
+    reversal closes a full cycle (the steady-state count of the repeated block).
     """
     import rainflow
     s = np.asarray(stress_history, dtype=np.float64)
@@ -172,6 +174,9 @@ def miner_damage(stress_history, curve: SNCurve, *, repeats: float = 1.0) -> Spe
     check_finite("stress_history", s)
     check_finite("repeats", repeats)
     check_positive("repeats", repeats)
+    if periodic:
+        i = int(np.argmin(s))
+        s = np.concatenate([s[i:], s[:i], s[i:i + 1]])
     cycles = [(rng, mean, count) for rng, mean, count, _, _ in rainflow.extract_cycles(s) if rng > 0.0]
     if not cycles:
         return SpectrumDamage(damage=0.0, amplitude=np.zeros(0), mean=np.zeros(0), count=np.zeros(0),
@@ -306,3 +311,76 @@ def rating_life(geometry: RatingGeometry, equivalent_load: float, speed_rad_s: f
     rev_per_s = speed_rad_s / (2 * math.pi)
     return RatingLife(dynamic_load_rating=C, equivalent_load=float(equivalent_load), exponent=p, L10_million_rev=L10,
                       L10_hours=L10 * 1e6 / (rev_per_s * SECONDS_PER_HOUR))
+
+
+# -- contact-stress reference of the force--life and stress-spectrum paths ------------------
+def hertz_line_reference_force(*, reference_pressure: float, radius: float, length: float,
+                               reduced_modulus: float) -> float:
+    """Force [N] at which a line contact of reduced radius R [m] and length b [m] reaches the Hertz
+    peak pressure p_ref [Pa]: p0^2 = F E* / (pi R b), so F_ref = pi R b p_ref^2 / E*, with E* the
+    plane-strain two-body modulus [Pa] (E / (2 (1 - nu^2)) for equal steels; the convention of
+    :mod:`rvtool.pressure`). A Hertz-pressure S--N curve N = N_ref (p_ref / p0)^k is then the
+    force--life law N = N_ref (F_ref / F)^(k/2) of Eq. (obs_damage)."""
+    for name, v in (("reference_pressure", reference_pressure), ("radius", radius), ("length", length),
+                    ("reduced_modulus", reduced_modulus)):
+        check_finite(name, v)
+        check_positive(name, v)
+    return math.pi * radius * length * reference_pressure ** 2 / reduced_modulus
+
+
+def hertz_line_tresca_ratio(nu: float = 0.3) -> float:
+    """max tau_max / p0 [-] of a frictionless Hertz line contact (plane strain, Poisson ratio nu),
+    from the closed-form field :func:`rvtool.pressure.sliding_hertz_stress` on the load axis
+    (about 0.300 at z = 0.786 a; Johnson 1985, Sec. 4.2)."""
+    from ..pressure import sliding_hertz_stress
+    z = np.linspace(0.70, 0.87, 3401)       # brackets the depth of the maximum, resolution 5e-5 a
+    return float(np.max(sliding_hertz_stress([0.0], z, 1.0, 1.0, 0.0, nu)["tau_max"]))
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class StressHistory:
+    """Peak subsurface Tresca stress of one contact over accepted states.
+
+    tau_max [Pa] per state (0 where the contact carries no load); force [N]; hertz_tau [Pa]:
+    the closed-form Hertz value of the same force and geometry (reference); depth [m] of the
+    peak; panels: the panel count of each solve.
+    """
+    tau_max: np.ndarray
+    force: np.ndarray
+    hertz_tau: np.ndarray
+    depth: np.ndarray
+    panels: int
+
+
+def subsurface_stress_history(local_contacts, *, panels: int = 201, depths: int = 61, domain_factor: float = 3.0,
+                              nu: float = 0.3) -> StressHistory:
+    """Peak subsurface Tresca stress tau_max [Pa] of one contact at each accepted state.
+
+    local_contacts: one :class:`rvtool.pressure.state.LocalContact` per state, or None where the
+    contact carries no load (tau = 0). Each loaded state is solved by the panel method of
+    :mod:`rvtool.pressure` (``panels`` uniform panels over +-domain_factor Hertz half-widths) and
+    its plane-strain stress field (:func:`rvtool.pressure.subsurface_stress`, Coulomb traction of
+    the contact's own sliding mu) evaluated on ``depths`` depths in [0, 2 a]; the history is the
+    field's maximum per state (the peak follows the contact zone over the surface: conservative
+    for a material point the zone moves across).
+    """
+    from ..pressure import subsurface_stress
+    from ..pressure.study import domain_halfwidth, solve_contact
+    if isinstance(panels, bool) or not isinstance(panels, (int, np.integer)) or panels < 11:
+        raise RvtoolInputError(f"panels = {panels!r} is outside the valid range: integers in [11, inf)")
+    if isinstance(depths, bool) or not isinstance(depths, (int, np.integer)) or depths < 5:
+        raise RvtoolInputError(f"depths = {depths!r} is outside the valid range: integers in [5, inf)")
+    ratio = hertz_line_tresca_ratio(nu)
+    n = len(local_contacts)
+    tau, F, ref, depth = (np.zeros(n) for _ in range(4))
+    for k, c in enumerate(local_contacts):
+        if c is None:
+            continue
+        half = domain_halfwidth(c, domain_factor)
+        sol = solve_contact(c, panels, half, 0.0)
+        z = np.linspace(0.0, 2.0 * c.hertz_halfwidth, depths)
+        field = subsurface_stress(sol.x, sol.pressure, z, nu=nu, mu=c.sliding_mu)["tau_max"]
+        i = np.unravel_index(int(np.argmax(field)), field.shape)
+        tau[k], depth[k], F[k] = field[i], z[i[0]], c.force
+        ref[k] = ratio * c.hertz_peak
+    return StressHistory(tau_max=tau, force=F, hertz_tau=ref, depth=depth, panels=int(panels))

@@ -28,14 +28,26 @@ contact over all channels is written through
 ``model.set_gap_offsets(family, {contact: offset})``, which the next contact
 evaluation uses (cycloid pins: the deviation sum e of Eq. (gap); lumped
 bearings: the enclosing radius; output pins: u_off of Eq. (output_gap)).
-Friction written by coupled lubrication is kept for the heat sources and the
-dissipation figure; the quasi-static windows have zero sliding velocity in the
-contact law, so mu does not enter their equilibria (declared).
+Friction. A static solve evaluates the contacts at zero velocity, so the
+regularized friction law of Eq. (friction) gives no tangential force. With
+``WindowProtocol.sliding_friction`` on, every equilibrium of a window is solved
+with the contacts evaluated at the kinematic velocities of its input angle at
+speed omega (``model.set_prescribed_velocity``): the quasi-static state of the
+steady motion, in which each sliding contact carries mu F_n along its sliding
+direction (the elastic velocities, a few um per mesh period times omega, are
+neglected as in the sliding speeds). mu per contact written by coupled
+lubrication (``apply_offsets(offsets, friction)``) then enters the contact law
+of the families that have one (cycloid pins built with ``pin_contact.mu`` > 0;
+the output-pin law is frictionless and bearings roll, so their mu stays a heat
+source only). With it off (default) the windows are unchanged and mu is kept
+for the heat sources and the dissipation figure only.
 """
 import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from warp_contacts.circle_pairs_ref import O_FT, O_VT
 
 from ..errors import RvtoolInputError, SolverFailure
 from ..model import Family
@@ -60,7 +72,8 @@ class WindowProtocol:
     starts [rad] (the reference phase of the matched protocols). window_angle: input
     angle of one window [rad] (> 0; None: the model's mesh period). steps: accepted
     quasi-static steps per window (>= 2). m: exponent of I_m [-] (> 0), the consuming
-    life law's.
+    life law's. sliding_friction: evaluate the contacts at the kinematic velocities of the
+    steady motion (friction acts in the equilibria; see the module docstring).
     """
     torque: float
     input_speed: float
@@ -68,6 +81,7 @@ class WindowProtocol:
     window_angle: float | None = None
     steps: int = 8
     m: float = 3.0
+    sliding_friction: bool = False
 
     def __post_init__(self):
         for name in ("torque", "input_speed", "m"):
@@ -79,6 +93,8 @@ class WindowProtocol:
             check_positive("window_angle", self.window_angle)
         if isinstance(self.steps, bool) or not isinstance(self.steps, int) or self.steps < 2:
             raise RvtoolInputError(f"steps = {self.steps!r} is outside the valid range: integers in [2, inf)")
+        if not isinstance(self.sliding_friction, bool):
+            raise RvtoolInputError(f"sliding_friction = {self.sliding_friction!r} must be True or False")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -166,6 +182,10 @@ class ReducerWindows:
         self.friction = None
         self.windows_run = 0
         self.last_q = None
+        self.last_te = None
+        self.last_friction_power = None
+        self.last_states = ()     # (input angle [rad], accepted duration [s], q) of the last window's steps
+        self.friction_written = set()
 
     # -- contact identities ------------------------------------------------------------
     def contact_ids(self, family) -> tuple:
@@ -229,26 +249,65 @@ class ReducerWindows:
         model.set_output_torque(-np.sign(model.ratio) * p.torque)
         observer = ExposureObserver(TimeWindows(self.window_angle / omega, m=p.m))
         da = self.window_angle / p.steps
-        # every window starts loaded from a cold start at a fraction of the torque: the offsets written
-        # since the last window move the equilibrium too far for a warm start (measured after wear updates)
-        self.solver = solver = loaded_start(model, p.torque, a0)
-        q_prev = solver.q.copy()
-        a_prev = solver.last_angle
-        # steps + 1 steps: the last one enters the next window, which closes this one
-        for j in range(1, p.steps + 2):
-            q = solver.solve(a0 + j * da, a_prev).copy()
-            a = solver.last_angle       # a kink shift of <= 1e-5 rad is kept in the clock, not hidden
-            snap = self._snapshot(q, a)
-            observer.on_accepted(AcceptedStep(index=j - 1, t_start=(a_prev - a0) / omega, dt=(a - a_prev) / omega,
-                                              q_start=q_prev, q_end=q, snapshots={SNAPSHOT: snap}))
-            q_prev, a_prev = q, a
+        i_out = model.output_index
+        te, work, states = [], 0.0, []
+        try:
+            self._prescribe(a0)
+            # every window starts loaded from a cold start at a fraction of the torque: the offsets written
+            # since the last window move the equilibrium too far for a warm start (measured after wear updates)
+            self.solver = solver = loaded_start(model, p.torque, a0)
+            q_prev = solver.q.copy()
+            a_prev = solver.last_angle
+            # steps + 1 steps: the last one enters the next window, which closes this one
+            for j in range(1, p.steps + 2):
+                self._prescribe(a0 + j * da)
+                q = solver.solve(a0 + j * da, a_prev).copy()
+                a = solver.last_angle       # a kink shift of <= 1e-5 rad is kept in the clock, not hidden
+                snap = self._snapshot(q, a)
+                observer.on_accepted(AcceptedStep(index=j - 1, t_start=(a_prev - a0) / omega, dt=(a - a_prev) / omega,
+                                                  q_start=q_prev, q_end=q, snapshots={SNAPSHOT: snap}))
+                if j <= p.steps:
+                    te.append(q[i_out] - model.kinematic_output(a))
+                    states.append((a, (a - a_prev) / omega, q))
+                    work += self._friction_power(q) * (a - a_prev) / omega
+                q_prev, a_prev = q, a
+        finally:
+            if p.sliding_friction:
+                model.set_prescribed_velocity(None)
         self.last_q = q_prev
+        self.last_te = np.array(te)
+        self.last_states = tuple(states)
+        self.last_friction_power = work * omega / (p.steps * da)
         done = observer.completed()
         if not done:
             raise RvtoolInputError(f"the window from input angle {a0} rad did not complete (steps = {p.steps}); "
                                    "valid: a solver that advances the input angle monotonically")
         self.windows_run += 1
         return done[0]
+
+    def _prescribe(self, angle):
+        """The kinematic velocities at ``angle`` as the contacts' evaluation velocity (sliding_friction)."""
+        if self.protocol.sliding_friction:
+            kin = self.model.kinematic_state(angle, self.protocol.input_speed)
+            self.model.set_prescribed_velocity(self.model.body_vector(kin.velocities))
+
+    def _friction_power(self, q) -> float:
+        """sum |F_t v_t| [W] of the contact law's friction over the families that have one, at state q
+        with the velocities the contacts are evaluated at (zero without sliding_friction)."""
+        P = 0.0
+        for fam in self.friction_families():
+            name, rows = self.model.families[fam]
+            obs = self.model.elements[name].evaluation_at(q).obs[rows]
+            P += float(np.sum(np.abs(obs[:, O_FT] * obs[:, O_VT])))
+        return P
+
+    def te_pp(self) -> float:
+        """Peak-to-peak [rad] of the last window's transmission error over its steps (:attr:`last_te`:
+        output coordinate minus its kinematic value, Eq. (obs_te) with the kinematic reference, so its
+        mean is the loaded wind-up)."""
+        if self.last_te is None:
+            raise RvtoolInputError("no window has been run yet")
+        return float(np.ptp(self.last_te))
 
     # -- MechanicalWindows -----------------------------------------------------------------
     def run_window(self, state) -> WindowExposure:
@@ -269,6 +328,35 @@ class ReducerWindows:
             self.model.set_gap_offsets(fam, {i[len(prefix):]: offsets.offset(i) for i in ids})
         self.offsets = offsets
         self.friction = None if friction is None else dict(friction)
+        if self.protocol.sliding_friction:
+            self._write_friction(self.friction)
+
+    def friction_families(self) -> tuple:
+        """Families whose contact law takes a friction coefficient (cycloid pins built with friction)."""
+        out = []
+        for fam in self.families:
+            ev = self.model.family_element(fam).evaluator
+            rows = getattr(ev, "friction_rows", None)
+            if rows is not None and np.any(rows):
+                out.append(fam)
+        return tuple(out)
+
+    def _write_friction(self, friction):
+        """mu per contact into the contact law of :meth:`friction_families` (None: the built mu)."""
+        fams = self.friction_families()
+        if friction is not None and not fams:
+            raise RvtoolInputError("coupled friction with sliding_friction=True needs a family whose contact law has "
+                                   "friction; valid: a cycloid design with pin_contact.mu in (0, inf)")
+        for fam in fams:
+            if friction is None:
+                if fam in self.friction_written:
+                    self.model.set_friction(fam, None)
+                    self.friction_written.discard(fam)
+                continue
+            prefix = fam.value + "/"
+            table = {i[len(prefix):]: float(friction[i]) for i in self.contact_ids(fam) if i in friction}
+            self.model.set_friction(fam, table)
+            self.friction_written.add(fam)
 
     def offsets_by_channel(self) -> dict:
         """{channel: {contact id: offset [m]}} of the offsets in force (nonzero entries)."""

@@ -30,6 +30,7 @@ class Continuation:
         self.max_step = max_step
         self.min_increment = min_increment
         self.stats = SolverStats()
+        self.restarts = bool(getattr(model, "continuation_restarts", False))
         model.set_input_angle(input_angle)
         # a loaded start is regular even where free play leaves the zero-load state ill-posed
         model.set_output_torque(float(initial_torque))
@@ -73,14 +74,45 @@ class Continuation:
                 self.stats.rejected_steps += 1
                 inc *= 0.5
                 if abs(inc) < self.min_increment:
-                    self.model.set_output_torque(t_now)
-                    raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
-                                        f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}")
+                    restarted = self._restart(t_now, torque) if self.restarts else None
+                    if restarted is None:
+                        self.model.set_output_torque(t_now)
+                        raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
+                                            f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}"
+                                            + ("; the restarts from the kinematic state failed too" if self.restarts else ""))
+                    self.q, t_now = restarted
+                    inc = torque - t_now
         self.torque = torque
         self._commit()
         self.stats.levels += 1
         self.stats.wall_s += time.perf_counter() - t0
         return self.q
+
+    RESTART_FRACTIONS = (1.0, 0.5, 0.1)
+    """Targets of a restart as fractions of the remaining torque step, tried in turn."""
+
+    def _restart(self, t_now, torque):
+        """(q, level) of a level between ``t_now`` and ``torque`` [N m] (fractions
+        :data:`RESTART_FRACTIONS` of the step, tried in turn) solved afresh by the static solver's
+        ladder (homotopy in the regularization stiffness from the kinematic state, then load
+        ramps), or None; only for models that declare ``continuation_restarts`` (existing models
+        keep their behaviour). Used only where the increments have stalled: in free play whose
+        only stiffness is the weak regularization (a mesh with backlash and a force law without
+        stiffness at zero approach, e.g. an involute mesh), Newton from the previous equilibrium
+        cycles between contact states at any increment, while the homotopy reaches a loaded level
+        (a smaller one where the full level is too far from the kinematic state); the continuation
+        goes on from there. A frictionless model's level is path-independent; a model with history
+        gets the state of a fresh loading, so the restart is counted (``ramped_restarts``)."""
+        for f in self.RESTART_FRACTIONS:
+            target = t_now + f * (torque - t_now)
+            self.model.set_output_torque(target)
+            try:
+                q = self.static.solve(self.input_angle)
+            except SolverFailure:
+                continue
+            self.stats.ramped_restarts += 1
+            return q, target
+        return None
 
     def _commit(self):
         """Commit the contact history (friction anchors) at the converged level."""

@@ -52,11 +52,15 @@ class PinSupport:
         midplanes (cantilever: clamped at z_a, free end at z_b).
     shear: True = Timoshenko (bending + shear), False = Euler--Bernoulli (bending only).
     shear_coefficient: kappa [-]; None = Cowper's value of a solid circle from the material.
+    support_compliance: radial compliance [m/N] of each support (the groove or bore the pin
+        sits in; a spring on the deflection at z_a and, where held, z_b; rotations stay held
+        where the model holds them); 0 = rigid supports.
     """
     model: Support = Support.RIGID
     ends: tuple = (0.0, 0.0)
     shear: bool = True
     shear_coefficient: float | None = None
+    support_compliance: float = 0.0
 
     def __post_init__(self):
         try:
@@ -74,6 +78,7 @@ class PinSupport:
             raise RvtoolInputError(f"shear = {self.shear!r} must be true or false")
         if self.shear_coefficient is not None:
             check_range("shear_coefficient", self.shear_coefficient, 0.0, 1.0, low_open=True)
+        check_range("support_compliance", self.support_compliance, 0.0, math.inf)
 
     @property
     def elastic(self):
@@ -138,32 +143,94 @@ class PinBeam:
         U[free] = np.linalg.solve(K[np.ix_(free, free)], F[free])
         return U[2 * ix]
 
+    def internal_forces(self, points, loads):
+        """Bending moment and shear along the pin under point loads (n, 2) [N] (x and y
+        components) at axial positions points (n,) [m]: (nodes (m,) [m], moment (m, 2) [N m] at
+        the nodes, shear (m - 1, 2) [N] per segment between nodes). With nodal loads only, the
+        Timoshenko element's end forces k_e u_e are exact, the moment is linear and the shear
+        constant between nodes, so the extremes lie at the nodes (support reactions included)."""
+        points = np.atleast_1d(np.asarray(points, float))
+        loads = np.asarray(loads, float).reshape(len(points), 2)
+        za, zb = self.support.ends
+        lo, hi = min(za, zb), max(za, zb)
+        tol = 1e-12 * (hi - lo)
+        if np.any(points < lo - tol) or np.any(points > hi + tol):
+            raise RvtoolInputError(f"support.ends = {self.support.ends} m do not span the loads (z in "
+                                   f"[{points.min():.6g}, {points.max():.6g}] m); valid: loads inside [{lo:.6g}, {hi:.6g}] m")
+        nodes = np.unique(np.concatenate([[lo, hi], np.clip(points, lo, hi)]))
+        K = self._stiffness(nodes)
+        free = np.setdiff1d(np.arange(2 * len(nodes)), self._held_dofs(nodes))
+        F = np.zeros((2 * len(nodes), 2))
+        np.add.at(F, 2 * np.searchsorted(nodes, np.clip(points, lo, hi)), loads)
+        U = np.zeros_like(F)
+        U[free] = np.linalg.solve(K[np.ix_(free, free)], F[free])
+        n = len(nodes)
+        M, V = np.zeros((n, 2)), np.zeros((n - 1, 2))
+        for e in range(n - 1):
+            f = self._element(nodes[e + 1] - nodes[e]) @ U[2 * e:2 * e + 4]     # end forces on the element
+            M[e] = -f[1]
+            V[e] = f[0]
+        M[-1] = f[3]
+        return nodes, M, V
+
+    def station_stresses(self, centres, width, resultants, n_sub=16):
+        """Largest bending stress |M|/W and shear stress 4 |V|/(3 A) [Pa] of the pin (solid
+        circle: W = pi r^3/4, A = pi r^2; the shear stress at the neutral axis) under the vector
+        resultants (k, 2) [N] spread uniformly over stations of ``width`` [m] centred at
+        ``centres`` (k,) [m], each station as 2 n_sub point loads at its composite Gauss points
+        (the moment of the lumped load differs from the uniform one by O((width / n_sub)^2)).
+        Returns (sigma_max, tau_max, z of sigma_max [m])."""
+        pts, wts = line_load_points(np.atleast_1d(np.asarray(centres, float)), width, n_sub)
+        loads = wts[:, :, None] * np.asarray(resultants, float)[:, None, :]
+        nodes, M, V = self.internal_forces(pts.ravel(), loads.reshape(-1, 2))
+        m = np.hypot(M[:, 0], M[:, 1])
+        r = self.radius
+        W, A = math.pi * r ** 3 / 4.0, math.pi * r ** 2
+        return float(m.max() / W), float(4.0 * np.hypot(V[:, 0], V[:, 1]).max() / (3.0 * A)), float(nodes[m.argmax()])
+
+    def _element(self, L):
+        """Timoshenko element stiffness (w, rotation at both ends) of length L."""
+        EI, kGA = self.EI, self.kGA
+        phi = 12.0 * EI / (kGA * L * L)
+        return EI / ((1.0 + phi) * L ** 3) * np.array([
+            [12.0, 6 * L, -12.0, 6 * L],
+            [6 * L, (4 + phi) * L * L, -6 * L, (2 - phi) * L * L],
+            [-12.0, -6 * L, 12.0, -6 * L],
+            [6 * L, (2 - phi) * L * L, -6 * L, (4 + phi) * L * L]])
+
     def _stiffness(self, nodes):
         """Assembled Timoshenko beam stiffness (dofs w, rotation per node)."""
         n = len(nodes)
         K = np.zeros((2 * n, 2 * n))
-        EI, kGA = self.EI, self.kGA
         for e in range(n - 1):
-            L = nodes[e + 1] - nodes[e]
-            phi = 12.0 * EI / (kGA * L * L)
-            ke = EI / ((1.0 + phi) * L ** 3) * np.array([
-                [12.0, 6 * L, -12.0, 6 * L],
-                [6 * L, (4 + phi) * L * L, -6 * L, (2 - phi) * L * L],
-                [-12.0, -6 * L, 12.0, -6 * L],
-                [6 * L, (2 - phi) * L * L, -6 * L, (4 + phi) * L * L]])
             s = slice(2 * e, 2 * e + 4)
-            K[s, s] += ke
+            K[s, s] += self._element(nodes[e + 1] - nodes[e])
+        if self.support.support_compliance > 0.0:
+            for d in self._support_springs(nodes):
+                K[d, d] += 1.0 / self.support.support_compliance
         return K
 
     def _held_dofs(self, nodes):
+        """Held dofs; with a support compliance the deflection dofs at the supports are free and
+        carry springs instead (added to the stiffness by :meth:`_stiffness`)."""
         za, zb = self.support.ends
         ia, ib = np.searchsorted(nodes, za), np.searchsorted(nodes, zb)
         m = self.support.model
         if m == Support.CANTILEVER:
-            return [2 * ia, 2 * ia + 1]
-        if m == Support.SIMPLY_SUPPORTED:
-            return [2 * ia, 2 * ib]
-        return [2 * ia, 2 * ia + 1, 2 * ib, 2 * ib + 1]
+            held = [2 * ia, 2 * ia + 1]
+        elif m == Support.SIMPLY_SUPPORTED:
+            held = [2 * ia, 2 * ib]
+        else:
+            held = [2 * ia, 2 * ia + 1, 2 * ib, 2 * ib + 1]
+        if self.support.support_compliance > 0.0:
+            held = [h for h in held if h % 2 == 1]
+        return held
+
+    def _support_springs(self, nodes):
+        """Deflection dofs of the supports (the springs of a support compliance)."""
+        za, zb = self.support.ends
+        ia, ib = np.searchsorted(nodes, za), np.searchsorted(nodes, zb)
+        return [2 * ia] if self.support.model == Support.CANTILEVER else [2 * ia, 2 * ib]
 
     def station_compliance(self, centres, width, n_sub=16):
         """C (k, k) [m/N] between stations of ``width`` [m] centred at ``centres`` (k,) [m]:

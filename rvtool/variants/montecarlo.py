@@ -13,7 +13,17 @@ maximum pin force, lost motion), in one of three modes:
 * ``"batched"``: one batch per chunk through ``rvtool.batched.batched_variant_figures``
   (all variants of a chunk in one Exudyn system), in this process (which holds the device),
   or one task per chunk on a given executor;
-* ``"serial"``: in this process, one variant after the other.
+* ``"serial"``: in this process, one variant after the other;
+* ``"device"``: as ``"batched"``, with the quasi-static TE of each chunk on the device Newton
+  (:func:`rvtool.variants.device.device_variant_figures`: all (variant, angle) pairs of the
+  chunk in one device loop, failed pairs on the per-variant Exudyn path; lost motion per
+  variant), on ``device`` ("cpu": chunks side by side in the pool; "cuda:N": one chunk after
+  another in this process);
+* ``"auto"``: the fastest measured path for this protocol (TE and lost motion): ``"batched"`` on
+  the CPU (:func:`resolve_mode`; ``"device"`` stays an explicit choice, see there).
+
+Each record names its TE path (``te_path``) and the number of its TE points that fell back
+from the device Newton to Exudyn (``te_fallback_points``; None for the Exudyn modes).
 
 Resumable: the variants are grouped in chunks of ``chunk_size`` consecutive indices; a
 chunk's records are written as soon as its last variant finishes, to
@@ -56,7 +66,29 @@ FIGURES = ("te_pp_arcsec", "te_rms_arcsec", "max_pin_force_N", "lost_motion_arcm
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
 """Thread-count variables set to 1 for pool workers: one process per core, one thread each."""
 
-MODES = ("pool", "batched", "serial")
+MODES = ("pool", "batched", "serial", "device", "auto")
+
+
+def resolve_mode(mode, device):
+    """(mode, device) that a study runs: ``"auto"`` -> the batched Exudyn path on the CPU.
+
+    Measured for the TE alone (cases/bench_batched_te.py, 53 points): on an H100 the device
+    Newton reaches 2,000-2,800 variants/s against 45.6 for a warmed 16-process pool (44-61x);
+    on 2 loaded CPU cores the device Newton (two processes) and batched Exudyn are on par.
+    But the Monte Carlo protocol also computes lost motion, per variant on Exudyn, and in
+    ``"device"`` mode on a GPU that runs one variant after another in the process holding the
+    device: the full 1,000-variant study on the H100 host took 292 s (3.4 variants/s) against
+    20.7 variants/s for the 16-process pool and 17.1 for batched Exudyn measured in the same
+    run (cases/monte_carlo_te.py --mode device, 2026-11-24). Until lost motion runs on the
+    device (or in the pool beside the device TE), ``"auto"`` picks the batched Exudyn path and
+    ``"device"`` is chosen explicitly for TE-dominated studies. ``device="auto"`` with the
+    other modes picks as :func:`warp_contacts.precision.resolve_device` for a large batch."""
+    if mode != "auto" and device != "auto":
+        return mode, device
+    from warp_contacts.precision import resolve_device
+    if mode == "auto":
+        return "batched", "cpu"
+    return mode, resolve_device("auto", n_contacts=10 ** 9)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -123,6 +155,8 @@ def _record(variant, figures=None, error=None, wall_s=None):
         rec[nm] = None if v is None else (int(v) if nm == "newton_iterations" else float(v))
     rec["lost_motion_method"] = None if figures is None else figures.get("lost_motion_method")
     rec["wall_s"] = float(figures["wall_s"]) if figures is not None and "wall_s" in figures else wall_s
+    rec["te_path"] = None if figures is None else figures.get("te_path", "exudyn")
+    rec["te_fallback_points"] = None if figures is None else figures.get("te_fallback_points")
     rec["status"] = "ok" if error is None else "failed"
     rec["error"] = error
     return rec
@@ -157,10 +191,18 @@ def _batched_function(build_kw=None):
     return batched_variant_figures
 
 
-def run_batch(design, variants, protocol, device="cpu", build_kw=None):
-    """Records of variants run together in one Exudyn system (rvtool.batched). If the batched run
+def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="batched"):
+    """Records of variants run together: in one Exudyn system (mode "batched", rvtool.batched) or
+    with the TE on the device Newton (mode "device", :mod:`rvtool.variants.device`). If the run
     raises, every variant of the batch is recorded as failed with that error."""
-    batched_variant_figures = _batched_function(build_kw)
+    if mode == "device":
+        from .device import device_variant_figures as batched_variant_figures
+        extra = sorted(set(build_kw or {}) - {"regularization"})
+        if extra:
+            raise RvtoolInputError(f"build options {extra} are not accepted by the device path; valid: "
+                                   f"['regularization']")
+    else:
+        batched_variant_figures = _batched_function(build_kw)
     t0 = time.perf_counter()
     try:
         figs = batched_variant_figures(design, variants, protocol, device=device, **(build_kw or {}))
@@ -260,21 +302,23 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
     def variants_of(i):
         return [sample_variant(tolerances, design, k, settings.seed) for k in range(*chunks[i])]
 
-    if settings.mode == "batched":
+    mode, device = resolve_mode(settings.mode, settings.device)
+    if mode == "batched":
         _batched_function(build_kw)   # fail early, in this process, when the batched path is missing
+    chunked = mode in ("batched", "device")
     n_workers = settings.workers or os.cpu_count() or 1
-    if settings.mode == "batched" and executor is None and (settings.device != "cpu" or n_workers == 1):
+    if chunked and executor is None and (device != "cpu" or n_workers == 1):
         # one batched system at a time in this process: it is the one that holds the device
         # (on the CPU with several workers, batches run side by side in the pool below: one
         # batch of chunk_size copies per process: on 2 cores 3.3x the per-variant pool for TE alone,
         # 1.15x for the whole protocol with lost motion, cases/bench_batched_te.py and monte_carlo_te)
         for i in pending:
-            recs = run_batch(design, variants_of(i), protocol, settings.device, build_kw)
+            recs = run_batch(design, variants_of(i), protocol, device, build_kw, mode)
             done += len(recs)
             if progress is not None:
                 progress(done, total)
             finish_chunk(i, recs)
-    elif settings.mode == "serial":
+    elif mode == "serial":
         for i in pending:
             recs = []
             for v in variants_of(i):
@@ -298,8 +342,8 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
                 for i in pending:
                     vs = variants_of(i)
                     partial[i] = [len(vs), []]
-                    if settings.mode == "batched":
-                        futures[executor.submit(run_batch, design, vs, protocol, settings.device, build_kw)] = (
+                    if chunked:
+                        futures[executor.submit(run_batch, design, vs, protocol, device, build_kw, mode)] = (
                             i, [v.index for v in vs])
                     else:
                         for v in vs:
@@ -326,7 +370,9 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
                         fut.cancel()
     recs = [r for i in sorted(records) for r in records[i]]
     return {"records": recs, "summary": summarize(recs), "chunks_loaded": n_loaded, "chunks_run": len(pending),
-            "wall_s": time.perf_counter() - t0, "fingerprint": fp}
+            "wall_s": time.perf_counter() - t0, "fingerprint": fp, "mode": mode, "device": device,
+            "te_paths": sorted({r["te_path"] for r in recs if r.get("te_path")}),
+            "te_fallback_points": sum(int(r.get("te_fallback_points") or 0) for r in recs)}
 
 
 def order_statistic_ci(x_sorted, p, level=0.95):

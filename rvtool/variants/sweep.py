@@ -34,7 +34,14 @@ SPEC format (TOML; relative paths in it are relative to the SPEC file)::
     seed = 0
     chunk_size = 10                 # variants per result file (and per task when batched)
     batched = false                 # true: one task per chunk through rvtool.batched
-    device = "cpu"                  # device of the batched path
+    mode = "auto"                   # optional, overrides batched: pool, batched, device or auto
+                                    # (device: TE of a chunk on the device Newton; auto: the fastest)
+    device = "cpu"                  # device of the batched / device path ("auto": a GPU if present)
+
+    [grid]                          # optional, study = "grid"
+    mode = "point"                  # point: one Exudyn run per point; device: the TE of all points
+                                    # sharing a design in one device Newton batch, lost motion per point
+    device = "cpu"                  # device of grid.mode = "device" ("auto": a GPU if present)
 
     [cluster]                       # LocalCluster settings (ignored with a scheduler address)
     scheduler = ""                  # address of an existing scheduler; "" = start a LocalCluster
@@ -68,7 +75,11 @@ VARIANT_PARAMETERS = ("eccentricity_error", "pin_radius_error", "equidistant_mod
 """Scalar Variant fields that a grid may sweep."""
 
 STUDIES = ("grid", "monte_carlo")
-ROW_TAIL = FIGURES + ("newton_iterations", "wall_s", "status", "error")
+GRID_MODES = ("point", "device")
+"""Grid execution: one Exudyn run per point, or the TE of the points that share a design in one
+device Newton batch (rvtool.solver.device_newton)."""
+
+ROW_TAIL = FIGURES + ("te_path", "te_fallback_points", "newton_iterations", "wall_s", "status", "error")
 """Columns after the parameters in every row."""
 
 
@@ -99,8 +110,14 @@ class SweepSpec:
     parameters: dict = field(default_factory=dict)
     monte_carlo: dict = field(default_factory=dict)
     cluster: ClusterSettings = field(default_factory=ClusterSettings)
+    grid: dict = field(default_factory=dict)
 
     def __post_init__(self):
+        if set(self.grid) - {"mode", "device"}:
+            raise RvtoolInputError(f"[grid] has unknown keys {sorted(set(self.grid) - {'mode', 'device'})}; valid keys "
+                                   f"are ['device', 'mode']")
+        if self.grid.get("mode", "point") not in GRID_MODES:
+            raise RvtoolInputError(f"grid.mode = {self.grid['mode']!r}; valid choices are {list(GRID_MODES)}")
         if self.study not in STUDIES:
             raise RvtoolInputError(f"study = {self.study!r}; valid choices are {list(STUDIES)}")
         if self.study == "grid" and not self.parameters:
@@ -133,7 +150,7 @@ def load_sweep_spec(path):
     with open(path, "rb") as fh:
         data = tomllib.load(fh)
     base = os.path.dirname(path)
-    valid = {"design", "study", "output_dir", "protocol", "build", "parameters", "monte_carlo", "cluster"}
+    valid = {"design", "study", "output_dir", "protocol", "build", "parameters", "monte_carlo", "cluster", "grid"}
     unknown = set(data) - valid
     if unknown:
         raise RvtoolInputError(f"sweep spec {path} has unknown keys {sorted(unknown)}; valid keys are {sorted(valid)}")
@@ -146,7 +163,7 @@ def load_sweep_spec(path):
         raise RvtoolInputError(f"sweep spec [protocol]/[cluster]: {exc}") from None
     build = {k: tuple(v) if isinstance(v, list) else v for k, v in data.get("build", {}).items()}
     mc = dict(data.get("monte_carlo", {}))
-    mc_valid = {"tolerances", "n_variants", "seed", "chunk_size", "batched", "device"}
+    mc_valid = {"tolerances", "n_variants", "seed", "chunk_size", "batched", "device", "mode"}
     if set(mc) - mc_valid:
         raise RvtoolInputError(f"[monte_carlo] has unknown keys {sorted(set(mc) - mc_valid)}; valid keys are {sorted(mc_valid)}")
     if "tolerances" in mc:
@@ -157,7 +174,7 @@ def load_sweep_spec(path):
     return SweepSpec(design_path=os.path.join(base, data["design"]), study=study,
                      output_dir=os.path.join(base, data.get("output_dir", "sweep_results")),
                      protocol=protocol, build=build, parameters=dict(data.get("parameters", {})), monte_carlo=mc,
-                     cluster=cluster)
+                     cluster=cluster, grid=dict(data.get("grid", {})))
 
 
 def point_model(design, params):
@@ -188,6 +205,35 @@ def run_point(design, params, protocol, build_kw=None):
     row.update({nm: fig[nm] for nm in FIGURES + ("newton_iterations",)})
     row.update(wall_s=fig["wall_s"], status="ok", error=None)
     return row
+
+
+def run_device_group(design, points, protocol, build_kw=None, device="cpu"):
+    """Rows of grid points that share one design (their other parameters are Variant fields):
+    the TE of all points in one device Newton batch (:func:`rvtool.variants.device.device_variant_figures`),
+    lost motion per point. A failed point is a row with status "failed"."""
+    from .device import device_variant_figures
+    t0 = time.perf_counter()
+    try:
+        variants = [point_model(design, p)[1] for p in points]
+        extra = sorted(set(build_kw or {}) - {"regularization"})
+        if extra:
+            raise RvtoolInputError(f"build options {extra} are not accepted by grid.mode = 'device'; valid: "
+                                   f"['regularization']")
+        figs = device_variant_figures(design, variants, protocol, device=device, **(build_kw or {}))
+    except Exception as exc:  # the group shares one batch: all its points failed
+        err = f"{type(exc).__name__}: {exc}"
+        wall = (time.perf_counter() - t0) / max(len(points), 1)
+        return [{**p, **{nm: None for nm in FIGURES + ("newton_iterations",)}, "wall_s": wall, "status": "failed",
+                 "error": err} for p in points]
+    rows = []
+    for p, f in zip(points, figs):
+        row = dict(p)
+        ok = f["status"] == "ok"
+        row.update({nm: (f[nm] if ok else None) for nm in FIGURES + ("newton_iterations",)})
+        row.update(te_path=f["te_path"], te_fallback_points=f["te_fallback_points"], wall_s=f["wall_s"],
+                   status=f["status"], error=f["error"])
+        rows.append(row)
+    return rows
 
 
 def write_table(rows, out_dir, name="results"):
@@ -241,9 +287,13 @@ class _Cluster:
 
 
 def run_grid(client, design, spec, progress=None):
-    """Rows of a grid study, one Dask task per point, in grid order."""
+    """Rows of a grid study in grid order: one Dask task per point (grid.mode "point"), or one
+    task per group of points that share a design, their TE on the device Newton (grid.mode
+    "device", on grid.device; "auto": a GPU if present)."""
     from dask.distributed import as_completed
     points = spec.points(design)
+    if spec.grid.get("mode", "point") == "device":
+        return _run_grid_device(client, design, spec, points, progress)
     futs = [client.submit(run_point, design, p, spec.protocol, spec.build, pure=False) for p in points]
     index = {f.key: i for i, f in enumerate(futs)}
     rows = [None] * len(points)
@@ -261,6 +311,31 @@ def run_grid(client, design, spec, progress=None):
         done += 1
         if progress is not None:
             progress(done, len(points))
+    return [{"point": i, **r} for i, r in enumerate(rows)]
+
+
+def _run_grid_device(client, design, spec, points, progress):
+    from dask.distributed import wait
+    from warp_contacts.precision import resolve_device
+    device = spec.grid.get("device", "cpu")
+    if device == "auto":
+        device = resolve_device("auto", n_contacts=10 ** 9)
+    groups = {}
+    for i, p in enumerate(points):
+        d, _ = point_model(design, {k: v for k, v in p.items() if k not in VARIANT_PARAMETERS})
+        groups.setdefault(repr(d), (d, []))[1].append(i)
+    futs = [(idx, client.submit(run_device_group, d, [points[i] for i in idx], spec.protocol, spec.build, device,
+                                pure=False)) for d, idx in groups.values()]
+    wait([f for _, f in futs])
+    rows = [None] * len(points)
+    for idx, fut in futs:
+        res = fut.result() if fut.status == "finished" else [
+            {**points[i], **{nm: None for nm in FIGURES + ("newton_iterations",)}, "wall_s": None, "status": "failed",
+             "error": f"{type(fut.exception()).__name__}: {fut.exception()}"} for i in idx]
+        for i, r in zip(idx, res):
+            rows[i] = r
+    if progress is not None:
+        progress(len(points), len(points))
     return [{"point": i, **r} for i, r in enumerate(rows)]
 
 
@@ -284,7 +359,7 @@ def run_sweep(spec: SweepSpec, *, scheduler=None, out_dir=None, progress=True, c
             tol = load_tolerances(mc["tolerances"])
             settings = MonteCarloSettings(n_variants=int(mc["n_variants"]), seed=int(mc.get("seed", 0)),
                                           chunk_size=int(mc.get("chunk_size", 10)),
-                                          mode="batched" if mc.get("batched", False) else "pool",
+                                          mode=mc.get("mode", "batched" if mc.get("batched", False) else "pool"),
                                           device=mc.get("device", "cpu"))
             res = run_monte_carlo(design, tol, spec.protocol, settings, os.path.join(out_dir, "chunks"),
                                   executor=cl.get_executor(pure=False), progress=prog, build_kw=spec.build)
@@ -294,6 +369,8 @@ def run_sweep(spec: SweepSpec, *, scheduler=None, out_dir=None, progress=True, c
            "table": table, "out_dir": out_dir}
     if summary is not None:
         out["summary"] = summary
+        # which TE path ran and how many TE points fell back from the device Newton to Exudyn
+        out.update({k: res[k] for k in ("mode", "device", "te_paths", "te_fallback_points")})
     return out
 
 

@@ -1,0 +1,133 @@
+"""Benchmark of RV-40E class (rv40e): cost per quasi-static equilibrium next to RD-40's in the same run, and per dynamic step, with the split.
+
+Quasi-static: the sequential TE path (rvtool.protocols.precision.quasi_static_te, one Exudyn
+static solve per point, warm-started) over one output revolution at 40 points per cycloid mesh
+cycle (rv40e: 121 input revolutions, 1,560 mesh cycles, 62,400 points; RD-40: 39 input
+revolutions, the same 62,400 points; --quick: 2 mesh cycles, 80 points each), run in
+interleaved blocks of 1,600 points (one crank revolution; --quick 40) so that both reducers see
+the same load of a shared machine; a block starts from the solver's cold start. Per point: wall
+time, Newton iterations, and the split into the contact callbacks (Python side of the elements)
+and the kernel launches inside them (the rest is Exudyn: solver set-up, assembly, linear
+algebra). The RV/RD-40 per-point cost ratio is the issue's figure (target: within 3x). The
+angle-batched path (rvtool.batched) is cycloid-only and is not run for the RV (not done).
+Dynamic: driven rotation at the rated input speed from the loaded quasi-static state, one crank
+revolution of rv40e (6,200 steps of 2e-5 s; --quick: 100 steps), per-step cost and split.
+"""
+import time
+
+import numpy as np
+
+from rvtool import casekit, designs
+from rvtool.assembly import build
+from rvtool.assembly.rv import load_design as load_rv
+from rvtool.assembly.spec import load_design as load_cycloid
+from rvtool.protocols.precision import dynamic_te, quasi_static_te, te_metrics, transmission_error
+from rvtool.solver.static import StaticSolver
+from rvtool.solver import RunSpec
+from rvtool.units import ARCSEC_PER_RAD
+
+
+def instrument(model):
+    """Wrap each element's evaluate and each evaluator's raw with wall-time counters."""
+    timers = {"callback_s": 0.0, "kernel_s": 0.0, "calls": 0}
+    for el in model.elements.values():
+        ev, raw = el.evaluate, el.evaluator.raw
+
+        def timed_eval(*a, _f=ev, **k):
+            t = time.perf_counter()
+            try:
+                return _f(*a, **k)
+            finally:
+                timers["callback_s"] += time.perf_counter() - t
+                timers["calls"] += 1
+
+        def timed_raw(*a, _f=raw, **k):
+            t = time.perf_counter()
+            try:
+                return _f(*a, **k)
+            finally:
+                timers["kernel_s"] += time.perf_counter() - t
+        el.evaluate = timed_eval
+        el.evaluator.raw = timed_raw
+    return timers
+
+
+class SequentialTE:
+    """The sequential quasi-static TE of one reducer, run block by block (warm-started within a block,
+    the solver kept across blocks) so that two reducers can be interleaved on a shared machine."""
+
+    def __init__(self, design, n_points, **build_kw):
+        self.design = design
+        self.model = build(design, **build_kw)
+        self.angles = np.arange(n_points) * self.model.mesh_period / 40
+        self.timers = instrument(self.model)
+        self.solver = StaticSolver(self.model)
+        self.theta_in, self.theta_out, self.wall_s, self.newton = [], [], 0.0, 0
+
+    def run_block(self, sl):
+        qs = quasi_static_te(self.model, torque=self.design.rated_torque, input_angles=self.angles[sl],
+                             solver=self.solver)
+        self.theta_in.append(qs["theta_in"])
+        self.theta_out.append(qs["theta_out"])
+        self.wall_s += qs["wall_s"]
+
+    def figures(self):
+        model, n = self.model, len(self.angles)
+        te = transmission_error(np.concatenate(self.theta_in), np.concatenate(self.theta_out), model.ratio,
+                                unwrap=False)
+        met = te_metrics(te, n_revolutions=n * model.mesh_period / 40 / (2 * np.pi * abs(model.ratio)), n_peaks=6)
+        t = self.timers
+        return {"points": n, "ms_per_point": 1e3 * self.wall_s / n,
+                "newton_per_point": self.solver.stats.newton_iterations / n,
+                "callback_ms_per_point": 1e3 * t["callback_s"] / n, "kernel_ms_per_point": 1e3 * t["kernel_s"] / n,
+                "exudyn_ms_per_point": 1e3 * (self.wall_s - t["callback_s"]) / n,
+                "contact_rows": sum(len(el.ids) for el in model.elements.values()),
+                "elements": len(model.elements), "coordinates": model.mbs.systemData.ODE2Size(),
+                "te_pp_arcsec": met["pp"] * ARCSEC_PER_RAD, "te_rms_arcsec": met["rms"] * ARCSEC_PER_RAD,
+                "te_orders": met["peak_orders"], "te_order_amplitudes_arcsec": met["peak_amplitudes"] * ARCSEC_PER_RAD,
+                "wall_s": self.wall_s}
+
+
+def main(argv=None):
+    args = casekit.parse_args(argv, __doc__)
+    t_all = time.perf_counter()
+    rv, rd = load_rv(designs.path("rv40e")), load_cycloid(designs.path("rd40"))
+    n_pts = 80 if args.quick else rv.pins.n_pins * (rv.pins.n_pins - 1) * 40    # one output revolution
+    block = 40 if args.quick else 1600
+    seq_rv, seq_rd = SequentialTE(rv, n_pts), SequentialTE(rd, n_pts, bearing_model="rolling")
+    for b0 in range(0, n_pts, block):   # interleaved blocks: both reducers see the same machine load
+        seq_rv.run_block(slice(b0, b0 + block))
+        seq_rd.run_block(slice(b0, b0 + block))
+    qs_rv, qs_rd = seq_rv.figures(), seq_rd.figures()
+    ratio = qs_rv["ms_per_point"] / qs_rd["ms_per_point"]
+
+    step = 2e-5
+    model = build(rv)
+    crank_rev_s = 2 * np.pi / abs(model.graph.crank_rate) / (rv.input_speed_rpm * np.pi / 30)
+    dur = 100 * step if args.quick else crank_rev_s
+    timers = instrument(model)
+    spec = RunSpec(end_time=dur, step=step, abs_tol=1e-6, rel_tol=1e-8)
+    dyn = dynamic_te(model, torque=rv.rated_torque, speed_rpm=rv.input_speed_rpm, duration=dur, run_spec=spec,
+                     on_start=lambda: timers.update(callback_s=0.0, kernel_s=0.0, calls=0))
+    rec = dyn["record"]
+    n = max(rec.accepted_steps, 1)
+    results = {
+        "quasistatic": {"rv40e": qs_rv, "rd40_rolling_bearings": qs_rd, "per_point_cost_ratio_rv_to_rd40": ratio,
+                        "target_ratio": 3.0, "within_target": bool(ratio <= 3.0)},
+        "dynamic_rv40e": {"duration_s": dur, "crank_revolution_s": crank_rev_s, "steps": rec.accepted_steps,
+                          "rejected_steps": rec.rejected_steps, "newton_per_step": rec.newton_iterations / n,
+                          "us_per_step": 1e6 * rec.wall_s / n, "callback_us_per_step": 1e6 * timers["callback_s"] / n,
+                          "kernel_us_per_step": 1e6 * timers["kernel_s"] / n,
+                          "exudyn_and_driver_us_per_step": 1e6 * (rec.wall_s - timers["callback_s"]) / n,
+                          "crank_revolution_projected_s": rec.wall_s / n * crank_rev_s / step,
+                          "te_pp_arcsec": float(np.ptp(dyn["te"]) * ARCSEC_PER_RAD), "wall_s": rec.wall_s},
+        "wall_s": time.perf_counter() - t_all,
+    }
+    settings = {"quick": args.quick, "points_per_mesh_cycle": 40, "interleaved_block_points": block, "dynamic_step_s": step, "run_spec": spec.to_dict(),
+                "rd40_bearing_model": "rolling (both reducers on rolling-element bearings)", "device": "cpu",
+                "precision": "float64"}
+    return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,190 @@
+"""RD-40 hysteresis with friction memory: anchor (stick--slip) friction on the pin mesh and output pins.
+
+Protocol (rvtool.protocols.hysteresis_cycles): fixed input (angle 0) and
+housing, a virgin preload from zero to -T_rated, then two identical signed
+cycles -T_rated -> +T_rated -> -T_rated with levels symmetric about zero
+torque (fine levels down to 0.05 % of T_rated resolve the free-play crossing).
+Path (b), quasi-static continuation, commits the contact history (anchors) once
+per converged level and samples the energy account there; ∮T dθ of the second
+cycle is admitted as dissipation only when that cycle closes and repeats the
+first (rvtool.protocols.hysteresis.cycle_dissipation), and is then compared
+with the friction dissipation the account recorded from the committed anchors.
+Path (a), dynamic relaxation with the implicit integrator (ramps, dwells,
+kinetic resets), runs a coarser cycle sequence; path (b) runs the same coarse
+levels for the comparison of the paths.
+
+Figures (RD-40, mu = 0.05 on both families): hysteresis loss (loop width at
+zero torque), lost motion (catalogue midpoint definition at +-3 % of rated
+torque), the four branch fits of Eq. (stiffness_fit) over 50-100 % of rated
+torque, ∮T dθ, friction dissipation per family, the run's energy balance, cycle
+repeatability, the difference of the paths; and hysteresis loss and lost
+motion versus mu in (0, 0.02, 0.05, 0.1).
+"""
+import os
+import time
+
+import numpy as np
+
+from rvtool import casekit, designs
+from rvtool.assembly.cycloid import build
+from rvtool.assembly.spec import load_design, replace
+from rvtool.protocols import hysteresis_cycles as HC
+from rvtool.protocols import stiffness as S
+from rvtool.units import RAD_PER_ARCMIN
+
+DESIGN = designs.path("rd40")
+MU = 0.05
+MU_SWEEP = (0.0, 0.02, 0.05, 0.1)
+#: Repeatability and closure tolerance of a cycle [arcmin]: the Newton tolerance of the static
+#: solves moves a level's angle by ~1e-7 arcmin; 1e-4 arcmin (0.03 urad) leaves three decades.
+CYCLE_TOL_ARCMIN = 1e-4
+#: Energy balance of the whole run: trapezoidal work on the levels against the account; the
+#: largest quadrature error is the free-play crossing of the virgin preload (0 -> -0.05 % T_rated),
+#: bounded below by 1e-3 of the load work at these levels (measured 4e-4 with step 1/8).
+ENERGY_TOL = 5e-3
+
+
+def friction_design(design, mu):
+    """RD-40 with anchor friction mu on the pin mesh and the output pins (mu = 0: frictionless code)."""
+    return replace(design, pin_contact={"mu": mu, "friction_model": "anchor"}, output_pins={"mu": mu})
+
+
+def quasi_static(design, mu, seq):
+    """Path (b) at friction mu: catalogue figures of the last cycle, the closed-cycle check,
+    dissipation per family of the last cycle and the energy account of the run."""
+    from rvtool.protocols import hysteresis as H
+    t0 = time.perf_counter()
+    model = build(friction_design(design, mu))
+    r = HC.quasi_static_cycles(model, seq)
+    prev, last = r["cycles"][-2], r["cycles"][-1]
+    fig = HC.catalogue_figures(last["torque_Nm"], last["angle_rad"], last["labels"], seq.rated_torque)
+    cyc = H.Cycle(torque=last["torque_Nm"], angle=last["angle_rad"])
+    rep = H.repeatability(H.Cycle(torque=prev["torque_Nm"], angle=prev["angle_rad"]), cyc,
+                          tolerance=CYCLE_TOL_ARCMIN * RAD_PER_ARCMIN)
+    closed = HC.closed_cycle(prev, last, angle_tolerance=CYCLE_TOL_ARCMIN * RAD_PER_ARCMIN)
+    return {"figures": fig, "cycle": last, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,
+            "closure_arcmin": closed.closure_angle / RAD_PER_ARCMIN, "loop_J": closed.loop_integral,
+            "dissipation_J": last["friction_dissipation_J"], "energy": r["energy"], "stats": r["stats"],
+            "quadrature_bound_J": HC.loop_quadrature_bound(cyc), "wall_s": time.perf_counter() - t0}
+
+
+def main(argv=None):
+    args = casekit.parse_args(argv, __doc__)
+    t_start = time.perf_counter()
+    design = load_design(DESIGN)
+    rated = design.rated_torque
+    fine = (0.0005, 0.001, 0.003, 0.01, 0.03)
+    seq = HC.CycleSequence(rated_torque=rated, step=0.125 if args.quick else 0.0625, fine_levels=fine)
+
+    sweep = {mu: quasi_static(design, mu, seq) for mu in MU_SWEEP}
+    main_run = sweep[MU]
+    fig = main_run["figures"]
+    D = main_run["dissipation_J"]
+    D_total = float(sum(D.values()))
+    loop = main_run["loop_J"]
+    loop_err = abs(loop - D_total) / D_total
+    loop_tol = main_run["quadrature_bound_J"] / D_total
+    energy = main_run["energy"]
+
+    # path (a) against path (b) on one coarse cycle sequence (the same levels)
+    dseq = HC.CycleSequence(rated_torque=rated, step=1.0 if args.quick else 0.25, fine_levels=(0.03,),
+                            ramp_steps=20 if args.quick else 30, dwell_steps=60 if args.quick else 100,
+                            reset_interval=30 if args.quick else 100,
+                            settle_span_arcmin=0.01 if args.quick else 0.002)
+    dyn = S.dynamic_stiffness(build(friction_design(design, MU)), dseq, step=2e-5)
+    qs = HC.quasi_static_cycles(build(friction_design(design, MU)), dseq, energy=False)
+    dyn_last = dseq.split(dyn["angle_arcmin"])[-1]
+    qs_last = qs["cycles"][-1]["angle_rad"] / RAD_PER_ARCMIN
+    fr, labels = dseq.cycle()
+    span = float(np.ptp(qs_last))
+    level_diff = float(np.max(np.abs(dyn_last - qs_last)))
+    # rate-independent friction: equilibria at one torque differ by locked-in stick states, by at
+    # most about the loop's width; the tolerance is the largest width of the path-(b) loop
+    # (same torque on its loading and unloading branch, from the fine sequence of the sweep)
+    c = main_run["cycle"]
+    th_c = c["angle_rad"] / RAD_PER_ARCMIN
+    width = max(abs(th_c[j] - th_c[i]) for i, li in enumerate(c["labels"]) for j, lj in enumerate(c["labels"])
+                if li == "pos_loading" and lj == "pos_unloading" and c["torque_Nm"][i] == c["torque_Nm"][j])
+    paths = {"value": level_diff / span, "tolerance": width / span, "passed": bool(level_diff <= width),
+             "max_level_diff_arcmin": level_diff, "loop_max_width_arcmin": width, "cycle_span_arcmin": span,
+             "note": "max over the levels of the last cycle |theta_a - theta_b| / peak-to-peak angle of path (b)",
+             "dynamic": {"forced_commits": dyn["stats"]["forced_commits"], "steps": dyn["stats"]["steps"],
+                         "step_s": dyn["step_s"], "max_tail_span_arcmin": float(np.max(dyn["tail_span_arcmin"]))}}
+    if not args.quick:
+        tq = fr * rated
+        fd, fq = (S.branch_fits(tq, a, labels, rated) for a in (dyn_last, qs_last))
+        paths["branch_K_rel_diff"] = {b: abs(fd[b]["K_Nm_per_arcmin"] - fq[b]["K_Nm_per_arcmin"])
+                                      / abs(fq[b]["K_Nm_per_arcmin"]) for b in S.BRANCHES}
+
+    results = {
+        "hysteresis_loss_arcmin": {"value": fig.hysteresis_loss_arcmin, "mu": MU,
+                                   "vs_mu": {str(m): r["figures"].hysteresis_loss_arcmin for m, r in sweep.items()}},
+        "lost_motion_arcmin": {"value": fig.lost_motion_arcmin, "mu": MU,
+                               "vs_mu": {str(m): r["figures"].lost_motion_arcmin for m, r in sweep.items()}},
+        "branch_fits": fig.branch_fits,
+        "loop_area_J": {"value": loop, "vs_mu": {str(m): r["loop_J"] for m, r in sweep.items()}},
+        "friction_dissipation_J": {**D, "total": D_total},
+        "loop_vs_dissipation_rel_err": {"value": loop_err, "tolerance": loop_tol, "passed": bool(loop_err <= loop_tol),
+                                        "tolerance_note": "quadrature bound of the trapezoidal loop on its levels "
+                                                          "(free-play crossings and a step-doubling estimate on "
+                                                          "the branches, HC.loop_quadrature_bound), relative to D"},
+        "energy_balance_rel_err": {"value": energy["balance_rel_err"], "tolerance": ENERGY_TOL,
+                                   "passed": bool(energy["balance_rel_err"] <= ENERGY_TOL),
+                                   "residual_J": energy["balance_residual_J"], "load_work_J": energy["load_work_J"],
+                                   "friction_dissipation_total_J": energy["friction_dissipation_total_J"]},
+        "cycle_repeatability_arcmin": {"value": main_run["repeat_arcmin"], "closure_arcmin": main_run["closure_arcmin"],
+                                       "tolerance": CYCLE_TOL_ARCMIN,
+                                       "passed": bool(max(main_run["repeat_arcmin"], main_run["closure_arcmin"])
+                                                      <= CYCLE_TOL_ARCMIN)},
+        "paths_rel_diff": paths,
+        "wall_s": {"quasi_static_per_mu": {str(m): r["wall_s"] for m, r in sweep.items()},
+                   "dynamic_path": dyn["wall_s"], "quasi_static_coarse_path": qs["wall_s"]},
+    }
+    settings = {"design": design.name, "mu": MU, "mu_sweep": MU_SWEEP, "sequence": seq.__dict__,
+                "dynamic_sequence": dseq.__dict__, "n_levels_per_cycle": len(seq.cycle()[0]),
+                "continuation": main_run["stats"], "bearing_model": "lumped", "input_angle_rad": 0.0,
+                "quick": args.quick,
+                "friction": "anchor model on cycloid-pin slices and output-pin slices, k_t = Mindlin ratio "
+                            "2(1-nu)/(2-nu) of the normal secant stiffness"}
+    _plot(args.out, main_run, sweep, fig)
+    print(f"RD-40 mu={MU}: hysteresis loss {fig.hysteresis_loss_arcmin:.4g} arcmin, lost motion "
+          f"{fig.lost_motion_arcmin:.4g} arcmin, loop {loop:.4e} J vs dissipation {D_total:.4e} J "
+          f"(rel. err {loop_err:.2e}, bound {loop_tol:.2e}), energy balance {energy['balance_rel_err']:.2e}, "
+          f"repeatability {main_run['repeat_arcmin']:.2e} arcmin, paths {paths['value']:.2e} (tol {paths['tolerance']:.2e})")
+    return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_start)
+
+
+def _plot(out, main_run, sweep, fig):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    c = main_run["cycle"]
+    T, th = c["torque_Nm"], c["angle_rad"] / RAD_PER_ARCMIN
+    f, ax = plt.subplots(1, 3, figsize=(15, 4.3))
+    ax[0].plot(th, T, ".-", lw=0.8, ms=3, label=f"mu = {MU}, second cycle")
+    for b, fit in fig.branch_fits.items():
+        if fit["K_Nm_per_arcmin"] is not None:
+            y = (1.0 if b.startswith("pos") else -1.0) * np.linspace(0.5, 1.0, 20) * np.max(np.abs(T))
+            ax[0].plot((y - fit["b_Nm"]) / fit["K_Nm_per_arcmin"], y, "--", lw=0.9, label=f"fit {b}")
+    ax[0].set(xlabel="output angle [arcmin]", ylabel="output torque [N m]", title="loop and branch fits")
+    ax[0].legend(fontsize=7)
+    for m, r in sweep.items():
+        cc = r["cycle"]
+        s = np.abs(cc["torque_Nm"]) <= 0.05 * np.max(np.abs(cc["torque_Nm"]))
+        ax[1].plot(cc["angle_rad"][s] / RAD_PER_ARCMIN, cc["torque_Nm"][s], ".-", lw=0.8, ms=3, label=f"mu = {m}")
+    ax[1].set(xlabel="output angle [arcmin]", ylabel="output torque [N m]", title="low-torque detail")
+    ax[1].legend(fontsize=7)
+    mus = list(sweep)
+    ax[2].plot(mus, [sweep[m]["figures"].hysteresis_loss_arcmin for m in mus], "o-", color="C0")
+    ax[2].set(xlabel="friction coefficient mu [-]", title="catalogue figures vs mu")
+    ax[2].set_ylabel("hysteresis loss (width at zero torque) [arcmin]", color="C0")
+    tw = ax[2].twinx()
+    tw.plot(mus, [sweep[m]["figures"].lost_motion_arcmin for m in mus], "s-", color="C1")
+    tw.set_ylabel("lost motion (+-3 % midpoints) [arcmin]", color="C1")
+    f.tight_layout()
+    os.makedirs(out, exist_ok=True)
+    casekit.save_figure(f, out, "hysteresis_friction")
+
+
+if __name__ == "__main__":
+    main()

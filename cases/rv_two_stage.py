@@ -1,0 +1,166 @@
+"""RV-40E class two-stage RV reducer: ratio from the gear graph, rated state, TE, crank load sharing, stiffness.
+
+Design rvtool/designs/rv40e.toml (catalogue: 412 N m, i = 121, 3 cranks; the rest chosen and
+declared in the file). Protocols, unchanged from the cycloid drive: the quasi-static TE
+sequence (rvtool.protocols.precision.quasi_static_te) over one crank revolution (1/39 output
+revolution: the period of the crank order; the nominal meshes repeat within it) at 40 points
+per cycloid mesh cycle (--quick: 12 points over the crank revolution), and the 74-level
+torque sequence by continuation (rvtool.protocols.stiffness, path (b); --quick: 25 % steps)
+with the four branch fits and the +-3 % lost motion. Crank load shares (fraction of the summed
+crank torque about the carrier axis) and the torque balance |T_out - i T_in| / T_out at the
+rated state (input angle 0); shares and the balance term are also recorded at every TE point.
+Peak loads: the largest normal force per physical contact (pin, tooth pair, roller, ball) of
+each family over the TE sequence (input angle 0 included).
+"""
+import time
+
+import numpy as np
+
+from rvtool import casekit, designs
+from rvtool.assembly import build
+from rvtool.assembly.rv import load_design
+from rvtool.protocols.load_sharing import contact_peaks, torque_balance_error, torque_balance_term
+from rvtool.protocols.precision import quasi_static_te, te_metrics
+from rvtool.protocols.stiffness import TorqueSequence, branch_fits, lost_motion_from_levels, quasi_static_stiffness
+from rvtool.solver.static import StaticSolver
+from rvtool.units import ARCSEC_PER_RAD
+
+DESIGN = designs.path("rv40e")
+
+
+def order_markers(model):
+    """Output-shaft orders of the RV's excitations (per output revolution)."""
+    d, g = model.design, model.graph
+    i = abs(model.ratio)
+    return {"input": i, "crank": abs(g.crank_rate) * i, "cycloid_mesh": d.pins.n_pins * abs(g.crank_rate) * i,
+            "involute_mesh": d.sun_gear.n_teeth * abs(g.sun_ratio - g.rates["carrier"]) * i}
+
+
+def main(argv=None):
+    args = casekit.parse_args(argv, __doc__)
+    t_all = time.perf_counter()
+    design = load_design(DESIGN)
+    T = design.rated_torque
+    wall = {}
+
+    t0 = time.perf_counter()
+    model = build(design)
+    wall["build"] = time.perf_counter() - t0
+    g = model.graph
+    closed_form = 1 + design.crank_gear.n_teeth / design.sun_gear.n_teeth * design.pins.n_pins
+
+    # rated state at input angle 0
+    t0 = time.perf_counter()
+    solver = StaticSolver(model)
+    model.set_output_torque(-np.sign(model.ratio) * T)
+    q_rated = solver.solve(0.0)
+    share0 = model.crank_load_share(q_rated)
+    ecc0 = model.eccentric_bearing_resultants(q_rated)
+    tb0 = torque_balance_error(model, q_rated, T)
+    wall["rated_state"] = time.perf_counter() - t0
+
+    # quasi-static TE over one crank revolution, shares and balance at every point
+    crank_rev = 2 * np.pi / abs(g.crank_rate)                  # input angle of one crank revolution
+    n_pts = 12 if args.quick else int(round(crank_rev / model.mesh_period)) * 40
+    angles = np.arange(n_pts) * crank_rev / n_pts
+    shares, balance, peaks = [], [], {}
+
+    def record(k, a, q):
+        shares.append(model.crank_load_share(q))
+        balance.append(torque_balance_term(model, q, T))
+        contact_peaks(model, q, peaks)
+
+    qs = quasi_static_te(build(design), torque=T, input_angles=angles, record=None)
+    wall["quasi_static_te"] = qs["wall_s"]
+    # the shares and balance are recorded on a second pass over the same points (their observation
+    # cost is kept out of the TE wall time)
+    t0 = time.perf_counter()
+    quasi_static_te(model, torque=T, input_angles=angles, record=record)
+    wall["crank_sharing_sequence"] = time.perf_counter() - t0
+    shares, balance = np.array(shares), np.array(balance)
+    revs = 1.0 / (abs(g.crank_rate) * abs(model.ratio))
+    met = te_metrics(qs["te"], n_revolutions=revs)
+
+    # stiffness and lost motion (path (b), continuation at input angle 0)
+    t0 = time.perf_counter()
+    seq = TorqueSequence(rated_torque=T, loading_step=0.25, other_step=0.25) if args.quick else TorqueSequence(rated_torque=T)
+    st = quasi_static_stiffness(build(design), seq)
+    fits = branch_fits(st["torque_Nm"], st["angle_arcmin"], st["labels"], T)
+    lm = lost_motion_from_levels(st["torque_Nm"], st["angle_arcmin"], T)
+    wall["stiffness_sequence"] = time.perf_counter() - t0
+
+    ratio_closed_err = abs(model.ratio - closed_form) / closed_form
+    names = list(ecc0)
+    results = {
+        "ratio_nominal": float(design.ratio_target),
+        "ratio_from_gear_graph": float(model.ratio),
+        "te_pp_arcsec": met["pp"] * ARCSEC_PER_RAD,
+        "te_rms_arcsec": met["rms"] * ARCSEC_PER_RAD,
+        "te_orders": met["peak_orders"],
+        "te_order_amplitudes_arcsec": met["peak_amplitudes"] * ARCSEC_PER_RAD,
+        "crank_load_share": {
+            "fraction_at_rated": share0,
+            "fraction_mean_over_crank_revolution": shares.mean(axis=0),
+            "fraction_min_over_crank_revolution": shares.min(axis=0),
+            "fraction_max_over_crank_revolution": shares.max(axis=0),
+            "eccentric_bearing_resultant_N": {f"crank{k}": {f"wheel{j}": ecc0[f"eccentric_bearing_c{k}w{j}"]
+                                                             for j in range(2)} for k in range(design.cranks.count)},
+        },
+        "torque_balance_rel_err": tb0,
+        "peak_loads_N": peaks,
+        "K_Nm_per_arcmin": {b: f["K_Nm_per_arcmin"] for b, f in fits.items()},
+        "lost_motion_arcmin": lm,
+        "wall_s": wall,
+    }
+    settings = {"design": design.name, "quick": args.quick, "backend": "warp", "device": "cpu",
+                **model.resolution_settings(),
+                "te_interval": {"input_angle_rad": float(crank_rev), "output_revolutions": revs, "points": n_pts,
+                                "definition": "one crank revolution (1/z_g output revolution)"},
+                "order_markers": order_markers(model),
+                "ratio_closed_form": closed_form, "ratio_closed_form_rel_err": ratio_closed_err,
+                "torque_balance_over_te_sequence": {"max_abs": float(np.max(np.abs(balance))),
+                                                     "mean_signed": float(np.mean(balance))},
+                "stiffness_fits": fits, "stiffness_levels": len(st["torque_Nm"]),
+                "regularization_max_N": {"te": qs["regularization_max"], "stiffness": st["regularization_max"]},
+                "solver_stats": {"te": qs["stats"], "stiffness": st["stats"]},
+                "ms_per_quasistatic_point": 1e3 * qs["wall_s"] / n_pts,
+                "eccentric_bearing_names": names}
+    _plots(model, q_rated, qs, met, angles, shares, st, args.out, revs)
+    return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_all)
+
+
+def _plots(model, q, qs, met, angles, shares, st, out, revs):
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 7))
+    model.draw_section(ax, q)
+    ax.set_title(f"{model.design.name}: contact forces at {model.design.rated_torque:g} N m (input angle 0)")
+    casekit.save_figure(fig, out, "section_contacts")
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 3.8))
+    out_deg = np.rad2deg(qs["theta_in"] / abs(model.ratio))
+    ax[0].plot(out_deg, (qs["te"] - np.mean(qs["te"])) * ARCSEC_PER_RAD, lw=0.8)
+    ax[0].set(xlabel="output angle [deg]", ylabel="TE - mean [arcsec]", title="quasi-static TE at rated load")
+    o, a = met["orders"], met["amplitudes"] * ARCSEC_PER_RAD
+    ax[1].semilogy(o[1:], np.maximum(a[1:], 1e-8), lw=0.8)
+    ax[1].set(xlabel="output-shaft order", ylabel="amplitude [arcsec]", title=f"order spectrum ({revs:.3g} output rev)")
+    casekit.save_figure(fig, out, "transmission_error")
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 3.8))
+    crank_deg = np.rad2deg(angles * abs(model.graph.crank_rate))
+    for k in range(shares.shape[1]):
+        ax[0].plot(crank_deg, shares[:, k], lw=0.9, label=f"crank {k}")
+    ax[0].axhline(1 / shares.shape[1], color="k", lw=0.5)
+    ax[0].set(xlabel="crank angle [deg]", ylabel="share of the crank torque on the carrier", title="crank load shares")
+    ax[0].legend(fontsize=8)
+    ax[1].bar(np.arange(shares.shape[1]), shares.mean(axis=0))
+    ax[1].set(xlabel="crank", ylabel="mean share over a crank revolution", ylim=(0, 0.5))
+    casekit.save_figure(fig, out, "crank_shares")
+
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    ax.plot(st["angle_arcmin"], st["torque_Nm"], ".-", lw=0.8)
+    ax.set(xlabel="output rotation [arcmin]", ylabel="output torque [N m]", title="torsional stiffness (continuation)")
+    casekit.save_figure(fig, out, "stiffness")
+
+
+if __name__ == "__main__":
+    main()

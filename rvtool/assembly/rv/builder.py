@@ -1,0 +1,374 @@
+"""Builder: an :class:`~rvtool.assembly.rv.spec.RVDesign` -> an :class:`RvModel` (a
+:class:`~rvtool.model.ReducerModel`), paper Fig. load_paths (b): "preliminary gearing drives
+multiple floating cranks sharing the wheels and carrier"; "crank translations and the selected
+axial and tilt coordinates are determined through bearing forces".
+
+Bodies (planar rigid, x, y, theta; node order = ``body_names``):
+
+* ``sun`` (two-stage: the input shaft with the sun gear; theta driven, x and y held unless
+  ``bodies.input`` frees them) -- three-stage: ``pinion`` (the driven offset input pinion,
+  centre held) and ``sun`` (the compound gear carrying the sun, on the axis, x and y held);
+* ``crank0..``: the floating crankshafts (x, y, theta all free), each with its spur gear
+  (centre at the body origin, tooth 0 on the body's x axis) and two eccentric journals;
+* ``wheel0``, ``wheel1``: the cycloid wheels (free), each bored for every crank's journal;
+* ``carrier``: the output (both halves joined rigidly; free, on the main bearings).
+
+Contact elements (each one kernel launch per evaluation): ``pins`` (cycloid--pin meshes of
+both wheels, pins on the ground), ``gears`` (involute pairs sun--crank gear k, and the
+three-stage pinion--compound pair), ``eccentric_bearings`` (needle rollers, crank journal ->
+wheel bore), ``crank_bearings`` (tapered-roller pairs, crank -> carrier, planar use: radial
+load through the rollers, the pair's axial force and tilting moment as observations -- the
+axial and tilt coordinates of the cranks are held, declared), ``main_bearings``
+(angular-contact pair, carrier -> housing). There are no output pins: the wheels drive the
+carrier through the cranks.
+
+Kinematics (:class:`RvKinematics`): the gear graph's rates (:mod:`.gear_graph`); the crank
+gears start conjugate to the sun (mid-backlash), the journals at the wheels' absolute phases.
+"""
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import exudyn as exu
+from exudyn.itemInterface import (CoordinateConstraint, CoordinateSpringDamper, LoadCoordinate,
+                                  MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D, ObjectRigidBody2D)
+
+from exudyn_user_elements.contact_element import ContactElement
+
+from ...bearings.set import BearingSet, Mounting
+from ...bearings.tapered_set import TaperedBearingSet, TaperedMounting
+from ...contact.circle_set import GROUND
+from ...contact.cycloid_set import CycloidPinSet
+from ...contact.involute_set import GearMesh, InvoluteContactSet
+from ...errors import RvtoolInputError
+from ...geometry.eccentric import journal_centre, journal_velocity
+from ...model import BodyCoordinate, Family, ReducerModel
+from ..cycloid import pin_meshes
+from .gear_graph import GearGraph
+from .spec import RVDesign
+
+
+class Layout:
+    """Body indices of an RV design: input body 0, the sun (0 or 1), cranks, wheels, carrier."""
+
+    def __init__(self, design):
+        self.three_stage = design.topology == "rv3"
+        self.n_cranks = design.cranks.count
+        self.sun = 1 if self.three_stage else 0
+        self.crank0 = self.sun + 1
+        self.wheel0 = self.crank0 + self.n_cranks
+        self.carrier = self.wheel0 + 2
+        self.n_bodies = self.carrier + 1
+
+    def names(self):
+        pre = ("pinion", "sun") if self.three_stage else ("sun",)
+        return pre + tuple(f"crank{k}" for k in range(self.n_cranks)) + ("wheel0", "wheel1", "carrier")
+
+    def crank(self, k):
+        return self.crank0 + k
+
+    def wheel(self, j):
+        return self.wheel0 + j
+
+
+class RvKinematics:
+    """Rigid, clearance-free kinematics of an RV reducer (module docstring): at input angle s
+    the carrier is at s / i, every crank turns by omega_k / omega_in s about its carrier-borne
+    axis, wheel j sits on the journals at the absolute eccentric angle and turns with the carrier."""
+
+    def __init__(self, design, graph, layout):
+        self.g, self.L = graph, layout
+        self.e = design.wheels.eccentricity
+        self.phases = np.asarray(design.wheels.phases, float)
+        self.reference = reference_poses(design, graph, layout)
+
+    def poses(self, input_angles):
+        """(n, nb, 3) poses at input angles (n,) [rad]."""
+        s = np.asarray(input_angles, float)
+        g, L = self.g, self.L
+        r = g.rates
+        phi_c = r["carrier"] * s
+        a = r["crank"] * s
+        q = np.repeat(self.reference[None], len(s), axis=0)
+        q[:, 0, 2] += s
+        if L.three_stage:
+            q[:, L.sun, 2] += r["sun"] * s
+        for k, b in enumerate(g.crank_angles):
+            i = L.crank(k)
+            q[:, i, 0] = g.crank_radius * np.cos(b + phi_c)
+            q[:, i, 1] = g.crank_radius * np.sin(b + phi_c)
+            q[:, i, 2] += a
+        for j in range(2):
+            i = L.wheel(j)
+            q[:, i, 0], q[:, i, 1] = journal_centre(self.e, self.phases[j], a)
+            q[:, i, 2] = phi_c
+        q[:, L.carrier, 2] = phi_c
+        return q
+
+    def velocities(self, input_angle, omega_in):
+        """(nb, 3) velocities at input angle [rad] and input speed [rad/s]."""
+        g, L = self.g, self.L
+        r = g.rates
+        s = float(input_angle)
+        phi_c, a = r["carrier"] * s, r["crank"] * s
+        wc, wa = r["carrier"] * omega_in, r["crank"] * omega_in
+        v = np.zeros((L.n_bodies, 3))
+        v[0, 2] = omega_in
+        if L.three_stage:
+            v[L.sun, 2] = r["sun"] * omega_in
+        for k, b in enumerate(g.crank_angles):
+            v[L.crank(k)] = (-g.crank_radius * np.sin(b + phi_c) * wc, g.crank_radius * np.cos(b + phi_c) * wc, wa)
+        for j in range(2):
+            vx, vy = journal_velocity(self.e, self.phases[j], a, wa)
+            v[L.wheel(j)] = (vx, vy, wc)
+        v[L.carrier, 2] = wc
+        return v
+
+
+def reference_poses(design, graph, layout):
+    """(nb, 3) poses at input angle 0: crank k at beta_k on the crank circle, turned to its gear's
+    conjugate angle; wheels on the journals; carrier and sun at zero (three-stage: the pinion at
+    its offset centre, the compound gear conjugate to it)."""
+    g, L = graph, layout
+    ref = np.zeros((L.n_bodies, 3))
+    if L.three_stage:
+        ref[0, :2] = g.input_centre
+        ref[L.sun, 2] = g.sun_angle0
+    for k, b in enumerate(g.crank_angles):
+        ref[L.crank(k)] = (g.crank_radius * math.cos(b), g.crank_radius * math.sin(b), g.crank_gear_angles0[k])
+    for j, ph in enumerate(design.wheels.phases):
+        ref[L.wheel(j), :2] = journal_centre(design.wheels.eccentricity, ph)
+    return ref
+
+
+def wheel_mass(design, graph):
+    """(m [kg], J [kg m^2]) of one wheel: an annulus between the root circle and the bore, less the crank bores."""
+    d = design
+    r_o = d.pins.pin_circle_radius - d.pins.pin_radius - d.wheels.eccentricity
+    r_b = d.eccentric_bearing.inner_radius + d.eccentric_bearing.roller_diameter
+    rc, n = graph.crank_radius, d.cranks.count
+    rho_t = d.material.density * d.wheels.width
+    m = rho_t * math.pi * (r_o ** 2 - n * r_b ** 2)
+    J = rho_t * math.pi * (0.5 * r_o ** 4 - n * (0.5 * r_b ** 4 + r_b ** 2 * rc ** 2))
+    return m, J
+
+
+def gear_meshes(design, graph, layout):
+    """The involute meshes: sun (gear A) -- crank gear k (gear B), and the three-stage pinion -- compound gear."""
+    st = design.involute_stage
+    kw = dict(n_slices=st.n_slices, window=st.window, damping=st.damping, ramp_depth=st.ramp_depth)
+    meshes = [GearMesh(pair=graph.sun_pair, body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}", **kw)
+              for k in range(layout.n_cranks)]
+    if layout.three_stage:
+        meshes.append(GearMesh(pair=graph.input_pair, body_a=0, body_b=layout.sun, name="input_stage", **kw))
+    return meshes
+
+
+def needle_mountings(design, graph, layout):
+    """Needle bearing of journal j of crank k into wheel j's bore k: the journal centre in the crank's
+    frame at the wheel's absolute phase (plus the crank's declared phase error), the bore on the crank circle."""
+    d = design
+    out = []
+    for k, b in enumerate(graph.crank_angles):
+        e_k = d.wheels.eccentricity + d.cranks.eccentricity_error(k)
+        for j, ph in enumerate(d.wheels.phases):
+            phase = ph + d.cranks.phase_error(k) - graph.crank_gear_angles0[k]
+            jc = journal_centre(e_k, phase)
+            out.append(Mounting(name=f"eccentric_bearing_c{k}w{j}", bearing=d.eccentric_bearing, inner=layout.crank(k),
+                                outer=layout.wheel(j), inner_centre=(float(jc[0]), float(jc[1])),
+                                outer_centre=(graph.crank_radius * math.cos(b), graph.crank_radius * math.sin(b))))
+    return out
+
+
+def crank_mountings(design, graph, layout):
+    """Tapered pair of crank k in the carrier, cup centred on the crank circle."""
+    return [TaperedMounting(name=f"crank_bearing{k}", bearing=design.crank_bearing, inner=layout.crank(k),
+                            outer=layout.carrier, outer_centre=(graph.crank_radius * math.cos(b),
+                                                                graph.crank_radius * math.sin(b)))
+            for k, b in enumerate(graph.crank_angles)]
+
+
+@dataclass
+class RvModel(ReducerModel):
+    """An assembled RV reducer: the :class:`~rvtool.model.ReducerModel` plus its gear graph,
+    layout, wheel profiles and the per-crank load observations."""
+    graph: GearGraph = None
+    layout: Layout = None
+    profiles: list = field(default_factory=list)
+
+    def _pose(self, name, q):
+        el = self.elements[name]
+        ql = el.local(q)
+        return el.pose_velocity(ql, np.zeros_like(ql))[0]
+
+    def crank_bearing_forces(self, q):
+        """(N_c, 2) force [N] of each crank's tapered pair on the carrier, and (N_c, 2) its point of
+        action (the cup centre, world) at the static state q."""
+        el = self.elements["crank_bearings"]
+        pose = self._pose("crank_bearings", q)
+        res = el.evaluator.resultants(pose)
+        forces, points = [], []
+        for k, m in enumerate(el.evaluator.mountings):
+            forces.append(-np.asarray(res[m.name].force))      # the rollers push the cone; the cup gets the reaction
+            th = pose[m.outer, 2]
+            c, s = math.cos(th), math.sin(th)
+            oc = np.asarray(m.outer_centre)
+            points.append(pose[m.outer, :2] + np.array([c * oc[0] - s * oc[1], s * oc[0] + c * oc[1]]))
+        return np.array(forces), np.array(points)
+
+    def crank_torques(self, q):
+        """(N_c,) torque [N m] of each crank's bearing force on the carrier about the carrier axis."""
+        F, P = self.crank_bearing_forces(q)
+        c = self._pose("crank_bearings", q)[self.layout.carrier, :2]
+        r = P - c
+        return r[:, 0] * F[:, 1] - r[:, 1] * F[:, 0]
+
+    def crank_load_share(self, q):
+        """(N_c,) fraction of the summed crank torque about the carrier axis carried by each crank."""
+        t = self.crank_torques(q)
+        return t / np.sum(t)
+
+    def eccentric_bearing_resultants(self, q):
+        """{mounting name: |resultant| [N]} of every needle bearing (crank k, wheel j) at q."""
+        el = self.elements["eccentric_bearings"]
+        res = el.evaluator.resultants(self._pose("eccentric_bearings", q))
+        return {name: float(np.hypot(*r.force)) for name, r in res.items()}
+
+    def input_torque(self, q):
+        """Torque [N m] the drive applies to the input rotation at the static state q: minus the
+        contact elements' generalized force on it (frictionless statics)."""
+        i = self.input_index
+        t = 0.0
+        for el in self.elements.values():
+            ltg = el.coordinate_indices
+            hit = np.flatnonzero(ltg == i)
+            if len(hit):
+                t -= float(el.evaluation_at(q).Q[hit[0]])
+        return t
+
+    def marker_frequencies(self, speed_rpm):
+        """Mesh and bearing marker frequencies [Hz] at input speed [rpm] (rates from the gear graph):
+        input, output, crank (absolute and relative to the carrier), the cycloid mesh z_b f_crank, the
+        involute mesh(es) z f_relative, and the needle, tapered and main bearings at their relative
+        ring speeds."""
+        from ...bearings.frequencies import bearing_frequencies
+        d, r = self.design, self.graph.rates
+        f_in = speed_rpm / 60.0
+        f_c, f_k, f_s = r["carrier"] * f_in, r["crank"] * f_in, r["sun"] * f_in
+        f_rel = f_k - f_c                      # crank relative to the carrier and to the wheels
+        nb, tp, mb = d.eccentric_bearing, d.crank_bearing.rows[0], d.main_bearing.rows[0]
+        out = {"input_hz": f_in, "output_hz": abs(f_c), "crank_hz": abs(f_k), "crank_relative_hz": abs(f_rel),
+               "mesh_hz": d.pins.n_pins * abs(f_k), "involute_mesh_hz": d.sun_gear.n_teeth * abs(f_s - f_c),
+               "eccentric_bearing": bearing_frequencies(f_rel, nb.n_rollers, nb.roller_diameter, nb.pitch_diameter),
+               "crank_bearing": bearing_frequencies(f_rel, tp.n_rollers, tp.roller_diameter, tp.pitch_diameter,
+                                                    tp.cup_angle_deg),
+               "main_bearing": bearing_frequencies(f_c, mb.n_balls, mb.ball_diameter, mb.pitch_diameter,
+                                                   math.degrees(mb.contact_angle))}
+        if self.layout.three_stage:
+            out["input_stage_mesh_hz"] = d.input_pinion.n_teeth * f_in
+        return out
+
+    def refined_design(self):
+        return self.design.refined()
+
+    def resolution_settings(self):
+        d = self.design
+        return {"samples_per_tooth": d.wheels.samples_per_tooth, "wheel_slices": d.wheels.n_slices,
+                "involute_slices": d.involute_stage.n_slices, "needle_slices": d.eccentric_bearing.n_slices,
+                "tapered_slices": d.crank_bearing.rows[0].n_slices}
+
+    def draw_section(self, ax, q):
+        import matplotlib.pyplot as plt
+        from ...geometry.cycloid import pin_centres
+        pose = self._pose("pins", q)
+        for j in range(2):
+            x = pose[self.layout.wheel(j)]
+            pts = self.profiles[j].points(np.linspace(0, 2 * np.pi, 4000))
+            c, s = np.cos(x[2]), np.sin(x[2])
+            ax.plot(x[0] + c * pts[:, 0] - s * pts[:, 1], x[1] + s * pts[:, 0] + c * pts[:, 1], lw=0.6,
+                    label=f"wheel {j}")
+        for p in pin_centres(self.profiles[0]):
+            ax.add_patch(plt.Circle(p, self.design.pins.pin_radius, fill=False, color="k", lw=0.5))
+        g = self.graph
+        for k in range(self.layout.n_cranks):
+            x = pose[self.layout.crank(k)]
+            ax.add_patch(plt.Circle(x[:2], g.sun_pair.gear_b.reference_radius, fill=False, color="g", lw=0.5))
+        ax.add_patch(plt.Circle(pose[self.layout.sun, :2], g.sun_pair.gear_a.reference_radius, fill=False, color="g",
+                                lw=0.5))
+        super().draw_section(ax, q)
+
+
+FAMILY_ELEMENTS = {Family.PINS: "pins", Family.INVOLUTE_STAGE: "gears", Family.ECCENTRIC_BEARINGS: "eccentric_bearings",
+                   Family.CRANK_BEARINGS: "crank_bearings", Family.MAIN_BEARINGS: "main_bearings"}
+
+
+def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1)):
+    """Assemble ``design`` into an Exudyn system; returns an :class:`RvModel`.
+
+    regularization: (k_translation [N/m], k_rotation [N m/rad]) of weak springs from every free
+    coordinate to its kinematic position (a numerical setting for the free play of the
+    backlash and bearing clearances at zero load, as in the cycloid builder; the force they
+    carry is reported by the protocols). (0, 0) removes them.
+    """
+    if not isinstance(design, RVDesign):
+        raise RvtoolInputError(f"design must be an RVDesign; got {type(design).__name__}")
+    d = design
+    graph = GearGraph.of(d)
+    L = Layout(d)
+    kin = RvKinematics(d, graph, L)
+    ref = kin.reference
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
+    m_w, J_w = wheel_mass(d, graph)
+    b = d.bodies
+    masses = ([(b.pinion_mass, b.pinion_inertia)] if L.three_stage else []) + [(b.sun_mass, b.sun_inertia)] + \
+        [(d.cranks.mass, d.cranks.inertia)] * L.n_cranks + [(m_w, J_w)] * 2 + [(b.carrier_mass, b.carrier_inertia)]
+    nodes = []
+    for k in range(L.n_bodies):
+        n = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=list(ref[k])))
+        mbs.AddObject(ObjectRigidBody2D(nodeNumber=n, mass=masses[k][0], inertia=masses[k][1]))
+        nodes.append(n)
+
+    def marker(body, c):
+        return mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[body], coordinate=c))
+
+    # held coordinates: the input's undeclared x, y; the three-stage compound gear's centre
+    held = [(0, c) for c, nm in enumerate(("x", "y")) if nm not in b.input]
+    if L.three_stage:
+        held += [(L.sun, 0), (L.sun, 1)]
+    locks = [mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, marker(body, c)])) for body, c in held]
+    drive = mbs.AddObject(CoordinateConstraint(markerNumbers=[mg, marker(0, 2)], offset=0.0))
+    k_t, k_r = regularization
+    reg_springs = []
+    for body in range(L.n_bodies):
+        for c in range(3):
+            if (body, c) in held or (body == 0 and c == 2):
+                continue
+            k = k_t if c < 2 else k_r
+            if k > 0:
+                reg_springs.append((body, c, k, mbs.AddObject(CoordinateSpringDamper(
+                    markerNumbers=[mg, marker(body, c)], stiffness=k))))
+    load = mbs.AddLoad(LoadCoordinate(markerNumber=marker(L.carrier, 2), load=0.0))
+
+    opts = dict(backend=backend, precision=precision, device=device)
+    profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
+    pin_set = CycloidPinSet(meshes, L.n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
+                            search=d.wheels.search, **opts)
+    gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
+    needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
+    cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
+    main = BearingSet([Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)],
+                      L.n_bodies, name="main_bearings", **opts)
+    elements = {name: ContactElement(mbs, nodes, s) for name, s in
+                (("pins", pin_set), ("gears", gears), ("eccentric_bearings", needles), ("crank_bearings", cranks),
+                 ("main_bearings", main))}
+    mbs.Assemble()
+    families = {fam: (name, np.arange(len(elements[name].ids))) for fam, name in FAMILY_ELEMENTS.items()}
+    i = abs(graph.ratio)
+    return RvModel(design=d, SC=SC, mbs=mbs, body_names=L.names(), nodes=nodes, elements=elements, families=families,
+                   input=BodyCoordinate(L.names()[0], "theta"), output=BodyCoordinate("carrier", "theta"),
+                   ratio=graph.ratio, kinematics=kin, drive=drive, load=load, reference=ref, locks=locks,
+                   reg_springs=reg_springs, main_mesh=Family.PINS,
+                   mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
+                   graph=graph, layout=L, profiles=profiles)

@@ -1,0 +1,285 @@
+"""RV reducer specification: plain data (TOML) loaded into frozen dataclasses. Every
+design section IS a component spec (:func:`rvtool.assembly.spec.build_section`): the
+cycloid stage reuses the cycloid sections (``pins``, ``wheels``, ``pin_contact``), the
+gears are :class:`~rvtool.geometry.involute.InvoluteGear`, the bearings are the bearing
+specs (:class:`~rvtool.bearings.spec.NeedleBearing`, :class:`~rvtool.bearings.tapered.TaperedPair`,
+:class:`~rvtool.bearings.spec.AngularContactPair` with its ``row`` subtable). Only the
+RV-specific parts (crank count and crank manufacturing deviations, the involute-stage
+numerics, the rigid-body data, the three-stage input) are defined here.
+
+Topology keys (``topology``): ``"rv2"`` (input sun -> cranks) and
+``"rv3"`` (offset input pinion -> compound gear carrying the sun -> cranks).
+"""
+import copy
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+
+from ...bearings.spec import AngularContactPair, BallBearing, NeedleBearing
+from ...bearings.tapered import TaperedPair
+from ...errors import RvtoolInputError
+from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
+from ...validation import check_finite, check_positive, check_range
+from ...geometry.cycloid import CycloidProfile
+from ...structure import ElasticMaterial
+from ..spec import LINKS, PinContact, Pins, Wheels, build_section, load_sections
+
+TOPOLOGIES = ("rv2", "rv3")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Cranks:
+    """The floating crankshafts: count N_c (2 or 3, equally spaced on the crank circle, whose
+    radius is the sun--crank-gear centre distance), rigid-body data (mass [kg], polar inertia
+    [kg m^2]) and manufacturing deviations per crank (a variant is a design):
+    phase_errors_arcmin: the eccentric phase of crank k off its nominal by this angle [arcmin]
+    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none)."""
+    count: int
+    mass: float = 0.25
+    inertia: float = 2.0e-5
+    phase_errors_arcmin: tuple = ()
+    eccentricity_errors: tuple = ()
+
+    def __post_init__(self):
+        if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count not in (2, 3):
+            raise RvtoolInputError(f"cranks.count = {self.count!r} is outside the valid range [2, 3] (integer): "
+                                   "an RV stage carries 2 or 3 floating crankshafts")
+        check_positive("cranks.mass", self.mass)
+        check_positive("cranks.inertia", self.inertia)
+        for nm in ("phase_errors_arcmin", "eccentricity_errors"):
+            v = getattr(self, nm)
+            if len(v) not in (0, self.count):
+                raise RvtoolInputError(f"cranks.{nm} has {len(v)} entries; valid: 0 or cranks.count = {self.count}")
+            check_finite(f"cranks.{nm}", v)
+
+    def phase_error(self, k):
+        """Eccentric phase error of crank k [rad]."""
+        return math.radians(self.phase_errors_arcmin[k] / 60.0) if self.phase_errors_arcmin else 0.0
+
+    def eccentricity_error(self, k):
+        return float(self.eccentricity_errors[k]) if self.eccentricity_errors else 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class InvoluteStage:
+    """Numerics of the involute meshes (each mesh a :class:`~rvtool.contact.involute_set.GearMesh`):
+    n_slices across the face width, window (teeth either side of the pitch point; None: from the
+    contact ratio), damping [N s/m] per mesh, ramp_depth [m]."""
+    n_slices: int = 1
+    window: int | None = None
+    damping: float = 0.0
+    ramp_depth: float = 1e-6
+
+    def __post_init__(self):
+        if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, int) or self.n_slices < 1:
+            raise RvtoolInputError(f"involute_stage.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
+        check_range("involute_stage.damping", self.damping, 0.0)
+        check_positive("involute_stage.ramp_depth", self.ramp_depth)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RvBodies:
+    """Rigid-body data: the input body (the sun, or the three-stage pinion) retains ``input``
+    coordinates (its theta is driven; x, y listed = floating on ``input_bearing_stiffness``
+    [N/m] springs, else held by its bearings as rigid); masses [kg] and polar inertias [kg m^2]
+    of the sun (or compound gear), the input pinion and the carrier (both halves, joined rigidly)."""
+    input: tuple = ("theta",)
+    sun_mass: float = 0.15
+    sun_inertia: float = 1.0e-5
+    pinion_mass: float = 0.1
+    pinion_inertia: float = 5.0e-6
+    carrier_mass: float = 3.0
+    carrier_inertia: float = 6.0e-3
+
+    def __post_init__(self):
+        for c in self.input:
+            if c not in ("x", "y", "theta"):
+                raise RvtoolInputError(f"bodies.input contains {c!r}; valid coordinates are ['x', 'y', 'theta']")
+        if "theta" not in self.input:
+            raise RvtoolInputError("bodies.input must contain 'theta' (the driven input rotation)")
+        for nm in ("sun_mass", "sun_inertia", "pinion_mass", "pinion_inertia", "carrier_mass", "carrier_inertia"):
+            check_positive(f"bodies.{nm}", getattr(self, nm))
+
+
+@dataclass(frozen=True, kw_only=True)
+class InputStage:
+    """Three-stage only: the offset input pinion meshing the compound gear's large gear;
+    direction_deg: the angle of the pinion axis seen from the reducer axis [deg]."""
+    direction_deg: float = 60.0
+
+    def __post_init__(self):
+        check_finite("input_stage.direction_deg", self.direction_deg)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RVDesign:
+    """An RV reducer (see rvtool/designs/rv40e.toml). ``ratio_target``: the declared nominal
+    ratio (catalogue), checked against the gear graph; None: not declared."""
+    name: str
+    topology: str
+    rated_torque: float
+    input_speed_rpm: float
+    ratio_target: float | None = None
+    material: ElasticMaterial
+    pins: Pins
+    profile: CycloidProfile
+    wheels: Wheels
+    pin_contact: PinContact
+    sun_gear: InvoluteGear
+    crank_gear: InvoluteGear
+    involute_stage: InvoluteStage = field(default_factory=InvoluteStage)
+    cranks: Cranks
+    eccentric_bearing: NeedleBearing
+    crank_bearing: TaperedPair
+    main_bearing: AngularContactPair
+    bodies: RvBodies = field(default_factory=RvBodies)
+    input_pinion: InvoluteGear | None = None
+    compound_gear: InvoluteGear | None = None
+    input_stage: InputStage = field(default_factory=InputStage)
+    #: the file-form data this design was loaded from (what :func:`replace` changes and re-loads)
+    source: dict | None = field(default=None, compare=False, hash=False, repr=False, metadata={"file": False})
+
+    def __post_init__(self):
+        if self.topology not in TOPOLOGIES:
+            raise RvtoolInputError(f"topology = {self.topology!r}; valid choices are {list(TOPOLOGIES)}")
+        check_positive("rated_torque", self.rated_torque)
+        check_positive("input_speed_rpm", self.input_speed_rpm)
+        if len(self.wheels.midplanes) != 2:
+            raise RvtoolInputError(f"wheels.midplanes has {len(self.wheels.midplanes)} entries; an RV stage has two "
+                                   "cycloid wheels (valid: 2 entries, phases 180 deg apart)")
+        dphi = math.degrees(self.wheels.phases[1] - self.wheels.phases[0]) % 360.0
+        if abs(dphi - 180.0) > 1e-9:
+            raise RvtoolInputError(f"wheels.phases_deg = {[math.degrees(p) for p in self.wheels.phases]}: the two "
+                                   "eccentric journals of "
+                                   "a crank are 180 deg apart (valid: phases differing by 180)")
+        zg = self.wheels.n_teeth if self.wheels.n_teeth is not None else self.pins.n_pins - 1
+        if zg != self.pins.n_pins - 1:
+            raise RvtoolInputError(f"wheels.n_teeth = {zg} with pins.n_pins = {self.pins.n_pins}: only Z_pins = "
+                                   f"Z_wheel + 1 is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
+        if self.ratio_target is not None:
+            check_positive("ratio_target", abs(self.ratio_target))
+        if self.topology == "rv3" and (self.input_pinion is None or self.compound_gear is None):
+            missing = [s for s in ("input_pinion", "compound_gear") if getattr(self, s) is None]
+            raise RvtoolInputError(f"topology = 'rv3' needs the sections {missing}")
+        if self.topology == "rv2" and (self.input_pinion is not None or self.compound_gear is not None):
+            raise RvtoolInputError("topology = 'rv2' has no input_pinion / compound_gear sections; valid: "
+                                   "remove them or set topology = 'rv3'")
+
+    @property
+    def n_wheels(self):
+        return 2
+
+    @property
+    def ratio(self):
+        """Signed nominal ratio from the gear graph (:mod:`rvtool.assembly.rv.gear_graph`)."""
+        from .gear_graph import GearGraph
+        return GearGraph.of(self).ratio
+
+    def replace(self, **sections):
+        """A copy with sections replaced by dicts of changed fields (``rvtool.assembly.spec.replace``)."""
+        from ..spec import replace
+        return replace(self, **sections)
+
+    def with_mesh_stiffness_factor(self, factor):
+        """A copy whose pin-contact law is the line law at ``factor`` times the current stiffness (as
+        :meth:`rvtool.assembly.spec.CycloidDesign.with_mesh_stiffness_factor`)."""
+        from ...contact.cycloid_set import secant_line_stiffness
+        from ..spec import replace
+        pc = self.pin_contact
+        k = pc.stiffness if pc.stiffness > 0 else secant_line_stiffness(pc.reference_force, self.wheels.width)
+        return replace(self, pin_contact={"law": "line", "stiffness": factor * k})
+
+    def refined(self):
+        """The design at refined numerical resolution: twice the wheel-profile samples and the involute
+        slices (the reference of resolution error statements)."""
+        w = dataclasses.replace(self.wheels, samples_per_tooth=2 * self.wheels.samples_per_tooth)
+        st = dataclasses.replace(self.involute_stage, n_slices=2 * self.involute_stage.n_slices)
+        return dataclasses.replace(self, wheels=w, involute_stage=st)
+
+
+def _gear(section, data):
+    """An InvoluteGear from its table; the optional sub-tables ``rack`` (BasicRack) and
+    ``modification`` (FlankModification) are component specs too. The gear's name is the section
+    (its validation errors then name the key path)."""
+    data = _table(section, data)
+    for key, cls in (("rack", BasicRack), ("modification", FlankModification)):
+        if key in data:
+            data[key] = build_section(cls, f"{section}.{key}", _table(f"{section}.{key}", data[key]))
+    data["name"] = section
+    return build_section(InvoluteGear, section, data)
+
+
+def _table(section, data):
+    """``data`` as a dict, or an error naming the section when the file holds something else there."""
+    if not isinstance(data, dict):
+        raise RvtoolInputError(f"[{section}] must be a table of keys; got {type(data).__name__} {data!r}")
+    return dict(data)
+
+
+def _main_bearing(data):
+    """The AngularContactPair from ``[main_bearing]`` with its two rows as ``[[main_bearing.rows]]``
+    tables (each a BallBearing spec) or one ``[main_bearing.row]`` table for both."""
+    data = _table("main_bearing", data)
+    if "row" in data:
+        table = data.pop("row")
+        data["rows"] = [table, table]
+    rows = data.get("rows")
+    if not (isinstance(rows, (list, tuple)) and len(rows) == 2):
+        raise RvtoolInputError(f"main_bearing.rows must hold 2 row tables (BallBearing specs); got {rows!r}")
+    data["rows"] = tuple(r if isinstance(r, BallBearing) else
+                         build_section(BallBearing, f"main_bearing.rows[{k}]", _table(f"main_bearing.rows[{k}]", r))
+                         for k, r in enumerate(rows))
+    return build_section(AngularContactPair, "main_bearing", data)
+
+
+def _crank_bearing(data):
+    """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables."""
+    data = _table("crank_bearing", data)
+    if "row" in data:
+        data["row"] = _table("crank_bearing.row", data["row"])
+    if isinstance(data.get("rows"), (list, tuple)):
+        data["rows"] = [r if not isinstance(r, dict) else _table(f"crank_bearing.rows[{k}]", r)
+                        for k, r in enumerate(data["rows"])]
+    return TaperedPair.from_mapping(data, "crank_bearing")
+
+
+#: The cycloid stage's sections, the cycloid design's specs (the wheel profile generated by the ring,
+#: :data:`rvtool.assembly.spec.LINKS`), in dependency order.
+_CYCLOID_SECTIONS = {"material": ElasticMaterial, "pins": Pins, "wheels": Wheels, "profile": CycloidProfile,
+                     "pin_contact": PinContact}
+_SECTIONS = {"sun_gear": lambda d: _gear("sun_gear", d),
+             "crank_gear": lambda d: _gear("crank_gear", d),
+             "involute_stage": lambda d: build_section(InvoluteStage, "involute_stage", d),
+             "cranks": lambda d: build_section(Cranks, "cranks", d),
+             "eccentric_bearing": lambda d: build_section(NeedleBearing, "eccentric_bearing", d),
+             "crank_bearing": _crank_bearing,
+             "main_bearing": _main_bearing,
+             "bodies": lambda d: build_section(RvBodies, "bodies", d),
+             "input_pinion": lambda d: _gear("input_pinion", d),
+             "compound_gear": lambda d: _gear("compound_gear", d),
+             "input_stage": lambda d: build_section(InputStage, "input_stage", d)}
+_OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input_stage")
+
+
+def design_from_dict(d):
+    """A validated :class:`RVDesign` from a design mapping (a parsed TOML file)."""
+    d = _table("design", d)
+    source = copy.deepcopy(dict(d))
+    kw = load_sections(d, _CYCLOID_SECTIONS, optional=("profile",), links={"profile": LINKS["profile"]}, derived={})
+    for sec, make in _SECTIONS.items():
+        if sec not in d:
+            if sec in _OPTIONAL:
+                continue
+            raise RvtoolInputError(f"section [{sec}] is missing from the design")
+        kw[sec] = make(d.pop(sec))
+    design = build_section(RVDesign, "design", {**d, **kw, "source": source})
+    from .gear_graph import GearGraph
+    GearGraph.of(design)          # topology errors (spacing, crank count, declared ratio) at load
+    return design
+
+
+def load_design(path):
+    """Load an RV design TOML file into a validated :class:`RVDesign`."""
+    with open(path, "rb") as fh:
+        return design_from_dict(tomllib.load(fh))

@@ -1,0 +1,208 @@
+"""Elastic pins as an exact per-pin static condensation (issue 21): each pin's beam is allocated
+once with its full station compliance matrix (Eq. (series_contact); paper, "each elastic region
+is allocated once"; the coupling of Eq. (pin_compliance) without its one-step linearization).
+
+A contact set whose pins are rigid (the ring pins of a :class:`~rvtool.contact.cycloid_set.CycloidPinSet`,
+the plain output pins of an :class:`~rvtool.output_pins.evaluator.OutputPinEvaluator`) is built
+with one *station body* per (pin, station): the pin's carrier (ground, or the flange) translated by
+the beam deflection u_ps (2,) [m] at station s (a wheel's contact width). The contacts of wheel s
+with pin p act on that body only, so the set evaluates every contact at the deflected pin. The
+beam closes the station bodies: per pin, with the station compliance C (n_s, n_s) of
+:meth:`rvtool.structure.pin_beam.PinBeam.station_compliance` and K_b = C^-1 (isotropic, so it
+applies to x and y alike),
+
+    R_p(q, u_p) = Q_u(q, u_p) - (K_b (x) I_2) u_p = 0,
+
+the contact forces on the stations equal the beam's elastic forces. :class:`ElasticPinClosure`
+solves this by Newton's method per pin for every evaluation (warm-started from the last solution;
+at most ``max_iterations`` steps, each halved until the residual decreases) and returns the
+condensed generalized forces and the exact condensed tangent
+
+    dQ/dq = K_qq - K_qu (K_uu - K_b)^-1 K_uq
+
+(the derivative of the forces along the solution manifold u(q); the velocity tangent likewise).
+The station bodies are massless (quasi-static beam): the deflection rate does not enter the
+contact velocities. Because the beam energy (1/2) u^T K_b u is invariant under rotations of u, the
+stations translate in the global frame while the carrier rotates; at R_p = 0 the condensed
+forces do not depend on that choice of coordinates.
+
+The observations are the set's at the solution: the gap is the contact gap at the deflected pin
+(the beam's deflection is not part of the observed approach), the force the final force.
+"""
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import RvtoolInputError
+from .evaluator import Evaluation, all_finite
+
+GROUND = -1
+
+
+class ElasticPinClosure:
+    """Contact evaluator of elastic pins over ``n_bodies`` real bodies (module docstring).
+
+    inner: the rigid-pin contact set over n_bodies + n_pins n_s bodies whose body
+    n_bodies + station[p, s] is pin p at station s (``evaluate(pose, vel, check=False)`` ->
+    :class:`~rvtool.contact.evaluator.Evaluation`, ``ids``, ``commit``, ``history``).
+    carrier: real body index carrying the pins, or GROUND (-1).
+    station_compliance: C (n_s, n_s) [m/N], symmetric positive definite.
+    station: (n_pins, n_s) station index of every (pin, station) (row of the station bodies).
+    tolerance: largest station force residual accepted [N] (1e-8 N: 1e-16 m of approach at a
+    contact stiffness of 1e8 N/m, the round-off of the approaches).
+    Attributes the model's observers read (``mesh_of``, ``pin_of``, ``meshes``, ...) are the
+    inner set's: the rows are the inner set's rows.
+    """
+
+    def __init__(self, inner, *, n_bodies, carrier, station_compliance, station, tolerance=1e-8,
+                 max_iterations=40):
+        C = np.asarray(station_compliance, float)
+        station = np.asarray(station, int)
+        if C.ndim != 2 or C.shape[0] != C.shape[1] or station.ndim != 2 or station.shape[1] != C.shape[0]:
+            raise RvtoolInputError(f"station_compliance {C.shape} and station {station.shape} must be (n_s, n_s) "
+                                   "and (n_pins, n_s)")
+        if not np.allclose(C, C.T, rtol=1e-10, atol=0.0) or np.linalg.eigvalsh(0.5 * (C + C.T)).min() <= 0:
+            raise RvtoolInputError("station_compliance must be symmetric positive definite (a supported beam); "
+                                   f"eigenvalues {np.linalg.eigvalsh(0.5 * (C + C.T))}")
+        self.inner = inner
+        self.name = inner.name
+        self.ids = inner.ids
+        self.n_bodies = int(n_bodies)
+        self.carrier = int(carrier)
+        self.station = station
+        self.n_pins, self.n_stations = station.shape
+        nv = station.size
+        if inner.n_bodies != self.n_bodies + nv:
+            raise RvtoolInputError(f"inner.n_bodies = {inner.n_bodies}; it must be n_bodies + n_pins n_s = "
+                                   f"{self.n_bodies + nv}")
+        self.compliance = C
+        self.beam_stiffness = np.linalg.inv(C)
+        self.tolerance = float(tolerance)
+        self.max_iterations = int(max_iterations)
+        self.history = inner.history
+        nr = 3 * self.n_bodies
+        # q_ext = M [q; u]: real bodies as they are; station body = carrier pose + (u, 0)
+        self._n_u = 2 * nv
+        M = np.zeros((3 * (self.n_bodies + nv), nr + self._n_u))
+        M[:nr, :nr] = np.eye(nr)
+        # u ordered per pin, then station, then (x, y): pin p's block is contiguous
+        self._u_index = np.zeros((self.n_pins, self.n_stations, 2), int)
+        for p in range(self.n_pins):
+            for s in range(self.n_stations):
+                b = 3 * (self.n_bodies + station[p, s])
+                k = nr + 2 * (p * self.n_stations + s)
+                self._u_index[p, s] = (k - nr, k + 1 - nr)
+                M[b, k], M[b + 1, k + 1] = 1.0, 1.0
+                if self.carrier != GROUND:
+                    M[b:b + 3, 3 * self.carrier:3 * self.carrier + 3] += np.eye(3)
+        self._M = sp.csr_matrix(M)
+        self._MT = self._M.T.tocsr()
+        self._Kb = np.kron(np.eye(self.n_pins), np.kron(self.beam_stiffness, np.eye(2)))
+        self._u = np.zeros(self._n_u)
+        self.last_iterations = 0
+
+    def __getattr__(self, name):
+        # row attributes of the inner set (mesh_of, pin_of, meshes, pin_forces, ...); only reached
+        # for names this class does not define
+        if name == "inner":
+            raise AttributeError(name)
+        return getattr(self.inner, name)
+
+    # -- the closure -------------------------------------------------------------------
+    def _extended(self, pose, vel, u):
+        ext = (self._M @ np.concatenate([np.asarray(pose, float).ravel(), u])).reshape(-1, 3)
+        vext = (self._M @ np.concatenate([np.asarray(vel, float).ravel(), np.zeros_like(u)])).reshape(-1, 3)
+        return ext, vext
+
+    def _reduced(self, ev, u):
+        """(Q_red (3 nb + 2 nv,), K_red, D_red or None) of an inner evaluation at station
+        deflections u, the beam's elastic forces included."""
+        Q = self._MT @ ev.Q
+        Q[3 * self.n_bodies:] -= self._Kb @ u
+        K = self._project(ev.dQdq)
+        K[3 * self.n_bodies:, 3 * self.n_bodies:] -= self._Kb
+        D = None if ev.dQdv is None else self._project(ev.dQdv)
+        return Q, K, D
+
+    def _project(self, A):
+        """M^T A M for a dense A (M sparse: one or two ones per row)."""
+        return np.ascontiguousarray((self._MT @ (self._MT @ np.asarray(A)).T).T)
+
+    def solve(self, pose, vel, u0=None):
+        """Station deflections u (2 n_pins n_s,) [m] at poses/velocities (nb, 3), the inner
+        evaluation there and the reduced (Q, K, D). Raises nothing: ``converged`` says."""
+        nr = 3 * self.n_bodies
+        u = self._u.copy() if u0 is None else np.asarray(u0, float).copy()
+        for restart in (False, True):
+            if restart:
+                u = np.zeros(self._n_u)
+            ext, vext = self._extended(pose, vel, u)
+            ev = self.inner.evaluate(ext, vext, check=False)
+            Q, K, D = self._reduced(ev, u)
+            r = np.abs(Q[nr:]).max(initial=0.0)
+            for it in range(self.max_iterations):
+                if r <= self.tolerance or not np.isfinite(r):
+                    break
+                du = -self._solve_uu(K[nr:, nr:], Q[nr:])
+                step = 1.0
+                for _ in range(12):
+                    un = u + step * du
+                    ext, vext = self._extended(pose, vel, un)
+                    evn = self.inner.evaluate(ext, vext, check=False)
+                    Qn, Kn, Dn = self._reduced(evn, un)
+                    rn = np.abs(Qn[nr:]).max(initial=0.0)
+                    if rn < r or rn <= self.tolerance:
+                        break
+                    step *= 0.5
+                u, ev, Q, K, D, r = un, evn, Qn, Kn, Dn, rn
+                self.last_iterations = it + 1
+            if r <= self.tolerance:
+                return u, ev, (Q, K, D), True
+        return u, ev, (Q, K, D), False
+
+    def _solve_uu(self, Kuu, rhs):
+        """Kuu^-1 rhs with Kuu block diagonal per pin (2 n_s square blocks)."""
+        m = 2 * self.n_stations
+        n = self.n_pins
+        blocks = Kuu.reshape(n, m, n, m)[np.arange(n), :, np.arange(n), :]
+        x = np.linalg.solve(blocks, np.asarray(rhs).reshape(n, m, -1))
+        return x.reshape(n * m, -1) if np.ndim(rhs) == 2 else x.reshape(-1)
+
+    def condense(self, red, beam_factor=1.0):
+        """(Q, dQ/dq, dQ/dv) on the real coordinates from reduced (Q, K, D); ``beam_factor``
+        scales K_b in the condensation only (the budget's switch-to-rigid view of the beam)."""
+        Q, K, D = red
+        nr = 3 * self.n_bodies
+        Kuu = K[nr:, nr:]
+        if beam_factor != 1.0:
+            Kuu = Kuu - (beam_factor - 1.0) * self._Kb
+        X = self._solve_uu(Kuu, K[nr:, :nr])
+        dQdq = K[:nr, :nr] - K[:nr, nr:] @ X
+        dQdv = None
+        if D is not None:
+            dQdv = D[:nr, :nr] - K[:nr, nr:] @ self._solve_uu(Kuu, D[nr:, :nr])
+        return Q[:nr], dQdq, dQdv
+
+    # -- evaluator protocol --------------------------------------------------------------
+    def evaluate(self, pose, vel, history=None, check=True):
+        if check:
+            for nm, a in (("pose", pose), ("vel", vel)):
+                a = np.asarray(a)
+                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
+                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
+        u, ev, red, ok = self.solve(pose, vel)
+        if ok:
+            self._u = u
+        Q, dQdq, dQdv = self.condense(red)
+        finite = ok and ev.finite and all_finite(Q, dQdq) and (dQdv is None or all_finite(dQdv))
+        return Evaluation(Q, dQdq, dQdv, ev.obs, ev.trial_history, finite)
+
+    def commit(self, pose, vel, evaluation=None):
+        if evaluation is not None:
+            return np.array(evaluation.obs, float)
+        u, ev, _, _ = self.solve(pose, vel)
+        return np.array(ev.obs, float)
+
+    def deflections(self, pose):
+        """Station deflections (n_pins, n_s, 2) [m] at static poses (nb, 3)."""
+        u = self.solve(pose, np.zeros_like(np.asarray(pose, float)))[0]
+        return u[self._u_index]

@@ -1,0 +1,90 @@
+"""RV manufacturing tolerances: declared distributions and seeded sampling of RV design variants
+(a variant is a design: the deviations are written into the design's own sections).
+
+Fields (SI units; distributions and their TOML form as :mod:`rvtool.variants.tolerances`):
+
+* ``crank_phase_error`` [arcmin]: eccentric phase error of each crank (one draw per crank,
+  ``cranks.phase_errors_arcmin``),
+* ``crank_eccentricity_error`` [m]: e_k - e of each crank (one draw per crank,
+  ``cranks.eccentricity_errors``),
+* ``pin_radius_error`` [m]: actual minus nominal pin radius, one value per reducer (``pins.radius_error``),
+* ``needle_clearance`` [m]: radial clearance of the needle sets (one value per reducer,
+  ``eccentric_bearing.radial_clearance``; support must be non-negative),
+* ``sun_pitch_deviation`` [m]: single pitch deviations f_pt of the sun gear (one draw per tooth,
+  minus their mean so that they close the circle; ``sun_gear.single_pitch_deviations``).
+
+Variant k draws from ``numpy.random.default_rng([seed, k])`` in the order of :data:`RV_FIELDS`.
+"""
+import tomllib
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RvtoolInputError
+from .tolerances import DISTRIBUTIONS, distribution_from_dict
+
+RV_FIELDS = ("crank_phase_error", "crank_eccentricity_error", "pin_radius_error", "needle_clearance",
+             "sun_pitch_deviation")
+
+
+@dataclass(frozen=True, kw_only=True)
+class RvToleranceSpec:
+    """One distribution (or None) per field of :data:`RV_FIELDS`."""
+    crank_phase_error: object = None
+    crank_eccentricity_error: object = None
+    pin_radius_error: object = None
+    needle_clearance: object = None
+    sun_pitch_deviation: object = None
+
+    def __post_init__(self):
+        for nm in RV_FIELDS:
+            d = getattr(self, nm)
+            if d is not None and not isinstance(d, tuple(DISTRIBUTIONS.values())):
+                raise RvtoolInputError(f"tolerances.{nm} = {d!r}; valid: one of {sorted(DISTRIBUTIONS)} or none")
+        if self.needle_clearance is not None and self.needle_clearance.support()[0] < 0:
+            raise RvtoolInputError(f"tolerances.needle_clearance has support starting at "
+                                   f"{self.needle_clearance.support()[0]} m; valid range [0, inf) m")
+
+
+def load_rv_tolerances(path):
+    """RvToleranceSpec from the ``[tolerances]`` table of a TOML file."""
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    table = data.get("tolerances")
+    if not isinstance(table, dict):
+        raise RvtoolInputError(f"{path}: no [tolerances] table")
+    unknown = set(table) - set(RV_FIELDS)
+    if unknown:
+        raise RvtoolInputError(f"[tolerances] has unknown keys {sorted(unknown)}; valid keys are {list(RV_FIELDS)}")
+    return RvToleranceSpec(**{k: distribution_from_dict(k, v) for k, v in table.items()})
+
+
+def sample_rv_design(spec, design, k, seed):
+    """(design of variant k, its drawn deviations {field: value(s)})."""
+    if int(k) < 0 or int(seed) < 0:
+        raise RvtoolInputError(f"variant index {k} and seed {seed}: valid range [0, inf) (integers)")
+    rng = np.random.default_rng([int(seed), int(k)])
+    n = design.cranks.count
+    drawn, changes = {}, {}
+    for nm in RV_FIELDS:
+        d = getattr(spec, nm)
+        if d is None:
+            continue
+        if nm == "crank_phase_error":
+            v = tuple(float(x) for x in d.sample(rng, n))
+            changes.setdefault("cranks", {})["phase_errors_arcmin"] = v
+        elif nm == "crank_eccentricity_error":
+            v = tuple(float(x) for x in d.sample(rng, n))
+            changes.setdefault("cranks", {})["eccentricity_errors"] = v
+        elif nm == "pin_radius_error":
+            v = float(d.sample(rng))
+            changes["pins"] = {"radius_error": v}
+        elif nm == "needle_clearance":
+            v = float(d.sample(rng))
+            changes["eccentric_bearing"] = {"radial_clearance": v}
+        else:
+            f = np.asarray(d.sample(rng, design.sun_gear.n_teeth), float)
+            v = tuple(float(x) for x in f - f.mean())
+            changes["sun_gear"] = {"single_pitch_deviations": v}
+        drawn[nm] = v
+    return design.replace(**changes), drawn
