@@ -205,6 +205,7 @@ class ReducerModel:
     structures: dict = field(default_factory=dict)
     main_mesh: Family = Family.PINS
     mesh_period: float = None       # input angle [rad] of one mesh cycle of the main mesh
+    contact_host: object = None     # MergedContactElement carrying every family (one element per system), or None
 
     # -- coordinates -------------------------------------------------------
     def body_index(self, body):
@@ -278,8 +279,12 @@ class ReducerModel:
     def set_input_motion(self, angle_of_time):
         """Prescribed input angle [rad] as a function of time [s] (driven runs). The static
         regularization springs are switched off: inertia makes the dynamic problem regular."""
-        self.mbs.SetObjectParameter(self.drive, "offsetUserFunction",
-                                    lambda mbs, t, itemNumber, lOffset: angle_of_time(t))
+        if self.contact_host is not None:
+            # one contact element per system: the host sets the offset once per step attempt
+            self.contact_host.set_drive(self.drive, angle_of_time)
+        else:
+            self.mbs.SetObjectParameter(self.drive, "offsetUserFunction",
+                                        lambda mbs, t, itemNumber, lOffset: angle_of_time(t))
         for _, _, _, obj in self.reg_springs:
             self.mbs.SetObjectParameter(obj, "stiffness", 0.0)
 
@@ -293,6 +298,10 @@ class ReducerModel:
 
     def set_output_torque_function(self, torque_of_time):
         """Output torque [N m] as a function of time [s]; None removes it (the constant load applies)."""
+        if self.contact_host is not None:
+            # one contact element per system: the host sets the load once per step attempt
+            self.contact_host.set_load_function(self.load, torque_of_time)
+            return
         fn = 0 if torque_of_time is None else (lambda mbs, t, load: torque_of_time(t))
         self.mbs.SetLoadParameter(self.load, "loadUserFunction", fn)
 
