@@ -52,6 +52,10 @@ from .contact_element import ContactElement
 # OpenBLAS runs a GEMM multithreaded above m n k = 65536 x 4 (interface/gemm.c,
 # SMP_THRESHOLD_MIN x GEMM_MULTITHREAD_THRESHOLD); below it the call stays on the caller's thread
 _GEMM_SINGLE_THREAD = 65536 * 4 - 1
+# up to this many element coordinates the tangent goes back dense: building an
+# exudyn.MatrixContainer costs ~20 us per Jacobian call more than handing over a
+# 12 x 12 array (measured, 2-core machine), while the system matrix gains nothing
+DENSE_MAX_COORDINATES = 30
 
 
 def small_matmul(A, B):
@@ -79,6 +83,24 @@ def _sparse_container(J, rows=None, cols=None):
     return mc
 
 
+class ContractedEvaluation(Evaluation):
+    """:class:`~rvtool.contact.evaluator.Evaluation` whose tangents dQdq, dQdv are formed on first
+    read (by the callables given for them) and kept."""
+
+    def __init__(self, Q, dQdq, dQdv, obs, trial_history, finite):
+        self._make = {"dQdq": dQdq, "dQdv": dQdv}
+        self._made = {}
+        self.Q, self.obs, self.trial_history, self.finite = Q, obs, trial_history, finite
+
+    def _get(self, name):
+        if name not in self._made:
+            self._made[name] = self._make[name]()
+        return self._made[name]
+
+    dQdq = property(lambda self: self._get("dQdq"), lambda self, v: self._made.__setitem__("dQdq", v))
+    dQdv = property(lambda self: self._get("dQdv"), lambda self, v: self._made.__setitem__("dQdv", v))
+
+
 class HostedContactElement(ContactElement):
     """One contact family of a :class:`MergedContactElement`: the per-family interface of
     :class:`ContactElement` (ids, ``evaluation_at``, ``commit``, ``set_gap_offsets``,
@@ -96,10 +118,40 @@ class HostedContactElement(ContactElement):
         if len(self.positions) != self.n:
             raise RvtoolInputError(f"positions has {len(self.positions)} entries for a family with {self.n} coordinates")
         # a contiguous leading block (the rigid bodies) is gathered and scattered as a view
-        self.prefix = self.n if np.array_equal(self.positions, np.arange(self.n)) else None
+        self.prefix = self.n if (self.ports is None and np.array_equal(self.positions, np.arange(self.n))) else None
 
     def _attach(self, mbs, nodes, ports):
         return self.host.object_number
+
+    def store(self, key, pose, vel):
+        """Evaluate at absolute poses/velocities (state already checked finite by the host) and
+        cache the result under ``key`` (the key :meth:`ContactElement.evaluate` forms), so that
+        ``commit`` and ``evaluation_at`` at this state reuse it."""
+        ev = self.evaluator.evaluate(pose, vel, check=False)
+        if self.ports is not None:
+            ev = self._contract(ev)
+        self.n_evaluations += 1
+        if self.n_evaluations in self.inject_nan_at:
+            ev.Q = ev.Q * np.nan
+            ev.finite = False
+        if not ev.finite:
+            self.nonfinite = True
+        self._key, self._ev = key, ev
+        return ev
+
+    def commit(self, q_global, v_global, t=None, snapshot=True):
+        """:meth:`ContactElement.commit`; ``snapshot=False`` commits the history and the last
+        observation without building the observers' snapshot (the driver passes it when no
+        observer is registered)."""
+        if snapshot:
+            return super().commit(q_global, v_global, t)
+        ql, vl = self.local(q_global), self.local(v_global)
+        if t is not None and self._key == (float(t), ql.tobytes(), vl.tobytes()):
+            self.last_obs = self.evaluator.commit(None, None, evaluation=self._ev)
+        else:
+            self.last_obs = self.evaluator.commit(*self.pose_velocity(ql, vl))
+        self._key = None
+        return None
 
     @property
     def coordinate_indices(self):
@@ -118,7 +170,6 @@ class HostedContactElement(ContactElement):
         a = active(ev.dQdq, ev.dQdv)
         Pa = P[a]
         ia = nr + a
-        ne = P.shape[1]
 
         def mat(J):
             out = np.zeros((self.n, self.n))
@@ -128,14 +179,17 @@ class HostedContactElement(ContactElement):
                 out[nr:, :nr] = small_matmul(Pa.T, J[ia][:, :nr])
                 out[nr:, nr:] = small_matmul(Pa.T, small_matmul(J[np.ix_(ia, ia)], Pa))
             return out
-        Q = np.empty(self.n)
+        Q = np.zeros(self.n)
         Q[:nr] = ev.Q[:nr]
-        Q[nr:] = Pa.T @ ev.Q[ia] if len(a) else 0.0
-        if len(a) and np.any(np.delete(ev.Q[nr:], a) != 0):
+        if np.any(np.delete(ev.Q[nr:], a) != 0):
             # a port row with force but no tangent (not a contact law of this code): contract all rows
             Q[nr:] = small_matmul(P.T, ev.Q[nr:, None])[:, 0]
-        del ne
-        return Evaluation(Q, mat(ev.dQdq), mat(ev.dQdv), ev.obs, ev.trial_history, ev.finite)
+        elif len(a):
+            Q[nr:] = Pa.T @ ev.Q[ia]
+        # the tangents are contracted when first read: a residual-only evaluation (the converged
+        # Newton iterate) and the static solver (no velocity tangent) skip their share
+        return ContractedEvaluation(Q, lambda: mat(ev.dQdq), lambda: mat(ev.dQdv), ev.obs, ev.trial_history,
+                                    ev.finite)
 
 
 class MergedContactElement:
@@ -165,14 +219,18 @@ class MergedContactElement:
         self._ltg = None
         self._drive = None
         self._load = None
-        empty = exu.MatrixContainer()
-        empty.SetWithSparseMatrixCSR(self.n, self.n, np.zeros((0, 3)), useDenseMatrix=False)
-        # sparse (triplet) format throughout: Exudyn requires the object's matrices and its
-        # Jacobian user function to agree in format
+        # Exudyn requires the object's matrices and its Jacobian user function to agree in format
+        self.sparse = self.n > DENSE_MAX_COORDINATES
+        if self.sparse:
+            empty = exu.MatrixContainer()
+            empty.SetWithSparseMatrixCSR(self.n, self.n, np.zeros((0, 3)), useDenseMatrix=False)
+            mats = dict(massMatrix=empty, stiffnessMatrix=empty, dampingMatrix=empty)
+        else:
+            mats = dict(massMatrix=np.zeros((self.n, self.n)))
         self.object_number = mbs.AddObject(ObjectGenericODE2(
-            name=name, nodeNumbers=nodes + ([] if structure is None else [structure.node]), massMatrix=empty,
-            stiffnessMatrix=empty, dampingMatrix=empty, forceUserFunction=self.force_callback,
-            jacobianUserFunction=self.jacobian_callback, visualization=VObjectGenericODE2(show=False)))
+            name=name, nodeNumbers=nodes + ([] if structure is None else [structure.node]), **mats,
+            forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,
+            visualization=VObjectGenericODE2(show=False)))
 
     def add(self, contact_set, *, ports=None, **kw):
         """Add a family (a contact set or evaluator, as for :class:`ContactElement`); returns its
@@ -184,6 +242,10 @@ class MergedContactElement:
                 raise RvtoolInputError("ports must act on the structure the merged element was built with")
             positions = np.arange(self.n)
         m = HostedContactElement(self, positions, self.nodes, contact_set, ports=ports, **kw)
+        if m.prefix is not None and m.prefix != self.n_rigid:
+            raise RvtoolInputError("a family without ports spans exactly the host's rigid coordinates")
+        if not self.members:
+            self.reference = m.reference
         self.members.append(m)
         return m
 
@@ -196,21 +258,34 @@ class MergedContactElement:
         """(Q, per-family evaluations) at the host's coordinates, cached per state."""
         q = np.asarray(q, dtype=float)
         q_t = np.asarray(q_t, dtype=float)
-        key = (float(t), q.tobytes(), q_t.tobytes())
-        if key != self._key:
-            Q = np.zeros(self.n)
-            evs = []
-            for m in self.members:
-                if m.prefix is not None:
-                    k = m.prefix
-                    ev = m.evaluate(t, q[:k], q_t[:k])
-                    Q[:k] += ev.Q
-                else:
-                    ev = m.evaluate(t, q[m.positions], q_t[m.positions])
-                    Q[m.positions] += ev.Q
-                evs.append(ev)
-            self._key, self._Q, self._evs = key, Q, evs
-        return self._Q, self._evs
+        t = float(t)
+        key = (t, q.tobytes(), q_t.tobytes())
+        if key == self._key:
+            return self._Q, self._evs
+        if not (np.isfinite(q.sum()) and np.isfinite(q_t.sum())):
+            # a diverged Newton trial: every family answers NaN so that the driver rejects the attempt
+            evs = [m.evaluate(t, q[m.positions], q_t[m.positions]) for m in self.members]
+            self._key, self._Q, self._evs = key, np.full(self.n, np.nan), evs
+            return self._Q, self._evs
+        nr = self.n_rigid
+        # the rigid poses once for every family (ContactElement.pose_velocity, shared)
+        qr, vr = q[:nr], q_t[:nr]
+        pose_r = self.reference + qr.reshape(-1, 3)
+        vel_r = vr.reshape(-1, 3)
+        key_r = (t, qr.tobytes(), vr.tobytes())
+        Q = np.zeros(self.n)
+        evs = []
+        for m in self.members:
+            if m.prefix is not None:
+                ev = m.store(key_r, pose_r, vel_r)
+                Q[:nr] += ev.Q
+            else:
+                qm, vm = q[m.positions], q_t[m.positions]
+                ev = m.store((t, qm.tobytes(), vm.tobytes()), *m.pose_velocity(qm, vm))
+                Q[m.positions] += ev.Q
+            evs.append(ev)
+        self._key, self._Q, self._evs = key, Q, evs
+        return Q, evs
 
     def tangent(self, t, q, q_t, f_q=1.0, f_v=0.0):
         """Dense f_q dQ/dq + f_v dQ/dq_t (n, n) at the host's coordinates (summed over families)."""
@@ -233,7 +308,7 @@ class MergedContactElement:
         self.n_jacobian_calls += 1
         J = self.tangent(t, q, q_t, fODE2, fODE2_t)
         J *= -1.0
-        return _sparse_container(J)
+        return _sparse_container(J) if self.sparse else J
 
     # -- accepted-step interface ----------------------------------------------
     @property

@@ -40,6 +40,7 @@ body list, kinematics object (``poses(angles) -> (n, nb, 3)`` and
 ``velocities(angle, omega) -> (nb, 3)``) and family map; nothing in the solvers or
 protocols changes.
 """
+import functools
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -91,6 +92,18 @@ def physical_contact(row_id):
     return row_id
 
 
+@functools.lru_cache(maxsize=64)
+def contact_groups(row_ids):
+    """(physical contact ids in order of first appearance, contact index of every row) of a
+    tuple of row ids; cached because a study observes the same rows at every point."""
+    contact = [physical_contact(r) for r in row_ids]
+    names = tuple(dict.fromkeys(contact))
+    index = {c: k for k, c in enumerate(names)}
+    rows = np.fromiter((index[c] for c in contact), int, len(contact))
+    rows.flags.writeable = False
+    return names, rows
+
+
 @dataclass(frozen=True)
 class FamilyObservation:
     """A contact family at one state: per row (slice, lamina or whole contact) the identity,
@@ -120,12 +133,10 @@ class FamilyObservation:
     def per_contact(self):
         """(contact ids, normal force per physical contact [N]): rows summed per contact
         (Eq. width_resultant's force part), contacts in order of first appearance."""
-        contact = [physical_contact(r) for r in self.ids]
-        names = list(dict.fromkeys(contact))
-        index = {c: k for k, c in enumerate(names)}
+        names, rows = contact_groups(self.ids)
         out = np.zeros(len(names))
-        np.add.at(out, np.fromiter((index[c] for c in contact), int, len(contact)), self.obs[:, O_FN])
-        return tuple(names), out
+        np.add.at(out, rows, self.obs[:, O_FN])
+        return names, out
 
     def per_member(self):
         """{member: per-contact normal forces [N]}: the physical contacts grouped by the first

@@ -54,6 +54,15 @@ class RunRecord:
         return d
 
 
+def simulation_settings(spec: RunSpec, n_coordinates):
+    """Exudyn ``SimulationSettings`` of :func:`simulate` for ``spec`` on a system of ``n_coordinates``
+    ODE2 coordinates (benchmarks time the bare Exudyn step with exactly these)."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        return _settings(spec, n_coordinates)
+
+
 def _settings(spec: RunSpec, n_coordinates):
     ss = exu.SimulationSettings()
     ti = ss.timeIntegration
@@ -185,7 +194,12 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
         """The accepted step ending at t with state (q, v): history commit, observers, statistics."""
         state["open"] = False
         dt = t - state["t_prev"]
-        snaps = {e.name: e.commit(q, v, t) for e in elements}
+        if merged and observers is None:
+            for e in elements:
+                e.commit(q, v, t, snapshot=False)   # no observer: history only, no snapshot
+            snaps = None
+        else:
+            snaps = {e.name: e.commit(q, v, t) for e in elements}
         if energy is not None:
             energy.accept(t, q, v)
         if observers is not None:
