@@ -126,7 +126,10 @@ class HostedContactElement(ContactElement):
     def store(self, key, pose, vel):
         """Evaluate at absolute poses/velocities (state already checked finite by the host) and
         cache the result under ``key`` (the key :meth:`ContactElement.evaluate` forms), so that
-        ``commit`` and ``evaluation_at`` at this state reuse it."""
+        ``commit`` and ``evaluation_at`` at this state reuse it. A state this family already holds
+        (evaluated on its own, e.g. by an observer) is not evaluated again, as in ContactElement."""
+        if key == self._key:
+            return self._ev
         ev = self.evaluator.evaluate(pose, vel, check=False)
         if self.ports is not None:
             ev = self._contract(ev)

@@ -137,6 +137,10 @@ def test_load_function_and_fault_injection_in_the_merged_layout():
         m.mbs.systemData.SetODE2Coordinates_t(m.body_vector(m.kinematic_state(0.0, 10.0).velocities),
                                               configuration=exu.ConfigurationType.Initial)
         pins = m.family_element("pins")
+        # an evaluation of one family at the start state before the run (as the hard cases record
+        # it): the host must reuse it, not count a second evaluation, or the injection index shifts
+        v0 = m.mbs.systemData.GetODE2Coordinates_t(configuration=exu.ConfigurationType.Initial)
+        pins.evaluate(0.0, pins.local(q0), pins.local(v0))
         if nan:
             pins.inject_nan_at = {pins.n_evaluations + 4}
         th = []
