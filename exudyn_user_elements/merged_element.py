@@ -56,6 +56,8 @@ _GEMM_SINGLE_THREAD = 65536 * 4 - 1
 # exudyn.MatrixContainer costs ~20 us per Jacobian call more than handing over a
 # 12 x 12 array (measured, 2-core machine), while the system matrix gains nothing
 DENSE_MAX_COORDINATES = 30
+# key of the list of MergedContactElements in ``mbs.variables`` (Exudyn's user dictionary)
+HOSTS_KEY = "rvtool.contact_hosts"
 
 
 def small_matmul(A, B):
@@ -230,6 +232,9 @@ class MergedContactElement:
             mats = dict(massMatrix=empty, stiffnessMatrix=empty, dampingMatrix=empty)
         else:
             mats = dict(massMatrix=np.zeros((self.n, self.n)))
+        # registered with the system: the driver sets a host's per-attempt controls even when it
+        # is called without the contact elements (a frozen drive would be wrong, not slow)
+        mbs.variables.setdefault(HOSTS_KEY, []).append(self)
         self.object_number = mbs.AddObject(ObjectGenericODE2(
             name=name, nodeNumbers=nodes + ([] if structure is None else [structure.node]), **mats,
             forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,

@@ -199,3 +199,21 @@ def test_ported_housing_merged_tangent_and_equilibrium():
     mc = host.jacobian_callback(m.mbs, 0.0, host.object_number, ql, vl, 1.0, 0.0)
     assert isinstance(mc, exu.MatrixContainer)
     assert np.array_equal(np.asarray(mc.Convert2DenseMatrix()), -J)
+
+
+def test_drive_follows_time_when_the_driver_gets_no_elements():
+    """The host is registered with the system, so a run given no contact elements still moves the
+    input as prescribed (the offset is set per attempt, not by a Python offset function)."""
+    import exudyn as exu
+
+    from rvtool.solver import RunSpec, simulate
+    m, q0 = _loaded("merged", _design())
+    m.set_input_speed(10.0)
+    m.mbs.Assemble()
+    m.mbs.systemData.SetODE2Coordinates(q0, configuration=exu.ConfigurationType.Initial)
+    m.mbs.systemData.SetODE2Coordinates_t(m.body_vector(m.kinematic_state(0.0, 10.0).velocities),
+                                          configuration=exu.ConfigurationType.Initial)
+    rec = simulate(m.mbs, RunSpec(end_time=10 * 2e-5, step=2e-5, abs_tol=1e-6, rel_tol=1e-8), [])
+    q = m.mbs.systemData.GetODE2Coordinates()
+    assert rec.accepted_steps == 10
+    assert q[m.input_index] == pytest.approx(10.0 * 10 * 2e-5, rel=1e-12)

@@ -140,8 +140,9 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
     # one contact element per system (exudyn_user_elements.merged_element): the hosts set the
     # per-attempt controls in the pre-step hook and the accepted step is committed in the
     # post-Newton hook, so an accepted step crosses into Python for the hooks twice, not three times
-    hosts = list({id(h): h for h in (getattr(e, "host", None) for e in elements) if h is not None}.values())
-    merged = bool(hosts) and all(getattr(e, "host", None) is not None for e in elements)
+    hosts = [h for h in (getattr(e, "host", None) for e in elements) if h is not None]
+    hosts = list({id(h): h for h in hosts + list(mbs.variables.get("rvtool.contact_hosts", ()))}.values())
+    merged = bool(elements) and all(getattr(e, "host", None) is not None for e in elements)
 
     def pre_step(mbs_, t):
         close_failed_attempt()
