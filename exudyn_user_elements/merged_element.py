@@ -125,6 +125,10 @@ class HostedContactElement(ContactElement):
     def _attach(self, mbs, nodes, ports):
         return self.host.object_number
 
+    def set_gap_offsets(self, offsets):
+        super().set_gap_offsets(offsets)
+        self.host.invalidate()
+
     def store(self, key, pose, vel):
         """Evaluate at absolute poses/velocities (state already checked finite by the host) and
         cache the result under ``key`` (the key :meth:`ContactElement.evaluate` forms), so that
@@ -148,6 +152,8 @@ class HostedContactElement(ContactElement):
         """:meth:`ContactElement.commit`; ``snapshot=False`` commits the history and the last
         observation without building the observers' snapshot (the driver passes it when no
         observer is registered)."""
+        # the committed history changes: the host's cached sum may not be reused either
+        self.host.invalidate()
         if snapshot:
             return super().commit(q_global, v_global, t)
         ql, vl = self.local(q_global), self.local(v_global)
@@ -258,6 +264,10 @@ class MergedContactElement:
         return m
 
     # -- evaluation ---------------------------------------------------------
+    def invalidate(self):
+        """Drop the cached evaluation (a family's history or parameters changed)."""
+        self._key = None
+
     @property
     def nonfinite(self):
         return any(m.nonfinite for m in self.members)

@@ -217,3 +217,26 @@ def test_drive_follows_time_when_the_driver_gets_no_elements():
     q = m.mbs.systemData.GetODE2Coordinates()
     assert rec.accepted_steps == 10
     assert q[m.input_index] == pytest.approx(10.0 * 10 * 2e-5, rel=1e-12)
+
+
+def test_gap_offsets_and_commits_reach_the_merged_sum(rd40):
+    """Changing a family's gap offsets (or committing its history) drops the host's cached sum:
+    the next evaluation at the same state sees the change, as the per-family element does."""
+    d, (m, q), _ = rd40
+    host = m.contact_host
+    ql = q[host.coordinate_indices]
+    v = np.zeros_like(ql)
+    Q0 = host.evaluate(0.0, ql, v)[0].copy()
+    names, _ = m.observe(q, "pins").per_contact()
+    m.set_gap_offsets("pins", {n: 2e-6 for n in names})
+    Q1 = host.evaluate(0.0, ql, v)[0].copy()
+    assert np.linalg.norm(Q1 - Q0) > 1e-3 * np.linalg.norm(Q0)      # 2 um opened gaps unload the pins
+    m.set_gap_offsets("pins", {})
+    assert np.array_equal(host.evaluate(0.0, ql, v)[0], Q0)          # zeros restore the built element
+    pins = m.family_element("pins")
+    n0 = pins.n_evaluations
+    host.evaluate(0.0, ql, v)
+    assert pins.n_evaluations == n0                                   # cached
+    m.commit_contacts(q)
+    host.evaluate(0.0, ql, v)
+    assert pins.n_evaluations == n0 + 1                               # re-evaluated after the commit
