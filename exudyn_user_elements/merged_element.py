@@ -75,10 +75,9 @@ def small_matmul(A, B):
     return out
 
 
-def _sparse_container(J, rows=None, cols=None):
+def _sparse_container(J):
     """``exudyn.MatrixContainer`` in sparse triplet format of the non-zero entries of J."""
-    if rows is None:
-        rows, cols = np.nonzero(J)
+    rows, cols = np.nonzero(J)
     mc = exu.MatrixContainer()
     mc.SetWithSparseMatrixCSR(J.shape[0], J.shape[1], np.column_stack([rows, cols, J[rows, cols]]),
                               useDenseMatrix=False)
