@@ -83,7 +83,7 @@ def main(argv=None):
         "flange_angle_increase_arcmin": ported["flange_angle_arcmin"] - rigid["flange_angle_arcmin"],
         "peak_pin_force_change_pct": 100 * (ported["peak_pin_force_N"] / rigid["peak_pin_force_N"] - 1),
     }
-    settings["housing"] = {k: getattr(design.housing, k) for k in design.housing.__dataclass_fields__}
+    settings["housing"] = design.source["housing"]            # the file-form [housing] table of the design
     settings["contact_element"] = args.contact_element
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t0)
 

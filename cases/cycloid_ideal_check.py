@@ -35,7 +35,7 @@ def closed_form(design, wheel, torque_per_wheel):
     e = design.wheels.eccentricity
     K1 = e * zb / design.pins.pin_circle_radius
     a = 2 * np.pi * np.arange(zb) / zb                       # pin angle from +y, clockwise
-    phase = np.deg2rad(design.wheels.phases_deg[wheel])      # journal direction of this wheel
+    phase = design.wheels.phases[wheel]                      # journal direction of this wheel
     phi = a + phase                                          # angle from the line of centres
     lever = e * zg * np.maximum(-np.sin(phi), 0.0) / np.sqrt(1 + K1 ** 2 - 2 * K1 * np.cos(phi))
     forces = torque_per_wheel * lever / np.sum(lever ** 2)
@@ -46,8 +46,8 @@ def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t0 = time.perf_counter()
     base = load_design(DESIGN)
-    design = replace(base, wheels={"clearance": 0.0, "equidistant_mod": 0.0, "offset_mod": 0.0, "rotation_mod": 0.0,
-                                   "samples_per_tooth": 60 if args.quick else 240},
+    design = replace(base, wheels={"clearance": 0.0, "samples_per_tooth": 60 if args.quick else 240},
+                     profile={"equidistant_mod": 0.0, "offset_mod": 0.0, "rotation_mod": 0.0},
                      pin_contact={"law": "line", "damping": 0.0, "mu": 0.0})
     model = build(design, rigid_supports=True)
     solver = StaticSolver(model)

@@ -180,7 +180,7 @@ def test_format_doc_covers_every_key_of_every_section():
 def test_ranges_are_the_enforced_ones():
     # every numeric range stated for a key is the one its spec rejects outside of
     rows = {(s, k): r for s, k, v, u, r, *_ in key_table("cycloid")}
-    assert rows[("material", "poisson_ratio")] == "[0.0, 0.5)"
+    assert rows[("material", "poisson_ratio")] == "(-1.0, 0.5)"       # [material] is an ElasticMaterial
     assert rows[("pins", "n_pins")].startswith("[3, inf)")
     assert rows[("output_pins", "hole_radius")] == "(0.004, inf)"   # above output_pins.pin_radius
 

@@ -86,7 +86,8 @@ def test_profile_modification_lost_motion_against_closed_form():
     # the clearance restored first 0.4557 vs 0.4417 (it also turns the elastic part from all pins
     # sharing the load to one pin carrying it). Bounds 2 %, 2 %, 1e-3 arcmin and 6 %.
     d = load_design(designs.path("rd40"))
-    dv = replace(d, wheels={"equidistant_mod": 5e-6, "offset_mod": -5e-6, "rotation_mod": 2e-4, "clearance": 2e-6},
+    dv = replace(d, profile={"equidistant_mod": 5e-6, "offset_mod": -5e-6, "rotation_mod": 2e-4},
+                 wheels={"clearance": 2e-6},
                  output_pins={"hole_radius": d.output_pins.pin_radius + d.wheels.eccentricity},
                  eccentric_bearing={"radial_clearance": 0.0}, input_bearing={"radial_clearance": 0.0})
     lm = lost_motion_budget(dv, fraction=0.005, bearing_model="lumped")

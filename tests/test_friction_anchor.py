@@ -217,8 +217,10 @@ def test_bad_friction_inputs_are_named():
 
 def _output_pins(backend="numpy", device="cpu", mu=MU, model=FrictionModel.ANCHOR, **kw):
     from rvtool.output_pins import OutputPinEvaluator, PinMode, shared_pin_study_mechanism
+    # the mechanism's friction law is the anchor model of its mu and tangential_stiffness (model
+    # NONE: mu = 0)
     mech = shared_pin_study_mechanism(0.0, n_pins=4, mode=PinMode.PLAIN, compliance=None,
-                                      friction=FrictionLaw(model=model, mu_kinetic=mu, tangential_stiffness=KT), **kw)
+                                      mu=mu if model == FrictionModel.ANCHOR else 0.0, tangential_stiffness=KT, **kw)
     return OutputPinEvaluator(mech, backend=backend, device=device)
 
 
@@ -307,11 +309,9 @@ def test_output_pin_mu_zero_and_bad_inputs():
     np.testing.assert_array_equal(ea.Q, eb.Q)
     np.testing.assert_array_equal(ea.dQdq, eb.dQdq)
     with pytest.raises(RvtoolInputError, match="plain"):
-        shared_pin_study_mechanism(0.0, friction=FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=0.1,
-                                                             tangential_stiffness=KT))
-    with pytest.raises(RvtoolInputError, match="friction.model"):
-        shared_pin_study_mechanism(0.0, mode=PinMode.PLAIN, compliance=None,
-                                   friction=FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=0.1))
+        shared_pin_study_mechanism(0.0, mu=0.1, tangential_stiffness=KT)
+    with pytest.raises(RvtoolInputError, match="mu"):
+        shared_pin_study_mechanism(0.0, mode=PinMode.PLAIN, compliance=None, mu=-0.1)
     with pytest.raises(RvtoolInputError, match="anchor_release_distance"):
         _output_pins(anchor_release_distance=0.0)
 

@@ -14,7 +14,7 @@ from warp_contacts.circle_pairs_ref import O_FN, O_NX, O_NY
 
 RD40 = designs.path("rd40")
 # a coarser mesh than the default keeps the reduction at ~2 s; the checks do not depend on it
-HOUSING = {"model": "ports", "mesh_size": 0.006}
+HOUSING = {"model": "ports", "structure": {"mesh_size": 0.006}}
 
 
 def _design(**housing):
@@ -95,7 +95,9 @@ def test_stiff_housing_tends_to_the_rigid_housing():
     errs = []
     for s in (1.0, 100.0):
         # the mounts scale too: otherwise the stiff housing still turns on them as a rigid ring
-        m, q = _rated(_design(youngs_modulus=206e9 * s, mount_stiffness=2e8 * s))
+        m, q = _rated(_design(structure={"mesh_size": 0.006, "mount_stiffness": 2e8 * s,
+                                         "material": {"youngs_modulus": 206e9 * s, "poisson_ratio": 0.3,
+                                                      "density": 7850.0}}))
         errs.append(abs(q[m.coordinate_index(m.flange, 2)] - q_r[i]))
     assert errs[0] > 1e-6                          # the elastic housing adds visible compliance (rad)
     assert errs[1] < 0.03 * errs[0]                # ~1/100 of it
@@ -106,8 +108,12 @@ def test_housing_spec_errors_name_the_parameter():
     from rvtool.errors import RvtoolInputError
     with pytest.raises(RvtoolInputError, match="housing.model"):
         _design(model="flexible")
-    with pytest.raises(RvtoolInputError, match="housing.inner_radius"):
-        _design(inner_radius=0.052)
+    with pytest.raises(RvtoolInputError, match=r"housing\.structure\.inner_radius = 0\.052 m cuts through"):
+        _design(structure={"inner_radius": 0.052})
+    with pytest.raises(RvtoolInputError, match=r"housing\.structure\.outer_radius"):
+        _design(structure={"outer_radius": 0.05})
+    with pytest.raises(RvtoolInputError, match=r"housing\.structure\.n_ports = 12; valid value pins\.n_pins = 40"):
+        _design(structure={"n_ports": 12})
     with pytest.raises(RvtoolInputError, match="housing.n_residual"):
         _design(n_residual=-2)
     assert replace(_design(), housing={"model": "rigid"}).housing.model == "rigid"

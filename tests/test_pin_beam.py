@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from rvtool import designs
-from rvtool.assembly.cycloid import output_pin_mechanism, pin_meshes, pin_station_compliance
+from rvtool.assembly.cycloid import pin_meshes, pin_station_compliance
 from rvtool.assembly.spec import load_design, replace
 from rvtool.errors import RvtoolInputError
 from rvtool.model import Family
@@ -61,7 +61,7 @@ def test_support_errors_name_the_key():
 def test_rigid_is_nothing():
     d = load_design(designs.path("rd40"))
     assert pin_station_compliance(d, Family.PINS) is None and pin_station_compliance(d, Family.OUTPUT_PINS) is None
-    assert output_pin_mechanism(d).mode == PinMode.PLAIN
+    assert d.output_pins.mode == PinMode.PLAIN
     _, meshes = pin_meshes(d)
     assert all(m.pin_bodies is None for m in meshes)
 

@@ -126,7 +126,8 @@ def test_multi_tooth_contact_grows_with_load(design, model):
     (lambda d: d["wheel"].update(n_teeth=78.5), r"wheel.n_teeth = 78.5"),
     (lambda d: d["ring"].update(internal=False), r"ring.internal is set by the design"),
     (lambda d: d["output_pins"].update(hole_radius=0.0050), r"output_pins.hole_radius = 0.005 m cannot pass"),
-    (lambda d: d["housing"].update(model="ports", inner_radius=0.05), r"housing.inner_radius = 0.05 m cuts through"),
+    (lambda d: [d["housing"].update(model="ports"), d["housing"]["structure"].update(inner_radius=0.05)],
+         r"housing.structure.inner_radius = 0.05 m cuts through"),
     (lambda d: d["mesh"].update(n_slices=0), r"mesh.n_slices = 0"),
     (lambda d: d["mesh"].update(tilt=0.1), r"\[mesh\] has unknown keys \['tilt'\]"),
     (lambda d: d["wheels"].update(eccentricity=-1e-3), r"wheels.eccentricity"),
@@ -182,7 +183,7 @@ def test_ported_housing_turns_the_ring_and_the_output_by_the_kinematic_factor(de
     mesh (8 mm) keeps the reduction at ~20 s."""
     from rvtool.solver.continuation import Continuation
     T = design.rated_torque
-    ported = build(design.replace(housing={"model": "ports", "mesh_size": 0.008}))
+    ported = build(design.replace(housing={"model": "ports", "structure": {"mesh_size": 0.008}}))
     assert "housing" in ported.structures
     th = {}
     for name, m in (("rigid", model), ("ports", ported)):
@@ -199,9 +200,10 @@ def test_single_wheel_variant(design):
     """One wheel (the topology takes one or two): it assembles conjugate, carries the rated torque
     alone, and its unbalanced radial mesh force reaches the main and input bearings."""
     from rvtool.solver.continuation import Continuation
-    # one wheel of twice the width (as RD-40's single-wheel variant)
+    # one wheel of twice the width (as RD-40's single-wheel variant; the wheel's face width follows)
     one = design.replace(n_wheels=1, wheels={"midplanes": (0.0,), "phases_deg": (0.0,), "width": 0.016},
-                         wheel={"face_width": 0.016}, eccentric_bearing={"roller_length": 0.016})
+                         eccentric_bearing={"roller_length": 0.016})
+    assert one.wheel.face_width == 0.016
     m = build(one)
     assert m.body_names == ("shaft", "wheel0", "flange") and m.ratio == design.ratio
     q = Continuation(m, input_angle=0.3).go_to(-np.sign(m.ratio) * one.rated_torque)

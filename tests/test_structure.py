@@ -337,8 +337,10 @@ def test_exudyn_trace_contact_equilibrium_with_contracted_tangent(small):
     assert np.linalg.norm(q - ref) < 1e-9 * np.linalg.norm(ref)
 
 
-def _wheel():
-    """Small free wheel: bore 20 mm, outer radius 40 mm, 10 mm thick; one port on the rim."""
+@pytest.fixture(scope="module")
+def wheel():
+    """Small free wheel: bore 20 mm, outer radius 40 mm, 10 mm thick; one port on the rim (meshed
+    once for the three floating-frame tests, which only read it)."""
     spec = AnnularHousingSpec(inner_radius=0.02, outer_radius=0.04, height=0.01, mesh_size=0.006, n_ports=1,
                               n_mounts=0, mount_radius=0.03)
     port = NodalPort(name="tooth", point=(0.04, 0.0, 0.005))
@@ -346,9 +348,15 @@ def _wheel():
                                   ports=(port,)), spec
 
 
-def test_free_free_basis_is_mass_orthogonal_to_rigid_modes():
-    m, _ = _wheel()
-    b = floating_basis(m, n_modes=6)
+@pytest.fixture(scope="module")
+def free_free_basis(wheel):
+    """The wheel's free-free basis with 6 elastic modes (read by two tests)."""
+    return floating_basis(wheel[0], n_modes=6)
+
+
+def test_free_free_basis_is_mass_orthogonal_to_rigid_modes(wheel, free_free_basis):
+    m, _ = wheel
+    b = free_free_basis
     Phi = b["matrix"]
     assert np.abs(Phi.T @ m.mass @ Phi - np.eye(6)).max() < 1e-10
     MR = m.mass @ m.rigid_body_modes()
@@ -357,13 +365,13 @@ def test_free_free_basis_is_mass_orthogonal_to_rigid_modes():
     assert np.allclose(b["eigenvalues"], lam[6:], rtol=1e-8)
 
 
-def test_exudyn_ffrf_body_port_compliance():
+def test_exudyn_ffrf_body_port_compliance(wheel):
     # floating frame held at rest; the frame follows the bore, the port load at the rim deflects the body
     # exactly as the bore-clamped parent does (Craig-Bampton with the port as boundary is exact in statics)
     import exudyn as exu
     from exudyn.itemInterface import CoordinateConstraint, Force, MarkerNodeCoordinate, NodePointGround
     from exudyn_user_elements.reduced_structure import add_floating_flexible_body, add_port_marker
-    m, spec = _wheel()
+    m, spec = wheel
     bore = np.flatnonzero(np.abs(np.hypot(m.vertices[:, 0], m.vertices[:, 1]) - spec.inner_radius) < 1e-9)
     port = m.ports[0].vertex
     b = floating_basis(m, n_modes=4, frame_vertices=bore, boundary_vertices=[port])
@@ -386,15 +394,15 @@ def test_exudyn_ffrf_body_port_compliance():
     assert np.linalg.norm(u - ref) < 1e-8 * np.linalg.norm(ref)
 
 
-def test_exudyn_ffrf_free_wheel_translates_and_spins():
+def test_exudyn_ffrf_free_wheel_translates_and_spins(wheel, free_free_basis):
     # a free body with free-free modes (orthogonal to the rigid modes) keeps its initial rigid motion;
     # the frame origin lies on the wheel axis, the mesh centre of mass within ~1e-8 m of it, so the
     # frame follows v0 t and w0 t up to that offset times the 0.2 rad turned (rel. < 1e-5)
     import exudyn as exu
     from exudyn_user_elements.reduced_structure import add_floating_flexible_body
     from rvtool.solver import RunSpec, simulate
-    m, _ = _wheel()
-    b = floating_basis(m, n_modes=6)
+    m, _ = wheel
+    b = free_free_basis
     mbs = exu.SystemContainer().AddSystem()
     v0, w0, T = np.array([0.3, -0.2, 0.0]), np.array([0.0, 0.0, 20.0]), 0.01
     cms = add_floating_flexible_body(mbs, m, b, velocity=v0, angular_velocity=w0)

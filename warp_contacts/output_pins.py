@@ -726,15 +726,8 @@ class OutputPinKernel:
 def _adjoint_kernel(dtype, static_slices, static_updates):
     F = _funcs(dtype)
     vec2, body_pose, param_vec2, store_triple = F["vec2"], F["body_pose"], F["param_vec2"], F["store_triple"]
+    rot = F["rot"]              # the planar helper of warp_contacts/planar.py, as the forward kernels
     unrolled = static_slices > 0
-
-    @wp.func
-    def rot_per_use(th: dtype, x: vec2):
-        """R(theta) x with cos and sin evaluated at each use. Forward values equal planar ``rot``;
-        the reverse sweep then adds the theta adjoint term by term, the order in which the
-        reported adjoint figures (cases/shared_pin.py) were computed: ``rot``, which shares
-        one cos/sin pair, moves them by about 2e-14 relative (measured)."""
-        return vec2(wp.cos(th) * x[0] - wp.sin(th) * x[1], wp.sin(th) * x[0] + wp.cos(th) * x[1])
 
     @wp.func
     def dist(v: vec2, floor: dtype):
@@ -802,9 +795,9 @@ def _adjoint_kernel(dtype, static_slices, static_updates):
         xf, thf = body_pose(pose_in, bf)
         x0, th0 = body_pose(pose_in, b0)
         x1, th1 = body_pose(pose_in, b1)
-        pf = rot_per_use(thf, param_vec2(fparams, i, ref.P_XI_PIN))
-        ph0 = rot_per_use(th0, param_vec2(fparams, i, ref.P_XI_HOLE0))
-        ph1 = rot_per_use(th1, param_vec2(fparams, i, ref.P_XI_HOLE1))
+        pf = rot(thf, param_vec2(fparams, i, ref.P_XI_PIN))
+        ph0 = rot(th0, param_vec2(fparams, i, ref.P_XI_HOLE0))
+        ph1 = rot(th1, param_vec2(fparams, i, ref.P_XI_HOLE1))
         # planar (untilted) separations: every slice of a wheel shares e_i
         e0 = (xf + pf) - (x0 + ph0)
         e1 = (xf + pf) - (x1 + ph1)

@@ -36,11 +36,13 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNo
 
 from exudyn_user_elements.contact_element import ContactElement, PortBodies
 
+from ..bearings.reducer import ball_rows
+from ..bearings.spec import NeedleBearing
 from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiffness
 from ..errors import RvtoolInputError
-from ..geometry.cycloid import CycloidProfile
 from ..geometry.eccentric import journal_centre, journal_velocity
+from ..output_pins.calibration import mindlin_tangential_ratio  # noqa: F401 (public here too)
 from ..model import BodyCoordinate, ClearanceVariant, Family, ReducerModel, SeriesBeam
 from .spec import CycloidDesign, replace
 
@@ -54,7 +56,7 @@ class CycloidKinematics:
 
     def __init__(self, design):
         self.eccentricity = design.wheels.eccentricity
-        self.phases = np.deg2rad(np.asarray(design.wheels.phases_deg[:design.n_wheels], float))
+        self.phases = np.asarray(design.wheels.phases[:design.n_wheels], float)
         self.z_g = design.pins.n_pins - 1
         self.n_wheels = design.n_wheels
 
@@ -230,24 +232,25 @@ class CycloidModel(ReducerModel):
                     ("input_bearing", "input_bearing", 2 / (e * zc) if d.n_wheels == 1 else 0.0),
                     ("main_bearing", "main_bearing", 0.0))
         for name, sec, factor in sections:
-            c = getattr(d, sec).radial_clearance
-            if getattr(getattr(d, sec), "kind", "") != "locked" and c > 0:
+            c = _radial_clearance(getattr(d, sec))
+            if c is not None and c > 0:
+                # a bearing section's radial_clearance key (a pair's: that of its rows)
                 out.append(ClearanceVariant(name, c, factor * c,
                                             lambda x, s=sec: replace(x, **{s: {"radial_clearance": 0.0}}),
                                             lambda x, o, s=sec: replace(x, **{s: {"radial_clearance":
-                                                                                  getattr(o, s).radial_clearance}})))
+                                                                                  _radial_clearance(getattr(o, s))}})))
         # the uniform profile clearance and the profile modifications: the wheels' free play against
         # the pins from the normal gaps and lever arms at each pin (geometry.cycloid.modification_play)
         from ..geometry.cycloid import modification_play
-        centres = journal_centre(e, np.deg2rad(np.asarray(d.wheels.phases_deg[:d.n_wheels], float)), 0.0)
+        centres = journal_centre(e, np.asarray(d.wheels.phases[:d.n_wheels], float), 0.0)
         centres = np.column_stack(centres)
-        for key, name in (("clearance", "profile_clearance"), ("equidistant_mod", "equidistant_mod"),
-                          ("offset_mod", "offset_mod"), ("rotation_mod", "rotation_mod")):
-            v = getattr(d.wheels, key)
+        for sec, key, name in (("wheels", "clearance", "profile_clearance"), ("profile", "equidistant_mod", "equidistant_mod"),
+                               ("profile", "offset_mod", "offset_mod"), ("profile", "rotation_mod", "rotation_mod")):
+            v = getattr(getattr(d, sec), key)
             if v != 0.0:
                 est = modification_play(d.pins.pin_circle_radius, zb, e, centres, **{key: v})[0]
-                out.append(ClearanceVariant(name, v, est, lambda x, k=key: replace(x, wheels={k: 0.0}),
-                                            lambda x, o, k=key: replace(x, wheels={k: getattr(o.wheels, k)})))
+                out.append(ClearanceVariant(name, v, est, lambda x, s=sec, k=key: replace(x, **{s: {k: 0.0}}),
+                                            lambda x, o, s=sec, k=key: replace(x, **{s: {k: getattr(getattr(o, s), k)}})))
         return out
 
     def marker_frequencies(self, speed_rpm):
@@ -258,15 +261,18 @@ class CycloidModel(ReducerModel):
         zg = zp - 1
         f_out = f_in / zg
         eb, mb, ib = self.design.eccentric_bearing, self.design.main_bearing, self.design.input_bearing
-        return {
+        out = {
             "input_hz": f_in, "output_hz": f_out, "mesh_hz": zp * f_in,
             # eccentric needle bearing: journal (input) against the wheel bore (wheel speed -f_out)
             "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
                                                      2 * eb.inner_radius + eb.roller_diameter),
-            "main_bearing": bearing_frequencies(f_out, mb.n_balls, mb.ball_diameter, mb.pitch_diameter,
-                                                mb.contact_angle_deg),
-            "input_bearing": bearing_frequencies(f_in, ib.n_balls, ib.ball_diameter, ib.pitch_diameter),
         }
+        for name, spec, f_ring in (("main_bearing", mb, f_out), ("input_bearing", ib, f_in)):
+            if spec is not None:
+                row = ball_rows(spec)[0]
+                out[name] = bearing_frequencies(f_ring, row.n_balls, row.ball_diameter, row.pitch_diameter,
+                                                row.contact_angle)
+        return out
 
     def draw_section(self, ax, q):
         """Wheel profiles at their state-q poses, the ring pins and the contact forces."""
@@ -274,7 +280,7 @@ class CycloidModel(ReducerModel):
 
         from ..geometry.cycloid import pin_centres
         for k, prof in enumerate(self.profiles):
-            x = self.reference[1 + k] + q[[self.coordinate_index(1 + k, c) for c in range(3)]]
+            x = self.body_pose(q, 1 + k)
             pts = prof.points(np.linspace(0, 2 * np.pi, 4000))
             c, s = np.cos(x[2]), np.sin(x[2])
             ax.plot(x[0] + c * pts[:, 0] - s * pts[:, 1], x[1] + s * pts[:, 0] + c * pts[:, 1], lw=0.8,
@@ -293,6 +299,13 @@ def _mass_wheel(design):
     return m, 0.5 * m * (r_o ** 2 + r_i ** 2)
 
 
+def _radial_clearance(spec):
+    """Radial clearance [m] of a bearing spec (a pair: its first row's), None for a locked bearing."""
+    if spec is None:
+        return None
+    return spec.radial_clearance if isinstance(spec, NeedleBearing) else ball_rows(spec)[0].radial_clearance
+
+
 def lumped_needle_law(design):
     """Lumped radial law F_r = K delta_r^(10/9) of the eccentric needle bearing: Palmgren's roller
     approach delta = 3.84e-5 Q^0.9 / L^0.8 [mm, N] per race contact (two in series), and
@@ -306,13 +319,16 @@ def lumped_needle_law(design):
 def lumped_ball_law(spec):
     """Lumped radial law F_r = K delta_r^(3/2) of a ball bearing (row or pair): Palmgren's ball
     approach delta = 4.36e-4 Q^(2/3) / D^(1/3) [mm, N] for both race contacts together and
-    Stribeck's F_r = Z Q_max cos(alpha) / 4.37 with delta_max = delta_r cos(alpha).
+    Stribeck's F_r = Z Q_max cos(alpha) / 4.37 with delta_max = delta_r cos(alpha) per row; the
+    rows of a pair carry the radial load side by side (their K add).
     Returns (K [N m^-3/2], 3/2)."""
-    Z = spec.n_balls * (2 if spec.kind == "angular_contact_pair" else 1)
-    ca = np.cos(np.deg2rad(spec.contact_angle_deg))
-    D = spec.ball_diameter * 1e3
-    k_mm = (1.0 / (4.36e-4 * D ** (-1 / 3))) ** 1.5             # Q = k_mm delta^1.5, N and mm
-    return Z * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5, 1.5
+    K = 0.0
+    for row in ball_rows(spec):
+        ca = np.cos(row.contact_angle)
+        D = row.ball_diameter * 1e3
+        k_mm = (1.0 / (4.36e-4 * D ** (-1 / 3))) ** 1.5             # Q = k_mm delta^1.5, N and mm
+        K += row.n_balls * ca ** 2.5 / 4.37 * k_mm * 1e3 ** 1.5
+    return K, 1.5
 
 
 def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 0.1), wheel_mass=None):
@@ -327,7 +343,7 @@ def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 
     m_w, J_w = _mass_wheel(d) if wheel_mass is None else wheel_mass
     ref = np.zeros((nw + 2, 3))
     for k in range(nw):
-        ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, np.deg2rad(d.wheels.phases_deg[k]))
+        ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, d.wheels.phases[k])
     masses = [(d.bodies.shaft_mass, d.bodies.shaft_inertia)] + [(m_w, J_w)] * nw + \
              [(d.bodies.flange_mass, d.bodies.flange_inertia)]
     nodes = []
@@ -370,8 +386,8 @@ def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 
 
 def pin_meshes(design, *, offset=0, prefix=""):
     """(profiles, :class:`WheelPinMesh` per wheel) of one reducer whose bodies start at index
-    ``offset`` (wheel k is body offset + 1 + k); pins on ground with the design's pin
-    deviations; names ``prefix + "wheel{k}"``."""
+    ``offset`` (wheel k is body offset + 1 + k): the design's profile turned to wheel k's
+    assembly phase, pins on ground with the design's pin deviations; names ``prefix + "wheel{k}"``."""
     d = design
     zg = d.pins.n_pins - 1
     pc = d.pin_contact
@@ -384,11 +400,8 @@ def pin_meshes(design, *, offset=0, prefix=""):
     friction = pin_friction_law(design, law.stiffness)
     profiles, meshes = [], []
     for k in range(d.n_wheels):
-        phi = np.deg2rad(d.wheels.phases_deg[k])
-        prof = CycloidProfile(pin_circle_radius=d.pins.pin_circle_radius, pin_radius=d.pins.pin_radius,
-                              n_pins=d.pins.n_pins, generating_eccentricity=d.wheels.e_g,
-                              equidistant_mod=d.wheels.equidistant_mod, offset_mod=d.wheels.offset_mod,
-                              rotation_mod=d.wheels.rotation_mod - phi / zg)
+        # the conjugate tooth phase of a journal at phi_k: every wheel starts in mesh
+        prof = dataclasses.replace(d.profile, rotation_mod=d.profile.rotation_mod - d.wheels.phases[k] / zg)
         profiles.append(prof)
         kw = dict(profile=prof, wheel_body=offset + 1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
                   wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,
@@ -417,13 +430,6 @@ def pin_station_compliance(design, family):
         raise RvtoolInputError(f"{section}.{exc}") from None
 
 
-def mindlin_tangential_ratio(poisson_ratio):
-    """k_t / k_n = 2 (1 - nu) / (2 - nu) of two elastic bodies of one material (Mindlin's
-    tangential compliance of a Hertz contact; 0.82 for steel): the default anchor stiffness
-    relative to the contact's normal secant stiffness."""
-    return 2.0 * (1.0 - poisson_ratio) / (2.0 - poisson_ratio)
-
-
 def pin_friction_law(design, normal_stiffness):
     """FrictionLaw of the cycloid--pin contact from ``[pin_contact]``: none for mu = 0, the
     regularized law of Eq. (friction) or the anchor model (k_t from the design, else Mindlin's
@@ -438,37 +444,6 @@ def pin_friction_law(design, normal_stiffness):
                                "a power law of exponent != 1 (no secant stiffness in N/m to derive it from)")
     kt = pc.tangential_stiffness or mindlin_tangential_ratio(design.material.poisson_ratio) * normal_stiffness
     return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=pc.mu, tangential_stiffness=kt)
-
-
-def output_pin_friction_law(design, coefficient):
-    """FrictionLaw of the output pins from ``[output_pins]``: none for mu = 0, else the anchor
-    model with k_t from the design or Mindlin's ratio of the 10/9 law's secant stiffness
-    F_ref / delta(F_ref) at the calibration load (``coefficient`` k [N m^-10/9])."""
-    from ..output_pins.calibration import PIN_EXPONENT
-    op = design.output_pins
-    if op.mu == 0.0:
-        return FrictionLaw()
-    secant = op.reference_force / (op.reference_force / coefficient) ** (1.0 / PIN_EXPONENT)
-    kt = op.tangential_stiffness or mindlin_tangential_ratio(design.material.poisson_ratio) * secant
-    return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=op.mu, tangential_stiffness=kt)
-
-
-def output_pin_mechanism(design):
-    """Flange pins in the wheel holes (10/9 law calibrated from the Hertz pin-in-hole approach),
-    plain pins; with ``output_pins.support`` elastic, :func:`build` closes their beams per pin
-    (:mod:`rvtool.contact.pin_closure`)."""
-    from ..output_pins.calibration import hertz_calibrated_coefficient
-    from ..output_pins.spec import OutputPinMechanism, PinMode
-    d = design
-    op = d.output_pins
-    width = d.wheels.width
-    k_op = hertz_calibrated_coefficient(op.reference_force, op.pin_radius, op.hole_radius, width,
-                                        d.material.youngs_modulus, d.material.poisson_ratio)
-    return OutputPinMechanism(pin_circle_radius=op.pin_circle_radius, hole_circle_radius=op.pin_circle_radius,
-                              n_pins=op.n_pins, phase=np.pi / 2, pin_radius=op.pin_radius, hole_radius=op.hole_radius,
-                              coefficient=k_op, contact_length=width, n_slices=op.n_slices,
-                              wheel_midplanes=tuple(d.wheels.midplanes), mode=PinMode.PLAIN,
-                              friction=output_pin_friction_law(d, k_op))
 
 
 def elastic_pin_stations(design, n_pins):
@@ -489,23 +464,25 @@ def lumped_bearing_contacts(design, *, offset=0, prefix=""):
     for k in range(nw):
         contacts.append(CircleContact(
             body_a=offset + SHAFT, body_b=offset + 1 + k,
-            centre_a=journal_centre(d.wheels.eccentricity, np.deg2rad(d.wheels.phases_deg[k])),
+            centre_a=journal_centre(d.wheels.eccentricity, d.wheels.phases[k]),
             centre_b=(0.0, 0.0), radius_a=r_j, radius_b=r_j + eb.radial_clearance + 1e-12, internal=True,
             normal=NormalLaw(law="power", stiffness=k_n, exponent=p_n, damping=50.0, ramp_depth=1e-6),
             name=f"{prefix}eccentric_bearing{k}"))
     main = d.main_bearing
-    if main.kind != "locked":
+    if main is not None:
+        row = ball_rows(main)[0]       # the lumped circle of a pair: its first row's pitch circle and clearance
         contacts.append(CircleContact(
             body_a=offset + nw + 1, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0),
-            radius_a=0.5 * main.pitch_diameter, radius_b=0.5 * main.pitch_diameter + main.radial_clearance + 1e-12,
+            radius_a=0.5 * row.pitch_diameter, radius_b=0.5 * row.pitch_diameter + row.radial_clearance + 1e-12,
             internal=True, normal=NormalLaw(law="power", stiffness=lumped_ball_law(main)[0], exponent=1.5,
                                             damping=200.0, ramp_depth=1e-6),
             name=f"{prefix}main_bearing"))
     inp = d.input_bearing
-    if inp.kind != "locked":
+    if inp is not None:
+        row = ball_rows(inp)[0]
         contacts.append(CircleContact(
             body_a=offset + SHAFT, body_b=GROUND, centre_a=(0.0, 0.0), centre_b=(0.0, 0.0),
-            radius_a=0.5 * inp.pitch_diameter, radius_b=0.5 * inp.pitch_diameter + inp.radial_clearance + 1e-12,
+            radius_a=0.5 * row.pitch_diameter, radius_b=0.5 * row.pitch_diameter + row.radial_clearance + 1e-12,
             # two input bearings share the radial load
             internal=True, normal=NormalLaw(law="power", stiffness=2 * lumped_ball_law(inp)[0], exponent=1.5,
                                             damping=50.0, ramp_depth=1e-6),
@@ -600,7 +577,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     from ..output_pins.evaluator import OutputPinEvaluator
     C_out = pin_station_compliance(d, Family.OUTPUT_PINS)
     if C_out is None:
-        op_eval = OutputPinEvaluator(output_pin_mechanism(d), name="output_pins", flange=nw + 1,
+        op_eval = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
                                      wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2, backend=backend,
                                      precision=precision, device=device)
     else:
@@ -608,7 +585,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         # the flange translated by the deflection (rvtool.contact.pin_closure)
         from ..contact.pin_closure import ElasticPinClosure
         st = elastic_pin_stations(d, d.output_pins.n_pins)
-        inner = OutputPinEvaluator(output_pin_mechanism(d), name="output_pins", flange=nw + 1,
+        inner = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
                                    wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2 + st.size, backend=backend,
                                    precision=precision, device=device, flange_bodies=nw + 2 + st.ravel())
         op_eval = ElasticPinClosure(inner, n_bodies=nw + 2, carrier=nw + 1, station_compliance=C_out, station=st)
@@ -636,7 +613,19 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                         reg_springs=bodies["reg_springs"], journal_locks=bodies["journal_locks"],
                         structures={} if housing is None else {"housing": housing},
                         mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
-                        housing=housing, contact_host=host)
+                        housing=housing, contact_host=host, family_specs=family_specs(d, meshes),
+                        material=d.material)
+
+
+def family_specs(design, meshes):
+    """{Family: component spec} of the families present: the wheel--pin meshes (one per wheel), the
+    output-pin mechanism and each bearing section's spec."""
+    specs = {Family.PINS: tuple(meshes), Family.OUTPUT_PINS: design.output_pins,
+             Family.ECCENTRIC_BEARINGS: design.eccentric_bearing}
+    for fam, spec in ((Family.MAIN_BEARINGS, design.main_bearing), (Family.INPUT_BEARINGS, design.input_bearing)):
+        if spec is not None:
+            specs[fam] = spec
+    return specs
 
 
 def bearing_friction_evaluator(design, bearing_set, load_source):
@@ -652,7 +641,7 @@ def bearing_friction_evaluator(design, bearing_set, load_source):
         if c.name.startswith("eccentric_bearing"):
             f0, f1, dm = bf.f0_needle, bf.f1_needle, 2 * eb.inner_radius + eb.roller_diameter
         elif c.name == "main_bearing":
-            f0, f1, dm = bf.f0_ball, bf.f1_ball, d.main_bearing.pitch_diameter
+            f0, f1, dm = bf.f0_ball, bf.f1_ball, ball_rows(d.main_bearing)[0].pitch_diameter
         else:
             f0, f1, dm = bf.f0_ball, bf.f1_ball, d.input_bearing.pitch_diameter
         model = PalmgrenFrictionTorque(f0=f0, f1=f1, pitch_diameter=dm, kinematic_viscosity=bf.kinematic_viscosity,

@@ -20,10 +20,7 @@ import math
 
 import numpy as np
 
-from ..structure import (AnnularHousingSpec, ElasticMaterial, NodalPort, PortReductionSpec, RayleighDamping,
-                         craig_bampton, fe_model_from_geometry, parent_modes, reduce_ports)
-
-CALIBRATION_HZ = (500.0, 5000.0)
+from ..structure import NodalPort, PortReductionSpec, craig_bampton, fe_model_from_geometry, parent_modes, reduce_ports
 
 
 def pin_port_angles(n_pins):
@@ -33,21 +30,15 @@ def pin_port_angles(n_pins):
 
 
 @functools.lru_cache(maxsize=8)
-def _reduced(housing, material, n_pins):
+def _reduced(housing):
     h = housing
-    spec = AnnularHousingSpec(inner_radius=h.inner_radius, outer_radius=h.outer_radius, height=h.height,
-                              mesh_size=h.mesh_size, n_ports=n_pins, n_mounts=h.n_mounts,
-                              mount_radius=h.mount_radius or 0.5 * (h.inner_radius + h.outer_radius),
-                              mount_stiffness=h.mount_stiffness,
-                              material=ElasticMaterial(
-                                  youngs_modulus=h.youngs_modulus if h.youngs_modulus is not None else material.youngs_modulus,
-                                  poisson_ratio=h.poisson_ratio if h.poisson_ratio is not None else material.poisson_ratio,
-                                  density=h.density if h.density is not None else material.density),
-                              damping=RayleighDamping(damping_ratio=h.damping_ratio, calibration_frequencies=CALIBRATION_HZ))
-    ports = tuple(NodalPort(name=f"pin{k}", point=(h.inner_radius * math.cos(a), h.inner_radius * math.sin(a), 0.5 * h.height),
+    spec = h.structure                      # the design's [housing.structure] is the housing spec
+    n_pins = spec.n_ports
+    z = 0.5 * spec.height if spec.port_height is None else spec.port_height
+    ports = tuple(NodalPort(name=f"pin{k}", point=(spec.inner_radius * math.cos(a), spec.inner_radius * math.sin(a), z),
                             directions=((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)))
                   for k, a in enumerate(pin_port_angles(n_pins)))
-    fe = fe_model_from_geometry(spec.geometry(), mesh_size=h.mesh_size, material=spec.material, ports=ports,
+    fe = fe_model_from_geometry(spec.geometry(), mesh_size=spec.mesh_size, material=spec.material, ports=ports,
                                 supports=spec.supports(), damping=spec.damping, info={"component": "reducer housing"})
     cb = craig_bampton(fe, n_modes=h.n_fixed_interface_modes)
     modes = parent_modes(cb)
@@ -62,11 +53,12 @@ def _reduced(housing, material, n_pins):
 def housing_ports(design):
     """(PortReducedModel, reference port compliance C_ref [m/N] of the parent, info dict) of
     ``design.housing`` (model "ports"); port k carries ring pin k, rows (2k, 2k + 1) = (x, y)."""
-    return _reduced(design.housing, design.material, design.pins.n_pins)
+    return _reduced(design.housing)
 
 
-def annulus_ports(housing, material, n_ports):
+def annulus_ports(housing, n_ports):
     """As :func:`housing_ports` for ``n_ports`` bore ports at the angles of
-    :func:`pin_port_angles` (``housing``: the design's ``[housing]``, ``material`` its
-    ``[material]``); for topologies whose ring is not a set of pins."""
-    return _reduced(housing, material, int(n_ports))
+    :func:`pin_port_angles` (``housing``: a design's ``[housing]`` whose ``structure`` is the
+    annulus); for topologies whose ring is not a set of pins."""
+    import dataclasses
+    return _reduced(dataclasses.replace(housing, structure=dataclasses.replace(housing.structure, n_ports=int(n_ports))))

@@ -1,41 +1,48 @@
-"""Cycloid reducer specification: plain data (TOML) loaded into frozen
-dataclasses and validated on load; errors name the parameter (with its
-section) and its valid range."""
+"""Cycloid reducer specification: one tree of component specs loaded from a design file.
+
+Every section of a design file IS a component spec (frozen dataclass, SI units, validated on
+construction): ``[material]`` an :class:`~rvtool.structure.ElasticMaterial`, ``[profile]`` a
+:class:`~rvtool.geometry.cycloid.CycloidProfile`, ``[output_pins]``
+an :class:`~rvtool.output_pins.spec.OutputPinMechanism`, ``[eccentric_bearing]`` a
+:class:`~rvtool.bearings.spec.NeedleBearing`, ``[main_bearing]`` / ``[input_bearing]`` a
+:class:`~rvtool.bearings.spec.BallBearing` or :class:`~rvtool.bearings.spec.AngularContactPair`
+(by ``kind``), ``[housing.structure]`` an :class:`~rvtool.structure.AnnularHousingSpec`, and
+``[pins]`` (the ring), ``[wheels]``, ``[pin_contact]``, ``[bodies]``, ``[housing]`` the classes
+below. The file's keys are the spec's field names (a sub-table is a nested spec); no code copies
+fields from one spec into another. Three loader rules, all in :func:`build_section` and :func:`design_from_dict`:
+
+* units: the file is SI except angles, which it gives in degrees under the field name plus
+  ``_deg`` (``phases_deg``, ``contact_angle_deg``, ``phase_deg``); :func:`build_section` converts
+  them to the field [rad] (the only place a unit is converted);
+* links (:data:`LINKS`): a key that another section already states (the profile's pin circle, the
+  output pins' contact length = the wheel width, ...) may be left out and then takes that value,
+  so the file states each quantity once (material constants of a component default to
+  ``[material]``); :data:`DERIVED` keys follow from a section's own (none for the cycloid);
+* a ``kind`` key selects the spec class of a bearing section (:data:`BEARING_KINDS`); an
+  angular-contact pair's section lists the pair's keys and its (identical) rows' keys.
+
+Validation errors name the key path in the file (``main_bearing.ball_diameter``) and the valid
+range. A design keeps its file-form data (:attr:`CycloidDesign.source`), so :func:`replace`
+re-loads the changed data and the links follow a change (e.g. of the wheel width).
+"""
+import copy
 import dataclasses
 import math
+import tomllib
+import typing
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..bearings.spec import NeedleBearing
+from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
+from ..geometry.cycloid import CycloidProfile
+from ..output_pins.spec import OutputPinMechanism
 from ..errors import RvtoolInputError
+from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
-
-
-@dataclass(frozen=True, kw_only=True)
-class Material:
-    """youngs_modulus [Pa], poisson_ratio [-], density [kg/m^3]."""
-    youngs_modulus: float = 206e9
-    poisson_ratio: float = 0.3
-    density: float = 7850.0
-
-    def __post_init__(self):
-        check_positive("material.youngs_modulus", self.youngs_modulus)
-        check_range("material.poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
-        check_positive("material.density", self.density)
-
-
-def _support(section, value):
-    """A :class:`PinSupport` from a design sub-table (dict) or an instance; errors name
-    ``section.support.<key>``."""
-    if isinstance(value, PinSupport):
-        return value
-    if not isinstance(value, dict):
-        raise RvtoolInputError(f"{section}.support = {value!r} must be a table (model, ends, shear, shear_coefficient)")
-    return build_section(PinSupport, f"{section}.support", value)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -53,7 +60,6 @@ class Pins:
     support: PinSupport = field(default_factory=PinSupport)
 
     def __post_init__(self):
-        object.__setattr__(self, "support", _support("pins", self.support))
         if not isinstance(self.n_pins, int) or self.n_pins < 3:
             raise RvtoolInputError(f"pins.n_pins = {self.n_pins!r} is outside the valid range [3, inf) (integer)")
         check_positive("pins.pin_circle_radius", self.pin_circle_radius)
@@ -69,20 +75,17 @@ class Pins:
 
 @dataclass(frozen=True, kw_only=True)
 class Wheels:
-    """Cycloid wheels: assembly eccentricity e [m] and nominal generating eccentricity e_g [m]
-    (separate inputs), width [m], axial midplanes [m], eccentric phases [deg], face-width slices,
-    profile table resolution, profile modifications [m, rad], uniform clearance [m] and the
+    """Cycloid wheels: assembly eccentricity e [m] of the journals (the profile's generating
+    eccentricity e_g is ``profile.generating_eccentricity``, a separate input), width [m], axial
+    midplanes [m] and eccentric journal phases [rad] (file: ``phases_deg``), one per wheel,
+    face-width slices, profile table resolution, uniform clearance [m] at the pins and the
     contact search ("discrete" table search or "analytic" closest point)."""
     eccentricity: float
-    generating_eccentricity: float | None = None
     width: float
     midplanes: tuple = (0.0,)
-    phases_deg: tuple = (0.0,)
+    phases: tuple = (0.0,)
     n_slices: int = 1
     samples_per_tooth: int = 120
-    equidistant_mod: float = 0.0
-    offset_mod: float = 0.0
-    rotation_mod: float = 0.0
     clearance: float = 0.0
     n_teeth: int | None = None
     search: str = "discrete"
@@ -90,19 +93,16 @@ class Wheels:
     def __post_init__(self):
         check_positive("wheels.eccentricity", self.eccentricity)
         check_positive("wheels.width", self.width)
-        if len(self.midplanes) != len(self.phases_deg):
-            raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases_deg "
-                                   f"({len(self.phases_deg)}) must have one entry per wheel")
+        if len(self.midplanes) != len(self.phases):
+            raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases "
+                                   f"({len(self.phases)}) must have one entry per wheel")
         if not 1 <= len(self.midplanes) <= 2:
             raise RvtoolInputError(f"wheels: {len(self.midplanes)} wheels; valid range [1, 2]")
+        check_finite("wheels.phases", np.asarray(self.phases, float))
         if not isinstance(self.n_slices, int) or self.n_slices < 1:
             raise RvtoolInputError(f"wheels.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
         if self.search not in ("discrete", "analytic"):
             raise RvtoolInputError(f"wheels.search = {self.search!r}; valid choices are ['discrete', 'analytic']")
-
-    @property
-    def e_g(self):
-        return self.eccentricity if self.generating_eccentricity is None else self.generating_eccentricity
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -136,111 +136,37 @@ class PinContact:
 
 
 @dataclass(frozen=True, kw_only=True)
-class OutputPins:
-    """Flange pins in wheel holes: n_pins, pin_circle_radius [m], pin_radius [m], hole_radius [m],
-    reference_force [N] of the Hertz calibration of the 10/9 law, n_slices; support: the pin as a
-    beam (sub-table ``[output_pins.support]``; rigid by default); mu [-] of the anchor (stick--slip)
-    friction per slice (0 = none), tangential_stiffness [N/m] of the anchors (whole contact; 0 =
-    Mindlin's ratio 2(1 - nu)/(2 - nu) of the 10/9 law's secant at reference_force)."""
-    n_pins: int
-    pin_circle_radius: float
-    pin_radius: float
-    hole_radius: float
-    reference_force: float = 1000.0
-    n_slices: int = 4
-    support: PinSupport = field(default_factory=PinSupport)
-    mu: float = 0.0
-    tangential_stiffness: float = 0.0
-
-    def __post_init__(self):
-        object.__setattr__(self, "support", _support("output_pins", self.support))
-        check_positive("output_pins.pin_circle_radius", self.pin_circle_radius)
-        check_positive("output_pins.pin_radius", self.pin_radius)
-        check_range("output_pins.hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
-        check_nonnegative("output_pins.mu", self.mu)
-        check_nonnegative("output_pins.tangential_stiffness", self.tangential_stiffness)
-
-
-@dataclass(frozen=True, kw_only=True)
-class BallBearingSpec:
-    """Ball bearing (row or back-to-back pair): kind ("deep_groove" | "angular_contact_pair"),
-    n_balls, ball_diameter [m], pitch_diameter [m], contact_angle_deg, groove_curvature_ratio,
-    radial_clearance [m], axial_preload [N], row_spacing [m]."""
-    kind: str = "deep_groove"
-    n_balls: int
-    ball_diameter: float
-    pitch_diameter: float
-    contact_angle_deg: float = 0.0
-    groove_curvature_ratio: float = 0.52
-    radial_clearance: float = 0.0
-    axial_preload: float = 0.0
-    row_spacing: float = 0.0
-
-    def __post_init__(self):
-        if self.kind not in ("deep_groove", "angular_contact_pair", "locked"):
-            raise RvtoolInputError(f"bearing kind = {self.kind!r}; valid: ['deep_groove', 'angular_contact_pair', 'locked']")
-        check_positive("ball_diameter", self.ball_diameter)
-        check_positive("pitch_diameter", self.pitch_diameter)
-        check_range("groove_curvature_ratio", self.groove_curvature_ratio, 0.5, 1.0, low_open=True)
-
-
-@dataclass(frozen=True, kw_only=True)
 class Housing:
     """Housing carrying the ring pins.
 
-    model: "rigid" (the pins are ground) or "ports" (an elastic annular housing, NGSolve
-    tetrahedra, reduced by Craig--Bampton and the port reduction of the structural
-    section; one planar port (x, y) per ring pin at the pin's angle on the bore, at
-    mid-height; the pin centres move with their ports).
-    inner_radius, outer_radius, height [m]; mesh_size [m] (nominal tetrahedron size);
-    n_mounts: translational mount springs at equal angles on the lower face, at
-    mount_radius [m] (0 = midway between the radii), each mount_stiffness [N/m] per direction;
-    n_fixed_interface_modes: Craig--Bampton modes of the parent; n_modes, n_residual:
-    retained parent modes and residual attachment modes of the port reduction (n_residual = -1:
-    one per port row, so that the static port compliance equals the parent's to round-off);
-    damping_ratio [-] (Rayleigh, calibrated at 500 and 5000 Hz);
-    youngs_modulus [Pa], poisson_ratio [-], density [kg/m^3]: the housing material (None: the
-    design's [material], e.g. set them for an aluminium housing).
+    model: "rigid" (the pins are ground; ``structure`` unused) or "ports" (an elastic housing,
+    NGSolve tetrahedra, reduced by Craig--Bampton and the port reduction of the structural
+    section; one planar port (x, y) per ring pin at the pin's angle on the bore, at the
+    structure's port height; the pin centres move with their ports).
+    structure: the :class:`~rvtool.structure.AnnularHousingSpec` (file: ``[housing.structure]``
+    with ``[housing.structure.material]`` and ``[housing.structure.damping]``; its ``n_ports`` is
+    the ring's pin count and its material [material]'s unless given).
+    n_fixed_interface_modes: Craig--Bampton modes of the parent; n_modes, n_residual: retained
+    parent modes and residual attachment modes of the port reduction (n_residual = -1: one per
+    port row, so that the static port compliance equals the parent's to round-off).
     """
     model: str = "rigid"
-    youngs_modulus: float | None = None
-    poisson_ratio: float | None = None
-    density: float | None = None
-    inner_radius: float = 0.0545
-    outer_radius: float = 0.075
-    height: float = 0.030
-    mesh_size: float = 0.004
-    n_mounts: int = 12
-    mount_radius: float = 0.0
-    mount_stiffness: float = 2e8
+    structure: AnnularHousingSpec | None = None
     n_fixed_interface_modes: int = 20
     n_modes: int = 12
     n_residual: int = -1
-    damping_ratio: float = 0.02
 
     def __post_init__(self):
         if self.model not in ("rigid", "ports"):
             raise RvtoolInputError(f"housing.model = {self.model!r}; valid choices are ['rigid', 'ports']")
-        check_positive("housing.inner_radius", self.inner_radius)
-        check_range("housing.outer_radius", self.outer_radius, self.inner_radius, math.inf, low_open=True)
-        check_positive("housing.height", self.height)
-        check_range("housing.mesh_size", self.mesh_size, 0.0, self.height, low_open=True)
-        for nm, lo in (("n_mounts", 1), ("n_fixed_interface_modes", 0), ("n_modes", 0), ("n_residual", -1)):
+        if self.model == "ports" and not isinstance(self.structure, AnnularHousingSpec):
+            raise RvtoolInputError("housing.model = 'ports' needs the table [housing.structure] (an AnnularHousingSpec)")
+        for nm, lo in (("n_fixed_interface_modes", 0), ("n_modes", 0), ("n_residual", -1)):
             v = getattr(self, nm)
             if not isinstance(v, int) or v < lo:
                 raise RvtoolInputError(f"housing.{nm} = {v!r} is outside the valid range [{lo}, inf) (integer)")
         if self.n_residual != -1 and self.n_modes + self.n_residual < 1:
             raise RvtoolInputError("housing.n_modes + housing.n_residual = 0; valid range [1, inf)")
-        if self.mount_radius != 0.0:
-            check_range("housing.mount_radius", self.mount_radius, self.inner_radius, self.outer_radius)
-        check_positive("housing.mount_stiffness", self.mount_stiffness)
-        check_range("housing.damping_ratio", self.damping_ratio, 0.0, 1.0, high_open=True)
-        if self.youngs_modulus is not None:
-            check_positive("housing.youngs_modulus", self.youngs_modulus)
-        if self.poisson_ratio is not None:
-            check_range("housing.poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
-        if self.density is not None:
-            check_positive("housing.density", self.density)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -292,21 +218,26 @@ class BearingFriction:
 
 @dataclass(frozen=True, kw_only=True)
 class CycloidDesign:
-    """A single-stage cycloid drive with one or two wheels (see rvtool/designs/rd40.toml)."""
+    """A single-stage cycloid drive with one or two wheels (see rvtool/designs/rd40.toml): the
+    tree of component specs, one per section. ``main_bearing`` / ``input_bearing`` are None
+    where the file says ``kind = "locked"`` (the body held on its axis, no bearing law)."""
     name: str
     n_wheels: int
     rated_torque: float
     input_speed_rpm: float
-    material: Material
+    material: ElasticMaterial
     pins: Pins
+    profile: CycloidProfile
     wheels: Wheels
     pin_contact: PinContact
-    output_pins: OutputPins
+    output_pins: OutputPinMechanism
     eccentric_bearing: NeedleBearing
-    main_bearing: BallBearingSpec
-    input_bearing: BallBearingSpec
+    main_bearing: BallBearing | AngularContactPair | None
+    input_bearing: BallBearing | None
     bodies: Bodies = field(default_factory=Bodies)
     housing: Housing = field(default_factory=Housing)
+    #: the file-form data this design was loaded from (what :func:`replace` changes and re-loads)
+    source: dict | None = field(default=None, compare=False, hash=False, repr=False, metadata={"file": False})
     bearing_friction: BearingFriction = field(default_factory=BearingFriction)
 
     def __post_init__(self):
@@ -318,14 +249,26 @@ class CycloidDesign:
         if zg != self.pins.n_pins - 1:
             raise RvtoolInputError(f"wheels.n_teeth = {zg} with pins.n_pins = {self.pins.n_pins}: only Z_pins = Z_wheel + 1 "
                                    f"is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
+        # the profile is generated by the ring it meshes with (it may leave these keys out)
+        for key in ("n_pins", "pin_circle_radius", "pin_radius"):
+            if getattr(self.profile, key) != getattr(self.pins, key):
+                raise RvtoolInputError(f"profile.{key} = {getattr(self.profile, key)!r} differs from pins.{key}; "
+                                       f"valid value {getattr(self.pins, key)!r} (leave the key out to take it)")
+        if self.output_pins.n_wheels != self.n_wheels:
+            raise RvtoolInputError(f"output_pins.wheel_midplanes has {self.output_pins.n_wheels} entries; valid: one per "
+                                   f"wheel ({self.n_wheels}; leave the key out to take wheels.midplanes)")
         needed = self.wheels.eccentricity + self.output_pins.pin_radius
         if self.output_pins.hole_radius < needed - 1e-4:
             raise RvtoolInputError(f"output_pins.hole_radius = {self.output_pins.hole_radius} m cannot pass the eccentric "
                                    f"motion; valid range [{needed:.6g}, inf) m (pin radius + eccentricity)")
         r_pins = self.pins.pin_circle_radius + self.pins.pin_radius
-        if self.housing.model == "ports" and self.housing.inner_radius < r_pins - 1e-12:
-            raise RvtoolInputError(f"housing.inner_radius = {self.housing.inner_radius} m cuts through the ring pins; "
+        st = self.housing.structure
+        if self.housing.model == "ports" and st.inner_radius < r_pins - 1e-12:
+            raise RvtoolInputError(f"housing.structure.inner_radius = {st.inner_radius} m cuts through the ring pins; "
                                    f"valid range [{r_pins:.6g}, outer_radius) m (pin circle radius + pin radius)")
+        if self.housing.model == "ports" and st.n_ports != self.pins.n_pins:
+            raise RvtoolInputError(f"housing.structure.n_ports = {st.n_ports}; valid value pins.n_pins = {self.pins.n_pins} "
+                                   "(one port per ring pin; leave the key out to take it)")
 
     @property
     def ratio(self):
@@ -345,10 +288,72 @@ class CycloidDesign:
         return replace(self, pin_contact={"law": "line", "stiffness": factor * k})
 
 
-_SECTIONS = {"material": Material, "pins": Pins, "wheels": Wheels, "pin_contact": PinContact,
-             "output_pins": OutputPins, "eccentric_bearing": NeedleBearing, "main_bearing": BallBearingSpec,
-             "input_bearing": BallBearingSpec, "bodies": Bodies, "housing": Housing,
-             "bearing_friction": BearingFriction}
+#: Bearing sections: the ``kind`` key selects the component spec (None: the body is held, no bearing).
+BEARING_KINDS = {"deep_groove": BallBearing, "angular_contact": BallBearing,
+                 "angular_contact_pair": AngularContactPair, "locked": None}
+
+#: Sections of a cycloid design file and their component specs (bearing sections: by ``kind``), in
+#: dependency order (a section's links read sections before it).
+SECTIONS = {"material": ElasticMaterial, "pins": Pins, "wheels": Wheels, "profile": CycloidProfile,
+            "pin_contact": PinContact, "output_pins": OutputPinMechanism, "eccentric_bearing": NeedleBearing,
+            "main_bearing": BEARING_KINDS, "input_bearing": BEARING_KINDS, "bodies": Bodies, "housing": Housing,
+            "bearing_friction": BearingFriction}
+OPTIONAL_SECTIONS = ("profile", "bodies", "housing", "bearing_friction")
+
+_ELASTIC = {"youngs_modulus": "material.youngs_modulus", "poisson_ratio": "material.poisson_ratio"}
+
+#: Keys a table may leave out because another section states the quantity: table path ->
+#: {key: "section.key" it takes, or "section": that whole section's spec}. The file states each
+#: quantity once; a key the table gives is kept. A link into the table's own section reads the
+#: table's own key; a sub-table the file does not give takes no links.
+LINKS = {
+    # the wheel profile is generated by the ring it meshes with; e_g = e unless given separately
+    "profile": {"n_pins": "pins.n_pins", "pin_circle_radius": "pins.pin_circle_radius",
+                "pin_radius": "pins.pin_radius", "generating_eccentricity": "wheels.eccentricity"},
+    # flange pins run in holes on their own pin circle, along the wheels' width, at the wheels' midplanes;
+    # pins and flange of the design's material
+    "output_pins": {"hole_circle_radius": "output_pins.pin_circle_radius", "contact_length": "wheels.width",
+                    "wheel_midplanes": "wheels.midplanes", **_ELASTIC},
+    # balls and rings of the design's material (a locked bearing takes nothing)
+    "main_bearing": dict(_ELASTIC),
+    "input_bearing": dict(_ELASTIC),
+    # one housing port per ring pin; the housing of the design's material
+    "housing.structure": {"n_ports": "pins.n_pins", "material": "material"},
+}
+
+
+#: Keys a section derives from its own (linked) keys where it leaves them out: section -> function
+#: (table, sections built before) -> {key: value}. (An elastic output pin derives nothing: the
+#: builder closes its beam per pin, :class:`~rvtool.contact.pin_closure.ElasticPinClosure`.)
+DERIVED = {}
+
+
+def _file_units(cls, section, data):
+    """The one unit conversion of a design file: ``NAME_deg`` [deg] -> field NAME [rad] of ``cls``
+    (a number or a list of numbers); every other key is SI already."""
+    names = {f.name for f in dataclasses.fields(cls)}
+    out = {}
+    for key, value in data.items():
+        stem = key[:-4] if key.endswith("_deg") else None
+        if stem is not None and stem in names and key not in names:
+            if stem in data:
+                raise RvtoolInputError(f"[{section}] gives both {stem} [rad] and {key} [deg]; give one")
+            try:
+                out[stem] = (tuple(float(np.deg2rad(v)) for v in value) if isinstance(value, (list, tuple))
+                             else float(np.deg2rad(value)))
+            except TypeError:
+                raise RvtoolInputError(f"{section}.{key} = {value!r} must be a number of degrees (or a list)") from None
+        else:
+            out[key] = value
+    return out
+
+
+def _spec_class(f):
+    """The component-spec class of dataclass field ``f`` (also inside ``X | None``), or None."""
+    for t in (f.type, *typing.get_args(f.type)):
+        if dataclasses.is_dataclass(t) and isinstance(t, type):
+            return t
+    return None
 
 
 def _field_types(cls):
@@ -415,19 +420,27 @@ def _check_type(key, value, tp):
 
 def build_section(cls, section, data):
     """Construct the component spec ``cls`` from the design-file table ``data`` of ``[section]``:
-    lists become tuples, unknown keys and type errors are reported with the section name, and a
+    ``NAME_deg`` keys become the field NAME in radians (the one unit conversion), lists become
+    tuples, a sub-table of a field whose type is a component spec is built the same way (key path
+    ``section.field``), unknown keys and type errors are reported with the section name, and a
     component's own validation error is prefixed with the section so it names the key path
     (e.g. ``wheels.eccentricity``). Every topology's design loader uses this one function."""
     if not isinstance(data, dict):
         raise RvtoolInputError(f"[{section}] must be a table of keys; got {type(data).__name__} {data!r}")
-    names = {f.name for f in dataclasses.fields(cls)}
-    unknown = set(data) - names
+    data = _file_units(cls, section, data)
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = set(data) - set(fields)
     if unknown:
-        raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(names)}")
+        raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(fields)}")
     hints = _field_types(cls)
+    kw = {}
     for k, v in data.items():
+        sub = _spec_class(fields[k])
+        if isinstance(v, dict) and sub is not None:
+            kw[k] = build_section(sub, f"{section}.{k}", v)
+            continue
         _check_type(k if section == "design" else f"{section}.{k}", v, hints.get(k))
-    kw = {k: tuple(v) if isinstance(v, list) else v for k, v in data.items()}
+        kw[k] = tuple(tuple(e) if isinstance(e, list) else e for e in v) if isinstance(v, list) else v
     try:
         return cls(**kw)
     except TypeError as exc:
@@ -438,18 +451,99 @@ def build_section(cls, section, data):
         raise RvtoolInputError(msg if msg.startswith(section + ".") or section == "design" else f"{section}.{msg}") from None
 
 
+def _bearing_kind(section, data):
+    """The ``kind`` key of a bearing section (default "deep_groove"), checked."""
+    kind = data.get("kind", "deep_groove")
+    if not isinstance(kind, str) or kind not in BEARING_KINDS:
+        raise RvtoolInputError(f"{section}.kind = {kind!r}; valid choices are {list(BEARING_KINDS)}")
+    return kind
+
+
+def _bearing_section(section, data):
+    """A bearing section: ``kind`` selects the spec; a pair's keys that are not the pair's own
+    are those of its two identical rows."""
+    data = dict(data)
+    kind = _bearing_kind(section, data)
+    data.pop("kind", None)
+    cls = BEARING_KINDS[kind]
+    if cls is None:
+        if data:
+            raise RvtoolInputError(f"[{section}] is locked (no bearing): keys {sorted(data)} are not used")
+        return None
+    angle = _file_units(BallBearing, section, data).get("contact_angle", 0.0)
+    if kind == "angular_contact" and not (isinstance(angle, (int, float)) and angle > 0):
+        raise RvtoolInputError(f"{section}.contact_angle_deg = {angle!r} rad; valid range (0, 90) deg for "
+                               "kind = 'angular_contact'")
+    if cls is AngularContactPair:
+        own = {f.name for f in dataclasses.fields(AngularContactPair)} - {"rows"}
+        row = build_section(BallBearing, section, {k: v for k, v in data.items() if k not in own})
+        return build_section(AngularContactPair, section, {**{k: v for k, v in data.items() if k in own},
+                                                           "rows": (row, row)})
+    return build_section(cls, section, data)
+
+
+def _with_links(section, data, built, links=None):
+    """``data`` with the keys it leaves out filled from ``links`` (default :data:`LINKS`; from the
+    sections already built, or from the table's own keys)."""
+    out = copy.deepcopy(data)
+    for path, table_links in (LINKS if links is None else links).items():
+        head, *rest = path.split(".")
+        if head != section:
+            continue
+        table = out
+        for part in rest:            # a sub-table the file does not give takes no links
+            table = table.get(part) if isinstance(table.get(part), dict) else None
+            if table is None:
+                break
+        if table is None:
+            continue
+        for key, src in table_links.items():
+            if key in table or key + "_deg" in table:
+                continue
+            src_section, _, src_key = src.partition(".")
+            if src_section == section and not rest:
+                if src_key in table:
+                    table[key] = table[src_key]
+            else:               # a key of a section built before, or (no key) that whole section's spec
+                table[key] = getattr(built[src_section], src_key) if src_key else built[src_section]
+    return out
+
+
+def load_sections(d, sections, *, optional=(), links=None, derived=None):
+    """Build the component specs of ``sections`` ({section: spec class, or :data:`BEARING_KINDS`
+    for a bearing section}, in dependency order) from the file-form table ``d``, popping each
+    section from ``d``; ``links`` / ``derived``: a topology's :data:`LINKS` / :data:`DERIVED`
+    (default the cycloid's). Returns {section: spec}. Every topology's loader uses this one loop."""
+    links = LINKS if links is None else links
+    derived = DERIVED if derived is None else derived
+    built = {}
+    for sec, cls in sections.items():       # in dependency order: a link reads a section built before
+        if sec not in d and sec not in optional:
+            raise RvtoolInputError(f"section [{sec}] is missing from the design")
+        data = d.pop(sec, {})
+        if not isinstance(data, dict):
+            raise RvtoolInputError(f"[{sec}] must be a table of keys; got {data!r}")
+        if cls is BEARING_KINDS:
+            locked = BEARING_KINDS[_bearing_kind(sec, data)] is None
+            built[sec] = _bearing_section(sec, data if locked else _with_links(sec, data, built, links))
+        else:
+            data = _with_links(sec, data, built, links)
+            if sec in derived:
+                data = {**derived[sec](data, built), **data}
+            built[sec] = build_section(cls, sec, data)
+    return built
+
+
 def design_from_dict(d):
+    """A validated :class:`CycloidDesign` from file-form data (the parsed TOML of a design file)."""
+    source = copy.deepcopy(dict(d))
     d = dict(d)
     topology = d.pop("topology", "cycloid")   # the key of rvtool.assembly.topologies; this loader is the cycloid's
     if topology != "cycloid":
         raise RvtoolInputError(f"topology = {topology!r}: this is the cycloid loader; load the file with "
                                "rvtool.load_design (rvtool.assembly.topologies), which picks the topology's loader")
-    kw = {}
-    for sec, cls in _SECTIONS.items():
-        if sec not in d and sec not in ("bodies", "housing", "bearing_friction"):
-            raise RvtoolInputError(f"section [{sec}] is missing from the design")
-        kw[sec] = build_section(cls, sec, d.pop(sec, {}))
-    return build_section(CycloidDesign, "design", {**d, **kw})
+    built = load_sections(d, SECTIONS, optional=OPTIONAL_SECTIONS)
+    return build_section(CycloidDesign, "design", {**d, **built, "source": source})
 
 
 def load_design(path):
@@ -459,11 +553,26 @@ def load_design(path):
     return topologies.design_from_table(topologies.read_table(path))
 
 
+def _merge(table, changes):
+    """``table`` with ``changes`` written in (sub-tables merged key by key); a key replaces its
+    ``_deg`` form and vice versa."""
+    out = dict(table)
+    for key, value in changes.items():
+        out.pop(key[:-4] if key.endswith("_deg") else key + "_deg", None)
+        if isinstance(value, dict):
+            out[key] = _merge(out.get(key, {}) if isinstance(out.get(key), dict) else {}, value)
+        else:
+            out[key] = [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, tuple) else value
+    return out
+
+
 def replace(design, **sections):
-    """A copy of ``design`` with sections replaced by dicts of changed fields, e.g.
-    ``replace(d, wheels={"n_slices": 4}, n_wheels=1)``."""
-    kw = {}
-    for k, v in sections.items():
-        cur = getattr(design, k)
-        kw[k] = dataclasses.replace(cur, **v) if isinstance(v, dict) else v
-    return dataclasses.replace(design, **kw)
+    """A copy of ``design`` with sections replaced by dicts of changed keys (file keys: field names,
+    or ``NAME_deg`` for an angle in degrees) and top-level values, e.g.
+    ``replace(d, wheels={"n_slices": 4}, n_wheels=1)``. The changed file-form data is loaded
+    again, so links follow (a new wheel width is the output pins' contact length)."""
+    from . import topologies
+    source = getattr(design, "source", None)
+    if source is None:
+        raise RvtoolInputError("replace needs a design loaded from file-form data (load_design / design_from_dict)")
+    return topologies.design_from_table(_merge(copy.deepcopy(source), sections))

@@ -5,7 +5,9 @@ Bodies (planar rigid, x, y, theta), as in the cycloid drive (:func:`rvtool.assem
 0 the eccentric input shaft, 1..n the external involute wheels on its journals, n+1 the
 output flange. The internal ring gear is the ground (rigid housing, ``housing.model = "rigid"``) or,
 with ``"ports"``, a port body that moves rigidly with the least-squares rigid motion of
-:data:`RING_PORTS` bore ports of the elastic annular housing of :mod:`rvtool.assembly.housing`
+``housing.structure.n_ports`` bore ports (16 in the shipped design: equally spaced ports average
+the bore's translation and torsion; a rigid fit needs 2) of the elastic annular housing of
+:mod:`rvtool.assembly.housing`
 (the housing's translation and torsion under the tooth forces; the bore's ovalization is not
 represented, the bearings stay grounded as in the cycloid drive). Contact sets, each one
 Exudyn contact element with one kernel launch per evaluation:
@@ -16,7 +18,7 @@ Exudyn contact element with one kernel launch per evaluation:
   tooth compliance and Weber's line-contact approach, off-line-of-action tip-edge contact of
   teeth beyond the path of contact (the load-dependent multi-tooth contact of these drives);
 * ``output_pins``: flange pins in wheel holes (the cycloid drive's mechanism,
-  :func:`rvtool.assembly.cycloid.output_pin_mechanism`);
+  :class:`~rvtool.output_pins.spec.OutputPinMechanism`, the design's ``output_pins``);
 * bearings: the eccentric needle bearings, the main and the input bearings, from rolling
   elements (:func:`rvtool.bearings.reducer.rolling_bearing_sets`) or lumped
   (:func:`rvtool.assembly.cycloid.lumped_bearing_contacts`).
@@ -46,15 +48,9 @@ from ..contact.involute_set import GearMesh, InvoluteContactSet
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre
 from ..model import BodyCoordinate, Family, ReducerModel
-from .cycloid import (CycloidKinematics, add_bodies, body_names, contact_families, lumped_bearing_contacts,
-                      output_pin_mechanism)
+from .cycloid import (CycloidKinematics, add_bodies, body_names, contact_families, lumped_bearing_contacts)
 from .spec import replace
 from .std_spec import StdInvoluteDesign
-
-RING_PORTS = 16
-"""Bore ports of an elastic housing (``housing.model = "ports"``) whose least-squares rigid motion
-carries the ring gear (:meth:`PortBodies.rigid_fit`); chosen: 16 equally spaced ports average the
-bore's translation and torsion (a rigid fit needs 2; more only enlarge the reduced basis)."""
 
 LOADED_LINE = 0
 """The line of action that carries the protocols' resisting output torque -sign(i) T (i < 0 for
@@ -71,7 +67,7 @@ class StdKinematics(CycloidKinematics):
 
     def __init__(self, design: StdInvoluteDesign):
         self.eccentricity = design.wheels.eccentricity
-        self.phases = np.deg2rad(np.asarray(design.wheels.phases_deg[:design.n_wheels], float))
+        self.phases = np.asarray(design.wheels.phases[:design.n_wheels], float)
         self.z_g = -design.ratio
         self.n_wheels = design.n_wheels
 
@@ -154,7 +150,7 @@ def gear_meshes(design, *, offset=0, prefix="", ring=GROUND):
     friction = FrictionLaw(model=FrictionModel.REGULARIZED if ms.mu > 0 else FrictionModel.NONE, mu_kinetic=ms.mu)
     meshes, phases = [], []
     for k in range(d.n_wheels):
-        c = journal_centre(d.wheels.eccentricity, math.radians(d.wheels.phases_deg[k]))
+        c = journal_centre(d.wheels.eccentricity, d.wheels.phases[k])
         phase = wheel_tooth_phase(d.pair, math.atan2(c[1], c[0]))
         phases.append(phase)
         meshes.append(GearMesh(pair=d.pair, body_a=offset + 1 + k, body_b=ring, n_slices=ms.n_slices, window=ms.window,
@@ -189,10 +185,11 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
         from exudyn_user_elements.contact_element import PortBodies
         from exudyn_user_elements.reduced_structure import ReducedStructure
         from .housing import annulus_ports, pin_port_angles
-        reduced, _, _ = annulus_ports(d.housing, d.material, RING_PORTS)
+        n_ports = d.housing.structure.n_ports
+        reduced, _, _ = annulus_ports(d.housing, n_ports)
         housing = ReducedStructure(mbs, reduced, name="housing")
-        ports = PortBodies.rigid_fit(housing, np.array([reduced.port_rows[k][:2] for k in range(RING_PORTS)]),
-                                     pin_port_angles(RING_PORTS), d.housing.inner_radius)
+        ports = PortBodies.rigid_fit(housing, np.array([reduced.port_rows[k][:2] for k in range(n_ports)]),
+                                     pin_port_angles(n_ports), d.housing.structure.inner_radius)
         ring = nw + 2
     meshes, phases = gear_meshes(d, ring=ring)
     gear_set = InvoluteContactSet(meshes, nw + 2 + (ports is not None), backend=backend, precision=precision,
@@ -200,7 +197,7 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
     elements = {"gears": ContactElement(mbs, nodes, gear_set, ports=ports)}
 
     from ..output_pins.evaluator import OutputPinEvaluator
-    op_eval = OutputPinEvaluator(output_pin_mechanism(d), name="output_pins", flange=nw + 1,
+    op_eval = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
                                  wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2, backend=backend,
                                  precision=precision, device=device)
     elements["output_pins"] = ContactElement(mbs, nodes, op_eval)

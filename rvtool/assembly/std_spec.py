@@ -21,14 +21,19 @@ backlash; output holes that pass the eccentric motion and lie inside the wheel's
 an elastic housing (``housing.model = "ports"``) whose bore clears the ring's root circle.
 Errors name the design key (``wheel.*``, ``ring.*``, ``wheels.eccentricity``).
 """
+import copy
 import tomllib
 from dataclasses import dataclass, field
 
-from ..bearings.spec import NeedleBearing
+import numpy as np
+
+from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ..errors import RvtoolInputError
 from ..geometry.involute import BasicRack, FlankModification, InvoluteGear, InvolutePair, line_gap
-from ..validation import check_nonnegative, check_positive
-from .spec import BallBearingSpec, Bodies, Housing, Material, OutputPins, build_section, replace
+from ..validation import check_finite, check_nonnegative, check_positive
+from ..output_pins.spec import OutputPinMechanism
+from ..structure import ElasticMaterial
+from .spec import BEARING_KINDS, Bodies, Housing, build_section, load_sections, replace
 
 TOPOLOGY = "std-involute"
 TOOTH_DIFFERENCES = (1, 4)
@@ -39,18 +44,20 @@ TOOTH_DIFFERENCES = (1, 4)
 class WheelSet:
     """The external involute wheels on the eccentric journals: eccentricity e [m] (= the working
     centre distance of the wheel--ring pair), face width of each wheel [m], axial midplanes [m]
-    (relative to the flange), eccentric phases [deg] (opposed journals for two wheels)."""
+    (relative to the flange), eccentric phases [rad] (file: ``phases_deg``; opposed journals for
+    two wheels)."""
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
-    phases_deg: tuple = (0.0,)
+    phases: tuple = (0.0,)
 
     def __post_init__(self):
         check_positive("eccentricity", self.eccentricity)
         check_positive("width", self.width)
-        if len(self.midplanes) != len(self.phases_deg):
-            raise RvtoolInputError(f"midplanes ({len(self.midplanes)}) and phases_deg ({len(self.phases_deg)}) must "
+        if len(self.midplanes) != len(self.phases):
+            raise RvtoolInputError(f"midplanes ({len(self.midplanes)}) and phases ({len(self.phases)}) must "
                                    "have one entry per wheel")
+        check_finite("phases", np.asarray(self.phases, float))
         if not 1 <= len(self.midplanes) <= 2:
             raise RvtoolInputError(f"midplanes: {len(self.midplanes)} wheels; valid range [1, 2]")
 
@@ -110,17 +117,19 @@ class StdInvoluteDesign:
     n_wheels: int
     rated_torque: float
     input_speed_rpm: float
-    material: Material
+    material: ElasticMaterial
     wheels: WheelSet
     wheel: InvoluteGear
     ring: InvoluteGear
     mesh: MeshSettings
-    output_pins: OutputPins
+    output_pins: OutputPinMechanism
     eccentric_bearing: NeedleBearing
-    main_bearing: BallBearingSpec
-    input_bearing: BallBearingSpec
+    main_bearing: BallBearing | AngularContactPair | None
+    input_bearing: BallBearing | None
     bodies: Bodies = field(default_factory=Bodies)
     housing: Housing = field(default_factory=Housing)
+    #: the file-form data this design was loaded from (what :func:`replace` changes and re-loads)
+    source: dict | None = field(default=None, compare=False, hash=False, repr=False, metadata={"file": False})
     pair: InvolutePair = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -146,8 +155,9 @@ class StdInvoluteDesign:
         if R.face_width < span - 1e-12:
             raise RvtoolInputError(f"ring.face_width = {R.face_width} m does not cover the wheels; valid range "
                                    f"[{span:.6g}, inf) m (midplane span + wheels.width)")
-        if self.housing.model == "ports" and self.housing.inner_radius < R.root_radius - 1e-12:
-            raise RvtoolInputError(f"housing.inner_radius = {self.housing.inner_radius} m cuts through the ring's teeth; "
+        if self.housing.model == "ports" and self.housing.structure.inner_radius < R.root_radius - 1e-12:
+            raise RvtoolInputError(f"housing.structure.inner_radius = {self.housing.structure.inner_radius} m cuts "
+                                   "through the ring's teeth; "
                                    f"valid range [{R.root_radius:.6g}, outer_radius) m (the ring's root radius)")
         e = self.wheels.eccentricity
         op = self.output_pins
@@ -185,9 +195,20 @@ class StdInvoluteDesign:
         return replace(self, **sections)
 
 
-_SECTIONS = {"material": Material, "wheels": WheelSet, "mesh": MeshSettings, "output_pins": OutputPins,
-             "eccentric_bearing": NeedleBearing, "main_bearing": BallBearingSpec, "input_bearing": BallBearingSpec,
+_SECTIONS = {"material": ElasticMaterial, "wheels": WheelSet, "mesh": MeshSettings, "output_pins": OutputPinMechanism,
+             "eccentric_bearing": NeedleBearing, "main_bearing": BEARING_KINDS, "input_bearing": BEARING_KINDS,
              "bodies": Bodies, "housing": Housing}
+_ELASTIC = {"youngs_modulus": "material.youngs_modulus", "poisson_ratio": "material.poisson_ratio"}
+#: Keys a table may leave out (as :data:`rvtool.assembly.spec.LINKS`): the output pins as the
+#: cycloid's (hole circle = pin circle, contact length = wheel width, the wheels' midplanes), the
+#: bearings and the housing annulus of the design's material.
+LINKS = {
+    "output_pins": {"hole_circle_radius": "output_pins.pin_circle_radius", "contact_length": "wheels.width",
+                    "wheel_midplanes": "wheels.midplanes", **_ELASTIC},
+    "main_bearing": dict(_ELASTIC),
+    "input_bearing": dict(_ELASTIC),
+    "housing.structure": {"material": "material"},
+}
 _OPTIONAL = ("bodies", "housing", "mesh")
 
 
@@ -210,18 +231,15 @@ def gear_section(section, data, **derived):
 
 def design_from_dict(d):
     """A validated :class:`StdInvoluteDesign` from the parsed design file (without its topology key)."""
+    source = {"topology": "std-involute", **copy.deepcopy(dict(d))}
     d = dict(d)
-    kw = {}
-    for sec, cls in _SECTIONS.items():
-        if sec not in d and sec not in _OPTIONAL:
-            raise RvtoolInputError(f"section [{sec}] is missing from the design")
-        kw[sec] = build_section(cls, sec, d.pop(sec, {}))
+    kw = load_sections(d, _SECTIONS, optional=_OPTIONAL, links=LINKS, derived={})
     for sec in ("wheel", "ring"):
         if sec not in d:
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
     kw["wheel"] = gear_section("wheel", d.pop("wheel"), face_width=kw["wheels"].width)
     kw["ring"] = gear_section("ring", d.pop("ring"), internal=True)
-    return build_section(StdInvoluteDesign, "design", {**d, **kw})
+    return build_section(StdInvoluteDesign, "design", {**d, **kw, "source": source})
 
 
 def load_design(path):

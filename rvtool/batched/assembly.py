@@ -34,8 +34,10 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround
 
+from warp_contacts import output_pins_ref as ref
+
 from ..assembly.cycloid import (CycloidKinematics, CycloidModel, add_bodies, body_names, kinematic_poses,
-                               lumped_bearing_contacts, output_pin_mechanism, pin_meshes)
+                               lumped_bearing_contacts, pin_meshes)
 from ..assembly.spec import CycloidDesign
 from ..contact.circle_set import CircleContactSet
 from ..contact.cycloid_set import CycloidPinSet
@@ -50,7 +52,7 @@ from .evaluator import BatchContactEvaluator
 def copy_contacts(design, offset):
     """Contact definitions of one copy whose bodies start at global index ``offset``
     (shaft ``offset``, wheels ``offset + 1..n``, flange ``offset + n + 1``): the builder's own
-    :func:`~rvtool.assembly.cycloid.pin_meshes`, :func:`~rvtool.assembly.cycloid.output_pin_mechanism`
+    :func:`~rvtool.assembly.cycloid.pin_meshes`, the design's output-pin mechanism
     and :func:`~rvtool.assembly.cycloid.lumped_bearing_contacts` at that offset, so a copy is
     ``build(..., bearing_model="lumped")`` by construction.
 
@@ -64,7 +66,7 @@ def copy_contacts(design, offset):
     prefix = f"copy{offset}/"
     nw = design.n_wheels
     _, meshes = pin_meshes(design, offset=offset, prefix=prefix)
-    mech = output_pin_mechanism(design)
+    mech = design.output_pins
     fp, ip = mech.packed(offset + nw + 1, tuple(range(offset + 1, offset + nw + 1)))
     return meshes, lumped_bearing_contacts(design, offset=offset, prefix=prefix), (fp, ip, mech.stations)
 
@@ -210,7 +212,7 @@ def build_batched(design: CycloidDesign, variants, *, bearing_model="lumped", ba
         op_kernel = OutputPinKernel(op_f, op_i, stations, n_total + 1, PinMode.PLAIN.value, precision, device)
     else:
         op_kernel = _NumpyPlainPins(op_f, op_i, stations)
-    evaluator = BatchContactEvaluator(pin_set, op_kernel, op_i[:, :2], bearings, nb, B)
+    evaluator = BatchContactEvaluator(pin_set, op_kernel, op_i[:, [ref.J_FLANGE, ref.J_WHEEL]], bearings, nb, B)
     elements = BatchedContactElements(mbs, [m.nodes for m in copies], evaluator)
     mbs.Assemble()
     ltg = np.array([np.concatenate([np.asarray(mbs.systemData.GetNodeLTGODE2(n), int) for n in m.nodes])

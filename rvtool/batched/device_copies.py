@@ -120,14 +120,15 @@ class CopyParameters:
 
 def _variant_columns(design, variants):
     """Per-variant scalars and arrays as :meth:`Variant.apply` computes them (checked)."""
-    w = design.wheels
+    w, prof = design.wheels, design.profile
     V = len(variants)
     zb = design.pins.n_pins
-    ecc = np.array([w.e_g + v.eccentricity_error for v in variants])
+    e_g = prof.generating_eccentricity
+    ecc = np.array([e_g + v.eccentricity_error for v in variants])
     bad = np.flatnonzero(~(ecc > 0))
     if len(bad):
         raise RvtoolInputError(f"variants[{bad[0]}].eccentricity_error = {variants[bad[0]].eccentricity_error} m leaves "
-                               f"a non-positive eccentricity; valid range ({-w.e_g}, inf) m")
+                               f"a non-positive eccentricity; valid range ({-e_g}, inf) m")
     radius_error = np.array([design.pins.radius_error + v.pin_radius_error for v in variants])
     rp = design.pins.pin_radius + radius_error
     bad = np.flatnonzero(~(rp > 0))
@@ -148,7 +149,7 @@ def _variant_columns(design, variants):
             has_err[i] = True
     eb = design.eccentric_bearing.radial_clearance
     brg_clr = np.array([eb if v.bearing_clearance is None else v.bearing_clearance for v in variants])
-    mods = [(w.equidistant_mod + v.equidistant_mod, w.offset_mod + v.offset_mod) for v in variants]
+    mods = [(prof.equidistant_mod + v.equidistant_mod, prof.offset_mod + v.offset_mod) for v in variants]
     return ecc, rp, radius_error, clearance, errors, has_err, brg_clr, mods
 
 
@@ -174,7 +175,7 @@ def copy_parameters(design: CycloidDesign, variants, *, regularization=(100.0, 0
     tables, analytic, window = [], [] if design.wheels.search == "analytic" else None, 0
     pin_f = pin_i = None
     for (eq, off), members in groups.items():
-        d_g = replace(design, wheels={"equidistant_mod": eq, "offset_mod": off})
+        d_g = replace(design, profile={"equidistant_mod": eq, "offset_mod": off})
         meshes, _, _ = copy_contacts(d_g, 0)
         pset = CycloidPinSet(meshes, nb, samples_per_tooth=design.wheels.samples_per_tooth, backend="numpy",
                              name="pins", search=design.wheels.search)
@@ -217,7 +218,7 @@ def copy_parameters(design: CycloidDesign, variants, *, regularization=(100.0, 0
     bset = CircleContactSet(name="bearings", n_bodies=nb, contacts=tuple(lumped_bearing_contacts(design)))
     bf, bi = bset.packed()
     brg_f = np.broadcast_to(bf, (V,) + bf.shape).copy()
-    phases = np.deg2rad(np.asarray(design.wheels.phases_deg[:nw], float))
+    phases = np.asarray(design.wheels.phases[:nw], float)
     r_j = design.eccentric_bearing.inner_radius
     for k in range(nw):
         jx, jy = journal_centre(ecc, phases[k])

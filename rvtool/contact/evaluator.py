@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from warp_contacts import circle_pairs_ref
+from warp_contacts.circle_pairs_ref import I_BODY_A, I_BODY_B
 
 from ..errors import RvtoolInputError
 from .assembly import PairAssembler
@@ -96,7 +97,7 @@ class ContactSetEvaluator:
         self.n_contacts = len(contact_set.contacts)
         self.n_bodies = contact_set.n_bodies
         self.history = ContactHistory(self.n_contacts)
-        self.assembler = PairAssembler(self.iparams[:, 0], self.iparams[:, 1], self.n_bodies)
+        self.assembler = PairAssembler(self.iparams[:, I_BODY_A], self.iparams[:, I_BODY_B], self.n_bodies)
         if backend == "warp":
             from warp_contacts.circle_pairs import CirclePairKernel
             self._kernel = CirclePairKernel(self.fparams, self.iparams, self.n_bodies, precision, device)

@@ -3,7 +3,12 @@ and the format documentation (``rvtool designs --format-doc``).
 
 Nothing here lists keys by hand. For a registered topology (:mod:`rvtool.assembly.topologies`)
 the top-level design dataclass gives the top-level keys and, through its dataclass-typed
-fields, the sections; each section's dataclass fields are its keys. Per key:
+fields (also ``A | B | None``: the spec the reference design holds), the sections; each
+section's dataclass fields are its keys, a field holding a spec is a sub-table
+(``[housing.structure]``), and the rows of an angular-contact pair are listed with the pair's
+keys (the loader's flat rule). The walk follows the reference design as loaded, so linked
+keys show their linked values (and are optional) and an angle the file gives in degrees
+(``NAME_deg``) is listed under that key. Per key:
 
 * **unit and meaning** -- from ``field(metadata={"unit": ..., "doc": ...})`` where a spec sets
   it, else from the spec's docstring (the text after the key's name up to its ``[unit]``);
@@ -42,14 +47,24 @@ def _hints(cls):
         return {f.name: f.type for f in dataclasses.fields(cls)}
 
 
-def sections(design_cls):
-    """(top-level fields, {section name: section dataclass}) of a design dataclass."""
+def _spec_types(tp):
+    """The spec dataclasses of an annotation (``X``, or the dataclasses of ``X | Y | None``)."""
+    return [t for t in (tp, *typing.get_args(tp)) if _is_spec(t)]
+
+
+def sections(design_cls, design=None):
+    """(top-level fields, {section name: section dataclass}) of a design dataclass; for a field
+    of several spec types, the type ``design`` holds there (else the first). Fields marked
+    ``metadata={"file": False}`` are not file keys."""
     hints = _hints(design_cls)
     top, secs = [], {}
     for f in dataclasses.fields(design_cls):
-        tp = hints.get(f.name, f.type)
-        if _is_spec(tp):
-            secs[f.name] = tp
+        if f.metadata.get("file", True) is False:
+            continue
+        specs = _spec_types(hints.get(f.name, f.type))
+        if specs:
+            value = getattr(design, f.name, None) if design is not None else None
+            secs[f.name] = type(value) if value is not None and _is_spec(type(value)) else specs[0]
         else:
             top.append(f)
     return top, secs
@@ -139,18 +154,55 @@ def _example_kwargs(cls, table):
 
 
 def _plain(v):
+    import enum
     if dataclasses.is_dataclass(v) and not isinstance(v, type):   # a nested component spec: its sub-table
         return {f.name: _plain(getattr(v, f.name)) for f in dataclasses.fields(v) if getattr(v, f.name) is not None}
     if isinstance(v, tuple):
         return [_plain(x) for x in v]
-    if hasattr(v, "value") and not isinstance(v, (int, float, str)):   # an Enum: its file value
+    if isinstance(v, enum.Enum):            # an Enum (also a str Enum): its file value
         return v.value
     return v
 
 
+def _section_rows(path, cls, obj, raw, links):
+    """Rows of one (sub-)table ``path`` of spec ``cls``, example values from the loaded spec
+    ``obj`` (None: field defaults) and the file's table ``raw``; sub-tables recursively."""
+    kw = {f.name: getattr(obj, f.name) for f in dataclasses.fields(cls)} if obj is not None \
+        else _example_kwargs(cls, raw)
+    if isinstance(kw.get("rows"), tuple) and kw["rows"] and _is_spec(type(kw["rows"][0])):
+        # an angular-contact pair: its rows' keys sit in the pair's table (the loader's flat rule)
+        row = kw["rows"][0]
+        rows = [r for r in _section_rows(path, type(row), row, raw, links)]
+        own = [f for f in dataclasses.fields(cls) if f.name != "rows"]
+        return _field_rows(path, cls, own, kw, raw, links) + rows
+    return _field_rows(path, cls, dataclasses.fields(cls), kw, raw, links)
+
+
+def _field_rows(path, cls, fields, kw, raw, links):
+    rows, subs = [], []
+    for f in fields:
+        value = kw.get(f.name)
+        if _is_spec(type(value)):
+            sub = raw.get(f.name, {}) if isinstance(raw.get(f.name), dict) else {}
+            subs += _section_rows(f"{path}.{f.name}", type(value), value, sub, links)
+            continue
+        meaning, unit = describe(cls, f.name)
+        required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        rng = valid_range(cls, kw, f.name) if f.name in kw else ""
+        key, shown = f.name, _plain(value)
+        if f.name + "_deg" in raw:          # the file gives this angle in degrees (the loader converts it)
+            key, shown, unit = f.name + "_deg", raw[f.name + "_deg"], "deg"
+            rng = f"{rng} rad" if rng else rng
+        if f.name in links.get(path, {}) and f.name not in raw and key not in raw:
+            meaning = f"{meaning} (left out: {links[path][f.name]})".strip()
+            required = False
+        rows.append((path, key, shown, unit, rng, meaning, required))
+    return rows + subs
+
+
 def key_table(topology):
-    """[(section or "" for top level, key, example value, unit, valid range, meaning, required)] of
-    a topology, in the design class's field order."""
+    """[(section path or "" for top level, key, example value, unit, valid range, meaning,
+    required)] of a topology, in the design class's field order (sub-tables after their table)."""
     from .. import designs
     from ..assembly import topologies
     top = topologies.get(topology)
@@ -160,8 +212,11 @@ def key_table(topology):
         with open(designs.path(top.reference), "rb") as fh:
             table = tomllib.load(fh)
     rows = []
-    top_fields, secs = sections(cls)
     design = topologies.design_from_table(dict(table)) if table else None
+    top_fields, secs = sections(cls, design)
+    module = __import__(cls.__module__, fromlist=["_"])
+    links = getattr(module, "LINKS", {})
+    kinds = getattr(module, "BEARING_KINDS", {})
     for f in top_fields:
         kw = {g.name: getattr(design, g.name) for g in dataclasses.fields(cls)} if design is not None else {}
         meaning, unit = describe(cls, f.name)
@@ -170,13 +225,13 @@ def key_table(topology):
         rows.append(("", f.name, _plain(value), unit, rng, meaning, f.default is dataclasses.MISSING))
     for sec, scls in secs.items():
         sec_table = table.get(sec, {})
-        kw = _example_kwargs(scls, sec_table)
-        for f in dataclasses.fields(scls):
-            meaning, unit = describe(scls, f.name)
-            required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-            value = _plain(kw.get(f.name))
-            rng = valid_range(scls, kw, f.name) if f.name in kw else ""
-            rows.append((sec, f.name, value, unit, rng, meaning, required))
+        obj = getattr(design, sec, None) if design is not None else None
+        if "kind" in sec_table and kinds:
+            rows.append((sec, "kind", sec_table["kind"], "", f"one of {list(kinds)}",
+                         "the spec of this section (a bearing's type)", False))
+        if obj is None and design is not None:
+            continue                         # e.g. a locked bearing: no spec, no keys
+        rows += _section_rows(sec, scls, obj, sec_table, links)
     return rows
 
 
@@ -202,7 +257,7 @@ def template(topology, name=None):
     doc.add(tomlkit.nl())
     doc.add("topology", topology)
     rows = key_table(topology)
-    _, secs = sections(cls)
+    classes = _table_classes(topology)
     tables = {}
     for sec, key, value, unit, rng, meaning, required in rows:
         if value is None or (sec == "" and key == "topology"):
@@ -219,14 +274,49 @@ def template(topology, name=None):
         else:
             if sec not in tables:
                 t = tomlkit.table()
-                d = " ".join((secs[sec].__doc__ or "").split())
-                t.add(tomlkit.comment(f"{secs[sec].__name__}: {d[:300]}{'...' if len(d) > 300 else ''}"))
+                c = classes.get(sec)
+                if c is not None:
+                    d = " ".join((c.__doc__ or "").split())
+                    t.add(tomlkit.comment(f"{c.__name__}: {d[:300]}{'...' if len(d) > 300 else ''}"))
                 tables[sec] = t
             tables[sec].add(key, item)
     for sec, t in tables.items():
-        doc.add(tomlkit.nl())
-        doc.add(sec, t)
+        head, _, tail = sec.rpartition(".")
+        if head:
+            tables[head].add(tail, t)        # a sub-table inside its table ([housing.structure])
+    for sec, t in tables.items():
+        if "." not in sec:
+            doc.add(tomlkit.nl())
+            doc.add(sec, t)
     return tomlkit.dumps(doc)
+
+
+def _table_classes(topology):
+    """{table path: spec class} of the reference design (the class named in each table's comment)."""
+    from .. import designs
+    from ..assembly import topologies
+    top = topologies.get(topology)
+    cls = topologies.design_class(topology)
+    design = None
+    if top.reference:
+        with open(designs.path(top.reference), "rb") as fh:
+            design = topologies.design_from_table(tomllib.load(fh))
+    out = {}
+
+    def walk(path, obj):
+        out[path] = type(obj)
+        for f in dataclasses.fields(obj):
+            v = getattr(obj, f.name)
+            if _is_spec(type(v)):
+                walk(f"{path}.{f.name}", v)
+    _, secs = sections(cls, design)
+    for sec, scls in secs.items():
+        obj = getattr(design, sec, None) if design is not None else None
+        if obj is not None:
+            walk(sec, obj)
+        else:
+            out[sec] = scls
+    return out
 
 
 def format_doc():
@@ -246,12 +336,12 @@ def format_doc():
         if reason:
             out += [f"Not available in this installation: {reason}.", ""]
             continue
-        _, secs = sections(topologies.design_class(name))
+        classes = _table_classes(name)
         current = None
         for sec, key, value, unit, rng, meaning, required in key_table(name):
             if sec != current:
                 current = sec
-                title = "top level" if sec == "" else f"`[{sec}]` ({secs[sec].__name__})"
+                title = "top level" if sec == "" else f"`[{sec}]` ({classes[sec].__name__})"
                 out += ["", f"### {title}", "", "| key | unit | valid range | required | example | meaning |",
                         "|---|---|---|---|---|---|"]
             ex = "" if value is None else f"`{value}`"

@@ -30,6 +30,10 @@ Contract (paper: "Transmission topology and reaction-force closure",
   lamina, ball) the normal force, position, normal and identity, and per
   physical contact (a pin, a roller, a tooth pair: slices summed) through
   :meth:`FamilyObservation.per_contact`.
+  ``family_spec(family)`` is the component spec the family's contacts were built
+  from (contact geometry for local studies such as the pressure resolution), and
+  ``material`` the elastic constants (``youngs_modulus``, ``poisson_ratio``) of the
+  load-carrying bodies.
 * **Continuation restarts.** ``continuation_restarts`` lets a stalled load continuation
   re-solve the level from the kinematic state (free play without stiffness at zero load).
 * **Regularization.** Weak springs from free coordinates to their kinematic
@@ -215,6 +219,8 @@ class ReducerModel:
     journal_locks: list = field(default_factory=list)
     structures: dict = field(default_factory=dict)
     main_mesh: Family = Family.PINS
+    family_specs: dict = field(default_factory=dict)   # Family -> component spec(s) of its contacts
+    material: object = None         # youngs_modulus [Pa], poisson_ratio [-] of the load-carrying bodies
     mesh_period: float = None       # input angle [rad] of one mesh cycle of the main mesh
     #: a load continuation whose increments stall may restart the level from the static solver's
     #: ladder (:meth:`rvtool.solver.continuation.Continuation.go_to`): set by topologies whose
@@ -259,6 +265,11 @@ class ReducerModel:
             c = mbs.GetMarkerParameter(marker, "coordinate")
             fixed.add(int(mbs.systemData.GetNodeLTGODE2(node)[c]))
         return fixed
+
+    def body_pose(self, q, body):
+        """Pose (x, y, theta) [m, rad] of ``body`` (name or index) at the state q: reference + displacement."""
+        b = self.body_index(body)
+        return self.reference[b] + q[[self.coordinate_index(b, c) for c in range(3)]]
 
     def body_vector(self, per_body):
         """A global ODE2 vector from per-body rows (nb, 3) (structural coordinates zero)."""
@@ -416,6 +427,15 @@ class ReducerModel:
                       scale_units="xy", scale=1, width=0.003, color="r" if fam == self.main_mesh else "b")
         ax.set_aspect("equal")
         ax.set(xlabel="x [m]", ylabel="y [m]")
+
+    def family_spec(self, family):
+        """The component spec the contacts of ``family`` were built from (per topology: e.g. the
+        wheel--pin meshes of a cycloid stage, an output-pin mechanism, a bearing spec)."""
+        try:
+            return self.family_specs[Family(family)]
+        except (KeyError, ValueError):
+            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} declares no component spec in this "
+                                   f"model; valid: {[f.value for f in self.family_specs]}") from None
 
     def set_gap_offsets(self, family, offsets):
         """Slow-state gap offsets [m] of ``family``: ``offsets`` maps physical contact ids (those of

@@ -79,3 +79,10 @@ def hertz_calibrated_coefficient(reference_force, pin_radius, hole_radius, lengt
     delta = hertz_pin_in_hole_approach(reference_force, pin_radius, hole_radius, length, youngs_modulus,
                                        poisson_ratio, youngs_modulus_2, poisson_ratio_2)
     return calibrate_pin_coefficient(reference_force, delta, exponent)
+
+
+def mindlin_tangential_ratio(poisson_ratio):
+    """k_t / k_n = 2 (1 - nu) / (2 - nu) of two elastic bodies of one material (Mindlin's
+    tangential compliance of a Hertz contact; 0.82 for steel): the default anchor stiffness
+    relative to the contact's normal secant stiffness."""
+    return 2.0 * (1.0 - poisson_ratio) / (2.0 - poisson_ratio)

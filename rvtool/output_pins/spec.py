@@ -13,6 +13,7 @@ condensation with a massless sleeve and the station compliance of Eq.
 import math
 from dataclasses import dataclass, field
 from enum import Enum
+from functools import cached_property
 
 import numpy as np
 
@@ -21,8 +22,9 @@ from warp_contacts import output_pins_ref as ref
 
 from ..contact.circle_set import FrictionLaw, FrictionModel
 from ..errors import RvtoolInputError
+from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
-from .calibration import PIN_EXPONENT
+from .calibration import PIN_EXPONENT, hertz_calibrated_coefficient, mindlin_tangential_ratio
 
 
 class PinMode(str, Enum):
@@ -89,19 +91,28 @@ class OutputPinMechanism:
 
     pin_circle_radius: radius of the pin centres on the flange [m].
     hole_circle_radius: radius of the hole centres on each wheel [m].
-    n_pins: number of pins, equally spaced from ``phase`` [rad].
+    n_pins: number of pins, equally spaced from the first at ``phase``; phase: angle of the first pin [rad].
     pin_radius: outer pin (sleeve) radius r_p [m]; hole_radius: R_h [m] > r_p.
-    coefficient: whole-contact coefficient k [N m^-p]; exponent: p [-] (10/9).
+    coefficient: whole-contact coefficient k [N m^-p], or None: k calibrated so that the law
+    meets the Hertz pin-in-hole approach at ``reference_force`` [N] (pin and flange of
+    ``youngs_modulus`` [Pa], ``poisson_ratio`` [-]); :attr:`law_coefficient` is the k in use.
+    exponent: p [-] (10/9).
     contact_length: axial contact width [m], integrated by ``n_slices`` equal-weight
     midpoint slices (stations s relative to each wheel midplane).
     wheel_midplanes: axial positions z_i of the wheel midplanes relative to the flange [m].
     gap_offsets: u_off of Eq. (output_gap) per wheel [m] (e.g. thermal; positive opens).
     mode: :class:`PinMode`; compliance and sleeve: shared mode only.
-    friction: NONE (default) or ANCHOR (plain mode): stick--slip anchors per slice (Eq.
-    (friction), anchor model), k_t the whole pin--hole contact's tangential stiffness, divided
-    among the slices like the coefficient; an ANCHOR law with mu_kinetic = 0 runs the
-    frictionless code. anchor_release_distance: d_rel [m] of :mod:`warp_contacts.anchor_ref`;
-    None: 10 % of the pin radius (far above the stick stroke mu F_n / k_t, far below a pin).
+    support: the pin as a beam (:class:`~rvtool.structure.pin_beam.PinSupport`; rigid by default).
+    The mechanism's own contacts are those of rigid pins; an elastic pin is closed per pin by the
+    assembly (:class:`~rvtool.contact.pin_closure.ElasticPinClosure` with the beam's station
+    compliance, :func:`rvtool.assembly.cycloid.build`).
+    mu: friction coefficient [-] of the anchor (stick--slip) model per slice (Eq. (friction),
+    anchor model; plain mode; 0 = none); tangential_stiffness: k_t [N/m] of the whole pin--hole
+    contact, divided among the slices like the coefficient (0 = Mindlin's ratio 2(1 - nu)/(2 - nu)
+    of the law's secant stiffness at ``reference_force``); :attr:`friction` is the resulting
+    :class:`~rvtool.contact.circle_set.FrictionLaw`. anchor_release_distance: d_rel [m] of
+    :mod:`warp_contacts.anchor_ref`; None: 10 % of the pin radius (far above the stick stroke
+    mu F_n / k_t, far below a pin).
     """
     pin_circle_radius: float
     hole_circle_radius: float
@@ -109,7 +120,10 @@ class OutputPinMechanism:
     phase: float = 0.0
     pin_radius: float
     hole_radius: float
-    coefficient: float
+    coefficient: float | None = None
+    reference_force: float = 1000.0
+    youngs_modulus: float = 206e9
+    poisson_ratio: float = 0.3
     exponent: float = PIN_EXPONENT
     contact_length: float
     n_slices: int = 4
@@ -118,7 +132,9 @@ class OutputPinMechanism:
     mode: PinMode = PinMode.PLAIN
     compliance: SharedPinCompliance | None = None
     sleeve: SleeveFit = field(default_factory=SleeveFit)
-    friction: FrictionLaw = field(default_factory=FrictionLaw)
+    support: PinSupport = field(default_factory=PinSupport)
+    mu: float = 0.0
+    tangential_stiffness: float = 0.0
     anchor_release_distance: float | None = None
 
     def __post_init__(self):
@@ -134,7 +150,11 @@ class OutputPinMechanism:
         check_finite("phase", self.phase)
         check_positive("pin_radius", self.pin_radius)
         check_range("hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)
-        check_nonnegative("coefficient", self.coefficient)
+        if self.coefficient is not None:
+            check_nonnegative("coefficient", self.coefficient)
+        check_positive("reference_force", self.reference_force)
+        check_positive("youngs_modulus", self.youngs_modulus)
+        check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
         check_range("exponent", self.exponent, 1.0)
         check_positive("contact_length", self.contact_length)
         if not isinstance(self.n_slices, (int, np.integer)) or self.n_slices < 1:
@@ -156,16 +176,26 @@ class OutputPinMechanism:
                 raise RvtoolInputError(f"compliance = {self.compliance!r} must be a SharedPinCompliance in shared mode")
         if not isinstance(self.sleeve, SleeveFit):
             raise RvtoolInputError(f"sleeve = {self.sleeve!r} must be a SleeveFit")
-        if not isinstance(self.friction, FrictionLaw):
-            raise RvtoolInputError(f"friction = {self.friction!r} must be a FrictionLaw")
-        if self.friction.model not in (FrictionModel.NONE, FrictionModel.ANCHOR):
-            raise RvtoolInputError(f"friction.model = {self.friction.model.name} is not available for output pins; "
-                                   "valid: NONE, ANCHOR")
+        if not isinstance(self.support, PinSupport):
+            raise RvtoolInputError(f"support = {self.support!r} must be a PinSupport")
+        check_nonnegative("mu", self.mu)
+        check_nonnegative("tangential_stiffness", self.tangential_stiffness)
         if self.anchors and self.mode == PinMode.SHARED:
-            raise RvtoolInputError("friction.model = ANCHOR is available for mode = 'plain' only (the shared-pin "
+            raise RvtoolInputError("mu > 0 (anchor friction) is available for mode = 'plain' only (the shared-pin "
                                    "condensation carries no tangential history)")
         if self.anchor_release_distance is not None:
             check_positive("anchor_release_distance", self.anchor_release_distance)
+
+    @cached_property
+    def friction(self):
+        """The :class:`FrictionLaw` of the pins: none for mu = 0, else the anchor model with k_t =
+        ``tangential_stiffness`` or Mindlin's ratio of the law's secant stiffness F_ref /
+        delta(F_ref) at ``reference_force``."""
+        if self.mu == 0.0:
+            return FrictionLaw()
+        k, p, F = self.law_coefficient, self.exponent, self.reference_force
+        kt = self.tangential_stiffness or mindlin_tangential_ratio(self.poisson_ratio) * F / (F / k) ** (1.0 / p)
+        return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=self.mu, tangential_stiffness=kt)
 
     @property
     def anchors(self):
@@ -186,6 +216,16 @@ class OutputPinMechanism:
     @property
     def n_wheels(self):
         return len(self.wheel_midplanes)
+
+    @cached_property
+    def law_coefficient(self):
+        """k [N m^-p] of the contact law: ``coefficient``, or the Hertz calibration at
+        ``reference_force`` over ``contact_length`` where it is None."""
+        if self.coefficient is not None:
+            return self.coefficient
+        return hertz_calibrated_coefficient(self.reference_force, self.pin_radius, self.hole_radius,
+                                            self.contact_length, self.youngs_modulus, self.poisson_ratio,
+                                            exponent=self.exponent)
 
     @property
     def stations(self):
@@ -216,7 +256,7 @@ class OutputPinMechanism:
             fp[:, ref.P_XI_HOLE1:ref.P_XI_HOLE1 + 2] = xh
             fp[:, ref.P_R_PIN], fp[:, ref.P_R_HOLE] = self.pin_radius, self.hole_radius
             fp[:, ref.P_OFF0], fp[:, ref.P_OFF1] = self.gap_offsets
-            fp[:, ref.P_K], fp[:, ref.P_EXP] = self.coefficient, self.exponent
+            fp[:, ref.P_K], fp[:, ref.P_EXP] = self.law_coefficient, self.exponent
             fp[:, ref.P_Z0], fp[:, ref.P_Z1] = self.wheel_midplanes
             c = self.compliance
             fp[:, ref.P_C00], fp[:, ref.P_C11] = c.self_compliance_0, c.self_compliance_1
@@ -225,7 +265,8 @@ class OutputPinMechanism:
             fp[:, ref.P_CLEAR], fp[:, ref.P_RELAX], fp[:, ref.P_KFLOOR] = s.clearance, s.relaxation, s.tangent_floor
             fp[:, ref.P_DETFLOOR], fp[:, ref.P_DISTFLOOR] = s.determinant_floor, s.distance_floor
             fp[:, ref.P_DMIN] = s.indentation_floor
-            ip[:] = (flange, wheels[0], wheels[1], s.updates)
+            ip[:, ref.I_FLANGE], ip[:, ref.I_WHEEL0], ip[:, ref.I_WHEEL1] = flange, wheels[0], wheels[1]
+            ip[:, ref.I_UPDATES] = s.updates
             return fp, ip
         n = self.n_pins * self.n_wheels
         fp = np.zeros((n, ref.N_PLAIN_F))
@@ -235,9 +276,9 @@ class OutputPinMechanism:
             fp[k, ref.Q_XI_PIN:ref.Q_XI_PIN + 2] = xp[pin]
             fp[k, ref.Q_XI_HOLE:ref.Q_XI_HOLE + 2] = xh[pin]
             fp[k, ref.Q_R_PIN], fp[k, ref.Q_R_HOLE] = self.pin_radius, self.hole_radius
-            fp[k, ref.Q_OFF], fp[k, ref.Q_K], fp[k, ref.Q_EXP] = self.gap_offsets[w], self.coefficient, self.exponent
+            fp[k, ref.Q_OFF], fp[k, ref.Q_K], fp[k, ref.Q_EXP] = self.gap_offsets[w], self.law_coefficient, self.exponent
             fp[k, ref.Q_Z], fp[k, ref.Q_DISTFLOOR] = self.wheel_midplanes[w], self.sleeve.distance_floor
-            ip[k] = (flange, wheels[w])
+            ip[k, ref.J_FLANGE], ip[k, ref.J_WHEEL] = flange, wheels[w]
         return fp, ip
 
 

@@ -4,14 +4,21 @@ public_pressure_tangent).
 A :class:`LocalContact` is built once from the state: contact identity, normal force, face width,
 materials, local frame and the undeformed gap as a function of the tangent coordinate. Everything is
 fixed before a panel resolution is chosen, so refining the panel grid never reselects the contact or
-changes its load. Families of the cycloid reducer (:func:`rvtool.assembly.cycloid.build`):
+changes its load. Everything comes through the :class:`~rvtool.model.ReducerModel` interface, so
+any topology with these families is served: the loads from the family observation
+(``model.observe``; a physical contact is its rows merged, :func:`rvtool.model.physical_contact`),
+the contact geometry from the family's component spec (``model.family_spec``), the elastic
+constants from ``model.material`` and body poses from ``model.body_pose``. Families:
 
-* cycloid pin (:func:`pin_contact`): final wheel profile at its pose against the ring pin, five-point
-  tangent of Eq. (public_pressure_tangent), mating-circle branch facing the wheel;
-* output pin (:func:`output_pin_contact`): convex pin in its concave wheel hole (conformal);
-* eccentric needle (:func:`needle_contact`): a roller against the journal (convex--convex) or against
-  the wheel bore (convex--concave), from the rolling-element observations
-  (``bearing_model="rolling"``) or, for the lumped bearing, from Stribeck's line-contact sharing
+* ``PINS`` (:func:`pin_contact`): a wheel--pin mesh spec (profile, pin radius, face width; contacts
+  ``wheel{k}/pin{j}``): final wheel profile at its pose against the ring pin, five-point tangent of
+  Eq. (public_pressure_tangent), mating-circle branch facing the wheel;
+* ``OUTPUT_PINS`` (:func:`output_pin_contact`): an output-pin mechanism spec (contacts
+  ``output_pins/pin{j}/wheel{k}``): convex pin in its concave wheel hole (conformal);
+* ``ECCENTRIC_BEARINGS`` (:func:`needle_contact`): a needle-bearing spec (contacts
+  ``eccentric_bearing{k}/roller{j}``, or one ``eccentric_bearing{k}`` for the lumped bearing): a
+  roller against the journal (convex--convex) or against the wheel bore (convex--concave), from the
+  rolling-element observations or, for the lumped bearing, from Stribeck's line-contact sharing
   Q_max = 4.08 F_r / Z at the bearing force direction.
 
 Slices (laminae) of one pin/roller and wheel lie on one line and carry equal loads in the planar
@@ -26,7 +33,7 @@ import scipy.interpolate
 
 from rvtool.errors import RvtoolInputError
 from rvtool.geometry.cycloid import pin_centres
-from rvtool.model import Family
+from rvtool.model import Family, physical_contact
 from warp_contacts.circle_pairs_ref import O_FN, O_FT, O_NX, O_NY, O_PX, O_PY
 
 #: Stribeck's factor of a line-contact bearing with zero clearance, Q_max = 4.08 F_r / Z
@@ -95,14 +102,20 @@ class LocalContact:
         return float(self.traction_sign * self.friction_coefficient)
 
 
-def _e_star(design):
-    m = design.material
+def _e_star(model):
+    m = model.material
     return m.youngs_modulus / (2 * (1 - m.poisson_ratio ** 2))
 
 
-def _evaluation_obs(el, q):
-    """Observation array (N, 8) of element ``el`` at the accepted state q (zero velocity)."""
-    return np.asarray(el.evaluation_at(q).obs, float)
+def _observation(model, q, family, obs):
+    """The :class:`~rvtool.model.FamilyObservation` of ``family`` at the accepted state q (zero
+    velocity), or ``obs`` where the caller already holds it."""
+    return model.observe(q, family) if obs is None else obs
+
+
+def _contact_rows(ob, contact):
+    """Observation rows of the physical contact ``contact`` (its slices or laminae)."""
+    return np.array([i for i, rid in enumerate(ob.ids) if physical_contact(rid) == contact], dtype=int)
 
 
 def _circle_pair_gap(r1, r2, conformal):
@@ -150,23 +163,20 @@ def pin_contact(model, q, wheel, pin, *, obs=None, extent=1e-3):
     0.12 um into the gap, finer than the 4097-panel spacing of a pin contact (28 nm), and moved its
     peak pressure by 0.2 %.
     """
-    el = model.family_element(Family.PINS)
-    obs = _evaluation_obs(el, q) if obs is None else obs
-    ps = model.family_element(Family.PINS).evaluator
-    rows = np.flatnonzero((ps.mesh_of == wheel) & (ps.pin_of == pin))
+    ob = _observation(model, q, Family.PINS, obs)
+    rows = _contact_rows(ob, f"wheel{wheel}/pin{pin}")
     if rows.size == 0:
         raise RvtoolInputError(f"wheel = {wheel}, pin = {pin}: no such cycloid pin contact")
+    obs = ob.obs
     F, pc, nrm, ratio = _merge(obs, rows)
     if not F > 0:
         raise RvtoolInputError(f"wheel = {wheel}, pin = {pin}: the contact carries no load at this state")
-    mesh = ps.meshes[int(wheel)]
+    mesh = model.family_spec(Family.PINS)[int(wheel)]
     prof = mesh.profile
     rp = mesh.pin_radius if mesh.pin_radius is not None else prof.pin_radius
     if not 0 < extent < rp:
         raise RvtoolInputError(f"extent = {extent!r} m is outside the valid range (0, pin radius {rp} m)")
-    ql = el.local(q)
-    pose, _ = el.pose_velocity(ql, 0 * ql)
-    wpose = pose[mesh.wheel_body]
+    wpose = model.body_pose(q, mesh.wheel_body)
     phi = np.linspace(0, 2 * np.pi, 200001)
     pts = _wheel_points(prof, wpose, phi)
     i = int(np.argmin(np.sum((pts - pc) ** 2, axis=1)))
@@ -195,8 +205,7 @@ def pin_contact(model, q, wheel, pin, *, obs=None, extent=1e-3):
     sign = float(np.sign(ft * np.dot(nt, t))) if ft != 0 else 1.0
     mu = mesh.friction.mu_kinetic if mesh.friction is not None else 0.0
     return LocalContact(name=f"wheel{wheel}/pin{pin}", family="pins", wheel=int(wheel), force=F,
-                        face_width=mesh.face_width, e_star=_e_star(model.design),
-                        poisson_ratio=model.design.material.poisson_ratio,
+                        face_width=mesh.face_width, e_star=_e_star(model), poisson_ratio=model.material.poisson_ratio,
                         radius=_equivalent_radius(gap, 0.02 * extent), point=p0, tangent=t, normal=n,
                         friction_coefficient=float(mu), traction_sign=sign, slice_force_ratio=ratio,
                         extent=float(extent), _gap=gap)
@@ -205,8 +214,8 @@ def pin_contact(model, q, wheel, pin, *, obs=None, extent=1e-3):
 def pin_contact_gap(model, q, contact, x):
     """Gap [m] at x [m] and force [N] of the cycloid pin contact of observation row ``contact``
     (its wheel and pin; slices merged). Kept for callers of the row-based interface."""
-    ps = model.family_element(Family.PINS).evaluator
-    c = pin_contact(model, q, int(ps.mesh_of[contact]), int(ps.pin_of[contact]))
+    wheel, pin = physical_contact(model.observe(q, Family.PINS).ids[contact]).split("/")
+    c = pin_contact(model, q, int(wheel.removeprefix("wheel")), int(pin.removeprefix("pin")))
     return c.gap(x), c.force
 
 
@@ -217,22 +226,20 @@ def _frame(n):
 
 def output_pin_contact(model, q, wheel, pin, *, obs=None):
     """Output pin ``pin`` in its hole of wheel ``wheel`` (convex pin in a concave hole, conformal)."""
-    el = model.family_element(Family.OUTPUT_PINS)
-    obs = _evaluation_obs(el, q) if obs is None else obs
-    prefix = f"output_pins/pin{pin}/wheel{wheel}/"
-    rows = np.array([i for i, cid in enumerate(el.ids) if cid.startswith(prefix)], dtype=int)
+    ob = _observation(model, q, Family.OUTPUT_PINS, obs)
+    rows = _contact_rows(ob, f"output_pins/pin{pin}/wheel{wheel}")
     if rows.size == 0:
         raise RvtoolInputError(f"wheel = {wheel}, pin = {pin}: no such output-pin contact")
-    F, pc, nrm, ratio = _merge(obs, rows)
+    F, pc, nrm, ratio = _merge(ob.obs, rows)
     if not F > 0:
         raise RvtoolInputError(f"wheel = {wheel}, pin = {pin}: the output-pin contact carries no load at this state")
-    op = model.design.output_pins
+    op = model.family_spec(Family.OUTPUT_PINS)
     t, n = _frame(nrm)
     gap = _circle_pair_gap(op.pin_radius, op.hole_radius, conformal=True)
     r_eq = op.pin_radius * op.hole_radius / (op.hole_radius - op.pin_radius)
     return LocalContact(name=f"output_pins/pin{pin}/wheel{wheel}", family="output_pins", wheel=int(wheel), force=F,
-                        face_width=model.design.wheels.width, e_star=_e_star(model.design),
-                        poisson_ratio=model.design.material.poisson_ratio, radius=r_eq, point=pc, tangent=t,
+                        face_width=op.contact_length, e_star=_e_star(model),
+                        poisson_ratio=model.material.poisson_ratio, radius=r_eq, point=pc, tangent=t,
                         normal=n, slice_force_ratio=ratio, extent=0.5 * op.pin_radius, _gap=gap)
 
 
@@ -245,27 +252,24 @@ def needle_contact(model, q, wheel, roller, race, *, obs=None):
     clearance) along the bearing force."""
     if race not in ("journal", "bore"):
         raise RvtoolInputError(f"race = {race!r}; valid choices are ['journal', 'bore']")
-    d = model.design
-    eb = d.eccentric_bearing
-    el = model.family_element(Family.ECCENTRIC_BEARINGS)
-    obs = _evaluation_obs(el, q) if obs is None else obs
+    eb = model.family_spec(Family.ECCENTRIC_BEARINGS)
+    ob = _observation(model, q, Family.ECCENTRIC_BEARINGS, obs)
     name = f"eccentric_bearing{wheel}"
-    if any(cid.startswith(name + "/roller") for cid in el.ids):
+    if any(cid.startswith(name + "/roller") for cid in ob.ids):
         if roller is None:
             raise RvtoolInputError("roller = None is only valid for the lumped bearing model; give a roller index")
-        prefix = f"{name}/roller{roller}/"
-        rows = np.array([i for i, cid in enumerate(el.ids) if cid.startswith(prefix)], dtype=int)
+        rows = _contact_rows(ob, f"{name}/roller{roller}")
         if rows.size == 0:
             raise RvtoolInputError(f"roller = {roller} is outside the valid range [0, {eb.n_rollers - 1}]")
-        F, pc, nrm, ratio = _merge(obs, rows)
+        F, pc, nrm, ratio = _merge(ob.obs, rows)
         cid = f"{name}/roller{roller}"
     else:
         if roller is not None:
             raise RvtoolInputError(f"roller = {roller!r}: the lumped bearing model has no rollers; pass None")
-        rows = np.array([i for i, c in enumerate(el.ids) if c == name], dtype=int)
+        rows = _contact_rows(ob, name)
         if rows.size == 0:
             raise RvtoolInputError(f"wheel = {wheel}: no eccentric bearing contact '{name}'")
-        Fr, pc, nrm, ratio = _merge(obs, rows)
+        Fr, pc, nrm, ratio = _merge(ob.obs, rows)
         F = STRIBECK_LINE * Fr / eb.n_rollers
         cid = f"{name}/stribeck_max"
     if not F > 0:
@@ -280,38 +284,27 @@ def needle_contact(model, q, wheel, roller, race, *, obs=None):
         r_eq = r_roll * r_bore / (r_bore - r_roll)
     t, n = _frame(nrm)
     return LocalContact(name=f"{cid}/{race}", family=f"needle_{race}", wheel=int(wheel), force=float(F),
-                        face_width=eb.roller_length, e_star=_e_star(d), poisson_ratio=d.material.poisson_ratio,
+                        face_width=eb.roller_length, e_star=_e_star(model), poisson_ratio=model.material.poisson_ratio,
                         radius=r_eq, point=pc, tangent=t, normal=n, slice_force_ratio=ratio, extent=0.5 * r_roll,
                         _gap=gap)
 
 
 def candidates(model, q, family, wheel, race="journal"):
     """All loaded contacts of ``family`` ("pins", "output_pins", "needles") of wheel ``wheel`` at q."""
-    if family == "pins":
-        el = model.family_element(Family.PINS)
-        obs = _evaluation_obs(el, q)
-        ps = model.family_element(Family.PINS).evaluator
-        loaded = sorted({int(p) for p, m, f in zip(ps.pin_of, ps.mesh_of, obs[:, O_FN]) if m == wheel and f > 0})
-        return [pin_contact(model, q, wheel, p, obs=obs) for p in loaded]
-    if family == "output_pins":
-        el = model.family_element(Family.OUTPUT_PINS)
-        obs = _evaluation_obs(el, q)
-        out = []
-        for p in range(model.design.output_pins.n_pins):
-            rows = [i for i, cid in enumerate(el.ids) if cid.startswith(f"output_pins/pin{p}/wheel{wheel}/")]
-            if obs[rows, O_FN].sum() > 0:
-                out.append(output_pin_contact(model, q, wheel, p, obs=obs))
-        return out
-    if family == "needles":
-        el = model.family_element(Family.ECCENTRIC_BEARINGS)
-        obs = _evaluation_obs(el, q)
-        name = f"eccentric_bearing{wheel}"
-        if not any(cid.startswith(name + "/roller") for cid in el.ids):
-            return [needle_contact(model, q, wheel, None, race, obs=obs)]
-        out = []
-        for j in range(model.design.eccentric_bearing.n_rollers):
-            rows = [i for i, cid in enumerate(el.ids) if cid.startswith(f"{name}/roller{j}/")]
-            if obs[rows, O_FN].sum() > 0:
-                out.append(needle_contact(model, q, wheel, j, race, obs=obs))
-        return out
-    raise RvtoolInputError(f"family = {family!r}; valid choices are ['pins', 'output_pins', 'needles']")
+    fam = {"pins": Family.PINS, "output_pins": Family.OUTPUT_PINS, "needles": Family.ECCENTRIC_BEARINGS}.get(family)
+    if fam is None:
+        raise RvtoolInputError(f"family = {family!r}; valid choices are ['pins', 'output_pins', 'needles']")
+    ob = model.observe(q, fam)
+    names, forces = ob.per_contact()
+    loaded = [n for n, f in zip(names, forces) if f > 0]
+    if fam == Family.PINS:
+        pins = sorted(int(p.removeprefix("pin")) for w, p in (n.split("/") for n in loaded) if w == f"wheel{wheel}")
+        return [pin_contact(model, q, wheel, p, obs=ob) for p in pins]
+    if fam == Family.OUTPUT_PINS:
+        pins = sorted(int(p.removeprefix("pin")) for _, p, w in (n.split("/") for n in loaded) if w == f"wheel{wheel}")
+        return [output_pin_contact(model, q, wheel, p, obs=ob) for p in pins]
+    name = f"eccentric_bearing{wheel}"
+    if not any(cid.startswith(name + "/roller") for cid in ob.ids):
+        return [needle_contact(model, q, wheel, None, race, obs=ob)]
+    rollers = sorted(int(n.split("/")[1].removeprefix("roller")) for n in loaded if n.startswith(name + "/roller"))
+    return [needle_contact(model, q, wheel, j, race, obs=ob) for j in rollers]

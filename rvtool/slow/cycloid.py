@@ -67,10 +67,18 @@ class CycloidSlowInputs:
     fatigue_pressure_exponent: float = 8.0
 
 
+def _housing_geometry(design):
+    """The housing's annulus (``[housing.structure]``: inner_radius, outer_radius, height [m])."""
+    if design.housing.structure is None:
+        raise RvtoolInputError("the thermal network needs the housing geometry: give [housing.structure] "
+                               "(inner_radius, outer_radius, height)")
+    return design.housing.structure
+
+
 def heat_capacities(design, inputs: CycloidSlowInputs) -> dict:
     """Node -> C_T [J/K] from the design's geometry and masses (steel, declared c_p)."""
     d, rho, cp = design, design.material.density, inputs.specific_heat
-    h = d.housing
+    h = _housing_geometry(design)
     m_housing = math.pi * (h.outer_radius ** 2 - h.inner_radius ** 2) * h.height * rho
     m_pins = d.pins.n_pins * math.pi * d.pins.pin_radius ** 2 * h.height * rho
     # wheel annulus between the pin envelope and the bearing bore (the assembly's wheel mass)
@@ -86,7 +94,7 @@ def heat_capacities(design, inputs: CycloidSlowInputs) -> dict:
 
 def thermal_network(design, inputs: CycloidSlowInputs) -> ThermalNetwork:
     """Six-node network of Eq. (obs_thermal): housing, pins, wheels, flange, shaft, needles."""
-    h = design.housing
+    h = _housing_geometry(design)
     area = 2 * math.pi * h.outer_radius * h.height + 2 * math.pi * (h.outer_radius ** 2 - h.inner_radius ** 2)
     C = heat_capacities(design, inputs)
     G_amb = {"housing": inputs.housing_film * area + inputs.housing_mount, "flange": inputs.flange_ambient, "shaft": inputs.shaft_ambient}
@@ -282,15 +290,17 @@ def rating_geometries(design) -> dict:
                             pitch_diameter=2 * eb.inner_radius + eb.roller_diameter, roller_length=eb.roller_length)
     for k in range(d.n_wheels):
         out[f"eccentric_bearing{k}"] = (needle, z / (z - 1))
+    from ..bearings.reducer import ball_rows
     mb, ib = d.main_bearing, d.input_bearing
-    if mb.kind != "locked":
-        rows = 2 if mb.kind == "angular_contact_pair" else 1
-        out["main_bearing"] = (RatingGeometry(element="ball", n_elements=mb.n_balls, element_diameter=mb.ball_diameter,
-                                              pitch_diameter=mb.pitch_diameter, n_rows=rows,
-                                              contact_angle=math.radians(mb.contact_angle_deg)), 1.0 / (z - 1))
-    if ib.kind != "locked":
+    if mb is not None:           # None: kind = "locked"
+        rows = ball_rows(mb)
+        r0 = rows[0]
+        out["main_bearing"] = (RatingGeometry(element="ball", n_elements=r0.n_balls, element_diameter=r0.ball_diameter,
+                                              pitch_diameter=r0.pitch_diameter, n_rows=len(rows),
+                                              contact_angle=r0.contact_angle), 1.0 / (z - 1))
+    if ib is not None:
         g = RatingGeometry(element="ball", n_elements=ib.n_balls, element_diameter=ib.ball_diameter,
-                           pitch_diameter=ib.pitch_diameter, contact_angle=math.radians(ib.contact_angle_deg))
+                           pitch_diameter=ib.pitch_diameter, contact_angle=ib.contact_angle)
         for k in range(2):
             out[f"input_bearing{k}"] = (g, 1.0)
     return out

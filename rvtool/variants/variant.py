@@ -58,16 +58,16 @@ class Variant:
     def apply(self, design):
         """The design of this variant of ``design`` (deviations written into its sections)."""
         from ..assembly.spec import replace
-        w = design.wheels
-        e = w.e_g + self.eccentricity_error
+        w, prof = design.wheels, design.profile
+        e_g = prof.generating_eccentricity
+        e = e_g + self.eccentricity_error
         if e <= 0:
             raise RvtoolInputError(f"eccentricity_error = {self.eccentricity_error} m leaves a non-positive eccentricity; "
-                                   f"valid range ({-w.e_g}, inf) m")
-        wheels = {"eccentricity": e, "generating_eccentricity": w.e_g,
-                  "equidistant_mod": w.equidistant_mod + self.equidistant_mod,
-                  "offset_mod": w.offset_mod + self.offset_mod,
-                  "clearance": w.clearance + self.pin_clearance}
-        sections = {"wheels": wheels}
+                                   f"valid range ({-e_g}, inf) m")
+        sections = {"wheels": {"eccentricity": e, "clearance": w.clearance + self.pin_clearance},
+                    "profile": {"generating_eccentricity": e_g,
+                                "equidistant_mod": prof.equidistant_mod + self.equidistant_mod,
+                                "offset_mod": prof.offset_mod + self.offset_mod}}
         if self.bearing_clearance is not None:
             sections["eccentric_bearing"] = {"radial_clearance": self.bearing_clearance}
         pins = {}

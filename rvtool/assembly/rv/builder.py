@@ -79,7 +79,7 @@ class RvKinematics:
     def __init__(self, design, graph, layout):
         self.g, self.L = graph, layout
         self.e = design.wheels.eccentricity
-        self.phases = np.deg2rad(np.asarray(design.wheels.phases_deg, float))
+        self.phases = np.asarray(design.wheels.phases, float)
         self.reference = reference_poses(design, graph, layout)
 
     def poses(self, input_angles):
@@ -136,8 +136,8 @@ def reference_poses(design, graph, layout):
         ref[L.sun, 2] = g.sun_angle0
     for k, b in enumerate(g.crank_angles):
         ref[L.crank(k)] = (g.crank_radius * math.cos(b), g.crank_radius * math.sin(b), g.crank_gear_angles0[k])
-    for j, ph in enumerate(design.wheels.phases_deg):
-        ref[L.wheel(j), :2] = journal_centre(design.wheels.eccentricity, math.radians(ph))
+    for j, ph in enumerate(design.wheels.phases):
+        ref[L.wheel(j), :2] = journal_centre(design.wheels.eccentricity, ph)
     return ref
 
 
@@ -171,8 +171,8 @@ def needle_mountings(design, graph, layout):
     out = []
     for k, b in enumerate(graph.crank_angles):
         e_k = d.wheels.eccentricity + d.cranks.eccentricity_error(k)
-        for j, ph in enumerate(d.wheels.phases_deg):
-            phase = math.radians(ph) + d.cranks.phase_error(k) - graph.crank_gear_angles0[k]
+        for j, ph in enumerate(d.wheels.phases):
+            phase = ph + d.cranks.phase_error(k) - graph.crank_gear_angles0[k]
             jc = journal_centre(e_k, phase)
             out.append(Mounting(name=f"eccentric_bearing_c{k}w{j}", bearing=d.eccentric_bearing, inner=layout.crank(k),
                                 outer=layout.wheel(j), inner_centre=(float(jc[0]), float(jc[1])),
