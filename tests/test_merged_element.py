@@ -183,7 +183,7 @@ def test_ported_housing_merged_tangent_and_equilibrium():
     92-coordinate pin element)."""
     import exudyn as exu
     # a coarser housing mesh than the default keeps the reduction at ~2 s (as test_housing_ports)
-    d = _design(housing={"model": "ports", "mesh_size": 0.006})
+    d = _design(housing={"model": "ports", "structure": {"mesh_size": 0.006}})
     m, q = _loaded("merged", d)
     m_old, q_old = _loaded("per_family", d)
     host = m.contact_host
