@@ -86,7 +86,10 @@ def reducer_costs(quick):
     return {"std_involute_equilibrium_ms": {"from_kinematic_state": cold, "warm_started": warm},
             "rd40_equilibrium_ms": {"from_kinematic_state": rd_cold, "warm_started": rd_warm},
             "std_involute_te_one_output_revolution": te_std, "rd40_te_reference": te_rd,
-            "per_point_cost_ratio_std_over_rd40": ratio, "target_ratio": 2.0, "passed": bool(ratio <= 2.0),
+            "per_point_cost_ratio_std_over_rd40": ratio, "target_ratio": 2.0,
+            # the target is judged on the full run only: 40 points of ~3 ms are timing noise on a shared machine
+            "passed": None if quick else bool(ratio <= 2.0),
+            "judged": "not judged (quick: 40 points, timing noise)" if quick else "full run",
             "bearing_model": "lumped (both)"}
 
 

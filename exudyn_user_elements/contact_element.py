@@ -134,15 +134,21 @@ class ContactElement:
         self.inject_nan_at = set()      # fault injection (tests, hard cases): evaluation counters to poison
         self._key = None
         self._ev = None
-        self.object_number = mbs.AddObject(ObjectGenericODE2(
-            nodeNumbers=nodes + ([] if ports is None else [ports.structure.node]), massMatrix=np.zeros((self.n, self.n)),
-            forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,
-            visualization=VObjectGenericODE2(show=False)))
         self.mbs = mbs
+        self.object_number = self._attach(mbs, nodes, ports)
         self._ltg = None
         self.last_obs = None            # observation array (N, 8) of the last accepted state
         self.gap_offsets = np.zeros(len(self.ids))   # slow-state gap offsets per row [m] (set_gap_offsets)
         self.prescribed_velocity = None   # element-coordinate velocity of quasi-static windows at speed
+
+    def _attach(self, mbs, nodes, ports):
+        """Add this set's own ``ObjectGenericODE2`` to ``mbs``; returns its object number.
+        (:class:`exudyn_user_elements.merged_element.HostedContactElement` adds none: its
+        host element carries every family of the reducer.)"""
+        return mbs.AddObject(ObjectGenericODE2(
+            nodeNumbers=nodes + ([] if ports is None else [ports.structure.node]), massMatrix=np.zeros((self.n, self.n)),
+            forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,
+            visualization=VObjectGenericODE2(show=False)))
 
     # -- pure evaluation -------------------------------------------------
     def pose_velocity(self, q, q_t):

@@ -110,3 +110,18 @@ def test_housing_structure_is_the_annular_housing_spec():
     raw["housing"]["model"] = "ports"
     with pytest.raises(RvtoolInputError, match=r"housing.model = 'ports' needs the table \[housing.structure\]"):
         design_from_dict(raw)
+
+
+@pytest.mark.parametrize("section, key, value, match", [
+    ("main_bearing", "n_balls", 10 ** 6, r"main_bearing\.n_balls = 1000000 is outside the valid range \[3, 1000\]"),
+    ("output_pins", "n_pins", 10 ** 5, r"output_pins\.n_pins = 100000 is outside the valid range \[1, 64\]"),
+    ("wheels", "samples_per_tooth", 10 ** 7, r"wheels\.samples_per_tooth = 10000000 is outside the valid range"),
+    ("wheels", "n_slices", 10 ** 4, r"wheels\.n_slices = 10000 is outside the valid range \[1, 64\]"),
+])
+def test_resolution_counts_are_bounded(section, key, value, match):
+    """A count that would make the build run for hours (found by the design fuzz, issue 20) is a
+    named error with its valid range at load."""
+    raw = _raw()
+    raw[section][key] = value
+    with pytest.raises(RvtoolInputError, match=match):
+        design_from_dict(raw)

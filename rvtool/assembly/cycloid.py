@@ -490,8 +490,22 @@ def lumped_bearing_contacts(design, *, offset=0, prefix=""):
     return contacts
 
 
+CONTACT_ELEMENTS = ("per_family", "merged")
+
+
+def contact_element_mode(value=None):
+    """The contact-element layout of :func:`build`: ``value``, else the environment variable
+    ``RVTOOL_CONTACT_ELEMENT``, else ``"per_family"`` (checked against CONTACT_ELEMENTS)."""
+    import os
+    mode = value if value is not None else os.environ.get("RVTOOL_CONTACT_ELEMENT", "per_family")
+    if mode not in CONTACT_ELEMENTS:
+        raise RvtoolInputError(f"contact_element = {mode!r}; valid choices are {list(CONTACT_ELEMENTS)} "
+                               "(argument of build or environment variable RVTOOL_CONTACT_ELEMENT)")
+    return mode
+
+
 def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
-          rigid_supports=False, regularization=(100.0, 0.1)):
+          rigid_supports=False, regularization=(100.0, 0.1), contact_element=None):
     """Assemble ``design`` into an Exudyn system; returns a :class:`CycloidModel`.
 
     rigid_supports: shaft and flange centres held on the axis and the wheel
@@ -503,7 +517,12 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     clearances leaves equilibrium directions without stiffness at zero load; at
     100 N/m and 10 um they carry 1e-3 N against contact loads of 1e2-1e3 N; the
     forces they carry are reported by the protocols). (0, 0) removes them.
+    contact_element: ``"per_family"`` (one Exudyn element per contact family, each with its own
+    callbacks) or ``"merged"`` (:class:`~exudyn_user_elements.merged_element.MergedContactElement`:
+    every family in one element, sparse tangent, per-attempt controls); None reads
+    ``RVTOOL_CONTACT_ELEMENT`` (default ``"per_family"``). Same families, ids and physics.
     """
+    mode = contact_element_mode(contact_element)
     if bearing_model not in ("lumped", "rolling"):
         raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
     d = design
@@ -540,11 +559,19 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         n_pin_bodies = nw + 2 + st.size
     pin_set = CycloidPinSet(meshes, n_pin_bodies, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
                             precision=precision, device=device, name="pins", search=d.wheels.search)
+    host = None
+    if mode == "merged":
+        from exudyn_user_elements.merged_element import MergedContactElement
+        host = MergedContactElement(mbs, nodes, structure=housing)
+
+    def element(cset, **kw):
+        return ContactElement(mbs, nodes, cset, **kw) if host is None else host.add(cset, **kw)
+
     pin_eval = pin_set
     if C_ring is not None:
         from ..contact.pin_closure import ElasticPinClosure
         pin_eval = ElasticPinClosure(pin_set, n_bodies=nw + 2, carrier=GROUND, station_compliance=C_ring, station=st)
-    elements = {"pins": ContactElement(mbs, nodes, pin_eval, ports=ports)}
+    elements = {"pins": element(pin_eval, ports=ports)}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
     from ..output_pins.evaluator import OutputPinEvaluator
@@ -562,23 +589,22 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                                    wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2 + st.size, backend=backend,
                                    precision=precision, device=device, flange_bodies=nw + 2 + st.ravel())
         op_eval = ElasticPinClosure(inner, n_bodies=nw + 2, carrier=nw + 1, station_compliance=C_out, station=st)
-    elements["output_pins"] = ContactElement(mbs, nodes, op_eval)
+    elements["output_pins"] = element(op_eval)
 
     # -- bearings -----------------------------------------------------------------
     if bearing_model == "rolling":
         from ..bearings.reducer import rolling_bearing_sets
         for name, ev in rolling_bearing_sets(d, nw, backend=backend, precision=precision, device=device).items():
-            elements[name] = ContactElement(mbs, nodes, ev)
+            elements[name] = element(ev)
     else:
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
-        elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
+        elements["bearings"] = element(bset, backend=backend, precision=precision, device=device)
     if d.bearing_friction.model != "none":
         # the friction torque of every bearing, a loss element of its own (switched off: absent)
         if bearing_model != "lumped":
             raise RvtoolInputError("bearing_friction.model = 'palmgren' needs bearing_model = 'lumped' (the "
                                    "bearing loads are read per bearing identity from the lumped set)")
-        elements["bearing_friction"] = ContactElement(mbs, nodes, bearing_friction_evaluator(
-            d, bset, elements["bearings"].evaluator))
+        elements["bearing_friction"] = element(bearing_friction_evaluator(d, bset, elements["bearings"].evaluator))
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
@@ -587,7 +613,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                         reg_springs=bodies["reg_springs"], journal_locks=bodies["journal_locks"],
                         structures={} if housing is None else {"housing": housing},
                         mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
-                        housing=housing, family_specs=family_specs(d, meshes), material=d.material)
+                        housing=housing, contact_host=host, family_specs=family_specs(d, meshes),
+                        material=d.material)
 
 
 def family_specs(design, meshes):

@@ -28,7 +28,6 @@ re-loads the changed data and the links follow a change (e.g. of the wheel width
 import copy
 import dataclasses
 import math
-import tomllib
 import typing
 from dataclasses import dataclass, field
 
@@ -99,8 +98,14 @@ class Wheels:
         if not 1 <= len(self.midplanes) <= 2:
             raise RvtoolInputError(f"wheels: {len(self.midplanes)} wheels; valid range [1, 2]")
         check_finite("wheels.phases", np.asarray(self.phases, float))
-        if not isinstance(self.n_slices, int) or self.n_slices < 1:
-            raise RvtoolInputError(f"wheels.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
+        # upper bounds: the largest resolutions the solvers are built and tested for (a fuzzed or mistyped
+        # 1e6 would otherwise build for hours instead of failing with a named error)
+        if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, int) or not 1 <= self.n_slices <= 64:
+            raise RvtoolInputError(f"wheels.n_slices = {self.n_slices!r} is outside the valid range [1, 64] (integer)")
+        if (isinstance(self.samples_per_tooth, bool) or not isinstance(self.samples_per_tooth, int)
+                or not 8 <= self.samples_per_tooth <= 20000):
+            raise RvtoolInputError(f"wheels.samples_per_tooth = {self.samples_per_tooth!r} is outside the valid range "
+                                   "[8, 20000] (integer)")
         if self.search not in ("discrete", "analytic"):
             raise RvtoolInputError(f"wheels.search = {self.search!r}; valid choices are ['discrete', 'analytic']")
 

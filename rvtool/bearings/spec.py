@@ -117,7 +117,7 @@ class CylindricalRollerBearing:
         check_positive("inner_radius", self.inner_radius)
         check_positive("roller_diameter", self.roller_diameter)
         check_positive("roller_length", self.roller_length)
-        _count("n_rollers", self.n_rollers, 3)
+        _count("n_rollers", self.n_rollers, 3, 1000)   # upper bound: a named error, not an hours-long build
         _count("n_slices", self.n_slices, 1, 64)
         check_range("radial_clearance", self.radial_clearance, -MAX_INTERFERENCE * self.roller_diameter,
                     MAX_CLEARANCE * self.roller_diameter)
@@ -240,7 +240,7 @@ class BallBearing:
     ramp_depth: float = 1e-6
 
     def __post_init__(self):
-        _count("n_balls", self.n_balls, 3)
+        _count("n_balls", self.n_balls, 3, 1000)   # upper bound: a named error, not an hours-long build
         check_positive("ball_diameter", self.ball_diameter)
         check_range("pitch_diameter", self.pitch_diameter, self.ball_diameter, math.inf, low_open=True)
         check_range("contact_angle", self.contact_angle, 0.0, math.pi / 2, high_open=True)

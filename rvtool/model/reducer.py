@@ -46,6 +46,7 @@ body list, kinematics object (``poses(angles) -> (n, nb, 3)`` and
 ``velocities(angle, omega) -> (nb, 3)``) and family map; nothing in the solvers or
 protocols changes.
 """
+import functools
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -97,6 +98,18 @@ def physical_contact(row_id):
     return row_id
 
 
+@functools.lru_cache(maxsize=64)
+def contact_groups(row_ids):
+    """(physical contact ids in order of first appearance, contact index of every row) of a
+    tuple of row ids; cached because a study observes the same rows at every point."""
+    contact = [physical_contact(r) for r in row_ids]
+    names = tuple(dict.fromkeys(contact))
+    index = {c: k for k, c in enumerate(names)}
+    rows = np.fromiter((index[c] for c in contact), int, len(contact))
+    rows.flags.writeable = False
+    return names, rows
+
+
 @dataclass(frozen=True)
 class FamilyObservation:
     """A contact family at one state: per row (slice, lamina or whole contact) the identity,
@@ -126,12 +139,10 @@ class FamilyObservation:
     def per_contact(self):
         """(contact ids, normal force per physical contact [N]): rows summed per contact
         (Eq. width_resultant's force part), contacts in order of first appearance."""
-        contact = [physical_contact(r) for r in self.ids]
-        names = list(dict.fromkeys(contact))
-        index = {c: k for k, c in enumerate(names)}
+        names, rows = contact_groups(self.ids)
         out = np.zeros(len(names))
-        np.add.at(out, np.fromiter((index[c] for c in contact), int, len(contact)), self.obs[:, O_FN])
-        return tuple(names), out
+        np.add.at(out, rows, self.obs[:, O_FN])
+        return names, out
 
     def per_member(self):
         """{member: per-contact normal forces [N]}: the physical contacts grouped by the first
@@ -215,6 +226,7 @@ class ReducerModel:
     #: ladder (:meth:`rvtool.solver.continuation.Continuation.go_to`): set by topologies whose
     #: zero-load state is free play without contact stiffness (a backlashed involute mesh)
     continuation_restarts: bool = False
+    contact_host: object = None     # MergedContactElement carrying every family (one element per system), or None
 
     # -- coordinates -------------------------------------------------------
     def body_index(self, body):
@@ -293,8 +305,12 @@ class ReducerModel:
     def set_input_motion(self, angle_of_time):
         """Prescribed input angle [rad] as a function of time [s] (driven runs). The static
         regularization springs are switched off: inertia makes the dynamic problem regular."""
-        self.mbs.SetObjectParameter(self.drive, "offsetUserFunction",
-                                    lambda mbs, t, itemNumber, lOffset: angle_of_time(t))
+        if self.contact_host is not None:
+            # one contact element per system: the host sets the offset once per step attempt
+            self.contact_host.set_drive(self.drive, angle_of_time)
+        else:
+            self.mbs.SetObjectParameter(self.drive, "offsetUserFunction",
+                                        lambda mbs, t, itemNumber, lOffset: angle_of_time(t))
         for _, _, _, obj in self.reg_springs:
             self.mbs.SetObjectParameter(obj, "stiffness", 0.0)
 
@@ -308,6 +324,10 @@ class ReducerModel:
 
     def set_output_torque_function(self, torque_of_time):
         """Output torque [N m] as a function of time [s]; None removes it (the constant load applies)."""
+        if self.contact_host is not None:
+            # one contact element per system: the host sets the load once per step attempt
+            self.contact_host.set_load_function(self.load, torque_of_time)
+            return
         fn = 0 if torque_of_time is None else (lambda mbs, t, load: torque_of_time(t))
         self.mbs.SetLoadParameter(self.load, "loadUserFunction", fn)
 

@@ -145,8 +145,9 @@ class OutputPinMechanism:
                                    f"{[m.value for m in PinMode]}") from None
         check_positive("pin_circle_radius", self.pin_circle_radius)
         check_positive("hole_circle_radius", self.hole_circle_radius)
-        if not isinstance(self.n_pins, (int, np.integer)) or self.n_pins < 1:
-            raise RvtoolInputError(f"n_pins = {self.n_pins!r} is outside the valid range [1, inf) (an integer)")
+        # upper bound 64: more pins than any pin-hole output mechanism carries; a named error, not an hours-long build
+        if isinstance(self.n_pins, bool) or not isinstance(self.n_pins, (int, np.integer)) or not 1 <= self.n_pins <= 64:
+            raise RvtoolInputError(f"n_pins = {self.n_pins!r} is outside the valid range [1, 64] (an integer)")
         check_finite("phase", self.phase)
         check_positive("pin_radius", self.pin_radius)
         check_range("hole_radius", self.hole_radius, self.pin_radius, math.inf, low_open=True)

@@ -54,6 +54,15 @@ class RunRecord:
         return d
 
 
+def simulation_settings(spec: RunSpec, n_coordinates):
+    """Exudyn ``SimulationSettings`` of :func:`simulate` for ``spec`` on a system of ``n_coordinates``
+    ODE2 coordinates (benchmarks time the bare Exudyn step with exactly these)."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        return _settings(spec, n_coordinates)
+
+
 def _settings(spec: RunSpec, n_coordinates):
     ss = exu.SimulationSettings()
     ti = ss.timeIntegration
@@ -128,12 +137,21 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
             reject("non-finite contact force in a trial evaluation" if any(e.nonfinite for e in elements)
                    else "Newton did not converge")
 
+    # one contact element per system (exudyn_user_elements.merged_element): the hosts set the
+    # per-attempt controls in the pre-step hook and the accepted step is committed in the
+    # post-Newton hook, so an accepted step crosses into Python for the hooks twice, not three times
+    hosts = [h for h in (getattr(e, "host", None) for e in elements) if h is not None]
+    hosts = list({id(h): h for h in hosts + list(mbs.variables.get("rvtool.contact_hosts", ()))}.values())
+    merged = bool(elements) and all(getattr(e, "host", None) is not None for e in elements)
+
     def pre_step(mbs_, t):
         close_failed_attempt()
         rec.attempts += 1
         state["open"] = True
         for e in elements:
             e.nonfinite = False
+        for h in hosts:
+            h.begin_attempt(t)
         return True
 
     def post_newton(mbs_, t):
@@ -157,6 +175,8 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
         if reason is not None:
             reject(reason)
             return [1.0, -1.0]
+        if merged:
+            accept(t, np.array(q), np.array(v))
         return [0.0, -1.0]
 
     def post_step(mbs_, t):
@@ -166,11 +186,21 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
             if energy is not None:
                 energy.start(t, mbs_.systemData.GetODE2Coordinates(), mbs_.systemData.GetODE2Coordinates_t())
             return True
+        if merged:
+            return True     # committed in the post-Newton hook
+        accept(t, np.array(mbs_.systemData.GetODE2Coordinates()), np.array(mbs_.systemData.GetODE2Coordinates_t()))
+        return True
+
+    def accept(t, q, v):
+        """The accepted step ending at t with state (q, v): history commit, observers, statistics."""
         state["open"] = False
         dt = t - state["t_prev"]
-        q = np.array(mbs_.systemData.GetODE2Coordinates())
-        v = np.array(mbs_.systemData.GetODE2Coordinates_t())
-        snaps = {e.name: e.commit(q, v, t) for e in elements}
+        if merged and observers is None:
+            for e in elements:
+                e.commit(q, v, t, snapshot=False)   # no observer: history only, no snapshot
+            snaps = None
+        else:
+            snaps = {e.name: e.commit(q, v, t) for e in elements}
         if energy is not None:
             energy.accept(t, q, v)
         if observers is not None:
@@ -186,11 +216,13 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
         state["v_prev"] = v
         if before_accept is not None:
             before_accept(t, q, v)
-        return True
 
     mbs.SetPreStepUserFunction(pre_step)
     mbs.SetPostNewtonUserFunction(post_newton)
-    mbs.SetPostStepUserFunction(post_step)
+    # merged: the post-step hook only samples the energy account's initial state
+    mbs.SetPostStepUserFunction(post_step if not merged or energy is not None else 0)
+    for h in hosts:
+        h.set_controls(0.0)
     state["q_prev"] = np.array(mbs.systemData.GetODE2Coordinates())
     state["v_prev"] = np.array(mbs.systemData.GetODE2Coordinates_t())
     t0 = time.perf_counter()

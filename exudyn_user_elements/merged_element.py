@@ -1,0 +1,374 @@
+"""All contact families of a reducer as one Exudyn element (issue 19, "one contact element per system").
+
+One ``ObjectGenericODE2`` spans the planar rigid bodies of the reducer (x, y, theta
+per node) and, for an elastic housing, the structural coordinates eta of its
+:class:`~exudyn_user_elements.reduced_structure.ReducedStructure`. Every Newton
+evaluation crosses into Python once for the residual and once for the tangent:
+
+* the force callback evaluates every family (one kernel launch each, the
+  evaluators of :mod:`rvtool.contact`, :mod:`rvtool.output_pins`,
+  :mod:`rvtool.bearings`) at the gathered state and returns the summed
+  Q = sum_f T_f^T G_f^T f_f (Eq. (contact_mapping); T_f the constant port map of
+  Eq. (port_runtime_transform) where a family acts on port bodies, else the
+  identity on its coordinates);
+* the Jacobian callback returns the summed analytic tangent of Eq.
+  (assembled_contact_tangent) as sparse triplets (``exudyn.MatrixContainer``) in
+  Exudyn's convention J_user = -(f_ODE2 dQ/dq + f_ODE2_t dQ/dq_t); the evaluation
+  of the preceding residual at the same state is reused (no second launch).
+
+The families stay addressable one by one: :class:`HostedContactElement` is the
+per-family :class:`~exudyn_user_elements.contact_element.ContactElement`
+interface (ids, observation at a static state, history commit, gap offsets,
+fault injection) without an Exudyn object of its own; the host calls its
+evaluation so its per-state cache serves the observers and the static
+protocols exactly as before.
+
+Port contraction: a family on port bodies sees n_v extra bodies whose poses are
+u = P eta. Its tangent in body coordinates is non-zero only on the rows and
+columns of the port bodies in contact, so the contraction
+dQ/dq = T^T (dQ_b/dq_b) T is formed on those rows only (an exact rewrite: the
+dropped rows and columns are zero). The matrix products are split so that no
+single BLAS call exceeds OpenBLAS's multithreading threshold: threaded GEMM on
+these 10^2-sized operands cost 33 ms per product on the 2-core development
+machine under load against 0.09 ms single-threaded (measured), which was the
+79 ms per quasi-static point of the ported housing.
+
+Accepted-step hooks: the host also carries the per-attempt controls that
+would otherwise be Python user functions evaluated at every residual (the input
+drive's offset, the output torque): :meth:`MergedContactElement.begin_attempt`
+sets them once per step attempt at the attempt's end time, where Exudyn's
+generalized-alpha evaluates them (Arnold--Bruls form: equations at t_{n+1}), so
+the values the solver sees are identical.
+"""
+import numpy as np
+import exudyn as exu
+from exudyn.itemInterface import ObjectGenericODE2, VObjectGenericODE2
+
+from rvtool.contact.evaluator import Evaluation
+from rvtool.errors import RvtoolInputError
+
+from .contact_element import ContactElement
+
+# OpenBLAS runs a GEMM multithreaded above m n k = 65536 x 4 (interface/gemm.c,
+# SMP_THRESHOLD_MIN x GEMM_MULTITHREAD_THRESHOLD); below it the call stays on the caller's thread
+_GEMM_SINGLE_THREAD = 65536 * 4 - 1
+# up to this many element coordinates the tangent goes back dense: building an
+# exudyn.MatrixContainer costs ~20 us per Jacobian call more than handing over a
+# 12 x 12 array (measured, 2-core machine), while the system matrix gains nothing
+DENSE_MAX_COORDINATES = 30
+# key of the list of MergedContactElements in ``mbs.variables`` (Exudyn's user dictionary)
+HOSTS_KEY = "rvtool.contact_hosts"
+
+
+def small_matmul(A, B):
+    """A @ B with the inner dimension split into chunks whose GEMM stays single-threaded
+    (see the module docstring: threaded GEMM on small operands costs ~300x more under load).
+    Exact up to the order of the inner sum."""
+    m, k = A.shape
+    n = B.shape[1]
+    if m * n * k <= _GEMM_SINGLE_THREAD:
+        return A @ B
+    kc = max(1, _GEMM_SINGLE_THREAD // max(m * n, 1))
+    out = A[:, :kc] @ B[:kc]
+    for s in range(kc, k, kc):
+        out += A[:, s:s + kc] @ B[s:s + kc]
+    return out
+
+
+def _sparse_container(J):
+    """``exudyn.MatrixContainer`` in sparse triplet format of the non-zero entries of J."""
+    rows, cols = np.nonzero(J)
+    mc = exu.MatrixContainer()
+    mc.SetWithSparseMatrixCSR(J.shape[0], J.shape[1], np.column_stack([rows, cols, J[rows, cols]]),
+                              useDenseMatrix=False)
+    return mc
+
+
+class ContractedEvaluation(Evaluation):
+    """:class:`~rvtool.contact.evaluator.Evaluation` whose tangents dQdq, dQdv are formed on first
+    read (by the callables given for them) and kept."""
+
+    def __init__(self, Q, dQdq, dQdv, obs, trial_history, finite):
+        self._make = {"dQdq": dQdq, "dQdv": dQdv}
+        self._made = {}
+        self.Q, self.obs, self.trial_history, self.finite = Q, obs, trial_history, finite
+
+    def _get(self, name):
+        if name not in self._made:
+            self._made[name] = self._make[name]()
+        return self._made[name]
+
+    dQdq = property(lambda self: self._get("dQdq"), lambda self, v: self._made.__setitem__("dQdq", v))
+    dQdv = property(lambda self: self._get("dQdv"), lambda self, v: self._made.__setitem__("dQdv", v))
+
+
+class HostedContactElement(ContactElement):
+    """One contact family of a :class:`MergedContactElement`: the per-family interface of
+    :class:`ContactElement` (ids, ``evaluation_at``, ``commit``, ``set_gap_offsets``,
+    ``coordinate_indices``, ``inject_nan_at``), evaluated by its host; no Exudyn object of its own.
+
+    host: the :class:`MergedContactElement`; positions: indices of this family's element
+    coordinates among the host's (rigid coordinates first, then eta for a ported family);
+    the other arguments as for :class:`ContactElement`.
+    """
+
+    def __init__(self, host, positions, nodes, contact_set, **kw):
+        self.host = host
+        self.positions = np.asarray(positions, dtype=int)
+        super().__init__(host.mbs, nodes, contact_set, **kw)
+        if len(self.positions) != self.n:
+            raise RvtoolInputError(f"positions has {len(self.positions)} entries for a family with {self.n} coordinates")
+        # a contiguous leading block (the rigid bodies) is gathered and scattered as a view
+        self.prefix = self.n if (self.ports is None and np.array_equal(self.positions, np.arange(self.n))) else None
+
+    def _attach(self, mbs, nodes, ports):
+        return self.host.object_number
+
+    def set_gap_offsets(self, offsets):
+        super().set_gap_offsets(offsets)
+        self.host.invalidate()
+
+    def store(self, key, pose, vel):
+        """Evaluate at absolute poses/velocities (state already checked finite by the host) and
+        cache the result under ``key`` (the key :meth:`ContactElement.evaluate` forms), so that
+        ``commit`` and ``evaluation_at`` at this state reuse it. A state this family already holds
+        (evaluated on its own, e.g. by an observer) is not evaluated again, as in ContactElement."""
+        if key == self._key:
+            return self._ev
+        ev = self.evaluator.evaluate(pose, vel, check=False)
+        if self.ports is not None:
+            ev = self._contract(ev)
+        self.n_evaluations += 1
+        if self.n_evaluations in self.inject_nan_at:
+            ev.Q = ev.Q * np.nan
+            ev.finite = False
+        if not ev.finite:
+            self.nonfinite = True
+        self._key, self._ev = key, ev
+        return ev
+
+    def commit(self, q_global, v_global, t=None, snapshot=True):
+        """:meth:`ContactElement.commit`; ``snapshot=False`` commits the history and the last
+        observation without building the observers' snapshot (the driver passes it when no
+        observer is registered)."""
+        # the committed history changes: the host's cached sum may not be reused either
+        self.host.invalidate()
+        if snapshot:
+            return super().commit(q_global, v_global, t)
+        ql, vl = self.local(q_global), self.local(v_global)
+        if t is not None and self._key == (float(t), ql.tobytes(), vl.tobytes()):
+            self.last_obs = self.evaluator.commit(None, None, evaluation=self._ev)
+        else:
+            self.last_obs = self.evaluator.commit(*self.pose_velocity(ql, vl))
+        self._key = None
+        return None
+
+    @property
+    def coordinate_indices(self):
+        return self.host.coordinate_indices[self.positions]
+
+    def _contract(self, ev):
+        """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T on the port rows in contact only (module docstring)."""
+        nr, P = self.n_rigid, self.ports.P
+        nb = len(ev.Q)
+
+        def active(*Ms):
+            mask = np.zeros(nb - nr, bool)
+            for M in Ms:
+                mask |= np.any(M[nr:] != 0, axis=1) | np.any(M[:, nr:] != 0, axis=0)
+            return np.flatnonzero(mask)
+        a = active(ev.dQdq, ev.dQdv)
+        Pa = P[a]
+        ia = nr + a
+
+        def mat(J):
+            out = np.zeros((self.n, self.n))
+            out[:nr, :nr] = J[:nr, :nr]
+            if len(a):
+                out[:nr, nr:] = small_matmul(J[:nr][:, ia], Pa)
+                out[nr:, :nr] = small_matmul(Pa.T, J[ia][:, :nr])
+                out[nr:, nr:] = small_matmul(Pa.T, small_matmul(J[np.ix_(ia, ia)], Pa))
+            return out
+        Q = np.zeros(self.n)
+        Q[:nr] = ev.Q[:nr]
+        if np.any(np.delete(ev.Q[nr:], a) != 0):
+            # a port row with force but no tangent (not a contact law of this code): contract all rows
+            Q[nr:] = small_matmul(P.T, ev.Q[nr:, None])[:, 0]
+        elif len(a):
+            Q[nr:] = Pa.T @ ev.Q[ia]
+        # the tangents are contracted when first read: a residual-only evaluation (the converged
+        # Newton iterate) and the static solver (no velocity tangent) skip their share
+        return ContractedEvaluation(Q, lambda: mat(ev.dQdq), lambda: mat(ev.dQdv), ev.obs, ev.trial_history,
+                                    ev.finite)
+
+
+class MergedContactElement:
+    """Every contact family of one reducer in one Exudyn ``ObjectGenericODE2``.
+
+    mbs: the MainSystem; nodes: the rigid-body node numbers (``NodeRigidBody2D``) every family
+    is evaluated on, in body order; structure: a
+    :class:`~exudyn_user_elements.reduced_structure.ReducedStructure` whose eta follow the
+    rigid coordinates (families with ``ports`` act on it), or None. Families are added with
+    :meth:`add` before ``mbs.Assemble()``.
+    """
+
+    def __init__(self, mbs, nodes, *, structure=None, name="contacts"):
+        nodes = [int(n) for n in nodes]
+        self.mbs = mbs
+        self.name = name
+        self.nodes = nodes
+        self.structure = structure
+        self.n_rigid = 3 * len(nodes)
+        self.n = self.n_rigid + (0 if structure is None else structure.n)
+        self.members = []
+        self.n_force_calls = 0
+        self.n_jacobian_calls = 0
+        self._key = None
+        self._Q = None
+        self._evs = None
+        self._ltg = None
+        self._drive = None
+        self._load = None
+        # Exudyn requires the object's matrices and its Jacobian user function to agree in format
+        self.sparse = self.n > DENSE_MAX_COORDINATES
+        if self.sparse:
+            empty = exu.MatrixContainer()
+            empty.SetWithSparseMatrixCSR(self.n, self.n, np.zeros((0, 3)), useDenseMatrix=False)
+            mats = dict(massMatrix=empty, stiffnessMatrix=empty, dampingMatrix=empty)
+        else:
+            mats = dict(massMatrix=np.zeros((self.n, self.n)))
+        # registered with the system: the driver sets a host's per-attempt controls even when it
+        # is called without the contact elements (a frozen drive would be wrong, not slow)
+        mbs.variables.setdefault(HOSTS_KEY, []).append(self)
+        self.object_number = mbs.AddObject(ObjectGenericODE2(
+            name=name, nodeNumbers=nodes + ([] if structure is None else [structure.node]), **mats,
+            forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,
+            visualization=VObjectGenericODE2(show=False)))
+
+    def add(self, contact_set, *, ports=None, **kw):
+        """Add a family (a contact set or evaluator, as for :class:`ContactElement`); returns its
+        :class:`HostedContactElement`. ``ports``: a
+        :class:`~exudyn_user_elements.contact_element.PortBodies` on this host's structure."""
+        positions = np.arange(self.n_rigid)
+        if ports is not None:
+            if self.structure is None or ports.structure is not self.structure:
+                raise RvtoolInputError("ports must act on the structure the merged element was built with")
+            positions = np.arange(self.n)
+        m = HostedContactElement(self, positions, self.nodes, contact_set, ports=ports, **kw)
+        if m.prefix is not None and m.prefix != self.n_rigid:
+            raise RvtoolInputError("a family without ports spans exactly the host's rigid coordinates")
+        if not self.members:
+            self.reference = m.reference
+        self.members.append(m)
+        return m
+
+    # -- evaluation ---------------------------------------------------------
+    def invalidate(self):
+        """Drop the cached evaluation (a family's history or parameters changed)."""
+        self._key = None
+
+    @property
+    def nonfinite(self):
+        return any(m.nonfinite for m in self.members)
+
+    def evaluate(self, t, q, q_t):
+        """(Q, per-family evaluations) at the host's coordinates, cached per state."""
+        q = np.asarray(q, dtype=float)
+        q_t = np.asarray(q_t, dtype=float)
+        t = float(t)
+        key = (t, q.tobytes(), q_t.tobytes())
+        if key == self._key:
+            return self._Q, self._evs
+        if not (np.isfinite(q.sum()) and np.isfinite(q_t.sum())):
+            # a diverged Newton trial: every family answers NaN so that the driver rejects the attempt
+            evs = [m.evaluate(t, q[m.positions], q_t[m.positions]) for m in self.members]
+            self._key, self._Q, self._evs = key, np.full(self.n, np.nan), evs
+            return self._Q, self._evs
+        nr = self.n_rigid
+        # the rigid poses once for every family (ContactElement.pose_velocity, shared)
+        qr, vr = q[:nr], q_t[:nr]
+        pose_r = self.reference + qr.reshape(-1, 3)
+        vel_r = vr.reshape(-1, 3)
+        key_r = (t, qr.tobytes(), vr.tobytes())
+        Q = np.zeros(self.n)
+        evs = []
+        for m in self.members:
+            if m.prefix is not None:
+                ev = m.store(key_r, pose_r, vel_r)
+                Q[:nr] += ev.Q
+            else:
+                qm, vm = q[m.positions], q_t[m.positions]
+                ev = m.store((t, qm.tobytes(), vm.tobytes()), *m.pose_velocity(qm, vm))
+                Q[m.positions] += ev.Q
+            evs.append(ev)
+        self._key, self._Q, self._evs = key, Q, evs
+        return Q, evs
+
+    def tangent(self, t, q, q_t, f_q=1.0, f_v=0.0):
+        """Dense f_q dQ/dq + f_v dQ/dq_t (n, n) at the host's coordinates (summed over families)."""
+        _, evs = self.evaluate(t, q, q_t)
+        J = np.zeros((self.n, self.n))
+        for m, ev in zip(self.members, evs):
+            blk = f_q * ev.dQdq if f_v == 0 else f_q * ev.dQdq + f_v * ev.dQdv
+            if m.prefix is not None:
+                J[:m.prefix, :m.prefix] += blk
+            else:
+                J[np.ix_(m.positions, m.positions)] += blk
+        return J
+
+    # -- Exudyn callbacks (exact signatures) --------------------------------
+    def force_callback(self, mbs, t, itemNumber, q, q_t):
+        self.n_force_calls += 1
+        return self.evaluate(t, q, q_t)[0]
+
+    def jacobian_callback(self, mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
+        self.n_jacobian_calls += 1
+        J = self.tangent(t, q, q_t, fODE2, fODE2_t)
+        J *= -1.0
+        return _sparse_container(J) if self.sparse else J
+
+    # -- accepted-step interface ----------------------------------------------
+    @property
+    def coordinate_indices(self):
+        """Global ODE2 indices of the host's coordinates (after Assemble)."""
+        if self._ltg is None:
+            self._ltg = np.asarray(self.mbs.systemData.GetObjectLTGODE2(self.object_number), dtype=int)
+        return self._ltg
+
+    def set_drive(self, constraint, angle_of_time):
+        """Prescribed coordinate through a ``CoordinateConstraint``'s offset, set once per step attempt
+        by :meth:`begin_attempt` instead of a Python offset user function evaluated at every residual
+        and Jacobian (three crossings per Newton iteration); None removes it."""
+        self._drive = None if angle_of_time is None else (int(constraint), angle_of_time)
+        if self._drive is not None:
+            self.mbs.SetObjectParameter(int(constraint), "offset", float(angle_of_time(0.0)))
+
+    def set_load_function(self, load, value_of_time):
+        """Load value [N or N m] of a ``LoadCoordinate`` as a function of time, set once per step attempt
+        (see :meth:`set_drive`); None removes it."""
+        if value_of_time is None:
+            if self._load is not None:      # the constant load in force before the function returns
+                self.mbs.SetLoadParameter(self._load[0], "load", self._load[2])
+            self._load = None
+            return
+        constant = self._load[2] if self._load is not None else float(self.mbs.GetLoadParameter(int(load), "load"))
+        self._load = (int(load), value_of_time, constant)
+        self.mbs.SetLoadParameter(int(load), "load", float(value_of_time(0.0)))
+
+    @property
+    def has_controls(self):
+        return self._drive is not None or self._load is not None
+
+    def set_controls(self, t):
+        """Per-attempt controls at time t (the driver sets them at the start time before solving)."""
+        if self._drive is not None:
+            self.mbs.SetObjectParameter(self._drive[0], "offset", float(self._drive[1](t)))
+        if self._load is not None:
+            self.mbs.SetLoadParameter(self._load[0], "load", float(self._load[1](t)))
+
+    def begin_attempt(self, t):
+        """Start of a step attempt ending at ``t``: reset the non-finite flags and set the
+        per-attempt controls to their values at t."""
+        for m in self.members:
+            m.nonfinite = False
+        self.set_controls(t)
