@@ -216,7 +216,11 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
                             drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"],
                             locks=bodies["locks"], reg_springs=bodies["reg_springs"],
                             journal_locks=bodies["journal_locks"], main_mesh=Family.INVOLUTE_STAGE,
-                            continuation_restarts=True,
+                            continuation_restarts=True, material=d.material,
+                            family_specs={fam: spec for fam, spec in (
+                                (Family.OUTPUT_PINS, d.output_pins), (Family.ECCENTRIC_BEARINGS, d.eccentric_bearing),
+                                (Family.MAIN_BEARINGS, d.main_bearing), (Family.INPUT_BEARINGS, d.input_bearing))
+                                if spec is not None},
                             mesh_period=2 * np.pi / d.ring.n_teeth, gear_set=gear_set, pair=d.pair, n_wheels=nw,
                             tooth_phases=phases, structures={} if housing is None else {"housing": housing},
                             housing=housing)

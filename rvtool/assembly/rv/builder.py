@@ -369,6 +369,8 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     return RvModel(design=d, SC=SC, mbs=mbs, body_names=L.names(), nodes=nodes, elements=elements, families=families,
                    input=BodyCoordinate(L.names()[0], "theta"), output=BodyCoordinate("carrier", "theta"),
                    ratio=graph.ratio, kinematics=kin, drive=drive, load=load, reference=ref, locks=locks,
-                   reg_springs=reg_springs, main_mesh=Family.PINS,
+                   reg_springs=reg_springs, main_mesh=Family.PINS, material=d.material,
+                   family_specs={Family.PINS: tuple(meshes), Family.ECCENTRIC_BEARINGS: d.eccentric_bearing,
+                                 Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
                    graph=graph, layout=L, profiles=profiles)
