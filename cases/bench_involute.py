@@ -83,14 +83,15 @@ def reducer_costs(quick):
     rd_revs = 2 / rd40.pins.n_pins if quick else 5.0
     te_std, te_rd = te_cost(std, std_revs), te_cost(rd40, rd_revs)
     ratio = te_std["ms_per_point"] / te_rd["ms_per_point"]
-    return {"std_involute_equilibrium_ms": {"from_kinematic_state": cold, "warm_started": warm},
+    out = {"std_involute_equilibrium_ms": {"from_kinematic_state": cold, "warm_started": warm},
             "rd40_equilibrium_ms": {"from_kinematic_state": rd_cold, "warm_started": rd_warm},
             "std_involute_te_one_output_revolution": te_std, "rd40_te_reference": te_rd,
             "per_point_cost_ratio_std_over_rd40": ratio, "target_ratio": 2.0,
-            # the target is judged on the full run only: 40 points of ~3 ms are timing noise on a shared machine
-            "passed": None if quick else bool(ratio <= 2.0),
             "judged": "not judged (quick: 40 points, timing noise)" if quick else "full run",
             "bearing_model": "lumped (both)"}
+    if not quick:   # the target is judged on the full run only: 40 points of ~3 ms are timing noise on a shared machine
+        out["passed"] = bool(ratio <= 2.0)
+    return out
 
 
 def main(argv=None):
