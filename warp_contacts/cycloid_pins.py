@@ -20,6 +20,7 @@ from .laws import law_funcs
 from .planar import LaunchBuffers, planar_funcs
 from .planar_ref import N_COORD_SEEDS, N_SEEDS
 from .precision import resolve_device, scalar_types
+from .recorded import assign_parameters, launch_rows
 
 
 @functools.lru_cache(maxsize=None)
@@ -399,18 +400,9 @@ class CycloidPinKernel:
         transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
         n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
         arrays, e.g. by the device Newton); default all."""
-        if n_rows is None or int(n_rows) == self.n:
-            self._cmd.launch()
-            return
-        self._cmd.set_dim(int(n_rows))
-        try:
-            self._cmd.launch()
-        finally:
-            self._cmd.set_dim(self.n)
+        launch_rows(self._cmd, self.n, n_rows)
 
     def set_parameters(self, fparams):
         """Overwrite the packed float parameters (same shape) in place on the device; the recorded
         launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
-        fp = np.ascontiguousarray(fparams, dtype=self.ndtype)
-        assert fp.shape == (self.n, N_FLOAT)
-        self._model[0].assign(fp)
+        assign_parameters(self._model[0], fparams, self.ndtype)

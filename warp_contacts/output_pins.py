@@ -24,6 +24,7 @@ from .anchor import anchor_funcs
 from .anchor_ref import N_ANCHOR
 from .planar import planar_funcs
 from .precision import resolve_device, scalar_types
+from .recorded import assign_parameters, launch_rows
 
 
 @functools.lru_cache(maxsize=None)
@@ -658,21 +659,12 @@ class OutputPinKernel:
         transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
         n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
         arrays, e.g. by the device Newton); default all."""
-        if n_rows is None or int(n_rows) == self.n:
-            self._cmd.launch()
-            return
-        self._cmd.set_dim(int(n_rows))
-        try:
-            self._cmd.launch()
-        finally:
-            self._cmd.set_dim(self.n)
+        launch_rows(self._cmd, self.n, n_rows)
 
     def set_parameters(self, fparams):
         """Overwrite the packed float parameters (same shape) in place on the device; the recorded
         launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
-        fp = np.ascontiguousarray(fparams, dtype=self.ndtype)
-        assert fp.shape == tuple(self.fparams.shape)
-        self.fparams.assign(fp)
+        assign_parameters(self.fparams, fparams, self.ndtype)
 
     def evaluate(self, pose, tilt=None, history=None):
         """Results in the layout of :mod:`output_pins_ref` (arrays owned by this object, overwritten next call).
