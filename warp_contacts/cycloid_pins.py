@@ -11,16 +11,15 @@ import numpy as np
 import warp as wp
 
 from .anchor import anchor_funcs
-from .anchor_ref import N_ANCHOR
 from .circle_pairs_ref import FRICTION_ANCHOR, FRICTION_REGULARIZED, N_OBS
 from .cycloid_pins_ref import (A_ANALYTIC, A_K1, A_R, A_RC, A_ROT, A_ZB, ANALYTIC_ITERATIONS, C_C, C_DR, C_E, C_K,
                                C_MUK, C_MUS, C_P, C_RP, C_TX, C_TY, C_VREG, C_VS, C_XI_B, C_Z, J_BODY_A, J_BODY_B,
                                J_FRICTION, J_TABLE, N_ANALYTIC, N_FLOAT, N_INT)
 from .laws import law_funcs
-from .planar import LaunchBuffers, planar_funcs
+from .planar import planar_funcs
 from .planar_ref import N_COORD_SEEDS, N_SEEDS
 from .precision import resolve_device, scalar_types
-from .recorded import assign_parameters, launch_rows
+from .recorded import PairLaunch
 
 
 @functools.lru_cache(maxsize=None)
@@ -299,7 +298,7 @@ def _analytic_rows(tables, analytic, ndtype):
     return rows
 
 
-class CycloidPinKernel:
+class CycloidPinKernel(PairLaunch):
     """Device-resident evaluator of one cycloid--pin contact set (one launch per call)."""
 
     def __init__(self, fparams, iparams, tables, window, n_bodies, precision="float64", device="cpu", analytic=None,
@@ -311,7 +310,7 @@ class CycloidPinKernel:
         fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
         iparams = np.ascontiguousarray(iparams, dtype=np.int32)
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
-        self.n = n = len(fparams)
+        self.n = len(fparams)
         dt = self.wdtype
         lens = [len(tb[0]) for tb in tables]
         offs = np.concatenate([[0], np.cumsum(lens)[:-1]]).astype(np.int32)
@@ -326,83 +325,4 @@ class CycloidPinKernel:
             wp.array(np.concatenate([tb[5] for tb in tables]).astype(self.ndtype), dtype=dt, device=d),
             wp.array(_analytic_rows(tables, analytic, self.ndtype), dtype=dt, device=d),
             int(window)]
-        self.anchor = anchor_params is not None
-        # without anchors the history arguments are one-row placeholders the kernel never reads
-        nh = n if self.anchor else 1
-        ap = (np.zeros((1, N_ANCHOR)) if anchor_params is None else
-              np.ascontiguousarray(anchor_params, dtype=self.ndtype))
-        assert ap.shape == (nh, N_ANCHOR)
-        model.append(wp.array(ap.astype(self.ndtype), dtype=dt, device=d))
-        self._model = model
-        self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),
-                                   "h_act_in": (nh, "int"), "h_a_in": ((nh, 2), "f"), "h_b_in": ((nh, 2), "f"),
-                                   "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
-                                   "obs": ((n, N_OBS), "f"), "h_act_out": (nh, "int"), "h_a_out": ((nh, 2), "f"),
-                                   "h_b_out": ((nh, 2), "f")}, dt, self.ndtype, d)
-        self.velocity_tangent = True
-        self._record()
-
-    def _record(self):
-        dev = self._buf.dev
-        self._cmd = wp.launch(_kernel(self.wdtype, self.velocity_tangent, self.anchor), dim=self.n,
-                              device=self.device,
-                              inputs=self._model + [dev[k] for k in ("pose", "vel", "h_act_in", "h_a_in", "h_b_in")],
-                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs", "h_act_out", "h_a_out", "h_b_out")],
-                              record_cmd=True)
-
-    def set_velocity_tangent(self, on):
-        """Switch the velocity tangent dQ/dv on (default) or off. Off, the kernel skips the six
-        velocity seeds of the tangent loop (about a third of its work) and dQ/dv is returned as
-        None: for static solves, whose residual does not depend on velocities."""
-        self.velocity_tangent = bool(on)
-        self._record()
-
-    def evaluate(self, pose, vel):
-        """Returns (Q (N,6), dQdq, dQdv, obs (N,8)); arrays are reused by the next call."""
-        h = self._buf.host
-        h["pose"][...] = pose
-        h["vel"][...] = vel
-        self._buf.upload(("pose", "vel"))
-        self._cmd.launch()
-        names = [k for k in ("q", "dqdq", "dqdv", "obs") if k not in self.keep_on_device
-                 and (k != "dqdv" or self.velocity_tangent)]
-        self._buf.download(names)
-        return tuple(h[k] if k in names else None for k in ("q", "dqdq", "dqdv", "obs"))
-
-    def evaluate_anchor(self, pose, vel, hist_active, hist_a, hist_b):
-        """:meth:`evaluate` with the committed anchor history in and the trial history
-        (flags (N,), anchor_A (N, 2), anchor_B (N, 2)) out as a fifth result."""
-        if not self.anchor:
-            raise RuntimeError("evaluate_anchor needs a kernel built with anchor_params")
-        h = self._buf.host
-        h["h_act_in"][...] = hist_active
-        h["h_a_in"][...] = hist_a
-        h["h_b_in"][...] = hist_b
-        self._buf.upload(("h_act_in", "h_a_in", "h_b_in"))
-        out = self.evaluate(pose, vel)
-        self._buf.download(("h_act_out", "h_a_out", "h_b_out"))
-        return out + ((h["h_act_out"], h["h_a_out"], h["h_b_out"]),)
-
-    # outputs left on the device (returned as None; read them with device_array), e.g. the
-    # per-row tangents that a device-side block scatter sums (warp_contacts.block_scatter)
-    keep_on_device = frozenset()
-
-    def device_array(self, name):
-        """A device array of the recorded launch: a data buffer (pose, vel, q, dqdq, dqdv, obs) or
-        the row parameters ("fparams", "iparams"), which a device-side refill may overwrite
-        between launches (the recorded launch reads them in place)."""
-        if name in ("fparams", "iparams"):
-            return self._model[0 if name == "fparams" else 1]
-        return self._buf.dev[name]
-
-    def launch_recorded(self, n_rows=None):
-        """Replay the recorded launch on the device-resident arrays as they are (no host
-        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
-        n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
-        arrays, e.g. by the device Newton); default all."""
-        launch_rows(self._cmd, self.n, n_rows)
-
-    def set_parameters(self, fparams):
-        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
-        launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
-        assign_parameters(self._model[0], fparams, self.ndtype)
+        self._setup_launch(_kernel, model, anchor_params, n_bodies, N_OBS)

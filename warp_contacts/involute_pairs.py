@@ -19,10 +19,10 @@ from .involute_pairs_ref import (
     N_INT, N_OBS, O_GAP, O_KT, O_MODE, O_TOOTH_A, O_TOOTH_B, O_UA, O_UB, O_VROLL, OPEN_GAP, POLY_TERMS, SERIES_MAX_ITERATIONS, SERIES_RTOL)
 from . import circle_pairs_ref, involute_pairs_ref
 from .anchor import anchor_funcs
-from .anchor_ref import N_ANCHOR
 from .circle_pairs_ref import FRICTION_ANCHOR
 from .laws import law_funcs
-from .planar import LaunchBuffers, planar_funcs
+from .planar import planar_funcs
+from .recorded import PairLaunch
 from .precision import resolve_device, scalar_types
 
 # the first observation columns are the contact element's (written by planar.store_pair_observation)
@@ -566,7 +566,7 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
     return eval_involute_pairs
 
 
-class InvolutePairKernel:
+class InvolutePairKernel(PairLaunch):
     """Device-resident evaluator of one involute contact set (one launch per call)."""
 
     def __init__(self, fparams, iparams, deviations, n_bodies, precision="float64", device="cpu", anchor_params=None):
@@ -577,58 +577,8 @@ class InvolutePairKernel:
         fparams = np.ascontiguousarray(fparams, dtype=self.ndtype)
         iparams = np.ascontiguousarray(iparams, dtype=np.int32)
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
-        self.n = n = len(fparams)
+        self.n = len(fparams)
         dt = self.wdtype
-        self.anchor = anchor_params is not None
-        # without anchors the history arguments are one-row placeholders the kernel never reads
-        nh = n if self.anchor else 1
-        ap = np.zeros((1, N_ANCHOR)) if anchor_params is None else np.asarray(anchor_params, float)
-        assert ap.shape == (nh, N_ANCHOR)
-        self._model = [wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
-                       wp.array(np.asarray(deviations, self.ndtype), dtype=dt, device=d),
-                       wp.array(ap.astype(self.ndtype), dtype=dt, device=d)]
-        self._buf = LaunchBuffers({"pose": ((n_bodies + 1, 3), "f"), "vel": ((n_bodies + 1, 3), "f"),
-                                   "h_act_in": (nh, "int"), "h_a_in": ((nh, 2), "f"), "h_b_in": ((nh, 2), "f"),
-                                   "q": ((n, 6), "f"), "dqdq": ((n, 6, 6), "f"), "dqdv": ((n, 6, 6), "f"),
-                                   "obs": ((n, N_OBS), "f"), "h_act_out": (nh, "int"), "h_a_out": ((nh, 2), "f"),
-                                   "h_b_out": ((nh, 2), "f")}, dt, self.ndtype, d)
-        self.velocity_tangent = True
-        self._record()
-
-    def _record(self):
-        dev = self._buf.dev
-        self._cmd = wp.launch(_kernel(self.wdtype, self.velocity_tangent, self.anchor), dim=self.n,
-                              device=self.device,
-                              inputs=self._model + [dev[k] for k in ("pose", "vel", "h_act_in", "h_a_in", "h_b_in")],
-                              outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs", "h_act_out", "h_a_out", "h_b_out")],
-                              record_cmd=True)
-
-    def set_velocity_tangent(self, on):
-        """Velocity tangent on (default) or off (the kernel skips the six velocity seeds; dQ/dv is None)."""
-        self.velocity_tangent = bool(on)
-        self._record()
-
-    def evaluate(self, pose, vel):
-        """Returns (Q (N,6), dQdq, dQdv or None, obs (N, N_OBS)); arrays are reused by the next call."""
-        h = self._buf.host
-        h["pose"][...] = pose
-        h["vel"][...] = vel
-        self._buf.upload(("pose", "vel"))
-        self._cmd.launch()
-        names = ["q", "dqdq", "obs"] + (["dqdv"] if self.velocity_tangent else [])
-        self._buf.download(names)
-        return h["q"], h["dqdq"], (h["dqdv"] if self.velocity_tangent else None), h["obs"]
-
-    def evaluate_anchor(self, pose, vel, hist_active, hist_a, hist_b):
-        """:meth:`evaluate` with the committed anchor history in and the trial history
-        (flags (N,), anchor_A (N, 2), anchor_B (N, 2)) out as a fifth result."""
-        if not self.anchor:
-            raise RuntimeError("evaluate_anchor needs a kernel built with anchor_params")
-        h = self._buf.host
-        h["h_act_in"][...] = hist_active
-        h["h_a_in"][...] = hist_a
-        h["h_b_in"][...] = hist_b
-        self._buf.upload(("h_act_in", "h_a_in", "h_b_in"))
-        out = self.evaluate(pose, vel)
-        self._buf.download(("h_act_out", "h_a_out", "h_b_out"))
-        return out + ((h["h_act_out"], h["h_a_out"], h["h_b_out"]),)
+        self._setup_launch(_kernel, [wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
+                                     wp.array(np.asarray(deviations, self.ndtype), dtype=dt, device=d)],
+                           anchor_params, n_bodies, N_OBS)
