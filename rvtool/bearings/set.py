@@ -34,8 +34,10 @@ from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
 
 
 @dataclass(frozen=True, kw_only=True)
-class Mounting:
-    """Where a bearing sits.
+class Placement:
+    """Where a bearing sits; the fields and checks shared by :class:`Mounting` and
+    :class:`rvtool.bearings.tapered_set.TaperedMounting`, which name the bearing types they
+    take (``bearing_types``, ``bearing_noun``, ``bearing_kinds``).
 
     name: prefix of its row ids (no "/"). bearing: a bearing specification.
     inner, outer: body indices of the inner- and outer-ring bodies (``GROUND`` = -1).
@@ -50,21 +52,31 @@ class Mounting:
     outer_centre: tuple = (0.0, 0.0)
     cage_phase: float = 0.0
 
+    bearing_types = ()
+    bearing_noun = "a bearing specification"
+    bearing_kinds = ""
+
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name or "/" in self.name:
             raise RvtoolInputError(f"name = {self.name!r} must be a non-empty string without '/'")
-        if not isinstance(self.bearing, (CylindricalRollerBearing, BallBearing, AngularContactPair)):
-            raise RvtoolInputError(f"bearing of type {type(self.bearing).__name__} is not a bearing specification; valid: "
-                                   "CylindricalRollerBearing, NeedleBearing, CrossedRollerBearing, BallBearing, "
-                                   "AngularContactPair")
+        if not isinstance(self.bearing, self.bearing_types):
+            raise RvtoolInputError(f"{self.name}.bearing of type {type(self.bearing).__name__} is not "
+                                   f"{self.bearing_noun}; valid: {self.bearing_kinds}")
         for nm in ("inner_centre", "outer_centre"):
             v = np.asarray(getattr(self, nm), dtype=float)
             if v.shape != (2,):
-                raise RvtoolInputError(f"{nm} must have 2 components [m]; got shape {v.shape}")
-            check_finite(nm, v)
-        check_finite("cage_phase", self.cage_phase)
+                raise RvtoolInputError(f"{self.name}.{nm} must have 2 components [m]; got shape {v.shape}")
+            check_finite(f"{self.name}.{nm}", v)
+        check_finite(f"{self.name}.cage_phase", self.cage_phase)
         if self.inner == self.outer:
-            raise RvtoolInputError(f"inner and outer must be different bodies; both are {self.inner}")
+            raise RvtoolInputError(f"{self.name}: inner and outer must be different bodies; both are {self.inner}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Mounting(Placement):
+    """Where a radial, needle, crossed-roller or ball bearing sits (fields: :class:`Placement`)."""
+    bearing_types = (CylindricalRollerBearing, BallBearing, AngularContactPair)
+    bearing_kinds = "CylindricalRollerBearing, NeedleBearing, CrossedRollerBearing, BallBearing, AngularContactPair"
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -37,43 +37,19 @@ from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
 from ..contact.evaluator import BACKENDS, Evaluation, all_finite
 from ..errors import RvtoolInputError
-from ..validation import check_finite
+from .set import Placement
 from .tapered import TaperedPair, TaperedRollerBearing
 
 N_Q = ref.N_Q
 
 
 @dataclass(frozen=True, kw_only=True)
-class TaperedMounting:
-    """Where a tapered row or pair sits (the fields of :class:`rvtool.bearings.set.Mounting`).
-
-    name: prefix of its row ids (no "/"). bearing: TaperedRollerBearing or TaperedPair.
-    inner, outer: body indices of the cone and cup bodies (``GROUND`` = -1).
-    inner_centre, outer_centre: ring centres in body coordinates [m] (ground: global).
-    cage_phase: psi_0 [rad], the azimuth of roller 0 at zero ring rotations.
-    """
-    name: str
-    bearing: object
-    inner: int
-    outer: int
-    inner_centre: tuple = (0.0, 0.0)
-    outer_centre: tuple = (0.0, 0.0)
-    cage_phase: float = 0.0
-
-    def __post_init__(self):
-        if not isinstance(self.name, str) or not self.name or "/" in self.name:
-            raise RvtoolInputError(f"name = {self.name!r} must be a non-empty string without '/'")
-        if not isinstance(self.bearing, (TaperedRollerBearing, TaperedPair)):
-            raise RvtoolInputError(f"{self.name}.bearing of type {type(self.bearing).__name__} is not a tapered "
-                                   "bearing; valid: TaperedRollerBearing, TaperedPair")
-        for nm in ("inner_centre", "outer_centre"):
-            v = np.asarray(getattr(self, nm), dtype=float)
-            if v.shape != (2,):
-                raise RvtoolInputError(f"{self.name}.{nm} must have 2 components [m]; got shape {v.shape}")
-            check_finite(f"{self.name}.{nm}", v)
-        check_finite(f"{self.name}.cage_phase", self.cage_phase)
-        if self.inner == self.outer:
-            raise RvtoolInputError(f"{self.name}: inner and outer must be different bodies; both are {self.inner}")
+class TaperedMounting(Placement):
+    """Where a tapered row or pair sits (fields: :class:`rvtool.bearings.set.Placement`; inner,
+    outer: the cone and cup bodies; cage_phase: the azimuth of roller 0)."""
+    bearing_types = (TaperedRollerBearing, TaperedPair)
+    bearing_noun = "a tapered bearing"
+    bearing_kinds = "TaperedRollerBearing, TaperedPair"
 
     def rows(self):
         """((row, axial station z [m], sense sigma, axial pre-displacement [m]), ...) of the mounting."""
