@@ -189,17 +189,24 @@ class ContactElement:
                 self._key, self._ev = key, Evaluation(np.full(n, np.nan), np.full((n, n), np.nan),
                                                       np.full((n, n), np.nan), None, None, False)
                 return self._ev
-            ev = self.evaluator.evaluate(pose, vel, check=False)
-            if self.ports is not None:
-                ev = self._contract(ev)
-            self.n_evaluations += 1
-            if self.n_evaluations in self.inject_nan_at:
-                ev.Q = ev.Q * np.nan
-                ev.finite = False
-            if not ev.finite:
-                self.nonfinite = True
-            self._key, self._ev = key, ev
+            self._evaluate_fresh(key, pose, vel)
         return self._ev
+
+    def _evaluate_fresh(self, key, pose, vel):
+        """Evaluate the contact set at finite absolute poses/velocities, contract it to the ports,
+        apply a requested NaN injection (hard cases), flag non-finite results and cache the
+        evaluation under ``key``; returns it."""
+        ev = self.evaluator.evaluate(pose, vel, check=False)
+        if self.ports is not None:
+            ev = self._contract(ev)
+        self.n_evaluations += 1
+        if self.n_evaluations in self.inject_nan_at:
+            ev.Q = ev.Q * np.nan
+            ev.finite = False
+        if not ev.finite:
+            self.nonfinite = True
+        self._key, self._ev = key, ev
+        return ev
 
     # -- Exudyn callbacks (exact signatures) ------------------------------
     def force_callback(self, mbs, t, itemNumber, q, q_t):

@@ -135,17 +135,7 @@ class HostedContactElement(ContactElement):
         (evaluated on its own, e.g. by an observer) is not evaluated again, as in ContactElement."""
         if key == self._key:
             return self._ev
-        ev = self.evaluator.evaluate(pose, vel, check=False)
-        if self.ports is not None:
-            ev = self._contract(ev)
-        self.n_evaluations += 1
-        if self.n_evaluations in self.inject_nan_at:
-            ev.Q = ev.Q * np.nan
-            ev.finite = False
-        if not ev.finite:
-            self.nonfinite = True
-        self._key, self._ev = key, ev
-        return ev
+        return self._evaluate_fresh(key, pose, vel)
 
     def commit(self, q_global, v_global, t=None, snapshot=True):
         """:meth:`ContactElement.commit`; ``snapshot=False`` commits the history and the last
