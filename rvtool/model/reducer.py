@@ -387,9 +387,9 @@ class ReducerModel:
         return None
 
     def pin_bending(self, q, family, support=None):
-        """Largest bending stress of the pins of ``family`` at state q (dict, see the topology),
-        or None where the topology has no pins of that family or they are rigid and no
-        ``support`` is assumed."""
+        """Largest bending stress of the pins of ``family`` at state q, or over a sequence of states
+        q (dict, see the topology), or None where the topology has no pins of that family or
+        they are rigid and no ``support`` is assumed."""
         return None
 
     def hertz_peaks(self, q):
