@@ -104,7 +104,7 @@ def datasheet(*, rated_torque, ratio, branch_slopes, secant, lost_motion_arcmin,
     error of the rated peak pin force at the default resolution. hysteresis: None (not computed)
     or {"loss_arcmin", "repeat_arcmin", "note"} of a closed +-T_rated cycle
     (:mod:`rvtool.protocols.hysteresis_cycles`); bearing_life: None (not computed) or bearing
-    name -> {"L10_h" (None: no radial load), "P_m_N", "C_r_N", ...} (ISO 281,
+    name -> {"L10_h" (None: no radial load), "P_m_N", "C_r_N", ...} ({}: no rolling-element loads; ISO 281,
     :func:`rvtool.slow.fatigue.rating_life`)."""
     a = allowables
     out = {"rated_torque": entry(rated_torque, "N m"), "ratio": entry(ratio, "-", reason="from the topology")}
@@ -148,6 +148,9 @@ def datasheet(*, rated_torque, ratio, branch_slopes, secant, lost_motion_arcmin,
     rated_lives = {b: v for b, v in (bearing_life or {}).items() if v.get("L10_h") is not None}
     if bearing_life is None:
         out["L10"] = entry(None, "h", reason="not computed")
+    elif not bearing_life:
+        out["L10"] = entry(None, "h", reason="not computed: no rolling-element loads (lumped bearings, or a "
+                                            "topology without ISO 281 bearing geometries)")
     elif not rated_lives:
         out["L10"] = entry(None, "h", reason="no bearing carries a radial load at the rated state")
     else:
