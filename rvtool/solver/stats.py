@@ -12,7 +12,7 @@ class SolverStats:
     rejected_steps: load or target increments rejected and halved; ramped_restarts: points
     re-solved from the kinematic state (homotopy, load ramps); substep_restarts: points
     reached by angle sub-steps; shifted_points: points shifted off an activation kink;
-    guided_levels: load levels reached by the guide-spring homotopy from the previous
+    guided_levels: load levels (static points) reached by the guide-spring homotopy from the previous
     equilibrium (:meth:`rvtool.solver.continuation.Continuation.guided`); wall_s: wall time [s].
     """
     points: int = 0
