@@ -6,7 +6,8 @@ is rejected: in the backlash at zero load Newton can land in a far, spurious
 equilibrium). Contact history (friction anchors) is committed once per converged level.
 Where the increments stall (free play whose only stiffness is the weak regularization: the
 tangent is nearly singular there and every nonzero increment is carried by the near-null
-directions), the level is reached by the guide-spring homotopy from the previous equilibrium
+directions), a model declaring ``guided_free_play`` reaches the level by the guide-spring
+homotopy from the previous equilibrium
 (:mod:`rvtool.solver.guide`; counted in ``guided_levels``, the last guide force in
 ``guide_force_max``); the accepted state carries no guide force.
 """
@@ -37,6 +38,7 @@ class Continuation:
         self.min_increment = min_increment
         self.stats = SolverStats()
         self.restarts = bool(getattr(model, "continuation_restarts", False))
+        self.guided_free_play = bool(getattr(model, "guided_free_play", False))
         self.guide_force_max = 0.0    # largest guide force [N or N m] at a last guided stage (before release)
         model.set_input_angle(input_angle)
         # a loaded start is regular even where free play leaves the zero-load state ill-posed
@@ -83,14 +85,15 @@ class Continuation:
                 if abs(inc) < self.min_increment:
                     # a model declaring restarts keeps its restart first (its figures are unchanged)
                     restarted = self._restart(t_now, torque) if self.restarts else None
-                    if restarted is None:
+                    if restarted is None and self.guided_free_play:
                         restarted = self.guided(t_now, torque)
                     if restarted is None:
                         self.model.set_output_torque(t_now)
                         raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
                                             f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}"
                                             + ("; the restarts from the kinematic state failed too" if self.restarts else "")
-                                            + "; the guide-spring homotopy from the last equilibrium failed too")
+                                            + ("; the guide-spring homotopy from the last equilibrium failed too"
+                                               if self.guided_free_play else ""))
                     self.q, t_now = restarted
                     inc = torque - t_now
         self.torque = torque

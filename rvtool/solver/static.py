@@ -6,9 +6,9 @@ equilibrium shifted by the kinematic increment; loads are applied in full
 (no load factor). If a warm start fails, the point is re-solved from the
 previous equilibrium in angle sub-steps, then from the kinematic state by a homotopy in the regularization stiffness (stiff springs
 first, then the model's own), then with the load ramped over ``ramp_steps``
-steps, and last by the guide-spring homotopy from the kinematic state
-(:mod:`rvtool.solver.guide`: finer factor steps, bisected on failure; reached only where
-everything before failed, so no point that solved before changes). A point that still fails raises :class:`SolverFailure` naming the
+steps, and last (models declaring ``guided_free_play``) by the guide-spring homotopy from the
+kinematic state (:mod:`rvtool.solver.guide`: finer factor steps, bisected on failure; reached
+only where everything before failed, so no point that solved before changes). A point that still fails raises :class:`SolverFailure` naming the
 control values.
 """
 import time
@@ -194,7 +194,7 @@ class StaticSolver:
             finally:
                 self.ramp_steps = steps
             ok = ok and self.plausible(q, input_angle)
-        if not ok:
+        if not ok and getattr(self.model, "guided_free_play", False):
             # free play without contact stiffness (rv40e's needle clearance and backlash at zero load):
             # the coarse stiffening ladder and the load ramps jump; the guides release in decades
             ok, q, _ = guided_newton(self.model, lambda q0: self.newton(q0, ramp=False),
