@@ -323,6 +323,21 @@ class TaperedBearingSet:
                                        row_wrenches=rows[k, :n_rows], rib_forces=ribs[k, :n_rows])
         return out
 
+    def energy_law(self):
+        """The per-lamina constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        no friction, the lamina's power law k delta^p (potential k delta^(p+1)/(p+1); with the rigid rib
+        the approach is linear in the ring displacement, so this is the exact potential of the
+        rollers' wrench). The elastic rib stores energy in the rib contact too, which the lamina
+        observations do not carry: refused by name."""
+        from ..observe.energy import ContactEnergyLaw
+        if np.any(self.roller_ip[:, ref.RI_RIB]):
+            elastic = sorted({self.mountings[k].name for k in self.roller_owner[self.roller_ip[:, ref.RI_RIB] != 0]})
+            raise RvtoolInputError(f"the energy account needs rib_contact = false tapered rows; {elastic} of "
+                                   f"{self.name!r} have an elastic rib, whose contact energy is not observed")
+        n = len(self.ids)
+        return ContactEnergyLaw(normal_stiffness=self.lamina_fp[:, ref.LA_K], normal_exponent=self.lamina_fp[:, ref.LA_P],
+                                tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32))
+
     def element_loads(self, obs):
         """{mounting name: normal force of each roller [N], laminae summed} (roller order as in the ids)."""
         per_roller = np.zeros(len(self.roller_owner))
