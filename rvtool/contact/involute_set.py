@@ -133,6 +133,27 @@ def gear_block(gear, compliance: ToothCompliance, u_ref):
     return blk
 
 
+def pair_secant_stiffness(pair: InvolutePair, force, compliance=None):
+    """Normal secant stiffness F / delta(F) [N/m] of one tooth pair of ``pair`` over its face width
+    at the middle of the path of contact, Eq. (series_contact) with delta(F) = C F + delta_H(F)
+    explicit in F (tooth compliances of :mod:`rvtool.contact.tooth_stiffness`, Weber's approach).
+    force: F [N] > 0; compliance: optional {gear: ToothCompliance} already computed."""
+    check_positive("force", force)
+    A, B = pair.gear_a, pair.gear_b
+    compliance = compliance or {}
+    ua = 0.5 * sum(pair.path_of_contact()) / A.base_radius
+    ub = float(pair.roll_b(ua))
+    b = A.face_width
+    blocks = [gear_block(g, compliance.get(g) or ToothCompliance.of(g), u)[None] for g, u in ((A, ua), (B, ub))]
+    u = (np.array([ua]), np.array([ub]))
+    c = sum(ref.poly(blk, ref.G_PC, ui)[0] for blk, ui in zip(blocks, u)) / b
+    hA, hB = (ref.poly(blk, ref.G_PH, ui)[0] for blk, ui in zip(blocks, u))
+    K = 1.0 / (A.base_radius * ua) + B.eps / (B.base_radius * ub)
+    F = np.array([float(force)])
+    dH = ref.weber_approach(F, hA, hB, K, A.youngs_modulus, A.poisson_ratio, B.youngs_modulus, B.poisson_ratio, b)[0]
+    return float(F[0] / (c[0] * F[0] + dH[0]))
+
+
 class InvoluteContactSet(PairFamilySet):
     """Evaluator of involute gear meshes between ``n_bodies`` planar bodies.
 

@@ -63,19 +63,34 @@ class Cranks:
 
 @dataclass(frozen=True, kw_only=True)
 class InvoluteStage:
-    """Numerics of the involute meshes (each mesh a :class:`~rvtool.contact.involute_set.GearMesh`):
-    n_slices across the face width, window (teeth either side of the pitch point; None: from the
-    contact ratio), damping [N s/m] per mesh, ramp_depth [m]."""
+    """Numerics and friction of the involute meshes (each mesh a
+    :class:`~rvtool.contact.involute_set.GearMesh`): n_slices across the face width, window (teeth
+    either side of the pitch point; None: from the contact ratio), damping [N s/m] per mesh,
+    ramp_depth [m]; mu [-] (0 = no friction: the frictionless code path), friction_model
+    ("regularized": Eq. (friction) velocity law; "anchor": stick--slip anchors per row, as
+    ``pin_contact``), tangential_stiffness [N/m] of the anchors per tooth pair over the face width
+    (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the pair's normal secant stiffness of Eq.
+    (series_contact) at reference_force [N], mid path of contact)."""
     n_slices: int = 1
     window: int | None = None
     damping: float = 0.0
     ramp_depth: float = 1e-6
+    mu: float = 0.0
+    friction_model: str = "regularized"
+    tangential_stiffness: float = 0.0
+    reference_force: float = 1000.0
 
     def __post_init__(self):
         if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, int) or self.n_slices < 1:
             raise RvtoolInputError(f"involute_stage.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
         check_range("involute_stage.damping", self.damping, 0.0)
         check_positive("involute_stage.ramp_depth", self.ramp_depth)
+        check_range("involute_stage.mu", self.mu, 0.0)
+        if self.friction_model not in ("regularized", "anchor"):
+            raise RvtoolInputError(f"involute_stage.friction_model = {self.friction_model!r}; valid choices are "
+                                   "['regularized', 'anchor']")
+        check_range("involute_stage.tangential_stiffness", self.tangential_stiffness, 0.0)
+        check_positive("involute_stage.reference_force", self.reference_force)
 
 
 @dataclass(frozen=True, kw_only=True)
