@@ -150,6 +150,8 @@ class _Family:
     """One contact element seen by the account."""
 
     def __init__(self, element, law):
+        if law is None and hasattr(element.evaluator, "energy_law"):
+            law = element.evaluator.energy_law()     # the family declares its own law
         if law is None:
             contact_set = getattr(element.evaluator, "set", None)
             if contact_set is None or not hasattr(contact_set, "contacts"):
