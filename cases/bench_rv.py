@@ -12,7 +12,7 @@ algebra). The RV/RD-40 per-point cost ratio is the issue's figure (target: withi
 Angle-batched: the same points through rvtool.batched.sequence.batched_quasi_static_te (the
 topology-neutral path: rvtool.batched.replica copies each model 64 times in one Exudyn system;
 --quick: 16), both reducers warmed first (one small run each: imports, kernel loads), then run in
-interleaved blocks of 1/8 output revolution (--quick: one block), each block a fresh batch (its
+interleaved blocks of at most 1/8 output revolution (7,800 points; --quick: one block), each block a fresh batch (its
 build counted). Per point: wall time and its split (Exudyn's solves, the Python callbacks, the
 kernel launches, the block scatter, the per-point peak observation, the build), and the largest
 TE difference to the sequential path at the same points.
@@ -135,10 +135,18 @@ class BatchedTE:
 
 
 def main(argv=None):
-    args = casekit.parse_args(argv, __doc__)
+    args = casekit.parse_args(argv, __doc__, extra=lambda p: p.add_argument(
+        "--points", type=int, default=None, help="quasi-static points per reducer (default: one output revolution, "
+                                                 "62,400; --quick 80), a multiple of 1,600 (one crank revolution)"))
     t_all = time.perf_counter()
     rv, rd = load_rv(designs.path("rv40e")), load_cycloid(designs.path("rd40"))
     n_pts = 80 if args.quick else rv.pins.n_pins * (rv.pins.n_pins - 1) * 40    # one output revolution
+    if args.points is not None:
+        if args.points < 1600 or args.points % 1600:
+            from rvtool.errors import RvtoolInputError
+            raise RvtoolInputError(f"--points = {args.points} is outside the valid range: a multiple of 1600 (one "
+                                   "crank revolution), at least 1600")
+        n_pts = args.points
     block = 40 if args.quick else 1600
     seq_rv, seq_rd = SequentialTE(rv, n_pts), SequentialTE(rd, n_pts, bearing_model="rolling")
     for b0 in range(0, n_pts, block):   # interleaved blocks: both reducers see the same machine load
@@ -148,7 +156,7 @@ def main(argv=None):
     ratio = qs_rv["ms_per_point"] / qs_rd["ms_per_point"]
     bq_rv, bq_rd = BatchedTE(rv, seq_rv, {}), BatchedTE(rd, seq_rd, {"bearing_model": "rolling"})
     copies = 16 if args.quick else 64
-    bblock = n_pts if args.quick else n_pts // 8
+    bblock = n_pts if args.quick else min(n_pts, 7800)     # 1/8 output revolution: 122 points per segment
     for b0 in range(0, n_pts, bblock):
         bq_rv.run_block(slice(b0, b0 + bblock), copies)
         bq_rd.run_block(slice(b0, b0 + bblock), copies)
@@ -181,7 +189,7 @@ def main(argv=None):
                           "te_pp_arcsec": float(np.ptp(dyn["te"]) * ARCSEC_PER_RAD), "wall_s": rec.wall_s},
         "wall_s": time.perf_counter() - t_all,
     }
-    settings = {"quick": args.quick, "points_per_mesh_cycle": 40, "interleaved_block_points": block, "dynamic_step_s": step, "run_spec": spec.to_dict(),
+    settings = {"quick": args.quick, "points": n_pts, "points_per_mesh_cycle": 40, "interleaved_block_points": block, "dynamic_step_s": step, "run_spec": spec.to_dict(),
                 "rd40_bearing_model": "rolling (both reducers on rolling-element bearings)", "device": "cpu",
                 "precision": "float64"}
     return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])
