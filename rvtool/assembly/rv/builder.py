@@ -199,6 +199,8 @@ class RvModel(ReducerModel):
     graph: GearGraph = None
     layout: Layout = None
     profiles: list = field(default_factory=list)
+    #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
+    guided_free_play: bool = True
 
     def _pose(self, name, q):
         el = self.elements[name]
