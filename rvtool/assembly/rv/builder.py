@@ -25,6 +25,7 @@ carrier through the cranks.
 Kinematics (:class:`RvKinematics`): the gear graph's rates (:mod:`.gear_graph`); the crank
 gears start conjugate to the sun (mid-backlash), the journals at the wheels' absolute phases.
 """
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -172,8 +173,13 @@ def gear_meshes(design, graph, layout):
     """The involute meshes: sun (gear A) -- crank gear k (gear B), and the three-stage pinion -- compound gear."""
     st = design.involute_stage
     kw = dict(n_slices=st.n_slices, window=st.window, damping=st.damping, ramp_depth=st.ramp_depth)
+    # crank k's own gear (its pitch deviations, cranks.gear_pitch_deviations); the nominal pair otherwise
+    pairs = [graph.sun_pair if design.crank_gear_of(k) is design.crank_gear
+             else dataclasses.replace(graph.sun_pair, gear_b=design.crank_gear_of(k)) for k in range(layout.n_cranks)]
+    # one friction law for all sun meshes: the anchor stiffness from the nominal pair (pitch deviations
+    # turn teeth rigidly and leave the pair's secant stiffness unchanged)
     sun = involute_friction_law(design, graph.sun_pair)
-    meshes = [GearMesh(pair=graph.sun_pair, body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}",
+    meshes = [GearMesh(pair=pairs[k], body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}",
                        friction=sun, **kw) for k in range(layout.n_cranks)]
     if layout.three_stage:
         meshes.append(GearMesh(pair=graph.input_pair, body_a=0, body_b=layout.sun, name="input_stage",
