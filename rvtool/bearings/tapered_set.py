@@ -35,7 +35,7 @@ from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX,
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, all_finite
+from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows
 from ..errors import RvtoolInputError
 from .set import Placement
 from .tapered import TaperedPair, TaperedRollerBearing
@@ -300,6 +300,20 @@ class TaperedBearingSet:
         Q, dQ, dQv, (_, _, lam), (b, psi) = self.raw(pose, vel)
         return Evaluation(self.assembler.vector(Q), self.assembler.matrix(dQ), self.assembler.matrix(dQv),
                           self._observations(pose, lam, b, psi), (), all_finite(Q, dQ, dQv))
+
+    def set_gap_offsets(self, offsets):
+        """Gap offsets [m] per lamina row (positive opens the gap: a clearance increment along the
+        lamina's normal, e.g. the thermal one of Eq. (obs_thermal_gap)), added to the lamina offset
+        o_s (clearance + crowning) of the approach, absolute over the built rows; zeros restore the
+        built rows bit for bit."""
+        off = gap_offset_rows(offsets, len(self.ids), self.name)
+        if not hasattr(self, "_built_lamina_fp"):
+            self._built_lamina_fp = self.lamina_fp.copy()
+        fp = self._built_lamina_fp.copy()
+        fp[:, ref.LA_OFF] += off
+        self.lamina_fp = fp
+        if self.backend == "warp":
+            self._kernel.set_lamina_parameters(fp)
 
     def commit(self, pose, vel=None, evaluation=None):
         """Observations (L, 8) at the accepted state (nothing to commit)."""
