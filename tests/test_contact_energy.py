@@ -68,11 +68,13 @@ def fzg_set(**kw):
     return pair, InvoluteContactSet([GearMesh(pair=pair, body_a=0, body_b=1, **kw)], 2, backend="numpy")
 
 
-@pytest.mark.parametrize("theta_a", [0.0, 0.07, 0.19, 0.31])
-def test_involute_elastic_state_rebuilds_the_evaluated_force(theta_a):
+@pytest.mark.parametrize("theta_a, corner", [(0.07, None), (0.31, None), (0.2, iref.MODE_CORNER_A),
+                                              (0.38, iref.MODE_CORNER_B)])
+def test_involute_elastic_state_rebuilds_the_evaluated_force(theta_a, corner):
     # at rest the damping part vanishes, so the evaluator's normal force is the elastic force:
-    # rebuilding it from the observed mode and roll angles must reproduce it to the series
-    # iteration's tolerance (1e-14 relative; 1e-12 for the re-solve from another start)
+    # rebuilding it from the observed mode and roll angles (line of action, and the tip edges of
+    # A and of B at these angles) must reproduce it to the series iteration's tolerance (1e-14
+    # relative; 1e-12 for the re-solve from another start)
     pair, cs = fzg_set(n_slices=2, damping=50.0)
     th_b = pair.mesh_phase(0) + pair.ratio * theta_a - 2e-4      # loaded on line 0 (about 10 um approach)
     pose = np.array([[0.0, 0.0, theta_a], [pair.a, 0.0, th_b]])
@@ -80,6 +82,8 @@ def test_involute_elastic_state_rebuilds_the_evaluated_force(theta_a):
     F, V = cs.elastic_energy(obs)
     loaded = obs[:, iref.O_FN] > 0
     assert loaded.sum() >= 2
+    if corner is not None:
+        assert np.any(loaded & (obs[:, iref.O_MODE] == corner))
     np.testing.assert_allclose(F, obs[:, iref.O_FN], rtol=1e-12, atol=0.0)
     assert np.all(V[loaded] > 0) and np.all(V[~loaded] == 0)
 
