@@ -239,21 +239,6 @@ class InvoluteContactSet(PairFamilySet):
         return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations,
                             **({} if anchor is None else {"anchor": anchor}))
 
-    def energy_law(self):
-        """The per-row constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
-        the series law's elastic force and potential in closed form
-        (:func:`warp_contacts.involute_pairs_ref.elastic_state`, read from the current parameter
-        rows), anchor stiffness and friction code."""
-        from ..observe.energy import ContactEnergyLaw
-        kt = self.anchor_params[:, anchor_ref.ANCHOR_KT] if self.anchor else np.zeros(self.n_contacts)
-        return ContactEnergyLaw(tangential_stiffness=kt, friction_model=self.iparams[:, ref.J_FRICTION].copy(),
-                                normal_potential=self.elastic_energy)
-
-    def elastic_energy(self, obs):
-        """(elastic normal force [N], potential [J]) per row from observation rows (N, N_OBS)."""
-        _, F, V = ref.elastic_state(self.fparams, obs)
-        return F, V
-
     def mesh_stiffness(self, obs):
         """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along
         the line of action at this state, bodies held)."""
@@ -270,3 +255,18 @@ class InvoluteContactSet(PairFamilySet):
         M = np.zeros((len(self.meshes), 2))
         np.add.at(M, self.mesh_of, np.column_stack([-z * f[:, 1], z * f[:, 0]]))
         return M
+
+    def energy_law(self):
+        """The per-row constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        the series law's elastic force and potential in closed form
+        (:func:`warp_contacts.involute_pairs_ref.elastic_state`, read from the current parameter
+        rows), anchor stiffness and friction code."""
+        from ..observe.energy import ContactEnergyLaw
+        kt = self.anchor_params[:, anchor_ref.ANCHOR_KT] if self.anchor else np.zeros(self.n_contacts)
+        return ContactEnergyLaw(tangential_stiffness=kt, friction_model=self.iparams[:, ref.J_FRICTION].copy(),
+                                normal_potential=self.elastic_energy)
+
+    def elastic_energy(self, obs):
+        """(elastic normal force [N], potential [J]) per row from observation rows (N, N_OBS)."""
+        _, F, V = ref.elastic_state(self.fparams, obs)
+        return F, V
