@@ -1,0 +1,220 @@
+"""Lost motion of many variants with the device Newton: the load continuation of all copies at once.
+
+The per-variant lost motion (:func:`rvtool.variants.variant_lost_motion`) is a load
+continuation at input angle 0 (:class:`rvtool.solver.continuation.Continuation`): the
+equilibrium at +f (f = ``protocol.lost_motion_fraction`` x T_rated) from the kinematic state,
+then the levels ``protocol.lost_motion_torques`` down to -f, each reached from the previous
+equilibrium by warm-started Newton solves whose torque increment is halved when Newton fails
+or a step moves a coordinate by more than ``max_step`` (in the free play a full Newton step
+can land in a far, spurious equilibrium), doubled again after a success; lost motion =
+theta_out(+f) - theta_out(-f). The free play (output-pin hole
+clearance, pin clearance) is crossed exactly as there: by the continuation through the
+levels, each warm-started from the copy's previous equilibrium, with the same increment
+control and the same acceptance test.
+
+Here every variant is one copy of :class:`rvtool.solver.device_newton.DeviceNewton` at input
+angle 0, and the copies advance TOGETHER: every round is one device Newton solve of all copies
+still running, each at its own next torque (its increment state is its own; a copy's
+arithmetic does not depend on the others, so a copy's result does not depend on which others
+run beside it):
+
+1. start: all copies at +f from their kinematic state; a failed warm start runs the
+   regularization homotopy on the device (per copy), as ``Continuation``'s start falls back to
+   the static solver's ladder;
+2. rounds: copy c at level k solves at ``target = levels[k]`` if the rest fits in its
+   increment, else at ``t_now + inc``; accepted if converged (plausibility bounds included)
+   and max |q - q_prev| <= ``max_step``, then ``inc`` doubles while smaller than the rest; on
+   rejection ``inc`` halves, and below ``min_increment`` the copy has failed. Warm-started
+   solves only (no homotopy: a restart from the kinematic state would leave the branch, as
+   ``Continuation`` does not restart for the cycloid models);
+3. copies that fail (start, stall, or ``max_rounds`` exhausted) go to the per-variant Exudyn
+   path (:func:`variant_lost_motion` on the variant's own build: load continuation, then
+   spring control), counted in ``fallback_copies``; if that fails too the copy's figure is NaN
+   and its status "failed".
+"""
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import RvtoolInputError, SolverFailure
+from ..solver.device_newton import CONVERGED, DeviceNewton, DeviceNewtonSettings
+from ..units import ARCMIN_PER_RAD
+from ..variants.variant import Variant, VariantProtocol
+from .device_copies import copy_parameters
+
+
+@dataclass(frozen=True, kw_only=True)
+class ContinuationSettings:
+    """The increment control of :class:`rvtool.solver.continuation.Continuation` (its defaults):
+    max_step [m or rad]: largest accepted coordinate change per increment; min_increment [N m]:
+    smallest torque increment before the copy fails; max_rounds: device solves after which the
+    copies still running fail (a bound the sequential path does not need: it bounds the batch's
+    wall time by its slowest copy; 400 rounds allow every level of the 7 to halve 14 times down
+    to 1e-4 N m from 1.4 N m and climb back twice)."""
+    max_step: float = 2e-3
+    min_increment: float = 1e-4
+    max_rounds: int = 400
+
+    def __post_init__(self):
+        for nm in ("max_step", "min_increment"):
+            v = getattr(self, nm)
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+                raise RvtoolInputError(f"lost_motion.{nm} = {v!r} is outside the valid range (0, inf)")
+        if not (isinstance(self.max_rounds, (int, np.integer)) and self.max_rounds >= 1):
+            raise RvtoolInputError(f"lost_motion.max_rounds = {self.max_rounds!r} is outside the valid range "
+                                   f"[1, inf) (integer)")
+
+
+@dataclass
+class DeviceLostMotion:
+    """Per-variant results of :func:`device_lost_motion` (V variants): lost motion [arcmin] (V,)
+    (NaN: failed), output angles at +f and -f [rad] (V,), the path that produced each
+    ("device" or "exudyn") and its method ("load" on the device; "load"/"spring" on the
+    Exudyn fallback), status ("ok"/"failed"), error (None or the message), Newton iterations
+    per variant (device iterations of all its rounds, plus the fallback's), and ``stats``
+    (rounds, copy solves, device loop wall, fallback and failed copies, the loop path)."""
+    lost_motion_arcmin: np.ndarray
+    theta_plus: np.ndarray
+    theta_minus: np.ndarray
+    path: list
+    method: list
+    status: list
+    error: list
+    iterations: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+
+def _exudyn_lost_motion(design, variant, protocol, regularization):
+    """The per-variant Exudyn path: (lost motion [arcmin], method, Newton iterations)."""
+    from ..assembly.cycloid import build
+    from ..variants.variant import variant_lost_motion
+    d = variant.apply(design)
+    lm = variant_lost_motion(build(d, bearing_model="lumped", regularization=regularization), d, protocol)
+    return lm["lost_motion_arcmin"], lm["method"], int(lm["newton_iterations"])
+
+
+LOST_MOTION_NEWTON = DeviceNewtonSettings(max_step_rotation=1e-3)
+"""Device Newton settings of the lost motion: the TE's, with a rotation step limit of 1e-3 rad
+(below the ~1.5e-3 rad of output-pin free play that a level step can cross; measured on the
+Monte Carlo's first 16 RD-40 variants: 3,880 copy iterations against 5,194 at the TE's 4e-3 rad,
+4e-4 rad: 5,112 and one more fallback; the same figures)."""
+
+
+def device_lost_motion(design, variants, protocol: VariantProtocol = VariantProtocol(), *, regularization=(100.0, 0.1),
+                       device="cpu", settings: DeviceNewtonSettings = LOST_MOTION_NEWTON,
+                       continuation: ContinuationSettings = ContinuationSettings(), params=None, fallback=True,
+                       copies=None):
+    """Lost motion of ``variants`` of ``design`` under ``protocol`` with the device Newton on
+    ``device`` (see the module docstring). params: :class:`CopyParameters` of
+    ``[Variant()] + variants`` (with the same ``regularization``) to reuse (e.g. from the TE);
+    built here if None. copies: indices into ``variants`` to run (default all; the others
+    are reported as not run, status "skipped"). fallback: send failed copies to the Exudyn
+    path. Returns a :class:`DeviceLostMotion`."""
+    t0 = time.perf_counter()
+    variants = list(variants)
+    V = len(variants)
+    if V < 1:
+        raise RvtoolInputError("device_lost_motion needs at least one variant (valid range of V: [1, inf))")
+    if protocol.bearing_model != "lumped":
+        raise RvtoolInputError(f"protocol.bearing_model = {protocol.bearing_model!r}; the device Newton supports "
+                               f"['lumped']")
+    if params is None:
+        params = copy_parameters(design, [Variant()] + variants, regularization=regularization)
+    elif len(params.variants) != V + 1:
+        raise RvtoolInputError(f"params must hold [Variant()] + variants ({V + 1} copies); got {len(params.variants)}")
+    run = np.arange(V) if copies is None else np.asarray(copies, np.int64)
+    # the start as Continuation's (warm start, then the ladder: here the device homotopy); the
+    # levels warm-started only (Continuation._try: ramp=False, no restart)
+    start_newton = DeviceNewton(params, device=device, settings=replace(settings, homotopy=True))
+    step_newton = DeviceNewton(params, device=device, settings=replace(settings, homotopy=False))
+    levels = protocol.lost_motion_torques(design)
+    i_out = params.output_index
+    P = len(run)
+    vi = 1 + run
+    zero = np.zeros(P)
+    setup_s = time.perf_counter() - t0
+
+    st = start_newton.solve(vi, zero, np.full(P, levels[0]), params.kinematic(vi, zero))
+    q = st.q.copy()
+    iters = st.iterations.astype(np.int64)
+    ok = st.converged.copy()
+    failed = ~ok                                  # fell out of the device continuation
+    why = np.array(["no loaded start at +f on the device (warm start and homotopy)" if not o else "" for o in ok],
+                    dtype=object)
+    theta_plus = np.where(ok, q[:, i_out], np.nan)
+    k = np.ones(P, np.int64)                      # index of the level each copy goes to next
+    t_now = np.full(P, float(levels[0]))
+    inc = np.full(P, float(levels[1] - levels[0]))
+    loop_s, copy_solves, rounds = st.loop_s, P, 0
+    cs = continuation
+    running = ok.copy()
+    while np.any(running) and rounds < cs.max_rounds:
+        idx = np.flatnonzero(running)
+        goal = levels[k[idx]]
+        rest = goal - t_now[idx]
+        target = np.where(np.abs(rest) <= np.abs(inc[idx]), goal, t_now[idx] + inc[idx])
+        r = step_newton.solve(vi[idx], zero[idx], target, q[idx])
+        rounds += 1
+        copy_solves += len(idx)
+        loop_s += r.loop_s
+        iters[idx] += r.iterations
+        acc = r.converged & (np.max(np.abs(r.q - q[idx]), axis=1) <= cs.max_step)
+        a, b = idx[acc], idx[~acc]
+        # accepted: Continuation.go_to's doubling rule, then the next level
+        q[a] = r.q[acc]
+        t_now[a] = target[acc]
+        rest_a = levels[k[a]] - t_now[a]
+        inc[a] = np.where(np.abs(inc[a]) < np.abs(rest_a), 2 * inc[a], inc[a])
+        at_level = t_now[a] == levels[k[a]]
+        done = a[at_level]
+        k[done] += 1
+        fin = done[k[done] == len(levels)]
+        running[fin] = False
+        nxt = done[k[done] < len(levels)]
+        inc[nxt] = levels[k[nxt]] - t_now[nxt]            # a new go_to: the whole step first
+        # rejected: halve; below min_increment the copy has stalled
+        inc[b] *= 0.5
+        stalled = b[np.abs(inc[b]) < cs.min_increment]
+        running[stalled] = False
+        failed[stalled] = True
+        for c in stalled:
+            why[c] = (f"device torque continuation stalled between {t_now[c]:.6g} and {levels[k[c]]:.6g} N m: "
+                      f"increment {abs(inc[c]):.3g} N m below min_increment = {cs.min_increment:g}")
+    for c in np.flatnonzero(running):
+        failed[c] = True
+        why[c] = f"device torque continuation not finished in max_rounds = {cs.max_rounds} rounds"
+    device_s = time.perf_counter() - t0
+
+    lm = np.full(V, np.nan)
+    th_p, th_m = np.full(V, np.nan), np.full(V, np.nan)
+    path, method, status, error = [None] * V, [None] * V, ["skipped"] * V, [None] * V
+    n_iter = np.zeros(V, np.int64)
+    for j, c in enumerate(run):
+        n_iter[c] = iters[j]
+        if not failed[j]:
+            th_p[c], th_m[c] = theta_plus[j], q[j, i_out]
+            lm[c] = (th_p[c] - th_m[c]) * ARCMIN_PER_RAD
+            path[c], method[c], status[c] = "device", "load", "ok"
+    n_fallback = int(failed.sum())
+    n_failed = 0
+    for j in np.flatnonzero(failed):
+        c = run[j]
+        if not fallback:
+            status[c], error[c], n_failed = "failed", str(why[j]), n_failed + 1
+            continue
+        try:
+            lm[c], method[c], it = _exudyn_lost_motion(design, variants[c], protocol, regularization)
+        except SolverFailure as exc:
+            status[c], error[c], n_failed = "failed", f"{why[j]}; Exudyn path: {exc}", n_failed + 1
+            path[c] = "exudyn"
+            continue
+        n_iter[c] += it
+        path[c], status[c] = "exudyn", "ok"
+    stats = {"copies": P, "rounds": rounds, "copy_solves": int(copy_solves), "device_loop_s": loop_s,
+             "newton_iterations_per_copy": float(iters.mean()) if P else 0.0,
+             "fallback_copies": n_fallback, "failed_copies": n_failed, "path": step_newton.last_path,
+             "device": step_newton.device, "setup_s": setup_s, "device_s": device_s,
+             "wall_s": time.perf_counter() - t0}
+    return DeviceLostMotion(lost_motion_arcmin=lm, theta_plus=th_p, theta_minus=th_m, path=path, method=method,
+                            status=status, error=error, iterations=n_iter, stats=stats)
