@@ -147,7 +147,9 @@ def main(argv=None):
     for cmode in ("pool", "batched", "device"):
         cdir = os.path.join(args.out, f"chunks_compare_{cmode}")
         shutil.rmtree(cdir, ignore_errors=True)
-        cset = MonteCarloSettings(n_variants=nc, seed=SEED, chunk_size=cmp_chunk[cmode], mode=cmode, workers=args.workers,
+        # --quick: the device mode in this process (no third pool to start: the quick run stays short)
+        workers = 1 if cmode == "device" and args.quick else args.workers
+        cset = MonteCarloSettings(n_variants=nc, seed=SEED, chunk_size=cmp_chunk[cmode], mode=cmode, workers=workers,
                                   device=cmp_device if cmode == "device" else "cpu")
         cres = run_monte_carlo(design, tol, protocol, cset, cdir, build_kw=build_kw)
         cmp_recs[cmode] = cres["records"]
@@ -193,8 +195,9 @@ def main(argv=None):
         "mode_comparison_note": (f"the three modes on the first {nc} variants, the pool and batched modes (and the "
                                  f"device mode on cpu) each in a process pool of {settings.workers or os.cpu_count()} "
                                  f"workers started for it (batched: {CHUNK_BATCHED} variants per Exudyn system on cpu; "
-                                 f"device: {cmp_chunk['device']} variants per chunk on {cmp_device}); rates over "
-                                 f"successful variants"),
+                                 f"device: {cmp_chunk['device']} variants per chunk on {cmp_device}"
+                                 + ("; --quick: the device mode in the case's process" if args.quick else "")
+                                 + "); rates over successful variants"),
         "batched_agreement": agreement,
         "device_agreement": agreement_with_pool("device"),
         "lost_motion_methods": methods,
