@@ -125,3 +125,38 @@ def test_bad_settings(design, samples):
         ContinuationSettings(max_rounds=0)
     with pytest.raises(RvtoolInputError, match="bearing_model"):
         device_lost_motion(design, [samples[1]], VariantProtocol(n_te_points=53, bearing_model="rolling"))
+
+
+def test_parameters_in_shares_and_fallbacks_on_an_executor(design, samples):
+    """The per-copy parameters built in shares on an executor and merged equal the direct build
+    row for row (profile tables read through each row's table index), the lost motion from
+    them is bit-identical, and the Exudyn fallbacks submitted to an executor give the
+    sequential figure exactly."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from warp_contacts import cycloid_pins_ref as pref
+
+    from rvtool.batched.device_copies import nominal_copy_parameters
+    from rvtool.batched.device_lost_motion import device_lost_motion
+    from rvtool.solver.device_newton import DeviceNewtonSettings
+    vs = [samples[k] for k in (1, 3, 2)]
+    direct = nominal_copy_parameters(design, vs, regularization=REG)
+    with ThreadPoolExecutor(max_workers=1) as ex:      # one thread: Exudyn systems are built one at a time
+        merged = nominal_copy_parameters(design, vs, regularization=REG, executor=ex, share=1)
+        assert len(merged.variants) == 4 and len(merged.tables) > len(direct.tables)   # a nominal table per share
+        for nm in ("pin_f", "brg_f", "reference", "eccentricity"):
+            assert np.array_equal(getattr(merged, nm), getattr(direct, nm)), nm
+        cols = [c for c in range(pref.N_INT) if c != pref.J_TABLE]
+        assert np.array_equal(merged.pin_i[:, :, cols], direct.pin_i[:, :, cols])
+        for c in range(4):
+            for tm, td in zip(merged.pin_i[c, :, pref.J_TABLE], direct.pin_i[c, :, pref.J_TABLE]):
+                assert all(np.array_equal(a, b) for a, b in zip(merged.tables[tm], direct.tables[td]))
+        a = device_lost_motion(design, vs, PROTOCOL, regularization=REG, params=direct, fallback=False)
+        b = device_lost_motion(design, vs, PROTOCOL, regularization=REG, params=merged, fallback=False)
+        assert np.array_equal(a.lost_motion_arcmin, b.lost_motion_arcmin)
+        r = device_lost_motion(design, [samples[1]], PROTOCOL, regularization=REG, executor=ex,
+                               settings=DeviceNewtonSettings(max_iterations=1, homotopy=False))
+    d = samples[1].apply(design)
+    ref = variant_lost_motion(build(d, bearing_model="lumped", regularization=REG), d, PROTOCOL)
+    assert r.path == ["exudyn"] and r.stats["fallback_copies"] == 1
+    assert r.lost_motion_arcmin[0] == ref["lost_motion_arcmin"]

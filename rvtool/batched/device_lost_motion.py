@@ -109,13 +109,15 @@ Monte Carlo's first 16 RD-40 variants: 3,880 copy iterations against 5,194 at th
 def device_lost_motion(design, variants, protocol: VariantProtocol = VariantProtocol(), *, regularization=(100.0, 0.1),
                        device="cpu", settings: DeviceNewtonSettings = LOST_MOTION_NEWTON,
                        continuation: ContinuationSettings = ContinuationSettings(), params=None, fallback=True,
-                       copies=None):
+                       copies=None, executor=None):
     """Lost motion of ``variants`` of ``design`` under ``protocol`` with the device Newton on
     ``device`` (see the module docstring). params: :class:`CopyParameters` of
     ``[Variant()] + variants`` (with the same ``regularization``) to reuse (e.g. from the TE);
     built here if None. copies: indices into ``variants`` to run (default all; the others
     are reported as not run, status "skipped"). fallback: send failed copies to the Exudyn
-    path. Returns a :class:`DeviceLostMotion`."""
+    path; executor: a ``concurrent.futures.Executor`` that runs those fallbacks side by side
+    (on a GPU host the process holding the device would otherwise run them one after another).
+    Returns a :class:`DeviceLostMotion`."""
     t0 = time.perf_counter()
     variants = list(variants)
     V = len(variants)
@@ -222,19 +224,26 @@ def device_lost_motion(design, variants, protocol: VariantProtocol = VariantProt
             path[c], method[c], status[c] = "device", "load", "ok"
     n_fallback = int(failed.sum())
     n_failed = 0
+    jobs = {}
     for j in np.flatnonzero(failed):
         c = run[j]
         if not fallback:
             status[c], error[c], n_failed = "failed", str(why[j]), n_failed + 1
-            continue
+        elif executor is not None:
+            jobs[j] = executor.submit(_exudyn_lost_motion, design, variants[c], protocol, regularization)
+        else:
+            jobs[j] = None
+    for j, fut in jobs.items():
+        c = run[j]
+        path[c] = "exudyn"
         try:
-            lm[c], method[c], it = _exudyn_lost_motion(design, variants[c], protocol, regularization)
+            lm[c], method[c], it = (fut.result() if fut is not None else
+                                    _exudyn_lost_motion(design, variants[c], protocol, regularization))
         except SolverFailure as exc:
             status[c], error[c], n_failed = "failed", f"{why[j]}; Exudyn path: {exc}", n_failed + 1
-            path[c] = "exudyn"
             continue
         n_iter[c] += it
-        path[c], status[c] = "exudyn", "ok"
+        status[c] = "ok"
     stats = {"copies": P, "rounds": rounds, "start_scales": {f"{sc:g}": int(np.sum(scale == sc)) for sc in START_SCALES}, "copy_solves": int(copy_solves), "device_loop_s": loop_s,
              "newton_iterations_per_copy": float(iters.mean()) if P else 0.0,
              "fallback_copies": n_fallback, "failed_copies": n_failed, "path": step_newton.last_path,

@@ -19,23 +19,26 @@ import time
 import numpy as np
 
 from ..errors import RvtoolInputError, SolverFailure
-from .variant import Variant, VariantProtocol, variant_lost_motion
+from .variant import VariantProtocol, variant_lost_motion
 
 LOST_MOTION_PATHS = ("device", "exudyn")
 
 
 def device_variant_figures(design, variants, protocol: VariantProtocol = VariantProtocol(), *, device="cpu",
                            regularization=(100.0, 0.1), settings=None, lost_motion="device",
-                           lost_motion_settings=None):
+                           lost_motion_settings=None, executor=None):
     """Figures of ``variants`` (see the module docstring); one dict per variant with the keys of
     ``variant_figures`` plus ``status`` ("ok"/"failed"), ``error``, ``te_path``,
     ``te_fallback_points``, ``lost_motion_path`` and ``lost_motion_fallback``.
     ``newton_iterations`` counts the variant's device Newton iterations over its TE points plus
     those of its lost motion. settings: :class:`DeviceNewtonSettings` of the TE;
     lost_motion_settings: those of the lost motion (default
-    :data:`rvtool.batched.device_lost_motion.LOST_MOTION_NEWTON`)."""
+    :data:`rvtool.batched.device_lost_motion.LOST_MOTION_NEWTON`). executor: a
+    ``concurrent.futures.Executor`` for the host work beside the device (the per-copy parameters
+    in shares, the lost-motion Exudyn fallbacks), e.g. a process pool on a GPU host; None: all
+    in this process."""
     from ..assembly.cycloid import build
-    from ..batched.device_copies import copy_parameters
+    from ..batched.device_copies import nominal_copy_parameters
     from ..batched.device_lost_motion import LOST_MOTION_NEWTON, device_lost_motion
     from ..batched.device_te import device_te
     from ..solver.device_newton import DeviceNewtonSettings
@@ -46,7 +49,7 @@ def device_variant_figures(design, variants, protocol: VariantProtocol = Variant
         raise RvtoolInputError(f"lost_motion = {lost_motion!r}; valid choices are {list(LOST_MOTION_PATHS)}")
     t0 = time.perf_counter()
     variants = list(variants)
-    params = copy_parameters(design, [Variant()] + variants, regularization=regularization)
+    params = nominal_copy_parameters(design, variants, regularization=regularization, executor=executor)
     angles = protocol.input_angles(design)
     te = device_te(design, variants, angles, torque=protocol.te_torque_fraction * design.rated_torque,
                    regularization=regularization, device=device, settings=settings or DeviceNewtonSettings(),
@@ -56,7 +59,8 @@ def device_variant_figures(design, variants, protocol: VariantProtocol = Variant
     lm = None
     if lost_motion == "device" and ok:
         lm = device_lost_motion(design, variants, protocol, regularization=regularization, device=device,
-                                settings=lost_motion_settings or LOST_MOTION_NEWTON, params=params, copies=ok)
+                                settings=lost_motion_settings or LOST_MOTION_NEWTON, params=params, copies=ok,
+                                executor=executor)
         lm_path = f"device_newton:{lm.stats['device']}:{lm.stats['path']}"
     out = []
     for c, v in enumerate(variants):

@@ -196,10 +196,11 @@ def _batched_function(build_kw=None):
     return batched_variant_figures
 
 
-def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="batched"):
+def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="batched", helpers=None):
     """Records of variants run together: in one Exudyn system (mode "batched", rvtool.batched) or
-    with the TE on the device Newton (mode "device", :mod:`rvtool.variants.device`). If the run
-    raises, every variant of the batch is recorded as failed with that error."""
+    with the TE and lost motion on the device Newton (mode "device", :mod:`rvtool.variants.device`;
+    ``helpers``: an executor for its host work, see there). If the run raises, every variant of
+    the batch is recorded as failed with that error."""
     if mode == "device":
         from .device import device_variant_figures as batched_variant_figures
         extra = sorted(set(build_kw or {}) - {"regularization"})
@@ -210,7 +211,8 @@ def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="bat
         batched_variant_figures = _batched_function(build_kw)
     t0 = time.perf_counter()
     try:
-        figs = batched_variant_figures(design, variants, protocol, device=device, **(build_kw or {}))
+        extra_kw = {"executor": helpers} if helpers is not None else {}
+        figs = batched_variant_figures(design, variants, protocol, device=device, **(build_kw or {}), **extra_kw)
     except Exception as exc:  # the whole batch shares one system: all its variants failed
         wall = (time.perf_counter() - t0) / max(len(variants), 1)
         return [_record(v, error=f"{type(exc).__name__}: {exc}", wall_s=wall) for v in variants]
@@ -321,12 +323,20 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
         # (on the CPU with several workers, batches run side by side in the pool below: one
         # batch of chunk_size copies per process: on 2 cores 3.3x the per-variant pool for TE alone,
         # 1.15x for the whole protocol with lost motion, cases/bench_batched_te.py and monte_carlo_te)
-        for i in pending:
-            recs = run_batch(design, variants_of(i), protocol, device, build_kw, mode)
-            done += len(recs)
-            if progress is not None:
-                progress(done, total)
-            finish_chunk(i, recs)
+        with contextlib.ExitStack() as stack:
+            helpers = None
+            if mode == "device" and n_workers > 1 and pending:
+                # the device mode's host work (per-copy parameters, Exudyn fallbacks) side by side
+                # on the other cores while this process holds the device
+                stack.enter_context(_single_thread_env())
+                helpers = stack.enter_context(cf.ProcessPoolExecutor(
+                    max_workers=n_workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker))
+            for i in pending:
+                recs = run_batch(design, variants_of(i), protocol, device, build_kw, mode, helpers)
+                done += len(recs)
+                if progress is not None:
+                    progress(done, total)
+                finish_chunk(i, recs)
     elif mode == "serial":
         for i in pending:
             recs = []
