@@ -7,8 +7,8 @@ then the levels ``protocol.lost_motion_torques`` down to -f, each reached from t
 equilibrium by warm-started Newton solves whose torque increment is halved when Newton fails
 or a step moves a coordinate by more than ``max_step`` (in the free play a full Newton step
 can land in a far, spurious equilibrium), doubled again after a success; lost motion =
-theta_out(+f) - theta_out(-f). The free play (output-pin hole
-clearance, pin clearance) is crossed exactly as there: by the continuation through the
+theta_out(+f) - theta_out(-f). The free play (output-pin hole clearance, pin clearance) is
+crossed exactly as there: by the continuation through the
 levels, each warm-started from the copy's previous equilibrium, with the same increment
 control and the same acceptance test.
 
@@ -16,7 +16,8 @@ Here every variant is one copy of :class:`rvtool.solver.device_newton.DeviceNewt
 angle 0, and the copies advance TOGETHER: every round is one device Newton solve of all copies
 still running, each at its own next torque (its increment state is its own; a copy's
 arithmetic does not depend on the others, so a copy's result does not depend on which others
-run beside it):
+run beside it). The batch is over variants only: a copy's levels are a chain (each starts from
+the equilibrium before it, which is how the free play is crossed), not independent solves:
 
 1. start: all copies at +f from their kinematic state; a failed warm start runs the
    regularization homotopy on the device (per copy), as ``Continuation``'s start falls back to
@@ -43,7 +44,7 @@ import numpy as np
 
 from ..errors import RvtoolInputError, SolverFailure
 from ..protocols.lost_motion import START_SCALES
-from ..solver.device_newton import CONVERGED, DeviceNewton, DeviceNewtonSettings
+from ..solver.device_newton import DeviceNewton, DeviceNewtonSettings
 from ..units import ARCMIN_PER_RAD
 from ..variants.variant import Variant, VariantProtocol
 from .device_copies import copy_parameters
@@ -153,7 +154,8 @@ def device_lost_motion(design, variants, protocol: VariantProtocol = VariantProt
         todo = np.flatnonzero(np.isnan(scale))
         if not len(todo):
             break
-        st = start_newton.solve(vi[todo], zero[todo], np.full(len(todo), sc * levels[0]), params.kinematic(vi[todo], zero[todo]))
+        st = start_newton.solve(vi[todo], zero[todo], np.full(len(todo), sc * levels[0]),
+                                params.kinematic(vi[todo], zero[todo]))
         loop_s += st.loop_s
         copy_solves += len(todo)
         iters[todo] += st.iterations
@@ -244,7 +246,9 @@ def device_lost_motion(design, variants, protocol: VariantProtocol = VariantProt
             continue
         n_iter[c] += it
         status[c] = "ok"
-    stats = {"copies": P, "rounds": rounds, "start_scales": {f"{sc:g}": int(np.sum(scale == sc)) for sc in START_SCALES}, "copy_solves": int(copy_solves), "device_loop_s": loop_s,
+    stats = {"copies": P, "rounds": rounds,
+             "start_scales": {f"{sc:g}": int(np.sum(scale == sc)) for sc in START_SCALES},
+             "copy_solves": int(copy_solves), "device_loop_s": loop_s,
              "newton_iterations_per_copy": float(iters.mean()) if P else 0.0,
              "fallback_copies": n_fallback, "failed_copies": n_failed, "path": step_newton.last_path,
              "device": step_newton.device, "setup_s": setup_s, "device_s": device_s,
