@@ -75,7 +75,8 @@ class ContinuationSettings:
 @dataclass
 class DeviceLostMotion:
     """Per-variant results of :func:`device_lost_motion` (V variants): lost motion [arcmin] (V,)
-    (NaN: failed), output angles at +f and -f [rad] (V,), the path that produced each
+    (NaN: failed), flange displacement coordinates at +f and -f [rad] (V,) (NaN where the Exudyn
+    fallback gave the figure), the path that produced each
     ("device" or "exudyn") and its method ("load" on the device; "load"/"spring" on the
     Exudyn fallback), status ("ok"/"failed"), error (None or the message), Newton iterations
     per variant (device iterations of all its rounds, plus the fallback's), and ``stats``
