@@ -8,6 +8,7 @@ Contact identities are those of :class:`rvtool.slow.reducer_windows.ReducerWindo
 :class:`CycloidSlowInputs` is an input chosen here (the reference design gives none);
 the cases report them with their results.
 """
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -146,13 +147,19 @@ def friction_law(inputs: CycloidSlowInputs) -> MixedFriction:
                          transition_lambda=inputs.lambda_transition, sharpness=inputs.friction_sharpness)
 
 
-def lubrication(design, inputs: CycloidSlowInputs, exposure) -> Lubrication:
+def lubrication(design, inputs: CycloidSlowInputs, exposure, radii: dict | None = None) -> Lubrication:
     """Film contacts of the families. Entrainment u = (u1 + u2) / 2: pins (fixed in the housing)
     and plain output pins have one moving surface at the contact, so u = half the load-weighted
     sliding speed I_s / I_F of the family in ``exposure`` (the cold window); the needles roll at
     u = omega_rel R_i / 2 (inner-race surface speed relative to the wheel bore, halved: the
     cage-frame speed of both surfaces, declared approximation). Line contacts; the lumped eccentric bearing's load per length is that
-    of the most loaded roller (Stribeck: Q_max = 4.08 F_r / Z), hence length = Z L / 4.08."""
+    of the most loaded roller (Stribeck: Q_max = 4.08 F_r / Z), hence length = Z L / 4.08.
+
+    Reduced radius of a ring-pin contact: radii (window contact id -> R [m], from
+    :func:`rvtool.slow.contact_radius.window_radii` over the accepted states of a window) gives each
+    loaded pin contact its local 1/R = 1/r_p + kappa_flank (on RD-40 the loaded flank is convex,
+    R ~ 0.46 r_p); None keeps R = r_p for every pin (the pin's own radius only). Output pins and
+    needles are circles on circles: their radii do not depend on the contact point."""
     E = reduced_modulus(design.material.youngs_modulus, design.material.poisson_ratio,
                         design.material.youngs_modulus, design.material.poisson_ratio)
     fam_u = {}
@@ -162,8 +169,6 @@ def lubrication(design, inputs: CycloidSlowInputs, exposure) -> Lubrication:
         fam_u[fam] = 0.5 * I_s / I_F
     d, eb, op = design, design.eccentric_bearing, design.output_pins
     rp = d.pins.pin_radius
-    # the cycloid flank's curvature radius at the loaded contacts is an order of magnitude above r_p:
-    # the reduced radius is taken as r_p (declared)
     omega_in = d.input_speed_rpm * math.pi / 30.0
     omega_rel = omega_in * (1.0 + 1.0 / (d.pins.n_pins - 1))
     Rr, Ri = 0.5 * eb.roller_diameter, eb.inner_radius
@@ -182,6 +187,12 @@ def lubrication(design, inputs: CycloidSlowInputs, exposure) -> Lubrication:
     }
     for fam in (Family.MAIN_BEARINGS.value, Family.INPUT_BEARINGS.value):
         contacts[fam] = contacts[Family.ECCENTRIC_BEARINGS.value]   # unloaded under pure torque: no film load
+    pin_film = contacts[Family.PINS.value]
+    for cid, R in dict(radii or {}).items():
+        if family_of(cid) != Family.PINS.value:
+            raise RvtoolInputError(f"radii names contact {cid!r}; valid: ring-pin contacts 'pins/...' (the other "
+                                   "families' radii do not depend on the contact point)")
+        contacts[cid] = dataclasses.replace(pin_film, radius_x=float(R))   # the identity wins over the set name
     return Lubrication(lubricant=RoelandsViscosity(reference_viscosity=inputs.eta_ref, reference_temperature=inputs.T_ref,
                                                    temperature_index=inputs.roelands_S0, pressure_index=inputs.roelands_Z),
                        friction_law=friction_law(inputs), contacts=contacts)
@@ -229,8 +240,9 @@ def _e_star(design):
 
 def contact_line_geometry(design) -> dict:
     """Family -> (reduced radius R [m], loaded length b [m]) of the line contacts: ring pin against
-    the flank (R = r_p, the flank's curvature radius at the loaded contacts being an order of
-    magnitude above r_p; declared as in :func:`lubrication`), output pin in its hole (conformal),
+    the flank (R = r_p, the pin's own radius: a nominal value; the local radius of a contact, with
+    the flank's curvature, comes from :func:`rvtool.slow.contact_radius.window_radii` or
+    :func:`rvtool.pressure.state.pin_contact`), output pin in its hole (conformal),
     needle on the journal (the inner, more conforming-less race)."""
     d, eb, op = design, design.eccentric_bearing, design.output_pins
     Rr, Ri = 0.5 * eb.roller_diameter, eb.inner_radius
