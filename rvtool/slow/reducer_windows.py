@@ -116,6 +116,17 @@ class ContactBodies:
             raise RvtoolInputError("body_b must be None (housing) or callable (contact id -> body name or None)")
 
 
+def std_involute_contact_bodies() -> dict:
+    """The small-tooth-difference drive's declaration (:mod:`rvtool.assembly.std_involute`): a tooth
+    flank contact ``<mesh>/gear_a|gear_b/tooth<k>/line<l>`` joins the wheel named by its mesh
+    (``wheel<k>``) and the ring (fixed in the housing); output pins and bearings as in the cycloid
+    drive."""
+    out = cycloid_contact_bodies()
+    del out[Family.PINS]
+    out[Family.INVOLUTE_STAGE] = ContactBodies(body_a=lambda c: c.split("/")[0], body_b=None)
+    return out
+
+
 def cycloid_contact_bodies() -> dict:
     """The cycloid drive's declaration (:mod:`rvtool.assembly.cycloid` contact ids): a ring-pin
     contact ``wheel<k>/pin<j>`` joins wheel k and the housing (pins fixed in the housing); an
@@ -189,23 +200,42 @@ class ReducerWindows:
 
     # -- contact identities ------------------------------------------------------------
     def contact_ids(self, family) -> tuple:
-        """Window identities ``"<family>/<contact>"`` of ``family``, in observation order."""
-        q = np.zeros(self.model.mbs.systemData.ODE2Size())
-        names, _ = self.model.observe(q, family).per_contact()
-        return tuple(f"{Family(family).value}/{c}" for c in names)
+        """Window identities ``"<family>/<contact>"`` of ``family``, in observation order (a family
+        whose evaluator names its own offset identities: those, e.g. the tooth flanks of a mesh)."""
+        own = self._own_ids(family)
+        if own is None:
+            q = np.zeros(self.model.mbs.systemData.ODE2Size())
+            own, _ = self.model.observe(q, family).per_contact()
+        return tuple(f"{Family(family).value}/{c}" for c in own)
+
+    def _own_ids(self, family):
+        """The evaluator's own contact identities (``gap_offset_ids``), or None for row contacts."""
+        return getattr(self.model.family_element(family).evaluator, "gap_offset_ids", None)
+
+    def _rows(self, q, fam):
+        """(observation, contact of every row entry, row index of every entry): one entry per row
+        (its physical contact), or, where the evaluator names its own identities, one per flank of
+        the row's tooth pair (both flanks carry the row's force)."""
+        ob = self.model.observe(q, fam)
+        ev = self.model.family_element(fam).evaluator
+        if self._own_ids(fam) is None:
+            return ob, [physical_contact(r) for r in ob.ids], np.arange(len(ob.ids))
+        fa, fb = ev.flank_ids(ob.obs)
+        return ob, fa + fb, np.concatenate([np.arange(len(fa)), np.arange(len(fb))])
 
     # -- one window --------------------------------------------------------------------------
     def _snapshot(self, q, angle):
         kin = self.model.kinematic_state(angle, self.protocol.input_speed)
         ids, F, slip, pos, nrm = [], [], [], [], []
         for fam in self.families:
-            ob = self.model.observe(q, fam)
-            names, Fc = ob.per_contact()
-            row_contact = [physical_contact(r) for r in ob.ids]
+            ob, row_contact, src = self._rows(q, fam)
+            names = tuple(dict.fromkeys(row_contact))
             index = {c: k for k, c in enumerate(names)}
             col = np.fromiter((index[c] for c in row_contact), int, len(row_contact))
-            f_row = ob.normal_force
-            p_row, n_row = ob.position, ob.normal
+            f_row = ob.normal_force[src]
+            p_row, n_row = ob.position[src], ob.normal[src]
+            Fc = np.zeros(len(names))
+            np.add.at(Fc, col, f_row)
             decl = self.bodies[fam]
             if decl.rolling:
                 v_row = np.zeros(len(f_row))

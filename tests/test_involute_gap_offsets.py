@@ -1,0 +1,118 @@
+"""Slow-state gap offsets of involute meshes per tooth flank (issue 18): kernel against reference on
+every device, the offset follows its tooth through the window slots, a uniform flank offset is the
+mesh clearance, zeros are bit-identical, and the slow windows run on the small-tooth-difference drive."""
+import numpy as np
+import pytest
+import warp as wp
+
+from rvtool import designs
+from rvtool.assembly import build
+from rvtool.assembly.spec import load_design
+from rvtool.errors import RvtoolInputError
+from rvtool.model import Family
+from rvtool.slow.offsets import GapOffsets
+from rvtool.slow.reducer_windows import ReducerWindows, WindowProtocol, std_involute_contact_bodies
+from test_involute_pairs import _cases, poses, scene
+from warp_contacts import involute_pairs_ref as ref
+
+DEVICES = ["cpu", pytest.param("cuda:0", marks=pytest.mark.skipif(wp.get_cuda_device_count() == 0,
+                                                                    reason="no CUDA device"))]
+
+
+def _offsets(s, seed=5):
+    return np.random.default_rng(seed).uniform(-3e-6, 3e-6, len(s.gap_offset_ids))
+
+
+def _sweep(pair, dth):
+    return poses(pair, np.linspace(0.0, 2 * np.pi / pair.gear_a.n_teeth, 7), dth)
+
+
+@pytest.mark.parametrize("device", DEVICES)
+@pytest.mark.parametrize("case", [0, 1])
+def test_kernel_matches_reference_with_flank_offsets(case, device):
+    """Tolerance as in test_involute_pairs.test_kernel_matches_numpy_reference (float64: 1e-9)."""
+    _, pair, kw, dth, vel = _cases()[case]
+    s_w, s_n = scene(pair, "warp", "float64", device, **kw), scene(pair, "numpy", **kw)
+    off = _offsets(s_n)
+    s_w.set_gap_offsets(off)
+    s_n.set_gap_offsets(off)
+    for pose in _sweep(pair, dth):
+        a, b = s_w.evaluate(pose, vel), s_n.evaluate(pose, vel)
+        for x, y in ((a.Q, b.Q), (a.dQdq, b.dQdq)):
+            assert np.max(np.abs(x - y)) <= 1e-9 * np.max(np.abs(y))
+        np.testing.assert_array_equal(a.obs[:, ref.O_MODE], b.obs[:, ref.O_MODE])
+
+
+@pytest.mark.parametrize("backend", ["warp", "numpy"])
+def test_offset_follows_its_tooth_and_zeros_are_bit_identical(backend):
+    _, pair, kw, dth, vel = _cases()[1]
+    built = scene(pair, backend, **kw)
+    s = scene(pair, backend, **kw)
+    ids = s.gap_offset_ids
+    first = built.evaluate(_sweep(pair, dth)[0], vel).obs
+    r0 = int(np.argmax(first[:, ref.O_FN]))
+    target = built.flank_ids(first)[0][r0]          # the A flank of the most loaded row at the first pose
+    off = np.zeros(len(ids))
+    off[ids.index(target)] = 2e-6
+    s.set_gap_offsets(off)
+    slots = set()
+    for pose in _sweep(pair, dth):
+        b, x = built.evaluate(pose, vel), s.evaluate(pose, vel)
+        fa, _ = s.flank_ids(x.obs)
+        hit = np.array([f == target for f in fa]) & (b.obs[:, ref.O_MODE] != ref.MODE_OPEN)
+        # the rows that hold that flank (whichever slot) open by exactly 2 um (gap sums
+        # of ~5e-2 m positions: round-off 1e-17 m), every other row is untouched bit for bit
+        assert np.allclose(x.obs[hit, ref.O_GAP] - b.obs[hit, ref.O_GAP], 2e-6, rtol=0, atol=1e-15)
+        np.testing.assert_array_equal(x.obs[~hit], b.obs[~hit])
+        slots |= {s.ids[r].split("/")[2] for r in np.flatnonzero(hit)}
+    assert len(slots) >= 2            # the tooth passed through more than one window slot
+    s.set_gap_offsets(np.zeros(len(ids)))
+    for pose in _sweep(pair, dth):
+        b, x = built.evaluate(pose, vel), s.evaluate(pose, vel)
+        for u, v in ((b.Q, x.Q), (b.dQdq, x.dQdq), (b.dQdv, x.dQdv), (b.obs, x.obs)):
+            np.testing.assert_array_equal(u, v)
+
+
+def test_uniform_flank_offset_is_the_mesh_clearance():
+    """Every flank of gear A on both lines opened by c: the gap of Eq. (gap) with clearance e_0 + c
+    (the same sum in another order: round-off of the ~1e-5 m approach, forces to 1e-9 relative)."""
+    _, pair, kw, dth, vel = _cases()[1]
+    s = scene(pair, "numpy", **kw)
+    s.set_gap_offsets([1.5e-6 if "/gear_a/" in i else 0.0 for i in s.gap_offset_ids])
+    c = scene(pair, "numpy", clearance=1.5e-6, **kw)
+    for pose in _sweep(pair, 2 * dth):
+        a, b = s.evaluate(pose, vel), c.evaluate(pose, vel)
+        assert np.max(np.abs(a.Q - b.Q)) <= 1e-9 * max(np.max(np.abs(b.Q)), 1.0)
+
+
+def test_bad_flank_offsets_are_named():
+    _, pair, kw, _, _ = _cases()[1]
+    s = scene(pair, "numpy", **kw)
+    with pytest.raises(RvtoolInputError, match="one per tooth flank"):
+        s.set_gap_offsets(np.zeros(3))
+    with pytest.raises(RvtoolInputError, match="finite"):
+        s.set_gap_offsets(np.full(len(s.gap_offset_ids), np.nan))
+
+
+def test_slow_windows_run_on_the_small_tooth_difference_drive():
+    d = load_design(designs.path("std_involute"))
+    m = build(d)
+    with pytest.raises(RvtoolInputError, match="wheel0/pin3"):
+        m.set_gap_offsets(Family.INVOLUTE_STAGE, {"wheel0/pin3": 1e-6})
+    w = ReducerWindows(m, WindowProtocol(torque=d.rated_torque, input_speed=d.input_speed_rpm * np.pi / 30, steps=4),
+                       bodies=std_involute_contact_bodies())
+    x0 = w.window()
+    te0 = w.last_te.copy()
+    flanks = [i for i in x0.ids if i.startswith("involute_stage/")]
+    loaded = [i for i in flanks if x0.I_F[x0.index(i)] > 0]
+    assert loaded and all("/tooth" in i for i in loaded)
+    assert any(x0.I_s[x0.index(i)] > 0 for i in loaded)      # the flanks slide (kinematic speeds)
+    # zeros written through the slow path: the window is bit-identical
+    w.apply_offsets(GapOffsets(by_channel={"wear": {i: 0.0 for i in flanks}}), None)
+    w.window()
+    np.testing.assert_array_equal(w.last_te, te0)
+    # wear of every loaded ring flank: the flank offsets reach the contact law and the wheels turn back
+    w.apply_offsets(GapOffsets(by_channel={"wear": {i: 3e-6 for i in loaded if "/gear_b/" in i}}), None)
+    assert max(m.gap_offsets(Family.INVOLUTE_STAGE).values()) == 3e-6
+    w.window()
+    assert np.max(np.abs(w.last_te - te0)) > 1e-7
