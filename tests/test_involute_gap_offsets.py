@@ -116,3 +116,22 @@ def test_slow_windows_run_on_the_small_tooth_difference_drive():
     assert max(m.gap_offsets(Family.INVOLUTE_STAGE).values()) == 3e-6
     w.window()
     assert np.max(np.abs(w.last_te - te0)) > 1e-7
+
+
+def test_window_radii_of_the_mesh_are_per_flank():
+    from rvtool.slow.contact_radius import window_radii
+    d = load_design(designs.path("std_involute"))
+    m = build(d)
+    w = ReducerWindows(m, WindowProtocol(torque=d.rated_torque, input_speed=d.input_speed_rpm * np.pi / 30, steps=2),
+                       bodies=std_involute_contact_bodies())
+    x = w.window()
+    R = window_radii(m, w.last_states)
+    loaded = {i for i in x.ids if i.startswith("involute_stage/") and x.I_F[x.index(i)] > 0}
+    assert set(R) == loaded
+    # on the line of action the conformal internal pair: R = rho_A rho_B / (rho_B - rho_A) far above
+    # either flank radius (rho ~ 17 mm, rho_B - rho_A = a sin alpha_w ~ 1.1 mm); a flank that also
+    # met a tip edge (rho_e = 0.02 m_n) in the window is dominated by the edge's curvature
+    v = np.array(list(R.values()))
+    assert np.all(v > 0) and 0.1 < v.max() < 1.0
+    rho_e = min(mm.pair.gear_a.edge_radius for mm in m.family_element(Family.INVOLUTE_STAGE).evaluator.meshes)
+    assert 0.9 * rho_e < v.min() < rho_e      # R = (1/rho_e + 1/rho_flank)^-1, rho_flank >> rho_e

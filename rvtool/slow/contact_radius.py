@@ -18,7 +18,7 @@ family's geometry:
   radius is the roll length, rho = r_b u (u the roll angle of the observation), so
   1 / R = 1 / (r_bA u_A) + s_B / (r_bB u_B) with s_B = +1 for an external and -1 for
   an internal gear B (the kernel's curvature sum K of Eq. (series_contact)); a
-  tip-edge contact (corner mode) has the edge radius rho_e on the cornering tooth.
+  tip-edge contact (corner mode) has the convex edge radius rho_e on the cornering tooth.
 
 Rolling-element and lumped bearings and the output pins keep their constant radii
 (circles on circles: the curvature does not depend on the contact point), declared
@@ -118,7 +118,7 @@ class ContactCurvature:
             mode = int(obs[r, iref.O_MODE])
             ra = A.edge_radius if mode == iref.MODE_CORNER_A else A.base_radius * obs[r, iref.O_UA]
             rb = B.edge_radius if mode == iref.MODE_CORNER_B else B.base_radius * abs(obs[r, iref.O_UB])
-            s_b = float(m.pair.eps)
+            s_b = 1.0 if mode == iref.MODE_CORNER_B else float(m.pair.eps)   # B's tip edge is convex
             kap[r] = 1.0 / ra + s_b / rb
         return kap
 
@@ -131,7 +131,7 @@ class ContactCurvature:
 
 
 def window_radii(model, states, families=None) -> dict:
-    """{window contact id ``"<family>/<contact>"``: R_c [m]} over accepted ``states``
+    """{window contact id ``"<family>/<contact>"`` (:meth:`ReducerWindows.contact_ids`): R_c [m]} over accepted ``states``
     ((input angle [rad], accepted duration [s], q) as :attr:`ReducerWindows.last_states`):
     the reciprocal of the load-weighted mean curvature sum (rows of a physical contact merged).
     Contacts without load in the window are left out."""
@@ -145,12 +145,19 @@ def window_radii(model, states, families=None) -> dict:
     for _, dt, q in states:
         for fam in fams:
             ob, kap = cc.rows(q, fam)
-            F = ob.normal_force
-            for rid, f, k in zip(ob.ids, F, kap):
+            ev = model.family_element(fam).evaluator
+            if getattr(ev, "gap_offset_ids", None) is not None:
+                # window identities of a mesh are its tooth flanks: both flanks of a row meet its curvature
+                fa, fb = ev.flank_ids(ob.obs)
+                owners = [(a, b) for a, b in zip(fa, fb)]
+            else:
+                owners = [(physical_contact(rid),) for rid in ob.ids]
+            for own, f, k in zip(owners, ob.normal_force, kap):
                 if f > 0.0:
-                    cid = f"{fam.value}/{physical_contact(rid)}"
-                    num[cid] = num.get(cid, 0.0) + f * k * dt
-                    den[cid] = den.get(cid, 0.0) + f * dt
+                    for c in own:
+                        cid = f"{fam.value}/{c}"
+                        num[cid] = num.get(cid, 0.0) + f * k * dt
+                        den[cid] = den.get(cid, 0.0) + f * dt
     out = {}
     for cid, n in num.items():
         if not n > 0.0:
