@@ -135,3 +135,19 @@ def test_window_radii_of_the_mesh_are_per_flank():
     assert np.all(v > 0) and 0.1 < v.max() < 1.0
     rho_e = min(mm.pair.gear_a.edge_radius for mm in m.family_element(Family.INVOLUTE_STAGE).evaluator.meshes)
     assert 0.9 * rho_e < v.min() < rho_e      # R = (1/rho_e + 1/rho_flank)^-1, rho_flank >> rho_e
+
+
+def test_rv_involute_stage_takes_flank_offsets():
+    """The RV's spur stage (crank gears on the input pinion) through the same model interface: zeros
+    bit-identical; opening every crank-gear flank moves the equilibrium."""
+    from rvtool.solver.static import StaticSolver
+    d = load_design(designs.path("rv40e"))
+    m = build(d)
+    ids = m.family_element(Family.INVOLUTE_STAGE).evaluator.gap_offset_ids
+    m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+    q0 = StaticSolver(m).solve(0.0).copy()
+    m.set_gap_offsets(Family.INVOLUTE_STAGE, {i: 0.0 for i in ids})
+    np.testing.assert_array_equal(StaticSolver(m).solve(0.0), q0)
+    m.set_gap_offsets(Family.INVOLUTE_STAGE, {i: 5e-6 for i in ids if "/gear_b/" in i})
+    assert m.gap_offsets(Family.INVOLUTE_STAGE)[ids[-1]] == 5e-6
+    assert np.max(np.abs(StaticSolver(m).solve(0.0) - q0)) > 1e-6
