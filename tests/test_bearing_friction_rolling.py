@@ -108,14 +108,16 @@ def test_static_part_is_a_jenkins_element_with_the_closed_form_loop():
     ev.commit(zero, zero)                             # the first accepted state: the load committed
     amp, n = 4 * M1 / k, 400
     path = np.concatenate([np.linspace(0, amp, n // 4), np.linspace(amp, -amp, n // 2), np.linspace(-amp, amp, n // 2)])
-    T = []
+    T, ft, slip = [], [], []
     for phi in path:
         pose = np.array([[0.0, 0.0, phi]])
         e = ev.evaluate(pose, zero)
         T.append(e.Q[2])
         assert abs(e.Q[2]) <= M1 * (1 + 1e-12)
         ev.commit(pose, zero, e)
-    T = np.array(T)
+        ft.append(abs(e.obs[1, cref.O_FT]))
+        slip.append(ev.history.slip_distance[1])
+    T, ft, slip = np.array(T), np.array(ft), np.array(slip)
     loop = slice(n // 4 + n // 2 - 1, None)           # from -amp back to +amp, then the down branch
     down = slice(n // 4 - 1, n // 4 + n // 2)
     phis = np.concatenate([path[down], path[loop]])
@@ -124,6 +126,16 @@ def test_static_part_is_a_jenkins_element_with_the_closed_form_loop():
     exact = 4 * M1 * (amp - M1 / k)
     dphi = 2 * amp / (n // 2 - 1)
     assert area == pytest.approx(exact, abs=2 * M1 * dphi)
+    # the energy account's anchor dissipation of the static row (|F_t| times the anchor travel r |d phi_a|)
+    # over the closed cycle +amp -> -amp -> +amp (same anchor at both ends: no stored energy change)
+    # is the loop area: the anchor moves only in slip, where |F_t| r = M1; the account's trapezoid
+    # averages in the stick force of the step before each of the two stick-slip transitions (one step)
+    c = slice(n // 4 - 1, None)
+    diss = np.sum(0.5 * (ft[c][1:] + ft[c][:-1]) * np.diff(slip[c]))
+    assert diss == pytest.approx(exact, abs=2 * M1 * dphi)
+    law = ev.energy_law()
+    assert list(law.friction_model) == [cref.FRICTION_REGULARIZED, cref.FRICTION_ANCHOR]
+    assert law.tangential_stiffness[1] == pytest.approx(k / 0.02 ** 2, rel=1e-12)
     # the reversal branch at +amp: stick with slope k until -M1
     rev = path[down]
     Tr = T[down]

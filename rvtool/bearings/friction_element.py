@@ -65,9 +65,11 @@ class BearingLoadHistory:
     """Committed load P1 [N] per bearing (of the last accepted state) and, with the static part,
     the anchor angle phi_a [rad] of the relative rotation."""
 
-    def __init__(self, n):
+    def __init__(self, n, n_rows=None):
         self.load = np.zeros(n)
         self.anchor = np.zeros(n)
+        # accumulated anchor travel |d phi_a| r per row [m] (static rows; the energy account's slip)
+        self.slip_distance = np.zeros(n if n_rows is None else n_rows)
 
 
 class RowLoads:
@@ -126,10 +128,13 @@ class BearingFrictionEvaluator:
         if not callable(self.loads):
             raise RvtoolInputError("load_source must be a bearing set (evaluate) or a callable (pose, vel) -> P1")
         self.name = name
-        self.ids = tuple(f"{name}/{b.name}" for b in self.bearings)
+        # with the static part each bearing has two rows, the speed law (M0) and the static torque (M1),
+        # so that the energy account books the first as regularized friction and the second as an anchor
+        self.ids = (tuple(f"{name}/{b.name}" for b in self.bearings) if self.static_stiffness is None else
+                    tuple(f"{name}/{b.name}/{part}" for b in self.bearings for part in ("speed", "static")))
         self.n_bodies = int(n_bodies)
         self.load_source = load_source
-        self.history = BearingLoadHistory(len(self.bearings))
+        self.history = BearingLoadHistory(len(self.bearings), len(self.ids))
         self._radius = np.array([0.5 * b.model.pitch_diameter for b in self.bearings])
 
     def _omega(self, vel):
@@ -162,8 +167,9 @@ class BearingFrictionEvaluator:
         Q = np.zeros(n)
         dQdv = np.zeros((n, n))
         dQdq = np.zeros((n, n))
-        obs = np.zeros((len(self.bearings), cref.N_OBS))
-        if self.static_stiffness is not None:
+        obs = np.zeros((len(self.ids), cref.N_OBS))
+        static = self.static_stiffness is not None
+        if static:
             T1, dT1, _, _ = self._static(pose, hist)
             speed_load = np.zeros(len(self.bearings))      # M1 is the static part: the speed law carries M0
         else:
@@ -171,17 +177,18 @@ class BearingFrictionEvaluator:
         for k, b in enumerate(self.bearings):
             q, dq_dw, _ = friction_generalized_force(b.model, omega[k], speed_load[k])
             rows = [(3 * body + 2, s) for body, s in ((b.body_a, 1.0), (b.body_b, -1.0)) if body != GROUND]
-            if self.static_stiffness is not None:
-                q = q + T1[k]
+            t = T1[k] if static else 0.0
             for i, si in rows:
-                Q[i] += si * q
+                Q[i] += si * (q + t)
                 for j, sj in rows:
                     dQdv[i, j] += si * sj * dq_dw
-                    if self.static_stiffness is not None:
+                    if static:
                         dQdq[i, j] += si * sj * dT1[k]
-            obs[k, cref.O_FN] = load[k]
-            obs[k, cref.O_VT] = omega[k] * self._radius[k]
-            obs[k, cref.O_FT] = q / self._radius[k]
+            r = self._radius[k]
+            for row, torque in (((2 * k, q), (2 * k + 1, t)) if static else ((k, q),)):
+                obs[row, cref.O_FN] = load[k]
+                obs[row, cref.O_VT] = omega[k] * r
+                obs[row, cref.O_FT] = torque / r
         return Evaluation(Q, dQdq, dQdv, obs, (), all_finite(Q, dQdv))
 
     def commit(self, pose, vel, evaluation=None):
@@ -191,18 +198,26 @@ class BearingFrictionEvaluator:
         if self.static_stiffness is not None:
             # anchor projection with the loads the state was evaluated with, then the new loads
             T1, _, slip, phi = self._static(pose, self.history)
-            self.history.anchor = np.where(slip, phi + T1 / self.static_stiffness, self.history.anchor)
+            anchor = np.where(slip, phi + T1 / self.static_stiffness, self.history.anchor)
+            self.history.slip_distance[1::2] += np.abs(anchor - self.history.anchor) * self._radius
+            self.history.anchor = anchor
         self.history.load = np.asarray(self.loads(pose, vel), dtype=np.float64)
         return np.array(obs, float)
 
     def energy_law(self):
-        """:class:`rvtool.observe.energy.ContactEnergyLaw` of the rows: no potential, the loss as
-        a regularized friction (dissipation -F_t v_t dt)."""
+        """:class:`rvtool.observe.energy.ContactEnergyLaw` of the rows: no potential, the speed law's
+        loss as a regularized friction (dissipation -F_t v_t dt); static rows as anchors at radius
+        r = d_m / 2 (F_t = T1 / r, k_t = k_phi / r^2: storage T1^2 / (2 k_phi), dissipation
+        |F_t| r |d phi_a| = M1 |d phi_a| in slip)."""
         from ..observe.energy import ContactEnergyLaw
-        n = len(self.bearings)
-        return ContactEnergyLaw(normal_stiffness=np.zeros(n), normal_exponent=np.ones(n),
-                                tangential_stiffness=np.zeros(n),
-                                friction_model=np.full(n, cref.FRICTION_REGULARIZED, np.int32))
+        n = len(self.ids)
+        model = np.full(n, cref.FRICTION_REGULARIZED, np.int32)
+        kt = np.zeros(n)
+        if self.static_stiffness is not None:
+            model[1::2] = cref.FRICTION_ANCHOR
+            kt[1::2] = self.static_stiffness / self._radius ** 2
+        return ContactEnergyLaw(normal_stiffness=np.zeros(n), normal_exponent=np.ones(n), tangential_stiffness=kt,
+                                friction_model=model)
 
 
 def mounting_losses(mountings, factors):
