@@ -106,3 +106,25 @@ def test_involute_curvature_is_the_roll_length_of_both_flanks():
         rho_a = np.sqrt(np.sum((p - OA) ** 2) - A.base_radius ** 2) - 0.5 * g
         rho_b = np.sqrt(np.sum((p - OB) ** 2) - B.base_radius ** 2) + 0.5 * g
         assert kap[r] == pytest.approx(1 / rho_a + mm.pair.eps / rho_b, rel=1e-6)
+
+
+def test_ball_bearing_films_are_point_contacts_at_the_inner_race(rd40_window):
+    """Main bearing (angular-contact pair) of RD-40: R_x = D (1 - gamma) / 2, R_y = f_i D / (2 f_i - 1),
+    gamma = D cos(alpha) / d_m, u = omega_rel d_m (1 - gamma^2) / 4 by hand; the lumped film load is
+    the most loaded ball's 5 / (Z_total cos alpha) of the bearing force, the rolling one the ball's own."""
+    _, _, x = rd40_window
+    row = RD40.main_bearing.rows[0]
+    D, dm, a, fi = row.ball_diameter, row.pitch_diameter, row.contact_angle, row.inner_curvature
+    g = D * np.cos(a) / dm
+    w_out = RD40.input_speed_rpm * np.pi / 30 / (RD40.pins.n_pins - 1)
+    for model, share in (("lumped", 5.0 / (2 * row.n_balls * np.cos(a))), ("rolling", 1.0)):
+        c = C.lubrication(RD40, C.CycloidSlowInputs(), x, bearing_model=model).contacts["main_bearings"]
+        assert c.kind.value == "point" and c.node == "flange"
+        assert c.radius_x == pytest.approx(0.5 * D * (1 - g), rel=1e-14)
+        assert c.radius_y == pytest.approx(fi * D / (2 * fi - 1), rel=1e-14)
+        assert c.entrainment_speed == pytest.approx(0.25 * w_out * dm * (1 - g * g), rel=1e-14)
+        assert c.load_share == pytest.approx(share, rel=1e-14)
+    needle = C.lubrication(RD40, C.CycloidSlowInputs(), x, bearing_model="rolling").contacts["eccentric_bearings"]
+    assert needle.length == RD40.eccentric_bearing.roller_length
+    with pytest.raises(RvtoolInputError, match="bearing_model"):
+        C.lubrication(RD40, C.CycloidSlowInputs(), x, bearing_model="ideal")
