@@ -151,3 +151,51 @@ def test_rv_involute_stage_takes_flank_offsets():
     m.set_gap_offsets(Family.INVOLUTE_STAGE, {i: 5e-6 for i in ids if "/gear_b/" in i})
     assert m.gap_offsets(Family.INVOLUTE_STAGE)[ids[-1]] == 5e-6
     assert np.max(np.abs(StaticSolver(m).solve(0.0) - q0)) > 1e-6
+
+
+def test_slow_loop_wears_and_heats_the_small_tooth_difference_mesh():
+    """One slow update on std_involute's mesh: Archard wear per tooth flank (constant k_w; a flank takes
+    half its pair's sliding exposure, so its depth is half the pair's loss, equal shares) reaches the
+    contact law as flank offsets, and the heat of a pair is counted once."""
+    from rvtool.slow.orchestrator import SlowOrchestrator, SlowSchedule, ThermalCoupling
+    from rvtool.slow.thermal import SlidingLossSources, ThermalNetwork
+    from rvtool.slow.wear import ConstantWearCoefficient, SurfaceAssociation, WearModel
+    d = load_design(designs.path("std_involute"))
+    m = build(d)
+    omega = d.input_speed_rpm * np.pi / 30
+    fam = Family.INVOLUTE_STAGE
+    w = ReducerWindows(m, WindowProtocol(torque=d.rated_torque, input_speed=omega, steps=4),
+                       bodies={fam: std_involute_contact_bodies()[fam]})
+    x0 = w.window()
+    te0 = w.last_te.copy()
+    # the pair's sliding exposure from the rows themselves: sum over the window's rows of F |v_s| dt, with
+    # v_s the kinematic sliding speed; the flanks' exposures sum to twice the half of each row
+    a_flanks = sum(x0.I_s[x0.index(c)] for c in x0.ids if "/gear_a/" in c)
+    b_flanks = sum(x0.I_s[x0.index(c)] for c in x0.ids if "/gear_b/" in c)
+    assert a_flanks == pytest.approx(b_flanks, rel=1e-12) and a_flanks > 0
+    k, A, hours = 1e-18, 2e-5, 500.0
+    flank_bin = lambda cid, pos: "flank/" + cid.split("/", 1)[1]          # noqa: E731  the flank itself
+    wear = WearModel(coefficient=ConstantWearCoefficient(k=k), nominal_area=A,
+                     association=SurfaceAssociation(rules={fam.value: ((flank_bin, 1.0),)}))
+    net = ThermalNetwork(nodes=("wheels", "housing"), capacity=[2e3, 2e4], links=(("wheels", "housing", 2.0),),
+                         ambient_conductance=[0.0, 5.0], ambient_temperature=293.15)
+    mu = 0.05
+    sources = SlidingLossSources(friction=mu, partition={f"{fam.value}/wheel0/gear_a": {"wheels": 1.0},
+                                                         f"{fam.value}/wheel1/gear_a": {"wheels": 1.0},
+                                                         fam.value: {"housing": 1.0}})
+    sch = SlowSchedule(service_time=hours * 3600, service_interval=hours * 3600, thermal_interval=600.0,
+                       settling_windows=0)
+    run = SlowOrchestrator(w, sch, wear=wear, thermal=ThermalCoupling(network=net, sources=sources)).run()
+    s = hours * 3600 / x0.tau_w
+    for cid in x0.ids:            # Eq. (obs_wear) per flank (the run's window is the same state as x0)
+        assert run.contact_wear.get(cid, 0.0) == pytest.approx(k * x0.I_s[x0.index(cid)] / A * s, rel=1e-9)
+    offs = m.gap_offsets(fam)     # the flank depths are the offsets in force
+    for cid, depth in run.contact_wear.items():
+        assert offs[cid.split("/", 1)[1]] == depth
+    assert max(run.contact_wear.values()) > 1e-8
+    w.window()
+    assert np.max(np.abs(w.last_te - te0)) > 1e-8
+    # heat: each pair once, half to each gear's node
+    Q = sources.node_sources(x0, net)
+    assert Q[0] == pytest.approx(Q[1], rel=1e-12) and Q[0] == pytest.approx(mu * a_flanks / x0.tau_w, rel=1e-12)
+    assert run.temperature["wheels"] > 293.15

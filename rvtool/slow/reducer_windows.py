@@ -15,6 +15,14 @@ Contact identities are ``"<family>/<physical contact>"`` (``"pins/wheel0/pin3"``
 ``"eccentric_bearings/eccentric_bearing1"``), so a family name is a selector
 of :mod:`rvtool.slow.offsets` for all of its contacts.
 
+Involute meshes are observed per tooth flank (the identities of the evaluator's
+``gap_offset_ids``, ``"involute_stage/<mesh>/gear_a/tooth<k>/line<l>"``): each row's
+tooth pair enters with both of its flanks, each carrying the row's force (load
+exposure, film load) and half of the row's sliding speed, so that the two flanks'
+sliding exposures sum to the pair's: a heat source mu I_s / tau_w and Archard wear
+k_w I_s / A of a flank are its half of the pair's loss (equal shares, declared; the
+share of each surface is the wear association's 1.0 to the flank itself).
+
 Sliding speeds are kinematic: the relative velocity of the two material points
 at the contact point, tangential part, from ``model.kinematic_state(a, omega)``
 (rigid, clearance-free poses and velocities; the elastic deflections of a few
@@ -252,6 +260,8 @@ class ReducerWindows:
                 dv = va - vb
                 t = np.column_stack([-n_row[:, 1], n_row[:, 0]])
                 v_row = np.abs(np.sum(dv * t, axis=1))
+                if self._own_ids(fam) is not None:
+                    v_row = 0.5 * v_row      # a flank takes half its pair's sliding exposure (module docstring)
             # per physical contact: rows summed (force), load-weighted (position, normal, sliding speed);
             # an unloaded contact takes its rows' plain mean
             w = np.zeros(len(names))
