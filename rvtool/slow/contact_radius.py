@@ -35,8 +35,9 @@ from warp_contacts import involute_pairs_ref as iref
 from ..errors import RvtoolInputError
 from ..model import Family, physical_contact
 
-#: Samples per tooth of the nearest-point search on the cycloid profile, refined by Newton
-#: iterations on (c(phi) - p) . c'(phi) = 0; the refinement converges from one sample spacing.
+#: Samples per tooth of the nearest-point search on the cycloid profile (a window of a quarter
+#: tooth around the point's polar angle), refined by Newton iterations on
+#: (c(phi) - p) . c'(phi) = 0; the refinement converges from one sample spacing.
 PROFILE_SAMPLES_PER_TOOTH = 256
 NEWTON_ITERATIONS = 4
 #: phi step of the central differences of c(phi) in the Newton refinement [rad]
@@ -56,14 +57,22 @@ class ProfileLocator:
     def __init__(self, profile):
         self.profile = profile
         n = PROFILE_SAMPLES_PER_TOOTH * profile.n_teeth
-        self.phi = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-        self.points = profile.points(self.phi)
+        phi = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        pts = profile.points(phi)
+        polar = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
+        order = np.argsort(polar)
+        self.phi, self.points, self.polar = phi[order], pts[order], polar[order]
 
     def curvature_at(self, p):
         """Signed profile curvature [1/m] (positive convex) at the profile points nearest p (n, 2)."""
         p = np.atleast_2d(p)
-        i = np.argmin(((self.points[None, :, :] - p[:, None, :]) ** 2).sum(axis=2), axis=1)
-        phi = self.phi[i]
+        # nearest sample among a quarter tooth of samples around the point's polar angle (a contact
+        # point lies within micrometres of the profile), then the Newton refinement
+        n, W = len(self.phi), PROFILE_SAMPLES_PER_TOOTH // 4
+        i0 = np.searchsorted(self.polar, np.mod(np.arctan2(p[:, 1], p[:, 0]), 2 * np.pi))
+        idx = (i0[:, None] + np.arange(-W, W + 1)[None, :]) % n
+        d2 = np.sum((self.points[idx] - p[:, None, :]) ** 2, axis=2)
+        phi = self.phi[idx[np.arange(len(p)), np.argmin(d2, axis=1)]]
         h = PHI_STEP
         for _ in range(NEWTON_ITERATIONS):
             c0, cp, cm = (self.profile.points(phi + d) for d in (0.0, h, -h))
