@@ -11,7 +11,8 @@ from rvtool.assembly.spec import load_design
 from rvtool.errors import RvtoolInputError
 from rvtool.model import Family
 from rvtool.slow.offsets import GapOffsets
-from rvtool.slow.reducer_windows import ReducerWindows, WindowProtocol, std_involute_contact_bodies
+from rvtool.slow.reducer_windows import (ReducerWindows, WindowProtocol, involute_stage_bodies,
+                                         std_involute_contact_bodies)
 from test_involute_pairs import _cases, poses, scene
 from warp_contacts import involute_pairs_ref as ref
 
@@ -100,7 +101,7 @@ def test_slow_windows_run_on_the_small_tooth_difference_drive():
     with pytest.raises(RvtoolInputError, match="wheel0/pin3"):
         m.set_gap_offsets(Family.INVOLUTE_STAGE, {"wheel0/pin3": 1e-6})
     w = ReducerWindows(m, WindowProtocol(torque=d.rated_torque, input_speed=d.input_speed_rpm * np.pi / 30, steps=4),
-                       bodies=std_involute_contact_bodies())
+                       bodies=std_involute_contact_bodies(m))
     x0 = w.window()
     te0 = w.last_te.copy()
     flanks = [i for i in x0.ids if i.startswith("involute_stage/")]
@@ -123,7 +124,7 @@ def test_window_radii_of_the_mesh_are_per_flank():
     d = load_design(designs.path("std_involute"))
     m = build(d)
     w = ReducerWindows(m, WindowProtocol(torque=d.rated_torque, input_speed=d.input_speed_rpm * np.pi / 30, steps=2),
-                       bodies=std_involute_contact_bodies())
+                       bodies=std_involute_contact_bodies(m))
     x = w.window()
     R = window_radii(m, w.last_states)
     loaded = {i for i in x.ids if i.startswith("involute_stage/") and x.I_F[x.index(i)] > 0}
@@ -138,8 +139,9 @@ def test_window_radii_of_the_mesh_are_per_flank():
 
 
 def test_rv_involute_stage_takes_flank_offsets():
-    """The RV's spur stage (crank gears on the input pinion) through the same model interface: zeros
-    bit-identical; opening every crank-gear flank moves the equilibrium."""
+    """The RV's spur stage (crank gears on the sun pinion) through the same model interface: zeros
+    bit-identical; opening every crank-gear flank moves the equilibrium; a window observes it per
+    flank with sliding (sun and crank bodies of each mesh) and a ring of flank offsets moves its TE."""
     from rvtool.solver.static import StaticSolver
     d = load_design(designs.path("rv40e"))
     m = build(d)
@@ -151,6 +153,17 @@ def test_rv_involute_stage_takes_flank_offsets():
     m.set_gap_offsets(Family.INVOLUTE_STAGE, {i: 5e-6 for i in ids if "/gear_b/" in i})
     assert m.gap_offsets(Family.INVOLUTE_STAGE)[ids[-1]] == 5e-6
     assert np.max(np.abs(StaticSolver(m).solve(0.0) - q0)) > 1e-6
+    m.set_gap_offsets(Family.INVOLUTE_STAGE, {})
+    w = ReducerWindows(m, WindowProtocol(torque=d.rated_torque, input_speed=1500 * np.pi / 30, steps=4),
+                       bodies={Family.INVOLUTE_STAGE: involute_stage_bodies(m)})
+    assert involute_stage_bodies(m).body_b("crank_gear2/gear_b/tooth0/line0") == "crank2"
+    x = w.window()
+    te0 = w.last_te.copy()
+    loaded = [i for i in x.ids if x.I_F[x.index(i)] > 0]
+    assert loaded and all(x.I_s[x.index(i)] > 0 for i in loaded)
+    w.apply_offsets(GapOffsets(by_channel={"wear": {i: 5e-6 for i in loaded if "/gear_b/" in i}}), None)
+    w.window()
+    assert np.max(np.abs(w.last_te - te0)) > 1e-7
 
 
 def test_slow_loop_wears_and_heats_the_small_tooth_difference_mesh():
@@ -165,7 +178,7 @@ def test_slow_loop_wears_and_heats_the_small_tooth_difference_mesh():
     omega = d.input_speed_rpm * np.pi / 30
     fam = Family.INVOLUTE_STAGE
     w = ReducerWindows(m, WindowProtocol(torque=d.rated_torque, input_speed=omega, steps=4),
-                       bodies={fam: std_involute_contact_bodies()[fam]})
+                       bodies={fam: involute_stage_bodies(m)})
     x0 = w.window()
     te0 = w.last_te.copy()
     # the pair's sliding exposure from the rows themselves: sum over the window's rows of F |v_s| dt, with

@@ -124,14 +124,27 @@ class ContactBodies:
             raise RvtoolInputError("body_b must be None (housing) or callable (contact id -> body name or None)")
 
 
-def std_involute_contact_bodies() -> dict:
-    """The small-tooth-difference drive's declaration (:mod:`rvtool.assembly.std_involute`): a tooth
-    flank contact ``<mesh>/gear_a|gear_b/tooth<k>/line<l>`` joins the wheel named by its mesh
-    (``wheel<k>``) and the ring (fixed in the housing); output pins and bearings as in the cycloid
-    drive."""
+def involute_stage_bodies(model) -> ContactBodies:
+    """Declaration of a model's involute meshes: a tooth flank contact
+    ``<mesh>/gear_a|gear_b/tooth<k>/line<l>`` joins the two bodies of its mesh (the mesh's
+    ``body_a`` / ``body_b``, indices of the model's bodies; the housing for GROUND), for every
+    topology with an involute stage (the small-tooth-difference drive: wheel and fixed ring; the
+    RV: sun pinion and crank gear)."""
+    meshes = {m.name: m for m in model.family_element(Family.INVOLUTE_STAGE).evaluator.meshes}
+    names = model.body_names
+
+    def body(index):
+        return None if index < 0 else names[index]
+    return ContactBodies(body_a=lambda c: body(meshes[c.split("/")[0]].body_a),
+                         body_b=lambda c: body(meshes[c.split("/")[0]].body_b))
+
+
+def std_involute_contact_bodies(model) -> dict:
+    """The small-tooth-difference drive's declaration (:mod:`rvtool.assembly.std_involute`): its mesh
+    by :func:`involute_stage_bodies`; output pins and bearings as in the cycloid drive."""
     out = cycloid_contact_bodies()
     del out[Family.PINS]
-    out[Family.INVOLUTE_STAGE] = ContactBodies(body_a=lambda c: c.split("/")[0], body_b=None)
+    out[Family.INVOLUTE_STAGE] = involute_stage_bodies(model)
     return out
 
 
