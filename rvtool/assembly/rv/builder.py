@@ -25,6 +25,7 @@ carrier through the cranks.
 Kinematics (:class:`RvKinematics`): the gear graph's rates (:mod:`.gear_graph`); the crank
 gears start conjugate to the sun (mid-backlash), the journals at the wheels' absolute phases.
 """
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -157,7 +158,10 @@ def gear_meshes(design, graph, layout):
     """The involute meshes: sun (gear A) -- crank gear k (gear B), and the three-stage pinion -- compound gear."""
     st = design.involute_stage
     kw = dict(n_slices=st.n_slices, window=st.window, damping=st.damping, ramp_depth=st.ramp_depth)
-    meshes = [GearMesh(pair=graph.sun_pair, body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}", **kw)
+    # crank k's own gear (its pitch deviations, cranks.gear_pitch_deviations); the nominal pair otherwise
+    pairs = [graph.sun_pair if design.crank_gear_of(k) is design.crank_gear
+             else dataclasses.replace(graph.sun_pair, gear_b=design.crank_gear_of(k)) for k in range(layout.n_cranks)]
+    meshes = [GearMesh(pair=pairs[k], body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}", **kw)
               for k in range(layout.n_cranks)]
     if layout.three_stage:
         meshes.append(GearMesh(pair=graph.input_pair, body_a=0, body_b=layout.sun, name="input_stage", **kw))
@@ -195,6 +199,8 @@ class RvModel(ReducerModel):
     graph: GearGraph = None
     layout: Layout = None
     profiles: list = field(default_factory=list)
+    #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
+    guided_free_play: bool = True
 
     def _pose(self, name, q):
         el = self.elements[name]

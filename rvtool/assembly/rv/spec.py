@@ -34,12 +34,16 @@ class Cranks:
     radius is the sun--crank-gear centre distance), rigid-body data (mass [kg], polar inertia
     [kg m^2]) and manufacturing deviations per crank (a variant is a design):
     phase_errors_arcmin: the eccentric phase of crank k off its nominal by this angle [arcmin]
-    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none)."""
+    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none);
+    gear_pitch_deviations: per crank, the single pitch deviations f_pt,j [m] of its spur gear
+    (``crank_gear.n_teeth`` entries summing to zero, as ``InvoluteGear.single_pitch_deviations``;
+    () = every crank gear as ``crank_gear``)."""
     count: int
     mass: float = 0.25
     inertia: float = 2.0e-5
     phase_errors_arcmin: tuple = ()
     eccentricity_errors: tuple = ()
+    gear_pitch_deviations: tuple = ()
 
     def __post_init__(self):
         if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count not in (2, 3):
@@ -52,6 +56,11 @@ class Cranks:
             if len(v) not in (0, self.count):
                 raise RvtoolInputError(f"cranks.{nm} has {len(v)} entries; valid: 0 or cranks.count = {self.count}")
             check_finite(f"cranks.{nm}", v)
+        if len(self.gear_pitch_deviations) not in (0, self.count):
+            raise RvtoolInputError(f"cranks.gear_pitch_deviations has {len(self.gear_pitch_deviations)} entries; "
+                                   f"valid: 0 or cranks.count = {self.count} (one list of pitch deviations per crank)")
+        for k, f in enumerate(self.gear_pitch_deviations):
+            check_finite(f"cranks.gear_pitch_deviations[{k}]", f)
 
     def phase_error(self, k):
         """Eccentric phase error of crank k [rad]."""
@@ -165,6 +174,23 @@ class RVDesign:
         if self.topology == "rv2" and (self.input_pinion is not None or self.compound_gear is not None):
             raise RvtoolInputError("topology = 'rv2' has no input_pinion / compound_gear sections; valid: "
                                    "remove them or set topology = 'rv3'")
+        z = self.crank_gear.n_teeth
+        for k, f in enumerate(self.cranks.gear_pitch_deviations):
+            f = tuple(float(x) for x in f)
+            if len(f) != z:
+                raise RvtoolInputError(f"cranks.gear_pitch_deviations[{k}] has {len(f)} entries; valid: "
+                                       f"crank_gear.n_teeth = {z}")
+            if abs(sum(f)) > 1e-9 * max(1.0, sum(abs(x) for x in f)) + 1e-15:
+                raise RvtoolInputError(f"cranks.gear_pitch_deviations[{k}] sum to {sum(f):.3g} m; valid: sum 0 "
+                                       "(the pitches of a closed circle add up to its circumference)")
+
+    def crank_gear_of(self, k):
+        """The spur gear of crank k: ``crank_gear`` with crank k's single pitch deviations
+        (``cranks.gear_pitch_deviations``), or ``crank_gear`` itself when none are declared."""
+        if not self.cranks.gear_pitch_deviations:
+            return self.crank_gear
+        return dataclasses.replace(self.crank_gear, single_pitch_deviations=tuple(
+            float(x) for x in self.cranks.gear_pitch_deviations[k]))
 
     @property
     def n_wheels(self):
