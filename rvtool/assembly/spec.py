@@ -202,10 +202,10 @@ class BearingFriction:
     bearings) [-], regularization_speed [rad/s] of the sign. The defaults are chosen here, inside the
     ranges tabulated by Harris & Kotzalas (oil bath: f0 = 2 for angular-contact/deep-groove ball
     bearings, 4 for needle bearings; f1 = 7e-4 ball, 5e-4 needle); ISO VG 32 at 40 degC.
-    f0_tapered, f1_tapered [-]: tapered roller rows (chosen here, of the order of the roller values).
-    static_stiffness: None (M0 + M1 on the speed law), or k_phi [N m/rad] > 0: M1 acts as a static
-    Coulomb torque with an anchor on the relative rotation
-    (:mod:`rvtool.bearings.friction_element`); switched off it costs nothing."""
+    f0_tapered, f1_tapered (tapered roller rows, chosen here, of the order of the roller values) [-].
+    static_stiffness k_phi [N m/rad] (> 0) of the static part, or None (M0 + M1 on the speed law):
+    with it, M1 acts as a Coulomb torque with an anchor on the bearing's relative rotation
+    (:mod:`rvtool.bearings.friction_element`); switched off (None) it costs nothing."""
     model: str = "none"
     kinematic_viscosity: float = 3.2e-5
     f0_ball: float = 2.0
