@@ -466,9 +466,21 @@ def _gap_terms(f, geo):
                 hB=(hB, dhB * dub), K=(K, dK))
 
 
-def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64, anchor=None):
+def flank_offset(ip, n_teeth, tooth_offsets, k, j):
+    """Slow-state gap offset [m] of the tooth pair of each row: the offset of the flank of tooth k
+    of A on the row's line plus that of the facing flank of tooth j of B (positive opens the gap).
+    tooth_offsets: (2 n_teeth,) per line of action (the flank side), then per tooth in the
+    J_TOOTH_* layout of the deviations: index line * n_teeth + J_TOOTH_A + k. The offsets follow
+    the teeth, not the rows (a row is a window slot whose teeth change as the gears turn)."""
+    base = ip[:, J_LINE] * n_teeth
+    return tooth_offsets[base + ip[:, J_TOOTH_A] + k] + tooth_offsets[base + ip[:, J_TOOTH_B] + j]
+
+
+def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64, anchor=None, tooth_offsets=None):
     """Evaluate all rows. pose, vel: (nb+1, 3) with the ground last; fparams (N, N_FLOAT),
     iparams (N, N_INT); deviations: concatenated tooth-angle deviations [rad] (J_TOOTH_* offsets).
+    tooth_offsets: None, or per-flank gap offsets (2 len(deviations),) [m] of :func:`flank_offset`
+    added to the gap of Eq. (gap) (constant per tooth: no tangent term).
     anchor: None, or (anchor_params (N, anchor_ref.N_ANCHOR), committed flags (N,), anchors in
     A and in B coordinates (N, 2)) for the rows with J_FRICTION = FRICTION_ANCHOR (2): the anchor
     model of :mod:`anchor_ref`, anchors formed at the contact point c as material points of both
@@ -505,6 +517,8 @@ def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64, anch
         geo = geometry(pose, fp, ip, dev, rows, sel, (z2, z1, z2, z1))
         gt = _gap_terms(f, geo)
         g = gt["g"][0]
+        if tooth_offsets is not None:
+            g = g + flank_offset(ip[rows], len(dev), np.asarray(tooth_offsets, float), sel["k"][rows], sel["j"][rows])
         delta = -g
         on = delta > 0
         ds = np.where(on, delta, 1.0)

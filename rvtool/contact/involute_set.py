@@ -223,6 +223,17 @@ class InvoluteContactSet(PairFamilySet):
         self.fparams = np.array(fp)
         self.iparams = np.array(ip, dtype=np.int32)
         self.deviations = np.concatenate(dev)
+        # slow-state gap offsets per tooth flank: identity -> index of ref.flank_offset's layout
+        n_teeth, flank, base = len(self.deviations), {}, 0
+        for m in self.meshes:
+            za, zb = m.pair.gear_a.n_teeth, m.pair.gear_b.n_teeth
+            for line in m.lines:
+                for gear, z, first in (("gear_a", za, base), ("gear_b", zb, base + za)):
+                    for k in range(z):
+                        flank[f"{m.name}/{gear}/tooth{k}/line{line}"] = line * n_teeth + first + k
+            base += za + zb
+        self._flank_index = flank
+        self._tooth_offsets = None
         self.ids = tuple(ids)
         self.mesh_of = np.array(mesh_of)
         self.n_contacts = len(fp)
@@ -236,8 +247,50 @@ class InvoluteContactSet(PairFamilySet):
                                               anchor_params=self.anchor_params)
 
     def reference(self, pose, vel, anchor=None):
-        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations,
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations, tooth_offsets=self._tooth_offsets,
                             **({} if anchor is None else {"anchor": anchor}))
+
+    @property
+    def gap_offset_ids(self):
+        """Identities that carry slow-state gap offsets: the tooth flanks
+        ``"<mesh>/gear_a/tooth<k>/line<l>"`` and ``"<mesh>/gear_b/tooth<j>/line<l>"`` (tooth numbers
+        of the tooth-angle table, line l = the flank side), not the rows: a row is a window slot
+        whose teeth change as the gears turn, and an offset (wear of a flank, a thermal growth)
+        belongs to a tooth."""
+        return tuple(self._flank_index)
+
+    def set_gap_offsets(self, offsets):
+        """Gap offsets [m] per tooth flank (order of :attr:`gap_offset_ids`; positive opens the gap):
+        the gap of a tooth pair on a line gets the offsets of both of its flanks
+        (:func:`warp_contacts.involute_pairs_ref.flank_offset`). Absolute, not increments; all zeros
+        restore the built evaluation bit for bit."""
+        off = np.array(offsets, dtype=np.float64)
+        if off.shape != (len(self._flank_index),):
+            raise RvtoolInputError(f"gap offsets of contact set {self.name!r} must have shape "
+                                   f"({len(self._flank_index)},), one per tooth flank; got {off.shape}")
+        if not np.all(np.isfinite(off)):
+            raise RvtoolInputError(f"gap offsets of contact set {self.name!r} are outside the valid range: finite [m]")
+        table = np.zeros(2 * len(self.deviations))
+        table[list(self._flank_index.values())] = off
+        self._tooth_offsets = table if np.any(table != 0.0) else None
+        if self.backend == "warp":
+            self._kernel.set_tooth_offsets(table)
+
+    def tooth_gap_offsets(self):
+        """{tooth flank id: gap offset [m]} in force."""
+        t = self._tooth_offsets
+        return {c: 0.0 if t is None else float(t[i]) for c, i in self._flank_index.items()}
+
+    def flank_ids(self, obs):
+        """(flank id of gear A, flank id of gear B) of every row of ``obs`` (the teeth the row's slot
+        holds at that state; :attr:`gap_offset_ids`)."""
+        out_a, out_b = [], []
+        for r, m_i in enumerate(self.mesh_of):
+            m = self.meshes[m_i]
+            line = int(self.iparams[r, ref.J_LINE])
+            out_a.append(f"{m.name}/gear_a/tooth{int(obs[r, ref.O_TOOTH_A])}/line{line}")
+            out_b.append(f"{m.name}/gear_b/tooth{int(obs[r, ref.O_TOOTH_B])}/line{line}")
+        return out_a, out_b
 
     def mesh_stiffness(self, obs):
         """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along
