@@ -44,7 +44,8 @@ class ElasticPinClosure:
     inner: the rigid-pin contact set over n_bodies + n_pins n_s bodies whose body
     n_bodies + station[p, s] is pin p at station s (``evaluate(pose, vel, check=False)`` ->
     :class:`~rvtool.contact.evaluator.Evaluation`, ``ids``, ``commit``, ``history``).
-    carrier: real body index carrying the pins, or GROUND (-1).
+    carrier: real body index carrying the pins, or GROUND (-1); or one such index per pin (n_pins,)
+    (the RV cranks: each crank carries its own stations).
     station_compliance: C (n_s, n_s) [m/N], symmetric positive definite.
     station: (n_pins, n_s) station index of every (pin, station) (row of the station bodies).
     tolerance: largest station force residual accepted [N] (1e-8 N: 1e-16 m of approach at a
@@ -67,9 +68,20 @@ class ElasticPinClosure:
         self.name = inner.name
         self.ids = inner.ids
         self.n_bodies = int(n_bodies)
-        self.carrier = int(carrier)
         self.station = station
         self.n_pins, self.n_stations = station.shape
+        carriers = np.asarray(carrier, int)
+        if carriers.ndim == 0:
+            self.carrier = int(carrier)
+        elif carriers.shape == (self.n_pins,):
+            self.carrier = tuple(int(c) for c in carriers)
+        else:
+            raise RvtoolInputError(f"carrier has shape {carriers.shape}; valid: one body index or one per pin "
+                                   f"({self.n_pins},)")
+        carriers = np.broadcast_to(carriers, (self.n_pins,))
+        if np.any((carriers < GROUND) | (carriers >= self.n_bodies)):
+            raise RvtoolInputError(f"carrier = {carrier!r}; valid: body indices in [0, {self.n_bodies - 1}] or "
+                                   "GROUND (-1)")
         nv = station.size
         if inner.n_bodies != self.n_bodies + nv:
             raise RvtoolInputError(f"inner.n_bodies = {inner.n_bodies}; it must be n_bodies + n_pins n_s = "
@@ -92,8 +104,9 @@ class ElasticPinClosure:
                 k = nr + 2 * (p * self.n_stations + s)
                 self._u_index[p, s] = (k - nr, k + 1 - nr)
                 M[b, k], M[b + 1, k + 1] = 1.0, 1.0
-                if self.carrier != GROUND:
-                    M[b:b + 3, 3 * self.carrier:3 * self.carrier + 3] += np.eye(3)
+                c = int(carriers[p])
+                if c != GROUND:
+                    M[b:b + 3, 3 * c:3 * c + 3] += np.eye(3)
         self._M = sp.csr_matrix(M)
         self._MT = self._M.T.tocsr()
         self._Kb = np.kron(np.eye(self.n_pins), np.kron(self.beam_stiffness, np.eye(2)))
@@ -201,6 +214,13 @@ class ElasticPinClosure:
             return np.array(evaluation.obs, float)
         u, ev, _, _ = self.solve(pose, vel)
         return np.array(ev.obs, float)
+
+    def extended_pose(self, pose):
+        """Poses (n_bodies + n_pins n_s, 3) of the real and the station bodies at the solved
+        deflections, static poses (nb, 3): the state the inner set's contacts are evaluated at."""
+        pose = np.asarray(pose, float)
+        u = self.solve(pose, np.zeros_like(pose))[0]
+        return self._extended(pose, np.zeros_like(pose), u)[0]
 
     def deflections(self, pose):
         """Station deflections (n_pins, n_s, 2) [m] at static poses (nb, 3)."""

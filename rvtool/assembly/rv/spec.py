@@ -23,6 +23,7 @@ from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
 from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
+from ...structure.crank_beam import CrankShaft
 from ..spec import LINKS, PinContact, Pins, Wheels, build_section, load_sections
 
 TOPOLOGIES = ("rv2", "rv3")
@@ -34,12 +35,16 @@ class Cranks:
     radius is the sun--crank-gear centre distance), rigid-body data (mass [kg], polar inertia
     [kg m^2]) and manufacturing deviations per crank (a variant is a design):
     phase_errors_arcmin: the eccentric phase of crank k off its nominal by this angle [arcmin]
-    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none)."""
+    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none).
+    shaft: the crankshaft as a beam between its tapered rows
+    (:class:`~rvtool.structure.crank_beam.CrankShaft`, sub-table ``[cranks.shaft]``; rigid by
+    default, the "nothing" variant)."""
     count: int
     mass: float = 0.25
     inertia: float = 2.0e-5
     phase_errors_arcmin: tuple = ()
     eccentricity_errors: tuple = ()
+    shaft: CrankShaft = field(default_factory=CrankShaft)
 
     def __post_init__(self):
         if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count not in (2, 3):
