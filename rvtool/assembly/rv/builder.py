@@ -198,6 +198,8 @@ class RvModel(ReducerModel):
     #: station compliance (3, 3) [m/N] of one elastic crank (journal of wheel 0, of wheel 1, gear;
     #: :func:`crank_station_compliance`), or None (rigid cranks)
     crank_compliance: np.ndarray = None
+    #: ReducedStructure of the elastic housing carrying the ring pins, or None (rigid ring)
+    housing: object = None
 
     def _pose(self, name, q):
         el = self.elements[name]
@@ -383,6 +385,27 @@ def elastic_crank_path(design, graph, layout, compliance, opts):
                              station_compliance=compliance, station=station - nb)
 
 
+def ported_ring(mbs, design, layout, meshes):
+    """The ring pins on the elastic housing (``housing.model = "ports"``; the cycloid's housing
+    machinery, :func:`rvtool.assembly.housing.housing_ports`): the reduced housing as an Exudyn
+    structure, one port body per ring pin after the bodies (index n_bodies + k carries pin k, its
+    centre moving with the port, Eq. port_runtime_transform), the wheel--pin meshes on those port
+    bodies. Returns (ReducedStructure, PortBodies, meshes); (None, None, meshes) for a rigid ring.
+    The main bearings stay grounded (their seats are not ported), as in the cycloid drive."""
+    import dataclasses
+    if design.housing.model != "ports":
+        return None, None, meshes
+    from exudyn_user_elements.contact_element import PortBodies
+    from exudyn_user_elements.reduced_structure import ReducedStructure
+    from ..housing import housing_ports
+    reduced, _, _ = housing_ports(design)
+    housing = ReducedStructure(mbs, reduced, name="housing")
+    zb = design.pins.n_pins
+    ports = PortBodies(housing, np.array([reduced.port_rows[k][:2] for k in range(zb)]))
+    pin_bodies = tuple(range(layout.n_bodies, layout.n_bodies + zb))
+    return housing, ports, [dataclasses.replace(m, pin_bodies=pin_bodies) for m in meshes]
+
+
 def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1)):
     """Assemble ``design`` into an Exudyn system; returns an :class:`RvModel`.
 
@@ -433,9 +456,13 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     load = mbs.AddLoad(LoadCoordinate(markerNumber=marker(L.carrier, 2), load=0.0))
 
     opts = dict(backend=backend, precision=precision, device=device)
+    if d.pins.support.elastic:
+        raise RvtoolInputError(f"pins.support.model = {d.pins.support.model.value!r}: elastic ring pins are not "
+                               "implemented for the RV topology; valid: 'rigid'")
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
-    pin_set = CycloidPinSet(meshes, L.n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
-                            search=d.wheels.search, **opts)
+    housing, ports, meshes = ported_ring(mbs, d, L, meshes)
+    pin_set = CycloidPinSet(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual),
+                            samples_per_tooth=d.wheels.samples_per_tooth, name="pins", search=d.wheels.search, **opts)
     cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
     main = BearingSet([Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)],
                       L.n_bodies, name="main_bearings", **opts)
@@ -446,8 +473,9 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
         crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts)),)
-    elements = {name: ContactElement(mbs, nodes, s) for name, s in
-                (("pins", pin_set), *crank_path, ("crank_bearings", cranks), ("main_bearings", main))}
+    elements = {"pins": ContactElement(mbs, nodes, pin_set, ports=ports)}
+    elements.update((name, ContactElement(mbs, nodes, s)) for name, s in
+                    (*crank_path, ("crank_bearings", cranks), ("main_bearings", main)))
     mbs.Assemble()
     if C_crank is None:
         families = {fam: (name, np.arange(len(elements[name].ids))) for fam, name in FAMILY_ELEMENTS.items()}
@@ -464,4 +492,5 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                    family_specs={Family.PINS: tuple(meshes), Family.ECCENTRIC_BEARINGS: d.eccentric_bearing,
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
-                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank)
+                   structures={} if housing is None else {"housing": housing},
+                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, housing=housing)
