@@ -19,6 +19,15 @@ torque), the four branch fits of Eq. (stiffness_fit) over 50-100 % of rated
 torque, ∮T dθ, friction dissipation per family, the run's energy balance, cycle
 repeatability, the difference of the paths; and hysteresis loss and lost
 motion versus mu in (0, 0.02, 0.05, 0.1).
+
+RV (rv40e, issue 16's design, with its declared needle clearance and backlash): anchor friction
+mu = 0.05 on the cycloid--pin mesh, path (b) on the same kind of cycle sequence (--quick: 25 %
+steps), under the key ``rv40e`` of every figure: hysteresis loss, lost motion, the four branch
+fits, ∮T dθ, closure and repeatability of the second cycle. The involute stage is frictionless:
+the RV builder's ``[involute_stage]`` has no friction key. Not available on the RV (declared in
+each key): the friction dissipation from the energy account, and therefore the loop-vs-dissipation
+and energy-balance checks -- the account has no energy law for the involute series law or the
+rolling-element bearing sets (needles, tapered pairs, main bearing) of the RV model.
 """
 import os
 import time
@@ -28,6 +37,8 @@ import numpy as np
 from rvtool import casekit, designs
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design, replace
+from rvtool.assembly import build as build_any
+from rvtool.assembly.rv import load_design as load_rv_design
 from rvtool.protocols import hysteresis_cycles as HC
 from rvtool.protocols import stiffness as S
 from rvtool.units import RAD_PER_ARCMIN
@@ -66,6 +77,31 @@ def quasi_static(design, mu, seq):
             "closure_arcmin": closed.closure_angle / RAD_PER_ARCMIN, "loop_J": closed.loop_integral,
             "dissipation_J": last["friction_dissipation_J"], "energy": r["energy"], "stats": r["stats"],
             "quadrature_bound_J": HC.loop_quadrature_bound(cyc), "wall_s": time.perf_counter() - t0}
+
+
+RV_DESIGN = designs.path("rv40e")
+RV_UNAVAILABLE = ("not available on the RV: the energy account has no energy law for the involute series law "
+                  "or the rolling-element bearing sets (needles, tapered pairs, main bearing)")
+
+
+def rv_quasi_static(mu, quick):
+    """Path (b) on rv40e with anchor friction mu on the pin mesh: the catalogue figures of the second
+    cycle, its closure and repeatability against the first (no energy account, see module docstring)."""
+    from rvtool.protocols import hysteresis as H
+    t0 = time.perf_counter()
+    d = load_rv_design(RV_DESIGN).replace(pin_contact={"mu": mu, "friction_model": "anchor"})
+    seq = HC.CycleSequence(rated_torque=d.rated_torque, step=0.25 if quick else 0.0625,
+                           fine_levels=(0.0005, 0.001, 0.003, 0.01, 0.03))
+    r = HC.quasi_static_cycles(build_any(d), seq, energy=False)
+    prev, last = r["cycles"][-2], r["cycles"][-1]
+    fig = HC.catalogue_figures(last["torque_Nm"], last["angle_rad"], last["labels"], seq.rated_torque)
+    cyc = H.Cycle(torque=last["torque_Nm"], angle=last["angle_rad"])
+    rep = H.repeatability(H.Cycle(torque=prev["torque_Nm"], angle=prev["angle_rad"]), cyc,
+                          tolerance=CYCLE_TOL_ARCMIN * RAD_PER_ARCMIN)
+    closed = HC.closed_cycle(prev, last, angle_tolerance=CYCLE_TOL_ARCMIN * RAD_PER_ARCMIN)
+    return {"figures": fig, "cycle": last, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,
+            "closure_arcmin": closed.closure_angle / RAD_PER_ARCMIN, "loop_J": closed.loop_integral,
+            "stats": r["stats"], "sequence": seq.__dict__, "design": d.name, "wall_s": time.perf_counter() - t0}
 
 
 def main(argv=None):
@@ -121,7 +157,7 @@ def main(argv=None):
                                    "vs_mu": {str(m): r["figures"].hysteresis_loss_arcmin for m, r in sweep.items()}},
         "lost_motion_arcmin": {"value": fig.lost_motion_arcmin, "mu": MU,
                                "vs_mu": {str(m): r["figures"].lost_motion_arcmin for m, r in sweep.items()}},
-        "branch_fits": fig.branch_fits,
+        "branch_fits": dict(fig.branch_fits),   # a copy: the rv40e entry is added below
         "loop_area_J": {"value": loop, "vs_mu": {str(m): r["loop_J"] for m, r in sweep.items()}},
         "friction_dissipation_J": {**D, "total": D_total},
         "loop_vs_dissipation_rel_err": {"value": loop_err, "tolerance": loop_tol, "passed": bool(loop_err <= loop_tol),
@@ -140,7 +176,23 @@ def main(argv=None):
         "wall_s": {"quasi_static_per_mu": {str(m): r["wall_s"] for m, r in sweep.items()},
                    "dynamic_path": dyn["wall_s"], "quasi_static_coarse_path": qs["wall_s"]},
     }
-    settings = {"design": design.name, "mu": MU, "mu_sweep": MU_SWEEP, "sequence": seq.__dict__,
+    rv = rv_quasi_static(MU, args.quick)
+    rvf = rv["figures"]
+    rv_ok = bool(max(rv["repeat_arcmin"], rv["closure_arcmin"]) <= CYCLE_TOL_ARCMIN)
+    results["hysteresis_loss_arcmin"]["rv40e"] = {"value": rvf.hysteresis_loss_arcmin, "mu": MU,
+                                                  "friction_families": ["pins"]}
+    results["lost_motion_arcmin"]["rv40e"] = {"value": rvf.lost_motion_arcmin, "mu": MU}
+    results["branch_fits"]["rv40e"] = rvf.branch_fits
+    results["loop_area_J"]["rv40e"] = {"value": rv["loop_J"]}
+    results["friction_dissipation_J"]["rv40e"] = {"available": False, "reason": RV_UNAVAILABLE}
+    results["loop_vs_dissipation_rel_err"]["rv40e"] = {"available": False, "reason": RV_UNAVAILABLE}
+    results["energy_balance_rel_err"]["rv40e"] = {"available": False, "reason": RV_UNAVAILABLE}
+    results["cycle_repeatability_arcmin"]["rv40e"] = {"value": rv["repeat_arcmin"], "closure_arcmin": rv["closure_arcmin"],
+                                                      "tolerance": CYCLE_TOL_ARCMIN, "passed": rv_ok}
+    results["paths_rel_diff"]["rv40e"] = {"available": False, "reason": "path (a) is run on RD-40 only"}
+    results["wall_s"]["rv40e_quasi_static"] = rv["wall_s"]
+    settings = {"design": design.name, "rv_design": rv["design"], "rv_sequence": rv["sequence"],
+                "rv_continuation": rv["stats"], "mu": MU, "mu_sweep": MU_SWEEP, "sequence": seq.__dict__,
                 "dynamic_sequence": dseq.__dict__, "n_levels_per_cycle": len(seq.cycle()[0]),
                 "continuation": main_run["stats"], "bearing_model": "lumped", "input_angle_rad": 0.0,
                 "quick": args.quick,
@@ -151,7 +203,28 @@ def main(argv=None):
           f"{fig.lost_motion_arcmin:.4g} arcmin, loop {loop:.4e} J vs dissipation {D_total:.4e} J "
           f"(rel. err {loop_err:.2e}, bound {loop_tol:.2e}), energy balance {energy['balance_rel_err']:.2e}, "
           f"repeatability {main_run['repeat_arcmin']:.2e} arcmin, paths {paths['value']:.2e} (tol {paths['tolerance']:.2e})")
+    print(f"rv40e mu={MU} on the pins: hysteresis loss {rvf.hysteresis_loss_arcmin:.4g} arcmin, lost motion "
+          f"{rvf.lost_motion_arcmin:.4g} arcmin, loop {rv['loop_J']:.4e} J, repeatability {rv['repeat_arcmin']:.2e} arcmin")
+    _plot_rv(args.out, rv)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_start)
+
+
+def _plot_rv(out, rv):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    c = rv["cycle"]
+    T, th = c["torque_Nm"], c["angle_rad"] / RAD_PER_ARCMIN
+    f, ax = plt.subplots(figsize=(6, 4.3))
+    ax.plot(th, T, ".-", lw=0.8, ms=3, label=f"rv40e, mu = {MU} on the pins, second cycle")
+    for b, fit in rv["figures"].branch_fits.items():
+        if fit["K_Nm_per_arcmin"] is not None:
+            y = (1.0 if b.startswith("pos") else -1.0) * np.linspace(0.5, 1.0, 20) * np.max(np.abs(T))
+            ax.plot((y - fit["b_Nm"]) / fit["K_Nm_per_arcmin"], y, "--", lw=0.9, label=f"fit {b}")
+    ax.set(xlabel="output angle [arcmin]", ylabel="output torque [N m]", title="rv40e loop and branch fits")
+    ax.legend(fontsize=7)
+    f.tight_layout()
+    casekit.save_figure(f, out, "hysteresis_friction_rv40e")
 
 
 def _plot(out, main_run, sweep, fig):

@@ -20,6 +20,16 @@ the share of the output compliance per family and path (``cranks`` = crank bendi
 from the condensed tangent's energy and by switching each to rigid; the tangent stiffness of
 both and the branch fits of the same torque sequence with elastic cranks. The published
 figures above stay those of the rigid cranks.
+Free play: rv40e carries a 1.5 um needle clearance and a 10 um tooth thickness allowance on the
+crank gears (declared in the design file). At zero load the cranks, wheels and carrier are then
+held only by the regularization springs; the continuation crosses that free play by the
+guide-spring homotopy from the previous equilibrium (rvtool/solver/guide.py; the accepted
+states carry no guide force; counted in the stiffness stats' ``guided_levels``). Recorded in the
+settings next to the figures: the lost motion by the spring-controlled march (an independent
+path through the free play), the lost motion and branch fits of the clearance-free variant
+(rvtool.assembly.rv.free_play.without_free_play, the model rv40e was before), and the bound on
+the regularization springs' effect: the +-3 % lost motion re-solved with springs ten times
+weaker, |LM(k) - LM(k/10)| / 0.9 (the effect is linear in k to first order).
 """
 import time
 
@@ -29,11 +39,14 @@ from rvtool import casekit, designs
 from rvtool.assembly import build
 from rvtool.assembly.rv import load_design
 from rvtool.protocols.budget import stiffness_budget
+from rvtool.assembly.rv.free_play import free_play, without_free_play
+from rvtool.protocols.lost_motion import lost_motion
 from rvtool.protocols.load_sharing import contact_peaks, torque_balance_error, torque_balance_term
 from rvtool.protocols.precision import quasi_static_te, te_metrics
 from rvtool.protocols.stiffness import TorqueSequence, branch_fits, lost_motion_from_levels, quasi_static_stiffness
+from rvtool.solver.continuation import Continuation
 from rvtool.solver.static import StaticSolver
-from rvtool.units import ARCSEC_PER_RAD
+from rvtool.units import ARCSEC_PER_RAD, RAD_PER_ARCMIN
 
 DESIGN = designs.path("rv40e")
 
@@ -44,6 +57,50 @@ def order_markers(model):
     i = abs(model.ratio)
     return {"input": i, "crank": abs(g.crank_rate) * i, "cycloid_mesh": d.pins.n_pins * abs(g.crank_rate) * i,
             "involute_mesh": d.sun_gear.n_teeth * abs(g.sun_ratio - g.rates["carrier"]) * i}
+
+
+REGULARIZATION = (100.0, 0.1)
+"""The RV builder's regularization springs (k_translation [N/m], k_rotation [N m/rad])."""
+
+
+def lost_motion_continuation(design, fraction=0.03, regularization=REGULARIZATION):
+    """Output angle [arcmin] at +fraction minus at -fraction of T_rated by the continuation from zero
+    (the sequence's definition without the loading branches between: a frictionless level is
+    path-independent) and the largest regularization force there [N or N m]."""
+    m = build(design, regularization=regularization)
+    cont = Continuation(m)
+    t = fraction * design.rated_torque
+    qp = cont.go_to(t).copy()
+    fp = m.regularization_force(qp)
+    qm = cont.go_to(-t).copy()
+    i = m.output_index
+    return (qp[i] - qm[i]) / RAD_PER_ARCMIN, max(fp, m.regularization_force(qm))
+
+
+def free_play_study(design, seq, lm_sequence):
+    """Settings record of the free play (module docstring): spring-march lost motion, the
+    clearance-free variant's figures, the regularization bound."""
+    T = design.rated_torque
+    t0 = time.perf_counter()
+    sm = lost_motion(build(design), torque_level=0.03 * T)
+    lm_k, reg_k = lost_motion_continuation(design)
+    lm_k10, _ = lost_motion_continuation(design, regularization=tuple(0.1 * k for k in REGULARIZATION))
+    bound = abs(lm_k - lm_k10) / 0.9
+    zero = without_free_play(design)
+    st0 = quasi_static_stiffness(build(zero), seq)
+    fits0 = branch_fits(st0["torque_Nm"], st0["angle_arcmin"], st0["labels"], T)
+    return {"free_play": free_play(design),
+            "lost_motion_spring_march_arcmin": sm["lost_motion_rad"] / RAD_PER_ARCMIN,
+            "lost_motion_spring_march_minus_sequence_arcmin": sm["lost_motion_rad"] / RAD_PER_ARCMIN - lm_sequence,
+            "regularization_bound": {"lost_motion_arcmin": lm_k, "lost_motion_weak_springs_arcmin": lm_k10,
+                                     "effect_bound_arcmin": bound, "effect_bound_rel": bound / abs(lm_k),
+                                     "max_spring_force_at_3pct": reg_k,
+                                     "output_spring_vs_branch_stiffness": "k_rot = 0.1 N m/rad = 2.9e-5 N m/arcmin "
+                                                                          "in parallel with the output rotation"},
+            "without_free_play": {"lost_motion_arcmin": lost_motion_from_levels(st0["torque_Nm"], st0["angle_arcmin"],
+                                                                                T),
+                                  "K_Nm_per_arcmin": {b: f["K_Nm_per_arcmin"] for b, f in fits0.items()}},
+            "wall_s": time.perf_counter() - t0}
 
 
 def main(argv=None):
@@ -98,6 +155,8 @@ def main(argv=None):
     fits = branch_fits(st["torque_Nm"], st["angle_arcmin"], st["labels"], T)
     lm = lost_motion_from_levels(st["torque_Nm"], st["angle_arcmin"], T)
     wall["stiffness_sequence"] = time.perf_counter() - t0
+    fp = free_play_study(design, seq, lm)
+    wall["free_play_study"] = fp["wall_s"]
 
     # stiffness budget: rigid cranks (as published) and elastic cranks, at the rated state
     t0 = time.perf_counter()
@@ -149,7 +208,8 @@ def main(argv=None):
                 "regularization_max_N": {"te": qs["regularization_max"], "stiffness": st["regularization_max"]},
                 "solver_stats": {"te": qs["stats"], "stiffness": st["stats"]},
                 "ms_per_quasistatic_point": 1e3 * qs["wall_s"] / n_pts,
-                "eccentric_bearing_names": names}
+                "eccentric_bearing_names": names, "free_play_study": fp,
+                "guide_force_max_before_release": st["continuation"].guide_force_max}
     _plots(model, q_rated, qs, met, angles, shares, st, args.out, revs)
     _budget_plot(results["stiffness_budget"], st, st_el, args.out)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_all)

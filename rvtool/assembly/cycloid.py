@@ -166,12 +166,15 @@ class CycloidModel(ReducerModel):
         return f
 
     def pin_bending(self, q, family, support=None):
-        """Largest bending and shear stress of the ring pins (``"pins"``) or output pins at the
-        static state q from their station loads (:meth:`pin_station_loads`) on the declared
-        support (``pins.support`` / ``output_pins.support``), or on ``support``
-        (:class:`~rvtool.structure.pin_beam.PinSupport`) where the design's pins are rigid (an
-        assumption the caller names). Returns a dict (``sigma_max_Pa``, ``tau_max_Pa``, ``pin``,
-        ``z_m``, ``support``, ``support_source``) or None (rigid pins and no support given)."""
+        """Largest bending and shear stress of the ring pins (``"pins"``) or output pins from their
+        station loads (:meth:`pin_station_loads`) on the declared support (``pins.support`` /
+        ``output_pins.support``), or on ``support`` (:class:`~rvtool.structure.pin_beam.PinSupport`)
+        where the design's pins are rigid (an assumption the caller names). q: one static state,
+        or a sequence of states (e.g. the points of a TE sequence over a mesh cycle: the pin
+        loads move from pin to pin, and the largest stress need not occur at one angle).
+        Returns a dict (``sigma_max_Pa``, ``tau_max_Pa`` (the largest over the states), ``pin``,
+        ``z_m``, ``state`` (index of the state of sigma_max; 0 for one state), ``support``,
+        ``support_source``) or None (rigid pins and no support given)."""
         from ..structure.pin_beam import PinBeam
         fam = Family(family)
         spec = self.design.pins if fam == Family.PINS else self.design.output_pins
@@ -182,13 +185,16 @@ class CycloidModel(ReducerModel):
                 return None
             sup, source = support, "assumed (the design's pins are rigid)"
         beam = PinBeam(sup, spec.pin_radius, self.design.material.youngs_modulus, self.design.material.poisson_ratio)
-        loads = self.pin_station_loads(q, fam)
-        best, tau = {"sigma_max_Pa": 0.0, "pin": None, "z_m": None}, 0.0
-        for p in np.flatnonzero(np.any(loads != 0.0, axis=(1, 2))):
-            s, t, z = beam.station_stresses(self.design.wheels.midplanes, self.design.wheels.width, loads[p])
-            tau = max(tau, t)
-            if s > best["sigma_max_Pa"]:
-                best = {"sigma_max_Pa": s, "pin": int(p), "z_m": z}
+        stress_map = beam.station_stress_map(self.design.wheels.midplanes, self.design.wheels.width)
+        states = [q] if np.ndim(q) == 1 else q
+        best, tau = {"sigma_max_Pa": 0.0, "pin": None, "z_m": None, "state": None}, 0.0
+        for k, qk in enumerate(states):
+            loads = self.pin_station_loads(qk, fam)
+            for p in np.flatnonzero(np.any(loads != 0.0, axis=(1, 2))):
+                s, t, z = stress_map.stresses(loads[p])
+                tau = max(tau, t)
+                if s > best["sigma_max_Pa"]:
+                    best = {"sigma_max_Pa": s, "pin": int(p), "z_m": z, "state": k}
         best.update(tau_max_Pa=tau, support={"model": sup.model.value, "ends": list(sup.ends), "shear": sup.shear},
                     support_source=source)
         return best

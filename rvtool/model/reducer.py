@@ -36,6 +36,8 @@ Contract (paper: "Transmission topology and reaction-force closure",
   load-carrying bodies.
 * **Continuation restarts.** ``continuation_restarts`` lets a stalled load continuation
   re-solve the level from the kinematic state (free play without stiffness at zero load).
+  ``guided_free_play`` lets a stalled continuation (and the static solver's last fallback)
+  reach the level by the guide-spring homotopy of :mod:`rvtool.solver.guide`.
 * **Regularization.** Weak springs from free coordinates to their kinematic
   positions (a numerical setting for free play at zero load);
   ``regularization_force(q)`` reports the largest force they carry and
@@ -226,6 +228,11 @@ class ReducerModel:
     #: ladder (:meth:`rvtool.solver.continuation.Continuation.go_to`): set by topologies whose
     #: zero-load state is free play without contact stiffness (a backlashed involute mesh)
     continuation_restarts: bool = False
+    #: a stalled load continuation, and a static point every other fallback missed, are reached by
+    #: the guide-spring homotopy (:mod:`rvtool.solver.guide`): set by topologies whose free play
+    #: leaves crank-like coordinates without contact stiffness at zero load (RV with needle
+    #: clearance and backlash); off elsewhere, so no existing model's path or failure changes
+    guided_free_play: bool = False
     contact_host: object = None     # MergedContactElement carrying every family (one element per system), or None
 
     # -- coordinates -------------------------------------------------------
@@ -387,9 +394,9 @@ class ReducerModel:
         return None
 
     def pin_bending(self, q, family, support=None):
-        """Largest bending stress of the pins of ``family`` at state q (dict, see the topology),
-        or None where the topology has no pins of that family or they are rigid and no
-        ``support`` is assumed."""
+        """Largest bending stress of the pins of ``family`` at state q, or over a sequence of states
+        q (dict, see the topology), or None where the topology has no pins of that family or
+        they are rigid and no ``support`` is assumed."""
         return None
 
     def hertz_peaks(self, q):

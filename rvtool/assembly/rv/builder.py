@@ -200,6 +200,8 @@ class RvModel(ReducerModel):
     crank_compliance: np.ndarray = None
     #: ReducedStructure of the elastic housing carrying the ring pins, or None (rigid ring)
     housing: object = None
+    #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
+    guided_free_play: bool = True
 
     def _pose(self, name, q):
         el = self.elements[name]
