@@ -42,11 +42,11 @@ class CrankShaft:
 
     model: "rigid" (the default and the "nothing" variant: no beam, no cost) or
         "simply_supported" (a beam on its two tapered rows).
-    radius: r [m] of the prismatic solid section.
-    supports: (z_a, z_b) [m] axial positions of the two tapered rows' load centres.
-    gear_position: z_g [m] of the spur gear's mid-face (inside or overhanging the supports).
+    radius: shaft radius r of one solid section [m].
+    supports: axial load centres of the two rows [m] (z_a < z_b).
+    gear_position: gear mid-face position z_g [m] (inside or overhanging the supports).
     shear: True = Timoshenko (bending + shear), False = Euler--Bernoulli.
-    shear_coefficient: kappa [-]; None = Cowper's value of a solid circle from the material.
+    shear_coefficient: Timoshenko's kappa [-] (None: Cowper's value of a solid circle).
     """
     model: str = "rigid"
     radius: float | None = None
