@@ -87,3 +87,16 @@ def test_budget_with_the_ported_housing(rated):
     # Rayleigh: the energy share equals the compliance's sensitivity to the housing's stiffness
     # (central differences, 1e-5), bound 1e-4
     assert bp["sensitivity_shares"]["housing_ports"] == pytest.approx(s["housing_ports"], abs=1e-4)
+
+
+def test_condensed_tangent_with_the_housing_matches_a_finite_increment(rated):
+    # the assembled K^s carries the housing's own stiffness on eta (rvtool.protocols.stiffness): the
+    # condensed tangent then equals dT/dtheta from a central +-0.1 % torque increment on a smooth
+    # branch (truncation ~ (dT)^2 curvature and the Newton tolerance on the two angles: measured
+    # 3.1e-8, 2.2e-8 on the rigid ring; bound 1e-5 as for RD-40 in tests/test_protocols_mechanical.py).
+    # Without the housing's stiffness the tangent was 0.
+    from rvtool.protocols.stiffness import tangent_check
+    mp, _ = rated["ported"]
+    tc = tangent_check(mp, 0.75 * mp.design.rated_torque)
+    assert tc["Kt_condensed_Nm_per_arcmin"] > 100.0
+    assert tc["rel_diff"] < 1e-5
