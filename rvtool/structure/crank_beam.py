@@ -47,6 +47,9 @@ class CrankShaft:
     gear_position: gear mid-face position z_g [m] (inside or overhanging the supports).
     shear: True = Timoshenko (bending + shear), False = Euler--Bernoulli.
     shear_coefficient: Timoshenko's kappa [-] (None: Cowper's value of a solid circle).
+    tilt: true = the crank also tilts on its tapered pair (the pair's tilting compliance 1/K_gamma,
+        linearized at its preload, in series with the beam: z z^T / K_gamma added to the station
+        compliance, z from the pair's centre; condensed, not a retained coordinate).
     """
     model: str = "rigid"
     radius: float | None = None
@@ -54,12 +57,18 @@ class CrankShaft:
     gear_position: float | None = None
     shear: bool = True
     shear_coefficient: float | None = None
+    tilt: bool = False
 
     def __post_init__(self):
         if self.model not in MODELS:
             raise RvtoolInputError(f"model = {self.model!r}; valid choices are {list(MODELS)}")
         if not isinstance(self.shear, bool):
             raise RvtoolInputError(f"shear = {self.shear!r} must be true or false")
+        if not isinstance(self.tilt, bool):
+            raise RvtoolInputError(f"tilt = {self.tilt!r} must be true or false")
+        if self.tilt and not self.elastic:
+            raise RvtoolInputError("tilt = true needs model = 'simply_supported' (the tilt compliance is added to "
+                                   "the beam's; valid: tilt = false or an elastic crank)")
         if self.shear_coefficient is not None:
             check_range("shear_coefficient", self.shear_coefficient, 0.0, 1.0, low_open=True)
         # the geometry is checked where given (a rigid crank may keep it declared for the switch)
