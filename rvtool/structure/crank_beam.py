@@ -47,9 +47,9 @@ class CrankShaft:
     gear_position: gear mid-face position z_g [m] (inside or overhanging the supports).
     shear: True = Timoshenko (bending + shear), False = Euler--Bernoulli.
     shear_coefficient: Timoshenko's kappa [-] (None: Cowper's value of a solid circle).
-    tilt: true = the crank also tilts on its tapered pair (the pair's tilting compliance 1/K_gamma,
-        linearized at its preload, in series with the beam: z z^T / K_gamma added to the station
-        compliance, z from the pair's centre; condensed, not a retained coordinate).
+    tilt: true = the crank also tilts on its tapered pair (the pair's tilting compliance 1/K_gamma
+        at the rated crank-bearing load, in series with the beam: z z^T / K_gamma added to the
+        station compliance, z from the pair's centre; condensed, not a retained coordinate).
     """
     model: str = "rigid"
     radius: float | None = None
