@@ -173,6 +173,20 @@ class Housing:
         if self.n_residual != -1 and self.n_modes + self.n_residual < 1:
             raise RvtoolInputError("housing.n_modes + housing.n_residual = 0; valid range [1, inf)")
 
+    def check_pin_ring(self, pins):
+        """An elastic housing carrying the ring ``pins`` (a :class:`Pins` spec) at one port per pin:
+        its bore clears the pins and it has one port per pin (cycloid and RV designs)."""
+        if self.model != "ports":
+            return
+        r_pins = pins.pin_circle_radius + pins.pin_radius
+        st = self.structure
+        if st.inner_radius < r_pins - 1e-12:
+            raise RvtoolInputError(f"housing.structure.inner_radius = {st.inner_radius} m cuts through the ring pins; "
+                                   f"valid range [{r_pins:.6g}, outer_radius) m (pin circle radius + pin radius)")
+        if st.n_ports != pins.n_pins:
+            raise RvtoolInputError(f"housing.structure.n_ports = {st.n_ports}; valid value pins.n_pins = {pins.n_pins} "
+                                   "(one port per ring pin; leave the key out to take it)")
+
 
 @dataclass(frozen=True, kw_only=True)
 class Bodies:
@@ -278,14 +292,7 @@ class CycloidDesign:
         if self.output_pins.hole_radius < needed - 1e-4:
             raise RvtoolInputError(f"output_pins.hole_radius = {self.output_pins.hole_radius} m cannot pass the eccentric "
                                    f"motion; valid range [{needed:.6g}, inf) m (pin radius + eccentricity)")
-        r_pins = self.pins.pin_circle_radius + self.pins.pin_radius
-        st = self.housing.structure
-        if self.housing.model == "ports" and st.inner_radius < r_pins - 1e-12:
-            raise RvtoolInputError(f"housing.structure.inner_radius = {st.inner_radius} m cuts through the ring pins; "
-                                   f"valid range [{r_pins:.6g}, outer_radius) m (pin circle radius + pin radius)")
-        if self.housing.model == "ports" and st.n_ports != self.pins.n_pins:
-            raise RvtoolInputError(f"housing.structure.n_ports = {st.n_ports}; valid value pins.n_pins = {self.pins.n_pins} "
-                                   "(one port per ring pin; leave the key out to take it)")
+        self.housing.check_pin_ring(self.pins)
 
     @property
     def ratio(self):

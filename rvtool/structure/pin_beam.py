@@ -210,13 +210,7 @@ class PinBeam:
 
     def _element(self, L):
         """Timoshenko element stiffness (w, rotation at both ends) of length L."""
-        EI, kGA = self.EI, self.kGA
-        phi = 12.0 * EI / (kGA * L * L)
-        return EI / ((1.0 + phi) * L ** 3) * np.array([
-            [12.0, 6 * L, -12.0, 6 * L],
-            [6 * L, (4 + phi) * L * L, -6 * L, (2 - phi) * L * L],
-            [-12.0, -6 * L, 12.0, -6 * L],
-            [6 * L, (2 - phi) * L * L, -6 * L, (4 + phi) * L * L]])
+        return timoshenko_element(self.EI, self.kGA, L)
 
     def _stiffness(self, nodes):
         """Assembled Timoshenko beam stiffness (dofs w, rotation per node)."""
@@ -272,6 +266,19 @@ class PinBeam:
         [start, end] (the closed-form checks of cases/pin_bending.py)."""
         pts, wts = line_load_points(np.array([0.5 * (start + end)]), end - start, n_sub)
         return self.influence(np.atleast_1d(x), pts.ravel()) @ (wts.ravel() * (end - start))
+
+
+def timoshenko_element(EI, kGA, L):
+    """Stiffness (4, 4) of the two-node interdependent-interpolation Timoshenko element of length
+    L [m] (dofs: deflection, rotation at both ends), bending stiffness EI [N m^2], shear stiffness
+    kGA [N] (inf: Euler--Bernoulli). Its nodal displacements are exact for nodal loads on a
+    prismatic beam (shared by the pin and crank beams)."""
+    phi = 12.0 * EI / (kGA * L * L)
+    return EI / ((1.0 + phi) * L ** 3) * np.array([
+        [12.0, 6 * L, -12.0, 6 * L],
+        [6 * L, (4 + phi) * L * L, -6 * L, (2 - phi) * L * L],
+        [-12.0, -6 * L, 12.0, -6 * L],
+        [6 * L, (2 - phi) * L * L, -6 * L, (4 + phi) * L * L]])
 
 
 @dataclass(frozen=True)
