@@ -6,7 +6,9 @@ the external offset stage reverses the rotation) against the closed form
 -(z_compound / z_pinion) (1 + (z_crank gear / z_sun) z_pins); the quasi-static TE over one crank
 revolution at 40 points per cycloid mesh cycle (--quick: 12 points); the torque balance
 |T_out - i T_in| / T_out at the rated state (input angle 0); the largest normal force per
-physical contact of every family over the TE sequence.
+physical contact of every family over the TE sequence. The TE resolution error (settings
+``te_resolution``): one cycloid mesh cycle at the design's settings against the refined reference
+(``RVDesign.resolution_reference``), as in cases/rv_two_stage.py.
 """
 import time
 
@@ -17,6 +19,7 @@ from rvtool.assembly import build
 from rvtool.assembly.rv import load_design
 from rvtool.protocols.load_sharing import contact_peaks, torque_balance_error, torque_balance_term
 from rvtool.protocols.precision import quasi_static_te, te_metrics
+from rvtool.protocols.resolution import te_resolution_error
 from rvtool.solver.static import StaticSolver
 from rvtool.units import ARCSEC_PER_RAD
 
@@ -55,6 +58,8 @@ def main(argv=None):
     wall["quasi_static_te_with_observations"] = qs["wall_s"]
     revs = 1.0 / (abs(model.graph.crank_rate) * abs(model.ratio))
     met = te_metrics(qs["te"], n_revolutions=revs)
+    res = te_resolution_error(d, d.resolution_reference(), points_per_mesh=20 if args.quick else 40)
+    wall["te_resolution"] = res["wall_s"] + res["reference_wall_s"]
     results = {"ratio_nominal": float(d.ratio_target), "ratio_from_gear_graph": float(model.ratio),
                "te_pp_arcsec": met["pp"] * ARCSEC_PER_RAD, "torque_balance_rel_err": tb0, "peak_loads_N": peaks}
     settings = {"design": d.name, "quick": args.quick, "ratio_closed_form": closed,
@@ -67,7 +72,9 @@ def main(argv=None):
                 "crank_share_mean_over_crank_revolution": np.mean(shares, axis=0),
                 "peak_loads_definition": "largest normal force per physical contact over the TE sequence [N]",
                 "wall_s": wall, "ms_per_quasistatic_point": 1e3 * qs["wall_s"] / n_pts,
-                "solver_stats": qs["stats"], **model.resolution_settings()}
+                "solver_stats": qs["stats"], **model.resolution_settings(),
+                "te_resolution": {**res, "reference": "design.resolution_reference(): 2x profile samples and "
+                                                      "involute slices, analytic profile search"}}
     _plots(model, q_rated, qs, met, revs, args.out)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_all)
 

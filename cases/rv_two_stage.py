@@ -20,6 +20,11 @@ the share of the output compliance per family and path (``cranks`` = crank bendi
 from the condensed tangent's energy and by switching each to rigid; the tangent stiffness of
 both and the branch fits of the same torque sequence with elastic cranks. The published
 figures above stay those of the rigid cranks.
+TE resolution (``te_resolution_rel_err``): the quasi-static TE over one cycloid mesh cycle (40
+points; --quick 20) at the design's settings against the refined reference
+(``RVDesign.resolution_reference``: twice the profile samples and involute slices, the analytic
+profile search), rvtool.protocols.resolution.te_error (the larger of the pointwise and the
+peak-to-peak error over the reference's peak-to-peak).
 Free play: rv40e carries a 1.5 um needle clearance and a 10 um tooth thickness allowance on the
 crank gears (declared in the design file). At zero load the cranks, wheels and carrier are then
 held only by the regularization springs; the continuation crosses that free play by the
@@ -43,6 +48,7 @@ from rvtool.assembly.rv.free_play import free_play, without_free_play
 from rvtool.protocols.lost_motion import lost_motion
 from rvtool.protocols.load_sharing import contact_peaks, torque_balance_error, torque_balance_term
 from rvtool.protocols.precision import quasi_static_te, te_metrics
+from rvtool.protocols.resolution import te_resolution_error
 from rvtool.protocols.stiffness import TorqueSequence, branch_fits, lost_motion_from_levels, quasi_static_stiffness
 from rvtool.solver.continuation import Continuation
 from rvtool.solver.static import StaticSolver
@@ -148,6 +154,11 @@ def main(argv=None):
     revs = 1.0 / (abs(g.crank_rate) * abs(model.ratio))
     met = te_metrics(qs["te"], n_revolutions=revs)
 
+    # resolution error of the TE (issue 21 Deliver 6): one mesh cycle at the design's settings against
+    # the refined reference (twice the profile samples and involute slices, analytic profile search)
+    res = te_resolution_error(design, design.resolution_reference(), points_per_mesh=20 if args.quick else 40)
+    wall["te_resolution"] = res["wall_s"] + res["reference_wall_s"]
+
     # stiffness and lost motion (path (b), continuation at input angle 0)
     t0 = time.perf_counter()
     seq = TorqueSequence(rated_torque=T, loading_step=0.25, other_step=0.25) if args.quick else TorqueSequence(rated_torque=T)
@@ -181,6 +192,7 @@ def main(argv=None):
         "te_rms_arcsec": met["rms"] * ARCSEC_PER_RAD,
         "te_orders": met["peak_orders"],
         "te_order_amplitudes_arcsec": met["peak_amplitudes"] * ARCSEC_PER_RAD,
+        "te_resolution_rel_err": res["te_rel_err"],
         "crank_load_share": {
             "fraction_at_rated": share0,
             "fraction_mean_over_crank_revolution": shares.mean(axis=0),
@@ -201,6 +213,8 @@ def main(argv=None):
                 "te_interval": {"input_angle_rad": float(crank_rev), "output_revolutions": revs, "points": n_pts,
                                 "definition": "one crank revolution (1/z_g output revolution)"},
                 "order_markers": order_markers(model),
+                "te_resolution": {**res, "reference": "design.resolution_reference(): 2x profile samples and "
+                                                      "involute slices, analytic profile search"},
                 "ratio_closed_form": closed_form, "ratio_closed_form_rel_err": ratio_closed_err,
                 "torque_balance_over_te_sequence": {"max_abs": float(np.max(np.abs(balance))),
                                                      "mean_signed": float(np.mean(balance))},

@@ -245,6 +245,12 @@ class RVDesign:
         st = dataclasses.replace(self.involute_stage, n_slices=2 * self.involute_stage.n_slices)
         return dataclasses.replace(self, wheels=w, involute_stage=st)
 
+    def resolution_reference(self):
+        """:meth:`refined` with the analytic closest-point search of the wheel profile: the reference
+        of the quasi-static TE resolution error (rvtool.protocols.resolution; the discrete table
+        search is the one resolution whose error is not negligible, cases/work_precision_rv.py)."""
+        return self.refined().replace(wheels={"search": "analytic"})
+
 
 def _gear(section, data):
     """An InvoluteGear from its table; the optional sub-tables ``rack`` (BasicRack) and
