@@ -67,10 +67,11 @@ def test_builder_dispatch_kinematics_and_families(zero_play, rated):
     v = m.kinematic_state(a, w).velocities
     assert np.allclose(v, (p[2] - p[0]) / (2 * h) * w, rtol=0, atol=1e-9)
     # zero load: the kinematic state is an equilibrium (zero-backlash stage, clearance-free needles and
-    # pins); the regularization springs carry 2e-9 N at 1.3 rad (measured at 480 profile samples per tooth;
-    # 2e-7 N at 120: the contact search resolution). With a 3 um needle clearance the wheels float in it and
-    # the springs carry up to 3e-4 N (rv40e's 1.5 um and 10 um backlash: 7.8e-7 N at 1.3 rad at 480 samples,
-    # 1.4e-4 N at 120, measured), so the zero-play variant is checked.
+    # pins); the regularization springs carry 1.7e-15 N at 1.3 rad (measured with rv40e's analytic profile
+    # search; 2e-7 N with the discrete search at 120 samples per tooth: the table's resolution). With a 3 um
+    # needle clearance the wheels float in it and the springs carry up to 3e-4 N with the discrete search
+    # (rv40e's 1.5 um and 10 um backlash: 1.4e-4 N at 1.3 rad, measured; 1.2e-15 N with the analytic
+    # search), so the zero-play variant is checked.
     m2 = build(zero_play)
     q0 = StaticSolver(m2).solve(1.3)
     assert m2.regularization_force(q0) < 1e-5
@@ -82,11 +83,11 @@ def test_torque_balance(design, rated):
     i Delta TE / Delta s = 2e-7 (measured). Measured at 120 profile samples per tooth: at most 3.5e-3
     over a crank revolution (800 points), mean -1.5e-4: the net work of the cycloid--pin element over the
     revolution (0.0107 J, the DC term's 0.010 J; every other family does < 7e-4 J), i.e. the pin
-    contact's force field is not exactly conservative at its contact-geometry resolution. At rv40e's
-    480 samples (issue 21 Deliver 6) the pointwise figure stays (3.5e-3) and the 200-point mean drops to
-    -1.3e-5 (the pin work's second-order convergence, tests/test_pin_work.py); the mean of 24 points is
-    then dominated by the mesh orders that 24 points alias onto the mean (measured 2.84e-4 at 480 samples,
-    1.7e-4 at 120), so its bound is 4e-4 (was 3e-4, measured at 120).
+    contact's force field is not exactly conservative at its contact-geometry resolution. With rv40e's
+    analytic profile search (issue 21 Deliver 6) the pointwise figure stays (3.6e-3) and the 200-point
+    mean drops to 8.5e-7 (the pin force field is conservative to the search's precision); the mean of 24
+    points is then the mesh orders that 24 points alias onto the mean (measured 2.94e-4; 1.7e-4 with the
+    discrete search at 120 samples), so its bound is 4e-4 (was 3e-4, measured with the discrete search).
     Bounds: 1e-4 at angle 0, 5e-3 pointwise, 4e-4 for the mean of 24 points."""
     m, s, q = rated
     T = design.rated_torque
@@ -120,8 +121,8 @@ def _mean_shares(design, n=12):
 
 def test_equal_crank_shares_at_nominal(design, zero_play, rated):
     """Nominal geometry: every crank carries 1/N_c of the torque on the carrier. Pointwise the shares
-    move by +-0.0023 with the crank angle (measured, 120 and 480 profile samples alike; the 40-pin ring is not three-fold symmetric and the
-    rollers are discrete), the mean over a crank revolution (12 points) is within 1e-4 of 1/3 (measured).
+    move by +-0.0023 with the crank angle (measured, discrete and analytic profile search alike; the
+    40-pin ring is not three-fold symmetric and the rollers are discrete), the mean over a crank revolution (12 points) is within 1e-4 of 1/3 (measured).
     Tolerances 5e-4 (mean) and 0.01 (pointwise), on the zero-play variant. (With rv40e's 1.5 um needle
     clearance and backlash the pointwise swing is +-0.015, with 3 um +-0.023: a journal in its clearance
     unloads; the carrier statics hold on rv40e itself.)"""
