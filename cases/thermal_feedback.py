@@ -14,11 +14,12 @@ studies' errors against their references and wall times.
 
 RV (key ``rv40e`` with the same keys; rv40e with a 10 um pin clearance, see RV_PIN_CLEARANCE):
 the seven-node network of :mod:`rvtool.slow.rv` (housing, pins, wheels, cranks, needles,
-carrier, input), the pin mesh's sliding loss as source, the thermal gap channels of the pins,
-the needle bearings, the tapered crank bearings and the main bearing written through
-``ReducerModel.set_gap_offsets``, TE and lost motion cold against hot (no vibration run), the
-single-node check; the origin per channel in the full run only. The involute stage is not a
-window family yet (its heat and flank offsets come with wip/slowfric).
+carrier, input), the sliding losses of the pin mesh and of the involute stage's tooth flanks
+as sources (the flanks' shared by the sun's input node and the crank gears' node), the thermal
+gap channels of the pins, the needle bearings, the tapered crank bearings, the main bearing and
+the three sun--crank-gear meshes (centre distance in the carrier, on the sun's flanks) written
+through ``ReducerModel.set_gap_offsets``, TE and lost motion cold against hot (no vibration
+run), the single-node check (on the pins' loss); the origin per channel in the full run only.
 """
 import dataclasses
 import time
@@ -72,8 +73,8 @@ converges in a few iterations (each costs two windows)."""
 
 def rv_thermal(quick):
     """The RV run (rv40e with RV_PIN_CLEARANCE): the seven-node network of rvtool.slow.rv with the pin
-    mesh's sliding loss, the four thermal gap channels (pins, needles, tapered crank bearings, main
-    bearing) through ReducerModel.set_gap_offsets, TE and lost motion cold against hot (matched
+    mesh's and the involute flanks' sliding loss, the thermal gap channels (pins, needles, tapered crank
+    bearings, main bearing, the involute meshes) through ReducerModel.set_gap_offsets, TE and lost motion cold against hot (matched
     protocol without the vibration run), the single-node check, and (full run) the origin per channel."""
     t_all = time.perf_counter()
     design = load_rv_design(designs.path("rv40e")).replace(wheels={"clearance": RV_PIN_CLEARANCE})
@@ -82,8 +83,9 @@ def rv_thermal(quick):
     omega = design.input_speed_rpm * np.pi / 30.0
     steps = 16 if quick else 80
     windows = ReducerWindows(model, WindowProtocol(torque=design.rated_torque, input_speed=omega,
-                                                   window_angle=2 * np.pi, steps=steps), bodies=RV.contact_bodies())
-    th = RV.thermal_coupling(design, inputs)
+                                                   window_angle=2 * np.pi, steps=steps),
+                             bodies=RV.contact_bodies(model))
+    th = RV.thermal_coupling(design, inputs, model=model)
     net = th.network
     phases = (0.0, 0.5 * model.mesh_period)
     protocol = dataclasses.replace(matched_protocol(design, model, quick), vibration_revolutions=None)

@@ -14,6 +14,7 @@ from rvtool.bearings.tapered_set import TaperedBearingSet, TaperedMounting
 from rvtool.errors import RvtoolInputError
 from rvtool.model import Family
 from rvtool.slow import rv as RV
+from rvtool.slow.thermal import InvoluteMeshExpansion
 from warp_contacts import circle_pairs_ref as O
 
 ROW = dict(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055, roller_length=0.010, cup_angle_deg=14.0,
@@ -114,3 +115,92 @@ def test_rv_slow_input_errors(rv40e):
         RV.RvSlowInputs(mu_pins=-0.1)
     with pytest.raises(RvtoolInputError, match="factor"):
         RV.ProjectedExpansion(None, 0.0)
+    with pytest.raises(RvtoolInputError, match="mu_involute"):
+        RV.RvSlowInputs(mu_involute=-0.1)
+    with pytest.raises(RvtoolInputError, match="working_pitch_radius"):
+        InvoluteMeshExpansion(centre_distance=0.036, working_pitch_radius_a=0.009, working_pitch_radius_b=0.045,
+                              working_pressure_angle=0.35, frame_expansion=1e-5, gear_a_expansion=1e-5,
+                              gear_b_expansion=1e-5)     # a = r_wB - r_wA: an internal pair, refused
+    with pytest.raises(RvtoolInputError, match="body 'flange'"):
+        RV.body_node("flange")
+
+
+def test_involute_mesh_expansion_closed_form():
+    # Delta g = sin(alpha_w) (alpha_f dT_f a - alpha_A dT_A r_wA - alpha_B dT_B r_wB): equal alpha dT
+    # cancel (a = r_wA + r_wB, to rounding 1e-20 m); each term alone is its closed form to rounding
+    x = InvoluteMeshExpansion(centre_distance=0.036, working_pitch_radius_a=0.009, working_pitch_radius_b=0.027,
+                              working_pressure_angle=0.35, frame_expansion=11.5e-6, gear_a_expansion=11.5e-6,
+                              gear_b_expansion=11.5e-6)
+    s = math.sin(0.35)
+    assert abs(x.gap_change(10.0, 10.0, 10.0)) < 1e-20
+    assert x.gap_change(10.0, 0.0, 0.0) == pytest.approx(s * 11.5e-6 * 10.0 * 0.036, rel=1e-14)
+    assert x.gap_change(0.0, 10.0, 0.0) == pytest.approx(-s * 11.5e-6 * 10.0 * 0.009, rel=1e-14)
+    assert x.gap_change(0.0, 0.0, 10.0) == pytest.approx(-s * 11.5e-6 * 10.0 * 0.027, rel=1e-14)
+
+
+@pytest.fixture(scope="module")
+def rv_windows(rv40e):
+    from rvtool.slow.reducer_windows import ReducerWindows, WindowProtocol
+    m = build(rv40e)
+    omega = rv40e.input_speed_rpm * math.pi / 30
+    w = ReducerWindows(m, WindowProtocol(torque=rv40e.rated_torque, input_speed=omega, steps=6),
+                       bodies=RV.contact_bodies(m))
+    return m, w, RV.thermal_coupling(rv40e, RV.RvSlowInputs(), model=m)
+
+
+def test_rv_involute_stage_heat(rv40e, rv_windows):
+    """Issue 18: the involute flanks are window contacts with sliding exposure; their loss
+    mu_involute I_s / tau_w is shared equally by the input node (the sun) and the cranks node (the
+    crank gears): with the bearings rolling, these two nodes get nothing else, so each gets half of
+    the involute loss (to rounding, 1e-12 relative), and the loss is positive. Without the model the
+    declaration is the one before issue 18 (no involute window contacts)."""
+    m, w, th = rv_windows
+    net = th.network
+    ex = w.window()
+    inv = [i for i, c in enumerate(ex.ids) if c.startswith(Family.INVOLUTE_STAGE.value + "/")]
+    assert inv and np.sum(ex.I_s[inv]) > 0
+    P = th.sources.power(ex)
+    Q = th.sources.node_sources(ex, net)
+    half = 0.5 * float(np.sum(P[inv]))
+    assert half > 0
+    assert Q[net.index("input")] == pytest.approx(half, rel=1e-12)
+    assert Q[net.index("cranks")] == pytest.approx(half, rel=1e-12)
+    assert sum(Q) == pytest.approx(float(np.sum(P)), rel=1e-12)
+    assert Family.INVOLUTE_STAGE not in RV.contact_bodies()
+
+
+def test_rv_involute_flank_channel_shifts_the_output(rv40e, rv_windows):
+    """Issue 18: a hotter carrier opens each sun--crank-gear pair by alpha dT a sin(alpha_w) (the
+    channel writes it on the sun's flanks); at rated torque the sun must turn that much further
+    along the line of action before the crank gears take the load, so at a fixed input angle the
+    output lags by delta / (r_b,sun |i|) more (every mesh opened alike: the same loads, a rigid shift;
+    measured 1.2e-4 relative, tolerance 1e-3: the contacts are evaluated at slightly different roll
+    positions and crank deflections). The gear B flanks get no offset; zeros restore the rated state."""
+    from rvtool.slow.thermal import thermal_gap_offsets
+    from rvtool.solver.static import StaticSolver
+    m, w, th = rv_windows
+    net = th.network
+    inv = [ch for ch in th.channels if ch.name.startswith("thermal/involute_stage/")]
+    assert [ch.nodes for ch in inv] == [("carrier", "input", "cranks")] * 3
+    T = np.full(len(net.nodes), RV.T_AMBIENT)
+    T[net.index("carrier")] += 20.0
+    pair = m.family_element(Family.INVOLUTE_STAGE).evaluator.meshes[0].pair
+    delta = RV.RvSlowInputs().expansion * 20.0 * pair.a * math.sin(pair.working_pressure_angle)
+    assert inv[0].gap_change(net, T) == pytest.approx(delta, rel=1e-12)
+
+    def rated_output():
+        s = StaticSolver(m)
+        m.set_output_torque(-np.sign(m.ratio) * rv40e.rated_torque)
+        return s.solve(0.0)[m.output_index]
+
+    cold = rated_output()
+    w.apply_offsets(thermal_gap_offsets(inv, net, T), None)      # the flank channels alone (the bearings'
+    # channels also see the carrier's temperature)
+    offs = m.gap_offsets(Family.INVOLUTE_STAGE)
+    assert all(v == pytest.approx(delta, rel=1e-12) for k, v in offs.items() if "/gear_a/" in k)
+    assert all(v == 0.0 for k, v in offs.items() if "/gear_b/" in k)
+    hot = rated_output()
+    w.apply_offsets(thermal_gap_offsets(th.channels, net, np.full(len(net.nodes), RV.T_AMBIENT)), None)
+    want = delta / (pair.gear_a.base_radius * abs(m.ratio))
+    assert abs(hot - cold) == pytest.approx(want, rel=1e-3)
+    assert abs(rated_output() - cold) < 1e-12

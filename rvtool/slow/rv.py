@@ -12,23 +12,34 @@ contact families written through ``ReducerModel.set_gap_offsets``:
   (n_r = cos of the cup angle: the gap offset of a tapered lamina acts along its normal);
 * ``thermal/main_bearings``: the angular-contact pair's radial clearance increment (outer race
   in the housing, inner race on the carrier, balls at the carrier's temperature), projected onto
-  the line of action (cos of the free contact angle: the ball law's clearance acts along it).
+  the line of action (cos of the free contact angle: the ball law's clearance acts along it);
+* ``thermal/involute_stage/<mesh>`` (with the model, :func:`gap_channels`): each involute mesh's
+  gap change along its line of action (:class:`~rvtool.slow.thermal.InvoluteMeshExpansion`: the
+  centre distance held by the carrier for the sun--crank-gear meshes, by the housing for the
+  three-stage input stage, minus the two gears' growth), written on gear A's tooth flanks (a
+  pair's gap takes the offsets of both of its flanks; the pair's change is put on one of them).
 
 The bearing channels are radial expansion only (declared): the axial expansion of a crank or of
 the carrier against the housing, which changes the tapered and angular-contact preloads, has no
-coordinate in the planar model. The involute stage is not a window family here: its sliding
-heat and flank offsets come with the involute-stage window bodies and flank offsets (wip/slowfric).
+coordinate in the planar model. The involute stage (issue 18) enters where the model is given
+(:func:`contact_bodies`, :func:`thermal_coupling`): its tooth flanks are window contacts
+(:func:`rvtool.slow.reducer_windows.involute_stage_bodies`), their sliding loss mu_involute I_s /
+tau_w is a heat source shared equally by the two gears' nodes (the sun and the three-stage
+pinion and compound gear on ``input``, the crank gears on ``cranks``), and the meshes get the
+flank channels above. Without the model the declaration is the one before issue 18 (no involute
+heat, no flank offsets).
 Every number of :class:`RvSlowInputs` is chosen here (the design gives none); the cases report them.
 """
 import math
 from dataclasses import dataclass
 
+from ..errors import RvtoolInputError
 from ..model import Family
 from ..validation import check_nonnegative, check_positive, check_range
 from .orchestrator import ThermalCoupling
-from .reducer_windows import ContactBodies
-from .thermal import (BearingClearanceExpansion, CycloidEnvelopeExpansion, SlidingLossSources, ThermalGapChannel,
-                      ThermalNetwork)
+from .reducer_windows import ContactBodies, involute_stage_bodies
+from .thermal import (BearingClearanceExpansion, CycloidEnvelopeExpansion, InvoluteMeshExpansion, SlidingLossSources,
+                      ThermalGapChannel, ThermalNetwork)
 
 NODES = ("housing", "pins", "wheels", "cranks", "needles", "carrier", "input")
 T_AMBIENT = 293.15
@@ -43,7 +54,8 @@ class RvSlowInputs:
     half in its bore); housing_film [W/(m^2 K)]: convection on its outer surface; housing_mount,
     carrier_ambient, input_ambient [W/K]: conduction into the machine frame, the driven machine
     and the motor; links [W/K]: (node_a, node_b, G); expansion [1/K] of all steel parts; mu_pins:
-    the declared sliding-loss coefficient of the cycloid--pin contacts [-] (heat sources).
+    the declared sliding-loss coefficient of the cycloid--pin contacts [-] (heat sources);
+    mu_involute: that of the involute tooth flanks [-] (a lubricated spur mesh, chosen).
     """
     specific_heat: float = 460.0
     housing_outer_radius: float = 0.085
@@ -58,11 +70,12 @@ class RvSlowInputs:
                     ("input", "housing", 0.5))
     expansion: float = 11.5e-6
     mu_pins: float = 0.05
+    mu_involute: float = 0.05
 
     def __post_init__(self):
         for name in ("specific_heat", "housing_outer_radius", "housing_height", "expansion"):
             check_positive(name, getattr(self, name))
-        for name in ("housing_film", "housing_mount", "carrier_ambient", "input_ambient", "mu_pins"):
+        for name in ("housing_film", "housing_mount", "carrier_ambient", "input_ambient", "mu_pins", "mu_involute"):
             check_nonnegative(name, getattr(self, name))
 
 
@@ -101,7 +114,8 @@ def thermal_network(design, inputs: RvSlowInputs) -> ThermalNetwork:
 def friction(inputs: RvSlowInputs) -> dict:
     """Declared sliding-loss mu per family (rolling bearings: no sliding exposure)."""
     return {Family.PINS.value: inputs.mu_pins, Family.ECCENTRIC_BEARINGS.value: 0.0,
-            Family.CRANK_BEARINGS.value: 0.0, Family.MAIN_BEARINGS.value: 0.0}
+            Family.CRANK_BEARINGS.value: 0.0, Family.MAIN_BEARINGS.value: 0.0,
+            Family.INVOLUTE_STAGE.value: inputs.mu_involute}
 
 
 HEAT_PARTITION = {Family.PINS.value: {"pins": 0.5, "wheels": 0.5},
@@ -111,13 +125,54 @@ HEAT_PARTITION = {Family.PINS.value: {"pins": 0.5, "wheels": 0.5},
 """Declared heat partition: the sliding loss of a contact shared equally by the two bodies."""
 
 
-def contact_bodies() -> dict:
+def contact_bodies(model=None) -> dict:
     """The RV's window declaration (:mod:`rvtool.assembly.rv.builder` contact ids): a pin contact
-    ``wheel<k>/pin<j>`` joins wheel k and the housing (pins fixed in it); the bearings roll."""
-    return {Family.PINS: ContactBodies(body_a=lambda c: c.split("/")[0], body_b=None),
-            Family.ECCENTRIC_BEARINGS: ContactBodies(rolling=True),
-            Family.CRANK_BEARINGS: ContactBodies(rolling=True),
-            Family.MAIN_BEARINGS: ContactBodies(rolling=True)}
+    ``wheel<k>/pin<j>`` joins wheel k and the housing (pins fixed in it); the bearings roll; with
+    ``model`` (an RV ReducerModel) the tooth flanks of its involute meshes join the meshes' bodies
+    (:func:`~rvtool.slow.reducer_windows.involute_stage_bodies`)."""
+    out = {Family.PINS: ContactBodies(body_a=lambda c: c.split("/")[0], body_b=None),
+           Family.ECCENTRIC_BEARINGS: ContactBodies(rolling=True),
+           Family.CRANK_BEARINGS: ContactBodies(rolling=True),
+           Family.MAIN_BEARINGS: ContactBodies(rolling=True)}
+    if model is not None:
+        out[Family.INVOLUTE_STAGE] = involute_stage_bodies(model)
+    return out
+
+
+def body_node(body: str) -> str:
+    """Thermal node of an RV body (:attr:`ReducerModel.body_names`): the input-side gears (``sun``,
+    the three-stage ``pinion``) on ``input``, ``crank<k>`` on ``cranks``, ``wheel<k>`` on ``wheels``."""
+    if body in ("sun", "pinion"):
+        return "input"
+    for prefix, node in (("crank", "cranks"), ("wheel", "wheels")):
+        if body.startswith(prefix):
+            return node
+    if body in NODES:
+        return body
+    raise RvtoolInputError(f"body {body!r} has no thermal node; valid: sun, pinion, crank<k>, wheel<k>, {NODES}")
+
+
+def involute_meshes(model) -> tuple:
+    """Per involute mesh of ``model``: (name, pair, node of gear A, node of gear B, frame node holding
+    the centre distance: the carrier for a mesh with a crank gear, else the housing)."""
+    names = model.body_names
+    out = []
+    for m in model.family_element(Family.INVOLUTE_STAGE).evaluator.meshes:
+        a, b = body_node(names[m.body_a]), body_node(names[m.body_b])
+        out.append((m.name, m.pair, a, b, "carrier" if "cranks" in (a, b) else "housing"))
+    return tuple(out)
+
+
+def heat_partition(model=None) -> dict:
+    """:data:`HEAT_PARTITION` and, with ``model``, each involute mesh's flanks
+    (``involute_stage/<mesh>``) shared equally by its two gears' nodes."""
+    out = dict(HEAT_PARTITION)
+    if model is not None:
+        for name, _, a, b, _ in involute_meshes(model):
+            share = {a: 0.5}
+            share[b] = share.get(b, 0.0) + 0.5
+            out[f"{Family.INVOLUTE_STAGE.value}/{name}"] = share
+    return out
 
 
 @dataclass(frozen=True)
@@ -134,8 +189,9 @@ class ProjectedExpansion:
         return self.factor * self.expansion.gap_change(dT_outer, dT_inner, dT_elements)
 
 
-def gap_channels(design, inputs: RvSlowInputs) -> tuple:
-    """The four thermal gap channels of the module docstring, reference = ambient."""
+def gap_channels(design, inputs: RvSlowInputs, model=None) -> tuple:
+    """The thermal gap channels of the module docstring, reference = ambient: the four of the pins
+    and bearings, and with ``model`` one per involute mesh."""
     a = inputs.expansion
     d = design
     eb = d.eccentric_bearing
@@ -153,6 +209,12 @@ def gap_channels(design, inputs: RvSlowInputs) -> tuple:
     crank = ProjectedExpansion(radial(tp.pitch_diameter, tp.roller_diameter), math.cos(math.radians(tp.cup_angle_deg)))
     main = ProjectedExpansion(radial(mb.pitch_diameter, mb.ball_diameter), math.cos(mb.contact_angle))
     ref = (T_AMBIENT,) * 3
+    gears = ()
+    if model is not None:
+        gears = tuple(ThermalGapChannel(
+            name=f"thermal/{Family.INVOLUTE_STAGE.value}/{name}",
+            contacts=(f"{Family.INVOLUTE_STAGE.value}/{name}/gear_a",), expansion=mesh_expansion(pair, a),
+            nodes=(frame, na, nb), reference_temperature=ref) for name, pair, na, nb, frame in involute_meshes(model))
     return (ThermalGapChannel(name="thermal/pins", contacts=(Family.PINS.value,), expansion=env,
                               nodes=("housing", "pins", "wheels"), reference_temperature=ref),
             ThermalGapChannel(name="thermal/eccentric_bearings", contacts=(Family.ECCENTRIC_BEARINGS.value,),
@@ -160,11 +222,22 @@ def gap_channels(design, inputs: RvSlowInputs) -> tuple:
             ThermalGapChannel(name="thermal/crank_bearings", contacts=(Family.CRANK_BEARINGS.value,),
                               expansion=crank, nodes=("carrier", "cranks", "cranks"), reference_temperature=ref),
             ThermalGapChannel(name="thermal/main_bearings", contacts=(Family.MAIN_BEARINGS.value,),
-                              expansion=main, nodes=("housing", "carrier", "carrier"), reference_temperature=ref))
+                              expansion=main, nodes=("housing", "carrier", "carrier"),
+                              reference_temperature=ref)) + gears
 
 
-def thermal_coupling(design, inputs: RvSlowInputs, *, channels=True) -> ThermalCoupling:
-    """Network, declared sliding-loss sources and (channels=True) the gap channels."""
+def mesh_expansion(pair, expansion: float) -> InvoluteMeshExpansion:
+    """The :class:`~rvtool.slow.thermal.InvoluteMeshExpansion` of an external involute pair, all parts
+    at the one steel ``expansion`` [1/K]."""
+    r_a, r_b = pair.working_pitch_radii
+    return InvoluteMeshExpansion(centre_distance=pair.a, working_pitch_radius_a=r_a, working_pitch_radius_b=r_b,
+                                 working_pressure_angle=pair.working_pressure_angle, frame_expansion=expansion,
+                                 gear_a_expansion=expansion, gear_b_expansion=expansion)
+
+
+def thermal_coupling(design, inputs: RvSlowInputs, *, channels=True, model=None) -> ThermalCoupling:
+    """Network, declared sliding-loss sources and (channels=True) the gap channels; with ``model``
+    (the RV ReducerModel of ``design``) the involute stage's heat partition and flank channels."""
     return ThermalCoupling(network=thermal_network(design, inputs),
-                           sources=SlidingLossSources(friction=friction(inputs), partition=HEAT_PARTITION),
-                           channels=gap_channels(design, inputs) if channels else ())
+                           sources=SlidingLossSources(friction=friction(inputs), partition=heat_partition(model)),
+                           channels=gap_channels(design, inputs, model) if channels else ())

@@ -431,12 +431,64 @@ class BearingClearanceExpansion:
 
 
 @dataclass(frozen=True, kw_only=True)
+class InvoluteMeshExpansion:
+    """Gap change of an external involute tooth pair along its line of action from thermal
+    expansion [m] (the gear-pair analogue of Eq. (obs_thermal_gap)):
+
+        Delta g_T = sin alpha_w (alpha_f dT_f a - alpha_A dT_A r_wA - alpha_B dT_B r_wB),
+
+    the centre distance a held by a frame part (a housing, a carrier) minus the two gears'
+    growth toward each other, all projected onto the line of action: a radial growth u of a
+    gear at its working pitch point moves its flank by u sin alpha_w along the line of action,
+    and a centre distance change Delta a opens the gap of a pair by Delta a sin alpha_w on either
+    line. Equal alpha dT give 0 (a = r_wA + r_wB: a uniformly scaled pair keeps its gaps, up to
+    alpha dT times the gap itself, neglected). Evaluated at the pitch point (declared): along the
+    path of contact the gears' terms change by (alpha_B dT_B - alpha_A dT_A) (s - s_pitch) (s the
+    roll distance), a flank-slope change that a constant per-flank offset cannot carry; it is
+    bounded by that difference times half the path of contact.
+
+    centre_distance a, working_pitch_radius_a / _b r_w [m] (> 0, a = r_wA + r_wB to 1e-9
+    relative: external pairs only); working_pressure_angle alpha_w [rad] in (0, pi/2);
+    frame_expansion, gear_a_expansion, gear_b_expansion: alpha [1/K] (>= 0).
+    """
+    centre_distance: float
+    working_pitch_radius_a: float
+    working_pitch_radius_b: float
+    working_pressure_angle: float
+    frame_expansion: float
+    gear_a_expansion: float
+    gear_b_expansion: float
+
+    def __post_init__(self):
+        for name in ("centre_distance", "working_pitch_radius_a", "working_pitch_radius_b"):
+            check_positive(name, getattr(self, name))
+        check_range("working_pressure_angle", self.working_pressure_angle, 0.0, 0.5 * math.pi, low_open=True,
+                    high_open=True)
+        for name in ("frame_expansion", "gear_a_expansion", "gear_b_expansion"):
+            check_nonnegative(name, getattr(self, name))
+        a, s = self.centre_distance, self.working_pitch_radius_a + self.working_pitch_radius_b
+        if abs(s - a) > 1e-9 * a:
+            raise RvtoolInputError(f"working_pitch_radius_a + working_pitch_radius_b = {s!r} is outside the valid "
+                                   f"range: equal to centre_distance = {a!r} (an external pair)")
+
+    def gap_change(self, dT_frame: float, dT_gear_a: float, dT_gear_b: float) -> float:
+        """Delta g_T [m] of the pair for temperature rises dT [K] of the frame and the two gears."""
+        for name, v in (("dT_frame", dT_frame), ("dT_gear_a", dT_gear_a), ("dT_gear_b", dT_gear_b)):
+            check_finite(name, v)
+        return math.sin(self.working_pressure_angle) * (
+            self.frame_expansion * dT_frame * self.centre_distance
+            - self.gear_a_expansion * dT_gear_a * self.working_pitch_radius_a
+            - self.gear_b_expansion * dT_gear_b * self.working_pitch_radius_b)
+
+
+@dataclass(frozen=True, kw_only=True)
 class ThermalGapChannel:
     """Binds an expansion map to thermal nodes and to the contacts whose gap it offsets.
 
     name: channel name (e.g. ``"thermal/pins"``). contacts: contact selectors
     receiving the offset (ids or set names). expansion: a
-    :class:`CycloidEnvelopeExpansion` or :class:`BearingClearanceExpansion`.
+    :class:`CycloidEnvelopeExpansion`, :class:`BearingClearanceExpansion` or
+    :class:`InvoluteMeshExpansion` (or any map with ``gap_change(dT, dT, dT)``).
     nodes: the three thermal nodes in the map's argument order (housing,
     pins, wheel / outer race, inner race, elements). reference_temperature:
     the three reference temperatures [K] (> 0) from which dT is measured.
