@@ -20,7 +20,10 @@ wheel bore), ``crank_bearings`` (tapered-roller pairs, crank -> carrier, planar 
 load through the rollers, the pair's axial force and tilting moment as observations -- the
 axial and tilt coordinates of the cranks are held, declared), ``main_bearings``
 (angular-contact pair, carrier -> housing). There are no output pins: the wheels drive the
-carrier through the cranks.
+carrier through the cranks. With ``[bearing_friction] model = "palmgren"`` (issue 17) two loss
+elements follow, ``crank_bearing_friction`` and ``main_bearing_friction``
+(:func:`rvtool.bearings.friction_element.rolling_friction_evaluator`: Palmgren's moment on each
+bearing's relative rotation, P1 from its accepted element loads); "none" (default) builds neither.
 
 Kinematics (:class:`RvKinematics`): the gear graph's rates (:mod:`.gear_graph`); the crank
 gears start conjugate to the sun (mid-backlash), the journals at the wheels' absolute phases.
@@ -537,6 +540,15 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     elements = {"pins": ContactElement(mbs, nodes, pin_set, ports=ports)}
     elements.update((name, ContactElement(mbs, nodes, s)) for name, s in
                     (*crank_path, ("crank_bearings", cranks), ("main_bearings", main)))
+    if d.bearing_friction.model != "none":
+        # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
+        # (carrier -> ground), P1 from the accepted element loads of each mounting; a loss element of its
+        # own per bearing set (switched off: absent, no cost). The needles (inside the elastic-crank
+        # element when the cranks bend) carry none here.
+        from ...bearings.friction_element import rolling_friction_evaluator
+        for name, bset in (("crank_bearing_friction", cranks), ("main_bearing_friction", main)):
+            elements[name] = ContactElement(mbs, nodes, rolling_friction_evaluator(bset, d.bearing_friction,
+                                                                                   name=name))
     mbs.Assemble()
     if C_crank is None:
         families = {fam: (name, np.arange(len(elements[name].ids))) for fam, name in FAMILY_ELEMENTS.items()}

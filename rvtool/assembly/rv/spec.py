@@ -24,7 +24,7 @@ from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
 from ...structure.crank_beam import CrankShaft
-from ..spec import LINKS, Housing, PinContact, Pins, Wheels, build_section, load_sections
+from ..spec import LINKS, BearingFriction, Housing, PinContact, Pins, Wheels, build_section, load_sections
 
 TOPOLOGIES = ("rv2", "rv3")
 
@@ -167,6 +167,9 @@ class RVDesign:
     compound_gear: InvoluteGear | None = None
     input_stage: InputStage = field(default_factory=InputStage)
     housing: Housing = field(default_factory=Housing)
+    #: Palmgren friction torque of the tapered crank bearings and the main bearings (issue 17; optional
+    #: section, model "none" = no element, no cost)
+    bearing_friction: BearingFriction = field(default_factory=BearingFriction)
     #: the file-form data this design was loaded from (what :func:`replace` changes and re-loads)
     source: dict | None = field(default=None, compare=False, hash=False, repr=False, metadata={"file": False})
 
@@ -315,8 +318,9 @@ _SECTIONS = {"sun_gear": lambda d: _gear("sun_gear", d),
              "bodies": lambda d: build_section(RvBodies, "bodies", d),
              "input_pinion": lambda d: _gear("input_pinion", d),
              "compound_gear": lambda d: _gear("compound_gear", d),
-             "input_stage": lambda d: build_section(InputStage, "input_stage", d)}
-_OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input_stage")
+             "input_stage": lambda d: build_section(InputStage, "input_stage", d),
+             "bearing_friction": lambda d: build_section(BearingFriction, "bearing_friction", d)}
+_OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input_stage", "bearing_friction")
 
 
 def design_from_dict(d):
