@@ -4,8 +4,9 @@ Quasi-static TE at rated load over one cycloid mesh cycle (rvtool.protocols.prec
 Reference: 80 points per mesh cycle, the analytic closest-point search of the wheel profile
 (480 table samples per tooth), 4 involute slices, 4 needle and 4 tapered laminae, involute
 window 3. Each factor is varied alone from the reference (so that one factor's error is not
-masked by another's), down to below the design's settings (40 points, discrete table search with
-120 samples, 1 involute slice, 2 needle and 2 tapered laminae, window from the contact ratio): TE sampling (points per mesh cycle: the TE
+masked by another's), down to below the design's settings (40 points, the design's profile setting
+(now the analytic search; the discrete table search with 120 samples before), 1 involute slice, 2
+needle and 2 tapered laminae, window from the contact ratio): TE sampling (points per mesh cycle: the TE
 peak-to-peak of a sampled curve), profile samples, involute slices, needle laminae, tapered
 laminae, involute window, profile (the search, and the table samples of the discrete one). Error: max |TE - TE_ref| over the reference's common samples (means
 removed) and the TE peak-to-peak error, the larger of the two, relative to the reference's TE
