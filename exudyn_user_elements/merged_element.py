@@ -137,6 +137,25 @@ class HostedContactElement(ContactElement):
             return self._ev
         return self._evaluate_fresh(key, pose, vel)
 
+    @property
+    def launchable(self):
+        """True if the host may sum this family's rows on the device: a family on the host's rigid
+        coordinates whose evaluator launches its Warp kernel without assembling (``launch``,
+        ``row_buffers``)."""
+        ev = self.evaluator
+        return (self.prefix is not None and getattr(ev, "backend", None) == "warp"
+                and callable(getattr(ev, "launch", None)) and callable(getattr(ev, "row_buffers", None)))
+
+    def launched(self, key, pose, vel):
+        """:meth:`store` without the host-side assembly, after the host launched this family's
+        kernel on inputs staged by ``evaluator.stage(pose, vel)`` (its rows summed on the device):
+        caches the :class:`~rvtool.contact.evaluator.LaunchedEvaluation`, which assembles a field
+        when it is read (commit, observers, ``evaluation_at``)."""
+        ev = self.evaluator.launched(pose, vel)
+        self.n_evaluations += 1
+        self._key, self._ev = key, ev
+        return ev
+
     def commit(self, q_global, v_global, t=None, snapshot=True):
         """:meth:`ContactElement.commit`; ``snapshot=False`` commits the history and the last
         observation without building the observers' snapshot (the driver passes it when no
@@ -219,6 +238,11 @@ class MergedContactElement:
         self._ltg = None
         self._drive = None
         self._load = None
+        self._sums = None       # warp_contacts.segment_sum.ElementSums of the launchable families
+        self._slot = {}         # member index -> slot in _sums
+        self._used = None
+        self._fast = False      # the cached evaluation summed families on the device
+        self._device_only = False
         # Exudyn requires the object's matrices and its Jacobian user function to agree in format
         self.sparse = self.n > DENSE_MAX_COORDINATES
         if self.sparse:
@@ -273,6 +297,7 @@ class MergedContactElement:
             # a diverged Newton trial: every family answers NaN so that the driver rejects the attempt
             evs = [m.evaluate(t, q[m.positions], q_t[m.positions]) for m in self.members]
             self._key, self._Q, self._evs = key, np.full(self.n, np.nan), evs
+            self._fast = self._device_only = False
             return self._Q, self._evs
         nr = self.n_rigid
         # the rigid poses once for every family (ContactElement.pose_velocity, shared)
@@ -280,31 +305,91 @@ class MergedContactElement:
         pose_r = self.reference + qr.reshape(-1, 3)
         vel_r = vr.reshape(-1, 3)
         key_r = (t, qr.tobytes(), vr.tobytes())
-        Q = np.zeros(self.n)
-        evs = []
-        for m in self.members:
-            if m.prefix is not None:
-                ev = m.store(key_r, pose_r, vel_r)
-                Q[:nr] += ev.Q
+        sums = self.row_sums()
+        used = self._used
+        used[:] = False
+        evs, host, launches = [None] * len(self.members), [], []
+        for i, m in enumerate(self.members):
+            slot = self._slot.get(i)
+            if slot is not None and key_r != m._key and (m.n_evaluations + 1) not in m.inject_nan_at:
+                # rows summed on the device (warp_contacts.segment_sum): no host assembly
+                m.evaluator.stage(pose_r, vel_r)
+                launches.append((slot, m.evaluator.launch_staged, m.evaluator.velocity_rows))
+                used[slot] = True
+            elif m.prefix is not None:
+                evs[i] = m.store(key_r, pose_r, vel_r)
+                host.append((m, evs[i]))
             else:
                 qm, vm = q[m.positions], q_t[m.positions]
-                ev = m.store((t, qm.tobytes(), vm.tobytes()), *m.pose_velocity(qm, vm))
+                evs[i] = m.store((t, qm.tobytes(), vm.tobytes()), *m.pose_velocity(qm, vm))
+                host.append((m, evs[i]))
+        if launches:
+            sums.run(launches)
+            for i, slot in self._slot.items():
+                if used[slot]:
+                    evs[i] = self.members[i].launched(key_r, pose_r, vel_r)
+        Q = np.zeros(self.n)
+        self._fast = bool(used.any())
+        # every family summed on the device and no structural coordinates: the sums' Jacobian is
+        # the element's
+        self._device_only = self._fast and not host and self.n == nr
+        if self._fast:
+            sums.set_used(used)
+            Qf, finite = sums.vector()
+            Q[:nr] = Qf
+            if not finite:
+                # one sum checked every launched force and tangent; name the families (rare path)
+                for i, slot in self._slot.items():
+                    if used[slot] and not evs[i].finite:
+                        self.members[i].nonfinite = True
+        for m, ev in host:
+            if m.prefix is not None:
+                Q[:nr] += ev.Q
+            else:
                 Q[m.positions] += ev.Q
-            evs.append(ev)
         self._key, self._Q, self._evs = key, Q, evs
         return Q, evs
 
-    def tangent(self, t, q, q_t, f_q=1.0, f_v=0.0):
-        """Dense f_q dQ/dq + f_v dQ/dq_t (n, n) at the host's coordinates (summed over families)."""
+    def row_sums(self):
+        """The device-side sums of the launchable families (built on first use, after every family
+        was added; None if no family is launchable)."""
+        if self._used is None:
+            fams = [i for i, m in enumerate(self.members) if m.launchable]
+            self._slot = {i: s for s, i in enumerate(fams)}
+            self._used = np.zeros(len(fams), bool)
+            if fams:
+                from warp_contacts.segment_sum import ElementSums
+                self._sums = ElementSums([self.members[i].evaluator.row_buffers() for i in fams], self.n_rigid)
+        return self._sums
+
+    def user_jacobian(self, t, q, q_t, f_q, f_v):
+        """Exudyn's J_user = -(f_q dQ/dq + f_v dQ/dq_t), dense (n, n), at the host's coordinates; the
+        launched families' part from the device-side sums (a buffer of the sums where no other
+        family adds: copy it to keep it)."""
         _, evs = self.evaluate(t, q, q_t)
-        J = np.zeros((self.n, self.n))
-        for m, ev in zip(self.members, evs):
+        nr = self.n_rigid
+        if self._fast:
+            Jf = self._sums.jacobian(f_q, f_v)
+            if self._device_only:
+                return Jf
+            J = np.zeros((self.n, self.n))
+            J[:nr, :nr] = Jf
+        else:
+            J = np.zeros((self.n, self.n))
+        for i, (m, ev) in enumerate(zip(self.members, evs)):
+            slot = self._slot.get(i)
+            if slot is not None and self._fast and self._used[slot]:
+                continue
             blk = f_q * ev.dQdq if f_v == 0 else f_q * ev.dQdq + f_v * ev.dQdv
             if m.prefix is not None:
-                J[:m.prefix, :m.prefix] += blk
+                J[:m.prefix, :m.prefix] -= blk
             else:
-                J[np.ix_(m.positions, m.positions)] += blk
+                J[np.ix_(m.positions, m.positions)] -= blk
         return J
+
+    def tangent(self, t, q, q_t, f_q=1.0, f_v=0.0):
+        """Dense f_q dQ/dq + f_v dQ/dq_t (n, n) at the host's coordinates (summed over families)."""
+        return -self.user_jacobian(t, q, q_t, f_q, f_v)
 
     # -- Exudyn callbacks (exact signatures) --------------------------------
     def force_callback(self, mbs, t, itemNumber, q, q_t):
@@ -313,8 +398,7 @@ class MergedContactElement:
 
     def jacobian_callback(self, mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
         self.n_jacobian_calls += 1
-        J = self.tangent(t, q, q_t, fODE2, fODE2_t)
-        J *= -1.0
+        J = self.user_jacobian(t, q, q_t, fODE2, fODE2_t)
         return _sparse_container(J) if self.sparse else J
 
     # -- accepted-step interface ----------------------------------------------

@@ -42,7 +42,7 @@ def test_element_sums_match_reference_and_csr_bit_for_bit(device):
     index = [coordinate_index(b, nb) for b, *_ in fams]
     rows = [(_device_rows(q, device), _device_rows(dq, device), _device_rows(dv, device) if w else None)
             for (_, q, dq, dv), w in zip(fams, withs)]
-    sums = ElementSums([(ix, *r) for ix, r in zip(index, rows)], n, device=device)
+    sums = ElementSums([(ix, *r) for ix, r in zip(index, rows)], n)
     for f in range(3):
         sums.add(f, f == 0, withs[f])
     Q, finite = sums.vector()
@@ -74,7 +74,7 @@ def test_element_sums_flag_a_nonfinite_tangent(device):
     row = int(np.flatnonzero(np.all(b < 2, axis=1))[0])   # a row with both bodies free: none dropped
     dq[row, 1, 2] = np.nan
     rows = (_device_rows(q, device), _device_rows(dq, device), _device_rows(dv, device))
-    sums = ElementSums([(coordinate_index(b, 2), *rows)], 6, device=device)
+    sums = ElementSums([(coordinate_index(b, 2), *rows)], 6)
     sums.add(0, True, True)
     Q, finite = sums.vector()
     assert np.all(np.isfinite(Q)) and not finite and not sums.slot_finite(0)

@@ -15,7 +15,6 @@ import functools
 import numpy as np
 import warp as wp
 
-from .precision import resolve_device, scalar_types
 from .segment_sum_ref import segments
 
 
@@ -85,16 +84,20 @@ class ElementSums:
     families: per family its row index (N_f, k_f) (element coordinate of each row entry, -1
     dropped) and its row buffers as Warp arrays (q (N_f, k_f), dqdq (N_f, k_f, k_f), dqdv
     (N_f, k_f, k_f) or None), the arrays its kernel writes in place at every launch;
-    n: element coordinates; precision, device: as the families' kernels.
+    n: element coordinates. Scalar type and device are the row buffers' (one for all families).
 
-    Per evaluation: :meth:`add` once per family (in family order, ``first`` for the first one),
-    then :meth:`vector`; per Jacobian call :meth:`jacobian`. Results are host arrays owned by
+    Per evaluation: :meth:`run` (or :meth:`add` once per family, in family order, ``first`` for the
+    first one), then :meth:`vector`; per Jacobian call :meth:`jacobian`. Results are host arrays owned by
     this object (overwritten by the next call).
     """
 
-    def __init__(self, families, n, precision="float64", device="cpu"):
-        self.wdtype, self.ndtype = scalar_types(precision)
-        self.device = resolve_device(device)
+    def __init__(self, families, n):
+        q0 = families[0][1]
+        if any(f[1].dtype != q0.dtype or f[1].device != q0.device for f in families):
+            raise ValueError("the families' row buffers differ in scalar type or device")
+        self.wdtype = q0.dtype
+        self.ndtype = np.float64 if q0.dtype == wp.float64 else np.float32
+        self.device = q0.device
         self.on_cpu = wp.get_device(self.device).is_cpu
         self.n = n = int(n)
         F = len(families)
@@ -107,6 +110,7 @@ class ElementSums:
         self.Kv = self.block[n + F * n * n:].reshape(F, n * n)
         self.J = np.zeros(n * n, self.ndtype)
         self.used = np.ones(F, np.int32)
+        self._graphs = {}
         if self.on_cpu:
             wrap = lambda a, t=dt: wp.array(a, dtype=t, device=d, copy=False)
         else:
@@ -129,6 +133,26 @@ class ElementSums:
         self._jac = wp.launch(_jacobian_kernel(dt), dim=n * n, device=d,
                               inputs=[self._used, self._kq, self._kv, dt(1.0), dt(0.0)], outputs=[self._j],
                               record_cmd=True)
+
+    def run(self, launches):
+        """Launch the staged families and sum their rows: ``launches`` lists (slot, launch, with_v)
+        in family order, ``launch()`` the family kernel's recorded launch on its staged inputs.
+        Every sequence runs as one captured graph (CPU: Warp's APIC replay in C++; GPU: a CUDA
+        graph), captured at its first use: one Python call instead of two launches per family.
+        The sequence is idempotent (pure kernels, the first sum writes), so a capture that also
+        executes is harmless."""
+        key = tuple((slot, bool(wv)) for slot, _, wv in launches)
+        g = self._graphs.get(key)
+        if g is None:
+            with wp.ScopedCapture(device=self.device) as cap:
+                self._sequence(launches)
+            g = self._graphs[key] = cap.graph
+        wp.capture_launch(g)
+
+    def _sequence(self, launches):
+        for j, (slot, launch, wv) in enumerate(launches):
+            launch()
+            self.add(slot, j == 0, wv)
 
     def add(self, f, first, with_v):
         """Sum family ``f``'s rows (its kernel has just written them): forces into the vector

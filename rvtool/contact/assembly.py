@@ -53,6 +53,7 @@ class BlockAssembler:
     def __init__(self, bodies, n_bodies):
         self.n = n = 3 * n_bodies
         gidx = coordinate_index(bodies, n_bodies)
+        self.index = gidx     # element coordinate of every row entry (-1 dropped): device-side sums
         self._vec = RowScatter(gidx, n)
         self._mat = RowScatter(pair_index(gidx, n), n * n)
 
