@@ -240,8 +240,9 @@ class MergedContactElement:
         self._load = None
         self._sums = None       # warp_contacts.segment_sum.ElementSums of the launchable families
         self._slot = {}         # member index -> slot in _sums
-        self._used = None
+        self._used = None       # set once the device sums are built (row_sums)
         self._fast = False      # the cached evaluation summed families on the device
+        self._launched = frozenset()   # members summed on the device in the cached evaluation
         self._device_only = False
         # Exudyn requires the object's matrices and its Jacobian user function to agree in format
         self.sparse = self.n > DENSE_MAX_COORDINATES
@@ -293,29 +294,33 @@ class MergedContactElement:
         key = (t, q.tobytes(), q_t.tobytes())
         if key == self._key:
             return self._Q, self._evs
-        if not (np.isfinite(q.sum()) and np.isfinite(q_t.sum())):
+        s = q.sum() + q_t.sum()
+        if s - s != 0.0:        # NaN or inf in the state (one sum; inf - inf is NaN)
             # a diverged Newton trial: every family answers NaN so that the driver rejects the attempt
             evs = [m.evaluate(t, q[m.positions], q_t[m.positions]) for m in self.members]
             self._key, self._Q, self._evs = key, np.full(self.n, np.nan), evs
             self._fast = self._device_only = False
+            self._launched = frozenset()
             return self._Q, self._evs
         nr = self.n_rigid
         # the rigid poses once for every family (ContactElement.pose_velocity, shared)
-        qr, vr = q[:nr], q_t[:nr]
+        if nr == self.n:
+            qr, vr, key_r = q, q_t, key
+        else:
+            qr, vr = q[:nr], q_t[:nr]
+            key_r = (t, qr.tobytes(), vr.tobytes())
         pose_r = self.reference + qr.reshape(-1, 3)
         vel_r = vr.reshape(-1, 3)
-        key_r = (t, qr.tobytes(), vr.tobytes())
         sums = self.row_sums()
-        used = self._used
-        used[:] = False
-        evs, host, launches = [None] * len(self.members), [], []
+        evs, host, launches, launched = [None] * len(self.members), [], [], []
         for i, m in enumerate(self.members):
             slot = self._slot.get(i)
             if slot is not None and key_r != m._key and (m.n_evaluations + 1) not in m.inject_nan_at:
                 # rows summed on the device (warp_contacts.segment_sum): no host assembly
-                m.evaluator.stage(pose_r, vel_r)
-                launches.append((slot, m.evaluator.launch_staged, m.evaluator.velocity_rows))
-                used[slot] = True
+                ev = m.evaluator
+                ev.stage(pose_r, vel_r)
+                launches.append((slot, ev.launch_staged, ev.velocity_rows))
+                launched.append(i)
             elif m.prefix is not None:
                 evs[i] = m.store(key_r, pose_r, vel_r)
                 host.append((m, evs[i]))
@@ -323,25 +328,29 @@ class MergedContactElement:
                 qm, vm = q[m.positions], q_t[m.positions]
                 evs[i] = m.store((t, qm.tobytes(), vm.tobytes()), *m.pose_velocity(qm, vm))
                 host.append((m, evs[i]))
-        if launches:
-            sums.run(launches)
-            for i, slot in self._slot.items():
-                if used[slot]:
-                    evs[i] = self.members[i].launched(key_r, pose_r, vel_r)
-        Q = np.zeros(self.n)
-        self._fast = bool(used.any())
+        self._fast = bool(launches)
+        self._launched = frozenset(launched)
         # every family summed on the device and no structural coordinates: the sums' Jacobian is
         # the element's
         self._device_only = self._fast and not host and self.n == nr
         if self._fast:
-            sums.set_used(used)
+            sums.run(launches)
+            for i in launched:
+                evs[i] = self.members[i].launched(key_r, pose_r, vel_r)
+            sums.set_used(self._used_slots(launches))
             Qf, finite = sums.vector()
-            Q[:nr] = Qf
             if not finite:
                 # one sum checked every launched force and tangent; name the families (rare path)
-                for i, slot in self._slot.items():
-                    if used[slot] and not evs[i].finite:
+                for i in launched:
+                    if not evs[i].finite:
                         self.members[i].nonfinite = True
+            if self._device_only:
+                Q = Qf.copy()
+            else:
+                Q = np.zeros(self.n)
+                Q[:nr] = Qf
+        else:
+            Q = np.zeros(self.n)
         for m, ev in host:
             if m.prefix is not None:
                 Q[:nr] += ev.Q
@@ -350,13 +359,23 @@ class MergedContactElement:
         self._key, self._Q, self._evs = key, Q, evs
         return Q, evs
 
+    def _used_slots(self, launches):
+        """Per slot of the device sums: summed in this evaluation (the launches' slots)."""
+        if len(launches) == len(self._slot):
+            return self._all_slots
+        used = [False] * len(self._slot)
+        for slot, _, _ in launches:
+            used[slot] = True
+        return tuple(used)
+
     def row_sums(self):
         """The device-side sums of the launchable families (built on first use, after every family
         was added; None if no family is launchable)."""
         if self._used is None:
             fams = [i for i, m in enumerate(self.members) if m.launchable]
             self._slot = {i: s for s, i in enumerate(fams)}
-            self._used = np.zeros(len(fams), bool)
+            self._all_slots = (True,) * len(fams)
+            self._used = True
             if fams:
                 from warp_contacts.segment_sum import ElementSums
                 self._sums = ElementSums([self.members[i].evaluator.row_buffers() for i in fams], self.n_rigid)
@@ -377,9 +396,8 @@ class MergedContactElement:
         else:
             J = np.zeros((self.n, self.n))
         for i, (m, ev) in enumerate(zip(self.members, evs)):
-            slot = self._slot.get(i)
-            if slot is not None and self._fast and self._used[slot]:
-                continue
+            if i in self._launched:
+                continue        # summed on the device
             blk = f_q * ev.dQdq if f_v == 0 else f_q * ev.dQdq + f_v * ev.dQdv
             if m.prefix is not None:
                 J[:m.prefix, :m.prefix] -= blk

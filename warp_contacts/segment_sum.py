@@ -63,10 +63,12 @@ def _jacobian_kernel(dtype):
             # Model:
             used: wp.array(dtype=wp.int32),
             # Data in:
-            kq_in: wp.array2d(dtype=dtype), kv_in: wp.array2d(dtype=dtype), f_q: dtype, f_v: dtype,
+            kq_in: wp.array2d(dtype=dtype), kv_in: wp.array2d(dtype=dtype), factors: wp.array(dtype=dtype),
             # Data out:
             j_out: wp.array(dtype=dtype)):
         e = wp.tid()
+        f_q = factors[0]
+        f_v = factors[1]
         s = dtype(0.0)
         for f in range(kq_in.shape[0]):
             if used[f] != 0:
@@ -110,6 +112,7 @@ class ElementSums:
         self.Kv = self.block[n + F * n * n:].reshape(F, n * n)
         self.J = np.zeros(n * n, self.ndtype)
         self.used = np.ones(F, np.int32)
+        self._used_key = (True,) * F
         self._graphs = {}
         if self.on_cpu:
             wrap = lambda a, t=dt: wp.array(a, dtype=t, device=d, copy=False)
@@ -130,9 +133,14 @@ class ElementSums:
                                               inputs=maps + [n, f, acc, wv, q, dqdq, dqdv if wv else dummy],
                                               outputs=[self._q, self._kq, self._kv], record_cmd=True)
             self._cmds.append(cmds)
-        self._jac = wp.launch(_jacobian_kernel(dt), dim=n * n, device=d,
-                              inputs=[self._used, self._kq, self._kv, dt(1.0), dt(0.0)], outputs=[self._j],
-                              record_cmd=True)
+        # Exudyn's factors (f_ODE2, f_ODE2_t) as an input array, so that the Jacobian launch is
+        # captured once and replayed (a scalar launch parameter would be repacked at every call)
+        self.factors = np.zeros(2, self.ndtype)
+        self._factors = wrap(self.factors)
+        with wp.ScopedCapture(device=d) as cap:
+            wp.launch(_jacobian_kernel(dt), dim=n * n, device=d, inputs=[self._used, self._kq, self._kv, self._factors],
+                      outputs=[self._j])
+        self._jac = cap.graph
 
     def run(self, launches):
         """Launch the staged families and sum their rows: ``launches`` lists (slot, launch, with_v)
@@ -161,10 +169,11 @@ class ElementSums:
         self._cmds[f][0 if first else 1, 1 if with_v else 0].launch()
 
     def set_used(self, used):
-        """Slots the Jacobian combines (bool per family): the families summed by :meth:`add` in
-        the current evaluation (a family evaluated the old way is added on the host)."""
-        u = np.asarray(used, np.int32)
-        if not np.array_equal(u, self.used):
+        """Slots the Jacobian combines (a tuple of bool per family): the families summed in the
+        current evaluation (a family evaluated the old way is added on the host)."""
+        u = tuple(used)
+        if u != self._used_key:
+            self._used_key = u
             self.used[...] = u
             if not self.on_cpu:
                 self._used.assign(self.used)
@@ -184,9 +193,11 @@ class ElementSums:
 
     def jacobian(self, f_q, f_v):
         """J = -(sum_f (f_q K_q,f + f_v K_v,f)) over the used slots, (n, n) host array."""
-        self._jac.set_param_at_index(3, self.wdtype(f_q))
-        self._jac.set_param_at_index(4, self.wdtype(f_v))
-        self._jac.launch()
+        self.factors[0] = f_q
+        self.factors[1] = f_v
+        if not self.on_cpu:
+            self._factors.assign(self.factors)
+        wp.capture_launch(self._jac)
         if not self.on_cpu:
             self.J[...] = self._j.numpy()
         return self.J.reshape(self.n, self.n)

@@ -18,6 +18,7 @@ class Staged:
         self.kernel = kernel
         self.on_cpu = wp.get_device(kernel.device).is_cpu
         self._views = {}
+        self._rows = {}
 
     def _view(self, name):
         v = self._views.get(name)
@@ -37,10 +38,12 @@ class Staged:
 
     def write_rows(self, name, value):
         """The leading rows of input ``name`` = value (a pose array whose last row, the ground, stays)."""
-        v = self._view(name)
-        v[:len(value)] = value
+        rows = self._rows.get(name)
+        if rows is None:
+            rows = self._rows[name] = self._view(name)[:len(value)]
+        rows[...] = value
         if not self.on_cpu:
-            self.kernel.device_array(name).assign(v)
+            self.kernel.device_array(name).assign(self._view(name))
 
     def read(self, name):
         """Output ``name`` of the last launch: a view on the CPU (valid until the next launch), a
