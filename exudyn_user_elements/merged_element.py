@@ -115,6 +115,7 @@ class HostedContactElement(ContactElement):
     def __init__(self, host, positions, nodes, contact_set, **kw):
         self.host = host
         self.positions = np.asarray(positions, dtype=int)
+        self._cidx = None
         super().__init__(host.mbs, nodes, contact_set, **kw)
         if len(self.positions) != self.n:
             raise RvtoolInputError(f"positions has {len(self.positions)} entries for a family with {self.n} coordinates")
@@ -174,7 +175,9 @@ class HostedContactElement(ContactElement):
 
     @property
     def coordinate_indices(self):
-        return self.host.coordinate_indices[self.positions]
+        if self._cidx is None:      # fixed once the system is assembled (read at every commit)
+            self._cidx = self.host.coordinate_indices[self.positions]
+        return self._cidx
 
     def _contract(self, ev):
         """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T on the port rows in contact only (module docstring)."""

@@ -149,7 +149,7 @@ class ElementSums:
         graph), captured at its first use: one Python call instead of two launches per family.
         The sequence is idempotent (pure kernels, the first sum writes), so a capture that also
         executes is harmless."""
-        key = tuple((slot, bool(wv)) for slot, _, wv in launches)
+        key = tuple(launches)      # slots, launch methods (bound: equal for one kernel) and with_v
         g = self._graphs.get(key)
         if g is None:
             with wp.ScopedCapture(device=self.device) as cap:

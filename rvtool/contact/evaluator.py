@@ -37,15 +37,15 @@ FIELDS = ("Q", "dQdq", "dQdv", "obs", "trial_history", "finite")
 class LaunchedEvaluation(Evaluation):
     """The :class:`Evaluation` of a family's kernel launch whose rows were not assembled on the
     host (the merged element sums them on the device, :mod:`warp_contacts.segment_sum`): each
-    field is made from the launch buffers by ``make[field]()`` when first read (a history
-    commit reads only the observations and the trial history) and kept. The buffers hold this
-    launch until the family launches again (``family.launches`` counts launches); a field first
-    read after that comes from a fresh ``family.evaluate`` at the same state from the committed
-    history, which gives the same values as long as that history was not committed since
-    (trial evaluations are read before their step's commit)."""
+    field is made by ``family.launched_field(name)`` from the launch buffers when first read (a
+    history commit reads only the observations and the trial history) and kept. The buffers hold
+    this launch until the family launches again (``family.launches`` counts launches); a field
+    first read after that comes from a fresh ``family.evaluate`` at the same state from the
+    committed history, which gives the same values as long as that history was not committed
+    since (trial evaluations are read before their step's commit)."""
 
-    def __init__(self, family, pose, vel, make):
-        self._family, self._pose, self._vel, self._make = family, pose, vel, make
+    def __init__(self, family, pose, vel):
+        self._family, self._pose, self._vel = family, pose, vel
         self._stamp = family.launches
         self._made = {}
 
@@ -53,7 +53,7 @@ class LaunchedEvaluation(Evaluation):
         made = self._made
         if name not in made:
             if self._family.launches == self._stamp:
-                made[name] = self._make[name]()
+                made[name] = self._family.launched_field(name)
             else:
                 full = self._family.evaluate(self._pose, self._vel, check=False)
                 for f in FIELDS:
@@ -204,16 +204,20 @@ class ContactSetEvaluator:
         """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
         fields are assembled from the kernel's outputs when read. Increments ``launches``."""
         self.launches += 1
-        r = self._staged.read
+        return LaunchedEvaluation(self, pose, vel)
 
-        def trial():
+    def launched_field(self, name):
+        """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""
+        r = self._staged.read
+        if name == "Q":
+            return self.assembler.vector(np.asarray(r("q"), np.float64))
+        if name in ("dQdq", "dQdv"):
+            return self.assembler.matrix(np.asarray(r("dqdq" if name == "dQdq" else "dqdv"), np.float64))
+        if name == "obs":
+            return np.array(r("obs"), np.float64)
+        if name == "trial_history":
             return tuple(np.array(a) for a in self._slip((r("h_act_out"), r("h_a_out"), r("h_b_out")), self.history))
-        make = {"Q": lambda: self.assembler.vector(np.asarray(r("q"), np.float64)),
-                "dQdq": lambda: self.assembler.matrix(np.asarray(r("dqdq"), np.float64)),
-                "dQdv": lambda: self.assembler.matrix(np.asarray(r("dqdv"), np.float64)),
-                "obs": lambda: np.array(r("obs"), np.float64), "trial_history": trial,
-                "finite": lambda: all_finite(r("q"), r("dqdq"), r("dqdv"))}
-        return LaunchedEvaluation(self, pose, vel, make)
+        return all_finite(r("q"), r("dqdq"), r("dqdv"))
 
     def launch(self, pose, vel):
         """Kernel launch at poses/velocities (nb, 3) from the committed history without assembly

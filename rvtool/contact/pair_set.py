@@ -69,6 +69,7 @@ class PairFamilySet:
         """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None for it
         and the kernel skips the velocity seeds)."""
         self.velocity_tangent = bool(on)
+        self.launches += 1      # a launched evaluation made before reads its fields afresh
         if self.backend == "warp":
             self._kernel.set_velocity_tangent(on)
 
@@ -140,20 +141,27 @@ class PairFamilySet:
         """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
         fields are assembled from the kernel's outputs when read. Increments ``launches``."""
         self.launches += 1
-        r = self._staged.read
-        with_v = self.velocity_tangent
-        n = self.assembler.n
+        return LaunchedEvaluation(self, pose, vel)
 
-        def trial():
+    def launched_field(self, name):
+        """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""
+        r = self._staged.read
+        if name == "Q":
+            return self.assembler.vector(np.asarray(r("q"), float))
+        if name == "dQdq":
+            return self.assembler.matrix(np.asarray(r("dqdq"), float))
+        if name == "dQdv":
+            n = self.assembler.n
+            return self.assembler.matrix(np.asarray(r("dqdv"), float)) if self.velocity_tangent else np.zeros((n, n))
+        if name == "obs":
+            return np.array(r("obs"), float)
+        if name == "trial_history":
+            if not self.anchor:
+                return ()
             flag, a, b = (np.array(r(nm)) for nm in ("h_act_out", "h_a_out", "h_b_out"))
             hist = self.history
             return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
-        make = {"Q": lambda: self.assembler.vector(np.asarray(r("q"), float)),
-                "dQdq": lambda: self.assembler.matrix(np.asarray(r("dqdq"), float)),
-                "dQdv": lambda: self.assembler.matrix(np.asarray(r("dqdv"), float)) if with_v else np.zeros((n, n)),
-                "obs": lambda: np.array(r("obs"), float), "trial_history": trial if self.anchor else (lambda: ()),
-                "finite": lambda: all_finite(r("q"), r("dqdq"), *((r("dqdv"),) if with_v else ()))}
-        return LaunchedEvaluation(self, pose, vel, make)
+        return all_finite(r("q"), r("dqdq"), *((r("dqdv"),) if self.velocity_tangent else ()))
 
     def launch(self, pose, vel):
         """Kernel launch at poses/velocities (nb, 3) from the committed history without assembly

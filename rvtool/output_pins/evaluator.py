@@ -201,19 +201,26 @@ class OutputPinEvaluator:
         """The :class:`LaunchedEvaluation` of the launch just made at poses (nb, 3): its fields are
         assembled from the kernel's outputs when read. Increments ``launches``."""
         self.launches += 1
-        r = self._staged.read
-        n = self.assembler.n
+        return LaunchedEvaluation(self, pose, vel)
 
-        def trial():
+    def launched_field(self, name):
+        """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""
+        r = self._staged.read
+        if name == "Q":
+            return self.assembler.vector(np.asarray(r("q"), np.float64))
+        if name == "dQdq":
+            return self.assembler.matrix(np.asarray(r("dqdq"), np.float64))
+        if name == "dQdv":
+            return np.zeros((self.assembler.n,) * 2)
+        if name == "obs":
+            return self._observations(r("slices"), r("ft") if self.anchor else None)
+        if name == "trial_history":
+            if not self.anchor:
+                return ()
             flag, a, b = (np.array(r(nm)) for nm in ("h_act_out", "h_a_out", "h_b_out"))
             hist = self.history
             return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
-        Q = lambda: self.assembler.vector(np.asarray(r("q"), np.float64))
-        K = lambda: self.assembler.matrix(np.asarray(r("dqdq"), np.float64))
-        make = {"Q": Q, "dQdq": K, "dQdv": lambda: np.zeros((n, n)),
-                "obs": lambda: self._observations(r("slices"), r("ft") if self.anchor else None),
-                "trial_history": trial if self.anchor else (lambda: ()), "finite": lambda: all_finite(Q(), K())}
-        return LaunchedEvaluation(self, pose, vel, make)
+        return all_finite(self.launched_field("Q"), self.launched_field("dQdq"))
 
     def launch(self, pose, vel):
         """Kernel launch at poses (nb, 3) from the committed history without assembly
