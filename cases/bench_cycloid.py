@@ -137,8 +137,7 @@ def crossing_floor(design, spec, omega):
 
     from rvtool.assembly.cycloid import add_bodies
     from rvtool.solver import simulate
-    out = []
-    for with_element in (False, True):
+    def step_cpu(with_element):
         SC = exu.SystemContainer()
         mbs = SC.AddSystem()
         mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
@@ -161,7 +160,11 @@ def crossing_floor(design, spec, omega):
         mbs.Assemble()
         c = time.thread_time()
         rec = simulate(mbs, spec, [])
-        out.append(((time.thread_time() - c) / rec.accepted_steps, calls[0] / rec.accepted_steps))
+        return (time.thread_time() - c) / rec.accepted_steps, calls[0] / rec.accepted_steps
+    # alternate the two systems and keep each one's fastest run: on a shared machine the CPU time
+    # of a short run still varies by ~10 %, more than the difference measured
+    runs = [[step_cpu(w) for w in (False, True)] for _ in range(3)]
+    out = [min((r[k] for r in runs), key=lambda x: x[0]) for k in (0, 1)]
     crossing_us = 1e6 * (out[1][0] - out[0][0]) / out[1][1]
 
     @wp.kernel
@@ -277,8 +280,8 @@ def main(argv=None):
     omega = d.input_speed_rpm * np.pi / 30
     bare, bare_cpu = bare_step_us(d, RunSpec(end_time=(200 if args.quick else 2000) * step, step=step, abs_tol=1e-6,
                                    rel_tol=1e-8), omega)
-    cross_us, launch_us, graph_us = crossing_floor(d, RunSpec(end_time=(200 if args.quick else 2000) * step, step=step,
-                                                             abs_tol=1e-6, rel_tol=1e-8), omega)
+    cross_us, launch_us, graph_us = crossing_floor(d, RunSpec(end_time=2000 * step, step=step, abs_tol=1e-6,
+                                                             rel_tol=1e-8), omega)
     dyn_old, old = dynamic_run(d, spec, dur, "per_family")
     dyn, new = dynamic_run(d, spec, dur, "merged")
     rec = dyn["record"]

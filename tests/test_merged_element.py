@@ -240,3 +240,49 @@ def test_gap_offsets_and_commits_reach_the_merged_sum(rd40):
     m.commit_contacts(q)
     host.evaluate(0.0, ql, v)
     assert pins.n_evaluations == n0 + 1                               # re-evaluated after the commit
+
+
+def test_device_sums_equal_the_host_assembly_bit_for_bit(rd40):
+    """The launchable families' rows summed on the device (warp_contacts.segment_sum) give the bits
+    of the host assembly of the same launches (each family's CSR-assembled evaluation, summed in
+    family order): the sum order is the same, so any difference is an indexing error."""
+    d, (m, q), _ = rd40
+    host = m.contact_host
+    ql = q[host.coordinate_indices]
+    vl = np.random.default_rng(5).normal(0, 1e-3, ql.shape)
+    host.invalidate()
+    for el in host.members:
+        el._key = None      # noqa: every family launches again (test reach-in: no public reset)
+    Q, evs = host.evaluate(1.0, ql, vl)
+    assert host.row_sums() is not None and len(host._launched) == len(host.members)
+    J = host.user_jacobian(1.0, ql, vl, 0.7, 0.3).copy()
+    Q_host = np.zeros_like(Q)
+    J_host = np.zeros_like(J)
+    for el, ev in zip(host.members, evs):
+        Q_host += ev.Q                      # assembled on the host from the same launch buffers
+        J_host -= 0.7 * ev.dQdq + 0.3 * ev.dQdv
+    assert np.array_equal(Q, Q_host) and np.array_equal(J, J_host)
+    # the same state again after the host's cache is dropped: every family is served from its own
+    # cache and summed on the host, with the same bits
+    host.invalidate()
+    Q2, _ = host.evaluate(1.0, ql, vl)
+    assert len(host._launched) == 0
+    assert np.array_equal(Q2, Q) and np.array_equal(host.user_jacobian(1.0, ql, vl, 0.7, 0.3), J)
+
+
+def test_launched_evaluation_read_after_a_relaunch_is_unchanged(rd40):
+    """A launched evaluation assembles its fields from the kernel's buffers when read; read after
+    its family launched again (the buffers overwritten), it evaluates afresh at its own state and
+    gives the same values."""
+    d, (m, q), _ = rd40
+    host = m.contact_host
+    ql = q[host.coordinate_indices]
+    vl = np.random.default_rng(6).normal(0, 1e-3, ql.shape)
+    _, evs = host.evaluate(2.0, ql, vl)
+    first = {f: [getattr(ev, f) for ev in evs] for f in ("Q", "obs")}
+    _, evs_same = host.evaluate(3.0, ql, vl)            # identical state, other time: launches again
+    _, evs2 = host.evaluate(4.0, ql + 1e-7, vl)          # another state: the buffers now hold it
+    for k, ev in enumerate(evs_same):
+        assert np.array_equal(ev.Q, first["Q"][k]) and np.array_equal(ev.obs, first["obs"][k])
+        assert np.array_equal(ev.dQdq, evs[k].dQdq)      # evs[k]: read after two relaunches
+    assert not np.array_equal(evs2[0].obs, first["obs"][0])

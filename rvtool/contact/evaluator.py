@@ -160,6 +160,7 @@ class ContactSetEvaluator:
         return Qc, dq, dv, obs, self._slip(trial, hist)
 
     def _rows(self, pose, vel, hist):
+        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
         self._pose[:-1] = pose
         self._vel[:-1] = vel
         if self.backend == "warp":

@@ -77,6 +77,7 @@ class PairFamilySet:
         """Per-row (Q (N, 6), dQdq (N, 6, 6), dQdv (N, 6, 6) or None, obs) at body poses (nb, 3);
         with anchors a fifth result, the trial history (flags, anchor_A, anchor_B, slip distance)
         from the committed ``history`` (default: the set's own); trials never change it."""
+        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
         self._pose[:-1] = pose
         self._vel[:-1] = vel
         if not self.anchor:

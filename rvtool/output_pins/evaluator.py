@@ -100,6 +100,7 @@ class OutputPinEvaluator:
         """Per-row results (layout of :mod:`warp_contacts.output_pins_ref`) at poses (nb, 3); with
         anchors also ``ft`` (N, ns) and the trial history ``trial`` (flags, anchor_A, anchor_B,
         slip distance) from the committed ``history`` (default: the evaluator's own)."""
+        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
         self._pose[:-1] = pose
         if self.anchor:
             hist = history or self.history
