@@ -286,3 +286,31 @@ def test_launched_evaluation_read_after_a_relaunch_is_unchanged(rd40):
         assert np.array_equal(ev.Q, first["Q"][k]) and np.array_equal(ev.obs, first["obs"][k])
         assert np.array_equal(ev.dQdq, evs[k].dQdq)      # evs[k]: read after two relaunches
     assert not np.array_equal(evs2[0].obs, first["obs"][0])
+
+
+@pytest.mark.skipif(not __import__("warp").get_cuda_device_count(), reason="no CUDA device")
+def test_merged_host_on_cuda_matches_cpu(rd40):
+    """The same code path on a GPU (family kernels, device sums and Jacobian as CUDA graphs):
+    generalized forces and Jacobian equal to the CPU's at the loaded state. Tolerance 1e-9
+    relative: the two compilers contract and order the kernels' floating-point operations
+    differently (round-off ~1e-15 per operation, amplified by the contact laws' stiffness to far
+    below 1e-9), while an indexing or staging error is O(1)."""
+    from rvtool.assembly.cycloid import build
+    d, (m, q), _ = rd40
+    cpu = m.contact_host
+    gpu_model = build(d, contact_element="merged", device="cuda:0")
+    gpu = gpu_model.contact_host
+    ql = q[cpu.coordinate_indices]
+    vl = np.random.default_rng(8).normal(0, 1e-3, ql.shape)
+    for host in (cpu, gpu):
+        host.invalidate()
+    Qc, Qg = cpu.evaluate(5.0, ql, vl)[0], gpu.evaluate(5.0, ql, vl)[0]
+    assert len(gpu._launched) == len(gpu.members)
+    assert np.allclose(Qg, Qc, rtol=0, atol=1e-9 * np.abs(Qc).max())
+    Jc = cpu.user_jacobian(5.0, ql, vl, 0.7, 0.3).copy()
+    Jg = gpu.user_jacobian(5.0, ql, vl, 0.7, 0.3)
+    assert np.allclose(Jg, Jc, rtol=0, atol=1e-9 * np.abs(Jc).max())
+    obs_c = [ev.obs for ev in cpu.evaluate(5.0, ql, vl)[1]]
+    obs_g = [ev.obs for ev in gpu.evaluate(5.0, ql, vl)[1]]
+    for a, b in zip(obs_c, obs_g):
+        assert np.allclose(a, b, rtol=1e-9, atol=1e-12)
