@@ -171,6 +171,8 @@ class ContactSetEvaluator:
     def _slip(trial, hist):
         act, a, b = trial
         kept = (hist.active != 0) & (act != 0)
+        if not kept.any():      # no anchor kept (every row of a set without anchor friction)
+            return act, a, b, hist.slip_distance + 0.0
         slip = hist.slip_distance + np.where(kept, np.linalg.norm(a - hist.anchor_a, axis=1), 0.0)
         return act, a, b, slip
 
