@@ -125,8 +125,17 @@ class HostedContactElement(ContactElement):
     def _attach(self, mbs, nodes, ports):
         return self.host.object_number
 
+    # the family's parameters or evaluation velocity change: the host's cached sum is stale too
     def set_gap_offsets(self, offsets):
         super().set_gap_offsets(offsets)
+        self.host.invalidate()
+
+    def set_friction_coefficients(self, mu):
+        super().set_friction_coefficients(mu)
+        self.host.invalidate()
+
+    def set_prescribed_velocity(self, v_global):
+        super().set_prescribed_velocity(v_global)
         self.host.invalidate()
 
     def store(self, key, pose, vel):
@@ -318,7 +327,12 @@ class MergedContactElement:
         evs, host, launches, launched = [None] * len(self.members), [], [], []
         for i, m in enumerate(self.members):
             slot = self._slot.get(i)
-            if slot is not None and key_r != m._key and (m.n_evaluations + 1) not in m.inject_nan_at:
+            if m.prescribed_velocity is not None:
+                # a quasi-static window at speed: the family is evaluated at its prescribed
+                # velocity (ContactElement.evaluate), not at the solver's
+                evs[i] = m.evaluate(t, q[m.positions], q_t[m.positions])
+                host.append((m, evs[i]))
+            elif slot is not None and key_r != m._key and (m.n_evaluations + 1) not in m.inject_nan_at:
                 # rows summed on the device (warp_contacts.segment_sum): no host assembly
                 ev = m.evaluator
                 ev.stage(pose_r, vel_r)
