@@ -314,3 +314,16 @@ def test_merged_host_on_cuda_matches_cpu(rd40):
     obs_g = [ev.obs for ev in gpu.evaluate(5.0, ql, vl)[1]]
     for a, b in zip(obs_c, obs_g):
         assert np.allclose(a, b, rtol=1e-9, atol=1e-12)
+
+
+def test_elastic_pin_closure_is_summed_on_the_host():
+    """A family whose evaluator only forwards to an inner set (the elastic ring-pin closure, Eq.
+    (series_contact)) is not launched by the host (the inner set's launch would evaluate the
+    station bodies, not the element's): it is assembled on the host next to the device-summed
+    bearings and output pins, and the loaded equilibrium equals the per-family layout's."""
+    d = _design(pins={"support": {"model": "simply_supported", "ends": [-0.015, 0.015]}})
+    (m, q), (m_old, q_old) = _loaded("merged", d), _loaded("per_family", d)
+    launchable = {name: el.launchable for name, el in m.elements.items()}
+    assert launchable["pins"] is False and launchable["bearings"] and launchable["output_pins"]
+    # static equilibria converged to the Newton tolerance from the same start: equal far below it
+    assert np.allclose(q, q_old, rtol=0, atol=1e-12)
