@@ -89,3 +89,22 @@ def test_segments_list_every_kept_entry_once():
     kept = (ix[:, :, None] >= 0) & (ix[:, None, :] >= 0)
     assert sorted(msrc.tolist()) == np.flatnonzero(kept.reshape(-1)).tolist()
     assert vs[-1] == len(vsrc) and ms[-1] == len(msrc)
+
+
+def test_element_sums_in_float32_hand_back_double():
+    # the explicit float32 option: sums in single precision, results handed to Exudyn in double;
+    # equal to the float64 sums of the float32-rounded rows to single-precision round-off
+    # (N = 12 rows: ~12 eps32 relative at most)
+    rng = np.random.default_rng(11)
+    b, q, dq, dv = _family(rng, 12, 2, 2)
+    rows32 = [wp.array(np.ascontiguousarray(a, np.float32), dtype=wp.float32, device="cpu") for a in (q, dq, dv)]
+    sums = ElementSums([(coordinate_index(b, 2), *rows32)], 6)
+    sums.add(0, True, True)
+    Q, finite = sums.vector()
+    J = sums.jacobian(1.0, 0.5)
+    assert Q.dtype == np.float64 and J.dtype == np.float64 and finite
+    q64, dq64, dv64 = (np.asarray(a, np.float32).astype(np.float64) for a in (q, dq, dv))
+    Qr, Kq, Kv = ref.family_sums(q64, dq64, dv64, coordinate_index(b, 2), 6)
+    assert np.allclose(Q, Qr, rtol=0, atol=24 * np.finfo(np.float32).eps * np.abs(q64).sum())
+    Jr = ref.element_jacobian(Kq[None], Kv[None], 1.0, 0.5)
+    assert np.allclose(J, Jr, rtol=0, atol=24 * np.finfo(np.float32).eps * (np.abs(dq64).sum() + np.abs(dv64).sum()))

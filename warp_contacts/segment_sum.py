@@ -179,13 +179,15 @@ class ElementSums:
                 self._used.assign(self.used)
 
     def vector(self):
-        """(Q (n,), finite) of the families added in this evaluation; ``finite`` is False if a
-        force or a tangent entry is NaN or inf."""
+        """(Q (n,) float64, finite) of the families added in this evaluation; ``finite`` is False if
+        a force or a tangent entry is NaN or inf."""
         if not self.on_cpu:
             self.block[:self.n] = self._q.numpy()
             self.Kq[...] = self._kq.numpy()
             self.Kv[...] = self._kv.numpy()
-        return self.Q, bool(np.isfinite(self.block.sum()))
+        # float32 sums (the explicit precision option) go back to Exudyn in double
+        Q = self.Q if self.ndtype == np.float64 else self.Q.astype(np.float64)
+        return Q, bool(np.isfinite(self.block.sum()))
 
     def slot_finite(self, f):
         """True if family f's tangent slot holds only finite entries (after :meth:`vector`)."""
@@ -200,4 +202,5 @@ class ElementSums:
         wp.capture_launch(self._jac)
         if not self.on_cpu:
             self.J[...] = self._j.numpy()
-        return self.J.reshape(self.n, self.n)
+        J = self.J.reshape(self.n, self.n)
+        return J if self.ndtype == np.float64 else J.astype(np.float64)
