@@ -180,7 +180,9 @@ class HostedContactElement(ContactElement):
             return super().commit(q_global, v_global, t)
         ql, vl = self.local(q_global), self.local(v_global)
         if t is not None and self._key == (float(t), ql.tobytes(), vl.tobytes()):
-            self.last_obs = self.evaluator.commit(None, None, evaluation=self._ev)
+            # the state goes with the evaluation: an evaluator may read more than the evaluation
+            # at commit (the bearing friction element evaluates its load source there)
+            self.last_obs = self.evaluator.commit(*self.pose_velocity(ql, vl), evaluation=self._ev)
         else:
             self.last_obs = self.evaluator.commit(*self.pose_velocity(ql, vl))
         self._key = None
