@@ -44,7 +44,7 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import ObjectGenericODE2, VObjectGenericODE2
 
-from rvtool.contact.evaluator import Evaluation
+from rvtool.contact.evaluator import Evaluation, LaunchedEvaluation
 from rvtool.errors import RvtoolInputError
 
 from .contact_element import ContactElement
@@ -182,7 +182,9 @@ class HostedContactElement(ContactElement):
         if t is not None and self._key == (float(t), ql.tobytes(), vl.tobytes()):
             # the state goes with the evaluation: an evaluator may read more than the evaluation
             # at commit (the bearing friction element evaluates its load source there)
-            self.last_obs = self.evaluator.commit(*self.pose_velocity(ql, vl), evaluation=self._ev)
+            ev = self._ev
+            state = ev.state if isinstance(ev, LaunchedEvaluation) else self.pose_velocity(ql, vl)
+            self.last_obs = self.evaluator.commit(*state, evaluation=ev)
         else:
             self.last_obs = self.evaluator.commit(*self.pose_velocity(ql, vl))
         self._key = None

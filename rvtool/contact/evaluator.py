@@ -63,6 +63,11 @@ class LaunchedEvaluation(Evaluation):
     def _set(self, name, value):
         self._made[name] = value
 
+    @property
+    def state(self):
+        """(pose, vel) (nb, 3) of the launch: the absolute state this evaluation is at."""
+        return self._pose, self._vel
+
 
 for _f in FIELDS:
     setattr(LaunchedEvaluation, _f, property(lambda self, _n=_f: self._get(_n),
