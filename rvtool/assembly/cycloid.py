@@ -606,11 +606,14 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
         elements["bearings"] = element(bset, backend=backend, precision=precision, device=device)
     if d.bearing_friction.model != "none":
-        # the friction torque of every bearing, a loss element of its own (switched off: absent)
-        if bearing_model != "lumped":
-            raise RvtoolInputError("bearing_friction.model = 'palmgren' needs bearing_model = 'lumped' (the "
-                                   "bearing loads are read per bearing identity from the lumped set)")
-        elements["bearing_friction"] = element(bearing_friction_evaluator(d, bset, elements["bearings"].evaluator))
+        # the friction torque of every bearing, a loss element of its own (switched off: absent); rolling
+        # elements: P1 from the accepted element loads of each mounting
+        if bearing_model == "rolling":
+            from ..bearings.friction_element import rolling_friction_evaluator
+            elements["bearing_friction"] = element(rolling_friction_evaluator(elements["bearings"].evaluator,
+                                                                              d.bearing_friction))
+        else:
+            elements["bearing_friction"] = element(bearing_friction_evaluator(d, bset, elements["bearings"].evaluator))
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
@@ -653,7 +656,7 @@ def bearing_friction_evaluator(design, bearing_set, load_source):
         model = PalmgrenFrictionTorque(f0=f0, f1=f1, pitch_diameter=dm, kinematic_viscosity=bf.kinematic_viscosity,
                                        regularization_speed=bf.regularization_speed)
         losses.append(BearingLoss(c.name, c.body_a, c.body_b, model, (row,)))
-    return BearingFrictionEvaluator(losses, bearing_set.n_bodies, load_source)
+    return BearingFrictionEvaluator(losses, bearing_set.n_bodies, load_source, static_stiffness=bf.static_stiffness)
 
 
 def body_names(n_wheels):

@@ -448,13 +448,23 @@ class ReducerModel:
         """Slow-state gap offsets [m] of ``family``: ``offsets`` maps physical contact ids (those of
         :meth:`FamilyObservation.per_contact`) to an offset (positive opens the gap; unnamed
         contacts 0), written into the family's contact element for the next contact evaluation.
-        Absolute, not increments; all zeros restore the built element bit for bit."""
+        Absolute, not increments; all zeros restore the built element bit for bit. A family whose
+        evaluator names its own offset identities (``gap_offset_ids``: the tooth flanks of an
+        involute mesh, whose rows are window slots) takes offsets keyed by those."""
         try:
             name, rows = self.families[Family(family)]
         except (KeyError, ValueError):
             raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
                                    f"{[f.value for f in self.families]}") from None
         el = self.elements[name]
+        own = getattr(el.evaluator, "gap_offset_ids", None)
+        if own is not None:     # offsets that follow the evaluator's identities (involute: tooth flanks)
+            unknown = sorted(set(offsets) - set(own))
+            if unknown:
+                raise RvtoolInputError(f"gap offsets name contacts {unknown[:4]} that family {Family(family).value!r} "
+                                       f"lacks; valid: tooth flanks {list(own)[:2]} ...")
+            el.set_gap_offsets([float(offsets.get(c, 0.0)) for c in own])
+            return
         contact = [physical_contact(el.ids[i]) for i in rows]
         unknown = sorted(set(offsets) - set(contact))
         if unknown:
@@ -465,9 +475,12 @@ class ReducerModel:
         el.set_gap_offsets(full)
 
     def gap_offsets(self, family):
-        """{physical contact id: gap offset [m]} in force for ``family`` (first row of each contact)."""
+        """{physical contact id: gap offset [m]} in force for ``family`` (first row of each contact;
+        involute meshes: per tooth flank)."""
         name, rows = self.families[Family(family)]
         el = self.elements[name]
+        if getattr(el.evaluator, "gap_offset_ids", None) is not None:
+            return el.evaluator.tooth_gap_offsets()
         out = {}
         for i in rows:
             out.setdefault(physical_contact(el.ids[i]), float(el.gap_offsets[i]))

@@ -25,6 +25,7 @@ carrier through the cranks.
 Kinematics (:class:`RvKinematics`): the gear graph's rates (:mod:`.gear_graph`); the crank
 gears start conjugate to the sun (mid-backlash), the journals at the wheels' absolute phases.
 """
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -37,12 +38,13 @@ from exudyn_user_elements.contact_element import ContactElement
 
 from ...bearings.set import BearingSet, Mounting
 from ...bearings.tapered_set import TaperedBearingSet, TaperedMounting
-from ...contact.circle_set import GROUND
+from ...contact.circle_set import GROUND, FrictionLaw, FrictionModel
 from ...contact.cycloid_set import CycloidPinSet
-from ...contact.involute_set import GearMesh, InvoluteContactSet
+from ...contact.involute_set import GearMesh, InvoluteContactSet, pair_secant_stiffness
 from ...errors import RvtoolInputError
 from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
+from ...output_pins.calibration import mindlin_tangential_ratio
 from ..cycloid import pin_meshes
 from .gear_graph import GearGraph
 from .spec import RVDesign
@@ -153,14 +155,35 @@ def wheel_mass(design, graph):
     return m, J
 
 
+def involute_friction_law(design, pair):
+    """FrictionLaw of the involute meshes of ``pair`` from ``[involute_stage]``: none for mu = 0,
+    the regularized law of Eq. (friction) or the anchor model (k_t from the design, else Mindlin's
+    ratio of the pair's normal secant stiffness at ``involute_stage.reference_force``)."""
+    st = design.involute_stage
+    if st.mu == 0.0:
+        return FrictionLaw()
+    if st.friction_model == "regularized":
+        return FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=st.mu)
+    kt = st.tangential_stiffness or (mindlin_tangential_ratio(pair.gear_a.poisson_ratio)
+                                     * pair_secant_stiffness(pair, st.reference_force))
+    return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=st.mu, tangential_stiffness=kt)
+
+
 def gear_meshes(design, graph, layout):
     """The involute meshes: sun (gear A) -- crank gear k (gear B), and the three-stage pinion -- compound gear."""
     st = design.involute_stage
     kw = dict(n_slices=st.n_slices, window=st.window, damping=st.damping, ramp_depth=st.ramp_depth)
-    meshes = [GearMesh(pair=graph.sun_pair, body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}", **kw)
-              for k in range(layout.n_cranks)]
+    # crank k's own gear (its pitch deviations, cranks.gear_pitch_deviations); the nominal pair otherwise
+    pairs = [graph.sun_pair if design.crank_gear_of(k) is design.crank_gear
+             else dataclasses.replace(graph.sun_pair, gear_b=design.crank_gear_of(k)) for k in range(layout.n_cranks)]
+    # one friction law for all sun meshes: the anchor stiffness from the nominal pair (pitch deviations
+    # turn teeth rigidly and leave the pair's secant stiffness unchanged)
+    sun = involute_friction_law(design, graph.sun_pair)
+    meshes = [GearMesh(pair=pairs[k], body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}",
+                       friction=sun, **kw) for k in range(layout.n_cranks)]
     if layout.three_stage:
-        meshes.append(GearMesh(pair=graph.input_pair, body_a=0, body_b=layout.sun, name="input_stage", **kw))
+        meshes.append(GearMesh(pair=graph.input_pair, body_a=0, body_b=layout.sun, name="input_stage",
+                               friction=involute_friction_law(design, graph.input_pair), **kw))
     return meshes
 
 

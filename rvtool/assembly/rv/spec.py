@@ -35,7 +35,10 @@ class Cranks:
     radius is the sun--crank-gear centre distance), rigid-body data (mass [kg], polar inertia
     [kg m^2]) and manufacturing deviations per crank (a variant is a design):
     phase_errors_arcmin: the eccentric phase of crank k off its nominal by this angle [arcmin]
-    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none).
+    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none);
+    gear_pitch_deviations: per crank, the single pitch deviations f_pt,j [m] of its spur gear
+    (``crank_gear.n_teeth`` entries summing to zero, as ``InvoluteGear.single_pitch_deviations``;
+    () = every crank gear as ``crank_gear``).
     shaft: the crankshaft as a beam between its tapered rows
     (:class:`~rvtool.structure.crank_beam.CrankShaft`, sub-table ``[cranks.shaft]``; rigid by
     default, the "nothing" variant)."""
@@ -44,6 +47,7 @@ class Cranks:
     inertia: float = 2.0e-5
     phase_errors_arcmin: tuple = ()
     eccentricity_errors: tuple = ()
+    gear_pitch_deviations: tuple = ()
     shaft: CrankShaft = field(default_factory=CrankShaft)
 
     def __post_init__(self):
@@ -57,6 +61,11 @@ class Cranks:
             if len(v) not in (0, self.count):
                 raise RvtoolInputError(f"cranks.{nm} has {len(v)} entries; valid: 0 or cranks.count = {self.count}")
             check_finite(f"cranks.{nm}", v)
+        if len(self.gear_pitch_deviations) not in (0, self.count):
+            raise RvtoolInputError(f"cranks.gear_pitch_deviations has {len(self.gear_pitch_deviations)} entries; "
+                                   f"valid: 0 or cranks.count = {self.count} (one list of pitch deviations per crank)")
+        for k, f in enumerate(self.gear_pitch_deviations):
+            check_finite(f"cranks.gear_pitch_deviations[{k}]", f)
 
     def phase_error(self, k):
         """Eccentric phase error of crank k [rad]."""
@@ -68,19 +77,34 @@ class Cranks:
 
 @dataclass(frozen=True, kw_only=True)
 class InvoluteStage:
-    """Numerics of the involute meshes (each mesh a :class:`~rvtool.contact.involute_set.GearMesh`):
-    n_slices across the face width, window (teeth either side of the pitch point; None: from the
-    contact ratio), damping [N s/m] per mesh, ramp_depth [m]."""
+    """Numerics and friction of the involute meshes (each mesh a
+    :class:`~rvtool.contact.involute_set.GearMesh`): n_slices across the face width, window (teeth
+    either side of the pitch point; None: from the contact ratio), damping [N s/m] per mesh,
+    ramp_depth [m]; mu [-] (0 = no friction: the frictionless code path), friction_model
+    ("regularized": Eq. (friction) velocity law; "anchor": stick--slip anchors per row, as
+    ``pin_contact``), tangential_stiffness [N/m] of the anchors per tooth pair over the face width
+    (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the pair's normal secant stiffness of Eq.
+    (series_contact) at reference_force [N], mid path of contact)."""
     n_slices: int = 1
     window: int | None = None
     damping: float = 0.0
     ramp_depth: float = 1e-6
+    mu: float = 0.0
+    friction_model: str = "regularized"
+    tangential_stiffness: float = 0.0
+    reference_force: float = 1000.0
 
     def __post_init__(self):
         if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, int) or self.n_slices < 1:
             raise RvtoolInputError(f"involute_stage.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
         check_range("involute_stage.damping", self.damping, 0.0)
         check_positive("involute_stage.ramp_depth", self.ramp_depth)
+        check_range("involute_stage.mu", self.mu, 0.0)
+        if self.friction_model not in ("regularized", "anchor"):
+            raise RvtoolInputError(f"involute_stage.friction_model = {self.friction_model!r}; valid choices are "
+                                   "['regularized', 'anchor']")
+        check_range("involute_stage.tangential_stiffness", self.tangential_stiffness, 0.0)
+        check_positive("involute_stage.reference_force", self.reference_force)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -172,6 +196,23 @@ class RVDesign:
         if self.topology == "rv2" and (self.input_pinion is not None or self.compound_gear is not None):
             raise RvtoolInputError("topology = 'rv2' has no input_pinion / compound_gear sections; valid: "
                                    "remove them or set topology = 'rv3'")
+        z = self.crank_gear.n_teeth
+        for k, f in enumerate(self.cranks.gear_pitch_deviations):
+            f = tuple(float(x) for x in f)
+            if len(f) != z:
+                raise RvtoolInputError(f"cranks.gear_pitch_deviations[{k}] has {len(f)} entries; valid: "
+                                       f"crank_gear.n_teeth = {z}")
+            if abs(sum(f)) > 1e-9 * max(1.0, sum(abs(x) for x in f)) + 1e-15:
+                raise RvtoolInputError(f"cranks.gear_pitch_deviations[{k}] sum to {sum(f):.3g} m; valid: sum 0 "
+                                       "(the pitches of a closed circle add up to its circumference)")
+
+    def crank_gear_of(self, k):
+        """The spur gear of crank k: ``crank_gear`` with crank k's single pitch deviations
+        (``cranks.gear_pitch_deviations``), or ``crank_gear`` itself when none are declared."""
+        if not self.cranks.gear_pitch_deviations:
+            return self.crank_gear
+        return dataclasses.replace(self.crank_gear, single_pitch_deviations=tuple(
+            float(x) for x in self.cranks.gear_pitch_deviations[k]))
 
     @property
     def n_wheels(self):
