@@ -10,6 +10,10 @@ sliding_friction``), so mu enters the equilibria (a static solve has zero veloci
 friction). The output-pin law is frictionless and the bearings roll: their mu is a heat source
 only (declared).
 
+Film radius of a ring-pin contact: the local reduced radius 1/R = 1/r_p + kappa_flank from the
+flank curvature at the accepted contact points of the cold window (load-weighted;
+:mod:`rvtool.slow.contact_radius`); output pins and needles are circles on circles.
+
 Steps. Observation: one window (one input revolution) at the declared mu, the six-node network's
 steady state from its sources mu I_s / tau_w (no thermal gap channels: the gaps stay as built, so
 the change of the coupled run comes from friction alone), the film at those temperatures.
@@ -32,6 +36,7 @@ from rvtool import casekit, designs
 from rvtool.assembly import build
 from rvtool.assembly.spec import load_design, replace
 from rvtool.slow import cycloid as C
+from rvtool.slow.contact_radius import window_radii
 from rvtool.slow.offsets import GapOffsets
 from rvtool.slow.reducer_windows import ReducerWindows, WindowProtocol
 from rvtool.slow.report import write_details
@@ -92,7 +97,8 @@ def main(argv=None):
     # observation mode: declared mu; the film is output only
     t0 = time.perf_counter()
     cold = windows.window()            # entrainment speeds of the film contacts from the declared-mu window
-    lub = C.lubrication(design, inputs, cold)
+    radii = window_radii(model, windows.last_states)   # local reduced radius of every loaded pin contact
+    lub = C.lubrication(design, inputs, cold, radii=radii)
     declared = _state(windows, te_windows, th, lub, None)
     wall_obs = time.perf_counter() - t0
 
@@ -151,6 +157,8 @@ def main(argv=None):
             "source_W": {"declared": declared["pin_source_W"], "coupled": coupled["pin_source_W"]},
             "rel_err": work_err, "tolerance": WORK_REL_TOL,
             "reference": "sum |F_t v_t| dt of the contact law over the window's accepted steps"},
+        "pin_reduced_radius_m": {"min": min(radii.values()), "max": max(radii.values()),
+                                 "pin_radius": design.pins.pin_radius},
         "cpu_s": time.process_time() - c_all,
     }
     write_details(args.out, details)
@@ -160,7 +168,8 @@ def main(argv=None):
                 "window": {"angle_rad": 2 * np.pi, "steps": steps, "sliding_friction": True},
                 "te_window": {"angle_rad": 2 * model.mesh_period, "steps": te_steps},
                 "thermal_gap_channels": False, "mu_tol": MU_TOL,
-                "film": "Dowson-Higginson line contact at the window-mean load, Roelands eta(T)"}
+                "film": "Dowson-Higginson line contact at the window-mean load, Roelands eta(T); ring pins at their "
+                        "local reduced radius 1/R = 1/r_p + kappa_flank (load-weighted over the window)"}
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_all)
 
 

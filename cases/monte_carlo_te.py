@@ -8,16 +8,20 @@ states, and the lost motion at +-3 % of the rated torque (load-controlled contin
 spring control where it fails). --mode batched (default): each chunk of CHUNK_BATCHED
 variants is one Exudyn system (rvtool.batched), chunks side by side in a process pool over
 all cores; --mode pool: one Exudyn system per variant in the pool (chunks of 10); --mode
-device: the TE of each chunk on the device Newton (--device cpu: chunks of CHUNK_DEVICE side
-by side in the pool; cuda:0: one after another), lost motion per variant; --mode auto: the
-fastest measured path (the device Newton on a GPU if present, else batched). ``te_path`` and
-``fallback_copies`` say which TE path ran and how many TE points fell back to Exudyn. Each
-finished chunk is one file (atomic rename), so an interrupted run resumes with --resume.
+device: the TE and the lost motion of each chunk on the device Newton (--device cpu: chunks of
+CHUNK_DEVICE side by side in the pool; cuda:0: chunks of CHUNK_DEVICE_GPU one after another;
+--chunk overrides), copies that fail there on the per-variant Exudyn path; --mode auto: the
+fastest measured path (rvtool.variants.montecarlo.resolve_mode: the device Newton, on a GPU
+if present). ``te_path`` / ``fallback_copies`` and ``lost_motion_path`` /
+``lost_motion_fallback_copies`` say which paths ran and how many TE points and lost-motion
+copies fell back to Exudyn. Each finished chunk is one file (atomic rename), so an
+interrupted run resumes with --resume.
 Reported: mean, std, p5/p50/p95 with a Student-t 95 % CI of the mean and a
 distribution-free order-statistic 95 % CI of p95; histograms. Error statement of the
 TE sampling: the p-p at N_TE points against a dense sampling (DENSE_TE points) on a
-few variants. Both modes are timed on the same first COMPARE variants (--quick: 4), with
-their largest figure differences (the batched path against the per-variant reference).
+few variants. The pool, batched and device modes (the device mode on --device) are timed on
+the same first COMPARE variants (--quick: 4), with their largest figure differences (the
+batched and device paths against the per-variant reference).
 """
 import os
 import shutil
@@ -28,7 +32,7 @@ import numpy as np
 from rvtool import casekit
 from rvtool.assembly.spec import load_design
 from rvtool import progress
-from rvtool.variants.montecarlo import MonteCarloSettings, run_monte_carlo, run_variant
+from rvtool.variants.montecarlo import MonteCarloSettings, resolve_mode, run_monte_carlo, run_variant
 from rvtool.variants.tolerances import load_tolerances, sample_variant
 from rvtool.variants import VariantProtocol
 from rvtool import designs
@@ -49,8 +53,11 @@ CHUNK_BATCHED = 16
 53 TE points: 17.3 variants/s at B = 16, 10.9 at B = 64)."""
 CHUNK_DEVICE = 16
 """Variants per chunk of the device mode on the CPU (one chunk per pool process; each chunk is
-V x 53 device Newton copies). On a GPU, larger chunks fill it better (--variants and a larger
-chunk are then the lead's to choose)."""
+V x 53 device Newton copies for the TE and V for the lost motion)."""
+CHUNK_DEVICE_GPU = 1024
+"""Variants per chunk of the device mode on a GPU (chunks one after another in this process):
+1,024 x 53 = 54,272 TE copies, one launch (device_te's cuda chunk is 65,536 pairs); the TE
+alone measured 2,001 variants/s on an H100 at 1,024 variants (cases/bench_batched_te.py)."""
 COMPARE = 64
 """Variants timed in both modes, at least two batches per worker (each mode's pool started from
 nothing, like a study)."""
@@ -67,9 +74,13 @@ def _extra(parser):
     parser.add_argument("--resume", action="store_true", help="reuse finished chunks in OUT/chunks")
     parser.add_argument("--mode", default="batched", choices=("batched", "pool", "device", "auto"),
                         help="batched: chunks of 16 variants per Exudyn system in a process pool; "
-                             "pool: one variant per task; device: the TE of each chunk on the device Newton "
-                             "(rvtool.solver.device_newton); auto: device on a GPU, else batched (default batched)")
+                             "pool: one variant per task; device: the TE and lost motion of each chunk on the device "
+                             "Newton (rvtool.solver.device_newton); auto: the fastest measured (device; on a GPU if "
+                             "present) (default batched)")
     parser.add_argument("--device", default="cpu", help="device of the batched / device modes (cpu, cuda:0, auto)")
+    parser.add_argument("--chunk", type=int, default=None,
+                        help=f"variants per chunk (default: batched {CHUNK_BATCHED}, pool 10, device {CHUNK_DEVICE} on "
+                             f"cpu, {CHUNK_DEVICE_GPU} on a GPU)")
 
 
 def _hist(ax, x, label, s):
@@ -91,9 +102,11 @@ def main(argv=None):
     chunk_dir = os.path.join(args.out, "chunks")
     if not args.resume and os.path.isdir(chunk_dir):
         shutil.rmtree(chunk_dir)   # a timed study starts from nothing unless asked to resume
-    chunk = CHUNK_BATCHED if args.mode == "batched" else CHUNK_DEVICE if args.mode in ("device", "auto") else 10
-    settings = MonteCarloSettings(n_variants=n, seed=SEED, chunk_size=chunk, mode=args.mode, workers=args.workers,
-                                  device=args.device)
+    mode, device = resolve_mode(args.mode, args.device)
+    chunk = args.chunk or (CHUNK_BATCHED if mode == "batched" else
+                           (CHUNK_DEVICE if device == "cpu" else CHUNK_DEVICE_GPU) if mode == "device" else 10)
+    settings = MonteCarloSettings(n_variants=n, seed=SEED, chunk_size=chunk, mode=mode, workers=args.workers,
+                                  device=device)
     with progress.reporting("auto"):
         res = run_monte_carlo(design, tol, protocol, settings, chunk_dir, build_kw=build_kw,
                               progress=progress.callback("Monte Carlo", unit="variant"))
@@ -129,21 +142,28 @@ def main(argv=None):
     # at least two batches per worker, else the batched mode leaves workers idle
     nc = min(n, 4 if args.quick else max(COMPARE, 2 * CHUNK_BATCHED * (settings.workers or os.cpu_count() or 1)))
     cmp_recs, cmp_rate = {}, {}
-    for mode in ("pool", "batched"):
-        cdir = os.path.join(args.out, f"chunks_compare_{mode}")
+    cmp_chunk = {"pool": 10, "batched": CHUNK_BATCHED, "device": CHUNK_DEVICE if device == "cpu" else CHUNK_DEVICE_GPU}
+    cmp_device = device if mode == "device" else args.device if args.device != "auto" else "cpu"
+    for cmode in ("pool", "batched", "device"):
+        cdir = os.path.join(args.out, f"chunks_compare_{cmode}")
         shutil.rmtree(cdir, ignore_errors=True)
-        cset = MonteCarloSettings(n_variants=nc, seed=SEED, chunk_size=CHUNK_BATCHED if mode == "batched" else 10,
-                                  mode=mode, workers=args.workers)
+        # --quick: the device mode in this process (no third pool to start: the quick run stays short)
+        workers = 1 if cmode == "device" and args.quick else args.workers
+        cset = MonteCarloSettings(n_variants=nc, seed=SEED, chunk_size=cmp_chunk[cmode], mode=cmode, workers=workers,
+                                  device=cmp_device if cmode == "device" else "cpu")
         cres = run_monte_carlo(design, tol, protocol, cset, cdir, build_kw=build_kw)
-        cmp_recs[mode] = cres["records"]
+        cmp_recs[cmode] = cres["records"]
         ok_n = sum(r["status"] == "ok" for r in cres["records"])
         # a rate of failed runs is no throughput: reported only when variants succeeded
-        cmp_rate[mode] = ok_n / cres["wall_s"] if ok_n else None
-    pairs = [(a, b) for a, b in zip(cmp_recs["batched"], cmp_recs["pool"]) if a["status"] == b["status"] == "ok"]
-    agreement = {"variants": nc, "both_ok": len(pairs),
-                 "status_differs": sum(a["status"] != b["status"] for a, b in zip(cmp_recs["batched"], cmp_recs["pool"])),
-                 **{f"max_abs_diff_{nm}": max((abs(a[nm] - b[nm]) for a, b in pairs), default=None)
-                    for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")}}
+        cmp_rate[cmode] = ok_n / cres["wall_s"] if ok_n else None
+
+    def agreement_with_pool(cmode):
+        pairs = [(a, b) for a, b in zip(cmp_recs[cmode], cmp_recs["pool"]) if a["status"] == b["status"] == "ok"]
+        return {"variants": nc, "both_ok": len(pairs),
+                "status_differs": sum(a["status"] != b["status"] for a, b in zip(cmp_recs[cmode], cmp_recs["pool"])),
+                **{f"max_abs_diff_{nm}": max((abs(a[nm] - b[nm]) for a, b in pairs), default=None)
+                   for nm in ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")}}
+    agreement = agreement_with_pool("batched")
     methods = {m: sum(r.get("lost_motion_method") == m for r in recs) for m in ("load", "spring")}
 
     import matplotlib.pyplot as plt
@@ -162,14 +182,24 @@ def main(argv=None):
         "wall_s": res["wall_s"],
         "variants_per_s": rate,
         "mode": args.mode,
+        "mode_run": res["mode"],
+        "device": res["device"],
         "te_path": res["te_paths"],
         "fallback_copies": res["te_fallback_points"],
+        "lost_motion_path": res["lost_motion_paths"],
+        "lost_motion_fallback_copies": res["lost_motion_fallback_copies"],
         "pool_variants_per_s": cmp_rate["pool"],
         "batched_variants_per_s": cmp_rate["batched"],
-        "mode_comparison_note": (f"both modes on the first {nc} variants, each in a process pool of "
-                                 f"{settings.workers or os.cpu_count()} workers started for it (batched: "
-                                 f"{CHUNK_BATCHED} variants per Exudyn system on cpu); rates over successful variants"),
+        "device_variants_per_s": cmp_rate["device"],
+        "device_compared_on": cmp_device,
+        "mode_comparison_note": (f"the three modes on the first {nc} variants, the pool and batched modes (and the "
+                                 f"device mode on cpu) each in a process pool of {settings.workers or os.cpu_count()} "
+                                 f"workers started for it (batched: {CHUNK_BATCHED} variants per Exudyn system on cpu; "
+                                 f"device: {cmp_chunk['device']} variants per chunk on {cmp_device}"
+                                 + ("; --quick: the device mode in the case's process" if args.quick else "")
+                                 + "); rates over successful variants"),
         "batched_agreement": agreement,
+        "device_agreement": agreement_with_pool("device"),
         "lost_motion_methods": methods,
         "te_pp_arcsec_mean_ci": s["te_pp_arcsec"].get("mean_ci"),
         "te_pp_arcsec_p95_ci": s["te_pp_arcsec"].get("p95_ci"),
@@ -193,7 +223,7 @@ def main(argv=None):
     }
     return casekit.write_results(args.out, results, settings={
         "variants": n, "seed": SEED, "tolerances": os.path.relpath(TOLERANCES, HERE), "protocol": repr(protocol),
-        "mode": args.mode, "chunk_size": settings.chunk_size, "workers": settings.workers or os.cpu_count(), "build": build_kw,
+        "mode": args.mode, "device": args.device, "chunk_size": settings.chunk_size, "workers": settings.workers or os.cpu_count(), "build": build_kw,
         "quick": args.quick}, wall_s=wall)
 
 

@@ -5,6 +5,9 @@ single-channel limiter (largest contact increment <= 1 um per update; quick: 4 u
 matched precision / lost-motion / stiffness / vibration re-run before and after 1,000 and 10,000 service
 hours at the rated torque and speed, with the origin of each change.
 
+Film radius of a ring pin: its local reduced radius 1/R = 1/r_p + kappa_flank at the cold window's
+accepted contacts (:mod:`rvtool.slow.contact_radius`).
+
 The thermal network runs without gap channels (temperatures set eta(T) and lambda of the
 lubrication in observation mode; the gaps change by wear only). Window: one input revolution,
 quick: 1 step per mesh period, full: 4. Reference: the represented service time equals the
@@ -20,6 +23,7 @@ from rvtool import casekit, designs
 from rvtool.assembly import build
 from rvtool.assembly.spec import load_design
 from rvtool.slow import cycloid as C
+from rvtool.slow.contact_radius import window_radii
 from rvtool.slow.orchestrator import (LubricationMode, SlowOrchestrator, SlowSchedule, ThermalCoupling,
                                       represented_service_time)
 from rvtool.slow.reducer_windows import ReducerWindows, WindowProtocol
@@ -49,8 +53,10 @@ def main(argv=None):
     t0 = time.perf_counter()
     before = run_matched(probe, protocol)
     wall_before = time.perf_counter() - t0
-    cold = ReducerWindows(probe, wp).window()
-    lub = C.lubrication(design, inputs, cold)
+    cold_windows = ReducerWindows(probe, wp)
+    cold = cold_windows.window()
+    # film of every loaded ring pin at its local reduced radius (flank curvature at the accepted contacts)
+    lub = C.lubrication(design, inputs, cold, radii=window_radii(probe, cold_windows.last_states))
     th = C.thermal_coupling(design, inputs, channels=False)
     limit = 4e-6 if args.quick else 1e-6
 

@@ -46,6 +46,15 @@ class ReducedStructure:
             name=name, nodeNumbers=[self.node], massMatrix=np.eye(n), stiffnessMatrix=np.diag(reduced.omega2),
             dampingMatrix=np.asarray(reduced.damping), visualization=VObjectGenericODE2(show=False)))
 
+    def stiffness(self):
+        """Stiffness (n, n) of eta [N/m per unit eta]: diag(omega^2) of the mass-normalized reduction,
+        the matrix this element hands Exudyn."""
+        return np.diag(np.asarray(self.reduced.omega2, float))
+
+    def coordinate_indices(self):
+        """Global ODE2 indices of eta (after Assemble)."""
+        return np.asarray(self.mbs.systemData.GetNodeLTGODE2(self.node), int)
+
     def coordinates(self, configuration=exu.ConfigurationType.Current):
         """eta of the node."""
         return np.asarray(self.mbs.GetNodeOutput(self.node, exu.OutputVariableType.Coordinates, configuration), float)

@@ -91,5 +91,6 @@ def test_bad_inputs_are_named():
         replace(d, bearing_friction={"model": "skf"})
     with pytest.raises(RvtoolInputError, match="bearing_friction.kinematic_viscosity"):
         replace(d, bearing_friction={"kinematic_viscosity": -1.0})
-    with pytest.raises(RvtoolInputError, match="bearing_model"):
-        build(replace(d, bearing_friction={"model": "palmgren"}), bearing_model="rolling")
+    # (the rolling-element bearing models take the loss too: tests/test_bearing_friction_rolling.py)
+    with pytest.raises(RvtoolInputError, match="bearing_friction.static_stiffness"):
+        replace(d, bearing_friction={"model": "palmgren", "static_stiffness": -1.0})

@@ -116,3 +116,32 @@ def test_modification_play_closed_forms():
     # the effects are first order: linear in each modification
     assert modification_play(R, zb, e, ow, offset_mod=-2e-6)[0] == pytest.approx(
         0.4 * modification_play(R, zb, e, ow, offset_mod=-5e-6)[0], rel=1e-9)
+
+
+def test_datasheet_hysteresis_and_L10_flip_at_their_allowables():
+    from dataclasses import replace as dc_replace
+
+    from rvtool.protocols.datasheet import datasheet
+    a = load_allowables(designs.path("rd40_allowables"))
+    assert a.max_hysteresis_loss == 1.0 and a.min_bearing_life == 6000.0
+
+    def sheet(loss, life, allow=a):
+        lives = {"eccentric_bearing0": {"L10_h": life, "C_r_N": 1.2e4, "P_m_N": 2e3, "speed_rpm": 1538.0},
+                 "main_bearing": {"L10_h": None, "C_r_N": 1e4, "P_m_N": 0.0, "speed_rpm": 38.0}}
+        return datasheet(rated_torque=140.0, ratio=-39.0, branch_slopes={}, secant=150.0, lost_motion_arcmin=0.5,
+                         hertz_peaks={}, pin_bending_stress={}, bearing_loads={}, resolution_error=1e-4, allowables=allow,
+                         hysteresis={"loss_arcmin": loss, "repeat_arcmin": 1e-9, "note": "friction mu 0.05"},
+                         bearing_life=lives)
+    ok, bad = sheet(1.0, 6000.0), sheet(1.0 + 1e-9, 6000.0 * (1 - 1e-9))
+    assert ok["hysteresis"]["meets_allowable"] is True and bad["hysteresis"]["meets_allowable"] is False
+    assert ok["L10"]["meets_allowable"] is True and bad["L10"]["meets_allowable"] is False
+    assert "eccentric_bearing0" in bad["L10"]["reason"] and "main_bearing" in bad["L10"]["reason"]
+    assert bad["L10"]["per_bearing_h"]["main_bearing"] is None
+    # an allowable left undeclared: the figure is reported, informative (neither passes nor fails)
+    free = sheet(5.0, 10.0, dc_replace(a, max_hysteresis_loss=None, min_bearing_life=None))
+    assert free["hysteresis"]["value"] == 5.0 and free["hysteresis"]["meets_allowable"] is None
+    assert free["L10"]["value"] == 10.0 and free["L10"]["meets_allowable"] is None
+    # not computed (a caller without the cycle or the bearing geometry) is said, never a number
+    none = datasheet(rated_torque=140.0, ratio=-39.0, branch_slopes={}, secant=150.0, lost_motion_arcmin=0.5,
+                     hertz_peaks={}, pin_bending_stress={}, bearing_loads={}, resolution_error=1e-4, allowables=a)
+    assert none["hysteresis"]["value"] is None and none["L10"]["reason"] == "not computed"

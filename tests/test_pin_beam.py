@@ -138,3 +138,36 @@ def test_support_compliance_in_series():
                                                                                               rel=1e-10)
     with pytest.raises(RvtoolInputError, match="support_compliance"):
         PinSupport(model="cantilever", ends=(0.0, L), support_compliance=-1.0)
+
+
+@pytest.mark.parametrize("model", ["cantilever", "simply_supported", "clamped_clamped"])
+def test_station_stress_map_equals_the_beam_solve(model):
+    # the map is the beam solve under unit station loads; superposition of two stations' x and y
+    # resultants must reproduce the direct solve to round-off (1e-9: the shear of the
+    # Euler-Bernoulli element is a difference of large end forces)
+    beam = PinBeam(PinSupport(model=model, ends=(-0.015, 0.015), shear=True), R, E, NU)
+    centres, width = [-0.006, 0.006], 0.008
+    smap = beam.station_stress_map(centres, width)
+    for res in ([[300.0, -50.0], [-20.0, 900.0]], [[0.0, 1.0], [0.0, 0.0]], [[1e3, 1e3], [-1e3, 2e3]]):
+        direct = beam.station_stresses(centres, width, res)
+        mapped = smap.stresses(res)
+        assert mapped[0] == pytest.approx(direct[0], rel=1e-9) and mapped[1] == pytest.approx(direct[1], rel=1e-9)
+        assert mapped[2] == pytest.approx(direct[2], abs=1e-12)
+
+
+def test_rd40_pin_bending_over_states_is_the_largest_single_state():
+    # the stress over a sequence of states is the largest of the single-state stresses (same pins,
+    # same support), and names the state where it occurs
+    from rvtool.assembly import build
+    from rvtool.solver.static import StaticSolver
+    d = load_design(designs.path("rd40"))
+    m = build(d, bearing_model="lumped")
+    m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+    solver = StaticSolver(m)
+    states = [solver.solve(a) for a in (0.0, 0.05, 0.1)]
+    cant = PinSupport(model="cantilever", ends=(-0.012, 0.012))
+    single = [m.pin_bending(q, "output_pins", cant)["sigma_max_Pa"] for q in states]
+    over = m.pin_bending(states, "output_pins", cant)
+    assert over["sigma_max_Pa"] == pytest.approx(max(single), rel=1e-12)
+    assert over["state"] == int(np.argmax(single))
+    assert max(single) > min(single)          # the angles differ: the test can tell the states apart

@@ -25,6 +25,14 @@ def design():
 
 
 @pytest.fixture(scope="module")
+def zero_play(design):
+    """rv40e without its needle clearance and backlash (the zero-play model whose measured bounds
+    the kinematic-equilibrium and pointwise-share checks state)."""
+    from rvtool.assembly.rv.free_play import without_free_play
+    return without_free_play(design)
+
+
+@pytest.fixture(scope="module")
 def rated(design):
     m = build(design)
     s = StaticSolver(m)
@@ -45,7 +53,7 @@ def test_ratio_from_the_gear_graph(design, z_sun, z_crank, n_pins, shift):
     assert i > 0          # sun and carrier turn the same way
 
 
-def test_builder_dispatch_kinematics_and_families(design, rated):
+def test_builder_dispatch_kinematics_and_families(zero_play, rated):
     m, _, _ = rated
     assert isinstance(m, RvModel)
     assert m.body_names == ("sun", "crank0", "crank1", "crank2", "wheel0", "wheel1", "carrier")
@@ -60,8 +68,9 @@ def test_builder_dispatch_kinematics_and_families(design, rated):
     assert np.allclose(v, (p[2] - p[0]) / (2 * h) * w, rtol=0, atol=1e-9)
     # zero load: the kinematic state is an equilibrium (zero-backlash stage, clearance-free needles and
     # pins); the regularization springs carry 2e-7 N at 1.3 rad (measured; the contact search resolution).
-    # With a 3 um needle clearance the wheels float in it and the springs carry up to 3e-4 N.
-    m2 = build(design)
+    # With a 3 um needle clearance the wheels float in it and the springs carry up to 3e-4 N (rv40e's
+    # 1.5 um and 10 um backlash: 1.4e-4 N at 1.3 rad, measured), so the zero-play variant is checked.
+    m2 = build(zero_play)
     q0 = StaticSolver(m2).solve(1.3)
     assert m2.regularization_force(q0) < 1e-5
 
@@ -104,16 +113,17 @@ def _mean_shares(design, n=12):
     return np.array(out)
 
 
-def test_equal_crank_shares_at_nominal(design, rated):
+def test_equal_crank_shares_at_nominal(design, zero_play, rated):
     """Nominal geometry: every crank carries 1/N_c of the torque on the carrier. Pointwise the shares
     move by +-0.002 with the crank angle (measured; the 40-pin ring is not three-fold symmetric and the
     rollers are discrete), the mean over a crank revolution (12 points) is within 1e-4 of 1/3 (measured).
-    Tolerances 5e-4 (mean) and 0.01 (pointwise). (With a 3 um needle clearance the pointwise swing is
-    +-0.023: a journal in its clearance unloads.)"""
+    Tolerances 5e-4 (mean) and 0.01 (pointwise), on the zero-play variant. (With rv40e's 1.5 um needle
+    clearance and backlash the pointwise swing is +-0.015, with 3 um +-0.023: a journal in its clearance
+    unloads; the carrier statics hold on rv40e itself.)"""
     m, _, q = rated
     torques = m.crank_torques(q)
     assert abs(np.sum(torques) - design.rated_torque) < 1e-4 * design.rated_torque   # carrier statics
-    sh = _mean_shares(design)
+    sh = _mean_shares(zero_play)
     assert np.all(np.abs(sh.mean(axis=0) - 1 / 3) < 5e-4)
     assert np.all(np.abs(sh - 1 / 3) < 0.01)
 

@@ -22,7 +22,7 @@ from .anchor import anchor_funcs
 from .circle_pairs_ref import FRICTION_ANCHOR
 from .laws import law_funcs
 from .planar import planar_funcs
-from .recorded import PairLaunch
+from .recorded import PairLaunch, assign_parameters
 from .precision import resolve_device, scalar_types
 
 # the first observation columns are the contact element's (written by planar.store_pair_observation)
@@ -151,6 +151,13 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         phit = wp.atan2(w[1], w[0]) + omega * wp.acos(wp.clamp(rb / rho, dtype(-1.0), dtype(1.0)))
         dphit = cross2(w, dw) / (rho * rho) + omega * rb * drho / (rho * lam_s)
         return phit, dphit, lam, rho * drho / lam_s, rho > rb
+
+    @wp.func
+    def flank_offset(ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), goff: wp.array(dtype=dtype), i: int,
+                     k: int, j: int):
+        """Gap offset of the row's tooth pair on its line (see the reference's flank_offset)."""
+        base = ip[i, J_LINE] * dev.shape[0]
+        return goff[base + ip[i, J_TOOTH_A] + k] + goff[base + ip[i, J_TOOTH_B] + j]
 
     @wp.func
     def tooth_angle(ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), i: int, which: int, k: int):
@@ -314,6 +321,7 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         fp: wp.array2d(dtype=dtype),
         ip: wp.array2d(dtype=wp.int32),
         dev: wp.array(dtype=dtype),
+        goff: wp.array(dtype=dtype),
         anchor_params: wp.array2d(dtype=dtype),
         # Data in:
         pose_in: wp.array2d(dtype=dtype),
@@ -434,6 +442,7 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         g0, dg0, n, dn0, cA, dcA0, cB, dcB0, ua, dua0, ub, dub0, RA, dRA0, RB, dRB0, sB = geometry(
             mode, fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, z2, zs, z2, zs)
         g, dg_, C, dC_, hA, dhA_, hB, dhB_, K, dK_ = gap_terms(fp, i, g0, zs, n, z2, ua, zs, ub, zs, RA, zs, RB, zs, sB)
+        g = g + flank_offset(ip, dev, goff, i, k, j)
         delta = -g
         on = delta > dtype(0.0)
         Fel = dtype(0.0)
@@ -579,6 +588,14 @@ class InvolutePairKernel(PairLaunch):
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
         self.n = len(fparams)
         dt = self.wdtype
+        dev = np.asarray(deviations, self.ndtype)
+        # per-flank slow-state gap offsets (reference: flank_offset), zero as built
+        self._tooth_offsets = wp.array(np.zeros(2 * len(dev), self.ndtype), dtype=dt, device=d)
         self._setup_launch(_kernel, [wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
-                                     wp.array(np.asarray(deviations, self.ndtype), dtype=dt, device=d)],
+                                     wp.array(dev, dtype=dt, device=d), self._tooth_offsets],
                            anchor_params, n_bodies, N_OBS)
+
+    def set_tooth_offsets(self, offsets):
+        """Overwrite the per-flank gap offsets (2 n_teeth,) [m] in place on the device; the recorded
+        launch keeps pointing at them."""
+        assign_parameters(self._tooth_offsets, offsets, self.ndtype)

@@ -184,6 +184,56 @@ def series_force(delta, C, hA, hB, K, EA, nuA, EB, nuB, bs, rtol=SERIES_RTOL[np.
     return tuple(np.where(bad, np.nan, x) for x in out)
 
 
+def series_potential(F, delta, EA, nuA, EB, nuB, bs):
+    """Elastic energy V [J] stored by Eq. (series_contact) at approach delta [m] carrying the
+    elastic force F [N] (F = series_force(delta, ...)), the coefficients C, h_i, K frozen:
+
+        V(delta) = int_0^delta F d(delta') = F delta - int_0^F delta(F') dF'   (by parts).
+
+    With delta(F) = C F + F (A - (C_A + C_B)/2 ln F) (Weber: a_H ~ sqrt(F), so ln(2 h / a_H)
+    = const - 1/2 ln F, A collecting the constants), the inner integral is
+    C F^2/2 + F delta_H(F)/2 + (C_A + C_B) F^2/8 = F delta/2 + (C_A + C_B) F^2/8, hence
+
+        V = F delta / 2 - (C_A + C_B) F^2 / 8,   C_i = 2 (1 - nu_i^2) / (pi E_i b_s),
+
+    exact (no quadrature); dV/d delta = F because d delta/dF = delta/F - (C_A + C_B)/2.
+    The tooth compliance C and the depths h_i drop out: they enter only through F."""
+    CA = 2 * (1 - nuA ** 2) / (np.pi * EA * bs)
+    CB = 2 * (1 - nuB ** 2) / (np.pi * EB * bs)
+    return 0.5 * F * delta - 0.125 * (CA + CB) * F * F
+
+
+def elastic_state(fp, obs):
+    """Per row from observation rows (N, N_OBS) of :func:`evaluate`: the approach delta [m], the
+    elastic force F of Eq. (series_contact) [N] (without the damping part of O_FN) and its
+    potential V [J] (:func:`series_potential`). The series coefficients are rebuilt from the
+    contact mode and the roll angles the row reports (as :func:`_gap_terms` forms them: on the
+    line of action R_A = r_bA u_A, R_B = r_bB u_B; a tip edge has its edge radius and, on B, a
+    convex sense); open rows and rows without approach carry zero force and energy."""
+    fp = np.asarray(fp, float)
+    obs = np.asarray(obs, float)
+    A, B = GEAR_A, GEAR_B
+    mode = obs[:, O_MODE]
+    delta = -obs[:, O_GAP]
+    on = (mode != MODE_OPEN) & (delta > 0)
+    ua = np.where(on, obs[:, O_UA], fp[:, A + G_UREF])
+    ub = np.where(on, obs[:, O_UB], fp[:, B + G_UREF])
+    RA = np.where(mode == MODE_CORNER_A, fp[:, A + G_RHO_E], fp[:, A + G_RB] * ua)
+    RB = np.where(mode == MODE_CORNER_B, fp[:, B + G_RHO_E], fp[:, B + G_RB] * ub)
+    sB = np.where(mode == MODE_CORNER_B, 1.0, fp[:, B + G_EPS])
+    bs = fp[:, C_BS]
+    C = (poly(fp[:, :N_GEAR], G_PC, ua)[0] + poly(fp[:, B:B + N_GEAR], G_PC, ub)[0]) / bs
+    hA = poly(fp[:, :N_GEAR], G_PH, ua)[0]
+    hB = poly(fp[:, B:B + N_GEAR], G_PH, ub)[0]
+    K = 1.0 / RA + sB / RB
+    ds = np.where(on, delta, 1.0)
+    E = (fp[:, A + G_E], fp[:, A + G_NU], fp[:, B + G_E], fp[:, B + G_NU])
+    F = series_force(ds, C, hA, hB, K, *E, bs)[0]
+    F = np.where(on, F, 0.0)
+    V = np.where(on, series_potential(F, ds, *E, bs), 0.0)
+    return delta, F, V
+
+
 def select(pose, fp, ip, dev):
     """Contact mode, teeth and frozen roll-angle offsets of every row at the primal state.
 
@@ -416,9 +466,21 @@ def _gap_terms(f, geo):
                 hB=(hB, dhB * dub), K=(K, dK))
 
 
-def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64, anchor=None):
+def flank_offset(ip, n_teeth, tooth_offsets, k, j):
+    """Slow-state gap offset [m] of the tooth pair of each row: the offset of the flank of tooth k
+    of A on the row's line plus that of the facing flank of tooth j of B (positive opens the gap).
+    tooth_offsets: (2 n_teeth,) per line of action (the flank side), then per tooth in the
+    J_TOOTH_* layout of the deviations: index line * n_teeth + J_TOOTH_A + k. The offsets follow
+    the teeth, not the rows (a row is a window slot whose teeth change as the gears turn)."""
+    base = ip[:, J_LINE] * n_teeth
+    return tooth_offsets[base + ip[:, J_TOOTH_A] + k] + tooth_offsets[base + ip[:, J_TOOTH_B] + j]
+
+
+def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64, anchor=None, tooth_offsets=None):
     """Evaluate all rows. pose, vel: (nb+1, 3) with the ground last; fparams (N, N_FLOAT),
     iparams (N, N_INT); deviations: concatenated tooth-angle deviations [rad] (J_TOOTH_* offsets).
+    tooth_offsets: None, or per-flank gap offsets (2 len(deviations),) [m] of :func:`flank_offset`
+    added to the gap of Eq. (gap) (constant per tooth: no tangent term).
     anchor: None, or (anchor_params (N, anchor_ref.N_ANCHOR), committed flags (N,), anchors in
     A and in B coordinates (N, 2)) for the rows with J_FRICTION = FRICTION_ANCHOR (2): the anchor
     model of :mod:`anchor_ref`, anchors formed at the contact point c as material points of both
@@ -455,6 +517,8 @@ def evaluate(pose, vel, fparams, iparams, deviations, precision=np.float64, anch
         geo = geometry(pose, fp, ip, dev, rows, sel, (z2, z1, z2, z1))
         gt = _gap_terms(f, geo)
         g = gt["g"][0]
+        if tooth_offsets is not None:
+            g = g + flank_offset(ip[rows], len(dev), np.asarray(tooth_offsets, float), sel["k"][rows], sel["j"][rows])
         delta = -g
         on = delta > 0
         ds = np.where(on, delta, 1.0)

@@ -169,6 +169,60 @@ def ball_law(r, rdot, fp):
     return delta, F, F * cw, F * az / Ls, np.arctan2(az, ar), dF * cw + F * dcw, dFd * cw
 
 
+#: Gauss--Legendre nodes of the ball potential's quadrature (:func:`ball_potential`); the
+#: integrand t^4 K(delta t^2) is a polynomial times the weakly varying K, so 12 nodes are exact
+#: to rounding (tests/test_contact_energy.py compares with adaptive quadrature)
+BALL_POTENTIAL_NODES = 12
+
+
+def ball_elastic(delta, fp):
+    """Elastic force K(alpha_w) <delta>_+^(3/2) [N] of Eq. (ball_bearing) as a function of the
+    approach delta [m] alone: the working angle follows from delta through
+    L = delta + A + c, a_r = sqrt(L^2 - a_z^2), cos(alpha_w) = a_r / L (a_z held)."""
+    A, c = fp[:, R_A], fp[:, R_CLEAR]
+    az = A * np.sin(fp[:, R_ALPHA]) + fp[:, R_SAX]
+    dp = np.where(delta > 0, delta, 0.0)
+    L = dp + A + c
+    cw = np.sqrt(np.maximum(L * L - az * az, 0.0)) / L
+    K = fp[:, R_KSCALE] * ball_stiffness(cw, fp[:, R_DBALL], fp[:, R_PITCH], fp[:, R_FI], fp[:, R_FO],
+                                         fp[:, R_EMOD])[0]
+    return np.where(delta > 0, K * dp ** 1.5, 0.0)
+
+
+def ball_potential(delta, fp):
+    """Elastic energy [J] of a ball at approach delta [m], V = int_0^delta F(d) dd with F of
+    :func:`ball_elastic` (K moves with the working angle, so no closed form): with d = delta t^2,
+    V = 2 delta^(5/2) int_0^1 t^4 K(delta t^2) dt by Gauss--Legendre. Its delta-derivative is the
+    force along the line of action, and dV/dr = F cos(alpha_w) = f_r, the radial force of
+    :func:`ball_law` (d delta/dr = cos(alpha_w))."""
+    delta = np.asarray(delta, float)
+    x, w = np.polynomial.legendre.leggauss(BALL_POTENTIAL_NODES)
+    t, w = 0.5 * (x + 1.0), 0.5 * w
+    dp = np.where(delta > 0, delta, 0.0)
+    V = np.zeros_like(dp)
+    for ti, wi in zip(t, w):
+        # F(d) = K d^(3/2) = K delta^(3/2) t^3, dd = 2 delta t dt
+        V = V + wi * ball_elastic(dp * ti * ti, fp) * 2.0 * dp * ti
+    return np.where(delta > 0, V, 0.0)
+
+
+def elastic_state(kind, delta, fp):
+    """Per row: the elastic normal force [N] (Eq. (normal_force) without its damping part, or
+    :func:`ball_elastic`) and the potential [J] (k delta^(p+1)/(p+1) of a lamina,
+    :func:`ball_potential` of a ball) at approaches delta [m]."""
+    fp = np.asarray(fp, float)
+    delta = np.asarray(delta, float)
+    ball = np.asarray(kind) == KIND_BALL
+    F, _ = laws_ref.power_law(fp[:, R_K], fp[:, R_P], delta)
+    V = np.where(delta > 0, F * np.where(delta > 0, delta, 0.0) / (fp[:, R_P] + 1.0), 0.0)
+    if np.any(ball):
+        F = np.where(ball, 0.0, F)
+        V = np.where(ball, 0.0, V)
+        F[ball] = ball_elastic(delta[ball], fp[ball])
+        V[ball] = ball_potential(delta[ball], fp[ball])
+    return F, V
+
+
 def element_law(kind, r, rdot, fp):
     """Per row: approach delta [m], normal force F [N], radial force f_r [N], axial
     magnitude F sin(alpha_w) [N], working angle alpha_w [rad], df_r/dr, df_r/drdot."""

@@ -209,13 +209,21 @@ class TaperedRollerKernel:
                                    "dfdpsidot": ((R, N_Q), "f"), "rib": ((R, 2), "f"), "lam": ((nl, 2), "f")},
                                   dt, self.ndtype, d)
         dev = self._buf.dev
+        self._lamina_fp = wp.array(lamina_fp, dtype=dt, device=d)
         self._cmd = wp.launch(_kernel(dt), dim=R, device=d,
                               inputs=[wp.array(roller_fp, dtype=dt, device=d),
                                       wp.array(roller_ip, dtype=wp.int32, device=d),
-                                      wp.array(lamina_fp, dtype=dt, device=d),
+                                      self._lamina_fp,
                                       dev["q"], dev["qdot"], dev["psi"], dev["psidot"]],
                               outputs=[dev[k] for k in ("f", "dfdq", "dfdv", "dfdpsi", "dfdpsidot", "rib", "lam")],
                               record_cmd=True)
+
+    def set_lamina_parameters(self, lamina_fp):
+        """Overwrite the lamina float parameters (same shape) in place on the device; the recorded
+        launch keeps pointing at them (slow-state clearance offsets between mechanical windows)."""
+        fp = np.ascontiguousarray(lamina_fp, dtype=self.ndtype)
+        assert fp.shape == tuple(self._lamina_fp.shape)
+        self._lamina_fp.assign(fp)
 
     def evaluate(self, q, qdot, psi, psidot):
         """Same results as :func:`tapered_rollers_ref.evaluate` (NumPy arrays owned by this object,

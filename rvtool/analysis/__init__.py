@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 from ..errors import RvtoolInputError
+from .admissible import check_rated_state
 from .registry import PROTOCOLS, Context, Unsupported, select
 from .results import AnalysisResult, Figure, ProtocolResult, finite_or_none
 
@@ -84,7 +85,8 @@ def _run_one(proto, ctx):
 
 def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", tolerances=None):
     """Run ``protocols`` (names, a comma-separated string or None for all) on ``design``;
-    returns an :class:`AnalysisResult`. Input errors (design, protocol names, device) raise
+    returns an :class:`AnalysisResult`. Input errors (design, protocol names, device, a rated
+    torque outside the design's admissible range, :mod:`rvtool.analysis.admissible`) raise
     :class:`~rvtool.errors.RvtoolInputError` before anything is written. ``tolerances``: the
     Monte Carlo's tolerance file (default: a shipped design's ``<name>_tolerances``)."""
     t0 = time.perf_counter()
@@ -98,6 +100,8 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     if tolerances is not None and not os.path.isfile(tolerances):
         raise RvtoolInputError(f"tolerances file {str(tolerances)!r} not found")
     ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances)
+    # a valid but unsolvable load is an input error: raised here, before anything is written
+    ctx.cache["rated_state"] = check_rated_state(obj, ctx.build)
     if out_dir is not None:
         os.makedirs(out_dir, exist_ok=True)
     results = tuple(_run_one(p, ctx) for p in chosen)

@@ -121,9 +121,11 @@ def run_te(ctx):
     out.plots.append(ctx.save(fig, "te"))
     # contact forces at the rated state, zero input angle
     from ..solver.static import StaticSolver
-    m0 = ctx.build()
-    m0.set_output_torque(-np.sign(m0.ratio) * rated)
-    q0 = StaticSolver(m0).solve(0.0)
+    m0, q0 = ctx.cache.get("rated_state", (None, None))    # solved by the admissibility check
+    if q0 is None:
+        m0 = ctx.build()
+        m0.set_output_torque(-np.sign(m0.ratio) * rated)
+        q0 = StaticSolver(m0).solve(0.0)
     out.data["mesh_forces_at_rated_N"] = mesh_forces(m0, q0)
     out.data["peak_loads_at_rated_N"] = m0.family_peaks(q0)
     fig, ax = plt.subplots(figsize=(6, 6))

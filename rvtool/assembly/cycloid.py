@@ -166,12 +166,15 @@ class CycloidModel(ReducerModel):
         return f
 
     def pin_bending(self, q, family, support=None):
-        """Largest bending and shear stress of the ring pins (``"pins"``) or output pins at the
-        static state q from their station loads (:meth:`pin_station_loads`) on the declared
-        support (``pins.support`` / ``output_pins.support``), or on ``support``
-        (:class:`~rvtool.structure.pin_beam.PinSupport`) where the design's pins are rigid (an
-        assumption the caller names). Returns a dict (``sigma_max_Pa``, ``tau_max_Pa``, ``pin``,
-        ``z_m``, ``support``, ``support_source``) or None (rigid pins and no support given)."""
+        """Largest bending and shear stress of the ring pins (``"pins"``) or output pins from their
+        station loads (:meth:`pin_station_loads`) on the declared support (``pins.support`` /
+        ``output_pins.support``), or on ``support`` (:class:`~rvtool.structure.pin_beam.PinSupport`)
+        where the design's pins are rigid (an assumption the caller names). q: one static state,
+        or a sequence of states (e.g. the points of a TE sequence over a mesh cycle: the pin
+        loads move from pin to pin, and the largest stress need not occur at one angle).
+        Returns a dict (``sigma_max_Pa``, ``tau_max_Pa`` (the largest over the states), ``pin``,
+        ``z_m``, ``state`` (index of the state of sigma_max; 0 for one state), ``support``,
+        ``support_source``) or None (rigid pins and no support given)."""
         from ..structure.pin_beam import PinBeam
         fam = Family(family)
         spec = self.design.pins if fam == Family.PINS else self.design.output_pins
@@ -182,13 +185,16 @@ class CycloidModel(ReducerModel):
                 return None
             sup, source = support, "assumed (the design's pins are rigid)"
         beam = PinBeam(sup, spec.pin_radius, self.design.material.youngs_modulus, self.design.material.poisson_ratio)
-        loads = self.pin_station_loads(q, fam)
-        best, tau = {"sigma_max_Pa": 0.0, "pin": None, "z_m": None}, 0.0
-        for p in np.flatnonzero(np.any(loads != 0.0, axis=(1, 2))):
-            s, t, z = beam.station_stresses(self.design.wheels.midplanes, self.design.wheels.width, loads[p])
-            tau = max(tau, t)
-            if s > best["sigma_max_Pa"]:
-                best = {"sigma_max_Pa": s, "pin": int(p), "z_m": z}
+        stress_map = beam.station_stress_map(self.design.wheels.midplanes, self.design.wheels.width)
+        states = [q] if np.ndim(q) == 1 else q
+        best, tau = {"sigma_max_Pa": 0.0, "pin": None, "z_m": None, "state": None}, 0.0
+        for k, qk in enumerate(states):
+            loads = self.pin_station_loads(qk, fam)
+            for p in np.flatnonzero(np.any(loads != 0.0, axis=(1, 2))):
+                s, t, z = stress_map.stresses(loads[p])
+                tau = max(tau, t)
+                if s > best["sigma_max_Pa"]:
+                    best = {"sigma_max_Pa": s, "pin": int(p), "z_m": z, "state": k}
         best.update(tau_max_Pa=tau, support={"model": sup.model.value, "ends": list(sup.ends), "shear": sup.shear},
                     support_source=source)
         return best
@@ -602,11 +608,14 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
         elements["bearings"] = element(bset, backend=backend, precision=precision, device=device)
     if d.bearing_friction.model != "none":
-        # the friction torque of every bearing, a loss element of its own (switched off: absent)
-        if bearing_model != "lumped":
-            raise RvtoolInputError("bearing_friction.model = 'palmgren' needs bearing_model = 'lumped' (the "
-                                   "bearing loads are read per bearing identity from the lumped set)")
-        elements["bearing_friction"] = element(bearing_friction_evaluator(d, bset, elements["bearings"].evaluator))
+        # the friction torque of every bearing, a loss element of its own (switched off: absent); rolling
+        # elements: P1 from the accepted element loads of each mounting
+        if bearing_model == "rolling":
+            from ..bearings.friction_element import rolling_friction_evaluator
+            elements["bearing_friction"] = element(rolling_friction_evaluator(elements["bearings"].evaluator,
+                                                                              d.bearing_friction))
+        else:
+            elements["bearing_friction"] = element(bearing_friction_evaluator(d, bset, elements["bearings"].evaluator))
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
@@ -649,7 +658,7 @@ def bearing_friction_evaluator(design, bearing_set, load_source):
         model = PalmgrenFrictionTorque(f0=f0, f1=f1, pitch_diameter=dm, kinematic_viscosity=bf.kinematic_viscosity,
                                        regularization_speed=bf.regularization_speed)
         losses.append(BearingLoss(c.name, c.body_a, c.body_b, model, (row,)))
-    return BearingFrictionEvaluator(losses, bearing_set.n_bodies, load_source)
+    return BearingFrictionEvaluator(losses, bearing_set.n_bodies, load_source, static_stiffness=bf.static_stiffness)
 
 
 def body_names(n_wheels):

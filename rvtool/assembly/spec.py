@@ -173,6 +173,20 @@ class Housing:
         if self.n_residual != -1 and self.n_modes + self.n_residual < 1:
             raise RvtoolInputError("housing.n_modes + housing.n_residual = 0; valid range [1, inf)")
 
+    def check_pin_ring(self, pins):
+        """An elastic housing carrying the ring ``pins`` (a :class:`Pins` spec) at one port per pin:
+        its bore clears the pins and it has one port per pin (cycloid and RV designs)."""
+        if self.model != "ports":
+            return
+        r_pins = pins.pin_circle_radius + pins.pin_radius
+        st = self.structure
+        if st.inner_radius < r_pins - 1e-12:
+            raise RvtoolInputError(f"housing.structure.inner_radius = {st.inner_radius} m cuts through the ring pins; "
+                                   f"valid range [{r_pins:.6g}, outer_radius) m (pin circle radius + pin radius)")
+        if st.n_ports != pins.n_pins:
+            raise RvtoolInputError(f"housing.structure.n_ports = {st.n_ports}; valid value pins.n_pins = {pins.n_pins} "
+                                   "(one port per ring pin; leave the key out to take it)")
+
 
 @dataclass(frozen=True, kw_only=True)
 class Bodies:
@@ -201,14 +215,21 @@ class BearingFriction:
     f0_ball, f1_ball (main and input ball bearings) and f0_needle, f1_needle (eccentric needle
     bearings) [-], regularization_speed [rad/s] of the sign. The defaults are chosen here, inside the
     ranges tabulated by Harris & Kotzalas (oil bath: f0 = 2 for angular-contact/deep-groove ball
-    bearings, 4 for needle bearings; f1 = 7e-4 ball, 5e-4 needle); ISO VG 32 at 40 degC."""
+    bearings, 4 for needle bearings; f1 = 7e-4 ball, 5e-4 needle); ISO VG 32 at 40 degC.
+    f0_tapered, f1_tapered (tapered roller rows, chosen here, of the order of the roller values) [-].
+    static_stiffness k_phi [N m/rad] (> 0) of the static part, or None (M0 + M1 on the speed law):
+    with it, M1 acts as a Coulomb torque with an anchor on the bearing's relative rotation
+    (:mod:`rvtool.bearings.friction_element`); switched off (None) it costs nothing."""
     model: str = "none"
     kinematic_viscosity: float = 3.2e-5
     f0_ball: float = 2.0
     f1_ball: float = 7e-4
     f0_needle: float = 4.0
     f1_needle: float = 5e-4
+    f0_tapered: float = 6.0
+    f1_tapered: float = 4e-4
     regularization_speed: float = 1e-2
+    static_stiffness: float | None = None
 
     def __post_init__(self):
         if self.model not in ("none", "palmgren"):
@@ -219,6 +240,11 @@ class BearingFriction:
         check_positive("bearing_friction.f0_needle", self.f0_needle)
         check_nonnegative("bearing_friction.f1_needle", self.f1_needle)
         check_positive("bearing_friction.regularization_speed", self.regularization_speed)
+        check_positive("bearing_friction.f0_tapered", self.f0_tapered)
+        check_nonnegative("bearing_friction.f1_tapered", self.f1_tapered)
+        if self.static_stiffness is not None:
+            check_finite("bearing_friction.static_stiffness", self.static_stiffness)
+            check_positive("bearing_friction.static_stiffness", self.static_stiffness)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -266,14 +292,7 @@ class CycloidDesign:
         if self.output_pins.hole_radius < needed - 1e-4:
             raise RvtoolInputError(f"output_pins.hole_radius = {self.output_pins.hole_radius} m cannot pass the eccentric "
                                    f"motion; valid range [{needed:.6g}, inf) m (pin radius + eccentricity)")
-        r_pins = self.pins.pin_circle_radius + self.pins.pin_radius
-        st = self.housing.structure
-        if self.housing.model == "ports" and st.inner_radius < r_pins - 1e-12:
-            raise RvtoolInputError(f"housing.structure.inner_radius = {st.inner_radius} m cuts through the ring pins; "
-                                   f"valid range [{r_pins:.6g}, outer_radius) m (pin circle radius + pin radius)")
-        if self.housing.model == "ports" and st.n_ports != self.pins.n_pins:
-            raise RvtoolInputError(f"housing.structure.n_ports = {st.n_ports}; valid value pins.n_pins = {self.pins.n_pins} "
-                                   "(one port per ring pin; leave the key out to take it)")
+        self.housing.check_pin_ring(self.pins)
 
     @property
     def ratio(self):

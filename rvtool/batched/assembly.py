@@ -150,6 +150,22 @@ class BatchedCycloidModel:
         (a scalar or one per copy)."""
         return (self._kinematic(angle) - self._reference).reshape(self.n_copies, -1)
 
+    @property
+    def input_local(self):
+        """Index of the driven shaft rotation within a copy's 3 nb coordinates."""
+        return 2
+
+    @property
+    def output_local(self):
+        """Index of the loaded flange rotation within a copy's 3 nb coordinates."""
+        return 3 * (self.nb - 1) + 2
+
+    def copy_model(self, c, build_kw=None):
+        """Copy c as its own model (the batch solver's per-copy fallback): the variant's design
+        built with lumped bearings and ``build_kw``."""
+        from ..assembly.cycloid import build
+        return build(self.variants[c].apply(self.design), bearing_model="lumped", **(build_kw or {}))
+
     def to_global(self, qc, out=None):
         """Global ODE2 vector from per-copy coordinates (B, 3 nb)."""
         out = np.zeros(self.mbs.systemData.ODE2Size()) if out is None else out

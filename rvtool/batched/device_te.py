@@ -90,10 +90,13 @@ class _Fallback:
 
 def device_te(design, variants, angles, *, torque=None, regularization=(1e4, 100.0), device="cpu",
               settings: DeviceNewtonSettings = DeviceNewtonSettings(), chunk_pairs=None, fallback=True,
-              pin_forces=True):
+              pin_forces=True, params=None):
     """Quasi-static TE of ``variants`` of ``design`` at ``angles`` [rad] under ``torque`` [N m]
     (default: the rated torque, resisting the output rotation as in ``quasi_static_te``) with
-    the device Newton on ``device``; see the module docstring. Returns a :class:`DeviceTE`."""
+    the device Newton on ``device``; see the module docstring. params: the
+    :class:`CopyParameters` of ``[Variant()] + variants`` with this ``regularization`` to reuse
+    (shared with the lost motion of the same variants); built here if None. Returns a
+    :class:`DeviceTE`."""
     t0 = time.perf_counter()
     variants = list(variants)
     angles = np.asarray(angles, float)
@@ -102,7 +105,10 @@ def device_te(design, variants, angles, *, torque=None, regularization=(1e4, 100
         raise RvtoolInputError(f"device_te needs at least one variant and one angle; got {V} and {A}")
     tq = -np.sign(design.ratio) * (design.rated_torque if torque is None else torque)
     # index 0: the nominal design (warm starts); variants at 1..V
-    params = copy_parameters(design, [Variant()] + variants, regularization=regularization)
+    if params is None:
+        params = copy_parameters(design, [Variant()] + variants, regularization=regularization)
+    elif len(params.variants) != V + 1:
+        raise RvtoolInputError(f"params must hold [Variant()] + variants ({V + 1} copies); got {len(params.variants)}")
     newton = DeviceNewton(params, device=device, settings=settings)
     kind = "cpu" if newton.device == "cpu" else "cuda"
     chunk = int(chunk_pairs or DEFAULT_CHUNK[kind])

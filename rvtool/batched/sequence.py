@@ -49,22 +49,27 @@ def _single_thread():
 
 def _run(design, angles, torque, build_kw, device, predictor, abs_tol):
     """One process: all segments of ``angles`` (B, L) side by side. Returns per-point arrays
-    (B, L): solved input angles, flange angles, and per-copy family peaks, stats."""
-    from ..variants.variant import Variant
-    from .assembly import build_batched
+    (B, L): solved input angles, output angles, and per-copy family peaks, stats, and the
+    split of the wall time (Exudyn's solves, callbacks, kernel launches with scatter)."""
+    from ..assembly import build
+    from .replica import replicate
     from ..solver.batched import BatchedStaticSolver
 
     t0 = time.perf_counter()
     B, L = angles.shape
-    model = build_batched(design, [Variant(index=c) for c in range(B)], device=device, **build_kw)
-    solver = BatchedStaticSolver(model, build_kw=build_kw, abs_tol=abs_tol)
+    kw = dict(build_kw, device=device)
+    source = build(design, **kw)
+    model = replicate(source, B, device=device, build_kw=kw)
+    solver = BatchedStaticSolver(model, build_kw=kw, abs_tol=abs_tol)
     build_s = time.perf_counter() - t0
-    solver.set_torques(-np.sign(design.ratio) * torque)
-    i_out = 3 * (model.nb - 1) + 2
-    ref_out = np.array([m.reference[-1, 2] for m in model.copies])
+    t1 = time.perf_counter()
+    solver.set_torques(-np.sign(source.ratio) * torque)
+    i_out = model.output_local
+    ref_out = source.reference.reshape(-1)[i_out]
     th_in, th_out = np.zeros((B, L)), np.zeros((B, L))
     peaks = {}
     prev = None
+    peak_s = 0.0
     for k in range(L):
         q = solver.solve(angles[:, k], prev, predictor=predictor)
         if np.any(solver.dead):
@@ -76,16 +81,22 @@ def _run(design, angles, torque, build_kw, device, predictor, abs_tol):
         prev = angles[:, k]
         th_in[:, k] = solver.solved_angles
         th_out[:, k] = ref_out + q[:, i_out]
+        tp = time.perf_counter()
         ev = model.elements.evaluation(model.to_global(q), np.zeros(model.mbs.systemData.ODE2Size()))
-        for fam, f in model.evaluator.family_peaks(ev).items():
+        for fam, f in model.family_peaks(ev).items():
             peaks.setdefault(fam, np.zeros((B, L)))[:, k] = f
-    return {"theta_in": th_in, "theta_out": th_out, "peaks": peaks, "stats": solver.stats.to_dict(),
+        peak_s += time.perf_counter() - tp
+    st = solver.stats
+    split = {"solve_s": time.perf_counter() - t1, "exudyn_s": st.solve_s - st.callback_s,
+             "callbacks_s": st.callback_s - st.kernel_s, "kernels_s": model.evaluator.timing["kernels"],
+             "scatter_s": model.evaluator.timing["scatter"], "peaks_s": peak_s}
+    return {"theta_in": th_in, "theta_out": th_out, "peaks": peaks, "stats": st.to_dict(), "split": split,
             "build_s": build_s, "wall_s": time.perf_counter() - t0}
 
 
 def batched_quasi_static_te(design, *, torque, input_angles, copies=None, workers=1, device="cpu", build_kw=None,
                             predictor="secant", abs_tol=1e-4):
-    """Quasi-static TE of ``design`` (lumped bearings, rigid housing) at ``input_angles`` [rad]
+    """Quasi-static TE of ``design`` (any topology: its builder, then :func:`~rvtool.batched.replica.replicate`) at ``input_angles`` [rad]
     under output torque ``torque`` [N m], solved as B = ``copies`` angle segments side by side
     (see the module docstring) in ``workers`` processes. copies: default min(64, number of
     angles) (RD-40 on 2 CPU cores: 16 -> 64 copies cut a revolution from ~16 to ~11 s, 128 and
@@ -128,8 +139,9 @@ def batched_quasi_static_te(design, *, torque, input_angles, copies=None, worker
     th_out = np.concatenate([p["theta_out"] for p in parts])[real]
     peaks = {fam: float(np.max(np.concatenate([p["peaks"][fam] for p in parts])[real])) for fam in parts[0]["peaks"]}
     stats = {k: sum(p["stats"][k] for p in parts) for k in parts[0]["stats"]}
+    split = {k: max(p["split"][k] for p in parts) for k in parts[0]["split"]}
     stats["points"] = len(angles)
     stats["batch_solves_per_process"] = [p["stats"]["solves"] for p in parts]
     return {"theta_in": th_in, "theta_out": th_out, "te": transmission_error(th_in, th_out, design.ratio, unwrap=False),
             "peak_loads": peaks, "stats": stats, "wall_s": time.perf_counter() - t0, "copies": copies,
-            "workers": workers, "build_s": max(p["build_s"] for p in parts)}
+            "workers": workers, "build_s": max(p["build_s"] for p in parts), "split": split}

@@ -252,6 +252,20 @@ class BearingSet:
         if self.backend == "warp":
             self._kernel.set_parameters(fp)
 
+    def energy_law(self):
+        """The per-element constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        no friction (rolling without a declared loss), the elastic force and potential of each row
+        (:func:`warp_contacts.rolling_elements_ref.elastic_state`: k delta^(p+1)/(p+1) per lamina,
+        the ball's by quadrature), read from the current parameter rows (gap offsets included)."""
+        from ..observe.energy import ContactEnergyLaw
+        n = len(self.ids)
+        return ContactEnergyLaw(tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32),
+                                normal_potential=self.elastic_energy)
+
+    def elastic_energy(self, obs):
+        """(elastic normal force [N], potential [J]) per element from observation rows (N, 8)."""
+        return ref.elastic_state(self.iparams[:, ref.K_KIND], -np.asarray(obs, float)[:, ref.O_GAP], self.fparams)
+
     def commit(self, pose, vel=None, evaluation=None):
         """Observations (N, 8) at the accepted state (nothing to commit)."""
         return np.array(evaluation.obs if evaluation is not None else self.raw(pose, vel)[3], float)

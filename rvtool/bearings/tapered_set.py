@@ -35,7 +35,7 @@ from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX,
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, all_finite
+from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows
 from ..errors import RvtoolInputError
 from .set import Placement
 from .tapered import TaperedPair, TaperedRollerBearing
@@ -301,6 +301,20 @@ class TaperedBearingSet:
         return Evaluation(self.assembler.vector(Q), self.assembler.matrix(dQ), self.assembler.matrix(dQv),
                           self._observations(pose, lam, b, psi), (), all_finite(Q, dQ, dQv))
 
+    def set_gap_offsets(self, offsets):
+        """Gap offsets [m] per lamina row (positive opens the gap: a clearance increment along the
+        lamina's normal, e.g. the thermal one of Eq. (obs_thermal_gap)), added to the lamina offset
+        o_s (clearance + crowning) of the approach, absolute over the built rows; zeros restore the
+        built rows bit for bit."""
+        off = gap_offset_rows(offsets, len(self.ids), self.name)
+        if not hasattr(self, "_built_lamina_fp"):
+            self._built_lamina_fp = self.lamina_fp.copy()
+        fp = self._built_lamina_fp.copy()
+        fp[:, ref.LA_OFF] += off
+        self.lamina_fp = fp
+        if self.backend == "warp":
+            self._kernel.set_lamina_parameters(fp)
+
     def commit(self, pose, vel=None, evaluation=None):
         """Observations (L, 8) at the accepted state (nothing to commit)."""
         if evaluation is not None:
@@ -322,6 +336,21 @@ class TaperedBearingSet:
             out[m.name] = TaperedLoads(force=w[:2], axial_force=float(w[2]), tilting_moment=w[3:5],
                                        row_wrenches=rows[k, :n_rows], rib_forces=ribs[k, :n_rows])
         return out
+
+    def energy_law(self):
+        """The per-lamina constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        no friction, the lamina's power law k delta^p (potential k delta^(p+1)/(p+1); with the rigid rib
+        the approach is linear in the ring displacement, so this is the exact potential of the
+        rollers' wrench). The elastic rib stores energy in the rib contact too, which the lamina
+        observations do not carry: refused by name."""
+        from ..observe.energy import ContactEnergyLaw
+        if np.any(self.roller_ip[:, ref.RI_RIB]):
+            elastic = sorted({self.mountings[k].name for k in self.roller_owner[self.roller_ip[:, ref.RI_RIB] != 0]})
+            raise RvtoolInputError(f"the energy account needs rib_contact = false tapered rows; {elastic} of "
+                                   f"{self.name!r} have an elastic rib, whose contact energy is not observed")
+        n = len(self.ids)
+        return ContactEnergyLaw(normal_stiffness=self.lamina_fp[:, ref.LA_K], normal_exponent=self.lamina_fp[:, ref.LA_P],
+                                tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32))
 
     def element_loads(self, obs):
         """{mounting name: normal force of each roller [N], laminae summed} (roller order as in the ids)."""

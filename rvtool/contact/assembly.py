@@ -52,6 +52,8 @@ class BlockAssembler:
 
     def __init__(self, bodies, n_bodies):
         self.n = n = 3 * n_bodies
+        #: (N, m) body indices of each row (n_bodies or more: the ground), e.g. to copy the rows
+        self.bodies = np.asarray(bodies, np.int64)
         gidx = coordinate_index(bodies, n_bodies)
         self.index = gidx     # element coordinate of every row entry (-1 dropped): device-side sums
         self._vec = RowScatter(gidx, n)

@@ -182,6 +182,7 @@ class CycloidPinSet(PairFamilySet):
             raise RvtoolInputError(f"search_band = {search_band!r} is outside the valid range (0, 0.5] "
                                    f"(fraction of the pin radius)")
         self.search_band = float(search_band)
+        self.samples_per_tooth = samples_per_tooth
         if samples_per_tooth < 8:
             raise RvtoolInputError(f"samples_per_tooth = {samples_per_tooth} is outside the valid range [8, inf)")
         self.name = name

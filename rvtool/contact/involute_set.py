@@ -133,6 +133,27 @@ def gear_block(gear, compliance: ToothCompliance, u_ref):
     return blk
 
 
+def pair_secant_stiffness(pair: InvolutePair, force, compliance=None):
+    """Normal secant stiffness F / delta(F) [N/m] of one tooth pair of ``pair`` over its face width
+    at the middle of the path of contact, Eq. (series_contact) with delta(F) = C F + delta_H(F)
+    explicit in F (tooth compliances of :mod:`rvtool.contact.tooth_stiffness`, Weber's approach).
+    force: F [N] > 0; compliance: optional {gear: ToothCompliance} already computed."""
+    check_positive("force", force)
+    A, B = pair.gear_a, pair.gear_b
+    compliance = compliance or {}
+    ua = 0.5 * sum(pair.path_of_contact()) / A.base_radius
+    ub = float(pair.roll_b(ua))
+    b = A.face_width
+    blocks = [gear_block(g, compliance.get(g) or ToothCompliance.of(g), u)[None] for g, u in ((A, ua), (B, ub))]
+    u = (np.array([ua]), np.array([ub]))
+    c = sum(ref.poly(blk, ref.G_PC, ui)[0] for blk, ui in zip(blocks, u)) / b
+    hA, hB = (ref.poly(blk, ref.G_PH, ui)[0] for blk, ui in zip(blocks, u))
+    K = 1.0 / (A.base_radius * ua) + B.eps / (B.base_radius * ub)
+    F = np.array([float(force)])
+    dH = ref.weber_approach(F, hA, hB, K, A.youngs_modulus, A.poisson_ratio, B.youngs_modulus, B.poisson_ratio, b)[0]
+    return float(F[0] / (c[0] * F[0] + dH[0]))
+
+
 class InvoluteContactSet(PairFamilySet):
     """Evaluator of involute gear meshes between ``n_bodies`` planar bodies.
 
@@ -202,6 +223,17 @@ class InvoluteContactSet(PairFamilySet):
         self.fparams = np.array(fp)
         self.iparams = np.array(ip, dtype=np.int32)
         self.deviations = np.concatenate(dev)
+        # slow-state gap offsets per tooth flank: identity -> index of ref.flank_offset's layout
+        n_teeth, flank, base = len(self.deviations), {}, 0
+        for m in self.meshes:
+            za, zb = m.pair.gear_a.n_teeth, m.pair.gear_b.n_teeth
+            for line in m.lines:
+                for gear, z, first in (("gear_a", za, base), ("gear_b", zb, base + za)):
+                    for k in range(z):
+                        flank[f"{m.name}/{gear}/tooth{k}/line{line}"] = line * n_teeth + first + k
+            base += za + zb
+        self._flank_index = flank
+        self._tooth_offsets = None
         self.ids = tuple(ids)
         self.mesh_of = np.array(mesh_of)
         self.n_contacts = len(fp)
@@ -215,8 +247,50 @@ class InvoluteContactSet(PairFamilySet):
                                               anchor_params=self.anchor_params)
 
     def reference(self, pose, vel, anchor=None):
-        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations,
+        return ref.evaluate(pose, vel, self.fparams, self.iparams, self.deviations, tooth_offsets=self._tooth_offsets,
                             **({} if anchor is None else {"anchor": anchor}))
+
+    @property
+    def gap_offset_ids(self):
+        """Identities that carry slow-state gap offsets: the tooth flanks
+        ``"<mesh>/gear_a/tooth<k>/line<l>"`` and ``"<mesh>/gear_b/tooth<j>/line<l>"`` (tooth numbers
+        of the tooth-angle table, line l = the flank side), not the rows: a row is a window slot
+        whose teeth change as the gears turn, and an offset (wear of a flank, a thermal growth)
+        belongs to a tooth."""
+        return tuple(self._flank_index)
+
+    def set_gap_offsets(self, offsets):
+        """Gap offsets [m] per tooth flank (order of :attr:`gap_offset_ids`; positive opens the gap):
+        the gap of a tooth pair on a line gets the offsets of both of its flanks
+        (:func:`warp_contacts.involute_pairs_ref.flank_offset`). Absolute, not increments; all zeros
+        restore the built evaluation bit for bit."""
+        off = np.array(offsets, dtype=np.float64)
+        if off.shape != (len(self._flank_index),):
+            raise RvtoolInputError(f"gap offsets of contact set {self.name!r} must have shape "
+                                   f"({len(self._flank_index)},), one per tooth flank; got {off.shape}")
+        if not np.all(np.isfinite(off)):
+            raise RvtoolInputError(f"gap offsets of contact set {self.name!r} are outside the valid range: finite [m]")
+        table = np.zeros(2 * len(self.deviations))
+        table[list(self._flank_index.values())] = off
+        self._tooth_offsets = table if np.any(table != 0.0) else None
+        if self.backend == "warp":
+            self._kernel.set_tooth_offsets(table)
+
+    def tooth_gap_offsets(self):
+        """{tooth flank id: gap offset [m]} in force."""
+        t = self._tooth_offsets
+        return {c: 0.0 if t is None else float(t[i]) for c, i in self._flank_index.items()}
+
+    def flank_ids(self, obs):
+        """(flank id of gear A, flank id of gear B) of every row of ``obs`` (the teeth the row's slot
+        holds at that state; :attr:`gap_offset_ids`)."""
+        out_a, out_b = [], []
+        for r, m_i in enumerate(self.mesh_of):
+            m = self.meshes[m_i]
+            line = int(self.iparams[r, ref.J_LINE])
+            out_a.append(f"{m.name}/gear_a/tooth{int(obs[r, ref.O_TOOTH_A])}/line{line}")
+            out_b.append(f"{m.name}/gear_b/tooth{int(obs[r, ref.O_TOOTH_B])}/line{line}")
+        return out_a, out_b
 
     def mesh_stiffness(self, obs):
         """Per mesh: sum of the loaded rows' series tangents k_t [N/m] (the mesh stiffness along
@@ -234,3 +308,18 @@ class InvoluteContactSet(PairFamilySet):
         M = np.zeros((len(self.meshes), 2))
         np.add.at(M, self.mesh_of, np.column_stack([-z * f[:, 1], z * f[:, 0]]))
         return M
+
+    def energy_law(self):
+        """The per-row constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
+        the series law's elastic force and potential in closed form
+        (:func:`warp_contacts.involute_pairs_ref.elastic_state`, read from the current parameter
+        rows), anchor stiffness and friction code."""
+        from ..observe.energy import ContactEnergyLaw
+        kt = self.anchor_params[:, anchor_ref.ANCHOR_KT] if self.anchor else np.zeros(self.n_contacts)
+        return ContactEnergyLaw(tangential_stiffness=kt, friction_model=self.iparams[:, ref.J_FRICTION].copy(),
+                                normal_potential=self.elastic_energy)
+
+    def elastic_energy(self, obs):
+        """(elastic normal force [N], potential [J]) per row from observation rows (N, N_OBS)."""
+        _, F, V = ref.elastic_state(self.fparams, obs)
+        return F, V

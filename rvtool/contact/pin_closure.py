@@ -37,6 +37,10 @@ from .evaluator import Evaluation, all_finite
 
 GROUND = -1
 
+RELATIVE_TOLERANCE = 1e-13
+"""Station residual accepted relative to the largest contact force (about 500 machine epsilons: the
+round-off of a sum of a few contact forces of that size)."""
+
 
 class ElasticPinClosure:
     """Contact evaluator of elastic pins over ``n_bodies`` real bodies (module docstring).
@@ -44,11 +48,14 @@ class ElasticPinClosure:
     inner: the rigid-pin contact set over n_bodies + n_pins n_s bodies whose body
     n_bodies + station[p, s] is pin p at station s (``evaluate(pose, vel, check=False)`` ->
     :class:`~rvtool.contact.evaluator.Evaluation`, ``ids``, ``commit``, ``history``).
-    carrier: real body index carrying the pins, or GROUND (-1).
+    carrier: real body index carrying the pins, or GROUND (-1); or one such index per pin (n_pins,)
+    (the RV cranks: each crank carries its own stations).
     station_compliance: C (n_s, n_s) [m/N], symmetric positive definite.
     station: (n_pins, n_s) station index of every (pin, station) (row of the station bodies).
     tolerance: largest station force residual accepted [N] (1e-8 N: 1e-16 m of approach at a
-    contact stiffness of 1e8 N/m, the round-off of the approaches).
+    contact stiffness of 1e8 N/m, the round-off of the approaches), or ``RELATIVE_TOLERANCE`` times
+    the largest contact force where that is larger (the residual is a difference of forces of that
+    size: at the 1e8-1e9 N forces of a diverging solver trial 1e-8 N is below their round-off).
     Attributes the model's observers read (``mesh_of``, ``pin_of``, ``meshes``, ...) are the
     inner set's: the rows are the inner set's rows.
     """
@@ -67,9 +74,20 @@ class ElasticPinClosure:
         self.name = inner.name
         self.ids = inner.ids
         self.n_bodies = int(n_bodies)
-        self.carrier = int(carrier)
         self.station = station
         self.n_pins, self.n_stations = station.shape
+        carriers = np.asarray(carrier, int)
+        if carriers.ndim == 0:
+            self.carrier = int(carrier)
+        elif carriers.shape == (self.n_pins,):
+            self.carrier = tuple(int(c) for c in carriers)
+        else:
+            raise RvtoolInputError(f"carrier has shape {carriers.shape}; valid: one body index or one per pin "
+                                   f"({self.n_pins},)")
+        carriers = np.broadcast_to(carriers, (self.n_pins,))
+        if np.any((carriers < GROUND) | (carriers >= self.n_bodies)):
+            raise RvtoolInputError(f"carrier = {carrier!r}; valid: body indices in [0, {self.n_bodies - 1}] or "
+                                   "GROUND (-1)")
         nv = station.size
         if inner.n_bodies != self.n_bodies + nv:
             raise RvtoolInputError(f"inner.n_bodies = {inner.n_bodies}; it must be n_bodies + n_pins n_s = "
@@ -92,8 +110,9 @@ class ElasticPinClosure:
                 k = nr + 2 * (p * self.n_stations + s)
                 self._u_index[p, s] = (k - nr, k + 1 - nr)
                 M[b, k], M[b + 1, k + 1] = 1.0, 1.0
-                if self.carrier != GROUND:
-                    M[b:b + 3, 3 * self.carrier:3 * self.carrier + 3] += np.eye(3)
+                c = int(carriers[p])
+                if c != GROUND:
+                    M[b:b + 3, 3 * c:3 * c + 3] += np.eye(3)
         self._M = sp.csr_matrix(M)
         self._MT = self._M.T.tocsr()
         self._Kb = np.kron(np.eye(self.n_pins), np.kron(self.beam_stiffness, np.eye(2)))
@@ -140,7 +159,7 @@ class ElasticPinClosure:
             Q, K, D = self._reduced(ev, u)
             r = np.abs(Q[nr:]).max(initial=0.0)
             for it in range(self.max_iterations):
-                if r <= self.tolerance or not np.isfinite(r):
+                if self._accepted(r, ev) or not np.isfinite(r):
                     break
                 du = -self._solve_uu(K[nr:, nr:], Q[nr:])
                 step = 1.0
@@ -150,14 +169,18 @@ class ElasticPinClosure:
                     evn = self.inner.evaluate(ext, vext, check=False)
                     Qn, Kn, Dn = self._reduced(evn, un)
                     rn = np.abs(Qn[nr:]).max(initial=0.0)
-                    if rn < r or rn <= self.tolerance:
+                    if rn < r or self._accepted(rn, evn):
                         break
                     step *= 0.5
                 u, ev, Q, K, D, r = un, evn, Qn, Kn, Dn, rn
                 self.last_iterations = it + 1
-            if r <= self.tolerance:
+            if self._accepted(r, ev):
                 return u, ev, (Q, K, D), True
         return u, ev, (Q, K, D), False
+
+    def _accepted(self, r, ev):
+        """Residual r [N] within the tolerance (class docstring) at the inner evaluation ev."""
+        return r <= self.tolerance or r <= RELATIVE_TOLERANCE * np.abs(ev.Q).max(initial=0.0)
 
     def _solve_uu(self, Kuu, rhs):
         """Kuu^-1 rhs with Kuu block diagonal per pin (2 n_s square blocks)."""
@@ -201,6 +224,13 @@ class ElasticPinClosure:
             return np.array(evaluation.obs, float)
         u, ev, _, _ = self.solve(pose, vel)
         return np.array(ev.obs, float)
+
+    def extended_pose(self, pose):
+        """Poses (n_bodies + n_pins n_s, 3) of the real and the station bodies at the solved
+        deflections, static poses (nb, 3): the state the inner set's contacts are evaluated at."""
+        pose = np.asarray(pose, float)
+        u = self.solve(pose, np.zeros_like(pose))[0]
+        return self._extended(pose, np.zeros_like(pose), u)[0]
 
     def deflections(self, pose):
         """Station deflections (n_pins, n_s, 2) [m] at static poses (nb, 3)."""

@@ -36,6 +36,8 @@ Contract (paper: "Transmission topology and reaction-force closure",
   load-carrying bodies.
 * **Continuation restarts.** ``continuation_restarts`` lets a stalled load continuation
   re-solve the level from the kinematic state (free play without stiffness at zero load).
+  ``guided_free_play`` lets a stalled continuation (and the static solver's last fallback)
+  reach the level by the guide-spring homotopy of :mod:`rvtool.solver.guide`.
 * **Regularization.** Weak springs from free coordinates to their kinematic
   positions (a numerical setting for free play at zero load);
   ``regularization_force(q)`` reports the largest force they carry and
@@ -226,6 +228,11 @@ class ReducerModel:
     #: ladder (:meth:`rvtool.solver.continuation.Continuation.go_to`): set by topologies whose
     #: zero-load state is free play without contact stiffness (a backlashed involute mesh)
     continuation_restarts: bool = False
+    #: a stalled load continuation, and a static point every other fallback missed, are reached by
+    #: the guide-spring homotopy (:mod:`rvtool.solver.guide`): set by topologies whose free play
+    #: leaves crank-like coordinates without contact stiffness at zero load (RV with needle
+    #: clearance and backlash); off elsewhere, so no existing model's path or failure changes
+    guided_free_play: bool = False
     contact_host: object = None     # MergedContactElement carrying every family (one element per system), or None
 
     # -- coordinates -------------------------------------------------------
@@ -387,9 +394,9 @@ class ReducerModel:
         return None
 
     def pin_bending(self, q, family, support=None):
-        """Largest bending stress of the pins of ``family`` at state q (dict, see the topology),
-        or None where the topology has no pins of that family or they are rigid and no
-        ``support`` is assumed."""
+        """Largest bending stress of the pins of ``family`` at state q, or over a sequence of states
+        q (dict, see the topology), or None where the topology has no pins of that family or
+        they are rigid and no ``support`` is assumed."""
         return None
 
     def hertz_peaks(self, q):
@@ -441,13 +448,23 @@ class ReducerModel:
         """Slow-state gap offsets [m] of ``family``: ``offsets`` maps physical contact ids (those of
         :meth:`FamilyObservation.per_contact`) to an offset (positive opens the gap; unnamed
         contacts 0), written into the family's contact element for the next contact evaluation.
-        Absolute, not increments; all zeros restore the built element bit for bit."""
+        Absolute, not increments; all zeros restore the built element bit for bit. A family whose
+        evaluator names its own offset identities (``gap_offset_ids``: the tooth flanks of an
+        involute mesh, whose rows are window slots) takes offsets keyed by those."""
         try:
             name, rows = self.families[Family(family)]
         except (KeyError, ValueError):
             raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
                                    f"{[f.value for f in self.families]}") from None
         el = self.elements[name]
+        own = getattr(el.evaluator, "gap_offset_ids", None)
+        if own is not None:     # offsets that follow the evaluator's identities (involute: tooth flanks)
+            unknown = sorted(set(offsets) - set(own))
+            if unknown:
+                raise RvtoolInputError(f"gap offsets name contacts {unknown[:4]} that family {Family(family).value!r} "
+                                       f"lacks; valid: tooth flanks {list(own)[:2]} ...")
+            el.set_gap_offsets([float(offsets.get(c, 0.0)) for c in own])
+            return
         contact = [physical_contact(el.ids[i]) for i in rows]
         unknown = sorted(set(offsets) - set(contact))
         if unknown:
@@ -458,9 +475,12 @@ class ReducerModel:
         el.set_gap_offsets(full)
 
     def gap_offsets(self, family):
-        """{physical contact id: gap offset [m]} in force for ``family`` (first row of each contact)."""
+        """{physical contact id: gap offset [m]} in force for ``family`` (first row of each contact;
+        involute meshes: per tooth flank)."""
         name, rows = self.families[Family(family)]
         el = self.elements[name]
+        if getattr(el.evaluator, "gap_offset_ids", None) is not None:
+            return el.evaluator.tooth_gap_offsets()
         out = {}
         for i in rows:
             out.setdefault(physical_contact(el.ids[i]), float(el.gap_offsets[i]))

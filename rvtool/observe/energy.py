@@ -28,7 +28,10 @@ refused with a named error, because its energy could not be attributed):
 * elastic energy V: ``CoordinateSpringDamper`` 1/2 k (q_m1 - q_m0 - offset)^2,
   reduced structures 1/2 q^T K q (``GenericODE2`` stiffness matrix), and per
   contact family the normal potential k delta^(p+1)/(p+1) of Eq.
-  (normal_force) and the anchor's tangential storage F_t^2/(2 k_t);
+  (normal_force) (or the family's own potential: the involute series law of
+  Eq. (series_contact) in closed form, a ball of Eq. (ball_bearing) by
+  quadrature, :attr:`ContactEnergyLaw.normal_potential`) and the anchor's
+  tangential storage F_t^2/(2 k_t);
 * damping dissipation: spring dampers, structural damping matrices, and per
   contact family the damping part F_n - k delta^p of the normal force on the
   indentation increments;
@@ -68,19 +71,34 @@ class ContactEnergyLaw:
     tangential_stiffness: k_t [N/m] of the anchor model, shape (N,) (ignored
     for other friction models).
     friction_model: (N,) codes ``circle_pairs_ref.FRICTION_*``.
+    normal_potential: None (the power law k delta^p above), or a callable
+    ``obs (N, >= 8) -> (F_e (N,), V (N,))`` giving each row's elastic normal
+    force [N] and normal potential [J] from its observation row, for a family
+    whose normal law is not a power of the approach (the involute series law of
+    Eq. (series_contact), a ball of Eq. (ball_bearing)); normal_stiffness and
+    normal_exponent are then unused and may be omitted.
     """
-    normal_stiffness: np.ndarray
-    normal_exponent: np.ndarray
+    normal_stiffness: np.ndarray | None = None
+    normal_exponent: np.ndarray | None = None
     tangential_stiffness: np.ndarray
     friction_model: np.ndarray
+    normal_potential: object = None
 
     def __post_init__(self):
-        k = np.asarray(self.normal_stiffness, np.float64)
-        n = k.shape[0] if k.ndim == 1 else -1
+        kt = np.asarray(self.tangential_stiffness, np.float64)
+        n = kt.shape[0] if kt.ndim == 1 else -1
         if n < 1:
-            raise RvtoolInputError(f"normal_stiffness must be a 1-D array with one entry per contact; got shape {k.shape}")
-        arrays = {"normal_stiffness": k, "normal_exponent": np.asarray(self.normal_exponent, np.float64),
-                  "tangential_stiffness": np.asarray(self.tangential_stiffness, np.float64)}
+            raise RvtoolInputError(f"tangential_stiffness must be a 1-D array with one entry per contact; got shape "
+                                   f"{kt.shape}")
+        if self.normal_potential is not None and not callable(self.normal_potential):
+            raise RvtoolInputError(f"normal_potential must be None or a callable obs -> (F_e, V); got "
+                                   f"{type(self.normal_potential).__name__}")
+        if self.normal_potential is None and (self.normal_stiffness is None or self.normal_exponent is None):
+            raise RvtoolInputError("normal_stiffness and normal_exponent must be given unless normal_potential is")
+        power = self.normal_potential is None
+        arrays = {"normal_stiffness": np.asarray(self.normal_stiffness if power else np.zeros(n), np.float64),
+                  "normal_exponent": np.asarray(self.normal_exponent if power else np.ones(n), np.float64),
+                  "tangential_stiffness": kt}
         for name, a in arrays.items():
             if a.shape != (n,):
                 raise RvtoolInputError(f"{name} must have shape ({n},); got {a.shape}")
@@ -115,9 +133,13 @@ class ContactEnergyLaw:
         delta = -obs[:, ref.O_GAP]
         on = delta > 0
         d = np.where(on, delta, 0.0)
-        k, p = self.normal_stiffness, self.normal_exponent
-        fe = np.where(on, k * d ** p, 0.0)
-        v_n = np.where(on, fe * d / (p + 1.0), 0.0)
+        if self.normal_potential is not None:
+            fe, v_n = (np.asarray(x, np.float64) for x in self.normal_potential(obs))
+            fe, v_n = np.where(on, fe, 0.0), np.where(on, v_n, 0.0)
+        else:
+            k, p = self.normal_stiffness, self.normal_exponent
+            fe = np.where(on, k * d ** p, 0.0)
+            v_n = np.where(on, fe * d / (p + 1.0), 0.0)
         anchor = self.friction_model == ref.FRICTION_ANCHOR
         kt = np.where(anchor, self.tangential_stiffness, 1.0)
         v_t = np.where(anchor, 0.5 * obs[:, ref.O_FT] ** 2 / kt, 0.0)
@@ -128,6 +150,8 @@ class _Family:
     """One contact element seen by the account."""
 
     def __init__(self, element, law):
+        if law is None and hasattr(element.evaluator, "energy_law"):
+            law = element.evaluator.energy_law()     # the family declares its own law
         if law is None:
             contact_set = getattr(element.evaluator, "set", None)
             if contact_set is None or not hasattr(contact_set, "contacts"):

@@ -16,7 +16,9 @@ sum to one). The beams of elastic pins (``series_compliance``) are closed per pi
 station compliance (:mod:`rvtool.contact.pin_closure`): the rows observe the contact approach
 only, and the beams' energy is sum_p du_p^T K_b du_p over the station deflections du_p along the
 mode (K_b = C^-1; equal to f_p^T C f_p with f_p the increments of the station resultants,
-including the turn of the forces' directions). What the rows and beams do not carry (the regularization springs and the
+including the turn of the forces' directions). An elastic structure of the model (a ported
+housing, ``model.structures``) carries eta^T K_eta eta in the mode, the path ``housing_ports``.
+What the rows and beams do not carry (the regularization springs and the
 geometric stiffness of loaded contacts whose normals turn, F_r d^2 delta_r/dq^2) is the entry
 ``geometric_and_regularization``, so that the shares sum to one exactly.
 The second view switches each family to rigid in turn: K' = K + (lambda - 1) K_f with
@@ -108,6 +110,18 @@ def stiffness_budget(model, q):
                       for s in (1.0, -1.0))
             sens[beam.path] = (cm - cp) / (2 * SENSITIVITY_STEP * C)
         shares[fam] = energy / C
+    for name, st in model.structures.items():
+        # an elastic structure's coordinates eta (a ported housing): its strain energy in the mode
+        # and its switch to rigid, as for a family (K_f = its own stiffness on eta)
+        pos = {g: k for k, g in enumerate(free)}
+        ix = [pos[g] for g in st.coordinate_indices()]
+        Ks = np.zeros_like(K)
+        Ks[np.ix_(ix, ix)] = st.stiffness()
+        path = f"{name}_ports"
+        shares[path] = float(u @ Ks @ u) / C
+        rigid[path] = (C - float(np.linalg.solve(K + (RIGID_FACTOR - 1.0) * Ks, e)[i_out])) / C
+        cp, cm = (float(np.linalg.solve(K + s * SENSITIVITY_STEP * Ks, e)[i_out]) for s in (1.0, -1.0))
+        sens[path] = (cm - cp) / (2 * SENSITIVITY_STEP * C)
     shares["geometric_and_regularization"] = 1.0 - sum(shares.values())
     return {"shares": shares, "rigid_shares": rigid, "sensitivity_shares": sens, "K_t_Nm_per_arcmin": RAD_PER_ARCMIN / C,
             "residual": "geometric stiffness of loaded contacts and regularization springs (what the "

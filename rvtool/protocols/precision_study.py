@@ -37,8 +37,10 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
     F_rated = mesh_forces(model, q_rated)
     peaks_rated = model.family_contact_peaks(q_rated)
 
-    # quasi-static TE over the interval
-    qs = quasi_static_te(model, torque=T, input_angles=angles)
+    # quasi-static TE over the interval; its states are kept (12-odd coordinates each) for the
+    # datasheet's pin bending stress and bearing loads over the mesh cycles
+    te_states = []
+    qs = quasi_static_te(model, torque=T, input_angles=angles, record=lambda k, a, q: te_states.append(np.array(q)))
     met = te_metrics(qs["te"], n_revolutions=revs)
 
     # refinement reference: one mesh cycle with twice the profile samples and points
@@ -75,7 +77,8 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
 
     # issue 21: stiffness and lost-motion budgets, datasheet with declared allowables
     honest = honest_figures(design, model, q_rated, quick=quick, bearing_model=bearing_model,
-                            peaks_rated=peaks_rated, allowables=allowables)
+                            peaks_rated=peaks_rated, allowables=allowables,
+                            te_states=(qs["theta_in"], te_states))
 
     results = {
         "ratio_nominal": float(ratio),
@@ -155,12 +158,15 @@ def _plots(model, q, F, qs, met, dyn, out_dir, revs):
     casekit.save_figure(fig, out_dir, "pin_forces")
 
 
-def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated, allowables=None):
+def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated, allowables=None, te_states=None):
     """Issue 21 figures at the rated state q_rated of ``model``: the stiffness budget (energy shares
     and switch-to-rigid shares, :mod:`rvtool.protocols.budget`), the lost-motion budget at +-3 %
     with its closed-form estimates, the branch stiffness slopes and catalogue secant (stiffness
     sequence; --quick: 25 % level steps), the default-resolution error of the rated peak pin
-    force against 8x the profile samples, and the datasheet against ``allowables``."""
+    force against 8x the profile samples, the hysteresis loss of a closed +-T_rated cycle, and the
+    datasheet against ``allowables``. te_states: (input angles [rad], states) of a quasi-static TE
+    sequence of ``model`` at the rated torque (None: q_rated alone); the pin bending stress is the
+    largest over these states and the bearings' ISO 281 mean load is taken over them."""
     from .. import designs
     from .budget import lost_motion_budget, stiffness_budget
     from .datasheet import datasheet, load_allowables
@@ -201,21 +207,105 @@ def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated,
     m_fine.set_output_torque(-np.sign(m_fine.ratio) * design.rated_torque)
     f_fine = m_fine.family_contact_peaks(StaticSolver(m_fine).solve(0.0))["pins"]
     res_err = float(abs(peaks_rated["pins"] - f_fine) / f_fine)
+    angles, states = te_states if te_states is not None else (np.zeros(1), [q_rated])
+    bending = {}
+    for fam, sup in (("pins", allowables.assumed_ring_pin_support),
+                     ("output_pins", allowables.assumed_output_pin_support)):
+        b = model.pin_bending(states, fam, sup)
+        if b is not None:
+            b.update(n_states=len(states), input_angle_deg=float(np.rad2deg(angles[b["state"]])))
+        bending[fam] = b
+    hyst = hysteresis_loss(design, bearing_model=bearing_model, quick=quick)
     sheet = datasheet(rated_torque=design.rated_torque, ratio=float(model.ratio),
                       branch_slopes={b: f["K_Nm_per_arcmin"] for b, f in fits.items()}, secant=secant,
                       lost_motion_arcmin=lm["total_arcmin"], hertz_peaks=model.hertz_peaks(q_rated),
-                      pin_bending_stress={
-                          "pins": model.pin_bending(q_rated, "pins", allowables.assumed_ring_pin_support),
-                          "output_pins": model.pin_bending(q_rated, "output_pins",
-                                                           allowables.assumed_output_pin_support)},
+                      pin_bending_stress=bending,
                       bearing_loads={f: v for f, v in peaks_rated.items() if f not in ("pins", "output_pins")},
-                      resolution_error=res_err, allowables=allowables)
+                      resolution_error=res_err, allowables=allowables, hysteresis=hyst,
+                      bearing_life=bearing_lives(model, design, states))
     sheet["resolution_error"]["reference"] = {"default": model.resolution_settings(),
                                               "refined_samples_per_tooth": fine.wheels.samples_per_tooth,
                                               "peak_pin_force_default_N": peaks_rated["pins"],
                                               "peak_pin_force_refined_N": f_fine}
     return {"stiffness_budget": stiffness, "lost_motion_budget_arcmin": lm_out, "datasheet": sheet,
             "wall_s": time.perf_counter() - t0}
+
+
+CYCLE_TOL_ARCMIN = 1e-4
+"""Repeatability tolerance of the hysteresis cycle [arcmin] (as cases/hysteresis_friction.py: the
+static solves' Newton tolerance moves a level by ~1e-7 arcmin)."""
+
+
+def hysteresis_loss(design, *, bearing_model, quick):
+    """Hysteresis loss [arcmin] of ``design``: the loop width at zero torque of the second of two
+    closed -T_rated -> +T_rated -> -T_rated cycles after a virgin preload
+    (:func:`rvtool.protocols.hysteresis_cycles.quasi_static_cycles`, levels every 25 % (quick) or
+    6.25 % of T_rated plus +-3 %), with the second cycle's repeatability against the first and a
+    note on the friction the design declares (the width is friction memory; the clearances are
+    crossed alike in both directions and add no width)."""
+    from ..units import RAD_PER_ARCMIN
+    from . import hysteresis as H
+    from . import hysteresis_cycles as HC
+    seq = HC.CycleSequence(rated_torque=design.rated_torque, step=0.25 if quick else 0.0625)
+    r = HC.quasi_static_cycles(build(design, bearing_model=bearing_model), seq, energy=False)
+    prev, last = r["cycles"][-2], r["cycles"][-1]
+    fig = HC.catalogue_figures(last["torque_Nm"], last["angle_rad"], last["labels"], design.rated_torque)
+    rep = H.repeatability(H.Cycle(torque=prev["torque_Nm"], angle=prev["angle_rad"]),
+                          H.Cycle(torque=last["torque_Nm"], angle=last["angle_rad"]),
+                          tolerance=CYCLE_TOL_ARCMIN * RAD_PER_ARCMIN)
+    mu = {"pin_contact": getattr(getattr(design, "pin_contact", None), "mu", 0.0),
+          "output_pins": getattr(getattr(design, "output_pins", None), "mu", 0.0)}
+    note = ("frictionless contacts (mu = 0): no friction memory, the width is numerical zero"
+            if not any(mu.values()) else f"friction mu {mu}")
+    if not rep.passed:
+        note += f"; the cycle does not repeat within {CYCLE_TOL_ARCMIN:g} arcmin"
+    return {"loss_arcmin": fig.hysteresis_loss_arcmin, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,
+            "note": note, "levels_per_cycle": len(last["torque_Nm"]), "step": seq.step}
+
+
+RADIAL_ZERO = 1e-9
+"""A bearing resultant below this fraction of its element loads is the round-off of a balanced
+(preloaded) ring, not a radial load (as cases/fatigue_life.py)."""
+
+
+def bearing_lives(model, design, states):
+    """Bearing name -> ISO 281 figures (:func:`rvtool.slow.fatigue.rating_life`) at the design's
+    input speed from the radial loads |sum_j Q_j n_j| of the rolling-element rows at ``states``
+    (points of a quasi-static TE sequence, equally spaced in input angle, hence in time at constant
+    speed: the ISO mean load is P_m = (mean P^p)^(1/p)); L10_h None where a bearing carries no
+    radial load (e.g. the opposed wheels' input bearings under pure torque: their life needs the
+    application's external loads). Topologies without ISO 281 geometries give {}."""
+    from ..slow import fatigue as Fa
+    from ..slow.cycloid import rating_geometries
+    try:
+        geometries = rating_geometries(design)
+    except AttributeError:        # a topology without the cycloid drive's bearing sections
+        return {}
+    fam_of = {"eccentric_bearing": "eccentric_bearings", "main_bearing": "main_bearings",
+              "input_bearing": "input_bearings"}
+    omega = design.input_speed_rpm * np.pi / 30.0
+    out = {}
+    for name, (geom, speed_factor) in geometries.items():
+        fam = fam_of[name.rstrip("0123456789")]
+        P, Qsum = [], 0.0
+        for q in states:
+            ob = model.observe(q, fam)
+            rows = [i for i, r in enumerate(ob.ids) if r.startswith(name + "/")]
+            if not rows:
+                break
+            P.append(Fa.radial_load_from_elements(ob.normal_force[rows], ob.normal[rows]))
+            Qsum = max(Qsum, float(np.sum(ob.normal_force[rows])))
+        if not P:
+            continue                     # no rolling-element rows of this bearing (lumped bearings)
+        P = np.where(np.array(P) > RADIAL_ZERO * Qsum, P, 0.0)
+        p = geom.life_exponent
+        Pm = Fa.mean_equivalent_load(float(np.sum(P ** p)), float(len(P)), p)
+        row = {"C_r_N": geom.dynamic_load_rating(), "P_m_N": Pm, "P_max_N": float(P.max()), "exponent": p,
+               "speed_rpm": speed_factor * design.input_speed_rpm, "L10_h": None}
+        if Pm > 0.0:
+            row["L10_h"] = Fa.rating_life(geom, Pm, speed_factor * omega).L10_hours
+        out[name] = row
+    return out
 
 
 def _budget_plots(h, out_dir):

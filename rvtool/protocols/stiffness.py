@@ -173,12 +173,16 @@ def condensed_tangent(model, q):
 
 def assembled_stiffness(model, q):
     """K^s (n, n) [N/m, N m/rad] at state q over all coordinates: minus the contact Jacobians
-    plus the regularization springs (Eq. obs_condensed_stiffness before condensation)."""
+    plus the elastic structures' own stiffness (a ported housing's eta; none: nothing added) and
+    the regularization springs (Eq. obs_condensed_stiffness before condensation)."""
     n = len(q)
     K = np.zeros((n, n))
     for el in model.contact_elements():
         ltg = el.coordinate_indices
         K[np.ix_(ltg, ltg)] -= el.evaluation_at(q).dQdq
+    for st in model.structures.values():
+        ix = st.coordinate_indices()
+        K[np.ix_(ix, ix)] += st.stiffness()
     for i, k in model.regularization_stiffness():
         K[i, i] += k
     return K

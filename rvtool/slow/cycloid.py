@@ -8,6 +8,7 @@ Contact identities are those of :class:`rvtool.slow.reducer_windows.ReducerWindo
 :class:`CycloidSlowInputs` is an input chosen here (the reference design gives none);
 the cases report them with their results.
 """
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -146,13 +147,52 @@ def friction_law(inputs: CycloidSlowInputs) -> MixedFriction:
                          transition_lambda=inputs.lambda_transition, sharpness=inputs.friction_sharpness)
 
 
-def lubrication(design, inputs: CycloidSlowInputs, exposure) -> Lubrication:
+#: Stribeck's ball-bearing constant, Q_max = 5 F_r / (Z cos alpha) (nominal clearance; Harris & Kotzalas
+#: 2007, vol. 1, ch. 7): the most loaded ball of a lumped ball bearing.
+STRIBECK_BALL = 5.0
+
+
+def _ball_film(spec, omega_rel, E, rough, node, lumped):
+    """Point-contact film of a ball bearing (or angular-contact pair, first row) at its inner race,
+    the contact of the smaller reduced radius: R_x = D (1 - gamma) / 2, R_y = f_i D / (2 f_i - 1)
+    (:func:`rvtool.bearings.hertz.race_radii`), entrainment u = omega_rel d_m (1 - gamma^2) / 4 (the
+    rolling speed of both surfaces relative to the contact), gamma = D cos(alpha) / d_m; lumped: the
+    most loaded ball's share STRIBECK_BALL / (Z cos alpha) of the bearing force."""
+    from ..bearings.hertz import race_radii
+    from ..bearings.reducer import ball_rows
+    rows = ball_rows(spec)
+    b = rows[0]
+    (rx, ry), _ = race_radii(b.ball_diameter, b.pitch_diameter, b.contact_angle, b.inner_curvature,
+                             b.outer_curvature)
+    g = b.ball_diameter * math.cos(b.contact_angle) / b.pitch_diameter
+    share = STRIBECK_BALL / (len(rows) * b.n_balls * math.cos(b.contact_angle)) if lumped else 1.0
+    return FilmContact(kind="point", radius_x=float(rx), radius_y=float(ry),
+                       entrainment_speed=0.25 * omega_rel * b.pitch_diameter * (1 - g * g), reduced_modulus=E,
+                       roughness_1=rough, roughness_2=rough, node=node, load_share=share)
+
+
+def lubrication(design, inputs: CycloidSlowInputs, exposure, radii: dict | None = None,
+                bearing_model: str = "lumped") -> Lubrication:
     """Film contacts of the families. Entrainment u = (u1 + u2) / 2: pins (fixed in the housing)
     and plain output pins have one moving surface at the contact, so u = half the load-weighted
     sliding speed I_s / I_F of the family in ``exposure`` (the cold window); the needles roll at
     u = omega_rel R_i / 2 (inner-race surface speed relative to the wheel bore, halved: the
     cage-frame speed of both surfaces, declared approximation). Line contacts; the lumped eccentric bearing's load per length is that
-    of the most loaded roller (Stribeck: Q_max = 4.08 F_r / Z), hence length = Z L / 4.08."""
+    of the most loaded roller (Stribeck: Q_max = 4.08 F_r / Z), hence length = Z L / 4.08.
+
+    Reduced radius of a ring-pin contact: radii (window contact id -> R [m], from
+    :func:`rvtool.slow.contact_radius.window_radii` over the accepted states of a window) gives each
+    loaded pin contact its local 1/R = 1/r_p + kappa_flank (on RD-40 the loaded flank is convex,
+    R ~ 0.46 r_p); None keeps R = r_p for every pin (the pin's own radius only). Output pins and
+    needles are circles on circles: their radii do not depend on the contact point.
+
+    bearing_model: "lumped" (one contact per bearing: the needle line contact of the most loaded
+    roller as above, the ball bearings' most loaded ball) or "rolling" (a contact per roller or
+    ball: its own load, length L). Main and input ball bearings are point contacts at their inner
+    race (:func:`_ball_film`); they turn at the output speed omega / (z_p - 1) and at omega."""
+    if bearing_model not in ("lumped", "rolling"):
+        raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
+    lumped = bearing_model == "lumped"
     E = reduced_modulus(design.material.youngs_modulus, design.material.poisson_ratio,
                         design.material.youngs_modulus, design.material.poisson_ratio)
     fam_u = {}
@@ -162,8 +202,6 @@ def lubrication(design, inputs: CycloidSlowInputs, exposure) -> Lubrication:
         fam_u[fam] = 0.5 * I_s / I_F
     d, eb, op = design, design.eccentric_bearing, design.output_pins
     rp = d.pins.pin_radius
-    # the cycloid flank's curvature radius at the loaded contacts is an order of magnitude above r_p:
-    # the reduced radius is taken as r_p (declared)
     omega_in = d.input_speed_rpm * math.pi / 30.0
     omega_rel = omega_in * (1.0 + 1.0 / (d.pins.n_pins - 1))
     Rr, Ri = 0.5 * eb.roller_diameter, eb.inner_radius
@@ -178,10 +216,20 @@ def lubrication(design, inputs: CycloidSlowInputs, exposure) -> Lubrication:
         Family.ECCENTRIC_BEARINGS.value: FilmContact(kind="line", radius_x=Rr * Ri / (Rr + Ri),
                                                      entrainment_speed=0.5 * omega_rel * Ri, reduced_modulus=E,
                                                      roughness_1=rough, roughness_2=rough, node="needles",
-                                                     length=eb.n_rollers * eb.roller_length / 4.08),
+                                                     length=eb.n_rollers * eb.roller_length / 4.08 if lumped
+                                                     else eb.roller_length),
     }
-    for fam in (Family.MAIN_BEARINGS.value, Family.INPUT_BEARINGS.value):
-        contacts[fam] = contacts[Family.ECCENTRIC_BEARINGS.value]   # unloaded under pure torque: no film load
+    if d.main_bearing is not None:
+        contacts[Family.MAIN_BEARINGS.value] = _ball_film(d.main_bearing, omega_in / (d.pins.n_pins - 1), E, rough,
+                                                          "flange", lumped)
+    if d.input_bearing is not None:
+        contacts[Family.INPUT_BEARINGS.value] = _ball_film(d.input_bearing, omega_in, E, rough, "shaft", lumped)
+    pin_film = contacts[Family.PINS.value]
+    for cid, R in dict(radii or {}).items():
+        if family_of(cid) != Family.PINS.value:
+            raise RvtoolInputError(f"radii names contact {cid!r}; valid: ring-pin contacts 'pins/...' (the other "
+                                   "families' radii do not depend on the contact point)")
+        contacts[cid] = dataclasses.replace(pin_film, radius_x=float(R))   # the identity wins over the set name
     return Lubrication(lubricant=RoelandsViscosity(reference_viscosity=inputs.eta_ref, reference_temperature=inputs.T_ref,
                                                    temperature_index=inputs.roelands_S0, pressure_index=inputs.roelands_Z),
                        friction_law=friction_law(inputs), contacts=contacts)
@@ -229,8 +277,9 @@ def _e_star(design):
 
 def contact_line_geometry(design) -> dict:
     """Family -> (reduced radius R [m], loaded length b [m]) of the line contacts: ring pin against
-    the flank (R = r_p, the flank's curvature radius at the loaded contacts being an order of
-    magnitude above r_p; declared as in :func:`lubrication`), output pin in its hole (conformal),
+    the flank (R = r_p, the pin's own radius: a nominal value; the local radius of a contact, with
+    the flank's curvature, comes from :func:`rvtool.slow.contact_radius.window_radii` or
+    :func:`rvtool.pressure.state.pin_contact`), output pin in its hole (conformal),
     needle on the journal (the inner, more conforming-less race)."""
     d, eb, op = design, design.eccentric_bearing, design.output_pins
     Rr, Ri = 0.5 * eb.roller_diameter, eb.inner_radius

@@ -233,7 +233,8 @@ class FilmContact:
     radius_y: transverse reduced radius [m] (point contacts). length: loaded
     length [m] (line contacts; w' = F / length). entrainment_speed: u [m/s]
     (> 0). reduced_modulus: E' [Pa]. roughness_1, roughness_2: RMS Rq [m].
-    node: thermal node whose temperature sets eta and alpha.
+    node: thermal node whose temperature sets eta and alpha. load_share: film load per unit of the
+    contact's window-mean force [-] (> 0; e.g. the most loaded ball's share of a lumped bearing).
     """
     kind: ContactKind
     radius_x: float
@@ -244,6 +245,7 @@ class FilmContact:
     node: str
     radius_y: float | None = None
     length: float | None = None
+    load_share: float = 1.0
 
     def __post_init__(self):
         try:
@@ -263,6 +265,8 @@ class FilmContact:
             check_positive("length", self.length)
         if self.radius_y is not None:
             check_positive("radius_y", self.radius_y)
+        check_finite("load_share", self.load_share)
+        check_positive("load_share", self.load_share)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -333,12 +337,13 @@ class Lubrication:
                 mu[k] = self.friction_law.fluid_friction
                 continue
             alpha = float(self.lubricant.alpha(T[k]))
+            w = F[k] if c.load_share == 1.0 else c.load_share * F[k]
             if c.kind is ContactKind.LINE:
-                h[k] = film_thickness_line(load_per_length=F[k] / c.length, radius=c.radius_x,
+                h[k] = film_thickness_line(load_per_length=w / c.length, radius=c.radius_x,
                                            entrainment_speed=c.entrainment_speed, viscosity=eta[k],
                                            pressure_viscosity=alpha, reduced_modulus=c.reduced_modulus)
             else:
-                h[k] = film_thickness_point(load=F[k], radius_x=c.radius_x, radius_y=c.radius_y,
+                h[k] = film_thickness_point(load=w, radius_x=c.radius_x, radius_y=c.radius_y,
                                             entrainment_speed=c.entrainment_speed, viscosity=eta[k],
                                             pressure_viscosity=alpha, reduced_modulus=c.reduced_modulus)
             lam[k] = film_parameter(h[k], c.roughness_1, c.roughness_2)

@@ -15,6 +15,14 @@ Contact identities are ``"<family>/<physical contact>"`` (``"pins/wheel0/pin3"``
 ``"eccentric_bearings/eccentric_bearing1"``), so a family name is a selector
 of :mod:`rvtool.slow.offsets` for all of its contacts.
 
+Involute meshes are observed per tooth flank (the identities of the evaluator's
+``gap_offset_ids``, ``"involute_stage/<mesh>/gear_a/tooth<k>/line<l>"``): each row's
+tooth pair enters with both of its flanks, each carrying the row's force (load
+exposure, film load) and half of the row's sliding speed, so that the two flanks'
+sliding exposures sum to the pair's: a heat source mu I_s / tau_w and Archard wear
+k_w I_s / A of a flank are its half of the pair's loss (equal shares, declared; the
+share of each surface is the wear association's 1.0 to the flank itself).
+
 Sliding speeds are kinematic: the relative velocity of the two material points
 at the contact point, tangential part, from ``model.kinematic_state(a, omega)``
 (rigid, clearance-free poses and velocities; the elastic deflections of a few
@@ -116,6 +124,30 @@ class ContactBodies:
             raise RvtoolInputError("body_b must be None (housing) or callable (contact id -> body name or None)")
 
 
+def involute_stage_bodies(model) -> ContactBodies:
+    """Declaration of a model's involute meshes: a tooth flank contact
+    ``<mesh>/gear_a|gear_b/tooth<k>/line<l>`` joins the two bodies of its mesh (the mesh's
+    ``body_a`` / ``body_b``, indices of the model's bodies; the housing for GROUND), for every
+    topology with an involute stage (the small-tooth-difference drive: wheel and fixed ring; the
+    RV: sun pinion and crank gear)."""
+    meshes = {m.name: m for m in model.family_element(Family.INVOLUTE_STAGE).evaluator.meshes}
+    names = model.body_names
+
+    def body(index):
+        return None if index < 0 else names[index]
+    return ContactBodies(body_a=lambda c: body(meshes[c.split("/")[0]].body_a),
+                         body_b=lambda c: body(meshes[c.split("/")[0]].body_b))
+
+
+def std_involute_contact_bodies(model) -> dict:
+    """The small-tooth-difference drive's declaration (:mod:`rvtool.assembly.std_involute`): its mesh
+    by :func:`involute_stage_bodies`; output pins and bearings as in the cycloid drive."""
+    out = cycloid_contact_bodies()
+    del out[Family.PINS]
+    out[Family.INVOLUTE_STAGE] = involute_stage_bodies(model)
+    return out
+
+
 def cycloid_contact_bodies() -> dict:
     """The cycloid drive's declaration (:mod:`rvtool.assembly.cycloid` contact ids): a ring-pin
     contact ``wheel<k>/pin<j>`` joins wheel k and the housing (pins fixed in the housing); an
@@ -189,23 +221,42 @@ class ReducerWindows:
 
     # -- contact identities ------------------------------------------------------------
     def contact_ids(self, family) -> tuple:
-        """Window identities ``"<family>/<contact>"`` of ``family``, in observation order."""
-        q = np.zeros(self.model.mbs.systemData.ODE2Size())
-        names, _ = self.model.observe(q, family).per_contact()
-        return tuple(f"{Family(family).value}/{c}" for c in names)
+        """Window identities ``"<family>/<contact>"`` of ``family``, in observation order (a family
+        whose evaluator names its own offset identities: those, e.g. the tooth flanks of a mesh)."""
+        own = self._own_ids(family)
+        if own is None:
+            q = np.zeros(self.model.mbs.systemData.ODE2Size())
+            own, _ = self.model.observe(q, family).per_contact()
+        return tuple(f"{Family(family).value}/{c}" for c in own)
+
+    def _own_ids(self, family):
+        """The evaluator's own contact identities (``gap_offset_ids``), or None for row contacts."""
+        return getattr(self.model.family_element(family).evaluator, "gap_offset_ids", None)
+
+    def _rows(self, q, fam):
+        """(observation, contact of every row entry, row index of every entry): one entry per row
+        (its physical contact), or, where the evaluator names its own identities, one per flank of
+        the row's tooth pair (both flanks carry the row's force)."""
+        ob = self.model.observe(q, fam)
+        ev = self.model.family_element(fam).evaluator
+        if self._own_ids(fam) is None:
+            return ob, [physical_contact(r) for r in ob.ids], np.arange(len(ob.ids))
+        fa, fb = ev.flank_ids(ob.obs)
+        return ob, fa + fb, np.concatenate([np.arange(len(fa)), np.arange(len(fb))])
 
     # -- one window --------------------------------------------------------------------------
     def _snapshot(self, q, angle):
         kin = self.model.kinematic_state(angle, self.protocol.input_speed)
         ids, F, slip, pos, nrm = [], [], [], [], []
         for fam in self.families:
-            ob = self.model.observe(q, fam)
-            names, Fc = ob.per_contact()
-            row_contact = [physical_contact(r) for r in ob.ids]
+            ob, row_contact, src = self._rows(q, fam)
+            names = tuple(dict.fromkeys(row_contact))
             index = {c: k for k, c in enumerate(names)}
             col = np.fromiter((index[c] for c in row_contact), int, len(row_contact))
-            f_row = ob.normal_force
-            p_row, n_row = ob.position, ob.normal
+            f_row = ob.normal_force[src]
+            p_row, n_row = ob.position[src], ob.normal[src]
+            Fc = np.zeros(len(names))
+            np.add.at(Fc, col, f_row)
             decl = self.bodies[fam]
             if decl.rolling:
                 v_row = np.zeros(len(f_row))
@@ -222,6 +273,8 @@ class ReducerWindows:
                 dv = va - vb
                 t = np.column_stack([-n_row[:, 1], n_row[:, 0]])
                 v_row = np.abs(np.sum(dv * t, axis=1))
+                if self._own_ids(fam) is not None:
+                    v_row = 0.5 * v_row      # a flank takes half its pair's sliding exposure (module docstring)
             # per physical contact: rows summed (force), load-weighted (position, normal, sliding speed);
             # an unloaded contact takes its rows' plain mean
             w = np.zeros(len(names))

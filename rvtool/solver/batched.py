@@ -14,7 +14,7 @@ same plausibility bounds, judged per copy:
 * Copies that failed the warm start go through the stiffness homotopy together, the
   accepted copies riding along from their solution with their own springs (their
   accepted states are kept); copies that still fail are solved by the per-variant
-  path (:class:`StaticSolver` on :func:`rvtool.assembly.cycloid.build` of that variant,
+  path (:class:`StaticSolver` on the batch model's ``copy_model(c)``: that copy's own model,
   warm-started from the copy's previous state) and counted in ``stats.fallbacks``.
   A copy that fails there too is marked failed (its figures NaN, ``status="failed"``);
   it is parked at its kinematic state on stiff springs so that it cannot disturb the
@@ -50,7 +50,8 @@ class BatchStats:
 
 
 class BatchedStaticSolver:
-    """Warm-started static solves of all copies of a :class:`BatchedCycloidModel`
+    """Warm-started static solves of all copies of a :class:`BatchedCycloidModel` or a
+    :class:`~rvtool.batched.replica.ReplicatedModel`
     (tolerances and bounds as :class:`StaticSolver`, see the module docstring)."""
 
     STIFFENING = StaticSolver.STIFFENING
@@ -79,11 +80,11 @@ class BatchedStaticSolver:
         # per-copy bounds and free coordinates (all but the drive and the locks)
         self.is_rot = np.tile(np.arange(n) % 3 == 2, (B, 1))
         self.free = np.ones((B, n), bool)
-        self.free[:, 2] = False                       # shaft rotation: driven
+        self.free[:, model.input_local] = False        # the driven input rotation
         for c, m in enumerate(model.copies):
             for obj in m.locks:
                 mk = model.mbs.GetObjectParameter(obj, "markerNumbers")[1]
-                b = m.nodes.index(model.mbs.GetMarkerParameter(mk, "nodeNumber"))
+                b = [int(n) for n in m.nodes].index(int(model.mbs.GetMarkerParameter(mk, "nodeNumber")))
                 self.free[c, 3 * b + model.mbs.GetMarkerParameter(mk, "coordinate")] = False
         # regularization springs: (B, n_s) local coordinate index, stiffness and object
         self.spring_idx = np.array([[3 * b + cc for b, cc, _, _ in m.reg_springs] for m in model.copies], int)
@@ -158,7 +159,7 @@ class BatchedStaticSolver:
         rows = np.arange(B)[:, None]
         off = self.kin[rows, self.spring_idx]
         R[rows, self.spring_idx] -= self.spring_k * self.factor[:, None] * (qc[rows, self.spring_idx] - off)
-        R[:, 3 * (m.nb - 1) + 2] += self.torque
+        R[:, m.output_local] += self.torque
         R = np.where(self.free, R, 0.0)
         out = np.sqrt(np.sum(R * R, axis=1))
         return np.where(ev.finite, out, np.inf)
@@ -250,10 +251,7 @@ class BatchedStaticSolver:
 
     def _per_variant_model(self, c):
         if c not in self._pv:
-            from ..assembly.cycloid import build
-            m = self.model
-            d = m.variants[c].apply(m.design)
-            pm = build(d, bearing_model="lumped", **self.build_kw)
+            pm = self.model.copy_model(c, self.build_kw)
             idx = np.concatenate([np.asarray(pm.mbs.systemData.GetNodeLTGODE2(n), int) for n in pm.nodes])
             o = self.opts
             self._pv[c] = (pm, StaticSolver(pm, abs_tol=o["abs_tol"], rel_tol=o["rel_tol"],

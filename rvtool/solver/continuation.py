@@ -4,12 +4,19 @@ Each level is reached from the previous equilibrium by warm-started Newton solve
 torque increment is halved when Newton fails or jumps (a step larger than ``max_step``
 is rejected: in the backlash at zero load Newton can land in a far, spurious
 equilibrium). Contact history (friction anchors) is committed once per converged level.
+Where the increments stall (free play whose only stiffness is the weak regularization: the
+tangent is nearly singular there and every nonzero increment is carried by the near-null
+directions), a model declaring ``guided_free_play`` reaches the level by the guide-spring
+homotopy from the previous equilibrium
+(:mod:`rvtool.solver.guide`; counted in ``guided_levels``, the last guide force in
+``guide_force_max``); the accepted state carries no guide force.
 """
 import time
 
 import numpy as np
 
 from ..errors import SolverFailure
+from .guide import guided_newton
 from .static import StaticSolver
 from .stats import SolverStats
 
@@ -31,6 +38,8 @@ class Continuation:
         self.min_increment = min_increment
         self.stats = SolverStats()
         self.restarts = bool(getattr(model, "continuation_restarts", False))
+        self.guided_free_play = bool(getattr(model, "guided_free_play", False))
+        self.guide_force_max = 0.0    # largest guide force [N or N m] at a last guided stage (before release)
         model.set_input_angle(input_angle)
         # a loaded start is regular even where free play leaves the zero-load state ill-posed
         model.set_output_torque(float(initial_torque))
@@ -74,12 +83,17 @@ class Continuation:
                 self.stats.rejected_steps += 1
                 inc *= 0.5
                 if abs(inc) < self.min_increment:
+                    # a model declaring restarts keeps its restart first (its figures are unchanged)
                     restarted = self._restart(t_now, torque) if self.restarts else None
+                    if restarted is None and self.guided_free_play:
+                        restarted = self.guided(t_now, torque)
                     if restarted is None:
                         self.model.set_output_torque(t_now)
                         raise SolverFailure(f"torque continuation stalled between {t_now:.6g} and {torque:.6g} N m: "
                                             f"increment {abs(inc):.3g} N m below min_increment = {self.min_increment:g}"
-                                            + ("; the restarts from the kinematic state failed too" if self.restarts else ""))
+                                            + ("; the restarts from the kinematic state failed too" if self.restarts else "")
+                                            + ("; the guide-spring homotopy from the last equilibrium failed too"
+                                               if self.guided_free_play else ""))
                     self.q, t_now = restarted
                     inc = torque - t_now
         self.torque = torque
@@ -87,6 +101,29 @@ class Continuation:
         self.stats.levels += 1
         self.stats.wall_s += time.perf_counter() - t0
         return self.q
+
+    def guided(self, t_now, torque):
+        """(q, level) of a level between ``t_now`` and ``torque`` [N m] (fractions
+        :data:`RESTART_FRACTIONS` of the step, tried in turn) by the guide-spring homotopy from
+        the current equilibrium (:func:`rvtool.solver.guide.guided_newton`), or None. Unlike
+        :meth:`_restart` it starts from the previous equilibrium: the committed contact history
+        and the branch are kept. The level must pass the static solver's plausibility bounds."""
+        def newton(q0):
+            it0 = self.static.stats.newton_iterations
+            ok, q = self.static.newton(q0, ramp=False)
+            self.stats.newton_iterations += self.static.stats.newton_iterations - it0
+            self.stats.solves += 1
+            return ok, q
+
+        for f in self.RESTART_FRACTIONS:
+            target = t_now + f * (torque - t_now)
+            self.model.set_output_torque(target)
+            ok, q, rep = guided_newton(self.model, newton, self.q)
+            if ok and self.static.plausible(q, self.input_angle):
+                self.stats.guided_levels += 1
+                self.guide_force_max = max(self.guide_force_max, rep["guide_force_last"])
+                return q, target
+        return None
 
     RESTART_FRACTIONS = (1.0, 0.5, 0.1)
     """Targets of a restart as fractions of the remaining torque step, tried in turn."""

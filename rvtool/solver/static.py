@@ -6,7 +6,9 @@ equilibrium shifted by the kinematic increment; loads are applied in full
 (no load factor). If a warm start fails, the point is re-solved from the
 previous equilibrium in angle sub-steps, then from the kinematic state by a homotopy in the regularization stiffness (stiff springs
 first, then the model's own), then with the load ramped over ``ramp_steps``
-steps. A point that still fails raises :class:`SolverFailure` naming the
+steps, and last (models declaring ``guided_free_play``) by the guide-spring homotopy from the
+kinematic state (:mod:`rvtool.solver.guide`: finer factor steps, bisected on failure; reached
+only where everything before failed, so no point that solved before changes). A point that still fails raises :class:`SolverFailure` naming the
 control values.
 """
 import time
@@ -16,6 +18,7 @@ import numpy as np
 import exudyn as exu
 
 from ..errors import SolverFailure
+from .guide import guided_newton
 from .stats import SolverStats
 
 
@@ -191,12 +194,19 @@ class StaticSolver:
             finally:
                 self.ramp_steps = steps
             ok = ok and self.plausible(q, input_angle)
+        if not ok and getattr(self.model, "guided_free_play", False):
+            # free play without contact stiffness (rv40e's needle clearance and backlash at zero load):
+            # the coarse stiffening ladder and the load ramps jump; the guides release in decades
+            ok, q, _ = guided_newton(self.model, lambda q0: self.newton(q0, ramp=False),
+                                     self.kinematic_vector(input_angle))
+            ok = ok and self.plausible(q, input_angle)
+            self.stats.guided_levels += int(ok)
         self.stats.wall_s += time.perf_counter() - t0
         if not ok:
             raise SolverFailure(f"no plausible static equilibrium at input angle {input_angle:.6g} rad (warm start, "
                                 f"a {self.ramp_steps}-step and a {5 * self.ramp_steps}-step load ramp failed or left a "
                                 f"body more than {self.max_translation} m / {self.max_rotation} rad off its kinematic position; "
-                                f"angle sub-steps and shifts of up to 1e-5 rad failed too)")
+                                f"angle sub-steps, shifts of up to 1e-5 rad and the guide-spring homotopy failed too)")
         self.stats.points += 1
         self.q = q
         self.last_angle = used

@@ -12,7 +12,8 @@ class SolverStats:
     rejected_steps: load or target increments rejected and halved; ramped_restarts: points
     re-solved from the kinematic state (homotopy, load ramps); substep_restarts: points
     reached by angle sub-steps; shifted_points: points shifted off an activation kink;
-    wall_s: wall time [s].
+    guided_levels: load levels (static points) reached by the guide-spring homotopy from the previous
+    equilibrium (:meth:`rvtool.solver.continuation.Continuation.guided`); wall_s: wall time [s].
     """
     points: int = 0
     levels: int = 0
@@ -22,6 +23,7 @@ class SolverStats:
     ramped_restarts: int = 0
     substep_restarts: int = 0
     shifted_points: int = 0
+    guided_levels: int = 0
     wall_s: float = 0.0
 
     def to_dict(self):

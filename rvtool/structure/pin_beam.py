@@ -188,15 +188,29 @@ class PinBeam:
         W, A = math.pi * r ** 3 / 4.0, math.pi * r ** 2
         return float(m.max() / W), float(4.0 * np.hypot(V[:, 0], V[:, 1]).max() / (3.0 * A)), float(nodes[m.argmax()])
 
+    def station_stress_map(self, centres, width, n_sub=16):
+        """The linear map from station resultants to the pin's internal forces
+        (:class:`StationStressMap`): :meth:`internal_forces` under a unit load on each station in
+        turn (the beam is linear and its two transverse planes are alike), so that many load
+        states (e.g. every point of a TE sequence) cost one matrix product each instead of one
+        beam solve (:meth:`station_stresses`, the same figures to round-off)."""
+        centres = np.atleast_1d(np.asarray(centres, float))
+        pts, wts = line_load_points(centres, width, n_sub)
+        k = len(centres)
+        GM, GV = [], []
+        for j in range(k):
+            loads = np.zeros((k, pts.shape[1], 2))
+            loads[j, :, 0] = wts[j]
+            nodes, M, V = self.internal_forces(pts.ravel(), loads.reshape(-1, 2))
+            GM.append(M[:, 0])
+            GV.append(V[:, 0])
+        r = self.radius
+        return StationStressMap(nodes=nodes, moment=np.array(GM).T, shear=np.array(GV).T,
+                                section_modulus=math.pi * r ** 3 / 4.0, area=math.pi * r ** 2)
+
     def _element(self, L):
         """Timoshenko element stiffness (w, rotation at both ends) of length L."""
-        EI, kGA = self.EI, self.kGA
-        phi = 12.0 * EI / (kGA * L * L)
-        return EI / ((1.0 + phi) * L ** 3) * np.array([
-            [12.0, 6 * L, -12.0, 6 * L],
-            [6 * L, (4 + phi) * L * L, -6 * L, (2 - phi) * L * L],
-            [-12.0, -6 * L, 12.0, -6 * L],
-            [6 * L, (2 - phi) * L * L, -6 * L, (4 + phi) * L * L]])
+        return timoshenko_element(self.EI, self.kGA, L)
 
     def _stiffness(self, nodes):
         """Assembled Timoshenko beam stiffness (dofs w, rotation per node)."""
@@ -252,6 +266,41 @@ class PinBeam:
         [start, end] (the closed-form checks of cases/pin_bending.py)."""
         pts, wts = line_load_points(np.array([0.5 * (start + end)]), end - start, n_sub)
         return self.influence(np.atleast_1d(x), pts.ravel()) @ (wts.ravel() * (end - start))
+
+
+def timoshenko_element(EI, kGA, L):
+    """Stiffness (4, 4) of the two-node interdependent-interpolation Timoshenko element of length
+    L [m] (dofs: deflection, rotation at both ends), bending stiffness EI [N m^2], shear stiffness
+    kGA [N] (inf: Euler--Bernoulli). Its nodal displacements are exact for nodal loads on a
+    prismatic beam (shared by the pin and crank beams)."""
+    phi = 12.0 * EI / (kGA * L * L)
+    return EI / ((1.0 + phi) * L ** 3) * np.array([
+        [12.0, 6 * L, -12.0, 6 * L],
+        [6 * L, (4 + phi) * L * L, -6 * L, (2 - phi) * L * L],
+        [-12.0, -6 * L, 12.0, -6 * L],
+        [6 * L, (2 - phi) * L * L, -6 * L, (4 + phi) * L * L]])
+
+
+@dataclass(frozen=True)
+class StationStressMap:
+    """Internal forces of a pin as linear maps of its station resultants R (k, 2) [N]: moment at
+    the nodes M = moment @ R (m, 2) [N m], shear per segment V = shear @ R (m - 1, 2) [N];
+    section modulus W = pi r^3/4 [m^3] and area A = pi r^2 [m^2] of the solid circle."""
+    nodes: np.ndarray
+    moment: np.ndarray
+    shear: np.ndarray
+    section_modulus: float
+    area: float
+
+    def stresses(self, resultants):
+        """(sigma_max = max |M|/W, tau_max = max 4 |V|/(3 A) [Pa], z of sigma_max [m]) under the
+        station resultants (k, 2) [N]."""
+        R = np.asarray(resultants, float)
+        M, V = self.moment @ R, self.shear @ R
+        m = np.hypot(M[:, 0], M[:, 1])
+        i = int(m.argmax())
+        return (float(m[i] / self.section_modulus), float(4.0 * np.hypot(V[:, 0], V[:, 1]).max() / (3.0 * self.area)),
+                float(self.nodes[i]))
 
 
 def line_load_points(centres, width, n_sub):

@@ -14,16 +14,18 @@ maximum pin force, lost motion), in one of three modes:
   (all variants of a chunk in one Exudyn system), in this process (which holds the device),
   or one task per chunk on a given executor;
 * ``"serial"``: in this process, one variant after the other;
-* ``"device"``: as ``"batched"``, with the quasi-static TE of each chunk on the device Newton
-  (:func:`rvtool.variants.device.device_variant_figures`: all (variant, angle) pairs of the
-  chunk in one device loop, failed pairs on the per-variant Exudyn path; lost motion per
-  variant), on ``device`` ("cpu": chunks side by side in the pool; "cuda:N": one chunk after
+* ``"device"``: as ``"batched"``, with the quasi-static TE and the lost motion of each chunk on
+  the device Newton (:func:`rvtool.variants.device.device_variant_figures`: all (variant,
+  angle) pairs of the chunk in one device loop, the lost-motion continuations of the chunk's
+  variants side by side; failed copies on the per-variant Exudyn path), on ``device`` ("cpu": chunks side by side in the pool; "cuda:N": one chunk after
   another in this process);
-* ``"auto"``: the fastest measured path for this protocol (TE and lost motion): ``"batched"`` on
-  the CPU (:func:`resolve_mode`; ``"device"`` stays an explicit choice, see there).
+* ``"auto"``: the fastest measured path for this protocol (TE and lost motion): ``"device"``
+  (:func:`resolve_mode`, see there for the measurements).
 
 Each record names its TE path (``te_path``) and the number of its TE points that fell back
-from the device Newton to Exudyn (``te_fallback_points``; None for the Exudyn modes).
+from the device Newton to Exudyn (``te_fallback_points``; None for the Exudyn modes), the path
+of its lost motion (``lost_motion_path``: the device Newton's, or "exudyn") and whether it fell
+back from the device to Exudyn (``lost_motion_fallback``; None for the Exudyn modes).
 
 Resumable: the variants are grouped in chunks of ``chunk_size`` consecutive indices; a
 chunk's records are written as soon as its last variant finishes, to
@@ -70,24 +72,25 @@ MODES = ("pool", "batched", "serial", "device", "auto")
 
 
 def resolve_mode(mode, device):
-    """(mode, device) that a study runs: ``"auto"`` -> the batched Exudyn path on the CPU.
+    """(mode, device) that a study runs: ``"auto"`` -> the device Newton (TE and lost motion), on
+    the first GPU if present (or on ``device`` if one is named), else on the CPU.
 
-    Measured for the TE alone (cases/bench_batched_te.py, 53 points): on an H100 the device
-    Newton reaches 2,000-2,800 variants/s against 45.6 for a warmed 16-process pool (44-61x);
-    on 2 loaded CPU cores the device Newton (two processes) and batched Exudyn are on par.
-    But the Monte Carlo protocol also computes lost motion, per variant on Exudyn, and in
-    ``"device"`` mode on a GPU that runs one variant after another in the process holding the
-    device: the full 1,000-variant study on the H100 host took 292 s (3.4 variants/s) against
-    20.7 variants/s for the 16-process pool and 17.1 for batched Exudyn measured in the same
-    run (cases/monte_carlo_te.py --mode device, 2026-11-24). Until lost motion runs on the
-    device (or in the pool beside the device TE), ``"auto"`` picks the batched Exudyn path and
-    ``"device"`` is chosen explicitly for TE-dominated studies. ``device="auto"`` with the
-    other modes picks as :func:`warp_contacts.precision.resolve_device` for a large batch."""
+    Measured for the whole protocol (TE, max pin force, lost motion) on this 2-core machine,
+    53 TE points, all modes on the same variants in one run, two pool processes each
+    (README, "Lost motion on the device"): the device Newton on the CPU with lost motion as a batched load
+    continuation (:func:`rvtool.batched.device_lost_motion.device_lost_motion`) ahead of batched
+    Exudyn and of the per-variant pool. On the GPU the TE alone reached 2,000-2,800 variants/s
+    on an H100 against 45.6 for a warmed 16-process pool (cases/bench_batched_te.py); before the
+    lost motion ran on the device, the full study there took 292 s (3.4 variants/s) against
+    20.7 for the pool and 17.1 for batched Exudyn, all of it in the per-variant lost motion,
+    which the device path now batches as well (the full study on the GPU is the lead's
+    measurement: README, "Lost motion on the device"). ``device="auto"`` with the other modes
+    picks as :func:`warp_contacts.precision.resolve_device` for a large batch."""
     if mode != "auto" and device != "auto":
         return mode, device
     from warp_contacts.precision import resolve_device
     if mode == "auto":
-        return "batched", "cpu"
+        return "device", resolve_device("auto", n_contacts=10 ** 9) if device == "auto" else device
     return mode, resolve_device("auto", n_contacts=10 ** 9)
 
 
@@ -157,6 +160,8 @@ def _record(variant, figures=None, error=None, wall_s=None):
     rec["wall_s"] = float(figures["wall_s"]) if figures is not None and "wall_s" in figures else wall_s
     rec["te_path"] = None if figures is None else figures.get("te_path", "exudyn")
     rec["te_fallback_points"] = None if figures is None else figures.get("te_fallback_points")
+    rec["lost_motion_path"] = None if figures is None else figures.get("lost_motion_path", "exudyn")
+    rec["lost_motion_fallback"] = None if figures is None else figures.get("lost_motion_fallback")
     rec["status"] = "ok" if error is None else "failed"
     rec["error"] = error
     return rec
@@ -191,10 +196,11 @@ def _batched_function(build_kw=None):
     return batched_variant_figures
 
 
-def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="batched"):
+def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="batched", helpers=None):
     """Records of variants run together: in one Exudyn system (mode "batched", rvtool.batched) or
-    with the TE on the device Newton (mode "device", :mod:`rvtool.variants.device`). If the run
-    raises, every variant of the batch is recorded as failed with that error."""
+    with the TE and lost motion on the device Newton (mode "device", :mod:`rvtool.variants.device`;
+    ``helpers``: an executor for its host work, see there). If the run raises, every variant of
+    the batch is recorded as failed with that error."""
     if mode == "device":
         from .device import device_variant_figures as batched_variant_figures
         extra = sorted(set(build_kw or {}) - {"regularization"})
@@ -205,14 +211,19 @@ def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="bat
         batched_variant_figures = _batched_function(build_kw)
     t0 = time.perf_counter()
     try:
-        figs = batched_variant_figures(design, variants, protocol, device=device, **(build_kw or {}))
+        extra_kw = {"executor": helpers} if helpers is not None else {}
+        figs = batched_variant_figures(design, variants, protocol, device=device, **(build_kw or {}), **extra_kw)
     except Exception as exc:  # the whole batch shares one system: all its variants failed
         wall = (time.perf_counter() - t0) / max(len(variants), 1)
         return [_record(v, error=f"{type(exc).__name__}: {exc}", wall_s=wall) for v in variants]
     out = []
     for v, f in zip(variants, figs):
         err = f.get("error") if f.get("status", "ok") != "ok" else None
-        out.append(_record(v, None if err else f, error=err, wall_s=f.get("wall_s")))
+        rec = _record(v, None if err else f, error=err, wall_s=f.get("wall_s"))
+        if err:   # a failed variant still names the paths it took (and whether its lost motion fell back)
+            rec.update({k: f[k] for k in ("te_path", "te_fallback_points", "lost_motion_path", "lost_motion_fallback")
+                        if k in f})
+        out.append(rec)
     return out
 
 
@@ -312,12 +323,20 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
         # (on the CPU with several workers, batches run side by side in the pool below: one
         # batch of chunk_size copies per process: on 2 cores 3.3x the per-variant pool for TE alone,
         # 1.15x for the whole protocol with lost motion, cases/bench_batched_te.py and monte_carlo_te)
-        for i in pending:
-            recs = run_batch(design, variants_of(i), protocol, device, build_kw, mode)
-            done += len(recs)
-            if progress is not None:
-                progress(done, total)
-            finish_chunk(i, recs)
+        with contextlib.ExitStack() as stack:
+            helpers = None
+            if mode == "device" and n_workers > 1 and pending:
+                # the device mode's host work (per-copy parameters, Exudyn fallbacks) side by side
+                # on the other cores while this process holds the device
+                stack.enter_context(_single_thread_env())
+                helpers = stack.enter_context(cf.ProcessPoolExecutor(
+                    max_workers=n_workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker))
+            for i in pending:
+                recs = run_batch(design, variants_of(i), protocol, device, build_kw, mode, helpers)
+                done += len(recs)
+                if progress is not None:
+                    progress(done, total)
+                finish_chunk(i, recs)
     elif mode == "serial":
         for i in pending:
             recs = []
@@ -372,7 +391,9 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
     return {"records": recs, "summary": summarize(recs), "chunks_loaded": n_loaded, "chunks_run": len(pending),
             "wall_s": time.perf_counter() - t0, "fingerprint": fp, "mode": mode, "device": device,
             "te_paths": sorted({r["te_path"] for r in recs if r.get("te_path")}),
-            "te_fallback_points": sum(int(r.get("te_fallback_points") or 0) for r in recs)}
+            "te_fallback_points": sum(int(r.get("te_fallback_points") or 0) for r in recs),
+            "lost_motion_paths": sorted({r["lost_motion_path"] for r in recs if r.get("lost_motion_path")}),
+            "lost_motion_fallback_copies": sum(bool(r.get("lost_motion_fallback")) for r in recs)}
 
 
 def order_statistic_ci(x_sorted, p, level=0.95):

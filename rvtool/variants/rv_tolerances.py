@@ -11,7 +11,10 @@ Fields (SI units; distributions and their TOML form as :mod:`rvtool.variants.tol
 * ``needle_clearance`` [m]: radial clearance of the needle sets (one value per reducer,
   ``eccentric_bearing.radial_clearance``; support must be non-negative),
 * ``sun_pitch_deviation`` [m]: single pitch deviations f_pt of the sun gear (one draw per tooth,
-  minus their mean so that they close the circle; ``sun_gear.single_pitch_deviations``).
+  minus their mean so that they close the circle; ``sun_gear.single_pitch_deviations``),
+* ``crank_gear_pitch_deviation`` [m]: single pitch deviations f_pt of each crank's spur gear (one
+  draw per tooth and crank, each crank's minus its mean; ``cranks.gear_pitch_deviations``). Drawn
+  last, so that adding it left the other fields' draws of a seed unchanged.
 
 Variant k draws from ``numpy.random.default_rng([seed, k])`` in the order of :data:`RV_FIELDS`.
 """
@@ -24,7 +27,7 @@ from ..errors import RvtoolInputError
 from .tolerances import DISTRIBUTIONS, distribution_from_dict
 
 RV_FIELDS = ("crank_phase_error", "crank_eccentricity_error", "pin_radius_error", "needle_clearance",
-             "sun_pitch_deviation")
+             "sun_pitch_deviation", "crank_gear_pitch_deviation")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -35,6 +38,7 @@ class RvToleranceSpec:
     pin_radius_error: object = None
     needle_clearance: object = None
     sun_pitch_deviation: object = None
+    crank_gear_pitch_deviation: object = None
 
     def __post_init__(self):
         for nm in RV_FIELDS:
@@ -82,9 +86,13 @@ def sample_rv_design(spec, design, k, seed):
         elif nm == "needle_clearance":
             v = float(d.sample(rng))
             changes["eccentric_bearing"] = {"radial_clearance": v}
-        else:
+        elif nm == "sun_pitch_deviation":
             f = np.asarray(d.sample(rng, design.sun_gear.n_teeth), float)
             v = tuple(float(x) for x in f - f.mean())
             changes["sun_gear"] = {"single_pitch_deviations": v}
+        else:
+            f = np.asarray(d.sample(rng, n * design.crank_gear.n_teeth), float).reshape(n, -1)
+            v = tuple(tuple(float(x) for x in row - row.mean()) for row in f)
+            changes.setdefault("cranks", {})["gear_pitch_deviations"] = v
         drawn[nm] = v
     return design.replace(**changes), drawn

@@ -209,8 +209,8 @@ def run_point(design, params, protocol, build_kw=None):
 
 def run_device_group(design, points, protocol, build_kw=None, device="cpu"):
     """Rows of grid points that share one design (their other parameters are Variant fields):
-    the TE of all points in one device Newton batch (:func:`rvtool.variants.device.device_variant_figures`),
-    lost motion per point. A failed point is a row with status "failed"."""
+    the TE and the lost motion of all points in one device Newton batch
+    (:func:`rvtool.variants.device.device_variant_figures`). A failed point is a row with status "failed"."""
     from .device import device_variant_figures
     t0 = time.perf_counter()
     try:

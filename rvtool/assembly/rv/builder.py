@@ -25,6 +25,7 @@ carrier through the cranks.
 Kinematics (:class:`RvKinematics`): the gear graph's rates (:mod:`.gear_graph`); the crank
 gears start conjugate to the sun (mid-backlash), the journals at the wheels' absolute phases.
 """
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -37,12 +38,13 @@ from exudyn_user_elements.contact_element import ContactElement
 
 from ...bearings.set import BearingSet, Mounting
 from ...bearings.tapered_set import TaperedBearingSet, TaperedMounting
-from ...contact.circle_set import GROUND
+from ...contact.circle_set import GROUND, FrictionLaw, FrictionModel
 from ...contact.cycloid_set import CycloidPinSet
-from ...contact.involute_set import GearMesh, InvoluteContactSet
+from ...contact.involute_set import GearMesh, InvoluteContactSet, pair_secant_stiffness
 from ...errors import RvtoolInputError
 from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
+from ...output_pins.calibration import mindlin_tangential_ratio
 from ..cycloid import pin_meshes
 from .gear_graph import GearGraph
 from .spec import RVDesign
@@ -153,14 +155,35 @@ def wheel_mass(design, graph):
     return m, J
 
 
+def involute_friction_law(design, pair):
+    """FrictionLaw of the involute meshes of ``pair`` from ``[involute_stage]``: none for mu = 0,
+    the regularized law of Eq. (friction) or the anchor model (k_t from the design, else Mindlin's
+    ratio of the pair's normal secant stiffness at ``involute_stage.reference_force``)."""
+    st = design.involute_stage
+    if st.mu == 0.0:
+        return FrictionLaw()
+    if st.friction_model == "regularized":
+        return FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=st.mu)
+    kt = st.tangential_stiffness or (mindlin_tangential_ratio(pair.gear_a.poisson_ratio)
+                                     * pair_secant_stiffness(pair, st.reference_force))
+    return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=st.mu, tangential_stiffness=kt)
+
+
 def gear_meshes(design, graph, layout):
     """The involute meshes: sun (gear A) -- crank gear k (gear B), and the three-stage pinion -- compound gear."""
     st = design.involute_stage
     kw = dict(n_slices=st.n_slices, window=st.window, damping=st.damping, ramp_depth=st.ramp_depth)
-    meshes = [GearMesh(pair=graph.sun_pair, body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}", **kw)
-              for k in range(layout.n_cranks)]
+    # crank k's own gear (its pitch deviations, cranks.gear_pitch_deviations); the nominal pair otherwise
+    pairs = [graph.sun_pair if design.crank_gear_of(k) is design.crank_gear
+             else dataclasses.replace(graph.sun_pair, gear_b=design.crank_gear_of(k)) for k in range(layout.n_cranks)]
+    # one friction law for all sun meshes: the anchor stiffness from the nominal pair (pitch deviations
+    # turn teeth rigidly and leave the pair's secant stiffness unchanged)
+    sun = involute_friction_law(design, graph.sun_pair)
+    meshes = [GearMesh(pair=pairs[k], body_a=layout.sun, body_b=layout.crank(k), name=f"crank_gear{k}",
+                       friction=sun, **kw) for k in range(layout.n_cranks)]
     if layout.three_stage:
-        meshes.append(GearMesh(pair=graph.input_pair, body_a=0, body_b=layout.sun, name="input_stage", **kw))
+        meshes.append(GearMesh(pair=graph.input_pair, body_a=0, body_b=layout.sun, name="input_stage",
+                               friction=involute_friction_law(design, graph.input_pair), **kw))
     return meshes
 
 
@@ -195,6 +218,13 @@ class RvModel(ReducerModel):
     graph: GearGraph = None
     layout: Layout = None
     profiles: list = field(default_factory=list)
+    #: station compliance (3, 3) [m/N] of one elastic crank (journal of wheel 0, of wheel 1, gear;
+    #: :func:`crank_station_compliance`), or None (rigid cranks)
+    crank_compliance: np.ndarray = None
+    #: ReducedStructure of the elastic housing carrying the ring pins, or None (rigid ring)
+    housing: object = None
+    #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
+    guided_free_play: bool = True
 
     def _pose(self, name, q):
         el = self.elements[name]
@@ -230,9 +260,45 @@ class RvModel(ReducerModel):
 
     def eccentric_bearing_resultants(self, q):
         """{mounting name: |resultant| [N]} of every needle bearing (crank k, wheel j) at q."""
-        el = self.elements["eccentric_bearings"]
-        res = el.evaluator.resultants(self._pose("eccentric_bearings", q))
+        needles, pose = self.needle_state(q)
+        res = needles.resultants(pose)
         return {name: float(np.hypot(*r.force)) for name, r in res.items()}
+
+    def needle_state(self, q):
+        """(the needle bearing set, the poses it is evaluated at) at the static state q: the
+        element's bodies, and with elastic cranks the journal stations at the solved deflections."""
+        if self.crank_compliance is None:
+            return self.elements["eccentric_bearings"].evaluator, self._pose("eccentric_bearings", q)
+        closure = self.elements["cranks"].evaluator
+        return closure.inner.part("eccentric_bearings"), closure.extended_pose(self._pose("cranks", q))
+
+    def crank_deflections(self, q):
+        """(N_c, 3, 2) bending deflections [m] of every elastic crank at its stations (journal of
+        wheel 0, of wheel 1, gear; x, y) relative to its support line at the static state q, or
+        None (rigid cranks)."""
+        if self.crank_compliance is None:
+            return None
+        return self.elements["cranks"].evaluator.deflections(self._pose("cranks", q))
+
+    def series_compliance(self, family):
+        """Elastic cranks (``cranks.shaft``): the beam of every crank with its station compliance
+        over the two journals and the gear, closed per crank (:mod:`rvtool.contact.pin_closure`),
+        reported once, with the eccentric bearings (budget path ``"cranks"``)."""
+        from ...model import SeriesBeam
+        if self.crank_compliance is None or Family(family) != Family.ECCENTRIC_BEARINGS:
+            return None
+        el = self.elements["cranks"]
+        closure = el.evaluator
+
+        def pose(q):
+            ql = el.local(q)
+            return el.pose_velocity(ql, 0 * ql)
+
+        def stiffened(q, factor):
+            _, _, red, _ = closure.solve(*pose(q))
+            return el.coordinate_indices, closure.condense(red, beam_factor=factor)[1]
+        return SeriesBeam("cranks", Family.ECCENTRIC_BEARINGS, self.crank_compliance,
+                          lambda q: closure.deflections(pose(q)[0]), stiffened)
 
     def input_torque(self, q):
         """Torque [N m] the drive applies to the input rotation at the static state q: minus the
@@ -301,6 +367,105 @@ class RvModel(ReducerModel):
 FAMILY_ELEMENTS = {Family.PINS: "pins", Family.INVOLUTE_STAGE: "gears", Family.ECCENTRIC_BEARINGS: "eccentric_bearings",
                    Family.CRANK_BEARINGS: "crank_bearings", Family.MAIN_BEARINGS: "main_bearings"}
 
+#: the stations of an elastic crank, in the order of its station compliance
+CRANK_STATIONS = ("journal_wheel0", "journal_wheel1", "gear")
+
+
+def crank_station_compliance(design):
+    """Station compliance C (3, 3) [m/N] of one crank (:data:`CRANK_STATIONS`: the journals at the
+    wheel midplanes over the needle rollers' length, the gear at ``cranks.shaft.gear_position``
+    over its face width; :class:`~rvtool.structure.crank_beam.CrankBeam`), or None for rigid cranks."""
+    from ...structure.crank_beam import CrankBeam
+    sh = design.cranks.shaft
+    if not sh.elastic:
+        return None
+    beam = CrankBeam(sh.radius, sh.supports, design.material.youngs_modulus, design.material.poisson_ratio,
+                     shear=sh.shear, shear_coefficient=sh.shear_coefficient)
+    w = design.eccentric_bearing.roller_length
+    centres = np.array([*design.wheels.midplanes, sh.gear_position])
+    C = beam.station_compliance(centres, (w, w, design.crank_gear.face_width))
+    if sh.tilt:
+        # the crank tilting on its pair about the pair's centre: a station at z from it moves by
+        # z gamma under gamma = M / K_gamma (the tilting mode; the planar law carries the translation)
+        z = centres - 0.5 * sum(sh.supports)
+        C = C + np.outer(z, z) / crank_pair_tilt_stiffness(design, rated_crank_bearing_load(design))
+    return C
+
+
+def rated_crank_bearing_load(design):
+    """Radial load [N] of one crank's pair at rated torque by statics: the cranks carry the output
+    torque to the carrier on the crank circle, F = T_rated / (N_c r_c) (equal shares)."""
+    from .gear_graph import GearGraph
+    return design.rated_torque / (design.cranks.count * GearGraph.of(design).crank_radius)
+
+
+def crank_pair_tilt_stiffness(design, radial_load=0.0):
+    """Tilting stiffness K_gamma [N m/rad] of a crank's tapered pair (``crank_bearing``): the mean
+    of the moment--tilt diagonal of the pair's 5-DOF tangent (:meth:`rvtool.bearings.tapered_set.
+    TaperedBearingSet.relative`) at the radial displacement that carries ``radial_load`` [N]
+    (Newton on the pair's radial force; 0: the preload only). The tilting stiffness of a
+    preloaded back-to-back pair falls as the radial load unloads one side (rv40e: 1.11e6 N m/rad
+    at the preload, 0.76e6 at the rated 3.8 kN), so the tilt is linearized at the rated load."""
+    from ...bearings.tapered_set import TaperedBearingSet, TaperedMounting
+    s = TaperedBearingSet([TaperedMounting(name="crank_pair", bearing=design.crank_bearing, inner=0, outer=1)], 2,
+                          backend="numpy")
+    q = np.zeros((1, 5))
+    for _ in range(50):
+        r = s.relative(q)
+        res = -r.wrench[0, 0] - radial_load          # the wrench is the force on the cone: -F_x carries the load
+        if abs(res) <= 1e-9 * max(radial_load, 1.0):
+            break
+        q[0, 0] -= res / -r.stiffness[0, 0, 0]
+    else:
+        raise RvtoolInputError(f"crank_bearing: no radial displacement carries {radial_load:.6g} N (pair unstable)")
+    K = s.relative(q).stiffness[0]
+    return float(-0.5 * (K[3, 3] + K[4, 4]))      # the tangent is dF/dq of the wrench on the cone
+
+
+def elastic_crank_path(design, graph, layout, compliance, opts):
+    """The contact set of the crank path with elastic cranks: the involute meshes and the needle
+    bearings stacked (:class:`~rvtool.contact.stacked.StackedContactSet`, element ``"cranks"``) over
+    the bodies plus one station body per (crank k, station s) at index n_bodies + 3 k + s (the
+    crank translated by its deflection there; :data:`CRANK_STATIONS`), closed per crank by its beam
+    (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`, Eq. (series_contact)). The crank
+    bearings stay on the crank body: the beam is held at its supports."""
+    import dataclasses
+    from ...contact.pin_closure import ElasticPinClosure
+    from ...contact.stacked import StackedContactSet
+    nb, nc = layout.n_bodies, layout.n_cranks
+    station = nb + np.arange(3 * nc).reshape(nc, 3)
+    crank_of = {layout.crank(k): k for k in range(nc)}
+    meshes = [dataclasses.replace(m, body_b=int(station[crank_of[m.body_b], 2])) if m.body_b in crank_of else m
+              for m in gear_meshes(design, graph, layout)]
+    mounts = [dataclasses.replace(m, inner=int(station[crank_of[m.inner], m.outer - layout.wheel0]))
+              for m in needle_mountings(design, graph, layout)]
+    n_ext = nb + station.size
+    stacked = StackedContactSet((InvoluteContactSet(meshes, n_ext, name="gears", **opts),
+                                 BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)), name="cranks")
+    return ElasticPinClosure(stacked, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
+                             station_compliance=compliance, station=station - nb)
+
+
+def ported_ring(mbs, design, layout, meshes):
+    """The ring pins on the elastic housing (``housing.model = "ports"``; the cycloid's housing
+    machinery, :func:`rvtool.assembly.housing.housing_ports`): the reduced housing as an Exudyn
+    structure, one port body per ring pin after the bodies (index n_bodies + k carries pin k, its
+    centre moving with the port, Eq. port_runtime_transform), the wheel--pin meshes on those port
+    bodies. Returns (ReducedStructure, PortBodies, meshes); (None, None, meshes) for a rigid ring.
+    The main bearings stay grounded (their seats are not ported), as in the cycloid drive."""
+    import dataclasses
+    if design.housing.model != "ports":
+        return None, None, meshes
+    from exudyn_user_elements.contact_element import PortBodies
+    from exudyn_user_elements.reduced_structure import ReducedStructure
+    from ..housing import housing_ports
+    reduced, _, _ = housing_ports(design)
+    housing = ReducedStructure(mbs, reduced, name="housing")
+    zb = design.pins.n_pins
+    ports = PortBodies(housing, np.array([reduced.port_rows[k][:2] for k in range(zb)]))
+    pin_bodies = tuple(range(layout.n_bodies, layout.n_bodies + zb))
+    return housing, ports, [dataclasses.replace(m, pin_bodies=pin_bodies) for m in meshes]
+
 
 def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1)):
     """Assemble ``design`` into an Exudyn system; returns an :class:`RvModel`.
@@ -352,19 +517,34 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     load = mbs.AddLoad(LoadCoordinate(markerNumber=marker(L.carrier, 2), load=0.0))
 
     opts = dict(backend=backend, precision=precision, device=device)
+    if d.pins.support.elastic:
+        raise RvtoolInputError(f"pins.support.model = {d.pins.support.model.value!r}: elastic ring pins are not "
+                               "implemented for the RV topology; valid: 'rigid'")
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
-    pin_set = CycloidPinSet(meshes, L.n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
-                            search=d.wheels.search, **opts)
-    gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
-    needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
+    housing, ports, meshes = ported_ring(mbs, d, L, meshes)
+    pin_set = CycloidPinSet(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual),
+                            samples_per_tooth=d.wheels.samples_per_tooth, name="pins", search=d.wheels.search, **opts)
     cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
     main = BearingSet([Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)],
                       L.n_bodies, name="main_bearings", **opts)
-    elements = {name: ContactElement(mbs, nodes, s) for name, s in
-                (("pins", pin_set), ("gears", gears), ("eccentric_bearings", needles), ("crank_bearings", cranks),
-                 ("main_bearings", main))}
+    C_crank = crank_station_compliance(d)
+    if C_crank is None:
+        gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
+        needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
+        crank_path = (("gears", gears), ("eccentric_bearings", needles))
+    else:
+        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts)),)
+    elements = {"pins": ContactElement(mbs, nodes, pin_set, ports=ports)}
+    elements.update((name, ContactElement(mbs, nodes, s)) for name, s in
+                    (*crank_path, ("crank_bearings", cranks), ("main_bearings", main)))
     mbs.Assemble()
-    families = {fam: (name, np.arange(len(elements[name].ids))) for fam, name in FAMILY_ELEMENTS.items()}
+    if C_crank is None:
+        families = {fam: (name, np.arange(len(elements[name].ids))) for fam, name in FAMILY_ELEMENTS.items()}
+    else:
+        # the involute stage and the needles are one element, their rows contiguous ranges of it
+        rows = elements["cranks"].evaluator.inner.rows
+        families = {fam: (name, np.arange(len(elements[name].ids))) if name in elements else ("cranks", rows[name])
+                    for fam, name in FAMILY_ELEMENTS.items()}
     i = abs(graph.ratio)
     return RvModel(design=d, SC=SC, mbs=mbs, body_names=L.names(), nodes=nodes, elements=elements, families=families,
                    input=BodyCoordinate(L.names()[0], "theta"), output=BodyCoordinate("carrier", "theta"),
@@ -373,4 +553,5 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                    family_specs={Family.PINS: tuple(meshes), Family.ECCENTRIC_BEARINGS: d.eccentric_bearing,
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
-                   graph=graph, layout=L, profiles=profiles)
+                   structures={} if housing is None else {"housing": housing},
+                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, housing=housing)

@@ -23,7 +23,8 @@ from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
 from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
-from ..spec import LINKS, PinContact, Pins, Wheels, build_section, load_sections
+from ...structure.crank_beam import CrankShaft
+from ..spec import LINKS, Housing, PinContact, Pins, Wheels, build_section, load_sections
 
 TOPOLOGIES = ("rv2", "rv3")
 
@@ -34,12 +35,20 @@ class Cranks:
     radius is the sun--crank-gear centre distance), rigid-body data (mass [kg], polar inertia
     [kg m^2]) and manufacturing deviations per crank (a variant is a design):
     phase_errors_arcmin: the eccentric phase of crank k off its nominal by this angle [arcmin]
-    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none)."""
+    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none);
+    gear_pitch_deviations: per crank, the single pitch deviations f_pt,j [m] of its spur gear
+    (``crank_gear.n_teeth`` entries summing to zero, as ``InvoluteGear.single_pitch_deviations``;
+    () = every crank gear as ``crank_gear``).
+    shaft: the crankshaft as a beam between its tapered rows
+    (:class:`~rvtool.structure.crank_beam.CrankShaft`, sub-table ``[cranks.shaft]``; rigid by
+    default, the "nothing" variant)."""
     count: int
     mass: float = 0.25
     inertia: float = 2.0e-5
     phase_errors_arcmin: tuple = ()
     eccentricity_errors: tuple = ()
+    gear_pitch_deviations: tuple = ()
+    shaft: CrankShaft = field(default_factory=CrankShaft)
 
     def __post_init__(self):
         if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count not in (2, 3):
@@ -52,6 +61,11 @@ class Cranks:
             if len(v) not in (0, self.count):
                 raise RvtoolInputError(f"cranks.{nm} has {len(v)} entries; valid: 0 or cranks.count = {self.count}")
             check_finite(f"cranks.{nm}", v)
+        if len(self.gear_pitch_deviations) not in (0, self.count):
+            raise RvtoolInputError(f"cranks.gear_pitch_deviations has {len(self.gear_pitch_deviations)} entries; "
+                                   f"valid: 0 or cranks.count = {self.count} (one list of pitch deviations per crank)")
+        for k, f in enumerate(self.gear_pitch_deviations):
+            check_finite(f"cranks.gear_pitch_deviations[{k}]", f)
 
     def phase_error(self, k):
         """Eccentric phase error of crank k [rad]."""
@@ -63,19 +77,34 @@ class Cranks:
 
 @dataclass(frozen=True, kw_only=True)
 class InvoluteStage:
-    """Numerics of the involute meshes (each mesh a :class:`~rvtool.contact.involute_set.GearMesh`):
-    n_slices across the face width, window (teeth either side of the pitch point; None: from the
-    contact ratio), damping [N s/m] per mesh, ramp_depth [m]."""
+    """Numerics and friction of the involute meshes (each mesh a
+    :class:`~rvtool.contact.involute_set.GearMesh`): n_slices across the face width, window (teeth
+    either side of the pitch point; None: from the contact ratio), damping [N s/m] per mesh,
+    ramp_depth [m]; mu [-] (0 = no friction: the frictionless code path), friction_model
+    ("regularized": Eq. (friction) velocity law; "anchor": stick--slip anchors per row, as
+    ``pin_contact``), tangential_stiffness [N/m] of the anchors per tooth pair over the face width
+    (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the pair's normal secant stiffness of Eq.
+    (series_contact) at reference_force [N], mid path of contact)."""
     n_slices: int = 1
     window: int | None = None
     damping: float = 0.0
     ramp_depth: float = 1e-6
+    mu: float = 0.0
+    friction_model: str = "regularized"
+    tangential_stiffness: float = 0.0
+    reference_force: float = 1000.0
 
     def __post_init__(self):
         if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, int) or self.n_slices < 1:
             raise RvtoolInputError(f"involute_stage.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
         check_range("involute_stage.damping", self.damping, 0.0)
         check_positive("involute_stage.ramp_depth", self.ramp_depth)
+        check_range("involute_stage.mu", self.mu, 0.0)
+        if self.friction_model not in ("regularized", "anchor"):
+            raise RvtoolInputError(f"involute_stage.friction_model = {self.friction_model!r}; valid choices are "
+                                   "['regularized', 'anchor']")
+        check_range("involute_stage.tangential_stiffness", self.tangential_stiffness, 0.0)
+        check_positive("involute_stage.reference_force", self.reference_force)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -137,6 +166,7 @@ class RVDesign:
     input_pinion: InvoluteGear | None = None
     compound_gear: InvoluteGear | None = None
     input_stage: InputStage = field(default_factory=InputStage)
+    housing: Housing = field(default_factory=Housing)
     #: the file-form data this design was loaded from (what :func:`replace` changes and re-loads)
     source: dict | None = field(default=None, compare=False, hash=False, repr=False, metadata={"file": False})
 
@@ -159,12 +189,30 @@ class RVDesign:
                                    f"Z_wheel + 1 is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
         if self.ratio_target is not None:
             check_positive("ratio_target", abs(self.ratio_target))
+        self.housing.check_pin_ring(self.pins)
         if self.topology == "rv3" and (self.input_pinion is None or self.compound_gear is None):
             missing = [s for s in ("input_pinion", "compound_gear") if getattr(self, s) is None]
             raise RvtoolInputError(f"topology = 'rv3' needs the sections {missing}")
         if self.topology == "rv2" and (self.input_pinion is not None or self.compound_gear is not None):
             raise RvtoolInputError("topology = 'rv2' has no input_pinion / compound_gear sections; valid: "
                                    "remove them or set topology = 'rv3'")
+        z = self.crank_gear.n_teeth
+        for k, f in enumerate(self.cranks.gear_pitch_deviations):
+            f = tuple(float(x) for x in f)
+            if len(f) != z:
+                raise RvtoolInputError(f"cranks.gear_pitch_deviations[{k}] has {len(f)} entries; valid: "
+                                       f"crank_gear.n_teeth = {z}")
+            if abs(sum(f)) > 1e-9 * max(1.0, sum(abs(x) for x in f)) + 1e-15:
+                raise RvtoolInputError(f"cranks.gear_pitch_deviations[{k}] sum to {sum(f):.3g} m; valid: sum 0 "
+                                       "(the pitches of a closed circle add up to its circumference)")
+
+    def crank_gear_of(self, k):
+        """The spur gear of crank k: ``crank_gear`` with crank k's single pitch deviations
+        (``cranks.gear_pitch_deviations``), or ``crank_gear`` itself when none are declared."""
+        if not self.cranks.gear_pitch_deviations:
+            return self.crank_gear
+        return dataclasses.replace(self.crank_gear, single_pitch_deviations=tuple(
+            float(x) for x in self.cranks.gear_pitch_deviations[k]))
 
     @property
     def n_wheels(self):
@@ -247,7 +295,10 @@ def _crank_bearing(data):
 #: The cycloid stage's sections, the cycloid design's specs (the wheel profile generated by the ring,
 #: :data:`rvtool.assembly.spec.LINKS`), in dependency order.
 _CYCLOID_SECTIONS = {"material": ElasticMaterial, "pins": Pins, "wheels": Wheels, "profile": CycloidProfile,
-                     "pin_contact": PinContact}
+                     "pin_contact": PinContact, "housing": Housing}
+#: the cycloid links the RV's cycloid stage takes: the profile generated by the ring, one housing
+#: port per ring pin and the housing of the design's material
+_CYCLOID_LINKS = {k: LINKS[k] for k in ("profile", "housing.structure")}
 _SECTIONS = {"sun_gear": lambda d: _gear("sun_gear", d),
              "crank_gear": lambda d: _gear("crank_gear", d),
              "involute_stage": lambda d: build_section(InvoluteStage, "involute_stage", d),
@@ -266,7 +317,7 @@ def design_from_dict(d):
     """A validated :class:`RVDesign` from a design mapping (a parsed TOML file)."""
     d = _table("design", d)
     source = copy.deepcopy(dict(d))
-    kw = load_sections(d, _CYCLOID_SECTIONS, optional=("profile",), links={"profile": LINKS["profile"]}, derived={})
+    kw = load_sections(d, _CYCLOID_SECTIONS, optional=("profile", "housing"), links=_CYCLOID_LINKS, derived={})
     for sec, make in _SECTIONS.items():
         if sec not in d:
             if sec in _OPTIONAL:

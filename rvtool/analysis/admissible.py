@@ -1,0 +1,123 @@
+"""Admissible load of a design, checked before ``rvtool analyze`` writes anything.
+
+A design can pass every key's own range check and still be unsolvable: e.g. a ``rated_torque``
+of 1e6 x the catalogue value on a 100 mm reducer. That is an input error of the load, not a
+solver failure: :func:`check_rated_state` solves the rated state (input angle 0) once -- the
+state the ``te`` protocol reports its contact forces at, so it is reused, not repeated -- and
+raises :class:`~rvtool.errors.RvtoolInputError` naming ``rated_torque`` and its admissible
+range when
+
+* the static solver finds no plausible equilibrium there (:class:`~rvtool.errors.SolverFailure`):
+  the range is then bracketed by solving lower torques (decades down, then a few bisection steps
+  in log scale) and reported as ``0 < rated_torque <= T_ok``, the largest torque shown to
+  equilibrate; or
+* the rated state's largest Hertz line-contact peak (``model.hertz_peaks``, where the topology
+  provides the local contact geometry) exceeds the contact law's validity: Hertz's half-space
+  solution needs the contact half-width b small against the relative radius of curvature R;
+  for a line contact b / R = 2 p0 / E* (p0 = sqrt(F' E* / (pi R)), b = 2 sqrt(F' R / (pi E*))),
+  and b / R <= :data:`HERTZ_HALF_WIDTH_RATIO` gives p0 <= 0.05 E*. The admissible torque is
+  estimated with p0 ~ sqrt(T) (the contact force proportional to the torque at fixed load
+  sharing).
+"""
+import numpy as np
+
+from ..errors import RvtoolInputError, SolverFailure
+
+HERTZ_HALF_WIDTH_RATIO = 0.1
+"""Largest contact half-width over relative radius of curvature b / R for which the Hertz
+line-contact law is taken as valid (the half-space assumption; b / R = 2 p0 / E*)."""
+
+DECADES_DOWN = 9
+"""Decades of torque searched below a failing rated torque for one that equilibrates (a design
+with no equilibrium even at 1e-9 x its rated torque is not a load problem)."""
+
+BISECTION_STEPS = 3
+"""Log-scale bisection steps between the last equilibrated and the first failing torque (a
+factor 10 bracket narrowed to 10^(1/8) = 1.33)."""
+
+
+def hertz_limit_pressure(design):
+    """Largest Hertz peak pressure [Pa] inside the law's validity, p0 <= (b/R)_max E* / 2, for
+    contacts of the design's material (E* = E / (2 (1 - nu^2)), both bodies of that material);
+    None where the design declares no material."""
+    mat = getattr(design, "material", None)
+    if mat is None:
+        return None
+    e_star = mat.youngs_modulus / (2.0 * (1.0 - mat.poisson_ratio ** 2))
+    return 0.5 * HERTZ_HALF_WIDTH_RATIO * e_star
+
+
+def _solve(build, torque):
+    """(model, state) at ``torque`` and input angle 0 on a fresh model, or (model, None) where the
+    static solver finds no plausible equilibrium."""
+    from ..solver.static import StaticSolver
+    model = build()
+    model.set_output_torque(-np.sign(model.ratio) * torque)
+    try:
+        return model, StaticSolver(model).solve(0.0)
+    except SolverFailure:
+        return model, None
+
+
+def _fmt(x):
+    return f"{x:.4g}"
+
+
+def _hertz_bound(design, model, q, torque):
+    """(admissible torque estimate, family, p0 [Pa]) of the family whose Hertz peak at state q (torque
+    ``torque``) is the largest against the law's validity, or None where the topology gives no
+    Hertz peaks or the design no material."""
+    p_lim = hertz_limit_pressure(design)
+    peaks = model.hertz_peaks(q) if p_lim is not None else {}
+    if not peaks:
+        return None
+    fam, p0 = max(peaks.items(), key=lambda kv: kv[1])
+    return torque * (p_lim / p0) ** 2, fam, p0
+
+
+def check_rated_state(design, build):
+    """Solve ``design``'s rated state with models from ``build()``; returns (model, q) for reuse, or
+    raises :class:`RvtoolInputError` naming ``rated_torque`` and its admissible range (see the
+    module docstring). Designs without a ``rated_torque`` return (None, None)."""
+    rated = getattr(design, "rated_torque", None)
+    if rated is None:
+        return None, None
+    model, q = _solve(build, rated)
+    if q is None:
+        ok, bad, at_ok = None, rated, None
+        for k in range(1, DECADES_DOWN + 1):
+            t = rated * 10.0 ** -k
+            m, qk = _solve(build, t)
+            if qk is not None:
+                ok, at_ok = t, (m, qk)
+                break
+            bad = t
+        if ok is None:
+            raise RvtoolInputError(
+                f"rated_torque = {_fmt(rated)} N m: the design has no static equilibrium at the rated state nor at "
+                f"{_fmt(rated * 10.0 ** -DECADES_DOWN)} N m (input angle 0); the geometry, not the load, is "
+                "inadmissible: check the clearances and radii against 'rvtool designs --format-doc'")
+        for _ in range(BISECTION_STEPS):
+            mid = float(np.sqrt(ok * bad))
+            m, qm = _solve(build, mid)
+            if qm is not None:
+                ok, at_ok = mid, (m, qm)
+            else:
+                bad = mid
+        limit, why = ok, "the largest torque shown to equilibrate"
+        hz = _hertz_bound(design, *at_ok, ok)
+        if hz is not None and hz[0] < ok:
+            limit, why = hz[0], f"Hertz validity of the {hz[1]} contacts, p0 ~ sqrt(torque)"
+        raise RvtoolInputError(
+            f"rated_torque = {_fmt(rated)} N m: no static equilibrium at the rated state (input angle 0); the design "
+            f"equilibrates at {_fmt(ok)} N m but not at {_fmt(bad)} N m; valid range: 0 < rated_torque <= "
+            f"{_fmt(limit)} N m ({why})")
+    hz = _hertz_bound(design, model, q, rated)
+    if hz is not None and hz[0] < rated:
+        t_lim, fam, p0 = hz
+        raise RvtoolInputError(
+            f"rated_torque = {_fmt(rated)} N m: the {fam} contacts reach a Hertz peak of {_fmt(p0 / 1e9)} GPa at the "
+            f"rated state, beyond the line-contact law's validity p0 <= {_fmt(hertz_limit_pressure(design) / 1e9)} "
+            f"GPa (contact half-width <= {HERTZ_HALF_WIDTH_RATIO:g} x the radius of curvature); valid range: "
+            f"0 < rated_torque <= {_fmt(t_lim)} N m (p0 ~ sqrt(torque))")
+    return model, q
