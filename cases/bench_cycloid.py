@@ -43,33 +43,72 @@ DESIGN = designs.path("rd40")
 
 
 def _instrument(model):
-    """Wrap each element's evaluate (the host's, for the merged layout) and each evaluator's raw
-    with wall-time counters, and count the drive offset calls Exudyn makes into Python."""
-    timers = {"callback_s": 0.0, "kernel_s": 0.0, "kernel_cpu_s": 0.0, "calls": 0, "drive_calls": 0}
-    host = model.contact_host
-    objects = [host] if host is not None else list(model.elements.values())
-    for el in objects:
-        ev = el.evaluate
+    """Wall-time counters: the element callbacks (the host's evaluate and Jacobian for the merged
+    layout, each element's evaluate otherwise), the kernels inside them (the evaluators' raw
+    launch + transfer; for the merged layout also the captured graph of the contact kernels and
+    their device sums, ElementSums.run, and the Jacobian combine, ElementSums.jacobian) and the
+    Python of the accepted-step hooks reachable from outside the driver (the host's
+    begin_attempt, the families' commit); counts the drive offset calls Exudyn makes into Python.
+    Nested timed calls count once (the outermost)."""
+    timers = {"callback_s": 0.0, "callback_cpu_s": 0.0, "kernel_s": 0.0, "kernel_cpu_s": 0.0, "hooks_s": 0.0,
+              "hooks_cpu_s": 0.0, "calls": 0,
+              "drive_calls": 0, "sums_runs": 0, "jacobians": 0}
+    depth = {"callback": 0, "kernel": 0}
 
-        def timed_eval(*a, _f=ev, **k):
-            t = time.perf_counter()
-            try:
-                return _f(*a, **k)
-            finally:
-                timers["callback_s"] += time.perf_counter() - t
-                timers["calls"] += 1
-        el.evaluate = timed_eval
-    for el in model.elements.values():
-        raw = el.evaluator.raw
-
-        def timed_raw(*a, _f=raw, **k):
+    def timed(f, kind, extra=None):
+        def g(*a, **k):
+            if depth[kind]:
+                return f(*a, **k)
+            depth[kind] += 1
             t, c = time.perf_counter(), time.thread_time()
             try:
-                return _f(*a, **k)
+                return f(*a, **k)
             finally:
-                timers["kernel_s"] += time.perf_counter() - t
-                timers["kernel_cpu_s"] += time.thread_time() - c
-        el.evaluator.raw = timed_raw
+                depth[kind] -= 1
+                if kind == "callback":
+                    timers["callback_s"] += time.perf_counter() - t
+                    timers["callback_cpu_s"] += time.thread_time() - c
+                    timers["calls"] += 1
+                else:
+                    timers["kernel_s"] += time.perf_counter() - t
+                    timers["kernel_cpu_s"] += time.thread_time() - c
+                if extra:
+                    timers[extra] += 1
+        return g
+    host = model.contact_host
+    if host is not None:
+        host.evaluate = timed(host.evaluate, "callback")
+        host.user_jacobian = timed(host.user_jacobian, "callback")
+        sums = host.row_sums()
+        if sums is not None:
+            sums.run = timed(sums.run, "kernel", "sums_runs")
+            sums.jacobian = timed(sums.jacobian, "kernel", "jacobians")
+        begin = host.begin_attempt
+
+        def timed_begin(t, _f=begin):
+            c, cc = time.perf_counter(), time.thread_time()
+            try:
+                return _f(t)
+            finally:
+                timers["hooks_s"] += time.perf_counter() - c
+                timers["hooks_cpu_s"] += time.thread_time() - cc
+        host.begin_attempt = timed_begin
+        for el in model.elements.values():
+            commit = el.commit
+
+            def timed_commit(*a, _f=commit, **k):
+                c, cc = time.perf_counter(), time.thread_time()
+                try:
+                    return _f(*a, **k)
+                finally:
+                    timers["hooks_s"] += time.perf_counter() - c
+                    timers["hooks_cpu_s"] += time.thread_time() - cc
+            el.commit = timed_commit
+    else:
+        for el in model.elements.values():
+            el.evaluate = timed(el.evaluate, "callback")
+    for el in model.elements.values():
+        el.evaluator.raw = timed(el.evaluator.raw, "kernel")
     if host is None:
         # per-family layout: the drive's offset is a Python function Exudyn calls at every
         # residual and Jacobian; count those calls (the merged host calls it once per attempt
@@ -83,6 +122,68 @@ def _instrument(model):
             return set_motion(f)
         model.set_input_motion = counted_motion
     return timers
+
+
+def crossing_floor(design, spec, omega):
+    """The floor of a step through Exudyn callbacks, measured on this machine in this run:
+    (us per empty Python crossing from Exudyn, us per recorded Warp CPU launch of an empty
+    kernel, us per replay of a captured one-launch graph). The crossing: the bare bodies with
+    one ObjectGenericODE2 whose force and Jacobian user functions return constant zeros, minus
+    the bare step, over the element calls per step."""
+    import exudyn as exu
+    import warp as wp
+    from exudyn.itemInterface import (MarkerNodeCoordinate, NodePointGround, ObjectGenericODE2,
+                                      VObjectGenericODE2)
+
+    from rvtool.assembly.cycloid import add_bodies
+    from rvtool.solver import simulate
+    def step_cpu(with_element):
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
+        b = add_bodies(mbs, design, mg, regularization=(0.0, 0.0))
+        mbs.SetObjectParameter(b["drive"], "offsetUserFunction", lambda mbs_, t, i, off: omega * t)
+        calls = [0]
+        if with_element:
+            n = 3 * len(b["nodes"])
+            Z, ZJ = np.zeros(n), np.zeros((n, n))
+
+            def force(mbs_, t, i, q, q_t):
+                calls[0] += 1
+                return Z
+
+            def jac(mbs_, t, i, q, q_t, f, f_t):
+                calls[0] += 1
+                return ZJ
+            mbs.AddObject(ObjectGenericODE2(nodeNumbers=b["nodes"], massMatrix=np.zeros((n, n)), forceUserFunction=force,
+                                            jacobianUserFunction=jac, visualization=VObjectGenericODE2(show=False)))
+        mbs.Assemble()
+        c = time.thread_time()
+        rec = simulate(mbs, spec, [])
+        return (time.thread_time() - c) / rec.accepted_steps, calls[0] / rec.accepted_steps
+    # alternate the two systems and keep each one's fastest run: on a shared machine the CPU time
+    # of a short run still varies by ~10 %, more than the difference measured
+    runs = [[step_cpu(w) for w in (False, True)] for _ in range(3)]
+    out = [min((r[k] for r in runs), key=lambda x: x[0]) for k in (0, 1)]
+    crossing_us = 1e6 * (out[1][0] - out[0][0]) / out[1][1]
+
+    @wp.kernel
+    def increment(a: wp.array(dtype=wp.float64)):
+        # the least a launch can do: one store per thread
+        i = wp.tid()
+        a[i] = a[i] + wp.float64(1.0)
+    a = wp.zeros(16, dtype=wp.float64, device="cpu")
+    cmd = wp.launch(increment, dim=16, inputs=[a], device="cpu", record_cmd=True)
+    with wp.ScopedCapture(device="cpu") as cap:
+        wp.launch(increment, dim=16, inputs=[a], device="cpu")
+    costs = []
+    for f in (cmd.launch, lambda: wp.capture_launch(cap.graph)):
+        f()
+        c = time.thread_time()
+        for _ in range(5000):
+            f()
+        costs.append(1e6 * (time.thread_time() - c) / 5000)
+    return crossing_us, costs[0], costs[1]
 
 
 def _callback_calls(model):
@@ -116,7 +217,8 @@ def dynamic_run(design, spec, dur, mode):
     counts = {}
 
     def start():
-        timers.update(callback_s=0.0, kernel_s=0.0, kernel_cpu_s=0.0, calls=0, drive_calls=0)
+        timers.update(callback_s=0.0, callback_cpu_s=0.0, kernel_s=0.0, kernel_cpu_s=0.0, hooks_s=0.0, hooks_cpu_s=0.0,
+                      calls=0, drive_calls=0, sums_runs=0, jacobians=0)
         counts["callbacks"] = _callback_calls(model)
         counts["evaluations"] = sum(el.n_evaluations for el in model.elements.values())
         counts["cpu"] = time.thread_time()
@@ -126,21 +228,30 @@ def dynamic_run(design, spec, dur, mode):
     rec = dyn["record"]
     n = rec.accepted_steps
     per_step = rec.wall_s / n
-    cb, kn = timers["callback_s"] / n, timers["kernel_s"] / n
+    cb, kn, hk = timers["callback_s"] / n, timers["kernel_s"] / n, timers["hooks_s"] / n
     evals = (sum(el.n_evaluations for el in model.elements.values()) - counts["evaluations"]) / len(model.elements)
     # hooks: pre-step and post-Newton per attempt; the per-family driver also crosses at post-step
     hooks = rec.attempts + rec.accepted_steps + (0 if mode == "merged" else rec.accepted_steps)
     crossings = (_callback_calls(model) - counts["callbacks"]) + timers["drive_calls"] + hooks
     out = {"dynamic_us_per_step": 1e6 * per_step,
            "python_crossings_per_step": crossings / n,
+           # wall split: exudyn_and_driver is everything outside the element callbacks (Exudyn's
+           # solver, the crossings into Python and the driver's hooks, of which the host's
+           # begin_attempt and the families' commits are hooks_python); callbacks_python is the
+           # Python inside the callbacks around the kernels
            "step_breakdown_us": {"total": 1e6 * per_step, "callbacks": 1e6 * cb, "kernels": 1e6 * kn,
+                                 "callbacks_python": 1e6 * (cb - kn), "hooks_python": 1e6 * hk,
                                  "exudyn_and_driver": 1e6 * (per_step - cb), "beyond_kernels": 1e6 * (per_step - kn)},
            # CPU time of the solving thread (the process is single-threaded here): on a shared, loaded
            # machine the wall time includes waiting for a core, the CPU time does not
            "cpu_breakdown_us": {"total": 1e6 * cpu / n, "kernels": 1e6 * timers["kernel_cpu_s"] / n,
+                                "callbacks_python": 1e6 * (timers["callback_cpu_s"] - timers["kernel_cpu_s"]) / n,
+                                "hooks_python": 1e6 * timers["hooks_cpu_s"] / n,
+                                "exudyn_and_driver": 1e6 * (cpu - timers["callback_cpu_s"]) / n,
                                 "beyond_kernels": 1e6 * (cpu - timers["kernel_cpu_s"]) / n},
            "newton_per_step": rec.newton_iterations / n, "rejected_steps": rec.rejected_steps, "dynamic_steps": n,
-           "family_evaluations_per_step": evals / n}
+           "family_evaluations_per_step": evals / n,
+           "device_sum_graphs_per_step": timers["sums_runs"] / n, "device_jacobians_per_step": timers["jacobians"] / n}
     return dyn, out
 
 
@@ -169,6 +280,8 @@ def main(argv=None):
     omega = d.input_speed_rpm * np.pi / 30
     bare, bare_cpu = bare_step_us(d, RunSpec(end_time=(200 if args.quick else 2000) * step, step=step, abs_tol=1e-6,
                                    rel_tol=1e-8), omega)
+    cross_us, launch_us, graph_us = crossing_floor(d, RunSpec(end_time=2000 * step, step=step, abs_tol=1e-6,
+                                                             rel_tol=1e-8), omega)
     dyn_old, old = dynamic_run(d, spec, dur, "per_family")
     dyn, new = dynamic_run(d, spec, dur, "merged")
     rec = dyn["record"]
@@ -176,6 +289,7 @@ def main(argv=None):
     te_diff = float(np.max(np.abs(dyn["te"] - dyn_old["te"])) * ARCSEC_PER_RAD) if len(dyn["te"]) == len(dyn_old["te"]) \
         else None
     for o in (old, new):
+        o["crossings_us_per_step_estimate"] = o["python_crossings_per_step"] * cross_us
         o["beyond_kernels_over_bare"] = o["step_breakdown_us"]["beyond_kernels"] / bare
         o["beyond_kernels_over_bare_cpu"] = o["cpu_breakdown_us"]["beyond_kernels"] / bare_cpu
         o["dynamic_full_revolution_s"] = (o["dynamic_us_per_step"] * 1e-6 * o["dynamic_steps"] if not args.quick
@@ -218,6 +332,12 @@ def main(argv=None):
         "beyond_kernels_over_bare_cpu": new["beyond_kernels_over_bare_cpu"],
         "beyond_kernels_target_met": bool(max(new["beyond_kernels_over_bare"], new["beyond_kernels_over_bare_cpu"]) <= 2.0),
         "te_pp_dynamic_arcsec": new["te_pp_dynamic_arcsec"],
+        # the floor of a step through Exudyn callbacks on this machine (CPU time, same run): one
+        # empty crossing from Exudyn into Python and back, one recorded Warp CPU launch of an empty
+        # kernel, one replay of a captured one-launch CPU graph
+        "floor_us": {"empty_crossing": cross_us, "warp_cpu_launch": launch_us, "graph_replay": graph_us,
+                     "crossings_per_step": new["python_crossings_per_step"] * cross_us},
+        "family_evaluations_per_step": new["family_evaluations_per_step"],
         "per_family": old,
         "dynamic_te_max_abs_diff_vs_per_family_arcsec": te_diff,
         "dynamic_speedup_vs_per_family": old["dynamic_us_per_step"] / new["dynamic_us_per_step"],

@@ -44,7 +44,7 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import ObjectGenericODE2, VObjectGenericODE2
 
-from rvtool.contact.evaluator import Evaluation
+from rvtool.contact.evaluator import Evaluation, LaunchedEvaluation
 from rvtool.errors import RvtoolInputError
 
 from .contact_element import ContactElement
@@ -115,6 +115,7 @@ class HostedContactElement(ContactElement):
     def __init__(self, host, positions, nodes, contact_set, **kw):
         self.host = host
         self.positions = np.asarray(positions, dtype=int)
+        self._cidx = None
         super().__init__(host.mbs, nodes, contact_set, **kw)
         if len(self.positions) != self.n:
             raise RvtoolInputError(f"positions has {len(self.positions)} entries for a family with {self.n} coordinates")
@@ -124,8 +125,17 @@ class HostedContactElement(ContactElement):
     def _attach(self, mbs, nodes, ports):
         return self.host.object_number
 
+    # the family's parameters or evaluation velocity change: the host's cached sum is stale too
     def set_gap_offsets(self, offsets):
         super().set_gap_offsets(offsets)
+        self.host.invalidate()
+
+    def set_friction_coefficients(self, mu):
+        super().set_friction_coefficients(mu)
+        self.host.invalidate()
+
+    def set_prescribed_velocity(self, v_global):
+        super().set_prescribed_velocity(v_global)
         self.host.invalidate()
 
     def store(self, key, pose, vel):
@@ -137,6 +147,29 @@ class HostedContactElement(ContactElement):
             return self._ev
         return self._evaluate_fresh(key, pose, vel)
 
+    @property
+    def launchable(self):
+        """True if the host may sum this family's rows on the device: a family on the host's rigid
+        coordinates whose evaluator launches its Warp kernel without assembling (``launch``,
+        ``row_buffers``)."""
+        ev = self.evaluator
+        # looked up on the class: a wrapper that forwards unknown attributes to an inner set (the
+        # elastic pin closure) evaluates other bodies than the inner set's launch would
+        cls = type(ev)
+        return (self.prefix is not None and getattr(ev, "backend", None) == "warp"
+                and all(callable(getattr(cls, nm, None)) for nm in ("stage", "launch_staged", "launched",
+                                                                    "launched_field", "row_buffers")))
+
+    def launched(self, key, pose, vel):
+        """:meth:`store` without the host-side assembly, after the host launched this family's
+        kernel on inputs staged by ``evaluator.stage(pose, vel)`` (its rows summed on the device):
+        caches the :class:`~rvtool.contact.evaluator.LaunchedEvaluation`, which assembles a field
+        when it is read (commit, observers, ``evaluation_at``)."""
+        ev = self.evaluator.launched(pose, vel)
+        self.n_evaluations += 1
+        self._key, self._ev = key, ev
+        return ev
+
     def commit(self, q_global, v_global, t=None, snapshot=True):
         """:meth:`ContactElement.commit`; ``snapshot=False`` commits the history and the last
         observation without building the observers' snapshot (the driver passes it when no
@@ -147,7 +180,11 @@ class HostedContactElement(ContactElement):
             return super().commit(q_global, v_global, t)
         ql, vl = self.local(q_global), self.local(v_global)
         if t is not None and self._key == (float(t), ql.tobytes(), vl.tobytes()):
-            self.last_obs = self.evaluator.commit(None, None, evaluation=self._ev)
+            # the state goes with the evaluation: an evaluator may read more than the evaluation
+            # at commit (the bearing friction element evaluates its load source there)
+            ev = self._ev
+            state = ev.state if isinstance(ev, LaunchedEvaluation) else self.pose_velocity(ql, vl)
+            self.last_obs = self.evaluator.commit(*state, evaluation=ev)
         else:
             self.last_obs = self.evaluator.commit(*self.pose_velocity(ql, vl))
         self._key = None
@@ -155,7 +192,9 @@ class HostedContactElement(ContactElement):
 
     @property
     def coordinate_indices(self):
-        return self.host.coordinate_indices[self.positions]
+        if self._cidx is None:      # fixed once the system is assembled (read at every commit)
+            self._cidx = self.host.coordinate_indices[self.positions]
+        return self._cidx
 
     def _contract(self, ev):
         """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T on the port rows in contact only (module docstring)."""
@@ -219,6 +258,12 @@ class MergedContactElement:
         self._ltg = None
         self._drive = None
         self._load = None
+        self._sums = None       # warp_contacts.segment_sum.ElementSums of the launchable families
+        self._slot = {}         # member index -> slot in _sums
+        self._used = None       # set once the device sums are built (row_sums)
+        self._fast = False      # the cached evaluation summed families on the device
+        self._launched = frozenset()   # members summed on the device in the cached evaluation
+        self._device_only = False
         # Exudyn requires the object's matrices and its Jacobian user function to agree in format
         self.sparse = self.n > DENSE_MAX_COORDINATES
         if self.sparse:
@@ -269,42 +314,125 @@ class MergedContactElement:
         key = (t, q.tobytes(), q_t.tobytes())
         if key == self._key:
             return self._Q, self._evs
-        if not (np.isfinite(q.sum()) and np.isfinite(q_t.sum())):
+        s = q.sum() + q_t.sum()
+        if s - s != 0.0:        # NaN or inf in the state (one sum; inf - inf is NaN)
             # a diverged Newton trial: every family answers NaN so that the driver rejects the attempt
             evs = [m.evaluate(t, q[m.positions], q_t[m.positions]) for m in self.members]
             self._key, self._Q, self._evs = key, np.full(self.n, np.nan), evs
+            self._fast = self._device_only = False
+            self._launched = frozenset()
             return self._Q, self._evs
         nr = self.n_rigid
         # the rigid poses once for every family (ContactElement.pose_velocity, shared)
-        qr, vr = q[:nr], q_t[:nr]
+        if nr == self.n:
+            qr, vr, key_r = q, q_t, key
+        else:
+            qr, vr = q[:nr], q_t[:nr]
+            key_r = (t, qr.tobytes(), vr.tobytes())
         pose_r = self.reference + qr.reshape(-1, 3)
         vel_r = vr.reshape(-1, 3)
-        key_r = (t, qr.tobytes(), vr.tobytes())
-        Q = np.zeros(self.n)
-        evs = []
-        for m in self.members:
-            if m.prefix is not None:
-                ev = m.store(key_r, pose_r, vel_r)
-                Q[:nr] += ev.Q
+        sums = self.row_sums()
+        evs, host, launches, launched = [None] * len(self.members), [], [], []
+        for i, m in enumerate(self.members):
+            slot = self._slot.get(i)
+            if m.prescribed_velocity is not None:
+                # a quasi-static window at speed: the family is evaluated at its prescribed
+                # velocity (ContactElement.evaluate), not at the solver's
+                evs[i] = m.evaluate(t, q[m.positions], q_t[m.positions])
+                host.append((m, evs[i]))
+            elif slot is not None and key_r != m._key and (m.n_evaluations + 1) not in m.inject_nan_at:
+                # rows summed on the device (warp_contacts.segment_sum): no host assembly
+                ev = m.evaluator
+                ev.stage(pose_r, vel_r)
+                launches.append((slot, ev.launch_staged, ev.velocity_rows))
+                launched.append(i)
+            elif m.prefix is not None:
+                evs[i] = m.store(key_r, pose_r, vel_r)
+                host.append((m, evs[i]))
             else:
                 qm, vm = q[m.positions], q_t[m.positions]
-                ev = m.store((t, qm.tobytes(), vm.tobytes()), *m.pose_velocity(qm, vm))
+                evs[i] = m.store((t, qm.tobytes(), vm.tobytes()), *m.pose_velocity(qm, vm))
+                host.append((m, evs[i]))
+        self._fast = bool(launches)
+        self._launched = frozenset(launched)
+        # every family summed on the device and no structural coordinates: the sums' Jacobian is
+        # the element's
+        self._device_only = self._fast and not host and self.n == nr
+        if self._fast:
+            sums.run(launches)
+            for i in launched:
+                evs[i] = self.members[i].launched(key_r, pose_r, vel_r)
+            sums.set_used(self._used_slots(launches))
+            Qf, finite = sums.vector()
+            if not finite:
+                # one sum checked every launched force and tangent; name the families (rare path)
+                for i in launched:
+                    if not evs[i].finite:
+                        self.members[i].nonfinite = True
+            if self._device_only:
+                Q = Qf.copy()
+            else:
+                Q = np.zeros(self.n)
+                Q[:nr] = Qf
+        else:
+            Q = np.zeros(self.n)
+        for m, ev in host:
+            if m.prefix is not None:
+                Q[:nr] += ev.Q
+            else:
                 Q[m.positions] += ev.Q
-            evs.append(ev)
         self._key, self._Q, self._evs = key, Q, evs
         return Q, evs
 
-    def tangent(self, t, q, q_t, f_q=1.0, f_v=0.0):
-        """Dense f_q dQ/dq + f_v dQ/dq_t (n, n) at the host's coordinates (summed over families)."""
+    def _used_slots(self, launches):
+        """Per slot of the device sums: summed in this evaluation (the launches' slots)."""
+        if len(launches) == len(self._slot):
+            return self._all_slots
+        used = [False] * len(self._slot)
+        for slot, _, _ in launches:
+            used[slot] = True
+        return tuple(used)
+
+    def row_sums(self):
+        """The device-side sums of the launchable families (built on first use, after every family
+        was added; None if no family is launchable)."""
+        if self._used is None:
+            fams = [i for i, m in enumerate(self.members) if m.launchable]
+            self._slot = {i: s for s, i in enumerate(fams)}
+            self._all_slots = (True,) * len(fams)
+            self._used = True
+            if fams:
+                from warp_contacts.segment_sum import ElementSums
+                self._sums = ElementSums([self.members[i].evaluator.row_buffers() for i in fams], self.n_rigid)
+        return self._sums
+
+    def user_jacobian(self, t, q, q_t, f_q, f_v):
+        """Exudyn's J_user = -(f_q dQ/dq + f_v dQ/dq_t), dense (n, n), at the host's coordinates; the
+        launched families' part from the device-side sums (a buffer of the sums where no other
+        family adds: copy it to keep it)."""
         _, evs = self.evaluate(t, q, q_t)
-        J = np.zeros((self.n, self.n))
-        for m, ev in zip(self.members, evs):
+        nr = self.n_rigid
+        if self._fast:
+            Jf = self._sums.jacobian(f_q, f_v)
+            if self._device_only:
+                return Jf
+            J = np.zeros((self.n, self.n))
+            J[:nr, :nr] = Jf
+        else:
+            J = np.zeros((self.n, self.n))
+        for i, (m, ev) in enumerate(zip(self.members, evs)):
+            if i in self._launched:
+                continue        # summed on the device
             blk = f_q * ev.dQdq if f_v == 0 else f_q * ev.dQdq + f_v * ev.dQdv
             if m.prefix is not None:
-                J[:m.prefix, :m.prefix] += blk
+                J[:m.prefix, :m.prefix] -= blk
             else:
-                J[np.ix_(m.positions, m.positions)] += blk
+                J[np.ix_(m.positions, m.positions)] -= blk
         return J
+
+    def tangent(self, t, q, q_t, f_q=1.0, f_v=0.0):
+        """Dense f_q dQ/dq + f_v dQ/dq_t (n, n) at the host's coordinates (summed over families)."""
+        return -self.user_jacobian(t, q, q_t, f_q, f_v)
 
     # -- Exudyn callbacks (exact signatures) --------------------------------
     def force_callback(self, mbs, t, itemNumber, q, q_t):
@@ -313,8 +441,7 @@ class MergedContactElement:
 
     def jacobian_callback(self, mbs, t, itemNumber, q, q_t, fODE2, fODE2_t):
         self.n_jacobian_calls += 1
-        J = self.tangent(t, q, q_t, fODE2, fODE2_t)
-        J *= -1.0
+        J = self.user_jacobian(t, q, q_t, fODE2, fODE2_t)
         return _sparse_container(J) if self.sparse else J
 
     # -- accepted-step interface ----------------------------------------------

@@ -55,6 +55,7 @@ class BlockAssembler:
         #: (N, m) body indices of each row (n_bodies or more: the ground), e.g. to copy the rows
         self.bodies = np.asarray(bodies, np.int64)
         gidx = coordinate_index(bodies, n_bodies)
+        self.index = gidx     # element coordinate of every row entry (-1 dropped): device-side sums
         self._vec = RowScatter(gidx, n)
         self._mat = RowScatter(pair_index(gidx, n), n * n)
 

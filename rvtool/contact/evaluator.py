@@ -31,6 +31,49 @@ class Evaluation:
     finite: bool
 
 
+FIELDS = ("Q", "dQdq", "dQdv", "obs", "trial_history", "finite")
+
+
+class LaunchedEvaluation(Evaluation):
+    """The :class:`Evaluation` of a family's kernel launch whose rows were not assembled on the
+    host (the merged element sums them on the device, :mod:`warp_contacts.segment_sum`): each
+    field is made by ``family.launched_field(name)`` from the launch buffers when first read (a
+    history commit reads only the observations and the trial history) and kept. The buffers hold
+    this launch until the family launches again (``family.launches`` counts launches); a field
+    first read after that comes from a fresh ``family.evaluate`` at the same state from the
+    committed history, which gives the same values as long as that history was not committed
+    since (trial evaluations are read before their step's commit)."""
+
+    def __init__(self, family, pose, vel):
+        self._family, self._pose, self._vel = family, pose, vel
+        self._stamp = family.launches
+        self._made = {}
+
+    def _get(self, name):
+        made = self._made
+        if name not in made:
+            if self._family.launches == self._stamp:
+                made[name] = self._family.launched_field(name)
+            else:
+                full = self._family.evaluate(self._pose, self._vel, check=False)
+                for f in FIELDS:
+                    made.setdefault(f, getattr(full, f))
+        return made[name]
+
+    def _set(self, name, value):
+        self._made[name] = value
+
+    @property
+    def state(self):
+        """(pose, vel) (nb, 3) of the launch: the absolute state this evaluation is at."""
+        return self._pose, self._vel
+
+
+for _f in FIELDS:
+    setattr(LaunchedEvaluation, _f, property(lambda self, _n=_f: self._get(_n),
+                                             lambda self, v, _n=_f: self._set(_n, v)))
+
+
 def gap_offset_rows(offsets, n, name):
     """Checked per-row gap offsets [m] (shape (n,), finite) of the contact set ``name``."""
     off = np.array(offsets, dtype=np.float64)
@@ -105,6 +148,10 @@ class ContactSetEvaluator:
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
         self._pose = np.zeros((self.n_bodies + 1, 3))
         self._vel = np.zeros((self.n_bodies + 1, 3))
+        self.launches = 0
+        self._staged = None
+        # the kernel reads the committed history only for anchor rows (CirclePairKernel uploads it so)
+        self.history_rows = bool(np.any(self.iparams[:, circle_pairs_ref.I_FRICTION] == circle_pairs_ref.FRICTION_ANCHOR))
 
     def raw(self, pose, vel, history=None):
         """Per-contact results (Q (N,6), dQdq, dQdv, obs, trial history) at poses (nb, 3).
@@ -114,16 +161,87 @@ class ContactSetEvaluator:
         tangential sliding of this increment.
         """
         hist = history or self.history
+        Qc, dq, dv, obs, trial = self._rows(pose, vel, hist)
+        return Qc, dq, dv, obs, self._slip(trial, hist)
+
+    def _rows(self, pose, vel, hist):
+        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
         self._pose[:-1] = pose
         self._vel[:-1] = vel
         if self.backend == "warp":
-            Qc, dq, dv, obs, (act, a, b) = self._kernel.evaluate(self._pose, self._vel, *hist.as_tuple())
-        else:
-            Qc, dq, dv, obs, (act, a, b) = circle_pairs_ref.evaluate(self._pose, self._vel, self.fparams,
-                                                                    self.iparams, *hist.as_tuple())
+            return self._kernel.evaluate(self._pose, self._vel, *hist.as_tuple())
+        return circle_pairs_ref.evaluate(self._pose, self._vel, self.fparams, self.iparams, *hist.as_tuple())
+
+    @staticmethod
+    def _slip(trial, hist):
+        act, a, b = trial
         kept = (hist.active != 0) & (act != 0)
+        if not kept.any():      # no anchor kept (every row of a set without anchor friction)
+            return act, a, b, hist.slip_distance + 0.0
         slip = hist.slip_distance + np.where(kept, np.linalg.norm(a - hist.anchor_a, axis=1), 0.0)
-        return Qc, dq, dv, obs, (act, a, b, slip)
+        return act, a, b, slip
+
+    # -- rows summed on the device (the merged element: warp_contacts.segment_sum) ----------
+    velocity_rows = True
+    """The velocity tangent rows are written at every launch."""
+
+    def row_buffers(self):
+        """(index (N, 6) element coordinate of every row entry, -1 dropped; the Warp arrays q,
+        dqdq, dqdv that every launch overwrites). Backend "warp" only."""
+        k = self._kernel
+        return self.assembler.index, k.device_array("q"), k.device_array("dqdq"), k.device_array("dqdv")
+
+    def stage(self, pose, vel):
+        """Write poses/velocities (nb, 3) and the committed history into the kernel's inputs
+        (no launch: :meth:`launch_staged`, alone or inside a captured graph)."""
+        st = self._staged
+        if st is None:
+            from warp_contacts.staged import Staged
+            st = self._staged = Staged(self._kernel)
+        st.write_rows("pose", pose)
+        st.write_rows("vel", vel)
+        if self.history_rows:
+            for nm, a in zip(("h_act_in", "h_a_in", "h_b_in"), self.history.as_tuple()):
+                st.write(nm, a)
+
+    def launch_staged(self):
+        """The kernel's recorded launch on the staged inputs (capturable)."""
+        self._kernel.launch_recorded()
+
+    def launched(self, pose, vel):
+        """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
+        fields are assembled from the kernel's outputs when read. Increments ``launches``."""
+        self.launches += 1
+        return LaunchedEvaluation(self, pose, vel)
+
+    def launched_field(self, name):
+        """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""
+        r = self._staged.read
+        if name == "Q":
+            return self.assembler.vector(np.asarray(r("q"), np.float64))
+        if name in ("dQdq", "dQdv"):
+            return self.assembler.matrix(np.asarray(r("dqdq" if name == "dQdq" else "dqdv"), np.float64))
+        if name == "obs":
+            return np.array(r("obs"), np.float64)
+        if name == "trial_history":
+            return tuple(np.array(a) for a in self._slip((r("h_act_out"), r("h_a_out"), r("h_b_out")), self.history))
+        return all_finite(r("q"), r("dqdq"), r("dqdv"))
+
+    def launch(self, pose, vel):
+        """Kernel launch at poses/velocities (nb, 3) from the committed history without assembly
+        (:meth:`stage`, :meth:`launch_staged`, :meth:`launched`): the rows stay in the kernel's
+        buffers (:meth:`row_buffers`) until the next launch."""
+        self.stage(pose, vel)
+        self.launch_staged()
+        return self.launched(pose, vel)
+
+    def _evaluation(self, Qc, dq, dv, obs, trial):
+        Q = self.assembler.vector(np.asarray(Qc, np.float64))
+        finite = all_finite(Qc, dq, dv)
+        # copies: the kernel's output buffers are reused by the next launch
+        return Evaluation(Q, self.assembler.matrix(np.asarray(dq, np.float64)),
+                          self.assembler.matrix(np.asarray(dv, np.float64)), np.array(obs, np.float64),
+                          tuple(np.array(a) for a in trial), finite)
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
@@ -143,13 +261,7 @@ class ContactSetEvaluator:
         """
         if check:
             self.check_state(pose, vel)
-        Qc, dq, dv, obs, trial = self.raw(pose, vel, history)
-        Q = self.assembler.vector(np.asarray(Qc, np.float64))
-        finite = all_finite(Qc, dq, dv)
-        # copies: the kernel's output buffers are reused by the next launch
-        return Evaluation(Q, self.assembler.matrix(np.asarray(dq, np.float64)),
-                          self.assembler.matrix(np.asarray(dv, np.float64)), np.array(obs, np.float64),
-                          tuple(np.array(a) for a in trial), finite)
+        return self._evaluation(*self.raw(pose, vel, history))
 
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per contact (positive opens the gap), absolute over the built

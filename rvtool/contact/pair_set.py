@@ -22,7 +22,7 @@ from ..errors import RvtoolInputError
 from .assembly import PairAssembler
 from warp_contacts import anchor_ref
 
-from .evaluator import ContactHistory, Evaluation, all_finite
+from .evaluator import ContactHistory, Evaluation, LaunchedEvaluation, all_finite
 
 BACKENDS = ("warp", "numpy")
 PRECISIONS = ("float64", "float32")
@@ -56,6 +56,8 @@ class PairFamilySet:
         self.assembler = PairAssembler(body_a, body_b, n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
+        self.launches = 0
+        self._staged = None
 
     def reference(self, pose, vel, anchor=None):
         """(Q, dQ/dq, dQ/dv, obs) per row from the NumPy reference at padded poses and velocities;
@@ -67,6 +69,7 @@ class PairFamilySet:
         """Velocity tangent dQ/dv on (default) or off (static solves: :meth:`raw` returns None for it
         and the kernel skips the velocity seeds)."""
         self.velocity_tangent = bool(on)
+        self.launches += 1      # a launched evaluation made before reads its fields afresh
         if self.backend == "warp":
             self._kernel.set_velocity_tangent(on)
 
@@ -74,6 +77,7 @@ class PairFamilySet:
         """Per-row (Q (N, 6), dQdq (N, 6, 6), dQdv (N, 6, 6) or None, obs) at body poses (nb, 3);
         with anchors a fifth result, the trial history (flags, anchor_A, anchor_B, slip distance)
         from the committed ``history`` (default: the set's own); trials never change it."""
+        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
         self._pose[:-1] = pose
         self._vel[:-1] = vel
         if not self.anchor:
@@ -104,6 +108,69 @@ class PairFamilySet:
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
                           self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float),
                           r[4] if self.anchor else (), finite)
+
+    # -- rows summed on the device (the merged element: warp_contacts.segment_sum) ----------
+    @property
+    def velocity_rows(self):
+        """True if every launch writes the velocity tangent rows (off in static mode)."""
+        return self.velocity_tangent
+
+    def row_buffers(self):
+        """(index (N, 6) element coordinate of every row entry, -1 dropped; the Warp arrays q,
+        dqdq, dqdv that every launch overwrites). Backend "warp" only."""
+        k = self._kernel
+        return self.assembler.index, k.device_array("q"), k.device_array("dqdq"), k.device_array("dqdv")
+
+    def stage(self, pose, vel):
+        """Write poses/velocities (nb, 3) and, with anchors, the committed history into the kernel's
+        inputs (no launch: :meth:`launch_staged`, alone or inside a captured graph)."""
+        st = self._staged
+        if st is None:
+            from warp_contacts.staged import Staged
+            st = self._staged = Staged(self._kernel)
+        st.write_rows("pose", pose)
+        st.write_rows("vel", vel)
+        if self.anchor:
+            for nm, a in zip(("h_act_in", "h_a_in", "h_b_in"), self.history.as_tuple()):
+                st.write(nm, a)
+
+    def launch_staged(self):
+        """The kernel's recorded launch on the staged inputs (capturable)."""
+        self._kernel.launch_recorded()
+
+    def launched(self, pose, vel):
+        """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
+        fields are assembled from the kernel's outputs when read. Increments ``launches``."""
+        self.launches += 1
+        return LaunchedEvaluation(self, pose, vel)
+
+    def launched_field(self, name):
+        """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""
+        r = self._staged.read
+        if name == "Q":
+            return self.assembler.vector(np.asarray(r("q"), float))
+        if name == "dQdq":
+            return self.assembler.matrix(np.asarray(r("dqdq"), float))
+        if name == "dQdv":
+            n = self.assembler.n
+            return self.assembler.matrix(np.asarray(r("dqdv"), float)) if self.velocity_tangent else np.zeros((n, n))
+        if name == "obs":
+            return np.array(r("obs"), float)
+        if name == "trial_history":
+            if not self.anchor:
+                return ()
+            flag, a, b = (np.array(r(nm)) for nm in ("h_act_out", "h_a_out", "h_b_out"))
+            hist = self.history
+            return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
+        return all_finite(r("q"), r("dqdq"), *((r("dqdv"),) if self.velocity_tangent else ()))
+
+    def launch(self, pose, vel):
+        """Kernel launch at poses/velocities (nb, 3) from the committed history without assembly
+        (:meth:`stage`, :meth:`launch_staged`, :meth:`launched`): the rows stay in the kernel's
+        buffers (:meth:`row_buffers`) until the next launch."""
+        self.stage(pose, vel)
+        self.launch_staged()
+        return self.launched(pose, vel)
 
     def commit(self, pose, vel, evaluation=None):
         """Commit the trial history at the accepted state (anchors only; ``evaluation``: the cached

@@ -15,7 +15,8 @@ not part of this family, so dQ/dv = 0.
 import numpy as np
 
 from rvtool.contact.assembly import BlockAssembler
-from rvtool.contact.evaluator import ContactHistory, Evaluation, all_finite, gap_offset_rows
+from rvtool.contact.evaluator import (ContactHistory, Evaluation, LaunchedEvaluation, all_finite,
+                                      gap_offset_rows)
 from warp_contacts import anchor_ref
 from warp_contacts import circle_pairs_ref as cref
 from warp_contacts import output_pins_ref as ref
@@ -88,6 +89,8 @@ class OutputPinEvaluator:
         self.anchor_params = mechanism.anchor_params() if self.anchor else None
         self.history = ContactHistory(len(self.ids)) if self.anchor else NoHistory()
         self._pose = np.zeros((self.n_bodies + 1, 3))
+        self.launches = 0
+        self._staged = None
         if backend == "warp":
             from warp_contacts.output_pins import OutputPinKernel
             self._kernel = OutputPinKernel(self.fparams, self.iparams, self.stations, self.n_bodies + 1,
@@ -97,6 +100,7 @@ class OutputPinEvaluator:
         """Per-row results (layout of :mod:`warp_contacts.output_pins_ref`) at poses (nb, 3); with
         anchors also ``ft`` (N, ns) and the trial history ``trial`` (flags, anchor_A, anchor_B,
         slip distance) from the committed ``history`` (default: the evaluator's own)."""
+        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
         self._pose[:-1] = pose
         if self.anchor:
             hist = history or self.history
@@ -166,6 +170,66 @@ class OutputPinEvaluator:
         finite = all_finite(Q, K)
         return Evaluation(Q, K, np.zeros_like(K), self._observations(r["slices"], r.get("ft")),
                           r["trial"] if self.anchor else (), finite)
+
+    # -- rows summed on the device (the merged element: warp_contacts.segment_sum) ----------
+    velocity_rows = False
+    """No damping in this family: no velocity tangent rows."""
+
+    def row_buffers(self):
+        """(index (N, 3 m) element coordinate of every row entry, -1 dropped; the Warp arrays q,
+        dqdq that every launch overwrites; None: no velocity tangent). Backend "warp" only."""
+        k = self._kernel
+        return self.assembler.index, k.device_array("q"), k.device_array("dqdq"), None
+
+    def stage(self, pose, vel):
+        """Write poses (nb, 3) and, with anchors, the committed history into the kernel's inputs
+        (no launch: :meth:`launch_staged`, alone or inside a captured graph). The tilt input stays
+        zero (this evaluator never tilts)."""
+        st = self._staged
+        if st is None:
+            from warp_contacts.staged import Staged
+            st = self._staged = Staged(self._kernel)
+        st.write_rows("pose", pose)
+        if self.anchor:
+            for nm, a in zip(("h_act_in", "h_a_in", "h_b_in"), self.history.as_tuple()):
+                st.write(nm, a)
+
+    def launch_staged(self):
+        """The kernel's recorded launch on the staged inputs (capturable)."""
+        self._kernel.launch_recorded()
+
+    def launched(self, pose, vel):
+        """The :class:`LaunchedEvaluation` of the launch just made at poses (nb, 3): its fields are
+        assembled from the kernel's outputs when read. Increments ``launches``."""
+        self.launches += 1
+        return LaunchedEvaluation(self, pose, vel)
+
+    def launched_field(self, name):
+        """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""
+        r = self._staged.read
+        if name == "Q":
+            return self.assembler.vector(np.asarray(r("q"), np.float64))
+        if name == "dQdq":
+            return self.assembler.matrix(np.asarray(r("dqdq"), np.float64))
+        if name == "dQdv":
+            return np.zeros((self.assembler.n,) * 2)
+        if name == "obs":
+            return self._observations(r("slices"), r("ft") if self.anchor else None)
+        if name == "trial_history":
+            if not self.anchor:
+                return ()
+            flag, a, b = (np.array(r(nm)) for nm in ("h_act_out", "h_a_out", "h_b_out"))
+            hist = self.history
+            return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
+        return all_finite(self.launched_field("Q"), self.launched_field("dQdq"))
+
+    def launch(self, pose, vel):
+        """Kernel launch at poses (nb, 3) from the committed history without assembly
+        (:meth:`stage`, :meth:`launch_staged`, :meth:`launched`): the rows stay in the kernel's
+        buffers (:meth:`row_buffers`) until the next launch."""
+        self.stage(pose, vel)
+        self.launch_staged()
+        return self.launched(pose, vel)
 
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per observation row (positive opens the gap), written to u_off of
