@@ -232,13 +232,12 @@ def simulate(mbs, spec: RunSpec, elements=(), observers: ObserverRegistry | None
     except Exception as exc:  # a failing user function ends the run: report it with the saved state
         ok, error = False, exc
     rec.wall_s = time.perf_counter() - t0
-    if merged:
-        # the merged layout commits the accepted step and sets the hosts' controls in these hooks:
-        # left installed, they would fire in later static solves of the same system (history
-        # commits at Newton states, a driven input angle over the static one)
-        mbs.SetPreStepUserFunction(0)
-        mbs.SetPostNewtonUserFunction(0)
-        mbs.SetPostStepUserFunction(0)
+    # the hooks commit accepted steps (and, merged, set the hosts' controls): left installed, they
+    # would fire in later static solves of the same system (history commits at Newton states, a
+    # driven input angle over the static one), in either layout
+    mbs.SetPreStepUserFunction(0)
+    mbs.SetPostNewtonUserFunction(0)
+    mbs.SetPostStepUserFunction(0)
     close_failed_attempt()
     rec.rejected_steps = rec.attempts - rec.accepted_steps
     rec.end_time = state["t_prev"]
