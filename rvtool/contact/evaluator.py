@@ -74,6 +74,54 @@ for _f in FIELDS:
                                              lambda self, v, _n=_f: self._set(_n, v)))
 
 
+class StagedLaunch:
+    """Launch without host assembly, for a family whose rows the merged element sums on the device
+    (:mod:`warp_contacts.segment_sum`): the kernel's row buffers, staging of the poses, velocities
+    and committed history into its inputs, its recorded launch, and the lazily assembled
+    :class:`LaunchedEvaluation`. The family keeps ``_kernel`` (backend "warp"), ``_staged`` (None
+    until the first stage), ``assembler``, ``history``, ``launches`` and ``launched_field``; it
+    says whether its kernel reads velocities (``stages_velocity``; False: no velocity input or
+    velocity tangent rows) and the committed history (``stages_history()``)."""
+
+    stages_velocity = True
+
+    def stages_history(self):
+        """True if the kernel reads the committed history (anchor rows)."""
+        return False
+
+    def row_buffers(self):
+        """(index (N, 6) element coordinate of every row entry, -1 dropped; the Warp arrays q,
+        dqdq, dqdv that every launch overwrites, dqdv None without a velocity tangent). Backend
+        "warp" only."""
+        k = self._kernel
+        return (self.assembler.index, k.device_array("q"), k.device_array("dqdq"),
+                k.device_array("dqdv") if self.stages_velocity else None)
+
+    def stage(self, pose, vel):
+        """Write poses/velocities (nb, 3) and, where the kernel reads it, the committed history into
+        the kernel's inputs (no launch: :meth:`launch_staged`, alone or inside a captured graph)."""
+        st = self._staged
+        if st is None:
+            from warp_contacts.staged import Staged
+            st = self._staged = Staged(self._kernel)
+        st.write_rows("pose", pose)
+        if self.stages_velocity:
+            st.write_rows("vel", vel)
+        if self.stages_history():
+            for nm, a in zip(("h_act_in", "h_a_in", "h_b_in"), self.history.as_tuple()):
+                st.write(nm, a)
+
+    def launch_staged(self):
+        """The kernel's recorded launch on the staged inputs (capturable)."""
+        self._kernel.launch_recorded()
+
+    def launched(self, pose, vel):
+        """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
+        fields are assembled from the kernel's outputs when read. Increments ``launches``."""
+        self.launches += 1
+        return LaunchedEvaluation(self, pose, vel)
+
+
 def gap_offset_rows(offsets, n, name):
     """Checked per-row gap offsets [m] (shape (n,), finite) of the contact set ``name``."""
     off = np.array(offsets, dtype=np.float64)
@@ -121,7 +169,7 @@ class ContactHistory:
         return h
 
 
-class ContactSetEvaluator:
+class ContactSetEvaluator(StagedLaunch):
     """Evaluates a :class:`CircleContactSet` at absolute body poses.
 
     backend: "warp" (one batched kernel launch, default) or "numpy" (the
@@ -185,34 +233,9 @@ class ContactSetEvaluator:
     velocity_rows = True
     """The velocity tangent rows are written at every launch."""
 
-    def row_buffers(self):
-        """(index (N, 6) element coordinate of every row entry, -1 dropped; the Warp arrays q,
-        dqdq, dqdv that every launch overwrites). Backend "warp" only."""
-        k = self._kernel
-        return self.assembler.index, k.device_array("q"), k.device_array("dqdq"), k.device_array("dqdv")
-
-    def stage(self, pose, vel):
-        """Write poses/velocities (nb, 3) and the committed history into the kernel's inputs
-        (no launch: :meth:`launch_staged`, alone or inside a captured graph)."""
-        st = self._staged
-        if st is None:
-            from warp_contacts.staged import Staged
-            st = self._staged = Staged(self._kernel)
-        st.write_rows("pose", pose)
-        st.write_rows("vel", vel)
-        if self.history_rows:
-            for nm, a in zip(("h_act_in", "h_a_in", "h_b_in"), self.history.as_tuple()):
-                st.write(nm, a)
-
-    def launch_staged(self):
-        """The kernel's recorded launch on the staged inputs (capturable)."""
-        self._kernel.launch_recorded()
-
-    def launched(self, pose, vel):
-        """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
-        fields are assembled from the kernel's outputs when read. Increments ``launches``."""
-        self.launches += 1
-        return LaunchedEvaluation(self, pose, vel)
+    def stages_history(self):
+        """True if the kernel reads the committed history (anchor rows only)."""
+        return self.history_rows
 
     def launched_field(self, name):
         """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""

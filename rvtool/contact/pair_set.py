@@ -22,7 +22,7 @@ from ..errors import RvtoolInputError
 from .assembly import PairAssembler
 from warp_contacts import anchor_ref
 
-from .evaluator import ContactHistory, Evaluation, LaunchedEvaluation, all_finite
+from .evaluator import ContactHistory, Evaluation, StagedLaunch, all_finite
 
 BACKENDS = ("warp", "numpy")
 PRECISIONS = ("float64", "float32")
@@ -40,7 +40,7 @@ def check_backend(backend, precision):
         raise RvtoolInputError(f"precision = {precision!r} is not valid; valid choices are {sorted(PRECISIONS)}")
 
 
-class PairFamilySet:
+class PairFamilySet(StagedLaunch):
     """Evaluator protocol of a two-body contact family (see the module docstring)."""
 
     velocity_tangent = True
@@ -115,34 +115,9 @@ class PairFamilySet:
         """True if every launch writes the velocity tangent rows (off in static mode)."""
         return self.velocity_tangent
 
-    def row_buffers(self):
-        """(index (N, 6) element coordinate of every row entry, -1 dropped; the Warp arrays q,
-        dqdq, dqdv that every launch overwrites). Backend "warp" only."""
-        k = self._kernel
-        return self.assembler.index, k.device_array("q"), k.device_array("dqdq"), k.device_array("dqdv")
-
-    def stage(self, pose, vel):
-        """Write poses/velocities (nb, 3) and, with anchors, the committed history into the kernel's
-        inputs (no launch: :meth:`launch_staged`, alone or inside a captured graph)."""
-        st = self._staged
-        if st is None:
-            from warp_contacts.staged import Staged
-            st = self._staged = Staged(self._kernel)
-        st.write_rows("pose", pose)
-        st.write_rows("vel", vel)
-        if self.anchor:
-            for nm, a in zip(("h_act_in", "h_a_in", "h_b_in"), self.history.as_tuple()):
-                st.write(nm, a)
-
-    def launch_staged(self):
-        """The kernel's recorded launch on the staged inputs (capturable)."""
-        self._kernel.launch_recorded()
-
-    def launched(self, pose, vel):
-        """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
-        fields are assembled from the kernel's outputs when read. Increments ``launches``."""
-        self.launches += 1
-        return LaunchedEvaluation(self, pose, vel)
+    def stages_history(self):
+        """True if the kernel reads the committed history (anchor rows)."""
+        return bool(self.anchor)
 
     def launched_field(self, name):
         """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""

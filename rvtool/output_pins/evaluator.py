@@ -15,7 +15,7 @@ not part of this family, so dQ/dv = 0.
 import numpy as np
 
 from rvtool.contact.assembly import BlockAssembler
-from rvtool.contact.evaluator import (ContactHistory, Evaluation, LaunchedEvaluation, all_finite,
+from rvtool.contact.evaluator import (ContactHistory, Evaluation, StagedLaunch, all_finite,
                                       gap_offset_rows)
 from warp_contacts import anchor_ref
 from warp_contacts import circle_pairs_ref as cref
@@ -33,7 +33,7 @@ class NoHistory:
     """Committed history of a family without history variables (no arrays)."""
 
 
-class OutputPinEvaluator:
+class OutputPinEvaluator(StagedLaunch):
     """Evaluates an output-pin mechanism at absolute body poses (nb, 3).
 
     flange: body index of the flange (or ``GROUND``); wheels: body indices of
@@ -175,34 +175,12 @@ class OutputPinEvaluator:
     velocity_rows = False
     """No damping in this family: no velocity tangent rows."""
 
-    def row_buffers(self):
-        """(index (N, 3 m) element coordinate of every row entry, -1 dropped; the Warp arrays q,
-        dqdq that every launch overwrites; None: no velocity tangent). Backend "warp" only."""
-        k = self._kernel
-        return self.assembler.index, k.device_array("q"), k.device_array("dqdq"), None
+    stages_velocity = False
+    """The kernel reads poses only (the tilt input stays zero: this evaluator never tilts)."""
 
-    def stage(self, pose, vel):
-        """Write poses (nb, 3) and, with anchors, the committed history into the kernel's inputs
-        (no launch: :meth:`launch_staged`, alone or inside a captured graph). The tilt input stays
-        zero (this evaluator never tilts)."""
-        st = self._staged
-        if st is None:
-            from warp_contacts.staged import Staged
-            st = self._staged = Staged(self._kernel)
-        st.write_rows("pose", pose)
-        if self.anchor:
-            for nm, a in zip(("h_act_in", "h_a_in", "h_b_in"), self.history.as_tuple()):
-                st.write(nm, a)
-
-    def launch_staged(self):
-        """The kernel's recorded launch on the staged inputs (capturable)."""
-        self._kernel.launch_recorded()
-
-    def launched(self, pose, vel):
-        """The :class:`LaunchedEvaluation` of the launch just made at poses (nb, 3): its fields are
-        assembled from the kernel's outputs when read. Increments ``launches``."""
-        self.launches += 1
-        return LaunchedEvaluation(self, pose, vel)
+    def stages_history(self):
+        """True if the kernel reads the committed history (anchor rows)."""
+        return bool(self.anchor)
 
     def launched_field(self, name):
         """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""
