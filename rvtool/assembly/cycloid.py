@@ -125,18 +125,8 @@ class CycloidModel(ReducerModel):
         C = pin_station_compliance(self.design, fam)
         if C is None:
             return None
-        el = self.elements["pins" if fam == Family.PINS else "output_pins"]
-        closure = el.evaluator
-
-        def pose(q):
-            ql = el.local(q)
-            return el.pose_velocity(ql, 0 * ql)
-
-        def stiffened(q, factor):
-            _, _, red, _ = closure.solve(*pose(q))
-            return el.coordinate_indices, closure.condense(red, beam_factor=factor)[1]
-        return SeriesBeam("ring_pin_bending" if fam == Family.PINS else "output_pin_bending", fam, C,
-                          lambda q: closure.deflections(pose(q)[0]), stiffened)
+        return SeriesBeam.of_closure("ring_pin_bending" if fam == Family.PINS else "output_pin_bending", fam, C,
+                                     self.elements["pins" if fam == Family.PINS else "output_pins"])
 
     def pin_station_rows(self, family):
         """(pin (rows,), station (rows,)) of every observation row of the ring pins

@@ -121,6 +121,14 @@ class StagedLaunch:
         self.launches += 1
         return LaunchedEvaluation(self, pose, vel)
 
+    def launch(self, pose, vel):
+        """Kernel launch at poses/velocities (nb, 3) from the committed history without assembly
+        (:meth:`stage`, :meth:`launch_staged`, :meth:`launched`): the rows stay in the kernel's
+        buffers (:meth:`row_buffers`) until the next launch."""
+        self.stage(pose, vel)
+        self.launch_staged()
+        return self.launched(pose, vel)
+
 
 def gap_offset_rows(offsets, n, name):
     """Checked per-row gap offsets [m] (shape (n,), finite) of the contact set ``name``."""
@@ -249,14 +257,6 @@ class ContactSetEvaluator(StagedLaunch):
         if name == "trial_history":
             return tuple(np.array(a) for a in self._slip((r("h_act_out"), r("h_a_out"), r("h_b_out")), self.history))
         return all_finite(r("q"), r("dqdq"), r("dqdv"))
-
-    def launch(self, pose, vel):
-        """Kernel launch at poses/velocities (nb, 3) from the committed history without assembly
-        (:meth:`stage`, :meth:`launch_staged`, :meth:`launched`): the rows stay in the kernel's
-        buffers (:meth:`row_buffers`) until the next launch."""
-        self.stage(pose, vel)
-        self.launch_staged()
-        return self.launched(pose, vel)
 
     def _evaluation(self, Qc, dq, dv, obs, trial):
         Q = self.assembler.vector(np.asarray(Qc, np.float64))

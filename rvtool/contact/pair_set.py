@@ -139,14 +139,6 @@ class PairFamilySet(StagedLaunch):
             return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
         return all_finite(r("q"), r("dqdq"), *((r("dqdv"),) if self.velocity_tangent else ()))
 
-    def launch(self, pose, vel):
-        """Kernel launch at poses/velocities (nb, 3) from the committed history without assembly
-        (:meth:`stage`, :meth:`launch_staged`, :meth:`launched`): the rows stay in the kernel's
-        buffers (:meth:`row_buffers`) until the next launch."""
-        self.stage(pose, vel)
-        self.launch_staged()
-        return self.launched(pose, vel)
-
     def commit(self, pose, vel, evaluation=None):
         """Commit the trial history at the accepted state (anchors only; ``evaluation``: the cached
         trial at exactly this state from the committed history) and return its observation rows."""

@@ -181,6 +181,22 @@ class SeriesBeam:
         du = (self.deflections(q + h * dq) - self.deflections(q - h * dq)) / (2 * h)
         return float(np.einsum("pkx,kl,plx->", du, np.linalg.inv(self.compliance), du))
 
+    @classmethod
+    def of_closure(cls, path, family, compliance, element):
+        """The beams closed by ``element``'s elastic closure (its evaluator:
+        :class:`~rvtool.contact.pin_closure.ElasticPinClosure`): deflections and the stiffened
+        tangent at the static pose of a state q (zero velocities)."""
+        closure = element.evaluator
+
+        def pose(q):
+            ql = element.local(q)
+            return element.pose_velocity(ql, 0 * ql)
+
+        def stiffened(q, factor):
+            _, _, red, _ = closure.solve(*pose(q))
+            return element.coordinate_indices, closure.condense(red, beam_factor=factor)[1]
+        return cls(path, family, compliance, lambda q: closure.deflections(pose(q)[0]), stiffened)
+
 
 @dataclass(frozen=True)
 class ClearanceVariant:

@@ -201,14 +201,6 @@ class OutputPinEvaluator(StagedLaunch):
             return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
         return all_finite(self.launched_field("Q"), self.launched_field("dQdq"))
 
-    def launch(self, pose, vel):
-        """Kernel launch at poses (nb, 3) from the committed history without assembly
-        (:meth:`stage`, :meth:`launch_staged`, :meth:`launched`): the rows stay in the kernel's
-        buffers (:meth:`row_buffers`) until the next launch."""
-        self.stage(pose, vel)
-        self.launch_staged()
-        return self.launched(pose, vel)
-
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per observation row (positive opens the gap), written to u_off of
         Eq. (output_gap) of the row's (pin, wheel) contact, absolute over the built parameters;

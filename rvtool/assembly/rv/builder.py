@@ -290,18 +290,7 @@ class RvModel(ReducerModel):
         from ...model import SeriesBeam
         if self.crank_compliance is None or Family(family) != Family.ECCENTRIC_BEARINGS:
             return None
-        el = self.elements["cranks"]
-        closure = el.evaluator
-
-        def pose(q):
-            ql = el.local(q)
-            return el.pose_velocity(ql, 0 * ql)
-
-        def stiffened(q, factor):
-            _, _, red, _ = closure.solve(*pose(q))
-            return el.coordinate_indices, closure.condense(red, beam_factor=factor)[1]
-        return SeriesBeam("cranks", Family.ECCENTRIC_BEARINGS, self.crank_compliance,
-                          lambda q: closure.deflections(pose(q)[0]), stiffened)
+        return SeriesBeam.of_closure("cranks", Family.ECCENTRIC_BEARINGS, self.crank_compliance, self.elements["cranks"])
 
     def input_torque(self, q):
         """Torque [N m] the drive applies to the input rotation at the static state q: minus the
@@ -557,7 +546,6 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         rows = elements["cranks"].evaluator.inner.rows
         families = {fam: (name, np.arange(len(elements[name].ids))) if name in elements else ("cranks", rows[name])
                     for fam, name in FAMILY_ELEMENTS.items()}
-    i = abs(graph.ratio)
     return RvModel(design=d, SC=SC, mbs=mbs, body_names=L.names(), nodes=nodes, elements=elements, families=families,
                    input=BodyCoordinate(L.names()[0], "theta"), output=BodyCoordinate("carrier", "theta"),
                    ratio=graph.ratio, kinematics=kin, drive=drive, load=load, reference=ref, locks=locks,
