@@ -20,7 +20,7 @@ from .laws import law_funcs
 from .planar import LaunchBuffers, planar_funcs
 from .planar_ref import N_SEEDS
 from .precision import resolve_device, scalar_types
-from .recorded import assign_parameters, launch_rows
+from .recorded import RecordedRows
 
 
 @functools.lru_cache(maxsize=None)
@@ -194,7 +194,7 @@ def _kernel(dtype):
     return eval_circle_pairs
 
 
-class CirclePairKernel:
+class CirclePairKernel(RecordedRows):
     """Device-resident evaluator of one circle contact set.
 
     Parameters are uploaded once; per evaluation only poses/velocities and the
@@ -253,21 +253,3 @@ class CirclePairKernel:
     # outputs left on the device (returned as None; read them with device_array)
     keep_on_device = frozenset()
 
-    def device_array(self, name):
-        """A device array of the recorded launch: a data buffer or the row parameters
-        ("fparams", "iparams", read in place by the recorded launch)."""
-        if name in ("fparams", "iparams"):
-            return getattr(self, name)
-        return self._dev[name]
-
-    def launch_recorded(self, n_rows=None):
-        """Replay the recorded launch on the device-resident arrays as they are (no host
-        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
-        n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
-        arrays, e.g. by the device Newton); default all."""
-        launch_rows(self._cmd, self.n, n_rows)
-
-    def set_parameters(self, fparams):
-        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
-        launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
-        assign_parameters(self.fparams, fparams, self.ndtype)

@@ -24,7 +24,7 @@ from .anchor import anchor_funcs
 from .anchor_ref import N_ANCHOR
 from .planar import planar_funcs
 from .precision import resolve_device, scalar_types
-from .recorded import assign_parameters, launch_rows
+from .recorded import RecordedRows
 
 
 @functools.lru_cache(maxsize=None)
@@ -569,7 +569,7 @@ def _plain_anchor_kernel(dtype):
     return eval_plain_pins_anchor
 
 
-class OutputPinKernel:
+class OutputPinKernel(RecordedRows):
     """Device-resident evaluator of a set of output pins (``mode`` "shared" or "plain").
 
     Parameters are uploaded once; per evaluation only poses and tilts go in.
@@ -647,24 +647,6 @@ class OutputPinKernel:
     # outputs left on the device (returned as None; read them with device_array)
     keep_on_device = frozenset()
 
-    def device_array(self, name):
-        """A device array of the recorded launch: a data buffer or the row parameters
-        ("fparams", "iparams", read in place by the recorded launch)."""
-        if name in ("fparams", "iparams"):
-            return getattr(self, name)
-        return self._dev[name]
-
-    def launch_recorded(self, n_rows=None):
-        """Replay the recorded launch on the device-resident arrays as they are (no host
-        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
-        n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
-        arrays, e.g. by the device Newton); default all."""
-        launch_rows(self._cmd, self.n, n_rows)
-
-    def set_parameters(self, fparams):
-        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
-        launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
-        assign_parameters(self.fparams, fparams, self.ndtype)
 
     def evaluate(self, pose, tilt=None, history=None):
         """Results in the layout of :mod:`output_pins_ref` (arrays owned by this object, overwritten next call).

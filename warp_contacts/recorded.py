@@ -27,7 +27,41 @@ def assign_parameters(array, fparams, dtype):
     array.assign(fp)
 
 
-class PairLaunch:
+class RecordedRows:
+    """Device access of a kernel wrapper's recorded launch (``_cmd`` over ``n`` rows, float
+    parameters of numpy dtype ``ndtype``): the wrapper says where its packed row parameters
+    (:meth:`parameter_arrays`) and its data buffers (:meth:`data_array`) live."""
+
+    def parameter_arrays(self):
+        """(fparams, iparams): the device arrays of the packed row parameters the launch reads."""
+        return self.fparams, self.iparams
+
+    def data_array(self, name):
+        """The device data buffer ``name`` of the recorded launch."""
+        return self._dev[name]
+
+    def device_array(self, name):
+        """A device array of the recorded launch: a data buffer (pose, vel, q, dqdq, dqdv, obs) or
+        the row parameters ("fparams", "iparams"), which a device-side refill may overwrite
+        between launches (the recorded launch reads them in place)."""
+        if name in ("fparams", "iparams"):
+            return self.parameter_arrays()[0 if name == "fparams" else 1]
+        return self.data_array(name)
+
+    def launch_recorded(self, n_rows=None):
+        """Replay the recorded launch on the device-resident arrays as they are (no host
+        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
+        n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
+        arrays, e.g. by the device Newton); default all."""
+        launch_rows(self._cmd, self.n, n_rows)
+
+    def set_parameters(self, fparams):
+        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
+        launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
+        assign_parameters(self.parameter_arrays()[0], fparams, self.ndtype)
+
+
+class PairLaunch(RecordedRows):
     """The recorded launch of a two-body pair kernel (cycloid--pin slices, involute tooth pairs):
     launch buffers, the optional anchor history of Eq. (friction)'s anchor model, the velocity
     tangent switch and the host round trip, written once for every such family.
@@ -101,22 +135,8 @@ class PairLaunch:
         self._buf.download(("h_act_out", "h_a_out", "h_b_out"))
         return out + ((h["h_act_out"], h["h_a_out"], h["h_b_out"]),)
 
-    def device_array(self, name):
-        """A device array of the recorded launch: a data buffer (pose, vel, q, dqdq, dqdv, obs) or
-        the row parameters ("fparams", "iparams"), which a device-side refill may overwrite
-        between launches (the recorded launch reads them in place)."""
-        if name in ("fparams", "iparams"):
-            return self._model[0 if name == "fparams" else 1]
+    def parameter_arrays(self):
+        return self._model[0], self._model[1]
+
+    def data_array(self, name):
         return self._buf.dev[name]
-
-    def launch_recorded(self, n_rows=None):
-        """Replay the recorded launch on the device-resident arrays as they are (no host
-        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``).
-        n_rows: evaluate only the first n_rows rows (a batch compacted to the front of the
-        arrays, e.g. by the device Newton); default all."""
-        launch_rows(self._cmd, self.n, n_rows)
-
-    def set_parameters(self, fparams):
-        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
-        launch keeps pointing at them (slow-state gap offsets between mechanical windows)."""
-        assign_parameters(self._model[0], fparams, self.ndtype)

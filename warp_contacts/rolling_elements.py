@@ -12,6 +12,7 @@ from .laws import law_funcs
 from .planar import LaunchBuffers, planar_funcs
 from .planar_ref import N_SEEDS
 from .precision import resolve_device, scalar_types
+from .recorded import RecordedRows
 from .rolling_elements_ref import (AUX_ALPHA, AUX_FU, AUX_FZ, HB_E0, HB_E1, HB_F0, HB_F1, HB_K_COEF, HB_K_EXP, K_BODY_A,
                                    K_BODY_B, K_KIND, KIND_BALL, N_AUX, N_FLOAT, N_INT, R_A, R_ALPHA, R_CLEAR, R_CROWN,
                                    R_DAMP, R_DBALL, R_EMOD, R_FI, R_FO, R_GAMMA, R_K, R_KSCALE, R_P, R_PITCH, R_PSI0,
@@ -170,7 +171,7 @@ def _kernel(dtype):
     return eval_rolling
 
 
-class RollingElementKernel:
+class RollingElementKernel(RecordedRows):
     """Device-resident evaluator of one rolling-element set (one recorded launch per call).
 
     Parameters are uploaded once; per call the poses (and velocities) go in and
@@ -191,24 +192,16 @@ class RollingElementKernel:
         dev = self._buf.dev
         self.n = n
         self._fparams = wp.array(fparams, dtype=dt, device=d)
+        self._iparams = wp.array(iparams, dtype=wp.int32, device=d)
         self._cmd = wp.launch(_kernel(dt), dim=n, device=d,
-                              inputs=[self._fparams, wp.array(iparams, dtype=wp.int32, device=d),
-                                      dev["pose"], dev["vel"]],
+                              inputs=[self._fparams, self._iparams, dev["pose"], dev["vel"]],
                               outputs=[dev[k] for k in ("q", "dqdq", "dqdv", "obs", "aux")], record_cmd=True)
 
-    def device_array(self, name):
-        return self._buf.dev[name]
-    def launch_recorded(self):
-        """Replay the recorded launch on the device-resident arrays as they are (no host
-        transfers; benchmarks and CUDA-graph capture fill the inputs with ``device_array``)."""
-        self._cmd.launch()
+    def parameter_arrays(self):
+        return self._fparams, self._iparams
 
-    def set_parameters(self, fparams):
-        """Overwrite the packed float parameters (same shape) in place on the device; the recorded
-        launch keeps pointing at them (slow-state clearance offsets between mechanical windows)."""
-        fp = np.ascontiguousarray(fparams, dtype=self.ndtype)
-        assert fp.shape == (self.n, N_FLOAT)
-        self._fparams.assign(fp)
+    def data_array(self, name):
+        return self._buf.dev[name]
 
     def evaluate(self, pose, vel=None):
         """Same results as :func:`rolling_elements_ref.evaluate` (NumPy arrays owned by this
