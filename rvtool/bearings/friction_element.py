@@ -43,7 +43,7 @@ import numpy as np
 
 from warp_contacts import circle_pairs_ref as cref
 
-from ..contact.evaluator import Evaluation, all_finite
+from ..contact.evaluator import Evaluation, all_finite, check_finite_state
 from ..errors import RvtoolInputError
 from .friction_torque import PalmgrenFrictionTorque, friction_generalized_force, palmgren_torque
 
@@ -156,10 +156,7 @@ class BearingFrictionEvaluator:
     def evaluate(self, pose, vel, history=None, check=True):
         """:class:`Evaluation` at poses/velocities (nb, 3) with the committed loads."""
         if check:
-            for nm, arr in (("pose", pose), ("vel", vel)):
-                a = np.asarray(arr)
-                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
+            check_finite_state(pose, vel, self.n_bodies)
         hist = history or self.history
         load = hist.load
         omega = self._omega(vel)

@@ -130,6 +130,15 @@ class StagedLaunch:
         return self.launched(pose, vel)
 
 
+def check_finite_state(pose, vel, n_bodies):
+    """Raise :class:`RvtoolInputError` unless pose and vel are finite arrays of shape (n_bodies, 3)
+    (x, y, theta per body): the state check of the evaluators built on other evaluators' rows."""
+    for nm, arr in (("pose", pose), ("vel", vel)):
+        a = np.asarray(arr)
+        if a.shape != (n_bodies, 3) or not np.all(np.isfinite(a)):
+            raise RvtoolInputError(f"{nm} must be a finite array of shape ({n_bodies}, 3); got {a.shape}")
+
+
 def gap_offset_rows(offsets, n, name):
     """Checked per-row gap offsets [m] (shape (n,), finite) of the contact set ``name``."""
     off = np.array(offsets, dtype=np.float64)

@@ -22,7 +22,7 @@ from ..errors import RvtoolInputError
 from .assembly import PairAssembler
 from warp_contacts import anchor_ref
 
-from .evaluator import ContactHistory, Evaluation, StagedLaunch, all_finite
+from .evaluator import ContactHistory, Evaluation, StagedLaunch, all_finite, check_finite_state
 
 BACKENDS = ("warp", "numpy")
 PRECISIONS = ("float64", "float32")
@@ -97,10 +97,7 @@ class PairFamilySet(StagedLaunch):
 
     def evaluate(self, pose, vel, history=None, check=True):
         if check:
-            for nm, a in (("pose", pose), ("vel", vel)):
-                a = np.asarray(a)
-                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
+            check_finite_state(pose, vel, self.n_bodies)
         r = self.raw(pose, vel, history)
         Qc, dq, dv, obs = r[:4]
         dv = np.zeros_like(dq) if dv is None else dv

@@ -33,7 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import RvtoolInputError
-from .evaluator import Evaluation, all_finite
+from .evaluator import Evaluation, all_finite, check_finite_state
 
 GROUND = -1
 
@@ -208,10 +208,7 @@ class ElasticPinClosure:
     # -- evaluator protocol --------------------------------------------------------------
     def evaluate(self, pose, vel, history=None, check=True):
         if check:
-            for nm, a in (("pose", pose), ("vel", vel)):
-                a = np.asarray(a)
-                if a.shape != (self.n_bodies, 3) or not np.all(np.isfinite(a)):
-                    raise RvtoolInputError(f"{nm} must be a finite array of shape ({self.n_bodies}, 3); got {a.shape}")
+            check_finite_state(pose, vel, self.n_bodies)
         u, ev, red, ok = self.solve(pose, vel)
         if ok:
             self._u = u

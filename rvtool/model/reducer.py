@@ -381,12 +381,7 @@ class ReducerModel:
     # -- contacts ----------------------------------------------------------------
     def observe(self, q, family):
         """:class:`FamilyObservation` of ``family`` at the static state q (zero velocity)."""
-        try:
-            name, rows = self.families[Family(family)]
-        except (KeyError, ValueError):
-            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
-                                   f"{[f.value for f in self.families]}") from None
-        el = self.elements[name]
+        el, rows = self.family_rows(family)
         obs = el.evaluation_at(q).obs
         return FamilyObservation(Family(family), tuple(el.ids[i] for i in rows), obs[rows])
 
@@ -467,12 +462,7 @@ class ReducerModel:
         Absolute, not increments; all zeros restore the built element bit for bit. A family whose
         evaluator names its own offset identities (``gap_offset_ids``: the tooth flanks of an
         involute mesh, whose rows are window slots) takes offsets keyed by those."""
-        try:
-            name, rows = self.families[Family(family)]
-        except (KeyError, ValueError):
-            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
-                                   f"{[f.value for f in self.families]}") from None
-        el = self.elements[name]
+        el, rows = self.family_rows(family)
         own = getattr(el.evaluator, "gap_offset_ids", None)
         if own is not None:     # offsets that follow the evaluator's identities (involute: tooth flanks)
             unknown = sorted(set(offsets) - set(own))
@@ -493,8 +483,7 @@ class ReducerModel:
     def gap_offsets(self, family):
         """{physical contact id: gap offset [m]} in force for ``family`` (first row of each contact;
         involute meshes: per tooth flank)."""
-        name, rows = self.families[Family(family)]
-        el = self.elements[name]
+        el, rows = self.family_rows(family)
         if getattr(el.evaluator, "gap_offset_ids", None) is not None:
             return el.evaluator.tooth_gap_offsets()
         out = {}
@@ -507,12 +496,7 @@ class ReducerModel:
         physical contact ids to mu (unnamed contacts keep their built coefficient), or None restores
         the built coefficients. Written into the contact law of Eq. (friction) of the family's rows
         built with friction (cycloid pins with ``pin_contact.mu`` > 0; other families: named error)."""
-        try:
-            name, rows = self.families[Family(family)]
-        except (KeyError, ValueError):
-            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
-                                   f"{[f.value for f in self.families]}") from None
-        el = self.elements[name]
+        el, rows = self.family_rows(family)
         if mu is None:
             el.set_friction_coefficients(None)
             return
@@ -542,9 +526,19 @@ class ReducerModel:
         for el in self.elements.values():
             el.set_prescribed_velocity(v)
 
+    def family_rows(self, family):
+        """(contact element, row indices) of ``family`` in that element; a family this model lacks
+        is a named input error."""
+        try:
+            name, rows = self.families[Family(family)]
+        except (KeyError, ValueError):
+            raise RvtoolInputError(f"family = {getattr(family, 'value', family)!r} is not in this model; valid: "
+                                   f"{[f.value for f in self.families]}") from None
+        return self.elements[name], rows
+
     def family_element(self, family):
         """The contact element that carries ``family`` (fault injection, per-step sums)."""
-        return self.elements[self.families[Family(family)][0]]
+        return self.family_rows(family)[0]
 
     def contact_elements(self):
         """The contact elements (solvers and the driver evaluate and commit them)."""
