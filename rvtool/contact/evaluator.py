@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from warp_contacts import anchor_ref
 from warp_contacts import circle_pairs_ref
 from warp_contacts.circle_pairs_ref import I_BODY_A, I_BODY_B
 
@@ -120,6 +121,17 @@ class StagedLaunch:
         fields are assembled from the kernel's outputs when read. Increments ``launches``."""
         self.launches += 1
         return LaunchedEvaluation(self, pose, vel)
+
+    def launched_anchor_history(self):
+        """The trial anchor history of the last launch, (active, anchor_a, anchor_b, slip distance)
+        with the slip distance grown by the anchors' shift on slip (the tangential sliding of the
+        increment); () where the kernel has no anchors."""
+        if not self.stages_history():
+            return ()
+        r = self._staged.read
+        flag, a, b = (np.array(r(nm)) for nm in ("h_act_out", "h_a_out", "h_b_out"))
+        hist = self.history
+        return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
 
     def launch(self, pose, vel):
         """Kernel launch at poses/velocities (nb, 3) from the committed history without assembly

@@ -129,11 +129,7 @@ class PairFamilySet(StagedLaunch):
         if name == "obs":
             return np.array(r("obs"), float)
         if name == "trial_history":
-            if not self.anchor:
-                return ()
-            flag, a, b = (np.array(r(nm)) for nm in ("h_act_out", "h_a_out", "h_b_out"))
-            hist = self.history
-            return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
+            return self.launched_anchor_history()
         return all_finite(r("q"), r("dqdq"), *((r("dqdv"),) if self.velocity_tangent else ()))
 
     def commit(self, pose, vel, evaluation=None):

@@ -194,11 +194,7 @@ class OutputPinEvaluator(StagedLaunch):
         if name == "obs":
             return self._observations(r("slices"), r("ft") if self.anchor else None)
         if name == "trial_history":
-            if not self.anchor:
-                return ()
-            flag, a, b = (np.array(r(nm)) for nm in ("h_act_out", "h_a_out", "h_b_out"))
-            hist = self.history
-            return flag, a, b, hist.slip_distance + anchor_ref.slip_increment(hist.active, flag, hist.anchor_a, a)
+            return self.launched_anchor_history()
         return all_finite(self.launched_field("Q"), self.launched_field("dQdq"))
 
     def set_gap_offsets(self, offsets):
