@@ -23,8 +23,21 @@ from .precision import resolve_device, scalar_types
 from .recorded import RecordedRows
 
 
-@functools.lru_cache(maxsize=None)
 def _kernel(dtype):
+    """The family's kernel."""
+    return _parts(dtype)[0]
+
+
+def row_function(dtype):
+    """The ``@wp.func`` of one row, ``circle_pair_row(i, <the kernel's arguments>)``: the body of
+    the kernel (a thin wrapper over it), for kernels that evaluate rows of their own
+    (:mod:`warp_contacts.fused_step`)."""
+    return _parts(dtype)[1]
+
+
+@functools.lru_cache(maxsize=None)
+def _parts(dtype):
+    """(kernel, row function) of the family."""
     L = law_funcs(dtype)
     C = circle_funcs(dtype)
     G = planar_funcs(dtype)
@@ -37,8 +50,9 @@ def _kernel(dtype):
     friction_coefficient = L.friction_coefficient
     circle_gap = C.circle_gap
 
-    @wp.kernel(module="unique")
-    def eval_circle_pairs(
+    @wp.func
+    def circle_pair_row(
+        i: int,
         # Model:
         fparams: wp.array2d(dtype=dtype),
         iparams: wp.array2d(dtype=wp.int32),
@@ -57,7 +71,7 @@ def _kernel(dtype):
         hist_a_out: wp.array2d(dtype=dtype),
         hist_b_out: wp.array2d(dtype=dtype),
     ):
-        i = wp.tid()
+        """Row i of the set (the kernel's body; the fused stepper calls it for its own rows)."""
         internal = iparams[i, I_INTERNAL]
         mode = iparams[i, I_FRICTION]
         s = dtype(1.0)
@@ -191,7 +205,29 @@ def _kernel(dtype):
 
         store_pair_observation(obs_out, i, F, vt, g, dtype(0.5) * ((xa + aa) + (xb + bb)), n, ft_mag)
 
-    return eval_circle_pairs
+    @wp.kernel(module="unique")
+    def eval_circle_pairs(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        vel_in: wp.array2d(dtype=dtype),
+        hist_active_in: wp.array(dtype=wp.int32),
+        hist_a_in: wp.array2d(dtype=dtype),
+        hist_b_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        dqdv_out: wp.array3d(dtype=dtype),
+        obs_out: wp.array2d(dtype=dtype),
+        hist_active_out: wp.array(dtype=wp.int32),
+        hist_a_out: wp.array2d(dtype=dtype),
+        hist_b_out: wp.array2d(dtype=dtype),
+    ):
+        circle_pair_row(wp.tid(), fparams, iparams, pose_in, vel_in, hist_active_in, hist_a_in, hist_b_in, q_out, dqdq_out, dqdv_out, obs_out, hist_active_out, hist_a_out, hist_b_out)
+
+    return eval_circle_pairs, circle_pair_row
 
 
 class CirclePairKernel(RecordedRows):

@@ -22,10 +22,22 @@ from .precision import resolve_device, scalar_types
 from .recorded import PairLaunch
 
 
-@functools.lru_cache(maxsize=None)
 def _kernel(dtype, velocity_tangent=True, anchor=False):
     """The family's kernel; ``anchor`` compiles the anchor friction of :mod:`anchor_ref` in
     (without it the anchor arguments are never read and the code is the frictionless one)."""
+    return _parts(dtype, velocity_tangent, anchor)[0]
+
+
+def row_function(dtype, velocity_tangent=True, anchor=False):
+    """The ``@wp.func`` of one row, ``cycloid_pin_row(i, <the kernel's arguments>)``: the body of
+    the kernel (which is a thin wrapper over it), for kernels that evaluate rows of their own
+    (:mod:`warp_contacts.fused_step`)."""
+    return _parts(dtype, velocity_tangent, anchor)[1]
+
+
+@functools.lru_cache(maxsize=None)
+def _parts(dtype, velocity_tangent=True, anchor=False):
+    """(kernel, row function) of the family."""
     L = law_funcs(dtype)
     A = anchor_funcs(dtype)
     anchor_state, anchor_force_tangent, anchor_trial = A.anchor_state, A.anchor_force_tangent, A.anchor_trial
@@ -124,8 +136,9 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
     # without the velocity tangent only the coordinate seeds run
     n_seeds = N_SEEDS if velocity_tangent else N_COORD_SEEDS
 
-    @wp.kernel(module="unique")
-    def eval_cycloid_pins(
+    @wp.func
+    def cycloid_pin_row(
+        i: int,
         # Model:
         fparams: wp.array2d(dtype=dtype),
         iparams: wp.array2d(dtype=wp.int32),
@@ -155,7 +168,7 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         hist_a_out: wp.array2d(dtype=dtype),
         hist_b_out: wp.array2d(dtype=dtype),
     ):
-        i = wp.tid()
+        """Row i of the set (the kernel's body; the fused stepper calls it for its own rows)."""
         xa, tha, vxa, wa = body_state(pose_in, vel_in, iparams[i, J_BODY_A])
         xb, thb, vxb, wb = body_state(pose_in, vel_in, iparams[i, J_BODY_B])
         r = fparams[i, C_RP]
@@ -284,7 +297,40 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
             store_row_vec2(hist_a_out, i, na)
             store_row_vec2(hist_b_out, i, nb)
 
-    return eval_cycloid_pins
+    @wp.kernel(module="unique")
+    def eval_cycloid_pins(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        tab_pts: wp.array2d(dtype=dtype),
+        tab_nrm: wp.array2d(dtype=dtype),
+        tab_kap: wp.array(dtype=dtype),
+        tab_polar: wp.array(dtype=dtype),
+        tab_offset: wp.array(dtype=wp.int32),
+        tab_len: wp.array(dtype=wp.int32),
+        tab_h: wp.array(dtype=dtype),
+        tab_phi: wp.array(dtype=dtype),
+        tab_ana: wp.array2d(dtype=dtype),
+        window: int,
+        anchor_params: wp.array2d(dtype=dtype),
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        vel_in: wp.array2d(dtype=dtype),
+        hist_active_in: wp.array(dtype=wp.int32),
+        hist_a_in: wp.array2d(dtype=dtype),
+        hist_b_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        dqdv_out: wp.array3d(dtype=dtype),
+        obs_out: wp.array2d(dtype=dtype),
+        hist_active_out: wp.array(dtype=wp.int32),
+        hist_a_out: wp.array2d(dtype=dtype),
+        hist_b_out: wp.array2d(dtype=dtype),
+    ):
+        cycloid_pin_row(wp.tid(), fparams, iparams, tab_pts, tab_nrm, tab_kap, tab_polar, tab_offset, tab_len, tab_h, tab_phi, tab_ana, window, anchor_params, pose_in, vel_in, hist_active_in, hist_a_in, hist_b_in, q_out, dqdq_out, dqdv_out, obs_out, hist_active_out, hist_a_out, hist_b_out)
+
+    return eval_cycloid_pins, cycloid_pin_row
 
 
 def _analytic_rows(tables, analytic, ndtype):

@@ -378,8 +378,21 @@ def _shared_kernel(dtype):
     return eval_shared_pins
 
 
-@functools.lru_cache(maxsize=None)
 def _plain_kernel(dtype):
+    """The plain (rigid pin, no sleeve) kernel."""
+    return _plain_parts(dtype)[0]
+
+
+def plain_row_function(dtype):
+    """The ``@wp.func`` of one plain row, ``plain_pin_row(i, <the plain kernel's arguments>)``: the
+    body of the plain kernel (a thin wrapper over it), for kernels that evaluate rows of their own
+    (:mod:`warp_contacts.fused_step`)."""
+    return _plain_parts(dtype)[1]
+
+
+@functools.lru_cache(maxsize=None)
+def _plain_parts(dtype):
+    """(plain kernel, plain row function)."""
     F = _funcs(dtype)
     vec2, vec9 = F["vec2"], F["vec9"]
     rot, wheel_react, separation = F["rot"], F["wheel_react"], F["separation"]
@@ -387,8 +400,9 @@ def _plain_kernel(dtype):
     store_triple, store_triple_column, store_tilt_moment = (F["store_triple"], F["store_triple_column"],
                                                             F["store_tilt_moment"])
 
-    @wp.kernel(enable_backward=False, module="unique")
-    def eval_plain_pins(
+    @wp.func
+    def plain_pin_row(
+        i: int,
         # Model:
         fparams: wp.array2d(dtype=dtype),
         iparams: wp.array2d(dtype=wp.int32),
@@ -404,7 +418,7 @@ def _plain_kernel(dtype):
         slice_out: wp.array3d(dtype=dtype),
         slice_df_out: wp.array4d(dtype=dtype),
     ):
-        i = wp.tid()
+        """Row i of the set (the kernel's body; the fused stepper calls it for its own rows)."""
         bf = iparams[i, ref.J_FLANGE]
         bw = iparams[i, ref.J_WHEEL]
         ns = stations.shape[0]
@@ -434,7 +448,26 @@ def _plain_kernel(dtype):
         store_tilt_moment(tilt_out, i, 0, mtf)
         store_tilt_moment(tilt_out, i, 1, mtw)
 
-    return eval_plain_pins
+    @wp.kernel(enable_backward=False, module="unique")
+    def eval_plain_pins(
+        # Model:
+        fparams: wp.array2d(dtype=dtype),
+        iparams: wp.array2d(dtype=wp.int32),
+        stations: wp.array(dtype=dtype),
+        write_tan: int,
+        # Data in:
+        pose_in: wp.array2d(dtype=dtype),
+        tilt_in: wp.array2d(dtype=dtype),
+        # Data out:
+        q_out: wp.array2d(dtype=dtype),
+        dqdq_out: wp.array3d(dtype=dtype),
+        tilt_out: wp.array3d(dtype=dtype),
+        slice_out: wp.array3d(dtype=dtype),
+        slice_df_out: wp.array4d(dtype=dtype),
+    ):
+        plain_pin_row(wp.tid(), fparams, iparams, stations, write_tan, pose_in, tilt_in, q_out, dqdq_out, tilt_out, slice_out, slice_df_out)
+
+    return eval_plain_pins, plain_pin_row
 
 
 @functools.lru_cache(maxsize=None)
