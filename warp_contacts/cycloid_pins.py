@@ -344,6 +344,13 @@ def _analytic_rows(tables, analytic, ndtype):
     return rows
 
 
+
+def analytic_rows(tables, analytic, ndtype=np.float64):
+    """The kernel's analytic-profile rows (one per table; columns A_*), for kernels that evaluate
+    the rows themselves (:mod:`warp_contacts.fused_step`)."""
+    return _analytic_rows(tables, analytic, ndtype)
+
+
 class CycloidPinKernel(PairLaunch):
     """Device-resident evaluator of one cycloid--pin contact set (one launch per call)."""
 

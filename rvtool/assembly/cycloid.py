@@ -295,6 +295,15 @@ def _mass_wheel(design):
     return m, 0.5 * m * (r_o ** 2 + r_i ** 2)
 
 
+def body_masses(design, *, wheel_mass=None):
+    """[(mass [kg], polar inertia [kg m^2])] of the bodies of :func:`add_bodies` in its order:
+    shaft, the wheels, flange (wheel_mass: as there)."""
+    d = design
+    m_w, J_w = _mass_wheel(d) if wheel_mass is None else wheel_mass
+    return [(d.bodies.shaft_mass, d.bodies.shaft_inertia)] + [(m_w, J_w)] * d.n_wheels + \
+        [(d.bodies.flange_mass, d.bodies.flange_inertia)]
+
+
 def _radial_clearance(spec):
     """Radial clearance [m] of a bearing spec (a pair: its first row's), None for a locked bearing."""
     if spec is None:
@@ -336,12 +345,10 @@ def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 
     Returns a dict with nodes, reference (nb, 3), locks, journal_locks, drive, reg_springs and load."""
     d = design
     nw = d.n_wheels
-    m_w, J_w = _mass_wheel(d) if wheel_mass is None else wheel_mass
     ref = np.zeros((nw + 2, 3))
     for k in range(nw):
         ref[1 + k, :2] = journal_centre(d.wheels.eccentricity, d.wheels.phases[k])
-    masses = [(d.bodies.shaft_mass, d.bodies.shaft_inertia)] + [(m_w, J_w)] * nw + \
-             [(d.bodies.flange_mass, d.bodies.flange_inertia)]
+    masses = body_masses(d, wheel_mass=wheel_mass)
     nodes = []
     for b in range(nw + 2):
         n = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=list(ref[b])))
