@@ -420,11 +420,11 @@ class FusedStepper:
 
     def state(self):
         """The copies' state as NumPy arrays (a dict)."""
-        return {k: v.numpy() for k, v in self._state.items()}
+        return {k: v.numpy().copy() for k, v in self._state.items()}
 
     def status(self):
         """(B,) ACTIVE / DONE / FAILED (one host read)."""
-        return self._state["status"].numpy()
+        return self._state["status"].numpy().copy()
 
     def _history_buffer(self, n_steps):
         if n_steps not in self._history:
@@ -456,4 +456,4 @@ class FusedStepper:
         the status (B,) on the host (three reads)."""
         hist = self.launch(n_steps)
         cnt = self._state["counters"].numpy()
-        return hist.numpy(), cnt[:, C_RECORDED].copy(), self._state["status"].numpy()
+        return hist.numpy().copy(), cnt[:, C_RECORDED].copy(), self._state["status"].numpy().copy()

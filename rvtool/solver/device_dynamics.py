@@ -242,7 +242,7 @@ class DeviceDynamics:
             hist = self.stepper.launch(K)
             wp.synchronize_device(self.device)
             c1 = time.perf_counter()
-            h = hist.numpy()
+            h = hist.numpy().copy()          # on the CPU numpy() aliases the buffer the next launch overwrites
             cnt = self.stepper.recorded()
             status = self.stepper.status()
             reads += 3
