@@ -24,6 +24,16 @@ through the same driver without contact elements, the convention of
 Exudyn into Python (element force and Jacobian callbacks, drive offset calls,
 pre-step, post-Newton and post-step hooks). ``beyond_kernels_over_bare`` =
 (dynamic_us_per_step - kernel time per step) / bare_step_us (target <= 2).
+
+Fused stepper (key ``fused``): the same driven run (same start, RunSpec, steps) with
+:func:`rvtool.solver.device_dynamics.dynamic_te_fused`, in the same process after the Exudyn runs,
+warmed by a short run first (kernel compiled/loaded). Its "kernel" is the WHOLE step (contact
+rows, assembly, dense solve, Newton, corrector, rejection, recording: one launch per
+``steps_per_launch`` accepted steps, timed launch + device synchronize); "beyond kernels" is what
+is left: Python around the launches and the host reads of the history, counters and status
+(3 reads per launch). ``python_crossings_per_step`` of the fused path = (launches + host reads) /
+steps. ``--fused-device cuda:0`` runs it on a GPU; ``--fused-copies B`` adds a batch of B copies
+of the design (key ``fused_batched``: copy-steps per second).
 """
 import os
 import time
@@ -255,8 +265,75 @@ def dynamic_run(design, spec, dur, mode):
     return dyn, out
 
 
+def fused_run(design, spec, dur, device, exu_dyn, bare, bare_cpu):
+    """The fused stepper over the Exudyn run's steps (warmed first); (result, figures dict)."""
+    from rvtool.batched.device_copies import copy_parameters
+    from rvtool.solver.device_dynamics import DeviceDynamicsSettings, dynamic_te_fused
+    from rvtool.variants import Variant
+    params = copy_parameters(design, [Variant()])
+    st = DeviceDynamicsSettings.from_run_spec(spec, steps_per_launch=64)
+    kw = dict(torque=design.rated_torque, speed_rpm=design.input_speed_rpm, settings=st, device=device, params=params)
+    dynamic_te_fused(design, duration=min(dur, 70 * spec.step), **kw)     # warm: kernel compiled or loaded
+    c = time.thread_time()
+    r = dynamic_te_fused(design, duration=dur, **kw)
+    cpu = time.thread_time() - c
+    run, rec = r["device_run"], r["record"]
+    n = rec.accepted_steps
+    per_step = 1e6 * run.wall_s / n
+    kernel = 1e6 * run.kernel_s / n
+    same = len(r["te"]) == len(exu_dyn["te"])
+    out = {"device": str(run_device(device)), "steps_per_launch": st.steps_per_launch,
+           "dynamic_us_per_step": per_step, "kernel_us_per_step": kernel, "beyond_kernels_us_per_step": per_step - kernel,
+           "cpu_us_per_step": 1e6 * cpu / n,
+           "python_crossings_per_step": (run.launches + run.host_reads) / n,
+           "launches_per_step": run.launches / n, "host_reads_per_step": run.host_reads / n,
+           "bare_step_us": bare, "beyond_kernels_over_bare": (per_step - kernel) / bare,
+           "total_over_bare": per_step / bare,
+           "kernel_covers": "the whole implicit step (contact rows of all families, assembly, dense LU, Newton, "
+                            "corrector, rejection, recording); not only the contact kernels",
+           "newton_per_step": rec.newton_iterations / n, "rejected_steps": rec.rejected_steps, "dynamic_steps": n,
+           "te_pp_dynamic_arcsec": float(np.ptp(r["te"]) * ARCSEC_PER_RAD),
+           "te_max_abs_diff_vs_exudyn_arcsec": float(np.max(np.abs(r["te"] - exu_dyn["te"])) * ARCSEC_PER_RAD)
+           if same else None,
+           "newton_iterations_equal_exudyn": bool(rec.newton_iterations == exu_dyn["record"].newton_iterations)}
+    return r, out
+
+
+def run_device(device):
+    from warp_contacts.precision import resolve_device
+    return resolve_device(device)
+
+
+def fused_batched(design, spec, dur, device, copies):
+    """B copies of the design side by side in the fused stepper: copy-steps per second."""
+    from rvtool.batched.device_copies import copy_parameters
+    from rvtool.solver.device_dynamics import DeviceDynamics, DeviceDynamicsSettings, kinematic_velocities
+    from rvtool.solver.device_newton import DeviceNewton
+    from rvtool.variants import Variant
+    from warp_contacts.fused_step_ref import M_SPEED, N_MOTION
+    params = copy_parameters(design, [Variant()])
+    omega = design.input_speed_rpm * np.pi / 30
+    t_out = -np.sign(design.ratio) * design.rated_torque
+    q0 = DeviceNewton(params, device=device).solve([0], [0.0], [t_out], params.kinematic([0], [0.0])).q
+    vi = np.zeros(copies, int)
+    motion = np.zeros((copies, N_MOTION))
+    motion[:, M_SPEED] = omega
+    dyn = DeviceDynamics(params, vi, torque=np.full(copies, t_out), motion=motion, end_time=dur, device=device,
+                         settings=DeviceDynamicsSettings.from_run_spec(spec, steps_per_launch=64))
+    dyn.start(np.repeat(q0, copies, 0), kinematic_velocities(params, vi, 0.0, omega))
+    run = dyn.run()
+    steps = int(np.sum(run.accepted))
+    return {"copies": copies, "copy_steps": steps, "wall_s": run.wall_s, "copy_steps_per_s": steps / run.wall_s,
+            "us_per_copy_step": 1e6 * run.wall_s / steps, "failed_copies": int(np.sum(run.status == 2))}
+
+
+def _extra(parser):
+    parser.add_argument("--fused-device", default="cpu", help="Warp device of the fused stepper (cpu, cuda:0)")
+    parser.add_argument("--fused-copies", type=int, default=0, help="also run B copies in the fused stepper")
+
+
 def main(argv=None):
-    args = casekit.parse_args(argv, __doc__)
+    args = casekit.parse_args(argv, __doc__, extra=_extra)
     t_all = time.perf_counter()
     d = load_design(DESIGN)
     zb, zg = d.pins.n_pins, d.pins.n_pins - 1
@@ -284,6 +361,9 @@ def main(argv=None):
                                                              rel_tol=1e-8), omega)
     dyn_old, old = dynamic_run(d, spec, dur, "per_family")
     dyn, new = dynamic_run(d, spec, dur, "merged")
+    dyn_fused, fused = fused_run(d, spec, dur, args.fused_device, dyn, bare, bare_cpu)
+    fused["dynamic_full_revolution_s"] = (dyn_fused["device_run"].wall_s if not args.quick
+                                          else fused["dynamic_us_per_step"] * 1e-6 * duration_full / step)
     rec = dyn["record"]
     per_step = rec.wall_s / rec.accepted_steps
     te_diff = float(np.max(np.abs(dyn["te"] - dyn_old["te"])) * ARCSEC_PER_RAD) if len(dyn["te"]) == len(dyn_old["te"]) \
@@ -342,6 +422,12 @@ def main(argv=None):
         "dynamic_te_max_abs_diff_vs_per_family_arcsec": te_diff,
         "dynamic_speedup_vs_per_family": old["dynamic_us_per_step"] / new["dynamic_us_per_step"],
         "te_pp_quasistatic_arcsec": float(np.ptp(qs["te"]) * ARCSEC_PER_RAD),
+        # the fused stepper over the same steps (warmed, same run): its kernel is the whole step
+        "fused": fused,
+        "fused_beyond_kernels_target_met": bool(fused["beyond_kernels_over_bare"] <= 2.0),
+        "fused_speedup_vs_merged": 1e6 * per_step / fused["dynamic_us_per_step"],
+        "fused_batched": (fused_batched(d, spec, dur, args.fused_device, args.fused_copies)
+                          if args.fused_copies > 0 else None),
         "wall_s": time.perf_counter() - t_all,
     }
     settings = {"points_per_mesh_cycle": 40, "dynamic_step_s": step, "run_spec": spec.to_dict(), "bearing_model": "lumped",
@@ -349,7 +435,8 @@ def main(argv=None):
                 "quasistatic_contact_element": contact_element_mode(),
                 "quasistatic_points": n_qs, "batched": {"copies": bq["copies"], "workers": bq["workers"],
                                                         "abs_tol_N": 1e-4, "predictor": "secant"},
-                "sequential_abs_tol_N": 1e-6}
+                "sequential_abs_tol_N": 1e-6, "fused_device": args.fused_device,
+                "fused_copies": args.fused_copies}
     return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])
 
 
