@@ -24,7 +24,8 @@ from .circle_pairs_ref import N_OBS, O_FN
 from .fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_RECORDED, C_REJECTED, C_RUN, DONE, FAILED, H_BEARING,
                              H_INPUT, H_NEWTON, H_OUTPUT, H_OUTPUT_PIN, H_PIN, H_STEP, H_TIME, H_TORQUE, M_ACCEL,
                              M_ANGLE, M_SPEED, N_COUNT, N_HISTORY, S_ABS_TOL, S_ALPHA_F, S_ALPHA_M, S_BETA, S_GAMMA,
-                             S_H_MIN, S_H_NOM, S_MAX_IT, S_RECOVERY, S_REL_TOL, S_T_END)
+                             S_H_MIN, S_H_NOM, S_MAX_IT, S_RECOVERY, S_RECOVERY_ITERATIONS, S_REL_TOL,
+                             S_T_END, END_TOLERANCE)
 from .output_pins_ref import N_SLICE_COLS
 from .precision import resolve_device
 
@@ -342,10 +343,10 @@ def kernels(dtype):
                 counters[p, C_RECORDED] = k + 1
                 counters[p, C_ACCEPTED] = counters[p, C_ACCEPTED] + 1
                 counters[p, C_RUN] = counters[p, C_RUN] + 1
-                if dtype(counters[p, C_RUN]) >= settings[S_RECOVERY] and h[p] < h_nom:
+                if dtype(counters[p, C_RUN]) >= settings[S_RECOVERY] and dtype(its + 1) < settings[S_RECOVERY_ITERATIONS]:
                     h[p] = wp.min(h_nom, dtype(2.0) * h[p])
                     counters[p, C_RUN] = 0
-                if t1 >= t_end - dtype(1.0e-12) * h_nom:
+                if t1 >= t_end - dtype(END_TOLERANCE):
                     status[p] = DONE
             else:
                 counters[p, C_REJECTED] = counters[p, C_REJECTED] + 1

@@ -27,8 +27,11 @@ index-3 coordinate constraints, full Newton, initial accelerations computed):
 * accepted: abar += (1 - alpha_f)/(1 - alpha_m) a (Exudyn's FinalizeNewton);
 * rejected (no convergence, non-finite values, a zero pivot): the copy's start-of-step state is
   restored and the step halved (not below h_min) and retried; a copy whose step is already
-  h_min is FAILED and stops (the other copies go on). After ``recovery`` accepted steps in a
-  row the step doubles again, up to the nominal step.
+  h_min is FAILED and stops (the other copies go on). After ``recovery`` accepted steps since
+  the last change, an accepted step with fewer than ``recovery_iterations`` - 1 Newton
+  iterations doubles the step (at most the nominal step) and restarts the count (Exudyn's
+  adaptiveStepRecoverySteps / adaptiveStepRecoveryIterations, the post-Newton pass counted as
+  one iteration); a copy ends once t >= t_end - END_TOLERANCE (Exudyn's end test).
 
 Arrays: q, v, a, abar (B, n) [m, rad and rates] are displacements from each copy's reference
 configuration; t, h (B,) [s]; status (B,); counters (B, N_COUNT); the history (B, K, N_HISTORY)
@@ -43,8 +46,9 @@ from . import output_pins_ref as oref
 
 # settings vector (N_SETTINGS,)
 (S_ALPHA_M, S_ALPHA_F, S_BETA, S_GAMMA, S_ABS_TOL, S_REL_TOL, S_MAX_IT, S_H_NOM, S_H_MIN, S_T_END,
- S_RECOVERY) = range(11)
-N_SETTINGS = 11
+ S_RECOVERY, S_RECOVERY_ITERATIONS) = range(12)
+N_SETTINGS = 12
+END_TOLERANCE = 1e-10     # [s] Exudyn's: the run ends once t >= end_time - 1e-10
 # prescribed input motion per copy (B, N_MOTION): angle(t) = angle + speed t + accel t^2 / 2
 M_ANGLE, M_SPEED, M_ACCEL = range(3)
 N_MOTION = 3
@@ -217,10 +221,10 @@ class ReferenceModel:
                         t1, q[self.input_index], self.reference[p, self.output_index] + q[self.output_index], torque,
                         peaks[0], peaks[1], peaks[2], h, its)
                     cnt[C_RECORDED] += 1
-                    if cnt[C_RUN] >= s[S_RECOVERY] and state["h"][p] < s[S_H_NOM]:
+                    if cnt[C_RUN] >= s[S_RECOVERY] and its + 1 < s[S_RECOVERY_ITERATIONS]:
                         state["h"][p] = min(s[S_H_NOM], 2.0 * state["h"][p])
                         cnt[C_RUN] = 0
-                    if t1 >= s[S_T_END] - 1e-12 * s[S_H_NOM]:
+                    if t1 >= s[S_T_END] - END_TOLERANCE:
                         state["status"][p] = DONE
                 else:
                     cnt[C_REJECTED] += 1

@@ -38,7 +38,8 @@ from warp_contacts.batched_newton_ref import gather_bodies, gather_rows
 from warp_contacts.fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_REJECTED, DONE, FAILED, H_BEARING, H_INPUT,
                                           H_NEWTON, H_OUTPUT, H_OUTPUT_PIN, H_PIN, H_STEP, H_TIME, H_TORQUE, M_ANGLE,
                                           M_SPEED, N_MOTION, N_SETTINGS, S_ABS_TOL, S_ALPHA_F, S_ALPHA_M, S_BETA,
-                                          S_GAMMA, S_H_MIN, S_H_NOM, S_MAX_IT, S_RECOVERY, S_REL_TOL, S_T_END,
+                                          S_GAMMA, S_H_MIN, S_H_NOM, S_MAX_IT, S_RECOVERY, S_RECOVERY_ITERATIONS,
+                                          S_REL_TOL, S_T_END,
                                           alpha_parameters)
 
 from ..errors import RvtoolInputError, SolverFailure
@@ -54,7 +55,9 @@ class DeviceDynamicsSettings:
     spectral_radius [-]: rho_inf of Eq. (alpha_parameters), in [0, 1].
     abs_tol [N], rel_tol [-]: Exudyn's Newton criterion (residual norm, relative to the
     initial residual). max_newton_iterations: per attempt.
-    recovery_steps: accepted steps in a row after which a reduced step doubles again.
+    recovery_steps, recovery_iterations: a reduced step doubles again after recovery_steps
+    accepted steps when the step took fewer than recovery_iterations - 1 Newton iterations
+    (Exudyn's adaptiveStepRecoverySteps, adaptiveStepRecoveryIterations; defaults Exudyn's).
     steps_per_launch: accepted steps per copy in one launch (one host read of the history each).
     """
     step: float
@@ -64,6 +67,7 @@ class DeviceDynamicsSettings:
     rel_tol: float = 1e-9
     max_newton_iterations: int = 12
     recovery_steps: int = 10
+    recovery_iterations: int = 7
     steps_per_launch: int = 64
 
     def __post_init__(self):
@@ -73,7 +77,7 @@ class DeviceDynamicsSettings:
         check_range("device_dynamics.spectral_radius", self.spectral_radius, 0.0, 1.0)
         check_positive("device_dynamics.abs_tol", self.abs_tol)
         check_range("device_dynamics.rel_tol", self.rel_tol, 0.0, 1.0, low_open=True)
-        for nm in ("max_newton_iterations", "recovery_steps", "steps_per_launch"):
+        for nm in ("max_newton_iterations", "recovery_steps", "recovery_iterations", "steps_per_launch"):
             v = getattr(self, nm)
             if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
                 raise RvtoolInputError(f"device_dynamics.{nm} = {v!r} is outside the valid range [1, inf) (integer)")
@@ -97,6 +101,7 @@ class DeviceDynamicsSettings:
         s[[S_ALPHA_M, S_ALPHA_F, S_BETA, S_GAMMA]] = alpha_parameters(self.spectral_radius)
         s[S_ABS_TOL], s[S_REL_TOL], s[S_MAX_IT] = self.abs_tol, self.rel_tol, self.max_newton_iterations
         s[S_H_NOM], s[S_H_MIN], s[S_T_END], s[S_RECOVERY] = self.step, self.minimum_step, end_time, self.recovery_steps
+        s[S_RECOVERY_ITERATIONS] = self.recovery_iterations
         return s
 
 
