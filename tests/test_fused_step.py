@@ -12,10 +12,10 @@ from rvtool.assembly.spec import load_design
 from rvtool.batched.device_copies import copy_parameters
 from rvtool.errors import RvtoolInputError
 from rvtool.solver.device_dynamics import (DeviceDynamics, DeviceDynamicsSettings, check_supported,
-                                           dynamic_te_fused, kinematic_velocities, model_arrays)
+                                           dynamic_te_fused, kinematic_velocities)
 from rvtool.units import ARCSEC_PER_RAD
 from rvtool.variants import Variant
-from warp_contacts.fused_step_ref import (ACTIVE, C_RECORDED, DONE, FAILED, H_OUTPUT, H_TORQUE, M_SPEED, N_COUNT,
+from warp_contacts.fused_step_ref import (C_RECORDED, DONE, FAILED, H_OUTPUT, H_TORQUE, M_SPEED, N_COUNT,
                                           N_MOTION, ReferenceModel)
 
 DEVICES = [pytest.param(d, id=d) for d in ("cpu", "cuda:0")]
@@ -179,3 +179,44 @@ def test_unsupported_models_named(params):
         check_supported(dataclasses.replace(params, pin_i=pin_i))
     with pytest.raises(RvtoolInputError, match="end_time"):
         DeviceDynamics(params, [0], torque=[1.0], motion=np.zeros((1, N_MOTION)), end_time=0.0, settings=_settings())
+
+
+def test_row_function_kernels_bit_identical(params):
+    """The kernels that are now thin wrappers over their row functions give the outputs of the
+    kernels before the move, bit for bit (tests/golden/row_functions_rd40.npz: written by the
+    pre-move kernels on these RD-40 rows and poses, Warp CPU, float64)."""
+    from pathlib import Path
+
+    from rvtool.output_pins.spec import PinMode
+    from warp_contacts.circle_pairs import CirclePairKernel
+    from warp_contacts.cycloid_pins import CycloidPinKernel
+    from warp_contacts.output_pins import OutputPinKernel
+    pr = copy_parameters(params.design, [Variant()])
+    nb = pr.nb
+    rng = np.random.default_rng(3)
+    kin = pr.kinematic([0], [0.3])[0]
+    pose = np.zeros((nb + 1, 3))
+    pose[:nb] = (pr.reference[0] + kin.reshape(nb, 3)) + rng.normal(0, 2e-6, (nb, 3))
+    pose[nb - 1, 2] += 4e-4          # the flange turned against the wheels: the output pins carry load
+    vel = np.zeros((nb + 1, 3))
+    vel[:nb] = rng.normal(0, 0.05, (nb, 3))
+    out = {}
+    for vt in (True, False):
+        k = CycloidPinKernel(pr.pin_f[0], pr.pin_i[0], pr.tables, pr.window, nb, "float64", "cpu", analytic=pr.analytic)
+        k.set_velocity_tangent(vt)
+        for j, a in enumerate(k.evaluate(pose, vel)[:4]):
+            if a is not None:
+                out[f"pin{vt}_{j}"] = np.array(a)
+    r = OutputPinKernel(pr.op_f, pr.op_i, pr.stations, nb + 1, PinMode.PLAIN.value, "float64", "cpu").evaluate(pose)
+    for key in ("Q", "dQdq", "tilt_moments", "slices"):
+        out["op_" + key] = np.array(r[key])
+    nr = len(pr.brg_i)
+    r = CirclePairKernel(pr.brg_f[0], pr.brg_i, nb, "float64", "cpu").evaluate(pose, vel, np.zeros(nr, np.int32),
+                                                                              np.zeros((nr, 2)), np.zeros((nr, 2)))
+    for j, a in enumerate(r[:4]):
+        out[f"brg_{j}"] = np.array(a)
+    golden = np.load(Path(__file__).parent / "golden" / "row_functions_rd40.npz")
+    assert sorted(golden.files) == sorted(out)
+    for k in golden.files:
+        assert np.array_equal(golden[k], out[k]), k
+    assert np.max(np.abs(out["op_Q"])) > 100.0 and np.max(np.abs(out["pinTrue_0"])) > 100.0
