@@ -123,7 +123,10 @@ def kernels(dtype):
         f[p, output_index] = f[p, output_index] + torque[p]
         return pk_pin, pk_op, pk_brg
 
-    @wp.kernel(module="unique")
+    # forward only: the fused step is never differentiated, and the adjoint of a kernel this
+    # large (every family's row function inlined, Newton and LU loops) made NVRTC's compile run
+    # for more than nine minutes on an H100 host (the CPU compile: ~50 s)
+    @wp.kernel(enable_backward=False, module="unique")
     def fused_steps(
         # Model:
         pin_f: wp.array2d(dtype=dtype), pin_i: wp.array2d(dtype=wp.int32), tab_pts: wp.array2d(dtype=dtype),
