@@ -29,6 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from warp_contacts import tapered_rollers_ref as ref
 from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY
@@ -153,6 +154,16 @@ class TaperedBearingSet:
         self.roller_phase, self.roller_gamma = np.array(psi0), np.array(gamma)
         #: per lamina: its roller
         self.lamina_roller = np.array(lam_roller, dtype=int)
+        # per-mounting sums of per-roller values as one 0/1 CSR product: each mounting's rollers are
+        # added in roller order starting from zero, the order of np.add.at (same sums bit for bit),
+        # in one pass over all summed columns instead of one unbuffered np.add.at per quantity
+        R = len(self.roller_owner)
+        self._mounting_sum = sp.csr_matrix((np.ones(R), (self.roller_owner, np.arange(R))),
+                                           shape=(len(self.mountings), R))
+        # the cage angle moves with theta_in by (1 - gamma)/2 and with theta_out by (1 + gamma)/2
+        self._cage_weights = (0.5 * (1 - self.roller_gamma))[:, None], (0.5 * (1 + self.roller_gamma))[:, None]
+        #: per roller: the columns of the planar per-mounting sums (see :meth:`raw`)
+        self._planar_columns = np.zeros((R, 18))
         self._bodies = np.array(bodies, dtype=np.int32)
         self.assembler = PairAssembler(self._bodies[:, 0], self._bodies[:, 1], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
@@ -174,9 +185,8 @@ class TaperedBearingSet:
 
     def _per_mounting(self, x):
         """Sum per-roller values (R, ...) into per-mounting values (M, ...)."""
-        out = np.zeros((len(self.mountings),) + x.shape[1:])
-        np.add.at(out, self.roller_owner, np.asarray(x, float))
-        return out
+        x = np.asarray(x, float)
+        return (self._mounting_sum @ x.reshape(len(x), -1)).reshape((len(self.mountings),) + x.shape[1:])
 
     def relative(self, q, qdot=None, cage_angle=None, cage_rate=None):
         """Evaluate every mounting at relative displacements ``q`` (M, 5) (and rates ``qdot``),
@@ -228,19 +238,28 @@ class TaperedBearingSet:
         """Per-mounting planar results: Q (M, 6), dQ/dq (M, 6, 6), dQ/dv (M, 6, 6) on (x, y, theta) of
         the inner and outer bodies, the per-roller kernel results and the planar state."""
         a, b, r, rdot, psi, psid, va, vb = self._planar_state(pose, vel)
-        o, g = self.roller_owner, self.roller_gamma
+        o = self.roller_owner
         R = len(o)
         q5, qd5 = np.zeros((R, N_Q)), np.zeros((R, N_Q))
         q5[:, :2], qd5[:, :2] = r[o], rdot[o]
-        f, K, C, fpsi, fpsid, rib, lam = (np.array(x, float) for x in self._rollers(q5, qd5, psi, psid))
+        f, K, C, fpsi, fpsid, rib, lam = self._rollers(q5, qd5, psi, psid)
+        # the tangents are read at once (the kernel's buffers are reused by the next call); the
+        # returned per-roller values are copies
+        f, rib, lam = (np.array(x, float) for x in (f, rib, lam))
         M = len(self.mountings)
-        F = self._per_mounting(f[:, :2])
-        K2, C2 = self._per_mounting(K[:, :2, :2]), self._per_mounting(C[:, :2, :2])
-        # the cage angle moves with theta_in by (1 - gamma)/2 and with theta_out by (1 + gamma)/2
-        FpA = self._per_mounting(fpsi[:, :2] * (0.5 * (1 - g))[:, None])
-        FpB = self._per_mounting(fpsi[:, :2] * (0.5 * (1 + g))[:, None])
-        FdA = self._per_mounting(fpsid[:, :2] * (0.5 * (1 - g))[:, None])
-        FdB = self._per_mounting(fpsid[:, :2] * (0.5 * (1 + g))[:, None])
+        wA, wB = self._cage_weights
+        # every per-mounting sum in one product: columns F (2), K (4), C (4), FpA, FpB, FdA, FdB (2 each)
+        X = self._planar_columns
+        X[:, 0:2] = f[:, :2]
+        X[:, 2:4], X[:, 4:6] = K[:, 0, :2], K[:, 1, :2]
+        X[:, 6:8], X[:, 8:10] = C[:, 0, :2], C[:, 1, :2]
+        np.multiply(fpsi[:, :2], wA, out=X[:, 10:12])
+        np.multiply(fpsi[:, :2], wB, out=X[:, 12:14])
+        np.multiply(fpsid[:, :2], wA, out=X[:, 14:16])
+        np.multiply(fpsid[:, :2], wB, out=X[:, 16:18])
+        S = self._mounting_sum @ X
+        F, FpA, FpB, FdA, FdB = S[:, 0:2], S[:, 10:12], S[:, 12:14], S[:, 14:16], S[:, 16:18]
+        K2, C2 = S[:, 2:6].reshape(M, 2, 2).copy(), S[:, 6:10].reshape(M, 2, 2).copy()
         I2 = np.broadcast_to(np.eye(2), (M, 2, 2))
         # dr/dq and drdot/dq, drdot/dv over (x_A, y_A, th_A, x_B, y_B, th_B): (M, 2, 6)
         dr = np.concatenate([I2, _perp(a)[:, :, None], -I2, -_perp(b)[:, :, None]], axis=2)
