@@ -154,16 +154,14 @@ class TaperedBearingSet:
         self.roller_phase, self.roller_gamma = np.array(psi0), np.array(gamma)
         #: per lamina: its roller
         self.lamina_roller = np.array(lam_roller, dtype=int)
-        # per-mounting sums of per-roller values as one 0/1 CSR product: each mounting's rollers are
+        # per-mounting sums of per-roller values as 0/1 CSR products: each mounting's rollers are
         # added in roller order starting from zero, the order of np.add.at (same sums bit for bit),
-        # in one pass over all summed columns instead of one unbuffered np.add.at per quantity
+        # one pass over all columns of a quantity instead of one unbuffered np.add.at
         R = len(self.roller_owner)
         self._mounting_sum = sp.csr_matrix((np.ones(R), (self.roller_owner, np.arange(R))),
                                            shape=(len(self.mountings), R))
         # the cage angle moves with theta_in by (1 - gamma)/2 and with theta_out by (1 + gamma)/2
         self._cage_weights = (0.5 * (1 - self.roller_gamma))[:, None], (0.5 * (1 + self.roller_gamma))[:, None]
-        #: per roller: the columns of the planar per-mounting sums (see :meth:`raw`)
-        self._planar_columns = np.zeros((R, 18))
         self._bodies = np.array(bodies, dtype=np.int32)
         self.assembler = PairAssembler(self._bodies[:, 0], self._bodies[:, 1], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
@@ -248,18 +246,14 @@ class TaperedBearingSet:
         f, rib, lam = (np.array(x, float) for x in (f, rib, lam))
         M = len(self.mountings)
         wA, wB = self._cage_weights
-        # every per-mounting sum in one product: columns F (2), K (4), C (4), FpA, FpB, FdA, FdB (2 each)
-        X = self._planar_columns
-        X[:, 0:2] = f[:, :2]
-        X[:, 2:4], X[:, 4:6] = K[:, 0, :2], K[:, 1, :2]
-        X[:, 6:8], X[:, 8:10] = C[:, 0, :2], C[:, 1, :2]
-        np.multiply(fpsi[:, :2], wA, out=X[:, 10:12])
-        np.multiply(fpsi[:, :2], wB, out=X[:, 12:14])
-        np.multiply(fpsid[:, :2], wA, out=X[:, 14:16])
-        np.multiply(fpsid[:, :2], wB, out=X[:, 16:18])
-        S = self._mounting_sum @ X
-        F, FpA, FpB, FdA, FdB = S[:, 0:2], S[:, 10:12], S[:, 12:14], S[:, 14:16], S[:, 16:18]
-        K2, C2 = S[:, 2:6].reshape(M, 2, 2).copy(), S[:, 6:10].reshape(M, 2, 2).copy()
+        # per-mounting sums of whole per-roller rows (contiguous: no column copies; the unused
+        # columns cost less to sum than to cut out)
+        S = self._mounting_sum
+        F = (S @ f)[:, :2]
+        K2 = np.ascontiguousarray((S @ K.reshape(R, -1)).reshape(M, N_Q, N_Q)[:, :2, :2])
+        C2 = np.ascontiguousarray((S @ C.reshape(R, -1)).reshape(M, N_Q, N_Q)[:, :2, :2])
+        FpA, FpB = (S @ (fpsi * wA))[:, :2], (S @ (fpsi * wB))[:, :2]
+        FdA, FdB = (S @ (fpsid * wA))[:, :2], (S @ (fpsid * wB))[:, :2]
         I2 = np.broadcast_to(np.eye(2), (M, 2, 2))
         # dr/dq and drdot/dq, drdot/dv over (x_A, y_A, th_A, x_B, y_B, th_B): (M, 2, 6)
         dr = np.concatenate([I2, _perp(a)[:, :, None], -I2, -_perp(b)[:, :, None]], axis=2)
