@@ -140,6 +140,18 @@ def test_planar_tangent_matches_central_differences():
     assert np.allclose(e.Q[0:2], loads["crank_bearing"].force + loads["support"].force, rtol=1e-12, atol=0)
 
 
+
+@pytest.mark.parametrize("backend", ["numpy", "warp"])
+def test_planar_mounting_sums_in_roller_order(backend):
+    """The per-mounting sums of the planar use (one CSR product over every summed column) add each
+    mounting's rollers in roller order from zero, as np.add.at does: the same forces bit for bit."""
+    s, pose, vel = _scene(backend=backend)
+    Q, _, _, (f, _, _), _ = s.raw(pose, vel)
+    F = np.zeros((len(s.mountings), 2))
+    np.add.at(F, s.roller_owner, f[:, :2])
+    assert np.any(F != 0.0)
+    assert np.array_equal(Q[:, 0:2], F) and np.array_equal(Q[:, 3:5], -F)
+
 def _phase_averaged(s, q, n_phases):
     """Wrench averaged over cage phases across one roller pitch: the midpoint rule of Z n_phases
     points over the circle, i.e. Z / (2 pi) times the azimuth integral of the roller load."""

@@ -5,6 +5,9 @@ per tooth-pair slice).
 Mirrors :mod:`warp_contacts.involute_pairs_ref` function by function (``select``,
 ``geom_line``, ``geom_corner_a``, ``geom_corner_b``, ``gap_terms``, ``series_force``); see
 there for the equations. The parameter columns are the reference's named constants.
+The tangent's seed loop reuses the seed-independent transcendentals of the geometry
+(``geometry_trig``) and the profile values of the gap (``profile_terms``), computed once per
+row by the same operations the geometry would repeat for every seed (same results, bit for bit).
 """
 import functools
 
@@ -39,6 +42,7 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
     A = anchor_funcs(dtype)
     anchor_state, anchor_force_tangent, anchor_trial = A.anchor_state, A.anchor_force_tangent, A.anchor_trial
     vec2, perp, cross2, body_seed = P.vec2, P.perp, P.cross2, P.body_seed
+    vec4 = wp.types.vector(4, dtype)      # packs of seed-independent values handed to the seed loop
     rot, row_vec2, store_row_vec2 = P.rot, P.row_vec2, P.store_row_vec2
     store_pair_forces, store_pair_column = P.store_pair_forces, P.store_pair_column
     body_state, store_pair_observation = P.body_state, P.store_pair_observation
@@ -153,6 +157,28 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         return phit, dphit, lam, rho * drho / lam_s, rho > rb
 
     @wp.func
+    def foot_trig(Pc: vec2, O: vec2, rb: dtype, omega: dtype):
+        """The seed-independent part of :func:`foot`: rho, lam and phit (its square root and angles)."""
+        w = Pc - O
+        rho = wp.length(w)
+        lam = wp.sqrt(wp.max(rho * rho - rb * rb, dtype(0.0)))
+        phit = wp.atan2(w[1], w[0]) + omega * wp.acos(wp.clamp(rb / rho, dtype(-1.0), dtype(1.0)))
+        return rho, lam, phit
+
+    @wp.func
+    def foot_seeded(Pc: vec2, dPc: vec2, O: vec2, dO: vec2, rb: dtype, omega: dtype, rho: dtype, lam: dtype,
+                    phit: dtype):
+        """:func:`foot` with its seed-independent part (:func:`foot_trig`) given: the same operations."""
+        w = Pc - O
+        dw = dPc - dO
+        drho = wp.dot(w, dw) / rho
+        lam_s = lam
+        if lam <= dtype(0.0):
+            lam_s = dtype(1.0)
+        dphit = cross2(w, dw) / (rho * rho) + omega * rb * drho / (rho * lam_s)
+        return phit, dphit, lam, rho * drho / lam_s, rho > rb
+
+    @wp.func
     def flank_offset(ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), goff: wp.array(dtype=dtype), i: int,
                      k: int, j: int):
         """Gap offset of the row's tooth pair on its line (see the reference's flank_offset)."""
@@ -172,7 +198,7 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
     @wp.func
     def geom_line(fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), i: int,
                   OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
-                  dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype):
+                  dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype, tv0: vec2, tv1: vec2, trig: vec4):
         eps = fp[i, GEAR_B + G_EPS]
         s = dtype(1.0)
         if ip[i, J_LINE] != 0:
@@ -182,19 +208,19 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         rbb = fp[i, GEAR_B + G_RB]
         D = OB - OA
         dD = dOB - dOA
-        a = wp.length(D)
+        a = trig[0]
         da = wp.dot(D, dD) / a
-        beta = wp.atan2(D[1], D[0])
+        beta = trig[1]
         dbeta = cross2(D, dD) / (a * a)
         Rs = rbb + eps * rba
-        aw = wp.acos(Rs / a)
-        sw = wp.sin(aw)
+        aw = trig[2]
+        sw = trig[3]
         daw = Rs * da / (a * a * sw)
         phia = beta + s * aw
         if eps < dtype(0.0):
             phia = beta + s * (PI - aw)
         dphia = dbeta + s * eps * daw
-        ea = unit(phia)
+        ea = tv0
         d = -omega * perp(ea)
         dd = (omega * dphia) * ea
         TA = OA + rba * ea
@@ -223,7 +249,7 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
     @wp.func
     def geom_corner_a(fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), i: int,
                       OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
-                      dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype):
+                      dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype, tv0: vec2, tv1: vec2, trig: vec4):
         eps = fp[i, GEAR_B + G_EPS]
         s = dtype(1.0)
         if ip[i, J_LINE] != 0:
@@ -232,13 +258,13 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         rbb = fp[i, GEAR_B + G_RB]
         ang = tha + tooth_angle(ip, dev, i, 0, k) - omega * fp[i, GEAR_A + G_PSI] + omega * fp[i, GEAR_A + G_CHI]
         rc = fp[i, GEAR_A + G_RHO_C]
-        Pc = OA + rc * unit(ang)
-        dPc = dOA + (rc * dtha) * perp(unit(ang))
-        phit, dphit, lam, dlam, ok = foot(Pc, dPc, OB, dOB, rbb, omega)
+        Pc = OA + rc * tv0
+        dPc = dOA + (rc * dtha) * perp(tv0)
+        phit, dphit, lam, dlam, ok = foot_seeded(Pc, dPc, OB, dOB, rbb, omega, trig[0], trig[1], trig[2])
         ub = (omega * (phit - thb + omega * eps * fp[i, GEAR_B + G_PSI]) - omega * tooth_angle(ip, dev, i, 1, j)
               - TWO_PI * off_b)
         dub = omega * (dphit - dthb)
-        et = unit(phit)
+        et = tv1
         dT = -omega * perp(et)
         ddT = (omega * dphit) * et
         n = -eps * dT
@@ -256,7 +282,7 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
     @wp.func
     def geom_corner_b(fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype), i: int,
                       OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
-                      dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype):
+                      dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype, tv0: vec2, tv1: vec2, trig: vec4):
         eps = fp[i, GEAR_B + G_EPS]
         s = dtype(1.0)
         if ip[i, J_LINE] != 0:
@@ -265,13 +291,13 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         rba = fp[i, GEAR_A + G_RB]
         ang = thb + tooth_angle(ip, dev, i, 1, j) - omega * eps * fp[i, GEAR_B + G_PSI] + omega * fp[i, GEAR_B + G_CHI]
         rc = fp[i, GEAR_B + G_RHO_C]
-        Pc = OB + rc * unit(ang)
-        dPc = dOB + (rc * dthb) * perp(unit(ang))
-        phit, dphit, lam, dlam, ok = foot(Pc, dPc, OA, dOA, rba, omega)
+        Pc = OB + rc * tv0
+        dPc = dOB + (rc * dthb) * perp(tv0)
+        phit, dphit, lam, dlam, ok = foot_seeded(Pc, dPc, OA, dOA, rba, omega, trig[0], trig[1], trig[2])
         ua = (omega * (phit - tha + omega * fp[i, GEAR_A + G_PSI]) - omega * tooth_angle(ip, dev, i, 0, k)
               - TWO_PI * off_a)
         dua = omega * (dphit - dtha)
-        et = unit(phit)
+        et = tv1
         n = -omega * perp(et)
         dn = (omega * dphit) * et
         cA = OA + rba * et + (rba * ua) * n
@@ -285,29 +311,90 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
                 rba * ua, rba * dua, rho_e, zero, dtype(1.0))
 
     @wp.func
-    def geometry(mode: int, fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype),
-                 i: int, OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
-                 dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype):
+    def geometry_trig(mode: int, fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32),
+                      dev: wp.array(dtype=dtype), i: int, OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int):
+        """The seed-independent transcendentals of :func:`geometry` at a state, computed once per row
+        and reused by every seed (the same operations as inside geom_*, so the same bits):
+        line: tv0 = e(phi_a), trig = (|O_B - O_A|, beta, alpha_w, sin alpha_w); corners: tv0 = the edge
+        centre's direction e(ang), tv1 = e(phi_t), trig = (rho, lam, phi_t) of the foot."""
+        eps = fp[i, GEAR_B + G_EPS]
+        s = dtype(1.0)
+        if ip[i, J_LINE] != 0:
+            s = dtype(-1.0)
+        omega = s * eps
+        zero = dtype(0.0)
         if mode == MODE_CORNER_A:
-            return geom_corner_a(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb)
+            rbb = fp[i, GEAR_B + G_RB]
+            ang = tha + tooth_angle(ip, dev, i, 0, k) - omega * fp[i, GEAR_A + G_PSI] + omega * fp[i, GEAR_A + G_CHI]
+            ea = unit(ang)
+            rho, lam, phit = foot_trig(OA + fp[i, GEAR_A + G_RHO_C] * ea, OB, rbb, omega)
+            return ea, unit(phit), vec4(rho, lam, phit, zero)
         if mode == MODE_CORNER_B:
-            return geom_corner_b(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb)
-        return geom_line(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb)
+            rba = fp[i, GEAR_A + G_RB]
+            ang = (thb + tooth_angle(ip, dev, i, 1, j) - omega * eps * fp[i, GEAR_B + G_PSI]
+                   + omega * fp[i, GEAR_B + G_CHI])
+            eb = unit(ang)
+            rho, lam, phit = foot_trig(OB + fp[i, GEAR_B + G_RHO_C] * eb, OA, rba, omega)
+            return eb, unit(phit), vec4(rho, lam, phit, zero)
+        rba = fp[i, GEAR_A + G_RB]
+        rbb = fp[i, GEAR_B + G_RB]
+        D = OB - OA
+        a = wp.length(D)
+        beta = wp.atan2(D[1], D[0])
+        Rs = rbb + eps * rba
+        aw = wp.acos(Rs / a)
+        phia = beta + s * aw
+        if eps < dtype(0.0):
+            phia = beta + s * (PI - aw)
+        return unit(phia), vec2(zero, zero), vec4(a, beta, aw, wp.sin(aw))
 
     @wp.func
-    def gap_terms(fp: wp.array2d(dtype=dtype), i: int, g0: dtype, dg0: dtype, n: vec2, dn: vec2, ua: dtype, dua: dtype,
-                  ub: dtype, dub: dtype, RA: dtype, dRA: dtype, RB: dtype, dRB: dtype, sB: dtype):
+    def geometry(mode: int, fp: wp.array2d(dtype=dtype), ip: wp.array2d(dtype=wp.int32), dev: wp.array(dtype=dtype),
+                 i: int, OA: vec2, tha: dtype, OB: vec2, thb: dtype, k: int, j: int, off_a: dtype, off_b: dtype,
+                 dOA: vec2, dtha: dtype, dOB: vec2, dthb: dtype, tv0: vec2, tv1: vec2, trig: vec4):
+        if mode == MODE_CORNER_A:
+            return geom_corner_a(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb,
+                                 tv0, tv1, trig)
+        if mode == MODE_CORNER_B:
+            return geom_corner_b(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb,
+                                 tv0, tv1, trig)
+        return geom_line(fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb, tv0, tv1, trig)
+
+    @wp.func
+    def profile_terms(fp: wp.array2d(dtype=dtype), i: int, ua: dtype, ub: dtype):
+        """The seed-independent profile values of :func:`gap_terms` at the contact's roll parameters:
+        (e_A, e_A', e_B, e_B') of the modifications and (c_A, c_A', c_B, c_B'), (h_A, h_A', h_B, h_B')
+        of the compliance and depth polynomials (computed once per row, reused by every seed)."""
         z = fp[i, C_Z]
         eA, deA = modification(fp, i, GEAR_A, ua, z)
         eB, deB = modification(fp, i, GEAR_B, ub, z)
-        tx = fp[i, C_TX]
-        ty = fp[i, C_TY]
-        g = g0 + eA + eB + fp[i, C_E] + z * (ty * n[0] - tx * n[1]) + z * fp[i, C_TANPSI]
-        dg = dg0 + deA * dua + deB * dub + z * (ty * dn[0] - tx * dn[1])
         cA, dcA = poly(fp, i, GEAR_A, G_PC, ua)
         cB, dcB = poly(fp, i, GEAR_B, G_PC, ub)
         hA, dhA = poly(fp, i, GEAR_A, G_PH, ua)
         hB, dhB = poly(fp, i, GEAR_B, G_PH, ub)
+        return vec4(eA, deA, eB, deB), vec4(cA, dcA, cB, dcB), vec4(hA, dhA, hB, dhB)
+
+    @wp.func
+    def gap_terms(fp: wp.array2d(dtype=dtype), i: int, g0: dtype, dg0: dtype, n: vec2, dn: vec2, ua: dtype, dua: dtype,
+                  ub: dtype, dub: dtype, RA: dtype, dRA: dtype, RB: dtype, dRB: dtype, sB: dtype, pe: vec4, pc: vec4,
+                  ph: vec4):
+        z = fp[i, C_Z]
+        eA = pe[0]
+        deA = pe[1]
+        eB = pe[2]
+        deB = pe[3]
+        tx = fp[i, C_TX]
+        ty = fp[i, C_TY]
+        g = g0 + eA + eB + fp[i, C_E] + z * (ty * n[0] - tx * n[1]) + z * fp[i, C_TANPSI]
+        dg = dg0 + deA * dua + deB * dub + z * (ty * dn[0] - tx * dn[1])
+        cA = pc[0]
+        dcA = pc[1]
+        cB = pc[2]
+        dcB = pc[3]
+        hA = ph[0]
+        dhA = ph[1]
+        hB = ph[2]
+        dhB = ph[3]
         bs = fp[i, C_BS]
         K = dtype(1.0) / RA + sB / RB
         dK = -dRA / (RA * RA) - sB * dRB / (RB * RB)
@@ -439,9 +526,13 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
         # -- primal geometry, gap and forces ----------------------------------------
         z2 = vec2(dtype(0.0), dtype(0.0))
         zs = dtype(0.0)
+        # the seed-independent transcendentals and profile values once per row (every seed reuses them)
+        tv0, tv1, trig = geometry_trig(mode, fp, ip, dev, i, OA, tha, OB, thb, k, j)
         g0, dg0, n, dn0, cA, dcA0, cB, dcB0, ua, dua0, ub, dub0, RA, dRA0, RB, dRB0, sB = geometry(
-            mode, fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, z2, zs, z2, zs)
-        g, dg_, C, dC_, hA, dhA_, hB, dhB_, K, dK_ = gap_terms(fp, i, g0, zs, n, z2, ua, zs, ub, zs, RA, zs, RB, zs, sB)
+            mode, fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, z2, zs, z2, zs, tv0, tv1, trig)
+        pe, pc, ph = profile_terms(fp, i, ua, ub)
+        g, dg_, C, dC_, hA, dhA_, hB, dhB_, K, dK_ = gap_terms(fp, i, g0, zs, n, z2, ua, zs, ub, zs, RA, zs, RB, zs, sB,
+                                                               pe, pc, ph)
         g = g + flank_offset(ip, dev, goff, i, k, j)
         delta = -g
         on = delta > dtype(0.0)
@@ -517,9 +608,9 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
                 dtha = zs
                 dthb = zs
             g0s, dg0, ns, dn, cAs, dcA, cBs, dcB, uas, dua, ubs, dub, RAs, dRA, RBs, dRB, sBs = geometry(
-                mode, fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb)
+                mode, fp, ip, dev, i, OA, tha, OB, thb, k, j, off_a, off_b, dOA, dtha, dOB, dthb, tv0, tv1, trig)
             gs, dg, Cs, dC, hAs, dhA, hBs, dhB, Ks, dK = gap_terms(fp, i, g0s, dg0, ns, dn, uas, dua, ubs, dub, RAs, dRA,
-                                                                    RBs, dRB, sBs)
+                                                                    RBs, dRB, sBs, pe, pc, ph)
             ddelta = -dg
             dFel = Fd * ddelta + FC * dC + FhA * dhA + FhB * dhB + FK * dK
             dt = perp(dn)

@@ -166,12 +166,14 @@ class ReplicaEvaluator:
         Q = sum(f.scatter.vector(np.asarray(r[0], np.float64)) for f, r in zip(self.families, rows))
         K = sum(f.scatter.blocks(np.asarray(r[1], np.float64)) for f, r in zip(self.families, rows))
         finite = np.isfinite(Q.sum(axis=1) + K.sum(axis=(1, 2)))
-        damp = [(f, None if r[2] is None else np.array(r[2], np.float64)) for f, r in zip(self.families, rows)]
         masked = self.masked.copy()
-        if any(d is None and callable(getattr(f.set, "set_velocity_tangent", None)) for f, d in damp):
+        if any(r[2] is None and callable(getattr(f.set, "set_velocity_tangent", None))
+               for f, r in zip(self.families, rows)):
+            # static mode: the bearing families' dQ/dv rows are not read (no copy of them)
             def damping():
                 raise RuntimeError("dQ/dv was not computed: the evaluator is in static mode")
         else:
+            damp = [(f, None if r[2] is None else np.array(r[2], np.float64)) for f, r in zip(self.families, rows)]
             for f, d in damp:
                 if d is not None:
                     bad = ~np.isfinite(d.reshape(len(d), -1).sum(axis=1))

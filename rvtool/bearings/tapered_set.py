@@ -29,6 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from warp_contacts import tapered_rollers_ref as ref
 from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY
@@ -153,6 +154,14 @@ class TaperedBearingSet:
         self.roller_phase, self.roller_gamma = np.array(psi0), np.array(gamma)
         #: per lamina: its roller
         self.lamina_roller = np.array(lam_roller, dtype=int)
+        # per-mounting sums of per-roller values as 0/1 CSR products: each mounting's rollers are
+        # added in roller order starting from zero, the order of np.add.at (same sums bit for bit),
+        # one pass over all columns of a quantity instead of one unbuffered np.add.at
+        R = len(self.roller_owner)
+        self._mounting_sum = sp.csr_matrix((np.ones(R), (self.roller_owner, np.arange(R))),
+                                           shape=(len(self.mountings), R))
+        # the cage angle moves with theta_in by (1 - gamma)/2 and with theta_out by (1 + gamma)/2
+        self._cage_weights = (0.5 * (1 - self.roller_gamma))[:, None], (0.5 * (1 + self.roller_gamma))[:, None]
         self._bodies = np.array(bodies, dtype=np.int32)
         self.assembler = PairAssembler(self._bodies[:, 0], self._bodies[:, 1], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
@@ -174,9 +183,8 @@ class TaperedBearingSet:
 
     def _per_mounting(self, x):
         """Sum per-roller values (R, ...) into per-mounting values (M, ...)."""
-        out = np.zeros((len(self.mountings),) + x.shape[1:])
-        np.add.at(out, self.roller_owner, np.asarray(x, float))
-        return out
+        x = np.asarray(x, float)
+        return (self._mounting_sum @ x.reshape(len(x), -1)).reshape((len(self.mountings),) + x.shape[1:])
 
     def relative(self, q, qdot=None, cage_angle=None, cage_rate=None):
         """Evaluate every mounting at relative displacements ``q`` (M, 5) (and rates ``qdot``),
@@ -228,19 +236,24 @@ class TaperedBearingSet:
         """Per-mounting planar results: Q (M, 6), dQ/dq (M, 6, 6), dQ/dv (M, 6, 6) on (x, y, theta) of
         the inner and outer bodies, the per-roller kernel results and the planar state."""
         a, b, r, rdot, psi, psid, va, vb = self._planar_state(pose, vel)
-        o, g = self.roller_owner, self.roller_gamma
+        o = self.roller_owner
         R = len(o)
         q5, qd5 = np.zeros((R, N_Q)), np.zeros((R, N_Q))
         q5[:, :2], qd5[:, :2] = r[o], rdot[o]
-        f, K, C, fpsi, fpsid, rib, lam = (np.array(x, float) for x in self._rollers(q5, qd5, psi, psid))
+        f, K, C, fpsi, fpsid, rib, lam = self._rollers(q5, qd5, psi, psid)
+        # the tangents are read at once (the kernel's buffers are reused by the next call); the
+        # returned per-roller values are copies
+        f, rib, lam = (np.array(x, float) for x in (f, rib, lam))
         M = len(self.mountings)
-        F = self._per_mounting(f[:, :2])
-        K2, C2 = self._per_mounting(K[:, :2, :2]), self._per_mounting(C[:, :2, :2])
-        # the cage angle moves with theta_in by (1 - gamma)/2 and with theta_out by (1 + gamma)/2
-        FpA = self._per_mounting(fpsi[:, :2] * (0.5 * (1 - g))[:, None])
-        FpB = self._per_mounting(fpsi[:, :2] * (0.5 * (1 + g))[:, None])
-        FdA = self._per_mounting(fpsid[:, :2] * (0.5 * (1 - g))[:, None])
-        FdB = self._per_mounting(fpsid[:, :2] * (0.5 * (1 + g))[:, None])
+        wA, wB = self._cage_weights
+        # per-mounting sums of whole per-roller rows (contiguous: no column copies; the unused
+        # columns cost less to sum than to cut out)
+        S = self._mounting_sum
+        F = (S @ f)[:, :2]
+        K2 = np.ascontiguousarray((S @ K.reshape(R, -1)).reshape(M, N_Q, N_Q)[:, :2, :2])
+        C2 = np.ascontiguousarray((S @ C.reshape(R, -1)).reshape(M, N_Q, N_Q)[:, :2, :2])
+        FpA, FpB = (S @ (fpsi * wA))[:, :2], (S @ (fpsi * wB))[:, :2]
+        FdA, FdB = (S @ (fpsid * wA))[:, :2], (S @ (fpsid * wB))[:, :2]
         I2 = np.broadcast_to(np.eye(2), (M, 2, 2))
         # dr/dq and drdot/dq, drdot/dv over (x_A, y_A, th_A, x_B, y_B, th_B): (M, 2, 6)
         dr = np.concatenate([I2, _perp(a)[:, :, None], -I2, -_perp(b)[:, :, None]], axis=2)
