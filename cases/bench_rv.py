@@ -35,27 +35,38 @@ from rvtool.units import ARCSEC_PER_RAD
 
 
 def instrument(model):
-    """Wrap each element's evaluate and each evaluator's raw with wall-time counters."""
+    """Wall-time counters on the contact callbacks (each element's evaluate; with the merged
+    element, the host's evaluate and Jacobian, nested calls counted once) and on the kernel
+    launches inside them (each evaluator's raw; with the merged element also the device sums
+    of the launched families)."""
     timers = {"callback_s": 0.0, "kernel_s": 0.0, "calls": 0}
+    depth = {"callback_s": 0, "kernel_s": 0}
+
+    def timed(f, key):
+        def g(*a, **k):
+            if depth[key]:
+                return f(*a, **k)
+            depth[key] += 1
+            t = time.perf_counter()
+            try:
+                return f(*a, **k)
+            finally:
+                depth[key] -= 1
+                timers[key] += time.perf_counter() - t
+                timers["calls"] += key == "callback_s"
+        return g
+    host = model.contact_host
+    if host is not None:
+        host.evaluate = timed(host.evaluate, "callback_s")
+        host.user_jacobian = timed(host.user_jacobian, "callback_s")
+        sums = host.row_sums()
+        if sums is not None:
+            sums.run = timed(sums.run, "kernel_s")
+            sums.jacobian = timed(sums.jacobian, "kernel_s")
     for el in model.elements.values():
-        ev, raw = el.evaluate, el.evaluator.raw
-
-        def timed_eval(*a, _f=ev, **k):
-            t = time.perf_counter()
-            try:
-                return _f(*a, **k)
-            finally:
-                timers["callback_s"] += time.perf_counter() - t
-                timers["calls"] += 1
-
-        def timed_raw(*a, _f=raw, **k):
-            t = time.perf_counter()
-            try:
-                return _f(*a, **k)
-            finally:
-                timers["kernel_s"] += time.perf_counter() - t
-        el.evaluate = timed_eval
-        el.evaluator.raw = timed_raw
+        if host is None:
+            el.evaluate = timed(el.evaluate, "callback_s")
+        el.evaluator.raw = timed(el.evaluator.raw, "kernel_s")
     return timers
 
 

@@ -34,7 +34,7 @@ import exudyn as exu
 from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNodeCoordinate, NodePointGround,
                                   NodeRigidBody2D, ObjectRigidBody2D)
 
-from exudyn_user_elements.contact_element import ContactElement, PortBodies
+from exudyn_user_elements.contact_element import PortBodies
 
 from ..bearings.reducer import ball_rows
 from ..bearings.spec import NeedleBearing
@@ -44,6 +44,7 @@ from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre, journal_velocity
 from ..output_pins.calibration import mindlin_tangential_ratio  # noqa: F401 (public here too)
 from ..model import BodyCoordinate, ClearanceVariant, Family, ReducerModel, SeriesBeam
+from .contact_layout import CONTACT_ELEMENTS, ContactElements, contact_element_mode  # noqa: F401 (public here too)
 from .spec import CycloidDesign, replace
 
 SHAFT = 0
@@ -493,22 +494,6 @@ def lumped_bearing_contacts(design, *, offset=0, prefix=""):
     return contacts
 
 
-CONTACT_ELEMENTS = ("per_family", "merged")
-
-
-def contact_element_mode(value=None):
-    """The contact-element layout of :func:`build`: ``value``, else the environment variable
-    ``RVTOOL_CONTACT_ELEMENT``, else ``"merged"`` (checked against CONTACT_ELEMENTS). The merged
-    layout is the default since it reproduced every quick case's figures (README, "One contact
-    element per Exudyn system"); ``"per_family"`` stays selectable."""
-    import os
-    mode = value if value is not None else os.environ.get("RVTOOL_CONTACT_ELEMENT", "merged")
-    if mode not in CONTACT_ELEMENTS:
-        raise RvtoolInputError(f"contact_element = {mode!r}; valid choices are {list(CONTACT_ELEMENTS)} "
-                               "(argument of build or environment variable RVTOOL_CONTACT_ELEMENT)")
-    return mode
-
-
 def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
           rigid_supports=False, regularization=(100.0, 0.1), contact_element=None):
     """Assemble ``design`` into an Exudyn system; returns a :class:`CycloidModel`.
@@ -564,13 +549,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         n_pin_bodies = nw + 2 + st.size
     pin_set = CycloidPinSet(meshes, n_pin_bodies, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
                             precision=precision, device=device, name="pins", search=d.wheels.search)
-    host = None
-    if mode == "merged":
-        from exudyn_user_elements.merged_element import MergedContactElement
-        host = MergedContactElement(mbs, nodes, structure=housing)
-
-    def element(cset, **kw):
-        return ContactElement(mbs, nodes, cset, **kw) if host is None else host.add(cset, **kw)
+    element = ContactElements(mbs, nodes, mode, structure=housing)
+    host = element.host
 
     pin_eval = pin_set
     if C_ring is not None:

@@ -41,13 +41,13 @@ import numpy as np
 import exudyn as exu
 from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround
 
-from exudyn_user_elements.contact_element import ContactElement
 
 from ..contact.circle_set import GROUND, CircleContactSet, FrictionLaw, FrictionModel
 from ..contact.involute_set import GearMesh, InvoluteContactSet
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre
 from ..model import BodyCoordinate, Family, ReducerModel
+from .contact_layout import ContactElements
 from .cycloid import (CycloidKinematics, add_bodies, body_names, contact_families, lumped_bearing_contacts)
 from .spec import replace
 from .std_spec import StdInvoluteDesign
@@ -160,12 +160,15 @@ def gear_meshes(design, *, offset=0, prefix="", ring=GROUND):
 
 
 def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
-          regularization=(100.0, 0.1)):
+          regularization=(100.0, 0.1), contact_element=None):
     """Assemble ``design`` into an Exudyn system; returns a :class:`StdInvoluteModel`.
 
     bearing_model: "lumped" (one internal circle contact per bearing) or "rolling" (rolling
     elements). regularization: (k_translation [N/m], k_rotation [N m/rad]) of the weak springs
     from every free coordinate to its kinematic position (as :func:`rvtool.assembly.cycloid.build`).
+    contact_element: ``"merged"`` (every family in one Exudyn element) or ``"per_family"`` (one
+    element per family); None reads ``RVTOOL_CONTACT_ELEMENT`` (default ``"merged"``;
+    :mod:`rvtool.assembly.contact_layout`).
     """
     if not isinstance(design, StdInvoluteDesign):
         raise RvtoolInputError(f"design must be a StdInvoluteDesign; got {type(design).__name__}")
@@ -194,21 +197,22 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
     meshes, phases = gear_meshes(d, ring=ring)
     gear_set = InvoluteContactSet(meshes, nw + 2 + (ports is not None), backend=backend, precision=precision,
                                   device=device, name="gears")
-    elements = {"gears": ContactElement(mbs, nodes, gear_set, ports=ports)}
+    element = ContactElements(mbs, nodes, contact_element, structure=housing)
+    elements = {"gears": element(gear_set, ports=ports)}
 
     from ..output_pins.evaluator import OutputPinEvaluator
     op_eval = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
                                  wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2, backend=backend,
                                  precision=precision, device=device)
-    elements["output_pins"] = ContactElement(mbs, nodes, op_eval)
+    elements["output_pins"] = element(op_eval)
 
     if bearing_model == "rolling":
         from ..bearings.reducer import rolling_bearing_sets
         for name, ev in rolling_bearing_sets(d, nw, backend=backend, precision=precision, device=device).items():
-            elements[name] = ContactElement(mbs, nodes, ev)
+            elements[name] = element(ev)
     else:
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
-        elements["bearings"] = ContactElement(mbs, nodes, bset, backend=backend, precision=precision, device=device)
+        elements["bearings"] = element(bset, backend=backend, precision=precision, device=device)
     mbs.Assemble()
     return StdInvoluteModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                             families=contact_families(elements, mesh=("gears", Family.INVOLUTE_STAGE)), input=BodyCoordinate("shaft", "theta"),
@@ -223,4 +227,4 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
                                 if spec is not None},
                             mesh_period=2 * np.pi / d.ring.n_teeth, gear_set=gear_set, pair=d.pair, n_wheels=nw,
                             tooth_phases=phases, structures={} if housing is None else {"housing": housing},
-                            housing=housing)
+                            housing=housing, contact_host=element.host)

@@ -27,7 +27,7 @@ from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows
+from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows
 from ..errors import RvtoolInputError
 from ..validation import check_finite
 from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
@@ -149,13 +149,18 @@ def _pack(m):
     return rows, kinds, ids, rho, z, row_of
 
 
-class BearingSet:
+class BearingSet(StagedLaunch):
     """Any number of mounted bearings between ``n_bodies`` planar bodies, one kernel launch.
 
     mountings: sequence of :class:`Mounting`. name: element name. backend: "warp"
     (default) or "numpy" (the reference). precision: "float64" or "float32" (warp
     only). device: Warp device ("cpu", "cuda:N", "auto").
+    With backend "warp" the set's rows can be summed on the device by the merged contact
+    element (:class:`~rvtool.contact.evaluator.StagedLaunch`: staged inputs, the recorded
+    launch, fields assembled when read); the kernel always writes the velocity tangent rows.
     """
+
+    velocity_rows = True
 
     def __init__(self, mountings, n_bodies, *, name="bearings", backend="warp", precision="float64", device="cpu"):
         if backend not in BACKENDS:
@@ -201,6 +206,8 @@ class BearingSet:
         self.assembler = PairAssembler(self.iparams[:, ref.K_BODY_A], self.iparams[:, ref.K_BODY_B], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
+        self.launches = 0
+        self._staged = None
         if backend == "warp":
             from warp_contacts.rolling_elements import RollingElementKernel
             self._kernel = RollingElementKernel(self.fparams, self.iparams, n_bodies, precision, device)
@@ -210,6 +217,7 @@ class BearingSet:
     def raw(self, pose, vel=None):
         """Per-element results (Q (N,6), dQdq, dQdv, obs (N,8), aux (N,3)) at poses and
         velocities (nb, 3); ``vel=None`` means at rest."""
+        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
         self._pose[:-1] = pose
         self._vel[:-1] = 0.0 if vel is None else vel
         if self.backend == "warp":
@@ -236,6 +244,20 @@ class BearingSet:
         finite = all_finite(Qc, dq, dv)
         return Evaluation(self.assembler.vector(np.asarray(Qc, float)), self.assembler.matrix(np.asarray(dq, float)),
                           self.assembler.matrix(np.asarray(dv, float)), np.array(obs, float), (), finite)
+
+    def launched_field(self, name):
+        """Field ``name`` of :class:`Evaluation` from the outputs of the last launch (as :meth:`evaluate`
+        assembles them; no history)."""
+        r = self._staged.read
+        if name == "Q":
+            return self.assembler.vector(np.asarray(r("q"), float))
+        if name in ("dQdq", "dQdv"):
+            return self.assembler.matrix(np.asarray(r("dqdq" if name == "dQdq" else "dqdv"), float))
+        if name == "obs":
+            return np.array(r("obs"), float)
+        if name == "trial_history":
+            return ()
+        return all_finite(r("q"), r("dqdq"), r("dqdv"))
 
     def set_gap_offsets(self, offsets):
         """Clearance offsets [m] per element row (positive opens the gap: a clearance increment, e.g.

@@ -37,8 +37,6 @@ import exudyn as exu
 from exudyn.itemInterface import (CoordinateConstraint, CoordinateSpringDamper, LoadCoordinate,
                                   MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D, ObjectRigidBody2D)
 
-from exudyn_user_elements.contact_element import ContactElement
-
 from ...bearings.set import BearingSet, Mounting
 from ...bearings.tapered_set import TaperedBearingSet, TaperedMounting
 from ...contact.circle_set import GROUND, FrictionLaw, FrictionModel
@@ -48,6 +46,7 @@ from ...errors import RvtoolInputError
 from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
 from ...output_pins.calibration import mindlin_tangential_ratio
+from ..contact_layout import ContactElements
 from ..cycloid import pin_meshes
 from .gear_graph import GearGraph
 from .spec import RVDesign
@@ -459,13 +458,17 @@ def ported_ring(mbs, design, layout, meshes):
     return housing, ports, [dataclasses.replace(m, pin_bodies=pin_bodies) for m in meshes]
 
 
-def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1)):
+def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1),
+          contact_element=None):
     """Assemble ``design`` into an Exudyn system; returns an :class:`RvModel`.
 
     regularization: (k_translation [N/m], k_rotation [N m/rad]) of weak springs from every free
     coordinate to its kinematic position (a numerical setting for the free play of the
     backlash and bearing clearances at zero load, as in the cycloid builder; the force they
     carry is reported by the protocols). (0, 0) removes them.
+    contact_element: ``"merged"`` (every family in one Exudyn element, the ported ring's
+    contraction on the pins in contact) or ``"per_family"`` (one element per family); None reads
+    ``RVTOOL_CONTACT_ELEMENT`` (default ``"merged"``; :mod:`rvtool.assembly.contact_layout`).
     """
     if not isinstance(design, RVDesign):
         raise RvtoolInputError(f"design must be an RVDesign; got {type(design).__name__}")
@@ -526,8 +529,9 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
         crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts)),)
-    elements = {"pins": ContactElement(mbs, nodes, pin_set, ports=ports)}
-    elements.update((name, ContactElement(mbs, nodes, s)) for name, s in
+    element = ContactElements(mbs, nodes, contact_element, structure=housing)
+    elements = {"pins": element(pin_set, ports=ports)}
+    elements.update((name, element(s)) for name, s in
                     (*crank_path, ("crank_bearings", cranks), ("main_bearings", main)))
     if d.bearing_friction.model != "none":
         # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
@@ -536,8 +540,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         # element when the cranks bend) carry none here.
         from ...bearings.friction_element import rolling_friction_evaluator
         for name, bset in (("crank_bearing_friction", cranks), ("main_bearing_friction", main)):
-            elements[name] = ContactElement(mbs, nodes, rolling_friction_evaluator(bset, d.bearing_friction,
-                                                                                   name=name))
+            elements[name] = element(rolling_friction_evaluator(bset, d.bearing_friction, name=name))
     mbs.Assemble()
     if C_crank is None:
         families = {fam: (name, np.arange(len(elements[name].ids))) for fam, name in FAMILY_ELEMENTS.items()}
@@ -554,4 +557,5 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
                    structures={} if housing is None else {"housing": housing},
-                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, housing=housing)
+                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, housing=housing,
+                   contact_host=element.host)
