@@ -19,12 +19,14 @@ import functools
 
 import warp as wp
 
+from .dense_lu import lu_funcs
 from .batched_newton_ref import ACTIVE, CONVERGED, FAILED, ROW_ENTRIES, WARM
 
 
 @functools.lru_cache(maxsize=None)
 def kernels(dtype):
     """(scatter_poses, newton_step, sweep_gate, gather_rows, gather_bodies) for ``dtype``."""
+    lu_solve = lu_funcs(dtype)
 
     @wp.func
     def add_rows(qr: wp.array2d(dtype=dtype), kr: wp.array3d(dtype=dtype), loc: wp.array2d(dtype=wp.int32), p: int,
@@ -146,41 +148,12 @@ def kernels(dtype):
             converged = int(1)
         if ok != 0:
             # Gaussian elimination with partial pivoting on (A | r), back substitution into dq
-            for c in range(n):
-                piv = int(c)
-                best = wp.abs(A[p, c, c])
-                for i in range(c + 1, n):
-                    v = wp.abs(A[p, i, c])
-                    if v > best:
-                        best = v
-                        piv = i
-                if best == dtype(0.0):
-                    ok = int(0)
-                if ok != 0:
-                    if piv != c:
-                        for j in range(n):
-                            t = A[p, c, j]
-                            A[p, c, j] = A[p, piv, j]
-                            A[p, piv, j] = t
-                        t = r[p, c]
-                        r[p, c] = r[p, piv]
-                        r[p, piv] = t
-                    for i in range(c + 1, n):
-                        m = A[p, i, c] / A[p, c, c]
-                        if m != dtype(0.0):
-                            for j in range(c + 1, n):
-                                A[p, i, j] = A[p, i, j] - m * A[p, c, j]
-                            r[p, i] = r[p, i] - m * r[p, c]
+            ok = lu_solve(A, r, dq, p, n)
+        mt = dtype(0.0)
+        mr = dtype(0.0)
         if ok != 0:
-            mt = dtype(0.0)
-            mr = dtype(0.0)
-            for ii in range(n):
-                i = n - 1 - ii
-                s = r[p, i]
-                for j in range(i + 1, n):
-                    s = s - A[p, i, j] * dq[p, j]
-                x = s / A[p, i, i]
-                dq[p, i] = x
+            for i in range(n):
+                x = dq[p, i]
                 if not wp.isfinite(x):
                     ok = int(0)
                 if i % 3 == 2:

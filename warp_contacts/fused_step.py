@@ -21,6 +21,7 @@ import warp as wp
 
 from . import circle_pairs, cycloid_pins, output_pins
 from .circle_pairs_ref import N_OBS, O_FN
+from .dense_lu import lu_funcs
 from .fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_RECORDED, C_REJECTED, C_RUN, DONE, FAILED, H_BEARING,
                              H_INPUT, H_NEWTON, H_OUTPUT, H_OUTPUT_PIN, H_PIN, H_STEP, H_TIME, H_TORQUE, M_ACCEL,
                              M_ANGLE, M_SPEED, N_COUNT, N_HISTORY, S_ABS_TOL, S_ALPHA_F, S_ALPHA_M, S_BETA, S_GAMMA,
@@ -38,6 +39,7 @@ def kernels(dtype):
     pin_row = cycloid_pins.row_function(dtype, True, False)
     op_row = output_pins.plain_row_function(dtype)
     brg_row = circle_pairs.row_function(dtype)
+    lu_solve = lu_funcs(dtype)
 
     @wp.func
     def add_row(qr: wp.array2d(dtype=dtype), kr: wp.array3d(dtype=dtype), cr: wp.array3d(dtype=dtype), velocity: int,
@@ -259,38 +261,8 @@ def kernels(dtype):
                                 A[p, i, j] = -sc * (K[p, i, j] + gp * C[p, i, j])
                         A[p, i, i] = A[p, i, i] + sc * bp * mass[p, i]
                 # Gaussian elimination with partial pivoting on (A | dx), back substitution into dx
-                for c in range(n):
-                    piv = int(c)
-                    best = wp.abs(A[p, c, c])
-                    for i in range(c + 1, n):
-                        vv = wp.abs(A[p, i, c])
-                        if vv > best:
-                            best = vv
-                            piv = i
-                    if not (best > dtype(0.0)):
-                        ok = int(0)
-                    if ok != 0:
-                        if piv != c:
-                            for j in range(n):
-                                tmp = A[p, c, j]
-                                A[p, c, j] = A[p, piv, j]
-                                A[p, piv, j] = tmp
-                            tmp = dx[p, c]
-                            dx[p, c] = dx[p, piv]
-                            dx[p, piv] = tmp
-                        for i in range(c + 1, n):
-                            m = A[p, i, c] / A[p, c, c]
-                            if m != dtype(0.0):
-                                for j in range(c + 1, n):
-                                    A[p, i, j] = A[p, i, j] - m * A[p, c, j]
-                                dx[p, i] = dx[p, i] - m * dx[p, c]
+                ok = lu_solve(A, dx, dx, p, n)
                 if ok != 0:
-                    for ii in range(n):
-                        i = n - 1 - ii
-                        s = dx[p, i]
-                        for j in range(i + 1, n):
-                            s = s - A[p, i, j] * dx[p, j]
-                        dx[p, i] = s / A[p, i, i]
                     # Exudyn's multiplier update of the fixed rows: lambda -= (s r_x - J_xf D_f) / s
                     for i in range(n):
                         if free[i] == 0:
