@@ -149,7 +149,7 @@ def test_merged_and_per_family_std_rated_equilibria_agree():
     from rvtool.assembly.std_involute import build
     from rvtool.assembly.std_spec import load_design
     d = load_design(designs.path("std_involute"))
-    (m, q, s), (m0, q0, s0) = _loaded(build, "merged", d), _loaded(build, "per_family", d)
+    (m, q, _), (m0, q0, _) = _loaded(build, "merged", d), _loaded(build, "per_family", d)
     assert {el.object_number for el in m.elements.values()} == {m.contact_host.object_number}
     assert np.max(np.abs(q - q0)) <= 1e-10 * np.max(np.abs(q0))
     for fam in m.families:

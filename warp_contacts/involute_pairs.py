@@ -256,7 +256,6 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
             s = dtype(-1.0)
         omega = s * eps
         rbb = fp[i, GEAR_B + G_RB]
-        ang = tha + tooth_angle(ip, dev, i, 0, k) - omega * fp[i, GEAR_A + G_PSI] + omega * fp[i, GEAR_A + G_CHI]
         rc = fp[i, GEAR_A + G_RHO_C]
         Pc = OA + rc * tv0
         dPc = dOA + (rc * dtha) * perp(tv0)
@@ -289,7 +288,6 @@ def _kernel(dtype, velocity_tangent=True, anchor=False):
             s = dtype(-1.0)
         omega = s * eps
         rba = fp[i, GEAR_A + G_RB]
-        ang = thb + tooth_angle(ip, dev, i, 1, j) - omega * eps * fp[i, GEAR_B + G_PSI] + omega * fp[i, GEAR_B + G_CHI]
         rc = fp[i, GEAR_B + G_RHO_C]
         Pc = OB + rc * tv0
         dPc = dOB + (rc * dthb) * perp(tv0)
