@@ -115,6 +115,90 @@ def check_supported(params):
                                "or regularized lumped bearings")
 
 
+FUSED_ELEMENTS = ("pins", "output_pins", "bearings")
+"""The contact elements of a built model the fused stepper carries (no loss elements)."""
+
+
+@dataclass(frozen=True)
+class FusedSupport:
+    """Whether the fused stepper can run a built model: ``reasons`` (empty: it can) and ``params``,
+    the :class:`CopyParameters` of ``[Variant()]`` of the model's design, checked equal to the
+    model (None where a reason was found before they could be built or compared)."""
+    reasons: tuple
+    params: object = None
+
+    @property
+    def eligible(self):
+        return not self.reasons
+
+
+def fused_support(model, run_spec=None):
+    """:class:`FusedSupport` of a built ``model`` (and ``run_spec``, when given) for the fused stepper.
+
+    The fused path rebuilds the model from ``model.design`` (:func:`copy_parameters`); the build
+    options that are not part of the design are checked against the model through its public
+    fields, and the rebuilt contact rows against the model's: the topology (a cycloid design
+    and kinematics), the contact elements (pins, output pins, bearings: no bearing-friction
+    loss element), no journal locks (``rigid_supports=False``), float64 contacts, the same
+    fixed coordinates and body reference poses, the cycloid-pin rows bit for bit, the same
+    number of output-pin and bearing rows (the lumped bearings: one row per bearing; a
+    rolling-element set has one per element), no gap offsets set on the pins after the build,
+    no friction anchors (:func:`check_supported`); a housing other than rigid and elastic pin
+    supports are refused by :func:`copy_parameters`. Not seen from outside the model (documented
+    assumption): friction coefficients changed after the build with ``set_friction``.
+    Run settings: full Newton, no strict acceptance or rotational residual scaling, adaptive
+    steps, float64 (the fused stepper's integrator is Exudyn's with these settings)."""
+    from ..assembly.cycloid import CycloidKinematics
+    from ..assembly.spec import CycloidDesign
+    from ..batched.device_copies import copy_parameters
+    from ..model.reducer import Family
+    from ..variants.variant import Variant
+    reasons = []
+    if run_spec is not None:
+        for key, val, ok in (("newton_mode", run_spec.newton_mode, "'full'"),
+                             ("strict_abs_tol", run_spec.strict_abs_tol, "None"),
+                             ("reference_length", run_spec.reference_length, "None"),
+                             ("adaptive", run_spec.adaptive, "True"),
+                             ("precision", run_spec.precision, "'float64'")):
+            if repr(val) != ok:
+                reasons.append(f"run_spec.{key} = {val!r} (the fused stepper runs {ok})")
+    if not (isinstance(model.design, CycloidDesign) and isinstance(model.kinematics, CycloidKinematics)):
+        reasons.append(f"topology {type(model.design).__name__}: the fused stepper runs cycloid reducers only")
+        return FusedSupport(tuple(reasons))
+    extra = sorted(set(model.elements) - set(FUSED_ELEMENTS))
+    if extra:
+        reasons.append(f"contact elements {extra} (bearing_friction.model = {model.design.bearing_friction.model!r}); "
+                       f"the fused stepper carries {list(FUSED_ELEMENTS)} only (valid: bearing_friction.model 'none')")
+    if model.journal_locks:
+        reasons.append("rigid_supports=True (journal locks); the fused stepper runs rigid_supports=False")
+    precision = getattr(model.pin_set, "precision", "float64")
+    if precision != "float64":
+        reasons.append(f"precision = {precision!r}; the fused stepper runs 'float64'")
+    try:
+        params = copy_parameters(model.design, [Variant()])
+        check_supported(params)
+    except RvtoolInputError as e:
+        reasons.append(str(e))
+        return FusedSupport(tuple(reasons))
+    if set(np.flatnonzero(~params.free)) != set(model.fixed_coordinates()):
+        reasons.append("the model's fixed coordinates differ from the design's (drive and bodies.* locks)")
+    if not np.array_equal(model.reference, params.reference[0]):
+        reasons.append("the model's body reference poses differ from the design's")
+    if not (np.array_equal(model.pin_set.fparams, params.pin_f[0])
+            and np.array_equal(model.pin_set.iparams, params.pin_i[0])):
+        reasons.append("the model's cycloid-pin rows differ from those rebuilt from model.design")
+    n_brg = sum(len(model.family_rows(f)[1]) for f in (Family.ECCENTRIC_BEARINGS, Family.MAIN_BEARINGS,
+                                                        Family.INPUT_BEARINGS) if f in model.families)
+    if n_brg != len(params.brg_i):
+        reasons.append(f"{n_brg} bearing rows against {len(params.brg_i)} lumped bearings: the fused stepper runs "
+                       "bearing_model='lumped' (valid: 'lumped')")
+    if Family.OUTPUT_PINS not in model.families:
+        reasons.append("the model has no output pins")
+    if any(v != 0.0 for v in model.gap_offsets(Family.PINS).values()):
+        reasons.append("gap offsets set on the pins after the build (set_gap_offsets) are not in model.design")
+    return FusedSupport(tuple(reasons), None if reasons else params)
+
+
 def model_arrays(params, variant_index, *, torque, motion, settings_vector):
     """The :class:`warp_contacts.fused_step.FusedStepper` / :class:`ReferenceModel` keyword arrays
     of copies ``variant_index`` (B,) of ``params``: global rows, masses, motion (B, N_MOTION)
@@ -332,5 +416,5 @@ def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDyn
             "peak_loads": peaks, "device_run": run}
 
 
-__all__ = ["DeviceDynamics", "DeviceDynamicsSettings", "DeviceRun", "dynamic_te_fused", "kinematic_velocities",
-           "model_arrays", "check_supported", "ACTIVE", "DONE", "FAILED"]
+__all__ = ["DeviceDynamics", "DeviceDynamicsSettings", "DeviceRun", "FusedSupport", "dynamic_te_fused",
+           "fused_support", "kinematic_velocities", "model_arrays", "check_supported", "ACTIVE", "DONE", "FAILED"]
