@@ -365,6 +365,42 @@ def _save_failure(out_dir, run, p):
     return path
 
 
+def driven_copies(params, variant_index, *, torque, speed_rpm, duration, settings: DeviceDynamicsSettings,
+                  device="cpu", on_launch=None):
+    """The dynamic TE protocol's driven run for copies ``variant_index`` (B,) of ``params`` in one
+    batched run: each copy's quasi-static loaded state at input angle 0 (the device Newton, from
+    the copy's kinematic state), its kinematic velocities, constant input speed [rpm], constant
+    output torque [N m] (resisting the nominal rotation, as the protocol), ``duration`` [s].
+    Copies whose static start does not converge are not run. Returns a dict: "static"
+    (:class:`DeviceSolve` of all B), "started" (B,) bool, "run" (:class:`DeviceRun` of the started
+    copies, in order), "te" (B,) list of Eq. (obs_te) histories [rad] on each copy's accepted steps
+    (None: not started), "omega_in" [rad/s]."""
+    from ..protocols.precision import transmission_error
+    from .device_newton import DeviceNewton
+    check_positive("duration", duration)
+    check_positive("speed_rpm", speed_rpm)
+    vi = np.asarray(variant_index, np.int64)
+    B = len(vi)
+    omega = speed_rpm * 2 * np.pi / 60.0
+    ratio = params.design.ratio
+    t_out = -np.sign(ratio) * torque
+    kin = params.kinematic(vi, np.zeros(B))
+    static = DeviceNewton(params, device=device).solve(vi, np.zeros(B), np.full(B, t_out), kin)
+    started = np.asarray(static.converged, bool)
+    te, run = [None] * B, None
+    if np.any(started):
+        vs = vi[started]
+        motion = np.zeros((len(vs), N_MOTION))
+        motion[:, M_SPEED] = omega
+        dyn = DeviceDynamics(params, vs, torque=np.full(len(vs), t_out), motion=motion, end_time=duration,
+                             device=device, settings=settings)
+        dyn.start(static.q[started], kinematic_velocities(params, vs, 0.0, omega))
+        run = dyn.run(on_launch=on_launch)
+        for p, b in enumerate(np.flatnonzero(started)):
+            te[b] = transmission_error(run.theta_in[p], run.theta_out[p], ratio)
+    return {"static": static, "started": started, "run": run, "te": te, "omega_in": omega}
+
+
 def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDynamicsSettings, device="cpu",
                      out_dir=None, params=None, on_launch=None):
     """Driven rotation of ``design`` at constant input speed [rpm] against the output torque
@@ -374,34 +410,23 @@ def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDyn
     "device_run". params: a prebuilt :class:`CopyParameters` of ``[Variant()]`` (else built).
     Raises SolverFailure (state saved in out_dir) if the run fails."""
     from ..batched.device_copies import copy_parameters
-    from ..protocols.precision import transmission_error
     from ..variants.variant import Variant
-    from .device_newton import DeviceNewton
     from .driver import RunRecord
-    check_positive("duration", duration)
-    check_positive("speed_rpm", speed_rpm)
     if params is None:
         params = copy_parameters(design, [Variant()])
-    omega = speed_rpm * 2 * np.pi / 60.0
     ratio = design.ratio
-    t_out = -np.sign(ratio) * torque
-    kin = params.kinematic([0], [0.0])
-    static = DeviceNewton(params, device=device).solve([0], [0.0], [t_out], kin)
+    res = driven_copies(params, [0], torque=torque, speed_rpm=speed_rpm, duration=duration, settings=settings,
+                        device=device, on_launch=on_launch)
+    static, run, omega = res["static"], res["run"], res["omega_in"]
     if not static.converged[0]:
         raise SolverFailure("fused dynamic TE: the quasi-static start at input angle 0 did not converge "
                             f"(residual {static.residual[0]:.3e} N)", None)
-    motion = np.zeros((1, N_MOTION))
-    motion[0, M_SPEED] = omega
-    dyn = DeviceDynamics(params, [0], torque=[t_out], motion=motion, end_time=duration, device=device,
-                         settings=settings)
-    dyn.start(static.q, kinematic_velocities(params, [0], 0.0, omega))
-    run = dyn.run(on_launch=on_launch)
     if run.status[0] == FAILED:
         path = _save_failure(out_dir, run, 0)
         raise SolverFailure(f"fused stepper: step below min_step {settings.minimum_step:g} s at "
                             f"t = {run.state['t'][0]:.6g} s (copy 0); last accepted state: {path}", path)
     t, th_in, th_out = run.t[0], run.theta_in[0], run.theta_out[0]
-    te = transmission_error(th_in, th_out, ratio)
+    te = res["te"][0]
     steps = run.step[0][1:]
     rec = RunRecord(accepted_steps=int(run.accepted[0]), attempts=int(run.accepted[0] + run.rejected[0]),
                     rejected_steps=int(run.rejected[0]), newton_iterations=int(run.newton_total[0]),
@@ -416,5 +441,5 @@ def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDyn
             "peak_loads": peaks, "device_run": run}
 
 
-__all__ = ["DeviceDynamics", "DeviceDynamicsSettings", "DeviceRun", "FusedSupport", "dynamic_te_fused",
+__all__ = ["DeviceDynamics", "DeviceDynamicsSettings", "DeviceRun", "FusedSupport", "driven_copies", "dynamic_te_fused",
            "fused_support", "kinematic_velocities", "model_arrays", "check_supported", "ACTIVE", "DONE", "FAILED"]
