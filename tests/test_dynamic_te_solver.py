@@ -63,6 +63,21 @@ def test_fused_and_auto_match_exudyn(model, design):
     assert np.ptp(exu["te"]) * ARCSEC_PER_RAD > 1.0
 
 
+@pytest.mark.parametrize("device", ["cuda:0"])
+def test_fused_switch_on_cuda(model, design, device):
+    """The switch's device argument: the fused run on a GPU against Exudyn (the CPU run is the
+    test above); same step sequence, same tolerance (the kernel is the same code; summation order
+    and the dense solve are per thread as on the CPU)."""
+    import warp as wp
+    wp.init()
+    if wp.get_cuda_device_count() == 0:
+        pytest.skip(f"{device} not present")
+    exu = _run(model, design, "exudyn")
+    fused = _run(model, design, "fused", device=device)
+    assert fused["solver"] == "fused" and fused["device_run"].accepted[0] == exu["record"].accepted_steps
+    assert np.max(np.abs(fused["te"] - exu["te"])) * ARCSEC_PER_RAD < 1.6e-6
+
+
 def test_auto_runs_exudyn_for_a_rolling_bearing_model(design):
     """Rolling-element bearings are outside the fused set: auto runs Exudyn and says why."""
     rolling = build(design, bearing_model="rolling")
