@@ -112,7 +112,8 @@ def main(argv=None):
             d = float(np.max(np.abs(np.interp(r["t"], run.t[p], res["te"][b]) - r["te"])) * ARCSEC_PER_RAD)
             diffs.append(d)
         ref.append({"index": variants[b].index, "t": r["t"], "te": r["te"],
-                    "te_pp_arcsec": float(np.ptp(r["te"]) * ARCSEC_PER_RAD), "diff_arcsec": d, "same_steps": bool(done[b] and len(r["t"]) == len(run.t[ti[b]]))})
+                    "te_pp_arcsec": float(np.ptp(r["te"]) * ARCSEC_PER_RAD), "diff_arcsec": d,
+                    "same_steps": bool(done[b] and len(r["t"]) == len(run.t[ti[b]]))})
     exu_wall = time.perf_counter() - t1
     exu_rate = exu_steps / exu_run_s if exu_run_s > 0 else None
 
@@ -155,7 +156,8 @@ def _plot(out, res, run, ti, done, ref, te_pp):
         every = max(1, len(r["t"]) // 200)      # markers thin enough to show the fused line under them
         ax[0].plot(r["t"][::every] * 1e3, r["te"][::every] * ARCSEC_PER_RAD, "o", ms=2.5, mfc="none",
                    color=f"C{k}", label=f"Exudyn, variant {r['index']}")
-    ax[0].set(xlabel="t [ms]", ylabel="TE [arcsec]", title="fused stepper (grey, up to 64 variants) vs Exudyn (markers)")
+    ax[0].set(xlabel="t [ms]", ylabel="TE [arcsec]",
+              title="fused stepper (grey, up to 64 variants) vs Exudyn (markers)")
     ax[0].legend(fontsize=7)
     x = [v for v in te_pp if v is not None]
     ax[1].hist(x, bins=max(5, min(40, len(x) // 4)), color="0.6", edgecolor="k", lw=0.5)
