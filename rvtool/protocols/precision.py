@@ -87,11 +87,58 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
             "regularization_max": model.regularization_force(solver.q)}
 
 
-def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, out_dir=None, on_start=None):
+DYNAMIC_SOLVERS = ("exudyn", "fused", "auto")
+"""Solvers of the driven run: Exudyn's generalized alpha with the contact elements, the fused
+device stepper (:func:`rvtool.solver.device_dynamics.dynamic_te_fused`, the same integrator in
+one Warp launch per 64 steps), or the fused stepper where it supports the model, else Exudyn."""
+
+
+def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, out_dir=None, on_start=None,
+               solver="exudyn", device=None):
     """Driven rotation at constant input speed from the quasi-static loaded state at angle 0.
 
-    Returns time, angle histories, TE [rad] on the accepted steps, the run record and
-    the uniform-time resampled TE (for spectra)."""
+    Returns time, angle histories, TE [rad] on the accepted steps, the run record,
+    the uniform-time resampled TE (for spectra) and ``solver``, the solver that ran.
+
+    solver: one of :data:`DYNAMIC_SOLVERS`. ``"fused"`` runs the built model's design on the
+    fused stepper with the same RunSpec (its eligibility, and that the model equals what the
+    fused path rebuilds from ``model.design``, is
+    :func:`rvtool.solver.device_dynamics.fused_support`; an ineligible model is a named
+    RvtoolInputError); the result adds "torque_in" and "peak_loads"; the static start is the
+    device Newton's (Exudyn's StaticSolver is its oracle). ``"auto"``: fused where eligible,
+    else Exudyn with the reasons in "solver_reasons". Observers need the Exudyn driver (auto
+    runs Exudyn with them). device: the fused stepper's Warp device (None: run_spec.device);
+    the Exudyn path evaluates contacts on the device the model was built for.
+    on_start: called just before the run (after the static start on the Exudyn path, before
+    the device Newton's start on the fused path)."""
+    from ..validation import check_choice
+    check_choice("solver", solver, DYNAMIC_SOLVERS)
+    if solver != "exudyn":
+        from ..errors import RvtoolInputError
+        from ..solver.device_dynamics import DeviceDynamicsSettings, dynamic_te_fused, fused_support
+        sup = fused_support(model, run_spec)
+        reasons = list(sup.reasons) + (["observers are recorded by the Exudyn driver only"] if observers else [])
+        if solver == "fused" and reasons:
+            raise RvtoolInputError(f"solver = 'fused' cannot run this model: {'; '.join(reasons)}. Valid choices: "
+                                   f"{list(DYNAMIC_SOLVERS)} ('exudyn', or 'auto', which runs Exudyn here)")
+        if not reasons:
+            if on_start is not None:
+                on_start()
+            out = dynamic_te_fused(model.design, torque=torque, speed_rpm=speed_rpm, duration=duration,
+                                   settings=DeviceDynamicsSettings.from_run_spec(run_spec),
+                                   device=device or run_spec.device, out_dir=out_dir, params=sup.params)
+            out["solver"] = "fused"
+            return out
+        out = _dynamic_te_exudyn(model, torque=torque, speed_rpm=speed_rpm, duration=duration, run_spec=run_spec,
+                                 observers=observers, out_dir=out_dir, on_start=on_start)
+        out["solver_reasons"] = reasons
+        return out
+    return _dynamic_te_exudyn(model, torque=torque, speed_rpm=speed_rpm, duration=duration, run_spec=run_spec,
+                              observers=observers, out_dir=out_dir, on_start=on_start)
+
+
+def _dynamic_te_exudyn(model, *, torque, speed_rpm, duration, run_spec, observers, out_dir, on_start):
+    """The Exudyn path of :func:`dynamic_te`."""
     import exudyn as exu
 
     from ..solver import simulate
@@ -129,4 +176,4 @@ def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, 
     n_uniform = max(16, int(round(duration / run_spec.step)))
     t_u = np.linspace(0.0, duration, n_uniform, endpoint=False)
     return {"t": t_rec, "theta_in": th_in, "theta_out": th_out, "te": te, "record": rec,
-            "t_uniform": t_u, "te_uniform": np.interp(t_u, t_rec, te), "omega_in": omega}
+            "t_uniform": t_u, "te_uniform": np.interp(t_u, t_rec, te), "omega_in": omega, "solver": "exudyn"}

@@ -115,6 +115,90 @@ def check_supported(params):
                                "or regularized lumped bearings")
 
 
+FUSED_ELEMENTS = ("pins", "output_pins", "bearings")
+"""The contact elements of a built model the fused stepper carries (no loss elements)."""
+
+
+@dataclass(frozen=True)
+class FusedSupport:
+    """Whether the fused stepper can run a built model: ``reasons`` (empty: it can) and ``params``,
+    the :class:`CopyParameters` of ``[Variant()]`` of the model's design, checked equal to the
+    model (None where a reason was found before they could be built or compared)."""
+    reasons: tuple
+    params: object = None
+
+    @property
+    def eligible(self):
+        return not self.reasons
+
+
+def fused_support(model, run_spec=None):
+    """:class:`FusedSupport` of a built ``model`` (and ``run_spec``, when given) for the fused stepper.
+
+    The fused path rebuilds the model from ``model.design`` (:func:`copy_parameters`); the build
+    options that are not part of the design are checked against the model through its public
+    fields, and the rebuilt contact rows against the model's: the topology (a cycloid design
+    and kinematics), the contact elements (pins, output pins, bearings: no bearing-friction
+    loss element), no journal locks (``rigid_supports=False``), float64 contacts, the same
+    fixed coordinates and body reference poses, the cycloid-pin rows bit for bit, the same
+    number of output-pin and bearing rows (the lumped bearings: one row per bearing; a
+    rolling-element set has one per element), no gap offsets set on the pins after the build,
+    no friction anchors (:func:`check_supported`); a housing other than rigid and elastic pin
+    supports are refused by :func:`copy_parameters`. Not seen from outside the model (documented
+    assumption): friction coefficients changed after the build with ``set_friction``.
+    Run settings: full Newton, no strict acceptance or rotational residual scaling, adaptive
+    steps, float64 (the fused stepper's integrator is Exudyn's with these settings)."""
+    from ..assembly.cycloid import CycloidKinematics
+    from ..assembly.spec import CycloidDesign
+    from ..batched.device_copies import copy_parameters
+    from ..model.reducer import Family
+    from ..variants.variant import Variant
+    reasons = []
+    if run_spec is not None:
+        for key, val, ok in (("newton_mode", run_spec.newton_mode, "'full'"),
+                             ("strict_abs_tol", run_spec.strict_abs_tol, "None"),
+                             ("reference_length", run_spec.reference_length, "None"),
+                             ("adaptive", run_spec.adaptive, "True"),
+                             ("precision", run_spec.precision, "'float64'")):
+            if repr(val) != ok:
+                reasons.append(f"run_spec.{key} = {val!r} (the fused stepper runs {ok})")
+    if not (isinstance(model.design, CycloidDesign) and isinstance(model.kinematics, CycloidKinematics)):
+        reasons.append(f"topology {type(model.design).__name__}: the fused stepper runs cycloid reducers only")
+        return FusedSupport(tuple(reasons))
+    extra = sorted(set(model.elements) - set(FUSED_ELEMENTS))
+    if extra:
+        reasons.append(f"contact elements {extra} (bearing_friction.model = {model.design.bearing_friction.model!r}); "
+                       f"the fused stepper carries {list(FUSED_ELEMENTS)} only (valid: bearing_friction.model 'none')")
+    if model.journal_locks:
+        reasons.append("rigid_supports=True (journal locks); the fused stepper runs rigid_supports=False")
+    precision = getattr(model.pin_set, "precision", "float64")
+    if precision != "float64":
+        reasons.append(f"precision = {precision!r}; the fused stepper runs 'float64'")
+    try:
+        params = copy_parameters(model.design, [Variant()])
+        check_supported(params)
+    except RvtoolInputError as e:
+        reasons.append(str(e))
+        return FusedSupport(tuple(reasons))
+    if set(np.flatnonzero(~params.free)) != set(model.fixed_coordinates()):
+        reasons.append("the model's fixed coordinates differ from the design's (drive and bodies.* locks)")
+    if not np.array_equal(model.reference, params.reference[0]):
+        reasons.append("the model's body reference poses differ from the design's")
+    if not (np.array_equal(model.pin_set.fparams, params.pin_f[0])
+            and np.array_equal(model.pin_set.iparams, params.pin_i[0])):
+        reasons.append("the model's cycloid-pin rows differ from those rebuilt from model.design")
+    n_brg = sum(len(model.family_rows(f)[1]) for f in (Family.ECCENTRIC_BEARINGS, Family.MAIN_BEARINGS,
+                                                        Family.INPUT_BEARINGS) if f in model.families)
+    if n_brg != len(params.brg_i):
+        reasons.append(f"{n_brg} bearing rows against {len(params.brg_i)} lumped bearings: the fused stepper runs "
+                       "bearing_model='lumped' (valid: 'lumped')")
+    if Family.OUTPUT_PINS not in model.families:
+        reasons.append("the model has no output pins")
+    if any(v != 0.0 for v in model.gap_offsets(Family.PINS).values()):
+        reasons.append("gap offsets set on the pins after the build (set_gap_offsets) are not in model.design")
+    return FusedSupport(tuple(reasons), None if reasons else params)
+
+
 def model_arrays(params, variant_index, *, torque, motion, settings_vector):
     """The :class:`warp_contacts.fused_step.FusedStepper` / :class:`ReferenceModel` keyword arrays
     of copies ``variant_index`` (B,) of ``params``: global rows, masses, motion (B, N_MOTION)
@@ -281,6 +365,42 @@ def _save_failure(out_dir, run, p):
     return path
 
 
+def driven_copies(params, variant_index, *, torque, speed_rpm, duration, settings: DeviceDynamicsSettings,
+                  device="cpu", on_launch=None):
+    """The dynamic TE protocol's driven run for copies ``variant_index`` (B,) of ``params`` in one
+    batched run: each copy's quasi-static loaded state at input angle 0 (the device Newton, from
+    the copy's kinematic state), its kinematic velocities, constant input speed [rpm], constant
+    output torque [N m] (resisting the nominal rotation, as the protocol), ``duration`` [s].
+    Copies whose static start does not converge are not run. Returns a dict: "static"
+    (:class:`DeviceSolve` of all B), "started" (B,) bool, "run" (:class:`DeviceRun` of the started
+    copies, in order), "te" (B,) list of Eq. (obs_te) histories [rad] on each copy's accepted steps
+    (None: not started), "omega_in" [rad/s]."""
+    from ..protocols.precision import transmission_error
+    from .device_newton import DeviceNewton
+    check_positive("duration", duration)
+    check_positive("speed_rpm", speed_rpm)
+    vi = np.asarray(variant_index, np.int64)
+    B = len(vi)
+    omega = speed_rpm * 2 * np.pi / 60.0
+    ratio = params.design.ratio
+    t_out = -np.sign(ratio) * torque
+    kin = params.kinematic(vi, np.zeros(B))
+    static = DeviceNewton(params, device=device).solve(vi, np.zeros(B), np.full(B, t_out), kin)
+    started = np.asarray(static.converged, bool)
+    te, run = [None] * B, None
+    if np.any(started):
+        vs = vi[started]
+        motion = np.zeros((len(vs), N_MOTION))
+        motion[:, M_SPEED] = omega
+        dyn = DeviceDynamics(params, vs, torque=np.full(len(vs), t_out), motion=motion, end_time=duration,
+                             device=device, settings=settings)
+        dyn.start(static.q[started], kinematic_velocities(params, vs, 0.0, omega))
+        run = dyn.run(on_launch=on_launch)
+        for p, b in enumerate(np.flatnonzero(started)):
+            te[b] = transmission_error(run.theta_in[p], run.theta_out[p], ratio)
+    return {"static": static, "started": started, "run": run, "te": te, "omega_in": omega}
+
+
 def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDynamicsSettings, device="cpu",
                      out_dir=None, params=None, on_launch=None):
     """Driven rotation of ``design`` at constant input speed [rpm] against the output torque
@@ -290,34 +410,23 @@ def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDyn
     "device_run". params: a prebuilt :class:`CopyParameters` of ``[Variant()]`` (else built).
     Raises SolverFailure (state saved in out_dir) if the run fails."""
     from ..batched.device_copies import copy_parameters
-    from ..protocols.precision import transmission_error
     from ..variants.variant import Variant
-    from .device_newton import DeviceNewton
     from .driver import RunRecord
-    check_positive("duration", duration)
-    check_positive("speed_rpm", speed_rpm)
     if params is None:
         params = copy_parameters(design, [Variant()])
-    omega = speed_rpm * 2 * np.pi / 60.0
     ratio = design.ratio
-    t_out = -np.sign(ratio) * torque
-    kin = params.kinematic([0], [0.0])
-    static = DeviceNewton(params, device=device).solve([0], [0.0], [t_out], kin)
+    res = driven_copies(params, [0], torque=torque, speed_rpm=speed_rpm, duration=duration, settings=settings,
+                        device=device, on_launch=on_launch)
+    static, run, omega = res["static"], res["run"], res["omega_in"]
     if not static.converged[0]:
         raise SolverFailure("fused dynamic TE: the quasi-static start at input angle 0 did not converge "
                             f"(residual {static.residual[0]:.3e} N)", None)
-    motion = np.zeros((1, N_MOTION))
-    motion[0, M_SPEED] = omega
-    dyn = DeviceDynamics(params, [0], torque=[t_out], motion=motion, end_time=duration, device=device,
-                         settings=settings)
-    dyn.start(static.q, kinematic_velocities(params, [0], 0.0, omega))
-    run = dyn.run(on_launch=on_launch)
     if run.status[0] == FAILED:
         path = _save_failure(out_dir, run, 0)
         raise SolverFailure(f"fused stepper: step below min_step {settings.minimum_step:g} s at "
                             f"t = {run.state['t'][0]:.6g} s (copy 0); last accepted state: {path}", path)
     t, th_in, th_out = run.t[0], run.theta_in[0], run.theta_out[0]
-    te = transmission_error(th_in, th_out, ratio)
+    te = res["te"][0]
     steps = run.step[0][1:]
     rec = RunRecord(accepted_steps=int(run.accepted[0]), attempts=int(run.accepted[0] + run.rejected[0]),
                     rejected_steps=int(run.rejected[0]), newton_iterations=int(run.newton_total[0]),
@@ -332,5 +441,5 @@ def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDyn
             "peak_loads": peaks, "device_run": run}
 
 
-__all__ = ["DeviceDynamics", "DeviceDynamicsSettings", "DeviceRun", "dynamic_te_fused", "kinematic_velocities",
-           "model_arrays", "check_supported", "ACTIVE", "DONE", "FAILED"]
+__all__ = ["DeviceDynamics", "DeviceDynamicsSettings", "DeviceRun", "FusedSupport", "driven_copies", "dynamic_te_fused",
+           "fused_support", "kinematic_velocities", "model_arrays", "check_supported", "ACTIVE", "DONE", "FAILED"]
