@@ -414,7 +414,6 @@ def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDyn
     from .driver import RunRecord
     if params is None:
         params = copy_parameters(design, [Variant()])
-    ratio = design.ratio
     res = driven_copies(params, [0], torque=torque, speed_rpm=speed_rpm, duration=duration, settings=settings,
                         device=device, on_launch=on_launch)
     static, run, omega = res["static"], res["run"], res["omega_in"]
