@@ -46,6 +46,14 @@ def check_nonnegative(name, value):
     return check_range(name, value, 0.0, math.inf)
 
 
+def check_integer(name, value, low, high=math.inf):
+    """Check that ``value`` is an integer (not a bool) with ``low <= value <= high``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+        hb = "inf)" if high == math.inf else f"{high}]"
+        raise RvtoolInputError(f"{name} = {value!r} is outside the valid range [{low}, {hb} (integer)")
+    return value
+
+
 def check_shape(name, array, shape):
     """Check an array's shape; ``None`` in ``shape`` matches any length."""
     arr = np.asarray(array)

@@ -30,7 +30,7 @@ import numpy as np
 from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ..errors import RvtoolInputError
 from ..geometry.involute import BasicRack, FlankModification, InvoluteGear, InvolutePair, line_gap
-from ..validation import check_finite, check_nonnegative, check_positive
+from ..validation import check_finite, check_integer, check_nonnegative, check_positive
 from ..output_pins.spec import OutputPinMechanism
 from ..structure import ElasticMaterial
 from .spec import BEARING_KINDS, Bodies, Housing, build_section, load_sections, replace
@@ -79,11 +79,9 @@ class MeshSettings:
     radial_assembly: bool = False
 
     def __post_init__(self):
-        if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, int) or self.n_slices < 1:
-            raise RvtoolInputError(f"n_slices = {self.n_slices!r} is outside the valid range [1, inf) (integer)")
-        if self.window is not None and (isinstance(self.window, bool) or not isinstance(self.window, int)
-                                        or self.window < 0):
-            raise RvtoolInputError(f"window = {self.window!r} is outside the valid range [0, inf) (integer)")
+        check_integer("n_slices", self.n_slices, 1)
+        if self.window is not None:
+            check_integer("window", self.window, 0)
         check_nonnegative("clearance", self.clearance)
         check_nonnegative("damping", self.damping)
         check_positive("ramp_depth", self.ramp_depth)

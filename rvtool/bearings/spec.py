@@ -26,7 +26,7 @@ import numpy as np
 from warp_contacts.rolling_elements_ref import ball_stiffness
 
 from ..errors import RvtoolInputError
-from ..validation import check_finite, check_nonnegative, check_positive, check_range
+from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import HertzConstants, effective_modulus, hertz_constants, roller_stiffness
 
 #: Largest interference (negative radial clearance) as a fraction of the element diameter:
@@ -55,10 +55,6 @@ def _enum(obj, name, cls):
     except ValueError:
         raise RvtoolInputError(f"{name} = {value!r} is not one of the valid choices {[m.value for m in cls]}") from None
 
-
-def _count(name, n, low, high=None):
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < low or (high is not None and n > high):
-        raise RvtoolInputError(f"{name} = {n!r} is outside the valid range [{low}, {high if high else 'inf'}] (integer)")
 
 
 def _fit(count_name, n, diameter, pitch_diameter):
@@ -117,8 +113,8 @@ class CylindricalRollerBearing:
         check_positive("inner_radius", self.inner_radius)
         check_positive("roller_diameter", self.roller_diameter)
         check_positive("roller_length", self.roller_length)
-        _count("n_rollers", self.n_rollers, 3, 1000)   # upper bound: a named error, not an hours-long build
-        _count("n_slices", self.n_slices, 1, 64)
+        check_integer("n_rollers", self.n_rollers, 3, 1000)   # upper bound: a named error, not an hours-long build
+        check_integer("n_slices", self.n_slices, 1, 64)
         check_range("radial_clearance", self.radial_clearance, -MAX_INTERFERENCE * self.roller_diameter,
                     MAX_CLEARANCE * self.roller_diameter)
         _enum(self, "law", LaminaLaw)
@@ -240,7 +236,7 @@ class BallBearing:
     ramp_depth: float = 1e-6
 
     def __post_init__(self):
-        _count("n_balls", self.n_balls, 3, 1000)   # upper bound: a named error, not an hours-long build
+        check_integer("n_balls", self.n_balls, 3, 1000)   # upper bound: a named error, not an hours-long build
         check_positive("ball_diameter", self.ball_diameter)
         check_range("pitch_diameter", self.pitch_diameter, self.ball_diameter, math.inf, low_open=True)
         check_range("contact_angle", self.contact_angle, 0.0, math.pi / 2, high_open=True)

@@ -50,7 +50,7 @@ import numpy as np
 from warp_contacts import tapered_rollers_ref as ref
 
 from ..errors import RvtoolInputError
-from ..validation import check_finite, check_nonnegative, check_positive, check_range
+from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import effective_modulus, roller_stiffness
 from .spec import Arrangement, LaminaLaw
 
@@ -61,10 +61,6 @@ MAX_CUP_ANGLE_DEG = 60.0
 #: (kappa = 2 sin(phi)) and the on-apex geometry are used up to this bound.
 MAX_ROLLER_HALF_ANGLE_DEG = 10.0
 
-
-def _integer(name, n, low, high):
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not low <= n <= high:
-        raise RvtoolInputError(f"{name} = {n!r} is outside the valid range [{low}, {high}] (integer)")
 
 
 def _choice(obj, name, cls):
@@ -120,12 +116,12 @@ class TaperedRollerBearing:
         check_positive("roller_diameter", self.roller_diameter)
         check_range("pitch_diameter", self.pitch_diameter, self.roller_diameter, math.inf, low_open=True)
         # n D_m < pi d_m: the rollers fit around the pitch circle without touching
-        _integer("n_rollers", self.n_rollers, 3, math.ceil(math.pi * self.pitch_diameter / self.roller_diameter) - 1)
+        check_integer("n_rollers", self.n_rollers, 3, math.ceil(math.pi * self.pitch_diameter / self.roller_diameter) - 1)
         check_positive("roller_length", self.roller_length)
         check_range("cup_angle_deg", self.cup_angle_deg, 0.0, MAX_CUP_ANGLE_DEG, low_open=True, high_open=True)
         check_range("cone_angle_deg", self.cone_angle_deg,
                     max(0.0, self.cup_angle_deg - 2 * MAX_ROLLER_HALF_ANGLE_DEG), self.cup_angle_deg, high_open=True)
-        _integer("n_slices", self.n_slices, 1, 64)
+        check_integer("n_slices", self.n_slices, 1, 64)
         crown = np.atleast_1d(np.asarray(self.crowning, dtype=float))
         if crown.shape not in ((1,), (self.n_slices,)):
             raise RvtoolInputError(f"crowning must be a number or hold n_slices = {self.n_slices} values; "

@@ -43,7 +43,7 @@ from warp_contacts.fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_REJECT
                                           alpha_parameters)
 
 from ..errors import RvtoolInputError, SolverFailure
-from ..validation import check_positive, check_range
+from ..validation import check_integer, check_positive, check_range
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -78,9 +78,7 @@ class DeviceDynamicsSettings:
         check_positive("device_dynamics.abs_tol", self.abs_tol)
         check_range("device_dynamics.rel_tol", self.rel_tol, 0.0, 1.0, low_open=True)
         for nm in ("max_newton_iterations", "recovery_steps", "recovery_iterations", "steps_per_launch"):
-            v = getattr(self, nm)
-            if not isinstance(v, (int, np.integer)) or isinstance(v, bool) or v < 1:
-                raise RvtoolInputError(f"device_dynamics.{nm} = {v!r} is outside the valid range [1, inf) (integer)")
+            check_integer(f"device_dynamics.{nm}", getattr(self, nm), 1)
 
     @property
     def minimum_step(self):

@@ -36,6 +36,7 @@ from warp_contacts.batched_newton_ref import ACTIVE, CONVERGED, FAILED
 from warp_contacts.precision import resolve_device
 
 from ..errors import RvtoolInputError
+from ..validation import check_integer
 from .static import StaticSolver
 
 
@@ -73,12 +74,8 @@ class DeviceNewtonSettings:
             v = getattr(self, nm)
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
                 raise RvtoolInputError(f"device_newton.{nm} = {v!r} is outside the valid range (0, inf)")
-        if not (isinstance(self.compact_after, (int, np.integer)) and self.compact_after >= 0):
-            raise RvtoolInputError(f"device_newton.compact_after = {self.compact_after!r} is outside the valid "
-                                   f"range [0, inf) (integer)")
-        if not (isinstance(self.max_iterations, (int, np.integer)) and self.max_iterations >= 1):
-            raise RvtoolInputError(f"device_newton.max_iterations = {self.max_iterations!r} is outside the valid "
-                                   f"range [1, inf) (integer)")
+        check_integer("device_newton.compact_after", self.compact_after, 0)
+        check_integer("device_newton.max_iterations", self.max_iterations, 1)
         if len(self.stiffening) < 1 or self.stiffening[-1] != 1.0:
             raise RvtoolInputError(f"device_newton.stiffening = {self.stiffening!r}; the last factor must be 1.0 "
                                    f"(the unmodified problem)")
