@@ -136,3 +136,14 @@ def test_every_angle_field_is_a_deg_file_key_and_every_spec_is_si():
     # every format 1 key maps onto an angle field's file key
     for old, (new, _) in topologies.FORMAT_1_KEYS.items():
         assert new.endswith("_deg") and new[:-4] in angles
+
+
+def test_designs_lists_each_shipped_design_under_its_own_topology(capsys):
+    """rv_three_stage.toml says topology = "rv3"; `rvtool designs` listed it as rv2 (RVDesign is the
+    class of both RV topologies and rv2 was found first)."""
+    from rvtool import cli
+    for name in designs.design_names():
+        assert topologies.topology_of(rvtool.load_design(name)) == _table(name).get("topology", "cycloid"), name
+    assert cli.main(["designs"]) in (0, None)
+    lines = {ln.split()[0]: ln for ln in capsys.readouterr().out.splitlines() if ln.strip()}
+    assert "rv3:" in lines["rv_three_stage"] and "rv2:" in lines["rv40e"]

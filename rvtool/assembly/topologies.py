@@ -121,7 +121,13 @@ def available(name):
 
 
 def topology_of(design):
-    """Name of the registered topology whose design class ``design`` is an instance of (None if none)."""
+    """Name of the registered topology whose design class ``design`` is an instance of (None if none).
+    A design class shared by several topologies (rv2 and rv3: :class:`~rvtool.assembly.rv.RVDesign`)
+    records its topology in its ``topology`` field; that name wins."""
+    recorded = getattr(design, "topology", None)
+    if isinstance(recorded, str) and recorded in TOPOLOGIES and available(recorded) is None \
+            and isinstance(design, design_class(recorded)):
+        return recorded
     for name, top in TOPOLOGIES.items():
         if available(name) is None and isinstance(design, design_class(name)):
             return name
