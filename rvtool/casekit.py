@@ -7,10 +7,7 @@ A case script computes in ``main(argv)`` and returns the results dict::
         args = casekit.parse_args(argv, __doc__)
         t0 = time.perf_counter()
         ...  # compute
-        casekit.verdict(results, {
-            # bound and why: what the reference is and why the error may be this large
-            "te_err_arcsec": casekit.check(te_err, 0.05, "<=", why="..."),
-        })
+        casekit.verdict(results, judge)    # judge(r) -> {name: casekit.check(value, bound, op, why)}
         return casekit.write_results(args.out, results, settings=..., wall_s=...,
                                      precision="float64", device="cpu")
 
@@ -109,10 +106,12 @@ def check(value, bound, op="<=", why=None):
     None or not finite fails: a criterion that could not be evaluated is not met."""
     if op not in _OPS:
         raise ValueError(f"unknown comparison {op!r}; one of {sorted(_OPS)}")
-    ok = value is not None and not (isinstance(value, (float, np.floating)) and not math.isfinite(value))
-    if ok and isinstance(value, (bool, np.bool_)):
+    if isinstance(value, (bool, np.bool_)):
         value = bool(value)
-    ok = bool(ok and _OPS[op](value, bound))
+    elif isinstance(value, (np.integer, np.floating)):
+        value = value.item()
+    numeric = isinstance(value, (int, float)) and math.isfinite(value)
+    ok = bool((numeric or (op == "==" and value is not None)) and _OPS[op](value, bound))
     shown = f"in [{bound[0]}, {bound[1]}]" if op == "in" else f"{op} {bound}"
     return {"value": value, "bound": shown, "passed": ok, "why": why}
 
@@ -139,11 +138,33 @@ def nan_paths(obj, path=""):
     return found
 
 
-def verdict(results, checks):
-    """Judge a case: store ``checks`` (name -> :func:`check`) under ``results["checks"]`` and set
-    ``results["passed"]``: every check passed, no NaN anywhere in ``results`` (listed under
-    ``results["nan_at"]`` if any) and every ``passed`` the case already wrote (sub-results) true.
-    Returns ``results``."""
+def plain(obj):
+    """``obj`` with NumPy arrays and scalars as Python lists and numbers (NaN stays a float), tuples as
+    lists: the form a case's ``judge`` sees, the same as reading its results.json back."""
+    if isinstance(obj, dict):
+        return {str(k): plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [plain(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return plain(obj.tolist())
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.floating):
+        return float(obj)
+    return obj
+
+
+def verdict(results, judge):
+    """Judge a case: ``judge(plain(results))`` returns its checks (name -> :func:`check`), stored under
+    ``results["checks"]``; ``results["passed"]`` is set true when every check passed, no value anywhere
+    in ``results`` is NaN (their key paths are listed under ``results["nan_at"]``) and a ``passed``
+    the case wrote before is true. ``judge`` may also be the checks dict itself. Returns ``results``.
+
+    A case defines ``judge(r)`` at module level from the figures it reports, so that the verdict can
+    be re-read from a results.json (``judge(json.load(...))``) as well."""
+    checks = judge(plain(results)) if callable(judge) else judge
     if not checks:
         raise ValueError("a verdict needs at least one check")
     earlier = results.get("passed", True)
