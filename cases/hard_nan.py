@@ -11,7 +11,7 @@ import os
 import numpy as np
 
 from rvtool.casekit import hard_case_main
-from rvtool.protocols import hard_cases as H
+from rvtool.analysis import hard_cases as H
 from rvtool.units import ARCSEC_PER_RAD
 
 

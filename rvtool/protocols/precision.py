@@ -13,18 +13,10 @@ import time
 import numpy as np
 
 from .. import progress
+from ..observe.transmission import transmission_error
 from ..solver.static import StaticSolver
 
-
-def transmission_error(theta_in, theta_out, ratio, *, unwrap=True):
-    """Eq. (obs_te) [rad] from angle histories and the signed ratio i. unwrap=True unwraps
-    sampled (wrapped) angles; histories of integrated coordinates are already continuous and
-    may be sampled more coarsely than pi per sample, so they are passed with unwrap=False."""
-    theta_in = np.asarray(theta_in, float)
-    theta_out = np.asarray(theta_out, float)
-    if unwrap:
-        theta_in, theta_out = np.unwrap(theta_in), np.unwrap(theta_out)
-    return (theta_out - theta_out[0]) - (theta_in - theta_in[0]) / ratio
+__all__ = ["transmission_error", "te_metrics", "mesh_forces", "quasi_static_te", "dynamic_te", "DYNAMIC_SOLVERS"]
 
 
 def te_metrics(te, *, n_revolutions=1.0, n_peaks=10, remove_mean=True):
