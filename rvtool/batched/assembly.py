@@ -46,7 +46,7 @@ from ..errors import RvtoolInputError
 from ..model import BodyCoordinate
 from ..output_pins.spec import PinMode
 from ..validation import check_choice
-from .evaluator import BatchContactEvaluator
+from ..solver.copy_evaluator import BatchContactEvaluator
 
 
 class _NumpyPlainPins:
