@@ -11,7 +11,7 @@ import time
 
 from rvtool import casekit
 from rvtool.assembly.spec import load_design
-from rvtool.protocols.precision_study import precision_study
+from rvtool.analysis.precision_study import precision_study
 from rvtool import designs
 
 DESIGN = designs.path("rd40")

@@ -29,7 +29,7 @@ from rvtool.assembly.spec import load_design, replace
 from rvtool.solver.static import StaticSolver
 from rvtool.protocols.precision import mesh_forces
 from rvtool.units import ARCMIN_PER_RAD
-from rvtool.protocols.precision_study import precision_study
+from rvtool.analysis.precision_study import precision_study
 from rvtool import designs
 
 DESIGN = designs.path("rd40")

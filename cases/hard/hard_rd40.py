@@ -20,7 +20,7 @@ import numpy as np
 
 import rvtool
 from rvtool import casekit
-from rvtool.protocols import hard_cases as H
+from rvtool.analysis import hard_cases as H
 from rvtool.units import ARCSEC_PER_RAD
 
 NAN_TE_DIFF_ARCSEC = 0.05

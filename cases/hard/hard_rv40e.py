@@ -16,7 +16,7 @@ import numpy as np
 
 from rvtool import casekit, designs
 from rvtool.assembly.topologies import load as load_design
-from rvtool.protocols.hard_cases import CASES, CRITERIA, criterion, run_hard_case
+from rvtool.analysis.hard_cases import CASES, CRITERIA, criterion, run_hard_case
 from rvtool.units import ARCSEC_PER_RAD
 
 SETTLE_S = 5e-4
