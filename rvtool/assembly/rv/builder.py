@@ -413,6 +413,55 @@ def crank_pair_tilt_stiffness(design, radial_load=0.0):
     return float(-0.5 * (K[3, 3] + K[4, 4]))      # the tangent is dF/dq of the wrench on the cone
 
 
+def crank_torsion_compliance(design):
+    """Torsion compliance C (n_wheels, n_wheels) [rad/(N m)] of one crank between its gear and its
+    journals (``cranks.shaft.torsion = "elastic"``, :mod:`rvtool.structure.crank_torsion`), or None."""
+    from ...structure.crank_torsion import torsion_compliance
+    sh = design.cranks.shaft
+    if sh.torsion == "rigid":
+        return None
+    m = design.material
+    return torsion_compliance(sh.radius, m.youngs_modulus, m.poisson_ratio, sh.gear_position, design.wheels.midplanes)
+
+
+def torsion_crank_path(design, graph, layout, compliance, opts):
+    """The needle bearings on twisting cranks: one station body per (crank k, wheel j) at index
+    n_bodies + n_wheels k + j, the crank rotated about its axis by the journal's twist relative to
+    the gear (the crank body's rotation is the gear's), closed per crank by Eq. (2) of
+    :mod:`rvtool.structure.crank_torsion` (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`
+    with ``dofs = (2,)``). The gears and the tapered rows stay on the crank body."""
+    from ...contact.pin_closure import ElasticPinClosure
+    nb, nc, nw = layout.n_bodies, layout.n_cranks, design.n_wheels
+    station = nb + np.arange(nc * nw).reshape(nc, nw)
+    crank_of = {layout.crank(k): k for k in range(nc)}
+    mounts = [dataclasses.replace(m, inner=int(station[crank_of[m.inner], m.outer - layout.wheel0]))
+              for m in needle_mountings(design, graph, layout)]
+    needles = BearingSet(mounts, nb + station.size, name="eccentric_bearings", **opts)
+    return ElasticPinClosure(needles, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
+                             station_compliance=compliance, station=station - nb, dofs=(2,))
+
+
+def groove_pins(design, layout, pin_set_of, meshes):
+    """The ring pins in conformal grooves (``pins.groove = "conformal"``, :mod:`rvtool.contact.groove`):
+    one station body per (pin p, wheel j) at n_bodies + n_wheels p + j (the pin's centre under
+    wheel j displaced in its groove), the wheel--pin meshes on them, closed per pin by the groove
+    law (:class:`~rvtool.contact.pin_closure.ElasticPinClosure` with ``support``). ``pin_set_of(meshes,
+    n_bodies)`` builds the contact set. Returns the closure, or None for rigid grooves."""
+    from ...contact.groove import GrooveSupport, groove_law
+    from ...contact.pin_closure import GROUND as PIN_GROUND, ElasticPinClosure
+    law = groove_law(design)
+    if law is None:
+        return None
+    if design.housing.model == "ports":
+        raise RvtoolInputError("pins.groove = 'conformal' with housing.model = 'ports' is not implemented (the "
+                               "stations would ride on the ports); valid: one of them rigid")
+    nb, nw = layout.n_bodies, design.n_wheels
+    st = np.arange(design.pins.n_pins * nw).reshape(design.pins.n_pins, nw)
+    meshes = [dataclasses.replace(m, pin_bodies=tuple(int(b) for b in nb + st[:, k])) for k, m in enumerate(meshes)]
+    return ElasticPinClosure(pin_set_of(meshes, nb + st.size), n_bodies=nb, carrier=PIN_GROUND,
+                             station_compliance=None, station=st, support=GrooveSupport(law))
+
+
 def elastic_crank_path(design, graph, layout, compliance, opts):
     """The contact set of the crank path with elastic cranks: the involute meshes and the needle
     bearings stacked (:class:`~rvtool.contact.stacked.StackedContactSet`, element ``"cranks"``) over
@@ -517,15 +566,24 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                                "implemented for the RV topology; valid: 'rigid'")
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
     housing, ports, meshes = ported_ring(mbs, d, L, meshes)
-    pin_set = CycloidPinSet(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual),
-                            samples_per_tooth=d.wheels.samples_per_tooth, name="pins", search=d.wheels.search, **opts)
+
+    def pin_set_of(meshes, n_bodies):
+        return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
+                             search=d.wheels.search, **opts)
+    pin_set = groove_pins(d, L, pin_set_of, meshes)
+    if pin_set is None:
+        pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
     cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
     main = BearingSet([Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)],
                       L.n_bodies, name="main_bearings", **opts)
     C_crank = crank_station_compliance(d)
+    C_torsion = crank_torsion_compliance(d)
     if C_crank is None:
         gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
-        needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
+        if C_torsion is None:
+            needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
+        else:
+            needles = torsion_crank_path(d, graph, L, C_torsion, opts)
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
         crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts)),)
