@@ -8,7 +8,7 @@ import pytest
 
 pytest.importorskip("exudyn")
 
-from rvtool.contact.scenes import block_on_belt  # noqa: E402
+from exudyn_user_elements.scenes import block_on_belt  # noqa: E402
 from rvtool.errors import RvtoolInputError, SolverFailure  # noqa: E402
 from rvtool.observe.registry import ObserverRegistry  # noqa: E402
 from rvtool.solver import RunSpec, simulate  # noqa: E402

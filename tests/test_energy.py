@@ -97,7 +97,7 @@ def _jenkins():
 
 
 def test_account_leaves_the_run_unchanged_and_off_computes_nothing():
-    from rvtool.contact.scenes import jenkins_element
+    from exudyn_user_elements.scenes import jenkins_element
     runs = []
     for with_energy in (False, True):
         SC, mbs, el, items = jenkins_element(frequency=0.1, dwell=0.025)

@@ -16,7 +16,7 @@ from exudyn.itemInterface import NodeRigidBody2D, ObjectRigidBody2D
 from exudyn_user_elements.contact_element import ContactElement
 from rvtool import casekit
 from rvtool.contact.evaluator import ContactSetEvaluator
-from rvtool.contact.scenes import random_pair_scene
+from exudyn_user_elements.scenes import random_pair_scene
 from rvtool.solver import RunSpec, simulate
 
 

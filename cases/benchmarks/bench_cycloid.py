@@ -267,7 +267,7 @@ def dynamic_run(design, spec, dur, mode):
 
 def fused_run(design, spec, dur, device, exu_dyn, bare, bare_cpu):
     """The fused stepper over the Exudyn run's steps (warmed first); (result, figures dict)."""
-    from rvtool.batched.device_copies import copy_parameters
+    from rvtool.solver.device_copies import copy_parameters
     from rvtool.solver.device_dynamics import DeviceDynamicsSettings, dynamic_te_fused
     from rvtool.variants import Variant
     params = copy_parameters(design, [Variant()])
@@ -306,7 +306,7 @@ def run_device(device):
 
 def fused_batched(design, spec, dur, device, copies):
     """B copies of the design side by side in the fused stepper: copy-steps per second."""
-    from rvtool.batched.device_copies import copy_parameters
+    from rvtool.solver.device_copies import copy_parameters
     from rvtool.solver.device_dynamics import DeviceDynamics, DeviceDynamicsSettings, kinematic_velocities
     from rvtool.solver.device_newton import DeviceNewton
     from rvtool.variants import Variant

@@ -10,7 +10,7 @@ time, Newton iterations, and the split into the contact callbacks (Python side o
 and the kernel launches inside them (the rest is Exudyn: solver set-up, assembly, linear
 algebra). The RV/RD-40 per-point cost ratio is the issue's figure (target: within 3x).
 Angle-batched: the same points through rvtool.batched.sequence.batched_quasi_static_te (the
-topology-neutral path: rvtool.batched.replica copies each model 64 times in one Exudyn system;
+topology-neutral path: rvtool.solver.replica copies each model 64 times in one Exudyn system;
 --quick: 16), both reducers warmed first (one small run each: imports, kernel loads), then run in
 interleaved blocks of at most 1/8 output revolution (7,800 points; --quick: one block), each block a fresh batch (its
 build counted). Per point: wall time and its split (Exudyn's solves, the Python callbacks, the

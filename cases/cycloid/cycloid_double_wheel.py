@@ -11,7 +11,7 @@ import time
 
 import rvtool
 from rvtool import casekit
-from rvtool.protocols.precision_study import precision_study
+from rvtool.analysis.precision_study import precision_study
 
 DESIGN = "rd40"
 

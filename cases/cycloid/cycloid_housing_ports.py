@@ -28,7 +28,7 @@ from rvtool.assembly.housing import housing_ports
 from rvtool.solver.static import StaticSolver
 from rvtool.protocols.precision import mesh_forces
 from rvtool.units import ARCMIN_PER_RAD
-from rvtool.protocols.precision_study import precision_study
+from rvtool.analysis.precision_study import precision_study
 
 DESIGN = "rd40"
 

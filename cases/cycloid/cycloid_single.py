@@ -7,7 +7,7 @@ import time
 
 import rvtool
 from rvtool import casekit
-from rvtool.protocols.precision_study import precision_study
+from rvtool.analysis.precision_study import precision_study
 
 DESIGN = "rd40"
 judge = casekit.import_case("cycloid/cycloid_double_wheel").judge

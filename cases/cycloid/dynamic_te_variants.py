@@ -32,7 +32,7 @@ import numpy as np
 
 from rvtool import casekit, designs
 import rvtool
-from rvtool.batched.device_copies import copy_parameters
+from rvtool.solver.device_copies import copy_parameters
 from rvtool.protocols.precision import dynamic_te
 from rvtool.solver import RunSpec
 from rvtool.solver.device_dynamics import DONE, DeviceDynamicsSettings, driven_copies

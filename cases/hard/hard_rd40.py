@@ -1,6 +1,6 @@
-"""The six hard cases of rvtool.protocols.hard_cases on RD-40 (double wheel), each judged by its declared criteria.
+"""The six hard cases of rvtool.analysis.hard_cases on RD-40 (double wheel), each judged by its declared criteria.
 
-Histories, settings and pass/fail criteria: rvtool.protocols.hard_cases.CASES and CRITERIA
+Histories, settings and pass/fail criteria: rvtool.analysis.hard_cases.CASES and CRITERIA
 (reversal, startup, runup, rattle, stiff100, nan). ``--case NAME`` runs one of them only.
 
 The 'nan' case adds two criteria here: one forced NaN in a pin-contact evaluation mid-run must
@@ -20,7 +20,7 @@ import numpy as np
 
 import rvtool
 from rvtool import casekit
-from rvtool.protocols import hard_cases as H
+from rvtool.analysis import hard_cases as H
 from rvtool.units import ARCSEC_PER_RAD
 
 NAN_TE_DIFF_ARCSEC = 0.05

@@ -1,7 +1,7 @@
-"""The six hard cases of rvtool.protocols.hard_cases on the RV-40E class reducer (rv40e), each judged by its declared criteria.
+"""The six hard cases of rvtool.analysis.hard_cases on the RV-40E class reducer (rv40e), each judged by its declared criteria.
 
 Same histories, settings and criteria as the RD-40 cases (cases/hard_*.py), run through
-rvtool.protocols.hard_cases.run_hard_case on the RV model unchanged. One adaptation, declared:
+rvtool.analysis.hard_cases.run_hard_case on the RV model unchanged. One adaptation, declared:
 the reversal case's two "after the reversal" criteria of RD-40 read the final sample; the RV's
 output keeps swinging after the 0.2 ms reversal (pin-force sum between about 1 and 24 kN with a
 period of about 3 ms, measured), so a single sample is arbitrary. Here they read the mean over
@@ -16,7 +16,7 @@ import numpy as np
 
 from rvtool import casekit, designs
 from rvtool.assembly.topologies import load as load_design
-from rvtool.protocols.hard_cases import CASES, CRITERIA, criterion, run_hard_case
+from rvtool.analysis.hard_cases import CASES, CRITERIA, criterion, run_hard_case
 from rvtool.units import ARCSEC_PER_RAD
 
 SETTLE_S = 5e-4

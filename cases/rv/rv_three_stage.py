@@ -19,7 +19,7 @@ from rvtool.assembly import build
 from rvtool.assembly.rv import load_design
 from rvtool.protocols.load_sharing import contact_peaks, torque_balance_error, torque_balance_term
 from rvtool.protocols.precision import quasi_static_te, te_metrics
-from rvtool.protocols.resolution import te_resolution_error
+from rvtool.analysis.resolution import te_resolution_error
 from rvtool.solver.static import StaticSolver
 from rvtool.units import ARCSEC_PER_RAD
 

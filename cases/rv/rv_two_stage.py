@@ -50,7 +50,7 @@ from rvtool.assembly.rv.free_play import free_play, without_free_play
 from rvtool.protocols.lost_motion import lost_motion
 from rvtool.protocols.load_sharing import contact_peaks, torque_balance_error, torque_balance_term
 from rvtool.protocols.precision import quasi_static_te, te_metrics
-from rvtool.protocols.resolution import te_resolution_error
+from rvtool.analysis.resolution import te_resolution_error
 from rvtool.protocols.stiffness import TorqueSequence, branch_fits, lost_motion_from_levels, quasi_static_stiffness
 from rvtool.solver.continuation import Continuation
 from rvtool.solver.static import StaticSolver

@@ -23,7 +23,8 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.assembly.gear_pair import GearPairStatics, build_gear_pair
+from rvtool.assembly.gear_pair import build_gear_pair
+from rvtool.solver.gear_pair import GearPairStatics
 from rvtool.contact.tooth_stiffness import ToothCompliance, iso6336_single_stiffness
 from rvtool.geometry.involute import FlankModification, InvoluteGear, InvolutePair
 from warp_contacts import involute_pairs_ref as ref

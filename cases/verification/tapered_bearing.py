@@ -34,8 +34,8 @@ from rvtool.bearings.tapered_checks import LINE_CONTACT_EXPONENT, epsilon_from_l
 from rvtool.bearings.tapered_set import TaperedBearingSet, TaperedMounting
 from rvtool.contact.circle_set import GROUND
 
-ROW = dict(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055, roller_length=0.010, cup_angle_deg=14.0,
-           cone_angle_deg=11.0)
+ROW = dict(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055, roller_length=0.010, cup_angle=math.radians(14.0),
+           cone_angle=math.radians(11.0))
 RADIAL_LOAD = 3000.0                       # N
 AXIAL_RATIOS = (0.3, 0.4, 0.6, 1.0, 2.0)   # F_a / F_r (F_a > F_r tan(alpha) = 0.25 F_r for a single row)
 PAIR_LOAD = dict(radial_N=2000.0, radial_at_m=0.012, axial_N=800.0, moment_Nm=15.0)

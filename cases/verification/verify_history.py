@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.contact.scenes import block_on_belt
+from exudyn_user_elements.scenes import block_on_belt
 from rvtool.observe import ObserverRegistry, WholeRun
 from rvtool.solver import RunSpec, simulate
 from warp_contacts import circle_pairs_ref as ref

@@ -33,7 +33,7 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.contact.scenes import jenkins_element
+from exudyn_user_elements.scenes import jenkins_element
 from rvtool.observe import ObserverRegistry
 from rvtool.observe.energy import EnergyAccount
 from rvtool.protocols.hysteresis import Cycle, jenkins_branch, loop_integral, zero_torque_width

@@ -114,11 +114,11 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
 
 def write(res):
     """Write results.json and report.html of ``res`` into its output folder."""
-    from .. import casekit
+    from .output import write_results
     from .report import write_report
     settings = {"design_source": res.source, "quick": res.quick, "protocols_requested": [r.name for r in res.results],
                 "device": res.device}
-    data = casekit.write_results(res.out_dir, res.to_dict(), settings=settings, wall_s=res.wall_s,
+    data = write_results(res.out_dir, res.to_dict(), settings=settings, wall_s=res.wall_s,
                                  precision="float64", device=res.device)
     write_report(data, res.out_dir)
     return data

@@ -9,7 +9,7 @@ from ..assembly import build
 from ..solver import RunSpec
 from ..solver.static import StaticSolver
 from ..units import ARCSEC_PER_RAD
-from .precision import dynamic_te, mesh_forces, quasi_static_te, te_metrics
+from ..protocols.precision import dynamic_te, mesh_forces, quasi_static_te, te_metrics
 
 
 FAMILIES = ("pins", "eccentric_bearings", "main_bearings", "output_pins", "input_bearings")
@@ -19,7 +19,7 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
                     output_revolutions=None, dynamic_duration=None, dynamic_step=2e-5, allowables=None):
     """Run the precision protocol on ``design``; returns the results dict (issue 5 keys, and issue 21's
     ``peak_slice_loads_N``, ``stiffness_budget``, ``lost_motion_budget_arcmin`` and ``datasheet``;
-    allowables: :class:`~rvtool.protocols.datasheet.Allowables`, default RD-40's declared table)."""
+    allowables: :class:`~rvtool.designs.allowables.Allowables`, default RD-40's declared table)."""
     t_all = time.perf_counter()
     model = build(design, bearing_model=bearing_model)
     ratio = model.ratio
@@ -131,12 +131,12 @@ def precision_study(design, *, quick, out_dir, bearing_model="rolling", points_p
 def _plots(model, q, F, qs, met, dyn, out_dir, revs):
     import matplotlib.pyplot as plt
 
-    from .. import casekit
+    from .output import save_figure
     # transverse section with the contact forces at the rated state
     fig, ax = plt.subplots(figsize=(6, 6))
     model.draw_section(ax, q)
     ax.set_title(f"{model.design.name}: contact forces at {model.design.rated_torque} N m")
-    casekit.save_figure(fig, out_dir, "profile_contacts")
+    save_figure(fig, out_dir, "profile_contacts")
     # TE and spectrum
     fig, ax = plt.subplots(1, 2, figsize=(11, 3.8))
     out_deg = np.rad2deg(qs["theta_in"] / abs(model.ratio))
@@ -148,14 +148,14 @@ def _plots(model, q, F, qs, met, dyn, out_dir, revs):
     o, a = met["orders"], met["amplitudes"] * ARCSEC_PER_RAD
     ax[1].semilogy(o[1:], np.maximum(a[1:], 1e-8), lw=0.8)
     ax[1].set(xlabel="output-shaft order", ylabel="amplitude [arcsec]", title=f"order spectrum ({revs:.3g} output rev)")
-    casekit.save_figure(fig, out_dir, "transmission_error")
+    save_figure(fig, out_dir, "transmission_error")
     # pin-force distribution
     fig, ax = plt.subplots(figsize=(7, 3.6))
     for k in range(F.shape[0]):
         ax.bar(np.arange(F.shape[1]) + 0.4 * k, F[k], width=0.4, label=f"wheel {k}")
     ax.set(xlabel="pin index (clockwise from +y)", ylabel="normal force [N]", title="pin forces at the rated state")
     ax.legend(fontsize=8)
-    casekit.save_figure(fig, out_dir, "pin_forces")
+    save_figure(fig, out_dir, "pin_forces")
 
 
 def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated, allowables=None, te_states=None):
@@ -168,9 +168,11 @@ def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated,
     sequence of ``model`` at the rated torque (None: q_rated alone); the pin bending stress is the
     largest over these states and the bearings' ISO 281 mean load is taken over them."""
     from .. import designs
-    from .budget import lost_motion_budget, stiffness_budget
-    from .datasheet import datasheet, load_allowables
-    from .stiffness import TorqueSequence, branch_fits, quasi_static_stiffness
+    from ..protocols.budget import stiffness_budget
+    from .budget import lost_motion_budget
+    from ..designs.allowables import load_allowables
+    from ..protocols.datasheet import datasheet
+    from ..protocols.stiffness import TorqueSequence, branch_fits, quasi_static_stiffness
     from ..units import RAD_PER_ARCMIN
     t0 = time.perf_counter()
     allowables = allowables or load_allowables(designs.path("rd40_allowables"))
@@ -244,8 +246,8 @@ def hysteresis_loss(design, *, bearing_model, quick):
     note on the friction the design declares (the width is friction memory; the clearances are
     crossed alike in both directions and add no width)."""
     from ..units import RAD_PER_ARCMIN
-    from . import hysteresis as H
-    from . import hysteresis_cycles as HC
+    from ..protocols import hysteresis as H
+    from ..protocols import hysteresis_cycles as HC
     seq = HC.CycleSequence(rated_torque=design.rated_torque, step=0.25 if quick else 0.0625)
     r = HC.quasi_static_cycles(build(design, bearing_model=bearing_model), seq, energy=False)
     prev, last = r["cycles"][-2], r["cycles"][-1]
@@ -311,7 +313,7 @@ def bearing_lives(model, design, states):
 def _budget_plots(h, out_dir):
     import matplotlib.pyplot as plt
 
-    from .. import casekit
+    from .output import save_figure
     fig, ax = plt.subplots(1, 3, figsize=(15, 4))
     sb = h["stiffness_budget"]
     names = list(sb["shares"])
@@ -332,4 +334,4 @@ def _budget_plots(h, out_dir):
     ax[2].barh([k for k, _ in rows], ratio, color=["g" if v["meets_allowable"] else "r" for _, v in rows])
     ax[2].axvline(1.0, color="k", lw=0.8)
     ax[2].set(xlabel="value / allowable", title="datasheet (green: pass)")
-    casekit.save_figure(fig, out_dir, "budgets_datasheet")
+    save_figure(fig, out_dir, "budgets_datasheet")

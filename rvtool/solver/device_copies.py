@@ -5,7 +5,7 @@ topology: every copy is one manufacturing variant (:class:`rvtool.variants.Varia
 input angle. Its contact kernels need the parameter rows of every copy. Building them as
 :func:`rvtool.batched.assembly.build_batched` does (the builder's pieces per copy, one Exudyn
 system) costs ~60 ms per copy; here the rows of ONE nominal copy are built once by the
-builder's own pieces (:func:`rvtool.batched.assembly.copy_contacts`) and the columns that a
+builder's own pieces (:func:`rvtool.assembly.copies.copy_contacts`) and the columns that a
 variant changes are written for all variants at once with NumPy, with the same expressions and
 the same order of floating-point operations as :meth:`Variant.apply` followed by the builder,
 so that the rows are bit-identical (tested against ``build_batched``):
@@ -38,7 +38,7 @@ from ..contact.circle_set import CircleContactSet
 from ..contact.cycloid_set import CycloidPinSet
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre
-from .assembly import copy_contacts
+from ..assembly.copies import copy_contacts
 
 
 def _local_map(bodies, nb):
@@ -255,7 +255,7 @@ def copy_parameters(design: CycloidDesign, variants, *, regularization=(100.0, 0
 
 def _nominal_plus(design, variants, regularization):
     """copy_parameters of [Variant()] + variants (a picklable task for an executor)."""
-    from ..variants.variant import Variant
+    from ..assembly.variant import Variant
     return copy_parameters(design, [Variant()] + list(variants), regularization=regularization)
 
 

@@ -2,7 +2,7 @@
 contact-element benchmark and the history case (not reducer models)."""
 import numpy as np
 
-from .circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
+from rvtool.contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 
 
 def _local(pose, x):
@@ -70,7 +70,7 @@ def block_on_belt(*, normal_load=100.0, mu=0.3, tangential_stiffness=1e6, spring
     from exudyn.itemInterface import (CoordinateConstraint, CoordinateSpringDamper, LoadCoordinate, MarkerNodeCoordinate,
                                       NodeRigidBody2D, NodePointGround, ObjectRigidBody2D)
 
-    from exudyn_user_elements.contact_element import ContactElement
+    from .contact_element import ContactElement
 
     r_block, r_belt, k_point = 5e-3, 1.0, 1e10
     delta0 = (normal_load / k_point) ** (2.0 / 3.0)
@@ -134,7 +134,7 @@ def jenkins_element(*, normal_load=100.0, mu=0.3, tangential_stiffness=1e6, spri
                                       MarkerNodeCoordinate, Node1D, NodePointGround, NodeRigidBody2D, ObjectMass1D,
                                       ObjectRigidBody2D)
 
-    from exudyn_user_elements.contact_element import ContactElement
+    from .contact_element import ContactElement
 
     r_block, k_point = 5e-3, 1e10
     delta0 = (normal_load / k_point) ** (2.0 / 3.0)

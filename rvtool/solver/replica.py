@@ -14,7 +14,7 @@ the model interface declares:
   copy c offset by c nb, or its kernel rows with offset body columns), so one kernel launch per
   family evaluates every contact of every copy, and per-row body indices
   (``assembler.bodies``) scatter the rows into per-copy blocks
-  (:class:`~rvtool.batched.evaluator.CopyBlockAssembler`: the batch tangent is block diagonal).
+  (:class:`~rvtool.solver.copy_evaluator.CopyBlockAssembler`: the batch tangent is block diagonal).
 
 Nothing here names a topology: a new topology whose contact sets are of the types of
 :data:`COPIERS` runs the angle-batched path unchanged. Refused with a named error: elastic
@@ -44,7 +44,7 @@ from ..errors import RvtoolInputError
 from ..model.reducer import COORDINATES
 from ..output_pins.evaluator import OutputPinEvaluator
 from ..output_pins.spec import PinMode
-from .evaluator import BatchEvaluation, CopyBlockAssembler
+from .copy_evaluator import BatchEvaluation, CopyBlockAssembler
 
 
 def _shift(body, offset):
@@ -143,7 +143,7 @@ class FamilyCopies:
 class ReplicaEvaluator:
     """Every family of B copies at global body poses/velocities (B nb, 3): one launch per family,
     the rows scattered into per-copy blocks (the interface of
-    :class:`~rvtool.batched.evaluator.BatchContactEvaluator` that the batch element and
+    :class:`~rvtool.solver.copy_evaluator.BatchContactEvaluator` that the batch element and
     :class:`~rvtool.solver.batched.BatchedStaticSolver` use). ``timing`` as there."""
 
     def __init__(self, families, nb, n_copies):
@@ -304,6 +304,30 @@ class ReplicatedModel:
         return out
 
 
+def replica_reasons(model):
+    """Every named reason why :func:`replicate` cannot copy ``model`` (empty: it can)."""
+    reasons = []
+    if model.structures:
+        reasons.append(f"the model has elastic structures {sorted(model.structures)}: the angle-batched path "
+                       "copies planar rigid bodies only (valid: housing.model = 'rigid')")
+    nb = len(model.body_names)
+    for el in model.contact_elements():
+        s = el.evaluator
+        if type(s) not in COPIERS:
+            reasons.append(f"contact element {el.evaluator.name!r} ({type(s).__name__}) has no copier for the "
+                           f"angle-batched path; valid set types: {sorted(t.__name__ for t in COPIERS)}")
+        if getattr(s, "anchor", False):
+            reasons.append(f"contact element {s.name!r} has stick--slip anchors: the angle-batched path takes "
+                           "history-free contacts (valid: frictionless or regularized friction)")
+        if getattr(s, "n_bodies", nb) != nb:
+            reasons.append(f"contact element {s.name!r} spans {s.n_bodies} bodies (port or pin bodies); the "
+                           f"angle-batched path copies the {nb} rigid bodies only")
+        if isinstance(s, OutputPinEvaluator) and s.mode != PinMode.PLAIN:
+            reasons.append(f"output_pins.mode = {s.mode.value!r}: the angle-batched path copies plain "
+                           "output pins only (valid: 'plain')")
+    return reasons
+
+
 def replicate(model, copies, *, precision="float64", device="cpu", build_kw=None):
     """:class:`ReplicatedModel` of ``copies`` copies of ``model`` (see the module docstring).
     build_kw: the build options ``model`` was built with (the per-copy fallback rebuilds with them)."""
@@ -311,23 +335,14 @@ def replicate(model, copies, *, precision="float64", device="cpu", build_kw=None
 
     if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
         raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer)")
-    if model.structures:
-        raise RvtoolInputError(f"the model has elastic structures {sorted(model.structures)}: the angle-batched path "
-                               "copies planar rigid bodies only (valid: housing.model = 'rigid')")
+    reasons = replica_reasons(model)
+    if reasons:
+        raise RvtoolInputError("; ".join(reasons))
     B, nb = int(copies), len(model.body_names)
     families = []
     for el in model.contact_elements():
         s = el.evaluator
-        copier = COPIERS.get(type(s))
-        if copier is None:
-            raise RvtoolInputError(f"contact element {el.evaluator.name!r} ({type(s).__name__}) has no copier for the "
-                                   f"angle-batched path; valid set types: {sorted(t.__name__ for t in COPIERS)}")
-        if getattr(s, "anchor", False):
-            raise RvtoolInputError(f"contact element {s.name!r} has stick--slip anchors: the angle-batched path takes "
-                                   "history-free contacts (valid: frictionless or regularized friction)")
-        if getattr(s, "n_bodies", nb) != nb:
-            raise RvtoolInputError(f"contact element {s.name!r} spans {s.n_bodies} bodies (port or pin bodies); the "
-                                   f"angle-batched path copies the {nb} rigid bodies only")
+        copier = COPIERS[type(s)]
         cs = copier(s, B, nb, precision, device)
         families.append(FamilyCopies(name=s.name, set=cs, scatter=CopyBlockAssembler(cs.assembler.bodies, nb, B),
                                      obs_rows=len(el.ids)))
