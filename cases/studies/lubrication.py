@@ -79,6 +79,19 @@ def _state(windows, te_windows, th, lub, friction):
             "pin_law_work_W": windows.last_friction_power, "te": te_windows.last_te.copy()}
 
 
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    return {
+        "coupled_fixed_point": casekit.check(r["coupled_converged"], True, "==",
+                                             why="the coupled mu fixed point converges within MAX_ITERATIONS"),
+        "pin_friction_work": casekit.check(r["pin_work_rel_err"], WORK_REL_TOL, "<=",
+                                           why="contact-law friction work vs sum mu I_s (WORK_REL_TOL)"),
+        # lambda = h_min / composite roughness is positive and the film positive wherever reported
+        "films_positive": casekit.check(min(v for v in r["h_min_um"].values() if v is not None), 0.0, ">",
+                                        why="Dowson--Higginson film thickness is positive"),
+    }
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t_all, c_all = time.perf_counter(), time.process_time()
@@ -134,8 +147,10 @@ def main(argv=None):
         "mu_mixed": {f: r["mu_mixed"] for f, r in table.items()},
         "friction_dissipation_change_W": coupled["power_W"] - declared["power_W"],
         "te_pp_change_arcsec": te_pp["coupled"] - te_pp["declared"],
-        "passed": bool(converged and max(work_err.values()) <= WORK_REL_TOL),
+        "coupled_converged": converged,
+        "pin_work_rel_err": max(work_err.values()),
     }
+    casekit.verdict(results, judge)
     x = declared["exposure"]
     details = {
         "observation": {"critical_contact": table, "temperature_C": dict(zip(th.network.nodes,
