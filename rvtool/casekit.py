@@ -181,6 +181,20 @@ def hard_case(name, design, quick, out, extra=None):
     return result
 
 
+def hard_cases_judge(r):
+    """Checks of a hard-case run's results (``r["cases"][name]["criteria"]``, each ``{value, limit: "<= x"
+    or ">= x", passed}`` as declared in :mod:`rvtool.analysis.hard_cases`): every declared criterion of
+    every case, re-checked from its value and limit, and every case finished without a saved failure state."""
+    checks = {}
+    for name, case in r["cases"].items():
+        for crit, c in case["criteria"].items():
+            op, limit = c["limit"].split()
+            checks[f"{name}_{crit}"] = check(c["value"], float(limit), op, why=f"declared criterion of hard case {name}")
+        checks[f"{name}_finished"] = check(case.get("saved_state") is None, True, "==",
+                                           why="the run ends without a saved failure state")
+    return checks
+
+
 def _plot_hard_case(out, name, arr):
     import matplotlib.pyplot as plt
 
