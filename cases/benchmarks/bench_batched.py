@@ -23,7 +23,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from rvtool import casekit  # noqa: E402
-from rvtool.assembly.spec import load_design  # noqa: E402
+from rvtool import load_design  # noqa: E402
 from rvtool.variants.batched import batched_variant_figures  # noqa: E402
 from rvtool.variants import Variant, VariantProtocol, variant_figures  # noqa: E402
 from rvtool import designs

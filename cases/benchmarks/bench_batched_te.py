@@ -37,7 +37,7 @@ from rvtool import casekit  # noqa: E402
 
 DESIGN_PATH = casekit.import_case("bench_batched").DESIGN_PATH
 sample_variants = casekit.import_case("bench_batched").sample_variants
-from rvtool.assembly.spec import load_design  # noqa: E402
+from rvtool import load_design  # noqa: E402
 from rvtool.units import ARCSEC_PER_RAD # noqa: E402
 from rvtool.protocols.precision import te_metrics, transmission_error # noqa: E402
 from rvtool.variants import VariantProtocol  # noqa: E402
@@ -49,7 +49,7 @@ TE_POINTS = 53
 
 def _per_variant_te(args):
     """TE p-p [arcsec] of one variant by the sequential path (None if it fails)."""
-    from rvtool.assembly.cycloid import build
+    from rvtool import build
     from rvtool.solver.static import StaticSolver
     from rvtool.protocols.precision import quasi_static_te
     design, v, angles, max_it, reg, start = args
@@ -67,7 +67,7 @@ def _warm_worker(args):
     """One TE point of the nominal design: imports, Warp's kernel load and the first build happen
     here, before the timed pool (the batched rate is quoted without its one-off build too)."""
     design, reg, pause = args
-    from rvtool.assembly.cycloid import build
+    from rvtool import build
     from rvtool.protocols.precision import quasi_static_te
     quasi_static_te(build(design, regularization=reg), torque=design.rated_torque, input_angles=[0.0])
     time.sleep(pause)                 # keeps this worker busy so that every worker gets one

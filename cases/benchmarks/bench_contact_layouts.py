@@ -27,10 +27,10 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
+from rvtool import build
 from rvtool.assembly.contact_layout import CONTACT_ELEMENTS
-from rvtool.assembly.rv import load_design as load_rv
-from rvtool.assembly.std_spec import load_design as load_std
+from rvtool import load_design as load_rv
+from rvtool import load_design as load_std
 from rvtool.protocols.precision import dynamic_te, quasi_static_te
 from rvtool.solver import RunSpec
 from rvtool.solver.static import StaticSolver

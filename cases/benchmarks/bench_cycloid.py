@@ -41,8 +41,9 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.assembly.cycloid import build, contact_element_mode
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool.assembly.cycloid import contact_element_mode
+from rvtool import load_design
 from rvtool.batched.sequence import batched_quasi_static_te
 from rvtool.units import ARCSEC_PER_RAD
 from rvtool.protocols.precision import dynamic_te, quasi_static_te

@@ -16,8 +16,8 @@ import numpy as np
 import warp as wp
 
 from rvtool import casekit
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from warp_contacts.precision import resolve_device
 from rvtool import designs
 

@@ -15,8 +15,8 @@ import numpy as np
 import warp as wp
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.protocols.precision import quasi_static_te
 from rvtool.solver.static import StaticSolver
 from rvtool.units import ARCSEC_PER_RAD

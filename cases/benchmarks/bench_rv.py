@@ -24,9 +24,9 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.rv import load_design as load_rv
-from rvtool.assembly.spec import load_design as load_cycloid
+from rvtool import build
+from rvtool import load_design as load_rv
+from rvtool import load_design as load_cycloid
 from rvtool.batched.sequence import batched_quasi_static_te
 from rvtool.protocols.precision import dynamic_te, quasi_static_te, te_metrics, transmission_error
 from rvtool.solver.static import StaticSolver

@@ -12,8 +12,8 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design, replace
+from rvtool import build
+from rvtool import load_design, replace_design as replace
 from rvtool.errors import RvtoolInputError
 from rvtool.units import ARCSEC_PER_RAD
 from rvtool.protocols.precision import mesh_forces

@@ -22,8 +22,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.rv import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.protocols.precision import dynamic_te, quasi_static_te
 from rvtool.solver import RunSpec
 from rvtool.units import ARCSEC_PER_RAD

@@ -17,8 +17,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.model import Family
 from rvtool.slow.coupling import linearized_load_change
 from rvtool.slow.report import write_details

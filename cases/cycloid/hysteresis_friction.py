@@ -36,10 +36,10 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design, replace
-from rvtool.assembly import build as build_any
-from rvtool.assembly.rv import load_design as load_rv_design
+from rvtool import build
+from rvtool import load_design, replace_design as replace
+from rvtool import build as build_any
+from rvtool import load_design as load_rv_design
 from rvtool.protocols import hysteresis_cycles as HC
 from rvtool.protocols import stiffness as S
 from rvtool.units import RAD_PER_ARCMIN

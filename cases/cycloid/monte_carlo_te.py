@@ -30,7 +30,7 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.assembly.spec import load_design
+from rvtool import load_design
 from rvtool import progress
 from rvtool.variants.montecarlo import MonteCarloSettings, resolve_mode, run_monte_carlo, run_variant
 from rvtool.variants.tolerances import load_tolerances, sample_variant

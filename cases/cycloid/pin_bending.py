@@ -25,8 +25,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design, replace
+from rvtool import build
+from rvtool import load_design, replace_design as replace
 from rvtool.protocols.budget import stiffness_budget
 from rvtool.protocols.stiffness import condensed_tangent
 from rvtool.solver.static import StaticSolver

@@ -15,8 +15,8 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.protocols import stiffness as S
 from rvtool import designs
 

@@ -11,8 +11,8 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.protocols import vibration as V
 from rvtool.units import ARCSEC_PER_RAD
 from rvtool.protocols.precision import quasi_static_te

@@ -27,8 +27,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design, replace
+from rvtool import build
+from rvtool import load_design, replace_design as replace
 from rvtool.errors import RvtoolInputError
 from rvtool.geometry.involute import line_gap
 from rvtool.protocols import stiffness as S

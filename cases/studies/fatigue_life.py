@@ -39,8 +39,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.model import Family
 from rvtool.pressure.state import pin_contact
 from rvtool.slow import cycloid as C

@@ -33,8 +33,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design, replace
+from rvtool import build
+from rvtool import load_design, replace_design as replace
 from rvtool.slow import cycloid as C
 from rvtool.slow.contact_radius import window_radii
 from rvtool.slow.offsets import GapOffsets

@@ -27,9 +27,9 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.rv import load_design as load_rv_design
-from rvtool.assembly.spec import load_design, replace
+from rvtool import build
+from rvtool import load_design as load_rv_design
+from rvtool import load_design, replace_design as replace
 from rvtool.slow import cycloid as C
 from rvtool.slow import rv as RV
 from rvtool.slow.report import write_details

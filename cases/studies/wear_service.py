@@ -20,8 +20,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.slow import cycloid as C
 from rvtool.slow.contact_radius import window_radii
 from rvtool.slow.orchestrator import (LubricationMode, SlowOrchestrator, SlowSchedule, ThermalCoupling,
