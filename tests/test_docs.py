@@ -33,7 +33,10 @@ def site(tmp_path_factory):
 
 
 def _text(html_path):
-    return re.sub(r"<[^>]+>", " ", html_path.read_text(encoding="utf-8"))
+    """The page's text: tags removed (inline markup joins its words as a reader sees them)."""
+    import html
+    text = re.sub(r"<[^>]+>", "", html_path.read_text(encoding="utf-8"))
+    return re.sub(r"\s+", " ", html.unescape(text))
 
 
 def test_docs_build_without_warnings(site):
@@ -70,7 +73,7 @@ def test_results_pages_are_generated_from_committed_results(site):
     te = data["te"]["figures"]["te_pp"]
     figures = _text(site / "protocols" / "figures.html")
     assert f"{te['value']:.4g}" in figures and "te_pp" in figures
-    assert te["error_statement"].split(";")[0][:40] in figures.replace("\n", " ")
+    assert te["error_statement"].split(";")[0][:40] in figures
 
 
 def test_changelog_includes_every_fragment(site):
