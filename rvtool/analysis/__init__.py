@@ -123,13 +123,13 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
 def write(res, allowables=None):
     """Write results.json and report.html of ``res`` into its output folder; ``allowables``: the
     :func:`rvtool.analysis.summary.allowables_record` the report's summary checks against."""
-    from .. import casekit
+    from .output import write_results
     from .report import write_report
     settings = {"design_source": res.source, "quick": res.quick, "protocols_requested": [r.name for r in res.results],
                 "device": res.device}
     d = res.to_dict()
     d["allowables"] = allowables or {"source": None, "values": None}
-    data = casekit.write_results(res.out_dir, d, settings=settings, wall_s=res.wall_s,
-                                 precision="float64", device=res.device)
+    data = write_results(res.out_dir, d, settings=settings, wall_s=res.wall_s,
+                         precision="float64", device=res.device)
     write_report(data, res.out_dir)
     return data

@@ -97,6 +97,6 @@ class Context:
         if self.out_dir is None:
             plt.close(fig)
             return None
-        from ..casekit import save_figure
+        from .output import save_figure
         os.makedirs(self.out_dir, exist_ok=True)
         return os.path.basename(save_figure(fig, self.out_dir, name))

@@ -1,6 +1,6 @@
 """The datasheet summary that opens ``report.html``: the figures a design review checks first,
 named in words with their units, their numerical error and pass/fail against the design's
-declared allowables (:class:`rvtool.protocols.datasheet.Allowables`).
+declared allowables (:class:`rvtool.designs.allowables.Allowables`).
 
 Allowables are found beside the design: a shipped design ``NAME`` uses the shipped
 ``NAME_allowables`` file (``rvtool/designs/rd40_allowables.toml``), a design file
@@ -68,10 +68,10 @@ def find_allowables(design_source, shipped=None):
 
 def allowables_record(path):
     """The ``allowables`` entry of results.json: {"source": path or None, "values": {key: SI value}
-    or None}. Loading errors name the file's keys (:func:`rvtool.protocols.datasheet.load_allowables`)."""
+    or None}. Loading errors name the file's keys (:func:`rvtool.designs.allowables.load_allowables`)."""
     if path is None:
         return {"source": None, "values": None}
-    from ..protocols.datasheet import load_allowables
+    from ..designs.allowables import load_allowables
     a = load_allowables(path)
     keys = ("min_torsional_stiffness", "max_lost_motion", "max_hertz_pins", "max_hertz_output_pins",
             "max_hertz_needles", "max_hysteresis_loss", "min_bearing_life")
@@ -168,5 +168,5 @@ def summary_rows(data):
     rows.append(Row("Bearing rating life L10h (ISO 281, rated torque and speed)", None, "h",
                     "-", _limit_text(life_limit, "min", "h"), "not computed", "-",
                     "rvtool analyze models the bearings lumped (no rolling-element loads); the rolling-element "
-                    "bearing lives come from rvtool.protocols.precision_study (cases/cycloid/cycloid_double_wheel.py)"))
+                    "bearing lives come from rvtool.analysis.precision_study (cases/cycloid/cycloid_double_wheel.py)"))
     return rows
