@@ -89,7 +89,8 @@ def _summary(data):
         f"<td><span class=\"{_VERDICT_CLASS.get(r.verdict, '')}\">{_e(r.verdict)}</span>"
         f"{'<div class=src>' + _e(r.note) + '</div>' if r.note else ''}</td></tr>"
         for r in rows)
-    return (f'<h2 id="summary">Summary</h2><p>{allow_line} {n_pass} pass, {n_fail} fail against the allowables.</p>'
+    counts = f" {n_pass} pass, {n_fail} fail against the allowables." if src else ""
+    return (f'<h2 id="summary">Summary</h2><p>{allow_line}{counts}</p>'
             '<table class="summary"><tr><th>quantity</th><th>value</th><th>unit</th><th>numerical error</th>'
             f"<th>allowable</th><th>verdict</th></tr>{body}</table>")
 

@@ -167,6 +167,7 @@ def summary_rows(data):
     life_limit = allow.get("min_bearing_life")
     rows.append(Row("Bearing rating life L10h (ISO 281, rated torque and speed)", None, "h",
                     "-", _limit_text(life_limit, "min", "h"), "not computed", "-",
-                    "rvtool analyze models the bearings lumped (no rolling-element loads); the rolling-element "
-                    "bearing lives come from rvtool.analysis.precision_study (cases/cycloid/cycloid_double_wheel.py)"))
+                    "rvtool analyze does not compute bearing rating lives: they need the rolling-element loads of "
+                    "a bearing model the quick and full protocols do not build; the cycloid drive's come from "
+                    "rvtool.analysis.precision_study (cases/cycloid/cycloid_double_wheel.py)"))
     return rows
