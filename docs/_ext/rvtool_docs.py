@@ -242,13 +242,20 @@ class ResultsIndex(_MarkdownDirective):
             data, source = load_case(name)
             prov = data.get("provenance", {})
             wall = prov.get("wall_s_total")
-            rows.append((f"`{name}`", verdict(data), source.get("mode", "?"),
+            rows.append([f"`{name}`", verdict(data), f"`{source.get('mode', '?')}`",
                          f"{wall:.3g}" if isinstance(wall, (int, float)) else "\u2014",
-                         str(source.get("host", "?")), f"`{source.get('commit', '?')}`", str(source.get("date", "?"))))
+                         str(source.get("host", "?")), f"`{source.get('commit', '?')}`", str(source.get("date", "?"))])
         if not rows:
             return self.emit([f"No committed results under `docs/case_results/{self.arguments[0]}/` yet."])
-        return self.emit(table_lines(rows, ["case", "verdict (its own criteria)", "run", "wall [s]", "host",
-                                            "commit", "date"]))
+        header = ["case", "verdict (its own criteria)", "run", "wall [s]", "host", "commit", "date"]
+        hosts = {r[4] for r in rows}
+        lines = []
+        if len(hosts) == 1:          # one host for every run: said once, not in every row
+            lines = [f"Every run below was made on: {hosts.pop()}.", ""]
+            header.pop(4)
+            for r in rows:
+                r.pop(4)
+        return self.emit(lines + table_lines(rows, header))
 
 
 class AnalysisFigures(_MarkdownDirective):
