@@ -89,3 +89,7 @@ def test_readme_fits_on_a_screen_and_links_the_docs():
         assert cmd in readme
     for img in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", readme):
         assert (ROOT / img).is_file(), f"README picture {img} is not committed"
+    links = [t for t in re.findall(r"\]\(([^)#]+)\)", readme) if not t.startswith("http")]
+    assert links, "the README links into the docs"
+    for target in links:
+        assert (ROOT / target).exists(), f"README links to {target}, which does not exist"

@@ -261,8 +261,9 @@ class ResultsIndex(_MarkdownDirective):
 class AnalysisFigures(_MarkdownDirective):
     """``analysis-figures CASE``: per protocol of a committed ``rvtool analyze`` results.json, its
     summary and a table of its figures (name, meaning, unit, value of that run, error and what the
-    error is measured against)."""
+    error is measured against); ``:level:`` is the heading level of the protocol names (default 2)."""
     required_arguments = 1
+    option_spec = {"level": directives.positive_int}
 
     def generate(self):
         name = self.arguments[0]
@@ -271,7 +272,7 @@ class AnalysisFigures(_MarkdownDirective):
         lines = [provenance_line(name, data, source), ""]
         for proto in [k for k, v in data.items() if isinstance(v, dict) and "figures" in v and "status" in v]:
             r = data[proto]
-            lines += [f"### `{proto}`", "", fmt(r.get("summary", "")) + f" (status in that run: {r['status']}"
+            lines += ["#" * self.options.get("level", 2) + f" `{proto}`", "", fmt(r.get("summary", "")) + f" (status in that run: {r['status']}"
                       + (f": {fmt(r['reason'])}" if r.get("reason") else "") + ")", ""]
             if r["figures"]:
                 rows = [(f"`{k}`", fmt(f.get("description", "")), fmt(f.get("unit", "")), fmt(f.get("value")),
