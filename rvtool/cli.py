@@ -168,7 +168,7 @@ def _cmd_run(args, parser):
     if args.case is None:
         design, protocols = DEFAULT_STUDY
         out = args.out or os.path.join("results", f"analyze_{design}")
-        return _analyze(design, protocols, quick=True, out=out, device="cpu", quiet=False, tolerances=None)
+        return _analyze(design, protocols, quick=True, out=out, device="cpu", quiet=False, tolerances=None, allowables=None)
     folder = cases_dir()
     if not folder.is_dir():
         parser.error(_missing_folder_message(folder))
@@ -190,7 +190,7 @@ def _input_error(exc):
     return EXIT_USAGE
 
 
-def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
+def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowables=None):
     from rvtool import progress
     from rvtool.analysis import analyze
     from rvtool.errors import RvtoolInputError
@@ -207,7 +207,8 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
         out = os.path.join("results", f"analyze_{stem}")
     with progress.reporting("quiet" if quiet else "auto"):
         try:
-            res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances)
+            res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances,
+                          allowables=allowables)
         except RvtoolInputError as exc:
             return _input_error(exc)
     for r in res.results:
@@ -226,7 +227,7 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
 
 def _cmd_analyze(args):
     return _analyze(args.design, args.protocols, quick=args.quick, out=args.out, device=args.device,
-                    quiet=args.quiet, tolerances=args.tolerances)
+                    quiet=args.quiet, tolerances=args.tolerances, allowables=args.allowables)
 
 
 def _cmd_designs(args):
@@ -315,6 +316,9 @@ def build_parser():
     an.add_argument("--quiet", action="store_true", help="no progress output")
     an.add_argument("--tolerances", default=None, metavar="FILE",
                     help="tolerance file of the Monte Carlo (default: a shipped design's <name>_tolerances.toml)")
+    an.add_argument("--allowables", default=None, metavar="FILE",
+                    help="design-review allowables the report's summary checks (default: <design>_allowables.toml "
+                         "beside the design file, or a shipped design's)")
     ds = sub.add_parser("designs", help="list the shipped designs and topologies",
                         description="List the shipped reference designs; --format-doc prints the design file "
                                     "format (every section and key, units, ranges) generated from the specs.")
