@@ -104,13 +104,14 @@ def choose(requested, model, task, *, run=None, n_states=None, device="cpu"):
         return b, {"requested": requested, "ran": b.name,
                    "not_taken": {o.name: f"not requested (--backend {requested})" for o in every if o is not b}}
     not_taken, chosen = {}, None
+    size = f"{n_states} states" if n_states is not None else task
     for b in sorted(every, key=lambda b: order.index(b.name)):
-        if chosen is not None:
-            not_taken[b.name] = f"slower in auto's order than {chosen.name!r}"
-            continue
         sup = b.supports(model, task, run)
-        if sup.ok:
+        if not sup.ok:
+            not_taken[b.name] = "; ".join(sup.reasons)
+        elif chosen is None:
             chosen = b
         else:
-            not_taken[b.name] = "; ".join(sup.reasons)
+            not_taken[b.name] = (f"supports the model, but slower than {chosen.name!r} for {size} on {device} "
+                                 "(measured order: rvtool.solver.backends.auto_order)")
     return chosen, {"requested": "auto", "ran": chosen.name, "not_taken": not_taken}
