@@ -1,5 +1,5 @@
-"""Command line: ``rvtool analyze DESIGN [--protocols ...] [--quick] [--out DIR] [--device ...] [--backend ...]
-[--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
+"""Command line: ``rvtool analyze DESIGN [--protocols ...] [--quick] [--out DIR] [--device ...]
+[--backend ...] [--scheduler ADDRESS] [--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
 ``rvtool designs [--format-doc]``, ``rvtool new --topology T [--name NAME]`` (a commented
 design template), ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
 ``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
@@ -145,7 +145,7 @@ def _input_error(exc):
     return EXIT_USAGE
 
 
-def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, backend="auto"):
+def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, backend="auto", scheduler=None):
     from rvtool import progress
     from rvtool.analysis import analyze
     from rvtool.errors import RvtoolInputError
@@ -163,7 +163,7 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, backen
     with progress.reporting("quiet" if quiet else "auto"):
         try:
             res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances,
-                          backend=backend)
+                          backend=backend, scheduler=scheduler)
         except RvtoolInputError as exc:
             return _input_error(exc)
     for r in res.results:
@@ -182,7 +182,7 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, backen
 
 def _cmd_analyze(args):
     return _analyze(args.design, args.protocols, quick=args.quick, out=args.out, device=args.device,
-                    quiet=args.quiet, tolerances=args.tolerances, backend=args.backend)
+                    quiet=args.quiet, tolerances=args.tolerances, backend=args.backend, scheduler=args.scheduler)
 
 
 def _cmd_designs(args):
@@ -272,6 +272,8 @@ def build_parser():
                     help="solver backend: auto (default: the fastest that supports the model, the choice and "
                          "the reasons recorded in results.json), exudyn (every model), replica, device or fused "
                          "(device Newton and fused stepper: cycloid, lumped bearings)")
+    an.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="Dask scheduler of the Monte Carlo's CPU pool (default: a LocalCluster started for it)")
     an.add_argument("--quiet", action="store_true", help="no progress output")
     an.add_argument("--tolerances", default=None, metavar="FILE",
                     help="tolerance file of the Monte Carlo (default: a shipped design's <name>_tolerances.toml)")

@@ -83,7 +83,8 @@ def _run_one(proto, ctx):
                           tuple(p for p in outcome.plots if p), time.perf_counter() - t0)
 
 
-def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", tolerances=None, backend="auto"):
+def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", tolerances=None, backend="auto",
+            scheduler=None):
     """Run ``protocols`` (names, a comma-separated string or None for all) on ``design``;
     returns an :class:`AnalysisResult`. Input errors (design, protocol names, device, a rated
     torque outside the design's admissible range, :mod:`rvtool.analysis.admissible`) raise
@@ -92,7 +93,8 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     ``backend``: the solver backend (:data:`rvtool.solver.backends.CHOICES`): "auto" runs each
     protocol on the fastest backend that supports the model; a named backend runs where it can and
     skips a protocol it cannot run, with the reasons. Each protocol's settings record
-    ``backend``: {"requested", "ran", "not_taken": {name: reason}}."""
+    ``backend``: {"requested", "ran", "not_taken": {name: reason}}. ``scheduler``: the address of
+    the Dask scheduler of the Monte Carlo's CPU pool (None: a LocalCluster started for it)."""
     t0 = time.perf_counter()
     chosen = select(protocols)
     dev = resolve_device(device)
@@ -106,7 +108,8 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
         tolerances = designs.path(designs.tolerances_of(shipped))
     if tolerances is not None and not os.path.isfile(tolerances):
         raise RvtoolInputError(f"tolerances file {str(tolerances)!r} not found")
-    ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances, backend=backend)
+    ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances, backend=backend,
+                  scheduler=scheduler)
     # a valid but unsolvable load is an input error: raised here, before anything is written
     ctx.cache["rated_state"] = check_rated_state(obj, ctx.build)
     if out_dir is not None:

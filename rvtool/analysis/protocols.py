@@ -473,7 +473,8 @@ def run_monte_carlo(ctx):
     n = 4 if ctx.quick else 200
     protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53)
     settings = MonteCarloSettings(n_variants=n, seed=2026, chunk_size=n if ctx.quick else 10,
-                                  mode="batched", workers=1 if ctx.quick else None, device=ctx.device)
+                                  mode="batched", workers=1 if ctx.quick else None, device=ctx.device,
+                                  scheduler=ctx.scheduler or "")
     with tempfile.TemporaryDirectory() as tmp:
         chunk_dir = os.path.join(ctx.out_dir, "monte_carlo_chunks") if ctx.out_dir else tmp
         res = mc(ctx.design, tol, protocol, settings, chunk_dir, build_kw={"regularization": MC_REGULARIZATION},
