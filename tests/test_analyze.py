@@ -49,7 +49,13 @@ def test_results_json_keys_figures_and_error_statements(quick_run):
     # lost motion by continuation and by the spring-controlled march are independent paths
     assert res["lost_motion"].figure("lost_motion").error < 0.01
     te = res["te"].figure("te_pp")
-    assert te.unit == "arcsec" and 0 < te.value < 60 and te.error is not None and te.error < 0.1 * te.value
+    assert te.unit == "arcsec" and te.error is not None and te.error < 0.1 * te.value
+    # README (cycloid_double_wheel): 4.73 arcsec p-p over one output revolution at 40 points per mesh
+    # cycle. The quick angles (first input revolution, 4 points per mesh cycle) are a subset of those,
+    # so the quick p-p cannot exceed it (+0.005: the README's rounding); measured 4.449 arcsec at 8d3787b,
+    # rel 1e-3: the static solver's tolerance and summation order, not the model (refinement error 0.009)
+    assert te.value <= 4.73 + 0.005
+    assert te.value == pytest.approx(4.449, rel=1e-3)
 
 
 def test_report_is_self_contained(quick_run):

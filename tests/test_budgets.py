@@ -1,4 +1,6 @@
 """Issue 21: stiffness budget, lost-motion budget and datasheet."""
+import math
+
 import numpy as np
 import pytest
 
@@ -88,7 +90,7 @@ def test_profile_modification_lost_motion_against_closed_form():
     # the clearance restored first 0.4557 vs 0.4417 (it also turns the elastic part from all pins
     # sharing the load to one pin carrying it). Bounds 2 %, 2 %, 1e-3 arcmin and 6 %.
     d = load_design(designs.path("rd40"))
-    dv = replace(d, profile={"equidistant_mod": 5e-6, "offset_mod": -5e-6, "rotation_mod": 2e-4},
+    dv = replace(d, profile={"equidistant_mod": 5e-6, "offset_mod": -5e-6, "rotation_mod_deg": math.degrees(2e-4)},
                  wheels={"clearance": 2e-6},
                  output_pins={"hole_radius": d.output_pins.pin_radius + d.wheels.eccentricity},
                  eccentric_bearing={"radial_clearance": 0.0}, input_bearing={"radial_clearance": 0.0})

@@ -17,7 +17,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _case(name):
-    spec = importlib.util.spec_from_file_location(name, os.path.join(ROOT, "cases", name + ".py"))
+    spec = importlib.util.spec_from_file_location(name, os.path.join(ROOT, "cases", "verification", name + ".py"))
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

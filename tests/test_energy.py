@@ -90,7 +90,7 @@ def test_residual_is_the_algorithmic_dissipation_for_rho_below_one():
 
 
 def _jenkins():
-    spec = importlib.util.spec_from_file_location("verify_jenkins", os.path.join(ROOT, "cases", "verify_jenkins.py"))
+    spec = importlib.util.spec_from_file_location("verify_jenkins", os.path.join(ROOT, "cases", "verification", "verify_jenkins.py"))
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

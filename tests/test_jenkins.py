@@ -34,7 +34,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _case():
-    spec = importlib.util.spec_from_file_location("verify_jenkins", os.path.join(ROOT, "cases", "verify_jenkins.py"))
+    spec = importlib.util.spec_from_file_location("verify_jenkins", os.path.join(ROOT, "cases", "verification", "verify_jenkins.py"))
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

@@ -35,6 +35,33 @@ CIRCLE_LAW = LAWS["point_law"]
 APPROACH_MAX = 50e-6  # |-g| at the ends of the sweep, m
 
 
+EPS32 = float(np.finfo(np.float32).eps)
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict): arithmetic error bounds per precision."""
+    checks = {}
+    for name in LAWS:
+        # float64: the reference does the same arithmetic in float64: a few ulps (pow), 1e-14 = 45 ulps
+        checks[f"float64_{name}"] = casekit.check(r[f"float64.{name}_norm_err"], 1e-14, "<=", why="few float64 ulps")
+        # float32: a handful of roundings of a power law, 1e-6 = 8 eps32
+        checks[f"float32_{name}"] = casekit.check(r[f"float32.{name}_norm_err"], 1e-6, "<=", why="8 float32 ulps")
+    for tag in ("ext", "int"):
+        checks[f"float64_{tag}_circle"] = casekit.check(r[f"float64.{tag}_circle_norm_err"], 1e-14, "<=",
+                                                        why="few float64 ulps")
+        checks[f"float64_{tag}_gap"] = casekit.check(r[f"float64.{tag}_gap_max_abs_err_m"], 1e-17, "<=",
+                                                     why="same float64 arithmetic (ulp of 5e-2 m is 7e-18)")
+        # float32 gap: centre distances of ~5e-2 m resolve to eps32 * 5e-2 = 6e-9 m; two such roundings
+        gap_bound = 2 * EPS32 * CIRCLE_RADIUS
+        checks[f"float32_{tag}_gap"] = casekit.check(r[f"float32.{tag}_gap_max_abs_err_m"], gap_bound, "<=",
+                                                     why="two float32 roundings of the 5e-2 m centre distance")
+        # force: p * gap error / largest approach (1.5 * 1.2e-8 / 5e-5 = 3.6e-4)
+        checks[f"float32_{tag}_circle"] = casekit.check(r[f"float32.{tag}_circle_norm_err"],
+                                                        CIRCLE_LAW[1] * gap_bound / APPROACH_MAX, "<=",
+                                                        why="law exponent x float32 gap error / largest approach")
+    return checks
+
+
 def _rounded(x, precision):
     """Inputs as the kernel sees them, promoted to float64 for the reference."""
     return np.asarray(x, dtype=precision).astype(np.float64)
@@ -151,6 +178,7 @@ def main(argv=None):
         "wall_s": "per precision: Warp evaluations and reference, including kernel loading",
         "quick": args.quick, "device": args.device,
     }
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=float(sum(walls.values())),
                                  precision="float64,float32", device=args.device)
 

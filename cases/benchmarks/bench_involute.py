@@ -23,7 +23,7 @@ from rvtool.units import ARCSEC_PER_RAD
 from rvtool.contact.involute_set import GearMesh, InvoluteContactSet
 from warp_contacts.precision import resolve_device
 
-import involute_pair
+involute_pair = casekit.import_case("verification/involute_pair")
 
 
 def scene(n_meshes, backend, device="cpu", precision="float64"):

@@ -27,6 +27,7 @@ Reported:
   (drive work against friction dissipation, elastic storage, kinetic energy and
   damping, from accepted steps) relative to the drive work.
 """
+import math
 import time
 
 import numpy as np
@@ -119,7 +120,42 @@ def run(quick=False, steps_per_cycle=None, loops=None, spectral_radius=0.8):
         "_detail": {"t": t, "x_d": x_d, "x_b": x_b, "force": force, "f_cf": f_cf, "f_t": np.array(samples.f_t),
                     "area_J": area, "area_cf_J": area_cf, "width_m": zero_torque_width(loop),
                     "width_cf_m": 2 * (x_a - f_c / k_s), "k_s": k_s, "f_c": f_c, "energy": energy,
-                    "record": rec.to_dict(), "spec": spec, "loop_sel": sel},
+                    "record": rec.to_dict(), "spec": spec, "loop_sel": sel, "loops": loops},
+    }
+
+
+def error_bounds(d):
+    """Error bounds of the three figures from the run's own parameters (derivations as in
+    tests/test_jenkins.py): relative loop area, absolute branch error [m], relative energy balance."""
+    p = PARAMS
+    k, kt, m_b = p["spring"], p["tangential_stiffness"], p["block_mass"]
+    x_a, w, R, F_N, mu = p["amplitude"], 2 * math.pi * p["frequency"], p["surface_radius"], p["normal_load"], p["mu"]
+    k_s, f_c, dt = d["k_s"], d["f_c"], d["spec"].step
+    area = 4 * f_c * (x_a - f_c / k_s)
+    # loop area: the trapezoidal loop cuts the two stick->slip corners (k_s dx^2/8 each, dx = w x_a dt),
+    # the ground circle of radius R adds a conservative spring -F_N/R and changes F_c by mu F_c x_a / R
+    area_tol = k_s * (w * x_a * dt) ** 2 / 4 + F_N / (R * k) * 4 * f_c * x_a + mu * f_c * x_a / R * 4 * x_a
+    # branches: the block's inertia ringing after a stick->slip transition (undamped bound), the ground
+    # curvature and the Newton tolerance
+    branch_tol = (w * x_a * kt / (k + kt)) / math.sqrt(k / m_b) + F_N * x_a / (R * k) + d["spec"].abs_tol / k
+    # energy: k_s dx^2/2 per stick->slip step plus the ringing energy per transition, one per half cycle
+    dv = w * x_a * kt / (k + kt)
+    transitions = 2 * d["loops"] + 1   # the virgin quarter cycle's, then one per half cycle
+    balance_tol = transitions * (k_s * (w * x_a * dt) ** 2 / 2 + 0.5 * m_b * dv ** 2)
+    return {"loop_area_rel": area_tol / area, "branch_m": branch_tol,
+            "energy_balance_rel": balance_tol / d["energy"]["balance_scale_J"]}
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict): the closed form within the derived bounds."""
+    b = r["error_bounds"]
+    return {
+        "loop_area": casekit.check(r["loop_area_rel_err"], b["loop_area_rel"], "<=",
+                                   why="Jenkins loop area 4 F_c (x_a - F_c/k_s); corner cut + ground curvature"),
+        "branches": casekit.check(r["branch_max_abs_err_m"], b["branch_m"], "<=",
+                                  why="Masing branches; inertia ringing + curvature + Newton tolerance"),
+        "energy_balance": casekit.check(r["energy_balance_rel_err"], b["energy_balance_rel"], "<=",
+                                        why="friction dissipation vs drive work; corner steps + ringing"),
     }
 
 
@@ -155,6 +191,7 @@ def main(argv=None):
     res = run(quick=args.quick)
     plot(res, args.out)
     d = res.pop("_detail")
+    res["error_bounds"] = error_bounds(d)
     print(f"loop area {d['area_J']:.6e} J (closed form {d['area_cf_J']:.6e} J), rel. err {res['loop_area_rel_err']:.2e}; "
           f"zero-force width {d['width_m']:.6e} m (closed form {d['width_cf_m']:.6e} m); branch error "
           f"{res['branch_max_abs_err_m']:.2e} m; energy balance rel. err {res['energy_balance_rel_err']:.2e} "
@@ -162,6 +199,7 @@ def main(argv=None):
           f"{d['record']['accepted_steps']} accepted / {d['record']['rejected_steps']} rejected steps in {res['wall_s']:.2f} s")
     settings = {"params": PARAMS, "run_spec": d["spec"].to_dict(), "quick": args.quick,
                 "reference": "series springs k, k_t with Coulomb slider: A = 4 F_c (x_a - F_c/k_s), k_s = k k_t/(k + k_t)"}
+    casekit.verdict(res, judge)
     return casekit.write_results(args.out, res, settings=settings, wall_s=time.perf_counter() - t0)
 
 

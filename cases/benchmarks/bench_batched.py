@@ -22,8 +22,6 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-
 from rvtool import casekit  # noqa: E402
 from rvtool.assembly.spec import load_design  # noqa: E402
 from rvtool.variants.batched import batched_variant_figures  # noqa: E402

@@ -1,6 +1,6 @@
 """RV-40E class: one crank's eccentric phase off by 0, 2, 5, 10 arcmin -- crank load shares and TE.
 
-Crank 0's two journals are turned by the error about its axis (``cranks.phase_errors_arcmin``,
+Crank 0's two journals are turned by the error about its axis (``cranks.phase_errors_deg``,
 a design variant; positive = counter-clockwise, i.e. lagging in the cranks' driving sense, since
 the cranks turn clockwise when the input turns counter-clockwise). Per error: the crank load
 shares at rated load (fraction of the summed crank torque about the carrier axis) at input angle 0
@@ -31,7 +31,7 @@ def main(argv=None):
     shares_out, te_pp, curves, walls = [], [], [], []
     for err in errors:
         t0 = time.perf_counter()
-        d = base.replace(cranks={"phase_errors_arcmin": (err,) + (0.0,) * (base.cranks.count - 1)})
+        d = base.replace(cranks={"phase_errors_deg": (err / 60,) + (0.0,) * (base.cranks.count - 1)})
         model = build(d)
         crank_rev = 2 * np.pi / abs(model.graph.crank_rate)
         n_pts = 12 if args.quick else int(round(crank_rev / model.mesh_period)) * 40

@@ -47,6 +47,23 @@ def _check(bearing, radial_load, backend, Jr):
     }
 
 
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    q = r["q_max_N"]
+    return {
+        # the exact discrete relation F_r = Q_max sum cos^(5/2) psi_j holds for the converged equilibrium:
+        # Newton's residual only (measured 1e-15); 1e-9 is the solver's stopping tolerance with margin
+        "q_max_vs_discrete_sum": casekit.check(abs(q / r["q_max_discrete_sum_N"] - 1), 1e-9, "<=",
+                                               why="exact discrete relation; Newton tolerance"),
+        # the Sjoevall integral replaces the 16-ball sum by an integral: 5e-4 apart (measured 4.6e-4);
+        # 2e-3 is the quadrature error of a 16-point sum of cos^(5/2) over the loaded half
+        "q_max_vs_sjoevall": casekit.check(abs(r["rel_err_vs_exact"]), 2e-3, "<=",
+                                           why="integral vs 16-ball sum (discretisation of the load zone)"),
+        # zero clearance: exactly the balls with cos psi > 0 carry load (psi = 0, +-22.5, +-45, +-67.5 deg)
+        "loaded_balls": casekit.check(r["n_loaded"], 7, "==", why="half the ring at zero clearance, Z = 16"),
+    }
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t0 = time.perf_counter()
@@ -84,6 +101,7 @@ def main(argv=None):
            title="departure from Stribeck (working angle)")
     bx.legend(fontsize=7)
     casekit.save_figure(fig, args.out, "stribeck")
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"bearing": repr(deep), "backend": backend,
                                                               "quick": args.quick}, wall_s=results["wall_s"])
 

@@ -96,6 +96,37 @@ def tangent_error(model, theta_a, theta_b, h=1e-9):
     return float(np.max(np.abs(Jfd - J)) / np.max(np.abs(J)))
 
 
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    n_cycle = len(r["mesh_stiffness_N_per_mm_um"]["pinion_angle_rad"]) - 1
+    iso = r["iso6336_reference"]
+    te = r["static_te_pp_urad"]
+    single = r["max_single_pair_stiffness_N_per_mm_um"]
+    return {
+        # the model's contact ratio is 1 + the fraction of sampled angles with two pairs: resolution 1/n_cycle
+        "contact_ratio_vs_iso": casekit.check(abs(r["contact_ratio_model"] - r["contact_ratio_iso"]), 1.0 / n_cycle,
+                                              "<=", why="sampling resolution of the pair count (1/points per cycle)"),
+        # conjugate action: under 1 N only the elastic approach remains (measured 1.6e-7 rad, nonlinear Weber
+        # approach at a light load); a 1 um involute error on the wheel's 55 mm base radius would give 2e-5 rad
+        "conjugate_action_rad": casekit.check(r["kinematic_te_max_abs_rad"], 1e-6, "<=",
+                                              why="rigid conjugate motion up to the 1 N elastic approach"),
+        # analytic tangent against central differences (h = 1e-9 rad): truncation + round-off ~1e-8
+        "tangent_vs_fd": casekit.check(r["tangent_fd_rel_err"], 1e-6, "<=",
+                                       why="central-difference error at h = 1e-9 (measured 1e-8)"),
+        # ISO 6336-1 Method B is an empirical estimate (its scatter: assumed 10-20 %); 15 % catches a
+        # mis-scaled tooth model, not the model's own departures from the empirical fit
+        "single_stiffness_vs_iso": casekit.check(
+            None if single is None else abs(single / iso["c_prime_N_per_mm_um"] - 1), 0.15, "<=",
+            why="c' of ISO 6336-1 Method B (empirical, assumed 10-20 % scatter)"),
+        "mesh_stiffness_vs_iso": casekit.check(
+            abs(r["mean_mesh_stiffness_N_per_mm_um"] / iso["c_gamma_alpha_N_per_mm_um"] - 1), 0.15, "<=",
+            why="c_gamma_alpha of ISO 6336-1 Method B (empirical, assumed 10-20 % scatter)"),
+        # the tip relief is sized for the middle load: it must lower the TE p-p there
+        "tip_relief_lowers_te": casekit.check(te["tip_relief"]["500"] / te["unmodified"]["500"], 1.0, "<",
+                                              why="tip relief designed at 500 N/mm (highest point of single contact)"),
+    }
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t0 = time.perf_counter()
@@ -175,9 +206,12 @@ def main(argv=None):
         "mesh_stiffness_N_per_mm_um": {"pinion_angle_rad": th1, "unmodified": k_mid, "tip_relief": stiff["tip_relief"][0],
                                        "line_load_N_per_mm": LINE_LOADS_N_PER_MM[1]},
         "mean_mesh_stiffness_N_per_mm_um": float(np.mean(k_mid[:-1])),
-        "max_single_pair_stiffness_N_per_mm_um": float(np.max(k_mid[single])) if np.any(single) else math.nan,
+        "max_single_pair_stiffness_N_per_mm_um": float(np.max(k_mid[single])) if np.any(single) else None,
         "static_te_pp_urad": te_pp,
-        "load_sharing": sharing,
+        # null where tooth 0 is out of mesh (no contact: no roll length or speed), not a computed NaN
+        "load_sharing": {name: {k: ([None if isinstance(v, float) and math.isnan(v) else v for v in vals]
+                                    if isinstance(vals, list) else vals) for k, vals in sh.items()}
+                         for name, sh in sharing.items()},
         "tangent_fd_rel_err": float(max(errs)),
         "wall_s": time.perf_counter() - t0,
         "iso6336_reference": {
@@ -196,6 +230,7 @@ def main(argv=None):
                 "max_pairs_in_contact_light_load": int(n_pairs.max()),
                 "newton_iterations": {k: s.newton_iterations for k, s in statics.items()}}
     _plots(args.out, th1 / cycle, stiff, te_curves, sharing, mu, statics["unmodified"])
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t0)
 
 

@@ -84,6 +84,28 @@ def _compare(a, b):
     return float(exposure), float(history), force
 
 
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    return {
+        "rejections_happened": casekit.check(r["n_rejected"], 1, ">=", why="the forced rejections must occur"),
+        # correct ownership: only the time discretization of the retried steps differs (measured 1.1e-6 in the
+        # committed history, 3e-4 in I_s, 4.5e-3 in the friction force); bounds 10x / 6x / 2x above those
+        "history_vs_no_rejection": casekit.check(r["history_rel_diff"], 1e-5, "<=",
+                                                 why="time discretization of the retried steps only"),
+        "exposure_vs_no_rejection": casekit.check(r["exposure_rel_diff"], 2e-3, "<=",
+                                                  why="time discretization of the retried steps only"),
+        "friction_force_vs_no_rejection": casekit.check(r["friction_force_rel_diff"], 1e-2, "<=",
+                                                        why="time discretization of the retried steps only"),
+        # the control (history committed at every trial) must be visibly worse, or the test could not fail
+        "control_history_worse": casekit.check(
+            r["control_wrong_policy_history_rel_diff"] / max(r["history_rel_diff"], 1e-300), 10.0, ">=",
+            why="the wrong policy's history error is at least 10x the correct one's (measured 300x)"),
+        "control_force_worse": casekit.check(
+            r["control_wrong_policy_friction_force_rel_diff"] / max(r["friction_force_rel_diff"], 1e-300), 5.0, ">=",
+            why="the wrong policy's friction-force error is at least 5x the correct one's (measured 10x)"),
+    }
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     spec = RunSpec(end_time=0.25 if args.quick else 1.0, step=5e-4 if args.quick else 2e-4, abs_tol=1e-6, rel_tol=1e-8)
@@ -124,6 +146,7 @@ def main(argv=None):
     ax.set(xlabel="t [s]", ylabel="tangential force on block [N]")
     ax.legend(fontsize=8)
     casekit.save_figure(fig, args.out, "stick_slip_history")
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=spec.to_dict(), wall_s=time.perf_counter() - t0)
 
 

@@ -33,11 +33,10 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-
-from bench_batched import DESIGN_PATH, sample_variants  # noqa: E402
 from rvtool import casekit  # noqa: E402
+
+DESIGN_PATH = casekit.import_case("bench_batched").DESIGN_PATH
+sample_variants = casekit.import_case("bench_batched").sample_variants
 from rvtool.assembly.spec import load_design  # noqa: E402
 from rvtool.units import ARCSEC_PER_RAD # noqa: E402
 from rvtool.protocols.precision import te_metrics, transmission_error # noqa: E402
