@@ -129,7 +129,7 @@ def test_auto_names_why_each_other_backend_was_not_taken(name):
     g = GOLDEN["exudyn"][name]
     d = rvtool.load_design(name)
     model = rvtool.build(d)
-    b, choice = choose("auto", model, "equilibria")
+    b, choice = choose("auto", model, "equilibria", n_states=len(g["te_angles_rad"]))
     assert choice["ran"] == b.name and b.supports(model, "equilibria").ok
     assert set(choice["not_taken"]) == {"exudyn", "replica", "device"} - {b.name}
     assert all(isinstance(r, str) and r for r in choice["not_taken"].values())
