@@ -1,5 +1,5 @@
 """Command line: ``rvtool analyze DESIGN [--protocols ...] [--quick] [--out DIR] [--device ...]
-[--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
+[--backend ...] [--scheduler ADDRESS] [--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
 ``rvtool designs [--format-doc]``, ``rvtool new --topology T [--name NAME]`` (a commented
 design template), ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
 ``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
@@ -190,7 +190,8 @@ def _input_error(exc):
     return EXIT_USAGE
 
 
-def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowables=None):
+def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowables=None, backend="auto",
+             scheduler=None):
     from rvtool import progress
     from rvtool.analysis import analyze
     from rvtool.errors import RvtoolInputError
@@ -208,7 +209,7 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowa
     with progress.reporting("quiet" if quiet else "auto"):
         try:
             res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances,
-                          allowables=allowables)
+                          allowables=allowables, backend=backend, scheduler=scheduler)
         except RvtoolInputError as exc:
             return _input_error(exc)
     for r in res.results:
@@ -227,7 +228,8 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowa
 
 def _cmd_analyze(args):
     return _analyze(args.design, args.protocols, quick=args.quick, out=args.out, device=args.device,
-                    quiet=args.quiet, tolerances=args.tolerances, allowables=args.allowables)
+                    quiet=args.quiet, tolerances=args.tolerances, allowables=args.allowables, backend=args.backend,
+                    scheduler=args.scheduler)
 
 
 def _cmd_designs(args):
@@ -313,6 +315,12 @@ def build_parser():
     an.add_argument("--quick", action="store_true", help="short forms of the protocols (seconds each)")
     an.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/analyze_DESIGN)")
     an.add_argument("--device", default="cpu", metavar="DEVICE", help="auto, cpu (default) or cuda[:N]")
+    an.add_argument("--backend", default="auto", choices=("auto", "exudyn", "replica", "device", "fused"),
+                    help="solver backend: auto (default: the fastest that supports the model, the choice and "
+                         "the reasons recorded in results.json), exudyn (every model), replica, device or fused "
+                         "(device Newton and fused stepper: cycloid, lumped bearings)")
+    an.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="Dask scheduler of the Monte Carlo's CPU pool (default: a LocalCluster started for it)")
     an.add_argument("--quiet", action="store_true", help="no progress output")
     an.add_argument("--tolerances", default=None, metavar="FILE",
                     help="tolerance file of the Monte Carlo (default: a shipped design's <name>_tolerances.toml)")
