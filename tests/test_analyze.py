@@ -167,7 +167,7 @@ def test_template_round_trip_and_comments(tmp_path, capsys, monkeypatch):
     assert d.name == "mine" and d.pins == ref.pins and d.wheels == ref.wheels
     # comments carry units and the ranges the specs enforce
     assert "wheels" in text and "[m]" in text and "valid: (0.0, inf)" in text
-    assert "one of ['line', 'power', 'secant']" in text
+    assert "one of ['line', 'power', 'secant', 'palmgren']" in text
     # no overwrite
     code, _, err = _run_cli(["new", "--topology", "cycloid", "--name", "mine"], capsys)
     assert code == 2 and "exists" in err
