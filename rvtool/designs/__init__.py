@@ -26,7 +26,9 @@ def path(name):
 def kind(name):
     """What a shipped file holds: "tolerances" (a ``[tolerances]`` table, the Monte Carlo's input),
     "sweep" (a ``study`` key, ``rvtool sweep``'s input), "allowables" (an ``[allowables]`` table, the
-    datasheet's input) or "design" (a reducer design)."""
+    datasheet's input), "catalogue" (a ``[[figure]]`` array: a design's catalogue data), "assumed" (an
+    ``[[assumed]]`` array: a design's assumed input ranges; both :mod:`rvtool.designs.catalogue`) or
+    "design" (a reducer design)."""
     import tomllib
     with open(path(name), "rb") as fh:
         table = tomllib.load(fh)
@@ -36,6 +38,10 @@ def kind(name):
         return "sweep"
     if "allowables" in table:
         return "allowables"
+    if "figure" in table or "test" in table:
+        return "catalogue"
+    if "assumed" in table:
+        return "assumed"
     return "design"
 
 
@@ -49,3 +55,17 @@ def tolerances_of(name):
     stem = name[:-5] if name.endswith(".toml") else name
     companion = f"{stem}_tolerances"
     return companion if companion in names() and kind(companion) == "tolerances" else None
+
+
+def catalogue_of(name):
+    """Name of the shipped catalogue file of shipped design ``name`` (``<name>_catalogue``), or None."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    companion = f"{stem}_catalogue"
+    return companion if companion in names() and kind(companion) == "catalogue" else None
+
+
+def assumed_of(name):
+    """Name of the shipped assumed-ranges file of shipped design ``name`` (``<name>_assumed``), or None."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    companion = f"{stem}_assumed"
+    return companion if companion in names() and kind(companion) == "assumed" else None
