@@ -26,9 +26,9 @@ def path(name):
 def kind(name):
     """What a shipped file holds: "tolerances" (a ``[tolerances]`` table, the Monte Carlo's input),
     "sweep" (a ``study`` key, ``rvtool sweep``'s input), "allowables" (an ``[allowables]`` table, the
-    datasheet's input), "catalogue" (a ``[[figure]]`` array: a design's catalogue data), "assumed" (an
-    ``[[assumed]]`` array: a design's assumed input ranges; both :mod:`rvtool.designs.catalogue`) or
-    "design" (a reducer design)."""
+    datasheet's input), "assumed" (``[[assumed]]`` tables: a design's assumed inputs with their cited
+    ranges), "catalogue" (``[[figure]]`` tables: a design's catalogue figures) or "design" (a reducer
+    design)."""
     import tomllib
     with open(path(name), "rb") as fh:
         table = tomllib.load(fh)
@@ -38,15 +38,15 @@ def kind(name):
         return "sweep"
     if "allowables" in table:
         return "allowables"
-    if "figure" in table or "test" in table:
-        return "catalogue"
     if "assumed" in table:
         return "assumed"
+    if "figure" in table:
+        return "catalogue"
     return "design"
 
 
 def design_names():
-    """Names of the shipped reducer designs (tolerance, sweep and allowables files left out)."""
+    """Names of the shipped reducer designs (tolerance, sweep, allowables, assumed and catalogue files left out)."""
     return [n for n in names() if kind(n) == "design"]
 
 
