@@ -44,10 +44,21 @@ REPEAT_TOLERANCE_ARCMIN = 1e-4
 """Declared bound on the difference of the two loops [arcmin] (the Newton tolerance moves a level
 by ~1e-7 arcmin; cases/hysteresis_friction.py)."""
 
-FULL_STEP, QUICK_STEP, SAMPLE_STEP = 0.0625, 0.25, 0.25
+DEFAULT_RIGIDITY_POINTS = (0.5, 1.0)
+"""b/a torque points [fraction of T_R] where the catalogue file gives none: a STATED CONVENTION
+(rvtool's datasheet secant, rd40_allowables.toml: "catalogue secant (50-100 % T_R)"), not the
+catalogue's own points, which were not read (rv40e/rv80e_catalogue.toml say so); every result
+names the points it used and where they come from."""
+
+QUICK_TORNADO_KEYS = 2
+"""Under quick the tornado covers the first this many `assumed` keys of the file (2 loops each)."""
+
+FULL_STEP, QUICK_STEP, SAMPLE_STEP = 0.0625, 0.25, 0.5
 """Level spacing of the central loop (full, quick) and of each sample's loop [fraction of T_R]
 (the catalogue's points and the +-3 %, 2 %, 1 % levels are added to every one; b/a and the
-mid-points are read at levels, so the spacing changes only the curve's plot)."""
+mid-points are read at levels, so the spacing changes only the curve's plot; measured on rv40e:
+the figures at 0.25 and 0.0625 agree to 1e-11 arcmin). A sample runs the preload and one cycle
+(the central loop shows the cycles repeat: Masing)."""
 
 
 def validated_designs():
@@ -72,14 +83,28 @@ def assumptions_commit(paths):
         return None, f"git unavailable: {exc}"
 
 
-def _loop(design, catalogue, step):
+def rigidity_points(catalogue):
+    """(points [fraction of T_R], where they come from)."""
+    pts = catalogue.test.rigidity_torque_points
+    if pts is not None:
+        return pts, f"the catalogue's own points ({os.path.basename(catalogue.path)}, test.rigidity_torque_points)"
+    return DEFAULT_RIGIDITY_POINTS, ("NOT the catalogue's points (the catalogue file gives none): the stated "
+                                     "convention 50-100 % T_R (rvtool.analysis.validate.DEFAULT_RIGIDITY_POINTS)")
+
+
+def _loop(design, catalogue, step, *, repeat=True):
+    """The catalogue loop of ``design``: two cycles with the repeatability check (``repeat``), or
+    the first cycle only (:func:`rvtool.protocols.catalogue.catalogue_loop`, for the samples)."""
     from ..assembly import build
     from ..protocols import catalogue as C
     t = catalogue.test
-    seq = C.catalogue_sequence(t.rated_torque, rigidity_points=t.rigidity_torque_points,
+    pts, _ = rigidity_points(catalogue)
+    seq = C.catalogue_sequence(t.rated_torque, rigidity_points=pts,
                                lost_motion_fraction=t.lost_motion_torque_fraction, step=step)
-    return C.catalogue_loops(C.ContinuationPath(build(design)), seq, rigidity_points=t.rigidity_torque_points,
-                             lost_motion_fraction=t.lost_motion_torque_fraction,
+    path = C.ContinuationPath(build(design))
+    if not repeat:
+        return C.catalogue_loop(path, seq, rigidity_points=pts, lost_motion_fraction=t.lost_motion_torque_fraction)
+    return C.catalogue_loops(path, seq, rigidity_points=pts, lost_motion_fraction=t.lost_motion_torque_fraction,
                              repeat_tolerance=REPEAT_TOLERANCE_ARCMIN * RAD_PER_ARCMIN)
 
 
@@ -94,7 +119,7 @@ def _sample(args):
     table, catalogue = args
     from ..assembly.topologies import design_from_table
     try:
-        return _figures(_loop(design_from_table(table), catalogue, SAMPLE_STEP)), None
+        return _figures(_loop(design_from_table(table), catalogue, SAMPLE_STEP, repeat=False)), None
     except Exception as exc:       # a failed variant is counted and reported, never dropped silently
         return None, f"{type(exc).__name__}: {exc}"
 
@@ -164,26 +189,41 @@ def model_family(model, value):
     raise RvtoolInputError(f"the model has no contact family {value!r} (valid: {[f.value for f in model.families]})")
 
 
-def _row(key, predicted, unit, catalogue, band=None, note=""):
-    f = catalogue.figure(key)
-    r = {"figure": key, "predicted": predicted, "unit": unit, "band": band, "note": note}
-    if f is None:
-        r.update(catalogue=None, kind=None, source="the catalogue file prints none", conditions="", verdict="no figure")
-        return r
-    r.update(catalogue=f.value, catalogue_unit=f.unit, kind=f.kind, source=catalogue.citation(f),
-             conditions=f.conditions)
-    if predicted is None or not np.isfinite(predicted):
-        r["verdict"] = "not computed"
-    elif f.kind == "max":
-        r["verdict"] = "within max" if predicted <= f.value else "above max"
-    elif f.kind == "min" or (f.kind == "rated" and key == "rated_life"):
-        r["verdict"] = "meets" if predicted >= f.value else "short"
-    else:
-        r["ratio"] = predicted / f.value
-        r["verdict"] = f"{100 * (predicted / f.value - 1):+.1f} % vs typical"
-        if band is not None:
-            r["verdict"] += "; in band" if band[0] <= f.value <= band[1] else "; outside band"
-    return r
+def _rows(key, predicted, unit, catalogue, band=None, note=""):
+    """One table row per catalogue figure of ``key`` (a max and a typical value are two rows). The
+    figure's value is converted to ``unit`` through SI (the catalogue file's unit as printed)."""
+    from ..designs.catalogue import UNITS
+    figs = catalogue.figures_of(key)
+    base = {"figure": key, "predicted": predicted, "unit": unit, "band": band, "note": note}
+    if not figs:
+        return [{**base, "catalogue": None, "kind": None, "source": "the catalogue file prints none", "conditions": "",
+                 "status": None, "verdict": "no figure"}]
+    out = []
+    for f in figs:
+        r = dict(base)
+        value = f.value_si / UNITS[unit]
+        r.update(catalogue=value, catalogue_unit=unit, kind=f.kind, source=catalogue.citation(f),
+                 conditions=f.conditions, status=f.status,
+                 catalogue_range=None if f.low is None else [f.low * UNITS[f.unit] / UNITS[unit],
+                                                            f.high * UNITS[f.unit] / UNITS[unit]])
+        if predicted is None or not np.isfinite(predicted):
+            r["verdict"] = "not computed"
+        elif f.kind == "max":
+            r["verdict"] = "within max" if predicted <= value else "above max"
+        elif f.kind == "min" or key == "rated_life":
+            r["verdict"] = "meets" if predicted >= value else "short"
+        else:
+            r["ratio"] = predicted / value
+            r["verdict"] = f"{100 * (predicted / value - 1):+.1f} % vs typical"
+            if r["catalogue_range"] is not None:
+                lo, hi = r["catalogue_range"]
+                r["verdict"] += "; inside the printed range" if lo <= predicted <= hi else "; outside the printed range"
+            if band is not None:
+                r["verdict"] += "; catalogue in band" if band[0] <= value <= band[1] else "; catalogue outside band"
+        if f.status == "not_reread":
+            r["verdict"] += " (catalogue value not re-read from the page)"
+        out.append(r)
+    return out
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, log=print):
@@ -209,7 +249,11 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     if assumed is not None:
         check_assumed_middle(assumed, table)
     files = [design_path] + ([assumed.path] if assumed else [])
-    commit, commit_date = assumptions_commit(files)
+    last_commit, last_date = assumptions_commit(files)
+    # the commit that fixed the assumed inputs, as the catalogue file records it (issue 28: made before the
+    # first comparison); beside it the last commit that touched the design or its ranges (a later change
+    # to an assumed value would show here)
+    commit = catalogue.assumptions_commit or last_commit
     d = design_from_table(table)
     T_R = catalogue.test.rated_torque
     if abs(float(getattr(d, "rated_torque", T_R)) - T_R) > 1e-9 * T_R:
@@ -231,72 +275,72 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     log(f"validate {design}: ratio variant")
     try:
         vt, v_ratio = ratio_variant(table)
-        v_fig = _figures(_loop(design_from_table(vt), catalogue, QUICK_STEP))
+        v_fig = _figures(_loop(design_from_table(vt), catalogue, SAMPLE_STEP, repeat=False))
         variant = {"ratio": v_ratio, "ratio_central": float(model.ratio), "rigidity": v_fig["torsional_rigidity"],
                    "rel_diff": v_fig["torsional_rigidity"] / fig_c["torsional_rigidity"] - 1.0,
                    "first_stage": {"sun_gear.n_teeth": vt["sun_gear"]["n_teeth"],
                                    "crank_gear.n_teeth": vt["crank_gear"]["n_teeth"]}}
-    except (RvtoolInputError, KeyError) as exc:
-        variant = {"error": str(exc)}
+    except Exception as exc:     # reported in the table, not fatal: the variant is a side check
+        variant = {"error": f"{type(exc).__name__}: {exc}"}
     # Latin hypercube + tornado over the assumed ranges
     unc = None
     if assumed is not None:
         from scipy.stats import qmc
         keys = [a.key for a in assumed.inputs]
-        lo = np.array([a.low for a in assumed.inputs])
-        hi = np.array([a.high for a in assumed.inputs])
-        X = qmc.scale(qmc.LatinHypercube(d=len(keys), seed=seed).random(n_samples), lo, hi)
+        U = qmc.LatinHypercube(d=len(keys), seed=seed).random(n_samples)    # fractions of each range
 
-        def table_of(values):
+        def table_of(u):
             t = table
-            for k, v in zip(keys, values):
-                t = set_key(t, k, float(v))
+            for a, uj in zip(assumed.inputs, u):
+                t = set_key(t, a.key, a.at(uj))
             return t
 
-        mid = 0.5 * (lo + hi)
+        n_tor = min(len(keys), QUICK_TORNADO_KEYS) if quick else len(keys)
         tornado_pts = []
-        for j in range(len(keys)):
-            for v in (lo[j], hi[j]):
-                x = mid.copy()
+        for j in range(n_tor):
+            for v in (0.0, 1.0):
+                x = np.full(len(keys), 0.5)
                 x[j] = v
                 tornado_pts.append(x)
         log(f"validate {design}: {n_samples} Latin-hypercube samples + {len(tornado_pts)} tornado points "
             f"({workers} worker(s))")
         ts = time.perf_counter()
-        res = _map(_sample, [(table_of(x), catalogue) for x in list(X) + tornado_pts], workers)
+        res = _map(_sample, [(table_of(x), catalogue) for x in list(U) + tornado_pts], workers)
         wall_samples = time.perf_counter() - ts
         lhs, tor = res[:n_samples], res[n_samples:]
         failures = [e for f, e in lhs if f is None]
         ok = [f for f, e in lhs if f is not None]
         band = {k: ([float(min(f[k] for f in ok)), float(max(f[k] for f in ok))] if ok else None)
                 for k in ("torsional_rigidity", "lost_motion", "hysteresis_loss")}
-        lm_max = catalogue.figure("lost_motion")
-        frac = (float(np.mean([f["lost_motion"] <= lm_max.value for f in ok])) if (ok and lm_max) else None)
+        lm_max = catalogue.figure("lost_motion", "max")
+        frac = (float(np.mean([f["lost_motion"] <= lm_max.value_si / RAD_PER_ARCMIN for f in ok]))
+                if (ok and lm_max) else None)
         tornado = {}
-        for j, k in enumerate(keys):
+        for j in range(n_tor):
+            a_in = assumed.inputs[j]
             (a, ea), (b, eb_) = tor[2 * j], tor[2 * j + 1]
-            tornado[k] = {"low": float(lo[j]), "high": float(hi[j]),
-                          "at_low": a, "at_high": b, "errors": [e for e in (ea, eb_) if e]}
-        unc = {"samples": n_samples, "keys": keys, "X": X.tolist(), "figures": [f for f, _ in lhs],
+            tornado[a_in.key] = {"low": a_in.low, "high": a_in.high, "at_low": a, "at_high": b,
+                                 "errors": [e for e in (ea, eb_) if e]}
+        unc = {"samples": n_samples, "keys": keys, "U": U.tolist(), "figures": [f for f, _ in lhs],
+               "tornado_keys": n_tor, "tornado_failures": sum(len(v["errors"]) for v in tornado.values()),
                "failures": failures, "band": band, "tornado": tornado, "seed": seed,
                "fraction_within_lost_motion_max": frac, "wall_s": wall_samples,
                "per_sample_s": wall_samples / max(1, len(res)) * workers}
     band = (unc or {}).get("band") or {}
-    rows = [
-        _row("torsional_rigidity", fig_c["torsional_rigidity"], "N m/arcmin", catalogue, band.get("torsional_rigidity"),
-             f"b/a on the loading branches at {catalogue.test.rigidity_torque_points} T_R"),
-        _row("lost_motion", fig_c["lost_motion"], "arcmin", catalogue, band.get("lost_motion"),
-             f"mid-points at +-{catalogue.test.lost_motion_torque_fraction:g} T_R"),
-        _row("hysteresis_loss", fig_c["hysteresis_loss"], "arcmin", catalogue, band.get("hysteresis_loss"),
-             f"zero-torque width along the unloading branches (extrapolation error "
-             f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"),
-    ]
-    finite_lives = {k: v["L10_h"] for k, v in lives.items() if v["L10_h"] is not None}
+    pts, pts_source = rigidity_points(catalogue)
+    rows = (
+        _rows("torsional_rigidity", fig_c["torsional_rigidity"], "N m/arcmin", catalogue, band.get("torsional_rigidity"),
+              f"b/a on the loading branches at {pts} T_R: {pts_source}")
+        + _rows("lost_motion", fig_c["lost_motion"], "arcmin", catalogue, band.get("lost_motion"),
+                f"mid-points at +-{catalogue.test.lost_motion_torque_fraction:g} T_R")
+        + _rows("hysteresis_loss", fig_c["hysteresis_loss"], "arcmin", catalogue, band.get("hysteresis_loss"),
+                f"zero-torque width along the unloading branches (extrapolation error "
+                f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
     for fam in ("eccentric_bearings", "crank_bearings"):
         vals = [v["L10_h"] for k, v in lives.items() if v["family"] == fam and v["L10_h"] is not None]
-        rows.append(_row("rated_life", min(vals) if vals else None, "h", catalogue,
-                         note=f"{fam}: smallest ISO 281 L10h at T_R, {next(iter(lives.values()))['speed_rpm']:.4g} rpm "
-                              "relative speed"))
+        rows += _rows("rated_life", min(vals) if vals else None, "h", catalogue,
+                      note=f"{fam}: smallest ISO 281 L10h at T_R, {next(iter(lives.values()))['speed_rpm']:.4g} rpm "
+                           "relative speed (radial load only)")
     allow_name = f"{design}_allowables"
     pressures = {"hertz_peaks_Pa": peaks}
     if not peaks:
@@ -312,8 +356,13 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "test": {"rated_torque_Nm": T_R, "rated_output_speed_rpm": catalogue.test.rated_output_speed_rpm,
                  "rated_life_h": catalogue.test.rated_life_h,
                  "lost_motion_torque_fraction": catalogue.test.lost_motion_torque_fraction,
-                 "rigidity_torque_points": list(catalogue.test.rigidity_torque_points)},
-        "assumptions_commit": commit, "assumptions_commit_date": commit_date,
+                 "rigidity_torque_points": catalogue.test.rigidity_torque_points},
+        "assumptions_commit": commit,
+        "assumptions_commit_source": ("the catalogue file's assumptions_commit" if catalogue.assumptions_commit
+                                      else "git: last commit touching the design or its assumed file"),
+        "last_commit_touching_inputs": last_commit, "last_commit_date": last_date,
+        "uncertainty_note": None if assumed else (f"no {design}_assumed.toml: the design's inputs are chosen, not "
+                                                  "assumed with cited ranges, so no band is computed"),
         "assumed_file": os.path.basename(assumed.path) if assumed else None,
         "table": rows,
         "central": {**fig_c, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN, "repeat_passed": bool(rep.passed),
@@ -328,6 +377,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "ratio_variant": variant, "uncertainty": unc,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
+                     "rigidity_points": list(rigidity_points(catalogue)[0]),
+                     "rigidity_points_source": rigidity_points(catalogue)[1],
                      "repeat_tolerance_arcmin": REPEAT_TOLERANCE_ARCMIN},
         "wall_s": time.perf_counter() - t0,
     }
@@ -348,7 +399,7 @@ def checks(out):
     res = {"no_nan": bool(all(np.isfinite(v) for v in vals)), "loops_repeat": bool(c["repeat_passed"])}
     u = out["uncertainty"]
     if u is not None:
-        res["no_failed_sample"] = not u["failures"]
+        res["no_failed_sample"] = not u["failures"] and not u["tornado_failures"]
         res["band_contains_central"] = bool(all(
             u["band"][k] is not None and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
             for k in ("torsional_rigidity", "lost_motion", "hysteresis_loss")))
@@ -361,6 +412,8 @@ def write(out, out_dir, catalogue):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "results.json"), "w") as fh:      # first: the figures outlive a plot failure
+        json.dump(_jsonable(out), fh, indent=1)
     T_R = out["test"]["rated_torque_Nm"]
     lp = out["loop"]
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
@@ -383,26 +436,27 @@ def write(out, out_dir, catalogue):
     if u is not None:
         fig, axs = plt.subplots(1, 3, figsize=(14, 3.2))
         for ax, k in zip(axs, ("torsional_rigidity", "lost_motion", "hysteresis_loss")):
-            keys = list(u["tornado"])
+            # largest swing first (the tornado's order)
+            keys = sorted(u["tornado"], key=lambda key: -abs(
+                (u["tornado"][key]["at_high"] or {}).get(k, c[k]) - (u["tornado"][key]["at_low"] or {}).get(k, c[k])))
             for j, key in enumerate(keys):
                 e = u["tornado"][key]
                 a = e["at_low"][k] if e["at_low"] else np.nan
                 b = e["at_high"][k] if e["at_high"] else np.nan
                 ax.barh(j, a - c[k], left=c[k], color="tab:blue", alpha=0.7, label="low" if j == 0 else None)
                 ax.barh(j, b - c[k], left=c[k], color="tab:red", alpha=0.7, label="high" if j == 0 else None)
-            ax.set_yticks(range(len(keys)), keys, fontsize=7)
+            ax.set_yticks(range(len(keys)), keys, fontsize=6)
+            ax.invert_yaxis()
             ax.axvline(c[k], color="k", lw=0.8)
-            f = catalogue.figure(k)
-            if f is not None:
-                ax.axvline(f.value, color="g", lw=1.0, ls="--", label=f"catalogue ({f.kind})")
+            for f, ls in zip(catalogue.figures_of(k), ("--", ":", "-.")):
+                v = f.value_si * (RAD_PER_ARCMIN if k == "torsional_rigidity" else 1.0 / RAD_PER_ARCMIN)
+                ax.axvline(v, color="g", lw=1.0, ls=ls, label=f"catalogue ({f.kind})")
             ax.set(title=k, xlabel="N m/arcmin" if k == "torsional_rigidity" else "arcmin")
             ax.legend(fontsize=6)
         fig.tight_layout()
         fig.savefig(os.path.join(out_dir, "tornado.png"), dpi=110)
         plt.close(fig)
         plots.append("tornado.png")
-    with open(os.path.join(out_dir, "results.json"), "w") as fh:
-        json.dump(_jsonable(out), fh, indent=1)
     with open(os.path.join(out_dir, "report.html"), "w") as fh:
         fh.write(report_html(out, out_dir, plots))
 
@@ -461,7 +515,7 @@ def report_html(out, out_dir, plots):
     extra = {k: out[k] for k in ("central", "bearing_lives", "pressures", "compliance_budget", "ratio_variant",
                                  "assumptions_commit", "settings")}
     if out["uncertainty"] is not None:
-        extra["uncertainty"] = {k: v for k, v in out["uncertainty"].items() if k not in ("X", "figures")}
+        extra["uncertainty"] = {k: v for k, v in out["uncertainty"].items() if k not in ("U", "figures")}
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>validate {e(out['design'])}</title></head>"
             f"<body style='font-family:sans-serif;max-width:1200px;margin:2em auto'>"
             f"<h1>{e(out['design'])} against {e(out['catalogue']['title'])}</h1>"

@@ -315,6 +315,22 @@ class SpringCoulombBacklash:
         return {}
 
 
+def catalogue_loop(path, sequence, *, rigidity_points, lost_motion_fraction=LOST_MOTION_FRACTION):
+    """The preload and the FIRST cycle of ``sequence`` only, and the catalogue's figures on it: the
+    cheap form for many variants of a design whose loops are known to repeat from the first cycle
+    (Masing; :func:`catalogue_loops` checks it on the central design). Returns the dict of
+    :func:`catalogue_loops` with one cycle and ``repeatability`` None."""
+    torques, _ = sequence.levels()
+    n = len(sequence.preload()) + len(sequence.cycle()[0])
+    angles = np.array([path.go_to(float(t)) for t in torques[:n]])
+    fr, labels = sequence.cycle()
+    cyc = {"torque_Nm": fr * sequence.rated_torque, "angle_rad": angles[len(sequence.preload()):], "labels": labels}
+    met = catalogue_metrics(cyc["torque_Nm"], cyc["angle_rad"], labels, rated_torque=sequence.rated_torque,
+                            rigidity_points=rigidity_points, lost_motion_fraction=lost_motion_fraction)
+    return {"cycles": [cyc], "metrics": met, "repeatability": None, "preload": angles[:len(sequence.preload())],
+            "stats": path.stats()}
+
+
 def catalogue_loops(path, sequence, *, rigidity_points, lost_motion_fraction=LOST_MOTION_FRACTION,
                     repeat_tolerance):
     """Run ``sequence`` (:func:`catalogue_sequence`) on a loading ``path`` and read the catalogue's
