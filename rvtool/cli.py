@@ -262,7 +262,7 @@ def _cmd_validate(args):
         out_dir = os.path.join(args.out, name) if args.out else os.path.join("results", f"validate_{name}")
         try:
             out = validate(name, quick=args.quick, out_dir=out_dir, samples=args.samples, workers=args.workers,
-                           log=log)
+                           tornado_keys=args.tornado_keys, log=log)
         except RvtoolInputError as exc:
             return _input_error(exc)
         print(table_text(out))
@@ -331,6 +331,8 @@ def build_parser():
     va.add_argument("--quick", action="store_true", help="8 Latin-hypercube samples instead of 64, coarse central loop")
     va.add_argument("--samples", type=int, default=None, metavar="N", help="Latin-hypercube samples (>= 2)")
     va.add_argument("--workers", type=int, default=1, metavar="W", help="processes for the samples (default 1)")
+    va.add_argument("--tornado-keys", type=int, default=None, metavar="K",
+                    help="one-at-a-time tornado over the K most important assumed keys (LHS screening; default all)")
     va.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/validate_DESIGN)")
     va.add_argument("--quiet", action="store_true", help="no progress output")
     return parser

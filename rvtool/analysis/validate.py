@@ -124,12 +124,26 @@ def _sample(args):
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def _map(fn, items, workers):
+def _map(fn, items, workers, log=None):
+    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item."""
+    out = []
     if workers <= 1 or len(items) < 2:
-        return [fn(i) for i in items]
-    from concurrent.futures import ProcessPoolExecutor
-    with ProcessPoolExecutor(max_workers=workers) as ex:
-        return list(ex.map(fn, items))
+        it = (fn(i) for i in items)
+        pool = None
+    else:
+        from concurrent.futures import ProcessPoolExecutor
+        pool = ProcessPoolExecutor(max_workers=workers)
+        it = pool.map(fn, items)
+    t0 = time.perf_counter()
+    try:
+        for k, r in enumerate(it):
+            out.append(r)
+            if log is not None:
+                log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){'' if r[1] is None else ': ' + r[1]}")
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    return out
 
 
 def ratio_variant(table):
@@ -248,11 +262,33 @@ def _rows(key, predicted, unit, catalogue, band=None, note=""):
     return out
 
 
-def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, log=print):
+def screening(keys, U, results):
+    """(key indices ordered by importance, {key: max |Spearman rho|}) of the Latin-hypercube samples:
+    each key's fraction of its range against the rigidity and the lost motion (failed samples left
+    out); the order of a one-at-a-time tornado over fewer keys than the file has."""
+    from scipy.stats import spearmanr
+    ok = [i for i, (f, _) in enumerate(results) if f is not None]
+    score = np.zeros(len(keys))
+    if len(ok) >= 3:
+        for fig in ("torsional_rigidity", "lost_motion"):
+            y = np.array([results[i][0][fig] for i in ok])
+            for j in range(len(keys)):
+                rho = spearmanr(U[ok, j], y).statistic if np.ptp(y) > 0 else 0.0
+                score[j] = max(score[j], abs(float(np.nan_to_num(rho))))
+    order = [int(j) for j in np.argsort(-score, kind="stable")]
+    return order, {keys[j]: float(score[j]) for j in order}
+
+
+def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
+             log=print):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
-    samples (the machine is shared: 1 or 2)."""
+    samples (the machine is shared: 1 or 2); tornado_keys: one-at-a-time low/high loops for this
+    many keys, the most important first by :func:`screening` (None: every key; quick:
+    :data:`QUICK_TORNADO_KEYS`)."""
+    if tornado_keys is None and quick:
+        tornado_keys = QUICK_TORNADO_KEYS
     from .. import designs
     from ..assembly import build
     from ..assembly.topologies import design_from_table, read_table
@@ -317,19 +353,23 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                 t = set_key(t, a.key, a.at(uj))
             return t
 
-        n_tor = min(len(keys), QUICK_TORNADO_KEYS) if quick else len(keys)
+        log(f"validate {design}: {n_samples} Latin-hypercube samples ({workers} worker(s))")
+        ts = time.perf_counter()
+        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log)
+        wall_lhs = time.perf_counter() - ts
+        order, screen = screening(keys, U, lhs)
+        n_tor = len(keys) if tornado_keys is None else min(len(keys), int(tornado_keys))
+        chosen = order[:n_tor]
         tornado_pts = []
-        for j in range(n_tor):
+        for j in chosen:
             for v in (0.0, 1.0):
                 x = np.full(len(keys), 0.5)
                 x[j] = v
                 tornado_pts.append(x)
-        log(f"validate {design}: {n_samples} Latin-hypercube samples + {len(tornado_pts)} tornado points "
-            f"({workers} worker(s))")
-        ts = time.perf_counter()
-        res = _map(_sample, [(table_of(x), catalogue) for x in list(U) + tornado_pts], workers)
+        log(f"validate {design}: tornado over {n_tor} of {len(keys)} keys ({len(tornado_pts)} loops)")
+        tor = _map(_sample, [(table_of(x), catalogue) for x in tornado_pts], workers, log)
         wall_samples = time.perf_counter() - ts
-        lhs, tor = res[:n_samples], res[n_samples:]
+        res = lhs + tor
         failures = [e for f, e in lhs if f is None]
         ok = [f for f, e in lhs if f is not None]
         band = {k: ([float(min(f[k] for f in ok)), float(max(f[k] for f in ok))] if ok else None)
@@ -338,13 +378,17 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         frac = (float(np.mean([f["lost_motion"] <= lm_max.value_si / RAD_PER_ARCMIN for f in ok]))
                 if (ok and lm_max) else None)
         tornado = {}
-        for j in range(n_tor):
+        for i, j in enumerate(chosen):
             a_in = assumed.inputs[j]
-            (a, ea), (b, eb_) = tor[2 * j], tor[2 * j + 1]
+            (a, ea), (b, eb_) = tor[2 * i], tor[2 * i + 1]
             tornado[a_in.key] = {"low": a_in.low, "high": a_in.high, "at_low": a, "at_high": b,
                                  "errors": [e for e in (ea, eb_) if e]}
         unc = {"samples": n_samples, "keys": keys, "U": U.tolist(), "figures": [f for f, _ in lhs],
                "tornado_keys": n_tor, "tornado_failures": sum(len(v["errors"]) for v in tornado.values()),
+               "screening_abs_spearman": screen, "wall_lhs_s": wall_lhs,
+               "tornado_selection": ("all keys" if n_tor == len(keys) else
+                                     f"the {n_tor} keys of largest |Spearman rank correlation| with rigidity or lost "
+                                     f"motion over the {n_samples} Latin-hypercube samples (screening)"),
                "failures": failures, "band": band, "tornado": tornado, "seed": seed,
                "fraction_within_lost_motion_max": frac, "wall_s": wall_samples,
                "per_sample_s": wall_samples / max(1, len(res)) * workers}
