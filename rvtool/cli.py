@@ -3,7 +3,9 @@
 ``rvtool designs [--format-doc]``, ``rvtool new --topology T [--name NAME]`` (a commented
 design template), ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
 ``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
-tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`).
+tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`),
+``rvtool validate [DESIGN] [--quick] [--samples N] [--workers W] [--out DIR]`` (a shipped design
+against its catalogue, :mod:`rvtool.analysis.validate`).
 
 Input errors (a design key out of range, an unknown protocol or topology, a missing file) print
 one line ``rvtool: error: ...`` naming the key path and the valid range, exit with status 2
@@ -295,6 +297,27 @@ def _cmd_sweep(args, parser):
     return 0
 
 
+def _cmd_validate(args):
+    from rvtool.analysis.validate import table_text, validate, validated_designs
+    from rvtool.errors import RvtoolInputError
+    names = [args.design] if args.design else validated_designs()
+    if args.samples is not None and args.samples < 2:
+        return _input_error(f"--samples = {args.samples} is outside the valid range [2, inf)")
+    if args.workers < 1:
+        return _input_error(f"--workers = {args.workers} is outside the valid range [1, inf)")
+    log = (lambda *a, **k: None) if args.quiet else (lambda *a, **k: print(*a, file=sys.stderr, **k))
+    for name in names:
+        out_dir = os.path.join(args.out, name) if args.out else os.path.join("results", f"validate_{name}")
+        try:
+            out = validate(name, quick=args.quick, out_dir=out_dir, samples=args.samples, workers=args.workers,
+                           tornado_keys=args.tornado_keys, log=log)
+        except RvtoolInputError as exc:
+            return _input_error(exc)
+        print(table_text(out))
+        print(f"written: {out_dir}/results.json, report.html")
+    return 0
+
+
 def build_parser():
     """The ``rvtool`` argument parser with its subcommands."""
     from rvtool import __version__
@@ -357,6 +380,19 @@ def build_parser():
                        help="address of an existing Dask scheduler (default: start a LocalCluster)")
     sweep.add_argument("--out", default=None, metavar="DIR", help="output directory (default: the spec's output_dir)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    va = sub.add_parser("validate", help="a shipped design against its catalogue (predicted vs catalogue table)",
+                        description="Compare DESIGN (default: every shipped design with a <design>_catalogue.toml) "
+                                    "with its catalogue by the catalogue's own definitions: rigidity, lost motion, "
+                                    "hysteresis loss, rated life, with an uncertainty band over the assumed ranges; "
+                                    "writes results.json, PNGs and report.html.")
+    va.add_argument("design", nargs="?", default=None, metavar="DESIGN", help="shipped design name (e.g. rv40e)")
+    va.add_argument("--quick", action="store_true", help="8 Latin-hypercube samples instead of 64, coarse central loop")
+    va.add_argument("--samples", type=int, default=None, metavar="N", help="Latin-hypercube samples (>= 2)")
+    va.add_argument("--workers", type=int, default=1, metavar="W", help="processes for the samples (default 1)")
+    va.add_argument("--tornado-keys", type=int, default=None, metavar="K",
+                    help="one-at-a-time tornado over the K most important assumed keys (LHS screening; default all)")
+    va.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/validate_DESIGN)")
+    va.add_argument("--quiet", action="store_true", help="no progress output")
     return parser
 
 
@@ -378,6 +414,8 @@ def main(argv=None):
         return _cmd_version(args)
     if args.command == "sweep":
         return _cmd_sweep(args, parser)
+    if args.command == "validate":
+        return _cmd_validate(args)
     parser.print_help(sys.stderr)
     return EXIT_USAGE
 

@@ -55,3 +55,17 @@ def tolerances_of(name):
     stem = name[:-5] if name.endswith(".toml") else name
     companion = f"{stem}_tolerances"
     return companion if companion in names() and kind(companion) == "tolerances" else None
+
+
+def catalogue_of(name):
+    """Name of the shipped catalogue file of shipped design ``name`` (``<name>_catalogue``), or None."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    companion = f"{stem}_catalogue"
+    return companion if companion in names() and kind(companion) == "catalogue" else None
+
+
+def assumed_of(name):
+    """Name of the shipped assumed-ranges file of shipped design ``name`` (``<name>_assumed``), or None."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    companion = f"{stem}_assumed"
+    return companion if companion in names() and kind(companion) == "assumed" else None
