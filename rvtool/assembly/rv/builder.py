@@ -441,24 +441,26 @@ def torsion_crank_path(design, graph, layout, compliance, opts):
                              station_compliance=compliance, station=station - nb, dofs=(2,))
 
 
-def groove_pins(design, layout, pin_set_of, meshes):
+def groove_pins(design, layout, pin_set_of, meshes, ports=None):
     """The ring pins in conformal grooves (``pins.groove = "conformal"``, :mod:`rvtool.contact.groove`):
-    one station body per (pin p, wheel j) at n_bodies + n_wheels p + j (the pin's centre under
-    wheel j displaced in its groove), the wheel--pin meshes on them, closed per pin by the groove
-    law (:class:`~rvtool.contact.pin_closure.ElasticPinClosure` with ``support``). ``pin_set_of(meshes,
-    n_bodies)`` builds the contact set. Returns the closure, or None for rigid grooves."""
+    one station body per (pin p, wheel j) after the bodies (and the port bodies of a ported ring),
+    at n + n_wheels p + j: pin p's groove (the ground, or its port body on the elastic housing)
+    translated by the pin centre's displacement under wheel j in its groove; the wheel--pin meshes
+    on them, closed per pin by the groove law (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`
+    with ``support``). ``pin_set_of(meshes, n_bodies)`` builds the contact set. Returns the closure,
+    or None for rigid grooves."""
     from ...contact.groove import GrooveSupport, groove_law
     from ...contact.pin_closure import GROUND as PIN_GROUND, ElasticPinClosure
     law = groove_law(design)
     if law is None:
         return None
-    if design.housing.model == "ports":
-        raise RvtoolInputError("pins.groove = 'conformal' with housing.model = 'ports' is not implemented (the "
-                               "stations would ride on the ports); valid: one of them rigid")
-    nb, nw = layout.n_bodies, design.n_wheels
-    st = np.arange(design.pins.n_pins * nw).reshape(design.pins.n_pins, nw)
-    meshes = [dataclasses.replace(m, pin_bodies=tuple(int(b) for b in nb + st[:, k])) for k, m in enumerate(meshes)]
-    return ElasticPinClosure(pin_set_of(meshes, nb + st.size), n_bodies=nb, carrier=PIN_GROUND,
+    zb, nw = design.pins.n_pins, design.n_wheels
+    n = layout.n_bodies + (0 if ports is None else ports.n_virtual)
+    # ported ring: pin p's port body is n_bodies + p (:func:`ported_ring`); the stations ride on it
+    carrier = PIN_GROUND if ports is None else [layout.n_bodies + p for p in range(zb)]
+    st = np.arange(zb * nw).reshape(zb, nw)
+    meshes = [dataclasses.replace(m, pin_bodies=tuple(int(b) for b in n + st[:, k])) for k, m in enumerate(meshes)]
+    return ElasticPinClosure(pin_set_of(meshes, n + st.size), n_bodies=n, carrier=carrier,
                              station_compliance=None, station=st, support=GrooveSupport(law))
 
 
@@ -570,7 +572,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     def pin_set_of(meshes, n_bodies):
         return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
                              search=d.wheels.search, **opts)
-    pin_set = groove_pins(d, L, pin_set_of, meshes)
+    pin_set = groove_pins(d, L, pin_set_of, meshes, ports)
     if pin_set is None:
         pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
     cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
