@@ -217,17 +217,30 @@ class ElasticPinClosure:
         x = np.linalg.solve(blocks, np.asarray(rhs).reshape(n, m, -1))
         return x.reshape(n * m, -1) if np.ndim(rhs) == 2 else x.reshape(-1)
 
-    def condense(self, red, beam_factor=1.0):
+    def support_tangent(self, u):
+        """The station law's tangent ds/du (n_u, n_u) at deflections u (block diagonal per pin);
+        K_b for the linear beam."""
+        if self.support is None:
+            return self._Kb
+        _, G = self.support.forces(np.asarray(u, float).reshape(self.n_pins, self.n_stations, len(self.dofs)))
+        m = self.n_stations * len(self.dofs)
+        out = np.zeros((self._n_u, self._n_u))
+        for p in range(self.n_pins):
+            out[p * m:(p + 1) * m, p * m:(p + 1) * m] = G[p]
+        return out
+
+    def condense(self, red, beam_factor=1.0, u=None):
         """(Q, dQ/dq, dQ/dv) on the real coordinates from reduced (Q, K, D); ``beam_factor``
-        scales K_b in the condensation only (the budget's switch-to-rigid view of the beam)."""
+        scales K_b (a nonlinear station law: its tangent at the solved deflections ``u``) in the
+        condensation only (the budget's switch-to-rigid view of the beam)."""
         Q, K, D = red
         nr = 3 * self.n_bodies
         Kuu = K[nr:, nr:]
         if beam_factor != 1.0:
-            if self.support is not None:
-                raise RvtoolInputError("beam_factor != 1 is not offered for a nonlinear station law (support); "
-                                       "valid: beam_factor = 1")
-            Kuu = Kuu - (beam_factor - 1.0) * self._Kb
+            if self.support is not None and u is None:
+                raise RvtoolInputError("beam_factor != 1 with a nonlinear station law (support) needs the solved "
+                                       "deflections u")
+            Kuu = Kuu - (beam_factor - 1.0) * (self._Kb if self.support is None else self.support_tangent(u))
         X = self._solve_uu(Kuu, K[nr:, :nr])
         dQdq = K[:nr, :nr] - K[:nr, nr:] @ X
         dQdv = None

@@ -45,6 +45,7 @@ from ...contact.involute_set import GearMesh, InvoluteContactSet, pair_secant_st
 from ...errors import RvtoolInputError
 from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
+from ...model import SeriesBeam as SeriesBeamBase
 from ...output_pins.calibration import mindlin_tangential_ratio
 from ..contact_layout import ContactElements
 from ..cycloid import pin_meshes
@@ -223,6 +224,7 @@ class RvModel(ReducerModel):
     #: station compliance (3, 3) [m/N] of one elastic crank (journal of wheel 0, of wheel 1, gear;
     #: :func:`crank_station_compliance`), or None (rigid cranks)
     crank_compliance: np.ndarray = None
+    torsion_compliance: np.ndarray = None
     #: ReducedStructure of the elastic housing carrying the ring pins, or None (rigid ring)
     housing: object = None
     #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
@@ -287,7 +289,15 @@ class RvModel(ReducerModel):
         over the two journals and the gear, closed per crank (:mod:`rvtool.contact.pin_closure`),
         reported once, with the eccentric bearings (budget path ``"cranks"``)."""
         from ...model import SeriesBeam
-        if self.crank_compliance is None or Family(family) != Family.ECCENTRIC_BEARINGS:
+        fam = Family(family)
+        if fam == Family.PINS and self.design.pins.groove != "rigid":
+            return GrooveSeries.of_groove(self.elements["pins"])
+        if fam != Family.ECCENTRIC_BEARINGS:
+            return None
+        if self.torsion_compliance is not None:
+            return SeriesBeam.of_closure("crank_torsion", Family.ECCENTRIC_BEARINGS, self.torsion_compliance,
+                                         self.elements["eccentric_bearings"])
+        if self.crank_compliance is None:
             return None
         return SeriesBeam.of_closure("cranks", Family.ECCENTRIC_BEARINGS, self.crank_compliance, self.elements["cranks"])
 
@@ -353,6 +363,36 @@ class RvModel(ReducerModel):
         ax.add_patch(plt.Circle(pose[self.layout.sun, :2], g.sun_pair.gear_a.reference_radius, fill=False, color="g",
                                 lw=0.5))
         super().draw_section(ax, q)
+
+
+@dataclass(frozen=True)
+class GrooveSeries(SeriesBeamBase):
+    """The ring pins' grooves (``pins.groove = "conformal"``) for the stiffness budget (path
+    ``"pin_grooves"``): the station law is nonlinear, so its energy along a mode is du^T G du with
+    G = ds/du, the law's tangent at the solved deflections, and its stiffened view scales G
+    (:meth:`rvtool.contact.pin_closure.ElasticPinClosure.condense` with ``u``)."""
+    closure: object = None
+    pose: object = None
+
+    def energy(self, q, dq, step=1e-9):
+        h = step / max(float(np.abs(dq).max()), 1e-300)
+        du = (self.deflections(q + h * dq) - self.deflections(q - h * dq)) / (2 * h)
+        u = self.closure.solve(*self.pose(q))[0]
+        return float(du.ravel() @ self.closure.support_tangent(u) @ du.ravel())
+
+    @classmethod
+    def of_groove(cls, element):
+        closure = element.evaluator
+
+        def pose(q):
+            ql = element.local(q)
+            return element.pose_velocity(ql, 0 * ql)
+
+        def stiffened(q, factor):
+            u, _, red, _ = closure.solve(*pose(q))
+            return element.coordinate_indices, closure.condense(red, beam_factor=factor, u=u)[1]
+        return cls("pin_grooves", Family.PINS, closure.compliance, lambda q: closure.deflections(pose(q)[0]),
+                   stiffened, closure, pose)
 
 
 FAMILY_ELEMENTS = {Family.PINS: "pins", Family.INVOLUTE_STAGE: "gears", Family.ECCENTRIC_BEARINGS: "eccentric_bearings",
@@ -617,5 +657,6 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
                    structures={} if housing is None else {"housing": housing},
-                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, housing=housing,
+                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
+                   housing=housing,
                    contact_host=element.host)
