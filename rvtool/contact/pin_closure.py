@@ -57,7 +57,8 @@ class ElasticPinClosure:
     n_bodies + station[p, s] is pin p at station s (``evaluate(pose, vel, check=False)`` ->
     :class:`~rvtool.contact.evaluator.Evaluation`, ``ids``, ``commit``, ``history``).
     carrier: real body index carrying the pins, or GROUND (-1); or one such index per pin (n_pins,)
-    (the RV cranks: each crank carries its own stations).
+    (the RV cranks: each crank carries its own stations); or one per station (n_pins, n_s) (a crank's
+    twisting journals on its bending stations).
     station_compliance: C (n_s, n_s) [m/N], symmetric positive definite.
     station: (n_pins, n_s) station index of every (pin, station) (row of the station bodies).
     tolerance: largest station force residual accepted [N] (1e-8 N: 1e-16 m of approach at a
@@ -96,10 +97,13 @@ class ElasticPinClosure:
             self.carrier = int(carrier)
         elif carriers.shape == (self.n_pins,):
             self.carrier = tuple(int(c) for c in carriers)
+        elif carriers.shape == (self.n_pins, self.n_stations):
+            self.carrier = tuple(tuple(int(c) for c in row) for row in carriers)
         else:
-            raise RvtoolInputError(f"carrier has shape {carriers.shape}; valid: one body index or one per pin "
-                                   f"({self.n_pins},)")
-        carriers = np.broadcast_to(carriers, (self.n_pins,))
+            raise RvtoolInputError(f"carrier has shape {carriers.shape}; valid: one body index, one per pin "
+                                   f"({self.n_pins},) or one per station ({self.n_pins}, {self.n_stations})")
+        carriers = (carriers if carriers.ndim == 2 else
+                    np.broadcast_to(np.broadcast_to(carriers, (self.n_pins,))[:, None], (self.n_pins, self.n_stations)))
         if np.any((carriers < GROUND) | (carriers >= self.n_bodies)):
             raise RvtoolInputError(f"carrier = {carrier!r}; valid: body indices in [0, {self.n_bodies - 1}] or "
                                    "GROUND (-1)")
@@ -129,7 +133,7 @@ class ElasticPinClosure:
                 self._u_index[p, s] = np.arange(k - nr, k - nr + nd)
                 for j, c in enumerate(dofs):
                     M[b + c, k + j] = 1.0
-                c = int(carriers[p])
+                c = int(carriers[p, s])
                 if c != GROUND:
                     M[b:b + 3, 3 * c:3 * c + 3] += np.eye(3)
         self._M = sp.csr_matrix(M)

@@ -52,7 +52,8 @@ class CrankShaft:
         station compliance, z from the pair's centre; condensed, not a retained coordinate).
     torsion: "rigid" (the default: today's figures) or "elastic": the shaft twists between its
         spur gear and its eccentric journals (:mod:`rvtool.structure.crank_torsion`; needs radius
-        and gear_position; with a rigid ``model`` only).
+        and gear_position; with ``model = "simply_supported"`` the journals twist on their bending
+        stations).
     """
     model: str = "rigid"
     radius: float | None = None
@@ -76,10 +77,6 @@ class CrankShaft:
         if self.torsion not in ("rigid", "elastic"):
             raise RvtoolInputError(f"torsion = {self.torsion!r}; valid choices are ['rigid', 'elastic']")
         if self.torsion == "elastic":
-            if self.elastic:
-                raise RvtoolInputError("torsion = 'elastic' with model = 'simply_supported' is not implemented (the "
-                                       "journal stations would need translation and rotation); valid: one of them "
-                                       "rigid")
             for nm in ("radius", "gear_position"):
                 if getattr(self, nm) is None:
                     raise RvtoolInputError(f"{nm} is required for torsion = 'elastic'; valid: see "

@@ -274,7 +274,10 @@ class RvModel(ReducerModel):
         if self.crank_compliance is None:
             return self.elements["eccentric_bearings"].evaluator, self._pose("eccentric_bearings", q)
         closure = self.elements["cranks"].evaluator
-        return closure.inner.part("eccentric_bearings"), closure.extended_pose(self._pose("cranks", q))
+        pose = closure.extended_pose(self._pose("cranks", q))
+        if self.torsion_compliance is not None:
+            pose = closure.inner.extended_pose(pose)       # the twisting journals inside the beam's closure
+        return closure.inner.part("eccentric_bearings"), pose
 
     def crank_deflections(self, q):
         """(N_c, 3, 2) bending deflections [m] of every elastic crank at its stations (journal of
@@ -287,14 +290,17 @@ class RvModel(ReducerModel):
     def series_compliance(self, family):
         """Elastic cranks (``cranks.shaft``): the beam of every crank with its station compliance
         over the two journals and the gear, closed per crank (:mod:`rvtool.contact.pin_closure`),
-        reported once, with the eccentric bearings (budget path ``"cranks"``)."""
+        reported once, with the eccentric bearings (budget path ``"cranks"``); crank torsion alone
+        likewise (path ``"crank_torsion"``; with the beam on, the torsion is inside the beam's closure
+        and not a path of its own: its energy falls into the budget's residual); the ring pins'
+        conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`)."""
         from ...model import SeriesBeam
         fam = Family(family)
         if fam == Family.PINS and self.design.pins.groove != "rigid":
             return GrooveSeries.of_groove(self.elements["pins"])
         if fam != Family.ECCENTRIC_BEARINGS:
             return None
-        if self.torsion_compliance is not None:
+        if self.torsion_compliance is not None and self.crank_compliance is None:
             return SeriesBeam.of_closure("crank_torsion", Family.ECCENTRIC_BEARINGS, self.torsion_compliance,
                                          self.elements["eccentric_bearings"])
         if self.crank_compliance is None:
@@ -504,27 +510,38 @@ def groove_pins(design, layout, pin_set_of, meshes, ports=None):
                              station_compliance=None, station=st, support=GrooveSupport(law))
 
 
-def elastic_crank_path(design, graph, layout, compliance, opts):
+def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None):
     """The contact set of the crank path with elastic cranks: the involute meshes and the needle
     bearings stacked (:class:`~rvtool.contact.stacked.StackedContactSet`, element ``"cranks"``) over
     the bodies plus one station body per (crank k, station s) at index n_bodies + 3 k + s (the
     crank translated by its deflection there; :data:`CRANK_STATIONS`), closed per crank by its beam
     (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`, Eq. (series_contact)). The crank
-    bearings stay on the crank body: the beam is held at its supports."""
+    bearings stay on the crank body: the beam is held at its supports.
+
+    torsion: the torsion compliance (n_wheels, n_wheels) of :func:`crank_torsion_compliance`, or
+    None. With it the needles sit on one more station body per (crank k, wheel j) at n_bodies +
+    3 n_cranks + n_wheels k + j, journal j's bending station rotated by the twist (an inner closure,
+    ``dofs = (2,)``, carried per station), and the beam closes that closure: bending and torsion
+    in series, each solved exactly."""
     import dataclasses
     from ...contact.pin_closure import ElasticPinClosure
     from ...contact.stacked import StackedContactSet
-    nb, nc = layout.n_bodies, layout.n_cranks
+    nb, nc, nw = layout.n_bodies, layout.n_cranks, design.n_wheels
     station = nb + np.arange(3 * nc).reshape(nc, 3)
     crank_of = {layout.crank(k): k for k in range(nc)}
     meshes = [dataclasses.replace(m, body_b=int(station[crank_of[m.body_b], 2])) if m.body_b in crank_of else m
               for m in gear_meshes(design, graph, layout)]
-    mounts = [dataclasses.replace(m, inner=int(station[crank_of[m.inner], m.outer - layout.wheel0]))
+    journal = station if torsion is None else nb + station.size + np.arange(nc * nw).reshape(nc, nw)
+    mounts = [dataclasses.replace(m, inner=int(journal[crank_of[m.inner], m.outer - layout.wheel0]))
               for m in needle_mountings(design, graph, layout)]
-    n_ext = nb + station.size
+    n_ext = nb + station.size + (0 if torsion is None else journal.size)
     stacked = StackedContactSet((InvoluteContactSet(meshes, n_ext, name="gears", **opts),
                                  BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)), name="cranks")
-    return ElasticPinClosure(stacked, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
+    inner = stacked
+    if torsion is not None:
+        inner = ElasticPinClosure(stacked, n_bodies=nb + station.size, carrier=station[:, :nw],
+                                  station_compliance=torsion, station=journal - nb - station.size, dofs=(2,))
+    return ElasticPinClosure(inner, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
                              station_compliance=compliance, station=station - nb)
 
 
@@ -628,7 +645,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
             needles = torsion_crank_path(d, graph, L, C_torsion, opts)
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
-        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts)),)
+        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion)),)
     element = ContactElements(mbs, nodes, contact_element, structure=housing)
     elements = {"pins": element(pin_set, ports=ports)}
     elements.update((name, element(s)) for name, s in
