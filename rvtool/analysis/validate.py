@@ -139,7 +139,8 @@ def _map(fn, items, workers, log=None):
         for k, r in enumerate(it):
             out.append(r)
             if log is not None:
-                log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){'' if r[1] is None else ': ' + r[1]}")
+                err = "" if r[1] is None else ": " + r[1]
+                log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){err}")
     finally:
         if pool is not None:
             pool.shutdown()
@@ -315,7 +316,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     d = design_from_table(table)
     T_R = catalogue.test.rated_torque
     if abs(float(getattr(d, "rated_torque", T_R)) - T_R) > 1e-9 * T_R:
-        log(f"note: the design's rated_torque {d.rated_torque} differs from the catalogue's T_R {T_R}; the catalogue's is used")
+        log(f"note: the design's rated_torque {d.rated_torque} differs from the catalogue's T_R {T_R}; the "
+            "catalogue's is used")
     n_samples = samples if samples is not None else (QUICK_SAMPLES if quick else SAMPLES)
     log(f"validate {design}: central loop")
     central = _loop(d, catalogue, QUICK_STEP if quick else FULL_STEP)
@@ -395,7 +397,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     band = (unc or {}).get("band") or {}
     pts, pts_source = rigidity_points(catalogue)
     rows = (
-        _rows("torsional_rigidity", fig_c["torsional_rigidity"], "N m/arcmin", catalogue, band.get("torsional_rigidity"),
+        _rows("torsional_rigidity", fig_c["torsional_rigidity"], "N m/arcmin", catalogue,
+              band.get("torsional_rigidity"),
               f"b/a on the loading branches at {pts} T_R: {pts_source}")
         + _rows("lost_motion", fig_c["lost_motion"], "arcmin", catalogue, band.get("lost_motion"),
                 f"mid-points at +-{catalogue.test.lost_motion_torque_fraction:g} T_R")
@@ -412,8 +415,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     al = load_allowables(designs.path(allow_name))
     pressures = {"hertz_peaks_Pa": peaks, "allowables_file": allow_name,
                  "allowables_note": ("the design's own review allowables" if allow_name.startswith(design) else
-                                     "no allowables file of this design: rd40_allowables.toml's declared limits (4.0 GPa "
-                                     "rolling contacts, ISO 76 static limit; 2.5 GPa case-hardened pins, design practice)"),
+                                     "no allowables file of this design: rd40_allowables.toml's declared limits "
+                                     "(4.0 GPa rolling contacts, ISO 76 static limit; 2.5 GPa case-hardened pins, "
+                                     "design practice)"),
                  "rows": {}}
     for k, p in peaks.items():
         lim = getattr(al, f"max_hertz_{k}", None)
@@ -423,8 +427,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                      "catalogue": None if lim is None else lim / 1e6, "catalogue_unit": "MPa",
                      "kind": "max (allowable)", "status": None,
                      "source": f"{allow_name}.toml (declared allowable, not a catalogue figure)",
-                     "conditions": f"Hertz line-contact peak at T_R, input angle 0",
-                     "verdict": "no allowable" if lim is None else ("within allowable" if p <= lim else "above allowable"),
+                     "conditions": "Hertz line-contact peak at T_R, input angle 0",
+                     "verdict": ("no allowable" if lim is None else
+                                 "within allowable" if p <= lim else "above allowable"),
                      "note": pressures["allowables_note"]})
     out = {
         "design": design, "catalogue": {"title": catalogue.source.title, "edition": catalogue.source.edition,
@@ -449,7 +454,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "bearing_lives": lives, "pressures": pressures,
         "compliance_budget": {"shares": budget["shares"], "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"],
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
-                                                "housing.model": getattr(d.housing, "model", None) if d.housing else None}},
+                                                "housing.model": getattr(d.housing, "model", None)
+                                                if d.housing else None}},
         "ratio_variant": variant, "uncertainty": unc,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
@@ -477,7 +483,8 @@ def checks(out):
     if u is not None:
         res["no_failed_sample"] = not u["failures"] and not u["tornado_failures"]
         res["band_contains_central"] = bool(all(
-            u["band"][k] is not None and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
+            u["band"][k] is not None
+            and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
             for k in ("torsional_rigidity", "lost_motion", "hysteresis_loss")))
     return res
 

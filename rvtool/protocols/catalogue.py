@@ -217,7 +217,8 @@ class CatalogueMetrics:
     hysteresis_loss: HysteresisLoss
 
 
-def catalogue_metrics(torque, angle, labels, *, rated_torque, rigidity_points, lost_motion_fraction=LOST_MOTION_FRACTION):
+def catalogue_metrics(torque, angle, labels, *, rated_torque, rigidity_points,
+                      lost_motion_fraction=LOST_MOTION_FRACTION):
     """:class:`CatalogueMetrics` of one loop; ``rigidity_points`` are fractions of T_R (the
     catalogue's own points of b/a), ``lost_motion_fraction`` the catalogue's ±fraction of T_R."""
     check_positive("rated_torque", rated_torque)
@@ -225,7 +226,8 @@ def catalogue_metrics(torque, angle, labels, *, rated_torque, rigidity_points, l
     if len(pts) != 2:
         raise RvtoolInputError(f"rigidity_points must be two fractions of the rated torque; got {rigidity_points!r}")
     return CatalogueMetrics(torsional_rigidity(torque, angle, labels, torque_points=pts),
-                            lost_motion(torque, angle, labels, rated_torque=rated_torque, fraction=lost_motion_fraction),
+                            lost_motion(torque, angle, labels, rated_torque=rated_torque,
+                                        fraction=lost_motion_fraction),
                             hysteresis_loss(torque, angle, labels))
 
 
@@ -271,14 +273,17 @@ class SpringCoulombBacklash:
     direction of the excess (F the spring-backlash torque); in the free play F = 0 and the slide
     crosses it at T = ±T_c. A loading path (``go_to(torque) -> θ``) for :func:`catalogue_loops`."""
 
-    def __init__(self, *, stiffness, backlash, friction_torque, knee_torque=np.inf, stiffness_2=None):
+    def __init__(self, *, stiffness, backlash, friction_torque, knee_torque=None, stiffness_2=None):
         check_positive("stiffness", stiffness)
         check_nonnegative("backlash", backlash)
         check_nonnegative("friction_torque", friction_torque)
-        check_positive("knee_torque", knee_torque)
-        self.k1, self.beta, self.tc, self.tk = float(stiffness), float(backlash), float(friction_torque), float(knee_torque)
+        if knee_torque is not None:       # None: a linear spring (no knee)
+            check_positive("knee_torque", knee_torque)
+        if stiffness_2 is not None:
+            check_positive("stiffness_2", stiffness_2)
+        self.k1, self.beta, self.tc = float(stiffness), float(backlash), float(friction_torque)
+        self.tk = np.inf if knee_torque is None else float(knee_torque)
         self.k2 = self.k1 if stiffness_2 is None else float(stiffness_2)
-        check_positive("stiffness_2", self.k2)
         self.theta = 0.0
 
     def _spring(self, d):            # torque of the bilinear spring at deflection d >= 0
