@@ -124,8 +124,10 @@ def _sample(args):
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def _map(fn, items, workers, log=None):
-    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item."""
+def _map(fn, items, workers, log=None, checkpoint=None):
+    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item;
+    ``checkpoint``: a JSON file rewritten with the results so far after each item (a long run that
+    is stopped keeps what it computed)."""
     out = []
     if workers <= 1 or len(items) < 2:
         it = (fn(i) for i in items)
@@ -141,6 +143,10 @@ def _map(fn, items, workers, log=None):
             if log is not None:
                 err = "" if r[1] is None else ": " + r[1]
                 log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){err}")
+            if checkpoint is not None:
+                with open(checkpoint, "w") as fh:
+                    json.dump(_jsonable({"done": len(out), "of": len(items), "results": out,
+                                         "wall_s": time.perf_counter() - t0}), fh)
     finally:
         if pool is not None:
             pool.shutdown()
@@ -357,7 +363,16 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
 
         log(f"validate {design}: {n_samples} Latin-hypercube samples ({workers} worker(s))")
         ts = time.perf_counter()
-        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log)
+        ck = None
+        if out_dir is not None:
+            os.makedirs(out_dir, exist_ok=True)
+            with open(os.path.join(out_dir, "central_partial.json"), "w") as fh:
+                json.dump(_jsonable({"central": fig_c, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,
+                                     "bearing_lives": lives, "budget_shares": budget["shares"],
+                                     "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"], "pressures_Pa": peaks,
+                                     "ratio_variant": variant, "U": U, "keys": keys}), fh, indent=1)
+            ck = os.path.join(out_dir, "samples_partial.json")
+        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log, ck)
         wall_lhs = time.perf_counter() - ts
         order, screen = screening(keys, U, lhs)
         n_tor = len(keys) if tornado_keys is None else min(len(keys), int(tornado_keys))

@@ -248,20 +248,25 @@ def catalogue_sequence(rated_torque, *, rigidity_points, lost_motion_fraction=LO
 class ContinuationPath:
     """Loading path of a :class:`~rvtool.model.ReducerModel` at a fixed input angle: equilibria by
     :class:`rvtool.solver.continuation.Continuation`, the contact history committed once per level;
-    ``go_to(torque)`` returns the output angle [rad] from its kinematic position."""
+    ``go_to(torque)`` returns the output angle [rad] from its kinematic position. The continuation
+    starts at the first torque asked for (a loaded start is regular where free play leaves the
+    zero-load state ill-posed: measured on rv80e variants, whose start at zero torque failed)."""
 
     def __init__(self, model, *, input_angle=0.0):
-        from ..solver.continuation import Continuation
         self.model = model
-        self.continuation = Continuation(model, input_angle=input_angle)
+        self.input_angle = input_angle
+        self.continuation = None
         self._i_out = model.output_index
         self._th_kin = model.kinematic_output(input_angle)
 
     def go_to(self, torque):
+        if self.continuation is None:
+            from ..solver.continuation import Continuation
+            self.continuation = Continuation(self.model, input_angle=self.input_angle, initial_torque=float(torque))
         return float(self.continuation.go_to(float(torque))[self._i_out] - self._th_kin)
 
     def stats(self):
-        return self.continuation.stats.to_dict()
+        return {} if self.continuation is None else self.continuation.stats.to_dict()
 
 
 class SpringCoulombBacklash:
@@ -320,19 +325,28 @@ class SpringCoulombBacklash:
         return {}
 
 
+def _levels(sequence):
+    """(torques [N m] of the protocol without the preload's zero level, the number of preload levels):
+    the virgin preload starts loaded at its first nonzero level (zero torque is free play)."""
+    torques, _ = sequence.levels()
+    pre = sequence.preload()
+    keep = np.ones(len(torques), bool)
+    keep[:len(pre)] = pre != 0.0
+    return torques[keep], int(np.count_nonzero(pre != 0.0))
+
+
 def catalogue_loop(path, sequence, *, rigidity_points, lost_motion_fraction=LOST_MOTION_FRACTION):
     """The preload and the FIRST cycle of ``sequence`` only, and the catalogue's figures on it: the
     cheap form for many variants of a design whose loops are known to repeat from the first cycle
     (Masing; :func:`catalogue_loops` checks it on the central design). Returns the dict of
     :func:`catalogue_loops` with one cycle and ``repeatability`` None."""
-    torques, _ = sequence.levels()
-    n = len(sequence.preload()) + len(sequence.cycle()[0])
-    angles = np.array([path.go_to(float(t)) for t in torques[:n]])
+    torques, n_pre = _levels(sequence)
     fr, labels = sequence.cycle()
-    cyc = {"torque_Nm": fr * sequence.rated_torque, "angle_rad": angles[len(sequence.preload()):], "labels": labels}
+    angles = np.array([path.go_to(float(t)) for t in torques[:n_pre + len(fr)]])
+    cyc = {"torque_Nm": fr * sequence.rated_torque, "angle_rad": angles[n_pre:], "labels": labels}
     met = catalogue_metrics(cyc["torque_Nm"], cyc["angle_rad"], labels, rated_torque=sequence.rated_torque,
                             rigidity_points=rigidity_points, lost_motion_fraction=lost_motion_fraction)
-    return {"cycles": [cyc], "metrics": met, "repeatability": None, "preload": angles[:len(sequence.preload())],
+    return {"cycles": [cyc], "metrics": met, "repeatability": None, "preload": angles[:n_pre],
             "stats": path.stats()}
 
 
@@ -345,15 +359,17 @@ def catalogue_loops(path, sequence, *, rigidity_points, lost_motion_fraction=LOS
     ``metrics`` (:class:`CatalogueMetrics` of the last cycle), ``repeatability``
     (:class:`rvtool.protocols.hysteresis.Repeatability`), ``preload`` angles [rad], ``stats``."""
     check_nonnegative("repeat_tolerance", repeat_tolerance)
-    torques, _ = sequence.levels()
+    torques, n_pre = _levels(sequence)
     angles = np.array([path.go_to(float(t)) for t in torques])
     fr, labels = sequence.cycle()
     cyc_T = fr * sequence.rated_torque
-    cycles = [{"torque_Nm": cyc_T, "angle_rad": a, "labels": labels} for a in sequence.split(angles)]
+    n_cyc = len(fr)
+    cycles = [{"torque_Nm": cyc_T, "angle_rad": angles[n_pre + c * n_cyc:n_pre + (c + 1) * n_cyc], "labels": labels}
+              for c in range(sequence.n_cycles)]
     rep = H.repeatability(H.Cycle(torque=cyc_T, angle=cycles[-2]["angle_rad"]),
                           H.Cycle(torque=cyc_T, angle=cycles[-1]["angle_rad"]), tolerance=repeat_tolerance)
     last = cycles[-1]
     met = catalogue_metrics(last["torque_Nm"], last["angle_rad"], labels, rated_torque=sequence.rated_torque,
                             rigidity_points=rigidity_points, lost_motion_fraction=lost_motion_fraction)
-    return {"cycles": cycles, "metrics": met, "repeatability": rep, "preload": angles[:len(sequence.preload())],
+    return {"cycles": cycles, "metrics": met, "repeatability": rep, "preload": angles[:n_pre],
             "stats": path.stats()}
