@@ -77,7 +77,7 @@ def test_rolling_moment_is_palmgren_by_hand(rolling):
 
 def test_tapered_pair_gets_its_factors_and_its_element_load():
     row = TaperedRollerBearing(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055, roller_length=0.010,
-                               cup_angle_deg=14.0, cone_angle_deg=11.0)
+                               cup_angle=math.radians(14.0), cone_angle=math.radians(11.0))
     s = TaperedBearingSet([TaperedMounting(name="row", bearing=row, inner=0, outer=GROUND)], 1, backend="numpy")
     bf = BearingFriction(model="palmgren")
     (loss,) = mounting_losses(s.mountings, bf)

@@ -1,12 +1,16 @@
 """Issue 21: stiffness budget, lost-motion budget and datasheet."""
+import math
+
 import numpy as np
 import pytest
 
 from rvtool import designs
 from rvtool.assembly import build
 from rvtool.assembly.spec import load_design, replace
-from rvtool.protocols.budget import lost_motion_budget, stiffness_budget
-from rvtool.protocols.datasheet import Allowables, entry, load_allowables
+from rvtool.analysis.budget import lost_motion_budget
+from rvtool.protocols.budget import stiffness_budget
+from rvtool.designs.allowables import Allowables, load_allowables
+from rvtool.protocols.datasheet import entry
 from rvtool.errors import RvtoolInputError
 from rvtool.solver.static import StaticSolver
 from rvtool.units import RAD_PER_ARCMIN
@@ -86,7 +90,7 @@ def test_profile_modification_lost_motion_against_closed_form():
     # the clearance restored first 0.4557 vs 0.4417 (it also turns the elastic part from all pins
     # sharing the load to one pin carrying it). Bounds 2 %, 2 %, 1e-3 arcmin and 6 %.
     d = load_design(designs.path("rd40"))
-    dv = replace(d, profile={"equidistant_mod": 5e-6, "offset_mod": -5e-6, "rotation_mod": 2e-4},
+    dv = replace(d, profile={"equidistant_mod": 5e-6, "offset_mod": -5e-6, "rotation_mod_deg": math.degrees(2e-4)},
                  wheels={"clearance": 2e-6},
                  output_pins={"hole_radius": d.output_pins.pin_radius + d.wheels.eccentricity},
                  eccentric_bearing={"radial_clearance": 0.0}, input_bearing={"radial_clearance": 0.0})

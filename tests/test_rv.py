@@ -139,8 +139,8 @@ def test_crank_phase_error_changes_the_share_with_the_right_sign(design):
     positive phase error lags) engages later and carries less; one that leads carries more. Odd in the
     error to first order."""
     base = _mean_shares(design, 6).mean(axis=0)[0]
-    plus = _mean_shares(design.replace(cranks={"phase_errors_arcmin": (5.0, 0.0, 0.0)}), 6).mean(axis=0)[0]
-    minus = _mean_shares(design.replace(cranks={"phase_errors_arcmin": (-5.0, 0.0, 0.0)}), 6).mean(axis=0)[0]
+    plus = _mean_shares(design.replace(cranks={"phase_errors_deg": (5.0 / 60, 0.0, 0.0)}), 6).mean(axis=0)[0]
+    minus = _mean_shares(design.replace(cranks={"phase_errors_deg": (-5.0 / 60, 0.0, 0.0)}), 6).mean(axis=0)[0]
     assert GearGraph.of(design).crank_rate < 0
     assert plus < base - 0.004 and minus > base + 0.004       # measured -0.0067 / +0.0069 at 5 arcmin
     assert abs((plus - base) + (minus - base)) < 0.2 * abs(plus - minus)
@@ -182,8 +182,8 @@ def test_topology_errors_name_their_keys(design):
         GearGraph.of(design.replace(ratio_target=120.0))
     with pytest.raises(RvtoolInputError, match=r"wheels.phases_deg.*180"):
         design.replace(wheels={"phases_deg": (0.0, 120.0)})
-    with pytest.raises(RvtoolInputError, match=r"cranks.phase_errors_arcmin has 2 entries"):
-        design.replace(cranks={"phase_errors_arcmin": (1.0, 2.0)})
+    with pytest.raises(RvtoolInputError, match=r"cranks.phase_errors has 2 entries"):
+        design.replace(cranks={"phase_errors_deg": (1.0, 2.0)})
 
 
 def test_design_file_errors_name_the_section(tmp_path):
@@ -247,7 +247,9 @@ def test_rv_tolerance_sampling(design, tmp_path):
     d1, a = sample_rv_design(tol, design, 3, 7)
     d2, b = sample_rv_design(tol, design, 3, 7)
     assert a == b and d1 == d2
-    assert d1.cranks.phase_errors_arcmin == a["crank_phase_error"] and len(a["crank_phase_error"]) == 3
+    # drawn in arcmin, held in rad (to round-off of the arcmin -> deg -> rad conversion)
+    np.testing.assert_allclose(d1.cranks.phase_errors, np.radians(np.array(a["crank_phase_error"]) / 60), rtol=1e-14)
+    assert len(a["crank_phase_error"]) == 3
     assert abs(sum(d1.sun_gear.single_pitch_deviations)) < 1e-18
     assert 0.0 <= d1.eccentric_bearing.radial_clearance <= 3e-6
     with pytest.raises(RvtoolInputError, match=r"tolerances.needle_clearance"):

@@ -148,3 +148,26 @@ def test_assumptions_commit_holds_todays_assumed_values(name):
     assert then_assumed["assumed"] == now_assumed["assumed"]
     for a in now_assumed["assumed"]:
         assert _value(then, a["key"]) == _value(now, a["key"]), a["key"]
+
+
+@pytest.mark.slow
+def test_rv80e_quick_analysis(tmp_path):
+    """`rvtool analyze rv80e --quick` on the protocols the catalogue comparison uses: exit 0, every protocol ok,
+    no NaN (a quick all-protocol run took 3.3 min on 2 cores: te, stiffness, lost_motion, hysteresis, vibration,
+    pressure ok; monte_carlo skipped, no tolerance file)."""
+    import json
+    import os
+    import sys
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=os.pathsep.join(filter(None, [str(root),
+                                                                                   os.environ.get("PYTHONPATH")])))
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "rvtool.cli", "analyze", "rv80e", "--quick", "--quiet",
+                           "--protocols", "stiffness,lost_motion", "--out", str(out)],
+                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    data = json.loads((out / "results.json").read_text())
+    for p in ("stiffness", "lost_motion"):
+        assert data[p]["status"] == "ok", data[p]["reason"]
+        for f in data[p]["figures"].values():
+            assert math.isfinite(f["value"])

@@ -74,7 +74,7 @@ def test_a_shifted_block_of_teeth_is_a_crank_phase_error(design):
     """Pitch deviations that turn the 17 teeth of crank 0's gear around its sun contact by
     delta = F / r_b (f_pt = +F entering the block, -F leaving it) act on the rated state exactly
     as turning the eccentric journals by -delta against the gear: the crank shares equal those
-    of ``cranks.phase_errors_arcmin = (-delta, 0, 0)`` (teeth outside the block are outside the
+    of ``cranks.phase_errors_deg = (-delta, 0, 0)`` (teeth outside the block are outside the
     mesh window; measured 1e-8, the static solve's tolerance), and differ from nominal."""
     import math
     z = design.crank_gear.n_teeth
@@ -89,6 +89,6 @@ def test_a_shifted_block_of_teeth_is_a_crank_phase_error(design):
     assert 0 < (j - 8) % z < (j + 9) % z          # the block does not contain tooth 0 (F_0 = 0)
     s_dev = _shares(design.replace(cranks={"gear_pitch_deviations": (tuple(f), (0.0,) * z, (0.0,) * z)}))
     delta = F / design.crank_gear.base_radius
-    s_phase = _shares(design.replace(cranks={"phase_errors_arcmin": (-math.degrees(delta) * 60, 0.0, 0.0)}))
+    s_phase = _shares(design.replace(cranks={"phase_errors_deg": (-math.degrees(delta), 0.0, 0.0)}))
     assert np.allclose(s_dev, s_phase, atol=1e-6, rtol=0)
     assert np.max(np.abs(s_dev - _shares(design))) > 3e-4

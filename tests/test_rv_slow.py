@@ -17,8 +17,8 @@ from rvtool.slow import rv as RV
 from rvtool.slow.thermal import InvoluteMeshExpansion
 from warp_contacts import circle_pairs_ref as O
 
-ROW = dict(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055, roller_length=0.010, cup_angle_deg=14.0,
-           cone_angle_deg=11.0, n_slices=2)
+ROW = dict(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055, roller_length=0.010, cup_angle=math.radians(14.0),
+           cone_angle=math.radians(11.0), n_slices=2)
 
 
 def _devices():
@@ -88,7 +88,7 @@ def test_rv_network_and_channels(rv40e):
     T2 = np.full(len(net.nodes), RV.T_AMBIENT)
     T2[net.index("carrier")] += dT
     row = rv40e.crank_bearing.rows[0]
-    want = a * dT * 0.5 * (row.pitch_diameter + row.roller_diameter) * math.cos(math.radians(row.cup_angle_deg))
+    want = a * dT * 0.5 * (row.pitch_diameter + row.roller_diameter) * math.cos(row.cup_angle)
     crank = [ch for ch in th.channels if ch.name == "thermal/crank_bearings"][0]
     assert crank.gap_change(net, T2) == pytest.approx(want, rel=1e-12)
     # a hotter wheel than the housing closes the pin gaps

@@ -52,8 +52,11 @@ def test_replace_reloads_so_links_follow():
     assert s.output_pins.law_coefficient > d.output_pins.law_coefficient
     m = replace(d, material={"youngs_modulus": 100e9})
     assert m.main_bearing.rows[0].youngs_modulus == 100e9 and m.output_pins.youngs_modulus == 100e9
-    # a radians key replaces the file's degrees key
-    assert replace(d, wheels={"phases": (0.0, 1.0)}).wheels.phases == (0.0, 1.0)
+    # a degrees key replaces the file's degrees key; the spec holds radians
+    assert replace(d, wheels={"phases_deg": (0.0, 90.0)}).wheels.phases == (0.0, math.pi / 2)
+    # an angle is a file key in degrees only (format 2): its field name in radians is refused
+    with pytest.raises(RvtoolInputError, match=r"wheels\.phases: a design file gives this angle in degrees as phases_deg"):
+        replace(d, wheels={"phases": (0.0, 1.0)})
     # a key set explicitly is not overwritten by its link
     assert replace(d, output_pins={"contact_length": 0.006}).output_pins.contact_length == 0.006
     assert replace(d, wheels={"width": 0.01}, output_pins={"contact_length": 0.006}).output_pins.contact_length == 0.006
@@ -77,10 +80,10 @@ def test_errors_name_the_key_path_and_range(section, key, value, match):
         design_from_dict(raw)
 
 
-def test_degrees_and_radians_of_one_field_are_refused():
+def test_an_angle_in_radians_is_refused():
     raw = _raw()
     raw["wheels"]["phases"] = [0.0, np.pi]
-    with pytest.raises(RvtoolInputError, match=r"\[wheels\] gives both phases \[rad\] and phases_deg \[deg\]"):
+    with pytest.raises(RvtoolInputError, match=r"wheels\.phases: a design file gives this angle in degrees"):
         design_from_dict(raw)
 
 

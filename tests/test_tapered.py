@@ -15,11 +15,11 @@ from rvtool.errors import RvtoolInputError
 from warp_contacts import circle_pairs_ref as O
 
 # a 30204-class row (chosen plausible dimensions; the RV crank support of issue 16)
-ROW = dict(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055, roller_length=0.010, cup_angle_deg=14.0,
-           cone_angle_deg=11.0)
+ROW = dict(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055, roller_length=0.010, cup_angle=math.radians(14.0),
+           cone_angle=math.radians(11.0))
 # a larger row with many rollers for the load-distribution checks
-WIDE = dict(n_rollers=20, pitch_diameter=0.06, roller_diameter=0.007, roller_length=0.012, cup_angle_deg=15.0,
-            cone_angle_deg=12.0)
+WIDE = dict(n_rollers=20, pitch_diameter=0.06, roller_diameter=0.007, roller_length=0.012, cup_angle=math.radians(15.0),
+            cone_angle=math.radians(12.0))
 LINE_N = 10.0 / 9.0
 
 
@@ -343,8 +343,8 @@ def test_tapered_set_as_exudyn_contact_element():
 
 
 def test_bad_inputs_name_the_parameter():
-    bad = [(dict(cup_angle_deg=75.0), "cup_angle_deg"), (dict(cup_angle_deg=0.0), "cup_angle_deg"),
-           (dict(cone_angle_deg=14.0), "cone_angle_deg"), (dict(cone_angle_deg=-6.0), "cone_angle_deg"),
+    bad = [(dict(cup_angle=math.radians(75.0)), "cup_angle_deg"), (dict(cup_angle=math.radians(0.0)), "cup_angle_deg"),
+           (dict(cone_angle=math.radians(14.0)), "cone_angle_deg"), (dict(cone_angle=math.radians(-6.0)), "cone_angle_deg"),
            (dict(n_rollers=30), "n_rollers"), (dict(n_slices=0), "n_slices"), (dict(crowning=-1e-6), "crowning"),
            (dict(crowning=(1e-6, 2e-6)), "crowning"), (dict(law="cubic"), "law"),
            (dict(rib_contact=True, damping=10.0), "damping"), (dict(rib_clearance=-1e-6), "rib_clearance"),
@@ -352,16 +352,21 @@ def test_bad_inputs_name_the_parameter():
     for kw, name in bad:
         with pytest.raises(RvtoolInputError, match=name):
             TaperedRollerBearing(**{**ROW, **kw})
+    # a design file's row table gives the angles in degrees (NAME_deg); the spec holds radians
+    file_row = {**{k: v for k, v in ROW.items() if not k.endswith("_angle")}, "cup_angle_deg": 14.0,
+                "cone_angle_deg": 11.0}
     with pytest.raises(RvtoolInputError, match=r"crank_bearing\.cup_angle_deg = \[95.0\] is outside the valid range"):
-        TaperedRollerBearing.from_mapping({**ROW, "cup_angle_deg": 95.0}, key="crank_bearing")
+        TaperedRollerBearing.from_mapping({**file_row, "cup_angle_deg": 95.0}, key="crank_bearing")
+    with pytest.raises(RvtoolInputError, match=r"crank_bearing\.cup_angle: a design file gives this angle in degrees"):
+        TaperedRollerBearing.from_mapping(ROW, key="crank_bearing")
     with pytest.raises(RvtoolInputError, match=r"crank_bearing\.rows\[1\]\.cone_angle_deg"):
-        TaperedPair.from_mapping({"rows": [ROW, {**ROW, "cone_angle_deg": 20.0}], "row_spacing": 0.04},
+        TaperedPair.from_mapping({"rows": [file_row, {**file_row, "cone_angle_deg": 20.0}], "row_spacing": 0.04},
                                  key="crank_bearing")
     with pytest.raises(RvtoolInputError, match=r"crank_bearing\.spacing is not a parameter"):
-        TaperedPair.from_mapping({"row": ROW, "spacing": 0.04}, key="crank_bearing")
+        TaperedPair.from_mapping({"row": file_row, "spacing": 0.04}, key="crank_bearing")
     with pytest.raises(RvtoolInputError, match=r"crank_bearing\.axial_preload"):
-        TaperedPair.from_mapping({"row": ROW, "row_spacing": 0.04, "axial_preload": -5.0}, key="crank_bearing")
-    assert TaperedPair.from_mapping({"row": ROW, "row_spacing": 0.04}).rows[1].cup_angle_deg == 14.0
+        TaperedPair.from_mapping({"row": file_row, "row_spacing": 0.04, "axial_preload": -5.0}, key="crank_bearing")
+    assert TaperedPair.from_mapping({"row": file_row, "row_spacing": 0.04}).rows[1].cup_angle == math.radians(14.0)
     row = TaperedRollerBearing(**ROW)
     for kw, name in [(dict(row_spacing=0.005), "row_spacing"), (dict(arrangement="tandem"), "arrangement"),
                      (dict(axial_preload=100.0, end_play=1e-6), "end_play"), (dict(end_play=1e-3), "end_play")]:

@@ -27,6 +27,7 @@ for quasi-static sequences, a speed for driven runs); the output load is a
 torque on the flange rotation.
 """
 import dataclasses
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -247,8 +248,11 @@ class CycloidModel(ReducerModel):
             v = getattr(getattr(d, sec), key)
             if v != 0.0:
                 est = modification_play(d.pins.pin_circle_radius, zb, e, centres, **{key: v})[0]
-                out.append(ClearanceVariant(name, v, est, lambda x, s=sec, k=key: replace(x, **{s: {k: 0.0}}),
-                                            lambda x, o, s=sec, k=key: replace(x, **{s: {k: getattr(getattr(o, s), k)}})))
+                # the design-file key (an angle in degrees: rotation_mod_deg) and its value in the file's unit
+                fk, to_file = (key + "_deg", math.degrees) if key == "rotation_mod" else (key, float)
+                out.append(ClearanceVariant(name, v, est, lambda x, s=sec, k=fk: replace(x, **{s: {k: 0.0}}),
+                                            lambda x, o, s=sec, k=key, f=fk, c=to_file:
+                                            replace(x, **{s: {f: c(getattr(getattr(o, s), k))}})))
         return out
 
     def marker_frequencies(self, speed_rpm):

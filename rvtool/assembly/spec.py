@@ -37,6 +37,7 @@ from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ..geometry.cycloid import CycloidProfile
 from ..output_pins.spec import OutputPinMechanism
 from ..errors import RvtoolInputError
+from ..units import angle_field, is_angle
 from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
@@ -82,7 +83,7 @@ class Wheels:
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
-    phases: tuple = (0.0,)
+    phases: tuple = angle_field((0.0,))
     n_slices: int = 1
     samples_per_tooth: int = 120
     clearance: float = 0.0
@@ -357,15 +358,17 @@ DERIVED = {}
 
 
 def _file_units(cls, section, data):
-    """The one unit conversion of a design file: ``NAME_deg`` [deg] -> field NAME [rad] of ``cls``
-    (a number or a list of numbers); every other key is SI already."""
-    names = {f.name for f in dataclasses.fields(cls)}
+    """The one unit conversion of a design file: ``NAME_deg`` [deg] -> angle field NAME [rad] of ``cls``
+    (a number or a list of numbers); every other key is SI already. An angle field is given in
+    degrees only (:func:`rvtool.units.is_angle`): its name in radians is not a file key."""
+    angles = {f.name for f in dataclasses.fields(cls) if is_angle(f)}
     out = {}
     for key, value in data.items():
         stem = key[:-4] if key.endswith("_deg") else None
-        if stem is not None and stem in names and key not in names:
-            if stem in data:
-                raise RvtoolInputError(f"[{section}] gives both {stem} [rad] and {key} [deg]; give one")
+        if key in angles:
+            raise RvtoolInputError(f"{section}.{key}: a design file gives this angle in degrees as {key}_deg "
+                                   f"(the spec holds it in rad)")
+        if stem is not None and stem in angles:
             try:
                 out[stem] = (tuple(float(np.deg2rad(v)) for v in value) if isinstance(value, (list, tuple))
                              else float(np.deg2rad(value)))
@@ -563,7 +566,10 @@ def load_sections(d, sections, *, optional=(), links=None, derived=None):
 
 
 def design_from_dict(d):
-    """A validated :class:`CycloidDesign` from file-form data (the parsed TOML of a design file)."""
+    """A validated :class:`CycloidDesign` from file-form data (the parsed TOML of a design file;
+    ``format_version``: :func:`rvtool.assembly.topologies.upgrade_table`)."""
+    from .topologies import upgrade_table
+    d = upgrade_table(d)
     source = copy.deepcopy(dict(d))
     d = dict(d)
     topology = d.pop("topology", "cycloid")   # the key of rvtool.assembly.topologies; this loader is the cycloid's

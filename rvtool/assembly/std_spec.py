@@ -29,6 +29,7 @@ import numpy as np
 
 from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ..errors import RvtoolInputError
+from ..units import angle_field
 from ..geometry.involute import BasicRack, FlankModification, InvoluteGear, InvolutePair, line_gap
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive
 from ..output_pins.spec import OutputPinMechanism
@@ -49,7 +50,7 @@ class WheelSet:
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
-    phases: tuple = (0.0,)
+    phases: tuple = angle_field((0.0,))
 
     def __post_init__(self):
         check_positive("eccentricity", self.eccentricity)
@@ -229,6 +230,8 @@ def gear_section(section, data, **derived):
 
 def design_from_dict(d):
     """A validated :class:`StdInvoluteDesign` from the parsed design file (without its topology key)."""
+    from .topologies import upgrade_table
+    d = upgrade_table(d)
     source = {"topology": "std-involute", **copy.deepcopy(dict(d))}
     d = dict(d)
     kw = load_sections(d, _SECTIONS, optional=_OPTIONAL, links=LINKS, derived={})

@@ -17,7 +17,9 @@ dispatches its models from :func:`rvtool.assembly.build`; nothing in the loader,
 templates, the format documentation or ``rvtool analyze`` changes.
 """
 import importlib
+import math
 import tomllib
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,6 +27,20 @@ from ..errors import RvtoolInputError
 
 DEFAULT_TOPOLOGY = "cycloid"
 """Topology of a design file without a ``topology`` key."""
+
+FORMAT_VERSION = 2
+"""The design file format written today (top-level key ``format_version``). Format 2: every angle
+key is ``NAME_deg`` [deg], every other dimensional key SI. A file without the key, or with
+``format_version = 1``, is read as format 1 and its old keys renamed (:data:`FORMAT_1_KEYS`)."""
+
+FORMAT_1_KEYS = {
+    "contact_angle": ("contact_angle_deg", 180.0 / math.pi),        # bearing rows, [rad] -> [deg]
+    "pressure_angle": ("pressure_angle_deg", 180.0 / math.pi),      # basic rack of a gear, [rad] -> [deg]
+    "rotation_mod": ("rotation_mod_deg", 180.0 / math.pi),          # cycloid profile rotation, [rad] -> [deg]
+    "phase_errors_arcmin": ("phase_errors_deg", 1.0 / 60.0),        # RV crank phase errors, [arcmin] -> [deg]
+}
+"""Format 1 keys of format 2: old key -> (new key, factor from the old unit to the new). The keys
+are looked up in every table of the file (no other key of any section has these names)."""
 
 
 @dataclass(frozen=True)
@@ -105,18 +121,82 @@ def available(name):
 
 
 def topology_of(design):
-    """Name of the registered topology whose design class ``design`` is an instance of (None if none)."""
+    """Name of the registered topology whose design class ``design`` is an instance of (None if none).
+    A design class shared by several topologies (rv2 and rv3: :class:`~rvtool.assembly.rv.RVDesign`)
+    records its topology in its ``topology`` field; that name wins."""
+    recorded = getattr(design, "topology", None)
+    if isinstance(recorded, str) and recorded in TOPOLOGIES and available(recorded) is None \
+            and isinstance(design, design_class(recorded)):
+        return recorded
     for name, top in TOPOLOGIES.items():
         if available(name) is None and isinstance(design, design_class(name)):
             return name
     return None
 
 
+def _renamed(value, factor):
+    if isinstance(value, bool) or not isinstance(value, (int, float, list, tuple)):
+        return value                     # not a number: the loader reports it under the new key
+    if isinstance(value, (list, tuple)):
+        return [_renamed(v, factor) for v in value]
+    return value * factor
+
+
+def _format_1_renames(table, path=""):
+    """(table with the format 1 keys of :data:`FORMAT_1_KEYS` renamed and converted, [(old key path,
+    new key path)]); sub-tables and arrays of tables are walked."""
+    out, renames = {}, []
+    for key, value in table.items():
+        where = f"{path}.{key}" if path else key
+        if isinstance(value, dict):
+            value, sub = _format_1_renames(value, where)
+            renames += sub
+        elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            rows = []
+            for k, v in enumerate(value):
+                v, sub = _format_1_renames(v, f"{where}[{k}]")
+                rows.append(v)
+                renames += sub
+            value = rows
+        elif key in FORMAT_1_KEYS and path:
+            new, factor = FORMAT_1_KEYS[key]
+            if new in table:
+                raise RvtoolInputError(f"[{path}] gives both {key} (format 1) and {new}; give {new}")
+            out[new] = _renamed(value, factor)
+            renames.append((where, f"{path}.{new}"))
+            continue
+        out[key] = value
+    return out, renames
+
+
+def upgrade_table(data):
+    """A design file's table in format :data:`FORMAT_VERSION` (without the ``format_version`` key).
+    A format 1 file (no ``format_version`` or 1) has its old keys renamed, with one
+    :class:`FutureWarning` naming each old key and its new name; a format 2 file holding a format 1
+    key is an error naming the new key."""
+    data = dict(data)
+    version = data.pop("format_version", 1)
+    if isinstance(version, bool) or version not in (1, FORMAT_VERSION):
+        raise RvtoolInputError(f"format_version = {version!r}; valid choices are [1, {FORMAT_VERSION}]")
+    upgraded, renames = _format_1_renames(data)
+    if renames and version == FORMAT_VERSION:
+        old, new = renames[0]
+        raise RvtoolInputError(f"{old} is a format 1 key; format_version = {FORMAT_VERSION} gives it as {new} "
+                               "(every angle in degrees as NAME_deg)")
+    if renames:
+        names = ", ".join(f"{old} -> {new}" for old, new in renames)
+        warnings.warn(f"design file format 1 (no format_version): rename {names} and write "
+                      f"format_version = {FORMAT_VERSION} at the top (every angle in degrees as NAME_deg; "
+                      "format 1 keys will stop loading in a later release)", FutureWarning, stacklevel=3)
+    return upgraded
+
+
 def design_from_table(data):
-    """A validated design from a design file's table (the ``topology`` key picks the loader)."""
+    """A validated design from a design file's table (the ``topology`` key picks the loader;
+    ``format_version``: :func:`upgrade_table`)."""
     if not isinstance(data, dict):
         raise RvtoolInputError(f"a design must be a table of sections; got {type(data).__name__}")
-    data = dict(data)
+    data = upgrade_table(data)
     name = data.pop("topology", DEFAULT_TOPOLOGY)
     top = get(name)
     cls = _import(top.design, top)

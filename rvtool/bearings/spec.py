@@ -26,6 +26,7 @@ import numpy as np
 from warp_contacts.rolling_elements_ref import ball_stiffness
 
 from ..errors import RvtoolInputError
+from ..units import angle_field
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import HertzConstants, effective_modulus, hertz_constants, roller_stiffness
 
@@ -192,7 +193,7 @@ class CrossedRollerBearing(CylindricalRollerBearing):
     Fields as :class:`CylindricalRollerBearing` (crowning, law and slices act along
     each roller's generator) plus contact_angle: alpha [rad] in (0, pi/2), 45 deg typical.
     """
-    contact_angle: float = math.pi / 4
+    contact_angle: float = angle_field(math.pi / 4)
     n_slices: int = 2
 
     def __post_init__(self):
@@ -225,7 +226,7 @@ class BallBearing:
     n_balls: int
     ball_diameter: float
     pitch_diameter: float
-    contact_angle: float = 0.0
+    contact_angle: float = angle_field(0.0)
     inner_curvature: float = 0.52
     outer_curvature: float = 0.52
     youngs_modulus: float = 206e9

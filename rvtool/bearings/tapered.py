@@ -37,7 +37,8 @@ its two load centres.
 RV crank support (chosen, plausible for a 30204-class bearing)::
 
     row = TaperedRollerBearing(n_rollers=14, pitch_diameter=0.0335, roller_diameter=0.0055,
-                               roller_length=0.010, cup_angle_deg=14.0, cone_angle_deg=11.0)
+                               roller_length=0.010, cup_angle=math.radians(14.0),
+                               cone_angle=math.radians(11.0))
     crank_bearing = TaperedPair(rows=(row, row), row_spacing=0.040, arrangement="back_to_back",
                                 axial_preload=300.0)
 """
@@ -50,6 +51,7 @@ import numpy as np
 from warp_contacts import tapered_rollers_ref as ref
 
 from ..errors import RvtoolInputError
+from ..units import angle_field, is_angle
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import effective_modulus, roller_stiffness
 from .spec import Arrangement, LaminaLaw
@@ -79,9 +81,10 @@ class TaperedRollerBearing:
     n_rollers: Z. pitch_diameter: d_m, diameter of the circle of roller centres at
     mid-length [m]. roller_diameter: mean roller diameter D_m [m]. roller_length:
     effective contact length l along the generator [m].
-    cup_angle_deg: alpha_o, cup half-angle = contact angle, in (0, 60) [deg].
-    cone_angle_deg: alpha_i, cone half-angle, in [alpha_o - 20, alpha_o) and >= 0 [deg]
-    (roller half-angle phi = (alpha_o - alpha_i) / 2 in (0, 10] deg).
+    cup_angle: alpha_o, the cup half-angle (the row's contact angle), in (0, 60) deg [rad]
+    (file: ``cup_angle_deg``).
+    cone_angle: alpha_i, the cone half-angle, in [alpha_o - 20 deg, alpha_o) and >= 0 [rad]
+    (file: ``cone_angle_deg``; the roller half-angle phi = (alpha_o - alpha_i) / 2 is in (0, 10] deg).
     n_slices: laminae per roller. crowning: end drop of a parabolic crown (scalar) or one
     drop per slice [m]. law: "power" (Palmgren 10/9) or "linear" (its secant at
     ``reference_roller_load`` [N]).
@@ -98,8 +101,8 @@ class TaperedRollerBearing:
     pitch_diameter: float
     roller_diameter: float
     roller_length: float
-    cup_angle_deg: float
-    cone_angle_deg: float
+    cup_angle: float = angle_field()
+    cone_angle: float = angle_field()
     n_slices: int = 4
     crowning: float | tuple = 0.0
     law: LaminaLaw = LaminaLaw.POWER
@@ -118,9 +121,13 @@ class TaperedRollerBearing:
         # n D_m < pi d_m: the rollers fit around the pitch circle without touching
         check_integer("n_rollers", self.n_rollers, 3, math.ceil(math.pi * self.pitch_diameter / self.roller_diameter) - 1)
         check_positive("roller_length", self.roller_length)
-        check_range("cup_angle_deg", self.cup_angle_deg, 0.0, MAX_CUP_ANGLE_DEG, low_open=True, high_open=True)
-        check_range("cone_angle_deg", self.cone_angle_deg,
-                    max(0.0, self.cup_angle_deg - 2 * MAX_ROLLER_HALF_ANGLE_DEG), self.cup_angle_deg, high_open=True)
+        # checked in degrees under the design file's keys (the spec holds radians)
+        check_finite("cup_angle", self.cup_angle)
+        check_finite("cone_angle", self.cone_angle)
+        cup_deg, cone_deg = _degrees(self.cup_angle), _degrees(self.cone_angle)
+        check_range("cup_angle_deg", cup_deg, 0.0, MAX_CUP_ANGLE_DEG, low_open=True, high_open=True)
+        check_range("cone_angle_deg", cone_deg, max(0.0, cup_deg - 2 * MAX_ROLLER_HALF_ANGLE_DEG), cup_deg,
+                    high_open=True)
         check_integer("n_slices", self.n_slices, 1, 64)
         crown = np.atleast_1d(np.asarray(self.crowning, dtype=float))
         if crown.shape not in ((1,), (self.n_slices,)):
@@ -150,19 +157,9 @@ class TaperedRollerBearing:
     @classmethod
     def from_mapping(cls, data, key="tapered_bearing"):
         """Build from a mapping (a TOML table); errors name ``key.field``."""
-        return _keyed(cls, dict(data), key)
+        return _keyed(cls, _file_angles(cls, dict(data), key), key)
 
     # -- angles ----------------------------------------------------------
-    @property
-    def cup_angle(self):
-        """alpha_o [rad]."""
-        return math.radians(self.cup_angle_deg)
-
-    @property
-    def cone_angle(self):
-        """alpha_i [rad]."""
-        return math.radians(self.cone_angle_deg)
-
     @property
     def roller_half_angle(self):
         """phi = (alpha_o - alpha_i) / 2 [rad]."""
@@ -388,6 +385,28 @@ class TaperedPair:
             s = row.axial_approach_for(self.axial_preload) if self.axial_preload > 0 else -0.5 * self.end_play
             out.append(-sigma * s)          # the loaded direction of a row is -sigma e_z
         return tuple(out)
+
+
+def _degrees(x):
+    """An angle [rad] in degrees, rounded to 12 digits so that a file's 14.0 deg reads back as 14.0."""
+    return float(f"{math.degrees(x):.12g}") if math.isfinite(x) else x
+
+
+def _file_angles(cls, data, key):
+    """A design-file table with its ``NAME_deg`` keys [deg] as the angle fields NAME [rad] of ``cls``
+    (the loader's unit rule, :func:`rvtool.assembly.spec.build_section`)."""
+    out = dict(data)
+    for f in fields(cls):
+        if not is_angle(f):
+            continue
+        if f.name in out:
+            raise RvtoolInputError(f"{key}.{f.name}: a design file gives this angle in degrees as {f.name}_deg")
+        if f.name + "_deg" in out:
+            v = out.pop(f.name + "_deg")
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise RvtoolInputError(f"{key}.{f.name}_deg = {v!r} must be a number of degrees")
+            out[f.name] = math.radians(v)
+    return out
 
 
 def _keyed(cls, data, key):

@@ -24,11 +24,13 @@ The template is written with tomlkit (a TOML library that keeps comments), so th
 are TOML comments attached to their keys, not pasted strings.
 """
 import dataclasses
+import math
 import re
 import tomllib
 import typing
 
 from ..errors import RvtoolInputError
+from ..units import file_key, is_angle
 
 _RANGE = re.compile(r"valid range\s*(?:is\s*)?([\[\(][^\]\)]*[\]\)])")
 _CHOICES = re.compile(r"valid(?: choices are|:)?\s*(\[[^\]]*\])")
@@ -75,9 +77,9 @@ def describe(cls, name):
     the spec and its bases are searched for ``name [unit]`` (a short symbol may stand between,
     e.g. ``pin_circle_radius R_z [m]``) and ``name: meaning``."""
     f = {x.name: x for x in dataclasses.fields(cls)}[name]
-    if "unit" in f.metadata or "doc" in f.metadata:
-        return f.metadata.get("doc", ""), f.metadata.get("unit", "")
-    meaning, unit = "", ""
+    if "doc" in f.metadata:
+        return f.metadata["doc"], f.metadata.get("unit", "")
+    meaning, unit = "", f.metadata.get("unit", "")
     for base in cls.__mro__:
         doc = " ".join((base.__doc__ or "").split())
         if not doc or base is object:
@@ -140,6 +142,35 @@ def valid_range(cls, kw, name):
     return ""
 
 
+def _to_degrees(text):
+    """The numbers of a range quoted in rad, in degrees (``inf`` stays)."""
+    return re.sub(r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?", lambda m: f"{math.degrees(float(m.group(0))):.6g}", text)
+
+
+def angle_range(cls, kw, name):
+    """Valid range [deg] of angle field ``name`` (held in rad) as the spec's validation states it:
+    a message about ``name`` quotes radians, one about the file key ``name_deg`` degrees."""
+    if isinstance(kw.get(name), (list, tuple)):
+        return "list of numbers"
+    found = []
+    for probe in PROBES:
+        try:
+            cls(**{**kw, name: probe})
+        except RvtoolInputError as exc:
+            msg = str(exc)
+        except (TypeError, ValueError, OverflowError):
+            continue
+        else:
+            continue
+        m = re.search(rf"(?<![\w]){re.escape(name)}(_deg)?(?![\w])\s*(=|must)", msg)
+        r = _RANGE.search(msg) if m else None
+        if r:
+            text = r.group(1) if m.group(1) else _to_degrees(r.group(1))
+            if text not in found:
+                found.append(text)
+    return " and ".join(found) if found else "any finite number"
+
+
 def _example_kwargs(cls, table):
     kw = {}
     for f in dataclasses.fields(cls):
@@ -151,6 +182,13 @@ def _example_kwargs(cls, table):
         elif f.default_factory is not dataclasses.MISSING:
             kw[f.name] = f.default_factory()
     return kw
+
+
+def _degrees(v):
+    """An angle value [rad] (a number or a list) in degrees, rounded to 12 digits (0.2443 rad -> 14.0)."""
+    if isinstance(v, (list, tuple)):
+        return tuple(_degrees(x) for x in v)
+    return float(f"{math.degrees(v):.12g}") if isinstance(v, (int, float)) and not isinstance(v, bool) else v
 
 
 def _plain(v):
@@ -188,11 +226,13 @@ def _field_rows(path, cls, fields, kw, raw, links):
             continue
         meaning, unit = describe(cls, f.name)
         required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-        rng = valid_range(cls, kw, f.name) if f.name in kw else ""
+        rng = valid_range(cls, kw, f.name) if f.name in kw and not is_angle(f) else ""
         key, shown = f.name, _plain(value)
-        if f.name + "_deg" in raw:          # the file gives this angle in degrees (the loader converts it)
-            key, shown, unit = f.name + "_deg", raw[f.name + "_deg"], "deg"
-            rng = f"{rng} rad" if rng else rng
+        if is_angle(f):                     # an angle: the file gives it in degrees (the loader converts it)
+            key, unit = file_key(f), "deg"
+            shown = raw.get(key, _plain(_degrees(value)))
+            rng = angle_range(cls, kw, f.name) if f.name in kw else ""
+            meaning = re.sub(r"\s*\(file: ``[^`]*``\)?|\s*\[rad\]", "", meaning).strip(" ,;")
         if f.name in links.get(path, {}) and f.name not in raw and key not in raw:
             meaning = f"{meaning} (left out: {links[path][f.name]})".strip()
             required = False

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RvtoolInputError
+from ..units import angle_field
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 
@@ -42,7 +43,7 @@ class CycloidProfile:
     generating_eccentricity: float
     equidistant_mod: float = 0.0
     offset_mod: float = 0.0
-    rotation_mod: float = 0.0
+    rotation_mod: float = angle_field(0.0)
     radial_mod_table: tuple | None = None
 
     def __post_init__(self):

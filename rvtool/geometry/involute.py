@@ -42,6 +42,7 @@ import math
 import numpy as np
 
 from ..errors import RvtoolInputError
+from ..units import angle_field
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 
@@ -72,7 +73,7 @@ class BasicRack:
     dedendum_coefficient: h_fP*. root_radius_coefficient: rho_fP* (tip rounding of the
     generating rack = root fillet radius of the basic rack).
     """
-    pressure_angle: float = math.radians(20.0)
+    pressure_angle: float = angle_field(math.radians(20.0))
     addendum_coefficient: float = 1.0
     dedendum_coefficient: float = 1.25
     root_radius_coefficient: float = 0.38

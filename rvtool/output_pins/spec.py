@@ -22,6 +22,7 @@ from warp_contacts import output_pins_ref as ref
 
 from ..contact.circle_set import FrictionLaw, FrictionModel
 from ..errors import RvtoolInputError
+from ..units import angle_field
 from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 from .calibration import PIN_EXPONENT, hertz_calibrated_coefficient, mindlin_tangential_ratio
@@ -117,7 +118,7 @@ class OutputPinMechanism:
     pin_circle_radius: float
     hole_circle_radius: float
     n_pins: int = 1
-    phase: float = 0.0
+    phase: float = angle_field(0.0)
     pin_radius: float
     hole_radius: float
     coefficient: float | None = None

@@ -206,7 +206,7 @@ def gap_channels(design, inputs: RvSlowInputs, model=None) -> tuple:
                                          element_diameter=D, outer_expansion=a, inner_expansion=a, element_expansion=a)
 
     tp, mb = d.crank_bearing.rows[0], d.main_bearing.rows[0]
-    crank = ProjectedExpansion(radial(tp.pitch_diameter, tp.roller_diameter), math.cos(math.radians(tp.cup_angle_deg)))
+    crank = ProjectedExpansion(radial(tp.pitch_diameter, tp.roller_diameter), math.cos(tp.cup_angle))
     main = ProjectedExpansion(radial(mb.pitch_diameter, mb.ball_diameter), math.cos(mb.contact_angle))
     ref = (T_AMBIENT,) * 3
     gears = ()

@@ -4,7 +4,7 @@
 Fields (SI units; distributions and their TOML form as :mod:`rvtool.variants.tolerances`):
 
 * ``crank_phase_error`` [arcmin]: eccentric phase error of each crank (one draw per crank,
-  ``cranks.phase_errors_arcmin``),
+  ``cranks.phase_errors_deg``),
 * ``crank_eccentricity_error`` [m]: e_k - e of each crank (one draw per crank,
   ``cranks.eccentricity_errors``),
 * ``pin_radius_error`` [m]: actual minus nominal pin radius, one value per reducer (``pins.radius_error``),
@@ -76,7 +76,8 @@ def sample_rv_design(spec, design, k, seed):
             continue
         if nm == "crank_phase_error":
             v = tuple(float(x) for x in d.sample(rng, n))
-            changes.setdefault("cranks", {})["phase_errors_arcmin"] = v
+            # drawn in arcmin (the tolerance file's unit); the design file gives the angle in degrees
+            changes.setdefault("cranks", {})["phase_errors_deg"] = tuple(x / 60.0 for x in v)
         elif nm == "crank_eccentricity_error":
             v = tuple(float(x) for x in d.sample(rng, n))
             changes.setdefault("cranks", {})["eccentricity_errors"] = v

@@ -318,9 +318,9 @@ class RvModel(ReducerModel):
                "mesh_hz": d.pins.n_pins * abs(f_k), "involute_mesh_hz": d.sun_gear.n_teeth * abs(f_s - f_c),
                "eccentric_bearing": bearing_frequencies(f_rel, nb.n_rollers, nb.roller_diameter, nb.pitch_diameter),
                "crank_bearing": bearing_frequencies(f_rel, tp.n_rollers, tp.roller_diameter, tp.pitch_diameter,
-                                                    tp.cup_angle_deg),
+                                                    tp.cup_angle),
                "main_bearing": bearing_frequencies(f_c, mb.n_balls, mb.ball_diameter, mb.pitch_diameter,
-                                                   math.degrees(mb.contact_angle))}
+                                                   mb.contact_angle)}
         if self.layout.three_stage:
             out["input_stage_mesh_hz"] = d.input_pinion.n_teeth * f_in
         return out

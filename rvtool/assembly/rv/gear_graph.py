@@ -134,7 +134,7 @@ class GearGraph:
         input_pair, input_centre, sun0 = None, None, 0.0
         if d.topology == "rv3":
             input_pair = InvolutePair(gear_a=d.input_pinion, gear_b=d.compound_gear)
-            gam = math.radians(d.input_stage.direction_deg)
+            gam = d.input_stage.direction
             input_centre = (input_pair.a * math.cos(gam), input_pair.a * math.sin(gam))
             # compound gear at the origin, pinion at input_centre: gear B lies in direction gam + pi from A
             sun0 = placed_phase(input_pair, gam + math.pi, 0.0)

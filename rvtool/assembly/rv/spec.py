@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from ...bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ...bearings.tapered import TaperedPair
 from ...errors import RvtoolInputError
+from ...units import angle_field
 from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
 from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
@@ -34,8 +35,8 @@ class Cranks:
     """The floating crankshafts: count N_c (2 or 3, equally spaced on the crank circle, whose
     radius is the sun--crank-gear centre distance), rigid-body data (mass [kg], polar inertia
     [kg m^2]) and manufacturing deviations per crank (a variant is a design):
-    phase_errors_arcmin: the eccentric phase of crank k off its nominal by this angle [arcmin]
-    (both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none);
+    phase_errors: the eccentric phase of crank k off its nominal by this angle [rad] (file:
+    ``phase_errors_deg``; both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none);
     gear_pitch_deviations: per crank, the single pitch deviations f_pt,j [m] of its spur gear
     (``crank_gear.n_teeth`` entries summing to zero, as ``InvoluteGear.single_pitch_deviations``;
     () = every crank gear as ``crank_gear``).
@@ -45,7 +46,7 @@ class Cranks:
     count: int
     mass: float = 0.25
     inertia: float = 2.0e-5
-    phase_errors_arcmin: tuple = ()
+    phase_errors: tuple = angle_field(())
     eccentricity_errors: tuple = ()
     gear_pitch_deviations: tuple = ()
     shaft: CrankShaft = field(default_factory=CrankShaft)
@@ -56,7 +57,7 @@ class Cranks:
                                    "an RV stage carries 2 or 3 floating crankshafts")
         check_positive("cranks.mass", self.mass)
         check_positive("cranks.inertia", self.inertia)
-        for nm in ("phase_errors_arcmin", "eccentricity_errors"):
+        for nm in ("phase_errors", "eccentricity_errors"):
             v = getattr(self, nm)
             if len(v) not in (0, self.count):
                 raise RvtoolInputError(f"cranks.{nm} has {len(v)} entries; valid: 0 or cranks.count = {self.count}")
@@ -69,7 +70,7 @@ class Cranks:
 
     def phase_error(self, k):
         """Eccentric phase error of crank k [rad]."""
-        return math.radians(self.phase_errors_arcmin[k] / 60.0) if self.phase_errors_arcmin else 0.0
+        return float(self.phase_errors[k]) if self.phase_errors else 0.0
 
     def eccentricity_error(self, k):
         return float(self.eccentricity_errors[k]) if self.eccentricity_errors else 0.0
@@ -133,12 +134,12 @@ class RvBodies:
 
 @dataclass(frozen=True, kw_only=True)
 class InputStage:
-    """Three-stage only: the offset input pinion meshing the compound gear's large gear;
-    direction_deg: the angle of the pinion axis seen from the reducer axis [deg]."""
-    direction_deg: float = 60.0
+    """Three-stage only: the offset input pinion meshing the compound gear's large gear.
+    direction: the angle of the pinion axis seen from the reducer axis [rad] (file: ``direction_deg``)."""
+    direction: float = angle_field(math.radians(60.0))
 
     def __post_init__(self):
-        check_finite("input_stage.direction_deg", self.direction_deg)
+        check_finite("input_stage.direction", self.direction)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -327,7 +328,8 @@ _OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input
 
 def design_from_dict(d):
     """A validated :class:`RVDesign` from a design mapping (a parsed TOML file)."""
-    d = _table("design", d)
+    from ..topologies import upgrade_table
+    d = upgrade_table(_table("design", d))
     source = copy.deepcopy(dict(d))
     kw = load_sections(d, _CYCLOID_SECTIONS, optional=("profile", "housing"), links=_CYCLOID_LINKS, derived={})
     for sec, make in _SECTIONS.items():
