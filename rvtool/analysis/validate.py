@@ -37,7 +37,7 @@ from ..units import RAD_PER_ARCMIN
 SAMPLES = 64
 """Latin-hypercube samples of the full run (issue 28: >= 64)."""
 
-QUICK_SAMPLES = 8
+QUICK_SAMPLES = 4
 """Samples under ``quick`` (the machinery, not the band's convergence)."""
 
 REPEAT_TOLERANCE_ARCMIN = 1e-4
@@ -50,10 +50,10 @@ DEFAULT_RIGIDITY_POINTS = (0.5, 1.0)
 catalogue's own points, which were not read (rv40e/rv80e_catalogue.toml say so); every result
 names the points it used and where they come from."""
 
-QUICK_TORNADO_KEYS = 2
+QUICK_TORNADO_KEYS = 1
 """Under quick the tornado covers the first this many `assumed` keys of the file (2 loops each)."""
 
-FULL_STEP, QUICK_STEP, SAMPLE_STEP = 0.0625, 0.25, 0.5
+FULL_STEP, QUICK_STEP, SAMPLE_STEP = 0.0625, 0.5, 0.5
 """Level spacing of the central loop (full, quick) and of each sample's loop [fraction of T_R]
 (the catalogue's points and the +-3 %, 2 %, 1 % levels are added to every one; b/a and the
 mid-points are read at levels, so the spacing changes only the curve's plot; measured on rv40e:
@@ -287,13 +287,15 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             log=print):
+             assumed=None, band=True, variant=True, log=print):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
     samples (the machine is shared: 1 or 2); tornado_keys: one-at-a-time low/high loops for this
     many keys, the most important first by :func:`screening` (None: every key; quick:
-    :data:`QUICK_TORNADO_KEYS`)."""
+    :data:`QUICK_TORNADO_KEYS`); assumed: a ranges file to use instead of the shipped
+    ``<design>_assumed.toml`` (its values must be the design's middles too); band, variant: False
+    skips the uncertainty band or the ratio variant (said so in the results)."""
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
     from .. import designs
@@ -309,8 +311,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     catalogue = load_catalogue(cat_name)
     design_path = designs.path(design)
     table = read_table(design_path)
-    assumed_name = designs.assumed_of(design)
-    assumed = load_assumed(assumed_name) if assumed_name else None
+    assumed_name = assumed or designs.assumed_of(design)
+    assumed = load_assumed(assumed_name) if (assumed_name and band) else None
     if assumed is not None:
         check_assumed_middle(assumed, table)
     files = [design_path] + ([assumed.path] if assumed else [])
@@ -338,8 +340,10 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     budget = stiffness_budget(model, q)
     peaks = contact_pressures(d, model, q)
     # ratio variant
-    log(f"validate {design}: ratio variant")
+    log(f"validate {design}: ratio variant" + ("" if variant else " skipped"))
     try:
+        if not variant:
+            raise RuntimeError("skipped (variant=False: --quick of the case for a costly design)")
         vt, v_ratio = ratio_variant(table)
         v_fig = _figures(_loop(design_from_table(vt), catalogue, SAMPLE_STEP, repeat=False))
         variant = {"ratio": v_ratio, "ratio_central": float(model.ratio), "rigidity": v_fig["torsional_rigidity"],
@@ -457,7 +461,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "assumptions_commit_source": ("the catalogue file's assumptions_commit" if catalogue.assumptions_commit
                                       else "git: last commit touching the design or its assumed file"),
         "last_commit_touching_inputs": last_commit, "last_commit_date": last_date,
-        "uncertainty_note": None if assumed else (f"no {design}_assumed.toml: the design's inputs are chosen, not "
+        "uncertainty_note": None if assumed else ("band skipped (band=False)" if not band else
+                                                  f"no {design}_assumed.toml: the design's inputs are chosen, not "
                                                   "assumed with cited ranges, so no band is computed"),
         "assumed_file": os.path.basename(assumed.path) if assumed else None,
         "table": rows,
