@@ -141,8 +141,8 @@ def summary_rows(data):
         "N m/arcmin", "min_torsional_stiffness", "min")
     add("Torsional rigidity, tangent at 75 % rated torque", "stiffness", "Kt_condensed", "N m/arcmin")
     add("Lost motion at +-3 % rated torque", "lost_motion", "lost_motion", "arcmin", "max_lost_motion")
-    add("Hysteresis loss (loop width at zero torque, +-rated cycle)", "hysteresis", "hysteresis_width",
-        "arcmin", "max_hysteresis_loss")
+    add("Hysteresis loss (catalogue: loop width at zero torque along the unloading branches)", "hysteresis",
+        "hysteresis_loss", "arcmin", "max_hysteresis_loss")
     te = data.get("te") if isinstance(data.get("te"), dict) else {}
     for name in sorted((te.get("figures") or {})):
         if name.startswith("peak_load_"):

@@ -37,7 +37,7 @@ from ..units import RAD_PER_ARCMIN
 SAMPLES = 64
 """Latin-hypercube samples of the full run (issue 28: >= 64)."""
 
-QUICK_SAMPLES = 8
+QUICK_SAMPLES = 4
 """Samples under ``quick`` (the machinery, not the band's convergence)."""
 
 REPEAT_TOLERANCE_ARCMIN = 1e-4
@@ -50,10 +50,10 @@ DEFAULT_RIGIDITY_POINTS = (0.5, 1.0)
 catalogue's own points, which were not read (rv40e/rv80e_catalogue.toml say so); every result
 names the points it used and where they come from."""
 
-QUICK_TORNADO_KEYS = 2
+QUICK_TORNADO_KEYS = 1
 """Under quick the tornado covers the first this many `assumed` keys of the file (2 loops each)."""
 
-FULL_STEP, QUICK_STEP, SAMPLE_STEP = 0.0625, 0.25, 0.5
+FULL_STEP, QUICK_STEP, SAMPLE_STEP = 0.0625, 0.5, 0.5
 """Level spacing of the central loop (full, quick) and of each sample's loop [fraction of T_R]
 (the catalogue's points and the +-3 %, 2 %, 1 % levels are added to every one; b/a and the
 mid-points are read at levels, so the spacing changes only the curve's plot; measured on rv40e:
@@ -124,8 +124,10 @@ def _sample(args):
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def _map(fn, items, workers, log=None):
-    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item."""
+def _map(fn, items, workers, log=None, checkpoint=None):
+    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item;
+    ``checkpoint``: a JSON file rewritten with the results so far after each item (a long run that
+    is stopped keeps what it computed)."""
     out = []
     if workers <= 1 or len(items) < 2:
         it = (fn(i) for i in items)
@@ -139,7 +141,12 @@ def _map(fn, items, workers, log=None):
         for k, r in enumerate(it):
             out.append(r)
             if log is not None:
-                log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){'' if r[1] is None else ': ' + r[1]}")
+                err = "" if r[1] is None else ": " + r[1]
+                log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){err}")
+            if checkpoint is not None:
+                with open(checkpoint, "w") as fh:
+                    json.dump(_jsonable({"done": len(out), "of": len(items), "results": out,
+                                         "wall_s": time.perf_counter() - t0}), fh)
     finally:
         if pool is not None:
             pool.shutdown()
@@ -280,13 +287,15 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             log=print):
+             assumed=None, band=True, variant=True, log=print):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
     samples (the machine is shared: 1 or 2); tornado_keys: one-at-a-time low/high loops for this
     many keys, the most important first by :func:`screening` (None: every key; quick:
-    :data:`QUICK_TORNADO_KEYS`)."""
+    :data:`QUICK_TORNADO_KEYS`); assumed: a ranges file to use instead of the shipped
+    ``<design>_assumed.toml`` (its values must be the design's middles too); band, variant: False
+    skips the uncertainty band or the ratio variant (said so in the results)."""
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
     from .. import designs
@@ -302,8 +311,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     catalogue = load_catalogue(cat_name)
     design_path = designs.path(design)
     table = read_table(design_path)
-    assumed_name = designs.assumed_of(design)
-    assumed = load_assumed(assumed_name) if assumed_name else None
+    assumed_name = assumed or designs.assumed_of(design)
+    assumed = load_assumed(assumed_name) if (assumed_name and band) else None
     if assumed is not None:
         check_assumed_middle(assumed, table)
     files = [design_path] + ([assumed.path] if assumed else [])
@@ -315,7 +324,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     d = design_from_table(table)
     T_R = catalogue.test.rated_torque
     if abs(float(getattr(d, "rated_torque", T_R)) - T_R) > 1e-9 * T_R:
-        log(f"note: the design's rated_torque {d.rated_torque} differs from the catalogue's T_R {T_R}; the catalogue's is used")
+        log(f"note: the design's rated_torque {d.rated_torque} differs from the catalogue's T_R {T_R}; the "
+            "catalogue's is used")
     n_samples = samples if samples is not None else (QUICK_SAMPLES if quick else SAMPLES)
     log(f"validate {design}: central loop")
     central = _loop(d, catalogue, QUICK_STEP if quick else FULL_STEP)
@@ -330,8 +340,10 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     budget = stiffness_budget(model, q)
     peaks = contact_pressures(d, model, q)
     # ratio variant
-    log(f"validate {design}: ratio variant")
+    log(f"validate {design}: ratio variant" + ("" if variant else " skipped"))
     try:
+        if not variant:
+            raise RuntimeError("skipped (variant=False: --quick of the case for a costly design)")
         vt, v_ratio = ratio_variant(table)
         v_fig = _figures(_loop(design_from_table(vt), catalogue, SAMPLE_STEP, repeat=False))
         variant = {"ratio": v_ratio, "ratio_central": float(model.ratio), "rigidity": v_fig["torsional_rigidity"],
@@ -355,7 +367,16 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
 
         log(f"validate {design}: {n_samples} Latin-hypercube samples ({workers} worker(s))")
         ts = time.perf_counter()
-        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log)
+        ck = None
+        if out_dir is not None:
+            os.makedirs(out_dir, exist_ok=True)
+            with open(os.path.join(out_dir, "central_partial.json"), "w") as fh:
+                json.dump(_jsonable({"central": fig_c, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,
+                                     "bearing_lives": lives, "budget_shares": budget["shares"],
+                                     "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"], "pressures_Pa": peaks,
+                                     "ratio_variant": variant, "U": U, "keys": keys}), fh, indent=1)
+            ck = os.path.join(out_dir, "samples_partial.json")
+        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log, ck)
         wall_lhs = time.perf_counter() - ts
         order, screen = screening(keys, U, lhs)
         n_tor = len(keys) if tornado_keys is None else min(len(keys), int(tornado_keys))
@@ -395,7 +416,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     band = (unc or {}).get("band") or {}
     pts, pts_source = rigidity_points(catalogue)
     rows = (
-        _rows("torsional_rigidity", fig_c["torsional_rigidity"], "N m/arcmin", catalogue, band.get("torsional_rigidity"),
+        _rows("torsional_rigidity", fig_c["torsional_rigidity"], "N m/arcmin", catalogue,
+              band.get("torsional_rigidity"),
               f"b/a on the loading branches at {pts} T_R: {pts_source}")
         + _rows("lost_motion", fig_c["lost_motion"], "arcmin", catalogue, band.get("lost_motion"),
                 f"mid-points at +-{catalogue.test.lost_motion_torque_fraction:g} T_R")
@@ -412,8 +434,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     al = load_allowables(designs.path(allow_name))
     pressures = {"hertz_peaks_Pa": peaks, "allowables_file": allow_name,
                  "allowables_note": ("the design's own review allowables" if allow_name.startswith(design) else
-                                     "no allowables file of this design: rd40_allowables.toml's declared limits (4.0 GPa "
-                                     "rolling contacts, ISO 76 static limit; 2.5 GPa case-hardened pins, design practice)"),
+                                     "no allowables file of this design: rd40_allowables.toml's declared limits "
+                                     "(4.0 GPa rolling contacts, ISO 76 static limit; 2.5 GPa case-hardened pins, "
+                                     "design practice)"),
                  "rows": {}}
     for k, p in peaks.items():
         lim = getattr(al, f"max_hertz_{k}", None)
@@ -423,8 +446,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                      "catalogue": None if lim is None else lim / 1e6, "catalogue_unit": "MPa",
                      "kind": "max (allowable)", "status": None,
                      "source": f"{allow_name}.toml (declared allowable, not a catalogue figure)",
-                     "conditions": f"Hertz line-contact peak at T_R, input angle 0",
-                     "verdict": "no allowable" if lim is None else ("within allowable" if p <= lim else "above allowable"),
+                     "conditions": "Hertz line-contact peak at T_R, input angle 0",
+                     "verdict": ("no allowable" if lim is None else
+                                 "within allowable" if p <= lim else "above allowable"),
                      "note": pressures["allowables_note"]})
     out = {
         "design": design, "catalogue": {"title": catalogue.source.title, "edition": catalogue.source.edition,
@@ -437,7 +461,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "assumptions_commit_source": ("the catalogue file's assumptions_commit" if catalogue.assumptions_commit
                                       else "git: last commit touching the design or its assumed file"),
         "last_commit_touching_inputs": last_commit, "last_commit_date": last_date,
-        "uncertainty_note": None if assumed else (f"no {design}_assumed.toml: the design's inputs are chosen, not "
+        "uncertainty_note": None if assumed else ("band skipped (band=False)" if not band else
+                                                  f"no {design}_assumed.toml: the design's inputs are chosen, not "
                                                   "assumed with cited ranges, so no band is computed"),
         "assumed_file": os.path.basename(assumed.path) if assumed else None,
         "table": rows,
@@ -449,7 +474,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "bearing_lives": lives, "pressures": pressures,
         "compliance_budget": {"shares": budget["shares"], "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"],
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
-                                                "housing.model": getattr(d.housing, "model", None) if d.housing else None}},
+                                                "housing.model": getattr(d.housing, "model", None)
+                                                if d.housing else None}},
         "ratio_variant": variant, "uncertainty": unc,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
@@ -477,7 +503,8 @@ def checks(out):
     if u is not None:
         res["no_failed_sample"] = not u["failures"] and not u["tornado_failures"]
         res["band_contains_central"] = bool(all(
-            u["band"][k] is not None and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
+            u["band"][k] is not None
+            and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
             for k in ("torsional_rigidity", "lost_motion", "hysteresis_loss")))
     return res
 
