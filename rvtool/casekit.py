@@ -7,17 +7,19 @@ A case script computes in ``main(argv)`` and returns the results dict::
         args = casekit.parse_args(argv, __doc__)
         t0 = time.perf_counter()
         ...  # compute
+        casekit.verdict(results, judge)    # judge(r) -> {name: casekit.check(value, bound, op, why)}
         return casekit.write_results(args.out, results, settings=..., wall_s=...,
                                      precision="float64", device="cpu")
+
+Every case is judged by its own criteria (:func:`check`, :func:`verdict`): ``results["passed"]``
+is true when every check passes and no figure anywhere in the results is NaN. The cases live in
+sub-folders of ``cases/`` by kind and topology (``rvtool list`` groups them; see
+``docs/guide/cases.md``).
 """
 import argparse
-import dataclasses
-import json
 import math
 import os
-import platform
 import sys
-import tempfile
 import time
 
 import numpy as np
@@ -25,6 +27,8 @@ import numpy as np
 import matplotlib
 
 matplotlib.use("Agg")  # cases are headless by default
+
+from .analysis.output import device_info, save_figure, versions, write_results  # noqa: E402  (the cases' names)
 
 
 def parse_args(argv=None, description=None, extra=None):
@@ -45,84 +49,87 @@ def parse_args(argv=None, description=None, extra=None):
     return args
 
 
-def versions():
-    """Versions of the packages a result depends on."""
-    out = {"python": platform.python_version(), "platform": platform.platform()}
-    for mod in ("rvtool", "numpy", "scipy", "exudyn", "warp", "ngsolve", "matplotlib"):
-        try:
-            m = __import__(mod)
-            out[mod] = getattr(m, "__version__", getattr(m, "config", None) and getattr(m.config, "version", "?"))
-        except Exception:  # a missing optional package is recorded, not fatal
-            out[mod] = None
-    return out
+_OPS = {"<=": lambda v, b: v <= b, "<": lambda v, b: v < b, ">=": lambda v, b: v >= b,
+        ">": lambda v, b: v > b, "==": lambda v, b: v == b, "in": lambda v, b: b[0] <= v <= b[1]}
 
 
-def device_info(device="cpu"):
-    """Name of the physical device a result was computed on."""
-    info = {"device": device, "cpu": platform.processor() or platform.machine(), "cpu_count": os.cpu_count()}
-    if device.startswith("cuda"):
-        try:
-            import warp as wp
+def check(value, bound, op="<=", why=None):
+    """One criterion of a case's verdict: ``{"value", "bound", "passed", "why"}``.
 
-            from warp_contacts.precision import init_warp
-            init_warp()
-            info["gpu"] = wp.get_device(device).name
-        except Exception as exc:  # recorded honestly when the query fails
-            info["gpu"] = f"unavailable: {exc}"
-    return info
+    ``op`` is ``<=``, ``<``, ``>=``, ``>``, ``==`` or ``in`` (``bound`` = ``(low, high)``, inclusive);
+    ``why`` says where the bound comes from (the reference and its own error). A value that is
+    None or not finite fails: a criterion that could not be evaluated is not met."""
+    if op not in _OPS:
+        raise ValueError(f"unknown comparison {op!r}; one of {sorted(_OPS)}")
+    if isinstance(value, (bool, np.bool_)):
+        value = bool(value)
+    elif isinstance(value, (np.integer, np.floating)):
+        value = value.item()
+    numeric = isinstance(value, (int, float)) and math.isfinite(value)
+    ok = bool((numeric or (op == "==" and value is not None)) and _OPS[op](value, bound))
+    shown = f"in [{bound[0]}, {bound[1]}]" if op == "in" else f"{op} {bound}"
+    return {"value": value, "bound": shown, "passed": ok, "why": why}
 
 
-def _jsonable(obj):
+def nan_paths(obj, path=""):
+    """Key paths of every NaN in a results dict (floats and the ``'nan'`` strings :func:`write_results`
+    writes for them); ``provenance`` is skipped."""
+    found = []
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        for k, v in obj.items():
+            if k != "provenance":
+                found += nan_paths(v, f"{path}/{k}")
+    elif isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            found += nan_paths(v, f"{path}[{i}]")
+    elif isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "fc" and np.isnan(obj).any():
+            found.append(path)
+    elif isinstance(obj, (float, np.floating)):
+        if math.isnan(obj):
+            found.append(path)
+    elif isinstance(obj, str) and obj.lower() == "nan":
+        found.append(path)
+    return found
+
+
+def plain(obj):
+    """``obj`` with NumPy arrays and scalars as Python lists and numbers (NaN stays a float), tuples as
+    lists: the form a case's ``judge`` sees, the same as reading its results.json back."""
+    if isinstance(obj, dict):
+        return {str(k): plain(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [plain(v) for v in obj]
     if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else repr(v)
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
+        return plain(obj.tolist())
+    if isinstance(obj, np.bool_):
         return bool(obj)
-    if hasattr(obj, "to_dict"):
-        return _jsonable(obj.to_dict())
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.floating):
+        return float(obj)
     return obj
 
 
-def write_results(out_dir, results, settings=None, wall_s=None, precision="float64", device="cpu"):
-    """Write ``out_dir/results.json`` atomically and return the written dict.
+def verdict(results, judge):
+    """Judge a case: ``judge(plain(results))`` returns its checks (name -> :func:`check`), stored under
+    ``results["checks"]``; ``results["passed"]`` is set true when every check passed, no value anywhere
+    in ``results`` is NaN (their key paths are listed under ``results["nan_at"]``) and a ``passed``
+    the case wrote before is true. ``judge`` may also be the checks dict itself. Returns ``results``.
 
-    ``results`` holds the keys an issue names; provenance (versions, device,
-    precision, settings, wall time, date) goes under ``"provenance"``.
-    """
-    data = dict(results)
-    data["provenance"] = {
-        "versions": versions(),
-        "device": device_info(device),
-        "precision": precision,
-        "settings": settings or {},
-        "wall_s_total": wall_s,
-        "date": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        "command": " ".join(sys.argv),
-    }
-    data = _jsonable(data)
-    os.makedirs(out_dir, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=out_dir, prefix=".results", suffix=".json")
-    with os.fdopen(fd, "w") as fh:
-        json.dump(data, fh, indent=1)
-    os.replace(tmp, os.path.join(out_dir, "results.json"))
-    return data
-
-
-def save_figure(fig, out_dir, name):
-    """Save a matplotlib figure as ``out_dir/name.png`` and close it."""
-    import matplotlib.pyplot as plt
-    path = os.path.join(out_dir, name if name.endswith(".png") else name + ".png")
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
+    A case defines ``judge(r)`` at module level from the figures it reports, so that the verdict can
+    be re-read from a results.json (``judge(json.load(...))``) as well."""
+    checks = judge(plain(results)) if callable(judge) else judge
+    if not checks:
+        raise ValueError("a verdict needs at least one check")
+    earlier = results.get("passed", True)
+    results["checks"] = checks
+    nans = nan_paths(results)
+    if nans:
+        results["nan_at"] = nans
+    results["passed"] = bool(earlier is True or earlier is np.True_) and not nans and all(
+        c["passed"] for c in checks.values())
+    return results
 
 
 def time_call(fn, min_time=0.2, max_reps=2000):
@@ -135,31 +142,57 @@ def time_call(fn, min_time=0.2, max_reps=2000):
     return (time.perf_counter() - t0) / reps
 
 
+def import_case(name):
+    """Import another case script as a module (e.g. a benchmark reusing a verification case's
+    scene): ``name`` is the bare case name or ``group/name`` (see :func:`rvtool.cli.resolve_case`);
+    the module is registered under its bare name, as a plain ``import name`` beside it would."""
+    import importlib.util
+
+    from .cli import case_path
+    path = case_path(name)
+    if path.stem in sys.modules:
+        return sys.modules[path.stem]
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[path.stem] = module  # registered before execution: dataclasses and pickling look it up
+    spec.loader.exec_module(module)
+    return module
+
+
 # -- hard cases ----------------------------------------------------------------------------
 
-def hard_case_main(name, argv=None, doc=None, extra=None, design="rd40"):
-    """Shared ``main`` of the cases/hard_*.py scripts: run, judge, plot, write results.json.
+def hard_case(name, design, quick, out, extra=None):
+    """Run the hard case ``name`` of :mod:`rvtool.analysis.hard_cases` on ``design``, judge it by its
+    declared criteria and plot it into ``out``; return its result dict (``passed``, ``criteria``, ...).
     ``extra(result, arr, design, quick, out)`` may add sub-runs and criteria."""
-    from . import designs
-    from .assembly.topologies import load as load_design
-    from .protocols.hard_cases import CRITERIA, case_by_name, run_hard_case
-    args = parse_args(argv, doc)
-    t_start = time.perf_counter()
-    design = load_design(designs.path(design))
+    from .analysis.hard_cases import CRITERIA, case_by_name, run_hard_case
     case = case_by_name(name)
-    result, arr = run_hard_case(case, design, quick=args.quick, out_dir=os.path.join(args.out, "state"),
+    result, arr = run_hard_case(case, design, quick=quick, out_dir=os.path.join(out, f"state_{name}"),
                                 criteria_fn=CRITERIA.get(name))
     if extra is not None:
-        extra(result, arr, design, args.quick, args.out)
+        extra(result, arr, design, quick, out)
         result["passed"] = bool(result["passed"] and all(c["passed"] for c in result["criteria"].values()))
         if result["saved_state"] is None:
             result["message"] = ("finished: " if result["passed"] else "finished but failed: ") + ", ".join(
                 f"{k}={'ok' if c['passed'] else 'FAIL'}" for k, c in result["criteria"].items())
     result["energy_balance"] = ("not evaluated: the driver records neither the drive constraint's work nor "
                                 "the contact dissipation; kinetic energy is bounded instead (criterion)")
-    _plot_hard_case(args.out, name, arr)
-    settings = {"case": dataclasses.asdict(case), "quick": args.quick, "design": design.name}
-    return write_results(args.out, result, settings=settings, wall_s=time.perf_counter() - t_start)
+    _plot_hard_case(out, name, arr)
+    return result
+
+
+def hard_cases_judge(r):
+    """Checks of a hard-case run's results (``r["cases"][name]["criteria"]``, each ``{value, limit: "<= x"
+    or ">= x", passed}`` as declared in :mod:`rvtool.analysis.hard_cases`): every declared criterion of
+    every case, re-checked from its value and limit, and every case finished without a saved failure state."""
+    checks = {}
+    for name, case in r["cases"].items():
+        for crit, c in case["criteria"].items():
+            op, limit = c["limit"].split()
+            checks[f"{name}_{crit}"] = check(c["value"], float(limit), op, why=f"declared criterion of hard case {name}")
+        checks[f"{name}_finished"] = check(case.get("saved_state") is None, True, "==",
+                                           why="the run ends without a saved failure state")
+    return checks
 
 
 def _plot_hard_case(out, name, arr):

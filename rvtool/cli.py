@@ -1,9 +1,11 @@
 """Command line: ``rvtool analyze DESIGN [--protocols ...] [--quick] [--out DIR] [--device ...]
-[--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
+[--backend ...] [--scheduler ADDRESS] [--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
 ``rvtool designs [--format-doc]``, ``rvtool new --topology T [--name NAME]`` (a commented
 design template), ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
 ``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
-tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`).
+tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`),
+``rvtool validate [DESIGN] [--quick] [--samples N] [--workers W] [--out DIR]`` (a shipped design
+against its catalogue, :mod:`rvtool.analysis.validate`).
 
 Input errors (a design key out of range, an unknown protocol or topology, a missing file) print
 one line ``rvtool: error: ...`` naming the key path and the valid range, exit with status 2
@@ -45,11 +47,53 @@ def cases_dir():
 
 
 def discover_cases(folder=None):
-    """Case names (file stems) in ``folder``, sorted; files starting with ``_`` are helpers, not cases."""
+    """Case names in ``folder``, sorted: ``group/name`` for ``folder/group/name.py`` (one level of
+    sub-folders, the groups of :func:`case_groups`) and ``name`` for a script directly in ``folder``.
+    Files and folders starting with ``_`` or ``.`` are helpers, not cases."""
     folder = cases_dir() if folder is None else Path(folder)
     if not folder.is_dir():
         return []
-    return sorted(p.stem for p in folder.glob("*.py") if p.is_file() and not p.name.startswith("_"))
+    names = []
+    for p in list(folder.glob("*.py")) + list(folder.glob("*/*.py")):
+        rel = p.relative_to(folder)
+        if p.is_file() and not any(part.startswith(("_", ".")) for part in rel.parts):
+            names.append(rel.with_suffix("").as_posix())
+    return sorted(names)
+
+
+def case_groups(folder=None):
+    """``{group: [case name, ...]}`` of :func:`discover_cases`, the group being the sub-folder
+    (``""`` for scripts directly in the cases folder)."""
+    groups = {}
+    for name in discover_cases(folder):
+        group, _, _ = name.rpartition("/")
+        groups.setdefault(group, []).append(name)
+    return groups
+
+
+def resolve_case(name, folder=None):
+    """The case name (``group/name``) of ``name``: a case name as listed, the bare file stem of a case
+    in any group (if unique) or either with ``.py``. Raises ``LookupError`` naming the candidates."""
+    folder = cases_dir() if folder is None else Path(folder)
+    name = name.replace(os.sep, "/")
+    name = name[:-3] if name.endswith(".py") else name
+    name = name[len("cases/"):] if name.startswith("cases/") else name
+    available = discover_cases(folder)
+    if name in available:
+        return name
+    matches = [n for n in available if n.rpartition("/")[2] == name]
+    if len(matches) == 1:
+        return matches[0]
+    if matches:
+        raise LookupError(f"case {name!r} is ambiguous in {folder}: " + ", ".join(matches))
+    raise LookupError(f"unknown case {name!r} in {folder}; available cases: "
+                      + (", ".join(available) if available else "(none)"))
+
+
+def case_path(name, folder=None):
+    """Path of the script of case ``name`` (any form :func:`resolve_case` accepts)."""
+    folder = cases_dir() if folder is None else Path(folder)
+    return folder / (resolve_case(name, folder) + ".py")
 
 
 def case_summary(path):
@@ -74,10 +118,12 @@ def _cmd_list(args):
     if not folder.is_dir():
         print(f"rvtool: error: {_missing_folder_message(folder)}", file=sys.stderr)
         return EXIT_USAGE
-    names = discover_cases(folder)
-    width = max((len(n) for n in names), default=0)
-    for name in names:
-        print(f"{name:<{width}}  {case_summary(folder / (name + '.py'))}")
+    groups = case_groups(folder)
+    width = max((len(n.rpartition("/")[2]) for names in groups.values() for n in names), default=0)
+    for group, names in groups.items():
+        print(f"{group or '.'}/")
+        for name in names:
+            print(f"  {name.rpartition('/')[2]:<{width}}  {case_summary(folder / (name + '.py'))}")
     return 0
 
 
@@ -92,15 +138,17 @@ def load_case(path, name):
 
 
 def run_case(name, quick=False, out=None):
-    """Run ``cases/<name>.py``'s ``main()`` in this process; return the path of the results.json it wrote.
+    """Run case ``name``'s ``main()`` in this process (``cases/<group>/<name>.py``; the bare name or
+    ``group/name``); return the path of the results.json it wrote.
 
-    ``out`` defaults to ``results/<name>`` in the current directory, as when
+    ``out`` defaults to ``results/<name>`` (the bare name) in the current directory, as when
     the script is run directly. While the case runs, ``sys.argv`` and
-    ``sys.path[0]`` look as they would for ``python cases/<name>.py``, so that the
+    ``sys.path[0]`` look as they would for ``python cases/<group>/<name>.py``, so that the
     recorded command and imports of helper modules beside the case behave the same.
     """
-    folder = cases_dir()
-    path = folder / f"{name}.py"
+    path = case_path(name)
+    folder = path.parent
+    name = path.stem
     out = os.path.join("results", name) if out is None else out
     case_argv = (["--quick"] if quick else []) + ["--out", str(out)]
     saved_argv, saved_path = sys.argv, list(sys.path)
@@ -122,15 +170,14 @@ def _cmd_run(args, parser):
     if args.case is None:
         design, protocols = DEFAULT_STUDY
         out = args.out or os.path.join("results", f"analyze_{design}")
-        return _analyze(design, protocols, quick=True, out=out, device="cpu", quiet=False, tolerances=None)
+        return _analyze(design, protocols, quick=True, out=out, device="cpu", quiet=False, tolerances=None, allowables=None)
     folder = cases_dir()
     if not folder.is_dir():
         parser.error(_missing_folder_message(folder))
-    name = args.case[:-3] if args.case.endswith(".py") else args.case
-    available = discover_cases(folder)
-    if name not in available:
-        parser.error(f"unknown case {name!r} in {folder}; available cases: "
-                     + (", ".join(available) if available else "(none)"))
+    try:
+        name = resolve_case(args.case, folder)
+    except LookupError as exc:
+        parser.error(str(exc.args[0]))
     results = run_case(name, quick=args.quick, out=args.out)
     if not results.is_file():
         print(f"rvtool: error: case {name!r} finished but wrote no {results}", file=sys.stderr)
@@ -145,7 +192,8 @@ def _input_error(exc):
     return EXIT_USAGE
 
 
-def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
+def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowables=None, backend="auto",
+             scheduler=None):
     from rvtool import progress
     from rvtool.analysis import analyze
     from rvtool.errors import RvtoolInputError
@@ -162,7 +210,8 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
         out = os.path.join("results", f"analyze_{stem}")
     with progress.reporting("quiet" if quiet else "auto"):
         try:
-            res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances)
+            res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances,
+                          allowables=allowables, backend=backend, scheduler=scheduler)
         except RvtoolInputError as exc:
             return _input_error(exc)
     for r in res.results:
@@ -181,7 +230,8 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
 
 def _cmd_analyze(args):
     return _analyze(args.design, args.protocols, quick=args.quick, out=args.out, device=args.device,
-                    quiet=args.quiet, tolerances=args.tolerances)
+                    quiet=args.quiet, tolerances=args.tolerances, allowables=args.allowables, backend=args.backend,
+                    scheduler=args.scheduler)
 
 
 def _cmd_designs(args):
@@ -247,6 +297,27 @@ def _cmd_sweep(args, parser):
     return 0
 
 
+def _cmd_validate(args):
+    from rvtool.analysis.validate import table_text, validate, validated_designs
+    from rvtool.errors import RvtoolInputError
+    names = [args.design] if args.design else validated_designs()
+    if args.samples is not None and args.samples < 2:
+        return _input_error(f"--samples = {args.samples} is outside the valid range [2, inf)")
+    if args.workers < 1:
+        return _input_error(f"--workers = {args.workers} is outside the valid range [1, inf)")
+    log = (lambda *a, **k: None) if args.quiet else (lambda *a, **k: print(*a, file=sys.stderr, **k))
+    for name in names:
+        out_dir = os.path.join(args.out, name) if args.out else os.path.join("results", f"validate_{name}")
+        try:
+            out = validate(name, quick=args.quick, out_dir=out_dir, samples=args.samples, workers=args.workers,
+                           tornado_keys=args.tornado_keys, log=log)
+        except RvtoolInputError as exc:
+            return _input_error(exc)
+        print(table_text(out))
+        print(f"written: {out_dir}/results.json, report.html")
+    return 0
+
+
 def build_parser():
     """The ``rvtool`` argument parser with its subcommands."""
     from rvtool import __version__
@@ -267,9 +338,18 @@ def build_parser():
     an.add_argument("--quick", action="store_true", help="short forms of the protocols (seconds each)")
     an.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/analyze_DESIGN)")
     an.add_argument("--device", default="cpu", metavar="DEVICE", help="auto, cpu (default) or cuda[:N]")
+    an.add_argument("--backend", default="auto", choices=("auto", "exudyn", "replica", "device", "fused"),
+                    help="solver backend: auto (default: the fastest that supports the model, the choice and "
+                         "the reasons recorded in results.json), exudyn (every model), replica, device or fused "
+                         "(device Newton and fused stepper: cycloid, lumped bearings)")
+    an.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="Dask scheduler of the Monte Carlo's CPU pool (default: a LocalCluster started for it)")
     an.add_argument("--quiet", action="store_true", help="no progress output")
     an.add_argument("--tolerances", default=None, metavar="FILE",
                     help="tolerance file of the Monte Carlo (default: a shipped design's <name>_tolerances.toml)")
+    an.add_argument("--allowables", default=None, metavar="FILE",
+                    help="design-review allowables the report's summary checks (default: <design>_allowables.toml "
+                         "beside the design file, or a shipped design's)")
     ds = sub.add_parser("designs", help="list the shipped designs and topologies",
                         description="List the shipped reference designs; --format-doc prints the design file "
                                     "format (every section and key, units, ranges) generated from the specs.")
@@ -280,13 +360,14 @@ def build_parser():
     nw.add_argument("--topology", required=True, metavar="T", help="cycloid, rv2, rv3 or std-involute")
     nw.add_argument("--name", default=None, help="design name and file stem (default: mine)")
     nw.add_argument("--out", default=None, metavar="FILE", help="output file (default: NAME.toml)")
-    sub.add_parser("list", help="list the cases (name and first docstring line)",
-                   description="List the case scripts and the first line of each one's docstring.")
+    sub.add_parser("list", help="list the cases by folder (name and first docstring line)",
+                   description="List the case scripts, grouped by their folder (cycloid, rv, std, "
+                               "verification, benchmarks, hard, studies), with the first line of each one's docstring.")
     run = sub.add_parser("run", help="run a case in this process (no CASE: a short reducer study)",
-                         description=f"Run cases/CASE.py's main(). Without CASE, runs the short reducer study "
+                         description=f"Run cases/GROUP/CASE.py's main(). Without CASE, runs the short reducer study "
                                      f"'rvtool analyze {DEFAULT_STUDY[0]} --quick --protocols {DEFAULT_STUDY[1]}'.")
     run.add_argument("case", nargs="?", default=None, metavar="CASE",
-                     help="case name, as printed by 'rvtool list' (default: the short reducer study)")
+                     help="case name as printed by 'rvtool list', bare or as GROUP/NAME (default: the short reducer study)")
     run.add_argument("--quick", action="store_true", help="fast, reduced version of the study")
     run.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/CASE)")
     sub.add_parser("version", help="print the versions of rvtool and the packages results depend on",
@@ -299,6 +380,19 @@ def build_parser():
                        help="address of an existing Dask scheduler (default: start a LocalCluster)")
     sweep.add_argument("--out", default=None, metavar="DIR", help="output directory (default: the spec's output_dir)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    va = sub.add_parser("validate", help="a shipped design against its catalogue (predicted vs catalogue table)",
+                        description="Compare DESIGN (default: every shipped design with a <design>_catalogue.toml) "
+                                    "with its catalogue by the catalogue's own definitions: rigidity, lost motion, "
+                                    "hysteresis loss, rated life, with an uncertainty band over the assumed ranges; "
+                                    "writes results.json, PNGs and report.html.")
+    va.add_argument("design", nargs="?", default=None, metavar="DESIGN", help="shipped design name (e.g. rv40e)")
+    va.add_argument("--quick", action="store_true", help="8 Latin-hypercube samples instead of 64, coarse central loop")
+    va.add_argument("--samples", type=int, default=None, metavar="N", help="Latin-hypercube samples (>= 2)")
+    va.add_argument("--workers", type=int, default=1, metavar="W", help="processes for the samples (default 1)")
+    va.add_argument("--tornado-keys", type=int, default=None, metavar="K",
+                    help="one-at-a-time tornado over the K most important assumed keys (LHS screening; default all)")
+    va.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/validate_DESIGN)")
+    va.add_argument("--quiet", action="store_true", help="no progress output")
     return parser
 
 
@@ -320,6 +414,8 @@ def main(argv=None):
         return _cmd_version(args)
     if args.command == "sweep":
         return _cmd_sweep(args, parser)
+    if args.command == "validate":
+        return _cmd_validate(args)
     parser.print_help(sys.stderr)
     return EXIT_USAGE
 

@@ -5,7 +5,8 @@ import pytest
 from rvtool.assembly.cycloid import build
 from rvtool.assembly.spec import load_design
 from rvtool.batched import build_batched
-from rvtool.batched.sequence import _segments, batched_quasi_static_te
+from rvtool.batched.sequence import batched_quasi_static_te
+from rvtool.solver.backends.replica import segments
 from rvtool.errors import RvtoolInputError
 from rvtool.units import ARCSEC_PER_RAD
 from rvtool.protocols.precision import quasi_static_te
@@ -51,7 +52,7 @@ def test_default_tolerance_and_two_workers(sequential):
 
 
 def test_segments_cover_every_angle_once():
-    idx, real = _segments(10, 4)
+    idx, real = segments(10, 4)
     assert idx.shape == (4, 3)
     assert sorted(idx[real].tolist()) == list(range(10))
     assert np.all(idx[~real] == 9)

@@ -7,8 +7,10 @@ import pytest
 from rvtool import designs
 from rvtool.assembly import build
 from rvtool.assembly.spec import load_design, replace
-from rvtool.protocols.budget import lost_motion_budget, stiffness_budget
-from rvtool.protocols.datasheet import Allowables, entry, load_allowables
+from rvtool.analysis.budget import lost_motion_budget
+from rvtool.protocols.budget import stiffness_budget
+from rvtool.designs.allowables import Allowables, load_allowables
+from rvtool.protocols.datasheet import entry
 from rvtool.errors import RvtoolInputError
 from rvtool.solver.static import StaticSolver
 from rvtool.units import RAD_PER_ARCMIN

@@ -1,4 +1,6 @@
-"""Every case script runs headless in its --quick form and writes a results.json with provenance."""
+"""Every case script runs headless in its --quick form, writes a results.json with provenance, and is
+judged by its own criteria: a top-level ``passed`` that is true (every ``passed`` it writes true), no NaN
+anywhere in the results and no protocol result with a status other than ok."""
 import json
 import os
 import subprocess
@@ -7,10 +9,24 @@ from pathlib import Path
 
 import pytest
 
+from rvtool import casekit, cli
+
 ROOT = Path(__file__).resolve().parents[1]
-CASES = sorted(p.stem for p in (ROOT / "cases").glob("*.py") if not p.name.startswith("_"))
+CASES = cli.discover_cases(ROOT / "cases")
 CASE_TIMEOUT_S = 300
 """A --quick run is meant to take seconds; five minutes means it is no longer quick."""
+
+
+def test_cases_are_grouped():
+    # every case sits in one of the folders by kind and topology (docs/guide/cases.md)
+    groups = {"cycloid", "rv", "std", "verification", "benchmarks", "hard", "studies"}
+    assert CASES
+    stray = [n for n in CASES if n.partition("/")[0] not in groups or "/" not in n]
+    assert not stray, f"cases outside the folders {sorted(groups)}: {stray}"
+    for group in groups:
+        index = (ROOT / "cases" / group / "README.md").read_text()
+        missing = [n for n in CASES if n.startswith(group + "/") and f"`{n.partition('/')[2]}`" not in index]
+        assert not missing, f"cases/{group}/README.md does not list {missing}"
 
 
 @pytest.mark.parametrize("name", CASES)
@@ -30,9 +46,30 @@ def test_case_quick(name, tmp_path):
         assert key in prov, f"{name}: provenance lacks {key!r}"
     wall = prov.get("wall_s_total")
     assert isinstance(wall, (int, float)) and wall >= 0, f"{name}: wall time {wall!r} is not a duration"
-    # a case's own pass/fail figures: every "passed" it writes must be true
+    judge(name, data)
+
+
+def judge(name, data):
+    """The verdict of one case's results dict (raises AssertionError naming what failed)."""
+    assert "passed" in data, f"{name}: results.json has no top-level 'passed' (every case judges itself)"
     failed = [path for path, ok in _passed_flags(data) if ok is not True]
-    assert not failed, f"{name}: its own criteria failed at {failed}"
+    assert not failed, f"{name}: its own criteria failed at {failed}: " + json.dumps(
+        {k: v for k, v in data.get("checks", {}).items() if not v.get("passed")})[:2000]
+    nans = casekit.nan_paths(data)
+    assert not nans, f"{name}: NaN in results.json at {nans[:20]}"
+    bad = list(_protocol_statuses(data))
+    assert not bad, f"{name}: protocol results not ok: {bad}"
+
+
+@pytest.mark.parametrize("data, reason", [
+    ({"x": 1.0}, "no top-level 'passed'"),
+    ({"passed": True, "sub": {"passed": False}}, "criteria failed"),
+    ({"passed": True, "x": [1.0, "nan"]}, "NaN"),
+    ({"passed": True, "te": {"status": "failed", "figures": {}}}, "not ok"),
+])
+def test_judge_can_fail(data, reason):
+    with pytest.raises(AssertionError, match=reason):
+        judge("dummy", data)
 
 
 def _passed_flags(obj, path=""):
@@ -47,3 +84,16 @@ def _passed_flags(obj, path=""):
     elif isinstance(obj, list):
         for i, v in enumerate(obj):
             yield from _passed_flags(v, f"{path}[{i}]")
+
+
+def _protocol_statuses(obj, path=""):
+    """(key path, status) of every protocol result (a dict with "status" and "figures") whose status is not ok."""
+    if isinstance(obj, dict):
+        if "status" in obj and "figures" in obj and obj["status"] != "ok":
+            yield path, obj["status"]
+        for k, v in obj.items():
+            if k != "provenance":
+                yield from _protocol_statuses(v, f"{path}/{k}")
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj):
+            yield from _protocol_statuses(v, f"{path}[{i}]")

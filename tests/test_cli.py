@@ -56,7 +56,8 @@ def test_list_repository_cases(capsys, monkeypatch):
     assert names, "the repository's cases/ folder holds no case"
     assert cli.main(["list"]) == 0
     out = capsys.readouterr().out
-    assert names[0] in out
+    group, _, stem = names[0].rpartition("/")
+    assert f"{group}/" in out and stem in out
 
 
 def test_list_shows_name_and_first_docstring_line(case_folder, capsys):
@@ -103,3 +104,39 @@ def test_version(capsys):
     out = capsys.readouterr().out
     assert "rvtool:" in out
     assert "exudyn:" in out
+
+
+def test_list_groups_by_folder_and_run_accepts_bare_and_grouped_names(tmp_path, monkeypatch, capsys):
+    folder = tmp_path / "cases"
+    (folder / "alpha").mkdir(parents=True)
+    (folder / "beta").mkdir()
+    (folder / "alpha" / "one.py").write_text(DUMMY_CASE)
+    (folder / "beta" / "two.py").write_text(DUMMY_CASE)
+    (folder / "beta" / "_helper.py").write_text('"""Helper module, not a case."""\n')
+    monkeypatch.setenv(cli.CASES_ENV, str(folder))
+    monkeypatch.chdir(tmp_path)
+    assert cli.discover_cases() == ["alpha/one", "beta/two"]
+    assert cli.main(["list"]) == 0
+    out = capsys.readouterr().out
+    assert out.index("alpha/") < out.index("one") < out.index("beta/") < out.index("two")
+    assert "_helper" not in out
+    for name in ("two", "beta/two", "beta/two.py", "cases/beta/two.py"):
+        assert cli.resolve_case(name) == "beta/two"
+    out_dir = tmp_path / "o"
+    assert cli.main(["run", "alpha/one", "--out", str(out_dir)]) == 0
+    assert (out_dir / "results.json").is_file()
+    assert cli.main(["run", "two", "--quick"]) == 0
+    assert json.loads((tmp_path / "results" / "two" / "results.json").read_text())["quick"] is True
+
+
+def test_ambiguous_bare_case_name_exits_2_naming_both(tmp_path, monkeypatch, capsys):
+    folder = tmp_path / "cases"
+    for group in ("a", "b"):
+        (folder / group).mkdir(parents=True)
+        (folder / group / "same.py").write_text(DUMMY_CASE)
+    monkeypatch.setenv(cli.CASES_ENV, str(folder))
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["run", "same"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "a/same" in err and "b/same" in err

@@ -11,7 +11,7 @@ from exudyn_user_elements.contact_element import ContactElement  # noqa: E402
 from rvtool.contact.circle_set import (GROUND, CircleContact, CircleContactSet, FrictionLaw,  # noqa: E402
                                        FrictionModel, NormalLaw)
 from rvtool.contact.evaluator import ContactSetEvaluator  # noqa: E402
-from rvtool.contact.scenes import random_pair_scene  # noqa: E402
+from exudyn_user_elements.scenes import random_pair_scene  # noqa: E402
 from rvtool.errors import RvtoolInputError  # noqa: E402
 
 

@@ -208,7 +208,8 @@ def test_gear_pair_energy_balance_with_the_series_potential():
     # non-potential part of the law (the compliance and depths move with the roll angle, about
     # F^2 dC/du du ~ 4e-4 V here); measured 2.3e-4. 1e-3 keeps margin while a potential without
     # Weber's term (V = F delta / 2) leaves 1.7e-2: the bound tests the closed form
-    from rvtool.assembly.gear_pair import GearPairStatics, build_gear_pair
+    from rvtool.assembly.gear_pair import build_gear_pair
+    from rvtool.solver.gear_pair import GearPairStatics
     from rvtool.observe.energy import EnergyAccount
     pair, _ = fzg_set()
     m = build_gear_pair(pair)

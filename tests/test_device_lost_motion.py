@@ -136,7 +136,7 @@ def test_parameters_in_shares_and_fallbacks_on_an_executor(design, samples):
 
     from warp_contacts import cycloid_pins_ref as pref
 
-    from rvtool.batched.device_copies import nominal_copy_parameters
+    from rvtool.solver.device_copies import nominal_copy_parameters
     from rvtool.batched.device_lost_motion import device_lost_motion
     from rvtool.solver.device_newton import DeviceNewtonSettings
     vs = [samples[k] for k in (1, 3, 2)]

@@ -41,7 +41,7 @@ def variants():
 
 @pytest.fixture(scope="module")
 def params(design, variants):
-    from rvtool.batched.device_copies import copy_parameters
+    from rvtool.solver.device_copies import copy_parameters
     return copy_parameters(design, [Variant()] + variants, regularization=REG)
 
 
@@ -55,7 +55,7 @@ def test_copy_parameters_equal_the_builder(design, variants, params):
     from warp_contacts import cycloid_pins_ref as pref
 
     from rvtool.assembly.cycloid import lumped_bearing_contacts
-    from rvtool.batched.assembly import copy_contacts
+    from rvtool.assembly.copies import copy_contacts
     from rvtool.contact.circle_set import CircleContactSet
     from rvtool.contact.cycloid_set import CycloidPinSet
     nb = params.nb
@@ -77,7 +77,7 @@ def test_copy_parameters_equal_the_builder(design, variants, params):
 
 
 def test_copy_parameters_reject_bad_variants(design):
-    from rvtool.batched.device_copies import copy_parameters
+    from rvtool.solver.device_copies import copy_parameters
     with pytest.raises(RvtoolInputError, match="eccentricity_error"):
         copy_parameters(design, [Variant(eccentricity_error=-1.0)])
     with pytest.raises(RvtoolInputError, match="pin_centre_errors"):

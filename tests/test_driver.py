@@ -8,7 +8,7 @@ import pytest
 
 pytest.importorskip("exudyn")
 
-from rvtool.contact.scenes import block_on_belt  # noqa: E402
+from exudyn_user_elements.scenes import block_on_belt  # noqa: E402
 from rvtool.errors import RvtoolInputError, SolverFailure  # noqa: E402
 from rvtool.observe.registry import ObserverRegistry  # noqa: E402
 from rvtool.solver import RunSpec, simulate  # noqa: E402
@@ -17,7 +17,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _case(name):
-    spec = importlib.util.spec_from_file_location(name, os.path.join(ROOT, "cases", name + ".py"))
+    spec = importlib.util.spec_from_file_location(name, os.path.join(ROOT, "cases", "verification", name + ".py"))
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

@@ -90,7 +90,7 @@ def test_fused_on_ineligible_models_is_named(design):
     """solver='fused' on a model it cannot run names why and the valid choices (no run starts)."""
     from rvtool.assembly import rv
     rolling = build(design, bearing_model="rolling")
-    with pytest.raises(RvtoolInputError, match=r"solver = 'fused'.*bearing_model='lumped'.*Valid choices"):
+    with pytest.raises(RvtoolInputError, match=r"backend = 'fused'.*bearing_model='lumped'.*Valid choices"):
         _run(rolling, design, "fused")
     rv_model = rv.build(load_design(designs.path("rv40e")))
     with pytest.raises(RvtoolInputError, match=r"topology RVDesign.*Valid choices"):

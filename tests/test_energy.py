@@ -90,14 +90,14 @@ def test_residual_is_the_algorithmic_dissipation_for_rho_below_one():
 
 
 def _jenkins():
-    spec = importlib.util.spec_from_file_location("verify_jenkins", os.path.join(ROOT, "cases", "verify_jenkins.py"))
+    spec = importlib.util.spec_from_file_location("verify_jenkins", os.path.join(ROOT, "cases", "verification", "verify_jenkins.py"))
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
 
 
 def test_account_leaves_the_run_unchanged_and_off_computes_nothing():
-    from rvtool.contact.scenes import jenkins_element
+    from exudyn_user_elements.scenes import jenkins_element
     runs = []
     for with_energy in (False, True):
         SC, mbs, el, items = jenkins_element(frequency=0.1, dwell=0.025)

@@ -9,7 +9,7 @@ import warp as wp
 
 from rvtool import designs
 from rvtool.assembly.spec import load_design
-from rvtool.batched.device_copies import copy_parameters
+from rvtool.solver.device_copies import copy_parameters
 from rvtool.errors import RvtoolInputError
 from rvtool.solver.device_dynamics import (DeviceDynamics, DeviceDynamicsSettings, check_supported,
                                            dynamic_te_fused, kinematic_velocities)

@@ -34,7 +34,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _case():
-    spec = importlib.util.spec_from_file_location("verify_jenkins", os.path.join(ROOT, "cases", "verify_jenkins.py"))
+    spec = importlib.util.spec_from_file_location("verify_jenkins", os.path.join(ROOT, "cases", "verification", "verify_jenkins.py"))
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
@@ -81,7 +81,7 @@ def test_quick_case_matches_the_closed_form(quick):
 def recorded():
     """A Jenkins run through virgin stick, slip and one reversal, with forced rejections;
     every accepted state, the committed history after it and the observations."""
-    from rvtool.contact.scenes import jenkins_element
+    from exudyn_user_elements.scenes import jenkins_element
     from rvtool.solver import RunSpec, simulate
     SC, mbs, el, items = jenkins_element(frequency=0.1, dwell=0.025)
     rows = []
@@ -225,6 +225,6 @@ def test_bad_friction_inputs_raise_naming_the_parameter(kwargs, name):
 
 
 def test_bad_jenkins_scene_inputs_raise():
-    from rvtool.contact.scenes import jenkins_element
+    from exudyn_user_elements.scenes import jenkins_element
     with pytest.raises(RvtoolInputError, match="mu_kinetic"):
         jenkins_element(mu=-0.3)

@@ -143,7 +143,7 @@ def test_vibration_protocol_validation_and_short_run(rd40):
 
 # -- hard cases ---------------------------------------------------------------------------------
 
-from rvtool.protocols import hard_cases as H  # noqa: E402
+from rvtool.analysis import hard_cases as H  # noqa: E402
 
 
 def test_single_nan_is_retried_and_persistent_nan_fails_loudly_with_state_saved(rd40, tmp_path):

@@ -1,4 +1,4 @@
-"""The topology-neutral angle-batched path (rvtool.batched.replica, rvtool.batched.sequence) on
+"""The topology-neutral angle-batched path (rvtool.solver.replica, rvtool.batched.sequence) on
 an RV reducer: the same equilibria as the sequential quasi-static TE, and its named limits."""
 import numpy as np
 import pytest
@@ -6,7 +6,7 @@ import pytest
 from rvtool import designs
 from rvtool.assembly import build
 from rvtool.assembly.rv import load_design
-from rvtool.batched.replica import replicate
+from rvtool.solver.replica import replicate
 from rvtool.batched.sequence import batched_quasi_static_te
 from rvtool.errors import RvtoolInputError
 from rvtool.protocols.precision import quasi_static_te

@@ -7,7 +7,8 @@ import pytest
 from rvtool import designs
 from rvtool.assembly.rv import load_design
 from rvtool.errors import RvtoolInputError
-from rvtool.protocols.resolution import te_error, te_resolution_error
+from rvtool.analysis.resolution import te_resolution_error
+from rvtool.protocols.resolution import te_error
 
 
 def test_te_error_closed_forms():

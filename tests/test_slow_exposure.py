@@ -101,7 +101,7 @@ def test_bad_window_inputs_are_named():
 
 def _belt(reject_attempts=()):
     pytest.importorskip("exudyn")
-    from rvtool.contact.scenes import block_on_belt
+    from exudyn_user_elements.scenes import block_on_belt
     from rvtool.solver import RunSpec, simulate
     _, mbs, el = block_on_belt()
     calls = {"trial": 0}

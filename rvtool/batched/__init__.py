@@ -6,6 +6,6 @@ elements); the solver is :class:`rvtool.solver.batched.BatchedStaticSolver` and 
 figures protocol :func:`rvtool.variants.batched.batched_variant_figures`.
 """
 from .assembly import BatchedCycloidModel, build_batched
-from .evaluator import BatchContactEvaluator, CopyBlockAssembler
+from ..solver.copy_evaluator import BatchContactEvaluator, CopyBlockAssembler
 
 __all__ = ["BatchedCycloidModel", "build_batched", "BatchContactEvaluator", "CopyBlockAssembler"]

@@ -36,8 +36,8 @@ from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround
 
 from warp_contacts import output_pins_ref as ref
 
-from ..assembly.cycloid import (CycloidKinematics, CycloidModel, add_bodies, body_names, kinematic_poses,
-                               lumped_bearing_contacts, pin_meshes)
+from ..assembly.copies import copy_contacts
+from ..assembly.cycloid import CycloidKinematics, CycloidModel, add_bodies, body_names, kinematic_poses
 from ..assembly.spec import CycloidDesign
 from ..contact.circle_set import CircleContactSet
 from ..contact.cycloid_set import CycloidPinSet
@@ -46,29 +46,7 @@ from ..errors import RvtoolInputError
 from ..model import BodyCoordinate
 from ..output_pins.spec import PinMode
 from ..validation import check_choice
-from .evaluator import BatchContactEvaluator
-
-
-def copy_contacts(design, offset):
-    """Contact definitions of one copy whose bodies start at global index ``offset``
-    (shaft ``offset``, wheels ``offset + 1..n``, flange ``offset + n + 1``): the builder's own
-    :func:`~rvtool.assembly.cycloid.pin_meshes`, the design's output-pin mechanism
-    and :func:`~rvtool.assembly.cycloid.lumped_bearing_contacts` at that offset, so a copy is
-    ``build(..., bearing_model="lumped")`` by construction.
-
-    Returns (wheel meshes, bearing circle contacts, output-pin (fparams, iparams, stations)).
-    """
-    for sec in ("pins", "output_pins"):
-        if getattr(design, sec).support.elastic:
-            raise RvtoolInputError(f"{sec}.support.model = {getattr(design, sec).support.model.value!r}: elastic pins "
-                                   "are closed per pin in the sequential model only (rvtool.contact.pin_closure); "
-                                   "valid for batched copies: 'rigid'")
-    prefix = f"copy{offset}/"
-    nw = design.n_wheels
-    _, meshes = pin_meshes(design, offset=offset, prefix=prefix)
-    mech = design.output_pins
-    fp, ip = mech.packed(offset + nw + 1, tuple(range(offset + 1, offset + nw + 1)))
-    return meshes, lumped_bearing_contacts(design, offset=offset, prefix=prefix), (fp, ip, mech.stations)
+from ..solver.copy_evaluator import BatchContactEvaluator
 
 
 class _NumpyPlainPins:

@@ -47,7 +47,7 @@ from ..protocols.lost_motion import START_SCALES
 from ..solver.device_newton import DeviceNewton, DeviceNewtonSettings
 from ..units import ARCMIN_PER_RAD
 from ..variants.variant import Variant, VariantProtocol
-from .device_copies import copy_parameters
+from ..solver.device_copies import copy_parameters
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -31,7 +31,7 @@ from ..protocols.precision import te_metrics, transmission_error
 from ..solver.device_newton import CONVERGED, DeviceNewton, DeviceNewtonSettings
 from ..units import ARCSEC_PER_RAD
 from ..variants.variant import Variant
-from .device_copies import copy_parameters
+from ..solver.device_copies import copy_parameters
 
 #: default copies per device loop: bounded by memory (RD-40: ~16 kB of contact rows and
 #: tangents per copy; 65,536 copies ~ 1 GB on a GPU) and, on the CPU, by cache

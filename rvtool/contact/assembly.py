@@ -7,7 +7,7 @@ per set as 0/1 sparse matrices; each assembly is then one CSR product, which
 also sums the entries of rows that share a coordinate. One implementation
 serves every family: :class:`BlockAssembler` (any m), :class:`PairAssembler`
 (m = 2) and, for independent copies of a reducer, the per-copy blocks of
-:class:`rvtool.batched.evaluator.CopyBlockAssembler`.
+:class:`rvtool.solver.copy_evaluator.CopyBlockAssembler`.
 """
 import numpy as np
 import scipy.sparse as sp

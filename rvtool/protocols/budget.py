@@ -38,15 +38,12 @@ differs from it only by the load redistribution a rigid path causes.
 ``model.clearance_variants()`` removed is the ``elastic`` part; the clearances are then restored
 one at a time in the declared order, and each one's contribution is the increase it causes (the
 contributions sum to the lost motion of the design exactly). Beside each, its closed-form
-kinematic estimate from the model.
+kinematic estimate from the model. It builds one model per clearance state, so it is a study:
+:func:`rvtool.analysis.budget.lost_motion_budget`.
 """
-import time
-
 import numpy as np
 
-from ..assembly import build
 from ..units import RAD_PER_ARCMIN
-from .lost_motion import lost_motion
 from .stiffness import free_stiffness
 
 RIGID_FACTOR = 1e6
@@ -139,29 +136,3 @@ def _stiffened_compliance(model, q, K, free, e, i_out, beam, factor):
     Kr = K.copy()
     Kr[np.ix_(glob, glob)] -= (dQ_rigid - dQ)[np.ix_(loc, loc)]   # K^s = -dQ/dq
     return float(np.linalg.solve(Kr, e)[i_out])
-
-
-def lost_motion_budget(design, *, fraction=0.03, bearing_model="rolling", input_angle=0.0):
-    """Lost motion [arcmin] at +-fraction T_rated split into ``elastic`` and one contribution per
-    clearance of the model (module docstring); ``estimates_arcmin`` are the closed forms."""
-    t0 = time.perf_counter()
-    model = build(design, bearing_model=bearing_model)
-    variants = model.clearance_variants()
-    level = fraction * design.rated_torque
-    # elastic: every clearance removed; then restored one at a time in the declared order
-    current = design
-    for v in variants:
-        current = v.remove(current)
-    lm = [lost_motion(build(current, bearing_model=bearing_model), torque_level=level,
-                      input_angle=input_angle)["lost_motion_rad"]]
-    for v in variants:
-        current = v.restore(current, design)
-        lm.append(lost_motion(build(current, bearing_model=bearing_model), torque_level=level,
-                              input_angle=input_angle)["lost_motion_rad"])
-    out = {"elastic": lm[0] / RAD_PER_ARCMIN}
-    for k, v in enumerate(variants):
-        out[v.name] = (lm[k + 1] - lm[k]) / RAD_PER_ARCMIN
-    return {"budget_arcmin": out, "total_arcmin": lm[-1] / RAD_PER_ARCMIN,
-            "estimates_arcmin": {v.name: v.estimate_rad / RAD_PER_ARCMIN for v in variants},
-            "clearances_m": {v.name: v.value for v in variants}, "torque_level_Nm": level,
-            "wall_s": time.perf_counter() - t0}

@@ -3,72 +3,10 @@ for, each with its unit, the declared allowable, pass/fail and a one-line reason
 the caller hands in figures computed through the ReducerModel interface; entries that need a
 result that was not computed say so ("not computed") instead of a number.
 
-Allowables are a component spec (:class:`Allowables`, a design-review table such as
-``rvtool/designs/rd40_allowables.toml``, loaded with :func:`load_allowables`).
+Allowables are a component spec (:class:`rvtool.designs.allowables.Allowables`, a design-review
+table such as ``rvtool/designs/rd40_allowables.toml``, loaded with
+:func:`rvtool.designs.allowables.load_allowables`).
 """
-import tomllib
-from dataclasses import dataclass
-
-from ..assembly.spec import build_section
-from ..errors import RvtoolInputError
-from ..structure.pin_beam import PinSupport
-from ..validation import check_positive
-
-
-@dataclass(frozen=True, kw_only=True)
-class Allowables:
-    """Declared allowables of a design review (SI units).
-
-    min_torsional_stiffness: lowest accepted catalogue secant stiffness [N m/arcmin].
-    max_lost_motion: largest accepted lost motion at +-3 % rated torque [arcmin].
-    max_hertz_pins, max_hertz_output_pins, max_hertz_needles: largest accepted Hertz peak
-        pressure per family [Pa].
-    max_pin_bending_stress: largest accepted bending stress sigma = M/W of a ring pin or an
-        output pin at the rated state [Pa].
-    max_resolution_error: largest accepted relative error of the rated peak pin force at the
-        default profile resolution against the refined one [-] (the project's 0.1 % statement).
-    max_hysteresis_loss: largest accepted hysteresis loss (loop width at zero torque of a closed
-        +-T_rated cycle) [arcmin]; None: not declared (the figure is informative).
-    min_bearing_life: smallest accepted ISO 281 rating life L10h of any bearing at the rated
-        torque and speed [h]; None: not declared.
-    assumed_ring_pin_support, assumed_output_pin_support: the support
-        (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-tables ``[allowables.assumed_ring_pin_support]``,
-        ...) the review assumes for the pin bending stress where the design's pins are rigid
-        (a declared support of the design takes precedence); None: the stress is not computed.
-    """
-    min_torsional_stiffness: float
-    max_lost_motion: float
-    max_hertz_pins: float
-    max_hertz_output_pins: float
-    max_hertz_needles: float
-    max_pin_bending_stress: float
-    max_resolution_error: float = 1e-3
-    max_hysteresis_loss: float | None = None
-    min_bearing_life: float | None = None
-    assumed_ring_pin_support: PinSupport | None = None
-    assumed_output_pin_support: PinSupport | None = None
-
-    def __post_init__(self):
-        for name in ("min_torsional_stiffness", "max_lost_motion", "max_hertz_pins", "max_hertz_output_pins",
-                     "max_hertz_needles", "max_pin_bending_stress", "max_resolution_error"):
-            check_positive(name, getattr(self, name))
-        for name in ("max_hysteresis_loss", "min_bearing_life"):
-            if getattr(self, name) is not None:
-                check_positive(name, getattr(self, name))
-        for name in ("assumed_ring_pin_support", "assumed_output_pin_support"):
-            v = getattr(self, name)
-            if isinstance(v, dict):
-                v = build_section(PinSupport, name, v)
-                object.__setattr__(self, name, v)
-            if v is not None and (not isinstance(v, PinSupport) or not v.elastic):
-                raise RvtoolInputError(f"{name} = {v!r} must be a support table with model 'cantilever', "
-                                       "'simply_supported' or 'clamped_clamped'")
-
-
-def load_allowables(path):
-    """:class:`Allowables` from a TOML file with an ``[allowables]`` table (errors name ``allowables.<key>``)."""
-    with open(path, "rb") as fh:
-        return build_section(Allowables, "allowables", tomllib.load(fh).get("allowables", {}))
 
 
 def entry(value, unit, *, allowable=None, kind=None, reason=""):
@@ -97,7 +35,7 @@ def _declared(value, unit, allowable, kind, reason):
 
 
 def datasheet(*, rated_torque, ratio, branch_slopes, secant, lost_motion_arcmin, hertz_peaks, pin_bending_stress,
-              bearing_loads, resolution_error, allowables: Allowables, hysteresis=None, bearing_life=None):
+              bearing_loads, resolution_error, allowables, hysteresis=None, bearing_life=None):
     """The datasheet dict. hertz_peaks: {"pins", "output_pins", "needles"} -> Pa; pin_bending_stress:
     {"pins", "output_pins"} -> the model's ``pin_bending`` dict or None (rigid pins, no assumed
     support); bearing_loads: family -> largest per-contact load [N]; resolution_error: relative
@@ -105,7 +43,7 @@ def datasheet(*, rated_torque, ratio, branch_slopes, secant, lost_motion_arcmin,
     or {"loss_arcmin", "repeat_arcmin", "note"} of a closed +-T_rated cycle
     (:mod:`rvtool.protocols.hysteresis_cycles`); bearing_life: None (not computed) or bearing
     name -> {"L10_h" (None: no radial load), "P_m_N", "C_r_N", ...} ({}: no rolling-element loads; ISO 281,
-    :func:`rvtool.slow.fatigue.rating_life`)."""
+    :func:`rvtool.slow.fatigue.rating_life`). allowables: an :class:`rvtool.designs.allowables.Allowables`."""
     a = allowables
     out = {"rated_torque": entry(rated_torque, "N m"), "ratio": entry(ratio, "-", reason="from the topology")}
     for b, k in branch_slopes.items():

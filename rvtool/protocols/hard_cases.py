@@ -3,7 +3,7 @@ histories, judged by declared pass/fail criteria.
 
 Each case (:data:`CASES`) is a :class:`HardCase`: design changes, input angle history
 theta_in(t) [rad], output torque history T(t) [N m], duration and run settings, and
-optional fault injection. :func:`run_hard_case` starts from the static equilibrium at
+optional fault injection. :func:`run_case` starts from the static equilibrium at
 theta_in(0) under T(0) with kinematic velocities at the initial input speed, runs the
 generalized-alpha driver, records per accepted step the input and output angles, the
 pin-mesh normal-force sum and the kinetic energy, and returns a result dict with
@@ -91,21 +91,22 @@ def _body_masses(model):
     return m
 
 
-def build_case_model(case: HardCase, design):
-    """(model, design) of the case: the design with its changes and mesh stiffness factor."""
-    from ..assembly import build
+def case_design(case: HardCase, design):
+    """The design of the case: ``design`` with the case's changes and mesh stiffness factor."""
     d = design.replace(**case.design_changes) if case.design_changes else design
     if case.stiffness_factor != 1.0:
         d = d.with_mesh_stiffness_factor(case.stiffness_factor)
-    return build(d), d
+    return d
 
 
-def run_hard_case(case: HardCase, design, *, quick=False, out_dir=None, criteria_fn=None, run_spec=None):
-    """Run ``case``; returns the result dict (see module docstring) and the records."""
+def run_case(case: HardCase, model, *, quick=False, out_dir=None, criteria_fn=None, run_spec=None):
+    """Run ``case`` on ``model``, the built :func:`case_design` of the case (a protocol is handed a
+    ReducerModel, never a builder: :func:`rvtool.analysis.hard_cases.run_hard_case` builds it);
+    returns the result dict (see module docstring) and the records."""
     import exudyn as exu
 
     from ..solver import RunSpec, simulate
-    model, d = build_case_model(case, design)
+    d = model.design
     rated = d.rated_torque
     sign = -np.sign(d.ratio)
     duration = case.quick_duration if quick else case.duration

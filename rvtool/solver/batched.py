@@ -51,7 +51,7 @@ class BatchStats:
 
 class BatchedStaticSolver:
     """Warm-started static solves of all copies of a :class:`BatchedCycloidModel` or a
-    :class:`~rvtool.batched.replica.ReplicatedModel`
+    :class:`~rvtool.solver.replica.ReplicatedModel`
     (tolerances and bounds as :class:`StaticSolver`, see the module docstring)."""
 
     STIFFENING = StaticSolver.STIFFENING

@@ -3,7 +3,7 @@
 The fused stepper (:mod:`warp_contacts.fused_step`) advances every copy by whole
 generalized-alpha steps inside one Warp launch (one thread per copy, ``steps_per_launch``
 accepted steps per launch), on ``cpu`` or ``cuda`` from the same code. The model side is
-:class:`rvtool.batched.device_copies.CopyParameters` (per-copy contact rows without an Exudyn
+:class:`rvtool.solver.device_copies.CopyParameters` (per-copy contact rows without an Exudyn
 build); this module adds the bodies' masses and inertias (:func:`rvtool.assembly.cycloid.body_masses`,
 as the Exudyn build), the prescribed input motion, the output load and the integrator
 settings, and records at every accepted step what the dynamic TE protocol needs: time, input
@@ -148,9 +148,9 @@ def fused_support(model, run_spec=None):
     steps, float64 (the fused stepper's integrator is Exudyn's with these settings)."""
     from ..assembly.cycloid import CycloidKinematics
     from ..assembly.spec import CycloidDesign
-    from ..batched.device_copies import copy_parameters
+    from .device_copies import copy_parameters
     from ..model.reducer import Family
-    from ..variants.variant import Variant
+    from ..assembly.variant import Variant
     reasons = []
     if run_spec is not None:
         for key, val, ok in (("newton_mode", run_spec.newton_mode, "'full'"),
@@ -373,7 +373,7 @@ def driven_copies(params, variant_index, *, torque, speed_rpm, duration, setting
     (:class:`DeviceSolve` of all B), "started" (B,) bool, "run" (:class:`DeviceRun` of the started
     copies, in order), "te" (B,) list of Eq. (obs_te) histories [rad] on each copy's accepted steps
     (None: not started), "omega_in" [rad/s]."""
-    from ..protocols.precision import transmission_error
+    from ..observe.transmission import transmission_error
     from .device_newton import DeviceNewton
     check_positive("duration", duration)
     check_positive("speed_rpm", speed_rpm)
@@ -407,8 +407,8 @@ def dynamic_te_fused(design, *, torque, speed_rpm, duration, settings: DeviceDyn
     "record", "t_uniform", "te_uniform", "omega_in") plus "torque_in", "peak_loads",
     "device_run". params: a prebuilt :class:`CopyParameters` of ``[Variant()]`` (else built).
     Raises SolverFailure (state saved in out_dir) if the run fails."""
-    from ..batched.device_copies import copy_parameters
-    from ..variants.variant import Variant
+    from .device_copies import copy_parameters
+    from ..assembly.variant import Variant
     from .driver import RunRecord
     if params is None:
         params = copy_parameters(design, [Variant()])

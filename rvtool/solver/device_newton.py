@@ -1,6 +1,6 @@
 """Device-resident batched static Newton: B independent equilibria of one topology on cpu or cuda.
 
-Each copy p is one variant of a design (:class:`rvtool.batched.device_copies.CopyParameters`)
+Each copy p is one variant of a design (:class:`rvtool.solver.device_copies.CopyParameters`)
 at its own input angle and output torque. One iteration, for all copies at once and without
 leaving the device:
 

@@ -38,7 +38,7 @@ def device_variant_figures(design, variants, protocol: VariantProtocol = Variant
     in shares, the lost-motion Exudyn fallbacks), e.g. a process pool on a GPU host; None: all
     in this process."""
     from ..assembly.cycloid import build
-    from ..batched.device_copies import nominal_copy_parameters
+    from ..solver.device_copies import nominal_copy_parameters
     from ..batched.device_lost_motion import LOST_MOTION_NEWTON, device_lost_motion
     from ..batched.device_te import device_te
     from ..solver.device_newton import DeviceNewtonSettings

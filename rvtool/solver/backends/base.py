@@ -1,0 +1,127 @@
+"""The one interface of the solver backends (issue 29): what a protocol hands a backend and what
+it gets back, and how a backend says whether it can run a model.
+
+A protocol (:mod:`rvtool.protocols.precision`) is written once against this interface; a
+backend only knows states and residuals:
+
+* :meth:`Backend.supports` ``(model, task, run=None) -> Support(ok, reasons)``: whether the backend can run
+  ``task`` ("equilibria" or "dynamic") on the built :class:`~rvtool.model.ReducerModel`, and if
+  not, every named reason (bodies, contact families, laws, options);
+* :meth:`Backend.solve_equilibria` ``(model, EquilibriumBatch) -> Equilibria``: the static
+  equilibria at a batch of drive/load states (input angles under one output torque);
+* :meth:`Backend.step_dynamic` ``(model, DrivenRun) -> DrivenHistory``: a driven run (prescribed
+  input speed, constant output torque) stepped to its end, the accepted steps committed to the
+  returned histories (the backend owns the stepping and the commit of each accepted step; the
+  protocol reads histories only).
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...errors import RvtoolInputError
+
+TASKS = ("equilibria", "dynamic")
+"""What a backend may be asked to do: static equilibria at drive/load states, driven runs."""
+
+
+@dataclass(frozen=True)
+class Support:
+    """Whether a backend runs a task on a model: ``ok``, else ``reasons`` (each a named reason)."""
+    ok: bool
+    reasons: tuple = ()
+
+    @classmethod
+    def of(cls, reasons):
+        reasons = tuple(reasons)
+        return cls(not reasons, reasons)
+
+
+@dataclass(frozen=True, kw_only=True)
+class EquilibriumBatch:
+    """Drive/load states of a quasi-static protocol: ``input_angles`` [rad] (prescribed input
+    rotation) under the output torque ``torque`` [N m] resisting the nominal output rotation
+    (applied as -sign(ratio) torque). warm_start: a backend that marches through the states may
+    start each from the previous equilibrium (False: every state from the kinematic state)."""
+    input_angles: tuple
+    torque: float
+    warm_start: bool = True
+
+    def __post_init__(self):
+        a = np.asarray(self.input_angles, float)
+        if a.ndim != 1 or len(a) < 1 or not np.all(np.isfinite(a)):
+            raise RvtoolInputError("input_angles must be a finite 1-D sequence of at least 1 angle [rad]")
+        if not np.isfinite(self.torque):
+            raise RvtoolInputError(f"torque = {self.torque!r} N m must be finite")
+        object.__setattr__(self, "input_angles", tuple(float(x) for x in a))
+
+
+@dataclass
+class Equilibria:
+    """Equilibria of an :class:`EquilibriumBatch`: ``theta_in`` (the solved input angles; a backend
+    may shift a point off an activation kink by <= 1e-5 rad and records it), ``theta_out`` (the
+    output rotation, reference included) [rad], per-family peak row loads and peak physical-contact
+    loads over the batch [N], ``regularization_max`` (largest regularization-spring force at the
+    last state [N or N m]), ``stats`` (solver statistics, backend-specific keys), ``wall_s`` and
+    ``q`` (n_states, n) the equilibrium states in the model's coordinates (None: the backend keeps
+    them on its copies)."""
+    theta_in: np.ndarray
+    theta_out: np.ndarray
+    peak_loads: dict
+    peak_contact_loads: dict
+    regularization_max: float | None
+    stats: dict = field(default_factory=dict)
+    wall_s: float = 0.0
+    q: np.ndarray | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class DrivenRun:
+    """A driven run: constant input speed ``speed_rpm`` [rpm] from the quasi-static loaded state at
+    input angle 0 under the output torque ``torque`` [N m] (resisting the nominal rotation), for
+    ``duration`` [s], with the integrator settings ``run_spec``
+    (:class:`rvtool.solver.run_spec.RunSpec`). ``observers`` (Exudyn driver only), ``out_dir``
+    (a failed run's saved state), ``on_start`` (called just before stepping), ``device`` (the
+    Warp device of a device backend; None: run_spec.device)."""
+    torque: float
+    speed_rpm: float
+    duration: float
+    run_spec: object
+    observers: object = None
+    out_dir: str | None = None
+    on_start: object = None
+    device: str | None = None
+
+
+@dataclass
+class DrivenHistory:
+    """Accepted-step histories of a driven run: t [s], theta_in, theta_out [rad] (t = 0 first),
+    ``record`` (:class:`rvtool.solver.driver.RunRecord`), ``omega_in`` [rad/s] and ``extras``
+    (backend-specific histories, e.g. the fused stepper's drive torque and peak loads)."""
+    t: np.ndarray
+    theta_in: np.ndarray
+    theta_out: np.ndarray
+    record: object
+    omega_in: float
+    extras: dict = field(default_factory=dict)
+
+
+class Backend:
+    """A solver backend (see the module docstring). ``name`` is its key in ``--backend``;
+    ``tasks`` what it implements (auto's order: :func:`rvtool.solver.backends.auto_order`)."""
+    name = ""
+    tasks = ()
+
+    def supports(self, model, task, run=None):
+        """:class:`Support` of ``task`` on ``model`` (and of the :class:`DrivenRun` ``run``, when given)."""
+        raise NotImplementedError
+
+    def solve_equilibria(self, model, batch: EquilibriumBatch, *, record=None) -> Equilibria:
+        raise NotImplementedError(f"backend {self.name!r} solves no equilibria")
+
+    def step_dynamic(self, model, run: DrivenRun) -> DrivenHistory:
+        raise NotImplementedError(f"backend {self.name!r} steps no driven runs")
+
+    def _task(self, task):
+        if task not in TASKS:
+            raise RvtoolInputError(f"task = {task!r}; valid choices are {list(TASKS)}")
+        return task in self.tasks

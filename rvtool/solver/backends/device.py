@@ -1,0 +1,153 @@
+"""The device backends: the device Newton (:class:`rvtool.solver.device_newton.DeviceNewton`) for
+equilibria and the fused stepper (:mod:`rvtool.solver.device_dynamics`) for driven runs, on a
+Warp device (``cpu`` or ``cuda``) from the same code.
+
+Both run a model from its design's copy parameters (:func:`rvtool.solver.device_copies.copy_parameters`,
+no Exudyn build), so they take what those parameters carry and nothing else: a cycloid design
+with lumped bearings, a rigid housing, rigid pins, plain output pins, no friction anchors, and
+a built model equal to its design's rebuild (:func:`rvtool.solver.device_dynamics.fused_support`
+names every difference); the device Newton also needs the model's regularization springs to be
+the parameters'. Every point is solved from its kinematic state (no warm start: the points are
+independent). A point the device Newton does not converge is solved by the Exudyn backend's
+static solver on the same model, from the same kinematic start, and counted in
+``stats["exudyn_points"]`` (the protocol reports it; never hidden).
+"""
+import time
+
+import numpy as np
+
+from ...errors import RvtoolInputError, SolverFailure
+from .base import Backend, DrivenHistory, Equilibria, Support
+
+
+def _device_reasons(model):
+    """(reasons, params) of the copy parameters of ``model`` (see the module docstring)."""
+    from ..device_dynamics import fused_support
+    sup = fused_support(model)
+    if sup.reasons:
+        return list(sup.reasons), None
+    params = sup.params
+    springs = np.zeros(params.n)
+    for i, k in model.regularization_stiffness():
+        springs[i] = k
+    if not np.array_equal(springs, params.spring_k):
+        return ["the model's regularization springs differ from the device copies' (build with the default "
+                "regularization)"], None
+    return [], params
+
+
+class DeviceBackend(Backend):
+    """Device Newton for equilibria (module docstring). device: Warp device ("cpu", "cuda:0");
+    settings: :class:`rvtool.solver.device_newton.DeviceNewtonSettings`."""
+    name = "device"
+    tasks = ("equilibria",)
+
+    def __init__(self, *, device="cpu", settings=None):
+        self.device, self.settings = device, settings
+        self._params = {}
+
+    def _params_of(self, model):
+        key = id(model)
+        if key not in self._params:
+            self._params[key] = _device_reasons(model)
+        return self._params[key]
+
+    def supports(self, model, task, run=None):
+        if not self._task(task):
+            return Support.of([f"device does not implement {task!r} (equilibria only; driven runs: 'fused')"])
+        try:
+            reasons, _ = self._params_of(model)
+        except RvtoolInputError as exc:
+            reasons = [str(exc)]
+        return Support.of(reasons)
+
+    def solve_equilibria(self, model, batch, *, record=None):
+        from ..device_newton import CONVERGED, DeviceNewton, DeviceNewtonSettings
+        from ..static import StaticSolver
+        sup = self.supports(model, "equilibria")
+        if not sup.ok:
+            raise RvtoolInputError(f"backend 'device' cannot run this model: {'; '.join(sup.reasons)}")
+        if record is not None:
+            raise RvtoolInputError("the device backend returns no per-point states (record=None; valid: the "
+                                   "exudyn backend)")
+        t0 = time.perf_counter()
+        _, params = self._params_of(model)
+        angles = np.asarray(batch.input_angles)
+        A = len(angles)
+        tq = -np.sign(model.ratio) * batch.torque
+        newton = DeviceNewton(params, device=self.device, settings=self.settings or DeviceNewtonSettings())
+        vi = np.zeros(A, int)
+        kin = params.kinematic(vi, angles)
+        r = newton.solve(vi, angles, np.full(A, tq), kin)
+        # the model's coordinates of each body (the device copy's local order)
+        idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
+        n_model = model.mbs.systemData.ODE2Size()
+        model.set_output_torque(tq)
+        theta_in = angles.copy()
+        qs = np.zeros((A, n_model))
+        qs[:, idx] = r.q
+        failed = np.flatnonzero(r.status != CONVERGED)
+        static = None
+        for p in failed:
+            static = static or StaticSolver(model)
+            static.q = np.zeros(n_model)
+            static.q[idx] = kin[p]
+            try:
+                qs[p] = static.solve(float(angles[p]), float(angles[p]))
+            except SolverFailure as exc:
+                raise SolverFailure(f"device backend: no equilibrium at input angle {angles[p]:.9g} rad (device "
+                                    f"Newton and the Exudyn static solver's ladder failed: {exc})") from None
+            theta_in[p] = static.last_angle
+        peaks, contact_peaks = {}, {}
+        for q in qs:
+            for fam, f in model.family_peaks(q).items():
+                peaks[fam] = max(peaks.get(fam, 0.0), f)
+            for fam, f in model.family_contact_peaks(q).items():
+                contact_peaks[fam] = max(contact_peaks.get(fam, 0.0), f)
+        ref_out = model.reference_value(model.output)
+        stats = {"points": A, "newton_iterations": int(r.iterations.sum()), "sweeps": int(r.sweeps),
+                 "device_loop_s": r.loop_s, "exudyn_points": int(len(failed)), "path": newton.last_path,
+                 "device": newton.device}
+        return Equilibria(theta_in=theta_in, theta_out=ref_out + qs[:, model.output_index], peak_loads=peaks,
+                          peak_contact_loads=contact_peaks, regularization_max=model.regularization_force(qs[-1]),
+                          stats=stats, wall_s=time.perf_counter() - t0, q=qs)
+
+
+class FusedBackend(Backend):
+    """The fused stepper for driven runs (module docstring; the whole generalized-alpha step of
+    every copy in one Warp launch per ``steps_per_launch`` steps). A failed run raises
+    :class:`SolverFailure` with its state saved; it never hands over to Exudyn."""
+    name = "fused"
+    tasks = ("dynamic",)
+
+    def __init__(self, *, device=None):
+        self.device = device
+
+    def supports(self, model, task, run=None):
+        if not self._task(task):
+            return Support.of([f"fused does not implement {task!r} (driven runs only; equilibria: 'device')"])
+        from ..device_dynamics import fused_support
+        try:
+            reasons = list(fused_support(model, run.run_spec if run is not None else None).reasons)
+        except RvtoolInputError as exc:
+            reasons = [str(exc)]
+        if run is not None and run.observers:
+            reasons.append("observers are recorded by the Exudyn driver only")
+        return Support.of(reasons)
+
+    def step_dynamic(self, model, run):
+        from ..device_dynamics import DeviceDynamicsSettings, dynamic_te_fused, fused_support
+        reasons = self.supports(model, "dynamic", run).reasons
+        if reasons:
+            raise RvtoolInputError(f"backend 'fused' cannot run this model: {'; '.join(reasons)}")
+        sup = fused_support(model, run.run_spec)
+        if run.on_start is not None:
+            run.on_start()
+        out = dynamic_te_fused(model.design, torque=run.torque, speed_rpm=run.speed_rpm, duration=run.duration,
+                               settings=DeviceDynamicsSettings.from_run_spec(run.run_spec),
+                               device=run.device or self.device or run.run_spec.device, out_dir=run.out_dir,
+                               params=sup.params)
+        return DrivenHistory(t=out["t"], theta_in=out["theta_in"], theta_out=out["theta_out"], record=out["record"],
+                             omega_in=out["omega_in"], extras={"torque_in": out["torque_in"],
+                                                               "peak_loads": out["peak_loads"],
+                                                               "device_run": out["device_run"]})
