@@ -122,15 +122,15 @@ class Wheels:
 class PinContact:
     """Cycloid--pin contact law.
 
-    law: the normal law ("line", "power", "secant" or "palmgren"). stiffness: whole-contact stiffness
-    [N/m] (0 with "line": the secant stiffness at reference_force; unused by "palmgren"). exponent: the
-    power law's exponent [-]. reference_force: the calibration load of the secant [N] ("line"/"secant"
-    only). "palmgren" is Palmgren's nonlinear steel line contact F = k delta^(10/9) over the wheel width
-    (:func:`rvtool.contact.cycloid_set.palmgren_line_coefficient`: no stiffness, no reference load).
-    damping: contact damping [N s/m]. mu: friction coefficient [-] (0 = no friction). friction_model:
-    "regularized" (Eq. (friction) velocity law) or "anchor" (stick--slip anchors per slice).
-    tangential_stiffness: whole-contact stiffness of the anchors [N/m] (0 = Mindlin's ratio
-    2(1 - nu)/(2 - nu) of the normal secant stiffness)."""
+    law: the normal law ("line", "power", "secant" or "palmgren"; "palmgren" is Palmgren's nonlinear
+    steel line contact F = k delta^(10/9) over the wheel width,
+    :func:`rvtool.contact.cycloid_set.palmgren_line_coefficient`: no stiffness, no reference load).
+    stiffness: whole-contact stiffness [N/m] (0 with "line": the secant stiffness at reference_force).
+    exponent: the power law's exponent [-]. reference_force: the calibration load of the secant [N]
+    ("line" and "secant" only). damping: contact damping [N s/m]. mu: friction coefficient [-]
+    (0 = no friction). friction_model: "regularized" (Eq. (friction) velocity law) or "anchor"
+    (stick--slip anchors per slice). tangential_stiffness: whole-contact stiffness of the anchors
+    [N/m] (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the normal secant stiffness)."""
     law: str = "line"
     stiffness: float = 0.0
     exponent: float = 1.0
