@@ -78,7 +78,7 @@ _warp_ready = init_warp
 
 
 #: Contacts per launch above which ``device="auto"`` picks the GPU. Measured with
-#: cases/bench_gpu.py on an H100 (float64, pose in and forces out per evaluation):
+#: cases/benchmarks/bench_gpu.py on an H100 (float64, pose in and forces out per evaluation):
 #: a CUDA evaluation costs ~70-100 us at any small size, the CPU ~0.3-0.8 us per
 #: contact, so CUDA wins from ~1,000 contacts (crossover at 1,280 cycloid slices,
 #: 256 output-pin rows, 2,880 rolling elements).

@@ -4,19 +4,19 @@ full forms follow the case scripts' settings.
 
 * ``te`` -- quasi-static transmission error (Eq. obs_te) under the rated torque
   (:func:`rvtool.protocols.precision.quasi_static_te`), refinement error against the
-  topology's refined resolution over one mesh cycle (as ``cases/cycloid_double_wheel.py``);
+  topology's refined resolution over one mesh cycle (as ``cases/cycloid/cycloid_double_wheel.py``);
 * ``stiffness`` -- signed torque sequence by continuation, branch fits of Eq. (stiffness_fit),
   condensed tangent of Eq. (obs_condensed_stiffness) against a finite increment
-  (as ``cases/stiffness_hysteresis.py``);
+  (as ``cases/cycloid/stiffness_hysteresis.py``);
 * ``lost_motion`` -- at +-3 % of the rated torque from the stiffness sequence, checked
   against the spring-controlled march (:func:`rvtool.protocols.lost_motion.lost_motion`);
 * ``hysteresis`` -- two loops -T -> +T -> -T after a virgin preload (no level at zero torque), the
   catalogue's hysteresis loss, lost motion and b/a (:mod:`rvtool.protocols.catalogue`), loop
   integral and the cycle-dissipation checks of :mod:`rvtool.protocols.hysteresis`;
 * ``vibration`` -- driven rotation at the rated speed and torque, spectra of the output
-  torsion, mesh-order amplitude against the quasi-static low-speed limit (as ``cases/vibration.py``);
+  torsion, mesh-order amplitude against the quasi-static low-speed limit (as ``cases/cycloid/vibration.py``);
 * ``pressure`` -- local pressure of the most loaded main-mesh contact per member at the rated
-  state, resolution sequence with e1 against the finest field (as ``cases/pressure_resolution.py``);
+  state, resolution sequence with e1 against the finest field (as ``cases/cycloid/pressure_resolution.py``);
 * ``monte_carlo`` -- tolerance Monte Carlo of TE p-p, lost motion and peak contact force when a
   tolerance file is given: the cycloid drive's batched variants
   (:func:`rvtool.variants.montecarlo.run_monte_carlo`), the RV and small-tooth-difference
@@ -344,7 +344,7 @@ def run_vibration(ctx):
     out = Outcome()
     model = ctx.build()
     mesh = _mesh_period(model)
-    revs = 0.25 if ctx.quick else 2.0          # input revolutions (cases/vibration.py)
+    revs = 0.25 if ctx.quick else 2.0          # input revolutions (cases/cycloid/vibration.py)
     step = 2e-5
     duration = revs * 60.0 / speed
     proto = V.VibrationProtocol(speed_rpm=speed, torque=rated, duration=duration, sample_step=step)
@@ -405,7 +405,7 @@ def run_vibration(ctx):
 # -- pressure ----------------------------------------------------------------------------------
 
 PRESSURE_WINDOW = 20e-6
-"""Fixed window of the mean pressure [m] (cases/pressure_resolution.py)."""
+"""Fixed window of the mean pressure [m] (cases/cycloid/pressure_resolution.py)."""
 
 
 @register("pressure", "local pressure of the most loaded main-mesh contact per member at the rated state (panels)")
@@ -454,7 +454,7 @@ def run_pressure(ctx):
 
 MC_REGULARIZATION = (1.0e4, 100.0)
 """Builder regularization springs [N/m, N m/rad] of the Monte Carlo variants, as in
-cases/monte_carlo_te.py: with pin clearance the lost-motion continuation crosses free play,
+cases/cycloid/monte_carlo_te.py: with pin clearance the lost-motion continuation crosses free play,
 where the default springs (100 N/m, 0.1 N m/rad) let it stall (measured here: 3 of 4 quick
 variants of RD-40 failed with the defaults)."""
 

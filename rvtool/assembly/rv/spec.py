@@ -264,7 +264,7 @@ class RVDesign:
     def resolution_reference(self):
         """:meth:`refined` with the analytic closest-point search of the wheel profile: the reference
         of the quasi-static TE resolution error (rvtool.protocols.resolution; the discrete table
-        search is the one resolution whose error is not negligible, cases/work_precision_rv.py)."""
+        search is the one resolution whose error is not negligible, cases/benchmarks/work_precision_rv.py)."""
         # through replace (the file-form data), not dataclasses.replace: a later replace re-loads the source
         return self.replace(wheels={"samples_per_tooth": 2 * self.wheels.samples_per_tooth, "search": "analytic"},
                             involute_stage={"n_slices": 2 * self.involute_stage.n_slices})
