@@ -207,7 +207,7 @@ def run_stiffness(ctx):
     note = (f"condensed tangent K_t at {t_ref:g} N m against the central finite increment "
             f"+-{tc['increment_Nm']:.3g} N m (relative difference)")
     out.figures.append(Figure("Kt_condensed", tc["Kt_condensed_Nm_per_arcmin"], "N m/arcmin",
-                              f"condensed tangent stiffness at 75 % of the rated torque", tc["rel_diff"], "-", note))
+                              "condensed tangent stiffness at 75 % of the rated torque", tc["rel_diff"], "-", note))
     for b, f in fits.items():
         if f["K_Nm_per_arcmin"] is None:
             out.warnings.append(f"branch {b}: {f['points']} points in 50-100 % of T_rated, no fit")
@@ -436,7 +436,7 @@ def run_pressure(ctx):
                                   e1, "%", f"e1 field difference of N = {ns[-2]} against N = {ns[-1]} panels "
                                            "(Eq. pressure_field_difference)"))
         out.figures.append(Figure(f"hertz_p0_{member}", best.hertz_peak / 1e6, "MPa",
-                                  f"Hertz line-contact peak of the same contact (closed form, for comparison)"))
+                                  "Hertz line-contact peak of the same contact (closed form, for comparison)"))
         if not rec.get("converged", True):
             out.warnings.append(f"{member}: pressure resolution not converged at N = {ns[-1]}")
         out.data[member] = rec
@@ -484,7 +484,6 @@ def _design_variant_monte_carlo(ctx, sampler, out):
     """The tolerance Monte Carlo of a topology whose variants are designs: per variant the quick TE
     interval of the te protocol (one input revolution, 4 points per mesh cycle) at the rated torque
     and the lost motion at +-3 % of it (spring-controlled march); returns (n, the run's figures)."""
-    import time
 
     from ..assembly import build
     from ..protocols.lost_motion import lost_motion
@@ -527,6 +526,37 @@ def _design_variant_monte_carlo(ctx, sampler, out):
     return n, {"summary": summarize(records, figures=figures), "records": records}, figures
 
 
+MC_MODES = {"device": "device", "fused": "device", "replica": "batched", "exudyn": "pool"}
+"""The Monte Carlo's mode (:data:`rvtool.variants.montecarlo.MODES`) of each named backend: the device
+Newton's variant batches, one batched Exudyn system per chunk (the replica idea for a batch of
+designs), or one Exudyn model per variant on the pool (the oracle)."""
+
+
+def _mc_backend(ctx):
+    """(mode, choice) of the Monte Carlo for ``ctx.backend``: auto takes the device Newton where the
+    design's copies can be built (measured fastest for the whole protocol, see
+    :func:`rvtool.variants.montecarlo.resolve_mode`), else one batched Exudyn system per chunk
+    (3.3x the per-variant pool for the TE on 2 cores, the module docstring), else the pool; a named
+    backend that cannot run the design skips the protocol with the reason."""
+    from ..assembly.variant import Variant
+    from ..solver.device_copies import copy_parameters
+    reasons = {}
+    try:
+        copy_parameters(ctx.design, [Variant()], regularization=MC_REGULARIZATION)
+    except (RvtoolInputError, AttributeError, TypeError) as exc:
+        reasons["device"] = reasons["fused"] = f"the device copies cannot be built from this design: {exc}"
+    if ctx.backend != "auto":
+        if ctx.backend in reasons:
+            raise Unsupported(f"backend = {ctx.backend!r} cannot run the Monte Carlo of this design: "
+                              f"{reasons[ctx.backend]}")
+        return MC_MODES[ctx.backend], {"requested": ctx.backend, "ran": ctx.backend, "not_taken": {
+            b: f"not requested (--backend {ctx.backend})" for b in MC_MODES if b != ctx.backend}}
+    ran = "device" if "device" not in reasons else "replica"
+    not_taken = {b: reasons.get(b, f"supports the design, but slower than {ran!r} for the Monte Carlo "
+                                   "(rvtool.variants.montecarlo.resolve_mode)") for b in MC_MODES if b != ran}
+    return MC_MODES[ran], {"requested": "auto", "ran": ran, "not_taken": not_taken}
+
+
 @register("monte_carlo", "tolerance Monte Carlo: TE p-p, lost motion and peak contact force over sampled variants")
 def run_monte_carlo(ctx):
     import os
@@ -543,10 +573,16 @@ def run_monte_carlo(ctx):
     out = Outcome()
     sampler = _design_variant_sampler(ctx.design)
     if sampler is not None:
+        if ctx.backend not in ("auto", "exudyn"):
+            raise Unsupported(f"backend = {ctx.backend!r} cannot run the Monte Carlo of "
+                              f"{type(ctx.design).__name__}: its variants are designs solved on the Exudyn CPU path")
+        choice = {"requested": ctx.backend, "ran": "exudyn", "not_taken": {
+            b: "the design-variant Monte Carlo of this topology runs on the Exudyn CPU path only"
+            for b in MC_MODES if b != "exudyn"}}
         n, res, names = _design_variant_monte_carlo(ctx, sampler, out)
         settings = {"tolerances": str(ctx.tolerances), "n_variants": n, "seed": MC_SEED, "mode": "design variants (cpu)",
                     "te_interval": "one input revolution, 4 points per mesh cycle (the quick te protocol's)",
-                    "lost_motion_torque_fraction": LOST_MOTION_FRACTION}
+                    "lost_motion_torque_fraction": LOST_MOTION_FRACTION, "backend": choice}
     elif not isinstance(ctx.design, CycloidDesign):
         raise Unsupported(f"no tolerance Monte Carlo for {type(ctx.design).__name__}: its topology has no variant sampler")
     else:
@@ -555,10 +591,11 @@ def run_monte_carlo(ctx):
             tol.check_design(ctx.design)
         except (RvtoolInputError, AttributeError) as exc:
             raise Unsupported(f"the tolerances do not apply to this design: {exc}") from None
+        mode, choice = _mc_backend(ctx)
         n = 4 if ctx.quick else 200
         protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53)
         mc_settings = MonteCarloSettings(n_variants=n, seed=MC_SEED, chunk_size=n if ctx.quick else 10,
-                                         mode="batched", workers=1 if ctx.quick else None, device=ctx.device,
+                                         mode=mode, workers=1 if ctx.quick else None, device=ctx.device,
                                          scheduler=ctx.scheduler or "")
         with tempfile.TemporaryDirectory() as tmp:
             chunk_dir = os.path.join(ctx.out_dir, "monte_carlo_chunks") if ctx.out_dir else tmp
@@ -566,7 +603,8 @@ def run_monte_carlo(ctx):
                      progress=progress.callback("Monte Carlo", "variant"))
         names = ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")
         settings = {"tolerances": str(ctx.tolerances), "n_variants": n, "seed": mc_settings.seed,
-                    "mode": mc_settings.mode, "regularization": MC_REGULARIZATION, "protocol": protocol.__dict__}
+                    "mode": mc_settings.mode, "regularization": MC_REGULARIZATION, "backend": choice,
+                    "protocol": protocol.__dict__}
     s = res["summary"]
     if s["n_failed"]:
         errs = sorted({r["error"] for r in res["records"] if r["status"] != "ok"})
