@@ -551,8 +551,11 @@ def write(out, out_dir, catalogue):
     T_R = out["test"]["rated_torque_Nm"]
     lp = out["loop"]
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    ax.plot(lp["angle_arcmin"], lp["torque_Nm"], ".-", lw=0.8, label="second loop")
-    ax.plot(lp["angle_arcmin_previous"], lp["torque_Nm"], "x", ms=4, label="first loop")
+    T, th, lab = np.asarray(lp["torque_Nm"]), np.asarray(lp["angle_arcmin"]), lp["labels"]
+    for k, b in enumerate(("neg_unloading", "pos_loading", "pos_unloading", "neg_loading")):
+        idx = [i for i, l in enumerate(lab) if l == b]     # one line per branch: none across the free play
+        ax.plot(th[idx], T[idx], ".-", lw=0.8, color=f"C{k}", label=f"{b} (second loop)")
+    ax.plot(lp["angle_arcmin_previous"], lp["torque_Nm"], "x", ms=4, color="k", label="first loop")
     t = out["test"]["lost_motion_torque_fraction"] * T_R
     for s in (1, -1):
         ax.axhline(s * t, color="gray", lw=0.5, ls=":")
