@@ -38,3 +38,19 @@ def test_auto_order_is_the_measured_one():
     assert auto_order("equilibria", n_states=REPLICA_MIN_STATES)[0] == "replica"
     assert auto_order("equilibria", n_states=10, device="cuda:0")[0] == "device"
     assert auto_order("dynamic") == ["fused", "exudyn"]
+
+
+def test_monte_carlo_mode_follows_the_backend():
+    """The Monte Carlo's mode per backend; auto takes the device Newton where the copies build (RD-40)
+    and names why not for a design they cannot take (the RV)."""
+    from rvtool.analysis.protocols import _mc_backend
+    from rvtool.analysis.registry import Context, Unsupported
+    rd40, rv = rvtool.load_design("rd40"), rvtool.load_design("rv40e")
+    for backend, mode in (("auto", "device"), ("device", "device"), ("replica", "batched"), ("exudyn", "pool")):
+        got, choice = _mc_backend(Context(rd40, quick=True, out_dir=None, backend=backend))
+        assert got == mode and choice["requested"] == backend
+        assert set(choice["not_taken"]) == {"device", "fused", "replica", "exudyn"} - {choice["ran"]}
+    mode, choice = _mc_backend(Context(rv, quick=True, out_dir=None, backend="auto"))
+    assert mode == "batched" and "cannot be built" in choice["not_taken"]["device"]
+    with pytest.raises(Unsupported, match="cannot run the Monte Carlo"):
+        _mc_backend(Context(rv, quick=True, out_dir=None, backend="device"))
