@@ -10,8 +10,9 @@ full forms follow the case scripts' settings.
   (as ``cases/stiffness_hysteresis.py``);
 * ``lost_motion`` -- at +-3 % of the rated torque from the stiffness sequence, checked
   against the spring-controlled march (:func:`rvtool.protocols.lost_motion.lost_motion`);
-* ``hysteresis`` -- two closed loops +T -> -T -> +T; zero-torque width, loop integral and the
-  cycle-dissipation checks of :mod:`rvtool.protocols.hysteresis`;
+* ``hysteresis`` -- two loops -T -> +T -> -T after a virgin preload (no level at zero torque), the
+  catalogue's hysteresis loss, lost motion and b/a (:mod:`rvtool.protocols.catalogue`), loop
+  integral and the cycle-dissipation checks of :mod:`rvtool.protocols.hysteresis`;
 * ``vibration`` -- driven rotation at the rated speed and torque, spectra of the output
   torsion, mesh-order amplitude against the quasi-static low-speed limit (as ``cases/vibration.py``);
 * ``pressure`` -- local pressure of the most loaded main-mesh contact per member at the rated
@@ -59,9 +60,13 @@ def _solver_warnings(out, stats, what):
 
 # -- transmission error ----------------------------------------------------------------------
 
+QUICK_POINTS_PER_MESH = 12
+"""Points per mesh cycle of the quick TE: enough to resolve the mesh-order ripple (at 4 points the
+rv40e trace was a jagged polygon through 4 samples per ripple); one input revolution keeps it short."""
+
 def _te_angles(model, quick):
     mesh = _mesh_period(model)
-    ppm = 4 if quick else 40
+    ppm = QUICK_POINTS_PER_MESH if quick else 40
     # quick: one input revolution; full: one output revolution (the declared interval of the cases)
     revs_out = 1.0 / abs(model.ratio) if quick else 1.0
     n = int(round(revs_out * abs(model.ratio) * (2 * np.pi / mesh) * ppm))
@@ -142,8 +147,9 @@ def run_te(ctx):
                     **model.resolution_settings()}
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(11, 3.8))
-    ax[0].plot(np.rad2deg(qs["theta_in"] / abs(model.ratio)), te_as - np.mean(te_as), lw=0.8)
-    ax[0].set(xlabel="output angle [deg]", ylabel="TE - mean [arcsec]", title="quasi-static TE at rated torque")
+    ax[0].plot(np.rad2deg(qs["theta_in"] / abs(model.ratio)), te_as - np.mean(te_as), ".-", lw=0.8, ms=2.5)
+    ax[0].set(xlabel="output angle [deg]", ylabel="TE - mean [arcsec]",
+              title=f"quasi-static TE at rated torque ({ppm} points per mesh cycle)")
     o, a = met["orders"], met["amplitudes"] * ARCSEC_PER_RAD
     ax[1].semilogy(o[1:], np.maximum(a[1:], 1e-8), lw=0.8)
     ax[1].set(xlabel="output-shaft order [-]", ylabel="amplitude [arcsec]", title="TE order spectrum")
@@ -157,6 +163,7 @@ def run_te(ctx):
         q0 = StaticSolver(m0).solve(0.0)
     out.data["mesh_forces_at_rated_N"] = mesh_forces(m0, q0)
     out.data["peak_loads_at_rated_N"] = m0.family_peaks(q0)
+    out.data["hertz_peaks_at_rated_Pa"] = m0.hertz_peaks(q0)      # the report's summary checks them
     fig, ax = plt.subplots(figsize=(6, 6))
     m0.draw_section(ax, q0)
     ax.set_title(f"contact forces at {rated} N m, input angle 0")
@@ -257,44 +264,41 @@ def run_lost_motion(ctx):
     return out
 
 
-def _loop_levels(ctx):
-    seq = _sequence(ctx)
-    s = seq.other_step
-    down = np.round(np.arange(1.0, -1.0 - 1e-9, -s), 10)
-    return np.concatenate([down, down[::-1][1:]]) * seq.rated_torque    # +T .. -T .. +T
+HYSTERESIS_RIGIDITY_POINTS = (0.5, 1.0)
+"""b/a torque points of ``analyze`` [fraction of T_rated]: rvtool's datasheet secant range; ``rvtool
+validate`` takes a catalogue's own points where its file gives them."""
 
 
-@register("hysteresis", "two closed loops +T -> -T -> +T: zero-torque width, loop integral, closure and repeatability")
+@register("hysteresis", "two repeating loops -T -> +T -> -T after a virgin preload: the catalogue's hysteresis loss, "
+                        "lost motion and b/a (rvtool.protocols.catalogue), loop integral, closure and repeatability")
 def run_hysteresis(ctx):
+    from ..protocols import catalogue as C
     from ..protocols import hysteresis as H
-    from ..solver.continuation import Continuation
     rated = ctx.require("rated_torque")
     backend = _continuation_backend(ctx)      # before any work: a named other backend skips
     out = Outcome()
-    model = ctx.build()
-    cont = Continuation(model, input_angle=0.0)
-    i_out = model.output_index
-    th_kin = model.kinematic_output(0.0)
-    loop = _loop_levels(ctx)
-    cycles = []
-    first = np.linspace(0.0, rated, 5)[1:]           # virgin loading to +T, not part of a loop
-    levels = list(first) + list(loop) + list(loop[1:])
-    angles = []
-    for t in progress.track(levels, desc="hysteresis levels", unit="level"):
-        angles.append(float(cont.go_to(float(t))[i_out] - th_kin))
-    n0, n = len(first) - 1, len(loop)
-    a1 = np.array(angles[n0:n0 + n])
-    a2 = np.array(angles[n0 + n - 1:n0 + 2 * n - 1])
-    cycles = [H.Cycle(torque=loop, angle=a1), H.Cycle(torque=loop, angle=a2)]
+    seq = C.catalogue_sequence(rated, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, step=_sequence(ctx).other_step)
     tol = 1e-3 * RAD_PER_ARCMIN        # 0.001 arcmin: far below any reported angle, far above Newton's tolerance
-    width = H.zero_torque_width(cycles[1])
-    rep = H.repeatability(cycles[0], cycles[1], tolerance=tol)
-    gap_a, gap_t = H.closure_gap(cycles[1])
+    path = C.ContinuationPath(ctx.build())
+    r = C.catalogue_loops(path, seq, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, repeat_tolerance=tol)
+    m, rep = r["metrics"], r["repeatability"]
+    first, last = r["cycles"][-2], r["cycles"][-1]
+    T = last["torque_Nm"]
+    cycles = [H.Cycle(torque=T, angle=first["angle_rad"]), H.Cycle(torque=T, angle=last["angle_rad"])]
     note = (f"repeatability of the second loop against the first (max angle difference at equal torque); "
             f"declared tolerance {tol * ARCMIN_PER_RAD:g} arcmin")
-    out.figures.append(Figure("hysteresis_width", width * ARCMIN_PER_RAD, "arcmin",
-                              "angle between the descending and ascending zero-torque crossings of the second loop",
-                              rep.max_angle_diff * ARCMIN_PER_RAD, "arcmin", note))
+    hl = m.hysteresis_loss
+    out.figures.append(Figure("hysteresis_loss", hl.value * ARCMIN_PER_RAD, "arcmin",
+                              "the catalogue's hysteresis loss: the loop's width at zero torque along the unloading "
+                              "branches (each extrapolated from its own side, the free play included)",
+                              None if hl.error is None else hl.error * ARCMIN_PER_RAD, "arcmin",
+                              "linear against quadratic extrapolation of the unloading branches to zero torque"))
+    out.figures.append(Figure("lost_motion_catalogue", m.lost_motion * ARCMIN_PER_RAD, "arcmin",
+                              "the catalogue's lost motion: angle between the mid-points of the loop's width at "
+                              "+-3 % T_rated", rep.max_angle_diff * ARCMIN_PER_RAD, "arcmin", note))
+    out.figures.append(Figure("torsional_rigidity_b_over_a", m.rigidity.value * RAD_PER_ARCMIN, "N m/arcmin",
+                              f"b/a on the loading branches between {HYSTERESIS_RIGIDITY_POINTS[0]:g} and "
+                              f"{HYSTERESIS_RIGIDITY_POINTS[1]:g} T_rated (mean of {list(m.rigidity.per_branch)})"))
     try:
         diss = H.cycle_dissipation(cycles[0], cycles[1], angle_tolerance=tol, torque_tolerance=1e-9 * rated)
         out.figures.append(Figure("loop_dissipation", diss.loop_integral, "J", "closed-loop integral of T d(theta) "
@@ -304,15 +308,21 @@ def run_hysteresis(ctx):
         out.warnings.append(f"no loop dissipation: {exc}")
         out.figures.append(Figure("loop_integral", H.loop_integral(cycles[1]), "J",
                                   "integral of T d(theta) over the second loop (NOT a dissipation: see warnings)"))
-    out.data = {"torque_Nm": loop, "angle_arcmin_loop1": a1 * ARCMIN_PER_RAD, "angle_arcmin_loop2": a2 * ARCMIN_PER_RAD,
-                "closure_gap_arcmin": gap_a * ARCMIN_PER_RAD, "closure_gap_Nm": gap_t, "continuation": cont.stats.to_dict()}
-    out.settings = {"loop_step_fraction": _sequence(ctx).other_step, "virgin_levels_Nm": first,
-                    "angle_tolerance_arcmin": tol * ARCMIN_PER_RAD, "backend": backend}
-    _solver_warnings(out, cont.stats.to_dict(), "continuation")
+    if not rep.passed:
+        out.warnings.append(f"the loops differ by {rep.max_angle_diff * ARCMIN_PER_RAD:.3g} arcmin (declared tolerance "
+                            f"{tol * ARCMIN_PER_RAD:g} arcmin)")
+    out.data = {"torque_Nm": T, "branch_labels": last["labels"], "angle_arcmin_loop1": first["angle_rad"] * ARCMIN_PER_RAD,
+                "angle_arcmin_loop2": last["angle_rad"] * ARCMIN_PER_RAD,
+                "rigidity_per_branch_Nm_per_arcmin": {k: v * RAD_PER_ARCMIN for k, v in m.rigidity.per_branch.items()},
+                "continuation": r["stats"]}
+    out.settings = {"loop_step_fraction": seq.step, "fine_levels": list(seq.fine_levels),
+                    "angle_tolerance_arcmin": tol * ARCMIN_PER_RAD, "rigidity_points": list(HYSTERESIS_RIGIDITY_POINTS),
+                    "backend": backend}
+    _solver_warnings(out, r["stats"], "continuation")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(a1 * ARCMIN_PER_RAD, loop, ".-", lw=0.8, label="loop 1")
-    ax.plot(a2 * ARCMIN_PER_RAD, loop, "x--", lw=0.8, label="loop 2")
+    ax.plot(first["angle_rad"] * ARCMIN_PER_RAD, T, ".-", lw=0.8, label="loop 1")
+    ax.plot(last["angle_rad"] * ARCMIN_PER_RAD, T, "x--", lw=0.8, label="loop 2")
     ax.set(xlabel="output angle [arcmin]", ylabel="output torque [N m]", title="hysteresis loops")
     ax.legend(fontsize=7)
     out.plots.append(ctx.save(fig, "hysteresis"))
