@@ -407,7 +407,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         rows += _rows("rated_life", min(vals) if vals else None, "h", catalogue,
                       note=f"{fam}: smallest ISO 281 L10h at T_R, {next(iter(lives.values()))['speed_rpm']:.4g} rpm "
                            "relative speed (radial load only)")
-    from ..protocols.datasheet import load_allowables
+    from ..designs.allowables import load_allowables
     allow_name = f"{design}_allowables" if f"{design}_allowables" in designs.names() else "rd40_allowables"
     al = load_allowables(designs.path(allow_name))
     pressures = {"hertz_peaks_Pa": peaks, "allowables_file": allow_name,
