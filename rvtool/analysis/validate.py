@@ -42,7 +42,7 @@ QUICK_SAMPLES = 4
 
 REPEAT_TOLERANCE_ARCMIN = 1e-4
 """Declared bound on the difference of the two loops [arcmin] (the Newton tolerance moves a level
-by ~1e-7 arcmin; cases/hysteresis_friction.py)."""
+by ~1e-7 arcmin; cases/cycloid/hysteresis_friction.py)."""
 
 DEFAULT_RIGIDITY_POINTS = (0.5, 1.0)
 """b/a torque points [fraction of T_R] where the catalogue file gives none: a STATED CONVENTION
