@@ -157,7 +157,9 @@ def solve_lcp(C, s, warm=None):
                 f = z
                 break
             neg = P & (z <= 0)
-            alpha = np.min(f[neg] / (f[neg] - z[neg]))
+            # f_i / (f_i - z_i) in [0, 1); a just-added slice (f_i = 0) with z_i = 0 stops the step
+            den = f[neg] - z[neg]
+            alpha = np.min(np.where(den > 0, f[neg] / np.where(den > 0, den, 1.0), 0.0))
             f = f + alpha * (z - f)
             P &= f > 0
             f[~P] = 0.0
