@@ -54,6 +54,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_field, is_angle
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import effective_modulus, roller_stiffness
+from .influence import HalfWidth, SliceLaw, check_influence, set_choice
 from .spec import Arrangement, LaminaLaw
 
 #: Largest cup angle [deg]: steep-angle tapered bearings reach about 30 deg; beyond 60 deg
@@ -96,6 +97,9 @@ class TaperedRollerBearing:
     youngs_modulus: E [Pa]; poisson_ratio: nu (rib contact).
     damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
     of Eq. (normal_force).
+    slices: "laminae" (default) or "influence" (the slices coupled by the half-space compliance of
+    both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`; with rib_contact = False and
+    damping = 0). half_width: "fixed" (at ``reference_roller_load``) or "line_load".
     """
     n_rollers: int
     pitch_diameter: float
@@ -114,6 +118,8 @@ class TaperedRollerBearing:
     poisson_ratio: float = 0.3
     damping: float = 0.0
     ramp_depth: float = 1e-6
+    slices: SliceLaw = SliceLaw.LAMINAE
+    half_width: HalfWidth = HalfWidth.FIXED
 
     def __post_init__(self):
         check_positive("roller_diameter", self.roller_diameter)
@@ -148,6 +154,12 @@ class TaperedRollerBearing:
         if self.rib_contact and self.damping != 0:
             raise RvtoolInputError(f"damping = {self.damping} with rib_contact = True; valid range [0, 0]: the elastic-rib "
                                    "path finds the roller's axial position from the elastic balance only")
+        set_choice(self, "slices", SliceLaw)
+        set_choice(self, "half_width", HalfWidth)
+        check_influence(self, self.damping)
+        if self.slices == SliceLaw.INFLUENCE and self.rib_contact:
+            raise RvtoolInputError("rib_contact = True with slices = 'influence'; valid: rib_contact = False (the "
+                                   "influence slices use the lumped rigid rib)")
         # the roller's inner contact line must stay off the axis
         if self.pitch_diameter * math.cos(self.cone_angle) <= self.roller_diameter:
             raise RvtoolInputError(f"pitch_diameter = {self.pitch_diameter} m leaves no cone under rollers of "

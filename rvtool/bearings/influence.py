@@ -1,0 +1,144 @@
+"""Influence-coefficient roller slices (paper Eq. (bearing_ic)): the supported alternative to
+independent laminae for needle, cylindrical (and crossed) and tapered rollers.
+
+A design selects the roller law per bearing section with ``slices = "laminae"`` (default: each
+lamina its own Palmgren law, Eq. (normal_force)) or ``slices = "influence"``: the slice forces of a
+roller solve the complementarity problem w = C_l f - s, f >= 0, w >= 0, f^T w = 0 with the
+finite-width half-space compliance C_l of both race contacts (inner and outer, in series),
+:mod:`warp_contacts.roller_slices_ref` (formula, sources). ``half_width = "fixed"`` (default) takes
+the Hertz half-width of each race contact at the bearing's ``reference_roller_load``;
+``"line_load"`` updates it from the roller's current total load.
+
+Race contact radii (Harris & Kotzalas, Rolling Bearing Analysis, 5th ed., 2007, vol. 1, ch. 2):
+gamma = D cos(alpha) / d_m, inner R' = D (1 - gamma) / 2, outer R' = D (1 + gamma) / 2 (a tapered
+row: its mean roller diameter and roller-axis angle). Two-body modulus of steel on steel (rollers
+and rings of one material): E* = E / (2 (1 - nu^2)) (Johnson's E*, 1/E* = sum (1 - nu_i^2) / E_i).
+
+The precomputed edge weight (:func:`edge_weights`) is the separate approximation the paper names:
+per-slice lamina stiffness factors that make independent laminae reproduce the coupled solution
+under uniform approach at the reference load; under tilt or crowning it differs from the solve
+(``cases/verification/roller_influence_slices.py`` compares the three).
+"""
+import math
+from enum import Enum
+
+import numpy as np
+
+from warp_contacts import roller_slices_ref as sref
+
+from ..errors import RvtoolInputError
+
+
+class SliceLaw(str, Enum):
+    """Roller slice law: independent laminae (default) or the influence-coefficient solve."""
+    LAMINAE = "laminae"
+    INFLUENCE = "influence"
+
+
+class HalfWidth(str, Enum):
+    """Contact half-width of the influence slices: fixed at the reference load, or updated from the line load."""
+    FIXED = "fixed"
+    LINE_LOAD = "line_load"
+
+
+def set_choice(obj, name, cls):
+    """Replace a string field of a frozen spec by its enum member (named error on a bad value)."""
+    value = getattr(obj, name)
+    try:
+        object.__setattr__(obj, name, cls(value))
+    except ValueError:
+        raise RvtoolInputError(f"{name} = {value!r} is not one of the valid choices {[m.value for m in cls]}") from None
+
+
+def two_body_modulus(youngs_modulus, poisson_ratio):
+    """E* = E / (2 (1 - nu^2)) [Pa] of two bodies of one material (1/E* = sum (1 - nu_i^2) / E_i)."""
+    return youngs_modulus / (2.0 * (1.0 - poisson_ratio ** 2))
+
+
+def race_radii(roller_diameter, pitch_diameter, contact_angle):
+    """Effective radii R' [m] of the inner- and outer-race line contacts (Harris & Kotzalas, ch. 2)."""
+    g = roller_diameter * math.cos(contact_angle) / pitch_diameter
+    return 0.5 * roller_diameter * (1.0 - g), 0.5 * roller_diameter * (1.0 + g)
+
+
+def slice_parameters(*, roller_length, n_slices, roller_diameter, pitch_diameter, contact_angle, youngs_modulus,
+                     poisson_ratio, reference_roller_load, half_width):
+    """Per-roller parameter rows (float (N_SLICE_FLOAT,), int (N_SLICE_INT,)) of
+    :mod:`warp_contacts.roller_slices_ref` for one roller of a bearing."""
+    es = two_body_modulus(youngs_modulus, poisson_ratio)
+    r_in, r_out = race_radii(roller_diameter, pitch_diameter, contact_angle)
+    fp = np.zeros(sref.N_SLICE_FLOAT)
+    fp[sref.SL_DY] = roller_length / n_slices
+    fp[sref.SL_ESTAR] = es
+    fp[sref.SL_RIN], fp[sref.SL_ROUT] = r_in, r_out
+    fp[sref.SL_BIN] = sref.line_load_half_width(reference_roller_load, roller_length, r_in, es)
+    fp[sref.SL_BOUT] = sref.line_load_half_width(reference_roller_load, roller_length, r_out, es)
+    fp[sref.SL_LEN] = roller_length
+    ip = np.zeros(sref.N_SLICE_INT, dtype=np.int32)
+    ip[sref.SI_COUNT] = n_slices
+    ip[sref.SI_MODE] = sref.HALF_WIDTH_LINE_LOAD if HalfWidth(half_width) == HalfWidth.LINE_LOAD \
+        else sref.HALF_WIDTH_FIXED
+    return fp, ip
+
+
+def bearing_slice_parameters(bearing):
+    """:func:`slice_parameters` of a CylindricalRollerBearing (or needle, crossed) or a TaperedRollerBearing."""
+    tapered = hasattr(bearing, "roller_axis_angle")
+    return slice_parameters(
+        roller_length=bearing.roller_length, n_slices=bearing.n_slices, roller_diameter=bearing.roller_diameter,
+        pitch_diameter=bearing.pitch_diameter,
+        contact_angle=bearing.roller_axis_angle if tapered else bearing.contact_angle,
+        youngs_modulus=bearing.youngs_modulus, poisson_ratio=bearing.poisson_ratio,
+        reference_roller_load=bearing.reference_roller_load, half_width=bearing.half_width)
+
+
+def check_influence(bearing, damping):
+    """Named error where the influence solve cannot stand in for the laminae (the specs call it)."""
+    if getattr(bearing, "slices", SliceLaw.LAMINAE) != SliceLaw.INFLUENCE:
+        return
+    if damping != 0:
+        raise RvtoolInputError(f"damping = {damping} with slices = 'influence'; valid range [0, 0]: the influence "
+                               "slices are elastic only (use slices = 'laminae' for lamina damping)")
+
+
+class RollerSlices:
+    """The complementarity solve of R rollers, one call per evaluation.
+
+    fparams (R, N_SLICE_FLOAT), iparams (R, N_SLICE_INT); backend "numpy" (the reference) or "warp"
+    (:class:`warp_contacts.roller_slices.RollerSliceKernel`, float64), device a Warp device.
+    ``solve(s)``: slice approaches (R, n_max) [m] -> (f (R, n_max) [N], J = df/ds (R, n_max, n_max)
+    [N/m], half-widths (R, 2) [m], active counts (R,)).
+    """
+
+    def __init__(self, fparams, iparams, *, backend="warp", device="cpu"):
+        self.fparams = np.asarray(fparams, float)
+        self.iparams = np.asarray(iparams, np.int32)
+        self.backend = backend
+        self.n_max = int(self.iparams[:, sref.SI_COUNT].max())
+        if backend == "warp":
+            from warp_contacts.roller_slices import RollerSliceKernel
+            self._kernel = RollerSliceKernel(self.fparams, self.iparams, device)
+        elif backend != "numpy":
+            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['warp', 'numpy']")
+
+    def solve(self, s):
+        if self.backend == "warp":
+            return self._kernel.evaluate(s)
+        return sref.evaluate(s, self.fparams, self.iparams)
+
+
+def compliance_matrix(bearing, half_widths=None):
+    """C_l (n, n) [m/N] of one roller of ``bearing`` (both races) at its fixed half-widths, or at
+    ``half_widths`` = (b_in, b_out) [m]."""
+    fp, ip = bearing_slice_parameters(bearing)
+    b = (fp[sref.SL_BIN], fp[sref.SL_BOUT]) if half_widths is None else half_widths
+    return sref.roller_compliance(fp, int(ip[sref.SI_COUNT]), *b)[0]
+
+
+def edge_weights(bearing):
+    """The precomputed edge weight: per-slice factors w_s (mean 1) of the lamina stiffness that make
+    independent linear laminae carry the slice forces of the influence solve under a uniform approach
+    (C_l f = s 1 -> w = f / mean(f)), at the bearing's fixed half-widths."""
+    C = compliance_matrix(bearing)
+    f = np.linalg.solve(C, np.ones(len(C)))
+    return f / f.mean()
