@@ -186,3 +186,34 @@ def evaluate(q, qdot, psi, psidot, roller_fp, roller_ip, lamina_fp, rtol=RIB_RTO
             rib[j] = kappa * np.sum(F), bf
         lam[sl, LAM_F], lam[sl, LAM_DELTA] = F, delta
     return f, K, C, fpsi, fpsid, rib, lam
+
+
+def influence_approaches(q, psi, roller_fp, lamina_fp, rows):
+    """Slice approaches of influence-coefficient rollers (rigid rib, Eq. (bearing_ic)): per roller r of
+    ``rows`` (Ri, n_max) lamina indices (-1 padding), s = g . (q + z_pre e_3) - o_s (Ri, n_max) [m],
+    with g, h (Ri, n_max, 5) and the rib point's axial displacement b_f (Ri,)."""
+    q, psi = np.asarray(q, float), np.asarray(psi, float)
+    rf, lf = np.asarray(roller_fp, float), np.asarray(lamina_fp, float)
+    qe = q.copy()
+    qe[:, 2] += rf[:, RL_ZPRE]
+    L = lf[np.where(rows < 0, 0, rows)]
+    g, h = meridional_gradient(L[..., LA_RHO], L[..., LA_Z], L[..., LA_NR], L[..., LA_NZ], psi[:, None])
+    pad = rows < 0
+    g[pad], h[pad] = 0.0, 0.0
+    s = np.where(pad, 0.0, np.einsum("rsk,rk->rs", g, qe) - L[..., LA_OFF])
+    gf, _ = meridional_gradient(rf[:, RL_FRHO], rf[:, RL_FZ], rf[:, RL_FNR], rf[:, RL_FNZ], psi)
+    return s, g, h, qe, np.einsum("rk,rk->r", gf, qe)
+
+
+def influence_wrench(F, J, g, h, qe, kappa, bf):
+    """Per-roller results of influence-coefficient rollers from their slice forces F (Ri, n) [N] and
+    tangent J = dF/ds (Ri, n, n) [N/m]: wrench f = -sum_s F_s g_s, df/dq = -g^T J g, df/dpsi =
+    -g^T J (h . q) - sum_s F_s h_s (ds/dpsi = h . q), no velocity terms (elastic slices), and the rigid
+    rib's values (kappa sum F, b_f), the lumped-rib branch of :func:`evaluate` with the slice solve in
+    place of the laminae's power law."""
+    bpsi = np.einsum("rsk,rk->rs", h, qe)
+    f = -np.einsum("rs,rsk->rk", F, g)
+    K = -np.einsum("rsi,rst,rtj->rij", g, J, g)
+    fpsi = -np.einsum("rsi,rst,rt->ri", g, J, bpsi) - np.einsum("rs,rsk->rk", F, h)
+    rib = np.column_stack([kappa * F.sum(axis=1), bf])
+    return f, K, fpsi, rib

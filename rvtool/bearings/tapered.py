@@ -292,7 +292,16 @@ class TaperedRollerBearing:
         [m] toward its loaded direction (-sigma e_z), no radial or tilt displacement."""
         rf, ri, lf = self.pack(sigma=1.0)
         q = np.array([[0.0, 0.0, -axial_approach, 0.0, 0.0]])
-        f = ref.evaluate(q, np.zeros((1, 5)), np.zeros(1), np.zeros(1), rf[:1], ri[:1], lf[:self.n_slices])[0]
+        if self.slices == SliceLaw.INFLUENCE:
+            # the row's own law: the slice solve of one roller (the rollers all alike)
+            from warp_contacts import roller_slices_ref as sref
+            from .influence import bearing_slice_parameters
+            s, g, h, qe, bf = ref.influence_approaches(q, np.zeros(1), rf[:1], lf, np.arange(self.n_slices)[None, :])
+            sf, si = bearing_slice_parameters(self)
+            F, J, _, _ = sref.evaluate(s, sf[None, :], si[None, :])
+            f = ref.influence_wrench(F, J, g, h, qe, rf[:1, ref.RL_KAPPA], bf)[0]
+        else:
+            f = ref.evaluate(q, np.zeros((1, 5)), np.zeros(1), np.zeros(1), rf[:1], ri[:1], lf[:self.n_slices])[0]
         return float(f[0, 2]) * self.n_rollers
 
     def axial_approach_for(self, axial_force):

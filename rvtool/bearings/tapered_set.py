@@ -38,6 +38,7 @@ from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
 from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows
 from ..errors import RvtoolInputError
+from .influence import RollerSlices, SliceLaw, bearing_slice_parameters
 from .set import Placement
 from .tapered import TaperedPair, TaperedRollerBearing
 
@@ -122,6 +123,7 @@ class TaperedBearingSet:
             raise RvtoolInputError(f"mounting names must be unique; got {names}")
         self.history = NoHistory()
         rf, ri, lf, ids, owner, row_of, psi0, gamma, lam_roller = [], [], [], [], [], [], [], [], []
+        slice_rollers, slice_fp, slice_ip = [], [], []
         n_lam = 0
         bodies = []
         for k, m in enumerate(self.mountings):
@@ -141,6 +143,11 @@ class TaperedBearingSet:
                 ri.append(b)
                 lf.append(c)
                 Z = row.n_rollers
+                if row.slices == SliceLaw.INFLUENCE:
+                    sf, si = bearing_slice_parameters(row)
+                    slice_rollers += list(len(psi0) + np.arange(Z))
+                    slice_fp += [sf] * Z
+                    slice_ip += [si] * Z
                 owner += [k] * Z
                 row_of += [r] * Z
                 psi0 += list(m.cage_phase + 2 * math.pi * np.arange(Z) / Z)
@@ -168,6 +175,16 @@ class TaperedBearingSet:
         self._vel = np.zeros((n_bodies + 1, 3))
         M = len(self.mountings)
         self._centres = np.array([[m.inner_centre, m.outer_centre] for m in self.mountings], float).reshape(M, 2, 2)
+        #: influence-coefficient rollers (slices = "influence"): their indices, their lamina rows (-1 padded)
+        self.slice_rollers = np.array(slice_rollers, dtype=int)
+        self._slices = None
+        if slice_rollers:
+            n_max = int(max(self.roller_ip[r, ref.RI_COUNT] for r in slice_rollers))
+            self.slice_rows = np.full((len(slice_rollers), n_max), -1)
+            for k, r in enumerate(slice_rollers):
+                first, count = self.roller_ip[r, ref.RI_FIRST], self.roller_ip[r, ref.RI_COUNT]
+                self.slice_rows[k, :count] = first + np.arange(count)
+            self._slices = RollerSlices(np.array(slice_fp), np.array(slice_ip), backend=backend, device=device)
         if backend == "warp":
             from warp_contacts.tapered_rollers import TaperedRollerKernel
             self._kernel = TaperedRollerKernel(self.roller_fp, self.roller_ip, self.lamina_fp, precision, device)
@@ -176,10 +193,23 @@ class TaperedBearingSet:
 
     # -- 5-DOF use ---------------------------------------------------------
     def _rollers(self, q, qdot, psi, psidot):
-        """Per-roller kernel results at per-roller states."""
+        """Per-roller kernel results at per-roller states; influence-coefficient rollers replaced by
+        their slice solve (:func:`warp_contacts.tapered_rollers_ref.influence_wrench`)."""
         if self.backend == "warp":
-            return self._kernel.evaluate(q, qdot, psi, psidot)
-        return ref.evaluate(q, qdot, psi, psidot, self.roller_fp, self.roller_ip, self.lamina_fp)
+            out = self._kernel.evaluate(q, qdot, psi, psidot)
+        else:
+            out = ref.evaluate(q, qdot, psi, psidot, self.roller_fp, self.roller_ip, self.lamina_fp)
+        if self._slices is None:
+            return out
+        f, K, C, fpsi, fpsid, rib, lam = (np.array(a, float) for a in out)
+        ir, rows = self.slice_rollers, self.slice_rows
+        s, g, h, qe, bf = ref.influence_approaches(q[ir], psi[ir], self.roller_fp[ir], self.lamina_fp, rows)
+        F, J, _, _ = (np.array(a) for a in self._slices.solve(s))
+        f[ir], K[ir], fpsi[ir], rib[ir] = ref.influence_wrench(F, J, g, h, qe, self.roller_fp[ir, ref.RL_KAPPA], bf)
+        C[ir], fpsid[ir] = 0.0, 0.0
+        pad = rows < 0
+        lam[rows[~pad], ref.LAM_F], lam[rows[~pad], ref.LAM_DELTA] = F[~pad], s[~pad]
+        return f, K, C, fpsi, fpsid, rib, lam
 
     def _per_mounting(self, x):
         """Sum per-roller values (R, ...) into per-mounting values (M, ...)."""
@@ -357,6 +387,9 @@ class TaperedBearingSet:
         rollers' wrench). The elastic rib stores energy in the rib contact too, which the lamina
         observations do not carry: refused by name."""
         from ..observe.energy import ContactEnergyLaw
+        if self._slices is not None:
+            raise RvtoolInputError(f"the energy account needs slices = 'laminae' tapered rows in {self.name!r}: the "
+                                   "influence slices' potential 1/2 f^T C_l f is not observed per lamina")
         if np.any(self.roller_ip[:, ref.RI_RIB]):
             elastic = sorted({self.mountings[k].name for k in self.roller_owner[self.roller_ip[:, ref.RI_RIB] != 0]})
             raise RvtoolInputError(f"the energy account needs rib_contact = false tapered rows; {elastic} of "
