@@ -100,7 +100,8 @@ class CylindricalRollerBearing:
     slices: "laminae" (default, the law above per lamina) or "influence" (the slices coupled by
     the half-space compliance of both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`;
     elastic only: damping must be 0). half_width: "fixed" (the Hertz half-width at
-    ``reference_roller_load``) or "line_load" (updated from the roller's load), influence only.
+    ``reference_roller_load``), "roller_load" or "slice_load" (updated from the roller's or each
+    slice's line load), influence only.
     youngs_modulus: E [Pa], poisson_ratio: nu (rollers and rings; the influence compliance).
     """
     inner_radius: float

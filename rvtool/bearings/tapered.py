@@ -99,7 +99,7 @@ class TaperedRollerBearing:
     of Eq. (normal_force).
     slices: "laminae" (default) or "influence" (the slices coupled by the half-space compliance of
     both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`; with rib_contact = False and
-    damping = 0). half_width: "fixed" (at ``reference_roller_load``) or "line_load".
+    damping = 0). half_width: "fixed" (at ``reference_roller_load``), "roller_load" or "slice_load".
     """
     n_rollers: int
     pitch_diameter: float
