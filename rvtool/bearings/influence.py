@@ -99,6 +99,17 @@ def bearing_slice_parameters(bearing):
         reference_roller_load=bearing.reference_roller_load, half_width=bearing.half_width)
 
 
+def slice_mean_crowning(bearing):
+    """Crowning drop per slice [m] as the influence slices take it: the mean over each slice (Galerkin
+    collocation, :mod:`warp_contacts.roller_slices_ref`). A parabolic crown of end drop c_e (scalar
+    ``crowning``) averages to c_e [(2 zeta / l)^2 + 1 / (3 n^2)] over a slice of width l / n; per-slice
+    values are taken as the slices' mean drops."""
+    crown = np.asarray(bearing.slice_crowning, float)
+    if np.ndim(bearing.crowning) == 0:
+        crown = crown + float(bearing.crowning) / (3.0 * bearing.n_slices ** 2)
+    return crown
+
+
 def check_influence(bearing, damping):
     """Named error where the influence solve cannot stand in for the laminae (the specs call it)."""
     if getattr(bearing, "slices", SliceLaw.LAMINAE) != SliceLaw.INFLUENCE:

@@ -30,7 +30,7 @@ from ..contact.circle_set import GROUND
 from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows
 from ..errors import RvtoolInputError
 from ..validation import check_finite
-from .influence import RollerSlices, SliceLaw, bearing_slice_parameters
+from .influence import RollerSlices, SliceLaw, bearing_slice_parameters, slice_mean_crowning
 from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
 
 
@@ -114,7 +114,9 @@ def _pack(m):
         gamma = b.roller_diameter * math.cos(alpha) / b.pitch_diameter
         k, crown, zeta = b.slice_stiffness, b.slice_crowning, b.slice_positions
         crossed = alpha > 0
-        kind = ref.KIND_SLICE if b.slices == SliceLaw.INFLUENCE else ref.KIND_LAMINA
+        kind = ref.KIND_LAMINA
+        if b.slices == SliceLaw.INFLUENCE:
+            kind, crown = ref.KIND_SLICE, slice_mean_crowning(b)
         for j in range(b.n_rollers):
             sigma = -1.0 if (crossed and j % 2) else 1.0
             for s in range(b.n_slices):

@@ -54,7 +54,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_field, is_angle
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import effective_modulus, roller_stiffness
-from .influence import HalfWidth, SliceLaw, check_influence, set_choice
+from .influence import HalfWidth, SliceLaw, check_influence, set_choice, slice_mean_crowning
 from .spec import Arrangement, LaminaLaw
 
 #: Largest cup angle [deg]: steep-angle tapered bearings reach about 30 deg; beyond 60 deg
@@ -273,7 +273,7 @@ class TaperedRollerBearing:
         lam[:, ref.LA_RHO], lam[:, ref.LA_Z] = pts[:, 0], pts[:, 1]
         lam[:, ref.LA_NR], lam[:, ref.LA_NZ] = n
         lam[:, ref.LA_K], lam[:, ref.LA_P] = self.slice_stiffness, self.exponent
-        lam[:, ref.LA_OFF] = self.slice_crowning
+        lam[:, ref.LA_OFF] = slice_mean_crowning(self) if self.slices == SliceLaw.INFLUENCE else self.slice_crowning
         lam[:, ref.LA_DAMP], lam[:, ref.LA_RAMP] = self.damping / ns, self.ramp_depth
         roller = np.zeros(ref.N_ROLLER_FLOAT)
         roller[ref.RL_KF], roller[ref.RL_CF] = self.rib_stiffness, self.rib_clearance
