@@ -201,7 +201,8 @@ def test_tapered_influence_tangent_and_preload(half_width):
     for k in range(5):
         e = np.zeros((1, 5))
         e[0, k] = 1e-11 if k >= 3 else 1e-12
-        K[:, k] = (s.relative(q + e, cage_angle=ca).wrench[0] - s.relative(q - e, cage_angle=ca).wrench[0]) / (2 * e[0, k])
+        up, down = s.relative(q + e, cage_angle=ca).wrench[0], s.relative(q - e, cage_angle=ca).wrench[0]
+        K[:, k] = (up - down) / (2 * e[0, k])
     assert np.max(np.abs(r["numpy"].stiffness[0] - K)) <= 1e-6 * np.max(np.abs(K))
     # the preload approach is the row's own (influence) law's: zero external load carries 300 N per row
     z = s.relative(np.zeros((1, 5)))

@@ -308,7 +308,8 @@ class RollerSliceKernel:
                    wp.zeros((R, n, n), dtype=f64, device=d), wp.zeros((R, N_WORK, n), dtype=f64, device=d),
                    wp.zeros((R, n), dtype=wp.int32, device=d), wp.zeros((R, n), dtype=wp.int32, device=d)]
         self._cmd = wp.launch(_kernel(), dim=R, device=d,
-                              inputs=[wp.array(fparams, dtype=f64, device=d), wp.array(iparams, dtype=wp.int32, device=d),
+                              inputs=[wp.array(fparams, dtype=f64, device=d),
+                                      wp.array(iparams, dtype=wp.int32, device=d),
                                       wp.array(SIN_Q, dtype=f64, device=d), wp.array(W_Q, dtype=f64, device=d),
                                       dev["s"]] + scratch,
                               outputs=[dev[k] for k in ("f", "J", "hw", "na")], record_cmd=True)

@@ -14,7 +14,8 @@ from .planar_ref import N_SEEDS
 from .precision import resolve_device, scalar_types
 from .recorded import RecordedRows
 from .rolling_elements_ref import (AUX_ALPHA, AUX_FU, AUX_FZ, HB_E0, HB_E1, HB_F0, HB_F1, HB_K_COEF, HB_K_EXP, K_BODY_A,
-                                   K_BODY_B, K_KIND, KIND_BALL, KIND_SLICE, N_AUX, N_FLOAT, N_INT, R_A, R_ALPHA, R_CLEAR, R_CROWN,
+                                   K_BODY_B, K_KIND, KIND_BALL, KIND_SLICE, N_AUX, N_FLOAT, N_INT, R_A, R_ALPHA,
+                                   R_CLEAR, R_CROWN,
                                    R_DAMP, R_DBALL, R_EMOD, R_FI, R_FO, R_GAMMA, R_K, R_KSCALE, R_P, R_PITCH, R_PSI0,
                                    R_RAMP, R_SAX, R_SIGMA, R_SLICE_DF, R_SLICE_F, R_XI_A, R_XI_B)
 

@@ -162,8 +162,8 @@ def main(argv=None):
     fig.tight_layout()
     casekit.save_figure(fig, args.out, "roller_slices")
     casekit.verdict(results, judge)
-    return casekit.write_results(args.out, results, settings={"quick": args.quick, "grids": {g: GRIDS[g] for g in grids},
-                                                              "n_slices": n}, wall_s=results["wall_s"])
+    settings = {"quick": args.quick, "grids": {g: GRIDS[g] for g in grids}, "n_slices": n}
+    return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])
 
 
 if __name__ == "__main__":
