@@ -4,12 +4,13 @@ Python API (imported on first use, so that ``import rvtool`` stays light)::
 
     import rvtool
     design = rvtool.load_design("rd40")          # a design file path or a shipped design's name
+    variant = rvtool.replace_design(design, wheels={"n_slices": 4})   # changed keys, validated again
     model = rvtool.build(design)                 # the topology's ReducerModel
     res = rvtool.analyze(design, "te,stiffness", quick=True, out_dir="results/mine")
 """
 __version__ = "0.1.0"
 
-__all__ = ["load_design", "build", "analyze", "__version__"]
+__all__ = ["load_design", "replace_design", "build", "analyze", "__version__"]
 
 
 def load_design(design):
@@ -18,6 +19,14 @@ def load_design(design):
     :class:`rvtool.errors.RvtoolInputError` naming the key path and the valid range."""
     from .assembly.topologies import load
     return load(design)
+
+
+def replace_design(design, **sections):
+    """A copy of a loaded ``design`` with sections replaced by dicts of changed keys (design-file keys)
+    and top-level values, validated again, e.g. ``rvtool.replace_design(d, housing={"model": "ports"})``
+    (see :func:`rvtool.assembly.spec.replace`)."""
+    from .assembly.spec import replace
+    return replace(design, **sections)
 
 
 def build(design, **options):

@@ -162,7 +162,7 @@ def import_case(name):
 # -- hard cases ----------------------------------------------------------------------------
 
 def hard_case(name, design, quick, out, extra=None):
-    """Run the hard case ``name`` of :mod:`rvtool.protocols.hard_cases` on ``design``, judge it by its
+    """Run the hard case ``name`` of :mod:`rvtool.analysis.hard_cases` on ``design``, judge it by its
     declared criteria and plot it into ``out``; return its result dict (``passed``, ``criteria``, ...).
     ``extra(result, arr, design, quick, out)`` may add sub-runs and criteria."""
     from .analysis.hard_cases import CRITERIA, case_by_name, run_hard_case
@@ -179,6 +179,20 @@ def hard_case(name, design, quick, out, extra=None):
                                 "the contact dissipation; kinetic energy is bounded instead (criterion)")
     _plot_hard_case(out, name, arr)
     return result
+
+
+def hard_cases_judge(r):
+    """Checks of a hard-case run's results (``r["cases"][name]["criteria"]``, each ``{value, limit: "<= x"
+    or ">= x", passed}`` as declared in :mod:`rvtool.analysis.hard_cases`): every declared criterion of
+    every case, re-checked from its value and limit, and every case finished without a saved failure state."""
+    checks = {}
+    for name, case in r["cases"].items():
+        for crit, c in case["criteria"].items():
+            op, limit = c["limit"].split()
+            checks[f"{name}_{crit}"] = check(c["value"], float(limit), op, why=f"declared criterion of hard case {name}")
+        checks[f"{name}_finished"] = check(case.get("saved_state") is None, True, "==",
+                                           why="the run ends without a saved failure state")
+    return checks
 
 
 def _plot_hard_case(out, name, arr):

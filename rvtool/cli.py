@@ -1,9 +1,11 @@
 """Command line: ``rvtool analyze DESIGN [--protocols ...] [--quick] [--out DIR] [--device ...]
-[--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
+[--backend ...] [--scheduler ADDRESS] [--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
 ``rvtool designs [--format-doc]``, ``rvtool new --topology T [--name NAME]`` (a commented
 design template), ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
 ``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
-tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`).
+tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`),
+``rvtool validate [DESIGN] [--quick] [--samples N] [--workers W] [--out DIR]`` (a shipped design
+against its catalogue, :mod:`rvtool.analysis.validate`).
 
 Input errors (a design key out of range, an unknown protocol or topology, a missing file) print
 one line ``rvtool: error: ...`` naming the key path and the valid range, exit with status 2
@@ -168,7 +170,7 @@ def _cmd_run(args, parser):
     if args.case is None:
         design, protocols = DEFAULT_STUDY
         out = args.out or os.path.join("results", f"analyze_{design}")
-        return _analyze(design, protocols, quick=True, out=out, device="cpu", quiet=False, tolerances=None)
+        return _analyze(design, protocols, quick=True, out=out, device="cpu", quiet=False, tolerances=None, allowables=None)
     folder = cases_dir()
     if not folder.is_dir():
         parser.error(_missing_folder_message(folder))
@@ -190,7 +192,8 @@ def _input_error(exc):
     return EXIT_USAGE
 
 
-def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
+def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowables=None, backend="auto",
+             scheduler=None):
     from rvtool import progress
     from rvtool.analysis import analyze
     from rvtool.errors import RvtoolInputError
@@ -207,7 +210,8 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
         out = os.path.join("results", f"analyze_{stem}")
     with progress.reporting("quiet" if quiet else "auto"):
         try:
-            res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances)
+            res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances,
+                          allowables=allowables, backend=backend, scheduler=scheduler)
         except RvtoolInputError as exc:
             return _input_error(exc)
     for r in res.results:
@@ -226,7 +230,8 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances):
 
 def _cmd_analyze(args):
     return _analyze(args.design, args.protocols, quick=args.quick, out=args.out, device=args.device,
-                    quiet=args.quiet, tolerances=args.tolerances)
+                    quiet=args.quiet, tolerances=args.tolerances, allowables=args.allowables, backend=args.backend,
+                    scheduler=args.scheduler)
 
 
 def _cmd_designs(args):
@@ -292,6 +297,27 @@ def _cmd_sweep(args, parser):
     return 0
 
 
+def _cmd_validate(args):
+    from rvtool.analysis.validate import table_text, validate, validated_designs
+    from rvtool.errors import RvtoolInputError
+    names = [args.design] if args.design else validated_designs()
+    if args.samples is not None and args.samples < 2:
+        return _input_error(f"--samples = {args.samples} is outside the valid range [2, inf)")
+    if args.workers < 1:
+        return _input_error(f"--workers = {args.workers} is outside the valid range [1, inf)")
+    log = (lambda *a, **k: None) if args.quiet else (lambda *a, **k: print(*a, file=sys.stderr, **k))
+    for name in names:
+        out_dir = os.path.join(args.out, name) if args.out else os.path.join("results", f"validate_{name}")
+        try:
+            out = validate(name, quick=args.quick, out_dir=out_dir, samples=args.samples, workers=args.workers,
+                           tornado_keys=args.tornado_keys, log=log)
+        except RvtoolInputError as exc:
+            return _input_error(exc)
+        print(table_text(out))
+        print(f"written: {out_dir}/results.json, report.html")
+    return 0
+
+
 def build_parser():
     """The ``rvtool`` argument parser with its subcommands."""
     from rvtool import __version__
@@ -312,9 +338,18 @@ def build_parser():
     an.add_argument("--quick", action="store_true", help="short forms of the protocols (seconds each)")
     an.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/analyze_DESIGN)")
     an.add_argument("--device", default="cpu", metavar="DEVICE", help="auto, cpu (default) or cuda[:N]")
+    an.add_argument("--backend", default="auto", choices=("auto", "exudyn", "replica", "device", "fused"),
+                    help="solver backend: auto (default: the fastest that supports the model, the choice and "
+                         "the reasons recorded in results.json), exudyn (every model), replica, device or fused "
+                         "(device Newton and fused stepper: cycloid, lumped bearings)")
+    an.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="Dask scheduler of the Monte Carlo's CPU pool (default: a LocalCluster started for it)")
     an.add_argument("--quiet", action="store_true", help="no progress output")
     an.add_argument("--tolerances", default=None, metavar="FILE",
                     help="tolerance file of the Monte Carlo (default: a shipped design's <name>_tolerances.toml)")
+    an.add_argument("--allowables", default=None, metavar="FILE",
+                    help="design-review allowables the report's summary checks (default: <design>_allowables.toml "
+                         "beside the design file, or a shipped design's)")
     ds = sub.add_parser("designs", help="list the shipped designs and topologies",
                         description="List the shipped reference designs; --format-doc prints the design file "
                                     "format (every section and key, units, ranges) generated from the specs.")
@@ -345,6 +380,19 @@ def build_parser():
                        help="address of an existing Dask scheduler (default: start a LocalCluster)")
     sweep.add_argument("--out", default=None, metavar="DIR", help="output directory (default: the spec's output_dir)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    va = sub.add_parser("validate", help="a shipped design against its catalogue (predicted vs catalogue table)",
+                        description="Compare DESIGN (default: every shipped design with a <design>_catalogue.toml) "
+                                    "with its catalogue by the catalogue's own definitions: rigidity, lost motion, "
+                                    "hysteresis loss, rated life, with an uncertainty band over the assumed ranges; "
+                                    "writes results.json, PNGs and report.html.")
+    va.add_argument("design", nargs="?", default=None, metavar="DESIGN", help="shipped design name (e.g. rv40e)")
+    va.add_argument("--quick", action="store_true", help="8 Latin-hypercube samples instead of 64, coarse central loop")
+    va.add_argument("--samples", type=int, default=None, metavar="N", help="Latin-hypercube samples (>= 2)")
+    va.add_argument("--workers", type=int, default=1, metavar="W", help="processes for the samples (default 1)")
+    va.add_argument("--tornado-keys", type=int, default=None, metavar="K",
+                    help="one-at-a-time tornado over the K most important assumed keys (LHS screening; default all)")
+    va.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/validate_DESIGN)")
+    va.add_argument("--quiet", action="store_true", help="no progress output")
     return parser
 
 
@@ -366,6 +414,8 @@ def main(argv=None):
         return _cmd_version(args)
     if args.command == "sweep":
         return _cmd_sweep(args, parser)
+    if args.command == "validate":
+        return _cmd_validate(args)
     parser.print_help(sys.stderr)
     return EXIT_USAGE
 

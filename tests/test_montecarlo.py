@@ -166,8 +166,22 @@ def test_resumed_study_equals_uninterrupted(design, tol, uninterrupted, tmp_path
 
 
 def test_pool_equals_serial(design, tol, uninterrupted, tmp_path):
+    """The pool on its default Dask LocalCluster (2 worker processes) gives the serial figures."""
     settings = MonteCarloSettings(n_variants=2, seed=2, chunk_size=1, mode="pool", workers=2)
     res = run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), build_kw=BUILD)
+    assert _figures(res["records"]) == _figures(uninterrupted["records"])
+
+
+def test_pool_on_a_scheduler_address_equals_serial(design, tol, uninterrupted, tmp_path):
+    """settings.scheduler: the pool's tasks go to the cluster at that address (here a LocalCluster
+    of one in-process worker, fast); the scheduler sees them and the figures are the serial ones."""
+    from dask.distributed import LocalCluster
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        before = cluster.scheduler.transition_counter
+        settings = MonteCarloSettings(n_variants=2, seed=2, chunk_size=1, mode="pool", workers=1,
+                                      scheduler=cluster.scheduler_address)
+        res = run_monte_carlo(design, tol, PROTOCOL, settings, str(tmp_path), build_kw=BUILD)
+        assert cluster.scheduler.transition_counter > before
     assert _figures(res["records"]) == _figures(uninterrupted["records"])
 
 

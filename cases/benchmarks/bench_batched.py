@@ -23,7 +23,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from rvtool import casekit  # noqa: E402
-from rvtool.assembly.spec import load_design  # noqa: E402
+from rvtool import load_design  # noqa: E402
 from rvtool.variants.batched import batched_variant_figures  # noqa: E402
 from rvtool.variants import Variant, VariantProtocol, variant_figures  # noqa: E402
 from rvtool import designs
@@ -52,6 +52,22 @@ def _extra(parser):
     parser.add_argument("--sizes", default=None, help="comma-separated batch sizes")
     parser.add_argument("--pool-max", type=int, default=None, help="largest number of variants run by the pool")
     parser.add_argument("--te-points", type=int, default=None, help="TE points per variant")
+
+
+def judge(r):
+    """The benchmark's correctness checks (see casekit.verdict); its rates are reported, not judged."""
+    d = r["max_abs_diff_vs_per_variant"]
+    return {
+        # no copy may fail on either path (maximum 0); a fallback is a copy redone per variant, not a failure
+        "batched_failed_copies": casekit.check(sum(r["failed_copies"]), 0, "==", why="maximum 0"),
+        "pool_failed_variants": casekit.check(sum(r["pool_failed"]), 0, "==", why="maximum 0"),
+        # the same equilibria in one system or one per variant: Newton's tolerance apart (measured 1.5e-8
+        # arcsec, 8e-8 N, 0 arcmin); bounds as the Monte Carlo's mode agreement
+        "te_vs_per_variant": casekit.check(d["te_pp_arcsec"], 1e-6, "<=", why="Newton tolerance"),
+        "pin_force_vs_per_variant": casekit.check(d["max_pin_force_N"], 1e-3, "<=", why="Newton tolerance"),
+        "lost_motion_vs_per_variant": casekit.check(d["lost_motion_arcmin"], 1e-4, "<=",
+                                                    why="Newton tolerance of the continuation"),
+    }
 
 
 def main(argv=None):
@@ -104,6 +120,7 @@ def main(argv=None):
               flush=True)
     wall = time.perf_counter() - t_start
     out["wall_s"] = wall
+    casekit.verdict(out, judge)
     return casekit.write_results(args.out, out, settings={"n_te_points": protocol.n_te_points, "sizes": list(sizes),
                                                           "device": args.device, "pool_max": args.pool_max},
                                  wall_s=wall, device=args.device)

@@ -37,7 +37,7 @@ from rvtool import casekit  # noqa: E402
 
 DESIGN_PATH = casekit.import_case("bench_batched").DESIGN_PATH
 sample_variants = casekit.import_case("bench_batched").sample_variants
-from rvtool.assembly.spec import load_design  # noqa: E402
+from rvtool import load_design  # noqa: E402
 from rvtool.units import ARCSEC_PER_RAD # noqa: E402
 from rvtool.protocols.precision import te_metrics, transmission_error # noqa: E402
 from rvtool.variants import VariantProtocol  # noqa: E402
@@ -49,7 +49,7 @@ TE_POINTS = 53
 
 def _per_variant_te(args):
     """TE p-p [arcsec] of one variant by the sequential path (None if it fails)."""
-    from rvtool.assembly.cycloid import build
+    from rvtool import build
     from rvtool.solver.static import StaticSolver
     from rvtool.protocols.precision import quasi_static_te
     design, v, angles, max_it, reg, start = args
@@ -67,7 +67,7 @@ def _warm_worker(args):
     """One TE point of the nominal design: imports, Warp's kernel load and the first build happen
     here, before the timed pool (the batched rate is quoted without its one-off build too)."""
     design, reg, pause = args
-    from rvtool.assembly.cycloid import build
+    from rvtool import build
     from rvtool.protocols.precision import quasi_static_te
     quasi_static_te(build(design, regularization=reg), torque=design.rated_torque, input_angles=[0.0])
     time.sleep(pause)                 # keeps this worker busy so that every worker gets one
@@ -144,6 +144,20 @@ def _extra(parser):
                         help="also time the batched-Exudyn path at these comma-separated batch sizes")
 
 
+def judge(r):
+    """The benchmark's correctness checks (see casekit.verdict); its rates are reported, not judged."""
+    return {
+        "pool_failed_variants": casekit.check(r["pool_failed"], 0, "==", why="maximum 0 failed pool variants"),
+        # every pool variant has its device TE (a device copy that fails goes to the Exudyn fallback, so a
+        # missing value is a failure)
+        "every_variant_compared": casekit.check(
+            sum(a != b for a, b in zip(r["compared_variants"], r["compared_expected"])), 0, "==",
+            why="a finite device TE for every successful pool variant"),
+        # device Newton and Exudyn solve the same equilibria to abs_tol 1e-6 N: measured 1.8e-10 arcsec
+        "te_vs_pool": casekit.check(r["te_max_abs_diff_arcsec"], 1e-6, "<=", why="Newton tolerance (1e-6 N)"),
+    }
+
+
 def main(argv=None):
     from rvtool.batched.device_te import device_te
     from rvtool.solver.device_newton import DeviceNewtonSettings
@@ -175,7 +189,8 @@ def main(argv=None):
                 "regularization": list(reg), "chunk_pairs": args.chunk_pairs, "device_stats": []}
     out = {"pool_variants_per_s": pool_rate, "device_newton_variants_per_s": [], "ratio": [],
            "newton_iterations_per_point": [], "us_per_copy_iteration": [], "fallback_copies": [],
-           "te_max_abs_diff_arcsec": 0.0}
+           "te_max_abs_diff_arcsec": 0.0, "pool_failed": settings["pool_failed"], "compared_variants": [],
+           "compared_expected": []}
     dn_settings = DeviceNewtonSettings(max_iterations=args.max_iterations)
     # warm-up: kernel compilation (and the first CUDA context use) is not part of the rate
     device_te(design, variants[:1], angles[:2], regularization=reg, device=args.device, settings=dn_settings)
@@ -212,12 +227,17 @@ def main(argv=None):
         out["us_per_copy_iteration"].append(st["us_per_copy_iteration"])
         out["fallback_copies"].append(st["fallback_copies"])
         settings["device_stats"].append({"V": V, **st})
+        compared = 0
         for a, b in zip(pp[:n_pool], pool_pp):
             if b is not None and np.isfinite(a):
                 out["te_max_abs_diff_arcsec"] = max(out["te_max_abs_diff_arcsec"], abs(a - b))
+                compared += 1
+        out["compared_variants"].append(compared)
+        out["compared_expected"].append(sum(b is not None for b in pool_pp[:min(V, n_pool)]))
         print(f"V={V}: device Newton {rate:.1f} variants/s ({st['path']}, {st['newton_iterations_per_point']:.2f} "
               f"it/point, {st['us_per_copy_iteration']:.2f} us per copy iteration, {st['fallback_copies']} fallbacks), "
               f"pool {pool_rate:.1f} variants/s, ratio {rate / pool_rate:.2f}", flush=True)
+        casekit.verdict(out, judge)
         res = casekit.write_results(args.out, out, settings=settings, wall_s=time.perf_counter() - t_start,
                                     device=args.device)
     if dex is not None:
@@ -227,6 +247,7 @@ def main(argv=None):
         for B in (int(x) for x in args.exudyn_batched.split(",")):
             pp, br = batched_te(design, variants[:B], angles, args.device, args.max_iterations, reg, "warm")
             out["exudyn_batched"].append({"B": B, "variants_per_s": B / br["solve_s"], **br})
+        casekit.verdict(out, judge)
         res = casekit.write_results(args.out, out, settings=settings, wall_s=time.perf_counter() - t_start,
                                     device=args.device)
     return res

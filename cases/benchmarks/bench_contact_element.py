@@ -67,6 +67,23 @@ def bench(n_contacts, precision, steps):
     return out
 
 
+def judge(r):
+    """The benchmark's correctness checks (see casekit.verdict); its times are reported, not judged."""
+    checks = {
+        # the same arithmetic in float64: round-off (measured 2e-16)
+        "float64_forces_vs_numpy": casekit.check(max(r["float64.force_rel_err_vs_numpy"]), 1e-12, "<=",
+                                                 why="float64 round-off"),
+        # float32: circle geometry of up to 5e-2 m resolves gaps to eps32 x 5e-2 = 6e-9 m against the scene's
+        # 2e-5 m compressions: 3e-4 relative, x 1.5 for the point law (measured 2.6e-4)
+        "float32_forces_vs_numpy": casekit.check(max(r["float32.force_rel_err_vs_numpy"]), 1e-3, "<=",
+                                                 why="float32 rounding of the positions"),
+    }
+    for prec in ("float64", "float32"):
+        checks[f"{prec}_rejected_steps"] = casekit.check(sum(r[f"{prec}.rejected_steps"]), 0, "==",
+                                                         why="maximum 0: slightly compressed pairs integrate smoothly")
+    return checks
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     contacts = [1, 10, 100] if args.quick else [1, 10, 100, 1000, 10000]
@@ -98,6 +115,7 @@ def main(argv=None):
     ax.legend()
     casekit.save_figure(fig, args.out, "bench_contact_element")
     run_spec = RunSpec(end_time=steps * 1e-6, step=1e-6, adaptive=True).to_dict()
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"steps": steps, "run_spec_float64": run_spec,
                                                               "float32_rel_tol": 1e-5, "device": "cpu"},
                                  wall_s=time.perf_counter() - t0)

@@ -27,10 +27,10 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
+from rvtool import build
 from rvtool.assembly.contact_layout import CONTACT_ELEMENTS
-from rvtool.assembly.rv import load_design as load_rv
-from rvtool.assembly.std_spec import load_design as load_std
+from rvtool import load_design as load_rv
+from rvtool import load_design as load_std
 from rvtool.protocols.precision import dynamic_te, quasi_static_te
 from rvtool.solver import RunSpec
 from rvtool.solver.static import StaticSolver
@@ -115,6 +115,22 @@ def dynamic(design, steps, step, repeats):
     return out
 
 
+def judge(r):
+    """The benchmark's correctness checks (see casekit.verdict); its times are reported, not judged."""
+    rp = r["reproduces_per_family"]
+    dyn = r["rv40e_dynamic"]
+    return {
+        # the merged element reproduces the per-family reference: round-off of the summation order (~1e-10
+        # arcsec); a missing or misplaced family would move the TE by arcseconds
+        "merged_reproduces_te": casekit.check(rp["largest_te_diff_arcsec"], rp["tolerance_arcsec"], "<=",
+                                              why="same equilibria, another summation order"),
+        "same_steps_and_newton_counts": casekit.check(dyn["same_step_and_newton_counts"], True, "==",
+                                                      why="the same dynamic run step by step"),
+        "no_rejected_steps": casekit.check(sum(v.get("rejected_steps", 0) for v in dyn.values() if isinstance(v, dict)),
+                                           0, "==", why="maximum 0 in the smooth rated run"),
+    }
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t_all = time.perf_counter()
@@ -144,6 +160,7 @@ def main(argv=None):
                 "interleaved_block_points": block, "points_per_mesh_cycle": 40, "dynamic_steps": steps,
                 "dynamic_step_s": step, "dynamic_repeats": repeats, "device": "cpu", "precision": "float64",
                 "ported_housing_mesh_size": QUICK_MESH_SIZE if q else "design default"}
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])
 
 

@@ -16,8 +16,8 @@ import numpy as np
 import warp as wp
 
 from rvtool import casekit
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from warp_contacts.precision import resolve_device
 from rvtool import designs
 
@@ -63,6 +63,20 @@ def _time(fn, reps):
     for _ in range(reps):
         fn()
     return (time.perf_counter() - t) / reps
+
+
+def judge(r):
+    """The benchmark's correctness checks (see casekit.verdict); its times are reported, not judged."""
+    checks = {}
+    for fam, rows in r["families"].items():
+        # every batch size was evaluated on the CPU (the reference of the CUDA rows)
+        checks[f"{fam}_cpu_rows"] = casekit.check(sum(t is not None and t > 0 for t in rows["us_per_eval_cpu"]),
+                                                  len(rows["batch"]), "==", why="a CPU time for every batch size")
+        if r["cuda_compared"]:
+            # the same float64 kernel on another device: round-off of a different operation order
+            checks[f"{fam}_cuda_vs_cpu"] = casekit.check(max(rows["max_rel_err_cuda_vs_cpu"]), 1e-12, "<=",
+                                                         why="float64 round-off (FMA and ordering)")
+    return checks
 
 
 def main(argv=None):
@@ -141,6 +155,8 @@ def main(argv=None):
     ax.set(xlabel="variants B", ylabel="us per evaluation")
     ax.legend(fontsize=7)
     casekit.save_figure(fig, args.out, "bench_gpu")
+    results["cuda_compared"] = has_cuda
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"batches": batches, "precision": "float64"},
                                  wall_s=results["wall_s"], device="cuda:0" if has_cuda else "cpu")
 

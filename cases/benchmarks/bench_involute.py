@@ -15,8 +15,8 @@ import numpy as np
 import warp as wp
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.protocols.precision import quasi_static_te
 from rvtool.solver.static import StaticSolver
 from rvtool.units import ARCSEC_PER_RAD
@@ -94,6 +94,15 @@ def reducer_costs(quick):
     return out
 
 
+def judge(r):
+    """The benchmark's correctness checks (see casekit.verdict); the full run also judges its cost target
+    (reducer.passed)."""
+    return {f"warp_{dev}_vs_numpy_{n}_meshes": casekit.check(v, 1e-12, "<=", why="float64: round-off")
+            for n, entry in r["us_per_pair_slice"].items()
+            for dev, v in ((k[len("warp_"):-len("_max_rel_diff")], v) for k, v in entry.items()
+                           if k.endswith("_max_rel_diff"))}
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t0 = time.perf_counter()
@@ -116,6 +125,7 @@ def main(argv=None):
         rows.append(entry["rows"])
     results = {"us_per_pair_slice": table, "rows": rows, "reducer": reducer_costs(args.quick),
                "wall_s": time.perf_counter() - t0}
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"meshes": sizes, "slices_per_mesh": 8,
                                                               "lines": 2, "devices": devices},
                                  wall_s=time.perf_counter() - t0, device=devices[-1])

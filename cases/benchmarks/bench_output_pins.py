@@ -48,6 +48,12 @@ def _extra(parser):
     parser.add_argument("--precision", default="float64", choices=("float64", "float32"))
 
 
+def judge(r):
+    """The benchmark's correctness checks (see casekit.verdict): Warp against the NumPy reference, float64."""
+    return {f"{k}_vs_numpy": casekit.check(v, 1e-12, "<=", why="float64 round-off (measured 4e-16)")
+            for k, v in r["max_rel_err_vs_numpy"].items() if k != "mechanisms_checked"}
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__, extra=_extra)
     t_start = time.perf_counter()
@@ -94,6 +100,7 @@ def main(argv=None):
         "mechanism": {"pins": N_PINS, "wheels": 2, "slices": int(st.size), "sleeve_updates": mech.sleeve.updates,
                       "loaded_slices_single": loaded},
     }
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"quick": args.quick, "min_time_s": min_time},
                                  wall_s=time.perf_counter() - t_start, precision=args.precision, device=args.device)
 

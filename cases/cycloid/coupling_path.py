@@ -17,8 +17,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.model import Family
 from rvtool.slow.coupling import linearized_load_change
 from rvtool.slow.report import write_details
@@ -31,6 +31,20 @@ bearing channel). A ring pin is no candidate at these steps: its line-law approa
 about 1 um, so Delta zeta = 1 um lifts it off (measured: Delta F = -F), a contact-set change
 that no linearization follows."""
 FD_STEP = 1e-10
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    errs = list(r["linear_vs_nonlinear_rel_err"].values())   # Delta zeta = 1, 0.5, 0.25 um
+    checks = {
+        # the linearization error is second order in Delta zeta: halving the step quarters it (ratio 4);
+        # [3, 5] admits the third-order term at these steps (measured 3.9)
+        f"second_order_ratio_{i}": casekit.check(errs[i] / errs[i + 1], (3.0, 5.0), "in",
+                                                 why="Eq. (obs_coupling_path) is a first-order expansion")
+        for i in range(len(errs) - 1)}
+    # at 1 um the linear change is within 1e-4 of the largest load (measured 1e-5): the path is usable
+    checks["error_at_1um"] = casekit.check(errs[0], 1e-4, "<=", why="linearized vs nonlinear re-solve at 1 um")
+    return checks
 
 
 def main(argv=None):
@@ -103,8 +117,8 @@ def main(argv=None):
                      "dF_max_linear_N": float(dF_lin[k]),
                      "dF_max_nonlinear_N": float(dF_nl[k]), "wall_s": walls[-1]})
     ratios = [errs[i] / errs[i + 1] for i in range(len(errs) - 1)]
-    results = {"linear_vs_nonlinear_rel_err": {f"{s}_um": e for s, e in zip(STEPS_UM, errs)},
-               "passed": bool(all(3.0 <= r <= 5.0 for r in ratios))}
+    results = {"linear_vs_nonlinear_rel_err": {f"{s}_um": e for s, e in zip(STEPS_UM, errs)}}
+    casekit.verdict(results, judge)
     write_details(args.out, {"ratios": ratios, "contact": f"{TARGET.value}/{target}", "F_target_N": float(F_fam.max()),
                              "max_F_N": scale, "free_coordinates": len(free), "steps": rows,
                              "reference": "nonlinear re-solve by rvtool.solver.static (abs_tol 1e-6 N)"})

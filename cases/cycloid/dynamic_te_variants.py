@@ -31,8 +31,7 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design
+import rvtool
 from rvtool.solver.device_copies import copy_parameters
 from rvtool.protocols.precision import dynamic_te
 from rvtool.solver import RunSpec
@@ -52,6 +51,19 @@ N_VARIANTS, N_VARIANTS_QUICK = 64, 12
 measured by cases/bench_cycloid.py); on a GPU pass --variants 1024 or more."""
 N_EXUDYN, N_EXUDYN_QUICK = 4, 3
 TE_TOL_PER_STEP_ARCSEC = 1.6e-8
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    return {
+        # every variant's copy must finish: the fused stepper has no failure allowance (maximum 0)
+        "failed_copies": casekit.check(r["failed_copies"], 0, "==", why="no copy may fail (maximum 0)"),
+        "all_references_compared": casekit.check(r["exudyn_variants_compared"], r["exudyn_variants"], "==",
+                                                 why="every Exudyn reference variant has its fused copy"),
+        # same integrator, same steps: round-off accumulation only, TE_TOL_PER_STEP_ARCSEC per step
+        "te_vs_exudyn": casekit.check(r["te_max_abs_diff_vs_exudyn_arcsec"], r["te_tolerance_arcsec"], "<=",
+                                      why="round-off growth per step x steps (same step sequence)"),
+    }
 
 
 def _extra(parser):
@@ -78,7 +90,7 @@ def main(argv=None):
     B = args.variants or (N_VARIANTS_QUICK if args.quick else N_VARIANTS)
     duration = args.duration or (DURATION_QUICK if args.quick else DURATION)
     n_exu = min(B, args.exudyn if args.exudyn is not None else (N_EXUDYN_QUICK if args.quick else N_EXUDYN))
-    design = load_design(designs.path("rd40"))
+    design = rvtool.load_design("rd40")
     variants = sample_variants(load_tolerances(designs.path("rd40_tolerances")), design, B, SEED)
     spec = RunSpec(end_time=duration, step=STEP, abs_tol=1e-6, rel_tol=1e-8)
     torque, rpm = design.rated_torque, design.input_speed_rpm
@@ -102,7 +114,7 @@ def main(argv=None):
     t1 = time.perf_counter()
     ref, diffs, exu_steps, exu_run_s = [], [], 0, 0.0
     for b in range(n_exu):
-        model = build(variants[b].apply(design))
+        model = rvtool.build(variants[b].apply(design))
         r = dynamic_te(model, torque=torque, speed_rpm=rpm, duration=duration, run_spec=spec, solver="exudyn")
         exu_steps += r["record"].accepted_steps
         exu_run_s += r["record"].wall_s
@@ -120,7 +132,6 @@ def main(argv=None):
     failed = int(B - np.sum(done))
     max_diff = max(diffs) if diffs else None
     tol = TE_TOL_PER_STEP_ARCSEC * duration / STEP
-    passed = failed == 0 and max_diff is not None and len(diffs) == n_exu and max_diff <= tol
     results = {
         "variants": B,
         "te_pp_arcsec": te_pp,
@@ -133,8 +144,11 @@ def main(argv=None):
         "device": str(args.device),
         "wall_s": {"fused": fused_wall, "fused_run": run.wall_s if run is not None else None,
                    "exudyn": exu_wall, "exudyn_runs": exu_run_s, "total": time.perf_counter() - t_all},
-        "passed": bool(passed),
+        "te_tolerance_arcsec": tol,
+        "exudyn_variants": n_exu,
+        "exudyn_variants_compared": len(diffs),
     }
+    casekit.verdict(results, judge)
     _plot(args.out, res, run, ti, done, ref, te_pp)
     settings = {"design": "rd40", "tolerances": "rd40_tolerances", "seed": SEED, "duration_s": duration,
                 "torque_Nm": torque, "speed_rpm": rpm, "run_spec": spec.to_dict(), "exudyn_variants": n_exu,

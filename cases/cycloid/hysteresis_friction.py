@@ -36,10 +36,10 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design, replace
-from rvtool.assembly import build as build_any
-from rvtool.assembly.rv import load_design as load_rv_design
+from rvtool import build
+from rvtool import load_design, replace_design as replace
+from rvtool import build as build_any
+from rvtool import load_design as load_rv_design
 from rvtool.protocols import hysteresis_cycles as HC
 from rvtool.protocols import stiffness as S
 from rvtool.units import RAD_PER_ARCMIN
@@ -156,6 +156,28 @@ def rv_paths(mu, rv_run):
             "dynamic": {"forced_commits": dyn["stats"]["forced_commits"], "steps": dyn["stats"]["steps"],
                         "step_s": dyn["step_s"]},
             "wall_s": {"dynamic_path": dyn["wall_s"], "quasi_static_coarse_path": qs["wall_s"]}}
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict): each criterion against the tolerance the
+    case derives for it (quadrature bound, energy tolerance, repeatability), RD-40 and rv40e."""
+    checks = {}
+    for key in ("loop_vs_dissipation_rel_err", "energy_balance_rel_err", "cycle_repeatability_arcmin",
+                "paths_rel_diff"):
+        for label, block in (("rd40", r[key]), ("rv40e", r[key].get("rv40e", {}))):
+            if "tolerance" in block:
+                value = max(block["value"], block.get("closure_arcmin", 0.0))
+                checks[f"{label}_{key}"] = casekit.check(value, block["tolerance"], "<=",
+                                                         why=block.get("tolerance_note", "the case's tolerance"))
+    # frictionless contacts (mu = 0) dissipate nothing: the loop closes to the solver's tolerance
+    # (measured 3e-13 arcmin); 1e-6 arcmin is far below the mu = 0.02 loss (1e-4)
+    checks["frictionless_no_hysteresis"] = casekit.check(r["hysteresis_loss_arcmin"]["vs_mu"]["0.0"], 1e-6, "<=",
+                                                         why="no friction, no loop")
+    # Coulomb friction: the loss grows with mu (monotone over the sweep)
+    losses = [v for _, v in sorted((float(k), v) for k, v in r["hysteresis_loss_arcmin"]["vs_mu"].items())]
+    checks["loss_grows_with_mu"] = casekit.check(min(b - a for a, b in zip(losses, losses[1:])), 0.0, ">",
+                                                 why="more friction, wider loop")
+    return checks
 
 
 def main(argv=None):
@@ -276,6 +298,7 @@ def main(argv=None):
           f"{rvD_total:.4e} J {rvD} (rel. err {rv_loop_err:.2e}, bound {rv_loop_tol:.2e}), energy balance "
           f"{rve['balance_rel_err']:.2e}, repeatability {rv['repeat_arcmin']:.2e} arcmin")
     _plot_rv(args.out, rv)
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_start)
 
 

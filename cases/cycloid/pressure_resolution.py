@@ -37,11 +37,41 @@ def _stress_summary(x, p, a, nu, mu):
     return out, s, z
 
 
+def _blocks(r):
+    """(name, per-contact record) of every studied contact."""
+    for key, v in r.items():
+        if isinstance(v, dict) and "converged" in v:
+            yield key, v
+        elif isinstance(v, dict):
+            for w, rec in v.items():
+                if isinstance(rec, dict) and "converged" in rec:
+                    yield f"{key}_{w}", rec
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict): every selected contact converges and meets
+    Hertz line contact (locally two cylinders at the state's load)."""
+    checks = {}
+    for name, rec in _blocks(r):
+        dx = 2 * rec["domain_halfwidth_m"] / (rec["N"][-1] - 1)
+        checks.update({
+            f"{name}_converged": casekit.check(rec["converged"], True, "==",
+                                               why="successive changes below 2 % (peak) and 1 % (span)"),
+            # Hertz: 3-D face-width effect ~(a/b)^2 and panel error O(dx/a) (measured <= 0.12 %)
+            f"{name}_p0_vs_hertz": casekit.check(abs(rec["p_raw"][-1] / rec["hertz_p0_Pa"] - 1), 0.01, "<=",
+                                                 why="Hertz p0 of the local radii and the contact's load"),
+            f"{name}_halfwidth_vs_hertz": casekit.check(abs(0.5 * rec["span"][-1] - rec["hertz_halfwidth_m"]), 2 * dx,
+                                                        "<=", why="Hertz half-width; two panels"),
+            f"{name}_load_balance": casekit.check(max(rec["load_residual"]), 1e-12, "<=",
+                                                  why="bordered solve balances the load exactly"),
+        })
+    return checks
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, description=__doc__)
     t_all = time.perf_counter()
-    from rvtool.assembly.cycloid import build
-    from rvtool.assembly.spec import load_design
+    from rvtool import build, load_design
     from rvtool.solver.static import StaticSolver
     design = load_design(designs.path("rd40"))
     m = build(design, bearing_model="rolling")
@@ -104,6 +134,7 @@ def main(argv=None):
                 "mu_sliding_case": MU_SLIDING, "E_Pa": design.material.youngs_modulus, "nu": nu, "N": ns,
                 "quick": args.quick, "solver": "active set; contiguous active block by Levinson (Toeplitz), "
                                                "dense bordered solve otherwise; gap by FFT convolution"}
+    casekit.verdict(results, judge)
     casekit.write_results(args.out, results, settings, wall_s)
     return results
 

@@ -15,12 +15,39 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.protocols import stiffness as S
 from rvtool import designs
 
 DESIGN = designs.path("rd40")
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    dyn = r["dynamic"]
+    rated = max(abs(t) for t in r["torque_Nm"])
+    hi_tail = max(s for t, s in zip(dyn["torque_Nm"], dyn["tail_span_arcmin"]) if abs(t) >= 0.5 * rated)
+    bf = r["branch_fits"]
+    return {
+        # Eq. (obs_condensed_stiffness) against a +-0.1 % central torque increment: the increment's own error
+        # is O(increment^2 x curvature) (measured 1.7e-7)
+        "Kt_vs_finite_increment": casekit.check(r["Kt_rel_diff_finite_increment"], 1e-5, "<=",
+                                                why="condensed tangent = central difference at 0.1 % of T"),
+        # path (a) settles in time; its level angles at |T| >= 50 % may differ from path (b)'s equilibria
+        # by what is still moving at the end of each dwell: twice the largest tail span at those levels
+        "paths_agree_high_load": casekit.check(r["angle_max_diff_paths_high_load_arcmin"], 2 * hi_tail, "<=",
+                                               why="dynamic settling residual (tail span) of path (a)"),
+        # frictionless contacts: the loaded and unloaded branches coincide, so the loop returns to zero
+        "zero_load_return": casekit.check(abs(r["zero_load_return_arcmin"]), 1e-6, "<=",
+                                          why="no friction, no hysteresis (frictionless nominal design)"),
+        # the nominal design is point-symmetric in torque: the negative branches mirror the positive ones
+        "branch_symmetry": casekit.check(
+            abs(bf["neg_loading"]["K_Nm_per_arcmin"] / bf["pos_unloading"]["K_Nm_per_arcmin"] - 1), 1e-6, "<=",
+            why="odd torque response of a symmetric reducer; Newton tolerance"),
+        "regularization_unloaded": casekit.check(r["regularization_max_N"] / np.max(r["max_Fn_N"]), 1e-4, "<=",
+                                                 why="regularization force negligible against contact loads"),
+    }
 
 
 def main(argv=None):
@@ -90,6 +117,7 @@ def main(argv=None):
                 "note": "path (b) runs the full 74-level sequence also in --quick; path (a) runs the 74 levels "
                         "only without --quick (quick: a 22-level coarse sequence compared with path (b) on it)"}
     _plot(args.out, torque, angle, fits, qs)
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_start)
 
 

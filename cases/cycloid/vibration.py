@@ -11,8 +11,8 @@ import time
 import numpy as np
 
 from rvtool import casekit
-from rvtool.assembly.cycloid import build
-from rvtool.assembly.spec import load_design
+from rvtool import build
+from rvtool import load_design
 from rvtool.protocols import vibration as V
 from rvtool.units import ARCSEC_PER_RAD
 from rvtool.protocols.precision import quasi_static_te
@@ -25,6 +25,23 @@ DESIGN = designs.path("rd40")
 def _amp_at(x, a, x0):
     i = int(np.argmin(np.abs(np.asarray(x) - x0)))
     return float(a[i]), float(x[i])
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    m = r["markers_hz"]
+    return {
+        # kinematics: the pin-mesh frequency is z_p times the input frequency, exactly
+        "mesh_marker": casekit.check(abs(m["mesh_hz"] / (r["mesh_order"] * m["input_hz"]) - 1), 1e-12, "<=",
+                                     why="f_mesh = z_p f_in"),
+        # the low-speed limit: the driven torsion's strongest order is the quasi-static TE's strongest order,
+        # within the order resolution of the window (1 / input revolutions)
+        "dominant_order_vs_quasistatic": casekit.check(abs(r["dominant_orders"][0] - r["dominant_order_quasistatic"]),
+                                                       r["order_resolution"], "<=",
+                                                       why="quasi-static TE at the same angles (low-speed limit)"),
+        "accepted_steps_converged": casekit.check(r["max_residual"], r["run_abs_tol"], "<=",
+                                                  why="every accepted step meets the run's absolute tolerance"),
+    }
 
 
 def main(argv=None):
@@ -67,6 +84,9 @@ def main(argv=None):
         "mesh_order_amplitude_arcsec": a_dyn_mesh * ARCSEC_PER_RAD,
         "mesh_order_amplitude_quasistatic_arcsec": a_qs_mesh * ARCSEC_PER_RAD,
         "mesh_order_rel_diff_vs_quasistatic": abs(a_dyn_mesh - a_qs_mesh) / max(a_qs_mesh, 1e-30),
+        "dominant_order_quasistatic": float(o_qs[int(np.argmax(np.where(np.asarray(o_qs) > 0, a_qs, 0.0)))]),
+        "order_resolution": 1.0 / revs,
+        "run_abs_tol": spec.abs_tol,
         "wall_s_dynamic": run["wall_s"], "wall_s_quasistatic_reference": wall_qs,
         "accepted_steps": rec.accepted_steps, "rejected_steps": rec.rejected_steps,
         "max_residual": rec.max_residual,
@@ -74,6 +94,7 @@ def main(argv=None):
     settings = {"design": design.name, "input_revolutions": revs, "speed_rpm": speed, "torque_Nm": design.rated_torque,
                 "run_spec": spec.to_dict(), "protocol": proto.__dict__, "quick": args.quick}
     _plot(args.out, sp, markers, zp)
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_start)
 
 

@@ -1,6 +1,6 @@
-"""The six hard cases of rvtool.protocols.hard_cases on RD-40 (double wheel), each judged by its declared criteria.
+"""The six hard cases of rvtool.analysis.hard_cases on RD-40 (double wheel), each judged by its declared criteria.
 
-Histories, settings and pass/fail criteria: rvtool.protocols.hard_cases.CASES and CRITERIA
+Histories, settings and pass/fail criteria: rvtool.analysis.hard_cases.CASES and CRITERIA
 (reversal, startup, runup, rattle, stiff100, nan). ``--case NAME`` runs one of them only.
 
 The 'nan' case adds two criteria here: one forced NaN in a pin-contact evaluation mid-run must
@@ -10,7 +10,7 @@ local error only); a persistent NaN must end the run with SolverFailure, a clear
 the last accepted state saved (failed_state.npz), with no results written as success.
 
 Keys: cases.<name>.{passed, criteria, rejected_steps, min_step_s, max_residual, message};
-passed (all six passed).
+passed (every declared criterion of every case, casekit.hard_cases_judge).
 """
 import dataclasses
 import os
@@ -59,7 +59,8 @@ def main(argv=None):
     for name in names:
         res = casekit.hard_case(name, design, args.quick, args.out, extra=EXTRA.get(name))
         out[name] = {k: v for k, v in res.items() if k != "reject_reasons"}
-    results = {"cases": out, "passed": all(r["passed"] for r in out.values())}
+    results = {"cases": out}
+    casekit.verdict(results, casekit.hard_cases_judge)
     settings = {"design": design.name, "quick": args.quick,
                 "cases": {n: dataclasses.asdict(H.case_by_name(n)) for n in names}}
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_all)

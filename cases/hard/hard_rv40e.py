@@ -1,7 +1,7 @@
-"""The six hard cases of rvtool.protocols.hard_cases on the RV-40E class reducer (rv40e), each judged by its declared criteria.
+"""The six hard cases of rvtool.analysis.hard_cases on the RV-40E class reducer (rv40e), each judged by its declared criteria.
 
 Same histories, settings and criteria as the RD-40 cases (cases/hard_*.py), run through
-rvtool.protocols.hard_cases.run_hard_case on the RV model unchanged. One adaptation, declared:
+rvtool.analysis.hard_cases.run_hard_case on the RV model unchanged. One adaptation, declared:
 the reversal case's two "after the reversal" criteria of RD-40 read the final sample; the RV's
 output keeps swinging after the 0.2 ms reversal (pin-force sum between about 1 and 24 kN with a
 period of about 3 ms, measured), so a single sample is arbitrary. Here they read the mean over
@@ -14,8 +14,7 @@ import time
 
 import numpy as np
 
-from rvtool import casekit, designs
-from rvtool.assembly.topologies import load as load_design
+from rvtool import casekit, designs, load_design
 from rvtool.analysis.hard_cases import CASES, CRITERIA, criterion, run_hard_case
 from rvtool.units import ARCSEC_PER_RAD
 
@@ -52,7 +51,8 @@ def main(argv=None):
                                           if k != "contact_loss_min_over_loaded"}
         out[case.name] = {k: v for k, v in res.items() if k != "reject_reasons"}
         _plot(args.out, case.name, arr)
-    results = {"cases": out, "passed": all(r["passed"] for r in out.values()), "wall_s": time.perf_counter() - t_all}
+    results = {"cases": out, "wall_s": time.perf_counter() - t_all}
+    casekit.verdict(results, casekit.hard_cases_judge)
     settings = {"design": design.name, "quick": args.quick, "reversal_settle_s": SETTLE_S,
                 "cases": {c.name: c.description for c in CASES}}
     return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])

@@ -13,13 +13,30 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.rv import load_design
+from rvtool import build, load_design
 from rvtool.protocols.precision import quasi_static_te, te_metrics
 from rvtool.units import ARCSEC_PER_RAD
 
 DESIGN = designs.path("rv40e")
 ERRORS_ARCMIN = (0.0, 2.0, 5.0, 10.0)
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict): the direction of the effect, per error step."""
+    sh = r["crank_load_share"]
+    share0 = [s["fraction_mean_over_crank_revolution"][0] for s in sh]
+    return {
+        # a lagging crank (positive error) engages later and unloads: its mean share falls as the error grows
+        "lagging_crank_unloads": casekit.check(max(b - a for a, b in zip(share0, share0[1:])), 0.0, "<",
+                                               why="crank 0 lags: smaller share of the summed crank torque"),
+        # no crank is unloaded completely at these errors (measured smallest share 0.28 at 10 arcmin): a share
+        # of zero would mean a lost contact, which the statically indeterminate three-crank carrier should not show
+        "all_cranks_loaded": casekit.check(min(min(s["fraction_min_over_crank_revolution"]) for s in sh), 0.0, ">",
+                                           why="every crank keeps a positive share of the torque"),
+        # a phase error adds a once-per-crank-revolution wind-up: the TE p-p grows with it
+        "te_grows_with_error": casekit.check(min(b - a for a, b in zip(r["te_pp_arcsec"], r["te_pp_arcsec"][1:])), 0.0,
+                                             ">", why="the error adds to the nominal TE"),
+    }
 
 
 def main(argv=None):
@@ -52,6 +69,7 @@ def main(argv=None):
                 "te_interval": "one crank revolution (1/z_g output revolution)", "points": len(curves[0][0]),
                 "wall_s_per_error": walls}
     _plots(errors, curves, args.out)
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_all)
 
 

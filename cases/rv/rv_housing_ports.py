@@ -25,9 +25,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
+from rvtool import build, load_design
 from rvtool.assembly.housing import housing_ports
-from rvtool.assembly.rv import load_design
 from rvtool.protocols.budget import stiffness_budget
 from rvtool.protocols.precision import quasi_static_te, te_metrics
 from rvtool.protocols.stiffness import TorqueSequence, branch_fits, quasi_static_stiffness
@@ -62,6 +61,29 @@ def rated_state(model, torque):
     budget = {"shares": b["shares"], "rigid_switch_shares": b["rigid_shares"],
               "sensitivity_shares": b["sensitivity_shares"], "K_tangent_Nm_per_arcmin": b["K_t_Nm_per_arcmin"]}
     return out, budget
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    K = r["K_tangent_Nm_per_arcmin"]
+    checks = {
+        # residual attachment modes make the static port compliance exact: round-off (measured 6e-13)
+        "housing_static_compliance": casekit.check(r["housing"]["static_compliance_rel_err_vs_parent"], 1e-9, "<=",
+                                                   why="exact static port compliance by construction; round-off"),
+        "ported_housing_softer": casekit.check(K["ported_housing"] / K["rigid_housing"], 1.0, "<",
+                                               why="the elastic ring adds compliance in series"),
+        # springs in series: the housing's compliance share is about the compliance it adds, 1 - K_p / K_r;
+        # the other families' compliances change with the load distribution on the elastic ring (measured 0.01)
+        "housing_share_vs_added_compliance": casekit.check(
+            abs(r["stiffness_budget"]["ported_housing"]["shares"]["housing_ports"] - (1 - K["ported_housing"]
+                                                                                     / K["rigid_housing"])),
+            0.03, "<=", why="series compliance; redistribution of the other families' loads"),
+    }
+    for name, b in r["stiffness_budget"].items():
+        checks[f"{name}_budget_energy_vs_sensitivity"] = casekit.check(
+            max(abs(v - b["sensitivity_shares"][k]) for k, v in b["shares"].items() if k in b["sensitivity_shares"]),
+            1e-4, "<=", why="energy shares = sensitivity shares (springs in series)")
+    return checks
 
 
 def main(argv=None):
@@ -125,6 +147,7 @@ def main(argv=None):
                 "stiffness_levels": None if seq is None else len(curves["rigid_housing"]["torque_Nm"]),
                 "housing": variants["ported_housing"].source["housing"]}
     _plots(te, curves, budget, args.out)
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_all)
 
 

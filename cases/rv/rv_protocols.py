@@ -20,8 +20,7 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.rv import load_design
+from rvtool import build, load_design
 from rvtool.protocols.stiffness import (TorqueSequence, branch_fits, dynamic_stiffness, lost_motion_from_levels,
                                         quasi_static_stiffness)
 from rvtool.protocols.vibration import VibrationProtocol, driven_response, dominant, vibration_spectra
@@ -32,6 +31,43 @@ from rvtool.solver.static import StaticSolver
 from rvtool.units import ARCSEC_PER_RAD
 
 STEP = 2e-5
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    m = r["vibration"]["markers_hz"]
+    checks = {
+        # kinematics: the cycloid mesh frequency is an integer multiple (z_pins) of the crank's relative speed
+        "cycloid_mesh_marker": casekit.check(abs(m["mesh_hz"] / m["crank_relative_hz"]
+                                                 - round(m["mesh_hz"] / m["crank_relative_hz"])), 1e-9, "<=",
+                                             why="f_mesh = z_pins x crank frequency relative to the carrier"),
+    }
+    for name, b in m.items():
+        if isinstance(b, dict) and "ftf" in b:
+            # BPFO = Z FTF and BPFI = Z (f_r - FTF): the ratio is the rolling-element count, an integer
+            checks[f"{name}_bpfo_over_ftf_integer"] = casekit.check(
+                abs(b["bpfo"] / b["ftf"] - round(b["bpfo"] / b["ftf"])), 1e-9, "<=", why="BPFO = Z FTF")
+            # FTF = f_r/2 (1 - d/D cos a) <= f_r/2 for 0 <= a < 90 deg, hence BPFO <= BPFI: fails for an angle
+            # passed in the wrong unit (cos 40 rad < 0)
+            checks[f"{name}_bpfo_le_bpfi"] = casekit.check(b["bpfo"] - b["bpfi"], 0.0, "<=",
+                                                           why="contact angle in [0, 90) deg: cos >= 0")
+    st = r["stiffness"]
+    if st["settled_comparison"]:
+        # settled path (a) against the continuation: README 548.19-548.28 vs 548.16-548.23 N m/arcmin
+        for b, k in st["path_b_continuation"]["K_Nm_per_arcmin"].items():
+            checks[f"stiffness_paths_{b}"] = casekit.check(abs(st["path_a_dynamic"]["K_Nm_per_arcmin"][b] / k - 1),
+                                                           0.01, "<=", why="path (a) settled vs path (b)")
+    p = r["pressure_selected_pin_contact"]
+    dx = 2 * p["domain_halfwidth_m"] / (p["N"][-1] - 1)
+    checks.update({
+        "pressure_converged": casekit.check(p["converged"], True, "==", why="2 % (peak) and 1 % (span) targets"),
+        "pressure_p0_vs_hertz": casekit.check(abs(p["p_raw"][-1] / p["hertz_p0_Pa"] - 1), 0.01, "<=",
+                                              why="Hertz line contact at the contact's load and local radii"),
+        "pressure_halfwidth_vs_hertz": casekit.check(abs(0.5 * p["span"][-1] - p["hertz_halfwidth_m"]), 2 * dx, "<=",
+                                                     why="Hertz half-width; two panels"),
+        "pressure_load_balance": casekit.check(max(p["load_residual"]), 1e-12, "<=", why="exact load balance"),
+    })
+    return checks
 
 
 def main(argv=None):
@@ -81,6 +117,8 @@ def main(argv=None):
     stiff["path_a_dynamic"]["stats"] = sa["stats"]
     stiff["levels_Nm"] = sa["torque_Nm"]
     stiff["max_angle_diff_a_minus_b_arcmin"] = float(np.max(np.abs(sa["angle_arcmin"] - sb["angle_arcmin"])))
+    # --quick's path (a) is a smoke run (not settled in the free play): compared only in the full run
+    stiff["settled_comparison"] = not args.quick
 
     # -- pressure at the selected pin contact ----------------------------------------------
     t0 = time.perf_counter()
@@ -97,6 +135,7 @@ def main(argv=None):
 
     results = {"vibration": vib, "stiffness": stiff, "pressure_selected_pin_contact": pres, "wall_s": wall}
     _plots(run, spec, vib, sa, sb, fields, best, args.out)
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"quick": args.quick, "design": d.name, "step_s": STEP,
                                                               "stiffness_sequence": {"ramp_steps": seq.ramp_steps,
                                                                                      "dwell_steps": seq.dwell_steps}},

@@ -27,8 +27,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design, replace
+from rvtool import build
+from rvtool import load_design, replace_design as replace
 from rvtool.errors import RvtoolInputError
 from rvtool.geometry.involute import line_gap
 from rvtool.protocols import stiffness as S
@@ -119,6 +119,31 @@ def interference_checks(design):
                          and out["rejects_interfering_variant"] is not None
                          and (out["radial_assembly_overlap_m"] <= 0 or not design.mesh.radial_assembly))
     return out
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict): every figure against its reference."""
+    te, pk, ic, K, lm = (r[k] for k in ("te_pp_arcsec", "peak_tooth_force_N", "interference_checks",
+                                         "K_Nm_per_arcmin", "lost_motion_arcmin"))
+    return {
+        "ratio": casekit.check(r["ratio_nominal"]["rel_error"], 1e-6, "<=",
+                               why="-z_wheel/(z_ring - z_wheel) vs the equilibria over one period"),
+        # the design's resolution resolves the TE and the tooth force: within 1 % of the figure
+        "te_vs_refined": casekit.check(te["error_vs_refined_arcsec"] / te["window_value"], 0.01, "<=",
+                                       why="refined resolution (mesh window 6, 2 slices, 2x points)"),
+        "peak_tooth_force_vs_refined": casekit.check(abs(pk["rel_error_vs_refined"]), 0.01, "<=",
+                                                     why="refined resolution; measured 0.12 %"),
+        "teeth_in_contact_vs_refined": casekit.check(r["teeth_in_contact"]["max_count_difference_vs_refined"], 0, "==",
+                                                     why="the same teeth carry load at the refined resolution"),
+        "trochoid_vs_4x_samples": casekit.check(abs(ic["trochoid_error_vs_4x_samples_m"]), 1e-9, "<=",
+                                                why="trochoid check at 4x the samples: 1 nm against 12 um clearances"),
+        "stiffness_vs_refined": casekit.check(abs(K["rel_error_vs_refined"]), 1e-3, "<=", why="refined resolution"),
+        "Kt_vs_finite_increment": casekit.check(K["Kt_rel_diff_finite_increment"], 1e-5, "<=",
+                                                why="condensed tangent = central difference at 0.1 % of T"),
+        # two independent paths to the lost motion: stiffness levels and the spring-controlled march
+        "lost_motion_two_paths": casekit.check(abs(lm["error_vs_spring_controlled_arcmin"]), 1e-4, "<=",
+                                               why="continuation vs spring control; solver tolerance"),
+    }
 
 
 def main(argv=None):
@@ -230,6 +255,7 @@ def main(argv=None):
     _plots(model, design, qs, revs, results, st, args.out)
     settings = {"design": design.name, "bearing_model": BEARINGS, **model.resolution_settings(),
                 "refined": fine_design.mesh.__dict__, "quick": args.quick}
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])
 
 

@@ -33,8 +33,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.spec import load_design, replace
+from rvtool import build
+from rvtool import load_design, replace_design as replace
 from rvtool.slow import cycloid as C
 from rvtool.slow.contact_radius import window_radii
 from rvtool.slow.offsets import GapOffsets
@@ -77,6 +77,19 @@ def _state(windows, te_windows, th, lub, friction):
     P_pins = float(np.sum(th.sources.power(x, friction)[pins]))
     return {"exposure": x, "T": T, "film": film, "power_W": P_source, "pin_source_W": P_pins,
             "pin_law_work_W": windows.last_friction_power, "te": te_windows.last_te.copy()}
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    return {
+        "coupled_fixed_point": casekit.check(r["coupled_converged"], True, "==",
+                                             why="the coupled mu fixed point converges within MAX_ITERATIONS"),
+        "pin_friction_work": casekit.check(r["pin_work_rel_err"], WORK_REL_TOL, "<=",
+                                           why="contact-law friction work vs sum mu I_s (WORK_REL_TOL)"),
+        # lambda = h_min / composite roughness is positive and the film positive wherever reported
+        "films_positive": casekit.check(min(v for v in r["h_min_um"].values() if v is not None), 0.0, ">",
+                                        why="Dowson--Higginson film thickness is positive"),
+    }
 
 
 def main(argv=None):
@@ -134,8 +147,10 @@ def main(argv=None):
         "mu_mixed": {f: r["mu_mixed"] for f, r in table.items()},
         "friction_dissipation_change_W": coupled["power_W"] - declared["power_W"],
         "te_pp_change_arcsec": te_pp["coupled"] - te_pp["declared"],
-        "passed": bool(converged and max(work_err.values()) <= WORK_REL_TOL),
+        "coupled_converged": converged,
+        "pin_work_rel_err": max(work_err.values()),
     }
+    casekit.verdict(results, judge)
     x = declared["exposure"]
     details = {
         "observation": {"critical_contact": table, "temperature_C": dict(zip(th.network.nodes,

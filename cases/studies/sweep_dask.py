@@ -44,6 +44,28 @@ def heat_map(rows, spec, out_dir, key="te_pp_arcsec", label="TE p-p [arcsec]"):
     return casekit.save_figure(fig, out_dir, "te_pp_heatmap")
 
 
+MAX_FAILED = 0
+"""Failed grid points allowed: the full 5 x 5 grid measured none (a failed point is a row, not a crash)."""
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict)."""
+    p1, p2 = list(r["parameters"])
+    n_grid = len(r["parameters"][p1]) * len(r["parameters"][p2])
+    ok = [row for row in r["table_rows"] if row["status"] == "ok"]
+    # pin clearance adds free play: at each eccentricity error the lost motion grows with the clearance
+    growth = []
+    for e in r["parameters"][p1]:
+        lm = [row["lost_motion_arcmin"] for row in sorted((x for x in ok if x[p1] == e), key=lambda x: x[p2])]
+        growth += [b - a for a, b in zip(lm, lm[1:])]
+    return {
+        "failures": casekit.check(r["failed"], MAX_FAILED, "<=", why="stated maximum MAX_FAILED"),
+        "every_point_reported": casekit.check(r["rows"], n_grid, "==", why="one row per grid point, failed or not"),
+        "clearance_adds_lost_motion": casekit.check(min(growth, default=None), 0.0, ">",
+                                                    why="free play at the pins adds to the lost motion"),
+    }
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t0 = time.perf_counter()
@@ -70,6 +92,7 @@ def main(argv=None):
         "table": [os.path.basename(p) for p in res["table"]],
         "table_rows": rows,
     }
+    casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"spec": os.path.relpath(SPEC, HERE), "quick": args.quick,
                                                               "protocol": repr(spec.protocol), "build": spec.build},
                                  wall_s=time.perf_counter() - t0)

@@ -27,9 +27,9 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs
-from rvtool.assembly import build
-from rvtool.assembly.rv import load_design as load_rv_design
-from rvtool.assembly.spec import load_design, replace
+from rvtool import build
+from rvtool import load_design as load_rv_design
+from rvtool import load_design, replace_design as replace
 from rvtool.slow import cycloid as C
 from rvtool.slow import rv as RV
 from rvtool.slow.report import write_details
@@ -116,7 +116,8 @@ def rv_thermal(quick):
         "gap_change_um": {ch.name: ch.gap_change(net, T_hot) * 1e6 for ch in th.channels},
         "te_pp_arcsec_cold": cold["te_pp_arcsec"], "te_pp_arcsec_hot": hot["te_pp_arcsec"],
         "lost_motion_arcmin_cold": cold["lost_motion_arcmin"], "lost_motion_arcmin_hot": hot["lost_motion_arcmin"],
-        "passed": bool(fp.converged and single_ok),
+        "single_node_backward_euler_bound_K": single["backward_euler_bound_K"],
+        "fixed_point_converged": bool(fp.converged),
     }
     details = {"origin": origin if origin is not None else "full run only (one re-run per channel)",
                "K_Nm_per_arcmin_cold": cold["K_Nm_per_arcmin"], "K_Nm_per_arcmin_hot": hot["K_Nm_per_arcmin"],
@@ -130,6 +131,25 @@ def rv_thermal(quick):
                 "not_in_the_windows": "involute stage (its sliding heat and flank offsets: wip/slowfric's involute "
                                       "window bodies and flank offsets)"}
     return results, details, settings, (net, T_hot, cold, hot, fp)
+
+
+def judge(r):
+    """The case's checks on its results (see casekit.verdict), RD-40 and rv40e."""
+    checks = {}
+    for label, b in (("rd40", r), ("rv40e", r["rv40e"])):
+        checks.update({
+            # the fixed point's own stopping rule: unrelaxed residual <= 1e-3 K and source drift <= 1e-4
+            f"{label}_fixed_point": casekit.check(b["fixed_point_converged"], True, "==",
+                                                  why="residual <= 1e-3 K and source drift <= 1e-4"),
+            f"{label}_temperature_residual": casekit.check(b["temperature_residual_K"], 1e-3, "<=",
+                                                           why="fixed-point stopping tolerance"),
+            f"{label}_source_drift": casekit.check(b["source_drift_rel"], 1e-4, "<=", why="fixed-point stopping tolerance"),
+            # backward Euler against the closed-form single-node transient, within its derived global bound
+            f"{label}_single_node": casekit.check(abs(b["single_node_T_C"] - b["single_node_closed_form_C"]),
+                                                  b["single_node_backward_euler_bound_K"], "<=",
+                                                  why="closed-form transient; backward-Euler error bound"),
+        })
+    return checks
 
 
 def single_node(net, x, mu, families):
@@ -212,7 +232,8 @@ def main(argv=None):
         "gap_change_um": gap_um,
         "te_pp_arcsec_cold": cold["te_pp_arcsec"], "te_pp_arcsec_hot": hot["te_pp_arcsec"],
         "lost_motion_arcmin_cold": cold["lost_motion_arcmin"], "lost_motion_arcmin_hot": hot["lost_motion_arcmin"],
-        "passed": bool(fp.converged and single_ok),
+        "single_node_backward_euler_bound_K": single["backward_euler_bound_K"],
+        "fixed_point_converged": bool(fp.converged),
     }
     details = {
         "origin": origin,
@@ -228,7 +249,7 @@ def main(argv=None):
     }
     rv_results, rv_details, rv_settings, rv_plot = rv_thermal(args.quick)
     results["rv40e"] = rv_results
-    results["passed"] = bool(results["passed"] and rv_results["passed"])
+    casekit.verdict(results, judge)
     details["rv40e"] = rv_details
     _plot(args.out, net, T_hot, cold, hot, fp)
     _plot(args.out, *rv_plot, name="thermal_feedback_rv40e")

@@ -83,15 +83,26 @@ def _run_one(proto, ctx):
                           tuple(p for p in outcome.plots if p), time.perf_counter() - t0)
 
 
-def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", tolerances=None):
+def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", tolerances=None, allowables=None,
+            backend="auto", scheduler=None):
     """Run ``protocols`` (names, a comma-separated string or None for all) on ``design``;
     returns an :class:`AnalysisResult`. Input errors (design, protocol names, device, a rated
     torque outside the design's admissible range, :mod:`rvtool.analysis.admissible`) raise
     :class:`~rvtool.errors.RvtoolInputError` before anything is written. ``tolerances``: the
-    Monte Carlo's tolerance file (default: a shipped design's ``<name>_tolerances``)."""
+    Monte Carlo's tolerance file (default: a shipped design's ``<name>_tolerances``).
+    ``allowables``: the design-review allowables file the report's summary checks the figures
+    against (default: :func:`rvtool.analysis.summary.find_allowables`, ``<name>_allowables``).
+    ``backend``: the solver backend (:data:`rvtool.solver.backends.CHOICES`): "auto" runs each
+    protocol on the fastest backend that supports the model; a named backend runs where it can and
+    skips a protocol it cannot run, with the reasons. Each protocol's settings record
+    ``backend``: {"requested", "ran", "not_taken": {name: reason}}. ``scheduler``: the address of
+    the Dask scheduler of the Monte Carlo's CPU pool (None: a LocalCluster started for it)."""
     t0 = time.perf_counter()
     chosen = select(protocols)
     dev = resolve_device(device)
+    from ..solver.backends import CHOICES
+    from ..validation import check_choice
+    check_choice("backend", backend, CHOICES)
     obj, source, shipped = load(design)
     from .. import designs
     from ..assembly import topologies
@@ -99,26 +110,36 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
         tolerances = designs.path(designs.tolerances_of(shipped))
     if tolerances is not None and not os.path.isfile(tolerances):
         raise RvtoolInputError(f"tolerances file {str(tolerances)!r} not found")
-    ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances)
+    from .summary import allowables_record, find_allowables
+    if allowables is None:
+        allowables = find_allowables(source, shipped)
+    elif not os.path.isfile(allowables):
+        raise RvtoolInputError(f"allowables file {str(allowables)!r} not found")
+    allowed = allowables_record(allowables)      # a bad file is an input error, raised before any work
+    ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances, backend=backend,
+                  scheduler=scheduler)
     # a valid but unsolvable load is an input error: raised here, before anything is written
     ctx.cache["rated_state"] = check_rated_state(obj, ctx.build)
     if out_dir is not None:
         os.makedirs(out_dir, exist_ok=True)
     results = tuple(_run_one(p, ctx) for p in chosen)
     res = AnalysisResult(getattr(obj, "name", type(obj).__name__), topologies.topology_of(obj) or type(obj).__name__,
-                         source, bool(quick), dev, results, out_dir, time.perf_counter() - t0)
+                         source, bool(quick), dev, results, out_dir, time.perf_counter() - t0, backend)
     if out_dir is not None:
-        write(res)
+        write(res, allowed)
     return res
 
 
-def write(res):
-    """Write results.json and report.html of ``res`` into its output folder."""
+def write(res, allowables=None):
+    """Write results.json and report.html of ``res`` into its output folder; ``allowables``: the
+    :func:`rvtool.analysis.summary.allowables_record` the report's summary checks against."""
     from .output import write_results
     from .report import write_report
     settings = {"design_source": res.source, "quick": res.quick, "protocols_requested": [r.name for r in res.results],
-                "device": res.device}
-    data = write_results(res.out_dir, res.to_dict(), settings=settings, wall_s=res.wall_s,
-                                 precision="float64", device=res.device)
+                "device": res.device, "backend": res.backend}
+    d = res.to_dict()
+    d["allowables"] = allowables or {"source": None, "values": None}
+    data = write_results(res.out_dir, d, settings=settings, wall_s=res.wall_s,
+                         precision="float64", device=res.device)
     write_report(data, res.out_dir)
     return data

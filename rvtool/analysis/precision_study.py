@@ -243,8 +243,9 @@ def hysteresis_loss(design, *, bearing_model, quick):
     closed -T_rated -> +T_rated -> -T_rated cycles after a virgin preload
     (:func:`rvtool.protocols.hysteresis_cycles.quasi_static_cycles`, levels every 25 % (quick) or
     6.25 % of T_rated plus +-3 %), with the second cycle's repeatability against the first and a
-    note on the friction the design declares (the width is friction memory; the clearances are
-    crossed alike in both directions and add no width)."""
+    note on the friction the design declares. The width is the catalogue's
+    (:mod:`rvtool.protocols.catalogue`): along the unloading branches, each extrapolated to zero
+    torque from its own side, so it holds the friction memory AND the free play of the clearances."""
     from ..units import RAD_PER_ARCMIN
     from ..protocols import hysteresis as H
     from ..protocols import hysteresis_cycles as HC
@@ -257,8 +258,8 @@ def hysteresis_loss(design, *, bearing_model, quick):
                           tolerance=CYCLE_TOL_ARCMIN * RAD_PER_ARCMIN)
     mu = {"pin_contact": getattr(getattr(design, "pin_contact", None), "mu", 0.0),
           "output_pins": getattr(getattr(design, "output_pins", None), "mu", 0.0)}
-    note = ("frictionless contacts (mu = 0): no friction memory, the width is numerical zero"
-            if not any(mu.values()) else f"friction mu {mu}")
+    note = ("frictionless contacts (mu = 0): no friction memory, the width is the clearances' free play"
+            if not any(mu.values()) else f"friction mu {mu}; the width includes the clearances' free play")
     if not rep.passed:
         note += f"; the cycle does not repeat within {CYCLE_TOL_ARCMIN:g} arcmin"
     return {"loss_arcmin": fig.hysteresis_loss_arcmin, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,

@@ -10,8 +10,9 @@ full forms follow the case scripts' settings.
   (as ``cases/stiffness_hysteresis.py``);
 * ``lost_motion`` -- at +-3 % of the rated torque from the stiffness sequence, checked
   against the spring-controlled march (:func:`rvtool.protocols.lost_motion.lost_motion`);
-* ``hysteresis`` -- two closed loops +T -> -T -> +T; zero-torque width, loop integral and the
-  cycle-dissipation checks of :mod:`rvtool.protocols.hysteresis`;
+* ``hysteresis`` -- two loops -T -> +T -> -T after a virgin preload (no level at zero torque), the
+  catalogue's hysteresis loss, lost motion and b/a (:mod:`rvtool.protocols.catalogue`), loop
+  integral and the cycle-dissipation checks of :mod:`rvtool.protocols.hysteresis`;
 * ``vibration`` -- driven rotation at the rated speed and torque, spectra of the output
   torsion, mesh-order amplitude against the quasi-static low-speed limit (as ``cases/vibration.py``);
 * ``pressure`` -- local pressure of the most loaded main-mesh contact per member at the rated
@@ -59,13 +60,43 @@ def _solver_warnings(out, stats, what):
 
 # -- transmission error ----------------------------------------------------------------------
 
+QUICK_POINTS_PER_MESH = 12
+"""Points per mesh cycle of the quick TE: enough to resolve the mesh-order ripple (at 4 points the
+rv40e trace was a jagged polygon through 4 samples per ripple); one input revolution keeps it short."""
+
 def _te_angles(model, quick):
     mesh = _mesh_period(model)
-    ppm = 4 if quick else 40
+    ppm = QUICK_POINTS_PER_MESH if quick else 40
     # quick: one input revolution; full: one output revolution (the declared interval of the cases)
     revs_out = 1.0 / abs(model.ratio) if quick else 1.0
     n = int(round(revs_out * abs(model.ratio) * (2 * np.pi / mesh) * ppm))
     return np.arange(n) * mesh / ppm, revs_out, ppm
+
+
+def _backend(ctx, model, task, n_states=None):
+    """(backend, choice) of ``ctx.backend`` for ``task`` on ``model``; a named backend that cannot
+    run it skips the protocol with its reasons (:class:`Unsupported`; never a silent fallback)."""
+    from ..solver.backends import choose
+    try:
+        return choose(ctx.backend, model, task, n_states=n_states, device=ctx.device)
+    except RvtoolInputError as exc:
+        raise Unsupported(str(exc)) from None
+
+
+def _exudyn_only(ctx, what):
+    """The backend record of a protocol that runs on Exudyn only (``what`` it needs that no other
+    backend implements); a named other backend skips the protocol, with that reason."""
+    from ..solver.backends import CHOICES
+    if ctx.backend not in ("auto", "exudyn"):
+        raise Unsupported(f"backend = {ctx.backend!r} runs no {what} (valid choices for this protocol: "
+                          "'exudyn' or 'auto')")
+    return {"requested": ctx.backend, "ran": "exudyn",
+            "not_taken": {b: f"implements no {what}" for b in CHOICES if b not in ("auto", "exudyn")}}
+
+
+def _continuation_backend(ctx):
+    """The torque continuation (stiffness, lost motion, hysteresis) runs on Exudyn's static solver."""
+    return _exudyn_only(ctx, "torque continuation")
 
 
 @register("te", "quasi-static transmission error under the rated torque (Eq. obs_te), with its refinement error")
@@ -74,10 +105,11 @@ def run_te(ctx):
     from ..protocols.precision import mesh_forces, quasi_static_te, te_metrics
     rated = ctx.require("rated_torque")
     out = Outcome()
-    model = ctx.build()
+    model = ctx.build()                 # built once: the sequence, the coarse refinement run, the section
     angles, revs, ppm = _te_angles(model, ctx.quick)
     mesh = _mesh_period(model)
-    qs = quasi_static_te(model, torque=rated, input_angles=angles)
+    backend, choice = _backend(ctx, model, "equilibria", len(angles))
+    qs = quasi_static_te(model, torque=rated, input_angles=angles, backend=backend)
     met = te_metrics(qs["te"], n_revolutions=revs)
     # refinement reference: one mesh cycle at the topology's refined resolution and twice the points
     window = np.arange(2 * ppm + 1) * mesh / (2 * ppm)
@@ -88,12 +120,13 @@ def run_te(ctx):
         out.warnings.append(f"no refinement error: {exc}")
         err_note = "not available: the topology declares no refined resolution"
     else:
-        coarse = quasi_static_te(ctx.build(), torque=rated, input_angles=window[::2])
-        fine_run = quasi_static_te(build(fine) if ctx.device == "cpu" else build(fine, device=ctx.device),
-                                   torque=rated, input_angles=window)
+        fine_model = build(fine) if ctx.device == "cpu" else build(fine, device=ctx.device)
+        ref_backend, ref_choice = _backend(ctx, fine_model, "equilibria", len(window))
+        coarse = quasi_static_te(model, torque=rated, input_angles=window[::2], backend=ref_backend)
+        fine_run = quasi_static_te(fine_model, torque=rated, input_angles=window, backend=ref_backend)
         err = float(np.max(np.abs(coarse["te"] - fine_run["te"][::2]))) * ARCSEC_PER_RAD
         err_note = ("max |TE - TE_refined| over one mesh cycle; reference: the topology's refined resolution "
-                    f"({model.resolution_settings()}) at twice the points")
+                    f"({model.resolution_settings()}) at twice the points (backend {ref_choice['ran']!r})")
     _solver_warnings(out, qs["stats"], "quasi-static TE")
     _regularization_warning(out, qs["regularization_max"], rated)
     te_as = qs["te"] * ARCSEC_PER_RAD
@@ -110,11 +143,13 @@ def run_te(ctx):
                 "te_order_amplitudes_arcsec": met["peak_amplitudes"] * ARCSEC_PER_RAD,
                 "regularization_max": qs["regularization_max"], "solver": qs["stats"], "wall_s_sequence": qs["wall_s"]}
     out.settings = {"torque_Nm": rated, "points": len(angles), "points_per_mesh_cycle": ppm,
-                    "output_revolutions": revs, "mesh_period_rad": mesh, **model.resolution_settings()}
+                    "output_revolutions": revs, "mesh_period_rad": mesh, "backend": choice,
+                    **model.resolution_settings()}
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(11, 3.8))
-    ax[0].plot(np.rad2deg(qs["theta_in"] / abs(model.ratio)), te_as - np.mean(te_as), lw=0.8)
-    ax[0].set(xlabel="output angle [deg]", ylabel="TE - mean [arcsec]", title="quasi-static TE at rated torque")
+    ax[0].plot(np.rad2deg(qs["theta_in"] / abs(model.ratio)), te_as - np.mean(te_as), ".-", lw=0.8, ms=2.5)
+    ax[0].set(xlabel="output angle [deg]", ylabel="TE - mean [arcsec]",
+              title=f"quasi-static TE at rated torque ({ppm} points per mesh cycle)")
     o, a = met["orders"], met["amplitudes"] * ARCSEC_PER_RAD
     ax[1].semilogy(o[1:], np.maximum(a[1:], 1e-8), lw=0.8)
     ax[1].set(xlabel="output-shaft order [-]", ylabel="amplitude [arcsec]", title="TE order spectrum")
@@ -123,11 +158,12 @@ def run_te(ctx):
     from ..solver.static import StaticSolver
     m0, q0 = ctx.cache.get("rated_state", (None, None))    # solved by the admissibility check
     if q0 is None:
-        m0 = ctx.build()
+        m0 = model
         m0.set_output_torque(-np.sign(m0.ratio) * rated)
         q0 = StaticSolver(m0).solve(0.0)
     out.data["mesh_forces_at_rated_N"] = mesh_forces(m0, q0)
     out.data["peak_loads_at_rated_N"] = m0.family_peaks(q0)
+    out.data["hertz_peaks_at_rated_Pa"] = m0.hertz_peaks(q0)      # the report's summary checks them
     fig, ax = plt.subplots(figsize=(6, 6))
     m0.draw_section(ax, q0)
     ax.set_title(f"contact forces at {rated} N m, input angle 0")
@@ -158,6 +194,7 @@ def _stiffness_run(ctx):
 def run_stiffness(ctx):
     from ..protocols import stiffness as S
     rated = ctx.require("rated_torque")
+    backend = _continuation_backend(ctx)      # before any work: a named other backend skips
     out = Outcome()
     seq, qs = _stiffness_run(ctx)
     torque, angle, labels = qs["torque_Nm"], qs["angle_arcmin"], qs["labels"]
@@ -184,7 +221,8 @@ def run_stiffness(ctx):
     out.data = {"torque_Nm": torque, "angle_arcmin": angle, "branch_labels": labels, "branch_fits": fits,
                 "tangent_check": tc, "continuation": qs["stats"], "regularization_max": qs["regularization_max"],
                 "wall_s_sequence": qs["wall_s"]}
-    out.settings = {"sequence": seq.__dict__, "levels": len(torque), "input_angle_rad": 0.0}
+    out.settings = {"sequence": seq.__dict__, "levels": len(torque), "input_angle_rad": 0.0,
+                    "backend": backend}
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot(angle, torque, ".-", lw=0.8, label="continuation levels")
@@ -204,6 +242,7 @@ def run_lost_motion(ctx):
     from ..protocols.lost_motion import lost_motion
     from ..protocols.stiffness import lost_motion_from_levels
     rated = ctx.require("rated_torque")
+    backend = _continuation_backend(ctx)      # before any work: a named other backend skips
     out = Outcome()
     _, qs = _stiffness_run(ctx)
     lm_cont = lost_motion_from_levels(qs["torque_Nm"], qs["angle_arcmin"], rated, LOST_MOTION_FRACTION)
@@ -220,47 +259,46 @@ def run_lost_motion(ctx):
     out.figures.append(Figure("lost_motion", lm_cont, "arcmin",
                               f"output angle between +{LOST_MOTION_FRACTION:.0%} and -{LOST_MOTION_FRACTION:.0%} "
                               "of T_rated on the first loading branches (continuation)", err, "arcmin", note))
-    out.settings = {"torque_fraction": LOST_MOTION_FRACTION, "torque_Nm": LOST_MOTION_FRACTION * rated}
+    out.settings = {"torque_fraction": LOST_MOTION_FRACTION, "torque_Nm": LOST_MOTION_FRACTION * rated,
+                    "backend": backend}
     return out
 
 
-def _loop_levels(ctx):
-    seq = _sequence(ctx)
-    s = seq.other_step
-    down = np.round(np.arange(1.0, -1.0 - 1e-9, -s), 10)
-    return np.concatenate([down, down[::-1][1:]]) * seq.rated_torque    # +T .. -T .. +T
+HYSTERESIS_RIGIDITY_POINTS = (0.5, 1.0)
+"""b/a torque points of ``analyze`` [fraction of T_rated]: rvtool's datasheet secant range; ``rvtool
+validate`` takes a catalogue's own points where its file gives them."""
 
 
-@register("hysteresis", "two closed loops +T -> -T -> +T: zero-torque width, loop integral, closure and repeatability")
+@register("hysteresis", "two repeating loops -T -> +T -> -T after a virgin preload: the catalogue's hysteresis loss, "
+                        "lost motion and b/a (rvtool.protocols.catalogue), loop integral, closure and repeatability")
 def run_hysteresis(ctx):
+    from ..protocols import catalogue as C
     from ..protocols import hysteresis as H
-    from ..solver.continuation import Continuation
     rated = ctx.require("rated_torque")
+    backend = _continuation_backend(ctx)      # before any work: a named other backend skips
     out = Outcome()
-    model = ctx.build()
-    cont = Continuation(model, input_angle=0.0)
-    i_out = model.output_index
-    th_kin = model.kinematic_output(0.0)
-    loop = _loop_levels(ctx)
-    cycles = []
-    first = np.linspace(0.0, rated, 5)[1:]           # virgin loading to +T, not part of a loop
-    levels = list(first) + list(loop) + list(loop[1:])
-    angles = []
-    for t in progress.track(levels, desc="hysteresis levels", unit="level"):
-        angles.append(float(cont.go_to(float(t))[i_out] - th_kin))
-    n0, n = len(first) - 1, len(loop)
-    a1 = np.array(angles[n0:n0 + n])
-    a2 = np.array(angles[n0 + n - 1:n0 + 2 * n - 1])
-    cycles = [H.Cycle(torque=loop, angle=a1), H.Cycle(torque=loop, angle=a2)]
+    seq = C.catalogue_sequence(rated, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, step=_sequence(ctx).other_step)
     tol = 1e-3 * RAD_PER_ARCMIN        # 0.001 arcmin: far below any reported angle, far above Newton's tolerance
-    width = H.zero_torque_width(cycles[1])
-    rep = H.repeatability(cycles[0], cycles[1], tolerance=tol)
-    gap_a, gap_t = H.closure_gap(cycles[1])
+    path = C.ContinuationPath(ctx.build())
+    r = C.catalogue_loops(path, seq, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, repeat_tolerance=tol)
+    m, rep = r["metrics"], r["repeatability"]
+    first, last = r["cycles"][-2], r["cycles"][-1]
+    T = last["torque_Nm"]
+    cycles = [H.Cycle(torque=T, angle=first["angle_rad"]), H.Cycle(torque=T, angle=last["angle_rad"])]
     note = (f"repeatability of the second loop against the first (max angle difference at equal torque); "
             f"declared tolerance {tol * ARCMIN_PER_RAD:g} arcmin")
-    out.figures.append(Figure("hysteresis_width", width * ARCMIN_PER_RAD, "arcmin",
-                              "angle between the descending and ascending zero-torque crossings of the second loop",
-                              rep.max_angle_diff * ARCMIN_PER_RAD, "arcmin", note))
+    hl = m.hysteresis_loss
+    out.figures.append(Figure("hysteresis_loss", hl.value * ARCMIN_PER_RAD, "arcmin",
+                              "the catalogue's hysteresis loss: the loop's width at zero torque along the unloading "
+                              "branches (each extrapolated from its own side, the free play included)",
+                              None if hl.error is None else hl.error * ARCMIN_PER_RAD, "arcmin",
+                              "linear against quadratic extrapolation of the unloading branches to zero torque"))
+    out.figures.append(Figure("lost_motion_catalogue", m.lost_motion * ARCMIN_PER_RAD, "arcmin",
+                              "the catalogue's lost motion: angle between the mid-points of the loop's width at "
+                              "+-3 % T_rated", rep.max_angle_diff * ARCMIN_PER_RAD, "arcmin", note))
+    out.figures.append(Figure("torsional_rigidity_b_over_a", m.rigidity.value * RAD_PER_ARCMIN, "N m/arcmin",
+                              f"b/a on the loading branches between {HYSTERESIS_RIGIDITY_POINTS[0]:g} and "
+                              f"{HYSTERESIS_RIGIDITY_POINTS[1]:g} T_rated (mean of {list(m.rigidity.per_branch)})"))
     try:
         diss = H.cycle_dissipation(cycles[0], cycles[1], angle_tolerance=tol, torque_tolerance=1e-9 * rated)
         out.figures.append(Figure("loop_dissipation", diss.loop_integral, "J", "closed-loop integral of T d(theta) "
@@ -270,15 +308,21 @@ def run_hysteresis(ctx):
         out.warnings.append(f"no loop dissipation: {exc}")
         out.figures.append(Figure("loop_integral", H.loop_integral(cycles[1]), "J",
                                   "integral of T d(theta) over the second loop (NOT a dissipation: see warnings)"))
-    out.data = {"torque_Nm": loop, "angle_arcmin_loop1": a1 * ARCMIN_PER_RAD, "angle_arcmin_loop2": a2 * ARCMIN_PER_RAD,
-                "closure_gap_arcmin": gap_a * ARCMIN_PER_RAD, "closure_gap_Nm": gap_t, "continuation": cont.stats.to_dict()}
-    out.settings = {"loop_step_fraction": _sequence(ctx).other_step, "virgin_levels_Nm": first,
-                    "angle_tolerance_arcmin": tol * ARCMIN_PER_RAD}
-    _solver_warnings(out, cont.stats.to_dict(), "continuation")
+    if not rep.passed:
+        out.warnings.append(f"the loops differ by {rep.max_angle_diff * ARCMIN_PER_RAD:.3g} arcmin (declared tolerance "
+                            f"{tol * ARCMIN_PER_RAD:g} arcmin)")
+    out.data = {"torque_Nm": T, "branch_labels": last["labels"], "angle_arcmin_loop1": first["angle_rad"] * ARCMIN_PER_RAD,
+                "angle_arcmin_loop2": last["angle_rad"] * ARCMIN_PER_RAD,
+                "rigidity_per_branch_Nm_per_arcmin": {k: v * RAD_PER_ARCMIN for k, v in m.rigidity.per_branch.items()},
+                "continuation": r["stats"]}
+    out.settings = {"loop_step_fraction": seq.step, "fine_levels": list(seq.fine_levels),
+                    "angle_tolerance_arcmin": tol * ARCMIN_PER_RAD, "rigidity_points": list(HYSTERESIS_RIGIDITY_POINTS),
+                    "backend": backend}
+    _solver_warnings(out, r["stats"], "continuation")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(a1 * ARCMIN_PER_RAD, loop, ".-", lw=0.8, label="loop 1")
-    ax.plot(a2 * ARCMIN_PER_RAD, loop, "x--", lw=0.8, label="loop 2")
+    ax.plot(first["angle_rad"] * ARCMIN_PER_RAD, T, ".-", lw=0.8, label="loop 1")
+    ax.plot(last["angle_rad"] * ARCMIN_PER_RAD, T, "x--", lw=0.8, label="loop 2")
     ax.set(xlabel="output angle [arcmin]", ylabel="output torque [N m]", title="hysteresis loops")
     ax.legend(fontsize=7)
     out.plots.append(ctx.save(fig, "hysteresis"))
@@ -293,6 +337,7 @@ def run_vibration(ctx):
     from ..protocols.precision import quasi_static_te
     from ..solver import RunSpec
     rated, speed = ctx.require("rated_torque", "input_speed_rpm")
+    backend = _exudyn_only(ctx, "driven run with the torsion observers of the vibration protocol")
     out = Outcome()
     model = ctx.build()
     mesh = _mesh_period(model)
@@ -337,7 +382,8 @@ def run_vibration(ctx):
                 "markers_hz": markers, "mesh_order_amplitude_quasistatic_arcsec": a_qs_mesh * ARCSEC_PER_RAD,
                 "accepted_steps": rec.accepted_steps, "rejected_steps": rec.rejected_steps,
                 "max_residual": rec.max_residual, "wall_s_run": run["wall_s"]}
-    out.settings = {"input_revolutions": revs, "speed_rpm": speed, "torque_Nm": rated, "run_spec": spec.to_dict()}
+    out.settings = {"input_revolutions": revs, "speed_rpm": speed, "torque_Nm": rated, "run_spec": spec.to_dict(),
+                    "backend": backend}
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(11, 3.6))
     ax[0].semilogy(sp["frequencies_hz"][1:], sp["spectrum"][1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8)
@@ -365,6 +411,7 @@ def run_pressure(ctx):
     from ..pressure.study import domain_halfwidth, resolution_study, select_contact
     from ..solver.static import StaticSolver
     rated = ctx.require("rated_torque")
+    backend = _exudyn_only(ctx, "contact-state extraction at one equilibrium (panels need the Exudyn model's state)")
     out = Outcome()
     model = ctx.build()
     if model.main_mesh != Family.PINS:
@@ -395,7 +442,8 @@ def run_pressure(ctx):
     ax.set(xlabel="x [um]", ylabel="pressure [MPa]", title=f"pressure at {rated} N m, N = {ns[-1]}")
     ax.legend(fontsize=7)
     out.plots.append(ctx.save(fig, "pressure"))
-    out.settings = {"torque_Nm": rated, "input_angle_rad": 0.0, "panels": ns, "window_m": PRESSURE_WINDOW}
+    out.settings = {"torque_Nm": rated, "input_angle_rad": 0.0, "panels": ns, "window_m": PRESSURE_WINDOW,
+                    "backend": backend}
     return out
 
 
@@ -435,7 +483,8 @@ def run_monte_carlo(ctx):
     n = 4 if ctx.quick else 200
     protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53)
     settings = MonteCarloSettings(n_variants=n, seed=2026, chunk_size=n if ctx.quick else 10,
-                                  mode="batched", workers=1 if ctx.quick else None, device=ctx.device)
+                                  mode="batched", workers=1 if ctx.quick else None, device=ctx.device,
+                                  scheduler=ctx.scheduler or "")
     with tempfile.TemporaryDirectory() as tmp:
         chunk_dir = os.path.join(ctx.out_dir, "monte_carlo_chunks") if ctx.out_dir else tmp
         res = mc(ctx.design, tol, protocol, settings, chunk_dir, build_kw={"regularization": MC_REGULARIZATION},

@@ -67,8 +67,10 @@ class Context:
     """What a protocol runs on: the design, the run mode and a cache shared by the protocols
     of one analysis (e.g. the stiffness sequence that lost motion and hysteresis reuse)."""
 
-    def __init__(self, design, *, quick, out_dir, device="cpu", tolerances=None):
+    def __init__(self, design, *, quick, out_dir, device="cpu", tolerances=None, backend="auto", scheduler=None):
         self.design = design
+        self.backend = backend          # a name of rvtool.solver.backends.CHOICES
+        self.scheduler = scheduler      # Dask scheduler address of the studies' pool (None: a LocalCluster)
         self.quick = bool(quick)
         self.out_dir = out_dir
         self.device = device

@@ -90,6 +90,13 @@ class AnalysisResult:
     results: tuple
     out_dir: str | None = None
     wall_s: float = 0.0
+    backend: str = "auto"
+
+    @property
+    def backends(self):
+        """Per protocol that ran, the backend record {"requested", "ran", "not_taken": {name: reason}}."""
+        return {r.name: r.settings["backend"] for r in self.results
+                if r.status == "ok" and isinstance(r.settings, dict) and "backend" in r.settings}
 
     def __getitem__(self, name):
         for r in self.results:
@@ -123,7 +130,8 @@ class AnalysisResult:
     def to_dict(self):
         """The results.json keys (provenance is added by the writer)."""
         d = {"design": self.design_name, "topology": self.topology, "design_source": self.source,
-             "quick": self.quick, "protocols": self.protocols, "skipped": self.skipped, "warnings": self.warnings}
+             "quick": self.quick, "protocols": self.protocols, "skipped": self.skipped, "warnings": self.warnings,
+             "backend_requested": self.backend, "backends": self.backends}
         for r in self.results:
             d[r.name] = r.to_dict()
         return d

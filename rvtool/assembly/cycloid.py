@@ -40,7 +40,8 @@ from exudyn_user_elements.contact_element import PortBodies
 from ..bearings.reducer import ball_rows
 from ..bearings.spec import NeedleBearing
 from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
-from ..contact.cycloid_set import CycloidPinSet, WheelPinMesh, secant_line_stiffness
+from ..contact.cycloid_set import (PALMGREN_EXPONENT, CycloidPinSet, WheelPinMesh, palmgren_line_coefficient,
+                                     secant_line_stiffness)
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre, journal_velocity
 from ..output_pins.calibration import mindlin_tangential_ratio  # noqa: F401 (public here too)
@@ -402,6 +403,9 @@ def pin_meshes(design, *, offset=0, prefix=""):
     width = d.wheels.width
     if pc.law == "power":
         law = NormalLaw(law="power", exponent=pc.exponent, stiffness=pc.stiffness or 1e9, damping=pc.damping)
+    elif pc.law == "palmgren":
+        law = NormalLaw(law="power", exponent=PALMGREN_EXPONENT, stiffness=palmgren_line_coefficient(width),
+                        damping=pc.damping)
     else:
         k_line = pc.stiffness if (pc.law == "line" and pc.stiffness > 0) else secant_line_stiffness(pc.reference_force, width)
         law = NormalLaw(law="line", stiffness=k_line, damping=pc.damping, ramp_depth=1e-6)
@@ -447,9 +451,9 @@ def pin_friction_law(design, normal_stiffness):
         return FrictionLaw()
     if pc.friction_model == "regularized":
         return FrictionLaw(model=FrictionModel.REGULARIZED, mu_kinetic=pc.mu)
-    if pc.tangential_stiffness == 0.0 and pc.law == "power" and pc.exponent != 1.0:
+    if pc.tangential_stiffness == 0.0 and (pc.law == "palmgren" or (pc.law == "power" and pc.exponent != 1.0)):
         raise RvtoolInputError("pin_contact.tangential_stiffness must be given (> 0 N/m) for the anchor model with "
-                               "a power law of exponent != 1 (no secant stiffness in N/m to derive it from)")
+                               "a power law of exponent != 1 or the palmgren law (no secant stiffness in N/m to derive it from)")
     kt = pc.tangential_stiffness or mindlin_tangential_ratio(design.material.poisson_ratio) * normal_stiffness
     return FrictionLaw(model=FrictionModel.ANCHOR, mu_kinetic=pc.mu, tangential_stiffness=kt)
 

@@ -113,8 +113,11 @@ class Wheels:
 
 @dataclass(frozen=True, kw_only=True)
 class PinContact:
-    """Cycloid--pin contact law: law ("line", "power", "secant"), stiffness [N/m] (whole contact;
-    0 with "line" = secant stiffness at reference_force), exponent (power law), reference_force [N],
+    """Cycloid--pin contact law: law ("line", "power", "secant", "palmgren"), stiffness [N/m] (whole contact;
+    0 with "line" = secant stiffness at reference_force), exponent (power law), reference_force [N]
+    ("line"/"secant" only; "palmgren" is Palmgren's nonlinear steel line contact F = k delta^(10/9) over
+    the wheel width, :func:`rvtool.contact.cycloid_set.palmgren_line_coefficient`: no stiffness, no
+    reference load),
     damping [N s/m], mu [-] (0 = no friction), friction_model ("regularized": Eq. (friction)
     velocity law; "anchor": stick--slip anchors per slice), tangential_stiffness [N/m] of the
     anchors (whole contact; 0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the normal secant stiffness)."""
@@ -128,8 +131,9 @@ class PinContact:
     tangential_stiffness: float = 0.0
 
     def __post_init__(self):
-        if self.law not in ("line", "power", "secant"):
-            raise RvtoolInputError(f"pin_contact.law = {self.law!r}; valid choices are ['line', 'power', 'secant']")
+        if self.law not in ("line", "power", "secant", "palmgren"):
+            raise RvtoolInputError(f"pin_contact.law = {self.law!r}; valid choices are ['line', 'power', 'secant', "
+                                   "'palmgren']")
         check_nonnegative("pin_contact.stiffness", self.stiffness)
         check_range("pin_contact.exponent", self.exponent, 1.0)
         check_positive("pin_contact.reference_force", self.reference_force)

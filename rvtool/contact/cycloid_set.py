@@ -30,6 +30,20 @@ def palmgren_line_approach(force, length):
     return 3.84e-5 * np.asarray(force) ** 0.9 / (length * 1e3) ** 0.8 * 1e-3
 
 
+PALMGREN_EXPONENT = 10.0 / 9.0
+"""Exponent p of Palmgren's line contact written as a force law F = k delta^p (p = 1/0.9)."""
+
+
+def palmgren_line_coefficient(length):
+    """Coefficient k [N/m^p] of Palmgren's steel line contact F = k delta^(10/9) over ``length``
+    [m]: the inverse of :func:`palmgren_line_approach` (delta = 3.84e-5 F^0.9 / L^0.8, F in N, L
+    and delta in mm; Palmgren, Ball and Roller Bearing Engineering, 1959; Harris & Kotzalas,
+    Essential Concepts of Bearing Technology, 5th ed. 2007, Eq. (6.29)). No reference load: the
+    law is the nonlinear approach itself."""
+    check_positive("length", length)
+    return ((length * 1e3) ** 0.8 / 3.84e-8) ** PALMGREN_EXPONENT     # delta [m] = 3.84e-8 F^0.9 / (L [mm])^0.8
+
+
 def secant_line_stiffness(reference_force, length):
     """Two-body line-contact secant k = F_ref / delta(F_ref) [N/m] at a stored reference load."""
     check_positive("reference_force", reference_force)

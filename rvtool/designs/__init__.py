@@ -26,7 +26,9 @@ def path(name):
 def kind(name):
     """What a shipped file holds: "tolerances" (a ``[tolerances]`` table, the Monte Carlo's input),
     "sweep" (a ``study`` key, ``rvtool sweep``'s input), "allowables" (an ``[allowables]`` table, the
-    datasheet's input) or "design" (a reducer design)."""
+    datasheet's input), "assumed" (``[[assumed]]`` tables: a design's assumed inputs with their cited
+    ranges), "catalogue" (``[[figure]]`` tables: a design's catalogue figures) or "design" (a reducer
+    design)."""
     import tomllib
     with open(path(name), "rb") as fh:
         table = tomllib.load(fh)
@@ -36,11 +38,15 @@ def kind(name):
         return "sweep"
     if "allowables" in table:
         return "allowables"
+    if "assumed" in table:
+        return "assumed"
+    if "figure" in table:
+        return "catalogue"
     return "design"
 
 
 def design_names():
-    """Names of the shipped reducer designs (tolerance, sweep and allowables files left out)."""
+    """Names of the shipped reducer designs (tolerance, sweep, allowables, assumed and catalogue files left out)."""
     return [n for n in names() if kind(n) == "design"]
 
 
@@ -49,3 +55,17 @@ def tolerances_of(name):
     stem = name[:-5] if name.endswith(".toml") else name
     companion = f"{stem}_tolerances"
     return companion if companion in names() and kind(companion) == "tolerances" else None
+
+
+def catalogue_of(name):
+    """Name of the shipped catalogue file of shipped design ``name`` (``<name>_catalogue``), or None."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    companion = f"{stem}_catalogue"
+    return companion if companion in names() and kind(companion) == "catalogue" else None
+
+
+def assumed_of(name):
+    """Name of the shipped assumed-ranges file of shipped design ``name`` (``<name>_assumed``), or None."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    companion = f"{stem}_assumed"
+    return companion if companion in names() and kind(companion) == "assumed" else None

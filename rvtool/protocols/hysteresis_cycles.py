@@ -7,8 +7,8 @@ after closure and repeatability have been established". The protocol is data
 symmetric about zero torque (the same fractions on every branch, the +-3 %
 lost-motion levels included, and no level at exactly zero torque: there the
 clearances are free play and the static regularization springs, a numerical
-setting, centre the output; the loop's zero-torque crossings are interpolated
-between the +-3 % levels of the same branch). After the virgin preload every
+setting, centre the output; the loop's zero-torque width is extrapolated along
+each unloading branch from its own side, :mod:`rvtool.protocols.catalogue`). After the virgin preload every
 reversal starts from a reversal point, so a rate-independent friction loop
 (Masing) repeats from the first cycle on; the second cycle is compared with the
 first.
@@ -22,7 +22,7 @@ only.
 
 Post-processing (:func:`catalogue_figures`): the catalogue figures of a
 precision reducer from one closed cycle -- hysteresis loss (loop width at zero
-torque, :func:`rvtool.protocols.hysteresis.zero_torque_width`), lost motion
+torque along the unloading branches, :func:`rvtool.protocols.catalogue.hysteresis_loss`), lost motion
 (the catalogue's midpoint definition: the angle between the midpoints of the
 loop's width at +3 % and at -3 % of rated torque), the four branch fits of
 Eq. (stiffness_fit) over 50-100 % of rated torque and ∮T dθ.
@@ -126,29 +126,26 @@ class CatalogueFigures:
 
 
 def midpoint_lost_motion(torque, angle, labels, rated_torque, fraction=0.03):
-    """Lost motion [angle units]: the angle between the midpoints of the loop's width at
-    +fraction and at -fraction of T_rated (the catalogue definition; each midpoint averages
-    the loading and the unloading branch at that torque)."""
-    torque = np.asarray(torque, float)
-    mids = []
-    for sign in (1.0, -1.0):
-        idx = np.flatnonzero(np.isclose(torque, sign * fraction * rated_torque))
-        branches = {labels[i] for i in idx}
-        if len(idx) < 2 or not any(b.endswith("_loading") for b in branches) \
-                or not any(b.endswith("_unloading") for b in branches):
-            raise RvtoolInputError(f"lost motion needs a loading and an unloading level at {sign * fraction:+g} T_rated; "
-                                   "the cycle has none (valid: a CycleSequence with that fine level)")
-        load = [i for i in idx if labels[i].endswith("_loading")][0]
-        unload = [i for i in idx if labels[i].endswith("_unloading")][0]
-        mids.append(0.5 * (angle[load] + angle[unload]))
-    return float(mids[0] - mids[1])
+    """Lost motion [angle units]: the catalogue's definition,
+    :func:`rvtool.protocols.catalogue.lost_motion` (the angle between the mid-points of the loop's
+    width at +fraction and at -fraction of T_rated)."""
+    from . import catalogue as C
+    try:
+        return C.lost_motion(torque, angle, labels, rated_torque=rated_torque, fraction=fraction)
+    except RvtoolInputError as exc:
+        raise RvtoolInputError(f"lost motion needs a loading and an unloading level at +-{fraction:g} T_rated: "
+                               f"{exc}") from None
 
 
 def catalogue_figures(torque, angle_rad, labels, rated_torque):
-    """:class:`CatalogueFigures` of one cycle (torque [N m], output angle [rad], branch labels)."""
+    """:class:`CatalogueFigures` of one cycle (torque [N m], output angle [rad], branch labels): the
+    hysteresis loss and lost motion by the catalogue's definitions (:mod:`rvtool.protocols.catalogue`:
+    the zero-torque width along the unloading branches, each extrapolated from its own side, the
+    clearance included; never interpolated across the free play)."""
+    from . import catalogue as C
     cyc = H.Cycle(torque=np.asarray(torque, float), angle=np.asarray(angle_rad, float))
     arcmin = cyc.angle / RAD_PER_ARCMIN
-    return CatalogueFigures(H.zero_torque_width(cyc) / RAD_PER_ARCMIN,
+    return CatalogueFigures(C.hysteresis_loss(cyc.torque, cyc.angle, labels).value / RAD_PER_ARCMIN,
                             midpoint_lost_motion(cyc.torque, arcmin, labels, rated_torque),
                             S.branch_fits(cyc.torque, arcmin, labels, rated_torque), H.loop_integral(cyc))
 

@@ -37,7 +37,8 @@ def mesh_forces(model, q):
     return np.array(list(model.observe(q, model.main_mesh).per_member().values()))
 
 
-def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, warm_start=True, backend="exudyn"):
+def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, warm_start=True, backend="exudyn",
+                    device="cpu"):
     """Sequence of equilibria at prescribed input angles under output torque ``torque`` [N m]
     (applied to resist the nominal output rotation), solved by ``backend`` (a name of
     :data:`rvtool.solver.backends.CHOICES` or a :class:`~rvtool.solver.backends.Backend`; the one
@@ -47,6 +48,7 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
     ``backend``: {"requested", "ran", "not_taken": {name: reason}}.
 
     solver, record: the Exudyn backend's StaticSolver and per-point callback record(k, angle, q).
+    device: the Warp device of the replica and device backends chosen by name or by auto.
     warm_start: start each point from the previous equilibrium (dense sequences); False
     starts every point with the solver's stiffness homotopy from the kinematic state, which
     is cheaper for points far apart (e.g. 53 points over an output revolution, 4.6 rad of
@@ -57,7 +59,7 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
             from ..errors import RvtoolInputError
             raise RvtoolInputError(f"solver= is the Exudyn backend's StaticSolver; backend = {backend!r} (valid: 'exudyn')")
         backend = ExudynBackend(solver=solver)
-    b, choice = choose(backend, model, "equilibria")
+    b, choice = choose(backend, model, "equilibria", n_states=len(input_angles), device=device)
     eq = b.solve_equilibria(model, EquilibriumBatch(input_angles=input_angles, torque=torque, warm_start=warm_start),
                             record=record)
     return {"theta_in": eq.theta_in, "theta_out": eq.theta_out,

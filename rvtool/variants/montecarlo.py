@@ -6,10 +6,10 @@ its own seeded generator) and run by the per-variant reference protocol
 :func:`rvtool.variants.variant_figures` (quasi-static TE over one output revolution,
 maximum pin force, lost motion), in one of three modes:
 
-* ``"pool"``: one task per variant on a ``concurrent.futures.ProcessPoolExecutor`` (spawned
-  workers, default one per core, each limited to one BLAS/OpenMP thread, so that the
-  workers do not oversubscribe the cores), or on any ``concurrent.futures.Executor`` passed
-  in (e.g. a Dask ``Client.get_executor()``, see :mod:`rvtool.variants.sweep`);
+* ``"pool"``: one task per variant on a Dask cluster (:mod:`rvtool.variants.cluster`: the
+  scheduler at ``settings.scheduler``, or a LocalCluster of spawned worker processes, default
+  one per core, each limited to one BLAS/OpenMP thread, so that the workers do not
+  oversubscribe the cores), or on any ``concurrent.futures.Executor`` passed in;
 * ``"batched"``: one batch per chunk through ``rvtool.batched.batched_variant_figures``
   (all variants of a chunk in one Exudyn system), in this process (which holds the device),
   or one task per chunk on a given executor;
@@ -59,14 +59,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RvtoolInputError
+from .cluster import THREAD_ENV, dask_client
+from .cluster import single_thread_env as _single_thread_env
 from .tolerances import sample_variant
 from .variant import VariantProtocol, variant_figures
 
 FIGURES = ("te_pp_arcsec", "te_rms_arcsec", "max_pin_force_N", "lost_motion_arcmin")
 """Figures of :func:`rvtool.variants.variant_figures` that the study reports distributions of."""
 
-THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
-"""Thread-count variables set to 1 for pool workers: one process per core, one thread each."""
 
 MODES = ("pool", "batched", "serial", "device", "auto")
 
@@ -100,13 +100,16 @@ class MonteCarloSettings:
     result file and per batched task), mode ("pool", "batched" or "serial"), workers (pool processes;
     None = os.cpu_count()) and device (of the batched path: "cpu", "cuda:N" or "auto"). Batched
     mode on "cpu" with more than one worker runs one batch (chunk) per pool process; on a GPU,
-    batches run one after another in the calling process, which holds the device."""
+    batches run one after another in the calling process, which holds the device.
+    scheduler: the pool's Dask cluster: the address of an existing scheduler, or "" for a
+    LocalCluster of ``workers`` processes started for the study (:mod:`rvtool.variants.cluster`)."""
     n_variants: int
     seed: int = 0
     chunk_size: int = 10
     mode: str = "pool"
     workers: int | None = None
     device: str = "cpu"
+    scheduler: str = ""
 
     def __post_init__(self):
         for nm, lo in (("n_variants", 1), ("seed", 0), ("chunk_size", 1)):
@@ -232,22 +235,6 @@ def _init_worker():
         os.environ[nm] = "1"
 
 
-@contextlib.contextmanager
-def _single_thread_env():
-    """Environment inherited by spawned workers: one BLAS/OpenMP thread each."""
-    saved = {nm: os.environ.get(nm) for nm in THREAD_ENV}
-    for nm in THREAD_ENV:
-        os.environ[nm] = "1"
-    try:
-        yield
-    finally:
-        for nm, v in saved.items():
-            if v is None:
-                os.environ.pop(nm, None)
-            else:
-                os.environ[nm] = v
-
-
 def chunk_path(out_dir, i):
     return os.path.join(out_dir, f"chunk_{i:05d}.json")
 
@@ -347,15 +334,12 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
                     progress(done, total)
             finish_chunk(i, recs)
     elif pending:
-        own = executor is None
         with contextlib.ExitStack() as stack:
-            if own:
-                stack.enter_context(_single_thread_env())
-                # spawn: workers start from a clean interpreter that sees the one-thread environment
-                # before numpy loads its BLAS (a fork would inherit the parent's thread pools)
-                executor = cf.ProcessPoolExecutor(max_workers=n_workers,
-                                                  mp_context=multiprocessing.get_context("spawn"),
-                                                  initializer=_init_worker)
+            if executor is None:
+                # the pool is a Dask cluster: the scheduler's, or a LocalCluster of n_workers processes
+                # started from a clean interpreter (one BLAS thread each, rvtool.variants.cluster)
+                client = stack.enter_context(dask_client(settings.scheduler, n_workers=n_workers))
+                executor = client.get_executor()
             try:
                 futures, partial = {}, {}
                 for i in pending:
@@ -382,11 +366,8 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
                     if len(partial[i][1]) == partial[i][0]:
                         finish_chunk(i, partial.pop(i)[1])
             finally:
-                if own:
-                    executor.shutdown(wait=True, cancel_futures=True)
-                else:
-                    for fut in futures:
-                        fut.cancel()
+                for fut in futures:      # after an interruption: nothing left running on the cluster
+                    fut.cancel()
     recs = [r for i in sorted(records) for r in records[i]]
     return {"records": recs, "summary": summarize(recs), "chunks_loaded": n_loaded, "chunks_run": len(pending),
             "wall_s": time.perf_counter() - t0, "fingerprint": fp, "mode": mode, "device": device,

@@ -67,6 +67,7 @@ from dataclasses import dataclass, field
 
 from ..errors import RvtoolInputError
 from .. import progress as progress_display
+from .cluster import dask_client
 from .montecarlo import FIGURES, MonteCarloSettings, run_monte_carlo
 from .variant import Variant, VariantProtocol, variant_figures
 
@@ -260,32 +261,6 @@ def write_table(rows, out_dir, name="results"):
     return paths
 
 
-class _Cluster:
-    """Context manager yielding a Dask client: connected to ``scheduler`` or to a new LocalCluster."""
-
-    def __init__(self, settings: ClusterSettings, scheduler=None):
-        self.settings, self.scheduler = settings, scheduler or settings.scheduler
-        self.cluster = self.client = None
-
-    def __enter__(self):
-        from dask.distributed import Client, LocalCluster
-        if self.scheduler:
-            self.client = Client(self.scheduler)
-        else:
-            s = self.settings
-            # no dashboard: a sweep is headless, and a fixed port would collide between sweeps
-            self.cluster = LocalCluster(n_workers=s.n_workers, threads_per_worker=s.threads_per_worker,
-                                        processes=s.processes, dashboard_address=None)
-            self.client = Client(self.cluster)
-        return self.client
-
-    def __exit__(self, *exc):
-        self.client.close()
-        if self.cluster is not None:
-            self.cluster.close()
-        return False
-
-
 def run_grid(client, design, spec, progress=None):
     """Rows of a grid study in grid order: one Dask task per point (grid.mode "point"), or one
     task per group of points that share a design, their TE on the device Newton (grid.mode
@@ -350,7 +325,10 @@ def run_sweep(spec: SweepSpec, *, scheduler=None, out_dir=None, progress=True, c
     design = load_design(spec.design_path)
     prog = progress_display.callback("sweep", unit="run") if progress is True else (progress or None)
     summary = None
-    with (_nullcontext(client) if client is not None else _Cluster(spec.cluster, scheduler)) as cl:
+    c = spec.cluster
+    with (_nullcontext(client) if client is not None else
+          dask_client(scheduler or c.scheduler, n_workers=c.n_workers, threads_per_worker=c.threads_per_worker,
+                      processes=c.processes)) as cl:
         if spec.study == "grid":
             rows = run_grid(cl, design, spec, prog)
         else:

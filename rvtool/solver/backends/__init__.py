@@ -12,7 +12,7 @@ fused      --                                          fused stepper (Warp, cpu 
 ``--backend device`` asks for the device family: the device Newton for equilibria and the fused
 stepper for driven runs. :func:`choose` resolves a requested name for a task on a model: a named
 backend that cannot run the model is a :class:`RvtoolInputError` naming every reason (no silent
-fallback); ``auto`` takes the first supporting backend in the measured order (``Backend.rank``,
+fallback); ``auto`` takes the first supporting backend in the measured order (:func:`auto_order`,
 docs/api/backends.md) and returns, for every other backend, the named reason it was not taken.
 """
 from ...errors import RvtoolInputError
@@ -25,7 +25,8 @@ CHOICES = ("auto", "exudyn", "replica", "device", "fused")
 """Values of ``--backend`` / ``backend=``."""
 
 __all__ = ["Backend", "CHOICES", "DeviceBackend", "DrivenHistory", "DrivenRun", "Equilibria", "EquilibriumBatch",
-           "ExudynBackend", "FusedBackend", "ReplicaBackend", "Support", "TASKS", "backends", "choose", "get"]
+           "ExudynBackend", "FusedBackend", "REPLICA_MIN_STATES", "ReplicaBackend", "Support", "TASKS", "auto_order",
+           "backends", "choose", "get"]
 
 
 def backends(device="cpu"):
@@ -43,9 +44,36 @@ def get(name, device="cpu"):
     raise RvtoolInputError(f"backend = {name!r}; valid choices are {list(CHOICES)}")
 
 
-def choose(requested, model, task, *, run=None, device="cpu"):
+REPLICA_MIN_STATES = 500
+"""From this many equilibria on, the replica backend is faster than Exudyn's sequential march on
+a CPU. Measured on the 2-core development machine (2026-11-27, tests/test_backends_golden.py's
+designs): the replica pays ~0.35 s (RD-40) to ~1.1 s (RV-40E) to copy the model and then
+0.8-1.5 ms per state, Exudyn 1.5-2.5 ms (RD-40) and 5.5-8.7 ms (RV-40E) per state: RD-40 160
+states 0.25 s Exudyn against 0.48 s replica, 2,000 states 4.9 s against 1.9 s; RV-40E 52 states
+0.45 s against 1.44 s, 600 states 3.3 s against 2.0 s. The crossover lies at 200-500 states."""
+
+
+def auto_order(task, *, n_states=None, device="cpu"):
+    """auto's order of the backends for ``task`` (fastest first), measured (see
+    :data:`REPLICA_MIN_STATES`): equilibria on a CUDA device: device Newton, replica, Exudyn; on a
+    CPU: Exudyn, then replica, below REPLICA_MIN_STATES states, replica first from there on, and the
+    device Newton last (from the kinematic state at every point, 1.9-2.2 ms per RD-40 state on one
+    CPU core: no faster than Exudyn's warm-started march). Driven runs: the fused stepper, then
+    Exudyn (RD-40, 1,000 steps on a CPU: 0.9-1.2 s against 1.0-1.1 s; on a GPU the fused stepper
+    runs many copies at once)."""
+    if task == "dynamic":
+        return ["fused", "exudyn"]
+    if str(device).startswith("cuda"):
+        return ["device", "replica", "exudyn"]
+    if n_states is not None and n_states >= REPLICA_MIN_STATES:
+        return ["replica", "exudyn", "device"]
+    return ["exudyn", "replica", "device"]
+
+
+def choose(requested, model, task, *, run=None, n_states=None, device="cpu"):
     """(backend, choice) for ``task`` on ``model``: ``requested`` is a name of :data:`CHOICES` or a
-    :class:`Backend`. choice = {"requested", "ran", "not_taken": {name: reason}} (for results.json).
+    :class:`Backend`; n_states: the number of equilibria asked for (auto's order depends on it);
+    device: the Warp device of the device backends. choice = {"requested", "ran", "not_taken": {name: reason}} (for results.json).
 
     A named backend that does not implement the task is mapped within its family ("device" runs
     driven runs on "fused", "fused" runs equilibria on "device"); one that cannot run the model
@@ -61,6 +89,7 @@ def choose(requested, model, task, *, run=None, device="cpu"):
     if requested not in CHOICES:
         raise RvtoolInputError(f"backend = {requested!r}; valid choices are {list(CHOICES)}")
     every = [b for b in backends(device) if task in b.tasks]
+    order = auto_order(task, n_states=n_states, device=device)
     if requested != "auto":
         family = {"device": ("device", "fused"), "fused": ("fused", "device")}.get(requested, (requested,))
         named = [b for b in every if b.name in family]
@@ -75,13 +104,14 @@ def choose(requested, model, task, *, run=None, device="cpu"):
         return b, {"requested": requested, "ran": b.name,
                    "not_taken": {o.name: f"not requested (--backend {requested})" for o in every if o is not b}}
     not_taken, chosen = {}, None
-    for b in sorted(every, key=lambda b: b.rank[task]):
-        if chosen is not None:
-            not_taken[b.name] = f"slower in auto's order than {chosen.name!r}"
-            continue
+    size = f"{n_states} states" if n_states is not None else task
+    for b in sorted(every, key=lambda b: order.index(b.name)):
         sup = b.supports(model, task, run)
-        if sup.ok:
+        if not sup.ok:
+            not_taken[b.name] = "; ".join(sup.reasons)
+        elif chosen is None:
             chosen = b
         else:
-            not_taken[b.name] = "; ".join(sup.reasons)
+            not_taken[b.name] = (f"supports the model, but slower than {chosen.name!r} for {size} on {device} "
+                                 "(measured order: rvtool.solver.backends.auto_order)")
     return chosen, {"requested": "auto", "ran": chosen.name, "not_taken": not_taken}

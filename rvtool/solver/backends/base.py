@@ -61,7 +61,9 @@ class Equilibria:
     may shift a point off an activation kink by <= 1e-5 rad and records it), ``theta_out`` (the
     output rotation, reference included) [rad], per-family peak row loads and peak physical-contact
     loads over the batch [N], ``regularization_max`` (largest regularization-spring force at the
-    last state [N or N m]), ``stats`` (solver statistics, backend-specific keys) and ``wall_s``."""
+    last state [N or N m]), ``stats`` (solver statistics, backend-specific keys), ``wall_s`` and
+    ``q`` (n_states, n) the equilibrium states in the model's coordinates (None: the backend keeps
+    them on its copies)."""
     theta_in: np.ndarray
     theta_out: np.ndarray
     peak_loads: dict
@@ -69,6 +71,7 @@ class Equilibria:
     regularization_max: float | None
     stats: dict = field(default_factory=dict)
     wall_s: float = 0.0
+    q: np.ndarray | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -104,11 +107,9 @@ class DrivenHistory:
 
 class Backend:
     """A solver backend (see the module docstring). ``name`` is its key in ``--backend``;
-    ``tasks`` what it implements; ``rank``: its place in ``auto``'s order per task (lower runs
-    first where supported; the order is measured, see docs/api/backends.md)."""
+    ``tasks`` what it implements (auto's order: :func:`rvtool.solver.backends.auto_order`)."""
     name = ""
     tasks = ()
-    rank = {}
 
     def supports(self, model, task, run=None):
         """:class:`Support` of ``task`` on ``model`` (and of the :class:`DrivenRun` ``run``, when given)."""

@@ -41,7 +41,6 @@ class DeviceBackend(Backend):
     settings: :class:`rvtool.solver.device_newton.DeviceNewtonSettings`."""
     name = "device"
     tasks = ("equilibria",)
-    rank = {"equilibria": 0}
 
     def __init__(self, *, device="cpu", settings=None):
         self.device, self.settings = device, settings
@@ -111,7 +110,7 @@ class DeviceBackend(Backend):
                  "device": newton.device}
         return Equilibria(theta_in=theta_in, theta_out=ref_out + qs[:, model.output_index], peak_loads=peaks,
                           peak_contact_loads=contact_peaks, regularization_max=model.regularization_force(qs[-1]),
-                          stats=stats, wall_s=time.perf_counter() - t0)
+                          stats=stats, wall_s=time.perf_counter() - t0, q=qs)
 
 
 class FusedBackend(Backend):
@@ -120,7 +119,6 @@ class FusedBackend(Backend):
     :class:`SolverFailure` with its state saved; it never hands over to Exudyn."""
     name = "fused"
     tasks = ("dynamic",)
-    rank = {"dynamic": 0}
 
     def __init__(self, *, device=None):
         self.device = device

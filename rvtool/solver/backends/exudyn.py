@@ -17,7 +17,6 @@ class ExudynBackend(Backend):
     the model to use for the equilibria (None: a new one per batch)."""
     name = "exudyn"
     tasks = ("equilibria", "dynamic")
-    rank = {"equilibria": 2, "dynamic": 2}
 
     def __init__(self, *, solver=None):
         self.solver = solver
@@ -34,7 +33,7 @@ class ExudynBackend(Backend):
         model.set_output_torque(-np.sign(model.ratio) * batch.torque)
         i_out = model.output_index
         ref_out = model.reference_value(model.output)
-        th_in, th_out = [], []
+        th_in, th_out, qs = [], [], []
         peaks, contact_peaks = {}, {}
         prev = None
         t0 = time.perf_counter()
@@ -44,6 +43,7 @@ class ExudynBackend(Backend):
             prev = a
             th_in.append(a)
             th_out.append(ref_out + q[i_out])
+            qs.append(np.array(q))
             for fam, f in model.family_peaks(q).items():
                 peaks[fam] = max(peaks.get(fam, 0.0), f)
             for fam, f in model.family_contact_peaks(q).items():
@@ -52,7 +52,7 @@ class ExudynBackend(Backend):
                 record(k, a, q)
         return Equilibria(theta_in=np.array(th_in), theta_out=np.array(th_out), peak_loads=peaks,
                           peak_contact_loads=contact_peaks, regularization_max=model.regularization_force(solver.q),
-                          stats=solver.stats.to_dict(), wall_s=time.perf_counter() - t0)
+                          stats=solver.stats.to_dict(), wall_s=time.perf_counter() - t0, q=np.array(qs))
 
     def step_dynamic(self, model, run):
         """Driven run with the Exudyn driver from the StaticSolver's loaded state at angle 0."""

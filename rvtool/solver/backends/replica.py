@@ -92,7 +92,6 @@ class ReplicaBackend(Backend):
     1e-6 N and saves a quarter of the iterations)."""
     name = "replica"
     tasks = ("equilibria",)
-    rank = {"equilibria": 1}
 
     def __init__(self, *, copies=None, workers=1, build_kw=None, device="cpu", predictor="secant", abs_tol=1e-4):
         check_choice("predictor", predictor, ("constant", "secant"))

@@ -1,0 +1,40 @@
+"""``rvtool analyze --backend`` / ``rvtool.analyze(..., backend=)``: results.json records which
+backend ran each protocol and, for every other backend, the named reason it was not taken; a
+named backend that cannot run a protocol skips it with the reasons (no silent fallback)."""
+import json
+
+import pytest
+
+import rvtool
+from rvtool.errors import RvtoolInputError
+from rvtool.solver.backends import REPLICA_MIN_STATES, auto_order
+
+
+def test_auto_records_the_choice_and_every_reason(tmp_path):
+    res = rvtool.analyze("rd40", "te,lost_motion", quick=True, out_dir=str(tmp_path), backend="auto")
+    data = json.loads((tmp_path / "results.json").read_text())
+    assert data["backend_requested"] == "auto"
+    te = data["backends"]["te"]
+    assert te["ran"] == "exudyn"                 # 160 states on a CPU: below REPLICA_MIN_STATES
+    assert set(te["not_taken"]) == {"replica", "device"}
+    assert all("slower" in r for r in te["not_taken"].values())
+    lm = data["backends"]["lost_motion"]
+    assert lm["ran"] == "exudyn" and set(lm["not_taken"]) == {"replica", "device", "fused"}
+    assert res["te"].settings["backend"] == te
+
+
+def test_named_backends_run_or_skip_with_reasons(tmp_path):
+    res = rvtool.analyze("rd40", "te,stiffness", quick=True, out_dir=None, backend="device")
+    assert res["te"].status == "ok" and res["te"].settings["backend"]["ran"] == "device"
+    assert res["stiffness"].status == "skipped" and "torque continuation" in res["stiffness"].reason
+    rv = rvtool.analyze("rv40e", "te", quick=True, out_dir=None, backend="fused")
+    assert rv["te"].status == "skipped" and "cannot run equilibria" in rv["te"].reason
+    with pytest.raises(RvtoolInputError, match="backend"):
+        rvtool.analyze("rd40", "te", quick=True, backend="gpu")
+
+
+def test_auto_order_is_the_measured_one():
+    assert auto_order("equilibria", n_states=REPLICA_MIN_STATES - 1)[0] == "exudyn"
+    assert auto_order("equilibria", n_states=REPLICA_MIN_STATES)[0] == "replica"
+    assert auto_order("equilibria", n_states=10, device="cuda:0")[0] == "device"
+    assert auto_order("dynamic") == ["fused", "exudyn"]

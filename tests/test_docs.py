@@ -1,0 +1,95 @@
+"""The documentation builds with warnings as errors, and its generated parts are there.
+
+The build (``python -m sphinx -W -b html docs OUT``) reads the committed results under
+docs/case_results/ and never reruns a study; it takes ~10-25 s on a shared 2-core machine.
+"""
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("sphinx", reason="the docs need the 'docs' or 'test' extra (sphinx, myst-parser)")
+pytest.importorskip("myst_parser", reason="the docs need the 'docs' or 'test' extra (sphinx, myst-parser)")
+
+ROOT = Path(__file__).resolve().parents[1]
+BUILD_TIMEOUT_S = 240
+"""Generous against a loaded CI machine; a quiet 2-core machine builds in ~10 s."""
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    out = tmp_path_factory.mktemp("docs")
+    env = dict(os.environ, MPLBACKEND="Agg")
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
+    proc = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html",
+                           "-d", str(out / "doctrees"), str(ROOT / "docs"), str(out / "html")],
+                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=BUILD_TIMEOUT_S)
+    assert proc.returncode == 0, f"sphinx-build -W failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-6000:]}"
+    return out / "html"
+
+
+def _text(html_path):
+    """The page's text: tags removed (inline markup joins its words as a reader sees them)."""
+    import html
+    text = re.sub(r"<[^>]+>", "", html_path.read_text(encoding="utf-8"))
+    return re.sub(r"\s+", " ", html.unescape(text))
+
+
+def test_docs_build_without_warnings(site):
+    for page in ("index", "install", "getting_started", "guide/cycloid", "guide/rv", "guide/std_involute",
+                 "reference/design_format", "protocols/index", "protocols/figures", "validation/index",
+                 "benchmarks/index", "api/rvtool", "changelog", "history/index"):
+        assert (site / f"{page}.html").is_file(), f"page {page} missing"
+
+
+def test_design_format_is_generated_at_build(site):
+    from rvtool.designs.format import format_doc
+    text = _text(site / "reference" / "design_format.html")
+    assert "replaced at build time" not in text, "the stub was not replaced by the generator"
+    # every section heading of the generator's output is on the page
+    for sec in re.findall(r"^### `\[([a-z_.]+)\]`", format_doc(), re.M)[:40]:
+        assert f"[{sec}]" in text, f"section [{sec}] of the format doc missing from the page"
+
+
+def test_api_reference_documents_the_public_entry_points(site):
+    text = _text(site / "api" / "rvtool.html")
+    for name in ("load_design", "build", "analyze"):
+        assert f"rvtool.{name}" in text
+    assert "ReducerModel" in _text(site / "api" / "model.html")
+
+
+def test_results_pages_are_generated_from_committed_results(site):
+    committed = sorted(p.parent.name for p in (ROOT / "docs" / "case_results").glob("verification/*/results.json"))
+    assert committed, "no committed verification results"
+    index = _text(site / "validation" / "index.html")
+    for case in committed:
+        assert case in index, f"{case} has committed results but no row on the verification page"
+    # a value of the committed file appears on the generated figures page, with its error statement
+    data = json.loads((ROOT / "docs/case_results/analyze/analyze_rd40/results.json").read_text())
+    te = data["te"]["figures"]["te_pp"]
+    figures = _text(site / "protocols" / "figures.html")
+    assert f"{te['value']:.4g}" in figures and "te_pp" in figures
+    assert te["error_statement"].split(";")[0][:40] in figures
+
+
+def test_changelog_includes_every_fragment(site):
+    text = _text(site / "changelog.html")
+    for frag in (ROOT / "docs" / "changelog.d").glob("*.md"):
+        assert f"from {frag.stem}" in text, f"fragment {frag.name} not in the changelog"
+
+
+def test_readme_fits_on_a_screen_and_links_the_docs():
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= 200
+    for cmd in ("pip install", "pytest", "rvtool analyze", "rvtool new"):
+        assert cmd in readme
+    for img in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", readme):
+        assert (ROOT / img).is_file(), f"README picture {img} is not committed"
+    links = [t for t in re.findall(r"\]\(([^)#]+)\)", readme) if not t.startswith("http")]
+    assert links, "the README links into the docs"
+    for target in links:
+        assert (ROOT / target).exists(), f"README links to {target}, which does not exist"

@@ -1,0 +1,80 @@
+"""`rvtool validate` (rvtool/analysis/validate.py): the table's verdicts follow the catalogue's kinds,
+the ratio variant keeps the frame, the CLI's input errors, and one quick end-to-end run on rv40e
+(no assumed ranges: no band) with its files."""
+import json
+import math
+import os
+
+import pytest
+
+from rvtool import designs
+from rvtool.analysis import validate as V
+from rvtool.assembly.topologies import read_table
+from rvtool.cli import main
+from rvtool.designs.catalogue import Catalogue, CatalogueFigure, CatalogueSource, CatalogueTest
+from rvtool.units import RAD_PER_ARCMIN
+
+
+def _cat(*figs):
+    test = CatalogueTest(rated_torque=400.0, rated_output_speed=math.pi / 2, rated_output_speed_rpm=15.0,
+                         rated_life_h=6000.0, lost_motion_torque_fraction=0.03, rigidity_torque_points=None)
+    return Catalogue(design="toy", source=CatalogueSource(title="T", edition="E"), test=test, figures=tuple(figs),
+                     path="toy_catalogue.toml")
+
+
+def _fig(key, value, unit, kind, **kw):
+    from rvtool.designs.catalogue import UNITS
+    return CatalogueFigure(key=key, value=value, unit=unit, value_si=value * UNITS[unit], page="p. 1", conditions="c",
+                           kind=kind, **kw)
+
+
+def test_rows_follow_the_catalogue_kinds():
+    cat = _cat(_fig("lost_motion", 1.0, "arcmin", "max"),
+               _fig("lost_motion", 0.45, "arcmin", "typical", low=0.3, high=0.6, status="read"),
+               _fig("torsional_rigidity", 6000.0, "N m/rad", "typical", status="not_reread"),
+               _fig("rated_life", 6000.0, "h", "typical"))
+    r = V._rows("lost_motion", 0.7, "arcmin", cat)
+    assert [x["verdict"] for x in r] == ["within max", "+55.6 % vs typical; outside the printed range"]
+    assert V._rows("lost_motion", 1.2, "arcmin", cat)[0]["verdict"] == "above max"
+    # units go through SI: 6000 N m/rad is 6000 x RAD_PER_ARCMIN N m/arcmin
+    k = V._rows("torsional_rigidity", 2.0, "N m/arcmin", cat, band=(1.0, 2.0))[0]
+    assert k["catalogue"] == pytest.approx(6000.0 * RAD_PER_ARCMIN, rel=1e-12)
+    assert "catalogue in band" in k["verdict"] and "not re-read" in k["verdict"]
+    assert V._rows("rated_life", 5000.0, "h", cat)[0]["verdict"] == "short"
+    assert V._rows("hysteresis_loss", 0.3, "arcmin", cat)[0]["verdict"] == "no figure"
+    assert V.rigidity_points(cat)[0] == V.DEFAULT_RIGIDITY_POINTS and "NOT the catalogue" in V.rigidity_points(cat)[1]
+
+
+def test_ratio_variant_keeps_the_frame():
+    t = read_table(designs.path("rv40e"))
+    t2, ratio = V.ratio_variant(t)
+    assert (t2["sun_gear"]["n_teeth"], t2["crank_gear"]["n_teeth"]) == (24, 48)
+    assert ratio == 81.0 and t2["ratio_target"] == 81.0 and t2["pins"] == t["pins"]
+    assert t["sun_gear"]["n_teeth"] == 18                 # the original table is untouched
+
+
+def test_cli_unknown_design_is_a_usage_error(capsys, tmp_path):
+    assert main(["validate", "rd40", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rvtool: error:") and "no catalogue file" in err and "rv80e" in err
+    assert not os.listdir(tmp_path)
+    assert main(["validate", "rv40e", "--samples", "1", "--out", str(tmp_path)]) == 2
+
+
+def test_quick_validate_rv40e_end_to_end(tmp_path):
+    out = V.validate("rv40e", quick=True, out_dir=str(tmp_path), log=lambda *a: None)
+    c = V.checks(out)
+    assert c == {"no_nan": True, "loops_repeat": True}            # rv40e ships no assumed ranges: no band
+    assert out["uncertainty"] is None and "no rv40e_assumed.toml" in out["uncertainty_note"]
+    keys = [r["figure"] for r in out["table"]]
+    assert {"torsional_rigidity", "lost_motion", "hysteresis_loss", "rated_life"} <= set(keys)
+    for r in out["table"]:
+        assert r["source"] and (r["catalogue"] is None or "Nabtesco" in r["source"] or "catalogue" in r["source"])
+    assert out["central"]["repeat_arcmin"] < V.REPEAT_TOLERANCE_ARCMIN
+    assert len(out["assumptions_commit"]) == 40
+    assert abs(out["ratio_variant"]["rel_diff"]) < 0.05          # one rigidity per frame (measured +0.57 %)
+    for f in ("results.json", "report.html", "hysteresis.png"):
+        assert os.path.isfile(tmp_path / f), f
+    data = json.loads((tmp_path / "results.json").read_text())
+    assert data["table"][0]["figure"] == "torsional_rigidity"
+    assert "data:image/png;base64," in (tmp_path / "report.html").read_text()
