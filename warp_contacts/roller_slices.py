@@ -17,15 +17,15 @@ import warp as wp
 
 from .planar import LaunchBuffers
 from .precision import resolve_device
-from .roller_slices_ref import (B_FLOOR_FRACTION, HALF_WIDTH_FIXED, HALF_WIDTH_ROLLER_LOAD, HALF_WIDTH_RTOL,
-                                HALF_WIDTH_SLICE_LOAD, LCP_RTOL, MAX_HALF_WIDTH_ITERATIONS, MAX_PIVOTS, N_QUAD,
+from .roller_slices_ref import (B_FLOOR_FRACTION, HALF_WIDTH_FIXED, HALF_WIDTH_ROLLER_LOAD, HALF_WIDTH_SLICE_LOAD,
+                                LCP_RTOL, MAX_HALF_WIDTH_ITERATIONS, MAX_PIVOTS, N_QUAD, NEWTON_RTOL,
                                 N_SLICE_FLOAT, N_SLICE_INT, SI_COUNT, SI_MODE, SIN_Q, SL_BIN, SL_BOUT, SL_DY, SL_ESTAR,
                                 SL_LEN, SL_RIN, SL_ROUT, W_Q)
 
 f64 = wp.float64
-# scratch slots of the per-roller work vectors
-W_F, W_RHS, W_T = 0, 1, 2
-N_WORK = 3
+# scratch slots of the per-roller work vectors: forces, right-hand side, strip integrals I_k, dI_k/db
+W_F, W_RHS, W_I, W_DI = 0, 1, 2, 3
+N_WORK = 4
 
 
 @functools.lru_cache(maxsize=None)
@@ -33,7 +33,7 @@ def _kernel():
     zero, one, two = f64(0.0), f64(1.0), f64(2.0)
     pi = f64(np.pi)
     rtol = f64(LCP_RTOL)
-    hw_rtol = f64(HALF_WIDTH_RTOL)
+    newton_rtol = f64(NEWTON_RTOL)
     floor_frac = f64(B_FLOOR_FRACTION)
 
     @wp.func
@@ -46,48 +46,57 @@ def _kernel():
         return -r, -c / r
 
     @wp.func
-    def strip(k: int, dy: f64, b: f64, sin_q: wp.array(dtype=f64), w_q: wp.array(dtype=f64)):
-        """I_k(b) and dI_k/db (Galerkin strip integral of the reference)."""
-        kk = f64(k)
-        I = zero
-        dI = zero
+    def strips(j: int, n: int, dy: f64, b: f64, sin_q: wp.array(dtype=f64), w_q: wp.array(dtype=f64),
+               work: wp.array3d(dtype=f64)):
+        """I_k(b) and dI_k/db, k < n, into work[j, W_I], work[j, W_DI] (Galerkin strip integrals of the
+        reference): per node, S at |u| = 0, dy, ..., n dy once, the second differences from them."""
+        for k in range(n):
+            work[j, W_I, k] = zero
+            work[j, W_DI, k] = zero
         for q in range(N_QUAD):
             c = b * sin_q[q]
-            sp, dp = smooth_h((kk + one) * dy, c)
-            s0, d0 = smooth_h(kk * dy, c)
-            sm, dm = smooth_h((kk - one) * dy, c)
-            I += w_q[q] * (sp - two * s0 + sm)
-            dI += w_q[q] * (dp - two * d0 + dm) * sin_q[q]
-        I = I / dy
-        dI = dI / dy
-        if k == 0:
-            I += two * wp.log(two / b) + one
-            dI -= two / b
-        return I, dI
+            s0, d0 = smooth_h(zero, c)
+            s1, d1 = smooth_h(dy, c)
+            sm = s1          # S(|-dy|)
+            dm = d1
+            for k in range(n):
+                sp, dp = smooth_h(f64(k + 1) * dy, c)
+                work[j, W_I, k] = work[j, W_I, k] + w_q[q] * (sp - two * s0 + sm)
+                work[j, W_DI, k] = work[j, W_DI, k] + w_q[q] * (dp - two * d0 + dm) * sin_q[q]
+                sm = s0
+                dm = d0
+                s0 = sp
+                d0 = dp
+        for k in range(n):
+            work[j, W_I, k] = work[j, W_I, k] / dy
+            work[j, W_DI, k] = work[j, W_DI, k] / dy
+        work[j, W_I, 0] = work[j, W_I, 0] + two * wp.log(two / b) + one
+        work[j, W_DI, 0] = work[j, W_DI, 0] - two / b
 
     @wp.func
     def fill_compliance(j: int, n: int, mode: int, dy: f64, scale: f64, hw: wp.array3d(dtype=f64),
                         sin_q: wp.array(dtype=f64), w_q: wp.array(dtype=f64), cm: wp.array3d(dtype=f64),
-                        dcm: wp.array4d(dtype=f64)):
+                        dcm: wp.array4d(dtype=f64), work: wp.array3d(dtype=f64)):
         """C (cm[j]) and dC/db_r (dcm[j, r]) at the half-widths hw[j] (2, n)."""
         if mode == HALF_WIDTH_SLICE_LOAD:
             for c in range(n):
                 for i in range(n):
                     cm[j, i, c] = zero
                 for r in range(2):
+                    strips(j, n, dy, hw[j, r, c], sin_q, w_q, work)
                     for i in range(n):
-                        I, dI = strip(wp.abs(i - c), dy, hw[j, r, c], sin_q, w_q)
-                        cm[j, i, c] = cm[j, i, c] + scale * I
-                        dcm[j, r, i, c] = scale * dI
+                        k = wp.abs(i - c)
+                        cm[j, i, c] = cm[j, i, c] + scale * work[j, W_I, k]
+                        dcm[j, r, i, c] = scale * work[j, W_DI, k]
         else:
             # one half-width per race: a symmetric Toeplitz matrix from its first column
             for k in range(n):
                 cm[j, k, 0] = zero
             for r in range(2):
+                strips(j, n, dy, hw[j, r, 0], sin_q, w_q, work)
                 for k in range(n):
-                    I, dI = strip(k, dy, hw[j, r, 0], sin_q, w_q)
-                    cm[j, k, 0] = cm[j, k, 0] + scale * I
-                    dcm[j, r, k, 0] = scale * dI
+                    cm[j, k, 0] = cm[j, k, 0] + scale * work[j, W_I, k]
+                    dcm[j, r, k, 0] = scale * work[j, W_DI, k]
             for c in range(1, n):
                 for i in range(n):
                     k = wp.abs(i - c)
@@ -98,14 +107,13 @@ def _kernel():
     @wp.func
     def update_half_widths(j: int, n: int, mode: int, fp: wp.array2d(dtype=f64), f: wp.array3d(dtype=f64),
                            hw: wp.array3d(dtype=f64)):
-        """New half-widths of the load modes into hw[j]; returns 1 when every one moved by <= rtol."""
+        """Half-widths of the load modes at the forces work[j, W_F] into hw[j]."""
         dy = fp[j, SL_DY]
         es = fp[j, SL_ESTAR]
         floor = floor_frac * dy
         total = zero
         for i in range(n):
             total += f[j, W_F, i]
-        done = int(1)
         for r in range(2):
             radius = fp[j, SL_RIN]
             if r == 1:
@@ -114,11 +122,36 @@ def _kernel():
                 q = total / fp[j, SL_LEN]
                 if mode == HALF_WIDTH_SLICE_LOAD:
                     q = wp.max(f[j, W_F, i], zero) / dy
-                b = wp.max(wp.sqrt(f64(4.0) * wp.max(q, zero) * radius / (pi * es)), floor)
-                if wp.abs(b - hw[j, r, i]) > hw_rtol * b:
-                    done = 0
-                hw[j, r, i] = b
-        return done
+                hw[j, r, i] = wp.max(wp.sqrt(f64(4.0) * wp.max(q, zero) * radius / (pi * es)), floor)
+
+    @wp.func
+    def add_half_width_term(j: int, n: int, mode: int, floor: f64, hw: wp.array3d(dtype=f64),
+                            dcm: wp.array4d(dtype=f64), work: wp.array3d(dtype=f64), cm: wp.array3d(dtype=f64)):
+        """cm[j] += D: M = C + D of the tangent (the reference's half_width_term)."""
+        total = zero
+        for i in range(n):
+            total += work[j, W_F, i]
+        if mode == HALF_WIDTH_ROLLER_LOAD:
+            ok = total > zero
+            for r in range(2):
+                if hw[j, r, 0] <= floor:
+                    ok = False
+            if ok:
+                for i in range(n):
+                    v = zero
+                    for r in range(2):
+                        for k in range(n):
+                            v += dcm[j, r, i, k] * work[j, W_F, k] * hw[j, r, 0]
+                    v = v / (two * total)
+                    for c in range(n):
+                        cm[j, i, c] = cm[j, i, c] + v
+        if mode == HALF_WIDTH_SLICE_LOAD:
+            for c in range(n):
+                for r in range(2):
+                    b = hw[j, r, c]
+                    if b > floor:
+                        for i in range(n):
+                            cm[j, i, c] = cm[j, i, c] + f64(0.5) * dcm[j, r, i, c] * b
 
     @wp.func
     def gather(j: int, n: int, act: wp.array2d(dtype=wp.int32), idx: wp.array2d(dtype=wp.int32)):
@@ -230,43 +263,43 @@ def _kernel():
             act[j, i] = 0
             if s_in[j, i] > zero:
                 act[j, i] = 1
-        iters = int(1)
+        fill_compliance(j, n, mode, dy, scale, hw_out, sin_q, w_q, cm, dcm, work)
+        murty(j, n, s_in, act, idx, cm, lu, work)
         if mode != HALF_WIDTH_FIXED:
-            iters = MAX_HALF_WIDTH_ITERATIONS
-        for it in range(iters):
-            fill_compliance(j, n, mode, dy, scale, hw_out, sin_q, w_q, cm, dcm)
-            murty(j, n, s_in, act, idx, cm, lu, work)
-            if mode != HALF_WIDTH_FIXED:
-                if update_half_widths(j, n, mode, fp, work, hw_out) == 1:
-                    fill_compliance(j, n, mode, dy, scale, hw_out, sin_q, w_q, cm, dcm)
-                    murty(j, n, s_in, act, idx, cm, lu, work)
-                    break
-        # tangent: M = C + D on the active block (D of the half-width mode), J_AA = M_AA^-1
-        total = zero
+            for it in range(MAX_HALF_WIDTH_ITERATIONS):
+                # Newton on C(b(f)) f_A = s_A, the active set held (see the reference)
+                update_half_widths(j, n, mode, fp, work, hw_out)
+                fill_compliance(j, n, mode, dy, scale, hw_out, sin_q, w_q, cm, dcm, work)
+                m = gather(j, n, act, idx)
+                for a in range(m):
+                    res = -s_in[j, idx[j, a]]
+                    for k in range(n):
+                        res += cm[j, idx[j, a], k] * work[j, W_F, k]
+                    work[j, W_RHS, a] = res
+                add_half_width_term(j, n, mode, floor, hw_out, dcm, work, cm)
+                factor(j, m, idx, cm, lu)
+                substitute(j, m, lu, work, W_RHS)
+                step = zero
+                fmax = zero
+                left = int(0)
+                for a in range(m):
+                    fa = work[j, W_F, idx[j, a]] - work[j, W_RHS, a]
+                    work[j, W_F, idx[j, a]] = fa
+                    step = wp.max(step, wp.abs(work[j, W_RHS, a]))
+                    fmax = wp.max(fmax, wp.abs(fa))
+                    if fa <= zero:
+                        left = 1
+                converged = step <= newton_rtol * fmax
+                if converged or left == 1:
+                    update_half_widths(j, n, mode, fp, work, hw_out)
+                    fill_compliance(j, n, mode, dy, scale, hw_out, sin_q, w_q, cm, dcm, work)
+                    p = murty(j, n, s_in, act, idx, cm, lu, work)
+                    if converged and p == 0:
+                        break
+        # tangent: M = C + D on the active block, J_AA = M_AA^-1
         for i in range(n):
             f_out[j, i] = work[j, W_F, i]
-            total += work[j, W_F, i]
-        if mode == HALF_WIDTH_ROLLER_LOAD:
-            ok = total > zero
-            for r in range(2):
-                if hw_out[j, r, 0] <= floor:
-                    ok = False
-            if ok:
-                for i in range(n):
-                    v = zero
-                    for r in range(2):
-                        for k in range(n):
-                            v += dcm[j, r, i, k] * work[j, W_F, k] * hw_out[j, r, 0]
-                    v = v / (two * total)
-                    for c in range(n):
-                        cm[j, i, c] = cm[j, i, c] + v
-        if mode == HALF_WIDTH_SLICE_LOAD:
-            for c in range(n):
-                for r in range(2):
-                    b = hw_out[j, r, c]
-                    if b > floor:
-                        for i in range(n):
-                            cm[j, i, c] = cm[j, i, c] + f64(0.5) * dcm[j, r, i, c] * b
+        add_half_width_term(j, n, mode, floor, hw_out, dcm, work, cm)
         m = gather(j, n, act, idx)
         for r in range(n):
             for c in range(n):
