@@ -223,3 +223,13 @@ def test_design_file_switch_and_named_errors():
         _needle(slices="influence", damping=10.0)
     with pytest.raises(RvtoolInputError, match="rib_contact"):
         _row(slices="influence", rib_contact=True)
+
+
+def test_lumped_bearing_model_refuses_influence_slices():
+    # the lumped bearing has no slices to couple: a design asking for them is told, not ignored
+    import rvtool
+    from rvtool.bearings.influence import check_lumped
+    d = rvtool.replace_design(rvtool.load_design("rvtool/designs/rd40.toml"), eccentric_bearing={"slices": "influence"})
+    with pytest.raises(RvtoolInputError, match="bearing_model = 'rolling'"):
+        check_lumped(d, "lumped")
+    check_lumped(d, "rolling")

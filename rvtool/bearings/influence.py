@@ -110,6 +110,18 @@ def slice_mean_crowning(bearing):
     return crown
 
 
+def check_lumped(design, bearing_model):
+    """Named error for a design whose roller bearing asks for influence slices while the builder
+    lumps each bearing into one circle contact (``bearing_model = "lumped"``: no slices to couple)."""
+    if bearing_model != "lumped":
+        return
+    for key in ("eccentric_bearing", "main_bearing", "input_bearing"):
+        b = getattr(design, key, None)
+        if getattr(b, "slices", SliceLaw.LAMINAE) == SliceLaw.INFLUENCE:
+            raise RvtoolInputError(f"{key}.slices = 'influence' needs bearing_model = 'rolling' (the lumped bearing "
+                                   "is one circle contact without slices); valid with 'lumped': 'laminae'")
+
+
 def check_influence(bearing, damping):
     """Named error where the influence solve cannot stand in for the laminae (the specs call it)."""
     if getattr(bearing, "slices", SliceLaw.LAMINAE) != SliceLaw.INFLUENCE:
