@@ -176,8 +176,26 @@ def test_laminae_set_is_untouched_by_the_switch():
     s = BearingSet([Mounting(name="ecc", bearing=_needle(), inner=0, outer=1)], n_bodies=2, backend="numpy")
     assert type(s) is BearingSet and _needle().slices == "laminae"
     with pytest.raises(RvtoolInputError, match="energy account"):
-        BearingSet([Mounting(name="ecc", bearing=_needle(slices="influence"), inner=0, outer=1)], n_bodies=2,
-                   backend="numpy").energy_law()
+        BearingSet([Mounting(name="ecc", bearing=_needle(slices="influence", half_width="slice_load"), inner=0,
+                             outer=1)], n_bodies=2, backend="numpy").energy_law()
+
+
+def test_influence_slices_potential_gives_the_forces():
+    # fixed half-width: V = 1/2 f^T C_l f per roller = sum 1/2 f_i delta_i, and Q = -dV/dq for the ring
+    # translations (central differences, step 1e-10 m: truncation ~1e-9 relative)
+    s = BearingSet([Mounting(name="ecc", bearing=_needle(slices="influence"), inner=0, outer=1)], n_bodies=2,
+                   backend="numpy")
+    s.energy_law()
+    pose = np.array([[1.5e-5, 0.3e-5, 0.0], [0.0, 0.0, 0.0]])
+
+    def V(p):
+        return s.elastic_energy(s.evaluate(p).obs)[1].sum()
+
+    Q = s.evaluate(pose).Q
+    for k in (0, 1):
+        d = np.zeros((2, 3))
+        d[0, k] = 1e-10
+        assert -(V(pose + d) - V(pose - d)) / 2e-10 == pytest.approx(Q[k], rel=1e-7)
 
 
 def _row(**kw):

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from warp_contacts import roller_slices_ref as sref
 from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
@@ -333,18 +334,29 @@ class BearingSet(StagedLaunch):
         """The per-element constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
         no friction (rolling without a declared loss), the elastic force and potential of each row
         (:func:`warp_contacts.rolling_elements_ref.elastic_state`: k delta^(p+1)/(p+1) per lamina,
-        the ball's by quadrature), read from the current parameter rows (gap offsets included)."""
+        the ball's by quadrature), read from the current parameter rows (gap offsets included).
+        Influence slices with the fixed half-width: 1/2 f_i delta_i per slice (the roller's
+        1/2 f^T C_l f, since f_i w_i = 0); the load-dependent half-widths are refused by name (C_l
+        then depends on f and the slice law has no potential)."""
         from ..observe.energy import ContactEnergyLaw
-        if self._slices is not None:
-            raise RvtoolInputError(f"the energy account needs slices = 'laminae' rollers in bearing set {self.name!r}: "
-                                   "the influence slices' potential 1/2 f^T C_l f is not observed per row")
+        if self._slices is not None and np.any(self._slices.iparams[:, sref.SI_MODE] != sref.HALF_WIDTH_FIXED):
+            raise RvtoolInputError(f"the energy account needs half_width = 'fixed' influence slices in bearing set "
+                                   f"{self.name!r}: with a load-dependent half-width the slice law has no potential")
         n = len(self.ids)
         return ContactEnergyLaw(tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32),
                                 normal_potential=self.elastic_energy)
 
     def elastic_energy(self, obs):
         """(elastic normal force [N], potential [J]) per element from observation rows (N, 8)."""
-        return ref.elastic_state(self.iparams[:, ref.K_KIND], -np.asarray(obs, float)[:, ref.O_GAP], self.fparams)
+        obs = np.asarray(obs, float)
+        delta = -obs[:, ref.O_GAP]
+        F, V = ref.elastic_state(self.iparams[:, ref.K_KIND], delta, self.fparams)
+        slices = self.iparams[:, ref.K_KIND] == ref.KIND_SLICE
+        if np.any(slices):
+            # the slice's force from its observation (the roller's solve); 1/2 f_i delta_i (f_i = 0 off contact)
+            F = np.where(slices, obs[:, ref.O_FN], F)
+            V = np.where(slices, 0.5 * obs[:, ref.O_FN] * delta, V)
+        return F, V
 
     def commit(self, pose, vel=None, evaluation=None):
         """Observations (N, 8) at the accepted state (nothing to commit)."""
