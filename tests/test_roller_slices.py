@@ -171,6 +171,28 @@ def test_bearing_set_influence_tangent_and_backends(half_width):
     assert loads.sum() > 0 and np.all(loads >= 0)
 
 
+def test_influence_slices_damping_and_velocity_tangent():
+    # the lamina's viscous term on slices in contact: dQ/dv and the velocity part of dQ/dq against
+    # central differences (steps 1e-6 m/s, 1e-10 m), Warp against NumPy
+    sets = {b: BearingSet([Mounting(name="ecc", bearing=_needle(slices="influence", damping=400.0), inner=0, outer=1)],
+                          n_bodies=2, backend=b) for b in ("numpy", "warp")}
+    pose = np.array([[1.5e-5, 0.3e-5, 0.01], [0.0, 0.0, 0.02]])
+    vel = np.array([[2e-3, -1e-3, 3.0], [0.0, 0.0, 1.0]])
+    ev = {b: s.evaluate(pose, vel) for b, s in sets.items()}
+    assert np.allclose(ev["warp"].Q, ev["numpy"].Q, rtol=1e-12, atol=1e-9)
+    s = sets["numpy"]
+    assert not np.allclose(ev["numpy"].Q, s.evaluate(pose).Q)        # the damping acts
+    Kv, Kq = np.zeros((6, 6)), np.zeros((6, 6))
+    for k in range(6):
+        d = np.zeros(6)
+        d[k] = 1e-6
+        Kv[:, k] = (s.evaluate(pose, vel + d.reshape(2, 3)).Q - s.evaluate(pose, vel - d.reshape(2, 3)).Q) / 2e-6
+        d[k] = 1e-10 if k % 3 < 2 else 1e-8
+        Kq[:, k] = (s.evaluate(pose + d.reshape(2, 3), vel).Q - s.evaluate(pose - d.reshape(2, 3), vel).Q) / (2 * d[k])
+    assert np.max(np.abs(ev["numpy"].dQdv - Kv)) <= 1e-6 * np.max(np.abs(Kv))
+    assert np.max(np.abs(ev["numpy"].dQdq - Kq)) <= 1e-6 * np.max(np.abs(Kq))
+
+
 def test_laminae_set_is_untouched_by_the_switch():
     # the default is the laminae law, with the plain (stageable) set
     s = BearingSet([Mounting(name="ecc", bearing=_needle(), inner=0, outer=1)], n_bodies=2, backend="numpy")
@@ -238,7 +260,7 @@ def test_design_file_switch_and_named_errors():
     with pytest.raises(RvtoolInputError, match="half_width"):
         _needle(slices="influence", half_width="variable")
     with pytest.raises(RvtoolInputError, match="damping"):
-        _needle(slices="influence", damping=10.0)
+        _row(slices="influence", damping=10.0)
     with pytest.raises(RvtoolInputError, match="rib_contact"):
         _row(slices="influence", rib_contact=True)
 

@@ -144,11 +144,17 @@ def _kernel(dtype):
         elif iparams[i, K_KIND] == KIND_SLICE:
             ca = wp.cos(fparams[i, R_ALPHA])
             delta = r * ca - fparams[i, R_CLEAR] - fparams[i, R_CROWN]
-            F = fparams[i, R_SLICE_F]
-            fr = F * ca
-            fzm = F * wp.sin(fparams[i, R_ALPHA])
             alpha_w = fparams[i, R_ALPHA]
-            fr_r = fparams[i, R_SLICE_DF] * ca * ca
+            fel = fparams[i, R_SLICE_F]
+            rho, drho = damping_ramp(delta, fparams[i, R_RAMP])
+            ddot = rdot * ca
+            Fs = fel + fparams[i, R_DAMP] * rho * ddot
+            if fel > dtype(0.0) and Fs > dtype(0.0):
+                F = Fs
+                fr = F * ca
+                fzm = F * wp.sin(fparams[i, R_ALPHA])
+                fr_r = (fparams[i, R_SLICE_DF] + fparams[i, R_DAMP] * drho * ddot) * ca * ca
+                fr_rd = fparams[i, R_DAMP] * rho * ca * ca
         else:
             delta, F, fr, fzm, alpha_w, fr_r, fr_rd = lamina_law(
                 r, rdot, fparams[i, R_K], fparams[i, R_P], fparams[i, R_ALPHA], fparams[i, R_CLEAR],

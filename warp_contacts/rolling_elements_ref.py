@@ -23,8 +23,8 @@ Element laws (paper, Section "Distributed bearing support"):
   delta = r cos(alpha) - c - crown, F = max(0, k delta^p + c_d rho(delta) deltadot)
   (Eq. (normal_force), p = 10/9 or 1), radial part f_r = F cos(alpha).
 * KIND_SLICE, an influence-coefficient slice (Eq. (bearing_ic), :mod:`warp_contacts.roller_slices_ref`):
-  the approach delta as a lamina's (no damping); its force F and dF/d delta are those of the
-  roller's slice solve at this state, written into columns R_SLICE_F, R_SLICE_DF by the owner
+  the approach delta as a lamina's; its elastic force and dF/d delta are those of the
+  roller's slice solve at this state (plus the lamina's viscous term on a slice in contact), written into columns R_SLICE_F, R_SLICE_DF by the owner
   (:class:`rvtool.bearings.set.BearingSet`) between a first launch that reads the approaches and
   the launch that assembles. In the planar model every slice of a roller moves by the same
   cos(alpha) dr, so dF_i/d delta = sum_k (df/ds)_ik is the exact per-slice derivative.
@@ -152,12 +152,21 @@ def lamina_law(r, rdot, fp):
 
 
 def slice_law(r, rdot, fp):
-    """Influence slice: (delta, F, f_r, F sin(alpha), alpha, df_r/dr, 0) with F, dF/d delta read from its row."""
+    """Influence slice: (delta, F, f_r, F sin(alpha), alpha, df_r/dr, df_r/drdot) with the elastic force
+    and dF/d delta of the roller's solve read from its row, plus the lamina's viscous term
+    c_d rho(delta) delta_dot of Eq. (normal_force) on a slice in contact (elastic force > 0), no tension."""
     alpha = fp[:, R_ALPHA]
     ca, sa = np.cos(alpha), np.sin(alpha)
     delta = r * ca - fp[:, R_CLEAR] - fp[:, R_CROWN]
-    F = fp[:, R_SLICE_F]
-    return delta, F, F * ca, F * sa, alpha, fp[:, R_SLICE_DF] * ca * ca, np.zeros_like(r)
+    fel, cd = fp[:, R_SLICE_F], fp[:, R_DAMP]
+    rho, drho = laws_ref.damping_ramp(delta, fp[:, R_RAMP])
+    ddot = rdot * ca
+    F = fel + cd * rho * ddot
+    on = (fel > 0) & (F > 0)
+    F = np.where(on, F, 0.0)
+    dF = np.where(on, fp[:, R_SLICE_DF] + cd * drho * ddot, 0.0)
+    dFd = np.where(on, cd * rho, 0.0)
+    return delta, F, F * ca, F * sa, alpha, dF * ca * ca, dFd * ca * ca
 
 
 def ball_law(r, rdot, fp):

@@ -123,7 +123,7 @@ def check_lumped(design, bearing_model):
 
 
 def check_influence(bearing, damping):
-    """Named error where the influence solve cannot stand in for the laminae (the specs call it)."""
+    """Named error where the influence solve cannot stand in for the laminae (a tapered row: elastic only)."""
     if getattr(bearing, "slices", SliceLaw.LAMINAE) != SliceLaw.INFLUENCE:
         return
     if damping != 0:

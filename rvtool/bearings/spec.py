@@ -29,7 +29,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_field
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import HertzConstants, effective_modulus, hertz_constants, roller_stiffness
-from .influence import HalfWidth, SliceLaw, check_influence, set_choice
+from .influence import HalfWidth, SliceLaw, set_choice
 
 #: Largest interference (negative radial clearance) as a fraction of the element diameter:
 #: beyond it the small-deformation contact laws no longer describe the fit.
@@ -99,7 +99,7 @@ class CylindricalRollerBearing:
     of Eq. (normal_force).
     slices: "laminae" (default, the law above per lamina) or "influence" (the slices coupled by
     the half-space compliance of both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`;
-    elastic only: damping must be 0). half_width: "fixed" (the Hertz half-width at
+    damping acts per slice in contact as for the laminae). half_width: "fixed" (the Hertz half-width at
     ``reference_roller_load``), "roller_load" or "slice_load" (updated from the roller's or each
     slice's line load), influence only.
     youngs_modulus: E [Pa], poisson_ratio: nu (rollers and rings; the influence compliance).
@@ -140,7 +140,6 @@ class CylindricalRollerBearing:
         set_choice(self, "half_width", HalfWidth)
         check_positive("youngs_modulus", self.youngs_modulus)
         check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
-        check_influence(self, self.damping)
         _fit("n_rollers", self.n_rollers, self.roller_diameter, self.pitch_diameter)
 
     @property
