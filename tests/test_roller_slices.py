@@ -273,3 +273,15 @@ def test_lumped_bearing_model_refuses_influence_slices():
     with pytest.raises(RvtoolInputError, match="bearing_model = 'rolling'"):
         check_lumped(d, "lumped")
     check_lumped(d, "rolling")
+
+
+def test_exhausted_pivots_report_nan(monkeypatch):
+    # a solve that cannot settle its active set returns NaN (the evaluation is then non-finite),
+    # never forces that violate complementarity: allow no pivot where one is needed
+    C = np.array([[2.0, 1.0], [1.0, 2.0]])
+    s = np.array([1.0, -1.0])
+    f, A, _ = sref.solve_lcp(C, s, warm=np.array([True, True]))
+    assert np.allclose(f, [0.5, 0.0]) and A.tolist() == [True, False]
+    monkeypatch.setattr(sref, "MAX_PIVOTS", 0)
+    f, _, _ = sref.solve_lcp(C, s, warm=np.array([True, True]))
+    assert np.all(np.isnan(f))

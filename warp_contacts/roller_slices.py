@@ -227,6 +227,9 @@ def _kernel():
                 return pivots
             act[j, bad] = 1 - act[j, bad]
             pivots += 1
+        # the pivots ran out (C not a P-matrix): NaN forces, the evaluation reports itself non-finite
+        for i in range(n):
+            work[j, W_F, i] = f64(wp.nan)
         return pivots
 
     @wp.kernel(module="unique")

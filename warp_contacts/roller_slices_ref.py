@@ -148,7 +148,9 @@ def half_widths(fp, mode, f, n):
 
 def solve_lcp(C, s, warm=None):
     """Exact solution f >= 0 of w = C f - s >= 0, f^T w = 0 (C a P-matrix) by Murty's least-index
-    principal pivoting; returns (f, active mask, pivots). ``warm``: the first active set (default s > 0)."""
+    principal pivoting; returns (f, active mask, pivots). ``warm``: the first active set (default s > 0).
+    Should the pivots run out (C not a P-matrix), f is NaN: the evaluation reports itself non-finite
+    instead of returning forces that violate the complementarity conditions."""
     n = len(s)
     tol = LCP_RTOL * max(np.max(np.abs(s)), 1e-300)
     A = (s > 0) if warm is None else np.asarray(warm, bool).copy()
@@ -161,6 +163,8 @@ def solve_lcp(C, s, warm=None):
         if bad.size == 0:
             break
         A[bad[0]] = ~A[bad[0]]
+    else:
+        f = np.full(n, np.nan)
     return f, A, pivots
 
 
