@@ -250,6 +250,36 @@ def test_tapered_influence_tangent_and_preload(half_width):
     assert abs(z.row_wrench[0, 1, 2]) == pytest.approx(300.0, rel=1e-9)
 
 
+def test_tapered_influence_damping_tangents():
+    # the lamina's viscous term on slices in contact: every tangent of the 5-DOF wrench (q, q_dot, cage
+    # angle and rate) against central differences, Warp against NumPy
+    row = _row(slices="influence", half_width="slice_load", damping=300.0)
+    pair = TaperedPair(rows=(row, row), row_spacing=0.04, axial_preload=300.0)
+    sets = {b: TaperedBearingSet([TaperedMounting(name="c", bearing=pair, inner=0, outer=1)], n_bodies=2, backend=b)
+            for b in ("numpy", "warp")}
+    q, qd = np.array([[8e-6, 3e-6, 1e-6, 2e-4, -1e-4]]), np.array([[2e-3, -1e-3, 5e-4, 0.1, 0.05]])
+    ca, cr = np.array([0.1]), np.array([30.0])
+    s = sets["numpy"]
+
+    def w(**kw):
+        args = dict(q=q, qdot=qd, cage_angle=ca, cage_rate=cr)
+        args.update(kw)
+        return s.relative(**args).wrench[0]
+
+    r = s.relative(q, qd, ca, cr)
+    assert np.allclose(sets["warp"].relative(q, qd, ca, cr).wrench, r.wrench, rtol=1e-12, atol=1e-9)
+    assert not np.allclose(r.wrench, s.relative(q, None, ca, None).wrench)     # the damping acts
+    E = np.eye(5)[:, None, :]
+    hq = np.array([1e-12, 1e-12, 1e-12, 1e-11, 1e-11])
+    K = np.column_stack([(w(q=q + hq[k] * E[k]) - w(q=q - hq[k] * E[k])) / (2 * hq[k]) for k in range(5)])
+    Cd = np.column_stack([(w(qdot=qd + 1e-6 * E[k]) - w(qdot=qd - 1e-6 * E[k])) / 2e-6 for k in range(5)])
+    dpsi = (w(cage_angle=ca + 1e-7) - w(cage_angle=ca - 1e-7)) / 2e-7
+    dpsid = (w(cage_rate=cr + 1e-4) - w(cage_rate=cr - 1e-4)) / 2e-4
+    for got, fd in ((r.stiffness[0], K), (r.damping[0], Cd), (r.cage_sensitivity[0], dpsi),
+                    (r.cage_rate_sensitivity[0], dpsid)):
+        assert np.max(np.abs(got - fd)) <= 1e-6 * np.max(np.abs(fd))
+
+
 def test_design_file_switch_and_named_errors():
     nb = build_section(NeedleBearing, "eccentric_bearing",
                        {"inner_radius": 0.012, "n_rollers": 16, "roller_diameter": 0.003, "roller_length": 0.008,
@@ -259,8 +289,6 @@ def test_design_file_switch_and_named_errors():
         _needle(slices="coupled")
     with pytest.raises(RvtoolInputError, match="half_width"):
         _needle(slices="influence", half_width="variable")
-    with pytest.raises(RvtoolInputError, match="damping"):
-        _row(slices="influence", damping=10.0)
     with pytest.raises(RvtoolInputError, match="rib_contact"):
         _row(slices="influence", rib_contact=True)
 

@@ -122,15 +122,6 @@ def check_lumped(design, bearing_model):
                                    "is one circle contact without slices); valid with 'lumped': 'laminae'")
 
 
-def check_influence(bearing, damping):
-    """Named error where the influence solve cannot stand in for the laminae (a tapered row: elastic only)."""
-    if getattr(bearing, "slices", SliceLaw.LAMINAE) != SliceLaw.INFLUENCE:
-        return
-    if damping != 0:
-        raise RvtoolInputError(f"damping = {damping} with slices = 'influence'; valid range [0, 0]: the influence "
-                               "slices are elastic only (use slices = 'laminae' for lamina damping)")
-
-
 class RollerSlices:
     """The complementarity solve of R rollers, one call per evaluation.
 

@@ -54,7 +54,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_field, is_angle
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import effective_modulus, roller_stiffness
-from .influence import HalfWidth, SliceLaw, check_influence, set_choice, slice_mean_crowning
+from .influence import HalfWidth, SliceLaw, set_choice, slice_mean_crowning
 from .spec import Arrangement, LaminaLaw
 
 #: Largest cup angle [deg]: steep-angle tapered bearings reach about 30 deg; beyond 60 deg
@@ -98,8 +98,8 @@ class TaperedRollerBearing:
     damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
     of Eq. (normal_force).
     slices: "laminae" (default) or "influence" (the slices coupled by the half-space compliance of
-    both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`; with rib_contact = False and
-    damping = 0). half_width: "fixed" (at ``reference_roller_load``), "roller_load" or "slice_load".
+    both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`; with rib_contact = False; damping
+    acts per slice in contact as for the laminae). half_width: "fixed" (at ``reference_roller_load``), "roller_load" or "slice_load".
     """
     n_rollers: int
     pitch_diameter: float
@@ -156,7 +156,6 @@ class TaperedRollerBearing:
                                    "path finds the roller's axial position from the elastic balance only")
         set_choice(self, "slices", SliceLaw)
         set_choice(self, "half_width", HalfWidth)
-        check_influence(self, self.damping)
         if self.slices == SliceLaw.INFLUENCE and self.rib_contact:
             raise RvtoolInputError("rib_contact = True with slices = 'influence'; valid: rib_contact = False (the "
                                    "influence slices use the lumped rigid rib)")
@@ -299,7 +298,7 @@ class TaperedRollerBearing:
             s, g, h, qe, bf = ref.influence_approaches(q, np.zeros(1), rf[:1], lf, np.arange(self.n_slices)[None, :])
             sf, si = bearing_slice_parameters(self)
             F, J, _, _ = sref.evaluate(s, sf[None, :], si[None, :])
-            f = ref.influence_wrench(F, J, g, h, qe, rf[:1, ref.RL_KAPPA], bf)[0]
+            f = ref.influence_wrench(F, J, g, h, qe, rf[:1, ref.RL_KAPPA], bf)[0]   # no damping at rest
         else:
             f = ref.evaluate(q, np.zeros((1, 5)), np.zeros(1), np.zeros(1), rf[:1], ri[:1], lf[:self.n_slices])[0]
         return float(f[0, 2]) * self.n_rollers

@@ -205,10 +205,12 @@ class TaperedBearingSet:
         ir, rows = self.slice_rollers, self.slice_rows
         s, g, h, qe, bf = ref.influence_approaches(q[ir], psi[ir], self.roller_fp[ir], self.lamina_fp, rows)
         F, J, _, _ = (np.array(a) for a in self._slices.solve(s))
-        f[ir], K[ir], fpsi[ir], rib[ir] = ref.influence_wrench(F, J, g, h, qe, self.roller_fp[ir, ref.RL_KAPPA], bf)
-        C[ir], fpsid[ir] = 0.0, 0.0
         pad = rows < 0
-        lam[rows[~pad], ref.LAM_F], lam[rows[~pad], ref.LAM_DELTA] = F[~pad], s[~pad]
+        L = self.lamina_fp[np.where(pad, 0, rows)]
+        damping = (s, qdot[ir], psidot[ir], np.where(pad, 0.0, L[..., ref.LA_DAMP]), np.where(pad, 1.0, L[..., ref.LA_RAMP]))
+        f[ir], K[ir], C[ir], fpsi[ir], fpsid[ir], rib[ir], Ft = ref.influence_wrench(
+            F, J, g, h, qe, self.roller_fp[ir, ref.RL_KAPPA], bf, damping)
+        lam[rows[~pad], ref.LAM_F], lam[rows[~pad], ref.LAM_DELTA] = Ft[~pad], s[~pad]
         return f, K, C, fpsi, fpsid, rib, lam
 
     def _per_mounting(self, x):
