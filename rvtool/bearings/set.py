@@ -353,9 +353,14 @@ class BearingSet(StagedLaunch):
         F, V = ref.elastic_state(self.iparams[:, ref.K_KIND], delta, self.fparams)
         slices = self.iparams[:, ref.K_KIND] == ref.KIND_SLICE
         if np.any(slices):
-            # the slice's force from its observation (the roller's solve); 1/2 f_i delta_i (f_i = 0 off contact)
-            F = np.where(slices, obs[:, ref.O_FN], F)
-            V = np.where(slices, 0.5 * obs[:, ref.O_FN] * delta, V)
+            # the elastic slice forces: the rollers' solve at the observed approaches (the observed force
+            # holds the viscous term too); 1/2 f_i delta_i (f_i = 0 off contact)
+            pad = self.slice_rows < 0
+            f = np.asarray(self._slices.solve(np.where(pad, 0.0, delta[self.slice_rows]))[0])
+            fel = np.zeros(len(delta))
+            fel[self.slice_rows[~pad]] = f[~pad]
+            F = np.where(slices, fel, F)
+            V = np.where(slices, 0.5 * fel * delta, V)
         return F, V
 
     def commit(self, pose, vel=None, evaluation=None):
