@@ -283,6 +283,25 @@ def test_tapered_influence_damping_tangents():
         assert np.max(np.abs(got - fd)) <= 1e-6 * np.max(np.abs(fd))
 
 
+def test_tapered_influence_potential_gives_the_wrench():
+    # fixed half-width, rigid rib: Q_x = -dV/dx of the planar pair (cone on body 0, cup on ground-like body 1)
+    row = _row(slices="influence")
+    s = TaperedBearingSet([TaperedMounting(name="c", bearing=TaperedPair(rows=(row, row), row_spacing=0.04,
+                                                                         axial_preload=300.0), inner=0, outer=1)],
+                          n_bodies=2, backend="numpy")
+    s.energy_law()
+    pose = np.array([[1.2e-5, -0.4e-5, 0.0], [0.0, 0.0, 0.0]])
+
+    def V(p):
+        return s.elastic_energy(s.evaluate(p).obs)[1].sum()
+
+    Q = s.evaluate(pose).Q
+    for k in (0, 1):
+        d = np.zeros((2, 3))
+        d[0, k] = 1e-10
+        assert -(V(pose + d) - V(pose - d)) / 2e-10 == pytest.approx(Q[k], rel=1e-6)
+
+
 def test_design_file_switch_and_named_errors():
     nb = build_section(NeedleBearing, "eccentric_bearing",
                        {"inner_radius": 0.012, "n_rollers": 16, "roller_diameter": 0.003, "roller_length": 0.008,

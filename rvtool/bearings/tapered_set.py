@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from warp_contacts import roller_slices_ref as sref
 from warp_contacts import tapered_rollers_ref as ref
 from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY
 
@@ -387,18 +388,38 @@ class TaperedBearingSet:
         no friction, the lamina's power law k delta^p (potential k delta^(p+1)/(p+1); with the rigid rib
         the approach is linear in the ring displacement, so this is the exact potential of the
         rollers' wrench). The elastic rib stores energy in the rib contact too, which the lamina
-        observations do not carry: refused by name."""
+        observations do not carry: refused by name. Influence rows with the fixed half-width:
+        1/2 f_s delta_s per slice (:meth:`elastic_energy`); load-dependent half-widths: refused by name."""
         from ..observe.energy import ContactEnergyLaw
-        if self._slices is not None:
-            raise RvtoolInputError(f"the energy account needs slices = 'laminae' tapered rows in {self.name!r}: the "
-                                   "influence slices' potential 1/2 f^T C_l f is not observed per lamina")
+        if self._slices is not None and np.any(self._slices.iparams[:, sref.SI_MODE] != sref.HALF_WIDTH_FIXED):
+            raise RvtoolInputError(f"the energy account needs half_width = 'fixed' influence rows in {self.name!r}: "
+                                   "with a load-dependent half-width the slice law has no potential")
         if np.any(self.roller_ip[:, ref.RI_RIB]):
             elastic = sorted({self.mountings[k].name for k in self.roller_owner[self.roller_ip[:, ref.RI_RIB] != 0]})
             raise RvtoolInputError(f"the energy account needs rib_contact = false tapered rows; {elastic} of "
                                    f"{self.name!r} have an elastic rib, whose contact energy is not observed")
         n = len(self.ids)
+        if self._slices is not None:
+            return ContactEnergyLaw(tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32),
+                                    normal_potential=self.elastic_energy)
         return ContactEnergyLaw(normal_stiffness=self.lamina_fp[:, ref.LA_K], normal_exponent=self.lamina_fp[:, ref.LA_P],
                                 tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32))
+
+    def elastic_energy(self, obs):
+        """(elastic normal force [N], potential [J]) per lamina from observation rows (L, 8): the power law
+        k delta^p, k delta^(p+1)/(p+1) of a lamina; an influence slice's force from its roller's solve at the
+        observed approaches and 1/2 f_s delta_s (the roller's 1/2 f^T C_l f)."""
+        from warp_contacts import laws_ref
+        delta = -np.asarray(obs, float)[:, O_GAP]
+        F, _ = laws_ref.power_law(self.lamina_fp[:, ref.LA_K], self.lamina_fp[:, ref.LA_P], delta)
+        V = np.where(delta > 0, F * np.where(delta > 0, delta, 0.0) / (self.lamina_fp[:, ref.LA_P] + 1.0), 0.0)
+        if self._slices is not None:
+            rows = self.slice_rows
+            pad = rows < 0
+            f = np.asarray(self._slices.solve(np.where(pad, 0.0, delta[np.where(pad, 0, rows)]))[0])
+            F[rows[~pad]] = f[~pad]
+            V[rows[~pad]] = 0.5 * f[~pad] * delta[rows[~pad]]
+        return F, V
 
     def element_loads(self, obs):
         """{mounting name: normal force of each roller [N], laminae summed} (roller order as in the ids)."""
