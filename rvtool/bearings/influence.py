@@ -128,7 +128,7 @@ class RollerSlices:
     fparams (R, N_SLICE_FLOAT), iparams (R, N_SLICE_INT); backend "numpy" (the reference) or "warp"
     (:class:`warp_contacts.roller_slices.RollerSliceKernel`, float64), device a Warp device.
     ``solve(s)``: slice approaches (R, n_max) [m] -> (f (R, n_max) [N], J = df/ds (R, n_max, n_max)
-    [N/m], half-widths (R, 2) [m], active counts (R,)).
+    [N/m], half-widths (R, 2, n_max) [m] (inner, outer race per slice), active counts (R,)).
     """
 
     def __init__(self, fparams, iparams, *, backend="warp", device="cpu"):
