@@ -335,3 +335,18 @@ def test_exhausted_pivots_report_nan(monkeypatch):
     monkeypatch.setattr(sref, "MAX_PIVOTS", 0)
     f, _, _ = sref.solve_lcp(C, s, warm=np.array([True, True]))
     assert np.all(np.isnan(f))
+
+
+def test_angle_batched_copies_of_an_influence_set():
+    # the replica backend's copier: B copies behind one set reproduce the single set's rows per copy
+    from rvtool.solver.replica import COPIERS
+    s = BearingSet([Mounting(name="ecc", bearing=_needle(slices="influence", half_width="slice_load"), inner=0,
+                             outer=1)], n_bodies=2, backend="numpy")
+    copies = COPIERS[type(s)](s, 3, 2, "float64", "cpu")
+    assert isinstance(copies, InfluenceBearingSet)
+    poses = np.array([[[1.5e-5, 0.3e-5, 0.01], [0.0, 0.0, 0.02]], [[-1e-5, 0.8e-5, 0.2], [0.0, 0.0, 0.1]],
+                      [[0.2e-5, -1.2e-5, 1.0], [0.0, 0.0, -0.3]]])
+    Qc = np.asarray(copies.raw(poses.reshape(-1, 3))[0])
+    n = len(s.ids)
+    for c in range(3):
+        assert np.allclose(Qc[c * n:(c + 1) * n], np.asarray(s.raw(poses[c])[0]), rtol=1e-12, atol=1e-9)
