@@ -266,7 +266,8 @@ def _kernel():
             act[j, i] = 0
             if s_in[j, i] > zero:
                 act[j, i] = 1
-        fill_compliance(j, n, mode, dy, scale, hw_out, sin_q, w_q, cm, dcm, work)
+        # the first solve at the fixed half-widths: one per race, the Toeplitz fill
+        fill_compliance(j, n, HALF_WIDTH_FIXED, dy, scale, hw_out, sin_q, w_q, cm, dcm, work)
         murty(j, n, s_in, act, idx, cm, lu, work)
         if mode != HALF_WIDTH_FIXED:
             for it in range(MAX_HALF_WIDTH_ITERATIONS):
