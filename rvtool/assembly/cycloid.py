@@ -42,6 +42,7 @@ from ..bearings.spec import NeedleBearing
 from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 from ..contact.cycloid_set import (PALMGREN_EXPONENT, CycloidPinSet, WheelPinMesh, palmgren_line_coefficient,
                                      secant_line_stiffness)
+from ..bearings.influence import check_lumped
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre, journal_velocity
 from ..output_pins.calibration import mindlin_tangential_ratio  # noqa: F401 (public here too)
@@ -523,6 +524,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     mode = contact_element_mode(contact_element)
     if bearing_model not in ("lumped", "rolling"):
         raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
+    check_lumped(design, bearing_model)
     d = design
     nw = d.n_wheels
     SC = exu.SystemContainer()

@@ -29,6 +29,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_field
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import HertzConstants, effective_modulus, hertz_constants, roller_stiffness
+from .influence import HalfWidth, SliceLaw, set_choice
 
 #: Largest interference (negative radial clearance) as a fraction of the element diameter:
 #: beyond it the small-deformation contact laws no longer describe the fit.
@@ -97,6 +98,12 @@ class CylindricalRollerBearing:
     their length) or a coefficient per lamina [N m^-p] (scalar or one per slice).
     damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
     of Eq. (normal_force).
+    slices: "laminae" (default, the law above per lamina) or "influence" (the slices coupled by
+    the half-space compliance of both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`;
+    damping acts per slice in contact as for the laminae). half_width: "fixed" (the Hertz half-width at
+    ``reference_roller_load``), "roller_load" or "slice_load" (updated from the roller's or each
+    slice's line load), influence only.
+    youngs_modulus: E [Pa], poisson_ratio: nu (rollers and rings; the influence compliance).
     """
     inner_radius: float
     roller_diameter: float
@@ -110,6 +117,10 @@ class CylindricalRollerBearing:
     lamina_stiffness: float | tuple | None = None
     damping: float = 0.0
     ramp_depth: float = 1e-6
+    slices: SliceLaw = SliceLaw.LAMINAE
+    half_width: HalfWidth = HalfWidth.FIXED
+    youngs_modulus: float = 206e9
+    poisson_ratio: float = 0.3
 
     def __post_init__(self):
         check_positive("inner_radius", self.inner_radius)
@@ -126,6 +137,10 @@ class CylindricalRollerBearing:
         _per_slice("crowning", self.crowning, self.n_slices, check_nonnegative)
         if self.lamina_stiffness is not None:
             _per_slice("lamina_stiffness", self.lamina_stiffness, self.n_slices, check_positive)
+        set_choice(self, "slices", SliceLaw)
+        set_choice(self, "half_width", HalfWidth)
+        check_positive("youngs_modulus", self.youngs_modulus)
+        check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
         _fit("n_rollers", self.n_rollers, self.roller_diameter, self.pitch_diameter)
 
     @property

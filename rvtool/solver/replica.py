@@ -34,7 +34,7 @@ from warp_contacts import output_pins_ref as oref
 from warp_contacts.circle_pairs_ref import O_FN
 from warp_contacts.tapered_rollers_ref import LAM_F
 
-from ..bearings.set import BearingSet
+from ..bearings.set import BearingSet, InfluenceBearingSet
 from ..bearings.tapered_set import TaperedBearingSet
 from ..contact.circle_set import GROUND, CircleContactSet
 from ..contact.cycloid_set import CycloidPinSet
@@ -115,7 +115,7 @@ class PlainPinCopies:
 
 #: contact-set type -> copier (see the module docstring)
 COPIERS = {CycloidPinSet: _copy_pins, InvoluteContactSet: _copy_gears, BearingSet: _copy_bearings,
-           TaperedBearingSet: _copy_bearings, ContactSetEvaluator: _copy_circles, OutputPinEvaluator: PlainPinCopies}
+           InfluenceBearingSet: _copy_bearings, TaperedBearingSet: _copy_bearings, ContactSetEvaluator: _copy_circles, OutputPinEvaluator: PlainPinCopies}
 
 
 def _rows(s, pose, vel):
