@@ -279,7 +279,7 @@ def flange_wrench(pair, q):
     displacement q = (delta_x, delta_y, delta_z [m], gamma_x, gamma_y [rad]) of its mounting centre:
     (w (5,) = (F_x, F_y, F_z [N], M_x, M_y [N m]) on the flange, its tangent dw/dq (5, 5), row axial
     forces (n_rows,) [N]). The cage is at its built phase."""
-    s = _flange_set(pair)
+    s = flange_set(pair)
     pose = np.array([[q[0], q[1], 0.0], [q[2], q[3], q[4]]], float)
     ev = s.evaluate(pose)
     sel = [0, 1, 3, 4, 5]
@@ -288,6 +288,6 @@ def flange_wrench(pair, q):
 
 
 @lru_cache(maxsize=32)
-def _flange_set(pair):
+def flange_set(pair):
     """The one-mounting set of a flange (body 0) and its out-of-plane row (1) on ``pair``, housing ground."""
     return SpatialBallSet([Mounting(name="flange", bearing=pair, inner=0, outer=GROUND)], 2, {0: 1}, name="flange")

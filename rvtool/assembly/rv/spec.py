@@ -108,12 +108,24 @@ class InvoluteStage:
         check_positive("involute_stage.reference_force", self.reference_force)
 
 
+#: retained coordinates of the carrier / output flange (``bodies.carrier_coordinates``)
+CARRIER_COORDINATES = ("planar", "spatial")
+
+
 @dataclass(frozen=True, kw_only=True)
 class RvBodies:
     """Rigid-body data: the input body (the sun, or the three-stage pinion) retains ``input``
     coordinates (its theta is driven; x, y listed = floating on ``input_bearing_stiffness``
     [N/m] springs, else held by its bearings as rigid); masses [kg] and polar inertias [kg m^2]
-    of the sun (or compound gear), the input pinion and the carrier (both halves, joined rigidly)."""
+    of the sun (or compound gear), the input pinion and the carrier (both halves, joined rigidly).
+
+    carrier_coordinates: the coordinates the carrier / output flange retains (issue 32):
+    ``"planar"`` (x, y, theta; its axial translation and tilts held, the main bearing's axial force
+    and tilting moment observations -- the default, today's figures) or ``"spatial"`` (also z,
+    gamma_x, gamma_y on the main-bearing rows: :class:`rvtool.bearings.spatial_set.SpatialBallSet`).
+    carrier_tilt_inertia: transverse inertia [kg m^2] of the carrier about a diameter through the
+    mounting centre (dynamic runs of a spatial carrier only); None: half the polar inertia (a thin
+    disc, assumed)."""
     input: tuple = ("theta",)
     sun_mass: float = 0.15
     sun_inertia: float = 1.0e-5
@@ -121,6 +133,8 @@ class RvBodies:
     pinion_inertia: float = 5.0e-6
     carrier_mass: float = 3.0
     carrier_inertia: float = 6.0e-3
+    carrier_coordinates: str = "planar"
+    carrier_tilt_inertia: float | None = None
 
     def __post_init__(self):
         for c in self.input:
@@ -130,6 +144,21 @@ class RvBodies:
             raise RvtoolInputError("bodies.input must contain 'theta' (the driven input rotation)")
         for nm in ("sun_mass", "sun_inertia", "pinion_mass", "pinion_inertia", "carrier_mass", "carrier_inertia"):
             check_positive(f"bodies.{nm}", getattr(self, nm))
+        if self.carrier_coordinates not in CARRIER_COORDINATES:
+            raise RvtoolInputError(f"bodies.carrier_coordinates = {self.carrier_coordinates!r}; valid choices are "
+                                   f"{list(CARRIER_COORDINATES)}")
+        if self.carrier_tilt_inertia is not None:
+            check_positive("bodies.carrier_tilt_inertia", self.carrier_tilt_inertia)
+
+    @property
+    def spatial_carrier(self):
+        """True where the carrier retains its axial and tilt coordinates."""
+        return self.carrier_coordinates == "spatial"
+
+    @property
+    def tilt_inertia(self):
+        """Transverse inertia [kg m^2] of the carrier (``carrier_tilt_inertia`` or half the polar inertia)."""
+        return self.carrier_inertia / 2 if self.carrier_tilt_inertia is None else self.carrier_tilt_inertia
 
 
 @dataclass(frozen=True, kw_only=True)
