@@ -31,6 +31,10 @@ from ..errors import RvtoolInputError, SolverFailure
 from ..units import RAD_PER_ARCMIN
 from ..validation import check_finite, check_positive, check_range
 
+NEWTON_DIAGONAL = (1.0, 1.0, 1.0, 1e-2, 1e-2)
+"""Weak diagonal [N/m, N m/rad] added to the flange's tangent in :func:`flange_equilibrium`'s Newton
+step (not to its residual: the equilibrium is the bearing's alone)."""
+
 DEFAULT_READ_BETWEEN = (0.0, 1.0)
 """Moment points [fraction of the reference moment] of the secant where none are given: a stated
 convention (the catalogue's own points were not read), named in every result."""
@@ -148,7 +152,7 @@ def moment_rigidity(model, test: MomentRigidityTest):
                                 convention=_convention(test))
 
 
-def flange_equilibrium(pair, load, q0=None, *, tol=1e-9, max_iterations=50):
+def flange_equilibrium(pair, load, q0=None, *, tol=1e-9, max_iterations=200):
     """Relative displacement q (5,) (delta_x, delta_y, delta_z, gamma_x, gamma_y) of a flange on
     ``pair`` against a rigid housing under the external wrench ``load`` (5,) (F_x, F_y, F_z [N],
     M_x, M_y [N m]) at the mounting centre: Newton on w(q) + load = 0 with the analytic tangent,
@@ -161,10 +165,12 @@ def flange_equilibrium(pair, load, q0=None, *, tol=1e-9, max_iterations=50):
         r = w + load
         if np.all(np.abs(r) <= tol * (1.0 + np.abs(load))):
             return q
-        step = -np.linalg.solve(K, r)
-        # a step larger than a tenth of the smallest ball's diameter (or 0.01 rad) leaves the
-        # small-deformation law: halve it (first contact of an unpreloaded pair)
-        scale = max(np.max(np.abs(step[:3])) / 1e-4, np.max(np.abs(step[3:])) / 1e-2, 1.0)
+        # the tangent with a weak diagonal (1 N/m, 0.01 N m/rad against ~1e8): regular inside an end
+        # play where no ball touches, a negligible change of the Newton step in contact
+        step = -np.linalg.solve(K - np.diag(NEWTON_DIAGONAL), r)
+        # steps are capped at a few ball approaches (5 um, 1e-4 rad): the first contact of a pair with
+        # end play is approached in steps, not jumped deep into the Hertz law
+        scale = max(np.max(np.abs(step[:3])) / 5e-6, np.max(np.abs(step[3:])) / 1e-4, 1.0)
         q = q + step / scale
     raise SolverFailure(f"flange on its main bearing: no equilibrium under the load {load.tolist()} "
                         f"in {max_iterations} Newton iterations")
