@@ -151,6 +151,10 @@ class SpatialBallSet:
         self.element_radius, self.element_station = np.array(rho), np.array(z)
         self.element_row, self.owner = np.array(row_of), np.array(owner)
         self._n = 3 * (n_bodies + 1)
+        self._seeds = np.eye(N_BALL_COORDS)
+        # scatter of the per-ball rows into the assembled vector and matrix (np.bincount)
+        self._flat_q = self.columns.ravel()
+        self._flat_k = (self.columns[:, :, None] * self._n + self.columns[:, None, :]).ravel()
 
     # -- per ball ----------------------------------------------------------------
     def balls(self, pose, vel=None):
@@ -184,30 +188,29 @@ class SpatialBallSet:
         Q[:, 3], Q[:, 4], Q[:, 5] = fz, m * s, -m * c
         Q[:, 6:8], Q[:, 8] = -fA, -_cross(b, fA)
         Q[:, 9:12] = -Q[:, 3:6]
-        dQ = np.zeros((N, N_BALL_COORDS, N_BALL_COORDS))
+        # tangent: each intermediate's row of derivatives over the 12 seeds (forward mode, vectorized)
+        E = self._seeds
         pa, pb = _perp(a), _perp(b)
-        for j in range(N_BALL_COORDS):
-            e = np.zeros(N_BALL_COORDS)
-            e[j] = 1.0
-            dda, ddb = e[2] * pa, e[8] * pb
-            dd = e[0:2] + dda - e[6:8] - ddb
-            dpsi = 0.5 * ((1 - g) * e[2] + (1 + g) * e[8])
-            dc, ds = -s * dpsi, c * dpsi
-            du = pu * dpsi[:, None]
-            dgx, dgy = e[4] - e[10], e[5] - e[11]
-            ddr = np.sum(dd * u, axis=1) + np.sum(d * du, axis=1) + zk * (dgy * c - dgx * s + gy * dc - gx * ds)
-            dda_ = (e[3] - e[9]) + rho * (dgx * s - dgy * c + gx * ds - gy * dc)
-            dar, daz = ddr, sig * dda_
-            dfu = -(Fr_r * dar + Fr_z * daz)
-            dfz = -sig * (Fa_r * dar + Fa_z * daz)
-            dm = rho * dfz - zk * dfu
-            dfA = dfu[:, None] * u + fu[:, None] * du
-            dQ[:, 0:2, j] = dfA
-            dQ[:, 2, j] = _cross(dda, fA) + _cross(a, dfA)
-            dQ[:, 3, j], dQ[:, 4, j], dQ[:, 5, j] = dfz, dm * s + m * ds, -dm * c - m * dc
-            dQ[:, 6:8, j] = -dfA
-            dQ[:, 8, j] = -(_cross(ddb, fA) + _cross(b, dfA))
-            dQ[:, 9:12, j] = -dQ[:, 3:6, j]
+        Jpsi = 0.5 * ((1 - g)[:, None] * E[2] + (1 + g)[:, None] * E[8])
+        Jgx, Jgy = E[4] - E[10], E[5] - E[11]
+        Jdd = (E[None, 0:2] + pa[:, :, None] * E[2] - E[None, 6:8] - pb[:, :, None] * E[8])      # (N, 2, 12)
+        Jdr = (np.einsum("nk,nkj->nj", u, Jdd) + (np.sum(d * pu, axis=1) - zk * (gy * s + gx * c))[:, None] * Jpsi
+               + zk[:, None] * (c[:, None] * Jgy - s[:, None] * Jgx))
+        Jda = (E[3] - E[9]) + rho[:, None] * (s[:, None] * Jgx - c[:, None] * Jgy) + (rho * (gx * c + gy * s))[:, None] * Jpsi
+        Jaz = sig[:, None] * Jda
+        Jfu = -(Fr_r[:, None] * Jdr + Fr_z[:, None] * Jaz)
+        Jfz = -sig[:, None] * (Fa_r[:, None] * Jdr + Fa_z[:, None] * Jaz)
+        Jm = rho[:, None] * Jfz - zk[:, None] * Jfu
+        JfA = u[:, :, None] * Jfu[:, None, :] + (fu[:, None] * pu)[:, :, None] * Jpsi[:, None, :]   # (N, 2, 12)
+        dQ = np.empty((N, N_BALL_COORDS, N_BALL_COORDS))
+        dQ[:, 0:2] = JfA
+        dQ[:, 2] = _cross(pa, fA)[:, None] * E[2] + a[:, 0:1] * JfA[:, 1] - a[:, 1:2] * JfA[:, 0]
+        dQ[:, 3] = Jfz
+        dQ[:, 4] = Jm * s[:, None] + (m * c)[:, None] * Jpsi
+        dQ[:, 5] = -Jm * c[:, None] + (m * s)[:, None] * Jpsi
+        dQ[:, 6:8] = -JfA
+        dQ[:, 8] = -(_cross(pb, fA)[:, None] * E[8] + b[:, 0:1] * JfA[:, 1] - b[:, 1:2] * JfA[:, 0])
+        dQ[:, 9:12] = -dQ[:, 3:6]
         obs = np.zeros((N, N_OBS))
         obs[:, O_FN], obs[:, O_GAP] = F, -delta
         obs[:, O_PX:O_PY + 1] = x[:, 6:8] + b + rho[:, None] * u
@@ -234,10 +237,8 @@ class SpatialBallSet:
             self.check_state(pose, vel)
         Qb, dQb, obs, _ = self.balls(pose)
         n = self._n
-        Q = np.zeros(n)
-        np.add.at(Q, self.columns, Qb)
-        K = np.zeros((n, n))
-        np.add.at(K, (self.columns[:, :, None], self.columns[:, None, :]), dQb)
+        Q = np.bincount(self._flat_q, weights=Qb.ravel(), minlength=n)
+        K = np.bincount(self._flat_k, weights=dQb.ravel(), minlength=n * n).reshape(n, n)
         m = 3 * self.n_bodies
         return Evaluation(Q[:m], K[:m, :m], np.zeros((m, m)), obs, (), all_finite(Q, K))
 
