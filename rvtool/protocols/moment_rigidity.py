@@ -203,3 +203,54 @@ def pair_moment_rigidity(pair, test: MomentRigidityTest):
 def spatial_design(design):
     """The design with a spatial carrier (``bodies.carrier_coordinates = "spatial"``)."""
     return dataclasses.replace(design, bodies=dataclasses.replace(design.bodies, carrier_coordinates="spatial"))
+
+
+def main_bearing_keys(assumed):
+    """The `assumed` inputs of a design (:class:`~rvtool.designs.catalogue.AssumedRanges`) that set its
+    main bearing (``main_bearing.*`` keys): the ones that move the moment rigidity."""
+    return tuple(a for a in assumed.inputs if a.key.startswith("main_bearing."))
+
+
+def pair_with(pair, key, value):
+    """``pair`` with the design-file ``key`` (``main_bearing.row_spacing``, ``main_bearing.row.FIELD``
+    or ``main_bearing.row.FIELD_deg``: both rows) set to ``value`` (the file's unit), validated."""
+    from ..bearings.spec import AngularContactPair
+    parts = key.split(".")
+    if parts[0] != "main_bearing" or not isinstance(pair, AngularContactPair):
+        raise RvtoolInputError(f"key = {key!r}: valid keys are main_bearing.row_spacing, main_bearing.row.FIELD")
+    if len(parts) == 2:
+        return dataclasses.replace(pair, **{parts[1]: value})
+    if len(parts) != 3 or parts[1] != "row":
+        raise RvtoolInputError(f"key = {key!r}: valid keys are main_bearing.row_spacing, main_bearing.row.FIELD "
+                               "(both rows; main_bearing.rows[k] tables are not varied here)")
+    field = parts[2]
+    if field.endswith("_deg"):
+        field, value = field[:-4], np.radians(value)
+    rows = tuple(dataclasses.replace(r, **{field: value}) for r in pair.rows)
+    return dataclasses.replace(pair, rows=rows)
+
+
+def main_bearing_band(pair, assumed, test, *, samples=16, seed=0):
+    """Moment rigidity [N m/arcmin] over the main bearing's `assumed` ranges: a one-at-a-time
+    tornado (each key at its low and high end) and ``samples`` Latin-hypercube samples
+    (:mod:`scipy.stats.qmc`) over all of them, each by :func:`pair_moment_rigidity`. Returns
+    {"keys", "tornado": {key: (at low, at high)}, "samples": [...], "band": (min, max) over all}."""
+    from scipy.stats import qmc
+    inputs = main_bearing_keys(assumed)
+    if not inputs:
+        return {"keys": [], "tornado": {}, "samples": [], "band": None}
+
+    def rigidity(p):
+        return pair_moment_rigidity(p, test).rigidity_arcmin
+
+    tornado = {a.key: (rigidity(pair_with(pair, a.key, a.at(0.0))), rigidity(pair_with(pair, a.key, a.at(1.0))))
+               for a in inputs}
+    U = qmc.LatinHypercube(d=len(inputs), seed=seed).random(samples) if samples else np.zeros((0, len(inputs)))
+    lhs = []
+    for u in U:
+        p = pair
+        for a, x in zip(inputs, u):
+            p = pair_with(p, a.key, a.at(x))
+        lhs.append(rigidity(p))
+    vals = [v for pr in tornado.values() for v in pr] + lhs
+    return {"keys": [a.key for a in inputs], "tornado": tornado, "samples": lhs, "band": (min(vals), max(vals))}
