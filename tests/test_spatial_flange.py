@@ -160,3 +160,19 @@ def test_device_backends_name_spatial_bodies(rv40e_pair):
     _, ms = rv40e_pair
     assert DeviceBackend().supports(ms, "equilibria").reasons == (SPATIAL_BODIES_REASON,)
     assert SPATIAL_BODIES_REASON in FusedBackend().supports(ms, "dynamic").reasons
+
+
+def test_validate_moment_rigidity_row():
+    """`rvtool validate`'s moment-rigidity row: computed on the spatial carrier, reference moment the
+    catalogue's allowable moment, and "no catalogue value" where the catalogue file prints none."""
+    from rvtool import designs
+    from rvtool.analysis import validate as V
+    from rvtool.designs.catalogue import load_catalogue
+    cat = load_catalogue(designs.catalogue_of("rv40e"))
+    out = V.moment_rigidity_figure(rvtool.load_design("rv40e"), cat, None, quick=True)
+    (row,) = out["rows"]
+    assert row["figure"] == "moment_rigidity" and row["unit"] == "N m/arcmin"
+    assert out["reference_moment_Nm"] == cat.figure("allowable_moment").value_si
+    assert row["predicted"] == pytest.approx(out["result"]["moment_rigidity_Nm_per_arcmin"], rel=1e-12)
+    assert row["predicted"] > 0
+    assert (row["verdict"] == "no catalogue value") == (not cat.figures_of("moment_rigidity"))
