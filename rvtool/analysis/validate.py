@@ -236,7 +236,7 @@ def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     the band over the main bearing's `assumed` ranges (bearing alone, rigid housing). Returns
     {"rows", "result", "band", "reference_moment_Nm", "note"}; an error is reported in the row, not raised
     (a side figure, as the ratio variant)."""
-    from .. import replace_design
+    from ..assembly.spec import replace as replace_design
     from ..assembly import build
     from ..protocols.moment_rigidity import MomentRigidityTest, main_bearing_band, moment_rigidity, spatial_design
     allow = catalogue.figure("allowable_moment")
