@@ -37,7 +37,7 @@ class Sequence:
         self.theta_out, self.te, self.flange, self.wall_s = [], [], [], 0.0
 
     def record(self, k, angle, q):
-        if self.model.flange is not None:
+        if self.model.carrier_tilt is not None:
             self.flange.append(self.model.flange_displacement(q))
 
     def run_block(self, sl):

@@ -118,7 +118,7 @@ def _secant(test, moments, tilt):
 def moment_rigidity(model, test: MomentRigidityTest):
     """:class:`MomentRigidityResult` of a built RV model with a spatial carrier (module docstring)."""
     from ..solver.static import StaticSolver
-    if getattr(model, "flange", None) is None:
+    if getattr(model, "carrier_tilt", None) is None:
         raise RvtoolInputError("moment rigidity needs the carrier's tilt coordinates; valid: "
                                "bodies.carrier_coordinates = 'spatial' in the design file")
     solver = StaticSolver(model)

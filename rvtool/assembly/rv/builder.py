@@ -229,13 +229,13 @@ class RvModel(ReducerModel):
     guided_free_play: bool = True
     #: the carrier's retained axial and tilt coordinates
     #: (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`), or None (planar carrier)
-    flange: object = None
+    carrier_tilt: object = None
 
-    def _flange(self):
-        if self.flange is None:
+    def _retained_tilt(self):
+        if self.carrier_tilt is None:
             raise RvtoolInputError("the carrier is planar (its axial and tilt coordinates are held); valid: "
-                               "bodies.carrier_coordinates = 'spatial' in the design file")
-        return self.flange
+                                   "bodies.carrier_coordinates = 'spatial' in the design file")
+        return self.carrier_tilt
 
     def set_flange_load(self, axial_force=0.0, moment=(0.0, 0.0)):
         """External axial force [N] and tilting moment (M_x, M_y) [N m] on the output flange at the
@@ -245,11 +245,11 @@ class RvModel(ReducerModel):
         check_finite("moment", moment)
         if np.shape(moment) != (2,):
             raise RvtoolInputError(f"moment must hold (M_x, M_y) [N m]; got {moment!r}")
-        self._flange().set_load(axial_force, moment)
+        self._retained_tilt().set_load(axial_force, moment)
 
     def flange_displacement(self, q):
         """(z [m], gamma_x, gamma_y [rad]) of the output flange at the state q (spatial carrier only)."""
-        return self._flange().coordinates(q)
+        return self._retained_tilt().coordinates(q)
 
     def main_bearing_loads(self, q):
         """:class:`~rvtool.bearings.set.BearingLoads` of the main bearing on the carrier at the static
@@ -616,4 +616,4 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
                    structures={} if housing is None else {"housing": housing},
                    graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, housing=housing,
-                   contact_host=element.host, flange=flange)
+                   contact_host=element.host, carrier_tilt=flange)

@@ -44,7 +44,7 @@ SPATIAL_BODIES_REASON = ("the model's carrier retains axial and tilt coordinates
 
 def spatial_body_reasons(model):
     """[SPATIAL_BODIES_REASON] where ``model`` has retained out-of-plane coordinates, else []."""
-    return [SPATIAL_BODIES_REASON] if getattr(model, "flange", None) is not None else []
+    return [SPATIAL_BODIES_REASON] if getattr(model, "carrier_tilt", None) is not None else []
 
 
 @dataclass(frozen=True, kw_only=True)
