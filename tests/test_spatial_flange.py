@@ -93,7 +93,7 @@ def test_design_key_errors():
     with pytest.raises(RvtoolInputError, match="bodies.carrier_coordinates"):
         dataclasses.replace(d.bodies, carrier_coordinates="3d")
     model = rvtool.build(d)
-    with pytest.raises(RvtoolInputError, match="carrier_coordinates = 'spatial'"):
+    with pytest.raises(RvtoolInputError, match=r"bodies.carrier_coordinates \(RV\)"):
         model.set_flange_load(0.0, (10.0, 0.0))
 
 
@@ -176,3 +176,46 @@ def test_validate_moment_rigidity_row():
     assert row["predicted"] == pytest.approx(out["result"]["moment_rigidity_Nm_per_arcmin"], rel=1e-12)
     assert row["predicted"] > 0
     assert (row["verdict"] == "no catalogue value") == (not cat.figures_of("moment_rigidity"))
+
+
+@pytest.fixture(scope="module")
+def rd40_pair():
+    d = rvtool.load_design("rd40")
+    ds = rvtool.replace_design(d, bodies={"flange_coordinates": "spatial"})
+    return rvtool.build(d, bearing_model="rolling"), rvtool.build(ds, bearing_model="rolling")
+
+
+def test_rd40_spatial_reproduces_planar(rd40_pair):
+    """The cycloid topology's flange (bodies.flange_coordinates = "spatial", rolling bearings): without
+    out-of-plane load the planar static points are reproduced to 1e-9 relative (issue 32)."""
+    from rvtool.solver.static import StaticSolver
+    qs = []
+    for m in rd40_pair:
+        m.set_output_torque(-np.sign(m.ratio) * 0.5 * m.design.rated_torque)
+        s = StaticSolver(m)
+        qs.append([s.solve(0.0), s.solve(0.02, previous_angle=0.0)])
+    (mp, ms), n = rd40_pair, len(qs[0][0])
+    for qp, qsp in zip(*qs):
+        assert np.max(np.abs(qsp[:n] - qp)) <= 1e-9 * np.max(np.abs(qp))
+        assert np.max(np.abs(ms.flange_displacement(qsp))) < 1e-15
+        # the main bearing's rows: the same preload split (its radial load is ~0 here: balanced wheels)
+        assert np.allclose(mp.main_bearing_loads(qp).row_axial_forces, ms.main_bearing_loads(qsp).row_axial_forces,
+                           rtol=1e-9)
+    assert set(mp.families) == set(ms.families)
+
+
+def test_rd40_moment_rigidity_model_equals_pair(rd40_pair):
+    _, ms = rd40_pair
+    t = MomentRigidityTest(reference_moment=100.0, levels=(0.0, 0.5, 1.0), axial_force=500.0)
+    r_model, r_pair = moment_rigidity(ms, t), pair_moment_rigidity(ms.design.main_bearing, t)
+    # regularization springs (100 N/m, 0.1 N m/rad against ~5e6 N m/rad) bound the difference
+    assert r_model.rigidity == pytest.approx(r_pair.rigidity, rel=1e-6)
+    assert r_model.axial_stiffness == pytest.approx(r_pair.axial_stiffness, rel=1e-6)
+
+
+def test_cycloid_spatial_flange_needs_rolling_rows():
+    ds = rvtool.replace_design(rvtool.load_design("rd40"), bodies={"flange_coordinates": "spatial"})
+    with pytest.raises(RvtoolInputError, match="bearing_model"):
+        rvtool.build(ds)
+    with pytest.raises(RvtoolInputError, match="bodies.flange_coordinates"):
+        rvtool.replace_design(rvtool.load_design("rd40"), bodies={"flange_coordinates": "tilted"})

@@ -119,19 +119,18 @@ def moment_rigidity(model, test: MomentRigidityTest):
     """:class:`MomentRigidityResult` of a built RV model with a spatial carrier (module docstring)."""
     from ..solver.static import StaticSolver
     if getattr(model, "carrier_tilt", None) is None:
-        raise RvtoolInputError("moment rigidity needs the carrier's tilt coordinates; valid: "
-                               "bodies.carrier_coordinates = 'spatial' in the design file")
+        raise RvtoolInputError("moment rigidity needs the output body's tilt coordinates; valid: "
+                               "bodies.carrier_coordinates (RV) or bodies.flange_coordinates (cycloid) = 'spatial' "
+                               "in the design file")
     solver = StaticSolver(model)
     model.set_output_torque(float(test.output_torque))
-    el = model.elements["main_bearings"]
     tilt, rows, angles = [], [], []
 
     def point(axial, moment):
         model.set_flange_load(axial, (moment, 0.0))
         q = solver.solve(0.0, previous_angle=0.0 if solver.q is not None else None)
-        pose = el.pose_velocity(el.local(q), np.zeros(len(el.local(q))))[0]
-        alw = el.evaluator.working_angles(pose)["main_bearing"]
-        return q, model.main_bearing_loads(q), alw
+        ev, pose = model.main_bearing_state(q)
+        return q, model.main_bearing_loads(q), ev.working_angles(pose)["main_bearing"]
 
     try:
         for M in test.moments:

@@ -227,36 +227,6 @@ class RvModel(ReducerModel):
     housing: object = None
     #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
     guided_free_play: bool = True
-    #: the carrier's retained axial and tilt coordinates
-    #: (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`), or None (planar carrier)
-    carrier_tilt: object = None
-
-    def _retained_tilt(self):
-        if self.carrier_tilt is None:
-            raise RvtoolInputError("the carrier is planar (its axial and tilt coordinates are held); valid: "
-                                   "bodies.carrier_coordinates = 'spatial' in the design file")
-        return self.carrier_tilt
-
-    def set_flange_load(self, axial_force=0.0, moment=(0.0, 0.0)):
-        """External axial force [N] and tilting moment (M_x, M_y) [N m] on the output flange at the
-        main bearing's axial centre (spatial carrier only)."""
-        from ...validation import check_finite
-        check_finite("axial_force", axial_force)
-        check_finite("moment", moment)
-        if np.shape(moment) != (2,):
-            raise RvtoolInputError(f"moment must hold (M_x, M_y) [N m]; got {moment!r}")
-        self._retained_tilt().set_load(axial_force, moment)
-
-    def flange_displacement(self, q):
-        """(z [m], gamma_x, gamma_y [rad]) of the output flange at the state q (spatial carrier only)."""
-        return self._retained_tilt().coordinates(q)
-
-    def main_bearing_loads(self, q):
-        """:class:`~rvtool.bearings.set.BearingLoads` of the main bearing on the carrier at the static
-        state q: radial force, axial force, tilting moment and the axial force of each row (fed back
-        with a spatial carrier, observations with a planar one)."""
-        el = self.elements["main_bearings"]
-        return el.evaluator.resultants(self._pose("main_bearings", q))["main_bearing"]
 
     def _pose(self, name, q):
         el = self.elements[name]
