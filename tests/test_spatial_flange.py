@@ -9,8 +9,8 @@ import pytest
 
 import rvtool
 from rvtool.bearings.set import BearingSet, Mounting
-from rvtool.bearings.spatial_set import SpatialBallSet, flange_wrench
-from rvtool.bearings.spec import AngularContactPair, BallBearing
+from rvtool.bearings.spatial_set import SpatialBearingSet, flange_wrench
+from rvtool.bearings.spec import AngularContactPair, BallBearing, CrossedRollerBearing
 from rvtool.contact.circle_set import GROUND
 from rvtool.errors import RvtoolInputError
 from rvtool.protocols.moment_rigidity import (MomentRigidityTest, flange_equilibrium, moment_rigidity,
@@ -43,7 +43,7 @@ def test_tangent_central_difference(pair):
     z, gamma_x, gamma_y), at a loaded, tilted state where some balls have lost contact (end play).
     Steps 1e-9 m / 1e-7 rad against displacements of ~1e-6 m / 1e-5 rad: truncation ~(h/x)^2 ~ 1e-6,
     rounding ~1e-16 / 1e-9 ~ 1e-7; bound 1e-6 of the largest entry (the issue's check)."""
-    s = SpatialBallSet([Mounting(name="m", bearing=pair, inner=0, outer=GROUND, inner_centre=(2e-4, -1e-4))], 2, {0: 1})
+    s = SpatialBearingSet([Mounting(name="m", bearing=pair, inner=0, outer=GROUND, inner_centre=(2e-4, -1e-4))], 2, {0: 1})
     pose = np.array([[4e-6, -3e-6, 0.37], [3e-6, 2e-5, -1.5e-5]])
     ev = s.evaluate(pose)
     fn = s.commit(pose)[:, 0]
@@ -57,7 +57,7 @@ def test_in_plane_equals_planar_element():
     forces and tangent (the same law, term by term: equal to rounding, bound 1e-12 relative)."""
     pair = _pair()
     ms = [Mounting(name="m", bearing=pair, inner=0, outer=GROUND, inner_centre=(1e-4, 0.0))]
-    planar, spatial = BearingSet(ms, 1, backend="numpy"), SpatialBallSet(ms, 2, {0: 1})
+    planar, spatial = BearingSet(ms, 1, backend="numpy"), SpatialBearingSet(ms, 2, {0: 1})
     pose = np.array([[2e-6, -3e-6, 0.3]])
     a, b = planar.evaluate(pose), spatial.evaluate(np.vstack([pose, np.zeros((1, 3))]))
     assert np.max(np.abs(a.Q - b.Q[:3])) <= 1e-12 * np.max(np.abs(a.Q))
@@ -219,3 +219,38 @@ def test_cycloid_spatial_flange_needs_rolling_rows():
         rvtool.build(ds)
     with pytest.raises(RvtoolInputError, match="bodies.flange_coordinates"):
         rvtool.replace_design(rvtool.load_design("rd40"), bodies={"flange_coordinates": "tilted"})
+
+
+CROSSED = CrossedRollerBearing(inner_radius=0.060, roller_diameter=0.008, roller_length=0.008, n_rollers=40,
+                               radial_clearance=-2e-6, n_slices=4, crowning=2e-6)
+
+
+def test_crossed_roller_tangent_and_planar_equality():
+    """Crossed-roller rows (rollers alternating +-alpha, laminae along each roller): analytic tangent
+    vs central differences (1e-6, as for the balls; the lamina law is k delta^(10/9), smooth away
+    from its activation), and the planar element's forces at zero axial and tilt displacement."""
+    ms = [Mounting(name="m", bearing=CROSSED, inner=0, outer=GROUND)]
+    s = SpatialBearingSet(ms, 2, {0: 1})
+    pose = np.array([[3e-6, -2e-6, 0.21], [1e-6, 2e-5, -1e-5]])
+    ev = s.evaluate(pose)
+    K = _fd(s, pose, [1e-10, 1e-10, 1e-8, 1e-10, 1e-10, 1e-10])
+    assert np.max(np.abs(ev.dQdq - K)) <= 1e-6 * np.max(np.abs(ev.dQdq))
+    planar = BearingSet(ms, 1, backend="numpy")
+    p0 = pose[:1]
+    a, b = planar.evaluate(p0), s.evaluate(np.vstack([p0, np.zeros((1, 3))]))
+    assert np.max(np.abs(a.Q - b.Q[:3])) <= 1e-12 * np.max(np.abs(a.Q))
+    assert np.max(np.abs(a.dQdq - b.dQdq[:3, :3])) <= 1e-12 * np.max(np.abs(a.dQdq))
+
+
+def test_crossed_roller_carries_moment_and_axial_load():
+    """A crossed-roller row carries a moment and an axial force in both directions (its +alpha and
+    -alpha rollers), odd in the load."""
+    t = MomentRigidityTest(reference_moment=200.0, levels=(0.0, 0.5, 1.0), axial_force=1000.0)
+    r = pair_moment_rigidity(CROSSED, t)
+    assert r.rigidity > 0 and r.axial_stiffness > 0 and np.all(np.diff(r.tilt) > 0)
+    qp = flange_equilibrium(CROSSED, (0, 0, 800.0, 0, 0))
+    qm = flange_equilibrium(CROSSED, (0, 0, -800.0, 0, 0))
+    assert qp[2] > 0 and qm[2] == pytest.approx(-qp[2], rel=1e-6)
+    m_p = flange_equilibrium(CROSSED, (0, 0, 0, 150.0, 0))
+    m_m = flange_equilibrium(CROSSED, (0, 0, 0, -150.0, 0))
+    assert m_p[3] > 0 and m_m[3] == pytest.approx(-m_p[3], rel=1e-6)

@@ -593,8 +593,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
             elements[name] = element(ev)
         if tilt is not None:
             # the main bearing on the flange's retained axial and tilt coordinates (pose row nw + 2)
-            from ..bearings.spatial_set import SpatialBallSet
-            elements["main_bearing"] = element(SpatialBallSet([main_bearing_mounting(d, nw)], nw + 3, {nw + 1: nw + 2},
+            from ..bearings.spatial_set import SpatialBearingSet
+            elements["main_bearing"] = element(SpatialBearingSet([main_bearing_mounting(d, nw)], nw + 3, {nw + 1: nw + 2},
                                                               name="main_bearing"), ports=tilt)
     else:
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))

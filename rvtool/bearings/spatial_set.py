@@ -1,8 +1,10 @@
-"""Ball rows between a ring body with retained axial and tilt coordinates and its housing:
-the spatial state of an output flange on its main-bearing rows (issue 32).
+"""Rolling-element rows between a ring body with retained axial and tilt coordinates and its
+housing: the spatial state of an output flange on its main-bearing rows (issue 32).
 
 Each ball row (a :class:`~rvtool.bearings.spec.BallBearing` or the two rows of an
-:class:`~rvtool.bearings.spec.AngularContactPair`) sits between an inner-ring body A and an
+:class:`~rvtool.bearings.spec.AngularContactPair`) or roller row (a
+:class:`~rvtool.bearings.spec.CrossedRollerBearing`, rollers alternating +-alpha, or a radial
+cylindrical / needle row, alpha = 0; sliced into laminae along each roller) sits between an inner-ring body A and an
 outer-ring body B (``GROUND`` allowed). Beside its planar coordinates (x, y, theta) a body may
 retain its out-of-plane coordinates (z, gamma_x, gamma_y): the axial translation and the two
 small tilts about the mounting's axial centre. They are carried as one more pose row of the
@@ -31,6 +33,12 @@ out-of-plane coordinates (f_z, m sin psi, -m cos psi) with m = rho f_z - z_k f_u
 (width_resultant)); B receives the opposite. The same point enters the kinematics and the moment,
 so the tangent is the Hessian of the balls' potential (symmetric at fixed cage).
 
+A roller lamina at its centre (rho_l, z_l) (along the roller's generator, as the planar packing
+places it) has the fixed contact normal (cos alpha u, sigma sin alpha e_z): its approach is
+delta = delta_r cos(alpha) + sigma delta_a sin(alpha) - c - crown and F = k <delta>^p (Eq.
+(normal_force)); a tilt thus loads a crossed-roller row's +alpha and -alpha rollers on opposite
+sides, and a radial row's laminae along their length (the roller's own tilting moment).
+
 At zero axial and tilt displacement the in-plane forces are those of the planar element
 (:class:`~rvtool.bearings.set.BearingSet`), term by term. Damping of the balls is not carried in the
 spatial use (a named error): the quasi-static protocols need none.
@@ -49,7 +57,12 @@ from ..contact.circle_set import GROUND
 from ..contact.evaluator import Evaluation, all_finite
 from ..errors import RvtoolInputError
 from .set import BearingLoads, Mounting, NoHistory, pack_mounting
-from .spec import AngularContactPair, BallBearing
+from warp_contacts import laws_ref
+
+from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
+
+#: bearings whose rows resolve the spatial state
+SPATIAL_TYPES = (BallBearing, AngularContactPair, CylindricalRollerBearing)
 
 #: coordinates of one ball's seeds: A (x, y, theta), A (z, gamma_x, gamma_y), B (x, y, theta), B (z, ...)
 N_BALL_COORDS = 12
@@ -95,7 +108,19 @@ def ball_law_spatial(ar, az, fp):
             F_r * sw + F * sw_r, F_z * sw + F * sw_z)
 
 
-class SpatialBallSet:
+def lamina_law_spatial(ar, az, fp):
+    """A roller lamina at fixed contact angle alpha (crossed rollers +-alpha through sigma, radial
+    rollers alpha = 0) at radial and signed axial displacement (a_r, a_z) = (delta_r, sigma delta_a)
+    of its centre: delta = a_r cos(alpha) + a_z sin(alpha) - c - crown, F = k <delta>^p (Eq.
+    (normal_force) without damping); the same outputs as :func:`ball_law_spatial`."""
+    al = fp[:, ref.R_ALPHA]
+    ca, sa = np.cos(al), np.sin(al)
+    delta = ar * ca + az * sa - fp[:, ref.R_CLEAR] - fp[:, ref.R_CROWN]
+    F, dF, _ = laws_ref.normal_force(fp[:, ref.R_K], fp[:, ref.R_P], 0.0, fp[:, ref.R_RAMP], delta, 0.0)
+    return delta, F, al, F * ca, F * sa, dF * ca * ca, dF * ca * sa, dF * sa * ca, dF * sa * sa
+
+
+class SpatialBearingSet:
     """Ball-bearing mountings whose rings retain axial and tilt coordinates (module docstring).
 
     mountings: :class:`~rvtool.bearings.set.Mounting` of a BallBearing or AngularContactPair;
@@ -118,23 +143,25 @@ class SpatialBallSet:
                 if not (isinstance(v, (int, np.integer)) and 0 <= v < n_bodies):
                     raise RvtoolInputError(f"tilt_bodies {nm} {v!r} is outside the valid range [0, {n_bodies - 1}]")
         self.history = NoHistory()
-        fp, ids, cols, rho, z, row_of, owner = [], [], [], [], [], [], []
+        fp, ids, cols, rho, z, row_of, owner, kinds = [], [], [], [], [], [], [], []
         g = n_bodies                                    # the ground slot (dropped on assembly)
         for k, m in enumerate(self.mountings):
-            if not isinstance(m, Mounting) or not isinstance(m.bearing, (BallBearing, AngularContactPair)):
-                raise RvtoolInputError(f"mountings[{k}] must be a Mounting of a BallBearing or AngularContactPair; "
-                                       f"got {type(getattr(m, 'bearing', m)).__name__}")
+            if not isinstance(m, Mounting) or not isinstance(m.bearing, SPATIAL_TYPES):
+                raise RvtoolInputError(f"mountings[{k}] must be a Mounting of a BallBearing, AngularContactPair or "
+                                       f"roller bearing (crossed, cylindrical, needle); got "
+                                       f"{type(getattr(m, 'bearing', m)).__name__}")
             rows = m.bearing.rows if isinstance(m.bearing, AngularContactPair) else (m.bearing,)
             for r, row in enumerate(rows):
                 if row.damping != 0:
                     raise RvtoolInputError(f"{m.name}: rows[{r}].damping = {row.damping} N s/m; valid with a spatial "
-                                           "flange: 0 (ball damping is not carried in the spatial use)")
+                                           "flange: 0 (element damping is not carried in the spatial use)")
             for nm in ("inner", "outer"):
                 b = getattr(m, nm)
                 if not (b == GROUND or (isinstance(b, (int, np.integer)) and 0 <= b < n_bodies)):
                     raise RvtoolInputError(f"mountings[{k}].{nm} = {b!r} is outside the valid range "
                                            f"[0, {n_bodies - 1}] or GROUND (-1)")
-            prow, _, rid, r_rho, r_z, r_row = pack_mounting(m)
+            prow, r_kind, rid, r_rho, r_z, r_row = pack_mounting(m)
+            kinds += r_kind
             slot = [g if m.inner == GROUND else m.inner, self.tilt_bodies.get(m.inner, g),
                     g if m.outer == GROUND else m.outer, self.tilt_bodies.get(m.outer, g)]
             idx = np.concatenate([3 * s + np.arange(3) for s in slot])
@@ -150,6 +177,8 @@ class SpatialBallSet:
         self.columns = np.array(cols)                  # (N, 12) pose-vector indices of each ball's seeds
         self.element_radius, self.element_station = np.array(rho), np.array(z)
         self.element_row, self.owner = np.array(row_of), np.array(owner)
+        self.kind = np.array(kinds)
+        self._ball = self.kind == ref.KIND_BALL
         self._n = 3 * (n_bodies + 1)
         self._seeds = np.eye(N_BALL_COORDS)
         # scatter of the per-ball rows into the assembled vector and matrix (np.bincount)
@@ -177,9 +206,15 @@ class SpatialBallSet:
         al0, A = fp[:, ref.R_ALPHA], fp[:, ref.R_A]
         dr = np.sum(d * u, axis=1) + zk * (gy * c - gx * s)
         da = zr + rho * (gx * s - gy * c)
-        ar = A * np.cos(al0) + dr
-        az = A * np.sin(al0) + fp[:, ref.R_SAX] + sig * da
-        delta, F, alw, Fr, Fa, Fr_r, Fr_z, Fa_r, Fa_z = ball_law_spatial(ar, az, fp)
+        ball = self._ball
+        ar = np.where(ball, A * np.cos(al0), 0.0) + dr
+        az = np.where(ball, A * np.sin(al0) + fp[:, ref.R_SAX], 0.0) + sig * da
+        law = np.zeros((9, N))
+        if np.any(ball):
+            law[:, ball] = ball_law_spatial(ar[ball], az[ball], fp[ball])
+        if not np.all(ball):
+            law[:, ~ball] = lamina_law_spatial(ar[~ball], az[~ball], fp[~ball])
+        delta, F, alw, Fr, Fa, Fr_r, Fr_z, Fa_r, Fa_z = law
         fu, fz = -Fr, -sig * Fa
         m = rho * fz - zk * fu
         fA = fu[:, None] * u
@@ -257,7 +292,7 @@ class SpatialBallSet:
         for k, mt in enumerate(self.mountings):
             sel = self.owner == k
             rows = self.element_row[sel]
-            n_rows = 2 if isinstance(mt.bearing, AngularContactPair) else 1
+            n_rows = 2 if isinstance(mt.bearing, AngularContactPair) else 1   # rollers: one row
             out[mt.name] = BearingLoads(
                 force=np.sum(fu[sel, None] * u[sel], axis=0), axial_force=float(np.sum(fz[sel])),
                 tilting_moment=np.sum(m[sel, None] * np.column_stack([u[sel, 1], -u[sel, 0]]), axis=0),
@@ -270,13 +305,18 @@ class SpatialBallSet:
         return {m.name: alw[self.owner == k] for k, m in enumerate(self.mountings)}
 
     def element_loads(self, obs):
-        """{mounting name: normal force of each ball [N]} from observations (N, 8)."""
+        """{mounting name: normal force of each rolling element [N]} from observations (N, 8): balls as
+        they are, rollers summed over their laminae (element order as in the ids)."""
         fn = np.asarray(obs)[:, O_FN]
-        return {m.name: fn[self.owner == k] for k, m in enumerate(self.mountings)}
+        out = {}
+        for k, m in enumerate(self.mountings):
+            f, b = fn[self.owner == k], m.bearing
+            out[m.name] = f.reshape(b.n_rollers, b.n_slices).sum(axis=1) if isinstance(b, CylindricalRollerBearing) else f
+        return out
 
 
 def flange_wrench(pair, q):
-    """Wrench on a flange (the inner rings) on ``pair`` against a rigid housing at relative
+    """Wrench on a flange (the inner rings) on ``pair`` (any bearing of :data:`SPATIAL_TYPES`) against a rigid housing at relative
     displacement q = (delta_x, delta_y, delta_z [m], gamma_x, gamma_y [rad]) of its mounting centre:
     (w (5,) = (F_x, F_y, F_z [N], M_x, M_y [N m]) on the flange, its tangent dw/dq (5, 5), row axial
     forces (n_rows,) [N]). The cage is at its built phase."""
@@ -291,4 +331,4 @@ def flange_wrench(pair, q):
 @lru_cache(maxsize=32)
 def flange_set(pair):
     """The one-mounting set of a flange (body 0) and its out-of-plane row (1) on ``pair``, housing ground."""
-    return SpatialBallSet([Mounting(name="flange", bearing=pair, inner=0, outer=GROUND)], 2, {0: 1}, name="flange")
+    return SpatialBearingSet([Mounting(name="flange", bearing=pair, inner=0, outer=GROUND)], 2, {0: 1}, name="flange")

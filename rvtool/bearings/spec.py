@@ -328,7 +328,7 @@ class AngularContactPair:
     In the planar model both rows carry radial load through their balls; the
     axial force and tilting moment of each row and of the pair are computed
     from the same element forces as observations (:meth:`BearingSet.resultants`).
-    With a spatial flange (:class:`rvtool.bearings.spatial_set.SpatialBallSet`) the
+    With a spatial flange (:class:`rvtool.bearings.spatial_set.SpatialBearingSet`) the
     axial and tilt displacements of the rings move every ball's approach and working
     angle, and the axial force and moments act on both bodies.
 

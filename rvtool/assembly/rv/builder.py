@@ -462,11 +462,11 @@ def spatial_flange(mbs, design, layout, mounting, housing, regularization):
     """A spatial carrier (``bodies.carrier_coordinates = "spatial"``, issue 32): its retained axial and
     tilt coordinates (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`: mass, transverse
     inertia, the builder's regularization springs) and the main bearing on them
-    (:class:`~rvtool.bearings.spatial_set.SpatialBallSet`: every ball's approach and working angle
+    (:class:`~rvtool.bearings.spatial_set.SpatialBearingSet`: every ball's approach and working angle
     from the radial, axial and tilt displacement; the out-of-plane coordinates are the evaluator's
     pose row n_bodies). The housing stays rigid out of plane. Returns (RetainedTilt, set)."""
     from exudyn_user_elements.out_of_plane import RetainedTilt
-    from ...bearings.spatial_set import SpatialBallSet
+    from ...bearings.spatial_set import SpatialBearingSet
     if housing is not None:
         raise RvtoolInputError("bodies.carrier_coordinates = 'spatial' with housing.model = 'ports' is not implemented "
                                "(the merged element carries one structure); valid: housing.model = 'rigid' or "
@@ -478,7 +478,7 @@ def spatial_flange(mbs, design, layout, mounting, housing, regularization):
     b = design.bodies
     k_t, k_r = regularization
     flange = RetainedTilt(mbs, b.carrier_mass, b.tilt_inertia, (k_t, k_r), name="carrier_tilt")
-    main = SpatialBallSet([mounting], layout.n_bodies + 1, {layout.carrier: layout.n_bodies}, name="main_bearings")
+    main = SpatialBearingSet([mounting], layout.n_bodies + 1, {layout.carrier: layout.n_bodies}, name="main_bearings")
     return flange, main
 
 

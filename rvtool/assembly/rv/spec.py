@@ -122,7 +122,7 @@ class RvBodies:
     carrier_coordinates: the coordinates the carrier / output flange retains (issue 32):
     ``"planar"`` (x, y, theta; its axial translation and tilts held, the main bearing's axial force
     and tilting moment observations -- the default, today's figures) or ``"spatial"`` (also z,
-    gamma_x, gamma_y on the main-bearing rows: :class:`rvtool.bearings.spatial_set.SpatialBallSet`).
+    gamma_x, gamma_y on the main-bearing rows: :class:`rvtool.bearings.spatial_set.SpatialBearingSet`).
     carrier_tilt_inertia: transverse inertia [kg m^2] of the carrier about a diameter through the
     mounting centre (dynamic runs of a spatial carrier only); None: half the polar inertia (a thin
     disc, assumed)."""
