@@ -180,15 +180,20 @@ class SpatialBearingSet:
         self.kind = np.array(kinds)
         self._ball = self.kind == ref.KIND_BALL
         self._n = 3 * (n_bodies + 1)
-        self._seeds = np.eye(N_BALL_COORDS)
+        # the seeds that move some ball (a grounded outer ring without tilt rows has none: the tangent
+        # is formed over the live seeds only, half of them for a flange on a rigid housing)
+        ground = 3 * n_bodies + np.arange(3)
+        self._live = np.flatnonzero(~np.all(np.isin(self.columns, ground), axis=0))
+        self._seeds = np.eye(N_BALL_COORDS)[:, self._live]
         # scatter of the per-ball rows into the assembled vector and matrix (np.bincount)
         self._flat_q = self.columns.ravel()
-        self._flat_k = (self.columns[:, :, None] * self._n + self.columns[:, None, :]).ravel()
+        self._flat_k = (self.columns[:, :, None] * self._n + self.columns[:, None, self._live]).ravel()
 
     # -- per ball ----------------------------------------------------------------
     def balls(self, pose, vel=None):
-        """Per-ball results at poses (n_bodies, 3): (Q (N, 12), dQ/dq (N, 12, 12), obs (N, 8),
-        aux (N, 4): f_u, f_z [N] on A, working angle alpha_w [rad], moment arm m [N m])."""
+        """Per-ball results at poses (n_bodies, 3): (Q (N, 12), dQ/dq (N, 12, L) over the L live seeds
+        (``self._live``: the ball's 12 coordinates less those held by the ground), obs (N, 8), aux (N, 4):
+        f_u, f_z [N] on A, working angle alpha_w [rad], moment arm m [N m])."""
         p = np.vstack([np.asarray(pose, float), np.zeros((1, 3))]).ravel()
         x = p[self.columns]                             # (N, 12)
         fp = self.fparams
@@ -229,7 +234,7 @@ class SpatialBearingSet:
         Jpsi = 0.5 * ((1 - g)[:, None] * E[2] + (1 + g)[:, None] * E[8])
         Jgx, Jgy = E[4] - E[10], E[5] - E[11]
         Jdd = (E[None, 0:2] + pa[:, :, None] * E[2] - E[None, 6:8] - pb[:, :, None] * E[8])      # (N, 2, 12)
-        Jdr = (np.einsum("nk,nkj->nj", u, Jdd) + (np.sum(d * pu, axis=1) - zk * (gy * s + gx * c))[:, None] * Jpsi
+        Jdr = (c[:, None] * Jdd[:, 0] + s[:, None] * Jdd[:, 1] + (np.sum(d * pu, axis=1) - zk * (gy * s + gx * c))[:, None] * Jpsi
                + zk[:, None] * (c[:, None] * Jgy - s[:, None] * Jgx))
         Jda = (E[3] - E[9]) + rho[:, None] * (s[:, None] * Jgx - c[:, None] * Jgy) + (rho * (gx * c + gy * s))[:, None] * Jpsi
         Jaz = sig[:, None] * Jda
@@ -237,7 +242,7 @@ class SpatialBearingSet:
         Jfz = -sig[:, None] * (Fa_r[:, None] * Jdr + Fa_z[:, None] * Jaz)
         Jm = rho[:, None] * Jfz - zk[:, None] * Jfu
         JfA = u[:, :, None] * Jfu[:, None, :] + (fu[:, None] * pu)[:, :, None] * Jpsi[:, None, :]   # (N, 2, 12)
-        dQ = np.empty((N, N_BALL_COORDS, N_BALL_COORDS))
+        dQ = np.empty((N, N_BALL_COORDS, len(self._live)))
         dQ[:, 0:2] = JfA
         dQ[:, 2] = _cross(pa, fA)[:, None] * E[2] + a[:, 0:1] * JfA[:, 1] - a[:, 1:2] * JfA[:, 0]
         dQ[:, 3] = Jfz
