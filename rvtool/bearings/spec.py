@@ -218,8 +218,9 @@ class BallBearing:
     Planar model: the rings' axial displacement and tilts are held, so each ball's
     axial approach stays at its preload value and only the radial part F cos(alpha_w)
     acts on the bodies; the axial force and tilting moment are computed from the same
-    element forces as observations (:meth:`BearingSet.resultants`) and are not fed back
-    until tilt and axial coordinates exist.
+    element forces as observations (:meth:`BearingSet.resultants`). A ring body with
+    retained axial and tilt coordinates (:class:`rvtool.bearings.spatial_set.SpatialBearingSet`)
+    feeds them back.
 
     RD-40 main-bearing row: ``BallBearing(n_balls=16, ball_diameter=7.938e-3,
     pitch_diameter=0.068, contact_angle=math.radians(25), axial_preload=200.0)``.

@@ -11,7 +11,10 @@ Bodies (planar rigid, x, y, theta; node order = ``body_names``):
 * ``crank0..``: the floating crankshafts (x, y, theta all free), each with its spur gear
   (centre at the body origin, tooth 0 on the body's x axis) and two eccentric journals;
 * ``wheel0``, ``wheel1``: the cycloid wheels (free), each bored for every crank's journal;
-* ``carrier``: the output (both halves joined rigidly; free, on the main bearings).
+* ``carrier``: the output (both halves joined rigidly; free, on the main bearings). With
+  ``bodies.carrier_coordinates = "spatial"`` it also retains its axial translation and two tilts
+  (:func:`spatial_flange`: an Exudyn node of three coordinates, the main bearing on them through
+  :class:`~rvtool.bearings.spatial_set.SpatialBearingSet`, NumPy whatever ``backend``).
 
 Contact elements (each one kernel launch per evaluation): ``pins`` (cycloid--pin meshes of
 both wheels, pins on the ground), ``gears`` (involute pairs sun--crank gear k, and the
