@@ -106,7 +106,7 @@ def _base_row(m, psi0, gamma, pitch, alpha, sigma):
     return r
 
 
-def _pack(m):
+def pack_mounting(m):
     """Rows of one mounting: (float rows, kinds, ids, element radius rho [m], axial station z [m], row index)."""
     b = m.bearing
     rows, kinds, ids, rho, z, row_of = [], [], [], [], [], []
@@ -134,12 +134,13 @@ def _pack(m):
         return rows, kinds, ids, rho, z, row_of
     stations = b.stations() if isinstance(b, AngularContactPair) else ((0.0, 1.0),)
     ball_rows = b.rows if isinstance(b, AngularContactPair) else (b,)
+    offsets = b.axial_offsets if isinstance(b, AngularContactPair) else (b.axial_preload_offset,)
     for k, (row, (zr, sigma)) in enumerate(zip(ball_rows, stations)):
         gamma = row.ball_diameter * math.cos(row.contact_angle) / row.pitch_diameter
         for j in range(row.n_balls):
             r = _base_row(m, m.cage_phase + 2 * math.pi * j / row.n_balls, gamma, row.pitch_diameter,
                           row.contact_angle, sigma)
-            r[ref.R_A], r[ref.R_SAX], r[ref.R_CLEAR] = (row.groove_centre_distance, row.axial_preload_offset,
+            r[ref.R_A], r[ref.R_SAX], r[ref.R_CLEAR] = (row.groove_centre_distance, offsets[k],
                                                         row.radial_clearance)
             r[ref.R_DAMP], r[ref.R_RAMP] = row.damping, row.ramp_depth
             r[ref.R_DBALL], r[ref.R_FI], r[ref.R_FO], r[ref.R_EMOD] = (row.ball_diameter, row.inner_curvature,
@@ -198,7 +199,7 @@ class BearingSet(StagedLaunch):
                 if not (b == GROUND or (isinstance(b, (int, np.integer)) and 0 <= b < n_bodies)):
                     raise RvtoolInputError(f"mountings[{k}].{nm} = {b!r} is outside the valid range "
                                            f"[0, {n_bodies - 1}] or GROUND (-1)")
-            rows, kinds, rid, r_rho, r_z, r_row = _pack(m)
+            rows, kinds, rid, r_rho, r_z, r_row = pack_mounting(m)
             fp += rows
             irows = np.zeros((len(kinds), ref.N_INT), np.int32)
             irows[:, ref.K_BODY_A] = g if m.inner == GROUND else m.inner

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import RvtoolInputError, SolverFailure
-from .base import Backend, DrivenHistory, Equilibria, Support
+from .base import Backend, DrivenHistory, Equilibria, Support, spatial_body_reasons
 
 
 def _device_reasons(model):
@@ -106,6 +106,9 @@ class DeviceBackend(Backend):
     def supports(self, model, task, run=None):
         if not self._task(task):
             return Support.of([f"device does not implement {task!r} (equilibria only; driven runs: 'fused')"])
+        spatial = spatial_body_reasons(model)
+        if spatial:
+            return Support.of(spatial)
         try:
             reasons, _ = self._params_of(model)
         except RvtoolInputError as exc:
@@ -264,10 +267,12 @@ class FusedBackend(Backend):
         if not self._task(task):
             return Support.of([f"fused does not implement {task!r} (driven runs only; equilibria: 'device')"])
         from ..device_dynamics import fused_support
-        try:
-            reasons = list(fused_support(model, run.run_spec if run is not None else None).reasons)
-        except RvtoolInputError as exc:
-            reasons = [str(exc)]
+        reasons = spatial_body_reasons(model)
+        if not reasons:
+            try:
+                reasons = list(fused_support(model, run.run_spec if run is not None else None).reasons)
+            except RvtoolInputError as exc:
+                reasons = [str(exc)]
         if run is not None and run.observers:
             reasons.append("observers are recorded by the Exudyn driver only")
         return Support.of(reasons)
