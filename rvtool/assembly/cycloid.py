@@ -546,6 +546,9 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         ports = PortBodies(housing, np.array([reduced.port_rows[k][:2] for k in range(zb)]))
         n_pin_bodies = nw + 2 + zb
         meshes = [dataclasses.replace(m, pin_bodies=tuple(range(nw + 2, nw + 2 + zb))) for m in meshes]
+    if d.pins.groove != "rigid":
+        raise RvtoolInputError(f"pins.groove = {d.pins.groove!r} is implemented for the RV topology only; valid for a "
+                               "cycloid drive: 'rigid'")
     C_ring = pin_station_compliance(d, Family.PINS)
     if C_ring is not None:
         # elastic ring pins: wheel k meets pin p on the station body nw + 2 + p nw + k (Eq. series_contact)

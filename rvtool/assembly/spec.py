@@ -53,13 +53,18 @@ class Pins:
     generating radius of the wheel profile [m]. Manufacturing deviations (part of the design, so a
     variant is a design): radius_error: the actual pin radius minus r_p [m]; centre_errors: None
     or (z_b, 2) pin-centre errors in the housing frame [m]. support: the pin as a beam
-    (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-table ``[pins.support]``; rigid by default)."""
+    (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-table ``[pins.support]``; rigid by default).
+    groove: the pin in its housing groove, "rigid" (the default: today's figures) or "conformal"
+    (the pin--groove contact law of :mod:`rvtool.contact.groove` in series with the pin; RV
+    topology); groove_clearance: its radial clearance Delta R [m] (required for "conformal")."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
     radius_error: float = 0.0
     centre_errors: tuple | None = None
     support: PinSupport = field(default_factory=PinSupport)
+    groove: str = "rigid"
+    groove_clearance: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.n_pins, int) or self.n_pins < 3:
@@ -73,6 +78,14 @@ class Pins:
                 raise RvtoolInputError(f"pins.centre_errors must have shape ({self.n_pins}, 2) (one (x, y) per pin); "
                                        f"got {e.shape}")
             check_finite("pins.centre_errors", e)
+        if self.groove not in ("rigid", "conformal"):
+            raise RvtoolInputError(f"pins.groove = {self.groove!r}; valid choices are ['rigid', 'conformal']")
+        if self.groove_clearance is not None:
+            from ..contact.groove import GROOVE_CLEARANCE_RANGE
+            check_range("pins.groove_clearance", self.groove_clearance, *GROOVE_CLEARANCE_RANGE)
+        elif self.groove == "conformal":
+            raise RvtoolInputError("pins.groove_clearance is required for pins.groove = 'conformal' (the radial "
+                                   "clearance of the pin in its groove [m], valid range [1e-07, 0.001])")
 
 
 @dataclass(frozen=True, kw_only=True)
