@@ -328,6 +328,27 @@ def replica_reasons(model):
     return reasons
 
 
+def copy_families(model, copies, *, precision="float64", device="cpu"):
+    """[:class:`FamilyCopies`] of every contact element of ``model`` copied ``copies`` times
+    (:data:`COPIERS`; copy c owns bodies c nb .. c nb + nb - 1): what :func:`replicate` puts into
+    its Exudyn system and what the device backend's row Newton
+    (:mod:`rvtool.solver.device_rows`) evaluates without one. The caller checks
+    :func:`replica_reasons` first."""
+    B, nb = int(copies), len(model.body_names)
+    families = []
+    for el in model.contact_elements():
+        s = el.evaluator
+        cs = COPIERS[type(s)](s, B, nb, precision, device)
+        families.append(FamilyCopies(name=s.name, set=cs, scatter=CopyBlockAssembler(cs.assembler.bodies, nb, B),
+                                     obs_rows=len(el.ids)))
+    return families
+
+
+def held_coordinates(model):
+    """[(body index, coordinate)] held at zero by the model's coordinate locks."""
+    return _held(model)
+
+
 def replicate(model, copies, *, precision="float64", device="cpu", build_kw=None):
     """:class:`ReplicatedModel` of ``copies`` copies of ``model`` (see the module docstring).
     build_kw: the build options ``model`` was built with (the per-copy fallback rebuilds with them)."""
@@ -339,13 +360,7 @@ def replicate(model, copies, *, precision="float64", device="cpu", build_kw=None
     if reasons:
         raise RvtoolInputError("; ".join(reasons))
     B, nb = int(copies), len(model.body_names)
-    families = []
-    for el in model.contact_elements():
-        s = el.evaluator
-        copier = COPIERS[type(s)]
-        cs = copier(s, B, nb, precision, device)
-        families.append(FamilyCopies(name=s.name, set=cs, scatter=CopyBlockAssembler(cs.assembler.bodies, nb, B),
-                                     obs_rows=len(el.ids)))
+    families = copy_families(model, B, precision=precision, device=device)
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))
