@@ -94,7 +94,7 @@ class DeviceBackend(Backend):
         angles = np.asarray(batch.input_angles)
         A = len(angles)
         tq = -np.sign(model.ratio) * batch.torque
-        copies = min(A, self.copies or 256)
+        copies = min(A, self.copies or 64)
         newton = DeviceRowNewton(model, copies, device=self.device,
                                  settings=self.settings or DeviceNewtonSettings())
         r = newton.solve(angles, np.full(A, tq))

@@ -1,0 +1,109 @@
+"""The device backend's row Newton (rvtool.solver.device_rows) on the non-cycloid topologies
+against the Exudyn oracle: tests/golden/backends.json's Exudyn figures (written by
+tests/golden/capture_backends.py, see tests/golden/README.md).
+
+Tolerances as tests/test_backends_golden.py (the issue's targets): equilibria 1e-9 relative
+(each coordinate kind against its largest elastic deviation: a 1e-6 N residual over contact
+stiffnesses of ~1e8 N/m moves a state by ~1e-14 m), TE 1e-6 arcsec, peak loads 1e-6 relative.
+A lost family or another regularization misses these by orders of magnitude (dropping the
+tapered crank bearings moves RV-40E's carrier by its whole elastic deflection).
+"""
+import dataclasses
+import json
+import pathlib
+
+import numpy as np
+import pytest
+
+import rvtool
+from rvtool.errors import RvtoolInputError
+from rvtool.protocols.precision import quasi_static_te
+from rvtool.solver.backends import DeviceBackend, EquilibriumBatch, choose
+from rvtool.solver.device_rows import CONVERGED, DeviceRowNewton
+from rvtool.units import ARCSEC_PER_RAD
+
+GOLDEN = json.loads((pathlib.Path(__file__).parent / "golden" / "backends.json").read_text())["exudyn"]
+TE_TOL = 1e-6           # arcsec
+EQ_TOL = 1e-9           # relative
+
+
+@pytest.fixture(scope="module")
+def rv():
+    d = rvtool.load_design("rv40e")
+    return d, rvtool.build(d)
+
+
+def _model_q(model, q_local):
+    """Model (Exudyn) coordinates of states in the body order of the copies."""
+    idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
+    out = np.zeros((len(q_local), model.mbs.systemData.ODE2Size()))
+    out[:, idx] = q_local
+    return out
+
+
+def _equal_states(q, q_ref, model):
+    q, q_ref = np.asarray(q), np.asarray(q_ref)
+    rot = np.zeros(q.shape[-1], bool)
+    for n in model.nodes:
+        rot[np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int)[2]] = True
+    for kind in (rot, ~rot):
+        scale = np.max(np.abs(q_ref[..., kind]))
+        assert np.max(np.abs(q[..., kind] - q_ref[..., kind])) <= EQ_TOL * scale
+
+
+def test_rv40e_equilibria_and_te_on_the_device_equal_exudyn(rv):
+    """Every family of RV-40E's merged element (cycloid pins, involute pairs, needle and ball
+    rolling elements, tapered crank bearings carrying the output carrier) on the device row
+    Newton: equilibria and the quick TE sequence against the Exudyn oracle, every point
+    converged on the device (no Exudyn hand-over)."""
+    d, model = rv
+    g = GOLDEN["rv40e"]
+    b = DeviceBackend()
+    assert b.supports(model, "equilibria").ok and b.path(model)[0] == "rows"
+    eq = b.solve_equilibria(model, EquilibriumBatch(input_angles=g["equilibria_angles_rad"], torque=d.rated_torque))
+    assert eq.stats["exudyn_points"] == 0 and eq.stats["path"] == "rows"
+    _equal_states(eq.q, g["equilibria_q"], model)
+    te = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"], backend="device")
+    assert te["backend"]["ran"] == "device" and te["stats"]["exudyn_points"] == 0
+    assert np.max(np.abs(te["te"] * ARCSEC_PER_RAD - g["te_arcsec"])) <= TE_TOL
+    assert set(te["peak_loads"]) == set(g["te_peak_loads_N"])
+    for fam, f in g["te_peak_loads_N"].items():
+        assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6)
+
+
+def test_chunks_and_the_homotopy_give_the_same_equilibria(rv):
+    """Solving 3 points in chunks of 2 copies (a padded last chunk) gives the equilibria of one
+    chunk of 3; a start outside the plausibility bounds fails its warm start, goes through the
+    regularization homotopy from the kinematic state and reaches the same equilibrium."""
+    d, model = rv
+    g = GOLDEN["rv40e"]
+    a = np.asarray(g["equilibria_angles_rad"])
+    tq = np.full(len(a), -np.sign(model.ratio) * d.rated_torque)
+    one = DeviceRowNewton(model, 3).solve(a, tq)
+    two = DeviceRowNewton(model, 2).solve(a, tq)
+    assert np.all(one.status == CONVERGED) and np.all(two.status == CONVERGED)
+    np.testing.assert_allclose(two.q, one.q, rtol=0, atol=1e-15 * np.max(np.abs(one.q)) + 1e-18)
+    newton = DeviceRowNewton(model, 3)
+    start = newton.kinematic(a)
+    start[:, newton.free & ~newton.rot] += 1e-3          # 1 mm: beyond max_translation = 0.5 mm
+    far = newton.solve(a, tq, start)
+    assert np.all(far.status == CONVERGED) and np.all(far.stage >= 0)   # converged in the homotopy
+    assert np.all(one.stage == -1)                                      # the kinematic start needs none
+    _equal_states(_model_q(model, far.q), g["equilibria_q"], model)
+
+
+def test_what_the_device_does_not_cover_is_named(rv):
+    """Friction with stick--slip anchors (history) is not on the device: a named reason, and
+    --backend device refuses instead of running something else."""
+    d, _ = rv
+    anchored = dataclasses.replace(d, involute_stage=dataclasses.replace(d.involute_stage, mu=0.05,
+                                                                         friction_model="anchor"))
+    model = rvtool.build(anchored)
+    sup = DeviceBackend().supports(model, "equilibria")
+    assert not sup.ok and any("stick--slip anchors" in r and "row path" in r for r in sup.reasons)
+    with pytest.raises(RvtoolInputError, match=r"backend = 'device'.*stick--slip anchors"):
+        choose("device", model, "equilibria")
+    with pytest.raises(RvtoolInputError, match=r"backend = 'device' \(fused\) cannot run dynamic.*cycloid reducers only"):
+        choose("device", model, "dynamic")           # no driven runs of RV on the device (fused stepper)
+    with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):
+        DeviceRowNewton(rvtool.build(d), 0)
