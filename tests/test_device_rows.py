@@ -107,3 +107,52 @@ def test_what_the_device_does_not_cover_is_named(rv):
         choose("device", model, "dynamic")           # no driven runs of RV on the device (fused stepper)
     with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):
         DeviceRowNewton(rvtool.build(d), 0)
+
+
+def test_rv40e_lost_motion_on_the_device_equals_exudyn(rv):
+    """Lost motion at +-3 % T_rated through the needle clearance and the gear backlash on the device
+    row Newton (load continuation) against the Exudyn oracle's figures (spring-controlled march
+    and torque continuation, tests/golden/backends.json), reached without an Exudyn hand-over."""
+    from rvtool.batched.device_rows_lost_motion import device_row_lost_motion
+    from rvtool.units import ARCMIN_PER_RAD
+    d, model = rv
+    g = GOLDEN["rv40e"]
+    r = device_row_lost_motion(DeviceRowNewton(model, 1), 0.03 * d.rated_torque)
+    assert r["path"] == ["device"] and r["status"] == ["ok"] and r["stats"]["exudyn_copies"] == 0
+    lm = r["lost_motion_rad"][0] * ARCMIN_PER_RAD
+    assert abs(lm - g["lost_motion_march_arcmin"]) <= 1e-6        # arcmin (the issue's target)
+    assert abs(lm - g["lost_motion_continuation_arcmin"]) <= 1e-6
+    with pytest.raises(RvtoolInputError, match=r"torque_level = -1"):
+        device_row_lost_motion(DeviceRowNewton(model, 1), -1.0)
+
+
+def test_variant_copies_equal_each_variants_exudyn_solution(rv):
+    """Monte Carlo variants of RV-40E (rv40e_tolerances: crank phase and eccentricity errors, pin
+    radius, needle clearance, pitch deviations) as copies of one row Newton, each copy its own
+    model: equilibria at two crank angles and the lost motion equal each variant's own Exudyn
+    solution (static solver; spring-controlled march)."""
+    from rvtool import designs
+    from rvtool.batched.device_rows_lost_motion import device_row_lost_motion
+    from rvtool.protocols.lost_motion import lost_motion
+    from rvtool.solver.static import StaticSolver
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    d, _ = rv
+    tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, d, k, 20261124)[0]) for k in range(2)]
+    newton = DeviceRowNewton(models)
+    for a in (0.0, 1.3):
+        r = newton.solve(np.full(2, a), np.full(2, -np.sign(models[0].ratio) * d.rated_torque))
+        assert np.all(r.converged)
+        for c, m in enumerate(models):
+            m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+            q_ref = StaticSolver(m).solve(a)
+            _equal_states(_model_q(m, r.q[c:c + 1]), q_ref[None], m)
+    assert not np.allclose(r.q[0], r.q[1], rtol=1e-6)               # the variants differ
+    lm = device_row_lost_motion(newton, 0.03 * d.rated_torque)
+    assert lm["path"] == ["device", "device"]
+    for c, m in enumerate(models):
+        m.set_output_torque(0.0)
+        ref = lost_motion(m, torque_level=0.03 * d.rated_torque)["lost_motion_rad"]
+        assert abs(lm["lost_motion_rad"][c] - ref) * 60 * 180 / np.pi <= 1e-6     # arcmin
+    with pytest.raises(RvtoolInputError, match=r"distinct variant copies"):
+        newton.solve(np.zeros(2), np.zeros(2), copies=[0, 0])

@@ -31,6 +31,7 @@ pairs, plain output pins). Not covered (named by :func:`row_reasons`): friction 
 anchors (history), elastic pin and crank closures (pin bodies), the ported housing's modal
 coordinates (elastic structures), shared output pins.
 """
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -72,18 +73,47 @@ class RowSolve:
         return self.status == CONVERGED
 
 
+def _constraints(model):
+    """(held, journal-locked, springs, input index, output index) of a model in copy coordinates."""
+    from .replica import held_coordinates
+    n = 3 * len(model.body_names)
+    held, journal, spring_k = np.zeros(n, bool), np.zeros(n, bool), np.zeros(n)
+    for b, k in held_coordinates(model):
+        held[3 * b + k] = True
+    for b, k, _ in model.journal_locks:
+        journal[3 * b + k] = True
+    for b, k, kk, _ in model.reg_springs:
+        spring_k[3 * b + k] += kk
+    i_in = 3 * model.body_index(model.input.body) + COORDINATES.index(model.input.coordinate)
+    i_out = 3 * model.body_index(model.output.body) + COORDINATES.index(model.output.coordinate)
+    return held, journal, spring_k, i_in, i_out
+
+
 class DeviceRowNewton:
     """Batched static Newton of B copies of ``model`` from its families' rows (module docstring).
 
-    copies: B, the number of equilibria one launch evaluates (a larger request runs in chunks of
-    B); device: Warp device of the contact kernels; settings: :class:`DeviceNewtonSettings` (the
-    cycloid path's tolerances and bounds: abs_tol 1e-6 N as Exudyn's static solver)."""
+    model: a :class:`~rvtool.model.ReducerModel`, or a list of B models of one topology (Monte
+    Carlo variants: copy c is ``model[c]``, its own rows, kinematics and reference; then every
+    solve has one point per copy). copies: B, the number of equilibria one launch evaluates (a
+    larger request of one model runs in chunks of B); device: Warp device of the contact kernels;
+    settings: :class:`DeviceNewtonSettings` (the cycloid path's tolerances and bounds: abs_tol
+    1e-6 N as Exudyn's static solver)."""
 
-    def __init__(self, model, copies, *, device="cpu", settings=None):
-        from .replica import ReplicaEvaluator, copy_families, held_coordinates
-        reasons = row_reasons(model)
-        if reasons:
-            raise RvtoolInputError("; ".join(reasons))
+    def __init__(self, model, copies=None, *, device="cpu", settings=None):
+        from .replica import ReplicaEvaluator, copy_families
+        self.models = list(model) if isinstance(model, (list, tuple)) else None
+        if self.models is not None:
+            if not self.models:
+                raise RvtoolInputError("model must be a model or a non-empty list of models")
+            if copies is not None and copies != len(self.models):
+                raise RvtoolInputError(f"copies = {copies!r}: a list of models has one copy per model "
+                                       f"({len(self.models)})")
+            copies = len(self.models)
+            model = self.models[0]
+        for m in self.models or [model]:
+            reasons = row_reasons(m)
+            if reasons:
+                raise RvtoolInputError("; ".join(reasons))
         if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
             raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer)")
         t0 = time.perf_counter()
@@ -91,88 +121,114 @@ class DeviceRowNewton:
         self.settings = settings or DeviceNewtonSettings()
         self.nb = nb = len(model.body_names)
         self.n = n = 3 * nb
-        self.evaluator = ReplicaEvaluator(copy_families(model, self.B, device=device), nb, self.B)
+        self.evaluator = ReplicaEvaluator(copy_families(self.models or model, self.B, device=device), nb, self.B)
         self.evaluator.set_static(True)              # static residual: no velocity tangent
-        self.input_local = 3 * model.body_index(model.input.body) + COORDINATES.index(model.input.coordinate)
-        self.output_local = 3 * model.body_index(model.output.body) + COORDINATES.index(model.output.coordinate)
+        cons = _constraints(model)
+        for i, m in enumerate(self.models or []):
+            other = _constraints(m)
+            if not all(np.array_equal(a, b) for a, b in zip(cons, other)):
+                raise RvtoolInputError(f"model {i} has other locks, springs, drive or load than model 0; the copies "
+                                       "must be models of one topology")
+        self.held, self.journal, self.spring_k, self.input_local, self.output_local = cons
         free = np.ones(n, bool)
-        self.held = np.zeros(n, bool)
-        for b, k in held_coordinates(model):
-            self.held[3 * b + k] = True
-        self.journal = np.zeros(n, bool)
-        for b, k, _ in model.journal_locks:
-            self.journal[3 * b + k] = True
         free[self.held | self.journal] = False
         free[self.input_local] = False
         self.free = free
-        self.spring_k = np.zeros(n)
-        for b, k, kk, _ in model.reg_springs:
-            self.spring_k[3 * b + k] += kk
         self.rot = np.arange(n) % 3 == 2
-        self.reference = np.asarray(model.reference, float).reshape(-1)
+        if self.models is None:
+            self.reference = np.broadcast_to(np.asarray(model.reference, float).reshape(-1), (self.B, n))
+        else:
+            self.reference = np.array([np.asarray(m.reference, float).reshape(-1) for m in self.models])
         self.setup_s = time.perf_counter() - t0
 
-    def kinematic(self, angles):
+    def kinematic(self, angles, copies=None):
         """(P, 3 nb) kinematic displacement states at input angles (P,) [rad], with the values the
         model's constraints prescribe: drive = angle, coordinate locks 0, journal locks and springs
-        at the kinematic positions (:meth:`ReducerModel.set_input_angle`)."""
+        at the kinematic positions (:meth:`ReducerModel.set_input_angle`). Variant copies: point p
+        is copy ``copies[p]`` (default: point p on copy p)."""
         a = np.asarray(angles, float)
-        kin = (self.model.kinematics.poses(a) - self.model.reference).reshape(len(a), -1)
+        if self.models is None:
+            kin = (self.model.kinematics.poses(a) - self.model.reference).reshape(len(a), -1)
+        else:
+            cp = self._copies(len(a), copies)
+            kin = np.array([(self.models[c].kinematics.poses(a[p:p + 1])[0] - self.models[c].reference).reshape(-1)
+                            for p, c in enumerate(cp)]).reshape(len(a), self.n)
         kin[:, self.held] = 0.0
         kin[:, self.input_local] = a
         return kin
 
-    def solve(self, angles, torques, q_start=None):
+    def _copies(self, P, copies):
+        """The variant copies of P points (checked: distinct, in range)."""
+        cp = np.arange(self.B) if copies is None else np.asarray(copies, np.int64)
+        if cp.shape != (P,) or len(np.unique(cp)) != P or np.any((cp < 0) | (cp >= self.B)):
+            raise RvtoolInputError(f"{P} points need {P} distinct variant copies in [0, {self.B - 1}] (copies=); "
+                                   f"got {None if copies is None else cp.tolist()}")
+        return cp
+
+    def solve(self, angles, torques, q_start=None, *, copies=None, homotopy=None, settings=None):
         """Equilibria at input angles (P,) [rad] under output torques (P,) [N m] (on the output
-        coordinate), from q_start (P, 3 nb) (None: the kinematic states). Returns a :class:`RowSolve`."""
+        coordinate), from q_start (P, 3 nb) (None: the kinematic states). Variant copies: point p
+        runs on copy ``copies[p]`` (distinct; default point p on copy p); a model's copies take any
+        number of points (in chunks of B). homotopy: override ``settings.homotopy`` (False: a failed
+        warm start fails, e.g. the steps of a load continuation); settings: other
+        :class:`DeviceNewtonSettings` for this solve. Returns a :class:`RowSolve`."""
         a = np.asarray(angles, float)
         P = len(a)
         tq = np.broadcast_to(np.asarray(torques, float), (P,)).copy()
-        kin = self.kinematic(a)
+        kin = self.kinematic(a, copies)
         q = kin.copy() if q_start is None else np.array(q_start, float)
         if q.shape != (P, self.n) or not np.all(np.isfinite(q)):
             raise RvtoolInputError(f"q_start must be finite with shape ({P}, {self.n})")
         q[:, ~self.free] = kin[:, ~self.free]
+        cfg = settings or self.settings
+        if homotopy is not None:
+            cfg = dataclasses.replace(cfg, homotopy=bool(homotopy))
         out = {"status": np.full(P, ACTIVE, np.int32), "stage": np.full(P, WARM, np.int32),
                "iters": np.zeros(P, np.int32), "total": np.zeros(P, np.int32), "residual": np.full(P, np.nan)}
         timing = {"kernels": 0.0, "scatter": 0.0, "solve": 0.0}
         sweeps = 0
-        for s in range(0, P, self.B):
-            sl = slice(s, min(P, s + self.B))
-            sweeps += self._chunk(q[sl], kin[sl], tq[sl], {k: v[sl] for k, v in out.items()}, timing)
+        if self.models is not None:
+            chunks = [(np.arange(P), self._copies(P, copies))]
+        else:
+            chunks = [(np.arange(s, min(P, s + self.B)), np.arange(min(P, s + self.B) - s)) for s in range(0, P, self.B)]
+        for pts, slots in chunks:
+            qc = q[pts]
+            st = {k: v[pts] for k, v in out.items()}
+            sweeps += self._chunk(slots, qc, kin[pts], tq[pts], st, timing, cfg)
+            q[pts] = qc
+            for k, v in st.items():
+                out[k][pts] = v
         return RowSolve(q=q, status=out["status"], stage=out["stage"], iterations=out["total"],
                         residual=out["residual"], sweeps=sweeps, kernels_s=timing["kernels"],
                         scatter_s=timing["scatter"], solve_s=timing["solve"], setup_s=self.setup_s)
 
-    def _chunk(self, q, kin, tq, st, timing):
-        """Iterate copies 0..m-1 of the evaluator (m <= B) until none is active; arrays in place."""
-        m, B, n = len(q), self.B, self.n
+    def _chunk(self, slots, q, kin, tq, st, timing, cfg):
+        """Iterate the points on copies ``slots`` until none is active (the other copies masked at
+        a kinematic state); arrays in place."""
+        B, n = self.B, self.n
         ev = self.evaluator
-        ev.masked[:] = False
-        ev.masked[m:] = True                         # padding copies of a last, smaller chunk
+        ev.masked[:] = True
+        ev.masked[slots] = False
         pose_q = np.zeros((B, n))
-        pad_kin = np.zeros((B, n))
-        pad_kin[:m] = kin
-        pad_kin[m:] = kin[0]
+        if self.models is None:
+            pose_q[:] = kin[0]
         vel = np.zeros((B * self.nb, 3))
         sweeps = 0
         while np.any(st["status"] == ACTIVE):
-            pose_q[:m] = q
-            pose_q[m:] = pad_kin[m:]
+            pose_q[slots] = q
             k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
-            r = ev.evaluate((self.reference[None] + pose_q).reshape(B * self.nb, 3), vel)
+            r = ev.evaluate((self.reference + pose_q).reshape(B * self.nb, 3), vel)
             timing["kernels"] += ev.timing["kernels"] - k0
             timing["scatter"] += ev.timing["scatter"] - s0
             t0 = time.perf_counter()
-            self._step(r.Q[:m], r.dQdq[:m], q, kin, tq, st)
+            self._step(r.Q[slots], r.dQdq[slots], q, kin, tq, st, cfg)
             timing["solve"] += time.perf_counter() - t0
             sweeps += 1
         return sweeps
 
-    def _step(self, Qc, Kc, q, kin, tq, st):
+    def _step(self, Qc, Kc, q, kin, tq, st, cfg):
         """One step of every active copy: :func:`warp_contacts.batched_newton_ref.newton_step`
-        vectorized over the copies (same order of operations per copy)."""
-        cfg = self.settings
+        vectorized over the copies (same order of operations per copy); cfg: the settings."""
         status, stage, iters, total = st["status"], st["stage"], st["iters"], st["total"]
         act = np.flatnonzero(status == ACTIVE)
         stiff = np.asarray(cfg.stiffening, float)
