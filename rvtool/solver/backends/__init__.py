@@ -5,7 +5,9 @@ name       equilibria (quasi-static protocols)         driven runs (dynamic prot
 =========  ==========================================  ==========================================
 exudyn     StaticSolver with its ladder (the oracle)   Exudyn generalized alpha (the oracle)
 replica    B copies in one Exudyn system               --
-device     device Newton (Warp, cpu or cuda)           --
+device     device Newton (Warp, cpu or cuda): the      --
+           cycloid CUDA-graph path or the row Newton
+           (every replicable topology, e.g. RV)
 fused      --                                          fused stepper (Warp, cpu or cuda)
 =========  ==========================================  ==========================================
 
