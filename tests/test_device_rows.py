@@ -22,6 +22,13 @@ from rvtool.solver.backends import DeviceBackend, EquilibriumBatch, choose
 from rvtool.solver.device_rows import CONVERGED, DeviceRowNewton
 from rvtool.units import ARCSEC_PER_RAD
 
+def _skip_absent(device):
+    import warp as wp
+    if device.startswith("cuda") and wp.get_cuda_device_count() == 0:
+        pytest.skip(f"{device} not present")
+
+
+DEVICES = [pytest.param(d, id=d) for d in ("cpu", "cuda:0")]
 GOLDEN = json.loads((pathlib.Path(__file__).parent / "golden" / "backends.json").read_text())["exudyn"]
 TE_TOL = 1e-6           # arcsec
 EQ_TOL = 1e-9           # relative
@@ -51,20 +58,23 @@ def _equal_states(q, q_ref, model):
         assert np.max(np.abs(q[..., kind] - q_ref[..., kind])) <= EQ_TOL * scale
 
 
-def test_rv40e_equilibria_and_te_on_the_device_equal_exudyn(rv):
+@pytest.mark.parametrize("device", DEVICES)
+def test_rv40e_equilibria_and_te_on_the_device_equal_exudyn(rv, device):
     """Every family of RV-40E's merged element (cycloid pins, involute pairs, needle and ball
     rolling elements, tapered crank bearings carrying the output carrier) on the device row
     Newton: equilibria and the quick TE sequence against the Exudyn oracle, every point
     converged on the device (no Exudyn hand-over)."""
+    _skip_absent(device)
     d, model = rv
     g = GOLDEN["rv40e"]
-    b = DeviceBackend()
+    b = DeviceBackend(device=device)
     assert b.supports(model, "equilibria").ok and b.path(model)[0] == "rows"
     eq = b.solve_equilibria(model, EquilibriumBatch(input_angles=g["equilibria_angles_rad"], torque=d.rated_torque))
     assert eq.stats["exudyn_points"] == 0 and eq.stats["path"] == "rows"
     _equal_states(eq.q, g["equilibria_q"], model)
-    te = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"], backend="device")
-    assert te["backend"]["ran"] == "device" and te["stats"]["exudyn_points"] == 0
+    te = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"], backend="device",
+                         device=device)
+    assert te["backend"]["ran"] == "device" and te["stats"]["exudyn_points"] == 0 and te["stats"]["device"] == device
     assert np.max(np.abs(te["te"] * ARCSEC_PER_RAD - g["te_arcsec"])) <= TE_TOL
     assert set(te["peak_loads"]) == set(g["te_peak_loads_N"])
     for fam, f in g["te_peak_loads_N"].items():
@@ -109,15 +119,17 @@ def test_what_the_device_does_not_cover_is_named(rv):
         DeviceRowNewton(rvtool.build(d), 0)
 
 
-def test_rv40e_lost_motion_on_the_device_equals_exudyn(rv):
+@pytest.mark.parametrize("device", DEVICES)
+def test_rv40e_lost_motion_on_the_device_equals_exudyn(rv, device):
     """Lost motion at +-3 % T_rated through the needle clearance and the gear backlash on the device
     row Newton (load continuation) against the Exudyn oracle's figures (spring-controlled march
     and torque continuation, tests/golden/backends.json), reached without an Exudyn hand-over."""
     from rvtool.batched.device_rows_lost_motion import device_row_lost_motion
     from rvtool.units import ARCMIN_PER_RAD
+    _skip_absent(device)
     d, model = rv
     g = GOLDEN["rv40e"]
-    r = device_row_lost_motion(DeviceRowNewton(model, 1), 0.03 * d.rated_torque)
+    r = device_row_lost_motion(DeviceRowNewton(model, 1, device=device), 0.03 * d.rated_torque)
     assert r["path"] == ["device"] and r["status"] == ["ok"] and r["stats"]["exudyn_copies"] == 0
     lm = r["lost_motion_rad"][0] * ARCMIN_PER_RAD
     assert abs(lm - g["lost_motion_march_arcmin"]) <= 1e-6        # arcmin (the issue's target)
