@@ -1,8 +1,9 @@
 """Benchmark of RV-40E (rv40e) Monte Carlo variants on the device backend against the replica and Exudyn backends: the same per-variant work, failures counted in the timing, the split of the time.
 
 Workload per variant (fixed, the Exudyn reference run's settings: cases/rv/monte_carlo_rv.py):
-quasi-static TE at rated torque over one crank revolution at 37 points (--quick: 7), from each
-point's kinematic state, and the lost motion at +-3 % of the rated torque at input angle 0.
+quasi-static TE at rated torque over one crank revolution at 37 points (--quick: 7), each point
+warm-started from the previous equilibrium (quasi_static_te's default), and the lost motion at
++-3 % of the rated torque at input angle 0.
 Variants: rv40e_tolerances.toml sampled by rvtool.variants.rv_tolerances (variant k from
 default_rng([SEED, k])), B = 64 (--quick: 4; --variants N).
 
@@ -16,7 +17,8 @@ as in the reference run):
   motion Exudyn's (the replica backend runs equilibria only: the Exudyn leg's lost-motion time is
   added, counted as a lost-motion fallback per variant);
 * device: one row Newton (rvtool.solver.device_rows) with one copy per variant: the TE one
-  batch solve of all B copies per angle, the lost motion the device load continuation
+  batch solve of all B copies per angle (warm-started likewise; a copy whose warm start fails
+  takes the regularization homotopy), the lost motion the device load continuation
   (rvtool.batched.device_rows_lost_motion); a point or copy the device does not converge is
   solved by Exudyn inside the timing and counted (``exudyn_points``, ``exudyn_copies``).
 
@@ -117,8 +119,14 @@ def run_device(models, design, angles, device):
     split = {"setup_s": newton.setup_s, "kernels_s": 0.0, "scatter_s": 0.0, "step_s": 0.0, "fallback_s": 0.0}
     exudyn_points, failed = 0, np.zeros(B, bool)
     t_te = time.perf_counter()
+    prev = None
     for k, a in enumerate(angles):
-        r = newton.solve(np.full(B, a), tq)
+        # warm start as the Exudyn reference (quasi_static_te's default): the previous equilibrium
+        # shifted by the kinematic increment (the first point from its kinematic state; a failed
+        # warm start runs the regularization homotopy from the kinematic state)
+        kin = newton.kinematic(np.full(B, a))
+        r = newton.solve(np.full(B, a), tq, None if prev is None else prev[0] + kin - prev[1])
+        prev = (r.q, kin)
         split["kernels_s"] += r.kernels_s
         split["scatter_s"] += r.scatter_s
         split["step_s"] += r.solve_s
@@ -128,6 +136,7 @@ def run_device(models, design, angles, device):
             exudyn_points += 1
             m = models[c]
             m.set_output_torque(tq[c])
+            r.q[c] = kin[c]                               # the next warm start: from the kinematic state
             try:
                 q_out[c, k] = StaticSolver(m).solve(a)[m.output_index]
             except SolverFailure:
