@@ -81,6 +81,24 @@ def test_rv40e_equilibria_and_te_on_the_device_equal_exudyn(rv, device):
         assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6)
 
 
+@pytest.mark.parametrize("name", ["std_involute", "rv_three_stage"])
+def test_other_topologies_te_on_the_device_equals_exudyn(name):
+    """The small-tooth-difference reducer (involute internal pair, plain output pins, circle-pair
+    bearings) and the three-stage RV (a second involute stage) on the device row Newton: the
+    quick TE sequence against the Exudyn oracle's golden TE and peak loads, no Exudyn hand-over."""
+    g = GOLDEN[name]
+    d = rvtool.load_design(name)
+    model = rvtool.build(d)
+    assert DeviceBackend().path(model)[0] == "rows"
+    te = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"], backend="device")
+    assert te["backend"]["ran"] == "device" and te["stats"]["exudyn_points"] == 0
+    assert np.max(np.abs(te["te"] * ARCSEC_PER_RAD - g["te_arcsec"])) <= TE_TOL
+    for fam, f in g["te_peak_loads_N"].items():
+        # abs 1e-6 N: a family at the edge of contact (golden 0 N) may carry a force below the
+        # Newton's residual tolerance (abs_tol = 1e-6 N), which neither solver resolves
+        assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6, abs=1e-6)
+
+
 def test_chunks_and_the_homotopy_give_the_same_equilibria(rv):
     """Solving 3 points in chunks of 2 copies (a padded last chunk) gives the equilibria of one
     chunk of 3; a start outside the plausibility bounds fails its warm start, goes through the
