@@ -120,6 +120,21 @@ def test_chunks_and_the_homotopy_give_the_same_equilibria(rv):
     _equal_states(_model_q(model, far.q), g["equilibria_q"], model)
 
 
+def test_the_device_side_row_sum_equals_the_host_scatter(rv):
+    """DeviceRowSum (rows summed into per-copy blocks by a Warp kernel, the tapered rollers' host
+    rows uploaded; the default on CUDA) gives the host scatter's Newton: the same iterations and
+    states to 1e-12 relative (only the order of the additions differs: last bits)."""
+    d, model = rv
+    a = np.asarray(GOLDEN["rv40e"]["te_angles_rad"][:4])
+    tq = np.full(len(a), -np.sign(model.ratio) * d.rated_torque)
+    host = DeviceRowNewton(model, 4, device_sum=False)
+    dev = DeviceRowNewton(model, 4, device_sum=True)
+    assert not host.device_sum and dev.device_sum
+    r0, r1 = host.solve(a, tq), dev.solve(a, tq)
+    assert np.all(r1.converged) and np.array_equal(r0.iterations, r1.iterations)
+    assert np.max(np.abs(r1.q - r0.q)) <= 1e-12 * np.max(np.abs(r0.q))
+
+
 def test_what_the_device_does_not_cover_is_named(rv):
     """Friction with stick--slip anchors (history) is not on the device: a named reason, and
     --backend device refuses instead of running something else."""

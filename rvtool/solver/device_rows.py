@@ -89,6 +89,71 @@ def _constraints(model):
     return held, journal, spring_k, i_in, i_out
 
 
+class DeviceRowSum:
+    """Per-copy residuals and tangent blocks of the copied families summed ON the device
+    (:class:`warp_contacts.block_scatter.BlockScatter`, one thread per row, atomics): a family
+    with a staged launch (:class:`rvtool.contact.evaluator.StagedLaunch`: cycloid pins, involute
+    pairs, rolling elements, circle pairs) is launched on the device and its row buffers are summed
+    where they are; the others (tapered rollers: planar mapping on the host; plain output pins)
+    are evaluated as in :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
+    Only B (n + n^2) numbers come back instead of every row (on a GPU the rows' transfer and the
+    host scatter cost more than the kernels). The same sums as the host scatter up to the order of
+    the additions (last bits). ``timing`` as ReplicaEvaluator's ("kernels": launches, host
+    families and uploads; "scatter": the device sum and its download)."""
+
+    def __init__(self, families, nb, n_copies, device):
+        import warp as wp
+        from warp_contacts.block_scatter import BlockScatter
+        from ..contact.evaluator import StagedLaunch
+        self.families, self.nb, self.B, self.device = families, nb, n_copies, device
+        self.staged = [isinstance(f.set, StagedLaunch) and getattr(f.set, "backend", None) == "warp"
+                       for f in families]
+        self.scatter = BlockScatter([(f.scatter.local, f.scatter.row_copy) for f in families], n_copies, 3 * nb,
+                                    wp.float64, device)
+        self._host_rows = {}
+        self.masked = np.zeros(n_copies, bool)
+        self.timing = {"kernels": 0.0, "scatter": 0.0, "launches": 0}
+
+    def set_static(self, on):
+        for f in self.families:
+            if callable(getattr(f.set, "set_velocity_tangent", None)):
+                f.set.set_velocity_tangent(not on)
+
+    def evaluate(self, pose, vel):
+        import warp as wp
+        from .replica import _rows
+        t0 = time.perf_counter()
+        rows = []
+        for i, (f, staged) in enumerate(zip(self.families, self.staged)):
+            if staged:
+                f.set.stage(pose, vel)
+                f.set.launch_staged()
+                _, q, K, _ = f.set.row_buffers()
+            else:
+                Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in _rows(f.set, pose, vel)[:2])
+                if i not in self._host_rows:
+                    self._host_rows[i] = (wp.empty(Qh.shape, dtype=wp.float64, device=self.device),
+                                          wp.empty(Kh.shape, dtype=wp.float64, device=self.device))
+                q, K = self._host_rows[i]
+                q.assign(Qh)
+                K.assign(Kh)
+            rows.append((q, K))
+        t1 = time.perf_counter()
+        Q, K = self.scatter(rows)
+        Q, K = np.array(Q), np.array(K)
+        Q[self.masked], K[self.masked] = 0.0, 0.0
+        self.timing["kernels"] += t1 - t0
+        self.timing["scatter"] += time.perf_counter() - t1
+        self.timing["launches"] += len(self.families)
+        return _Blocks(Q, K)
+
+
+@dataclass
+class _Blocks:
+    Q: np.ndarray
+    dQdq: np.ndarray
+
+
 class DeviceRowNewton:
     """Batched static Newton of B copies of ``model`` from its families' rows (module docstring).
 
@@ -97,9 +162,11 @@ class DeviceRowNewton:
     solve has one point per copy). copies: B, the number of equilibria one launch evaluates (a
     larger request of one model runs in chunks of B); device: Warp device of the contact kernels;
     settings: :class:`DeviceNewtonSettings` (the cycloid path's tolerances and bounds: abs_tol
-    1e-6 N as Exudyn's static solver)."""
+    1e-6 N as Exudyn's static solver). device_sum: sum the rows into per-copy blocks on the device
+    (:class:`DeviceRowSum`) instead of on the host; default on a CUDA device only (on the CPU the
+    rows are host memory already and the host scatter is deterministic)."""
 
-    def __init__(self, model, copies=None, *, device="cpu", settings=None):
+    def __init__(self, model, copies=None, *, device="cpu", settings=None, device_sum=None):
         from .replica import ReplicaEvaluator, copy_families
         self.models = list(model) if isinstance(model, (list, tuple)) else None
         if self.models is not None:
@@ -121,7 +188,12 @@ class DeviceRowNewton:
         self.settings = settings or DeviceNewtonSettings()
         self.nb = nb = len(model.body_names)
         self.n = n = 3 * nb
-        self.evaluator = ReplicaEvaluator(copy_families(self.models or model, self.B, device=device), nb, self.B)
+        families = copy_families(self.models or model, self.B, device=device)
+        if device_sum is None:
+            device_sum = not str(device).startswith("cpu")
+        self.device_sum = bool(device_sum)
+        self.evaluator = (DeviceRowSum(families, nb, self.B, device) if self.device_sum
+                          else ReplicaEvaluator(families, nb, self.B))
         self.evaluator.set_static(True)              # static residual: no velocity tangent
         cons = _constraints(model)
         for i, m in enumerate(self.models or []):
