@@ -121,7 +121,7 @@ class DeviceRowSum:
 
     def evaluate(self, pose, vel):
         import warp as wp
-        from .replica import _rows
+        from .replica import family_rows
         t0 = time.perf_counter()
         rows = []
         for i, (f, staged) in enumerate(zip(self.families, self.staged)):
@@ -130,7 +130,7 @@ class DeviceRowSum:
                 f.set.launch_staged()
                 _, q, K, _ = f.set.row_buffers()
             else:
-                Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in _rows(f.set, pose, vel)[:2])
+                Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in family_rows(f.set, pose, vel)[:2])
                 if i not in self._host_rows:
                     self._host_rows[i] = (wp.empty(Qh.shape, dtype=wp.float64, device=self.device),
                                           wp.empty(Kh.shape, dtype=wp.float64, device=self.device))

@@ -127,7 +127,7 @@ COPIERS = {CycloidPinSet: _copy_pins, InvoluteContactSet: _copy_gears, BearingSe
            TaperedBearingSet: _copy_bearings, ContactSetEvaluator: _copy_circles, OutputPinEvaluator: PlainPinCopies}
 
 
-def _rows(s, pose, vel):
+def family_rows(s, pose, vel):
     """(Q rows, dQ/dq rows, dQ/dv rows or None, normal force per observation row [N]) of a copied set."""
     if isinstance(s, PlainPinCopies):
         r = s.raw(pose)
@@ -170,7 +170,7 @@ class ReplicaEvaluator:
 
     def evaluate(self, pose, vel):
         t0 = time.perf_counter()
-        rows = [_rows(f.set, pose, vel) for f in self.families]
+        rows = [family_rows(f.set, pose, vel) for f in self.families]
         t1 = time.perf_counter()
         Q = sum(f.scatter.vector(np.asarray(r[0], np.float64)) for f, r in zip(self.families, rows))
         K = sum(f.scatter.blocks(np.asarray(r[1], np.float64)) for f, r in zip(self.families, rows))
