@@ -150,6 +150,8 @@ def test_what_the_device_does_not_cover_is_named(rv):
         choose("device", model, "dynamic")           # no driven runs of RV on the device (fused stepper)
     with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):
         DeviceRowNewton(rvtool.build(d), 0)
+    with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):
+        DeviceBackend(copies=0)
 
 
 @pytest.mark.parametrize("device", DEVICES)
@@ -201,3 +203,25 @@ def test_variant_copies_equal_each_variants_exudyn_solution(rv):
         assert abs(lm["lost_motion_rad"][c] - ref) * 60 * 180 / np.pi <= 1e-6     # arcmin
     with pytest.raises(RvtoolInputError, match=r"distinct variant copies"):
         newton.solve(np.zeros(2), np.zeros(2), copies=[0, 0])
+
+
+def test_variants_te_counts_every_exudyn_hand_over(rv):
+    """rvtool.batched.device_rows_variants (the Monte Carlo's device path): the variants' TE equals
+    each variant's Exudyn TE (quasi_static_te) to 1e-6 arcsec; with a Newton that cannot converge
+    (one iteration, no homotopy) every point goes to Exudyn, is counted, and the TE is unchanged."""
+    from rvtool import designs
+    from rvtool.batched.device_rows_variants import device_rows_variants
+    from rvtool.solver.device_newton import DeviceNewtonSettings
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    d, _ = rv
+    tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, d, k, 20261124)[0]) for k in (2, 3)]
+    angles = np.array([0.0, 0.4, 0.8])
+    ref = [quasi_static_te(m, torque=d.rated_torque, input_angles=angles, backend="exudyn")["te"] for m in models]
+    r = device_rows_variants(models, torque=d.rated_torque, input_angles=angles)
+    assert r.status == ["ok", "ok"] and r.exudyn_points == 0 and r.lost_motion_rad is None
+    assert np.max(np.abs(r.te - np.array(ref))) * ARCSEC_PER_RAD <= TE_TOL
+    stuck = device_rows_variants(models, torque=d.rated_torque, input_angles=angles,
+                                 settings=DeviceNewtonSettings(max_iterations=1, homotopy=False))
+    assert stuck.exudyn_points == 6 and stuck.status == ["ok", "ok"] and stuck.split["fallback_s"] > 0
+    assert np.max(np.abs(stuck.te - np.array(ref))) * ARCSEC_PER_RAD <= TE_TOL

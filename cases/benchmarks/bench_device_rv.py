@@ -16,10 +16,10 @@ as in the reference run):
 * replica: the TE on the replica backend (the variant's copies in one Exudyn system), the lost
   motion Exudyn's (the replica backend runs equilibria only: the Exudyn leg's lost-motion time is
   added, counted as a lost-motion fallback per variant);
-* device: one row Newton (rvtool.solver.device_rows) with one copy per variant: the TE one
-  batch solve of all B copies per angle (warm-started likewise; a copy whose warm start fails
-  takes the regularization homotopy), the lost motion the device load continuation
-  (rvtool.batched.device_rows_lost_motion); a point or copy the device does not converge is
+* device: rvtool.batched.device_rows_variants: one row Newton (rvtool.solver.device_rows) with
+  one copy per variant, the TE one batch solve of all B copies per angle (warm-started likewise;
+  a copy whose warm start fails takes the regularization homotopy), the lost motion the device
+  load continuation (rvtool.batched.device_rows_lost_motion); a point or copy the device does not converge is
   solved by Exudyn inside the timing and counted (``exudyn_points``, ``exudyn_copies``).
 
 Correctness (``passed``): per variant, the device's and the replica's TE against Exudyn's within
@@ -34,13 +34,12 @@ import time
 import numpy as np
 
 from rvtool import build, casekit, designs, load_design
-from rvtool.batched.device_rows_lost_motion import device_row_lost_motion
+from rvtool.batched.device_rows_variants import device_rows_variants
 from rvtool.errors import SolverFailure
 from rvtool.protocols.lost_motion import lost_motion
-from rvtool.protocols.precision import quasi_static_te, transmission_error
+from rvtool.protocols.precision import quasi_static_te
 from rvtool.solver.backends import ReplicaBackend
 from rvtool.solver.device_rows import DeviceRowNewton
-from rvtool.solver.static import StaticSolver
 from rvtool.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
 
@@ -64,11 +63,6 @@ def judge(r):
                                          int(MAX_FAILURE_SHARE * b), "<=",
                                          why="issue 31: failures < 0.2 % of the variants, per backend"),
     }
-
-
-def te_from(model, theta_in, q_out):
-    """TE [rad] of a variant from its input angles and output displacement coordinates."""
-    return transmission_error(theta_in, model.reference_value(model.output) + q_out, model.ratio, unwrap=False)
 
 
 def run_exudyn(models, lm_models, design, angles):
@@ -111,51 +105,11 @@ def run_replica(models, design, angles, exudyn):
 
 
 def run_device(models, design, angles, device):
-    t0 = time.perf_counter()
-    newton = DeviceRowNewton(models, device=device)
-    B = len(models)
-    tq = np.full(B, -np.sign(models[0].ratio) * design.rated_torque)
-    q_out = np.zeros((B, len(angles)))
-    split = {"setup_s": newton.setup_s, "kernels_s": 0.0, "scatter_s": 0.0, "step_s": 0.0, "fallback_s": 0.0}
-    exudyn_points, failed = 0, np.zeros(B, bool)
-    t_te = time.perf_counter()
-    prev = None
-    for k, a in enumerate(angles):
-        # warm start as the Exudyn reference (quasi_static_te's default): the previous equilibrium
-        # shifted by the kinematic increment (the first point from its kinematic state; a failed
-        # warm start runs the regularization homotopy from the kinematic state)
-        kin = newton.kinematic(np.full(B, a))
-        r = newton.solve(np.full(B, a), tq, None if prev is None else prev[0] + kin - prev[1])
-        prev = (r.q, kin)
-        split["kernels_s"] += r.kernels_s
-        split["scatter_s"] += r.scatter_s
-        split["step_s"] += r.solve_s
-        q_out[:, k] = r.q[:, newton.output_local]
-        tf = time.perf_counter()
-        for c in np.flatnonzero(~r.converged):           # Exudyn inside the timing, counted
-            exudyn_points += 1
-            m = models[c]
-            m.set_output_torque(tq[c])
-            r.q[c] = kin[c]                               # the next warm start: from the kinematic state
-            try:
-                q_out[c, k] = StaticSolver(m).solve(a)[m.output_index]
-            except SolverFailure:
-                failed[c] = True
-        split["fallback_s"] += time.perf_counter() - tf
-    te_s = time.perf_counter() - t_te
-    t_lm = time.perf_counter()
-    lm = device_row_lost_motion(newton, LM_FRACTION * design.rated_torque)
-    lm_s = time.perf_counter() - t_lm
-    for k in ("kernels_s", "scatter_s", "step_s"):
-        split[k] += lm["stats"][k]
-    failed |= np.array([s == "failed" for s in lm["status"]])
-    wall = time.perf_counter() - t0
-    split["rest_s"] = wall - sum(split.values())
-    te = [te_from(m, angles, q_out[c]) for c, m in enumerate(models)]
-    return {"te": te, "lm": lm["lost_motion_rad"], "failed_variants": int(failed.sum()), "wall_s": wall,
-            "split": split, "te_s": te_s, "lost_motion_s": lm_s, "exudyn_points": exudyn_points,
-            "exudyn_copies": lm["stats"]["exudyn_copies"], "lost_motion_rounds": lm["stats"]["rounds"],
-            "device": str(device)}
+    r = device_rows_variants(models, torque=design.rated_torque, input_angles=angles,
+                             lost_motion_level=LM_FRACTION * design.rated_torque, device=device)
+    return {"te": list(r.te), "lm": r.lost_motion_rad, "failed_variants": r.status.count("failed"),
+            "wall_s": r.wall_s, "split": r.split, "te_s": r.te_s, "lost_motion_s": r.lost_motion_s,
+            "exudyn_points": r.exudyn_points, "exudyn_copies": r.exudyn_copies, "stats": r.stats}
 
 
 def main(argv=None):
