@@ -386,7 +386,7 @@ def build_parser():
                                     "hysteresis loss, rated life, with an uncertainty band over the assumed ranges; "
                                     "writes results.json, PNGs and report.html.")
     va.add_argument("design", nargs="?", default=None, metavar="DESIGN", help="shipped design name (e.g. rv40e)")
-    va.add_argument("--quick", action="store_true", help="8 Latin-hypercube samples instead of 64, coarse central loop")
+    va.add_argument("--quick", action="store_true", help="4 Latin-hypercube samples instead of 64, a 1-key tornado, coarse central loop")
     va.add_argument("--samples", type=int, default=None, metavar="N", help="Latin-hypercube samples (>= 2)")
     va.add_argument("--workers", type=int, default=1, metavar="W", help="processes for the samples (default 1)")
     va.add_argument("--tornado-keys", type=int, default=None, metavar="K",

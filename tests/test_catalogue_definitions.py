@@ -128,3 +128,16 @@ def test_zero_torque_samples_are_not_used():
            "neg_loading", "neg_loading"]
     # pos_unloading: reversal (2, 3.0) and (1, 2.5) -> 2.0 at zero; neg_unloading: (-2, -3), (-1, -2.5) -> -2.0
     assert C.hysteresis_loss(T, th, lab).value == pytest.approx(4.0, rel=1e-15)
+
+
+def test_linear_reference_and_its_input_errors():
+    """Without a knee the spring is linear: b/a = k1 on any points above T_c."""
+    red = C.SpringCoulombBacklash(stiffness=K1, backlash=BETA, friction_torque=5.0)
+    seq = C.catalogue_sequence(T_R, rigidity_points=(0.25, 1.0), step=0.25)
+    r = C.catalogue_loops(red, seq, rigidity_points=(0.25, 1.0), repeat_tolerance=0.0)
+    assert r["metrics"].rigidity.value == pytest.approx(K1, rel=TOL)
+    for kw, name in (({"stiffness": -1.0}, "stiffness"), ({"backlash": float("nan")}, "backlash"),
+                     ({"friction_torque": -2.0}, "friction_torque"), ({"knee_torque": 0.0}, "knee_torque")):
+        args = {"stiffness": K1, "backlash": BETA, "friction_torque": 1.0, **kw}
+        with pytest.raises(RvtoolInputError, match=name):
+            C.SpringCoulombBacklash(**args)

@@ -15,9 +15,11 @@ not a failed analysis. Each shipped design's rated torque x 1e6 is checked expli
 hypothesis examples need not draw that scale).
 """
 import copy
+import functools
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 import tomllib
@@ -246,3 +248,118 @@ def test_unsolvable_rated_torque_is_an_input_error(name, tmp_path):
     assert "rated_torque" in msg and "valid range: 0 < rated_torque <= " in msg, msg
     limit = float(msg.split("rated_torque <= ")[1].split()[0])
     assert 0 < limit < table["rated_torque"], msg
+
+
+# -- in-range fuzz from every template (issue 27) ---------------------------------------------------
+# Every topology's `rvtool new` template is the starting point; one to three keys with a stated
+# valid range (the format documentation's, i.e. the range the spec enforces) are moved inside that
+# range. Property: the file loads, or fails with a one-line RvtoolInputError naming a key (ranges
+# that depend on other keys, e.g. a hole larger than its pin, can still reject a combination) --
+# never another exception. Budget: N_TEMPLATE examples per template (about 5 s each on one core).
+
+N_TEMPLATE = 150
+"""In-range perturbations per template (validation only)."""
+TEMPLATE_TOPOLOGIES = [t for t in topologies.TOPOLOGIES if topologies.available(t) is None]
+_INTERVAL = re.compile(r"([\[\(])\s*([-+0-9.einf]+),\s*([-+0-9.einf]+)\s*([\]\)])")
+
+
+@functools.lru_cache(maxsize=None)
+def _template_text(topology):
+    from rvtool.designs.format import template
+    return template(topology)
+
+
+def _template_table(topology):
+    return tomllib.loads(_template_text(topology))
+
+
+def _ranged_keys(topology):
+    """[(key path, example value, low, high, low_open, high_open, integer)] of every numeric key of
+    the template with a stated finite bound (the intersection of the intervals quoted)."""
+    from rvtool.designs.format import key_table
+    table = _template_table(topology)
+    out = []
+    for sec, key, value, unit, rng, meaning, required in key_table(topology):
+        path = tuple(sec.split(".")) + (key,) if sec else (key,)
+        try:
+            example = _get(table, path)
+        except (KeyError, TypeError):
+            continue                    # not written in the template (an optional key without value)
+        if isinstance(example, bool) or not isinstance(example, (int, float)):
+            continue
+        lo, hi, lo_open, hi_open = -math.inf, math.inf, False, False
+        found = False
+        for a, x, y, b in _INTERVAL.findall(rng or ""):
+            found = True
+            x, y = float(x), float(y)
+            if x > lo or (x == lo and a == "("):
+                lo, lo_open = x, a == "("
+            if y < hi or (y == hi and b == ")"):
+                hi, hi_open = y, b == ")"
+        if found and (math.isfinite(lo) or math.isfinite(hi)) and lo < hi:
+            out.append((path, example, lo, hi, lo_open, hi_open, isinstance(example, int)))
+    return out
+
+
+@st.composite
+def in_range_change(draw, topology, keys):
+    t = copy.deepcopy(_template_table(topology))
+    changes = []
+    for _ in range(draw(st.integers(1, 3))):
+        path, example, lo, hi, lo_open, hi_open, integer = draw(st.sampled_from(keys))
+        if integer:
+            a = int(math.floor(lo)) + (1 if lo_open and float(lo).is_integer() else 0)
+            top = hi if math.isfinite(hi) else max(a, 2 * abs(example)) + 2
+            b = int(math.ceil(top)) - (1 if hi_open and float(top).is_integer() else 0)
+            v = draw(st.integers(a, max(a, min(b, a + 200))))
+        else:
+            low = lo if math.isfinite(lo) else min(example, hi) - max(1.0, abs(example))
+            high = hi if math.isfinite(hi) else max(example, low) * 4 + abs(low) + 1e-9
+            v = draw(st.floats(low, high, exclude_min=lo_open or not math.isfinite(lo),
+                               exclude_max=hi_open or not math.isfinite(hi), allow_nan=False, allow_infinity=False))
+        _set(t, path, v)
+        changes.append(f"{'.'.join(path)} = {v!r}")
+    return "; ".join(changes), t
+
+
+@pytest.mark.parametrize("topology", TEMPLATE_TOPOLOGIES)
+def test_template_in_range_fuzz(topology):
+    keys = _ranged_keys(topology)
+    assert len(keys) >= 30, f"{topology}: only {len(keys)} ranged keys found"   # the parse found the ranges
+    names = set()
+    for path, *_ in keys:
+        names.update(path)
+    names |= set(_template_table(topology))
+
+    @settings(max_examples=N_TEMPLATE, deadline=5000, derandomize=True, database=None,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+    @given(in_range_change(topology, keys))
+    def check(case):
+        desc, table = case
+        try:
+            topologies.design_from_table(table)
+        except RvtoolInputError as exc:
+            msg = str(exc)
+            assert msg and "\n" not in msg.strip(), f"{desc}: multi-line error {msg!r}"
+            assert any(k in msg for k in names | {"design"}), f"{desc}: error names no key: {msg!r}"
+
+    check()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("topology", TEMPLATE_TOPOLOGIES)
+def test_template_in_range_full_quick_analysis(topology, tmp_path):
+    """FULL_EXAMPLES in-range changes of each template through a whole quick te+stiffness analysis."""
+    keys = _ranged_keys(topology)
+
+    @settings(max_examples=FULL_EXAMPLES, deadline=None, derandomize=True, database=None,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+    @given(in_range_change(topology, keys))
+    def check(case):
+        desc, table = case
+        d = tmp_path / f"case{len(list(tmp_path.iterdir()))}"
+        proc = _run_cli(table, d)
+        assert "Traceback" not in proc.stderr, f"{desc}: {proc.stderr[-3000:]}"
+        _check_clean_outcome(desc, proc, d / "out")
+
+    check()

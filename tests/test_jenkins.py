@@ -1,6 +1,6 @@
 """Anchor friction of the circle-contact family as a Jenkins element under the production driver.
 
-* the quick form of cases/verify_jenkins.py against the closed form of the
+* the quick form of cases/verification/verify_jenkins.py against the closed form of the
   series springs k, k_t with a Coulomb slider (k_s = k k_t / (k + k_t)):
   loop area 4 F_c (x_a - F_c/k_s) and the Masing branches;
 * history ownership: the committed anchors are a function of the accepted

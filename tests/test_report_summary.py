@@ -60,6 +60,15 @@ def test_rows_judge_against_allowables():
     assert life.verdict == "not computed" and life.allowable == "\u2265 6000 h"
 
 
+def test_missing_pressures_are_said_not_left_out():
+    data = _data(RD40_ALLOWABLES)
+    data["te"]["data"]["hertz_peaks_at_rated_Pa"] = {}
+    data["pressure"] = {"status": "skipped", "reason": "main mesh is 'involute_stage'", "summary": "",
+                        "figures": {}, "data": {}}
+    row = _row(summary_rows(data), "Peak contact pressure, main mesh")
+    assert row.verdict == "not computed" and "involute_stage" in row.note and "no Hertz peaks" in row.note
+
+
 def test_rows_without_allowables_say_so():
     rows = summary_rows(_data({"source": None, "values": None}))
     judged = [r for r in rows if r.value is not None]

@@ -78,3 +78,27 @@ def test_quick_validate_rv40e_end_to_end(tmp_path):
     data = json.loads((tmp_path / "results.json").read_text())
     assert data["table"][0]["figure"] == "torsional_rigidity"
     assert "data:image/png;base64," in (tmp_path / "report.html").read_text()
+
+
+def test_band_tornado_and_fraction_on_rv40e_with_test_ranges(tmp_path, monkeypatch):
+    """The uncertainty machinery on rv40e with two assumed ranges written here (the class design ships
+    none): the band holds the central value, the tornado's keys come from the screening, and the
+    needle clearance -- rv40e's free play -- moves the lost motion most."""
+    ranges = tmp_path / "rv40e_assumed.toml"
+    ranges.write_text('format_version = 2\ndesign = "rv40e"\n'
+                      '[[assumed]]\nkey = "eccentric_bearing.radial_clearance"\nlow = 0.0\nhigh = 3.0e-6\nunit = "m"\n'
+                      'source = "test range: rv40e_tolerances.toml needle_clearance [0, 3] um"\n'
+                      '[[assumed]]\nkey = "bodies.carrier_mass"\nlow = 2.0\nhigh = 4.0\nunit = "kg"\n'
+                      'source = "test range: a static figure must not move with a mass"\n')
+    monkeypatch.setattr(designs, "assumed_of", lambda name: str(ranges))
+    out = V.validate("rv40e", quick=True, samples=4, tornado_keys=1, log=lambda *a: None)
+    c = V.checks(out)
+    assert c["no_failed_sample"] and c["band_contains_central"], c
+    u = out["uncertainty"]
+    assert u["samples"] == 4 and len(u["figures"]) == 4
+    assert list(u["tornado"]) == ["eccentric_bearing.radial_clearance"]
+    t = u["tornado"]["eccentric_bearing.radial_clearance"]
+    assert t["at_high"]["lost_motion"] > out["central"]["lost_motion"] > t["at_low"]["lost_motion"]
+    assert 0.0 <= u["fraction_within_lost_motion_max"] <= 1.0
+    lo, hi = u["band"]["lost_motion"]
+    assert lo < out["central"]["lost_motion"] < hi

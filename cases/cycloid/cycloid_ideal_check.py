@@ -55,7 +55,7 @@ def main(argv=None):
     t0 = time.perf_counter()
     base = rvtool.load_design(DESIGN)
     design = rvtool.replace_design(base, wheels={"clearance": 0.0, "samples_per_tooth": 60 if args.quick else 240},
-                     profile={"equidistant_mod": 0.0, "offset_mod": 0.0, "rotation_mod": 0.0},
+                     profile={"equidistant_mod": 0.0, "offset_mod": 0.0, "rotation_mod_deg": 0.0},
                      pin_contact={"law": "line", "damping": 0.0, "mu": 0.0})
     model = rvtool.build(design, rigid_supports=True)
     solver = StaticSolver(model)

@@ -35,6 +35,9 @@ def resolve_device(device):
     if device == "cpu":
         return "cpu"
     import warp as wp
+
+    from warp_contacts.precision import init_warp
+    init_warp()                     # quietly: no driver notice on a CPU-only machine
     n = wp.get_cuda_device_count()
     if device == "auto":
         return "cuda:0" if n > 0 else "cpu"

@@ -30,6 +30,9 @@ def device_info(device="cpu"):
     if device.startswith("cuda"):
         try:
             import warp as wp
+
+            from warp_contacts.precision import init_warp
+            init_warp()                 # quietly: no driver notice on a CPU-only machine
             info["gpu"] = wp.get_device(device).name
         except Exception as exc:  # recorded honestly when the query fails
             info["gpu"] = f"unavailable: {exc}"

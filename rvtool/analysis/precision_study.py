@@ -234,7 +234,7 @@ def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated,
 
 
 CYCLE_TOL_ARCMIN = 1e-4
-"""Repeatability tolerance of the hysteresis cycle [arcmin] (as cases/hysteresis_friction.py: the
+"""Repeatability tolerance of the hysteresis cycle [arcmin] (as cases/cycloid/hysteresis_friction.py: the
 static solves' Newton tolerance moves a level by ~1e-7 arcmin)."""
 
 
@@ -268,7 +268,7 @@ def hysteresis_loss(design, *, bearing_model, quick):
 
 RADIAL_ZERO = 1e-9
 """A bearing resultant below this fraction of its element loads is the round-off of a balanced
-(preloaded) ring, not a radial load (as cases/fatigue_life.py)."""
+(preloaded) ring, not a radial load (as cases/studies/fatigue_life.py)."""
 
 
 def bearing_lives(model, design, states):

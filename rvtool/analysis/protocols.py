@@ -4,21 +4,24 @@ full forms follow the case scripts' settings.
 
 * ``te`` -- quasi-static transmission error (Eq. obs_te) under the rated torque
   (:func:`rvtool.protocols.precision.quasi_static_te`), refinement error against the
-  topology's refined resolution over one mesh cycle (as ``cases/cycloid_double_wheel.py``);
+  topology's refined resolution over one mesh cycle (as ``cases/cycloid/cycloid_double_wheel.py``);
 * ``stiffness`` -- signed torque sequence by continuation, branch fits of Eq. (stiffness_fit),
   condensed tangent of Eq. (obs_condensed_stiffness) against a finite increment
-  (as ``cases/stiffness_hysteresis.py``);
+  (as ``cases/cycloid/stiffness_hysteresis.py``);
 * ``lost_motion`` -- at +-3 % of the rated torque from the stiffness sequence, checked
   against the spring-controlled march (:func:`rvtool.protocols.lost_motion.lost_motion`);
 * ``hysteresis`` -- two loops -T -> +T -> -T after a virgin preload (no level at zero torque), the
   catalogue's hysteresis loss, lost motion and b/a (:mod:`rvtool.protocols.catalogue`), loop
   integral and the cycle-dissipation checks of :mod:`rvtool.protocols.hysteresis`;
 * ``vibration`` -- driven rotation at the rated speed and torque, spectra of the output
-  torsion, mesh-order amplitude against the quasi-static low-speed limit (as ``cases/vibration.py``);
+  torsion, mesh-order amplitude against the quasi-static low-speed limit (as ``cases/cycloid/vibration.py``);
 * ``pressure`` -- local pressure of the most loaded main-mesh contact per member at the rated
-  state, resolution sequence with e1 against the finest field (as ``cases/pressure_resolution.py``);
-* ``monte_carlo`` -- tolerance Monte Carlo of TE p-p, lost motion and peak mesh force
-  (:func:`rvtool.variants.montecarlo.run_monte_carlo`), when a tolerance file is given.
+  state, resolution sequence with e1 against the finest field (as ``cases/cycloid/pressure_resolution.py``);
+* ``monte_carlo`` -- tolerance Monte Carlo of TE p-p, lost motion and peak contact force when a
+  tolerance file is given: the cycloid drive's batched variants
+  (:func:`rvtool.variants.montecarlo.run_monte_carlo`), the RV and small-tooth-difference
+  reducers' design variants on the CPU path (:mod:`rvtool.variants.rv_tolerances`,
+  :mod:`rvtool.variants.std_tolerances`).
 """
 import time
 
@@ -204,7 +207,7 @@ def run_stiffness(ctx):
     note = (f"condensed tangent K_t at {t_ref:g} N m against the central finite increment "
             f"+-{tc['increment_Nm']:.3g} N m (relative difference)")
     out.figures.append(Figure("Kt_condensed", tc["Kt_condensed_Nm_per_arcmin"], "N m/arcmin",
-                              f"condensed tangent stiffness at 75 % of the rated torque", tc["rel_diff"], "-", note))
+                              "condensed tangent stiffness at 75 % of the rated torque", tc["rel_diff"], "-", note))
     for b, f in fits.items():
         if f["K_Nm_per_arcmin"] is None:
             out.warnings.append(f"branch {b}: {f['points']} points in 50-100 % of T_rated, no fit")
@@ -341,7 +344,7 @@ def run_vibration(ctx):
     out = Outcome()
     model = ctx.build()
     mesh = _mesh_period(model)
-    revs = 0.25 if ctx.quick else 2.0          # input revolutions (cases/vibration.py)
+    revs = 0.25 if ctx.quick else 2.0          # input revolutions (cases/cycloid/vibration.py)
     step = 2e-5
     duration = revs * 60.0 / speed
     proto = V.VibrationProtocol(speed_rpm=speed, torque=rated, duration=duration, sample_step=step)
@@ -402,7 +405,7 @@ def run_vibration(ctx):
 # -- pressure ----------------------------------------------------------------------------------
 
 PRESSURE_WINDOW = 20e-6
-"""Fixed window of the mean pressure [m] (cases/pressure_resolution.py)."""
+"""Fixed window of the mean pressure [m] (cases/cycloid/pressure_resolution.py)."""
 
 
 @register("pressure", "local pressure of the most loaded main-mesh contact per member at the rated state (panels)")
@@ -433,7 +436,7 @@ def run_pressure(ctx):
                                   e1, "%", f"e1 field difference of N = {ns[-2]} against N = {ns[-1]} panels "
                                            "(Eq. pressure_field_difference)"))
         out.figures.append(Figure(f"hertz_p0_{member}", best.hertz_peak / 1e6, "MPa",
-                                  f"Hertz line-contact peak of the same contact (closed form, for comparison)"))
+                                  "Hertz line-contact peak of the same contact (closed form, for comparison)"))
         if not rec.get("converged", True):
             out.warnings.append(f"{member}: pressure resolution not converged at N = {ns[-1]}")
         out.data[member] = rec
@@ -451,12 +454,110 @@ def run_pressure(ctx):
 
 MC_REGULARIZATION = (1.0e4, 100.0)
 """Builder regularization springs [N/m, N m/rad] of the Monte Carlo variants, as in
-cases/monte_carlo_te.py: with pin clearance the lost-motion continuation crosses free play,
+cases/cycloid/monte_carlo_te.py: with pin clearance the lost-motion continuation crosses free play,
 where the default springs (100 N/m, 0.1 N m/rad) let it stall (measured here: 3 of 4 quick
 variants of RD-40 failed with the defaults)."""
 
 
-@register("monte_carlo", "tolerance Monte Carlo: TE p-p, lost motion and peak pin force over sampled variants")
+MC_SEED = 2026
+"""Seed of the tolerance Monte Carlo (variant k draws from default_rng([MC_SEED, k]))."""
+MC_DESIGN_VARIANTS = (4, 40)
+"""Variants of the design-variant Monte Carlo (RV, small-tooth-difference involute) under --quick and in
+full: each variant is a design built and solved on the CPU path (two solves), as cases/monte_carlo_rv.py."""
+
+
+def _design_variant_sampler(design):
+    """(load tolerances, sample variant k) of a topology whose variants are designs (the RV and the
+    small-tooth-difference involute reducers), or None."""
+    from ..assembly.rv.spec import RVDesign
+    from ..assembly.std_spec import StdInvoluteDesign
+    if isinstance(design, RVDesign):
+        from ..variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+        return load_rv_tolerances, sample_rv_design
+    if isinstance(design, StdInvoluteDesign):
+        from ..variants.std_tolerances import load_std_tolerances, sample_std_design
+        return load_std_tolerances, sample_std_design
+    return None
+
+
+def _design_variant_monte_carlo(ctx, sampler, out):
+    """The tolerance Monte Carlo of a topology whose variants are designs: per variant the quick TE
+    interval of the te protocol (one input revolution, 4 points per mesh cycle) at the rated torque
+    and the lost motion at +-3 % of it (spring-controlled march); returns (n, the run's figures)."""
+
+    from ..assembly import build
+    from ..protocols.lost_motion import lost_motion
+    from ..protocols.precision import quasi_static_te
+    from ..variants.montecarlo import summarize
+    load, sample = sampler
+    try:
+        spec = load(ctx.tolerances)
+    except RvtoolInputError as exc:
+        raise Unsupported(f"the tolerances do not apply to this design: {exc}") from None
+    rated = ctx.require("rated_torque")
+    n = MC_DESIGN_VARIANTS[0] if ctx.quick else MC_DESIGN_VARIANTS[1]
+    angles, _, _ = _te_angles(ctx.build(), quick=True)
+    kw = {} if ctx.device == "cpu" else {"device": ctx.device}
+    records = []
+    tick = progress.callback("Monte Carlo", "variant")
+    for k in range(n):
+        t0 = time.perf_counter()
+        rec = {"index": k, "status": "ok", "error": None}
+        drawn = {}
+        try:
+            # a variant its deviations make inadmissible (e.g. tooth interference) is a failed variant
+            design, drawn = sample(spec, ctx.design, k, MC_SEED)
+            qs = quasi_static_te(build(design, **kw), torque=rated, input_angles=angles)
+            lm = lost_motion(build(design, **kw), torque_level=LOST_MOTION_FRACTION * rated)
+            rec.update(te_pp_arcsec=float(np.ptp(qs["te"])) * ARCSEC_PER_RAD,
+                       lost_motion_arcmin=lm["lost_motion_rad"] * ARCMIN_PER_RAD,
+                       max_contact_force_N=max(qs["peak_loads"].values()) if qs["peak_loads"] else None)
+        except (SolverFailure, RvtoolInputError) as exc:         # recorded, never dropped silently
+            rec.update(status="failed", error=str(exc), te_pp_arcsec=None, lost_motion_arcmin=None,
+                       max_contact_force_N=None)
+        # per-tooth and per-crank draws: their largest magnitude; scalars as drawn
+        rec["deviations"] = {f: (float(np.max(np.abs(np.asarray(v, float)))) if np.ndim(v) else float(v))
+                             for f, v in drawn.items()}
+        rec["wall_s"] = time.perf_counter() - t0
+        records.append(rec)
+        if tick:
+            tick(k + 1, n)
+    figures = ("te_pp_arcsec", "lost_motion_arcmin", "max_contact_force_N")
+    return n, {"summary": summarize(records, figures=figures), "records": records}, figures
+
+
+MC_MODES = {"device": "device", "fused": "device", "replica": "batched", "exudyn": "pool"}
+"""The Monte Carlo's mode (:data:`rvtool.variants.montecarlo.MODES`) of each named backend: the device
+Newton's variant batches, one batched Exudyn system per chunk (the replica idea for a batch of
+designs), or one Exudyn model per variant on the pool (the oracle)."""
+
+
+def _mc_backend(ctx):
+    """(mode, choice) of the Monte Carlo for ``ctx.backend``: auto takes the device Newton where the
+    design's copies can be built (measured fastest for the whole protocol, see
+    :func:`rvtool.variants.montecarlo.resolve_mode`), else one batched Exudyn system per chunk
+    (3.3x the per-variant pool for the TE on 2 cores, the module docstring), else the pool; a named
+    backend that cannot run the design skips the protocol with the reason."""
+    from ..assembly.variant import Variant
+    from ..solver.device_copies import copy_parameters
+    reasons = {}
+    try:
+        copy_parameters(ctx.design, [Variant()], regularization=MC_REGULARIZATION)
+    except (RvtoolInputError, AttributeError, TypeError) as exc:
+        reasons["device"] = reasons["fused"] = f"the device copies cannot be built from this design: {exc}"
+    if ctx.backend != "auto":
+        if ctx.backend in reasons:
+            raise Unsupported(f"backend = {ctx.backend!r} cannot run the Monte Carlo of this design: "
+                              f"{reasons[ctx.backend]}")
+        return MC_MODES[ctx.backend], {"requested": ctx.backend, "ran": ctx.backend, "not_taken": {
+            b: f"not requested (--backend {ctx.backend})" for b in MC_MODES if b != ctx.backend}}
+    ran = "device" if "device" not in reasons else "replica"
+    not_taken = {b: reasons.get(b, f"supports the design, but slower than {ran!r} for the Monte Carlo "
+                                   "(rvtool.variants.montecarlo.resolve_mode)") for b in MC_MODES if b != ran}
+    return MC_MODES[ran], {"requested": "auto", "ran": ran, "not_taken": not_taken}
+
+
+@register("monte_carlo", "tolerance Monte Carlo: TE p-p, lost motion and peak contact force over sampled variants")
 def run_monte_carlo(ctx):
     import os
     import tempfile
@@ -469,31 +570,47 @@ def run_monte_carlo(ctx):
         raise Unsupported("no tolerance file: pass --tolerances FILE (a shipped design uses its "
                           "<name>_tolerances.toml when there is one)")
     from ..assembly.spec import CycloidDesign
-    if not isinstance(ctx.design, CycloidDesign):
-        # the variants and the batched figures below are the cycloid drive's; the RV Monte Carlo
-        # (rvtool.variants.rv_tolerances) runs in cases/monte_carlo_rv.py
-        raise Unsupported(f"the tolerance Monte Carlo here covers the cycloid topology; {type(ctx.design).__name__}: "
-                          "see cases/monte_carlo_rv.py")
-    tol = load_tolerances(ctx.tolerances)
-    try:
-        tol.check_design(ctx.design)
-    except (RvtoolInputError, AttributeError) as exc:
-        raise Unsupported(f"the tolerances do not apply to this design: {exc}") from None
     out = Outcome()
-    n = 4 if ctx.quick else 200
-    protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53)
-    settings = MonteCarloSettings(n_variants=n, seed=2026, chunk_size=n if ctx.quick else 10,
-                                  mode="batched", workers=1 if ctx.quick else None, device=ctx.device,
-                                  scheduler=ctx.scheduler or "")
-    with tempfile.TemporaryDirectory() as tmp:
-        chunk_dir = os.path.join(ctx.out_dir, "monte_carlo_chunks") if ctx.out_dir else tmp
-        res = mc(ctx.design, tol, protocol, settings, chunk_dir, build_kw={"regularization": MC_REGULARIZATION},
-                 progress=progress.callback("Monte Carlo", "variant"))
+    sampler = _design_variant_sampler(ctx.design)
+    if sampler is not None:
+        if ctx.backend not in ("auto", "exudyn"):
+            raise Unsupported(f"backend = {ctx.backend!r} cannot run the Monte Carlo of "
+                              f"{type(ctx.design).__name__}: its variants are designs solved on the Exudyn CPU path")
+        choice = {"requested": ctx.backend, "ran": "exudyn", "not_taken": {
+            b: "the design-variant Monte Carlo of this topology runs on the Exudyn CPU path only"
+            for b in MC_MODES if b != "exudyn"}}
+        n, res, names = _design_variant_monte_carlo(ctx, sampler, out)
+        settings = {"tolerances": str(ctx.tolerances), "n_variants": n, "seed": MC_SEED, "mode": "design variants (cpu)",
+                    "te_interval": "one input revolution, 4 points per mesh cycle (the quick te protocol's)",
+                    "lost_motion_torque_fraction": LOST_MOTION_FRACTION, "backend": choice}
+    elif not isinstance(ctx.design, CycloidDesign):
+        raise Unsupported(f"no tolerance Monte Carlo for {type(ctx.design).__name__}: its topology has no variant sampler")
+    else:
+        tol = load_tolerances(ctx.tolerances)
+        try:
+            tol.check_design(ctx.design)
+        except (RvtoolInputError, AttributeError) as exc:
+            raise Unsupported(f"the tolerances do not apply to this design: {exc}") from None
+        mode, choice = _mc_backend(ctx)
+        n = 4 if ctx.quick else 200
+        protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53)
+        mc_settings = MonteCarloSettings(n_variants=n, seed=MC_SEED, chunk_size=n if ctx.quick else 10,
+                                         mode=mode, workers=1 if ctx.quick else None, device=ctx.device,
+                                         scheduler=ctx.scheduler or "")
+        with tempfile.TemporaryDirectory() as tmp:
+            chunk_dir = os.path.join(ctx.out_dir, "monte_carlo_chunks") if ctx.out_dir else tmp
+            res = mc(ctx.design, tol, protocol, mc_settings, chunk_dir, build_kw={"regularization": MC_REGULARIZATION},
+                     progress=progress.callback("Monte Carlo", "variant"))
+        names = ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")
+        settings = {"tolerances": str(ctx.tolerances), "n_variants": n, "seed": mc_settings.seed,
+                    "mode": mc_settings.mode, "regularization": MC_REGULARIZATION, "backend": choice,
+                    "protocol": protocol.__dict__}
     s = res["summary"]
     if s["n_failed"]:
         errs = sorted({r["error"] for r in res["records"] if r["status"] != "ok"})
         out.warnings.append(f"{s['n_failed']} of {n} variants failed: {errs[:3]}")
-    for nm, unit in (("te_pp_arcsec", "arcsec"), ("lost_motion_arcmin", "arcmin"), ("max_pin_force_N", "N")):
+    units = {"te_pp_arcsec": "arcsec", "lost_motion_arcmin": "arcmin", "max_pin_force_N": "N", "max_contact_force_N": "N"}
+    for nm, unit in ((nm, units[nm]) for nm in names):
         st = s.get(nm, {})
         if not st.get("n"):
             out.warnings.append(f"{nm}: no successful variant")
@@ -505,9 +622,7 @@ def run_monte_carlo(ctx):
         out.figures.append(Figure(f"{name}_p95", st["p95"], unit, f"95th percentile of {nm}", None, unit,
                                   f"95 % order-statistic interval {st['p95_ci']} (None: too few variants)"))
     out.data = {"summary": s, "records": res["records"]}
-    out.settings = {"tolerances": str(ctx.tolerances), "n_variants": n, "seed": settings.seed, "mode": settings.mode,
-                    "regularization": MC_REGULARIZATION,
-                    "protocol": protocol.__dict__}
+    out.settings = settings
     import matplotlib.pyplot as plt
     ok = [r for r in res["records"] if r["status"] == "ok"]
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.4))

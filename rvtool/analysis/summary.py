@@ -141,8 +141,8 @@ def summary_rows(data):
         "N m/arcmin", "min_torsional_stiffness", "min")
     add("Torsional rigidity, tangent at 75 % rated torque", "stiffness", "Kt_condensed", "N m/arcmin")
     add("Lost motion at +-3 % rated torque", "lost_motion", "lost_motion", "arcmin", "max_lost_motion")
-    add("Hysteresis loss (loop width at zero torque, +-rated cycle)", "hysteresis", "hysteresis_width",
-        "arcmin", "max_hysteresis_loss")
+    add("Hysteresis loss (catalogue: loop width at zero torque along the unloading branches)", "hysteresis",
+        "hysteresis_loss", "arcmin", "max_hysteresis_loss")
     te = data.get("te") if isinstance(data.get("te"), dict) else {}
     for name in sorted((te.get("figures") or {})):
         if name.startswith("peak_load_"):
@@ -164,6 +164,14 @@ def summary_rows(data):
             member = name[len("p_window_"):]
             add(f"Peak local contact pressure, main mesh, {member} (pressure field)", "pressure", name,
                 "MPa", HERTZ_ALLOWABLE[MEMBER_HERTZ_GROUP], "max", 1.0 / PA_PER_MPA)
+    if not any("pressure" in r.quantity for r in rows):    # said, not left out
+        lim = allow.get(HERTZ_ALLOWABLE[MEMBER_HERTZ_GROUP])
+        note = _status_note(data, "pressure") or "the protocol reported no pressure figure"
+        if te.get("status") == "ok" and not peaks:
+            note += "; the topology gives no Hertz peaks at the rated state"
+        rows.append(Row("Peak contact pressure, main mesh", None, "MPa", "-",
+                        _limit_text(None if lim is None else lim / PA_PER_MPA, "max", "MPa"), "not computed",
+                        "pressure", note))
     life_limit = allow.get("min_bearing_life")
     rows.append(Row("Bearing rating life L10h (ISO 281, rated torque and speed)", None, "h",
                     "-", _limit_text(life_limit, "min", "h"), "not computed", "-",

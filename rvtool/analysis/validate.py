@@ -37,12 +37,12 @@ from ..units import RAD_PER_ARCMIN
 SAMPLES = 64
 """Latin-hypercube samples of the full run (issue 28: >= 64)."""
 
-QUICK_SAMPLES = 8
+QUICK_SAMPLES = 4
 """Samples under ``quick`` (the machinery, not the band's convergence)."""
 
 REPEAT_TOLERANCE_ARCMIN = 1e-4
 """Declared bound on the difference of the two loops [arcmin] (the Newton tolerance moves a level
-by ~1e-7 arcmin; cases/hysteresis_friction.py)."""
+by ~1e-7 arcmin; cases/cycloid/hysteresis_friction.py)."""
 
 DEFAULT_RIGIDITY_POINTS = (0.5, 1.0)
 """b/a torque points [fraction of T_R] where the catalogue file gives none: a STATED CONVENTION
@@ -50,10 +50,10 @@ DEFAULT_RIGIDITY_POINTS = (0.5, 1.0)
 catalogue's own points, which were not read (rv40e/rv80e_catalogue.toml say so); every result
 names the points it used and where they come from."""
 
-QUICK_TORNADO_KEYS = 2
+QUICK_TORNADO_KEYS = 1
 """Under quick the tornado covers the first this many `assumed` keys of the file (2 loops each)."""
 
-FULL_STEP, QUICK_STEP, SAMPLE_STEP = 0.0625, 0.25, 0.5
+FULL_STEP, QUICK_STEP, SAMPLE_STEP = 0.0625, 0.5, 0.5
 """Level spacing of the central loop (full, quick) and of each sample's loop [fraction of T_R]
 (the catalogue's points and the +-3 %, 2 %, 1 % levels are added to every one; b/a and the
 mid-points are read at levels, so the spacing changes only the curve's plot; measured on rv40e:
@@ -124,8 +124,10 @@ def _sample(args):
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def _map(fn, items, workers, log=None):
-    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item."""
+def _map(fn, items, workers, log=None, checkpoint=None):
+    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item;
+    ``checkpoint``: a JSON file rewritten with the results so far after each item (a long run that
+    is stopped keeps what it computed)."""
     out = []
     if workers <= 1 or len(items) < 2:
         it = (fn(i) for i in items)
@@ -139,7 +141,12 @@ def _map(fn, items, workers, log=None):
         for k, r in enumerate(it):
             out.append(r)
             if log is not None:
-                log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){'' if r[1] is None else ': ' + r[1]}")
+                err = "" if r[1] is None else ": " + r[1]
+                log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){err}")
+            if checkpoint is not None:
+                with open(checkpoint, "w") as fh:
+                    json.dump(_jsonable({"done": len(out), "of": len(items), "results": out,
+                                         "wall_s": time.perf_counter() - t0}), fh)
     finally:
         if pool is not None:
             pool.shutdown()
@@ -159,12 +166,27 @@ def ratio_variant(table):
     return set_key(t, "ratio_target", ratio), ratio
 
 
-def bearing_lives(design, model, q, catalogue):
-    """ISO 281 L10 [h] of each needle bearing (eccentric journal) and crank-bearing row at the
-    rated state q, at the catalogue's rated output speed: both turn with the crank relative to the
-    carrier (and the wheel), at (i - 1) z_sun / z_crank times the output speed. Radial load of a
-    bearing: |sum F_j n_j| over its observed rows (the tapered rows' axial preload is not in P:
-    a lower bound of P, an upper bound of the life)."""
+LIFE_STATES, QUICK_LIFE_STATES = 8, 3
+"""Rated states (input angles equally spaced over one crank revolution relative to the carrier) of the
+ISO 281 mean load: a needle bearing's radial load turns and varies with the crank (measured on rv80e at
+one state: 0.55 to 5.6 kN over its six needle bearings)."""
+
+
+def crank_revolution_input_angle(design, model):
+    """Input angle [rad] of one crank revolution relative to the carrier: the input turns by
+    (i / (i - 1)) z_crank / z_sun revolutions relative to the ground while the crank turns once
+    relative to the carrier (ratio i = omega_in / omega_out)."""
+    i = abs(float(model.ratio))
+    return 2 * math.pi * design.crank_gear.n_teeth / design.sun_gear.n_teeth * i / (i - 1.0)
+
+
+def bearing_lives(design, model, states, catalogue):
+    """ISO 281 L10 [h] of each needle bearing (eccentric journal) and crank-bearing row at the rated
+    ``states`` (input angles equally spaced over one crank revolution, equal times at constant
+    speed: the mean load P_m = (mean P^p)^(1/p), ISO 281), at the catalogue's rated output speed:
+    both turn with the crank relative to the carrier (and the wheel), at (i - 1) z_sun / z_crank
+    times the output speed. Radial load of a bearing: |sum F_j n_j| over its observed rows (the
+    tapered rows' axial preload is not in P: a lower bound of P, an upper bound of the life)."""
     from ..slow import fatigue as Fa
     from ..slow.fatigue import RatingGeometry
     eb, cb = design.eccentric_bearing, design.crank_bearing
@@ -177,22 +199,28 @@ def bearing_lives(design, model, q, catalogue):
         rows[f"row{r_i}"] = RatingGeometry(element="roller", n_elements=row.n_rollers,
                                            element_diameter=row.roller_diameter, pitch_diameter=row.pitch_diameter,
                                            roller_length=row.roller_length, contact_angle=float(row.cup_angle))
+    loads = {}
+    for q in states:
+        for fam, key_of in (("eccentric_bearings", lambda i: i.split("/")[0]),
+                            ("crank_bearings", lambda i: "/".join(i.split("/")[:2]))):
+            ob = model.observe(q, model_family(model, fam))
+            groups = {}
+            for j, rid in enumerate(ob.ids):
+                groups.setdefault(key_of(rid), []).append(j)
+            for name, idx in groups.items():
+                loads.setdefault((fam, name), []).append(
+                    Fa.radial_load_from_elements(ob.normal_force[idx], ob.normal[idx]))
     out = {}
-    for fam, key_of, geom_of in (("eccentric_bearings", lambda i: i.split("/")[0], lambda k: needle),
-                                 ("crank_bearings", lambda i: "/".join(i.split("/")[:2]),
-                                  lambda k: rows[k.split("/")[1]])):
-        ob = model.observe(q, model_family(model, fam))
-        groups = {}
-        for j, rid in enumerate(ob.ids):
-            groups.setdefault(key_of(rid), []).append(j)
-        for name, idx in sorted(groups.items()):
-            P = Fa.radial_load_from_elements(ob.normal_force[idx], ob.normal[idx])
-            g = geom_of(name)
-            row = {"family": fam, "C_r_N": g.dynamic_load_rating(), "P_N": P, "speed_rpm": crank_speed * 30 / math.pi,
-                   "L10_h": None}
-            if P > 0:
-                row["L10_h"] = Fa.rating_life(g, P, crank_speed).L10_hours
-            out[name] = row
+    for (fam, name), P in sorted(loads.items()):
+        g = needle if fam == "eccentric_bearings" else rows[name.split("/")[1]]
+        P = np.asarray(P)
+        Pm = Fa.mean_equivalent_load(float(np.sum(P ** g.life_exponent)), float(P.size), g.life_exponent)
+        row = {"family": fam, "C_r_N": g.dynamic_load_rating(), "P_m_N": Pm, "P_max_N": float(P.max()),
+               "P_min_N": float(P.min()), "states": int(P.size), "speed_rpm": crank_speed * 30 / math.pi,
+               "L10_h": None}
+        if Pm > 0:
+            row["L10_h"] = Fa.rating_life(g, Pm, crank_speed).L10_hours
+        out[name] = row
     return out
 
 
@@ -280,15 +308,18 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             log=print):
+             assumed=None, band=True, variant=True, log=print):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
     samples (the machine is shared: 1 or 2); tornado_keys: one-at-a-time low/high loops for this
     many keys, the most important first by :func:`screening` (None: every key; quick:
-    :data:`QUICK_TORNADO_KEYS`)."""
+    :data:`QUICK_TORNADO_KEYS`); assumed: a ranges file to use instead of the shipped
+    ``<design>_assumed.toml`` (its values must be the design's middles too); band, variant: False
+    skips the uncertainty band or the ratio variant (said so in the results)."""
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
+    want_band, want_variant = bool(band), bool(variant)
     from .. import designs
     from ..assembly import build
     from ..assembly.topologies import design_from_table, read_table
@@ -302,8 +333,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     catalogue = load_catalogue(cat_name)
     design_path = designs.path(design)
     table = read_table(design_path)
-    assumed_name = designs.assumed_of(design)
-    assumed = load_assumed(assumed_name) if assumed_name else None
+    assumed_name = assumed or designs.assumed_of(design)
+    assumed = load_assumed(assumed_name) if (assumed_name and want_band) else None
     if assumed is not None:
         check_assumed_middle(assumed, table)
     files = [design_path] + ([assumed.path] if assumed else [])
@@ -315,7 +346,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     d = design_from_table(table)
     T_R = catalogue.test.rated_torque
     if abs(float(getattr(d, "rated_torque", T_R)) - T_R) > 1e-9 * T_R:
-        log(f"note: the design's rated_torque {d.rated_torque} differs from the catalogue's T_R {T_R}; the catalogue's is used")
+        log(f"note: the design's rated_torque {d.rated_torque} differs from the catalogue's T_R {T_R}; the "
+            "catalogue's is used")
     n_samples = samples if samples is not None else (QUICK_SAMPLES if quick else SAMPLES)
     log(f"validate {design}: central loop")
     central = _loop(d, catalogue, QUICK_STEP if quick else FULL_STEP)
@@ -325,13 +357,22 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     # rated state: lives, pressures, budget
     model = build(d)
     model.set_output_torque(-np.sign(model.ratio) * T_R)
-    q = StaticSolver(model).solve(0.0)
-    lives = bearing_lives(d, model, q, catalogue)
+    solver = StaticSolver(model)
+    q = solver.solve(0.0)
     budget = stiffness_budget(model, q)
     peaks = contact_pressures(d, model, q)
+    # the bearings' mean load over a crank revolution (after the budget and pressures of q: the model's
+    # input angle moves)
+    n_life = QUICK_LIFE_STATES if quick else LIFE_STATES
+    span = crank_revolution_input_angle(d, model)
+    life_angles = [k * span / n_life for k in range(n_life)]
+    life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
+    lives = bearing_lives(d, model, life_states, catalogue)
     # ratio variant
-    log(f"validate {design}: ratio variant")
+    log(f"validate {design}: ratio variant" + ("" if want_variant else " skipped"))
     try:
+        if not want_variant:
+            raise RuntimeError("skipped (variant=False: --quick of the case for a costly design)")
         vt, v_ratio = ratio_variant(table)
         v_fig = _figures(_loop(design_from_table(vt), catalogue, SAMPLE_STEP, repeat=False))
         variant = {"ratio": v_ratio, "ratio_central": float(model.ratio), "rigidity": v_fig["torsional_rigidity"],
@@ -355,7 +396,16 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
 
         log(f"validate {design}: {n_samples} Latin-hypercube samples ({workers} worker(s))")
         ts = time.perf_counter()
-        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log)
+        ck = None
+        if out_dir is not None:
+            os.makedirs(out_dir, exist_ok=True)
+            with open(os.path.join(out_dir, "central_partial.json"), "w") as fh:
+                json.dump(_jsonable({"central": fig_c, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,
+                                     "bearing_lives": lives, "budget_shares": budget["shares"],
+                                     "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"], "pressures_Pa": peaks,
+                                     "ratio_variant": variant, "U": U, "keys": keys}), fh, indent=1)
+            ck = os.path.join(out_dir, "samples_partial.json")
+        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log, ck)
         wall_lhs = time.perf_counter() - ts
         order, screen = screening(keys, U, lhs)
         n_tor = len(keys) if tornado_keys is None else min(len(keys), int(tornado_keys))
@@ -367,7 +417,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                 x[j] = v
                 tornado_pts.append(x)
         log(f"validate {design}: tornado over {n_tor} of {len(keys)} keys ({len(tornado_pts)} loops)")
-        tor = _map(_sample, [(table_of(x), catalogue) for x in tornado_pts], workers, log)
+        tor = _map(_sample, [(table_of(x), catalogue) for x in tornado_pts], workers, log,
+                   None if ck is None else os.path.join(out_dir, "tornado_partial.json"))
         wall_samples = time.perf_counter() - ts
         res = lhs + tor
         failures = [e for f, e in lhs if f is None]
@@ -395,7 +446,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     band = (unc or {}).get("band") or {}
     pts, pts_source = rigidity_points(catalogue)
     rows = (
-        _rows("torsional_rigidity", fig_c["torsional_rigidity"], "N m/arcmin", catalogue, band.get("torsional_rigidity"),
+        _rows("torsional_rigidity", fig_c["torsional_rigidity"], "N m/arcmin", catalogue,
+              band.get("torsional_rigidity"),
               f"b/a on the loading branches at {pts} T_R: {pts_source}")
         + _rows("lost_motion", fig_c["lost_motion"], "arcmin", catalogue, band.get("lost_motion"),
                 f"mid-points at +-{catalogue.test.lost_motion_torque_fraction:g} T_R")
@@ -406,14 +458,16 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         vals = [v["L10_h"] for k, v in lives.items() if v["family"] == fam and v["L10_h"] is not None]
         rows += _rows("rated_life", min(vals) if vals else None, "h", catalogue,
                       note=f"{fam}: smallest ISO 281 L10h at T_R, {next(iter(lives.values()))['speed_rpm']:.4g} rpm "
-                           "relative speed (radial load only)")
-    from ..protocols.datasheet import load_allowables
+                           f"relative speed, mean load over {n_life} states of a crank revolution (radial load "
+                           "only)")
+    from ..designs.allowables import load_allowables
     allow_name = f"{design}_allowables" if f"{design}_allowables" in designs.names() else "rd40_allowables"
     al = load_allowables(designs.path(allow_name))
     pressures = {"hertz_peaks_Pa": peaks, "allowables_file": allow_name,
                  "allowables_note": ("the design's own review allowables" if allow_name.startswith(design) else
-                                     "no allowables file of this design: rd40_allowables.toml's declared limits (4.0 GPa "
-                                     "rolling contacts, ISO 76 static limit; 2.5 GPa case-hardened pins, design practice)"),
+                                     "no allowables file of this design: rd40_allowables.toml's declared limits "
+                                     "(4.0 GPa rolling contacts, ISO 76 static limit; 2.5 GPa case-hardened pins, "
+                                     "design practice)"),
                  "rows": {}}
     for k, p in peaks.items():
         lim = getattr(al, f"max_hertz_{k}", None)
@@ -423,8 +477,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                      "catalogue": None if lim is None else lim / 1e6, "catalogue_unit": "MPa",
                      "kind": "max (allowable)", "status": None,
                      "source": f"{allow_name}.toml (declared allowable, not a catalogue figure)",
-                     "conditions": f"Hertz line-contact peak at T_R, input angle 0",
-                     "verdict": "no allowable" if lim is None else ("within allowable" if p <= lim else "above allowable"),
+                     "conditions": "Hertz line-contact peak at T_R, input angle 0",
+                     "verdict": ("no allowable" if lim is None else
+                                 "within allowable" if p <= lim else "above allowable"),
                      "note": pressures["allowables_note"]})
     out = {
         "design": design, "catalogue": {"title": catalogue.source.title, "edition": catalogue.source.edition,
@@ -437,7 +492,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "assumptions_commit_source": ("the catalogue file's assumptions_commit" if catalogue.assumptions_commit
                                       else "git: last commit touching the design or its assumed file"),
         "last_commit_touching_inputs": last_commit, "last_commit_date": last_date,
-        "uncertainty_note": None if assumed else (f"no {design}_assumed.toml: the design's inputs are chosen, not "
+        "uncertainty_note": None if assumed else ("band skipped (band=False)" if not want_band else
+                                                  f"no {design}_assumed.toml: the design's inputs are chosen, not "
                                                   "assumed with cited ranges, so no band is computed"),
         "assumed_file": os.path.basename(assumed.path) if assumed else None,
         "table": rows,
@@ -449,7 +505,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "bearing_lives": lives, "pressures": pressures,
         "compliance_budget": {"shares": budget["shares"], "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"],
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
-                                                "housing.model": getattr(d.housing, "model", None) if d.housing else None}},
+                                                "housing.model": getattr(d.housing, "model", None)
+                                                if d.housing else None}},
         "ratio_variant": variant, "uncertainty": unc,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
@@ -477,7 +534,8 @@ def checks(out):
     if u is not None:
         res["no_failed_sample"] = not u["failures"] and not u["tornado_failures"]
         res["band_contains_central"] = bool(all(
-            u["band"][k] is not None and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
+            u["band"][k] is not None
+            and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
             for k in ("torsional_rigidity", "lost_motion", "hysteresis_loss")))
     return res
 
@@ -493,8 +551,11 @@ def write(out, out_dir, catalogue):
     T_R = out["test"]["rated_torque_Nm"]
     lp = out["loop"]
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    ax.plot(lp["angle_arcmin"], lp["torque_Nm"], ".-", lw=0.8, label="second loop")
-    ax.plot(lp["angle_arcmin_previous"], lp["torque_Nm"], "x", ms=4, label="first loop")
+    T, th, lab = np.asarray(lp["torque_Nm"]), np.asarray(lp["angle_arcmin"]), lp["labels"]
+    for k, b in enumerate(("neg_unloading", "pos_loading", "pos_unloading", "neg_loading")):
+        idx = [i for i, l in enumerate(lab) if l == b]     # one line per branch: none across the free play
+        ax.plot(th[idx], T[idx], ".-", lw=0.8, color=f"C{k}", label=f"{b} (second loop)")
+    ax.plot(lp["angle_arcmin_previous"], lp["torque_Nm"], "x", ms=4, color="k", label="first loop")
     t = out["test"]["lost_motion_torque_fraction"] * T_R
     for s in (1, -1):
         ax.axhline(s * t, color="gray", lw=0.5, ls=":")

@@ -47,10 +47,12 @@ COORDS = ("x", "y", "theta")
 
 @dataclass(frozen=True, kw_only=True)
 class Pins:
-    """Ring pins: n_pins (z_b), pin_circle_radius R_z [m], pin_radius r_p [m] (the generating
-    radius of the wheel profile). Manufacturing deviations (part of the design, so a variant is
-    a design): radius_error [m], the actual pin radius minus r_p; centre_errors: None or
-    (z_b, 2) pin-centre errors [m] in the housing frame. support: the pin as a beam
+    """Ring pins.
+
+    n_pins: z_b, the number of ring pins [-]. pin_circle_radius: R_z [m]. pin_radius: r_p, the
+    generating radius of the wheel profile [m]. Manufacturing deviations (part of the design, so a
+    variant is a design): radius_error: the actual pin radius minus r_p [m]; centre_errors: None
+    or (z_b, 2) pin-centre errors in the housing frame [m]. support: the pin as a beam
     (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-table ``[pins.support]``; rigid by default)."""
     n_pins: int
     pin_circle_radius: float
@@ -75,11 +77,16 @@ class Pins:
 
 @dataclass(frozen=True, kw_only=True)
 class Wheels:
-    """Cycloid wheels: assembly eccentricity e [m] of the journals (the profile's generating
-    eccentricity e_g is ``profile.generating_eccentricity``, a separate input), width [m], axial
-    midplanes [m] and eccentric journal phases [rad] (file: ``phases_deg``), one per wheel,
-    face-width slices, profile table resolution, uniform clearance [m] at the pins and the
-    contact search ("discrete" table search or "analytic" closest point)."""
+    """Cycloid wheels.
+
+    eccentricity: assembly eccentricity e of the journals [m] (the profile's generating
+    eccentricity e_g is ``profile.generating_eccentricity``, a separate input). width: axial width
+    of each wheel [m]. midplanes: axial midplanes of the wheels [m], one per wheel. phases:
+    eccentric journal phases [rad] (file: ``phases_deg``), one per wheel. n_slices: slices across
+    the face width [-]. samples_per_tooth: resolution of the wheel-profile table [-].
+    clearance: uniform clearance at the pins [m]. n_teeth: z_g, the wheel's tooth count [-]
+    (None: pins.n_pins - 1). search: the contact search ("discrete" table search or "analytic"
+    closest point)."""
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
@@ -113,14 +120,17 @@ class Wheels:
 
 @dataclass(frozen=True, kw_only=True)
 class PinContact:
-    """Cycloid--pin contact law: law ("line", "power", "secant", "palmgren"), stiffness [N/m] (whole contact;
-    0 with "line" = secant stiffness at reference_force), exponent (power law), reference_force [N]
-    ("line"/"secant" only; "palmgren" is Palmgren's nonlinear steel line contact F = k delta^(10/9) over
-    the wheel width, :func:`rvtool.contact.cycloid_set.palmgren_line_coefficient`: no stiffness, no
-    reference load),
-    damping [N s/m], mu [-] (0 = no friction), friction_model ("regularized": Eq. (friction)
-    velocity law; "anchor": stick--slip anchors per slice), tangential_stiffness [N/m] of the
-    anchors (whole contact; 0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the normal secant stiffness)."""
+    """Cycloid--pin contact law.
+
+    law: the normal law ("line", "power", "secant" or "palmgren"; "palmgren" is Palmgren's nonlinear
+    steel line contact F = k delta^(10/9) over the wheel width,
+    :func:`rvtool.contact.cycloid_set.palmgren_line_coefficient`: no stiffness, no reference load).
+    stiffness: whole-contact stiffness [N/m] (0 with "line": the secant stiffness at reference_force).
+    exponent: the power law's exponent [-]. reference_force: the calibration load of the secant [N]
+    ("line" and "secant" only). damping: contact damping [N s/m]. mu: friction coefficient [-]
+    (0 = no friction). friction_model: "regularized" (Eq. (friction) velocity law) or "anchor"
+    (stick--slip anchors per slice). tangential_stiffness: whole-contact stiffness of the anchors
+    [N/m] (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the normal secant stiffness)."""
     law: str = "line"
     stiffness: float = 0.0
     exponent: float = 1.0
@@ -156,9 +166,9 @@ class Housing:
     structure: the :class:`~rvtool.structure.AnnularHousingSpec` (file: ``[housing.structure]``
     with ``[housing.structure.material]`` and ``[housing.structure.damping]``; its ``n_ports`` is
     the ring's pin count and its material [material]'s unless given).
-    n_fixed_interface_modes: Craig--Bampton modes of the parent; n_modes, n_residual: retained
-    parent modes and residual attachment modes of the port reduction (n_residual = -1: one per
-    port row, so that the static port compliance equals the parent's to round-off).
+    n_fixed_interface_modes: Craig--Bampton modes of the parent [-]. n_modes: retained parent
+    modes of the port reduction [-]. n_residual: residual attachment modes of the port reduction
+    [-] (-1: one per port row, so that the static port compliance equals the parent's to round-off).
     """
     model: str = "rigid"
     structure: AnnularHousingSpec | None = None
@@ -195,8 +205,12 @@ class Housing:
 
 @dataclass(frozen=True, kw_only=True)
 class Bodies:
-    """Retained planar coordinates per body (subset of x, y, theta) and rigid-body data
-    (shaft and flange masses [kg] and polar inertias [kg m^2]; wheels from their geometry)."""
+    """Retained planar coordinates per body and rigid-body data (the wheels' from their geometry).
+
+    shaft, wheel, flange: the planar coordinates each body keeps (a subset of x, y, theta).
+    shaft_mass: mass of the input shaft [kg]. shaft_inertia: polar inertia of the input shaft
+    [kg m^2]. flange_mass: mass of the output flange [kg]. flange_inertia: polar inertia of the
+    output flange [kg m^2]."""
     shaft: tuple = COORDS
     wheel: tuple = COORDS
     flange: tuple = COORDS
@@ -215,16 +229,21 @@ class Bodies:
 @dataclass(frozen=True, kw_only=True)
 class BearingFriction:
     """Bearing friction torque as a loss on each bearing's relative rotation (optional section;
-    model "none" = no element, no cost): model ("none" | "palmgren", Palmgren's M = M0 + M1 of
-    :mod:`rvtool.bearings.friction_torque`), kinematic_viscosity nu [m^2/s] of the lubricant,
-    f0_ball, f1_ball (main and input ball bearings) and f0_needle, f1_needle (eccentric needle
-    bearings) [-], regularization_speed [rad/s] of the sign. The defaults are chosen here, inside the
-    ranges tabulated by Harris & Kotzalas (oil bath: f0 = 2 for angular-contact/deep-groove ball
-    bearings, 4 for needle bearings; f1 = 7e-4 ball, 5e-4 needle); ISO VG 32 at 40 degC.
-    f0_tapered, f1_tapered (tapered roller rows, chosen here, of the order of the roller values) [-].
-    static_stiffness k_phi [N m/rad] (> 0) of the static part, or None (M0 + M1 on the speed law):
-    with it, M1 acts as a Coulomb torque with an anchor on the bearing's relative rotation
-    (:mod:`rvtool.bearings.friction_element`); switched off (None) it costs nothing."""
+    model "none" = no element, no cost).
+
+    model: "none" or "palmgren" (Palmgren's M = M0 + M1 of :mod:`rvtool.bearings.friction_torque`).
+    kinematic_viscosity: nu of the lubricant [m^2/s]. f0_ball, f1_ball: Palmgren's factors of the
+    main and input ball bearings [-]. f0_needle, f1_needle: Palmgren's factors of the eccentric
+    needle bearings [-]. f0_tapered, f1_tapered: Palmgren's factors of the tapered roller rows [-]
+    (chosen here, of the order of the roller values). regularization_speed: the speed that
+    regularizes the sign of the torque [rad/s]. static_stiffness: k_phi of the static part
+    [N m/rad] (> 0), or None (M0 + M1 on the speed law); with it, M1 acts as a Coulomb torque with
+    an anchor on the bearing's relative rotation (:mod:`rvtool.bearings.friction_element`);
+    switched off (None) it costs nothing.
+
+    The defaults are chosen here, inside the ranges tabulated by Harris & Kotzalas (oil bath:
+    f0 = 2 for angular-contact/deep-groove ball bearings, 4 for needle bearings; f1 = 7e-4 ball,
+    5e-4 needle); ISO VG 32 at 40 degC."""
     model: str = "none"
     kinematic_viscosity: float = 3.2e-5
     f0_ball: float = 2.0
@@ -256,7 +275,10 @@ class BearingFriction:
 class CycloidDesign:
     """A single-stage cycloid drive with one or two wheels (see rvtool/designs/rd40.toml): the
     tree of component specs, one per section. ``main_bearing`` / ``input_bearing`` are None
-    where the file says ``kind = "locked"`` (the body held on its axis, no bearing law)."""
+    where the file says ``kind = "locked"`` (the body held on its axis, no bearing law).
+
+    name: the design's label. n_wheels: number of cycloid wheels [-] (1 or 2). rated_torque: the
+    rated output torque [N m]. input_speed_rpm: the rated input speed [rpm]."""
     name: str
     n_wheels: int
     rated_torque: float

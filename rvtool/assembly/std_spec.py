@@ -43,10 +43,12 @@ TOOTH_DIFFERENCES = (1, 4)
 
 @dataclass(frozen=True, kw_only=True)
 class WheelSet:
-    """The external involute wheels on the eccentric journals: eccentricity e [m] (= the working
-    centre distance of the wheel--ring pair), face width of each wheel [m], axial midplanes [m]
-    (relative to the flange), eccentric phases [rad] (file: ``phases_deg``; opposed journals for
-    two wheels)."""
+    """The external involute wheels on the eccentric journals.
+
+    eccentricity: e [m], the working centre distance of the wheel--ring pair. width: face width of
+    each wheel [m]. midplanes: axial midplanes of the wheels relative to the flange [m], one per
+    wheel. phases: eccentric phases of the journals [rad] (file: ``phases_deg``; opposed journals
+    for two wheels)."""
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
@@ -65,12 +67,14 @@ class WheelSet:
 
 @dataclass(frozen=True, kw_only=True)
 class MeshSettings:
-    """Contact settings of each wheel--ring mesh (:class:`~rvtool.contact.involute_set.GearMesh`):
-    n_slices across the face width, window (teeth of the wheel evaluated on each side of the
-    one at the pitch point; None: ceil(epsilon_alpha / 2) + 1), clearance [m], damping [N s/m]
-    of the whole mesh, ramp_depth [m] of the damping ramp, mu [-] (regularized friction;
-    0 = none), radial_assembly (check tip-to-tip interference when the wheel is moved radially
-    into the ring; false: the wheels are assembled axially)."""
+    """Contact settings of each wheel--ring mesh (:class:`~rvtool.contact.involute_set.GearMesh`).
+
+    n_slices: slices across the face width [-]. window: teeth of the wheel evaluated on each side
+    of the one at the pitch point [-] (None: ceil(epsilon_alpha / 2) + 1). clearance: uniform
+    clearance of the flanks [m]. damping: contact damping of the whole mesh [N s/m]. ramp_depth:
+    depth of the damping ramp [m]. mu: friction coefficient [-] (regularized friction; 0 = none).
+    radial_assembly: check tip-to-tip interference when the wheel is moved radially into the ring
+    (false: the wheels are assembled axially)."""
     n_slices: int = 1
     window: int | None = None
     clearance: float = 0.0
@@ -111,7 +115,10 @@ def internal_pair(wheel, ring, eccentricity, radial_assembly):
 class StdInvoluteDesign:
     """A small-tooth-difference involute reducer with one or two wheels (see
     rvtool/designs/std_involute.toml): the wheels on the eccentric input shaft mesh a fixed
-    internal ring gear; the output flange takes the wheels' rotation through pins in holes."""
+    internal ring gear; the output flange takes the wheels' rotation through pins in holes.
+
+    name: the design's label. n_wheels: number of wheels [-] (1 or 2). rated_torque: the rated
+    output torque [N m]. input_speed_rpm: the rated input speed [rpm]."""
     name: str
     n_wheels: int
     rated_torque: float
@@ -209,6 +216,10 @@ LINKS = {
     "housing.structure": {"material": "material"},
 }
 _OPTIONAL = ("bodies", "housing", "mesh")
+#: Fields of a table the design sets, not the file (the wheel's face width is [wheels] width, the
+#: ring is internal, a gear is named after its table): not file keys, so the templates and the
+#: format documentation leave them out.
+SET_BY_DESIGN = {"wheel": ("face_width", "internal", "name"), "ring": ("internal", "name")}
 
 
 def gear_section(section, data, **derived):
@@ -218,6 +229,9 @@ def gear_section(section, data, **derived):
     if not isinstance(data, dict):
         raise RvtoolInputError(f"[{section}] must be a table of keys (an InvoluteGear spec); got {type(data).__name__}")
     data = dict(data)
+    if "name" in data:
+        raise RvtoolInputError(f"{section}.name is set by the design (the gear is named {section!r}); remove it "
+                               f"from [{section}]")
     for k in derived:
         if k in data:
             raise RvtoolInputError(f"{section}.{k} is set by the design ({derived[k]!r}); remove it from [{section}]")
@@ -238,7 +252,7 @@ def design_from_dict(d):
     for sec in ("wheel", "ring"):
         if sec not in d:
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
-    kw["wheel"] = gear_section("wheel", d.pop("wheel"), face_width=kw["wheels"].width)
+    kw["wheel"] = gear_section("wheel", d.pop("wheel"), face_width=kw["wheels"].width, internal=False)
     kw["ring"] = gear_section("ring", d.pop("ring"), internal=True)
     return build_section(StdInvoluteDesign, "design", {**d, **kw, "source": source})
 

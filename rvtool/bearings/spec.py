@@ -85,13 +85,14 @@ class CylindricalRollerBearing:
     """Cylindrical roller bearing, rollers sliced along their length (radial normal).
 
     inner_radius: raceway radius of the inner ring or journal [m].
-    roller_diameter: D [m]. roller_length: effective length l [m]. n_rollers: Z.
+    roller_diameter: D [m]. roller_length: effective length l [m]. n_rollers: Z, the number of
+    rollers [-].
     radial_clearance: c [m] (half the diametral clearance; negative = interference,
     down to -0.2 % of D).
     n_slices: laminae per roller. crowning: drop of the generator [m], either the
     drop at the roller ends of a parabolic crown (scalar) or one drop per slice.
     law: "power" (Palmgren, k delta^(10/9)) or "linear" (the secant of the power
-    law at ``reference_roller_load``, N).
+    law at the reference roller load). reference_roller_load: the load of that secant [N].
     lamina_stiffness: None (the law above, shared by the laminae in proportion to
     their length) or a coefficient per lamina [N m^-p] (scalar or one per slice).
     damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
@@ -205,9 +206,9 @@ class CrossedRollerBearing(CylindricalRollerBearing):
 class BallBearing:
     """Ball bearing row (deep-groove for contact_angle = 0, else angular contact).
 
-    n_balls: Z. ball_diameter: D [m]. pitch_diameter: d_m [m].
+    n_balls: Z, the number of balls [-]. ball_diameter: D [m]. pitch_diameter: d_m [m].
     contact_angle: free contact angle alpha_0 [rad] in [0, pi/2).
-    inner_curvature, outer_curvature: groove curvature ratios f_i, f_o = r_groove / D in (0.5, 1].
+    inner_curvature, outer_curvature: groove curvature ratios f_i, f_o = r_groove / D [-] in (0.5, 1].
     youngs_modulus: E [Pa]; poisson_ratio: nu [-] (balls and rings of one material).
     radial_clearance: c_b [m] of Eq. (ball_bearing) (negative = interference, down to -0.2 % of D).
     axial_preload: F_a [N] pressing the rings axially; it sets the axial approach
@@ -313,10 +314,11 @@ class BallBearing:
 
 @dataclass(frozen=True, kw_only=True)
 class AngularContactPair:
-    """Two angular-contact rows ``rows`` = (row 0, row 1), row_spacing [m] apart
-    (row 0 at -spacing/2, row 1 at +spacing/2 from the mounting's axial centre),
-    arrangement "back_to_back" (contact lines diverge toward the axis: pressure
-    centres outside the rows) or "face_to_face".
+    """Two angular-contact rows ``rows`` = (row 0, row 1).
+
+    row_spacing: the rows' axial distance [m] (row 0 at -spacing/2, row 1 at +spacing/2 from the
+    mounting's axial centre). arrangement: "back_to_back" (contact lines diverge toward the
+    axis: pressure centres outside the rows) or "face_to_face".
 
     In the planar model both rows carry radial load through their balls; the
     axial force and tilting moment of each row and of the pair are computed

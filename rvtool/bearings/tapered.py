@@ -78,7 +78,7 @@ def _choice(obj, name, cls):
 class TaperedRollerBearing:
     """One row of a tapered roller bearing.
 
-    n_rollers: Z. pitch_diameter: d_m, diameter of the circle of roller centres at
+    n_rollers: Z, the number of rollers [-]. pitch_diameter: d_m, diameter of the circle of roller centres at
     mid-length [m]. roller_diameter: mean roller diameter D_m [m]. roller_length:
     effective contact length l along the generator [m].
     cup_angle: alpha_o, the cup half-angle (the row's contact angle), in (0, 60) deg [rad]
@@ -86,14 +86,15 @@ class TaperedRollerBearing:
     cone_angle: alpha_i, the cone half-angle, in [alpha_o - 20 deg, alpha_o) and >= 0 [rad]
     (file: ``cone_angle_deg``; the roller half-angle phi = (alpha_o - alpha_i) / 2 is in (0, 10] deg).
     n_slices: laminae per roller. crowning: end drop of a parabolic crown (scalar) or one
-    drop per slice [m]. law: "power" (Palmgren 10/9) or "linear" (its secant at
-    ``reference_roller_load`` [N]).
+    drop per slice [m]. law: "power" (Palmgren 10/9) or "linear" (its secant at the reference
+    roller load). reference_roller_load: the load of that secant [N].
     rib_contact: False (cone and rib lumped, rigid rib) or True (elastic rib, the roller's
     axial position resolved per roller; requires damping = 0).
     rib_end_radius: radius of the roller's spherical large end [m]; None: the apex
     distance of the roller's large end (the usual design, R_e close to it).
     rib_clearance: play between the roller end and the rib c_f [m].
-    youngs_modulus: E [Pa]; poisson_ratio: nu (rib contact).
+    youngs_modulus: E of the rollers and rings [Pa] (rib contact). poisson_ratio: nu of the
+    rollers and rings [-] (rib contact).
     damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
     of Eq. (normal_force).
     """

@@ -27,7 +27,10 @@ import dataclasses
 import math
 import re
 import tomllib
+import textwrap
 import typing
+
+import numpy as np
 
 from ..errors import RvtoolInputError
 from ..units import file_key, is_angle
@@ -61,8 +64,8 @@ def sections(design_cls, design=None):
     hints = _hints(design_cls)
     top, secs = [], {}
     for f in dataclasses.fields(design_cls):
-        if f.metadata.get("file", True) is False:
-            continue
+        if f.metadata.get("file", True) is False or not f.init:
+            continue                        # not a file key, or derived by the design (init=False)
         specs = _spec_types(hints.get(f.name, f.type))
         if specs:
             value = getattr(design, f.name, None) if design is not None else None
@@ -72,29 +75,81 @@ def sections(design_cls, design=None):
     return top, secs
 
 
+_UNIT = re.compile(r"\[(-|[A-Za-z%][A-Za-z0-9^/ .*\-]*)\]")
+"""A unit in brackets (``[m]``, ``[N m/rad]``, ``[kg m^2]``, ``[-]``), not a range (``[0, 3]``)."""
+
+
+def _clause_end(doc, i, names):
+    """Index where the clause starting at ``doc[i]`` ends, outside parentheses: the next ``;``, a
+    sentence end (a ``.`` before a capital letter, before another key's ``name:`` / ``name,`` or at
+    the end) or ``, NAME`` of another field ``NAME`` in ``names`` (a comma-separated key list)."""
+    depth = 0
+    for j in range(i, len(doc)):
+        c = doc[j]
+        if c in "([{":
+            depth += 1
+        elif c in ")]}":
+            depth = max(0, depth - 1)
+        elif depth == 0 and c == ";":
+            return j
+        elif depth == 0 and c == "." and (j + 1 == len(doc) or re.match(r"\s+(?:[A-Z]|`?\w+`?[:,]|$)", doc[j + 1:])):
+            return j
+        elif depth == 0 and c == ",":
+            m = re.match(r",\s*(?:and\s+)?`*(\w+)`*", doc[j:])
+            if m and m.group(1) in names:
+                return j
+    return len(doc)
+
+
+_PATTERNS = (r"(?<![\w.`]){name}(?![\w`])((?:,\s*(?:and\s+)?\w+)*):\s*",   # name: meaning
+             r"(?<![\w.`]){name}(?![\w`])(?=[^\[\];.]{{0,40}}\[)",          # name SYMBOL [unit]
+             r"``{name}``\s*[:]?\s*",                                       # ``name`` ...
+             r"(?<![\w.`]){name}(?![\w`])\s*")                              # name ...
+
+
+def _clause(doc, name, names=(), patterns=_PATTERNS):
+    """The clause of docstring ``doc`` describing key ``name`` (its text after the name, or after a
+    list of keys that share it: ``f0_ball, f1_ball: ...``), or ""."""
+    # code examples (``Spec(key=value)``) describe nothing (pairs of `` taken in order)
+    doc = re.sub(r"``([^`]*)``", lambda m: "" if "=" in m.group(1) else m.group(0), doc)
+    for pattern in patterns:
+        pattern = pattern.format(name=re.escape(name))
+        for m in re.finditer(pattern, doc):
+            listed = re.findall(r"\w+", m.group(1)) if m.groups() else []
+            if any(n not in names for n in listed if n != "and"):
+                continue                # "name, word:" that is not a list of keys
+            p = m.end()
+            while True:                 # a key list "name, other, third [unit]": skip the other names
+                k = re.match(r",\s*(?:and\s+)?(\w+)\s*", doc[p:])
+                if not (k and k.group(1) in names):
+                    break
+                p += k.end()
+            text = doc[p:_clause_end(doc, p, set(names) - {name})].strip(" ,:")
+            if text:
+                return text
+    return ""
+
+
 def describe(cls, name):
     """(meaning, unit) of field ``name`` of spec ``cls`` (module docstring). The docstrings of
-    the spec and its bases are searched for ``name [unit]`` (a short symbol may stand between,
-    e.g. ``pin_circle_radius R_z [m]``) and ``name: meaning``."""
+    the spec and its bases are searched for the key's clause (``name: meaning [unit]``, or
+    ``name SYMBOL [unit]``, e.g. ``pin_circle_radius R_z [m]``) up to the next ``;`` or the end of
+    its sentence, so the meaning is whole; its first bracketed unit is the key's unit. An integer
+    field is a count ([-])."""
     f = {x.name: x for x in dataclasses.fields(cls)}[name]
     if "doc" in f.metadata:
         return f.metadata["doc"], f.metadata.get("unit", "")
     meaning, unit = "", f.metadata.get("unit", "")
-    for base in cls.__mro__:
-        doc = " ".join((base.__doc__ or "").split())
-        if not doc or base is object:
-            continue
-        if not unit:
-            m = re.search(rf"(?<![\w.]){re.escape(name)}(?![\w])([^\[\],;.]{{0,40}}?)\[([^\]]+)\]", doc)
-            if m:
-                unit = m.group(2)
-                meaning = meaning or m.group(1).strip(" :(-")
-        if not meaning:
-            m = re.search(rf"(?<![\w.]){re.escape(name)}:\s*([^.;]{{3,160}})", doc)
-            if m:
-                meaning = m.group(1).strip()
-                u = re.search(r"\[([^\]]+)\]\s*$", meaning)
-                unit = unit or (u.group(1) if u else "")
+    docs = [" ".join((b.__doc__ or "").split()) for b in cls.__mro__ if b is not object and b.__doc__]
+    names = [x.name for x in dataclasses.fields(cls)]
+    for pattern in _PATTERNS:               # the most specific form in any docstring first
+        meaning = next((c for c in (_clause(d, name, names, (pattern,)) for d in docs) if c), "")
+        if meaning:
+            u = _UNIT.search(meaning)
+            unit = unit or (u.group(1) if u else "")
+            break
+    if not unit and _hints(cls).get(name) is int:
+        unit = "-"
     return meaning, unit
 
 
@@ -134,7 +189,7 @@ def valid_range(cls, kw, name):
             other = [(msg, p) for msg, p in ((_probe_message(cls, kw, name, p), p) for p in probes) if msg]
             if other:
                 msg, p = other[0]
-                return "constrained by other keys: " + msg.split(";")[0].replace(str(p), "VALUE")[:120]
+                return "constrained by other keys: " + msg.split(";")[0].replace(str(p), "VALUE")
             return "any finite number" + integer
         return " and ".join(found) + integer
     if isinstance(value, (list, tuple)):
@@ -185,10 +240,15 @@ def _example_kwargs(cls, table):
 
 
 def _degrees(v):
-    """An angle value [rad] (a number or a list) in degrees, rounded to 12 digits (0.2443 rad -> 14.0)."""
+    """An angle value [rad] (a number or a list) in degrees: rounded to 12 digits where that reads
+    back as the same radians (0.2443... rad -> 14.0), else in full."""
     if isinstance(v, (list, tuple)):
         return tuple(_degrees(x) for x in v)
-    return float(f"{math.degrees(v):.12g}") if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return v
+    d = math.degrees(v)
+    short = float(f"{d:.12g}")
+    return short if math.radians(short) == v or float(np.deg2rad(short)) == v else d
 
 
 def _plain(v):
@@ -202,7 +262,7 @@ def _plain(v):
     return v
 
 
-def _section_rows(path, cls, obj, raw, links):
+def _section_rows(path, cls, obj, raw, links, set_by_design):
     """Rows of one (sub-)table ``path`` of spec ``cls``, example values from the loaded spec
     ``obj`` (None: field defaults) and the file's table ``raw``; sub-tables recursively."""
     kw = {f.name: getattr(obj, f.name) for f in dataclasses.fields(cls)} if obj is not None \
@@ -210,19 +270,21 @@ def _section_rows(path, cls, obj, raw, links):
     if isinstance(kw.get("rows"), tuple) and kw["rows"] and _is_spec(type(kw["rows"][0])):
         # an angular-contact pair: its rows' keys sit in the pair's table (the loader's flat rule)
         row = kw["rows"][0]
-        rows = [r for r in _section_rows(path, type(row), row, raw, links)]
+        rows = [r for r in _section_rows(path, type(row), row, raw, links, set_by_design)]
         own = [f for f in dataclasses.fields(cls) if f.name != "rows"]
-        return _field_rows(path, cls, own, kw, raw, links) + rows
-    return _field_rows(path, cls, dataclasses.fields(cls), kw, raw, links)
+        return _field_rows(path, cls, own, kw, raw, links, set_by_design) + rows
+    return _field_rows(path, cls, dataclasses.fields(cls), kw, raw, links, set_by_design)
 
 
-def _field_rows(path, cls, fields, kw, raw, links):
+def _field_rows(path, cls, fields, kw, raw, links, set_by_design):
     rows, subs = [], []
     for f in fields:
         value = kw.get(f.name)
+        if f.name in set_by_design.get(path, ()):
+            continue                        # the design sets it (e.g. a gear's name): not a file key
         if _is_spec(type(value)):
             sub = raw.get(f.name, {}) if isinstance(raw.get(f.name), dict) else {}
-            subs += _section_rows(f"{path}.{f.name}", type(value), value, sub, links)
+            subs += _section_rows(f"{path}.{f.name}", type(value), value, sub, links, set_by_design)
             continue
         meaning, unit = describe(cls, f.name)
         required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
@@ -256,6 +318,7 @@ def key_table(topology):
     top_fields, secs = sections(cls, design)
     module = __import__(cls.__module__, fromlist=["_"])
     links = getattr(module, "LINKS", {})
+    set_by_design = getattr(module, "SET_BY_DESIGN", {})
     kinds = getattr(module, "BEARING_KINDS", {})
     for f in top_fields:
         kw = {g.name: getattr(design, g.name) for g in dataclasses.fields(cls)} if design is not None else {}
@@ -271,12 +334,23 @@ def key_table(topology):
                          "the spec of this section (a bearing's type)", False))
         if obj is None and design is not None:
             continue                         # e.g. a locked bearing: no spec, no keys
-        rows += _section_rows(sec, scls, obj, sec_table, links)
+        rows += _section_rows(sec, scls, obj, sec_table, links, set_by_design)
     return rows
 
 
+def sentence(text):
+    """``text`` as a whole sentence: stripped, ending in a full stop (never cut)."""
+    text = " ".join(str(text).split()).rstrip(" ,;:")
+    return text if not text or text.endswith((".", "?", "!")) else text + "."
+
+
+def summary(cls):
+    """The first paragraph of a spec's docstring, whole (what a table's comment says)."""
+    return sentence(" ".join((cls.__doc__ or "").strip().split("\n\n")[0].split()))
+
+
 def _comment(unit, rng, meaning, required):
-    parts = [f"[{unit}]" if unit else "", rng and f"valid: {rng}", "" if required else "optional", meaning]
+    parts = [f"[{unit}]" if unit else "", rng and f"valid: {rng}", "" if required else "optional", sentence(meaning)]
     return "  ".join(p for p in parts if p)
 
 
@@ -295,6 +369,9 @@ def template(topology, name=None):
                             "is left out), meaning."))
     doc.add(tomlkit.comment(f"Example values: {top.reference or 'field defaults'}. Check: rvtool analyze THIS_FILE --quick"))
     doc.add(tomlkit.nl())
+    version = tomlkit.item(topologies.FORMAT_VERSION)
+    version.comment("the design file format: every angle in degrees (NAME_deg), every other key SI")
+    doc.add("format_version", version)
     doc.add("topology", topology)
     rows = key_table(topology)
     classes = _table_classes(topology)
@@ -316,8 +393,8 @@ def template(topology, name=None):
                 t = tomlkit.table()
                 c = classes.get(sec)
                 if c is not None:
-                    d = " ".join((c.__doc__ or "").split())
-                    t.add(tomlkit.comment(f"{c.__name__}: {d[:300]}{'...' if len(d) > 300 else ''}"))
+                    for line in textwrap.wrap(f"{c.__name__}: {summary(c)}", 100):
+                        t.add(tomlkit.comment(line))
                 tables[sec] = t
             tables[sec].add(key, item)
     for sec, t in tables.items():
@@ -385,6 +462,6 @@ def format_doc():
                 out += ["", f"### {title}", "", "| key | unit | valid range | required | example | meaning |",
                         "|---|---|---|---|---|---|"]
             ex = "" if value is None else f"`{value}`"
-            out.append(f"| `{key}` | {unit} | {rng} | {'yes' if required else 'no'} | {ex} | {meaning} |")
+            out.append(f"| `{key}` | {unit} | {rng} | {'yes' if required else 'no'} | {ex} | {sentence(meaning)} |")
         out.append("")
     return "\n".join(out) + "\n"

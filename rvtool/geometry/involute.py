@@ -65,13 +65,18 @@ def inv_inverse(value):
     return a
 
 
+MIN_MODULE = 1e-6
+"""Smallest module accepted [m] (see :class:`InvoluteGear`)."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class BasicRack:
     """Basic rack tooth profile (ISO 53), coefficients relative to the module.
 
-    pressure_angle: alpha_P [rad]. addendum_coefficient: h_aP* (gear addendum).
-    dedendum_coefficient: h_fP*. root_radius_coefficient: rho_fP* (tip rounding of the
-    generating rack = root fillet radius of the basic rack).
+    pressure_angle: alpha_P, the profile angle of the rack [rad]. addendum_coefficient: h_aP*,
+    the gear addendum over the module [-]. dedendum_coefficient: h_fP*, the dedendum over the
+    module [-]. root_radius_coefficient: rho_fP*, the tip rounding of the generating rack (the
+    root fillet radius of the basic rack) over the module [-]. name: the rack's label.
     """
     pressure_angle: float = angle_field(math.radians(20.0))
     addendum_coefficient: float = 1.0
@@ -141,14 +146,15 @@ class FlankModification:
 class InvoluteGear:
     """One involute spur gear (external or internal).
 
-    module: m [m]; n_teeth: z (positive integer); face_width: b [m]; profile_shift: x [-];
-    internal: ring gear; rack: :class:`BasicRack` (ISO 53 profile A by default).
+    module: m [m]; n_teeth: z, the number of teeth [-]; face_width: b [m]; profile_shift: x [-];
+    internal: true for a ring gear; rack: :class:`BasicRack` (ISO 53 profile A by default).
     tip_diameter: d_a [m] (default from the rack: d + 2 m (h_aP* + x), internal d - 2 m (h_aP* + x)).
     thickness_allowance: A_s [m], tooth thickness reduction on the reference circle (backlash).
     tip_edge_radius: rho_e [m] of the rounded tip edge used for corner contact
     (default 0.02 m: a chosen small edge break, declared here).
     bore_diameter: d_i [m] of the gear body (fillet-foundation compliance; default 0.5 d_f, chosen).
-    youngs_modulus [Pa], poisson_ratio [-]: the gear's material (default steel 206 GPa, 0.3).
+    youngs_modulus: E of the gear's material [Pa] (default steel, 206 GPa). poisson_ratio: nu of
+    the gear's material [-] (default 0.3).
     modification: :class:`FlankModification` (the same on both flanks of every tooth).
     single_pitch_deviations: f_pt,k [m] for k = 0..z-1 (f_pt,k between tooth k-1 and k);
     they must sum to zero (a closed circle), see ISO 1328-1.
@@ -173,7 +179,10 @@ class InvoluteGear:
 
     def __post_init__(self):
         p = self.name
-        check_positive(f"{p}.module", self.module)
+        # assumed floor: 50x below the finest manufactured modules (0.05 mm, fine-pitch instrument
+        # gears); below it squared lengths of the tooth geometry underflow (a module of 5e-324 m
+        # divided by zero, found by tests/test_design_fuzz.py::test_template_in_range_fuzz)
+        check_range(f"{p}.module", self.module, MIN_MODULE, math.inf)
         z = self.n_teeth
         if isinstance(z, bool) or not isinstance(z, (int, np.integer)) or z < 3:
             raise RvtoolInputError(f"{p}.n_teeth = {z!r} is outside the valid range [3, inf) (integer)")

@@ -217,7 +217,8 @@ class CatalogueMetrics:
     hysteresis_loss: HysteresisLoss
 
 
-def catalogue_metrics(torque, angle, labels, *, rated_torque, rigidity_points, lost_motion_fraction=LOST_MOTION_FRACTION):
+def catalogue_metrics(torque, angle, labels, *, rated_torque, rigidity_points,
+                      lost_motion_fraction=LOST_MOTION_FRACTION):
     """:class:`CatalogueMetrics` of one loop; ``rigidity_points`` are fractions of T_R (the
     catalogue's own points of b/a), ``lost_motion_fraction`` the catalogue's ±fraction of T_R."""
     check_positive("rated_torque", rated_torque)
@@ -225,7 +226,8 @@ def catalogue_metrics(torque, angle, labels, *, rated_torque, rigidity_points, l
     if len(pts) != 2:
         raise RvtoolInputError(f"rigidity_points must be two fractions of the rated torque; got {rigidity_points!r}")
     return CatalogueMetrics(torsional_rigidity(torque, angle, labels, torque_points=pts),
-                            lost_motion(torque, angle, labels, rated_torque=rated_torque, fraction=lost_motion_fraction),
+                            lost_motion(torque, angle, labels, rated_torque=rated_torque,
+                                        fraction=lost_motion_fraction),
                             hysteresis_loss(torque, angle, labels))
 
 
@@ -246,20 +248,25 @@ def catalogue_sequence(rated_torque, *, rigidity_points, lost_motion_fraction=LO
 class ContinuationPath:
     """Loading path of a :class:`~rvtool.model.ReducerModel` at a fixed input angle: equilibria by
     :class:`rvtool.solver.continuation.Continuation`, the contact history committed once per level;
-    ``go_to(torque)`` returns the output angle [rad] from its kinematic position."""
+    ``go_to(torque)`` returns the output angle [rad] from its kinematic position. The continuation
+    starts at the first torque asked for (a loaded start is regular where free play leaves the
+    zero-load state ill-posed: measured on rv80e variants, whose start at zero torque failed)."""
 
     def __init__(self, model, *, input_angle=0.0):
-        from ..solver.continuation import Continuation
         self.model = model
-        self.continuation = Continuation(model, input_angle=input_angle)
+        self.input_angle = input_angle
+        self.continuation = None
         self._i_out = model.output_index
         self._th_kin = model.kinematic_output(input_angle)
 
     def go_to(self, torque):
+        if self.continuation is None:
+            from ..solver.continuation import Continuation
+            self.continuation = Continuation(self.model, input_angle=self.input_angle, initial_torque=float(torque))
         return float(self.continuation.go_to(float(torque))[self._i_out] - self._th_kin)
 
     def stats(self):
-        return self.continuation.stats.to_dict()
+        return {} if self.continuation is None else self.continuation.stats.to_dict()
 
 
 class SpringCoulombBacklash:
@@ -271,14 +278,17 @@ class SpringCoulombBacklash:
     direction of the excess (F the spring-backlash torque); in the free play F = 0 and the slide
     crosses it at T = ±T_c. A loading path (``go_to(torque) -> θ``) for :func:`catalogue_loops`."""
 
-    def __init__(self, *, stiffness, backlash, friction_torque, knee_torque=np.inf, stiffness_2=None):
+    def __init__(self, *, stiffness, backlash, friction_torque, knee_torque=None, stiffness_2=None):
         check_positive("stiffness", stiffness)
         check_nonnegative("backlash", backlash)
         check_nonnegative("friction_torque", friction_torque)
-        check_positive("knee_torque", knee_torque)
-        self.k1, self.beta, self.tc, self.tk = float(stiffness), float(backlash), float(friction_torque), float(knee_torque)
+        if knee_torque is not None:       # None: a linear spring (no knee)
+            check_positive("knee_torque", knee_torque)
+        if stiffness_2 is not None:
+            check_positive("stiffness_2", stiffness_2)
+        self.k1, self.beta, self.tc = float(stiffness), float(backlash), float(friction_torque)
+        self.tk = np.inf if knee_torque is None else float(knee_torque)
         self.k2 = self.k1 if stiffness_2 is None else float(stiffness_2)
-        check_positive("stiffness_2", self.k2)
         self.theta = 0.0
 
     def _spring(self, d):            # torque of the bilinear spring at deflection d >= 0
@@ -315,19 +325,28 @@ class SpringCoulombBacklash:
         return {}
 
 
+def _levels(sequence):
+    """(torques [N m] of the protocol without the preload's zero level, the number of preload levels):
+    the virgin preload starts loaded at its first nonzero level (zero torque is free play)."""
+    torques, _ = sequence.levels()
+    pre = sequence.preload()
+    keep = np.ones(len(torques), bool)
+    keep[:len(pre)] = pre != 0.0
+    return torques[keep], int(np.count_nonzero(pre != 0.0))
+
+
 def catalogue_loop(path, sequence, *, rigidity_points, lost_motion_fraction=LOST_MOTION_FRACTION):
     """The preload and the FIRST cycle of ``sequence`` only, and the catalogue's figures on it: the
     cheap form for many variants of a design whose loops are known to repeat from the first cycle
     (Masing; :func:`catalogue_loops` checks it on the central design). Returns the dict of
     :func:`catalogue_loops` with one cycle and ``repeatability`` None."""
-    torques, _ = sequence.levels()
-    n = len(sequence.preload()) + len(sequence.cycle()[0])
-    angles = np.array([path.go_to(float(t)) for t in torques[:n]])
+    torques, n_pre = _levels(sequence)
     fr, labels = sequence.cycle()
-    cyc = {"torque_Nm": fr * sequence.rated_torque, "angle_rad": angles[len(sequence.preload()):], "labels": labels}
+    angles = np.array([path.go_to(float(t)) for t in torques[:n_pre + len(fr)]])
+    cyc = {"torque_Nm": fr * sequence.rated_torque, "angle_rad": angles[n_pre:], "labels": labels}
     met = catalogue_metrics(cyc["torque_Nm"], cyc["angle_rad"], labels, rated_torque=sequence.rated_torque,
                             rigidity_points=rigidity_points, lost_motion_fraction=lost_motion_fraction)
-    return {"cycles": [cyc], "metrics": met, "repeatability": None, "preload": angles[:len(sequence.preload())],
+    return {"cycles": [cyc], "metrics": met, "repeatability": None, "preload": angles[:n_pre],
             "stats": path.stats()}
 
 
@@ -340,15 +359,17 @@ def catalogue_loops(path, sequence, *, rigidity_points, lost_motion_fraction=LOS
     ``metrics`` (:class:`CatalogueMetrics` of the last cycle), ``repeatability``
     (:class:`rvtool.protocols.hysteresis.Repeatability`), ``preload`` angles [rad], ``stats``."""
     check_nonnegative("repeat_tolerance", repeat_tolerance)
-    torques, _ = sequence.levels()
+    torques, n_pre = _levels(sequence)
     angles = np.array([path.go_to(float(t)) for t in torques])
     fr, labels = sequence.cycle()
     cyc_T = fr * sequence.rated_torque
-    cycles = [{"torque_Nm": cyc_T, "angle_rad": a, "labels": labels} for a in sequence.split(angles)]
+    n_cyc = len(fr)
+    cycles = [{"torque_Nm": cyc_T, "angle_rad": angles[n_pre + c * n_cyc:n_pre + (c + 1) * n_cyc], "labels": labels}
+              for c in range(sequence.n_cycles)]
     rep = H.repeatability(H.Cycle(torque=cyc_T, angle=cycles[-2]["angle_rad"]),
                           H.Cycle(torque=cyc_T, angle=cycles[-1]["angle_rad"]), tolerance=repeat_tolerance)
     last = cycles[-1]
     met = catalogue_metrics(last["torque_Nm"], last["angle_rad"], labels, rated_torque=sequence.rated_torque,
                             rigidity_points=rigidity_points, lost_motion_fraction=lost_motion_fraction)
-    return {"cycles": cycles, "metrics": met, "repeatability": rep, "preload": angles[:len(sequence.preload())],
+    return {"cycles": cycles, "metrics": met, "repeatability": rep, "preload": angles[:n_pre],
             "stats": path.stats()}

@@ -18,7 +18,7 @@ and repeatability have been established"):
   repeats its predecessor within the declared tolerances;
 * :func:`jenkins_branch`: the closed-form branches of a Jenkins element (a
   spring in series with a Coulomb slider), the reference of the tests and
-  of ``cases/verify_jenkins.py``.
+  of ``cases/verification/verify_jenkins.py``.
 """
 from dataclasses import dataclass
 

@@ -12,7 +12,8 @@ import numpy as np
 
 from ..observe.transmission import transmission_error
 
-__all__ = ["transmission_error", "te_metrics", "mesh_forces", "quasi_static_te", "dynamic_te", "DYNAMIC_SOLVERS"]
+__all__ = ["transmission_error", "te_metrics", "batch_te", "mesh_forces", "quasi_static_te", "dynamic_te",
+           "DYNAMIC_SOLVERS"]
 
 
 def te_metrics(te, *, n_revolutions=1.0, n_peaks=10, remove_mean=True):
@@ -29,6 +30,24 @@ def te_metrics(te, *, n_revolutions=1.0, n_peaks=10, remove_mean=True):
     idx = idx[amp[idx] > 0]
     return {"pp": float(np.ptp(te)), "rms": float(np.sqrt(np.mean((te - mean) ** 2))), "mean": mean,
             "orders": orders, "amplitudes": amp, "peak_orders": orders[idx], "peak_amplitudes": amp[idx]}
+
+
+def batch_te(theta_in, theta_out, ratio, failed=None):
+    """Eq. (obs_te) and its peak-to-peak and RMS for V histories at prescribed states (a batch of
+    designs: theta_in, theta_out (V, A) [rad], integrated angles, not unwrapped); rows marked in
+    ``failed`` (V,) are NaN. Returns {"te" (V, A) [rad], "pp_arcsec", "rms_arcsec" (V,)}; the TE
+    of every backend's variant batches (the one TE computation beside :func:`quasi_static_te`)."""
+    from ..units import ARCSEC_PER_RAD
+    theta_in, theta_out = np.atleast_2d(theta_in), np.atleast_2d(theta_out)
+    V = len(theta_in)
+    failed = np.zeros(V, bool) if failed is None else np.asarray(failed, bool)
+    te = np.full(theta_in.shape, np.nan)
+    pp, rms = np.full(V, np.nan), np.full(V, np.nan)
+    for c in np.flatnonzero(~failed):
+        te[c] = transmission_error(theta_in[c], theta_out[c], ratio, unwrap=False)
+        met = te_metrics(te[c])
+        pp[c], rms[c] = met["pp"] * ARCSEC_PER_RAD, met["rms"] * ARCSEC_PER_RAD
+    return {"te": te, "pp_arcsec": pp, "rms_arcsec": rms}
 
 
 def mesh_forces(model, q):

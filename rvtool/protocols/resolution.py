@@ -9,7 +9,7 @@ import numpy as np
 def te_error(te, te_ref):
     """Relative TE error of ``te`` against ``te_ref`` (the same input angles): the larger of the
     pointwise error with both means removed and the peak-to-peak error, over the reference's
-    peak-to-peak (the definition of cases/work_precision_rv.py)."""
+    peak-to-peak (the definition of cases/benchmarks/work_precision_rv.py)."""
     te, te_ref = np.asarray(te), np.asarray(te_ref)
     pp_ref = float(np.ptp(te_ref))
     e = (te - te.mean()) - (te_ref - te_ref.mean())

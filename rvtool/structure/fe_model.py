@@ -329,11 +329,13 @@ def fe_model_from_geometry(geometry, *, mesh_size, material, ports=(), supports=
 class AnnularHousingSpec:
     """Mounted annular housing of Table (tab:supp_ports_inputs).
 
-    inner_radius, outer_radius, height [m]; material; mesh_size: nominal tetrahedron size [m];
-    n_ports: pin ports at equal angles theta_j = 2 pi j / n_ports on the inner surface, at
-    port_height [m] (None: mid-height), three translations each; n_mounts: springs at equal
-    angles on the lower face (z = 0) circle of mount_radius [m]; mount_stiffness [N/m] per
-    location and Cartesian direction; damping: Rayleigh calibration.
+    inner_radius: bore radius [m]. outer_radius: outer radius [m]. height: axial height [m].
+    material: the housing's material. mesh_size: nominal tetrahedron size [m].
+    n_ports: number of pin ports [-], at equal angles theta_j = 2 pi j / n_ports on the inner
+    surface, three translations each. port_height: axial station of the ports [m] (None:
+    mid-height). n_mounts: number of mount springs [-], at equal angles on the lower face (z = 0).
+    mount_radius: radius of the mount circle [m]. mount_stiffness: stiffness of each mount per
+    Cartesian direction [N/m]. damping: the Rayleigh calibration.
     """
     inner_radius: float = 0.105
     outer_radius: float = 0.125

@@ -263,7 +263,7 @@ class PinBeam:
 
     def line_load_deflection(self, x, start, end, n_sub=64):
         """Deflection [m] at x under a uniform line load of unit intensity (1 N/m) over
-        [start, end] (the closed-form checks of cases/pin_bending.py)."""
+        [start, end] (the closed-form checks of cases/cycloid/pin_bending.py)."""
         pts, wts = line_load_points(np.array([0.5 * (start + end)]), end - start, n_sub)
         return self.influence(np.atleast_1d(x), pts.ravel()) @ (wts.ravel() * (end - start))
 

@@ -11,8 +11,8 @@ import time
 
 import numpy as np
 
-from ..protocols.precision import te_metrics, transmission_error
-from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
+from ..protocols.precision import batch_te
+from ..units import ARCMIN_PER_RAD
 from .variant import VariantProtocol
 from ..batched.assembly import build_batched
 from ..solver.batched import BatchedStaticSolver
@@ -181,9 +181,8 @@ def batched_variant_figures(design, variants, protocol: VariantProtocol = Varian
                         "newton_iterations": solver.stats.newton_iterations, "wall_s": wall / B,
                         "status": "failed", "error": error[c], "q_te": q_te[:, c]})
             continue
-        te = transmission_error(angles, th_out[:, c], ratio[c], unwrap=False)
-        met = te_metrics(te)
-        out.append({"te_pp_arcsec": met["pp"] * ARCSEC_PER_RAD, "te_rms_arcsec": met["rms"] * ARCSEC_PER_RAD,
+        te = batch_te(angles, th_out[:, c], ratio[c])
+        out.append({"te_pp_arcsec": float(te["pp_arcsec"][0]), "te_rms_arcsec": float(te["rms_arcsec"][0]),
                     "max_pin_force_N": float(fmax[c]),
                     "lost_motion_arcmin": float(lm[c]), "lost_motion_method": method[c],
                     "newton_iterations": solver.stats.newton_iterations, "wall_s": wall / B,

@@ -80,7 +80,7 @@ def resolve_mode(mode, device):
     (README, "Lost motion on the device"): the device Newton on the CPU with lost motion as a batched load
     continuation (:func:`rvtool.batched.device_lost_motion.device_lost_motion`) ahead of batched
     Exudyn and of the per-variant pool. On the GPU the TE alone reached 2,000-2,800 variants/s
-    on an H100 against 45.6 for a warmed 16-process pool (cases/bench_batched_te.py); before the
+    on an H100 against 45.6 for a warmed 16-process pool (cases/benchmarks/bench_batched_te.py); before the
     lost motion ran on the device, the full study there took 292 s (3.4 variants/s) against
     20.7 for the pool and 17.1 for batched Exudyn, all of it in the per-variant lost motion,
     which the device path now batches as well (the full study on the GPU is the lead's
@@ -309,7 +309,7 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
         # one batched system at a time in this process: it is the one that holds the device
         # (on the CPU with several workers, batches run side by side in the pool below: one
         # batch of chunk_size copies per process: on 2 cores 3.3x the per-variant pool for TE alone,
-        # 1.15x for the whole protocol with lost motion, cases/bench_batched_te.py and monte_carlo_te)
+        # 1.15x for the whole protocol with lost motion, cases/benchmarks/bench_batched_te.py and monte_carlo_te)
         with contextlib.ExitStack() as stack:
             helpers = None
             if mode == "device" and n_workers > 1 and pending:

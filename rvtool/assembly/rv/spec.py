@@ -32,9 +32,11 @@ TOPOLOGIES = ("rv2", "rv3")
 
 @dataclass(frozen=True, kw_only=True)
 class Cranks:
-    """The floating crankshafts: count N_c (2 or 3, equally spaced on the crank circle, whose
-    radius is the sun--crank-gear centre distance), rigid-body data (mass [kg], polar inertia
-    [kg m^2]) and manufacturing deviations per crank (a variant is a design):
+    """The floating crankshafts and their manufacturing deviations (a variant is a design).
+
+    count: N_c, the number of cranks [-] (2 or 3, equally spaced on the crank circle, whose radius
+    is the sun--crank-gear centre distance). mass: mass of each crank [kg]. inertia: polar inertia
+    of each crank [kg m^2].
     phase_errors: the eccentric phase of crank k off its nominal by this angle [rad] (file:
     ``phase_errors_deg``; both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none);
     gear_pitch_deviations: per crank, the single pitch deviations f_pt,j [m] of its spur gear
@@ -79,13 +81,16 @@ class Cranks:
 @dataclass(frozen=True, kw_only=True)
 class InvoluteStage:
     """Numerics and friction of the involute meshes (each mesh a
-    :class:`~rvtool.contact.involute_set.GearMesh`): n_slices across the face width, window (teeth
-    either side of the pitch point; None: from the contact ratio), damping [N s/m] per mesh,
-    ramp_depth [m]; mu [-] (0 = no friction: the frictionless code path), friction_model
-    ("regularized": Eq. (friction) velocity law; "anchor": stick--slip anchors per row, as
-    ``pin_contact``), tangential_stiffness [N/m] of the anchors per tooth pair over the face width
-    (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the pair's normal secant stiffness of Eq.
-    (series_contact) at reference_force [N], mid path of contact)."""
+    :class:`~rvtool.contact.involute_set.GearMesh`).
+
+    n_slices: slices across the face width [-]. window: teeth either side of the pitch point [-]
+    (None: from the contact ratio). damping: contact damping per mesh [N s/m]. ramp_depth: depth
+    of the damping ramp [m]. mu: friction coefficient [-] (0 = no friction: the frictionless code
+    path). friction_model: "regularized" (Eq. (friction) velocity law) or "anchor" (stick--slip
+    anchors per row, as ``pin_contact``). tangential_stiffness: stiffness of the anchors per tooth
+    pair over the face width [N/m] (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the pair's normal
+    secant stiffness of Eq. (series_contact) at reference_force, mid path of contact).
+    reference_force: the load of that secant stiffness [N]."""
     n_slices: int = 1
     window: int | None = None
     damping: float = 0.0
@@ -110,10 +115,14 @@ class InvoluteStage:
 
 @dataclass(frozen=True, kw_only=True)
 class RvBodies:
-    """Rigid-body data: the input body (the sun, or the three-stage pinion) retains ``input``
-    coordinates (its theta is driven; x, y listed = floating on ``input_bearing_stiffness``
-    [N/m] springs, else held by its bearings as rigid); masses [kg] and polar inertias [kg m^2]
-    of the sun (or compound gear), the input pinion and the carrier (both halves, joined rigidly)."""
+    """Rigid-body data of the RV bodies.
+
+    input: the planar coordinates the input body (the sun, or the three-stage pinion) keeps (its
+    theta is driven; x, y listed = floating, else held by its bearings as rigid). sun_mass: mass
+    of the sun (or the compound gear) [kg]. sun_inertia: its polar inertia [kg m^2]. pinion_mass:
+    mass of the three-stage input pinion [kg]. pinion_inertia: its polar inertia [kg m^2].
+    carrier_mass: mass of the carrier, both halves joined rigidly [kg]. carrier_inertia: its polar
+    inertia [kg m^2]."""
     input: tuple = ("theta",)
     sun_mass: float = 0.15
     sun_inertia: float = 1.0e-5
@@ -144,8 +153,11 @@ class InputStage:
 
 @dataclass(frozen=True, kw_only=True)
 class RVDesign:
-    """An RV reducer (see rvtool/designs/rv40e.toml). ``ratio_target``: the declared nominal
-    ratio (catalogue), checked against the gear graph; None: not declared."""
+    """An RV reducer (see rvtool/designs/rv40e.toml).
+
+    name: the design's label. topology: "rv2" or "rv3". rated_torque: the rated output torque
+    [N m]. input_speed_rpm: the rated input speed [rpm]. ratio_target: the declared nominal ratio
+    [-] (catalogue), checked against the gear graph (None: not declared)."""
     name: str
     topology: str
     rated_torque: float
@@ -252,7 +264,7 @@ class RVDesign:
     def resolution_reference(self):
         """:meth:`refined` with the analytic closest-point search of the wheel profile: the reference
         of the quasi-static TE resolution error (rvtool.protocols.resolution; the discrete table
-        search is the one resolution whose error is not negligible, cases/work_precision_rv.py)."""
+        search is the one resolution whose error is not negligible, cases/benchmarks/work_precision_rv.py)."""
         # through replace (the file-form data), not dataclasses.replace: a later replace re-loads the source
         return self.replace(wheels={"samples_per_tooth": 2 * self.wheels.samples_per_tooth, "search": "analytic"},
                             involute_stage={"n_slices": 2 * self.involute_stage.n_slices})
@@ -277,10 +289,22 @@ def _table(section, data):
     return dict(data)
 
 
+def _flat_rows(cls, data):
+    """A pair's table whose identical rows' keys sit in the pair's own table (the loader's flat
+    rule, :func:`rvtool.assembly.spec._bearing_section`; what ``rvtool new`` writes): those keys
+    become one ``row`` table. A table with ``rows`` or ``row`` is returned unchanged."""
+    if "rows" in data or "row" in data:
+        return data
+    own = {f.name for f in dataclasses.fields(cls)}
+    row = {k: v for k, v in data.items() if k not in own}
+    return {**{k: v for k, v in data.items() if k in own}, **({"row": row} if row else {})}
+
+
 def _main_bearing(data):
     """The AngularContactPair from ``[main_bearing]`` with its two rows as ``[[main_bearing.rows]]``
-    tables (each a BallBearing spec) or one ``[main_bearing.row]`` table for both."""
-    data = _table("main_bearing", data)
+    tables (each a BallBearing spec), one ``[main_bearing.row]`` table for both, or the rows' keys
+    in the pair's table (:func:`_flat_rows`)."""
+    data = _flat_rows(AngularContactPair, _table("main_bearing", data))
     if "row" in data:
         table = data.pop("row")
         data["rows"] = [table, table]
@@ -294,8 +318,9 @@ def _main_bearing(data):
 
 
 def _crank_bearing(data):
-    """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables."""
-    data = _table("crank_bearing", data)
+    """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables,
+    or the rows' keys in the pair's table (:func:`_flat_rows`)."""
+    data = _flat_rows(TaperedPair, _table("crank_bearing", data))
     if "row" in data:
         data["row"] = _table("crank_bearing.row", data["row"])
     if isinstance(data.get("rows"), (list, tuple)):
@@ -324,6 +349,9 @@ _SECTIONS = {"sun_gear": lambda d: _gear("sun_gear", d),
              "input_stage": lambda d: build_section(InputStage, "input_stage", d),
              "bearing_friction": lambda d: build_section(BearingFriction, "bearing_friction", d)}
 _OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input_stage", "bearing_friction")
+#: Fields of a table the design sets, not the file (a gear is named after its table): not file keys,
+#: so the templates and the format documentation leave them out.
+SET_BY_DESIGN = {g: ("name",) for g in ("sun_gear", "crank_gear", "input_pinion", "compound_gear")}
 
 
 def design_from_dict(d):

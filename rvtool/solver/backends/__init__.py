@@ -75,7 +75,8 @@ def auto_order(task, *, n_states=None, device="cpu"):
 def choose(requested, model, task, *, run=None, n_states=None, device="cpu"):
     """(backend, choice) for ``task`` on ``model``: ``requested`` is a name of :data:`CHOICES` or a
     :class:`Backend`; n_states: the number of equilibria asked for (auto's order depends on it);
-    device: the Warp device of the device backends. choice = {"requested", "ran", "not_taken": {name: reason}} (for results.json).
+    device: the Warp device of the device backends. choice = {"requested", "ran", "not_taken":
+    {name: reason}} (for results.json).
 
     A named backend that does not implement the task is mapped within its family ("device" runs
     driven runs on "fused", "fused" runs equilibria on "device"); one that cannot run the model
@@ -108,12 +109,14 @@ def choose(requested, model, task, *, run=None, n_states=None, device="cpu"):
     not_taken, chosen = {}, None
     size = f"{n_states} states" if n_states is not None else task
     for b in sorted(every, key=lambda b: order.index(b.name)):
+        if chosen is not None:
+            # not asked whether it supports the model (a device backend's check builds its copies)
+            not_taken[b.name] = (f"comes after {chosen.name!r} in auto's measured order for {size} on {device} "
+                                 "(rvtool.solver.backends.auto_order)")
+            continue
         sup = b.supports(model, task, run)
-        if not sup.ok:
-            not_taken[b.name] = "; ".join(sup.reasons)
-        elif chosen is None:
+        if sup.ok:
             chosen = b
         else:
-            not_taken[b.name] = (f"supports the model, but slower than {chosen.name!r} for {size} on {device} "
-                                 "(measured order: rvtool.solver.backends.auto_order)")
+            not_taken[b.name] = "; ".join(sup.reasons)
     return chosen, {"requested": "auto", "ran": chosen.name, "not_taken": not_taken}

@@ -18,6 +18,7 @@ static solver on the same model, from the same kinematic start, and counted in
 ``stats["exudyn_points"]`` (the protocol reports it; never hidden).
 """
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -48,6 +49,56 @@ def _device_reasons(model):
         return ["the model's regularization springs differ from the device copies' (build with the default "
                 "regularization)"], None
     return [], params
+
+
+#: default copies per device loop of :meth:`DeviceBackend.solve_variants`: bounded by memory (RD-40:
+#: ~16 kB of contact rows and tangents per copy; 65,536 copies ~ 1 GB on a GPU) and, on the CPU, by cache
+DEFAULT_CHUNK = {"cpu": 2048, "cuda": 65536}
+
+
+@dataclass
+class VariantEquilibria:
+    """Equilibria of V variants at A input angles (:meth:`DeviceBackend.solve_variants`): solved
+    input angles and flange rotations from the reference (V, A) [rad] (NaN: failed), ``failed``
+    (V, A), the largest pin contact force per state (V, A) [N] (None: not asked for), device
+    Newton iterations (V, A), points that fell back to Exudyn per variant (V,), and ``stats``."""
+    theta_in: np.ndarray
+    theta_out: np.ndarray
+    failed: np.ndarray
+    pin_force: np.ndarray | None
+    iterations: np.ndarray
+    fallback_points: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+
+class _VariantFallback:
+    """The per-variant Exudyn path for single failed (variant, angle) pairs (models cached)."""
+
+    def __init__(self, design, variants, regularization, settings):
+        self.design, self.variants, self.reg, self.settings = design, variants, regularization, settings
+        self._models = {}
+
+    def solve(self, v, angle, torque, q_guess):
+        """(q (3 nb,), solved angle, max pin force) or None."""
+        from ...assembly.cycloid import build
+        from ..static import StaticSolver
+        if v not in self._models:
+            m = build(self.variants[v].apply(self.design), bearing_model="lumped", regularization=self.reg)
+            idx = np.concatenate([np.asarray(m.mbs.systemData.GetNodeLTGODE2(n), int) for n in m.nodes])
+            s = self.settings
+            # the per-variant path with its own iteration limit and ladder (not the device budget)
+            self._models[v] = (m, StaticSolver(m, abs_tol=s.abs_tol, max_translation=s.max_translation,
+                                               max_rotation=s.max_rotation), idx)
+        m, solver, idx = self._models[v]
+        m.set_output_torque(float(torque))
+        solver.q = np.zeros(m.mbs.systemData.ODE2Size())
+        solver.q[idx] = q_guess
+        try:
+            q = solver.solve(float(angle), float(angle))
+        except SolverFailure:
+            return None
+        forces = np.array(list(m.observe(q, m.main_mesh).per_member().values()))
+        return q[idx], solver.last_angle, float(np.max(forces))
 
 
 class DeviceBackend(Backend):
@@ -187,6 +238,92 @@ class DeviceBackend(Backend):
         return Equilibria(theta_in=theta_in, theta_out=ref_out + qs[:, model.output_index], peak_loads=peaks,
                           peak_contact_loads=contact_peaks, regularization_max=model.regularization_force(qs[-1]),
                           stats=stats, wall_s=time.perf_counter() - t0, q=qs)
+
+
+    def solve_variants(self, design, variants, batch, *, regularization=(1e4, 100.0), chunk_pairs=None, fallback=True,
+                       pin_forces=True, params=None):
+        """Equilibria of every (variant, input angle) pair of ``variants`` of the cycloid ``design``
+        at ``batch``'s states (a batch of designs: the Monte Carlo's device path). Every pair is one
+        copy of the device Newton, in chunks of ``chunk_pairs`` copies (default :data:`DEFAULT_CHUNK`),
+        warm-started from the NOMINAL design's equilibrium at the same angle (its elastic deviation
+        added to the variant's kinematic state: micrometre tolerances move the equilibrium by
+        micrometres, far less than the input angle between two TE points); a copy that fails runs
+        the regularization homotopy on the device, and one that still fails goes to the per-variant
+        Exudyn path (StaticSolver with its ladder on the variant's build) when ``fallback``, counted
+        in ``fallback_points`` and ``stats["fallback_copies"]``. params: the
+        :class:`~rvtool.solver.device_copies.CopyParameters` of ``[Variant()] + variants`` with this
+        ``regularization`` to reuse (built here if None). Returns :class:`VariantEquilibria`."""
+        from ...assembly.variant import Variant
+        from ..device_copies import copy_parameters
+        from ..device_newton import CONVERGED, DeviceNewton, DeviceNewtonSettings
+        t0 = time.perf_counter()
+        variants = list(variants)
+        angles = np.asarray(batch.input_angles, float)
+        V, A = len(variants), len(angles)
+        if V < 1:
+            raise RvtoolInputError(f"solve_variants needs at least one variant; got {V}")
+        tq = -np.sign(design.ratio) * batch.torque
+        settings = self.settings or DeviceNewtonSettings()
+        # index 0: the nominal design (warm starts); variants at 1..V
+        if params is None:
+            params = copy_parameters(design, [Variant()] + variants, regularization=regularization)
+        elif len(params.variants) != V + 1:
+            raise RvtoolInputError(f"params must hold [Variant()] + variants ({V + 1} copies); "
+                                   f"got {len(params.variants)}")
+        newton = DeviceNewton(params, device=self.device, settings=settings)
+        kind = "cpu" if newton.device == "cpu" else "cuda"
+        chunk = int(chunk_pairs or DEFAULT_CHUNK[kind])
+        if chunk < 1:
+            raise RvtoolInputError(f"chunk_pairs = {chunk_pairs!r} is outside the valid range [1, inf)")
+        setup_s = time.perf_counter() - t0
+
+        nom = newton.solve(np.zeros(A, int), angles, np.full(A, tq), params.kinematic(np.zeros(A, int), angles))
+        nominal_dev = np.where((nom.status == CONVERGED)[:, None], nom.q - params.kinematic(np.zeros(A, int), angles), 0.0)
+        vi = 1 + np.repeat(np.arange(V), A)
+        ai = np.tile(np.arange(A), V)
+        P = V * A
+        q = np.empty((P, params.n))
+        status = np.empty(P, int)
+        iters = np.empty(P, int)
+        forces = np.zeros(P)
+        loop_s, sweeps, copy_sweeps = nom.loop_s, nom.sweeps, nom.copy_sweeps
+        for s0 in range(0, P, chunk):
+            sl = slice(s0, min(P, s0 + chunk))
+            guess = params.kinematic(vi[sl], angles[ai[sl]]) + nominal_dev[ai[sl]]
+            r = newton.solve(vi[sl], angles[ai[sl]], np.full(sl.stop - sl.start, tq), guess, pin_forces=pin_forces)
+            q[sl], status[sl], iters[sl] = r.q, r.status, r.iterations
+            loop_s += r.loop_s
+            sweeps += r.sweeps
+            copy_sweeps += r.copy_sweeps
+            if pin_forces:
+                nw, zb = params.nb - 2, design.pins.n_pins
+                forces[sl] = r.pin_forces.reshape(len(r.q), nw, zb, -1).sum(axis=3).max(axis=(1, 2))
+        device_s = time.perf_counter() - t0
+        theta_in = angles[ai].copy()
+        failed = status != CONVERGED
+        n_fallback = int(failed.sum())
+        fallback_points = failed.reshape(V, A).sum(axis=1)
+        if np.any(failed) and fallback:
+            fb = _VariantFallback(design, variants, regularization, settings)
+            for p in np.flatnonzero(failed):
+                guess = params.kinematic(vi[p:p + 1], angles[ai[p:p + 1]])[0] + nominal_dev[ai[p]]
+                res = fb.solve(vi[p] - 1, angles[ai[p]], tq, guess)
+                if res is not None:
+                    q[p], theta_in[p], forces[p] = res
+                    failed[p] = False
+        q[failed] = np.nan
+        forces[failed] = np.nan
+        stats = {"pairs": P, "chunks": -(-P // chunk), "chunk_pairs": chunk,
+                 "newton_iterations_per_point": float(iters.mean()),
+                 "sweeps": int(sweeps), "copy_sweeps": int(copy_sweeps), "device_loop_s": loop_s,
+                 "us_per_copy_iteration": 1e6 * loop_s / max(copy_sweeps, 1),
+                 "fallback_copies": n_fallback, "failed_copies": int(failed.sum()),
+                 "nominal_failed_points": int(np.sum(nom.status != CONVERGED)),
+                 "path": newton.last_path, "device": newton.device, "setup_s": setup_s,
+                 "device_s": device_s, "wall_s": time.perf_counter() - t0}
+        return VariantEquilibria(theta_in=theta_in.reshape(V, A), theta_out=q[:, params.output_index].reshape(V, A),
+                                 failed=failed.reshape(V, A), pin_force=forces.reshape(V, A) if pin_forces else None,
+                                 iterations=iters.reshape(V, A), fallback_points=fallback_points, stats=stats)
 
 
 class FusedBackend(Backend):
