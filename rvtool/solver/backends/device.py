@@ -239,7 +239,6 @@ class DeviceBackend(Backend):
                           peak_contact_loads=contact_peaks, regularization_max=model.regularization_force(qs[-1]),
                           stats=stats, wall_s=time.perf_counter() - t0, q=qs)
 
-
     def solve_variants(self, design, variants, batch, *, regularization=(1e4, 100.0), chunk_pairs=None, fallback=True,
                        pin_forces=True, params=None):
         """Equilibria of every (variant, input angle) pair of ``variants`` of the cycloid ``design``
