@@ -135,6 +135,16 @@ def test_the_device_side_row_sum_equals_the_host_scatter(rv):
     assert np.max(np.abs(r1.q - r0.q)) <= 1e-12 * np.max(np.abs(r0.q))
 
 
+def test_auto_does_not_take_the_unmeasured_row_path(rv):
+    """auto on CUDA puts the device first (measured on the cycloid path); the row path is not
+    measured there, so auto names why it did not take it and runs the next backend."""
+    from rvtool.solver.backends import auto_order
+    _, model = rv
+    assert auto_order("equilibria", n_states=52, device="cuda:0")[0] == "device"
+    b, choice = choose("auto", model, "equilibria", n_states=52, device="cuda:0")
+    assert b.name == "replica" and "no measured place in auto's order" in choice["not_taken"]["device"]
+
+
 def test_what_the_device_does_not_cover_is_named(rv):
     """Friction with stick--slip anchors (history) is not on the device: a named reason, and
     --backend device refuses instead of running something else."""

@@ -115,8 +115,9 @@ def choose(requested, model, task, *, run=None, n_states=None, device="cpu"):
                                  "(rvtool.solver.backends.auto_order)")
             continue
         sup = b.supports(model, task, run)
-        if sup.ok:
+        why = b.auto_reason(model, task) if sup.ok else None
+        if sup.ok and why is None:
             chosen = b
         else:
-            not_taken[b.name] = "; ".join(sup.reasons)
+            not_taken[b.name] = why or "; ".join(sup.reasons)
     return chosen, {"requested": "auto", "ran": chosen.name, "not_taken": not_taken}

@@ -144,6 +144,15 @@ class DeviceBackend(Backend):
             return Support.of([f"device does not implement {task!r} (equilibria only; driven runs: 'fused')"])
         return Support.of(self.path(model)[1])
 
+    def auto_reason(self, model, task):
+        """auto takes the resident path only: the row path's place in auto's measured order is not
+        measured yet (on a CPU it is no faster than Exudyn for one model's points; on CUDA not
+        measured). --backend device runs it."""
+        if self._task(task) and self.path(model)[0] == "rows":
+            return ("the device row path (non-cycloid topology) has no measured place in auto's order yet "
+                    "(name --backend device to run it)")
+        return None
+
     def _solve_rows(self, model, batch):
         """Equilibria of a non-cycloid model on the row Newton (module docstring)."""
         from ..device_newton import DeviceNewtonSettings
