@@ -99,6 +99,23 @@ def test_other_topologies_te_on_the_device_equals_exudyn(name):
         assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6, abs=1e-6)
 
 
+def test_rd40_with_rolling_bearings_takes_the_row_path():
+    """RD-40 built with rolling-element bearings (needle, ball, angular-contact pairs) is outside
+    the resident path's copy parameters (lumped bearings): the row path runs it, and its TE and
+    peak loads equal the Exudyn backend's at the same points."""
+    from rvtool.assembly.cycloid import build
+    d = rvtool.load_design("rd40")
+    model = build(d, bearing_model="rolling")
+    assert DeviceBackend().path(model)[0] == "rows"
+    a = np.linspace(0.0, 0.3, 12)
+    ref = quasi_static_te(model, torque=d.rated_torque, input_angles=a, backend="exudyn")
+    te = quasi_static_te(model, torque=d.rated_torque, input_angles=a, backend="device")
+    assert te["stats"]["path"] == "rows" and te["stats"]["exudyn_points"] == 0
+    assert np.max(np.abs(te["te"] - ref["te"])) * ARCSEC_PER_RAD <= TE_TOL
+    for fam, f in ref["peak_loads"].items():
+        assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6, abs=1e-6)
+
+
 def test_chunks_and_the_homotopy_give_the_same_equilibria(rv):
     """Solving 3 points in chunks of 2 copies (a padded last chunk) gives the equilibria of one
     chunk of 3; a start outside the plausibility bounds fails its warm start, goes through the
