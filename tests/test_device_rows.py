@@ -252,3 +252,43 @@ def test_variants_te_counts_every_exudyn_hand_over(rv):
                                  settings=DeviceNewtonSettings(max_iterations=1, homotopy=False))
     assert stuck.exudyn_points == 6 and stuck.status == ["ok", "ok"] and stuck.split["fallback_s"] > 0
     assert np.max(np.abs(stuck.te - np.array(ref))) * ARCSEC_PER_RAD <= TE_TOL
+
+
+def test_rv40e_hysteresis_loop_on_the_device_equals_exudyn(rv):
+    """The catalogue's loop (virgin preload, then -T -> +T -> -T at 1/16 T_R steps plus the rigidity
+    and lost-motion points) on the device torque path against the Exudyn load continuation
+    (rvtool.protocols.catalogue.ContinuationPath): every level's output angle within 1e-6 arcmin,
+    the catalogue figures (rigidity, lost motion, hysteresis loss) within 1e-9 relative."""
+    from rvtool.batched.device_rows_lost_motion import DeviceTorquePath
+    from rvtool.protocols import catalogue as C
+    from rvtool.units import ARCMIN_PER_RAD
+    d, _ = rv
+    pts = (0.5, 1.0)
+    seq = C.catalogue_sequence(d.rated_torque, rigidity_points=pts)
+    ref = C.catalogue_loop(C.ContinuationPath(rvtool.build(d)), seq, rigidity_points=pts)
+    path = DeviceTorquePath(DeviceRowNewton(rvtool.build(d), 1))
+    dev = C.catalogue_loop(path, seq, rigidity_points=pts)
+    assert path.status() == ["device"] and path.stats()["exudyn_copies"] == 0
+    for key in ("preload",):
+        assert np.max(np.abs(dev[key] - ref[key])) * ARCMIN_PER_RAD <= 1e-6
+    assert np.max(np.abs(dev["cycles"][0]["angle_rad"] - ref["cycles"][0]["angle_rad"])) * ARCMIN_PER_RAD <= 1e-6
+    a, b = dev["metrics"], ref["metrics"]
+    assert a.rigidity.value == pytest.approx(b.rigidity.value, rel=1e-9)
+    assert a.lost_motion == pytest.approx(b.lost_motion, rel=1e-9)
+    assert a.hysteresis_loss.value == pytest.approx(b.hysteresis_loss.value, rel=1e-9)
+
+
+def test_a_copy_that_leaves_the_device_continues_on_exudyn(rv):
+    """A continuation that cannot finish on the device (no step accepted: max_step 1e-12) hands the
+    copy to the Exudyn load continuation at that level: counted, and the figures are Exudyn's."""
+    from rvtool.batched.device_lost_motion import ContinuationSettings
+    from rvtool.batched.device_rows_lost_motion import DeviceTorquePath
+    from rvtool.protocols.catalogue import ContinuationPath
+    d, model = rv
+    levels = (0.5 * d.rated_torque, -0.5 * d.rated_torque, 0.25 * d.rated_torque)
+    path = DeviceTorquePath(DeviceRowNewton(model, 1), continuation=ContinuationSettings(max_step=1e-12))
+    got = [path.go_to(t) for t in levels]
+    assert path.status() == ["exudyn"] and path.stats()["exudyn_copies"] == 1
+    ref = ContinuationPath(rvtool.build(d))
+    want = [ref.go_to(t) for t in levels]
+    assert np.max(np.abs(np.array(got) - want)) * 60 * 180 / np.pi <= 1e-6          # arcmin
