@@ -292,3 +292,20 @@ def test_a_copy_that_leaves_the_device_continues_on_exudyn(rv):
     ref = ContinuationPath(rvtool.build(d))
     want = [ref.go_to(t) for t in levels]
     assert np.max(np.abs(np.array(got) - want)) * 60 * 180 / np.pi <= 1e-6          # arcmin
+
+
+def test_analyze_hysteresis_runs_on_the_device_with_exudyns_figures():
+    """rvtool analyze rv40e --protocols hysteresis --backend device: the loops on the device torque
+    path, recorded as such, every figure equal to the Exudyn run's (angles within 1e-6 arcmin; the
+    rigidity 1e-9 relative)."""
+    ex = rvtool.analyze("rv40e", "hysteresis", quick=True, out_dir=None, backend="exudyn")["hysteresis"]
+    dv = rvtool.analyze("rv40e", "hysteresis", quick=True, out_dir=None, backend="device")["hysteresis"]
+    assert dv.status == "ok" and dv.settings["backend"]["ran"] == "device" and not dv.warnings
+    assert ex.settings["backend"]["ran"] == "exudyn"
+    fe, fd = ({f.name: f.value for f in r.figures} for r in (ex, dv))
+    assert set(fe) == set(fd)
+    for k in ("hysteresis_loss", "lost_motion_catalogue"):
+        assert abs(fd[k] - fe[k]) <= 1e-6                                   # arcmin
+    assert fd["torsional_rigidity_b_over_a"] == pytest.approx(fe["torsional_rigidity_b_over_a"], rel=1e-9)
+    for key in ("angle_arcmin_loop1", "angle_arcmin_loop2"):
+        assert np.max(np.abs(np.asarray(dv.data[key]) - np.asarray(ex.data[key]))) <= 1e-6
