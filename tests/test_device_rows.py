@@ -116,6 +116,22 @@ def test_rd40_with_rolling_bearings_takes_the_row_path():
         assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6, abs=1e-6)
 
 
+def test_warm_started_segments_give_the_oracles_te_in_fewer_sweeps(rv):
+    """More points than copies with batch.warm_start: the row path marches warm-started segments
+    (solve_sequence); the TE equals the Exudyn oracle's and takes fewer device sweeps than cold
+    starts of every point (the same equilibria: the states differ by round-off only)."""
+    d, model = rv
+    g = GOLDEN["rv40e"]
+    warm = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"],
+                           backend=DeviceBackend(copies=4))
+    cold = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"],
+                           backend=DeviceBackend(copies=4), warm_start=False)
+    for te in (warm, cold):
+        assert te["stats"]["exudyn_points"] == 0
+        assert np.max(np.abs(te["te"] * ARCSEC_PER_RAD - g["te_arcsec"])) <= TE_TOL
+    assert warm["stats"]["newton_iterations"] < 0.8 * cold["stats"]["newton_iterations"]
+
+
 def test_chunks_and_the_homotopy_give_the_same_equilibria(rv):
     """Solving 3 points in chunks of 2 copies (a padded last chunk) gives the equilibria of one
     chunk of 3; a start outside the plausibility bounds fails its warm start, goes through the

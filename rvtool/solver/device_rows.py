@@ -274,6 +274,41 @@ class DeviceRowNewton:
                         residual=out["residual"], sweeps=sweeps, kernels_s=timing["kernels"],
                         scatter_s=timing["scatter"], solve_s=timing["solve"], setup_s=self.setup_s)
 
+    def solve_sequence(self, angles, torque):
+        """Equilibria of one model along a sequence of input angles (A,) [rad] under one output
+        torque [N m] (on the output coordinate), warm-started: the points are cut into B contiguous
+        segments (:func:`rvtool.solver.backends.replica.segments`) marched side by side, each point
+        from its segment's previous equilibrium shifted by the kinematic increment (the first of a
+        segment, and a point after a failed one, from the kinematic state; a failed warm start runs
+        the regularization homotopy). Returns a :class:`RowSolve` of the A points (sweeps and
+        times summed over the steps)."""
+        from .backends.replica import segments
+        if self.models is not None:
+            raise RvtoolInputError("solve_sequence marches one model's points; variant copies take solve()")
+        a = np.asarray(angles, float)
+        A = len(a)
+        B = min(self.B, A)
+        seg, real = segments(A, B)
+        out = RowSolve(q=np.zeros((A, self.n)), status=np.zeros(A, np.int32), stage=np.zeros(A, np.int32),
+                       iterations=np.zeros(A, np.int32), residual=np.zeros(A), sweeps=0, kernels_s=0.0,
+                       scatter_s=0.0, solve_s=0.0, setup_s=self.setup_s)
+        prev = None
+        for k in range(seg.shape[1]):
+            pts = seg[:, k]
+            kin = self.kinematic(a[pts])
+            r = self.solve(a[pts], np.full(B, float(torque)), None if prev is None else prev[0] + kin - prev[1])
+            keep = real[:, k]
+            for nm in ("q", "status", "stage", "iterations", "residual"):
+                getattr(out, nm)[pts[keep]] = getattr(r, nm)[keep]
+            out.sweeps += r.sweeps
+            out.kernels_s += r.kernels_s
+            out.scatter_s += r.scatter_s
+            out.solve_s += r.solve_s
+            q_next = r.q.copy()
+            q_next[~r.converged] = kin[~r.converged]
+            prev = (q_next, kin)
+        return out
+
     def _chunk(self, slots, q, kin, tq, st, timing, cfg):
         """Iterate the points on copies ``slots`` until none is active (the other copies masked at
         a kinematic state); arrays in place."""

@@ -13,7 +13,9 @@ outside that set) runs on the device row Newton (:class:`rvtool.solver.device_ro
 the families' own Warp kernels on the device, the per-copy step on the host); ``stats["path"]``
 says which ran. Not covered (named reasons): friction with stick--slip anchors, elastic pin and
 crank closures, the ported housing's modal coordinates, shared output pins.
-Every point is solved from its kinematic state (no warm start: the points are independent). A point the device Newton does not converge is solved by the Exudyn backend's
+The resident path solves every point from its kinematic state (no warm start: the points are
+independent); the row path does too up to ``copies`` points, and marches warm-started segments
+beyond (``batch.warm_start``, :meth:`rvtool.solver.device_rows.DeviceRowNewton.solve_sequence`). A point the device Newton does not converge is solved by the Exudyn backend's
 static solver on the same model, from the same kinematic start, and counted in
 ``stats["exudyn_points"]`` (the protocol reports it; never hidden).
 """
@@ -164,7 +166,9 @@ class DeviceBackend(Backend):
         copies = min(A, self.copies or 64)
         newton = DeviceRowNewton(model, copies, device=self.device,
                                  settings=self.settings or DeviceNewtonSettings())
-        r = newton.solve(angles, np.full(A, tq))
+        # warm-started segments where the batch asks for it and there are more points than copies
+        r = (newton.solve_sequence(angles, tq) if batch.warm_start and A > copies
+             else newton.solve(angles, np.full(A, tq)))
         idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
         qs = np.zeros((A, model.mbs.systemData.ODE2Size()))
         qs[:, idx] = r.q
