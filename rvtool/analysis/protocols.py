@@ -102,6 +102,29 @@ def _continuation_backend(ctx):
     return _exudyn_only(ctx, "torque continuation")
 
 
+def _loop_path(ctx, what):
+    """(backend record, loading path) of a loop protocol: Exudyn's load continuation
+    (:class:`rvtool.protocols.catalogue.ContinuationPath`), or with ``--backend device`` (or
+    ``fused``, the device family) the device torque path
+    (:class:`rvtool.batched.device_rows_lost_motion.DeviceTorquePath`) where the device row Newton
+    runs the model; a model it cannot run skips the protocol with the reasons."""
+    from ..protocols import catalogue as C
+    if ctx.backend not in ("device", "fused"):
+        return _continuation_backend(ctx), C.ContinuationPath(ctx.build())
+    from ..batched.device_rows_lost_motion import DeviceTorquePath
+    from ..solver.backends import CHOICES
+    from ..solver.device_rows import DeviceRowNewton, row_reasons
+    model = ctx.build()
+    reasons = row_reasons(model)
+    if reasons:
+        raise Unsupported(f"backend = {ctx.backend!r} (the device torque path) cannot run the {what} on this model: "
+                          f"{'; '.join(reasons)} (valid choices for this model: 'exudyn' or 'auto')")
+    record = {"requested": ctx.backend, "ran": "device",
+              "not_taken": {b: f"not requested (--backend {ctx.backend})" for b in CHOICES
+                            if b not in ("auto", "device")}}
+    return record, DeviceTorquePath(DeviceRowNewton(model, 1, device=ctx.device))
+
+
 @register("te", "quasi-static transmission error under the rated torque (Eq. obs_te), with its refinement error")
 def run_te(ctx):
     from ..assembly import build
@@ -278,11 +301,10 @@ def run_hysteresis(ctx):
     from ..protocols import catalogue as C
     from ..protocols import hysteresis as H
     rated = ctx.require("rated_torque")
-    backend = _continuation_backend(ctx)      # before any work: a named other backend skips
+    backend, path = _loop_path(ctx, "hysteresis loops")   # a named backend that cannot run it skips
     out = Outcome()
     seq = C.catalogue_sequence(rated, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, step=_sequence(ctx).other_step)
     tol = 1e-3 * RAD_PER_ARCMIN        # 0.001 arcmin: far below any reported angle, far above Newton's tolerance
-    path = C.ContinuationPath(ctx.build())
     r = C.catalogue_loops(path, seq, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, repeat_tolerance=tol)
     m, rep = r["metrics"], r["repeatability"]
     first, last = r["cycles"][-2], r["cycles"][-1]
@@ -322,6 +344,9 @@ def run_hysteresis(ctx):
                     "angle_tolerance_arcmin": tol * ARCMIN_PER_RAD, "rigidity_points": list(HYSTERESIS_RIGIDITY_POINTS),
                     "backend": backend}
     _solver_warnings(out, r["stats"], "continuation")
+    if r["stats"].get("exudyn_copies"):
+        out.warnings.append("device torque path: the continuation left the device and finished on Exudyn "
+                            "(counted in continuation.exudyn_copies)")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot(first["angle_rad"] * ARCMIN_PER_RAD, T, ".-", lw=0.8, label="loop 1")

@@ -126,6 +126,11 @@ class Backend:
         """:class:`Support` of ``task`` on ``model`` (and of the :class:`DrivenRun` ``run``, when given)."""
         raise NotImplementedError
 
+    def auto_reason(self, model, task):
+        """Why ``auto`` does not take this backend although it supports ``task`` on ``model`` (a
+        path without a measured place in auto's order), or None."""
+        return None
+
     def solve_equilibria(self, model, batch: EquilibriumBatch, *, record=None) -> Equilibria:
         raise NotImplementedError(f"backend {self.name!r} solves no equilibria")
 
