@@ -223,7 +223,12 @@ class Bodies:
     shaft, wheel, flange: the planar coordinates each body keeps (a subset of x, y, theta).
     shaft_mass: mass of the input shaft [kg]. shaft_inertia: polar inertia of the input shaft
     [kg m^2]. flange_mass: mass of the output flange [kg]. flange_inertia: polar inertia of the
-    output flange [kg m^2]."""
+    output flange [kg m^2].
+    flange_coordinates: ``"planar"`` (default: the flange's axial translation and tilts held) or
+    ``"spatial"`` (also z, gamma_x, gamma_y on the main-bearing rows, issue 32; needs rolling-element
+    bearings, ``build(..., bearing_model="rolling")``, and a ball main bearing).
+    flange_tilt_inertia: transverse inertia [kg m^2] of the flange (dynamic runs of a spatial flange);
+    None: half the polar inertia (a thin disc, assumed)."""
     shaft: tuple = COORDS
     wheel: tuple = COORDS
     flange: tuple = COORDS
@@ -231,12 +236,29 @@ class Bodies:
     shaft_inertia: float = 2e-5
     flange_mass: float = 1.2
     flange_inertia: float = 1.5e-3
+    flange_coordinates: str = "planar"
+    flange_tilt_inertia: float | None = None
 
     def __post_init__(self):
         for nm in ("shaft", "wheel", "flange"):
             for c in getattr(self, nm):
                 if c not in COORDS:
                     raise RvtoolInputError(f"bodies.{nm} contains {c!r}; valid coordinates are {list(COORDS)}")
+        if self.flange_coordinates not in ("planar", "spatial"):
+            raise RvtoolInputError(f"bodies.flange_coordinates = {self.flange_coordinates!r}; valid choices are "
+                                   "['planar', 'spatial']")
+        if self.flange_tilt_inertia is not None:
+            check_positive("bodies.flange_tilt_inertia", self.flange_tilt_inertia)
+
+    @property
+    def spatial_flange(self):
+        """True where the flange retains its axial and tilt coordinates."""
+        return self.flange_coordinates == "spatial"
+
+    @property
+    def tilt_inertia(self):
+        """Transverse inertia [kg m^2] of the flange (``flange_tilt_inertia`` or half the polar inertia)."""
+        return self.flange_inertia / 2 if self.flange_tilt_inertia is None else self.flange_tilt_inertia
 
 
 @dataclass(frozen=True, kw_only=True)

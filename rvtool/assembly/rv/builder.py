@@ -11,7 +11,10 @@ Bodies (planar rigid, x, y, theta; node order = ``body_names``):
 * ``crank0..``: the floating crankshafts (x, y, theta all free), each with its spur gear
   (centre at the body origin, tooth 0 on the body's x axis) and two eccentric journals;
 * ``wheel0``, ``wheel1``: the cycloid wheels (free), each bored for every crank's journal;
-* ``carrier``: the output (both halves joined rigidly; free, on the main bearings).
+* ``carrier``: the output (both halves joined rigidly; free, on the main bearings). With
+  ``bodies.carrier_coordinates = "spatial"`` it also retains its axial translation and two tilts
+  (:func:`spatial_flange`: an Exudyn node of three coordinates, the main bearing on them through
+  :class:`~rvtool.bearings.spatial_set.SpatialBearingSet`, NumPy whatever ``backend``).
 
 Contact elements (each one kernel launch per evaluation): ``pins`` (cycloid--pin meshes of
 both wheels, pins on the ground), ``gears`` (involute pairs sun--crank gear k, and the
@@ -566,6 +569,30 @@ def ported_ring(mbs, design, layout, meshes):
     return housing, ports, [dataclasses.replace(m, pin_bodies=pin_bodies) for m in meshes]
 
 
+def spatial_flange(mbs, design, layout, mounting, housing, regularization):
+    """A spatial carrier (``bodies.carrier_coordinates = "spatial"``, issue 32): its retained axial and
+    tilt coordinates (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`: mass, transverse
+    inertia, the builder's regularization springs) and the main bearing on them
+    (:class:`~rvtool.bearings.spatial_set.SpatialBearingSet`: every ball's approach and working angle
+    from the radial, axial and tilt displacement; the out-of-plane coordinates are the evaluator's
+    pose row n_bodies). The housing stays rigid out of plane. Returns (RetainedTilt, set)."""
+    from exudyn_user_elements.out_of_plane import RetainedTilt
+    from ...bearings.spatial_set import SpatialBearingSet
+    if housing is not None:
+        raise RvtoolInputError("bodies.carrier_coordinates = 'spatial' with housing.model = 'ports' is not implemented "
+                               "(the merged element carries one structure); valid: housing.model = 'rigid' or "
+                               "bodies.carrier_coordinates = 'planar'")
+    if design.bearing_friction.model != "none":
+        raise RvtoolInputError(f"bodies.carrier_coordinates = 'spatial' with bearing_friction.model = "
+                               f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
+                               "planar bearing set); valid: bearing_friction.model = 'none' or planar")
+    b = design.bodies
+    k_t, k_r = regularization
+    flange = RetainedTilt(mbs, b.carrier_mass, b.tilt_inertia, (k_t, k_r), name="carrier_tilt")
+    main = SpatialBearingSet([mounting], layout.n_bodies + 1, {layout.carrier: layout.n_bodies}, name="main_bearings")
+    return flange, main
+
+
 def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1),
           contact_element=None):
     """Assemble ``design`` into an Exudyn system; returns an :class:`RvModel`.
@@ -633,8 +660,12 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     if pin_set is None:
         pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
     cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
-    main = BearingSet([Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)],
-                      L.n_bodies, name="main_bearings", **opts)
+    main_mounting = Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)
+    flange = None
+    if b.spatial_carrier:
+        flange, main = spatial_flange(mbs, d, L, main_mounting, housing, regularization)
+    else:
+        main = BearingSet([main_mounting], L.n_bodies, name="main_bearings", **opts)
     C_crank = crank_station_compliance(d)
     C_torsion = crank_torsion_compliance(d)
     if C_crank is None:
@@ -646,10 +677,10 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
         crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion)),)
-    element = ContactElements(mbs, nodes, contact_element, structure=housing)
+    element = ContactElements(mbs, nodes, contact_element, structure=housing if flange is None else flange)
     elements = {"pins": element(pin_set, ports=ports)}
-    elements.update((name, element(s)) for name, s in
-                    (*crank_path, ("crank_bearings", cranks), ("main_bearings", main)))
+    elements.update((name, element(s)) for name, s in (*crank_path, ("crank_bearings", cranks)))
+    elements["main_bearings"] = element(main, ports=flange)
     if d.bearing_friction.model != "none":
         # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
         # (carrier -> ground), P1 from the accepted element loads of each mounting; a loss element of its
@@ -675,5 +706,4 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
                    structures={} if housing is None else {"housing": housing},
                    graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
-                   housing=housing,
-                   contact_host=element.host)
+                   housing=housing, contact_host=element.host, carrier_tilt=flange)
