@@ -139,9 +139,13 @@ def test_auto_names_why_each_other_backend_was_not_taken(name):
 
 
 def test_a_named_backend_that_cannot_run_the_model_is_an_error():
-    """No silent fallback: --backend device on an RV model names the reasons."""
+    """No silent fallback: --backend device on an RV model with stick--slip (anchor) friction
+    names the reasons (the frictionless RV-40E runs on the device row Newton, tests/test_device_rows.py)."""
+    import dataclasses
     from rvtool.errors import RvtoolInputError
-    model = rvtool.build(rvtool.load_design("rv40e"))
+    d = rvtool.load_design("rv40e")
+    model = rvtool.build(dataclasses.replace(d, involute_stage=dataclasses.replace(d.involute_stage, mu=0.05,
+                                                                                   friction_model="anchor")))
     with pytest.raises(RvtoolInputError, match=r"backend = 'device'.*cannot run equilibria.*Valid choices"):
         choose("device", model, "equilibria")
     with pytest.raises(RvtoolInputError, match=r"valid choices are"):

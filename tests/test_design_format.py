@@ -147,3 +147,19 @@ def test_designs_lists_each_shipped_design_under_its_own_topology(capsys):
     assert cli.main(["designs"]) in (0, None)
     lines = {ln.split()[0]: ln for ln in capsys.readouterr().out.splitlines() if ln.strip()}
     assert "rv3:" in lines["rv_three_stage"] and "rv2:" in lines["rv40e"]
+
+
+def test_one_warning_per_file_when_it_is_loaded_twice(tmp_path):
+    """`rvtool analyze FILE` loads a file to check it and again to run it: still one warning."""
+    import tomlkit
+    old = _format_1(_table("rv40e"))
+    old["crank_gear"]["rack"] = {"pressure_angle": math.radians(20.0)}
+    old["sun_gear"]["rack"] = {"pressure_angle": math.radians(20.0)}
+    p = tmp_path / "old.toml"
+    p.write_text(tomlkit.dumps(old))
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")         # Python's own "once" is not what makes it one
+        rvtool.load_design(str(p))
+        rvtool.load_design(str(p))
+    msgs = [str(w.message) for w in rec if issubclass(w.category, FutureWarning)]
+    assert len(msgs) == 1 and "crank_gear.rack.pressure_angle -> crank_gear.rack.pressure_angle_deg" in msgs[0]

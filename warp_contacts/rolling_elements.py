@@ -14,9 +14,10 @@ from .planar_ref import N_SEEDS
 from .precision import resolve_device, scalar_types
 from .recorded import RecordedRows
 from .rolling_elements_ref import (AUX_ALPHA, AUX_FU, AUX_FZ, HB_E0, HB_E1, HB_F0, HB_F1, HB_K_COEF, HB_K_EXP, K_BODY_A,
-                                   K_BODY_B, K_KIND, KIND_BALL, N_AUX, N_FLOAT, N_INT, R_A, R_ALPHA, R_CLEAR, R_CROWN,
+                                   K_BODY_B, K_KIND, KIND_BALL, KIND_SLICE, N_AUX, N_FLOAT, N_INT, R_A, R_ALPHA,
+                                   R_CLEAR, R_CROWN,
                                    R_DAMP, R_DBALL, R_EMOD, R_FI, R_FO, R_GAMMA, R_K, R_KSCALE, R_P, R_PITCH, R_PSI0,
-                                   R_RAMP, R_SAX, R_SIGMA, R_XI_A, R_XI_B)
+                                   R_RAMP, R_SAX, R_SIGMA, R_SLICE_DF, R_SLICE_F, R_XI_A, R_XI_B)
 
 
 @functools.lru_cache(maxsize=None)
@@ -140,6 +141,20 @@ def _kernel(dtype):
                 r, rdot, fparams[i, R_ALPHA], fparams[i, R_A], fparams[i, R_SAX], fparams[i, R_CLEAR],
                 fparams[i, R_DAMP], fparams[i, R_RAMP], fparams[i, R_DBALL], fparams[i, R_PITCH], fparams[i, R_FI],
                 fparams[i, R_FO], fparams[i, R_EMOD], fparams[i, R_KSCALE])
+        elif iparams[i, K_KIND] == KIND_SLICE:
+            ca = wp.cos(fparams[i, R_ALPHA])
+            delta = r * ca - fparams[i, R_CLEAR] - fparams[i, R_CROWN]
+            alpha_w = fparams[i, R_ALPHA]
+            fel = fparams[i, R_SLICE_F]
+            rho, drho = damping_ramp(delta, fparams[i, R_RAMP])
+            ddot = rdot * ca
+            Fs = fel + fparams[i, R_DAMP] * rho * ddot
+            if fel > dtype(0.0) and Fs > dtype(0.0):
+                F = Fs
+                fr = F * ca
+                fzm = F * wp.sin(fparams[i, R_ALPHA])
+                fr_r = (fparams[i, R_SLICE_DF] + fparams[i, R_DAMP] * drho * ddot) * ca * ca
+                fr_rd = fparams[i, R_DAMP] * rho * ca * ca
         else:
             delta, F, fr, fzm, alpha_w, fr_r, fr_rd = lamina_law(
                 r, rdot, fparams[i, R_K], fparams[i, R_P], fparams[i, R_ALPHA], fparams[i, R_CLEAR],

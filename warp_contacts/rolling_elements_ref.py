@@ -22,6 +22,12 @@ Element laws (paper, Section "Distributed bearing support"):
   contact angle alpha (0 for radial rollers):
   delta = r cos(alpha) - c - crown, F = max(0, k delta^p + c_d rho(delta) deltadot)
   (Eq. (normal_force), p = 10/9 or 1), radial part f_r = F cos(alpha).
+* KIND_SLICE, an influence-coefficient slice (Eq. (bearing_ic), :mod:`warp_contacts.roller_slices_ref`):
+  the approach delta as a lamina's; its elastic force and dF/d delta are those of the
+  roller's slice solve at this state (plus the lamina's viscous term on a slice in contact), written into columns R_SLICE_F, R_SLICE_DF by the owner
+  (:class:`rvtool.bearings.set.BearingSet`) between a first launch that reads the approaches and
+  the launch that assembles. In the planar model every slice of a roller moves by the same
+  cos(alpha) dr, so dF_i/d delta = sum_k (df/ds)_ik is the exact per-slice derivative.
 * KIND_BALL, Eq. (ball_bearing): a_r = A cos(alpha_0) + r,
   a_z = A sin(alpha_0) + s_a (s_a the axial approach that carries the
   preload; held in the planar model), delta = sqrt(a_r^2 + a_z^2) - A - c,
@@ -74,13 +80,15 @@ R_FI = 18           # inner race conformity f_i [-]
 R_FO = 19           # outer race conformity f_o [-]
 R_EMOD = 20         # effective modulus E' [Pa]
 R_KSCALE = 21       # stiffness factor s_K at the free contact angle [-]
-N_FLOAT = 22
+R_SLICE_F = 22      # influence slice: its force F [N] from the roller's slice solve
+R_SLICE_DF = 23     # influence slice: dF/d delta [N/m] (the roller's slices move together in the plane)
+N_FLOAT = 24
 # ---- packed integer parameters ----
 K_BODY_A = 0        # pose row of the inner-ring body A
 K_BODY_B = 1        # pose row of the outer-ring body B
 K_KIND = 2          # element kind KIND_*
 N_INT = 3
-KIND_LAMINA, KIND_BALL = 0, 1
+KIND_LAMINA, KIND_BALL, KIND_SLICE = 0, 1, 2
 # auxiliary per-element output: force on A along u [N], axial force on A [N], working contact angle [rad]
 AUX_FU, AUX_FZ, AUX_ALPHA = range(3)
 N_AUX = 3
@@ -141,6 +149,24 @@ def lamina_law(r, rdot, fp):
     delta = r * ca - fp[:, R_CLEAR] - fp[:, R_CROWN]
     F, Fd, Fdd = laws_ref.normal_force(fp[:, R_K], fp[:, R_P], fp[:, R_DAMP], fp[:, R_RAMP], delta, rdot * ca)
     return delta, F, F * ca, F * sa, alpha, Fd * ca * ca, Fdd * ca * ca
+
+
+def slice_law(r, rdot, fp):
+    """Influence slice: (delta, F, f_r, F sin(alpha), alpha, df_r/dr, df_r/drdot) with the elastic force
+    and dF/d delta of the roller's solve read from its row, plus the lamina's viscous term
+    c_d rho(delta) delta_dot of Eq. (normal_force) on a slice in contact (elastic force > 0), no tension."""
+    alpha = fp[:, R_ALPHA]
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    delta = r * ca - fp[:, R_CLEAR] - fp[:, R_CROWN]
+    fel, cd = fp[:, R_SLICE_F], fp[:, R_DAMP]
+    rho, drho = laws_ref.damping_ramp(delta, fp[:, R_RAMP])
+    ddot = rdot * ca
+    F = fel + cd * rho * ddot
+    on = (fel > 0) & (F > 0)
+    F = np.where(on, F, 0.0)
+    dF = np.where(on, fp[:, R_SLICE_DF] + cd * drho * ddot, 0.0)
+    dFd = np.where(on, cd * rho, 0.0)
+    return delta, F, F * ca, F * sa, alpha, dF * ca * ca, dFd * ca * ca
 
 
 def ball_law(r, rdot, fp):
@@ -227,7 +253,7 @@ def element_law(kind, r, rdot, fp):
     """Per row: approach delta [m], normal force F [N], radial force f_r [N], axial
     magnitude F sin(alpha_w) [N], working angle alpha_w [rad], df_r/dr, df_r/drdot."""
     out = tuple(np.zeros(len(r)) for _ in range(7))
-    for sel, law in ((kind == KIND_BALL, ball_law), (kind != KIND_BALL, lamina_law)):
+    for sel, law in ((kind == KIND_BALL, ball_law), (kind == KIND_LAMINA, lamina_law), (kind == KIND_SLICE, slice_law)):
         if np.any(sel):
             for o, v in zip(out, law(r[sel], rdot[sel], fp[sel])):
                 o[sel] = v

@@ -186,3 +186,61 @@ def evaluate(q, qdot, psi, psidot, roller_fp, roller_ip, lamina_fp, rtol=RIB_RTO
             rib[j] = kappa * np.sum(F), bf
         lam[sl, LAM_F], lam[sl, LAM_DELTA] = F, delta
     return f, K, C, fpsi, fpsid, rib, lam
+
+
+def influence_approaches(q, psi, roller_fp, lamina_fp, rows):
+    """Slice approaches of influence-coefficient rollers (rigid rib, Eq. (bearing_ic)): per roller r of
+    ``rows`` (Ri, n_max) lamina indices (-1 padding), s = g . (q + z_pre e_3) - o_s (Ri, n_max) [m],
+    with g, h (Ri, n_max, 5) and the rib point's axial displacement b_f (Ri,)."""
+    q, psi = np.asarray(q, float), np.asarray(psi, float)
+    rf, lf = np.asarray(roller_fp, float), np.asarray(lamina_fp, float)
+    qe = q.copy()
+    qe[:, 2] += rf[:, RL_ZPRE]
+    L = lf[np.where(rows < 0, 0, rows)]
+    g, h = meridional_gradient(L[..., LA_RHO], L[..., LA_Z], L[..., LA_NR], L[..., LA_NZ], psi[:, None])
+    pad = rows < 0
+    g[pad], h[pad] = 0.0, 0.0
+    s = np.where(pad, 0.0, np.einsum("rsk,rk->rs", g, qe) - L[..., LA_OFF])
+    gf, _ = meridional_gradient(rf[:, RL_FRHO], rf[:, RL_FZ], rf[:, RL_FNR], rf[:, RL_FNZ], psi)
+    return s, g, h, qe, np.einsum("rk,rk->r", gf, qe)
+
+
+def influence_wrench(F, J, g, h, qe, kappa, bf, damping=None):
+    """Per-roller results of influence-coefficient rollers from their slice forces F (Ri, n) [N] and
+    tangent J = dF/ds (Ri, n, n) [N/m]: the lumped-rib branch of :func:`evaluate` with the slice solve
+    in place of the laminae's power law. Returns f, df/dq, df/dq_dot, df/dpsi, df/dpsi_dot and the
+    rigid rib's values (kappa sum F, b_f); ds/dpsi = h . q.
+
+    ``damping`` = (s (Ri, n) slice approaches, qdot (Ri, 5), psidot (Ri,), c_d (Ri, n), ramp depth
+    (Ri, n)) adds the lamina's viscous term c_d rho(s) s_dot of Eq. (normal_force) on every slice in
+    contact (elastic force > 0), no tension, s_dot = g . q_dot + (h . q) psi_dot, with the velocity
+    terms of the lamina path of :func:`evaluate`. Returns the slice forces too (damping included)."""
+    bpsi = np.einsum("rsk,rk->rs", h, qe)
+    R = len(F)
+    Jon, Ft = J, F
+    Fd = np.zeros_like(F)          # dF/d s_dot
+    dFv = np.zeros_like(F)         # d(viscous force)/ds at fixed s_dot
+    dd_psi = np.zeros_like(F)      # d s_dot / d psi
+    psid = np.zeros(R)
+    if damping is not None:
+        s, qdot, psid, cd, ramp = damping
+        sd = np.einsum("rsk,rk->rs", g, qdot) + bpsi * psid[:, None]
+        rho, drho = laws_ref.damping_ramp(s, ramp)
+        Ft = F + cd * rho * sd
+        on = (F > 0) & (Ft > 0)
+        Ft = np.where(on, Ft, 0.0)
+        Jon = np.where(on[:, :, None], J, 0.0)
+        Fd = np.where(on, cd * rho, 0.0)
+        dFv = np.where(on, cd * drho * sd, 0.0)
+        # d s_dot / d psi = h . q_dot + (dh/dpsi . q) psi_dot, dh/dpsi = -(g - n_z e_3) (lamina path)
+        gq = np.einsum("rsk,rk->rs", g, qe) - g[..., 2] * qe[:, None, 2]
+        dd_psi = np.einsum("rsk,rk->rs", h, qdot) - gq * psid[:, None]
+    f = -np.einsum("rs,rsk->rk", Ft, g)
+    K = (-np.einsum("rsi,rst,rtj->rij", g, Jon, g) - np.einsum("rsi,rs,rsj->rij", g, dFv, g)
+         - np.einsum("rsi,rs,rsj->rij", g, Fd * psid[:, None], h))
+    C = -np.einsum("rsi,rs,rsj->rij", g, Fd, g)
+    fpsi = (-np.einsum("rsi,rst,rt->ri", g, Jon, bpsi) - np.einsum("rsi,rs->ri", g, dFv * bpsi + Fd * dd_psi)
+            - np.einsum("rs,rsk->rk", Ft, h))
+    fpsid = -np.einsum("rsi,rs->ri", g, Fd * bpsi)
+    rib = np.column_stack([kappa * Ft.sum(axis=1), bf])
+    return f, K, C, fpsi, fpsid, rib, Ft

@@ -102,6 +102,29 @@ def _continuation_backend(ctx):
     return _exudyn_only(ctx, "torque continuation")
 
 
+def _loop_path(ctx, what):
+    """(backend record, loading path) of a loop protocol: Exudyn's load continuation
+    (:class:`rvtool.protocols.catalogue.ContinuationPath`), or with ``--backend device`` (or
+    ``fused``, the device family) the device torque path
+    (:class:`rvtool.batched.device_rows_lost_motion.DeviceTorquePath`) where the device row Newton
+    runs the model; a model it cannot run skips the protocol with the reasons."""
+    from ..protocols import catalogue as C
+    if ctx.backend not in ("device", "fused"):
+        return _continuation_backend(ctx), C.ContinuationPath(ctx.build())
+    from ..batched.device_rows_lost_motion import DeviceTorquePath
+    from ..solver.backends import CHOICES
+    from ..solver.device_rows import DeviceRowNewton, row_reasons
+    model = ctx.build()
+    reasons = row_reasons(model)
+    if reasons:
+        raise Unsupported(f"backend = {ctx.backend!r} (the device torque path) cannot run the {what} on this model: "
+                          f"{'; '.join(reasons)} (valid choices for this model: 'exudyn' or 'auto')")
+    record = {"requested": ctx.backend, "ran": "device",
+              "not_taken": {b: f"not requested (--backend {ctx.backend})" for b in CHOICES
+                            if b not in ("auto", "device")}}
+    return record, DeviceTorquePath(DeviceRowNewton(model, 1, device=ctx.device))
+
+
 @register("te", "quasi-static transmission error under the rated torque (Eq. obs_te), with its refinement error")
 def run_te(ctx):
     from ..assembly import build
@@ -278,11 +301,10 @@ def run_hysteresis(ctx):
     from ..protocols import catalogue as C
     from ..protocols import hysteresis as H
     rated = ctx.require("rated_torque")
-    backend = _continuation_backend(ctx)      # before any work: a named other backend skips
+    backend, path = _loop_path(ctx, "hysteresis loops")   # a named backend that cannot run it skips
     out = Outcome()
     seq = C.catalogue_sequence(rated, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, step=_sequence(ctx).other_step)
     tol = 1e-3 * RAD_PER_ARCMIN        # 0.001 arcmin: far below any reported angle, far above Newton's tolerance
-    path = C.ContinuationPath(ctx.build())
     r = C.catalogue_loops(path, seq, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, repeat_tolerance=tol)
     m, rep = r["metrics"], r["repeatability"]
     first, last = r["cycles"][-2], r["cycles"][-1]
@@ -322,6 +344,9 @@ def run_hysteresis(ctx):
                     "angle_tolerance_arcmin": tol * ARCMIN_PER_RAD, "rigidity_points": list(HYSTERESIS_RIGIDITY_POINTS),
                     "backend": backend}
     _solver_warnings(out, r["stats"], "continuation")
+    if r["stats"].get("exudyn_copies"):
+        out.warnings.append("device torque path: the continuation left the device and finished on Exudyn "
+                            "(counted in continuation.exudyn_copies)")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot(first["angle_rad"] * ARCMIN_PER_RAD, T, ".-", lw=0.8, label="loop 1")
@@ -533,11 +558,14 @@ designs), or one Exudyn model per variant on the pool (the oracle)."""
 
 
 def _mc_backend(ctx):
-    """(mode, choice) of the Monte Carlo for ``ctx.backend``: auto takes the device Newton where the
-    design's copies can be built (measured fastest for the whole protocol, see
-    :func:`rvtool.variants.montecarlo.resolve_mode`), else one batched Exudyn system per chunk
-    (3.3x the per-variant pool for the TE on 2 cores, the module docstring), else the pool; a named
-    backend that cannot run the design skips the protocol with the reason."""
+    """(mode, choice) of the Monte Carlo for ``ctx.backend``. auto: on a CUDA device the device
+    Newton where the design's copies build (TE alone 2,000-2,800 variants/s on an H100 against 45.6
+    for a 16-process pool, :func:`rvtool.variants.montecarlo.resolve_mode`); on a CPU one batched
+    Exudyn system per chunk, as before (the device Newton was not faster there: RD-40 on the 2-core
+    machine, 2026-11-27, 16 variants x 53 TE points 20.6 s against 18.8 s, 4 x 23 10.1-11.8 s
+    against 9.0-14.1 s; the pool is 3.3x slower than the batched system for the TE, module
+    docstring of :mod:`rvtool.variants.montecarlo`). A named backend that cannot run the design
+    skips the protocol with the reason."""
     from ..assembly.variant import Variant
     from ..solver.device_copies import copy_parameters
     reasons = {}
@@ -551,9 +579,14 @@ def _mc_backend(ctx):
                               f"{reasons[ctx.backend]}")
         return MC_MODES[ctx.backend], {"requested": ctx.backend, "ran": ctx.backend, "not_taken": {
             b: f"not requested (--backend {ctx.backend})" for b in MC_MODES if b != ctx.backend}}
-    ran = "device" if "device" not in reasons else "replica"
-    not_taken = {b: reasons.get(b, f"supports the design, but slower than {ran!r} for the Monte Carlo "
-                                   "(rvtool.variants.montecarlo.resolve_mode)") for b in MC_MODES if b != ran}
+    on_gpu = str(ctx.device).startswith("cuda")
+    ran = "device" if on_gpu and "device" not in reasons else "replica"
+    slower = {"device": "on a CPU not faster than one batched Exudyn system per chunk (measured, see "
+                        "rvtool.analysis.protocols._mc_backend)",
+              "fused": "the fused stepper runs driven runs; the Monte Carlo's device mode is 'device'",
+              "replica": "on a CUDA device slower than the device Newton's variant batches",
+              "exudyn": "one Exudyn model per variant: 3.3x slower than the batched system for the TE"}
+    not_taken = {b: reasons.get(b, slower[b]) for b in MC_MODES if b != ran}
     return MC_MODES[ran], {"requested": "auto", "ran": ran, "not_taken": not_taken}
 
 

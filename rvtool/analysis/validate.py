@@ -253,6 +253,46 @@ def model_family(model, value):
     raise RvtoolInputError(f"the model has no contact family {value!r} (valid: {[f.value for f in model.families]})")
 
 
+MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
+"""Latin-hypercube samples of the moment-rigidity band over the main bearing's `assumed` ranges."""
+
+
+def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
+    """The moment-rigidity row (issue 32): :func:`rvtool.protocols.moment_rigidity.moment_rigidity`
+    on the design with a spatial carrier (a ported housing replaced by the rigid one: the main-bearing
+    seats are grounded in both), the reference moment the catalogue's allowable moment (else T_R),
+    the band over the main bearing's `assumed` ranges (bearing alone, rigid housing). Returns
+    {"rows", "result", "band", "reference_moment_Nm", "note"}; an error is reported in the row, not raised
+    (a side figure, as the ratio variant)."""
+    from ..assembly.spec import replace as replace_design
+    from ..assembly import build
+    from ..protocols.moment_rigidity import MomentRigidityTest, main_bearing_band, moment_rigidity, spatial_design
+    allow = catalogue.figure("allowable_moment")
+    m_ref = allow.value_si if allow is not None else catalogue.test.rated_torque
+    ref_note = (f"reference moment {m_ref:g} N m: {catalogue.citation(allow)}" if allow is not None else
+                f"reference moment T_R = {m_ref:g} N m (the catalogue file prints no allowable moment)")
+    try:
+        d = design if getattr(design.housing, "model", "rigid") != "ports" else replace_design(design,
+                                                                                               housing={"model": "rigid"})
+        test = MomentRigidityTest(reference_moment=m_ref, axial_force=2000.0)
+        res = moment_rigidity(build(spatial_design(d)), test)
+        band = None
+        if assumed is not None:
+            band = main_bearing_band(d.main_bearing, assumed, test,
+                                     samples=QUICK_MOMENT_SAMPLES if quick else MOMENT_SAMPLES)
+        value, note = res.rigidity_arcmin, f"{res.convention}; {ref_note}; axial stiffness {res.axial_stiffness:.4g} N/m"
+        detail = {"result": res.to_dict(), "band": band}
+    except Exception as exc:           # reported in the table, not fatal
+        value, note, band = None, f"not computed: {type(exc).__name__}: {exc}", None
+        detail = {"result": None, "band": None, "error": note}
+    rows = _rows("moment_rigidity", value, "N m/arcmin", catalogue,
+                 None if band is None or band["band"] is None else list(band["band"]), note)
+    for r in rows:
+        if r["catalogue"] is None:
+            r["verdict"] = "no catalogue value"
+    return {"rows": rows, "reference_moment_Nm": m_ref, **detail}
+
+
 def _rows(key, predicted, unit, catalogue, band=None, note=""):
     """One table row per catalogue figure of ``key`` (a max and a typical value are two rows). The
     figure's value is converted to ``unit`` through SI (the catalogue file's unit as printed)."""
@@ -368,6 +408,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     life_angles = [k * span / n_life for k in range(n_life)]
     life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
     lives = bearing_lives(d, model, life_states, catalogue)
+    log(f"validate {design}: moment rigidity (spatial carrier)")
+    moment = moment_rigidity_figure(d, catalogue, assumed, quick=quick)
     # ratio variant
     log(f"validate {design}: ratio variant" + ("" if want_variant else " skipped"))
     try:
@@ -454,6 +496,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         + _rows("hysteresis_loss", fig_c["hysteresis_loss"], "arcmin", catalogue, band.get("hysteresis_loss"),
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
+    rows += moment["rows"]
     for fam in ("eccentric_bearings", "crank_bearings"):
         vals = [v["L10_h"] for k, v in lives.items() if v["family"] == fam and v["L10_h"] is not None]
         rows += _rows("rated_life", min(vals) if vals else None, "h", catalogue,
@@ -503,6 +546,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                                                           central["metrics"].rigidity.per_branch.items()},
                     "solver": central["stats"]},
         "bearing_lives": lives, "pressures": pressures,
+        "moment_rigidity": {k: v for k, v in moment.items() if k != "rows"},
         "compliance_budget": {"shares": budget["shares"], "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"],
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
                                                 "housing.model": getattr(d.housing, "model", None)

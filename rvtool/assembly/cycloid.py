@@ -38,10 +38,11 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNo
 from exudyn_user_elements.contact_element import PortBodies
 
 from ..bearings.reducer import ball_rows
-from ..bearings.spec import NeedleBearing
+from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 from ..contact.cycloid_set import (PALMGREN_EXPONENT, CycloidPinSet, WheelPinMesh, palmgren_line_coefficient,
                                      secant_line_stiffness)
+from ..bearings.influence import check_lumped
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre, journal_velocity
 from ..output_pins.calibration import mindlin_tangential_ratio  # noqa: F401 (public here too)
@@ -523,6 +524,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     mode = contact_element_mode(contact_element)
     if bearing_model not in ("lumped", "rolling"):
         raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
+    check_lumped(design, bearing_model)
     d = design
     nw = d.n_wheels
     SC = exu.SystemContainer()
@@ -544,6 +546,9 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         ports = PortBodies(housing, np.array([reduced.port_rows[k][:2] for k in range(zb)]))
         n_pin_bodies = nw + 2 + zb
         meshes = [dataclasses.replace(m, pin_bodies=tuple(range(nw + 2, nw + 2 + zb))) for m in meshes]
+    if d.pins.groove != "rigid":
+        raise RvtoolInputError(f"pins.groove = {d.pins.groove!r} is implemented for the RV topology only; valid for a "
+                               "cycloid drive: 'rigid'")
     C_ring = pin_station_compliance(d, Family.PINS)
     if C_ring is not None:
         # elastic ring pins: wheel k meets pin p on the station body nw + 2 + p nw + k (Eq. series_contact)
@@ -557,7 +562,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         n_pin_bodies = nw + 2 + st.size
     pin_set = CycloidPinSet(meshes, n_pin_bodies, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
                             precision=precision, device=device, name="pins", search=d.wheels.search)
-    element = ContactElements(mbs, nodes, mode, structure=housing)
+    tilt = spatial_flange(mbs, d, bearing_model, housing, regularization) if d.bodies.spatial_flange else None
+    element = ContactElements(mbs, nodes, mode, structure=housing if tilt is None else tilt)
     host = element.host
 
     pin_eval = pin_set
@@ -586,9 +592,15 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
 
     # -- bearings -----------------------------------------------------------------
     if bearing_model == "rolling":
-        from ..bearings.reducer import rolling_bearing_sets
-        for name, ev in rolling_bearing_sets(d, nw, backend=backend, precision=precision, device=device).items():
+        from ..bearings.reducer import main_bearing_mounting, rolling_bearing_sets
+        for name, ev in rolling_bearing_sets(d, nw, backend=backend, precision=precision, device=device,
+                                             main=tilt is None).items():
             elements[name] = element(ev)
+        if tilt is not None:
+            # the main bearing on the flange's retained axial and tilt coordinates (pose row nw + 2)
+            from ..bearings.spatial_set import SpatialBearingSet
+            elements["main_bearing"] = element(SpatialBearingSet([main_bearing_mounting(d, nw)], nw + 3, {nw + 1: nw + 2},
+                                                              name="main_bearing"), ports=tilt)
     else:
         bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
         elements["bearings"] = element(bset, backend=backend, precision=precision, device=device)
@@ -610,7 +622,28 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                         structures={} if housing is None else {"housing": housing},
                         mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
                         housing=housing, contact_host=host, family_specs=family_specs(d, meshes),
-                        material=d.material)
+                        material=d.material, carrier_tilt=tilt)
+
+
+def spatial_flange(mbs, design, bearing_model, housing, regularization):
+    """The flange's retained axial and tilt coordinates (``bodies.flange_coordinates = "spatial"``,
+    issue 32; :class:`~exudyn_user_elements.out_of_plane.RetainedTilt` with the flange's mass, transverse
+    inertia and the builder's regularization springs), after checking what they need."""
+    from exudyn_user_elements.out_of_plane import RetainedTilt
+    d = design
+    if bearing_model != "rolling":
+        raise RvtoolInputError(f"bodies.flange_coordinates = 'spatial' with bearing_model = {bearing_model!r}: the "
+                               "lumped main bearing has no rows; valid: build(..., bearing_model='rolling')")
+    if not isinstance(d.main_bearing, (BallBearing, AngularContactPair)):
+        raise RvtoolInputError("bodies.flange_coordinates = 'spatial' needs a ball main bearing; valid: "
+                               "main_bearing.kind = 'angular_contact_pair', 'angular_contact' or 'deep_groove'")
+    if housing is not None:
+        raise RvtoolInputError("bodies.flange_coordinates = 'spatial' with housing.model = 'ports' is not implemented "
+                               "(the merged element carries one structure); valid: housing.model = 'rigid'")
+    if d.bearing_friction.model != "none":
+        raise RvtoolInputError(f"bodies.flange_coordinates = 'spatial' with bearing_friction.model = "
+                               f"{d.bearing_friction.model!r} is not implemented; valid: 'none'")
+    return RetainedTilt(mbs, d.bodies.flange_mass, d.bodies.tilt_inertia, regularization, name="flange_tilt")
 
 
 def family_specs(design, meshes):
@@ -667,4 +700,6 @@ def contact_families(elements, mesh=("pins", Family.PINS)):
         rows = np.array([i for i, cid in enumerate(ids) if cid.startswith(prefix)], dtype=int)
         if len(rows):
             fams[fam] = ("bearings", rows)
+    if "main_bearing" in elements:          # a spatial flange's main bearing, an element of its own
+        fams[Family.MAIN_BEARINGS] = ("main_bearing", np.arange(len(elements["main_bearing"].ids)))
     return fams

@@ -53,13 +53,18 @@ class Pins:
     generating radius of the wheel profile [m]. Manufacturing deviations (part of the design, so a
     variant is a design): radius_error: the actual pin radius minus r_p [m]; centre_errors: None
     or (z_b, 2) pin-centre errors in the housing frame [m]. support: the pin as a beam
-    (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-table ``[pins.support]``; rigid by default)."""
+    (:class:`~rvtool.structure.pin_beam.PinSupport`, sub-table ``[pins.support]``; rigid by default).
+    groove: the pin in its housing groove, "rigid" (the default: today's figures) or "conformal"
+    (the pin--groove contact law of :mod:`rvtool.contact.groove` in series with the pin; RV
+    topology); groove_clearance: its radial clearance Delta R [m] (required for "conformal")."""
     n_pins: int
     pin_circle_radius: float
     pin_radius: float
     radius_error: float = 0.0
     centre_errors: tuple | None = None
     support: PinSupport = field(default_factory=PinSupport)
+    groove: str = "rigid"
+    groove_clearance: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.n_pins, int) or self.n_pins < 3:
@@ -73,6 +78,14 @@ class Pins:
                 raise RvtoolInputError(f"pins.centre_errors must have shape ({self.n_pins}, 2) (one (x, y) per pin); "
                                        f"got {e.shape}")
             check_finite("pins.centre_errors", e)
+        if self.groove not in ("rigid", "conformal"):
+            raise RvtoolInputError(f"pins.groove = {self.groove!r}; valid choices are ['rigid', 'conformal']")
+        if self.groove_clearance is not None:
+            from ..contact.groove import GROOVE_CLEARANCE_RANGE
+            check_range("pins.groove_clearance", self.groove_clearance, *GROOVE_CLEARANCE_RANGE)
+        elif self.groove == "conformal":
+            raise RvtoolInputError("pins.groove_clearance is required for pins.groove = 'conformal' (the radial "
+                                   "clearance of the pin in its groove [m], valid range [1e-07, 0.001])")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -210,7 +223,12 @@ class Bodies:
     shaft, wheel, flange: the planar coordinates each body keeps (a subset of x, y, theta).
     shaft_mass: mass of the input shaft [kg]. shaft_inertia: polar inertia of the input shaft
     [kg m^2]. flange_mass: mass of the output flange [kg]. flange_inertia: polar inertia of the
-    output flange [kg m^2]."""
+    output flange [kg m^2].
+    flange_coordinates: ``"planar"`` (default: the flange's axial translation and tilts held) or
+    ``"spatial"`` (also z, gamma_x, gamma_y on the main-bearing rows, issue 32; needs rolling-element
+    bearings, ``build(..., bearing_model="rolling")``, and a ball main bearing).
+    flange_tilt_inertia: transverse inertia [kg m^2] of the flange (dynamic runs of a spatial flange);
+    None: half the polar inertia (a thin disc, assumed)."""
     shaft: tuple = COORDS
     wheel: tuple = COORDS
     flange: tuple = COORDS
@@ -218,12 +236,29 @@ class Bodies:
     shaft_inertia: float = 2e-5
     flange_mass: float = 1.2
     flange_inertia: float = 1.5e-3
+    flange_coordinates: str = "planar"
+    flange_tilt_inertia: float | None = None
 
     def __post_init__(self):
         for nm in ("shaft", "wheel", "flange"):
             for c in getattr(self, nm):
                 if c not in COORDS:
                     raise RvtoolInputError(f"bodies.{nm} contains {c!r}; valid coordinates are {list(COORDS)}")
+        if self.flange_coordinates not in ("planar", "spatial"):
+            raise RvtoolInputError(f"bodies.flange_coordinates = {self.flange_coordinates!r}; valid choices are "
+                                   "['planar', 'spatial']")
+        if self.flange_tilt_inertia is not None:
+            check_positive("bodies.flange_tilt_inertia", self.flange_tilt_inertia)
+
+    @property
+    def spatial_flange(self):
+        """True where the flange retains its axial and tilt coordinates."""
+        return self.flange_coordinates == "spatial"
+
+    @property
+    def tilt_inertia(self):
+        """Transverse inertia [kg m^2] of the flange (``flange_tilt_inertia`` or half the polar inertia)."""
+        return self.flange_inertia / 2 if self.flange_tilt_inertia is None else self.flange_tilt_inertia
 
 
 @dataclass(frozen=True, kw_only=True)

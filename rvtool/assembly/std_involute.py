@@ -44,6 +44,7 @@ from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround
 
 from ..contact.circle_set import GROUND, CircleContactSet, FrictionLaw, FrictionModel
 from ..contact.involute_set import GearMesh, InvoluteContactSet
+from ..bearings.influence import check_lumped
 from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre
 from ..model import BodyCoordinate, Family, ReducerModel
@@ -174,6 +175,7 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
         raise RvtoolInputError(f"design must be a StdInvoluteDesign; got {type(design).__name__}")
     if bearing_model not in ("lumped", "rolling"):
         raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
+    check_lumped(design, bearing_model)
     d = design
     nw = d.n_wheels
     SC = exu.SystemContainer()

@@ -134,6 +134,10 @@ def topology_of(design):
     return None
 
 
+_WARNED = set()
+"""Format 1 warnings already given in this process (:func:`upgrade_table`)."""
+
+
 def _renamed(value, factor):
     if isinstance(value, bool) or not isinstance(value, (int, float, list, tuple)):
         return value                     # not a number: the loader reports it under the new key
@@ -185,9 +189,14 @@ def upgrade_table(data):
                                "(every angle in degrees as NAME_deg)")
     if renames:
         names = ", ".join(f"{old} -> {new}" for old, new in renames)
-        warnings.warn(f"design file format 1 (no format_version): rename {names} and write "
-                      f"format_version = {FORMAT_VERSION} at the top (every angle in degrees as NAME_deg; "
-                      "format 1 keys will stop loading in a later release)", FutureWarning, stacklevel=3)
+        message = (f"design file format 1 (no format_version): rename {names} and write "
+                   f"format_version = {FORMAT_VERSION} at the top (every angle in degrees as NAME_deg; "
+                   "format 1 keys will stop loading in a later release)")
+        # once per file content and process: `rvtool analyze` loads a file more than once (to check it,
+        # then to run it), and a warnings filter reset in between would repeat Python's own "once"
+        if message not in _WARNED:
+            _WARNED.add(message)
+            warnings.warn(message, FutureWarning, stacklevel=3)
     return upgraded
 
 

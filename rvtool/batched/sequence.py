@@ -23,15 +23,13 @@ previous points (``predictor="secant"``).
 batched system): on a CPU the kernels of one process run on one core.
 
 The march itself is the replica backend's (:class:`rvtool.solver.backends.ReplicaBackend`) and
-the TE loop the protocol's (:func:`rvtool.protocols.precision.quasi_static_te`); this function
-builds the design's model once and runs that loop on that backend.
+the TE the protocol's (:func:`rvtool.protocols.precision.equilibria_te`, the end of
+:func:`~rvtool.protocols.precision.quasi_static_te`); the worker processes build the model
+(one build per process, none here).
 """
 
-import gc
-
-from ..assembly import build
-from ..protocols.precision import quasi_static_te
-from ..solver.backends import ReplicaBackend
+from ..protocols.precision import equilibria_te
+from ..solver.backends import EquilibriumBatch, ReplicaBackend
 
 
 def batched_quasi_static_te(design, *, torque, input_angles, copies=None, workers=1, device="cpu", build_kw=None,
@@ -45,15 +43,12 @@ def batched_quasi_static_te(design, *, torque, input_angles, copies=None, worker
     plus ``copies``, ``workers``, ``build_s`` (largest per-process build time [s]) and ``split``.
     build_kw: builder options (``regularization``)."""
     kw = dict(build_kw or {})
-    model = build(design, **dict(kw, device=device))
     backend = ReplicaBackend(copies=copies, workers=workers, build_kw=kw, device=device, predictor=predictor,
                              abs_tol=abs_tol)
-    out = quasi_static_te(model, torque=torque, input_angles=input_angles, backend=backend)
-    # the model and its copies hold reference cycles (Exudyn systems, contact callbacks): collected
-    # here, not by a later automatic collection inside the caller's own timed work (bench_cycloid's
-    # fused run took 3x its CPU time when the collection fell there)
-    del model, backend
-    gc.collect()
+    batch = EquilibriumBatch(input_angles=input_angles, torque=torque)
+    # the workers build their own models (replicate names what it cannot copy); this process builds none
+    eq = backend.solve_design(design, batch)
+    out = equilibria_te(eq, design.ratio, {"requested": "replica", "ran": "replica", "not_taken": {}})
     st = out["stats"]
     out.update(copies=st.pop("copies"), workers=st.pop("workers"), build_s=st.pop("build_s"), split=st.pop("split"))
     return out

@@ -12,10 +12,18 @@ def ball_rows(spec):
     return spec.rows if isinstance(spec, AngularContactPair) else (spec,)
 
 
-def rolling_bearing_sets(design, n_wheels, *, backend="warp", precision="float64", device="cpu"):
+def main_bearing_mounting(design, n_wheels):
+    """The main bearing (flange -> housing) of a cycloid design, or None."""
+    if design.main_bearing is None:
+        return None
+    return Mounting(name="main_bearing", bearing=design.main_bearing, inner=n_wheels + 1, outer=GROUND)
+
+
+def rolling_bearing_sets(design, n_wheels, *, backend="warp", precision="float64", device="cpu", main=True):
     """{"bearings": BearingSet} with the eccentric needle bearings (shaft journal -> wheel bore),
-    the main angular-contact pair (flange -> housing, back to back) and the two input ball
-    bearings (shaft -> housing), body indices as in :mod:`rvtool.assembly.cycloid`
+    the main angular-contact pair (flange -> housing, back to back; left out with ``main=False``:
+    a spatial flange carries it in its own element) and the two input ball bearings
+    (shaft -> housing), body indices as in :mod:`rvtool.assembly.cycloid`
     (0 shaft, 1..n_wheels wheels, n_wheels + 1 flange)."""
     d = design
     needle = d.eccentric_bearing            # each bearing section of the design is its component spec
@@ -24,8 +32,8 @@ def rolling_bearing_sets(design, n_wheels, *, backend="warp", precision="float64
         centre = journal_centre(d.wheels.eccentricity, d.wheels.phases[k])
         mounts.append(Mounting(name=f"eccentric_bearing{k}", bearing=needle, inner=0, outer=1 + k,
                                inner_centre=tuple(float(c) for c in centre)))
-    if d.main_bearing is not None:
-        mounts.append(Mounting(name="main_bearing", bearing=d.main_bearing, inner=n_wheels + 1, outer=GROUND))
+    if main and d.main_bearing is not None:
+        mounts.append(main_bearing_mounting(d, n_wheels))
     ib = d.input_bearing
     if ib is not None:
         n_balls = ball_rows(ib)[0].n_balls

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from warp_contacts import roller_slices_ref as sref
 from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
@@ -30,6 +31,7 @@ from ..contact.circle_set import GROUND
 from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows
 from ..errors import RvtoolInputError
 from ..validation import check_finite
+from .influence import RollerSlices, SliceLaw, bearing_slice_parameters, slice_mean_crowning
 from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
 
 
@@ -104,7 +106,7 @@ def _base_row(m, psi0, gamma, pitch, alpha, sigma):
     return r
 
 
-def _pack(m):
+def pack_mounting(m):
     """Rows of one mounting: (float rows, kinds, ids, element radius rho [m], axial station z [m], row index)."""
     b = m.bearing
     rows, kinds, ids, rho, z, row_of = [], [], [], [], [], []
@@ -113,6 +115,9 @@ def _pack(m):
         gamma = b.roller_diameter * math.cos(alpha) / b.pitch_diameter
         k, crown, zeta = b.slice_stiffness, b.slice_crowning, b.slice_positions
         crossed = alpha > 0
+        kind = ref.KIND_LAMINA
+        if b.slices == SliceLaw.INFLUENCE:
+            kind, crown = ref.KIND_SLICE, slice_mean_crowning(b)
         for j in range(b.n_rollers):
             sigma = -1.0 if (crossed and j % 2) else 1.0
             for s in range(b.n_slices):
@@ -120,7 +125,7 @@ def _pack(m):
                 r[ref.R_K], r[ref.R_P], r[ref.R_CLEAR], r[ref.R_CROWN] = k[s], b.exponent, b.radial_clearance, crown[s]
                 r[ref.R_DAMP], r[ref.R_RAMP] = b.damping / b.n_slices, b.ramp_depth
                 rows.append(r)
-                kinds.append(ref.KIND_LAMINA)
+                kinds.append(kind)
                 ids.append(f"{m.name}/roller{j}/slice{s}")
                 # lamina centre: along the generator (-sigma sin(alpha), cos(alpha)) from the roller centre
                 rho.append(0.5 * b.pitch_diameter - sigma * zeta[s] * math.sin(alpha))
@@ -129,12 +134,13 @@ def _pack(m):
         return rows, kinds, ids, rho, z, row_of
     stations = b.stations() if isinstance(b, AngularContactPair) else ((0.0, 1.0),)
     ball_rows = b.rows if isinstance(b, AngularContactPair) else (b,)
+    offsets = b.axial_offsets if isinstance(b, AngularContactPair) else (b.axial_preload_offset,)
     for k, (row, (zr, sigma)) in enumerate(zip(ball_rows, stations)):
         gamma = row.ball_diameter * math.cos(row.contact_angle) / row.pitch_diameter
         for j in range(row.n_balls):
             r = _base_row(m, m.cage_phase + 2 * math.pi * j / row.n_balls, gamma, row.pitch_diameter,
                           row.contact_angle, sigma)
-            r[ref.R_A], r[ref.R_SAX], r[ref.R_CLEAR] = (row.groove_centre_distance, row.axial_preload_offset,
+            r[ref.R_A], r[ref.R_SAX], r[ref.R_CLEAR] = (row.groove_centre_distance, offsets[k],
                                                         row.radial_clearance)
             r[ref.R_DAMP], r[ref.R_RAMP] = row.damping, row.ramp_depth
             r[ref.R_DBALL], r[ref.R_FI], r[ref.R_FO], r[ref.R_EMOD] = (row.ball_diameter, row.inner_curvature,
@@ -162,6 +168,14 @@ class BearingSet(StagedLaunch):
 
     velocity_rows = True
 
+    def __new__(cls, *args, **kwargs):
+        # a set with influence-coefficient rollers is host-assembled (InfluenceBearingSet)
+        mountings = args[0] if args else kwargs.get("mountings", ())
+        if cls is BearingSet and any(isinstance(getattr(m, "bearing", None), CylindricalRollerBearing)
+                                     and m.bearing.slices == SliceLaw.INFLUENCE for m in mountings):
+            cls = InfluenceBearingSet
+        return super().__new__(cls)
+
     def __init__(self, mountings, n_bodies, *, name="bearings", backend="warp", precision="float64", device="cpu"):
         if backend not in BACKENDS:
             raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are {list(BACKENDS)}")
@@ -185,7 +199,7 @@ class BearingSet(StagedLaunch):
                 if not (b == GROUND or (isinstance(b, (int, np.integer)) and 0 <= b < n_bodies)):
                     raise RvtoolInputError(f"mountings[{k}].{nm} = {b!r} is outside the valid range "
                                            f"[0, {n_bodies - 1}] or GROUND (-1)")
-            rows, kinds, rid, r_rho, r_z, r_row = _pack(m)
+            rows, kinds, rid, r_rho, r_z, r_row = pack_mounting(m)
             fp += rows
             irows = np.zeros((len(kinds), ref.N_INT), np.int32)
             irows[:, ref.K_BODY_A] = g if m.inner == GROUND else m.inner
@@ -204,6 +218,7 @@ class BearingSet(StagedLaunch):
         #: per element: radius [m] and axial station [m] of its centre, ball-row index
         self.element_radius, self.element_station, self.element_row = np.array(rho), np.array(z), np.array(row_of)
         self.assembler = PairAssembler(self.iparams[:, ref.K_BODY_A], self.iparams[:, ref.K_BODY_B], n_bodies)
+        self._init_slices(backend, device)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
         self.launches = 0
@@ -214,15 +229,57 @@ class BearingSet(StagedLaunch):
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
 
-    def raw(self, pose, vel=None):
-        """Per-element results (Q (N,6), dQdq, dQdv, obs (N,8), aux (N,3)) at poses and
-        velocities (nb, 3); ``vel=None`` means at rest."""
-        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
-        self._pose[:-1] = pose
-        self._vel[:-1] = 0.0 if vel is None else vel
+    def _init_slices(self, backend, device):
+        """The influence-coefficient rollers (slices = "influence"): their slice rows (R, n_max), -1
+        padded, and the batched slice solve (:class:`rvtool.bearings.influence.RollerSlices`)."""
+        self._slices = None
+        rows = np.flatnonzero(self.iparams[:, ref.K_KIND] == ref.KIND_SLICE)
+        if rows.size == 0:
+            return
+        fp, ip, groups = [], [], []
+        start = 0
+        for m in self.mountings:
+            n = len(_pack(m)[0])
+            b = m.bearing
+            if isinstance(b, CylindricalRollerBearing) and b.slices == SliceLaw.INFLUENCE:
+                f, i = bearing_slice_parameters(b)
+                for j in range(b.n_rollers):
+                    fp.append(f)
+                    ip.append(i)
+                    groups.append(start + j * b.n_slices + np.arange(b.n_slices))
+            start += n
+        n_max = max(len(g) for g in groups)
+        self.slice_rows = np.full((len(groups), n_max), -1)
+        for k, g in enumerate(groups):
+            self.slice_rows[k, :len(g)] = g
+        self._slices = RollerSlices(np.array(fp), np.array(ip), backend=backend, device=device)
+
+    def _evaluate_rows(self):
         if self.backend == "warp":
             return self._kernel.evaluate(self._pose, self._vel)
         return ref.evaluate(self._pose, self._vel, self.fparams, self.iparams)
+
+    def raw(self, pose, vel=None):
+        """Per-element results (Q (N,6), dQdq, dQdv, obs (N,8), aux (N,3)) at poses and
+        velocities (nb, 3); ``vel=None`` means at rest. With influence-coefficient rollers, a first
+        launch gives the slices' approaches, the rollers' slice solve their forces and dF/d delta,
+        and a second launch assembles."""
+        self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
+        self._pose[:-1] = pose
+        self._vel[:-1] = 0.0 if vel is None else vel
+        if self._slices is not None:
+            delta = -np.asarray(self._evaluate_rows()[3], float)[:, ref.O_GAP]
+            pad = self.slice_rows < 0
+            s = np.where(pad, 0.0, delta[self.slice_rows])
+            f, J, _, _ = self._slices.solve(s)
+            sel = self.slice_rows[~pad]
+            fp = self.fparams
+            fp[sel, ref.R_SLICE_F] = np.asarray(f)[~pad]
+            # every slice of a roller moves by the same cos(alpha) dr: dF_i/d delta = sum_k J_ik
+            fp[sel, ref.R_SLICE_DF] = np.asarray(J).sum(axis=2)[~pad]
+            if self.backend == "warp":
+                self._kernel.set_parameters(fp)
+        return self._evaluate_rows()
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
@@ -278,15 +335,34 @@ class BearingSet(StagedLaunch):
         """The per-element constants of the energy account (:class:`rvtool.observe.energy.ContactEnergyLaw`):
         no friction (rolling without a declared loss), the elastic force and potential of each row
         (:func:`warp_contacts.rolling_elements_ref.elastic_state`: k delta^(p+1)/(p+1) per lamina,
-        the ball's by quadrature), read from the current parameter rows (gap offsets included)."""
+        the ball's by quadrature), read from the current parameter rows (gap offsets included).
+        Influence slices with the fixed half-width: 1/2 f_i delta_i per slice (the roller's
+        1/2 f^T C_l f, since f_i w_i = 0); the load-dependent half-widths are refused by name (C_l
+        then depends on f and the slice law has no potential)."""
         from ..observe.energy import ContactEnergyLaw
+        if self._slices is not None and np.any(self._slices.iparams[:, sref.SI_MODE] != sref.HALF_WIDTH_FIXED):
+            raise RvtoolInputError(f"the energy account needs half_width = 'fixed' influence slices in bearing set "
+                                   f"{self.name!r}: with a load-dependent half-width the slice law has no potential")
         n = len(self.ids)
         return ContactEnergyLaw(tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32),
                                 normal_potential=self.elastic_energy)
 
     def elastic_energy(self, obs):
         """(elastic normal force [N], potential [J]) per element from observation rows (N, 8)."""
-        return ref.elastic_state(self.iparams[:, ref.K_KIND], -np.asarray(obs, float)[:, ref.O_GAP], self.fparams)
+        obs = np.asarray(obs, float)
+        delta = -obs[:, ref.O_GAP]
+        F, V = ref.elastic_state(self.iparams[:, ref.K_KIND], delta, self.fparams)
+        slices = self.iparams[:, ref.K_KIND] == ref.KIND_SLICE
+        if np.any(slices):
+            # the elastic slice forces: the rollers' solve at the observed approaches (the observed force
+            # holds the viscous term too); 1/2 f_i delta_i (f_i = 0 off contact)
+            pad = self.slice_rows < 0
+            f = np.asarray(self._slices.solve(np.where(pad, 0.0, delta[self.slice_rows]))[0])
+            fel = np.zeros(len(delta))
+            fel[self.slice_rows[~pad]] = f[~pad]
+            F = np.where(slices, fel, F)
+            V = np.where(slices, 0.5 * fel * delta, V)
+        return F, V
 
     def commit(self, pose, vel=None, evaluation=None):
         """Observations (N, 8) at the accepted state (nothing to commit)."""
@@ -326,3 +402,11 @@ class BearingSet(StagedLaunch):
             b = m.bearing
             out[m.name] = f.reshape(b.n_rollers, b.n_slices).sum(axis=1) if isinstance(b, CylindricalRollerBearing) else f
         return out
+
+
+class InfluenceBearingSet(BearingSet):
+    """A :class:`BearingSet` with influence-coefficient rollers (``slices = "influence"``), made by
+    ``BearingSet(...)`` itself. Host-assembled: the rollers' slice solve sits between two launches
+    (:meth:`BearingSet.raw`), so the merged element cannot sum its rows on the device from staged
+    poses (it finds no staging methods and evaluates the set on the host)."""
+    stage = launch_staged = launched = launched_field = row_buffers = None

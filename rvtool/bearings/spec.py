@@ -29,6 +29,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_field
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import HertzConstants, effective_modulus, hertz_constants, roller_stiffness
+from .influence import HalfWidth, SliceLaw, set_choice
 
 #: Largest interference (negative radial clearance) as a fraction of the element diameter:
 #: beyond it the small-deformation contact laws no longer describe the fit.
@@ -97,6 +98,12 @@ class CylindricalRollerBearing:
     their length) or a coefficient per lamina [N m^-p] (scalar or one per slice).
     damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
     of Eq. (normal_force).
+    slices: "laminae" (default, the law above per lamina) or "influence" (the slices coupled by
+    the half-space compliance of both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`;
+    damping acts per slice in contact as for the laminae). half_width: "fixed" (the Hertz half-width at
+    ``reference_roller_load``), "roller_load" or "slice_load" (updated from the roller's or each
+    slice's line load), influence only.
+    youngs_modulus: E [Pa], poisson_ratio: nu (rollers and rings; the influence compliance).
     """
     inner_radius: float
     roller_diameter: float
@@ -110,6 +117,10 @@ class CylindricalRollerBearing:
     lamina_stiffness: float | tuple | None = None
     damping: float = 0.0
     ramp_depth: float = 1e-6
+    slices: SliceLaw = SliceLaw.LAMINAE
+    half_width: HalfWidth = HalfWidth.FIXED
+    youngs_modulus: float = 206e9
+    poisson_ratio: float = 0.3
 
     def __post_init__(self):
         check_positive("inner_radius", self.inner_radius)
@@ -126,6 +137,10 @@ class CylindricalRollerBearing:
         _per_slice("crowning", self.crowning, self.n_slices, check_nonnegative)
         if self.lamina_stiffness is not None:
             _per_slice("lamina_stiffness", self.lamina_stiffness, self.n_slices, check_positive)
+        set_choice(self, "slices", SliceLaw)
+        set_choice(self, "half_width", HalfWidth)
+        check_positive("youngs_modulus", self.youngs_modulus)
+        check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
         _fit("n_rollers", self.n_rollers, self.roller_diameter, self.pitch_diameter)
 
     @property
@@ -218,8 +233,9 @@ class BallBearing:
     Planar model: the rings' axial displacement and tilts are held, so each ball's
     axial approach stays at its preload value and only the radial part F cos(alpha_w)
     acts on the bodies; the axial force and tilting moment are computed from the same
-    element forces as observations (:meth:`BearingSet.resultants`) and are not fed back
-    until tilt and axial coordinates exist.
+    element forces as observations (:meth:`BearingSet.resultants`). A ring body with
+    retained axial and tilt coordinates (:class:`rvtool.bearings.spatial_set.SpatialBearingSet`)
+    feeds them back.
 
     RD-40 main-bearing row: ``BallBearing(n_balls=16, ball_diameter=7.938e-3,
     pitch_diameter=0.068, contact_angle=math.radians(25), axial_preload=200.0)``.
@@ -320,16 +336,27 @@ class AngularContactPair:
     mounting's axial centre). arrangement: "back_to_back" (contact lines diverge toward the
     axis: pressure centres outside the rows) or "face_to_face".
 
+    Preload by axial displacement, declared one of three ways (at most one nonzero):
+    the rows' ``axial_preload`` [N] (each row pressed to carry that force at zero external
+    load), ``end_play`` [m] (the axial play of the pair: each row held end_play / 2 off
+    contact) or ``interference`` [m] (the axial overlap the pair is clamped through at
+    assembly, e.g. a ground spacer: each row pressed by interference / 2). Each row's
+    axial approach s_a at zero external load is :attr:`axial_offsets`.
+
     In the planar model both rows carry radial load through their balls; the
     axial force and tilting moment of each row and of the pair are computed
-    from the same element forces as observations (:meth:`BearingSet.resultants`)
-    and are not fed back (no axial or tilt coordinates yet).
+    from the same element forces as observations (:meth:`BearingSet.resultants`).
+    With a spatial flange (:class:`rvtool.bearings.spatial_set.SpatialBearingSet`) the
+    axial and tilt displacements of the rings move every ball's approach and working
+    angle, and the axial force and moments act on both bodies.
 
     RD-40 main bearing: ``AngularContactPair(rows=(row, row), row_spacing=0.040)``.
     """
     rows: tuple
     row_spacing: float
     arrangement: Arrangement = Arrangement.BACK_TO_BACK
+    end_play: float = 0.0
+    interference: float = 0.0
 
     def __post_init__(self):
         if not (isinstance(self.rows, (tuple, list)) and len(self.rows) == 2):
@@ -343,6 +370,26 @@ class AngularContactPair:
                                        "(0, pi/2) for an angular-contact pair")
         check_positive("row_spacing", self.row_spacing)
         _enum(self, "arrangement", Arrangement)
+        d_min = min(r.ball_diameter for r in self.rows)
+        # the small-deformation ball law: an axial play or overlap of at most 1 % of the ball diameter
+        check_range("end_play", self.end_play, 0.0, 0.01 * d_min)
+        check_range("interference", self.interference, 0.0, 0.01 * d_min)
+        declared = [nm for nm, v in (("rows[].axial_preload", max(r.axial_preload for r in self.rows)),
+                                     ("end_play", self.end_play), ("interference", self.interference)) if v > 0]
+        if len(declared) > 1:
+            raise RvtoolInputError(f"preload declared as {' and '.join(declared)}; valid: at most one of "
+                                   "rows[].axial_preload [N], end_play [m], interference [m] > 0")
+
+    @cached_property
+    def axial_offsets(self):
+        """(s_0, s_1) [m]: each row's axial approach at zero external load (positive presses the
+        balls; Eq. (ball_bearing)'s s_a): the preload force's approach, -end_play / 2 or
+        interference / 2."""
+        if self.end_play > 0:
+            return (-0.5 * self.end_play,) * 2
+        if self.interference > 0:
+            return (0.5 * self.interference,) * 2
+        return tuple(r.axial_preload_offset for r in self.rows)
 
     def stations(self):
         """((axial position z [m], axial sense sigma) of row 0, of row 1): sigma is the sign

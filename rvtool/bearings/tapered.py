@@ -54,6 +54,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_field, is_angle
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import effective_modulus, roller_stiffness
+from .influence import HalfWidth, SliceLaw, set_choice, slice_mean_crowning
 from .spec import Arrangement, LaminaLaw
 
 #: Largest cup angle [deg]: steep-angle tapered bearings reach about 30 deg; beyond 60 deg
@@ -97,6 +98,9 @@ class TaperedRollerBearing:
     rollers and rings [-] (rib contact).
     damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
     of Eq. (normal_force).
+    slices: "laminae" (default) or "influence" (the slices coupled by the half-space compliance of
+    both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`; with rib_contact = False; damping
+    acts per slice in contact as for the laminae). half_width: "fixed" (at ``reference_roller_load``), "roller_load" or "slice_load".
     """
     n_rollers: int
     pitch_diameter: float
@@ -115,6 +119,8 @@ class TaperedRollerBearing:
     poisson_ratio: float = 0.3
     damping: float = 0.0
     ramp_depth: float = 1e-6
+    slices: SliceLaw = SliceLaw.LAMINAE
+    half_width: HalfWidth = HalfWidth.FIXED
 
     def __post_init__(self):
         check_positive("roller_diameter", self.roller_diameter)
@@ -149,6 +155,11 @@ class TaperedRollerBearing:
         if self.rib_contact and self.damping != 0:
             raise RvtoolInputError(f"damping = {self.damping} with rib_contact = True; valid range [0, 0]: the elastic-rib "
                                    "path finds the roller's axial position from the elastic balance only")
+        set_choice(self, "slices", SliceLaw)
+        set_choice(self, "half_width", HalfWidth)
+        if self.slices == SliceLaw.INFLUENCE and self.rib_contact:
+            raise RvtoolInputError("rib_contact = True with slices = 'influence'; valid: rib_contact = False (the "
+                                   "influence slices use the lumped rigid rib)")
         # the roller's inner contact line must stay off the axis
         if self.pitch_diameter * math.cos(self.cone_angle) <= self.roller_diameter:
             raise RvtoolInputError(f"pitch_diameter = {self.pitch_diameter} m leaves no cone under rollers of "
@@ -262,7 +273,7 @@ class TaperedRollerBearing:
         lam[:, ref.LA_RHO], lam[:, ref.LA_Z] = pts[:, 0], pts[:, 1]
         lam[:, ref.LA_NR], lam[:, ref.LA_NZ] = n
         lam[:, ref.LA_K], lam[:, ref.LA_P] = self.slice_stiffness, self.exponent
-        lam[:, ref.LA_OFF] = self.slice_crowning
+        lam[:, ref.LA_OFF] = slice_mean_crowning(self) if self.slices == SliceLaw.INFLUENCE else self.slice_crowning
         lam[:, ref.LA_DAMP], lam[:, ref.LA_RAMP] = self.damping / ns, self.ramp_depth
         roller = np.zeros(ref.N_ROLLER_FLOAT)
         roller[ref.RL_KF], roller[ref.RL_CF] = self.rib_stiffness, self.rib_clearance
@@ -281,7 +292,16 @@ class TaperedRollerBearing:
         [m] toward its loaded direction (-sigma e_z), no radial or tilt displacement."""
         rf, ri, lf = self.pack(sigma=1.0)
         q = np.array([[0.0, 0.0, -axial_approach, 0.0, 0.0]])
-        f = ref.evaluate(q, np.zeros((1, 5)), np.zeros(1), np.zeros(1), rf[:1], ri[:1], lf[:self.n_slices])[0]
+        if self.slices == SliceLaw.INFLUENCE:
+            # the row's own law: the slice solve of one roller (the rollers all alike)
+            from warp_contacts import roller_slices_ref as sref
+            from .influence import bearing_slice_parameters
+            s, g, h, qe, bf = ref.influence_approaches(q, np.zeros(1), rf[:1], lf, np.arange(self.n_slices)[None, :])
+            sf, si = bearing_slice_parameters(self)
+            F, J, _, _ = sref.evaluate(s, sf[None, :], si[None, :])
+            f = ref.influence_wrench(F, J, g, h, qe, rf[:1, ref.RL_KAPPA], bf)[0]   # no damping at rest
+        else:
+            f = ref.evaluate(q, np.zeros((1, 5)), np.zeros(1), np.zeros(1), rf[:1], ri[:1], lf[:self.n_slices])[0]
         return float(f[0, 2]) * self.n_rollers
 
     def axial_approach_for(self, axial_force):

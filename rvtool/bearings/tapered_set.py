@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from warp_contacts import roller_slices_ref as sref
 from warp_contacts import tapered_rollers_ref as ref
 from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY
 
@@ -38,6 +39,7 @@ from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
 from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows
 from ..errors import RvtoolInputError
+from .influence import RollerSlices, SliceLaw, bearing_slice_parameters
 from .set import Placement
 from .tapered import TaperedPair, TaperedRollerBearing
 
@@ -122,6 +124,7 @@ class TaperedBearingSet:
             raise RvtoolInputError(f"mounting names must be unique; got {names}")
         self.history = NoHistory()
         rf, ri, lf, ids, owner, row_of, psi0, gamma, lam_roller = [], [], [], [], [], [], [], [], []
+        slice_rollers, slice_fp, slice_ip = [], [], []
         n_lam = 0
         bodies = []
         for k, m in enumerate(self.mountings):
@@ -141,6 +144,11 @@ class TaperedBearingSet:
                 ri.append(b)
                 lf.append(c)
                 Z = row.n_rollers
+                if row.slices == SliceLaw.INFLUENCE:
+                    sf, si = bearing_slice_parameters(row)
+                    slice_rollers += list(len(psi0) + np.arange(Z))
+                    slice_fp += [sf] * Z
+                    slice_ip += [si] * Z
                 owner += [k] * Z
                 row_of += [r] * Z
                 psi0 += list(m.cage_phase + 2 * math.pi * np.arange(Z) / Z)
@@ -168,6 +176,16 @@ class TaperedBearingSet:
         self._vel = np.zeros((n_bodies + 1, 3))
         M = len(self.mountings)
         self._centres = np.array([[m.inner_centre, m.outer_centre] for m in self.mountings], float).reshape(M, 2, 2)
+        #: influence-coefficient rollers (slices = "influence"): their indices, their lamina rows (-1 padded)
+        self.slice_rollers = np.array(slice_rollers, dtype=int)
+        self._slices = None
+        if slice_rollers:
+            n_max = int(max(self.roller_ip[r, ref.RI_COUNT] for r in slice_rollers))
+            self.slice_rows = np.full((len(slice_rollers), n_max), -1)
+            for k, r in enumerate(slice_rollers):
+                first, count = self.roller_ip[r, ref.RI_FIRST], self.roller_ip[r, ref.RI_COUNT]
+                self.slice_rows[k, :count] = first + np.arange(count)
+            self._slices = RollerSlices(np.array(slice_fp), np.array(slice_ip), backend=backend, device=device)
         if backend == "warp":
             from warp_contacts.tapered_rollers import TaperedRollerKernel
             self._kernel = TaperedRollerKernel(self.roller_fp, self.roller_ip, self.lamina_fp, precision, device)
@@ -176,10 +194,25 @@ class TaperedBearingSet:
 
     # -- 5-DOF use ---------------------------------------------------------
     def _rollers(self, q, qdot, psi, psidot):
-        """Per-roller kernel results at per-roller states."""
+        """Per-roller kernel results at per-roller states; influence-coefficient rollers replaced by
+        their slice solve (:func:`warp_contacts.tapered_rollers_ref.influence_wrench`)."""
         if self.backend == "warp":
-            return self._kernel.evaluate(q, qdot, psi, psidot)
-        return ref.evaluate(q, qdot, psi, psidot, self.roller_fp, self.roller_ip, self.lamina_fp)
+            out = self._kernel.evaluate(q, qdot, psi, psidot)
+        else:
+            out = ref.evaluate(q, qdot, psi, psidot, self.roller_fp, self.roller_ip, self.lamina_fp)
+        if self._slices is None:
+            return out
+        f, K, C, fpsi, fpsid, rib, lam = (np.array(a, float) for a in out)
+        ir, rows = self.slice_rollers, self.slice_rows
+        s, g, h, qe, bf = ref.influence_approaches(q[ir], psi[ir], self.roller_fp[ir], self.lamina_fp, rows)
+        F, J, _, _ = (np.array(a) for a in self._slices.solve(s))
+        pad = rows < 0
+        L = self.lamina_fp[np.where(pad, 0, rows)]
+        damping = (s, qdot[ir], psidot[ir], np.where(pad, 0.0, L[..., ref.LA_DAMP]), np.where(pad, 1.0, L[..., ref.LA_RAMP]))
+        f[ir], K[ir], C[ir], fpsi[ir], fpsid[ir], rib[ir], Ft = ref.influence_wrench(
+            F, J, g, h, qe, self.roller_fp[ir, ref.RL_KAPPA], bf, damping)
+        lam[rows[~pad], ref.LAM_F], lam[rows[~pad], ref.LAM_DELTA] = Ft[~pad], s[~pad]
+        return f, K, C, fpsi, fpsid, rib, lam
 
     def _per_mounting(self, x):
         """Sum per-roller values (R, ...) into per-mounting values (M, ...)."""
@@ -355,15 +388,38 @@ class TaperedBearingSet:
         no friction, the lamina's power law k delta^p (potential k delta^(p+1)/(p+1); with the rigid rib
         the approach is linear in the ring displacement, so this is the exact potential of the
         rollers' wrench). The elastic rib stores energy in the rib contact too, which the lamina
-        observations do not carry: refused by name."""
+        observations do not carry: refused by name. Influence rows with the fixed half-width:
+        1/2 f_s delta_s per slice (:meth:`elastic_energy`); load-dependent half-widths: refused by name."""
         from ..observe.energy import ContactEnergyLaw
+        if self._slices is not None and np.any(self._slices.iparams[:, sref.SI_MODE] != sref.HALF_WIDTH_FIXED):
+            raise RvtoolInputError(f"the energy account needs half_width = 'fixed' influence rows in {self.name!r}: "
+                                   "with a load-dependent half-width the slice law has no potential")
         if np.any(self.roller_ip[:, ref.RI_RIB]):
             elastic = sorted({self.mountings[k].name for k in self.roller_owner[self.roller_ip[:, ref.RI_RIB] != 0]})
             raise RvtoolInputError(f"the energy account needs rib_contact = false tapered rows; {elastic} of "
                                    f"{self.name!r} have an elastic rib, whose contact energy is not observed")
         n = len(self.ids)
+        if self._slices is not None:
+            return ContactEnergyLaw(tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32),
+                                    normal_potential=self.elastic_energy)
         return ContactEnergyLaw(normal_stiffness=self.lamina_fp[:, ref.LA_K], normal_exponent=self.lamina_fp[:, ref.LA_P],
                                 tangential_stiffness=np.zeros(n), friction_model=np.zeros(n, np.int32))
+
+    def elastic_energy(self, obs):
+        """(elastic normal force [N], potential [J]) per lamina from observation rows (L, 8): the power law
+        k delta^p, k delta^(p+1)/(p+1) of a lamina; an influence slice's force from its roller's solve at the
+        observed approaches and 1/2 f_s delta_s (the roller's 1/2 f^T C_l f)."""
+        from warp_contacts import laws_ref
+        delta = -np.asarray(obs, float)[:, O_GAP]
+        F, _ = laws_ref.power_law(self.lamina_fp[:, ref.LA_K], self.lamina_fp[:, ref.LA_P], delta)
+        V = np.where(delta > 0, F * np.where(delta > 0, delta, 0.0) / (self.lamina_fp[:, ref.LA_P] + 1.0), 0.0)
+        if self._slices is not None:
+            rows = self.slice_rows
+            pad = rows < 0
+            f = np.asarray(self._slices.solve(np.where(pad, 0.0, delta[np.where(pad, 0, rows)]))[0])
+            F[rows[~pad]] = f[~pad]
+            V[rows[~pad]] = 0.5 * f[~pad] * delta[rows[~pad]]
+        return F, V
 
     def element_loads(self, obs):
         """{mounting name: normal force of each roller [N], laminae summed} (roller order as in the ids)."""

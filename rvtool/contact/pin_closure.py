@@ -28,6 +28,14 @@ forces do not depend on that choice of coordinates.
 
 The observations are the set's at the solution: the gap is the contact gap at the deflected pin
 (the beam's deflection is not part of the observed approach), the force the final force.
+
+Two generalizations use the same closure (issue 30, the compliance members of the torque path):
+``dofs`` names the station body's coordinates the deflection moves ((0, 1): a translation, the
+default; (2,): a rotation about the carrier's centre, a crank's torsion between its spur gear and
+its eccentrics, :mod:`rvtool.structure.crank_torsion`), with K_b (x) I_{n_d}; and ``support``
+replaces the linear K_b u by a nonlinear station law s(u) with its tangent ds/du (a ring pin's
+conformal contact in its housing groove, :mod:`rvtool.contact.groove`): R_p = Q_u - s(u_p) = 0 and
+dQ/dq = K_qq - K_qu (K_uu - ds/du)^-1 K_uq.
 """
 import numpy as np
 import scipy.sparse as sp
@@ -49,7 +57,8 @@ class ElasticPinClosure:
     n_bodies + station[p, s] is pin p at station s (``evaluate(pose, vel, check=False)`` ->
     :class:`~rvtool.contact.evaluator.Evaluation`, ``ids``, ``commit``, ``history``).
     carrier: real body index carrying the pins, or GROUND (-1); or one such index per pin (n_pins,)
-    (the RV cranks: each crank carries its own stations).
+    (the RV cranks: each crank carries its own stations); or one per station (n_pins, n_s) (a crank's
+    twisting journals on its bending stations).
     station_compliance: C (n_s, n_s) [m/N], symmetric positive definite.
     station: (n_pins, n_s) station index of every (pin, station) (row of the station bodies).
     tolerance: largest station force residual accepted [N] (1e-8 N: 1e-16 m of approach at a
@@ -61,9 +70,16 @@ class ElasticPinClosure:
     """
 
     def __init__(self, inner, *, n_bodies, carrier, station_compliance, station, tolerance=1e-8,
-                 max_iterations=40):
-        C = np.asarray(station_compliance, float)
+                 max_iterations=40, dofs=(0, 1), support=None):
+        dofs = tuple(int(c) for c in dofs)
+        if not dofs or len(set(dofs)) != len(dofs) or any(c not in (0, 1, 2) for c in dofs):
+            raise RvtoolInputError(f"dofs = {dofs!r}; valid: distinct station coordinates among (0, 1, 2) = (x, y, theta)")
         station = np.asarray(station, int)
+        if support is not None and station_compliance is None:
+            # a nonlinear station law alone: its zero-load tangent stands for the beam where a
+            # linear stiffness is needed (the rigid view of ``condense`` is not offered)
+            station_compliance = np.eye(station.shape[-1]) / support.zero_load_stiffness
+        C = np.asarray(station_compliance, float)
         if C.ndim != 2 or C.shape[0] != C.shape[1] or station.ndim != 2 or station.shape[1] != C.shape[0]:
             raise RvtoolInputError(f"station_compliance {C.shape} and station {station.shape} must be (n_s, n_s) "
                                    "and (n_pins, n_s)")
@@ -81,10 +97,13 @@ class ElasticPinClosure:
             self.carrier = int(carrier)
         elif carriers.shape == (self.n_pins,):
             self.carrier = tuple(int(c) for c in carriers)
+        elif carriers.shape == (self.n_pins, self.n_stations):
+            self.carrier = tuple(tuple(int(c) for c in row) for row in carriers)
         else:
-            raise RvtoolInputError(f"carrier has shape {carriers.shape}; valid: one body index or one per pin "
-                                   f"({self.n_pins},)")
-        carriers = np.broadcast_to(carriers, (self.n_pins,))
+            raise RvtoolInputError(f"carrier has shape {carriers.shape}; valid: one body index, one per pin "
+                                   f"({self.n_pins},) or one per station ({self.n_pins}, {self.n_stations})")
+        carriers = (carriers if carriers.ndim == 2 else
+                    np.broadcast_to(np.broadcast_to(carriers, (self.n_pins,))[:, None], (self.n_pins, self.n_stations)))
         if np.any((carriers < GROUND) | (carriers >= self.n_bodies)):
             raise RvtoolInputError(f"carrier = {carrier!r}; valid: body indices in [0, {self.n_bodies - 1}] or "
                                    "GROUND (-1)")
@@ -94,28 +113,32 @@ class ElasticPinClosure:
                                    f"{self.n_bodies + nv}")
         self.compliance = C
         self.beam_stiffness = np.linalg.inv(C)
+        self.dofs = dofs
+        self.support = support
+        nd = len(dofs)
         self.tolerance = float(tolerance)
         self.max_iterations = int(max_iterations)
         self.history = inner.history
         nr = 3 * self.n_bodies
-        # q_ext = M [q; u]: real bodies as they are; station body = carrier pose + (u, 0)
-        self._n_u = 2 * nv
+        # q_ext = M [q; u]: real bodies as they are; station body = carrier pose + u on ``dofs``
+        self._n_u = nd * nv
         M = np.zeros((3 * (self.n_bodies + nv), nr + self._n_u))
         M[:nr, :nr] = np.eye(nr)
-        # u ordered per pin, then station, then (x, y): pin p's block is contiguous
-        self._u_index = np.zeros((self.n_pins, self.n_stations, 2), int)
+        # u ordered per pin, then station, then dofs: pin p's block is contiguous
+        self._u_index = np.zeros((self.n_pins, self.n_stations, nd), int)
         for p in range(self.n_pins):
             for s in range(self.n_stations):
                 b = 3 * (self.n_bodies + station[p, s])
-                k = nr + 2 * (p * self.n_stations + s)
-                self._u_index[p, s] = (k - nr, k + 1 - nr)
-                M[b, k], M[b + 1, k + 1] = 1.0, 1.0
-                c = int(carriers[p])
+                k = nr + nd * (p * self.n_stations + s)
+                self._u_index[p, s] = np.arange(k - nr, k - nr + nd)
+                for j, c in enumerate(dofs):
+                    M[b + c, k + j] = 1.0
+                c = int(carriers[p, s])
                 if c != GROUND:
                     M[b:b + 3, 3 * c:3 * c + 3] += np.eye(3)
         self._M = sp.csr_matrix(M)
         self._MT = self._M.T.tocsr()
-        self._Kb = np.kron(np.eye(self.n_pins), np.kron(self.beam_stiffness, np.eye(2)))
+        self._Kb = np.kron(np.eye(self.n_pins), np.kron(self.beam_stiffness, np.eye(nd)))
         self._u = np.zeros(self._n_u)
         self.last_iterations = 0
 
@@ -136,9 +159,17 @@ class ElasticPinClosure:
         """(Q_red (3 nb + 2 nv,), K_red, D_red or None) of an inner evaluation at station
         deflections u, the beam's elastic forces included."""
         Q = self._MT @ ev.Q
-        Q[3 * self.n_bodies:] -= self._Kb @ u
         K = self._project(ev.dQdq)
-        K[3 * self.n_bodies:, 3 * self.n_bodies:] -= self._Kb
+        if self.support is None:
+            Q[3 * self.n_bodies:] -= self._Kb @ u
+            K[3 * self.n_bodies:, 3 * self.n_bodies:] -= self._Kb
+        else:
+            F, G = self.support.forces(u.reshape(self.n_pins, self.n_stations, len(self.dofs)))
+            Q[3 * self.n_bodies:] -= F.ravel()
+            m = self.n_stations * len(self.dofs)
+            for p in range(self.n_pins):
+                sl = slice(3 * self.n_bodies + p * m, 3 * self.n_bodies + (p + 1) * m)
+                K[sl, sl] -= G[p]
         D = None if ev.dQdv is None else self._project(ev.dQdv)
         return Q, K, D
 
@@ -183,21 +214,37 @@ class ElasticPinClosure:
         return r <= self.tolerance or r <= RELATIVE_TOLERANCE * np.abs(ev.Q).max(initial=0.0)
 
     def _solve_uu(self, Kuu, rhs):
-        """Kuu^-1 rhs with Kuu block diagonal per pin (2 n_s square blocks)."""
-        m = 2 * self.n_stations
+        """Kuu^-1 rhs with Kuu block diagonal per pin (n_d n_s square blocks)."""
+        m = len(self.dofs) * self.n_stations
         n = self.n_pins
         blocks = Kuu.reshape(n, m, n, m)[np.arange(n), :, np.arange(n), :]
         x = np.linalg.solve(blocks, np.asarray(rhs).reshape(n, m, -1))
         return x.reshape(n * m, -1) if np.ndim(rhs) == 2 else x.reshape(-1)
 
-    def condense(self, red, beam_factor=1.0):
+    def support_tangent(self, u):
+        """The station law's tangent ds/du (n_u, n_u) at deflections u (block diagonal per pin);
+        K_b for the linear beam."""
+        if self.support is None:
+            return self._Kb
+        _, G = self.support.forces(np.asarray(u, float).reshape(self.n_pins, self.n_stations, len(self.dofs)))
+        m = self.n_stations * len(self.dofs)
+        out = np.zeros((self._n_u, self._n_u))
+        for p in range(self.n_pins):
+            out[p * m:(p + 1) * m, p * m:(p + 1) * m] = G[p]
+        return out
+
+    def condense(self, red, beam_factor=1.0, u=None):
         """(Q, dQ/dq, dQ/dv) on the real coordinates from reduced (Q, K, D); ``beam_factor``
-        scales K_b in the condensation only (the budget's switch-to-rigid view of the beam)."""
+        scales K_b (a nonlinear station law: its tangent at the solved deflections ``u``) in the
+        condensation only (the budget's switch-to-rigid view of the beam)."""
         Q, K, D = red
         nr = 3 * self.n_bodies
         Kuu = K[nr:, nr:]
         if beam_factor != 1.0:
-            Kuu = Kuu - (beam_factor - 1.0) * self._Kb
+            if self.support is not None and u is None:
+                raise RvtoolInputError("beam_factor != 1 with a nonlinear station law (support) needs the solved "
+                                       "deflections u")
+            Kuu = Kuu - (beam_factor - 1.0) * (self._Kb if self.support is None else self.support_tangent(u))
         X = self._solve_uu(Kuu, K[nr:, :nr])
         dQdq = K[:nr, :nr] - K[:nr, nr:] @ X
         dQdv = None
@@ -230,6 +277,6 @@ class ElasticPinClosure:
         return self._extended(pose, np.zeros_like(pose), u)[0]
 
     def deflections(self, pose):
-        """Station deflections (n_pins, n_s, 2) [m] at static poses (nb, 3)."""
+        """Station deflections (n_pins, n_s, n_d) [m or rad] at static poses (nb, 3)."""
         u = self.solve(pose, np.zeros_like(np.asarray(pose, float)))[0]
         return u[self._u_index]

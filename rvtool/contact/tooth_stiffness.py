@@ -33,6 +33,8 @@ needs Weber's load-line depth h(u) supplied here.
 from dataclasses import dataclass
 import math
 
+import functools
+
 import numpy as np
 
 from ..geometry.involute import InvoluteGear
@@ -74,6 +76,15 @@ def _load(gear: InvoluteGear, u):
     return P, -gear.eps * dT
 
 
+@functools.lru_cache(maxsize=8)
+def _gauss_legendre(n):
+    """Gauss--Legendre nodes and weights on [-1, 1] (read-only, computed once per n: an
+    eigenvalue problem of order n that every gear of every variant would otherwise repeat)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.flags.writeable = w.flags.writeable = False
+    return x, w
+
+
 def beam_compliance(gear: InvoluteGear, u, n_sections=400, section=None):
     """(c'_bending, c'_shear, c'_axial) [m^2/N] per unit face width at roll angles u.
 
@@ -92,7 +103,7 @@ def beam_compliance(gear: InvoluteGear, u, n_sections=400, section=None):
     v = f @ np.array([-axis[1], axis[0]])
     nrm = f @ axis
     # Gauss-Legendre on [0, s_P]: the integrands are smooth in s (y > 0 over the whole tooth)
-    xg, wg = np.polynomial.legendre.leggauss(n_sections // 4)
+    xg, wg = _gauss_legendre(n_sections // 4)
     for i, sp in enumerate(s_p):
         s = 0.5 * sp * (xg + 1.0)
         w = 0.5 * sp * wg

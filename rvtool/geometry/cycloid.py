@@ -44,7 +44,7 @@ class CycloidProfile:
     equidistant_mod: float = 0.0
     offset_mod: float = 0.0
     rotation_mod: float = angle_field(0.0)
-    radial_mod_table: tuple | None = None
+    radial_mod_table: tuple | None = field(default=None, metadata={"unit": "rad, m"})  # (phi, delta_r) pairs
 
     def __post_init__(self):
         check_positive("pin_circle_radius", self.pin_circle_radius)

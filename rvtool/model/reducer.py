@@ -250,6 +250,9 @@ class ReducerModel:
     #: clearance and backlash); off elsewhere, so no existing model's path or failure changes
     guided_free_play: bool = False
     contact_host: object = None     # MergedContactElement carrying every family (one element per system), or None
+    #: retained axial and tilt coordinates of the output body on its main bearing
+    #: (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`; issue 32), or None (planar output)
+    carrier_tilt: object = None
 
     # -- coordinates -------------------------------------------------------
     def body_index(self, body):
@@ -377,6 +380,47 @@ class ReducerModel:
             if body == b and cc == c and k > 0:
                 return obj, k
         return None
+
+    # -- the output flange on its main bearing (issue 32) ---------------------------
+    def _retained_tilt(self):
+        if self.carrier_tilt is None:
+            raise RvtoolInputError("the output body is planar (its axial and tilt coordinates are held); valid: "
+                                   "bodies.carrier_coordinates (RV) or bodies.flange_coordinates (cycloid) = "
+                                   "'spatial' in the design file")
+        return self.carrier_tilt
+
+    def set_flange_load(self, axial_force=0.0, moment=(0.0, 0.0)):
+        """External axial force [N] and tilting moment (M_x, M_y) [N m] on the output flange at the
+        main bearing's axial centre (spatial output body only)."""
+        from ..validation import check_finite
+        check_finite("axial_force", axial_force)
+        check_finite("moment", moment)
+        if np.shape(moment) != (2,):
+            raise RvtoolInputError(f"moment must hold (M_x, M_y) [N m]; got {moment!r}")
+        self._retained_tilt().set_load(axial_force, moment)
+
+    def flange_displacement(self, q):
+        """(z [m], gamma_x, gamma_y [rad]) of the output flange at the state q (spatial output body only)."""
+        return self._retained_tilt().coordinates(q)
+
+    def main_bearing_state(self, q):
+        """(the main bearing's evaluator, the poses it is evaluated at) at the static state q."""
+        if Family.MAIN_BEARINGS not in self.families:
+            raise RvtoolInputError("the model has no main-bearing family")
+        el = self.elements[self.families[Family.MAIN_BEARINGS][0]]
+        ql = el.local(q)
+        return el.evaluator, el.pose_velocity(ql, np.zeros_like(ql))[0]
+
+    def main_bearing_loads(self, q):
+        """:class:`~rvtool.bearings.set.BearingLoads` of the mounting ``main_bearing`` on the output body
+        at the static state q: radial force, axial force, tilting moment and the axial force of each
+        row (fed back with a spatial output body, observations with a planar one; rolling-element
+        main bearings only)."""
+        ev, pose = self.main_bearing_state(q)
+        if not callable(getattr(ev, "resultants", None)):
+            raise RvtoolInputError(f"the main bearing is a {type(ev).__name__} without resultants; valid: "
+                                   "rolling-element bearings (cycloid: build(..., bearing_model='rolling'))")
+        return ev.resultants(pose)["main_bearing"]
 
     # -- contacts ----------------------------------------------------------------
     def observe(self, q, family):

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..observe.transmission import transmission_error
 
-__all__ = ["transmission_error", "te_metrics", "batch_te", "mesh_forces", "quasi_static_te", "dynamic_te",
+__all__ = ["transmission_error", "te_metrics", "batch_te", "equilibria_te", "mesh_forces", "quasi_static_te", "dynamic_te",
            "DYNAMIC_SOLVERS"]
 
 
@@ -81,8 +81,15 @@ def quasi_static_te(model, *, torque, input_angles, solver=None, record=None, wa
     b, choice = choose(backend, model, "equilibria", n_states=len(input_angles), device=device)
     eq = b.solve_equilibria(model, EquilibriumBatch(input_angles=input_angles, torque=torque, warm_start=warm_start),
                             record=record)
+    return equilibria_te(eq, model.ratio, choice)
+
+
+def equilibria_te(eq, ratio, choice):
+    """The quasi-static TE result (keys of :func:`quasi_static_te`) of a backend's
+    :class:`~rvtool.solver.backends.Equilibria` at prescribed input angles, signed ratio ``ratio``;
+    ``choice`` the backend record."""
     return {"theta_in": eq.theta_in, "theta_out": eq.theta_out,
-            "te": transmission_error(eq.theta_in, eq.theta_out, model.ratio, unwrap=False),
+            "te": transmission_error(eq.theta_in, eq.theta_out, ratio, unwrap=False),
             "peak_loads": eq.peak_loads, "peak_contact_loads": eq.peak_contact_loads, "stats": eq.stats,
             "wall_s": eq.wall_s, "regularization_max": eq.regularization_max, "backend": choice}
 

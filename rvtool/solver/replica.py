@@ -34,7 +34,7 @@ from warp_contacts import output_pins_ref as oref
 from warp_contacts.circle_pairs_ref import O_FN
 from warp_contacts.tapered_rollers_ref import LAM_F
 
-from ..bearings.set import BearingSet
+from ..bearings.set import BearingSet, InfluenceBearingSet
 from ..bearings.tapered_set import TaperedBearingSet
 from ..contact.circle_set import GROUND, CircleContactSet
 from ..contact.cycloid_set import CycloidPinSet
@@ -56,30 +56,36 @@ def _renamed(item, c, **bodies):
     return dataclasses.replace(item, name=f"copy{c}_{item.name}", **bodies)
 
 
-# -- one copier per contact-set type: (set, copies B, bodies per copy nb, precision, device) -> set over B nb --------
-def _copy_pins(s, B, nb, precision, device):
+# -- one copier per contact-set type: (per-copy sets [B], bodies per copy nb, precision, device) -> set over B nb ----
+# copy c takes its rows from sets[c] (one model's set B times, or the sets of B variant models of one topology);
+# the set-wide options (samples, backend, search) are the first set's
+def _copy_pins(sets, nb, precision, device):
+    s, B = sets[0], len(sets)
     meshes = [_renamed(m, c, wheel_body=_shift(m.wheel_body, c * nb), pin_body=_shift(m.pin_body, c * nb),
                        pin_bodies=None if m.pin_bodies is None else tuple(_shift(b, c * nb) for b in m.pin_bodies))
-              for c in range(B) for m in s.meshes]
+              for c, sc in enumerate(sets) for m in sc.meshes]
     return CycloidPinSet(meshes, B * nb, samples_per_tooth=s.samples_per_tooth, backend=s.backend,
                          precision=precision, device=device, name=s.name, search=s.search, search_band=s.search_band)
 
 
-def _copy_gears(s, B, nb, precision, device):
+def _copy_gears(sets, nb, precision, device):
+    s, B = sets[0], len(sets)
     meshes = [_renamed(m, c, body_a=_shift(m.body_a, c * nb), body_b=_shift(m.body_b, c * nb))
-              for c in range(B) for m in s.meshes]
+              for c, sc in enumerate(sets) for m in sc.meshes]
     return InvoluteContactSet(meshes, B * nb, backend=s.backend, precision=precision, device=device, name=s.name)
 
 
-def _copy_bearings(s, B, nb, precision, device):
+def _copy_bearings(sets, nb, precision, device):
+    s, B = sets[0], len(sets)
     mounts = [_renamed(m, c, inner=_shift(m.inner, c * nb), outer=_shift(m.outer, c * nb))
-              for c in range(B) for m in s.mountings]
+              for c, sc in enumerate(sets) for m in sc.mountings]
     return type(s)(mounts, B * nb, name=s.name, backend=s.backend, precision=precision, device=device)
 
 
-def _copy_circles(s, B, nb, precision, device):
+def _copy_circles(sets, nb, precision, device):
+    s, B = sets[0], len(sets)
     contacts = tuple(_renamed(ct, c, body_a=_shift(ct.body_a, c * nb), body_b=_shift(ct.body_b, c * nb))
-                     for c in range(B) for ct in s.set.contacts)
+                     for c, sc in enumerate(sets) for ct in sc.set.contacts)
     return ContactSetEvaluator(CircleContactSet(name=s.name, n_bodies=B * nb, contacts=contacts), backend=s.backend,
                                precision=precision, device=device)
 
@@ -89,15 +95,18 @@ class PlainPinCopies:
     the evaluator's own rows with the flange and wheel columns offset per copy. The
     ``assembler.bodies`` are the (flange, wheel) of each (pin, wheel) row."""
 
-    def __init__(self, s, B, nb, precision, device):
-        if s.mode != PinMode.PLAIN:
+    def __init__(self, sets, nb, precision, device):
+        s, B = sets[0], len(sets)
+        if any(sc.mode != PinMode.PLAIN for sc in sets):
             raise RvtoolInputError(f"output_pins.mode = {s.mode.value!r}: the angle-batched path copies plain "
                                    "output pins only (valid: 'plain')")
+        if any(not np.array_equal(sc.stations, s.stations) for sc in sets):
+            raise RvtoolInputError("the copies' output pins have different stations; copies must share them")
         cols = [oref.J_FLANGE, oref.J_WHEEL]
-        ip = np.tile(s.iparams, (B, 1))
-        off = np.repeat(np.arange(B) * nb, len(s.iparams))[:, None]
+        ip = np.concatenate([sc.iparams for sc in sets])
+        off = np.concatenate([np.full(len(sc.iparams), c * nb) for c, sc in enumerate(sets)])[:, None]
         ip[:, cols] = np.where(ip[:, cols] >= s.n_bodies, B * nb, ip[:, cols] + off)
-        self.fparams, self.iparams, self.stations = np.tile(s.fparams, (B, 1)), ip, s.stations
+        self.fparams, self.iparams, self.stations = np.concatenate([sc.fparams for sc in sets]), ip, s.stations
         self.name, self.n_bodies, self.backend = s.name, B * nb, s.backend
         self.assembler = dataclasses.make_dataclass("Rows", ["bodies"])(ip[:, cols].astype(np.int64))
         self._pose = np.zeros((B * nb + 1, 3))
@@ -115,10 +124,10 @@ class PlainPinCopies:
 
 #: contact-set type -> copier (see the module docstring)
 COPIERS = {CycloidPinSet: _copy_pins, InvoluteContactSet: _copy_gears, BearingSet: _copy_bearings,
-           TaperedBearingSet: _copy_bearings, ContactSetEvaluator: _copy_circles, OutputPinEvaluator: PlainPinCopies}
+           InfluenceBearingSet: _copy_bearings, TaperedBearingSet: _copy_bearings, ContactSetEvaluator: _copy_circles, OutputPinEvaluator: PlainPinCopies}
 
 
-def _rows(s, pose, vel):
+def family_rows(s, pose, vel):
     """(Q rows, dQ/dq rows, dQ/dv rows or None, normal force per observation row [N]) of a copied set."""
     if isinstance(s, PlainPinCopies):
         r = s.raw(pose)
@@ -161,7 +170,7 @@ class ReplicaEvaluator:
 
     def evaluate(self, pose, vel):
         t0 = time.perf_counter()
-        rows = [_rows(f.set, pose, vel) for f in self.families]
+        rows = [family_rows(f.set, pose, vel) for f in self.families]
         t1 = time.perf_counter()
         Q = sum(f.scatter.vector(np.asarray(r[0], np.float64)) for f, r in zip(self.families, rows))
         K = sum(f.scatter.blocks(np.asarray(r[1], np.float64)) for f, r in zip(self.families, rows))
@@ -328,6 +337,39 @@ def replica_reasons(model):
     return reasons
 
 
+def copy_families(model, copies, *, precision="float64", device="cpu"):
+    """[:class:`FamilyCopies`] of every contact element of ``model`` copied ``copies`` times
+    (:data:`COPIERS`; copy c owns bodies c nb .. c nb + nb - 1): what :func:`replicate` puts into
+    its Exudyn system and what the device backend's row Newton
+    (:mod:`rvtool.solver.device_rows`) evaluates without one. ``model`` may also be a list of
+    ``copies`` models of one topology (e.g. Monte Carlo variants): copy c then takes its rows
+    from ``model[c]`` (same elements, same bodies, same rows per copy; checked). The caller
+    checks :func:`replica_reasons` of each model first."""
+    models = list(model) if isinstance(model, (list, tuple)) else [model] * int(copies)
+    B, nb = len(models), len(models[0].body_names)
+    if B != int(copies):
+        raise RvtoolInputError(f"copies = {copies} but {B} models were given (one model per copy)")
+    per_model = [m.contact_elements() for m in models]
+    first = per_model[0]
+    for i, els in enumerate(per_model):
+        if len(models[i].body_names) != nb or [e.evaluator.name for e in els] != [e.evaluator.name for e in first] \
+                or [len(e.ids) for e in els] != [len(e.ids) for e in first]:
+            raise RvtoolInputError(f"model {i} differs in bodies, contact elements or their rows from model 0; the "
+                                   "copies must be models of one topology")
+    families = []
+    for j, el in enumerate(first):
+        s = el.evaluator
+        cs = COPIERS[type(s)]([els[j].evaluator for els in per_model], nb, precision, device)
+        families.append(FamilyCopies(name=s.name, set=cs, scatter=CopyBlockAssembler(cs.assembler.bodies, nb, B),
+                                     obs_rows=len(el.ids)))
+    return families
+
+
+def held_coordinates(model):
+    """[(body index, coordinate)] held at zero by the model's coordinate locks."""
+    return _held(model)
+
+
 def replicate(model, copies, *, precision="float64", device="cpu", build_kw=None):
     """:class:`ReplicatedModel` of ``copies`` copies of ``model`` (see the module docstring).
     build_kw: the build options ``model`` was built with (the per-copy fallback rebuilds with them)."""
@@ -339,13 +381,7 @@ def replicate(model, copies, *, precision="float64", device="cpu", build_kw=None
     if reasons:
         raise RvtoolInputError("; ".join(reasons))
     B, nb = int(copies), len(model.body_names)
-    families = []
-    for el in model.contact_elements():
-        s = el.evaluator
-        copier = COPIERS[type(s)]
-        cs = copier(s, B, nb, precision, device)
-        families.append(FamilyCopies(name=s.name, set=cs, scatter=CopyBlockAssembler(cs.assembler.bodies, nb, B),
-                                     obs_rows=len(el.ids)))
+    families = copy_families(model, B, precision=precision, device=device)
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     mg = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=mbs.AddNode(NodePointGround()), coordinate=0))

@@ -50,6 +50,10 @@ class CrankShaft:
     tilt: true = the crank also tilts on its tapered pair (the pair's tilting compliance 1/K_gamma
         at the rated crank-bearing load, in series with the beam: z z^T / K_gamma added to the
         station compliance, z from the pair's centre; condensed, not a retained coordinate).
+    torsion: "rigid" (the default: today's figures) or "elastic": the shaft twists between its
+        spur gear and its eccentric journals (:mod:`rvtool.structure.crank_torsion`; needs radius
+        and gear_position; with ``model = "simply_supported"`` the journals twist on their bending
+        stations).
     """
     model: str = "rigid"
     radius: float | None = None
@@ -58,6 +62,7 @@ class CrankShaft:
     shear: bool = True
     shear_coefficient: float | None = None
     tilt: bool = False
+    torsion: str = "rigid"
 
     def __post_init__(self):
         if self.model not in MODELS:
@@ -69,6 +74,13 @@ class CrankShaft:
         if self.tilt and not self.elastic:
             raise RvtoolInputError("tilt = true needs model = 'simply_supported' (the tilt compliance is added to "
                                    "the beam's; valid: tilt = false or an elastic crank)")
+        if self.torsion not in ("rigid", "elastic"):
+            raise RvtoolInputError(f"torsion = {self.torsion!r}; valid choices are ['rigid', 'elastic']")
+        if self.torsion == "elastic":
+            for nm in ("radius", "gear_position"):
+                if getattr(self, nm) is None:
+                    raise RvtoolInputError(f"{nm} is required for torsion = 'elastic'; valid: see "
+                                           "rvtool/designs/rv40e.toml [cranks.shaft]")
         if self.shear_coefficient is not None:
             check_range("shear_coefficient", self.shear_coefficient, 0.0, 1.0, low_open=True)
         # the geometry is checked where given (a rigid crank may keep it declared for the switch)

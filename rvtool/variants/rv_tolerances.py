@@ -18,13 +18,12 @@ Fields (SI units; distributions and their TOML form as :mod:`rvtool.variants.tol
 
 Variant k draws from ``numpy.random.default_rng([seed, k])`` in the order of :data:`RV_FIELDS`.
 """
-import tomllib
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import RvtoolInputError
-from .tolerances import DISTRIBUTIONS, distribution_from_dict
+from .tolerances import check_design_distributions, load_design_tolerances
 
 RV_FIELDS = ("crank_phase_error", "crank_eccentricity_error", "pin_radius_error", "needle_clearance",
              "sun_pitch_deviation", "crank_gear_pitch_deviation")
@@ -41,26 +40,12 @@ class RvToleranceSpec:
     crank_gear_pitch_deviation: object = None
 
     def __post_init__(self):
-        for nm in RV_FIELDS:
-            d = getattr(self, nm)
-            if d is not None and not isinstance(d, tuple(DISTRIBUTIONS.values())):
-                raise RvtoolInputError(f"tolerances.{nm} = {d!r}; valid: one of {sorted(DISTRIBUTIONS)} or none")
-        if self.needle_clearance is not None and self.needle_clearance.support()[0] < 0:
-            raise RvtoolInputError(f"tolerances.needle_clearance has support starting at "
-                                   f"{self.needle_clearance.support()[0]} m; valid range [0, inf) m")
+        check_design_distributions(self, RV_FIELDS)
 
 
 def load_rv_tolerances(path):
     """RvToleranceSpec from the ``[tolerances]`` table of a TOML file."""
-    with open(path, "rb") as fh:
-        data = tomllib.load(fh)
-    table = data.get("tolerances")
-    if not isinstance(table, dict):
-        raise RvtoolInputError(f"{path}: no [tolerances] table")
-    unknown = set(table) - set(RV_FIELDS)
-    if unknown:
-        raise RvtoolInputError(f"[tolerances] has unknown keys {sorted(unknown)}; valid keys are {list(RV_FIELDS)}")
-    return RvToleranceSpec(**{k: distribution_from_dict(k, v) for k, v in table.items()})
+    return load_design_tolerances(path, RvToleranceSpec, RV_FIELDS)
 
 
 def sample_rv_design(spec, design, k, seed):

@@ -227,6 +227,34 @@ def distribution_from_dict(name, table):
                                f"{sorted(f.name for f in fields(cls))}") from None
 
 
+def check_design_distributions(spec, field_names):
+    """Validate a design-variant tolerance spec (RV, small-tooth-difference): each field of
+    ``field_names`` holds a distribution of :data:`DISTRIBUTIONS` or None, and a clearance's support
+    starts at 0 or above (a negative clearance is no clearance)."""
+    for nm in field_names:
+        d = getattr(spec, nm)
+        if d is not None and not isinstance(d, tuple(DISTRIBUTIONS.values())):
+            raise RvtoolInputError(f"tolerances.{nm} = {d!r}; valid: one of {sorted(DISTRIBUTIONS)} or none")
+    clearance = getattr(spec, "needle_clearance", None)
+    if clearance is not None and clearance.support()[0] < 0:
+        raise RvtoolInputError(f"tolerances.needle_clearance has support starting at "
+                               f"{clearance.support()[0]} m; valid range [0, inf) m")
+
+
+def load_design_tolerances(path, spec_type, field_names):
+    """``spec_type`` from the ``[tolerances]`` table of a TOML file whose keys are ``field_names``
+    (the design-variant tolerance files of the RV and small-tooth-difference reducers)."""
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    table = data.get("tolerances")
+    if not isinstance(table, dict):
+        raise RvtoolInputError(f"{path}: no [tolerances] table")
+    unknown = set(table) - set(field_names)
+    if unknown:
+        raise RvtoolInputError(f"[tolerances] has unknown keys {sorted(unknown)}; valid keys are {list(field_names)}")
+    return spec_type(**{k: distribution_from_dict(k, v) for k, v in table.items()})
+
+
 def spec_from_dict(data):
     """ToleranceSpec from a dict holding a ``tolerances`` table (or the table itself)."""
     table = data.get("tolerances", data) if isinstance(data, dict) else data

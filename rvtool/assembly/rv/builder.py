@@ -11,7 +11,10 @@ Bodies (planar rigid, x, y, theta; node order = ``body_names``):
 * ``crank0..``: the floating crankshafts (x, y, theta all free), each with its spur gear
   (centre at the body origin, tooth 0 on the body's x axis) and two eccentric journals;
 * ``wheel0``, ``wheel1``: the cycloid wheels (free), each bored for every crank's journal;
-* ``carrier``: the output (both halves joined rigidly; free, on the main bearings).
+* ``carrier``: the output (both halves joined rigidly; free, on the main bearings). With
+  ``bodies.carrier_coordinates = "spatial"`` it also retains its axial translation and two tilts
+  (:func:`spatial_flange`: an Exudyn node of three coordinates, the main bearing on them through
+  :class:`~rvtool.bearings.spatial_set.SpatialBearingSet`, NumPy whatever ``backend``).
 
 Contact elements (each one kernel launch per evaluation): ``pins`` (cycloid--pin meshes of
 both wheels, pins on the ground), ``gears`` (involute pairs sun--crank gear k, and the
@@ -45,6 +48,7 @@ from ...contact.involute_set import GearMesh, InvoluteContactSet, pair_secant_st
 from ...errors import RvtoolInputError
 from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
+from ...model import SeriesBeam as SeriesBeamBase
 from ...output_pins.calibration import mindlin_tangential_ratio
 from ..contact_layout import ContactElements
 from ..cycloid import pin_meshes
@@ -223,6 +227,7 @@ class RvModel(ReducerModel):
     #: station compliance (3, 3) [m/N] of one elastic crank (journal of wheel 0, of wheel 1, gear;
     #: :func:`crank_station_compliance`), or None (rigid cranks)
     crank_compliance: np.ndarray = None
+    torsion_compliance: np.ndarray = None
     #: ReducedStructure of the elastic housing carrying the ring pins, or None (rigid ring)
     housing: object = None
     #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
@@ -272,7 +277,10 @@ class RvModel(ReducerModel):
         if self.crank_compliance is None:
             return self.elements["eccentric_bearings"].evaluator, self._pose("eccentric_bearings", q)
         closure = self.elements["cranks"].evaluator
-        return closure.inner.part("eccentric_bearings"), closure.extended_pose(self._pose("cranks", q))
+        pose = closure.extended_pose(self._pose("cranks", q))
+        if self.torsion_compliance is not None:
+            pose = closure.inner.extended_pose(pose)       # the twisting journals inside the beam's closure
+        return closure.inner.part("eccentric_bearings"), pose
 
     def crank_deflections(self, q):
         """(N_c, 3, 2) bending deflections [m] of every elastic crank at its stations (journal of
@@ -285,9 +293,20 @@ class RvModel(ReducerModel):
     def series_compliance(self, family):
         """Elastic cranks (``cranks.shaft``): the beam of every crank with its station compliance
         over the two journals and the gear, closed per crank (:mod:`rvtool.contact.pin_closure`),
-        reported once, with the eccentric bearings (budget path ``"cranks"``)."""
+        reported once, with the eccentric bearings (budget path ``"cranks"``); crank torsion alone
+        likewise (path ``"crank_torsion"``; with the beam on, the torsion is inside the beam's closure
+        and not a path of its own: its energy falls into the budget's residual); the ring pins'
+        conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`)."""
         from ...model import SeriesBeam
-        if self.crank_compliance is None or Family(family) != Family.ECCENTRIC_BEARINGS:
+        fam = Family(family)
+        if fam == Family.PINS and self.design.pins.groove != "rigid":
+            return GrooveSeries.of_groove(self.elements["pins"])
+        if fam != Family.ECCENTRIC_BEARINGS:
+            return None
+        if self.torsion_compliance is not None and self.crank_compliance is None:
+            return SeriesBeam.of_closure("crank_torsion", Family.ECCENTRIC_BEARINGS, self.torsion_compliance,
+                                         self.elements["eccentric_bearings"])
+        if self.crank_compliance is None:
             return None
         return SeriesBeam.of_closure("cranks", Family.ECCENTRIC_BEARINGS, self.crank_compliance, self.elements["cranks"])
 
@@ -355,6 +374,36 @@ class RvModel(ReducerModel):
         super().draw_section(ax, q)
 
 
+@dataclass(frozen=True)
+class GrooveSeries(SeriesBeamBase):
+    """The ring pins' grooves (``pins.groove = "conformal"``) for the stiffness budget (path
+    ``"pin_grooves"``): the station law is nonlinear, so its energy along a mode is du^T G du with
+    G = ds/du, the law's tangent at the solved deflections, and its stiffened view scales G
+    (:meth:`rvtool.contact.pin_closure.ElasticPinClosure.condense` with ``u``)."""
+    closure: object = None
+    pose: object = None
+
+    def energy(self, q, dq, step=1e-9):
+        h = step / max(float(np.abs(dq).max()), 1e-300)
+        du = (self.deflections(q + h * dq) - self.deflections(q - h * dq)) / (2 * h)
+        u = self.closure.solve(*self.pose(q))[0]
+        return float(du.ravel() @ self.closure.support_tangent(u) @ du.ravel())
+
+    @classmethod
+    def of_groove(cls, element):
+        closure = element.evaluator
+
+        def pose(q):
+            ql = element.local(q)
+            return element.pose_velocity(ql, 0 * ql)
+
+        def stiffened(q, factor):
+            u, _, red, _ = closure.solve(*pose(q))
+            return element.coordinate_indices, closure.condense(red, beam_factor=factor, u=u)[1]
+        return cls("pin_grooves", Family.PINS, closure.compliance, lambda q: closure.deflections(pose(q)[0]),
+                   stiffened, closure, pose)
+
+
 FAMILY_ELEMENTS = {Family.PINS: "pins", Family.INVOLUTE_STAGE: "gears", Family.ECCENTRIC_BEARINGS: "eccentric_bearings",
                    Family.CRANK_BEARINGS: "crank_bearings", Family.MAIN_BEARINGS: "main_bearings"}
 
@@ -413,27 +462,89 @@ def crank_pair_tilt_stiffness(design, radial_load=0.0):
     return float(-0.5 * (K[3, 3] + K[4, 4]))      # the tangent is dF/dq of the wrench on the cone
 
 
-def elastic_crank_path(design, graph, layout, compliance, opts):
+def crank_torsion_compliance(design):
+    """Torsion compliance C (n_wheels, n_wheels) [rad/(N m)] of one crank between its gear and its
+    journals (``cranks.shaft.torsion = "elastic"``, :mod:`rvtool.structure.crank_torsion`), or None."""
+    from ...structure.crank_torsion import torsion_compliance
+    sh = design.cranks.shaft
+    if sh.torsion == "rigid":
+        return None
+    m = design.material
+    return torsion_compliance(sh.radius, m.youngs_modulus, m.poisson_ratio, sh.gear_position, design.wheels.midplanes)
+
+
+def torsion_crank_path(design, graph, layout, compliance, opts):
+    """The needle bearings on twisting cranks: one station body per (crank k, wheel j) at index
+    n_bodies + n_wheels k + j, the crank rotated about its axis by the journal's twist relative to
+    the gear (the crank body's rotation is the gear's), closed per crank by Eq. (2) of
+    :mod:`rvtool.structure.crank_torsion` (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`
+    with ``dofs = (2,)``). The gears and the tapered rows stay on the crank body."""
+    from ...contact.pin_closure import ElasticPinClosure
+    nb, nc, nw = layout.n_bodies, layout.n_cranks, design.n_wheels
+    station = nb + np.arange(nc * nw).reshape(nc, nw)
+    crank_of = {layout.crank(k): k for k in range(nc)}
+    mounts = [dataclasses.replace(m, inner=int(station[crank_of[m.inner], m.outer - layout.wheel0]))
+              for m in needle_mountings(design, graph, layout)]
+    needles = BearingSet(mounts, nb + station.size, name="eccentric_bearings", **opts)
+    return ElasticPinClosure(needles, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
+                             station_compliance=compliance, station=station - nb, dofs=(2,))
+
+
+def groove_pins(design, layout, pin_set_of, meshes, ports=None):
+    """The ring pins in conformal grooves (``pins.groove = "conformal"``, :mod:`rvtool.contact.groove`):
+    one station body per (pin p, wheel j) after the bodies (and the port bodies of a ported ring),
+    at n + n_wheels p + j: pin p's groove (the ground, or its port body on the elastic housing)
+    translated by the pin centre's displacement under wheel j in its groove; the wheel--pin meshes
+    on them, closed per pin by the groove law (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`
+    with ``support``). ``pin_set_of(meshes, n_bodies)`` builds the contact set. Returns the closure,
+    or None for rigid grooves."""
+    from ...contact.groove import GrooveSupport, groove_law
+    from ...contact.pin_closure import GROUND as PIN_GROUND, ElasticPinClosure
+    law = groove_law(design)
+    if law is None:
+        return None
+    zb, nw = design.pins.n_pins, design.n_wheels
+    n = layout.n_bodies + (0 if ports is None else ports.n_virtual)
+    # ported ring: pin p's port body is n_bodies + p (:func:`ported_ring`); the stations ride on it
+    carrier = PIN_GROUND if ports is None else [layout.n_bodies + p for p in range(zb)]
+    st = np.arange(zb * nw).reshape(zb, nw)
+    meshes = [dataclasses.replace(m, pin_bodies=tuple(int(b) for b in n + st[:, k])) for k, m in enumerate(meshes)]
+    return ElasticPinClosure(pin_set_of(meshes, n + st.size), n_bodies=n, carrier=carrier,
+                             station_compliance=None, station=st, support=GrooveSupport(law))
+
+
+def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None):
     """The contact set of the crank path with elastic cranks: the involute meshes and the needle
     bearings stacked (:class:`~rvtool.contact.stacked.StackedContactSet`, element ``"cranks"``) over
     the bodies plus one station body per (crank k, station s) at index n_bodies + 3 k + s (the
     crank translated by its deflection there; :data:`CRANK_STATIONS`), closed per crank by its beam
     (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`, Eq. (series_contact)). The crank
-    bearings stay on the crank body: the beam is held at its supports."""
+    bearings stay on the crank body: the beam is held at its supports.
+
+    torsion: the torsion compliance (n_wheels, n_wheels) of :func:`crank_torsion_compliance`, or
+    None. With it the needles sit on one more station body per (crank k, wheel j) at n_bodies +
+    3 n_cranks + n_wheels k + j, journal j's bending station rotated by the twist (an inner closure,
+    ``dofs = (2,)``, carried per station), and the beam closes that closure: bending and torsion
+    in series, each solved exactly."""
     import dataclasses
     from ...contact.pin_closure import ElasticPinClosure
     from ...contact.stacked import StackedContactSet
-    nb, nc = layout.n_bodies, layout.n_cranks
+    nb, nc, nw = layout.n_bodies, layout.n_cranks, design.n_wheels
     station = nb + np.arange(3 * nc).reshape(nc, 3)
     crank_of = {layout.crank(k): k for k in range(nc)}
     meshes = [dataclasses.replace(m, body_b=int(station[crank_of[m.body_b], 2])) if m.body_b in crank_of else m
               for m in gear_meshes(design, graph, layout)]
-    mounts = [dataclasses.replace(m, inner=int(station[crank_of[m.inner], m.outer - layout.wheel0]))
+    journal = station if torsion is None else nb + station.size + np.arange(nc * nw).reshape(nc, nw)
+    mounts = [dataclasses.replace(m, inner=int(journal[crank_of[m.inner], m.outer - layout.wheel0]))
               for m in needle_mountings(design, graph, layout)]
-    n_ext = nb + station.size
+    n_ext = nb + station.size + (0 if torsion is None else journal.size)
     stacked = StackedContactSet((InvoluteContactSet(meshes, n_ext, name="gears", **opts),
                                  BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)), name="cranks")
-    return ElasticPinClosure(stacked, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
+    inner = stacked
+    if torsion is not None:
+        inner = ElasticPinClosure(stacked, n_bodies=nb + station.size, carrier=station[:, :nw],
+                                  station_compliance=torsion, station=journal - nb - station.size, dofs=(2,))
+    return ElasticPinClosure(inner, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
                              station_compliance=compliance, station=station - nb)
 
 
@@ -456,6 +567,30 @@ def ported_ring(mbs, design, layout, meshes):
     ports = PortBodies(housing, np.array([reduced.port_rows[k][:2] for k in range(zb)]))
     pin_bodies = tuple(range(layout.n_bodies, layout.n_bodies + zb))
     return housing, ports, [dataclasses.replace(m, pin_bodies=pin_bodies) for m in meshes]
+
+
+def spatial_flange(mbs, design, layout, mounting, housing, regularization):
+    """A spatial carrier (``bodies.carrier_coordinates = "spatial"``, issue 32): its retained axial and
+    tilt coordinates (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`: mass, transverse
+    inertia, the builder's regularization springs) and the main bearing on them
+    (:class:`~rvtool.bearings.spatial_set.SpatialBearingSet`: every ball's approach and working angle
+    from the radial, axial and tilt displacement; the out-of-plane coordinates are the evaluator's
+    pose row n_bodies). The housing stays rigid out of plane. Returns (RetainedTilt, set)."""
+    from exudyn_user_elements.out_of_plane import RetainedTilt
+    from ...bearings.spatial_set import SpatialBearingSet
+    if housing is not None:
+        raise RvtoolInputError("bodies.carrier_coordinates = 'spatial' with housing.model = 'ports' is not implemented "
+                               "(the merged element carries one structure); valid: housing.model = 'rigid' or "
+                               "bodies.carrier_coordinates = 'planar'")
+    if design.bearing_friction.model != "none":
+        raise RvtoolInputError(f"bodies.carrier_coordinates = 'spatial' with bearing_friction.model = "
+                               f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
+                               "planar bearing set); valid: bearing_friction.model = 'none' or planar")
+    b = design.bodies
+    k_t, k_r = regularization
+    flange = RetainedTilt(mbs, b.carrier_mass, b.tilt_inertia, (k_t, k_r), name="carrier_tilt")
+    main = SpatialBearingSet([mounting], layout.n_bodies + 1, {layout.carrier: layout.n_bodies}, name="main_bearings")
+    return flange, main
 
 
 def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1),
@@ -517,22 +652,35 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                                "implemented for the RV topology; valid: 'rigid'")
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
     housing, ports, meshes = ported_ring(mbs, d, L, meshes)
-    pin_set = CycloidPinSet(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual),
-                            samples_per_tooth=d.wheels.samples_per_tooth, name="pins", search=d.wheels.search, **opts)
+
+    def pin_set_of(meshes, n_bodies):
+        return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
+                             search=d.wheels.search, **opts)
+    pin_set = groove_pins(d, L, pin_set_of, meshes, ports)
+    if pin_set is None:
+        pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
     cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
-    main = BearingSet([Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)],
-                      L.n_bodies, name="main_bearings", **opts)
+    main_mounting = Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)
+    flange = None
+    if b.spatial_carrier:
+        flange, main = spatial_flange(mbs, d, L, main_mounting, housing, regularization)
+    else:
+        main = BearingSet([main_mounting], L.n_bodies, name="main_bearings", **opts)
     C_crank = crank_station_compliance(d)
+    C_torsion = crank_torsion_compliance(d)
     if C_crank is None:
         gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
-        needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
+        if C_torsion is None:
+            needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
+        else:
+            needles = torsion_crank_path(d, graph, L, C_torsion, opts)
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
-        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts)),)
-    element = ContactElements(mbs, nodes, contact_element, structure=housing)
+        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion)),)
+    element = ContactElements(mbs, nodes, contact_element, structure=housing if flange is None else flange)
     elements = {"pins": element(pin_set, ports=ports)}
-    elements.update((name, element(s)) for name, s in
-                    (*crank_path, ("crank_bearings", cranks), ("main_bearings", main)))
+    elements.update((name, element(s)) for name, s in (*crank_path, ("crank_bearings", cranks)))
+    elements["main_bearings"] = element(main, ports=flange)
     if d.bearing_friction.model != "none":
         # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
         # (carrier -> ground), P1 from the accepted element loads of each mounting; a loss element of its
@@ -557,5 +705,5 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
                    structures={} if housing is None else {"housing": housing},
-                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, housing=housing,
-                   contact_host=element.host)
+                   graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
+                   housing=housing, contact_host=element.host, carrier_tilt=flange)

@@ -113,6 +113,10 @@ class InvoluteStage:
         check_positive("involute_stage.reference_force", self.reference_force)
 
 
+#: retained coordinates of the carrier / output flange (``bodies.carrier_coordinates``)
+CARRIER_COORDINATES = ("planar", "spatial")
+
+
 @dataclass(frozen=True, kw_only=True)
 class RvBodies:
     """Rigid-body data of the RV bodies.
@@ -122,7 +126,14 @@ class RvBodies:
     of the sun (or the compound gear) [kg]. sun_inertia: its polar inertia [kg m^2]. pinion_mass:
     mass of the three-stage input pinion [kg]. pinion_inertia: its polar inertia [kg m^2].
     carrier_mass: mass of the carrier, both halves joined rigidly [kg]. carrier_inertia: its polar
-    inertia [kg m^2]."""
+    inertia [kg m^2].
+    carrier_coordinates: the coordinates the carrier / output flange retains (issue 32):
+    ``"planar"`` (x, y, theta; its axial translation and tilts held, the main bearing's axial force
+    and tilting moment observations -- the default, today's figures) or ``"spatial"`` (also z,
+    gamma_x, gamma_y on the main-bearing rows: :class:`rvtool.bearings.spatial_set.SpatialBearingSet`).
+    carrier_tilt_inertia: transverse inertia [kg m^2] of the carrier about a diameter through the
+    mounting centre (dynamic runs of a spatial carrier only); None: half the polar inertia (a thin
+    disc, assumed)."""
     input: tuple = ("theta",)
     sun_mass: float = 0.15
     sun_inertia: float = 1.0e-5
@@ -130,6 +141,8 @@ class RvBodies:
     pinion_inertia: float = 5.0e-6
     carrier_mass: float = 3.0
     carrier_inertia: float = 6.0e-3
+    carrier_coordinates: str = "planar"
+    carrier_tilt_inertia: float | None = None
 
     def __post_init__(self):
         for c in self.input:
@@ -139,6 +152,21 @@ class RvBodies:
             raise RvtoolInputError("bodies.input must contain 'theta' (the driven input rotation)")
         for nm in ("sun_mass", "sun_inertia", "pinion_mass", "pinion_inertia", "carrier_mass", "carrier_inertia"):
             check_positive(f"bodies.{nm}", getattr(self, nm))
+        if self.carrier_coordinates not in CARRIER_COORDINATES:
+            raise RvtoolInputError(f"bodies.carrier_coordinates = {self.carrier_coordinates!r}; valid choices are "
+                                   f"{list(CARRIER_COORDINATES)}")
+        if self.carrier_tilt_inertia is not None:
+            check_positive("bodies.carrier_tilt_inertia", self.carrier_tilt_inertia)
+
+    @property
+    def spatial_carrier(self):
+        """True where the carrier retains its axial and tilt coordinates."""
+        return self.carrier_coordinates == "spatial"
+
+    @property
+    def tilt_inertia(self):
+        """Transverse inertia [kg m^2] of the carrier (``carrier_tilt_inertia`` or half the polar inertia)."""
+        return self.carrier_inertia / 2 if self.carrier_tilt_inertia is None else self.carrier_tilt_inertia
 
 
 @dataclass(frozen=True, kw_only=True)

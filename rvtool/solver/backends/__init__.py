@@ -5,7 +5,9 @@ name       equilibria (quasi-static protocols)         driven runs (dynamic prot
 =========  ==========================================  ==========================================
 exudyn     StaticSolver with its ladder (the oracle)   Exudyn generalized alpha (the oracle)
 replica    B copies in one Exudyn system               --
-device     device Newton (Warp, cpu or cuda)           --
+device     device Newton (Warp, cpu or cuda): the      --
+           cycloid CUDA-graph path or the row Newton
+           (every replicable topology, e.g. RV)
 fused      --                                          fused stepper (Warp, cpu or cuda)
 =========  ==========================================  ==========================================
 
@@ -113,8 +115,9 @@ def choose(requested, model, task, *, run=None, n_states=None, device="cpu"):
                                  "(rvtool.solver.backends.auto_order)")
             continue
         sup = b.supports(model, task, run)
-        if sup.ok:
+        why = b.auto_reason(model, task) if sup.ok else None
+        if sup.ok and why is None:
             chosen = b
         else:
-            not_taken[b.name] = "; ".join(sup.reasons)
+            not_taken[b.name] = why or "; ".join(sup.reasons)
     return chosen, {"requested": "auto", "ran": chosen.name, "not_taken": not_taken}

@@ -36,6 +36,17 @@ class Support:
         return cls(not reasons, reasons)
 
 
+SPATIAL_BODIES_REASON = ("the model's carrier retains axial and tilt coordinates (bodies.carrier_coordinates = "
+                         "'spatial'): the device copies carry planar bodies (x, y, theta) and the planar bearing "
+                         "kernels only, not the spatial ball rows of rvtool.bearings.spatial_set")
+"""The named reason a device backend gives for a model with spatial bodies (issue 32)."""
+
+
+def spatial_body_reasons(model):
+    """[SPATIAL_BODIES_REASON] where ``model`` has retained out-of-plane coordinates, else []."""
+    return [SPATIAL_BODIES_REASON] if getattr(model, "carrier_tilt", None) is not None else []
+
+
 @dataclass(frozen=True, kw_only=True)
 class EquilibriumBatch:
     """Drive/load states of a quasi-static protocol: ``input_angles`` [rad] (prescribed input
@@ -114,6 +125,11 @@ class Backend:
     def supports(self, model, task, run=None):
         """:class:`Support` of ``task`` on ``model`` (and of the :class:`DrivenRun` ``run``, when given)."""
         raise NotImplementedError
+
+    def auto_reason(self, model, task):
+        """Why ``auto`` does not take this backend although it supports ``task`` on ``model`` (a
+        path without a measured place in auto's order), or None."""
+        return None
 
     def solve_equilibria(self, model, batch: EquilibriumBatch, *, record=None) -> Equilibria:
         raise NotImplementedError(f"backend {self.name!r} solves no equilibria")

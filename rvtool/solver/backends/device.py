@@ -7,8 +7,15 @@ no Exudyn build), so they take what those parameters carry and nothing else: a c
 with lumped bearings, a rigid housing, rigid pins, plain output pins, no friction anchors, and
 a built model equal to its design's rebuild (:func:`rvtool.solver.device_dynamics.fused_support`
 names every difference); the device Newton also needs the model's regularization springs to be
-the parameters'. Every point is solved from its kinematic state (no warm start: the points are
-independent). A point the device Newton does not converge is solved by the Exudyn backend's
+the parameters'. Every other model whose contact families can be copied
+(:func:`rvtool.solver.device_rows.row_reasons`: RV, small-tooth-difference, cycloid designs
+outside that set) runs on the device row Newton (:class:`rvtool.solver.device_rows.DeviceRowNewton`:
+the families' own Warp kernels on the device, the per-copy step on the host); ``stats["path"]``
+says which ran. Not covered (named reasons): friction with stick--slip anchors, elastic pin and
+crank closures, the ported housing's modal coordinates, shared output pins.
+The resident path solves every point from its kinematic state (no warm start: the points are
+independent); the row path does too up to ``copies`` points, and marches warm-started segments
+beyond (``batch.warm_start``, :meth:`rvtool.solver.device_rows.DeviceRowNewton.solve_sequence`). A point the device Newton does not converge is solved by the Exudyn backend's
 static solver on the same model, from the same kinematic start, and counted in
 ``stats["exudyn_points"]`` (the protocol reports it; never hidden).
 """
@@ -18,7 +25,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import RvtoolInputError, SolverFailure
-from .base import Backend, DrivenHistory, Equilibria, Support
+from .base import Backend, DrivenHistory, Equilibria, Support, spatial_body_reasons
+
+
+COVERED = ("cycloid pins", "output pins (plain)", "involute pairs (external, internal)",
+           "rolling elements (needle, cylindrical, ball)", "tapered rollers", "circle pairs (lumped bearings)")
+"""Contact families the device backend's equilibria cover (module docstring)."""
+
+NOT_COVERED = ("friction with stick--slip anchors", "elastic pin and crank closures",
+               "ported housing (modal coordinates)", "shared output pins", "driven runs of non-cycloid topologies")
+"""What the device backends do not run (each is a named reason of :meth:`DeviceBackend.supports`)."""
 
 
 def _device_reasons(model):
@@ -89,28 +105,96 @@ class _VariantFallback:
 
 class DeviceBackend(Backend):
     """Device Newton for equilibria (module docstring). device: Warp device ("cpu", "cuda:0");
-    settings: :class:`rvtool.solver.device_newton.DeviceNewtonSettings`."""
+    settings: :class:`rvtool.solver.device_newton.DeviceNewtonSettings`; copies: the row Newton's
+    batch (copies of the model evaluated per launch; None: min(64, points), since copying the
+    families grows faster than linearly with the copies: RV-40E 1.6 s for 64, 34 s for 512 on the
+    development machine)."""
     name = "device"
     tasks = ("equilibria",)
 
-    def __init__(self, *, device="cpu", settings=None):
-        self.device, self.settings = device, settings
+    def __init__(self, *, device="cpu", settings=None, copies=None):
+        if copies is not None and (isinstance(copies, bool) or not isinstance(copies, (int, np.integer))
+                                   or copies < 1):
+            raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer; None: "
+                                   f"min(64, points), the row Newton's batch)")
+        self.device, self.settings, self.copies = device, settings, copies
         self._params = {}
 
     def _params_of(self, model):
         key = id(model)
         if key not in self._params:
-            self._params[key] = _device_reasons(model)
+            try:
+                self._params[key] = _device_reasons(model)
+            except RvtoolInputError as exc:
+                self._params[key] = [str(exc)], None
         return self._params[key]
+
+    def path(self, model):
+        """(path, reasons): "resident" (the cycloid copy parameters, CUDA graph on cuda), "rows"
+        (:mod:`rvtool.solver.device_rows`) or None with the reasons of both."""
+        from ..device_rows import row_reasons
+        reasons, params = self._params_of(model)
+        if not reasons:
+            return "resident", []
+        rows = row_reasons(model)
+        if not rows:
+            return "rows", []
+        return None, [f"resident path: {r}" for r in reasons] + [f"row path: {r}" for r in rows]
 
     def supports(self, model, task, run=None):
         if not self._task(task):
             return Support.of([f"device does not implement {task!r} (equilibria only; driven runs: 'fused')"])
-        try:
-            reasons, _ = self._params_of(model)
-        except RvtoolInputError as exc:
-            reasons = [str(exc)]
-        return Support.of(reasons)
+        spatial = spatial_body_reasons(model)
+        if spatial:
+            return Support.of(spatial)
+        return Support.of(self.path(model)[1])
+
+    def auto_reason(self, model, task):
+        """auto takes the resident path only: the row path's place in auto's measured order is not
+        measured yet (on a CPU it is no faster than Exudyn for one model's points; on CUDA not
+        measured). --backend device runs it."""
+        if self._task(task) and self.path(model)[0] == "rows":
+            return ("the device row path (non-cycloid topology) has no measured place in auto's order yet "
+                    "(name --backend device to run it)")
+        return None
+
+    def _solve_rows(self, model, batch):
+        """Equilibria of a non-cycloid model on the row Newton (module docstring)."""
+        from ..device_newton import DeviceNewtonSettings
+        from ..device_rows import CONVERGED, DeviceRowNewton
+        from ..static import StaticSolver
+        angles = np.asarray(batch.input_angles)
+        A = len(angles)
+        tq = -np.sign(model.ratio) * batch.torque
+        copies = min(A, self.copies or 64)
+        newton = DeviceRowNewton(model, copies, device=self.device,
+                                 settings=self.settings or DeviceNewtonSettings())
+        # warm-started segments where the batch asks for it and there are more points than copies
+        r = (newton.solve_sequence(angles, tq) if batch.warm_start and A > copies
+             else newton.solve(angles, np.full(A, tq)))
+        idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
+        qs = np.zeros((A, model.mbs.systemData.ODE2Size()))
+        qs[:, idx] = r.q
+        theta_in = angles.copy()
+        failed = np.flatnonzero(r.status != CONVERGED)
+        model.set_output_torque(tq)
+        static = None
+        for p in failed:
+            static = static or StaticSolver(model)
+            static.q = np.zeros(qs.shape[1])
+            static.q[idx] = newton.kinematic(angles[p:p + 1])[0]
+            try:
+                qs[p] = static.solve(float(angles[p]), float(angles[p]))
+            except SolverFailure as exc:
+                raise SolverFailure(f"device backend: no equilibrium at input angle {angles[p]:.9g} rad (device "
+                                    f"row Newton and the Exudyn static solver's ladder failed: {exc})") from None
+            theta_in[p] = static.last_angle
+        stats = {"points": A, "newton_iterations": int(r.iterations.sum()), "sweeps": int(r.sweeps),
+                 "device_loop_s": r.kernels_s + r.scatter_s + r.solve_s, "exudyn_points": int(len(failed)),
+                 "path": "rows", "device": str(self.device), "copies": copies,
+                 "split": {"setup_s": r.setup_s, "kernels_s": r.kernels_s, "scatter_s": r.scatter_s,
+                           "step_s": r.solve_s}}
+        return theta_in, qs, stats
 
     def solve_equilibria(self, model, batch, *, record=None):
         from ..device_newton import CONVERGED, DeviceNewton, DeviceNewtonSettings
@@ -122,6 +206,9 @@ class DeviceBackend(Backend):
             raise RvtoolInputError("the device backend returns no per-point states (record=None; valid: the "
                                    "exudyn backend)")
         t0 = time.perf_counter()
+        if self.path(model)[0] == "rows":
+            theta_in, qs, stats = self._solve_rows(model, batch)
+            return self._equilibria(model, theta_in, qs, stats, t0)
         _, params = self._params_of(model)
         angles = np.asarray(batch.input_angles)
         A = len(angles)
@@ -149,6 +236,14 @@ class DeviceBackend(Backend):
                 raise SolverFailure(f"device backend: no equilibrium at input angle {angles[p]:.9g} rad (device "
                                     f"Newton and the Exudyn static solver's ladder failed: {exc})") from None
             theta_in[p] = static.last_angle
+        stats = {"points": A, "newton_iterations": int(r.iterations.sum()), "sweeps": int(r.sweeps),
+                 "device_loop_s": r.loop_s, "exudyn_points": int(len(failed)), "path": newton.last_path,
+                 "device": newton.device}
+        return self._equilibria(model, theta_in, qs, stats, t0)
+
+    @staticmethod
+    def _equilibria(model, theta_in, qs, stats, t0):
+        """:class:`Equilibria` with the model's family peaks of the states qs (model coordinates)."""
         peaks, contact_peaks = {}, {}
         for q in qs:
             for fam, f in model.family_peaks(q).items():
@@ -156,13 +251,9 @@ class DeviceBackend(Backend):
             for fam, f in model.family_contact_peaks(q).items():
                 contact_peaks[fam] = max(contact_peaks.get(fam, 0.0), f)
         ref_out = model.reference_value(model.output)
-        stats = {"points": A, "newton_iterations": int(r.iterations.sum()), "sweeps": int(r.sweeps),
-                 "device_loop_s": r.loop_s, "exudyn_points": int(len(failed)), "path": newton.last_path,
-                 "device": newton.device}
         return Equilibria(theta_in=theta_in, theta_out=ref_out + qs[:, model.output_index], peak_loads=peaks,
                           peak_contact_loads=contact_peaks, regularization_max=model.regularization_force(qs[-1]),
                           stats=stats, wall_s=time.perf_counter() - t0, q=qs)
-
 
     def solve_variants(self, design, variants, batch, *, regularization=(1e4, 100.0), chunk_pairs=None, fallback=True,
                        pin_forces=True, params=None):
@@ -264,10 +355,12 @@ class FusedBackend(Backend):
         if not self._task(task):
             return Support.of([f"fused does not implement {task!r} (driven runs only; equilibria: 'device')"])
         from ..device_dynamics import fused_support
-        try:
-            reasons = list(fused_support(model, run.run_spec if run is not None else None).reasons)
-        except RvtoolInputError as exc:
-            reasons = [str(exc)]
+        reasons = spatial_body_reasons(model)
+        if not reasons:
+            try:
+                reasons = list(fused_support(model, run.run_spec if run is not None else None).reasons)
+            except RvtoolInputError as exc:
+                reasons = [str(exc)]
         if run is not None and run.observers:
             reasons.append("observers are recorded by the Exudyn driver only")
         return Support.of(reasons)

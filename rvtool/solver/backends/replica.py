@@ -110,6 +110,11 @@ class ReplicaBackend(Backend):
         if record is not None:
             raise RvtoolInputError("the replica backend returns no per-point states (record=None; valid: the "
                                    "exudyn backend)")
+        return self.solve_design(model.design, batch, model=model)
+
+    def solve_design(self, design, batch, *, model=None):
+        """:meth:`solve_equilibria` from ``design`` (built in each worker process with ``build_kw``;
+        with one worker, ``model`` is copied if given, else the design is built here)."""
         angles = np.asarray(batch.input_angles)
         n = len(angles)
         if n < 2:
@@ -124,10 +129,10 @@ class ReplicaBackend(Backend):
         t0 = time.perf_counter()
         idx, real = segments(n, copies)
         blocks = np.array_split(np.arange(copies), workers)
-        args = [(model.design, angles[idx[b]], batch.torque, self.build_kw, self.device, self.predictor,
+        args = [(design, angles[idx[b]], batch.torque, self.build_kw, self.device, self.predictor,
                  self.abs_tol) for b in blocks]
         if workers == 1:
-            parts = [_march(model, *args[0][1:])]
+            parts = [_march(model if model is not None else design, *args[0][1:])]
         else:
             ctx = multiprocessing.get_context("spawn")   # a fresh interpreter: no forked Warp/Exudyn state
             with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_single_thread) as ex:

@@ -1,0 +1,147 @@
+"""Benchmark: cost of a quasi-static point with a spatial carrier (retained axial and tilt
+coordinates on the main-bearing rows, issue 32) next to the planar one, rv40e and rd40.
+
+Both models (``bodies.carrier_coordinates`` "planar", the default, and "spatial") run the same
+sequential quasi-static TE (rvtool.protocols.precision.quasi_static_te, one warm-started Exudyn
+static solve per point) at 40 points per cycloid mesh cycle under the rated torque, in
+interleaved blocks (both see the same load of a shared machine). Per point: wall time and
+Newton iterations; the ratio spatial / planar is the issue's figure (target <= 3x, reported,
+not judged: a machine-load figure). rd40 (cycloid, rolling bearings, bodies.flange_coordinates)
+the same way, at its own mesh period.
+
+Correctness (judged, ``passed``): without out-of-plane load the spatial model reproduces the
+planar one -- the output angle at every point within 1e-9 of the largest output angle, the TE
+within 1e-9 of its peak-to-peak (issue 32: 1e-9 relative), and the flange's axial and tilt
+coordinates zero to 1e-15 m / rad (the pair is symmetric, nothing loads it out of plane).
+Also reported: one loaded spatial point (the rated torque plus 1000 N m on the flange)
+and its cost.
+"""
+import time
+
+import numpy as np
+
+import rvtool
+from rvtool import casekit
+from rvtool.protocols.moment_rigidity import spatial_design
+from rvtool.protocols.precision import quasi_static_te
+from rvtool.solver.static import StaticSolver
+from rvtool.units import ARCSEC_PER_RAD, RAD_PER_ARCMIN
+
+
+class Sequence:
+    """The sequential quasi-static TE of one model, block by block, warm-started within the run."""
+
+    def __init__(self, design, angles, **build_kw):
+        self.design, self.angles = design, angles
+        self.model = rvtool.build(design, **build_kw)
+        self.solver = StaticSolver(self.model)
+        self.theta_out, self.te, self.flange, self.wall_s = [], [], [], 0.0
+
+    def record(self, k, angle, q):
+        if self.model.carrier_tilt is not None:
+            self.flange.append(self.model.flange_displacement(q))
+
+    def run_block(self, sl):
+        r = quasi_static_te(self.model, torque=float(self.design.rated_torque), input_angles=self.angles[sl],
+                            solver=self.solver, record=self.record)
+        self.theta_out.append(r["theta_out"])
+        self.te.append(r["te"])
+        self.wall_s += r["wall_s"]
+
+    def figures(self):
+        n = len(self.angles)
+        return {"points": n, "ms_per_point": 1e3 * self.wall_s / n,
+                "newton_per_point": self.solver.stats.newton_iterations / n,
+                "coordinates": self.model.mbs.systemData.ODE2Size(), "wall_s": self.wall_s}
+
+
+def judge(r):
+    c = r["correctness"]
+    out = {
+        "theta_out_equal": casekit.check(c["theta_out_max_rel_diff"], 1e-9, "<=",
+                                         "issue 32: a spatial model without out-of-plane load reproduces the planar "
+                                         "figures to 1e-9 relative (measured ~1e-15: the same law, term by term)"),
+        "te_equal": casekit.check(c["te_max_diff_over_pp"], 1e-9, "<=",
+                                  "as above, on the TE (its pp ~1e-6 rad; the output angle's rounding, ~1e-17 rad, "
+                                  "is ~1e-11 of it)"),
+        "flange_stays_in_plane": casekit.check(c["flange_max_out_of_plane"], 1e-15, "<=",
+                                               "symmetric back-to-back pair under in-plane load: no axial force or "
+                                               "moment (rounding only)"),
+    }
+    c = r["rd40"]["correctness"]
+    out["rd40_theta_out_equal"] = casekit.check(c["theta_out_max_rel_diff"], 1e-9, "<=", "as for rv40e")
+    out["rd40_te_equal"] = casekit.check(c["te_max_diff_over_pp"], 1e-9, "<=", "as for rv40e")
+    out["rd40_flange_stays_in_plane"] = casekit.check(c["flange_max_out_of_plane"], 1e-15, "<=", "as for rv40e")
+    return out
+
+
+def compare(planar, spatial):
+    """Correctness figures of a spatial run against its planar twin at the same points."""
+    th_p, th_s = np.concatenate(planar.theta_out), np.concatenate(spatial.theta_out)
+    te_p, te_s = np.concatenate(planar.te), np.concatenate(spatial.te)
+    return {"theta_out_max_rel_diff": float(np.max(np.abs(th_s - th_p)) / np.max(np.abs(th_p))),
+            "te_max_diff_over_pp": float(np.max(np.abs(te_s - te_p)) / np.ptp(te_p)),
+            "te_pp_arcsec": float(np.ptp(te_p) * ARCSEC_PER_RAD),
+            "flange_max_out_of_plane": float(np.max(np.abs(spatial.flange)))}
+
+
+def main(argv=None):
+    args = casekit.parse_args(argv, __doc__)
+    t0 = time.perf_counter()
+    d = rvtool.load_design("rv40e")
+    ds = spatial_design(d)
+    period = rvtool.build(d).mesh_period
+    n = 40 if args.quick else 400
+    block = 40
+    angles = np.arange(n) * period / 40
+    planar, spatial = Sequence(d, angles), Sequence(ds, angles)
+    for b0 in range(0, n, block):
+        planar.run_block(slice(b0, b0 + block))
+        spatial.run_block(slice(b0, b0 + block))
+    fp, fs = planar.figures(), spatial.figures()
+    ratio = fs["ms_per_point"] / fp["ms_per_point"]
+
+    # the cycloid topology (rd40, rolling bearings; its flange spatial by bodies.flange_coordinates)
+    rd = rvtool.load_design("rd40")
+    rd_s = rvtool.replace_design(rd, bodies={"flange_coordinates": "spatial"})
+    rd_angles = np.arange(n) * rvtool.build(rd).mesh_period / 40
+    rd_p, rd_sp = Sequence(rd, rd_angles, bearing_model="rolling"), Sequence(rd_s, rd_angles, bearing_model="rolling")
+    for b0 in range(0, n, block):
+        rd_p.run_block(slice(b0, b0 + block))
+        rd_sp.run_block(slice(b0, b0 + block))
+    rfp, rfs = rd_p.figures(), rd_sp.figures()
+
+    # one loaded spatial point: rated torque plus 1000 N m on the flange (a round figure below the
+    # rv40e catalogue file's allowable moment)
+    m_ref = 1000.0
+    m = spatial.model
+    m.set_flange_load(0.0, (m_ref, 0.0))
+    t1 = time.perf_counter()
+    q = spatial.solver.solve(float(angles[-1]), previous_angle=float(angles[-1]))
+    loaded_ms = 1e3 * (time.perf_counter() - t1)
+    z, gx, gy = m.flange_displacement(q)
+    loads = m.main_bearing_loads(q)
+    m.set_flange_load(0.0, (0.0, 0.0))
+    results = {
+        "design": "rv40e",
+        "planar": fp, "spatial": fs, "per_point_cost_ratio_spatial_to_planar": ratio, "target_ratio": 3.0,
+        "within_target": bool(ratio <= 3.0),
+        "correctness": compare(planar, spatial),
+        "rd40": {"planar": rfp, "spatial": rfs,
+                 "per_point_cost_ratio_spatial_to_planar": rfs["ms_per_point"] / rfp["ms_per_point"],
+                 "within_target": bool(rfs["ms_per_point"] / rfp["ms_per_point"] <= 3.0),
+                 "correctness": compare(rd_p, rd_sp), "bearing_model": "rolling"},
+        "loaded_point": {"moment_Nm": m_ref, "torque_Nm": d.rated_torque, "ms": loaded_ms,
+                         "tilt_arcmin": float(gx / RAD_PER_ARCMIN), "axial_mm": float(z * 1e3),
+                         "row_axial_forces_N": list(loads.row_axial_forces),
+                         "main_bearing_radial_N": float(np.hypot(*loads.force))},
+        "wall_s": time.perf_counter() - t0,
+    }
+    settings = {"quick": args.quick, "points": n, "points_per_mesh_cycle": 40, "interleaved_block_points": block,
+                "device": "cpu", "precision": "float64"}
+    casekit.verdict(results, judge)
+    return casekit.write_results(args.out, results, settings=settings, wall_s=results["wall_s"])
+
+
+if __name__ == "__main__":
+    main()

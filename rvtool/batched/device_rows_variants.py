@@ -1,0 +1,130 @@
+"""TE and lost motion of many variant models of one topology (RV-40E Monte Carlo variants) on the
+device row Newton: one copy per variant, every TE point one batch solve of all copies.
+
+:func:`device_rows_variants` takes built models (e.g. ``rvtool.build(sample_rv_design(...))``
+for k = 0..V-1) and runs the per-variant work of the Monte Carlo reference run
+(``cases/rv/monte_carlo_rv.py``) on :class:`rvtool.solver.device_rows.DeviceRowNewton`:
+
+* TE: the quasi-static equilibria at ``input_angles`` under ``torque`` (resisting the nominal
+  output rotation, as :func:`rvtool.protocols.precision.quasi_static_te`), each point warm-started
+  from the copy's previous equilibrium shifted by its kinematic increment (``warm_start``; the
+  first point, and every point with ``warm_start=False``, from the kinematic state); a failed warm
+  start runs the regularization homotopy from the kinematic state on the device; a point that
+  still fails is solved by the Exudyn static solver on the variant's model and counted
+  (``exudyn_points``);
+* lost motion (``lost_motion_level`` [N m], optional): :func:`rvtool.batched.device_rows_lost_motion.device_row_lost_motion`
+  on the same copies (its Exudyn fallbacks counted in ``exudyn_copies``).
+
+A variant whose Exudyn fallback fails too is "failed" (its figures NaN), never dropped.
+"""
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import RvtoolInputError, SolverFailure
+from ..protocols.precision import transmission_error
+from ..solver.device_rows import DeviceRowNewton
+from ..solver.static import StaticSolver
+from .device_rows_lost_motion import device_row_lost_motion
+
+
+@dataclass
+class RowVariants:
+    """Results of :func:`device_rows_variants` for V variants and N points: te (V, N) [rad],
+    theta_out (V, N) [rad] (reference included), lost_motion_rad (V,) (None: not asked), status
+    per variant ("ok" / "failed"), error per variant, exudyn_points (TE points solved by Exudyn),
+    exudyn_copies (lost motions by Exudyn), split of the wall time [s] (``setup_s`` copying the
+    families, ``kernels_s``, ``scatter_s``, ``step_s`` (host Newton step), ``fallback_s``,
+    ``rest_s``), te_s and lost_motion_s [s], wall_s [s], stats (sweeps, Newton iterations)."""
+    te: np.ndarray
+    theta_out: np.ndarray
+    lost_motion_rad: np.ndarray | None
+    status: list
+    error: list
+    exudyn_points: int
+    exudyn_copies: int
+    split: dict
+    te_s: float
+    lost_motion_s: float
+    wall_s: float
+    stats: dict = field(default_factory=dict)
+
+
+def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None, device="cpu", settings=None,
+                         device_sum=None, warm_start=True):
+    """TE and lost motion of ``models`` (module docstring) on Warp ``device``. torque [N m]: the
+    TE's output torque; input_angles [rad]; lost_motion_level [N m] or None; settings: the row
+    Newton's :class:`~rvtool.solver.device_newton.DeviceNewtonSettings`; device_sum: see
+    :class:`DeviceRowNewton`. Returns a :class:`RowVariants`."""
+    t0 = time.perf_counter()
+    models = list(models)
+    angles = np.asarray(input_angles, float)
+    if angles.ndim != 1 or len(angles) < 1 or not np.all(np.isfinite(angles)):
+        raise RvtoolInputError("input_angles must be a finite 1-D sequence of at least 1 angle [rad]")
+    if not np.isfinite(torque):
+        raise RvtoolInputError(f"torque = {torque!r} N m must be finite")
+    newton = DeviceRowNewton(models, device=device, settings=settings, device_sum=device_sum)
+    V, N = len(models), len(angles)
+    tq = np.full(V, -np.sign(models[0].ratio) * float(torque))
+    q_out = np.zeros((V, N))
+    split = {"setup_s": newton.setup_s, "kernels_s": 0.0, "scatter_s": 0.0, "step_s": 0.0, "fallback_s": 0.0}
+    failed = np.zeros(V, bool)
+    error = [None] * V
+    exudyn_points = sweeps = iterations = 0
+    t_te = time.perf_counter()
+    prev = None
+    for k, a in enumerate(angles):
+        kin = newton.kinematic(np.full(V, a))
+        start = prev[0] + kin - prev[1] if (warm_start and prev is not None) else None
+        r = newton.solve(np.full(V, a), tq, start)
+        sweeps += r.sweeps
+        iterations += int(r.iterations.sum())
+        split["kernels_s"] += r.kernels_s
+        split["scatter_s"] += r.scatter_s
+        split["step_s"] += r.solve_s
+        q_out[:, k] = r.q[:, newton.output_local]
+        prev = (r.q, kin)
+        tf = time.perf_counter()
+        for c in np.flatnonzero(~r.converged):
+            exudyn_points += 1
+            r.q[c] = kin[c]                       # the next warm start: from the kinematic state
+            m = models[c]
+            m.set_output_torque(tq[c])
+            try:
+                q_out[c, k] = StaticSolver(m).solve(float(a))[m.output_index]
+            except SolverFailure as exc:
+                failed[c] = True
+                q_out[c, k] = np.nan
+                error[c] = f"TE point {k} (input angle {a:.9g} rad): device and Exudyn failed: {exc}"
+        split["fallback_s"] += time.perf_counter() - tf
+    te_s = time.perf_counter() - t_te
+    lm, lm_s, exudyn_copies = None, 0.0, 0
+    if lost_motion_level is not None:
+        t_lm = time.perf_counter()
+        r = device_row_lost_motion(newton, lost_motion_level)
+        lm_s = time.perf_counter() - t_lm
+        for key in ("kernels_s", "scatter_s", "step_s"):
+            split[key] += r["stats"][key]
+        lm = r["lost_motion_rad"]
+        exudyn_copies = r["stats"]["exudyn_copies"]
+        for c, st in enumerate(r["status"]):
+            if st == "failed":
+                failed[c] = True
+                error[c] = (error[c] + "; " if error[c] else "") + f"lost motion: {r['error'][c]}"
+        sweeps += r["stats"]["rounds"]
+        iterations += r["stats"]["newton_iterations"]
+    ref_out = np.array([m.reference_value(m.output) for m in models])
+    theta_out = ref_out[:, None] + q_out
+    te = np.array([transmission_error(angles, theta_out[c], m.ratio, unwrap=False) for c, m in enumerate(models)])
+    te[failed] = np.nan
+    wall = time.perf_counter() - t0
+    split["rest_s"] = wall - sum(split.values())
+    return RowVariants(te=te, theta_out=theta_out, lost_motion_rad=lm,
+                       status=["failed" if f else "ok" for f in failed], error=error, exudyn_points=exudyn_points,
+                       exudyn_copies=exudyn_copies, split=split, te_s=te_s, lost_motion_s=lm_s, wall_s=wall,
+                       stats={"variants": V, "points": N, "sweeps": sweeps, "newton_iterations": iterations,
+                              "device": str(device), "device_sum": newton.device_sum})
+
+
+__all__ = ["RowVariants", "device_rows_variants"]

@@ -1,0 +1,255 @@
+"""Moment rigidity and axial stiffness of the output flange on its main-bearing rows (issue 32).
+
+Catalogue quantity. RV reducer catalogues list, beside the allowable moment, a "moment rigidity"
+[N m/arc.min]: the external moment on the output flange (an arm's load about a diameter of the
+main bearing) over the tilt angle of the flange it causes, read on the catalogue's moment--tilt
+curve. The Nabtesco rating-table notes that give its measuring points were NOT read in the session
+that wrote this module (rv40e/rv80e_catalogue.toml: the stored copy returned only the opening
+pages), so the points are a STATED CONVENTION, named in every result: the secant between two moment
+levels given as fractions of a reference moment (by default 0 and the catalogue's allowable moment:
+the whole rated range, the catalogue's graph of tilt vs moment being nearly linear for a preloaded
+pair). Nothing is tuned toward a catalogue value.
+
+Procedure (:class:`MomentRigidityTest`): the model with a spatial carrier
+(``bodies.carrier_coordinates = "spatial"``), input held at angle 0, the output torque held at
+``output_torque``; a moment M_x at the main bearing's axial centre at each level, a static
+equilibrium per level (warm-started Newton, :class:`~rvtool.solver.static.StaticSolver`); the
+flange's tilt gamma_x, the axial force of each main-bearing row and the working contact angles read
+at each. Axial stiffness: the same with an axial force, k_a = dF / dz between its two levels.
+
+:func:`pair_moment_rigidity` is the same test on the main bearing alone (flange on a rigid housing,
+Newton on the 5-DOF wrench of :func:`rvtool.bearings.spatial_set.flange_wrench`): cheap, for
+uncertainty bands over the main bearing's `assumed` ranges; with a rigid housing the reducer model
+gives the same figure (the drive train carries no out-of-plane load; tests compare them).
+"""
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RvtoolInputError, SolverFailure
+from ..units import RAD_PER_ARCMIN
+from ..validation import check_finite, check_positive, check_range
+
+NEWTON_DIAGONAL = (1.0, 1.0, 1.0, 1e-2, 1e-2)
+"""Weak diagonal [N/m, N m/rad] added to the flange's tangent in :func:`flange_equilibrium`'s Newton
+step (not to its residual: the equilibrium is the bearing's alone)."""
+
+DEFAULT_READ_BETWEEN = (0.0, 1.0)
+"""Moment points [fraction of the reference moment] of the secant where none are given: a stated
+convention (the catalogue's own points were not read), named in every result."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class MomentRigidityTest:
+    """The moment-rigidity and axial-stiffness protocol as data.
+
+    reference_moment: M_ref [N m] (the catalogue's allowable moment where it prints one).
+    levels: moment levels [fraction of M_ref], ascending, including ``read_between``.
+    read_between: (a, b) [fraction of M_ref]: rigidity = (M_b - M_a) / (gamma_b - gamma_a).
+    axial_force: F_ref [N] of the axial-stiffness points (0, F_ref); 0 skips it.
+    output_torque: torque [N m] held on the output during the test (reducer model only).
+    """
+    reference_moment: float
+    levels: tuple = (0.0, 0.25, 0.5, 0.75, 1.0)
+    read_between: tuple = DEFAULT_READ_BETWEEN
+    axial_force: float = 0.0
+    output_torque: float = 0.0
+
+    def __post_init__(self):
+        check_positive("reference_moment", self.reference_moment)
+        lv = np.asarray(self.levels, float)
+        check_range("levels", lv, 0.0, 2.0)
+        if lv.ndim != 1 or len(lv) < 2 or np.any(np.diff(lv) <= 0):
+            raise RvtoolInputError(f"levels = {self.levels!r} must be at least two ascending fractions")
+        a, b = self.read_between
+        if a not in self.levels or b not in self.levels or not a < b:
+            raise RvtoolInputError(f"read_between = {self.read_between!r} must be two ascending members of "
+                                   f"levels = {self.levels!r}")
+        check_range("axial_force", self.axial_force, 0.0)
+        check_finite("output_torque", self.output_torque)
+
+    @property
+    def moments(self):
+        """Moment levels [N m]."""
+        return np.asarray(self.levels, float) * self.reference_moment
+
+
+@dataclass(frozen=True, kw_only=True)
+class MomentRigidityResult:
+    """moments (n,) [N m]; tilt (n,) [rad] about the moment's axis; row_axial_forces (n, 2) [N] on
+    the flange per main-bearing row; working_angle_range (n, 2) [rad] (smallest, largest over the
+    balls); rigidity [N m/rad] between the test's read points and rigidity_arcmin [N m/arcmin];
+    axial_stiffness [N/m] (None if not run); read_between; convention (where the points come from)."""
+    moments: np.ndarray
+    tilt: np.ndarray
+    row_axial_forces: np.ndarray
+    working_angle_range: np.ndarray
+    rigidity: float
+    axial_stiffness: float | None
+    read_between: tuple
+    convention: str
+
+    @property
+    def rigidity_arcmin(self):
+        return self.rigidity * RAD_PER_ARCMIN
+
+    def to_dict(self):
+        return {"moments_Nm": self.moments.tolist(), "tilt_arcmin": (self.tilt / RAD_PER_ARCMIN).tolist(),
+                "row_axial_forces_N": self.row_axial_forces.tolist(),
+                "working_angle_range_deg": np.degrees(self.working_angle_range).tolist(),
+                "moment_rigidity_Nm_per_arcmin": self.rigidity_arcmin,
+                "axial_stiffness_N_per_m": self.axial_stiffness, "read_between": list(self.read_between),
+                "convention": self.convention}
+
+
+def _convention(test):
+    return (f"secant between {test.read_between[0]:g} and {test.read_between[1]:g} x {test.reference_moment:g} N m "
+            + ("(stated convention: the catalogue's own points were not read)"
+               if tuple(test.read_between) == DEFAULT_READ_BETWEEN else "(declared by the caller)"))
+
+
+def _secant(test, moments, tilt):
+    lv = list(test.levels)
+    i, j = lv.index(test.read_between[0]), lv.index(test.read_between[1])
+    return float((moments[j] - moments[i]) / (tilt[j] - tilt[i]))
+
+
+def moment_rigidity(model, test: MomentRigidityTest):
+    """:class:`MomentRigidityResult` of a built RV model with a spatial carrier (module docstring)."""
+    from ..solver.static import StaticSolver
+    if getattr(model, "carrier_tilt", None) is None:
+        raise RvtoolInputError("moment rigidity needs the output body's tilt coordinates; valid: "
+                               "bodies.carrier_coordinates (RV) or bodies.flange_coordinates (cycloid) = 'spatial' "
+                               "in the design file")
+    solver = StaticSolver(model)
+    model.set_output_torque(float(test.output_torque))
+    tilt, rows, angles = [], [], []
+
+    def point(axial, moment):
+        model.set_flange_load(axial, (moment, 0.0))
+        q = solver.solve(0.0, previous_angle=0.0 if solver.q is not None else None)
+        ev, pose = model.main_bearing_state(q)
+        return q, model.main_bearing_loads(q), ev.working_angles(pose)["main_bearing"]
+
+    try:
+        for M in test.moments:
+            q, loads, alw = point(0.0, M)
+            tilt.append(model.flange_displacement(q)[1])
+            rows.append(loads.row_axial_forces)
+            angles.append((alw.min(), alw.max()))
+        k_a = None
+        if test.axial_force > 0:
+            z = [model.flange_displacement(point(F, 0.0)[0])[0] for F in (0.0, test.axial_force)]
+            k_a = float(test.axial_force / (z[1] - z[0]))
+    finally:
+        model.set_flange_load(0.0, (0.0, 0.0))
+    tilt = np.array(tilt)
+    return MomentRigidityResult(moments=test.moments, tilt=tilt, row_axial_forces=np.array(rows),
+                                working_angle_range=np.array(angles), rigidity=_secant(test, test.moments, tilt),
+                                axial_stiffness=k_a, read_between=tuple(test.read_between),
+                                convention=_convention(test))
+
+
+def flange_equilibrium(pair, load, q0=None, *, tol=1e-9, max_iterations=200):
+    """Relative displacement q (5,) (delta_x, delta_y, delta_z, gamma_x, gamma_y) of a flange on
+    ``pair`` against a rigid housing under the external wrench ``load`` (5,) (F_x, F_y, F_z [N],
+    M_x, M_y [N m]) at the mounting centre: Newton on w(q) + load = 0 with the analytic tangent,
+    converged when |w + load| <= tol (1 + |load|) component-wise. Raises SolverFailure."""
+    from ..bearings.spatial_set import flange_wrench
+    load = np.asarray(load, float)
+    q = np.zeros(5) if q0 is None else np.array(q0, float)
+    for _ in range(max_iterations):
+        w, K, _ = flange_wrench(pair, q)
+        r = w + load
+        if np.all(np.abs(r) <= tol * (1.0 + np.abs(load))):
+            return q
+        # the tangent with a weak diagonal (1 N/m, 0.01 N m/rad against ~1e8): regular inside an end
+        # play where no ball touches, a negligible change of the Newton step in contact
+        step = -np.linalg.solve(K - np.diag(NEWTON_DIAGONAL), r)
+        # steps are capped at a few ball approaches (5 um, 1e-4 rad): the first contact of a pair with
+        # end play is approached in steps, not jumped deep into the Hertz law
+        scale = max(np.max(np.abs(step[:3])) / 5e-6, np.max(np.abs(step[3:])) / 1e-4, 1.0)
+        q = q + step / scale
+    raise SolverFailure(f"flange on its main bearing: no equilibrium under the load {load.tolist()} "
+                        f"in {max_iterations} Newton iterations")
+
+
+def pair_moment_rigidity(pair, test: MomentRigidityTest):
+    """:class:`MomentRigidityResult` of the flange on ``pair`` alone (rigid housing)."""
+    from ..bearings.spatial_set import flange_set
+    s = flange_set(pair)
+    tilt, rows, angles = [], [], []
+    q = np.zeros(5)
+    for M in test.moments:
+        q = flange_equilibrium(pair, (0.0, 0.0, 0.0, M, 0.0), q)
+        pose = np.array([[q[0], q[1], 0.0], [q[2], q[3], q[4]]])
+        tilt.append(q[3])
+        rows.append(s.resultants(pose)["flange"].row_axial_forces)
+        alw = s.working_angles(pose)["flange"]
+        angles.append((alw.min(), alw.max()))
+    k_a = None
+    if test.axial_force > 0:
+        z1 = flange_equilibrium(pair, (0.0, 0.0, test.axial_force, 0.0, 0.0))[2]
+        k_a = float(test.axial_force / z1)
+    tilt = np.array(tilt)
+    return MomentRigidityResult(moments=test.moments, tilt=tilt, row_axial_forces=np.array(rows),
+                                working_angle_range=np.array(angles), rigidity=_secant(test, test.moments, tilt),
+                                axial_stiffness=k_a, read_between=tuple(test.read_between),
+                                convention=_convention(test))
+
+
+def spatial_design(design):
+    """The design with a spatial carrier (``bodies.carrier_coordinates = "spatial"``)."""
+    return dataclasses.replace(design, bodies=dataclasses.replace(design.bodies, carrier_coordinates="spatial"))
+
+
+def main_bearing_keys(assumed):
+    """The `assumed` inputs of a design (:class:`~rvtool.designs.catalogue.AssumedRanges`) that set its
+    main bearing (``main_bearing.*`` keys): the ones that move the moment rigidity."""
+    return tuple(a for a in assumed.inputs if a.key.startswith("main_bearing."))
+
+
+def pair_with(pair, key, value):
+    """``pair`` with the design-file ``key`` (``main_bearing.row_spacing``, ``main_bearing.row.FIELD``
+    or ``main_bearing.row.FIELD_deg``: both rows) set to ``value`` (the file's unit), validated."""
+    from ..bearings.spec import AngularContactPair
+    parts = key.split(".")
+    if parts[0] != "main_bearing" or not isinstance(pair, AngularContactPair):
+        raise RvtoolInputError(f"key = {key!r}: valid keys are main_bearing.row_spacing, main_bearing.row.FIELD")
+    if len(parts) == 2:
+        return dataclasses.replace(pair, **{parts[1]: value})
+    if len(parts) != 3 or parts[1] != "row":
+        raise RvtoolInputError(f"key = {key!r}: valid keys are main_bearing.row_spacing, main_bearing.row.FIELD "
+                               "(both rows; main_bearing.rows[k] tables are not varied here)")
+    field = parts[2]
+    if field.endswith("_deg"):
+        field, value = field[:-4], np.radians(value)
+    rows = tuple(dataclasses.replace(r, **{field: value}) for r in pair.rows)
+    return dataclasses.replace(pair, rows=rows)
+
+
+def main_bearing_band(pair, assumed, test, *, samples=16, seed=0):
+    """Moment rigidity [N m/arcmin] over the main bearing's `assumed` ranges: a one-at-a-time
+    tornado (each key at its low and high end) and ``samples`` Latin-hypercube samples
+    (:mod:`scipy.stats.qmc`) over all of them, each by :func:`pair_moment_rigidity`. Returns
+    {"keys", "tornado": {key: (at low, at high)}, "samples": [...], "band": (min, max) over all}."""
+    from scipy.stats import qmc
+    inputs = main_bearing_keys(assumed)
+    if not inputs:
+        return {"keys": [], "tornado": {}, "samples": [], "band": None}
+
+    def rigidity(p):
+        return pair_moment_rigidity(p, test).rigidity_arcmin
+
+    tornado = {a.key: (rigidity(pair_with(pair, a.key, a.at(0.0))), rigidity(pair_with(pair, a.key, a.at(1.0))))
+               for a in inputs}
+    U = qmc.LatinHypercube(d=len(inputs), seed=seed).random(samples) if samples else np.zeros((0, len(inputs)))
+    lhs = []
+    for u in U:
+        p = pair
+        for a, x in zip(inputs, u):
+            p = pair_with(p, a.key, a.at(x))
+        lhs.append(rigidity(p))
+    vals = [v for pr in tornado.values() for v in pr] + lhs
+    return {"keys": [a.key for a in inputs], "tornado": tornado, "samples": lhs, "band": (min(vals), max(vals))}

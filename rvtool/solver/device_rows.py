@@ -1,0 +1,398 @@
+"""The device backend's row Newton: B independent equilibria of ANY replicable model (RV,
+small-tooth-difference, cycloid) from the contact rows of its families, without an Exudyn system.
+
+The fully device-resident Newton (:mod:`rvtool.solver.device_newton`) reads a cycloid design's
+copy parameters (cycloid pins, plain output pins, lumped bearings: three families of two planar
+bodies, the loop a CUDA graph). Other topologies have other families: RV-40E's merged element
+holds cycloid pins, involute pairs, needle (eccentric) and ball (main) rolling elements and
+tapered rollers (the crank bearings that carry the output carrier). This module solves those:
+
+1. every contact element of the model is copied B times on the Warp device
+   (:func:`rvtool.solver.replica.copy_families`, the copiers the replica backend uses: the same
+   kernels, the same rows, no physics written again);
+2. one Newton iteration of all B copies evaluates each family in one launch at the absolute
+   poses reference + q of all copies, and sums its rows into per-copy residuals and dense tangent
+   blocks (:class:`rvtool.solver.replica.ReplicaEvaluator`, the rows' block scatter);
+3. the step of :mod:`warp_contacts.batched_newton_ref` (the reference of the device-resident
+   kernel, the same bookkeeping) vectorized over the copies: regularization springs times the
+   copy's homotopy factor, the output torque, the fixed coordinates (drive, coordinate locks,
+   journal locks: identity rows at their prescribed values), a dense solve per copy, step
+   limiting, plausibility bounds, warm start -> regularization homotopy -> failed.
+
+Where it runs: the contact kernels on the Warp device (``cpu`` or ``cuda``); the block scatter,
+the tapered rollers' planar mapping (NumPy in :class:`rvtool.bearings.tapered_set.TaperedBearingSet`)
+and the per-copy dense solve on the host, one host round trip per iteration. It is therefore
+not a CUDA graph like the cycloid path: that needs the tapered planar mapping and a family-generic
+row sum as device kernels (issue 31, not done here).
+
+Covered: every contact-set type of :data:`rvtool.solver.replica.COPIERS` (cycloid pins, involute
+pairs external and internal, rolling-element bearings: needle, cylindrical, ball, tapered; circle
+pairs, plain output pins). Not covered (named by :func:`row_reasons`): friction with stick--slip
+anchors (history), elastic pin and crank closures (pin bodies), the ported housing's modal
+coordinates (elastic structures), shared output pins.
+"""
+import dataclasses
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from warp_contacts.batched_newton_ref import ACTIVE, CONVERGED, FAILED, WARM
+
+from ..errors import RvtoolInputError
+from ..model.reducer import COORDINATES
+from .device_newton import DeviceNewtonSettings
+
+
+def row_reasons(model):
+    """Every named reason why the row Newton cannot run ``model`` (empty: it can)."""
+    from .replica import replica_reasons
+    return [r.replace("the angle-batched path", "the device row Newton") for r in replica_reasons(model)]
+
+
+@dataclass
+class RowSolve:
+    """Result of :meth:`DeviceRowNewton.solve` for P copies: q (P, 3 nb) displacement states [m,
+    rad], status (P,) (CONVERGED / FAILED), the converged stage (-1 warm start, s homotopy stage),
+    Newton iterations per copy, residual norms [N], sweeps (batch iterations) and the wall-time
+    split [s]: ``kernels_s`` (the families' launches with their host transfers), ``scatter_s``
+    (rows into per-copy blocks), ``solve_s`` (the host step), ``setup_s`` (copying the families)."""
+    q: np.ndarray
+    status: np.ndarray
+    stage: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    sweeps: int
+    kernels_s: float
+    scatter_s: float
+    solve_s: float
+    setup_s: float
+
+    @property
+    def converged(self):
+        return self.status == CONVERGED
+
+
+def _constraints(model):
+    """(held, journal-locked, springs, input index, output index) of a model in copy coordinates."""
+    from .replica import held_coordinates
+    n = 3 * len(model.body_names)
+    held, journal, spring_k = np.zeros(n, bool), np.zeros(n, bool), np.zeros(n)
+    for b, k in held_coordinates(model):
+        held[3 * b + k] = True
+    for b, k, _ in model.journal_locks:
+        journal[3 * b + k] = True
+    for b, k, kk, _ in model.reg_springs:
+        spring_k[3 * b + k] += kk
+    i_in = 3 * model.body_index(model.input.body) + COORDINATES.index(model.input.coordinate)
+    i_out = 3 * model.body_index(model.output.body) + COORDINATES.index(model.output.coordinate)
+    return held, journal, spring_k, i_in, i_out
+
+
+class DeviceRowSum:
+    """Per-copy residuals and tangent blocks of the copied families summed ON the device
+    (:class:`warp_contacts.block_scatter.BlockScatter`, one thread per row, atomics): a family
+    with a staged launch (:class:`rvtool.contact.evaluator.StagedLaunch`: cycloid pins, involute
+    pairs, rolling elements, circle pairs) is launched on the device and its row buffers are summed
+    where they are; the others (tapered rollers: planar mapping on the host; plain output pins)
+    are evaluated as in :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
+    Only B (n + n^2) numbers come back instead of every row (on a GPU the rows' transfer and the
+    host scatter cost more than the kernels). The same sums as the host scatter up to the order of
+    the additions (last bits). ``timing`` as ReplicaEvaluator's ("kernels": launches, host
+    families and uploads; "scatter": the device sum and its download)."""
+
+    def __init__(self, families, nb, n_copies, device):
+        import warp as wp
+        from warp_contacts.block_scatter import BlockScatter
+        from ..contact.evaluator import StagedLaunch
+        self.families, self.nb, self.B, self.device = families, nb, n_copies, device
+        self.staged = [isinstance(f.set, StagedLaunch) and getattr(f.set, "backend", None) == "warp"
+                       for f in families]
+        self.scatter = BlockScatter([(f.scatter.local, f.scatter.row_copy) for f in families], n_copies, 3 * nb,
+                                    wp.float64, device)
+        self._host_rows = {}
+        self.masked = np.zeros(n_copies, bool)
+        self.timing = {"kernels": 0.0, "scatter": 0.0, "launches": 0}
+
+    def set_static(self, on):
+        for f in self.families:
+            if callable(getattr(f.set, "set_velocity_tangent", None)):
+                f.set.set_velocity_tangent(not on)
+
+    def evaluate(self, pose, vel):
+        import warp as wp
+        from .replica import family_rows
+        t0 = time.perf_counter()
+        rows = []
+        for i, (f, staged) in enumerate(zip(self.families, self.staged)):
+            if staged:
+                f.set.stage(pose, vel)
+                f.set.launch_staged()
+                _, q, K, _ = f.set.row_buffers()
+            else:
+                Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in family_rows(f.set, pose, vel)[:2])
+                if i not in self._host_rows:
+                    self._host_rows[i] = (wp.empty(Qh.shape, dtype=wp.float64, device=self.device),
+                                          wp.empty(Kh.shape, dtype=wp.float64, device=self.device))
+                q, K = self._host_rows[i]
+                q.assign(Qh)
+                K.assign(Kh)
+            rows.append((q, K))
+        t1 = time.perf_counter()
+        Q, K = self.scatter(rows)
+        Q, K = np.array(Q), np.array(K)
+        Q[self.masked], K[self.masked] = 0.0, 0.0
+        self.timing["kernels"] += t1 - t0
+        self.timing["scatter"] += time.perf_counter() - t1
+        self.timing["launches"] += len(self.families)
+        return _Blocks(Q, K)
+
+
+@dataclass
+class _Blocks:
+    Q: np.ndarray
+    dQdq: np.ndarray
+
+
+class DeviceRowNewton:
+    """Batched static Newton of B copies of ``model`` from its families' rows (module docstring).
+
+    model: a :class:`~rvtool.model.ReducerModel`, or a list of B models of one topology (Monte
+    Carlo variants: copy c is ``model[c]``, its own rows, kinematics and reference; then every
+    solve has one point per copy). copies: B, the number of equilibria one launch evaluates (a
+    larger request of one model runs in chunks of B); device: Warp device of the contact kernels;
+    settings: :class:`DeviceNewtonSettings` (the cycloid path's tolerances and bounds: abs_tol
+    1e-6 N as Exudyn's static solver). device_sum: sum the rows into per-copy blocks on the device
+    (:class:`DeviceRowSum`) instead of on the host; default on a CUDA device only (on the CPU the
+    rows are host memory already and the host scatter is deterministic)."""
+
+    def __init__(self, model, copies=None, *, device="cpu", settings=None, device_sum=None):
+        from .replica import ReplicaEvaluator, copy_families
+        self.models = list(model) if isinstance(model, (list, tuple)) else None
+        if self.models is not None:
+            if not self.models:
+                raise RvtoolInputError("model must be a model or a non-empty list of models")
+            if copies is not None and copies != len(self.models):
+                raise RvtoolInputError(f"copies = {copies!r}: a list of models has one copy per model "
+                                       f"({len(self.models)})")
+            copies = len(self.models)
+            model = self.models[0]
+        for m in self.models or [model]:
+            reasons = row_reasons(m)
+            if reasons:
+                raise RvtoolInputError("; ".join(reasons))
+        if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
+            raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer)")
+        t0 = time.perf_counter()
+        self.model, self.B, self.device = model, int(copies), device
+        self.settings = settings or DeviceNewtonSettings()
+        self.nb = nb = len(model.body_names)
+        self.n = n = 3 * nb
+        families = copy_families(self.models or model, self.B, device=device)
+        if device_sum is None:
+            device_sum = not str(device).startswith("cpu")
+        self.device_sum = bool(device_sum)
+        self.evaluator = (DeviceRowSum(families, nb, self.B, device) if self.device_sum
+                          else ReplicaEvaluator(families, nb, self.B))
+        self.evaluator.set_static(True)              # static residual: no velocity tangent
+        cons = _constraints(model)
+        for i, m in enumerate(self.models or []):
+            other = _constraints(m)
+            if not all(np.array_equal(a, b) for a, b in zip(cons, other)):
+                raise RvtoolInputError(f"model {i} has other locks, springs, drive or load than model 0; the copies "
+                                       "must be models of one topology")
+        self.held, self.journal, self.spring_k, self.input_local, self.output_local = cons
+        free = np.ones(n, bool)
+        free[self.held | self.journal] = False
+        free[self.input_local] = False
+        self.free = free
+        self.rot = np.arange(n) % 3 == 2
+        if self.models is None:
+            self.reference = np.broadcast_to(np.asarray(model.reference, float).reshape(-1), (self.B, n))
+        else:
+            self.reference = np.array([np.asarray(m.reference, float).reshape(-1) for m in self.models])
+        self.setup_s = time.perf_counter() - t0
+
+    def kinematic(self, angles, copies=None):
+        """(P, 3 nb) kinematic displacement states at input angles (P,) [rad], with the values the
+        model's constraints prescribe: drive = angle, coordinate locks 0, journal locks and springs
+        at the kinematic positions (:meth:`ReducerModel.set_input_angle`). Variant copies: point p
+        is copy ``copies[p]`` (default: point p on copy p)."""
+        a = np.asarray(angles, float)
+        if self.models is None:
+            kin = (self.model.kinematics.poses(a) - self.model.reference).reshape(len(a), -1)
+        else:
+            cp = self._copies(len(a), copies)
+            kin = np.array([(self.models[c].kinematics.poses(a[p:p + 1])[0] - self.models[c].reference).reshape(-1)
+                            for p, c in enumerate(cp)]).reshape(len(a), self.n)
+        kin[:, self.held] = 0.0
+        kin[:, self.input_local] = a
+        return kin
+
+    def _copies(self, P, copies):
+        """The variant copies of P points (checked: distinct, in range)."""
+        cp = np.arange(self.B) if copies is None else np.asarray(copies, np.int64)
+        if cp.shape != (P,) or len(np.unique(cp)) != P or np.any((cp < 0) | (cp >= self.B)):
+            raise RvtoolInputError(f"{P} points need {P} distinct variant copies in [0, {self.B - 1}] (copies=); "
+                                   f"got {None if copies is None else cp.tolist()}")
+        return cp
+
+    def solve(self, angles, torques, q_start=None, *, copies=None, homotopy=None, settings=None):
+        """Equilibria at input angles (P,) [rad] under output torques (P,) [N m] (on the output
+        coordinate), from q_start (P, 3 nb) (None: the kinematic states). Variant copies: point p
+        runs on copy ``copies[p]`` (distinct; default point p on copy p); a model's copies take any
+        number of points (in chunks of B). homotopy: override ``settings.homotopy`` (False: a failed
+        warm start fails, e.g. the steps of a load continuation); settings: other
+        :class:`DeviceNewtonSettings` for this solve. Returns a :class:`RowSolve`."""
+        a = np.asarray(angles, float)
+        P = len(a)
+        tq = np.broadcast_to(np.asarray(torques, float), (P,)).copy()
+        kin = self.kinematic(a, copies)
+        q = kin.copy() if q_start is None else np.array(q_start, float)
+        if q.shape != (P, self.n) or not np.all(np.isfinite(q)):
+            raise RvtoolInputError(f"q_start must be finite with shape ({P}, {self.n})")
+        q[:, ~self.free] = kin[:, ~self.free]
+        cfg = settings or self.settings
+        if homotopy is not None:
+            cfg = dataclasses.replace(cfg, homotopy=bool(homotopy))
+        out = {"status": np.full(P, ACTIVE, np.int32), "stage": np.full(P, WARM, np.int32),
+               "iters": np.zeros(P, np.int32), "total": np.zeros(P, np.int32), "residual": np.full(P, np.nan)}
+        timing = {"kernels": 0.0, "scatter": 0.0, "solve": 0.0}
+        sweeps = 0
+        if self.models is not None:
+            chunks = [(np.arange(P), self._copies(P, copies))]
+        else:
+            chunks = [(np.arange(s, min(P, s + self.B)), np.arange(min(P, s + self.B) - s)) for s in range(0, P, self.B)]
+        for pts, slots in chunks:
+            qc = q[pts]
+            st = {k: v[pts] for k, v in out.items()}
+            sweeps += self._chunk(slots, qc, kin[pts], tq[pts], st, timing, cfg)
+            q[pts] = qc
+            for k, v in st.items():
+                out[k][pts] = v
+        return RowSolve(q=q, status=out["status"], stage=out["stage"], iterations=out["total"],
+                        residual=out["residual"], sweeps=sweeps, kernels_s=timing["kernels"],
+                        scatter_s=timing["scatter"], solve_s=timing["solve"], setup_s=self.setup_s)
+
+    def solve_sequence(self, angles, torque):
+        """Equilibria of one model along a sequence of input angles (A,) [rad] under one output
+        torque [N m] (on the output coordinate), warm-started: the points are cut into B contiguous
+        segments (:func:`rvtool.solver.backends.replica.segments`) marched side by side, each point
+        from its segment's previous equilibrium shifted by the kinematic increment (the first of a
+        segment, and a point after a failed one, from the kinematic state; a failed warm start runs
+        the regularization homotopy). Returns a :class:`RowSolve` of the A points (sweeps and
+        times summed over the steps)."""
+        from .backends.replica import segments
+        if self.models is not None:
+            raise RvtoolInputError("solve_sequence marches one model's points; variant copies take solve()")
+        a = np.asarray(angles, float)
+        A = len(a)
+        B = min(self.B, A)
+        seg, real = segments(A, B)
+        out = RowSolve(q=np.zeros((A, self.n)), status=np.zeros(A, np.int32), stage=np.zeros(A, np.int32),
+                       iterations=np.zeros(A, np.int32), residual=np.zeros(A), sweeps=0, kernels_s=0.0,
+                       scatter_s=0.0, solve_s=0.0, setup_s=self.setup_s)
+        prev = None
+        for k in range(seg.shape[1]):
+            pts = seg[:, k]
+            kin = self.kinematic(a[pts])
+            r = self.solve(a[pts], np.full(B, float(torque)), None if prev is None else prev[0] + kin - prev[1])
+            keep = real[:, k]
+            for nm in ("q", "status", "stage", "iterations", "residual"):
+                getattr(out, nm)[pts[keep]] = getattr(r, nm)[keep]
+            out.sweeps += r.sweeps
+            out.kernels_s += r.kernels_s
+            out.scatter_s += r.scatter_s
+            out.solve_s += r.solve_s
+            q_next = r.q.copy()
+            q_next[~r.converged] = kin[~r.converged]
+            prev = (q_next, kin)
+        return out
+
+    def _chunk(self, slots, q, kin, tq, st, timing, cfg):
+        """Iterate the points on copies ``slots`` until none is active (the other copies masked at
+        a kinematic state); arrays in place."""
+        B, n = self.B, self.n
+        ev = self.evaluator
+        ev.masked[:] = True
+        ev.masked[slots] = False
+        pose_q = np.zeros((B, n))
+        if self.models is None:
+            pose_q[:] = kin[0]
+        vel = np.zeros((B * self.nb, 3))
+        sweeps = 0
+        while np.any(st["status"] == ACTIVE):
+            pose_q[slots] = q
+            k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
+            r = ev.evaluate((self.reference + pose_q).reshape(B * self.nb, 3), vel)
+            timing["kernels"] += ev.timing["kernels"] - k0
+            timing["scatter"] += ev.timing["scatter"] - s0
+            t0 = time.perf_counter()
+            self._step(r.Q[slots], r.dQdq[slots], q, kin, tq, st, cfg)
+            timing["solve"] += time.perf_counter() - t0
+            sweeps += 1
+        return sweeps
+
+    def _step(self, Qc, Kc, q, kin, tq, st, cfg):
+        """One step of every active copy: :func:`warp_contacts.batched_newton_ref.newton_step`
+        vectorized over the copies (same order of operations per copy); cfg: the settings."""
+        status, stage, iters, total = st["status"], st["stage"], st["iters"], st["total"]
+        act = np.flatnonzero(status == ACTIVE)
+        stiff = np.asarray(cfg.stiffening, float)
+        free, rot = self.free, self.rot
+        total[act] += 1
+        f = np.where(stage[act] == WARM, 1.0, stiff[np.maximum(stage[act], 0)])
+        ks = f[:, None] * self.spring_k[None]
+        r = Qc[act] - ks * (q[act] - kin[act])
+        r[:, self.output_local] += tq[act]
+        A = -Kc[act]
+        A[:, np.arange(self.n), np.arange(self.n)] += ks
+        r[:, ~free] = 0.0
+        A[:, ~free, :] = 0.0
+        A[:, :, ~free] = 0.0
+        A[:, ~free, ~free] = 1.0
+        ok = np.isfinite(r).all(axis=1) & np.isfinite(A).all(axis=(1, 2))
+        norm = np.sqrt(np.sum(r * r, axis=1))
+        st["residual"][act] = norm
+        converged = ok & (norm <= cfg.abs_tol)
+        dq = np.zeros_like(r)
+        good = np.flatnonzero(ok)
+        if len(good):
+            try:
+                dq[good] = np.linalg.solve(A[good], r[good][:, :, None])[:, :, 0]
+            except np.linalg.LinAlgError:               # one singular block: solve them one by one
+                for i in good:
+                    try:
+                        dq[i] = np.linalg.solve(A[i], r[i])
+                    except np.linalg.LinAlgError:
+                        ok[i] = False
+        ok &= np.isfinite(dq).all(axis=1)
+        mt = np.max(np.abs(dq[:, ~rot]), axis=1)
+        mr = np.max(np.abs(dq[:, rot]), axis=1)
+        scale = np.ones(len(act))
+        lim_t = ~converged & (mt > cfg.max_step_translation)
+        scale[lim_t] = cfg.max_step_translation / mt[lim_t]
+        lim_r = ~converged & (mr * scale > cfg.max_step_rotation)
+        scale[lim_r] = cfg.max_step_rotation / mr[lim_r]
+        upd = act[ok]
+        q[upd] += scale[ok, None] * dq[ok]
+        iters[upd] += 1
+        dev = np.abs(q[act] - kin[act])
+        implausible = np.any(np.where(rot[None], dev > cfg.max_rotation, dev > cfg.max_translation), axis=1)
+        ok &= ~implausible
+        last = len(stiff) - 1
+        done = ok & converged
+        fin = done & ((stage[act] == WARM) | (stage[act] == last))
+        status[act[fin]] = CONVERGED
+        nxt = act[done & ~fin]
+        stage[nxt] += 1
+        iters[nxt] = 0
+        bad = act[~done & (~ok | (iters[act] >= cfg.max_iterations))]
+        to_h = bad[(stage[bad] == WARM) & bool(cfg.homotopy)]
+        stage[to_h] = 0
+        iters[to_h] = 0
+        q[to_h] = kin[to_h]
+        status[np.setdiff1d(bad, to_h)] = FAILED
+
+
+__all__ = ["DeviceRowNewton", "RowSolve", "row_reasons"]

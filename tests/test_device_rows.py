@@ -1,0 +1,327 @@
+"""The device backend's row Newton (rvtool.solver.device_rows) on the non-cycloid topologies
+against the Exudyn oracle: tests/golden/backends.json's Exudyn figures (written by
+tests/golden/capture_backends.py, see tests/golden/README.md).
+
+Tolerances as tests/test_backends_golden.py (the issue's targets): equilibria 1e-9 relative
+(each coordinate kind against its largest elastic deviation: a 1e-6 N residual over contact
+stiffnesses of ~1e8 N/m moves a state by ~1e-14 m), TE 1e-6 arcsec, peak loads 1e-6 relative.
+A lost family or another regularization misses these by orders of magnitude (dropping the
+tapered crank bearings moves RV-40E's carrier by its whole elastic deflection).
+"""
+import dataclasses
+import json
+import pathlib
+
+import numpy as np
+import pytest
+
+import rvtool
+from rvtool.errors import RvtoolInputError
+from rvtool.protocols.precision import quasi_static_te
+from rvtool.solver.backends import DeviceBackend, EquilibriumBatch, choose
+from rvtool.solver.device_rows import CONVERGED, DeviceRowNewton
+from rvtool.units import ARCSEC_PER_RAD
+
+def _skip_absent(device):
+    import warp as wp
+    if device.startswith("cuda") and wp.get_cuda_device_count() == 0:
+        pytest.skip(f"{device} not present")
+
+
+DEVICES = [pytest.param(d, id=d) for d in ("cpu", "cuda:0")]
+GOLDEN = json.loads((pathlib.Path(__file__).parent / "golden" / "backends.json").read_text())["exudyn"]
+TE_TOL = 1e-6           # arcsec
+EQ_TOL = 1e-9           # relative
+
+
+@pytest.fixture(scope="module")
+def rv():
+    d = rvtool.load_design("rv40e")
+    return d, rvtool.build(d)
+
+
+def _model_q(model, q_local):
+    """Model (Exudyn) coordinates of states in the body order of the copies."""
+    idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
+    out = np.zeros((len(q_local), model.mbs.systemData.ODE2Size()))
+    out[:, idx] = q_local
+    return out
+
+
+def _equal_states(q, q_ref, model):
+    q, q_ref = np.asarray(q), np.asarray(q_ref)
+    rot = np.zeros(q.shape[-1], bool)
+    for n in model.nodes:
+        rot[np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int)[2]] = True
+    for kind in (rot, ~rot):
+        scale = np.max(np.abs(q_ref[..., kind]))
+        assert np.max(np.abs(q[..., kind] - q_ref[..., kind])) <= EQ_TOL * scale
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_rv40e_equilibria_and_te_on_the_device_equal_exudyn(rv, device):
+    """Every family of RV-40E's merged element (cycloid pins, involute pairs, needle and ball
+    rolling elements, tapered crank bearings carrying the output carrier) on the device row
+    Newton: equilibria and the quick TE sequence against the Exudyn oracle, every point
+    converged on the device (no Exudyn hand-over)."""
+    _skip_absent(device)
+    d, model = rv
+    g = GOLDEN["rv40e"]
+    b = DeviceBackend(device=device)
+    assert b.supports(model, "equilibria").ok and b.path(model)[0] == "rows"
+    eq = b.solve_equilibria(model, EquilibriumBatch(input_angles=g["equilibria_angles_rad"], torque=d.rated_torque))
+    assert eq.stats["exudyn_points"] == 0 and eq.stats["path"] == "rows"
+    _equal_states(eq.q, g["equilibria_q"], model)
+    te = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"], backend="device",
+                         device=device)
+    assert te["backend"]["ran"] == "device" and te["stats"]["exudyn_points"] == 0 and te["stats"]["device"] == device
+    assert np.max(np.abs(te["te"] * ARCSEC_PER_RAD - g["te_arcsec"])) <= TE_TOL
+    assert set(te["peak_loads"]) == set(g["te_peak_loads_N"])
+    for fam, f in g["te_peak_loads_N"].items():
+        assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6)
+
+
+@pytest.mark.parametrize("name", ["std_involute", "rv_three_stage"])
+def test_other_topologies_te_on_the_device_equals_exudyn(name):
+    """The small-tooth-difference reducer (involute internal pair, plain output pins, circle-pair
+    bearings) and the three-stage RV (a second involute stage) on the device row Newton: the
+    quick TE sequence against the Exudyn oracle's golden TE and peak loads, no Exudyn hand-over."""
+    g = GOLDEN[name]
+    d = rvtool.load_design(name)
+    model = rvtool.build(d)
+    assert DeviceBackend().path(model)[0] == "rows"
+    te = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"], backend="device")
+    assert te["backend"]["ran"] == "device" and te["stats"]["exudyn_points"] == 0
+    assert np.max(np.abs(te["te"] * ARCSEC_PER_RAD - g["te_arcsec"])) <= TE_TOL
+    for fam, f in g["te_peak_loads_N"].items():
+        # abs 1e-6 N: a family at the edge of contact (golden 0 N) may carry a force below the
+        # Newton's residual tolerance (abs_tol = 1e-6 N), which neither solver resolves
+        assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6, abs=1e-6)
+
+
+def test_rd40_with_rolling_bearings_takes_the_row_path():
+    """RD-40 built with rolling-element bearings (needle, ball, angular-contact pairs) is outside
+    the resident path's copy parameters (lumped bearings): the row path runs it, and its TE and
+    peak loads equal the Exudyn backend's at the same points."""
+    from rvtool.assembly.cycloid import build
+    d = rvtool.load_design("rd40")
+    model = build(d, bearing_model="rolling")
+    assert DeviceBackend().path(model)[0] == "rows"
+    a = np.linspace(0.0, 0.3, 12)
+    ref = quasi_static_te(model, torque=d.rated_torque, input_angles=a, backend="exudyn")
+    te = quasi_static_te(model, torque=d.rated_torque, input_angles=a, backend="device")
+    assert te["stats"]["path"] == "rows" and te["stats"]["exudyn_points"] == 0
+    assert np.max(np.abs(te["te"] - ref["te"])) * ARCSEC_PER_RAD <= TE_TOL
+    for fam, f in ref["peak_loads"].items():
+        assert te["peak_loads"][fam] == pytest.approx(f, rel=1e-6, abs=1e-6)
+
+
+def test_warm_started_segments_give_the_oracles_te_in_fewer_sweeps(rv):
+    """More points than copies with batch.warm_start: the row path marches warm-started segments
+    (solve_sequence); the TE equals the Exudyn oracle's and takes fewer device sweeps than cold
+    starts of every point (the same equilibria: the states differ by round-off only)."""
+    d, model = rv
+    g = GOLDEN["rv40e"]
+    warm = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"],
+                           backend=DeviceBackend(copies=4))
+    cold = quasi_static_te(model, torque=d.rated_torque, input_angles=g["te_angles_rad"],
+                           backend=DeviceBackend(copies=4), warm_start=False)
+    for te in (warm, cold):
+        assert te["stats"]["exudyn_points"] == 0
+        assert np.max(np.abs(te["te"] * ARCSEC_PER_RAD - g["te_arcsec"])) <= TE_TOL
+    assert warm["stats"]["newton_iterations"] < 0.8 * cold["stats"]["newton_iterations"]
+
+
+def test_chunks_and_the_homotopy_give_the_same_equilibria(rv):
+    """Solving 3 points in chunks of 2 copies (a padded last chunk) gives the equilibria of one
+    chunk of 3; a start outside the plausibility bounds fails its warm start, goes through the
+    regularization homotopy from the kinematic state and reaches the same equilibrium."""
+    d, model = rv
+    g = GOLDEN["rv40e"]
+    a = np.asarray(g["equilibria_angles_rad"])
+    tq = np.full(len(a), -np.sign(model.ratio) * d.rated_torque)
+    one = DeviceRowNewton(model, 3).solve(a, tq)
+    two = DeviceRowNewton(model, 2).solve(a, tq)
+    assert np.all(one.status == CONVERGED) and np.all(two.status == CONVERGED)
+    np.testing.assert_allclose(two.q, one.q, rtol=0, atol=1e-15 * np.max(np.abs(one.q)) + 1e-18)
+    newton = DeviceRowNewton(model, 3)
+    start = newton.kinematic(a)
+    start[:, newton.free & ~newton.rot] += 1e-3          # 1 mm: beyond max_translation = 0.5 mm
+    far = newton.solve(a, tq, start)
+    assert np.all(far.status == CONVERGED) and np.all(far.stage >= 0)   # converged in the homotopy
+    assert np.all(one.stage == -1)                                      # the kinematic start needs none
+    _equal_states(_model_q(model, far.q), g["equilibria_q"], model)
+
+
+def test_the_device_side_row_sum_equals_the_host_scatter(rv):
+    """DeviceRowSum (rows summed into per-copy blocks by a Warp kernel, the tapered rollers' host
+    rows uploaded; the default on CUDA) gives the host scatter's Newton: the same iterations and
+    states to 1e-12 relative (only the order of the additions differs: last bits)."""
+    d, model = rv
+    a = np.asarray(GOLDEN["rv40e"]["te_angles_rad"][:4])
+    tq = np.full(len(a), -np.sign(model.ratio) * d.rated_torque)
+    host = DeviceRowNewton(model, 4, device_sum=False)
+    dev = DeviceRowNewton(model, 4, device_sum=True)
+    assert not host.device_sum and dev.device_sum
+    r0, r1 = host.solve(a, tq), dev.solve(a, tq)
+    assert np.all(r1.converged) and np.array_equal(r0.iterations, r1.iterations)
+    assert np.max(np.abs(r1.q - r0.q)) <= 1e-12 * np.max(np.abs(r0.q))
+
+
+def test_auto_does_not_take_the_unmeasured_row_path(rv):
+    """auto on CUDA puts the device first (measured on the cycloid path); the row path is not
+    measured there, so auto names why it did not take it and runs the next backend."""
+    from rvtool.solver.backends import auto_order
+    _, model = rv
+    assert auto_order("equilibria", n_states=52, device="cuda:0")[0] == "device"
+    b, choice = choose("auto", model, "equilibria", n_states=52, device="cuda:0")
+    assert b.name == "replica" and "no measured place in auto's order" in choice["not_taken"]["device"]
+
+
+def test_what_the_device_does_not_cover_is_named(rv):
+    """Friction with stick--slip anchors (history) is not on the device: a named reason, and
+    --backend device refuses instead of running something else."""
+    d, _ = rv
+    anchored = dataclasses.replace(d, involute_stage=dataclasses.replace(d.involute_stage, mu=0.05,
+                                                                         friction_model="anchor"))
+    model = rvtool.build(anchored)
+    sup = DeviceBackend().supports(model, "equilibria")
+    assert not sup.ok and any("stick--slip anchors" in r and "row path" in r for r in sup.reasons)
+    with pytest.raises(RvtoolInputError, match=r"backend = 'device'.*stick--slip anchors"):
+        choose("device", model, "equilibria")
+    with pytest.raises(RvtoolInputError, match=r"backend = 'device' \(fused\) cannot run dynamic.*cycloid reducers only"):
+        choose("device", model, "dynamic")           # no driven runs of RV on the device (fused stepper)
+    with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):
+        DeviceRowNewton(rvtool.build(d), 0)
+    with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):
+        DeviceBackend(copies=0)
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_rv40e_lost_motion_on_the_device_equals_exudyn(rv, device):
+    """Lost motion at +-3 % T_rated through the needle clearance and the gear backlash on the device
+    row Newton (load continuation) against the Exudyn oracle's figures (spring-controlled march
+    and torque continuation, tests/golden/backends.json), reached without an Exudyn hand-over."""
+    from rvtool.batched.device_rows_lost_motion import device_row_lost_motion
+    from rvtool.units import ARCMIN_PER_RAD
+    _skip_absent(device)
+    d, model = rv
+    g = GOLDEN["rv40e"]
+    r = device_row_lost_motion(DeviceRowNewton(model, 1, device=device), 0.03 * d.rated_torque)
+    assert r["path"] == ["device"] and r["status"] == ["ok"] and r["stats"]["exudyn_copies"] == 0
+    lm = r["lost_motion_rad"][0] * ARCMIN_PER_RAD
+    assert abs(lm - g["lost_motion_march_arcmin"]) <= 1e-6        # arcmin (the issue's target)
+    assert abs(lm - g["lost_motion_continuation_arcmin"]) <= 1e-6
+    with pytest.raises(RvtoolInputError, match=r"torque_level = -1"):
+        device_row_lost_motion(DeviceRowNewton(model, 1), -1.0)
+
+
+def test_variant_copies_equal_each_variants_exudyn_solution(rv):
+    """Monte Carlo variants of RV-40E (rv40e_tolerances: crank phase and eccentricity errors, pin
+    radius, needle clearance, pitch deviations) as copies of one row Newton, each copy its own
+    model: equilibria at two crank angles and the lost motion equal each variant's own Exudyn
+    solution (static solver; spring-controlled march)."""
+    from rvtool import designs
+    from rvtool.batched.device_rows_lost_motion import device_row_lost_motion
+    from rvtool.protocols.lost_motion import lost_motion
+    from rvtool.solver.static import StaticSolver
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    d, _ = rv
+    tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, d, k, 20261124)[0]) for k in range(2)]
+    newton = DeviceRowNewton(models)
+    for a in (0.0, 1.3):
+        r = newton.solve(np.full(2, a), np.full(2, -np.sign(models[0].ratio) * d.rated_torque))
+        assert np.all(r.converged)
+        for c, m in enumerate(models):
+            m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+            q_ref = StaticSolver(m).solve(a)
+            _equal_states(_model_q(m, r.q[c:c + 1]), q_ref[None], m)
+    assert not np.allclose(r.q[0], r.q[1], rtol=1e-6)               # the variants differ
+    lm = device_row_lost_motion(newton, 0.03 * d.rated_torque)
+    assert lm["path"] == ["device", "device"]
+    for c, m in enumerate(models):
+        m.set_output_torque(0.0)
+        ref = lost_motion(m, torque_level=0.03 * d.rated_torque)["lost_motion_rad"]
+        assert abs(lm["lost_motion_rad"][c] - ref) * 60 * 180 / np.pi <= 1e-6     # arcmin
+    with pytest.raises(RvtoolInputError, match=r"distinct variant copies"):
+        newton.solve(np.zeros(2), np.zeros(2), copies=[0, 0])
+
+
+def test_variants_te_counts_every_exudyn_hand_over(rv):
+    """rvtool.batched.device_rows_variants (the Monte Carlo's device path): the variants' TE equals
+    each variant's Exudyn TE (quasi_static_te) to 1e-6 arcsec; with a Newton that cannot converge
+    (one iteration, no homotopy) every point goes to Exudyn, is counted, and the TE is unchanged."""
+    from rvtool import designs
+    from rvtool.batched.device_rows_variants import device_rows_variants
+    from rvtool.solver.device_newton import DeviceNewtonSettings
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    d, _ = rv
+    tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, d, k, 20261124)[0]) for k in (2, 3)]
+    angles = np.array([0.0, 0.4, 0.8])
+    ref = [quasi_static_te(m, torque=d.rated_torque, input_angles=angles, backend="exudyn")["te"] for m in models]
+    r = device_rows_variants(models, torque=d.rated_torque, input_angles=angles)
+    assert r.status == ["ok", "ok"] and r.exudyn_points == 0 and r.lost_motion_rad is None
+    assert np.max(np.abs(r.te - np.array(ref))) * ARCSEC_PER_RAD <= TE_TOL
+    stuck = device_rows_variants(models, torque=d.rated_torque, input_angles=angles,
+                                 settings=DeviceNewtonSettings(max_iterations=1, homotopy=False))
+    assert stuck.exudyn_points == 6 and stuck.status == ["ok", "ok"] and stuck.split["fallback_s"] > 0
+    assert np.max(np.abs(stuck.te - np.array(ref))) * ARCSEC_PER_RAD <= TE_TOL
+
+
+def test_rv40e_hysteresis_loop_on_the_device_equals_exudyn(rv):
+    """The catalogue's loop (virgin preload, then -T -> +T -> -T at 1/16 T_R steps plus the rigidity
+    and lost-motion points) on the device torque path against the Exudyn load continuation
+    (rvtool.protocols.catalogue.ContinuationPath): every level's output angle within 1e-6 arcmin,
+    the catalogue figures (rigidity, lost motion, hysteresis loss) within 1e-9 relative."""
+    from rvtool.batched.device_rows_lost_motion import DeviceTorquePath
+    from rvtool.protocols import catalogue as C
+    from rvtool.units import ARCMIN_PER_RAD
+    d, _ = rv
+    pts = (0.5, 1.0)
+    seq = C.catalogue_sequence(d.rated_torque, rigidity_points=pts)
+    ref = C.catalogue_loop(C.ContinuationPath(rvtool.build(d)), seq, rigidity_points=pts)
+    path = DeviceTorquePath(DeviceRowNewton(rvtool.build(d), 1))
+    dev = C.catalogue_loop(path, seq, rigidity_points=pts)
+    assert path.status() == ["device"] and path.stats()["exudyn_copies"] == 0
+    for key in ("preload",):
+        assert np.max(np.abs(dev[key] - ref[key])) * ARCMIN_PER_RAD <= 1e-6
+    assert np.max(np.abs(dev["cycles"][0]["angle_rad"] - ref["cycles"][0]["angle_rad"])) * ARCMIN_PER_RAD <= 1e-6
+    a, b = dev["metrics"], ref["metrics"]
+    assert a.rigidity.value == pytest.approx(b.rigidity.value, rel=1e-9)
+    assert a.lost_motion == pytest.approx(b.lost_motion, rel=1e-9)
+    assert a.hysteresis_loss.value == pytest.approx(b.hysteresis_loss.value, rel=1e-9)
+
+
+def test_a_copy_that_leaves_the_device_continues_on_exudyn(rv):
+    """A continuation that cannot finish on the device (no step accepted: max_step 1e-12) hands the
+    copy to the Exudyn load continuation at that level: counted, and the figures are Exudyn's."""
+    from rvtool.batched.device_lost_motion import ContinuationSettings
+    from rvtool.batched.device_rows_lost_motion import DeviceTorquePath
+    from rvtool.protocols.catalogue import ContinuationPath
+    d, model = rv
+    levels = (0.5 * d.rated_torque, -0.5 * d.rated_torque, 0.25 * d.rated_torque)
+    path = DeviceTorquePath(DeviceRowNewton(model, 1), continuation=ContinuationSettings(max_step=1e-12))
+    got = [path.go_to(t) for t in levels]
+    assert path.status() == ["exudyn"] and path.stats()["exudyn_copies"] == 1
+    ref = ContinuationPath(rvtool.build(d))
+    want = [ref.go_to(t) for t in levels]
+    assert np.max(np.abs(np.array(got) - want)) * 60 * 180 / np.pi <= 1e-6          # arcmin
+
+
+def test_analyze_hysteresis_runs_on_the_device_with_exudyns_figures():
+    """rvtool analyze rv40e --protocols hysteresis --backend device: the loops on the device torque
+    path, recorded as such, every figure equal to the Exudyn run's (angles within 1e-6 arcmin; the
+    rigidity 1e-9 relative)."""
+    ex = rvtool.analyze("rv40e", "hysteresis", quick=True, out_dir=None, backend="exudyn")["hysteresis"]
+    dv = rvtool.analyze("rv40e", "hysteresis", quick=True, out_dir=None, backend="device")["hysteresis"]
+    assert dv.status == "ok" and dv.settings["backend"]["ran"] == "device" and not dv.warnings
+    assert ex.settings["backend"]["ran"] == "exudyn"
+    fe, fd = ({f.name: f.value for f in r.figures} for r in (ex, dv))
+    assert set(fe) == set(fd)
+    for k in ("hysteresis_loss", "lost_motion_catalogue"):
+        assert abs(fd[k] - fe[k]) <= 1e-6                                   # arcmin
+    assert fd["torsional_rigidity_b_over_a"] == pytest.approx(fe["torsional_rigidity_b_over_a"], rel=1e-9)
+    for key in ("angle_arcmin_loop1", "angle_arcmin_loop2"):
+        assert np.max(np.abs(np.asarray(dv.data[key]) - np.asarray(ex.data[key]))) <= 1e-6
