@@ -93,3 +93,34 @@ def test_readme_fits_on_a_screen_and_links_the_docs():
     assert links, "the README links into the docs"
     for target in links:
         assert (ROOT / target).exists(), f"README links to {target}, which does not exist"
+
+
+def _ext():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("rvtool_docs_ext", ROOT / "docs" / "_ext" / "rvtool_docs.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_units_are_read_from_key_names():
+    ext = _ext()
+    cases = {"L10_h": "h", "K_t_Nm_per_arcmin": "N m/arcmin", "designs/rv40e/p0_MPa": "MPa",
+             "variants_per_s": "1/s", "wall_s": "s", "us_per_roller": "\u00b5s/roller", "axial_N_per_m": "N/m",
+             "added_compliance_arcmin_per_Nm": "arcmin/(N m)", "lost_motion": "", "passed": "", "tilt_deg": "deg"}
+    for key, unit in cases.items():
+        assert ext.unit_of(key) == unit, key
+    assert ext.key_spec("central/torsional_rigidity [N m/arcmin]") == ("central/torsional_rigidity", "N m/arcmin")
+    assert ext.key_spec(" central/lost_motion_arcmin ") == ("central/lost_motion_arcmin", "arcmin")
+
+
+def test_each_table_and_star_keys_select_from_nested_results():
+    ext = _ext()
+    data = {"designs": {"a": {"c": {"k_Nm": 1.0}, "life_h": 2.0}, "b": {"c": {"k_Nm": 3.5}}},
+            "runs": [{"name": "x", "v": 1}, {"name": "y", "v": 2}]}
+    rows = ext.each_rows(data, "designs", [("c/k_Nm", "N m"), ("life_h", "h")])
+    assert rows == [["`a`", "1", "2"], ["`b`", "3.5", "\u2014"]]      # missing entry: a dash, not an error
+    assert ext.each_rows(data, "runs", [("v", "")], label="name") == [["x", "1"], ["y", "2"]]
+    paths = [p for p, _ in ext.flatten(data) if ext.match_key(p, ["designs/*/c"])]
+    assert paths == ["designs/a/c/k_Nm", "designs/b/c/k_Nm"]
+    assert not ext.match_key("designs/a/life_h", ["designs/*/c"])
