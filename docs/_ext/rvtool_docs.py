@@ -166,9 +166,11 @@ _UNITS = [  # key-name suffix -> unit (longest first); results keys carry their 
 
 def unit_of(path):
     """Unit named by the last key of ``path`` (``L10_h`` -> h, ``K_t_Nm_per_arcmin`` -> N m/arcmin),
-    or '' where the name states none. ``_per_<unit>`` spellings are matched before plain ones;
+    or '' where the name states none (or is a dotted design-file key such as ``row.contact_angle_deg``). ``_per_<unit>`` spellings are matched before plain ones;
     ``us_per_roller`` style (unit first) is read as the leading unit."""
     last = str(path).rstrip("/").split("/")[-1]
+    if "." in last:             # a design-file key used as a results key (tornado/<key>): its value's unit is not its own
+        return ""
     for suffix, unit in _UNITS:
         if last.endswith(suffix) and len(last) > len(suffix):
             return unit
