@@ -296,7 +296,7 @@ class CaseResults(_MarkdownDirective):
                 rows = each_rows(data, self.options["each"], specs, self.options.get("label"))
             except (KeyError, IndexError, TypeError) as exc:
                 raise MissingResults(f"case {name!r}: no entry {self.options['each']!r} in results.json ({exc})")
-            header = [f"`{self.options['each']}`"] + [f"`{p}`" + (f" [{u}]" if u else "") for p, u in specs]
+            header = [f"`{self.options.get('label') or self.options['each']}`"] + [f"`{p}`" + (f" [{u}]" if u else "") for p, u in specs]
             return self.emit(lines + table_lines(rows, header))
         keys = [key_spec(k)[0] for k in keys]
         rows = [(p, v) for p, v in flatten(data) if not keys or match_key(p, keys)]
