@@ -108,7 +108,9 @@ def test_units_are_read_from_key_names():
     cases = {"L10_h": "h", "K_t_Nm_per_arcmin": "N m/arcmin", "designs/rv40e/p0_MPa": "MPa",
              "variants_per_s": "1/s", "wall_s": "s", "us_per_roller": "\u00b5s/roller", "axial_N_per_m": "N/m",
              "added_compliance_arcmin_per_Nm": "arcmin/(N m)", "lost_motion": "", "passed": "", "tilt_deg": "deg",
-             "band/tornado/main_bearing.row.contact_angle_deg": ""}     # a design key naming a row, not a unit
+             "band/tornado/main_bearing.row.contact_angle_deg": "",     # a design key naming a row, not a unit
+             "loss_by_family_W/pins": "W", "us_per_roller/needle_planar/laminae": "\u00b5s/roller",
+             "law/curve/0.01/psi": ""}
     for key, unit in cases.items():
         assert ext.unit_of(key) == unit, key
     assert ext.key_spec("central/torsional_rigidity [N m/arcmin]") == ("central/torsional_rigidity", "N m/arcmin")

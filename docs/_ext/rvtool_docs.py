@@ -164,12 +164,8 @@ _UNITS = [  # key-name suffix -> unit (longest first); results keys carry their 
 ]
 
 
-def unit_of(path):
-    """Unit named by the last key of ``path`` (``L10_h`` -> h, ``K_t_Nm_per_arcmin`` -> N m/arcmin),
-    or '' where the name states none (or is a dotted design-file key such as ``row.contact_angle_deg``). ``_per_<unit>`` spellings are matched before plain ones;
-    ``us_per_roller`` style (unit first) is read as the leading unit."""
-    last = str(path).rstrip("/").split("/")[-1]
-    if "." in last:             # a design-file key used as a results key (tornado/<key>): its value's unit is not its own
+def _unit_of_name(last):
+    if "." in last:             # a design-file key used as a results key (tornado/<key>): not a unit
         return ""
     for suffix, unit in _UNITS:
         if last.endswith(suffix) and len(last) > len(suffix):
@@ -177,6 +173,18 @@ def unit_of(path):
     head = last.split("_per_")[0] if "_per_" in last else None
     if head and "_" + head in dict(_UNITS):
         return dict(_UNITS)["_" + head] + "/" + last.split("_per_", 1)[1].replace("_", " ")
+    return ""
+
+
+def unit_of(path):
+    """Unit named by the key path (``L10_h`` -> h, ``K_t_Nm_per_arcmin`` -> N m/arcmin,
+    ``loss_by_family_W/pins`` -> W: the nearest key that names one, the last key first), or ''
+    where none does. Dotted design-file keys (``row.contact_angle_deg`` as a tornado entry) name
+    no unit. ``us_per_roller`` style (unit first) is read as the leading unit."""
+    for part in reversed(str(path).rstrip("/").split("/")):
+        unit = _unit_of_name(part)
+        if unit:
+            return unit
     return ""
 
 
