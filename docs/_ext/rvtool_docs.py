@@ -304,7 +304,9 @@ class CaseResults(_MarkdownDirective):
                 rows = each_rows(data, self.options["each"], specs, self.options.get("label"))
             except (KeyError, IndexError, TypeError) as exc:
                 raise MissingResults(f"case {name!r}: no entry {self.options['each']!r} in results.json ({exc})")
-            header = [f"`{self.options.get('label') or self.options['each']}`"] + [f"`{p}`" + (f" [{u}]" if u else "") for p, u in specs]
+            first = self.options.get("label")
+            header = [f"`{first}`" + (f" [{unit_of(first)}]" if unit_of(first) else "") if first
+                      else f"`{self.options['each']}`"] + [f"`{p}`" + (f" [{u}]" if u else "") for p, u in specs]
             return self.emit(lines + table_lines(rows, header))
         keys = [key_spec(k)[0] for k in keys]
         rows = [(p, v) for p, v in flatten(data) if not keys or match_key(p, keys)]
