@@ -15,6 +15,10 @@ Generated content:
   appended in name order under "Unreleased";
 * directive ``case-results NAME`` -- provenance line, verdict and a table of the scalar figures
   of one case's results.json; ``:keys:`` (comma-separated key-path prefixes) narrows the table,
+  ``*`` in a key path matches one level; ``:each: PATH`` with ``:keys: SUB [unit], ...`` makes a
+  table of one row per entry of the dict or list at PATH (a design, a variant) and one column per
+  sub-path, its unit read from the key's name (``L10_h``, ``K_t_Nm_per_arcmin``) or given in brackets;
+  ``:label: SUB`` labels list entries by a sub-key;
   ``:plot:`` (``X_PATH Y_PATH [Y_PATH ...]``, key paths joined by ``/``) draws a figure of
   list-valued entries, ``:log:`` (``x``, ``y`` or ``xy``) sets log axes;
 * directive ``results-index FOLDER`` -- one row per committed case of a folder (verdict, wall
@@ -151,6 +155,77 @@ def provenance_line(name, data, source):
     return "Source: " + "; ".join(parts) + "."
 
 
+_UNITS = [  # key-name suffix -> unit (longest first); results keys carry their unit in their name
+    ("_Nm_per_arcmin", "N m/arcmin"), ("_Nm_per_rad", "N m/rad"), ("_N_per_m", "N/m"),
+    ("_arcmin_per_Nm", "arcmin/(N m)"), ("_per_s", "1/s"), ("_arcmin", "arcmin"), ("_arcsec", "arcsec"), ("_MPa", "MPa"),
+    ("_GPa", "GPa"), ("_Pa", "Pa"), ("_Nm", "N m"), ("_kN", "kN"), ("_N", "N"), ("_rpm", "r/min"),
+    ("_deg", "deg"), ("_rad", "rad"), ("_um", "\u00b5m"), ("_mm", "mm"), ("_m", "m"), ("_ms", "ms"),
+    ("_us", "\u00b5s"), ("_s", "s"), ("_h", "h"), ("_W", "W"), ("_pct", "%"), ("_percent", "%"),
+]
+
+
+def _unit_of_name(last):
+    if "." in last:             # a design-file key used as a results key (tornado/<key>): not a unit
+        return ""
+    for suffix, unit in _UNITS:
+        if last.endswith(suffix) and len(last) > len(suffix):
+            return unit
+    head = last.split("_per_")[0] if "_per_" in last else None
+    if head and "_" + head in dict(_UNITS):
+        return dict(_UNITS)["_" + head] + "/" + last.split("_per_", 1)[1].replace("_", " ")
+    return ""
+
+
+def unit_of(path):
+    """Unit named by the key path (``L10_h`` -> h, ``K_t_Nm_per_arcmin`` -> N m/arcmin,
+    ``loss_by_family_W/pins`` -> W: the nearest key that names one, the last key first), or ''
+    where none does. Dotted design-file keys (``row.contact_angle_deg`` as a tornado entry) name
+    no unit. ``us_per_roller`` style (unit first) is read as the leading unit."""
+    for part in reversed(str(path).rstrip("/").split("/")):
+        unit = _unit_of_name(part)
+        if unit:
+            return unit
+    return ""
+
+
+def key_spec(text):
+    """``path`` or ``path [unit]`` (a unit the key's name does not carry) -> (path, unit)."""
+    m = re.fullmatch(r"\s*(.*?)\s*(?:\[([^\]]*)\])?\s*", text)
+    path, unit = m.group(1), m.group(2)
+    return path, (unit if unit is not None else unit_of(path))
+
+
+def match_key(path, keys):
+    """``path`` is selected by one of ``keys``: equal, below it, or a ``*`` pattern (one level each)."""
+    for k in keys:
+        if "*" in k:
+            pat = "^" + re.escape(k).replace("\\*", "[^/]+") + "(/.*)?$"
+            if re.match(pat, path):
+                return True
+        elif path == k or path.startswith(k + "/"):
+            return True
+    return False
+
+
+def each_rows(data, each, specs, label=None):
+    """Rows of a per-entry table: one row per child of the dict or list at key path ``each``,
+    one column per (sub-path, unit) of ``specs``; a missing entry is a dash. ``label`` names a
+    sub-key whose value labels a list element's row (default: the dict key or the index)."""
+    base = get_path(data, each)
+    items = list(base.items()) if isinstance(base, dict) else list(enumerate(base))
+    rows = []
+    for k, child in items:
+        name = fmt(get_path(child, label)) if label else f"`{k}`"
+        cells = []
+        for sub, _ in specs:
+            try:
+                cells.append(fmt(get_path(child, sub)))
+            except (KeyError, IndexError, TypeError, ValueError):
+                cells.append("\u2014")
+        rows.append([name] + cells)
+    return rows
+
+
 def table_lines(rows, header):
     out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     out += ["| " + " | ".join(r) + " |" for r in rows]
@@ -207,7 +282,7 @@ class CaseResults(_MarkdownDirective):
     """``case-results NAME``: provenance, verdict, figure and table of one case's committed results."""
     required_arguments = 1
     option_spec = {"keys": directives.unchanged, "plot": directives.unchanged, "log": directives.unchanged,
-                   "title": directives.unchanged}
+                   "title": directives.unchanged, "each": directives.unchanged, "label": directives.unchanged}
 
     def generate(self):
         name = self.arguments[0]
@@ -221,9 +296,24 @@ class CaseResults(_MarkdownDirective):
             rel = os.path.relpath(png, DOCS).replace(os.sep, "/")
             lines += [f"```{{image}} /{rel}", f":alt: {name}", "```", ""]
         keys = [k.strip() for k in self.options.get("keys", "").split(",") if k.strip()]
-        rows = [(p, v) for p, v in flatten(data) if not keys or any(p == k or p.startswith(k + "/") for k in keys)]
+        if "each" in self.options:
+            if not keys:
+                raise ValueError(":each: needs :keys: (the sub-paths that make the columns)")
+            specs = [key_spec(k) for k in keys]
+            try:
+                rows = each_rows(data, self.options["each"], specs, self.options.get("label"))
+            except (KeyError, IndexError, TypeError) as exc:
+                raise MissingResults(f"case {name!r}: no entry {self.options['each']!r} in results.json ({exc})")
+            first = self.options.get("label")
+            header = [f"`{first}`" + (f" [{unit_of(first)}]" if unit_of(first) else "") if first
+                      else f"`{self.options['each']}`"] + [f"`{p}`" + (f" [{u}]" if u else "") for p, u in specs]
+            return self.emit(lines + table_lines(rows, header))
+        keys = [key_spec(k)[0] for k in keys]
+        rows = [(p, v) for p, v in flatten(data) if not keys or match_key(p, keys)]
         shown = rows[:MAX_ROWS]
-        lines += table_lines([(f"`{p}`", fmt(v)) for p, v in shown], ["key in results.json", "value"])
+        with_units = any(unit_of(p) for p, _ in shown)
+        lines += table_lines([(f"`{p}`", fmt(v)) + ((unit_of(p),) if with_units else ()) for p, v in shown],
+                             ["key in results.json", "value"] + (["unit (from the key's name)"] if with_units else []))
         if len(rows) > len(shown):
             lines += ["", f"{len(rows) - len(shown)} more scalar entries are in the case's results.json."]
         return self.emit(lines)
