@@ -342,7 +342,7 @@ def test_angle_batched_copies_of_an_influence_set():
     from rvtool.solver.replica import COPIERS
     s = BearingSet([Mounting(name="ecc", bearing=_needle(slices="influence", half_width="slice_load"), inner=0,
                              outer=1)], n_bodies=2, backend="numpy")
-    copies = COPIERS[type(s)](s, 3, 2, "float64", "cpu")
+    copies = COPIERS[type(s)]([s] * 3, 2, "float64", "cpu")
     assert isinstance(copies, InfluenceBearingSet)
     poses = np.array([[[1.5e-5, 0.3e-5, 0.01], [0.0, 0.0, 0.02]], [[-1e-5, 0.8e-5, 0.2], [0.0, 0.0, 0.1]],
                       [[0.2e-5, -1.2e-5, 1.0], [0.0, 0.0, -0.3]]])

@@ -239,7 +239,7 @@ class BearingSet(StagedLaunch):
         fp, ip, groups = [], [], []
         start = 0
         for m in self.mountings:
-            n = len(_pack(m)[0])
+            n = len(pack_mounting(m)[0])
             b = m.bearing
             if isinstance(b, CylindricalRollerBearing) and b.slices == SliceLaw.INFLUENCE:
                 f, i = bearing_slice_parameters(b)
