@@ -27,7 +27,7 @@ CHOICES = ("auto", "exudyn", "replica", "device", "fused")
 """Values of ``--backend`` / ``backend=``."""
 
 __all__ = ["Backend", "CHOICES", "DeviceBackend", "DrivenHistory", "DrivenRun", "Equilibria", "EquilibriumBatch",
-           "ExudynBackend", "FusedBackend", "REPLICA_MIN_STATES", "ReplicaBackend", "Support", "TASKS", "auto_order",
+           "ExudynBackend", "FusedBackend", "REPLICA_MIN_STATES", "TORQUE_PATH_ORDER", "ReplicaBackend", "Support", "TASKS", "auto_order",
            "backends", "choose", "get"]
 
 
@@ -55,6 +55,10 @@ states 0.25 s Exudyn against 0.48 s replica, 2,000 states 4.9 s against 1.9 s; R
 0.45 s against 1.44 s, 600 states 3.3 s against 2.0 s. The crossover lies at 200-500 states."""
 
 
+TORQUE_PATH_ORDER = ("exudyn", "device")
+"""auto's order of the torque path (the stiffness / lost-motion / hysteresis sequences): MEASURED_LATER."""
+
+
 def auto_order(task, *, n_states=None, device="cpu"):
     """auto's order of the backends for ``task`` (fastest first), measured (see
     :data:`REPLICA_MIN_STATES`): equilibria on a CUDA device: device Newton, replica, Exudyn; on a
@@ -65,6 +69,8 @@ def auto_order(task, *, n_states=None, device="cpu"):
     runs many copies at once)."""
     if task == "dynamic":
         return ["fused", "exudyn"]
+    if task == "torque_path":
+        return list(TORQUE_PATH_ORDER)
     if str(device).startswith("cuda"):
         return ["device", "replica", "exudyn"]
     if n_states is not None and n_states >= REPLICA_MIN_STATES:

@@ -110,7 +110,7 @@ class DeviceBackend(Backend):
     families grows faster than linearly with the copies: RV-40E 1.6 s for 64, 34 s for 512 on the
     development machine)."""
     name = "device"
-    tasks = ("equilibria",)
+    tasks = ("equilibria", "torque_path")
 
     def __init__(self, *, device="cpu", settings=None, copies=None):
         if copies is not None and (isinstance(copies, bool) or not isinstance(copies, (int, np.integer))
@@ -143,17 +143,34 @@ class DeviceBackend(Backend):
 
     def supports(self, model, task, run=None):
         if not self._task(task):
-            return Support.of([f"device does not implement {task!r} (equilibria only; driven runs: 'fused')"])
+            return Support.of([f"device does not implement {task!r} (equilibria and torque paths; driven runs: "
+                               "'fused')"])
         spatial = spatial_body_reasons(model)
         if spatial:
             return Support.of(spatial)
+        if task == "torque_path":
+            from ..device_rows import row_reasons
+            return Support.of([f"device torque path (row Newton): {r}" for r in row_reasons(model)])
         return Support.of(self.path(model)[1])
+
+    def torque_path(self, model, *, input_angle=0.0, initial_torque=None):
+        """The device torque path (:class:`rvtool.solver.device_torque_path.DeviceTorquePath`) on one
+        copy of the device row Newton (every topology the row Newton runs, the cycloid included;
+        a level the device does not reach continues on Exudyn's continuation, counted in
+        ``stats()["exudyn_copies"]``)."""
+        from ..device_rows import DeviceRowNewton
+        from ..device_torque_path import DeviceTorquePath
+        sup = self.supports(model, "torque_path")
+        if not sup.ok:
+            raise RvtoolInputError(f"backend 'device' cannot run a torque path on this model: {'; '.join(sup.reasons)}")
+        return DeviceTorquePath(DeviceRowNewton(model, 1, device=self.device), input_angle=input_angle,
+                                initial_torque=initial_torque)
 
     def auto_reason(self, model, task):
         """auto takes the resident path only: the row path's place in auto's measured order is not
         measured yet (on a CPU it is no faster than Exudyn for one model's points; on CUDA not
         measured). --backend device runs it."""
-        if self._task(task) and self.path(model)[0] == "rows":
+        if task == "equilibria" and self.path(model)[0] == "rows":
             return ("the device row path (non-cycloid topology) has no measured place in auto's order yet "
                     "(name --backend device to run it)")
         return None
