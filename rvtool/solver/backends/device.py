@@ -53,6 +53,12 @@ def _device_reasons(model):
     return [], params
 
 
+TORQUE_PATH_CYCLOID_REASON = ("on a cycloid drive the device torque path is slower than Exudyn's continuation on "
+                              "a CPU (measured: RD-40's quick stiffness sequence 0.08-0.11 s against 0.05 s, "
+                              "rvtool.solver.backends.TORQUE_PATH_ORDER); --backend device runs it")
+"""Why auto does not take the device torque path of a cycloid model (it supports it)."""
+
+
 #: default copies per device loop of :meth:`DeviceBackend.solve_variants`: bounded by memory (RD-40:
 #: ~16 kB of contact rows and tangents per copy; 65,536 copies ~ 1 GB on a GPU) and, on the CPU, by cache
 DEFAULT_CHUNK = {"cpu": 2048, "cuda": 65536}
@@ -167,9 +173,15 @@ class DeviceBackend(Backend):
                                 initial_torque=initial_torque)
 
     def auto_reason(self, model, task):
-        """auto takes the resident path only: the row path's place in auto's measured order is not
-        measured yet (on a CPU it is no faster than Exudyn for one model's points; on CUDA not
-        measured). --backend device runs it."""
+        """Equilibria: auto takes the resident path only: the row path's place in auto's measured
+        order is not measured yet (on a CPU it is no faster than Exudyn for one model's points; on
+        CUDA not measured). Torque paths: auto leaves the cycloid to Exudyn's continuation (measured
+        faster there, :data:`rvtool.solver.backends.TORQUE_PATH_ORDER`). --backend device runs both."""
+        if task == "torque_path":
+            from ...assembly.spec import CycloidDesign
+            if isinstance(getattr(model, "design", None), CycloidDesign):
+                return TORQUE_PATH_CYCLOID_REASON
+            return None
         if task == "equilibria" and self.path(model)[0] == "rows":
             return ("the device row path (non-cycloid topology) has no measured place in auto's order yet "
                     "(name --backend device to run it)")
