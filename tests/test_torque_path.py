@@ -135,3 +135,20 @@ def test_named_backend_that_cannot_run_the_torque_path_skips():
     res = rvtool.analyze("rd40", "stiffness,lost_motion,hysteresis", quick=True, out_dir=None, backend="replica")
     for p in ("stiffness", "lost_motion", "hysteresis"):
         assert res[p].status == "skipped" and "does not run torque_path" in res[p].reason
+
+
+@pytest.mark.parametrize("name,backend", [("rd40", "exudyn"), ("rv40e", "exudyn"), ("rv40e", "device")])
+def test_tangent_check_on_the_sequences_model_is_a_fresh_builds(name, backend):
+    """The stiffness protocol builds its model once: the tangent check after the sequence on the
+    same model (stateful_reasons empty) equals the one on a fresh build bit for bit."""
+    from rvtool.solver.torque_path import stateful_reasons
+    d = rvtool.load_design(name)
+    seq = S.TorqueSequence(rated_torque=d.rated_torque, loading_step=0.25, other_step=0.25)
+    model = rvtool.build(d)
+    assert stateful_reasons(model) == []
+    S.quasi_static_stiffness(model, seq, backend=backend)
+    t = 0.75 * d.rated_torque
+    reused, fresh = S.tangent_check(model, t, backend=backend), S.tangent_check(rvtool.build(d), t, backend=backend)
+    for k in ("Kt_condensed_Nm_per_arcmin", "K_finite_increment_Nm_per_arcmin", "rel_diff"):
+        assert reused[k] == fresh[k], k
+    assert stateful_reasons(rvtool.build(rvtool.load_design("rv80e")))          # elastic housing, crank closures

@@ -222,11 +222,15 @@ def run_stiffness(ctx):
     from ..protocols import stiffness as S
     rated = ctx.require("rated_torque")
     out = Outcome()
-    seq, qs, _, path_backend, backend = _stiffness_run(ctx)      # a named backend that cannot run it skips
+    from ..solver.torque_path import stateful_reasons
+    seq, qs, model, path_backend, backend = _stiffness_run(ctx)      # a named backend that cannot run it skips
     torque, angle, labels = qs["torque_Nm"], qs["angle_arcmin"], qs["labels"]
     fits = S.branch_fits(torque, angle, labels, rated)
     t_ref = 0.75 * rated
-    tc = S.tangent_check(ctx.build(), t_ref, backend=path_backend, device=ctx.device)
+    # the model built once where the sequence leaves no state in it; else a fresh build (named why)
+    stateful = stateful_reasons(model)
+    tc = S.tangent_check(ctx.build() if stateful else model, t_ref, backend=path_backend, device=ctx.device)
+    tc["model"] = ("a fresh build: " + "; ".join(stateful)) if stateful else "the torque sequence's model"
     note = (f"condensed tangent K_t at {t_ref:g} N m against the central finite increment "
             f"+-{tc['increment_Nm']:.3g} N m (relative difference)")
     out.figures.append(Figure("Kt_condensed", tc["Kt_condensed_Nm_per_arcmin"], "N m/arcmin",

@@ -49,6 +49,19 @@ class ContinuationSettings:
                                    f"[1, inf) (integer)")
 
 
+def stateful_reasons(model):
+    """Every named reason why a torque path may leave state in ``model`` that a later path on it
+    would start from (empty: none). The contact sets the replica copies with history-free laws
+    (:func:`rvtool.solver.replica.replica_reasons` empty: planar rigid bodies, no stick--slip
+    anchors, no elastic pin or crank closures with their warm-started inner deflections, no port
+    bodies) make a model whose residual is a function of the state, the output torque and the
+    input angle only; a path sets both anew at its start (:class:`Continuation` from the kinematic
+    state, the device copies from the model's parameters), so a second path on the model is the
+    path on a fresh build (tests/test_torque_path.py holds it bit for bit on RD-40 and RV-40E)."""
+    from .replica import replica_reasons
+    return replica_reasons(model)
+
+
 class TorquePath:
     """The interface of a torque path (module docstring)."""
 
@@ -98,4 +111,4 @@ class ContinuationPath(TorquePath):
         return {} if self.continuation is None else self.continuation.stats.to_dict()
 
 
-__all__ = ["ContinuationPath", "ContinuationSettings", "START_SCALES", "TorquePath"]
+__all__ = ["ContinuationPath", "ContinuationSettings", "START_SCALES", "TorquePath", "stateful_reasons"]
