@@ -137,10 +137,12 @@ def test_named_backend_that_cannot_run_the_torque_path_skips():
         assert res[p].status == "skipped" and "does not run torque_path" in res[p].reason
 
 
-@pytest.mark.parametrize("name,backend", [("rd40", "exudyn"), ("rv40e", "exudyn"), ("rv40e", "device")])
+@pytest.mark.parametrize("name,backend", [("rd40", "exudyn"), ("rv40e", "exudyn"), ("rv40e", "device"),
+                                          ("std_involute", "exudyn"), ("rv_three_stage", "exudyn")])
 def test_tangent_check_on_the_sequences_model_is_a_fresh_builds(name, backend):
     """The stiffness protocol builds its model once: the tangent check after the sequence on the
-    same model (stateful_reasons empty) equals the one on a fresh build bit for bit."""
+    same model (stateful_reasons empty) equals the one on a fresh build bit for bit (every shipped
+    design the check admits)."""
     from rvtool.solver.torque_path import stateful_reasons
     d = rvtool.load_design(name)
     seq = S.TorqueSequence(rated_torque=d.rated_torque, loading_step=0.25, other_step=0.25)

@@ -57,7 +57,7 @@ def stateful_reasons(model):
     bodies) make a model whose residual is a function of the state, the output torque and the
     input angle only; a path sets both anew at its start (:class:`Continuation` from the kinematic
     state, the device copies from the model's parameters), so a second path on the model is the
-    path on a fresh build (tests/test_torque_path.py holds it bit for bit on RD-40 and RV-40E)."""
+    path on a fresh build (tests/test_torque_path.py holds it bit for bit on RD-40, RV-40E, the standard involute and the three-stage RV)."""
     from .replica import replica_reasons
     return replica_reasons(model)
 
