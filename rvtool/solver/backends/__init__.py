@@ -11,6 +11,10 @@ device     device Newton (Warp, cpu or cuda): the      --
 fused      --                                          fused stepper (Warp, cpu or cuda)
 =========  ==========================================  ==========================================
 
+Torque paths (task ``"torque_path"``, :meth:`Backend.torque_path`; the stiffness, lost-motion and
+hysteresis sequences): ``exudyn`` (the load continuation, the oracle) and ``device`` (the row Newton's
+:class:`~rvtool.solver.device_torque_path.DeviceTorquePath`).
+
 ``--backend device`` asks for the device family: the device Newton for equilibria and the fused
 stepper for driven runs. :func:`choose` resolves a requested name for a task on a model: a named
 backend that cannot run the model is a :class:`RvtoolInputError` naming every reason (no silent

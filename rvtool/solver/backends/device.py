@@ -13,6 +13,9 @@ outside that set) runs on the device row Newton (:class:`rvtool.solver.device_ro
 the families' own Warp kernels on the device, the per-copy step on the host); ``stats["path"]``
 says which ran. Not covered (named reasons): friction with stick--slip anchors, elastic pin and
 crank closures, the ported housing's modal coordinates, shared output pins.
+Torque paths (task ``"torque_path"``): the row Newton's
+:class:`~rvtool.solver.device_torque_path.DeviceTorquePath` on one copy, for every model the row
+Newton takes (the cycloid included).
 The resident path solves every point from its kinematic state (no warm start: the points are
 independent); the row path does too up to ``copies`` points, and marches warm-started segments
 beyond (``batch.warm_start``, :meth:`rvtool.solver.device_rows.DeviceRowNewton.solve_sequence`). A point the device Newton does not converge is solved by the Exudyn backend's
