@@ -154,3 +154,19 @@ def test_tangent_check_on_the_sequences_model_is_a_fresh_builds(name, backend):
     for k in ("Kt_condensed_Nm_per_arcmin", "K_finite_increment_Nm_per_arcmin", "rel_diff"):
         assert reused[k] == fresh[k], k
     assert stateful_reasons(rvtool.build(rvtool.load_design("rv80e")))          # elastic housing, crank closures
+
+
+def test_device_state_after_the_exudyn_hand_over():
+    """A copy that leaves the device (here forced: max_step 1e-12 rejects every device step)
+    continues on Exudyn; state() is then its Exudyn continuation's, equal to a fresh Exudyn path's."""
+    from rvtool.solver.device_rows import DeviceRowNewton
+    from rvtool.solver.torque_path import ContinuationSettings
+    d = rvtool.load_design("rd40")
+    t = 0.5 * d.rated_torque
+    path = DeviceTorquePath(DeviceRowNewton(rvtool.build(d), 1), continuation=ContinuationSettings(max_step=1e-12))
+    path.go_to(t)                          # the loaded start: on the device
+    assert path.status() == ["device"]
+    got = path.go_to(-t)                   # every step rejected: Exudyn from -t on
+    assert path.status() == ["exudyn"] and path.stats()["exudyn_copies"] == 1
+    ref = ContinuationPath(rvtool.build(d))
+    assert got == ref.go_to(-t) and np.array_equal(path.state(), ref.state())
