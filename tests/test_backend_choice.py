@@ -27,7 +27,10 @@ def test_auto_records_the_choice_and_every_reason(tmp_path):
 def test_named_backends_run_or_skip_with_reasons(tmp_path):
     res = rvtool.analyze("rd40", "te,stiffness", quick=True, out_dir=None, backend="device")
     assert res["te"].status == "ok" and res["te"].settings["backend"]["ran"] == "device"
-    assert res["stiffness"].status == "skipped" and "torque continuation" in res["stiffness"].reason
+    # the torque sequence on the device torque path (tests/test_torque_path.py)
+    assert res["stiffness"].status == "ok" and res["stiffness"].settings["backend"]["ran"] == "device"
+    res = rvtool.analyze("rd40", "stiffness", quick=True, out_dir=None, backend="replica")
+    assert res["stiffness"].status == "skipped" and "does not run torque_path" in res["stiffness"].reason
     # the device family on RV-40E: equilibria on the device row Newton (tests/test_device_rows.py)
     rv = rvtool.analyze("rv40e", "te", quick=True, out_dir=None, backend="fused")
     assert rv["te"].status == "ok" and rv["te"].settings["backend"]["ran"] == "device"

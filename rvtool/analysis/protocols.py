@@ -61,6 +61,12 @@ def _solver_warnings(out, stats, what):
             out.warnings.append(f"{what}: {n} {key.replace('_', ' ')} (solver fallbacks; figures converged)")
 
 
+def _exudyn_copies_warning(out, stats):
+    if stats.get("exudyn_copies"):
+        out.warnings.append("device torque path: the continuation left the device and finished on Exudyn "
+                            "(counted in continuation.exudyn_copies)")
+
+
 # -- transmission error ----------------------------------------------------------------------
 
 QUICK_POINTS_PER_MESH = 12
@@ -97,32 +103,23 @@ def _exudyn_only(ctx, what):
             "not_taken": {b: f"implements no {what}" for b in CHOICES if b not in ("auto", "exudyn")}}
 
 
-def _continuation_backend(ctx):
-    """The torque continuation (stiffness, lost motion, hysteresis) runs on Exudyn's static solver."""
-    return _exudyn_only(ctx, "torque continuation")
-
-
-def _loop_path(ctx, what):
-    """(backend record, loading path) of a loop protocol: Exudyn's load continuation
-    (:class:`rvtool.protocols.catalogue.ContinuationPath`), or with ``--backend device`` (or
-    ``fused``, the device family) the device torque path
-    (:class:`rvtool.batched.device_rows_lost_motion.DeviceTorquePath`) where the device row Newton
-    runs the model; a model it cannot run skips the protocol with the reasons."""
-    from ..protocols import catalogue as C
-    if ctx.backend not in ("device", "fused"):
-        return _continuation_backend(ctx), C.ContinuationPath(ctx.build())
-    from ..batched.device_rows_lost_motion import DeviceTorquePath
-    from ..solver.backends import CHOICES
-    from ..solver.device_rows import DeviceRowNewton, row_reasons
-    model = ctx.build()
-    reasons = row_reasons(model)
-    if reasons:
-        raise Unsupported(f"backend = {ctx.backend!r} (the device torque path) cannot run the {what} on this model: "
-                          f"{'; '.join(reasons)} (valid choices for this model: 'exudyn' or 'auto')")
-    record = {"requested": ctx.backend, "ran": "device",
-              "not_taken": {b: f"not requested (--backend {ctx.backend})" for b in CHOICES
-                            if b not in ("auto", "device")}}
-    return record, DeviceTorquePath(DeviceRowNewton(model, 1, device=ctx.device))
+def _torque_path(ctx, model, what):
+    """(backend, choice) of the torque path (task ``"torque_path"``: Exudyn's load continuation,
+    the device row Newton's torque path) of ``what`` on ``model``, as the TE's: auto takes the
+    first supporting backend in the measured order (:func:`rvtool.solver.backends.auto_order`)
+    and records the named reason of every other; the backends that implement no torque path are
+    recorded with that reason; a named backend that cannot run it skips the protocol with the
+    reasons (:class:`Unsupported`, never a silent fallback)."""
+    from ..solver.backends import backends, choose
+    try:
+        backend, choice = choose(ctx.backend, model, "torque_path", device=ctx.device)
+    except RvtoolInputError as exc:
+        raise Unsupported(f"{what}: {exc}") from None
+    for b in backends(ctx.device):
+        if b.name != choice["ran"] and b.name not in choice["not_taken"]:
+            choice["not_taken"][b.name] = ("implements no torque path (rvtool.solver.backends.Backend.torque_path)"
+                                           if ctx.backend == "auto" else f"not requested (--backend {ctx.backend})")
+    return backend, choice
 
 
 @register("te", "quasi-static transmission error under the rated torque (Eq. obs_te), with its refinement error")
@@ -208,11 +205,15 @@ def _sequence(ctx):
 
 
 def _stiffness_run(ctx):
-    """The signed torque sequence by continuation, once per analysis (stiffness and lost motion share it)."""
+    """(sequence, run, model, backend, choice): the signed torque sequence on the chosen backend's
+    torque path, once per analysis (stiffness and lost motion share it; the model built once)."""
     if "stiffness_run" not in ctx.cache:
         from ..protocols.stiffness import quasi_static_stiffness
+        model = ctx.build()
+        backend, choice = _torque_path(ctx, model, "torque sequence")   # a named backend that cannot run it skips
         seq = _sequence(ctx)
-        ctx.cache["stiffness_run"] = (seq, quasi_static_stiffness(ctx.build(), seq))
+        ctx.cache["stiffness_run"] = (seq, quasi_static_stiffness(model, seq, backend=backend, device=ctx.device),
+                                      model, backend, choice)
     return ctx.cache["stiffness_run"]
 
 
@@ -220,13 +221,16 @@ def _stiffness_run(ctx):
 def run_stiffness(ctx):
     from ..protocols import stiffness as S
     rated = ctx.require("rated_torque")
-    backend = _continuation_backend(ctx)      # before any work: a named other backend skips
     out = Outcome()
-    seq, qs = _stiffness_run(ctx)
+    from ..solver.torque_path import stateful_reasons
+    seq, qs, model, path_backend, backend = _stiffness_run(ctx)      # a named backend that cannot run it skips
     torque, angle, labels = qs["torque_Nm"], qs["angle_arcmin"], qs["labels"]
     fits = S.branch_fits(torque, angle, labels, rated)
     t_ref = 0.75 * rated
-    tc = S.tangent_check(ctx.build(), t_ref)
+    # the model built once where the sequence leaves no state in it; else a fresh build (named why)
+    stateful = stateful_reasons(model)
+    tc = S.tangent_check(ctx.build() if stateful else model, t_ref, backend=path_backend, device=ctx.device)
+    tc["model"] = ("a fresh build: " + "; ".join(stateful)) if stateful else "the torque sequence's model"
     note = (f"condensed tangent K_t at {t_ref:g} N m against the central finite increment "
             f"+-{tc['increment_Nm']:.3g} N m (relative difference)")
     out.figures.append(Figure("Kt_condensed", tc["Kt_condensed_Nm_per_arcmin"], "N m/arcmin",
@@ -243,6 +247,7 @@ def run_stiffness(ctx):
     out.figures.append(Figure("zero_load_return", S.zero_load_return(torque, angle), "arcmin",
                               "final minus first zero-load output angle"))
     _solver_warnings(out, qs["stats"], "continuation")
+    _exudyn_copies_warning(out, qs["stats"])
     _regularization_warning(out, qs["regularization_max"], rated)
     out.data = {"torque_Nm": torque, "angle_arcmin": angle, "branch_labels": labels, "branch_fits": fits,
                 "tangent_check": tc, "continuation": qs["stats"], "regularization_max": qs["regularization_max"],
@@ -268,9 +273,8 @@ def run_lost_motion(ctx):
     from ..protocols.lost_motion import lost_motion
     from ..protocols.stiffness import lost_motion_from_levels
     rated = ctx.require("rated_torque")
-    backend = _continuation_backend(ctx)      # before any work: a named other backend skips
     out = Outcome()
-    _, qs = _stiffness_run(ctx)
+    _, qs, _, _, backend = _stiffness_run(ctx)      # a named backend that cannot run it skips
     lm_cont = lost_motion_from_levels(qs["torque_Nm"], qs["angle_arcmin"], rated, LOST_MOTION_FRACTION)
     err, note = None, ""
     try:
@@ -301,7 +305,9 @@ def run_hysteresis(ctx):
     from ..protocols import catalogue as C
     from ..protocols import hysteresis as H
     rated = ctx.require("rated_torque")
-    backend, path = _loop_path(ctx, "hysteresis loops")   # a named backend that cannot run it skips
+    model = ctx.build()
+    chosen, backend = _torque_path(ctx, model, "hysteresis loops")   # a named backend that cannot run it skips
+    path = chosen.torque_path(model)
     out = Outcome()
     seq = C.catalogue_sequence(rated, rigidity_points=HYSTERESIS_RIGIDITY_POINTS, step=_sequence(ctx).other_step)
     tol = 1e-3 * RAD_PER_ARCMIN        # 0.001 arcmin: far below any reported angle, far above Newton's tolerance
@@ -344,9 +350,7 @@ def run_hysteresis(ctx):
                     "angle_tolerance_arcmin": tol * ARCMIN_PER_RAD, "rigidity_points": list(HYSTERESIS_RIGIDITY_POINTS),
                     "backend": backend}
     _solver_warnings(out, r["stats"], "continuation")
-    if r["stats"].get("exudyn_copies"):
-        out.warnings.append("device torque path: the continuation left the device and finished on Exudyn "
-                            "(counted in continuation.exudyn_copies)")
+    _exudyn_copies_warning(out, r["stats"])
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot(first["angle_rad"] * ARCMIN_PER_RAD, T, ".-", lw=0.8, label="loop 1")

@@ -43,33 +43,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import RvtoolInputError, SolverFailure
-from ..protocols.lost_motion import START_SCALES
 from ..solver.device_newton import DeviceNewton, DeviceNewtonSettings
 from ..units import ARCMIN_PER_RAD
 from ..variants.variant import Variant, VariantProtocol
 from ..solver.device_copies import copy_parameters
-
-
-@dataclass(frozen=True, kw_only=True)
-class ContinuationSettings:
-    """The increment control of :class:`rvtool.solver.continuation.Continuation` (its defaults):
-    max_step [m or rad]: largest accepted coordinate change per increment; min_increment [N m]:
-    smallest torque increment before the copy fails; max_rounds: device solves after which the
-    copies still running fail (a bound the sequential path does not need: it bounds the batch's
-    wall time by its slowest copy; 400 rounds allow every level of the 7 to halve 14 times down
-    to 1e-4 N m from 1.4 N m and climb back twice)."""
-    max_step: float = 2e-3
-    min_increment: float = 1e-4
-    max_rounds: int = 400
-
-    def __post_init__(self):
-        for nm in ("max_step", "min_increment"):
-            v = getattr(self, nm)
-            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
-                raise RvtoolInputError(f"lost_motion.{nm} = {v!r} is outside the valid range (0, inf)")
-        if not (isinstance(self.max_rounds, (int, np.integer)) and self.max_rounds >= 1):
-            raise RvtoolInputError(f"lost_motion.max_rounds = {self.max_rounds!r} is outside the valid range "
-                                   f"[1, inf) (integer)")
+from ..solver.torque_path import START_SCALES, ContinuationSettings  # noqa: F401  (re-exported)
 
 
 @dataclass

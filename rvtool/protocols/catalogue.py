@@ -46,6 +46,7 @@ import numpy as np
 
 from ..errors import RvtoolInputError
 from ..validation import check_nonnegative, check_positive, check_range
+from ..solver.torque_path import ContinuationPath  # noqa: F401  (the Exudyn loading path, re-exported)
 from . import hysteresis as H
 
 BRANCHES = ("neg_unloading", "pos_loading", "pos_unloading", "neg_loading")
@@ -243,30 +244,6 @@ def catalogue_sequence(rated_torque, *, rigidity_points, lost_motion_fraction=LO
     f = lost_motion_fraction
     fine = sorted({round(x, 12) for x in (f / 3.0, 2.0 * f / 3.0, f, *rigidity_points) if 0.0 < x < 1.0})
     return CycleSequence(rated_torque=rated_torque, step=step, fine_levels=tuple(fine), n_cycles=n_cycles)
-
-
-class ContinuationPath:
-    """Loading path of a :class:`~rvtool.model.ReducerModel` at a fixed input angle: equilibria by
-    :class:`rvtool.solver.continuation.Continuation`, the contact history committed once per level;
-    ``go_to(torque)`` returns the output angle [rad] from its kinematic position. The continuation
-    starts at the first torque asked for (a loaded start is regular where free play leaves the
-    zero-load state ill-posed: measured on rv80e variants, whose start at zero torque failed)."""
-
-    def __init__(self, model, *, input_angle=0.0):
-        self.model = model
-        self.input_angle = input_angle
-        self.continuation = None
-        self._i_out = model.output_index
-        self._th_kin = model.kinematic_output(input_angle)
-
-    def go_to(self, torque):
-        if self.continuation is None:
-            from ..solver.continuation import Continuation
-            self.continuation = Continuation(self.model, input_angle=self.input_angle, initial_torque=float(torque))
-        return float(self.continuation.go_to(float(torque))[self._i_out] - self._th_kin)
-
-    def stats(self):
-        return {} if self.continuation is None else self.continuation.stats.to_dict()
 
 
 class SpringCoulombBacklash:

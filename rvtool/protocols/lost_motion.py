@@ -2,14 +2,8 @@
 protocol around :class:`rvtool.solver.spring_march.SpringControl` (see there for the method)."""
 from ..errors import SolverFailure
 from ..solver.spring_march import SpringControl
+from ..solver.torque_path import START_SCALES  # noqa: F401  (the start torques, defined with the torque paths)
 from ..validation import check_positive
-
-
-START_SCALES = (1.0, 2.5, 6.0, 15.0)
-"""Start torques of :func:`lost_motion` as multiples of the level, tried in turn: a loaded
-start by Newton and load ramps can fail at a small torque inside the free play (measured on
-Monte Carlo variants of RD-40 at 3 % of T_rated) and succeed at a larger one, from where
-the spring-controlled march comes down to the level."""
 
 
 def lost_motion(model, *, torque_level, input_angle=0.0, k_s=None, **kw):

@@ -206,19 +206,25 @@ def mesh_contact_stats(model, q):
     return [float(np.sum(f)) for f in members.values()], [float(np.max(f)) for f in members.values()]
 
 
-def quasi_static_stiffness(model, sequence: TorqueSequence, *, input_angle=0.0, record=None):
-    """Path (b): run the torque sequence as an equilibrium continuation. Returns per-level
-    torque [N m], output angle [arcmin] (output rotation from its kinematic position),
-    per-wheel pin-force sums and maxima [N], residual diagnostics and statistics."""
+def quasi_static_stiffness(model, sequence: TorqueSequence, *, input_angle=0.0, record=None, backend="exudyn",
+                           device="cpu"):
+    """Path (b): run the torque sequence as an equilibrium continuation on the torque path of
+    ``backend`` (a name of :data:`rvtool.solver.backends.CHOICES` or a
+    :class:`~rvtool.solver.backends.Backend`; task ``"torque_path"``: Exudyn's continuation, the
+    device row Newton's). Returns per-level torque [N m], output angle [arcmin] (output rotation
+    from its kinematic position), per-wheel pin-force sums and maxima [N], residual diagnostics
+    and statistics, ``path`` (the :class:`~rvtool.solver.torque_path.TorquePath`), ``continuation``
+    (Exudyn's :class:`Continuation`, None on another backend) and ``backend`` ({"requested",
+    "ran", "not_taken"})."""
+    from ..solver.backends import choose
     t0 = time.perf_counter()
     torques, labels = sequence.levels()
-    cont = Continuation(model, input_angle=input_angle)
-    i_out = model.output_index
-    th_kin = model.kinematic_output(input_angle)
+    b, choice = choose(backend, model, "torque_path", device=device)
+    path = b.torque_path(model, input_angle=input_angle)
     angles, sums, maxs, reg = [], [], [], []
     for k, t in enumerate(progress.track(torques, desc="stiffness levels", unit="level")):
-        q = cont.go_to(float(t))
-        angles.append((q[i_out] - th_kin) / RAD_PER_ARCMIN)
+        angles.append(path.go_to(float(t)) / RAD_PER_ARCMIN)
+        q = path.state()
         s, m = mesh_contact_stats(model, q)
         sums.append(s)
         maxs.append(m)
@@ -227,26 +233,32 @@ def quasi_static_stiffness(model, sequence: TorqueSequence, *, input_angle=0.0, 
             record(k, t, q)
     return {"torque_Nm": torques, "labels": labels, "angle_arcmin": np.array(angles),
             "sum_Fn_N": np.array(sums), "max_Fn_N": np.array(maxs), "regularization_max": max(reg),
-            "q_final": cont.q, "continuation": cont, "stats": cont.stats.to_dict(),
-            "wall_s": time.perf_counter() - t0}
+            "q_final": path.state(), "continuation": getattr(path, "continuation", None), "path": path,
+            "stats": path.stats(), "backend": choice, "wall_s": time.perf_counter() - t0}
 
 
-def tangent_check(model, torque, *, input_angle=0.0, increment=None):
-    """At output torque [N m] (reached by continuation from zero): the condensed tangent K_t
-    and the finite-increment stiffness dT/dtheta from a central torque increment (default
-    0.1 % of |torque|: a 1 % increment at 105 N m of RD-40 already crosses a change of the
-    contact set, a slope kink, and differs by 2.3 %). Both in N m/arcmin; their relative difference."""
-    cont = Continuation(model, input_angle=input_angle)
+def tangent_check(model, torque, *, input_angle=0.0, increment=None, backend="exudyn", device="cpu"):
+    """At output torque [N m] (reached by continuation from zero, on the torque path of
+    ``backend`` as :func:`quasi_static_stiffness`): the condensed tangent K_t and the
+    finite-increment stiffness dT/dtheta from a central torque increment (default 0.1 % of
+    |torque|: a 1 % increment at 105 N m of RD-40 already crosses a change of the contact set, a
+    slope kink, and differs by 2.3 %). Both in N m/arcmin; their relative difference."""
+    from ..solver.backends import choose
+    b, choice = choose(backend, model, "torque_path", device=device)
+    path = b.torque_path(model, input_angle=input_angle, initial_torque=0.0)
     i_out = model.output_index
-    q = cont.go_to(torque)
+    path.go_to(torque)
+    q = path.state()
     kt = condensed_tangent(model, q) * RAD_PER_ARCMIN
     dt = increment or 0.001 * abs(torque)
-    th_p = cont.go_to(torque + dt)[i_out]
-    cont.go_to(torque)
-    th_m = cont.go_to(torque - dt)[i_out]
+    path.go_to(torque + dt)
+    th_p = path.state()[i_out]
+    path.go_to(torque)
+    path.go_to(torque - dt)
+    th_m = path.state()[i_out]
     kfd = 2 * dt / ((th_p - th_m) / RAD_PER_ARCMIN)
     return {"Kt_condensed_Nm_per_arcmin": kt, "K_finite_increment_Nm_per_arcmin": float(kfd),
-            "rel_diff": float(abs(kt - kfd) / abs(kfd)), "increment_Nm": dt}
+            "rel_diff": float(abs(kt - kfd) / abs(kfd)), "increment_Nm": dt, "backend": choice}
 
 
 # -- path (a): dynamic settling with the implicit integrator -----------------------------------

@@ -11,6 +11,10 @@ device     device Newton (Warp, cpu or cuda): the      --
 fused      --                                          fused stepper (Warp, cpu or cuda)
 =========  ==========================================  ==========================================
 
+Torque paths (task ``"torque_path"``, :meth:`Backend.torque_path`; the stiffness, lost-motion and
+hysteresis sequences): ``exudyn`` (the load continuation, the oracle) and ``device`` (the row Newton's
+:class:`~rvtool.solver.device_torque_path.DeviceTorquePath`).
+
 ``--backend device`` asks for the device family: the device Newton for equilibria and the fused
 stepper for driven runs. :func:`choose` resolves a requested name for a task on a model: a named
 backend that cannot run the model is a :class:`RvtoolInputError` naming every reason (no silent
@@ -27,7 +31,7 @@ CHOICES = ("auto", "exudyn", "replica", "device", "fused")
 """Values of ``--backend`` / ``backend=``."""
 
 __all__ = ["Backend", "CHOICES", "DeviceBackend", "DrivenHistory", "DrivenRun", "Equilibria", "EquilibriumBatch",
-           "ExudynBackend", "FusedBackend", "REPLICA_MIN_STATES", "ReplicaBackend", "Support", "TASKS", "auto_order",
+           "ExudynBackend", "FusedBackend", "REPLICA_MIN_STATES", "TORQUE_PATH_ORDER", "ReplicaBackend", "Support", "TASKS", "auto_order",
            "backends", "choose", "get"]
 
 
@@ -55,6 +59,17 @@ states 0.25 s Exudyn against 0.48 s replica, 2,000 states 4.9 s against 1.9 s; R
 0.45 s against 1.44 s, 600 states 3.3 s against 2.0 s. The crossover lies at 200-500 states."""
 
 
+TORQUE_PATH_ORDER = {"cpu": ("device", "exudyn"), "cuda": ("exudyn", "device")}
+"""auto's order of the torque path (the stiffness / lost-motion / hysteresis sequences of one
+model) per Warp device kind. Measured on the 2-core development machine (2026-11-27, the quick
+``rvtool analyze DESIGN --protocols stiffness`` sequence of 22 levels, warm, 3 repeats): on a CPU
+the device row Newton's torque path is faster on every non-cycloid shipped design (RV-40E 0.17 s
+against Exudyn's 0.60 s, the whole protocol 0.41 s against 1.11 s; the standard involute 0.055 s
+against 0.081 s; the three-stage RV 0.14 s against 0.16-0.18 s) and slower on the cycloid (RD-40
+0.079-0.11 s against 0.048-0.15 s), which :meth:`DeviceBackend.auto_reason` names (auto keeps
+Exudyn there). On CUDA not measured: the oracle first."""
+
+
 def auto_order(task, *, n_states=None, device="cpu"):
     """auto's order of the backends for ``task`` (fastest first), measured (see
     :data:`REPLICA_MIN_STATES`): equilibria on a CUDA device: device Newton, replica, Exudyn; on a
@@ -62,9 +77,11 @@ def auto_order(task, *, n_states=None, device="cpu"):
     device Newton last (from the kinematic state at every point, 1.9-2.2 ms per RD-40 state on one
     CPU core: no faster than Exudyn's warm-started march). Driven runs: the fused stepper, then
     Exudyn (RD-40, 1,000 steps on a CPU: 0.9-1.2 s against 1.0-1.1 s; on a GPU the fused stepper
-    runs many copies at once)."""
+    runs many copies at once). Torque paths: :data:`TORQUE_PATH_ORDER`."""
     if task == "dynamic":
         return ["fused", "exudyn"]
+    if task == "torque_path":
+        return list(TORQUE_PATH_ORDER["cuda" if str(device).startswith("cuda") else "cpu"])
     if str(device).startswith("cuda"):
         return ["device", "replica", "exudyn"]
     if n_states is not None and n_states >= REPLICA_MIN_STATES:

@@ -12,7 +12,11 @@ backend only knows states and residuals:
 * :meth:`Backend.step_dynamic` ``(model, DrivenRun) -> DrivenHistory``: a driven run (prescribed
   input speed, constant output torque) stepped to its end, the accepted steps committed to the
   returned histories (the backend owns the stepping and the commit of each accepted step; the
-  protocol reads histories only).
+  protocol reads histories only);
+* :meth:`Backend.torque_path` ``(model, input_angle=0, initial_torque=None) -> TorquePath``: the
+  model's loading path at a fixed input angle (:class:`rvtool.solver.torque_path.TorquePath`:
+  ``go_to(torque) -> output angle``, ``state()``, ``stats()``), the torque sequences of the
+  stiffness, lost-motion and hysteresis protocols.
 """
 from dataclasses import dataclass, field
 
@@ -20,8 +24,9 @@ import numpy as np
 
 from ...errors import RvtoolInputError
 
-TASKS = ("equilibria", "dynamic")
-"""What a backend may be asked to do: static equilibria at drive/load states, driven runs."""
+TASKS = ("equilibria", "dynamic", "torque_path")
+"""What a backend may be asked to do: static equilibria at drive/load states, driven runs, a
+loading path under a changing output torque at a fixed input angle."""
 
 
 @dataclass(frozen=True)
@@ -136,6 +141,11 @@ class Backend:
 
     def step_dynamic(self, model, run: DrivenRun) -> DrivenHistory:
         raise NotImplementedError(f"backend {self.name!r} steps no driven runs")
+
+    def torque_path(self, model, *, input_angle=0.0, initial_torque=None):
+        """The loading path (:class:`rvtool.solver.torque_path.TorquePath`) of ``model`` at
+        ``input_angle`` [rad], started at ``initial_torque`` [N m] (None: at the first level)."""
+        raise NotImplementedError(f"backend {self.name!r} runs no torque path")
 
     def _task(self, task):
         if task not in TASKS:

@@ -13,6 +13,9 @@ outside that set) runs on the device row Newton (:class:`rvtool.solver.device_ro
 the families' own Warp kernels on the device, the per-copy step on the host); ``stats["path"]``
 says which ran. Not covered (named reasons): friction with stick--slip anchors, elastic pin and
 crank closures, the ported housing's modal coordinates, shared output pins.
+Torque paths (task ``"torque_path"``): the row Newton's
+:class:`~rvtool.solver.device_torque_path.DeviceTorquePath` on one copy, for every model the row
+Newton takes (the cycloid included).
 The resident path solves every point from its kinematic state (no warm start: the points are
 independent); the row path does too up to ``copies`` points, and marches warm-started segments
 beyond (``batch.warm_start``, :meth:`rvtool.solver.device_rows.DeviceRowNewton.solve_sequence`). A point the device Newton does not converge is solved by the Exudyn backend's
@@ -51,6 +54,12 @@ def _device_reasons(model):
         return ["the model's regularization springs differ from the device copies' (build with the default "
                 "regularization)"], None
     return [], params
+
+
+TORQUE_PATH_CYCLOID_REASON = ("on a cycloid drive the device torque path is slower than Exudyn's continuation on "
+                              "a CPU (measured: RD-40's quick stiffness sequence 0.08-0.11 s against 0.05 s, "
+                              "rvtool.solver.backends.TORQUE_PATH_ORDER); --backend device runs it")
+"""Why auto does not take the device torque path of a cycloid model (it supports it)."""
 
 
 #: default copies per device loop of :meth:`DeviceBackend.solve_variants`: bounded by memory (RD-40:
@@ -110,7 +119,7 @@ class DeviceBackend(Backend):
     families grows faster than linearly with the copies: RV-40E 1.6 s for 64, 34 s for 512 on the
     development machine)."""
     name = "device"
-    tasks = ("equilibria",)
+    tasks = ("equilibria", "torque_path")
 
     def __init__(self, *, device="cpu", settings=None, copies=None):
         if copies is not None and (isinstance(copies, bool) or not isinstance(copies, (int, np.integer))
@@ -143,17 +152,40 @@ class DeviceBackend(Backend):
 
     def supports(self, model, task, run=None):
         if not self._task(task):
-            return Support.of([f"device does not implement {task!r} (equilibria only; driven runs: 'fused')"])
+            return Support.of([f"device does not implement {task!r} (equilibria and torque paths; driven runs: "
+                               "'fused')"])
         spatial = spatial_body_reasons(model)
         if spatial:
             return Support.of(spatial)
+        if task == "torque_path":
+            from ..device_rows import row_reasons
+            return Support.of([f"device torque path (row Newton): {r}" for r in row_reasons(model)])
         return Support.of(self.path(model)[1])
 
+    def torque_path(self, model, *, input_angle=0.0, initial_torque=None):
+        """The device torque path (:class:`rvtool.solver.device_torque_path.DeviceTorquePath`) on one
+        copy of the device row Newton (every topology the row Newton runs, the cycloid included;
+        a level the device does not reach continues on Exudyn's continuation, counted in
+        ``stats()["exudyn_copies"]``)."""
+        from ..device_rows import DeviceRowNewton
+        from ..device_torque_path import DeviceTorquePath
+        sup = self.supports(model, "torque_path")
+        if not sup.ok:
+            raise RvtoolInputError(f"backend 'device' cannot run a torque path on this model: {'; '.join(sup.reasons)}")
+        return DeviceTorquePath(DeviceRowNewton(model, 1, device=self.device), input_angle=input_angle,
+                                initial_torque=initial_torque)
+
     def auto_reason(self, model, task):
-        """auto takes the resident path only: the row path's place in auto's measured order is not
-        measured yet (on a CPU it is no faster than Exudyn for one model's points; on CUDA not
-        measured). --backend device runs it."""
-        if self._task(task) and self.path(model)[0] == "rows":
+        """Equilibria: auto takes the resident path only: the row path's place in auto's measured
+        order is not measured yet (on a CPU it is no faster than Exudyn for one model's points; on
+        CUDA not measured). Torque paths: auto leaves the cycloid to Exudyn's continuation (measured
+        faster there, :data:`rvtool.solver.backends.TORQUE_PATH_ORDER`). --backend device runs both."""
+        if task == "torque_path":
+            from ...assembly.spec import CycloidDesign
+            if isinstance(getattr(model, "design", None), CycloidDesign):
+                return TORQUE_PATH_CYCLOID_REASON
+            return None
+        if task == "equilibria" and self.path(model)[0] == "rows":
             return ("the device row path (non-cycloid topology) has no measured place in auto's order yet "
                     "(name --backend device to run it)")
         return None

@@ -16,7 +16,7 @@ class ExudynBackend(Backend):
     """Exudyn static and dynamic (see the module docstring). solver: a :class:`StaticSolver` of
     the model to use for the equilibria (None: a new one per batch)."""
     name = "exudyn"
-    tasks = ("equilibria", "dynamic")
+    tasks = ("equilibria", "dynamic", "torque_path")
 
     def __init__(self, *, solver=None):
         self.solver = solver
@@ -53,6 +53,11 @@ class ExudynBackend(Backend):
         return Equilibria(theta_in=np.array(th_in), theta_out=np.array(th_out), peak_loads=peaks,
                           peak_contact_loads=contact_peaks, regularization_max=model.regularization_force(solver.q),
                           stats=solver.stats.to_dict(), wall_s=time.perf_counter() - t0, q=np.array(qs))
+
+    def torque_path(self, model, *, input_angle=0.0, initial_torque=None):
+        """Exudyn's load continuation (:class:`rvtool.solver.torque_path.ContinuationPath`)."""
+        from ..torque_path import ContinuationPath
+        return ContinuationPath(model, input_angle=input_angle, initial_torque=initial_torque)
 
     def step_dynamic(self, model, run):
         """Driven run with the Exudyn driver from the StaticSolver's loaded state at angle 0."""
