@@ -103,7 +103,7 @@ class CylindricalRollerBearing:
     damping acts per slice in contact as for the laminae). half_width: "fixed" (the Hertz half-width at
     ``reference_roller_load``), "roller_load" or "slice_load" (updated from the roller's or each
     slice's line load), influence only.
-    youngs_modulus: E [Pa], poisson_ratio: nu (rollers and rings; the influence compliance).
+    youngs_modulus: E [Pa] (rollers and rings; the influence compliance); poisson_ratio: nu [-].
     """
     inner_radius: float
     roller_diameter: float
