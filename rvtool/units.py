@@ -22,6 +22,18 @@ def angle_field(default=dataclasses.MISSING, **kw):
     return dataclasses.field(default=default, metadata=ANGLE_METADATA, **kw)
 
 
+def angle_table_field(default=None, *, angle_columns=(0,), unit="rad, m", **kw):
+    """A dataclass field holding a table of rows whose ``angle_columns`` are angles [rad] (e.g. (phi,
+    delta_r) pairs); design files give it as ``NAME_deg`` with those columns in degrees."""
+    meta = {"unit": unit, "file_suffix": "_deg", "angle_columns": tuple(angle_columns)}
+    return dataclasses.field(default=default, metadata=meta, **kw)
+
+
+def angle_columns(f):
+    """The angle columns of a table field (:func:`angle_table_field`), or None for a plain angle."""
+    return f.metadata.get("angle_columns")
+
+
 def is_angle(f):
     """Whether dataclass field ``f`` is an angle [rad] given in design files as ``NAME_deg``."""
     return f.metadata.get("file_suffix") == "_deg"

@@ -163,3 +163,27 @@ def test_one_warning_per_file_when_it_is_loaded_twice(tmp_path):
         rvtool.load_design(str(p))
     msgs = [str(w.message) for w in rec if issubclass(w.category, FutureWarning)]
     assert len(msgs) == 1 and "crank_gear.rack.pressure_angle -> crank_gear.rack.pressure_angle_deg" in msgs[0]
+
+
+def test_radial_mod_table_is_given_in_degrees_and_format_1_tables_convert():
+    # the tabulated modification's angle column is in degrees in files (radial_mod_table_deg), radians
+    # inside; the delta_r column stays SI. A format 1 file's radian table converts with the warning.
+    table = _table("rd40")
+    table["profile"]["radial_mod_table_deg"] = [[0.0, 0.0], [2.0, 1e-6], [4.0, 0.0]]
+    d = topologies.design_from_table(table)
+    import numpy as np
+    np.testing.assert_allclose(d.profile.radial_mod_table, [[0.0, 0.0], [math.radians(2.0), 1e-6],
+                                                           [math.radians(4.0), 0.0]], rtol=1e-14, atol=0)
+    old = _format_1(_table("rd40"))
+    old["profile"]["radial_mod_table"] = [[0.0, 0.0], [math.radians(2.0), 1e-6], [math.radians(4.0), 0.0]]
+    with pytest.warns(FutureWarning, match=r"profile\.radial_mod_table -> profile\.radial_mod_table_deg"):
+        d1 = topologies.design_from_table(old)
+    np.testing.assert_allclose(d1.profile.radial_mod_table, d.profile.radial_mod_table, rtol=1e-14, atol=0)
+    bad = _table("rd40")
+    bad["profile"]["radial_mod_table_deg"] = [0.0, 1.0]
+    with pytest.raises(RvtoolInputError, match="radial_mod_table_deg"):
+        topologies.design_from_table(bad)
+    radian_key = _table("rd40")
+    radian_key["profile"]["radial_mod_table"] = [[0.0, 0.0], [0.03, 1e-6]]
+    with pytest.raises(RvtoolInputError, match="radial_mod_table"):
+        topologies.design_from_table(radian_key)

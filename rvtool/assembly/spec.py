@@ -37,7 +37,7 @@ from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ..geometry.cycloid import CycloidProfile
 from ..output_pins.spec import OutputPinMechanism
 from ..errors import RvtoolInputError
-from ..units import angle_field, is_angle
+from ..units import angle_columns, angle_field, is_angle
 from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
@@ -418,7 +418,7 @@ def _file_units(cls, section, data):
     """The one unit conversion of a design file: ``NAME_deg`` [deg] -> angle field NAME [rad] of ``cls``
     (a number or a list of numbers); every other key is SI already. An angle field is given in
     degrees only (:func:`rvtool.units.is_angle`): its name in radians is not a file key."""
-    angles = {f.name for f in dataclasses.fields(cls) if is_angle(f)}
+    angles = {f.name: f for f in dataclasses.fields(cls) if is_angle(f)}
     out = {}
     for key, value in data.items():
         stem = key[:-4] if key.endswith("_deg") else None
@@ -426,11 +426,18 @@ def _file_units(cls, section, data):
             raise RvtoolInputError(f"{section}.{key}: a design file gives this angle in degrees as {key}_deg "
                                    f"(the spec holds it in rad)")
         if stem is not None and stem in angles:
+            cols = angle_columns(angles[stem])
             try:
-                out[stem] = (tuple(float(np.deg2rad(v)) for v in value) if isinstance(value, (list, tuple))
-                             else float(np.deg2rad(value)))
-            except TypeError:
-                raise RvtoolInputError(f"{section}.{key} = {value!r} must be a number of degrees (or a list)") from None
+                if cols is not None:        # a table whose angle columns are in degrees, the others SI
+                    out[stem] = tuple(tuple(float(np.deg2rad(x)) if j in cols else float(x) for j, x in enumerate(row))
+                                      for row in value)
+                else:
+                    out[stem] = (tuple(float(np.deg2rad(v)) for v in value) if isinstance(value, (list, tuple))
+                                 else float(np.deg2rad(value)))
+            except (TypeError, ValueError):
+                what = "a table of rows with its angle columns in degrees" if cols is not None else \
+                    "a number of degrees (or a list)"
+                raise RvtoolInputError(f"{section}.{key} = {value!r} must be {what}") from None
         else:
             out[key] = value
     return out

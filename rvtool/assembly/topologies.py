@@ -38,6 +38,7 @@ FORMAT_1_KEYS = {
     "pressure_angle": ("pressure_angle_deg", 180.0 / math.pi),      # basic rack of a gear, [rad] -> [deg]
     "rotation_mod": ("rotation_mod_deg", 180.0 / math.pi),          # cycloid profile rotation, [rad] -> [deg]
     "phase_errors_arcmin": ("phase_errors_deg", 1.0 / 60.0),        # RV crank phase errors, [arcmin] -> [deg]
+    "radial_mod_table": ("radial_mod_table_deg", (180.0 / math.pi, 1.0)),  # (phi [rad] -> [deg], delta_r [m]) rows
 }
 """Format 1 keys of format 2: old key -> (new key, factor from the old unit to the new). The keys
 are looked up in every table of the file (no other key of any section has these names)."""
@@ -139,6 +140,10 @@ _WARNED = set()
 
 
 def _renamed(value, factor):
+    if isinstance(factor, tuple):        # a table: one factor per column of each row
+        if not isinstance(value, (list, tuple)) or not all(isinstance(r, (list, tuple)) for r in value):
+            return value                 # not a table: the loader reports it under the new key
+        return [[_renamed(x, f) for x, f in zip(row, factor)] + list(row[len(factor):]) for row in value]
     if isinstance(value, bool) or not isinstance(value, (int, float, list, tuple)):
         return value                     # not a number: the loader reports it under the new key
     if isinstance(value, (list, tuple)):

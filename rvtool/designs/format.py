@@ -33,7 +33,7 @@ import typing
 import numpy as np
 
 from ..errors import RvtoolInputError
-from ..units import file_key, is_angle
+from ..units import angle_columns, file_key, is_angle
 
 _RANGE = re.compile(r"valid range\s*(?:is\s*)?([\[\(][^\]\)]*[\]\)])")
 _CHOICES = re.compile(r"valid(?: choices are|:)?\s*(\[[^\]]*\])")
@@ -293,6 +293,11 @@ def _field_rows(path, cls, fields, kw, raw, links, set_by_design):
         if is_angle(f):                     # an angle: the file gives it in degrees (the loader converts it)
             key, unit = file_key(f), "deg"
             shown = raw.get(key, _plain(_degrees(value)))
+            cols = angle_columns(f)
+            if cols is not None:            # a table: its angle columns in degrees, the others SI
+                unit = f.metadata["unit"].replace("rad", "deg")
+                shown = raw.get(key, None if value is None else [
+                    [_degrees(x) if j in cols else x for j, x in enumerate(row)] for row in value])
             rng = angle_range(cls, kw, f.name) if f.name in kw else ""
             meaning = re.sub(r"\s*\(file: ``[^`]*``\)?|\s*\[rad\]", "", meaning).strip(" ,;")
         if f.name in links.get(path, {}) and f.name not in raw and key not in raw:

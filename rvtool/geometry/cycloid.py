@@ -16,12 +16,12 @@ rotation (the profile turned by delta_rot [rad]) and a tabulated radial
 modification r_c(phi) = r_c + table(phi). The nominal generating
 eccentricity and the assembly eccentricity are separate inputs.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import RvtoolInputError
-from ..units import angle_field
+from ..units import angle_field, angle_table_field
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 
@@ -44,7 +44,7 @@ class CycloidProfile:
     equidistant_mod: float = 0.0
     offset_mod: float = 0.0
     rotation_mod: float = angle_field(0.0)
-    radial_mod_table: tuple | None = field(default=None, metadata={"unit": "rad, m"})  # (phi, delta_r) pairs
+    radial_mod_table: tuple | None = angle_table_field()  # (phi [rad], delta_r [m]) pairs; file: radial_mod_table_deg
 
     def __post_init__(self):
         check_positive("pin_circle_radius", self.pin_circle_radius)
