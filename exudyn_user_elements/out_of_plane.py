@@ -12,7 +12,6 @@ contact element and its own ``ports`` (P = I, one virtual body), the port mechan
 :mod:`exudyn_user_elements.contact_element` with the identity map.
 """
 import numpy as np
-import exudyn as exu
 from exudyn.itemInterface import LoadCoordinate, MarkerNodeCoordinate, NodeGenericODE2, ObjectGenericODE2
 
 #: the retained coordinates, in node order

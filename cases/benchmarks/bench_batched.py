@@ -16,7 +16,6 @@ variants (its rate, variants per second over all cores, does not depend on B; th
 figures are compared on those N).
 """
 import os
-import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 

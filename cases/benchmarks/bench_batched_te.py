@@ -27,7 +27,6 @@ earlier batched-Exudyn path (B copies in one Exudyn system) under ``exudyn_batch
 --quick: V = 8 with 13 TE points.
 """
 import os
-import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 

@@ -173,7 +173,6 @@ def honest_figures(design, model, q_rated, *, quick, bearing_model, peaks_rated,
     from ..designs.allowables import load_allowables
     from ..protocols.datasheet import datasheet
     from ..protocols.stiffness import TorqueSequence, branch_fits, quasi_static_stiffness
-    from ..units import RAD_PER_ARCMIN
     t0 = time.perf_counter()
     allowables = allowables or load_allowables(designs.path("rd40_allowables"))
     sb = stiffness_budget(model, q_rated)

@@ -265,7 +265,6 @@ def psi_inverse(y, tol=1e-14, max_iterations=100):
     y = np.asarray(y, float)
     if np.any(~np.isfinite(y)) or np.any(y < 0):
         raise RvtoolInputError("conformal pin law: the approach must be finite and >= 0")
-    global _LAW
     if _LAW is None:
         psi(0.0)
     flat = y.ravel()
