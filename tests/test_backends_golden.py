@@ -14,6 +14,7 @@ import pathlib
 
 import numpy as np
 import pytest
+from states import assert_equal_states
 
 import rvtool
 from rvtool.protocols.precision import dynamic_te, quasi_static_te
@@ -28,14 +29,7 @@ LM_TOL = 1e-6           # arcmin
 
 
 def _equal_states(q, q_ref, model):
-    """Each coordinate kind within EQ_TOL of the largest elastic deviation of that kind."""
-    q, q_ref = np.asarray(q), np.asarray(q_ref)
-    rot = np.zeros(q.shape[-1], bool)
-    for n in model.nodes:
-        rot[np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int)[2]] = True
-    for kind in (rot, ~rot):
-        scale = np.max(np.abs(q_ref[..., kind]))
-        assert np.max(np.abs(q[..., kind] - q_ref[..., kind])) <= EQ_TOL * scale
+    assert_equal_states(q, q_ref, model, EQ_TOL)
 
 
 @pytest.mark.parametrize("name", DESIGNS)

@@ -14,6 +14,7 @@ import pathlib
 
 import numpy as np
 import pytest
+from states import assert_equal_states
 
 import rvtool
 from rvtool.errors import RvtoolInputError
@@ -49,13 +50,7 @@ def _model_q(model, q_local):
 
 
 def _equal_states(q, q_ref, model):
-    q, q_ref = np.asarray(q), np.asarray(q_ref)
-    rot = np.zeros(q.shape[-1], bool)
-    for n in model.nodes:
-        rot[np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int)[2]] = True
-    for kind in (rot, ~rot):
-        scale = np.max(np.abs(q_ref[..., kind]))
-        assert np.max(np.abs(q[..., kind] - q_ref[..., kind])) <= EQ_TOL * scale
+    assert_equal_states(q, q_ref, model, EQ_TOL)
 
 
 @pytest.mark.parametrize("device", DEVICES)
