@@ -64,10 +64,16 @@ def friction_design(design, mu):
 def quasi_static(design, mu, seq):
     """Path (b) at friction mu: catalogue figures of the last cycle, the closed-cycle check,
     dissipation per family of the last cycle and the energy account of the run."""
-    from rvtool.protocols import hysteresis as H
     t0 = time.perf_counter()
-    model = build(friction_design(design, mu))
-    r = HC.quasi_static_cycles(model, seq)
+    r = HC.quasi_static_cycles(build(friction_design(design, mu)), seq)
+    return {**cycle_figures(r, seq), "wall_s": time.perf_counter() - t0}
+
+
+def cycle_figures(r, seq):
+    """The catalogue figures of the last cycle of a quasi-static cycle run ``r``, its closure and
+    repeatability against the cycle before, the friction dissipation of that cycle and the run's
+    energy account (RD-40 and rv40e alike)."""
+    from rvtool.protocols import hysteresis as H
     prev, last = r["cycles"][-2], r["cycles"][-1]
     fig = HC.catalogue_figures(last["torque_Nm"], last["angle_rad"], last["labels"], seq.rated_torque)
     cyc = H.Cycle(torque=last["torque_Nm"], angle=last["angle_rad"])
@@ -77,7 +83,7 @@ def quasi_static(design, mu, seq):
     return {"figures": fig, "cycle": last, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,
             "closure_arcmin": closed.closure_angle / RAD_PER_ARCMIN, "loop_J": closed.loop_integral,
             "dissipation_J": last["friction_dissipation_J"], "energy": r["energy"], "stats": r["stats"],
-            "quadrature_bound_J": HC.loop_quadrature_bound(cyc), "wall_s": time.perf_counter() - t0}
+            "quadrature_bound_J": HC.loop_quadrature_bound(cyc)}
 
 
 RV_DESIGN = designs.path("rv40e")
@@ -104,23 +110,12 @@ def rv_quasi_static(mu, quick):
     """Path (b) on rv40e with anchor friction mu on the pin mesh and the involute stage: the catalogue
     figures of the second cycle, its closure and repeatability against the first, the friction
     dissipation per family of that cycle and the energy account of the run."""
-    from rvtool.protocols import hysteresis as H
     t0 = time.perf_counter()
     d = rv_design(mu)
     seq = HC.CycleSequence(rated_torque=d.rated_torque, step=0.125 if quick else 0.0625,
                            fine_levels=(0.0005, 0.001, 0.003, 0.01, 0.03))
     r = HC.quasi_static_cycles(build_any(d), seq)
-    prev, last = r["cycles"][-2], r["cycles"][-1]
-    fig = HC.catalogue_figures(last["torque_Nm"], last["angle_rad"], last["labels"], seq.rated_torque)
-    cyc = H.Cycle(torque=last["torque_Nm"], angle=last["angle_rad"])
-    rep = H.repeatability(H.Cycle(torque=prev["torque_Nm"], angle=prev["angle_rad"]), cyc,
-                          tolerance=CYCLE_TOL_ARCMIN * RAD_PER_ARCMIN)
-    closed = HC.closed_cycle(prev, last, angle_tolerance=CYCLE_TOL_ARCMIN * RAD_PER_ARCMIN)
-    return {"figures": fig, "cycle": last, "repeat_arcmin": rep.max_angle_diff / RAD_PER_ARCMIN,
-            "closure_arcmin": closed.closure_angle / RAD_PER_ARCMIN, "loop_J": closed.loop_integral,
-            "dissipation_J": last["friction_dissipation_J"], "energy": r["energy"],
-            "quadrature_bound_J": HC.loop_quadrature_bound(cyc),
-            "stats": r["stats"], "sequence": seq.__dict__, "design": d.name, "wall_s": time.perf_counter() - t0}
+    return {**cycle_figures(r, seq), "sequence": seq.__dict__, "design": d.name, "wall_s": time.perf_counter() - t0}
 
 
 def loop_max_width(cycle):
