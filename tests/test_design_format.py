@@ -187,3 +187,13 @@ def test_radial_mod_table_is_given_in_degrees_and_format_1_tables_convert():
     radian_key["profile"]["radial_mod_table"] = [[0.0, 0.0], [0.03, 1e-6]]
     with pytest.raises(RvtoolInputError, match="radial_mod_table"):
         topologies.design_from_table(radian_key)
+
+
+def test_an_angle_out_of_range_is_reported_in_the_file_key_and_degrees():
+    # the spec validates radians; the user wrote degrees under NAME_deg: the error speaks the file's terms
+    table = _table("rv40e")
+    rows = table["main_bearing"]["rows"]
+    rows[0]["contact_angle_deg"] = 120.0
+    with pytest.raises(RvtoolInputError, match=r"main_bearing\.rows\[0\]\.contact_angle_deg = \[120\] is outside "
+                                               r"the valid range \[0, 90\) deg"):
+        topologies.design_from_table(table)

@@ -28,6 +28,7 @@ re-loads the changed data and the links follow a change (e.g. of the wheel width
 import copy
 import dataclasses
 import math
+import re
 import typing
 from dataclasses import dataclass, field
 
@@ -542,8 +543,28 @@ def build_section(cls, section, data):
         raise RvtoolInputError(f"[{section}]: {exc}") from None
     except RvtoolInputError as exc:
         # a component spec validates its own fields; the design file's key path names the section
-        msg = str(exc)
+        msg = _file_angle_message(str(exc), cls)
         raise RvtoolInputError(msg if msg.startswith(section + ".") or section == "design" else f"{section}.{msg}") from None
+
+
+_RANGE_MESSAGE = re.compile(r"^(\w+) = (.+?) is outside the valid range ([\[(])([^,]+), ([^\])]+)([\])])(.*)$", re.S)
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def _file_angle_message(msg, cls):
+    """A spec's range message about one of its angle fields [rad] in the design file's terms: the key
+    ``NAME_deg``, the value and the valid range in degrees (every other message unchanged)."""
+    m = _RANGE_MESSAGE.match(msg)
+    angles = {f.name for f in dataclasses.fields(cls) if is_angle(f) and angle_columns(f) is None}
+    if m is None or m.group(1) not in angles:
+        return msg
+    name, value, lb, low, high, hb, rest = m.groups()
+    try:
+        low_deg, high_deg = (f"{np.degrees(float(t)):.12g}" for t in (low, high))
+    except ValueError:
+        return msg
+    value_deg = _NUMBER.sub(lambda n: f"{np.degrees(float(n.group(0))):.12g}", value)
+    return f"{name}_deg = {value_deg} is outside the valid range {lb}{low_deg}, {high_deg}{hb} deg{rest}"
 
 
 def _bearing_kind(section, data):
