@@ -61,17 +61,22 @@ def _same(a, b):
             assert abs(x[f] - y[f]) <= EQUAL * abs(y[f]), (x["index"], f, x[f], y[f])
 
 
-def test_two_cpu_workers_equal_one():
+@pytest.fixture(scope="module")
+def rd40_case():
+    rd40 = rvtool.load_design("rd40")
+    tol = load_tolerances(designs.path("rd40_tolerances"))
+    p = VariantProtocol(n_te_points=7)
+    return rd40, tol, p, cycloid_batch(rd40, tol, p, 2026, range(2), "cpu")
+
+
+def test_two_cpu_workers_equal_one(rd40_case):
     """RD-40 (device Newton) and rv40e (device row Newton), TE + lost motion: the records of two
     cpu workers, each its batch, equal those of one batch run here; every worker starts with
     CUDA_VISIBLE_DEVICES set by its slot (cpu: "", no GPU visible)."""
-    rd40 = rvtool.load_design("rd40")
-    rd_tol = load_tolerances(designs.path("rd40_tolerances"))
-    rd_p = VariantProtocol(n_te_points=7)
+    rd40, rd_tol, rd_p, ref_rd = rd40_case
     rv40e = rvtool.load_design("rv40e")
     rv_tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
     rv_p = RvVariantProtocol(n_te_points=3)
-    ref_rd = cycloid_batch(rd40, rd_tol, rd_p, 2026, range(2), "cpu")
     ref_rv = rv_batch(rv40e, rv_tol, rv_p, 20261124, range(2), "cpu")
     assert sum(r["status"] == "ok" for r in ref_rd) >= 1 and all(r["status"] == "ok" for r in ref_rv)
     with device_cluster(["cpu", "cpu"]) as (client, slots):
@@ -84,6 +89,21 @@ def test_two_cpu_workers_equal_one():
     _same(rd["records"], ref_rd)
     _same(rv["records"], ref_rv)
     assert rv["failed"] == 0
+
+
+def test_monte_carlo_study_on_two_devices(rd40_case, tmp_path):
+    """The resumable study (run_monte_carlo, mode "device") with settings.devices: its chunks on two
+    cpu workers give the one-batch records; mixed or non-device settings are refused by name."""
+    from rvtool.variants.montecarlo import MonteCarloSettings, run_monte_carlo
+    rd40, tol, p, ref = rd40_case
+    out = run_monte_carlo(rd40, tol, p, MonteCarloSettings(n_variants=2, seed=2026, chunk_size=1, mode="device",
+                                                            devices=("cpu", "cpu")), str(tmp_path))
+    assert out["device"] == "cpu x 2" and out["chunks_run"] == 2
+    _same(out["records"], ref)
+    with pytest.raises(RvtoolInputError, match="mixes cpu and cuda"):
+        MonteCarloSettings(n_variants=2, mode="device", devices=("cpu", "cuda:0"))
+    with pytest.raises(RvtoolInputError, match="runs the device mode"):
+        MonteCarloSettings(n_variants=2, mode="pool", devices=2)
 
 
 def test_workers_start_with_their_gpu_visible_only():
