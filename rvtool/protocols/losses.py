@@ -206,9 +206,16 @@ def _mounting_factors(bearing, fs):
                            "cylindrical roller, ball, angular-contact pair, tapered row or pair")
 
 
-def _check_rv2(model):
+def _check_rv2(model, design):
     from ..bearings.set import BearingSet
     from ..bearings.tapered_set import TaperedBearingSet
+    if getattr(design, "topology", None) != "rv2":
+        raise RvtoolInputError(f"losses: topology = {getattr(design, 'topology', type(design).__name__)!r} is not "
+                               "supported (valid: 'rv2')")
+    if design.cranks.shaft.elastic or design.cranks.shaft.torsion != "rigid":
+        raise RvtoolInputError("losses: cranks.shaft.model / cranks.shaft.torsion are elastic; valid: "
+                               "cranks.shaft.model = 'rigid', cranks.shaft.torsion = 'rigid' (the loss accounting "
+                               "takes plain rolling-bearing sets)")
     missing = [n for n in ("pins", "gears") + ROLLING_ELEMENTS if n not in model.elements]
     if missing:
         raise RvtoolInputError(f"losses: the model lacks the elements {missing} (valid: topology = 'rv2')")
@@ -315,7 +322,7 @@ def efficiency_map(model, design, fs: FrictionSet, *, torque_ratios=(1.0,), outp
     """Efficiency at output torques ``torque_ratios`` x T_R and output speeds [r/min], averaged over
     ``input_angles`` [rad] (static states solved once per torque and angle). One row per (ratio, speed):
     efficiency, P_out, P_loss [W], loss_by_part [W], teeth_mu, the frictionless power balance."""
-    _check_rv2(model)
+    _check_rv2(model, design)
     ratio = abs(float(model.ratio))
     for r in torque_ratios:
         check_range("torque_ratio", r, 0.0, 10.0, low_open=True)
@@ -342,7 +349,7 @@ def no_load_torque(model, design, fs: FrictionSet, input_speed_rpm, *, input_ang
     """Input-side running torque [N m] at zero output torque and ``input_speed_rpm``, by part: each
     part's loss over omega_in (the bearings' M0 and their M1 at the unloaded state, seals, churning;
     the sliding contacts carry no load). Returns {"by_part_Nm": {...}, "total_Nm": ...}."""
-    _check_rv2(model)
+    _check_rv2(model, design)
     check_positive("input_speed_rpm", input_speed_rpm)
     states = _states(model, 0.0, input_angles)
     w_in = input_speed_rpm * 2.0 * math.pi / 60.0
