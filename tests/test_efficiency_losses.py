@@ -1,4 +1,4 @@
-"""Friction losses with the cited friction set (rvtool.protocols.losses; issue 30, Deliver 2)."""
+"""Friction losses with the cited friction set (rvtool.analysis.losses; issue 30, Deliver 2)."""
 import math
 import tomllib
 from dataclasses import replace
@@ -9,7 +9,7 @@ import pytest
 import rvtool
 from rvtool import designs
 from rvtool.errors import RvtoolInputError
-from rvtool.protocols import losses as L
+from rvtool.analysis import losses as L
 from rvtool.protocols.efficiency import kinematic_velocity
 
 

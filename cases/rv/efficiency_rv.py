@@ -1,7 +1,7 @@
 """RV E series friction losses against the catalogue (issue 30, Deliver 2 and 4): efficiency over the output speed
 at T_R and over the load, the no-load running torque by part, for rv40e (class design) and rv80e (cited geometry).
 
-One friction set for both sizes and every speed (rvtool/designs/friction_set.toml, rvtool.protocols.losses):
+One friction set for both sizes and every speed (rvtool/designs/friction_set.toml, rvtool.analysis.losses):
 Palmgren's M0 + M1 on every rolling set (grease f0, f1 of Harris & Kotzalas), ISO/TR 14179-2 at the involute
 teeth, one assumed mixed-lubrication mu at the cycloid--pin contacts, the output lip seal and an assumed grease
 churning share, the base oil's viscosity at the catalogue's case temperature of 30 degC. The assumed values sit at
@@ -26,7 +26,7 @@ import numpy as np
 
 import rvtool
 from rvtool import casekit, designs
-from rvtool.protocols import losses as L
+from rvtool.analysis import losses as L
 
 QUICK_SPEEDS = (5.0, 15.0, 30.0, 60.0)
 FULL_SPEEDS = (5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0)

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import RvtoolInputError
 from ..validation import check_nonnegative, check_positive, check_range
-from .efficiency import kinematic_velocity, power_balance_error
+from ..protocols.efficiency import kinematic_velocity, power_balance_error
 
 #: Walther's constant of ASTM D341 [mm^2/s].
 WALTHER_SHIFT = 0.7
