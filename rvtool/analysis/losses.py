@@ -453,3 +453,46 @@ def catalogue_efficiency(curve: EfficiencyCurve, output_speed_rpm):
     n = curve.output_speed_rpm
     check_range("output_speed_rpm", output_speed_rpm, n[0], n[-1])
     return float(np.interp(output_speed_rpm, n, curve.efficiency))
+
+
+# ---------------------------------------------------------------- the hysteresis loss split
+def hysteresis_split(design, *, pins_mu, teeth_mu, step=0.125, fine_levels=(0.0005, 0.001, 0.003, 0.01, 0.03)):
+    """The catalogue's hysteresis loss [arcmin] split into its clearance and friction shares: two repeating
+    quasi-static cycles over +-T_R (rvtool.protocols.hysteresis_cycles, the catalogue's definition of
+    rvtool.protocols.catalogue) with friction off and on (anchor friction ``pins_mu`` on the cycloid--pin
+    mesh, ``teeth_mu`` on the involute stage, the anchors' stiffness at the rated mesh force).
+
+    - clearance share: the loss with friction off (the free play, crossed at zero torque; its loop
+      encloses no area up to the quadrature);
+    - friction share by the catalogue's definition: loss(on) - loss(off);
+    - friction share by energy: the area of the loop with friction on over its height, A / (2 T_R) (a
+      loop of constant width w between -T_R and +T_R encloses 2 T_R w; the frictionless loop's area is
+      the quadrature's residue), with the dissipation per family.
+    """
+    from ..assembly.rv.gear_graph import GearGraph
+    from ..protocols import hysteresis_cycles as HC
+    from ..units import RAD_PER_ARCMIN
+    from ..assembly import build
+    check_nonnegative("pins_mu", pins_mu)
+    check_nonnegative("teeth_mu", teeth_mu)
+    g = GearGraph.of(design)
+    f_mesh = design.rated_torque / abs(g.ratio) / g.sun_pair.gear_a.base_radius / design.cranks.count
+    seq = HC.CycleSequence(rated_torque=design.rated_torque, step=step, fine_levels=fine_levels)
+    out = {}
+    for key, (mp, mt) in (("off", (0.0, 0.0)), ("on", (pins_mu, teeth_mu))):
+        d = design.replace(pin_contact={"mu": mp, "friction_model": "anchor"},
+                           involute_stage={"mu": mt, "friction_model": "anchor", "reference_force": f_mesh})
+        r = HC.quasi_static_cycles(build(d), seq)
+        last = r["cycles"][-1]
+        fig = HC.catalogue_figures(last["torque_Nm"], last["angle_rad"], last["labels"], design.rated_torque)
+        out[key] = {"hysteresis_loss_arcmin": fig.hysteresis_loss_arcmin, "loop_J": fig.loop_integral_J,
+                    "dissipation_J": {k: float(v) for k, v in last["friction_dissipation_J"].items()}}
+    width = lambda a: a / (2.0 * design.rated_torque) / RAD_PER_ARCMIN   # noqa: E731
+    off, on = out["off"], out["on"]
+    return {"pins_mu": pins_mu, "teeth_mu": teeth_mu, "step": step,
+            "hysteresis_loss_off_arcmin": off["hysteresis_loss_arcmin"],
+            "hysteresis_loss_on_arcmin": on["hysteresis_loss_arcmin"],
+            "clearance_share_arcmin": off["hysteresis_loss_arcmin"],
+            "friction_share_catalogue_arcmin": on["hysteresis_loss_arcmin"] - off["hysteresis_loss_arcmin"],
+            "friction_share_energy_arcmin": width(on["loop_J"] - off["loop_J"]),
+            "loop_off_J": off["loop_J"], "loop_on_J": on["loop_J"], "dissipation_on_J": on["dissipation_J"]}
