@@ -140,3 +140,21 @@ def test_efficiency_catalogue_loads_and_records_its_status():
     assert all(c["status"] in ("read", "not_reread") for c in t["efficiency_curve"])
     assert len(t["efficiency_catalogue"]["assumptions_commit"]) == 40
     assert "friction_set" not in designs.design_names() and "rv_e_efficiency" not in designs.design_names()
+
+
+def test_validate_rows_and_plot(tmp_path, rv40e):
+    # the rows `rvtool validate` adds: one per speed of the catalogue's chart and the no-load torque, each with
+    # its source and reading status; the plot is written from the results dict
+    d, _ = rv40e
+    eff = L.validate_efficiency("rv40e", d, quick=True)
+    rows = eff.pop("rows")
+    cat = L.load_efficiency_catalogue()
+    assert [r["figure"] for r in rows] == [f"efficiency_{n:g}rpm" for n in cat.curves["rv40e"].output_speed_rpm] \
+        + ["no_load_running_torque"]
+    for r in rows:
+        assert "Nabtesco" in r["source"] and r["status"] == "not_reread" and "not re-read" in r["verdict"]
+        assert np.isfinite(r["predicted"]) and r["predicted"] > 0
+    assert L.efficiency_plot({"design": "rv40e", "efficiency": eff}, str(tmp_path)) == ["efficiency.png"]
+    assert (tmp_path / "efficiency.png").is_file()
+    # a design without figures gives no rows and says so
+    assert L.validate_efficiency("rd40", None)["rows"] == []
