@@ -46,13 +46,7 @@ RAISE_LOSSES = {"density": "low"}
 
 def design_for_losses(name):
     """The design the loss accounting runs on and the note saying what was changed."""
-    d = rvtool.load_design(designs.path(name))
-    note = "as shipped"
-    if d.cranks.shaft.elastic or d.housing.model != "rigid":
-        d = d.replace(cranks={"shaft": {"model": "rigid", "tilt": False, "torsion": "rigid"}}, housing={"model": "rigid"})
-        note = ("cranks.shaft.model = 'rigid' (tilt off), housing.model = 'rigid' (shipped: elastic members on); "
-                "the loss accounting takes plain rolling-bearing sets")
-    return d, note
+    return L.loss_design(rvtool.load_design(designs.path(name)))
 
 
 def corner(loaded, raise_losses):
@@ -106,7 +100,11 @@ def run_design(name, loaded, cat, speeds, n_ang):
                "band_low_Nm": nl_lo["total_Nm"], "band_high_Nm": nl_hi["total_Nm"], "catalogue_Nm": fig.torque,
                "catalogue_low_Nm": fig.low, "catalogue_high_Nm": fig.high, "ratio_to_catalogue": nl["total_Nm"] / fig.torque,
                "within_factor_2": bool(0.5 <= nl["total_Nm"] / fig.torque <= 2.0), "catalogue_status": fig.status}
-    return {"variant": note, "ratio": abs(float(m.ratio)), "rated_torque_Nm": d.rated_torque,
+    curve_lists = {"output_speed_rpm": [p["output_speed_rpm"] for p in rows],
+                   "model_pct": [p["efficiency_pct"] for p in rows],
+                   "band_low_pct": [p["band_low_pct"] for p in rows], "band_high_pct": [p["band_high_pct"] for p in rows],
+                   "catalogue_pct": [100 * L.catalogue_efficiency(curve, p["output_speed_rpm"]) for p in rows]}
+    return {"variant": note, "ratio": abs(float(m.ratio)), "rated_torque_Nm": d.rated_torque, "curve": curve_lists,
             "viscosity_at_case_temperature_m2_s": fs.viscosity, "efficiency_vs_speed": rows, "low_load": low_load,
             "no_load": no_load, "catalogue_status": curve.status}
 
