@@ -158,3 +158,30 @@ def test_validate_rows_and_plot(tmp_path, rv40e):
     assert (tmp_path / "efficiency.png").is_file()
     # a design without figures gives no rows and says so
     assert L.validate_efficiency("rd40", None)["rows"] == []
+
+
+def test_teeth_loss_uses_the_mesh_load_of_iso_tr_14179(rv40e, loaded):
+    # ISO/TR 14179-2 takes the mesh's transverse load over the face width (all its tooth pairs together): the
+    # loss recomputed by hand from the rows, with one mu per mesh, at the rated state
+    d, m = rv40e
+    fs = loaded.central
+    from rvtool.solver.static import StaticSolver
+    m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+    q = StaticSolver(m).solve(0.0)
+    w_in = 1500 * 2 * math.pi / 60
+    v = kinematic_velocity(m, 0.0, w_in)
+    el = m.elements["gears"]
+    pose, vel = el.pose_velocity(el.local(q), el.local(v))
+    fn = np.maximum(el.evaluator.evaluate(pose, 0 * vel, check=False).obs[:, 0], 0.0)
+    vt = np.abs(el.evaluator.evaluate(pose, vel, check=False).obs[:, 1])
+    rw1, aw, rho, b = L.sun_mesh_geometry(d)
+    v_sum = 2 * (w_in - w_in / abs(m.ratio) * np.sign(m.ratio)) * rw1 * math.sin(aw)
+    hand = 0.0
+    for k in set(el.evaluator.mesh_of.tolist()):
+        rows = el.evaluator.mesh_of == k
+        w = fn[rows].sum() / b
+        mu = 0.048 * (w * 1e-3 / (abs(v_sum) * rho * 1e3)) ** 0.2 * (fs.viscosity * fs.density * 1e3) ** -0.05 \
+            * (fs.roughness * 1e6) ** 0.25
+        hand += mu * np.sum(fn[rows] * vt[rows])
+    assert np.count_nonzero(fn) >= 4                 # two pairs in some mesh: per-row loads would differ
+    assert L.part_losses(m, d, fs, q, v)["teeth"] == pytest.approx(hand, rel=1e-9)

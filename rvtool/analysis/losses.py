@@ -9,8 +9,9 @@ size and speed; each number carries its source there or is `assumed` at the midd
   the grease column of Harris & Kotzalas' f0 table times the mounting's number of rows, f1 by type,
   the base oil's viscosity at the catalogue's case temperature (ASTM D341, :func:`walther_viscosity`),
   P1 the mounting's radial resultant, omega the relative speed of its rings;
-- **involute teeth**: mu per mesh from ISO/TR 14179-2 (:func:`iso_tr_14179_mu`) at the mesh's load per
-  face width, its sum velocity and reduced radius at the pitch point; the loss mu F_n |v_t| per row;
+- **involute teeth**: mu per mesh from ISO/TR 14179-2 (:func:`iso_tr_14179_mu`) at the mesh's load (all its
+  tooth pairs and slices) per face width, its sum velocity and reduced radius at the pitch point; the loss
+  mu F_n |v_t| per row;
 - **cycloid--ring-pin contacts**: one mixed-lubrication mu (assumed), the loss mu F_n |v_t| per row;
 - **output seal**: P = c d^2 n (radial lip seal, d the seal diameter [mm], n the output speed [r/min]);
 - **grease churning**: an assumed fraction of the bearings' load-independent M0 losses.
@@ -262,9 +263,14 @@ def part_losses(model, design, fs: FrictionSet, q, v):
     rw1, aw, rho, b = sun_mesh_geometry(design)
     w_rel = abs(v[model.input_index] - v[model.output_index])
     v_sum = 2.0 * w_rel * rw1 * math.sin(aw)
-    fn, vt = _rows(model.elements["gears"], q, v)
-    n_sl = design.involute_stage.n_slices
-    mu = iso_tr_14179_mu(fn / (b / n_sl), v_sum, rho, nu * fs.density, fs.roughness, fs.teeth_lubricant_factor)
+    gears = model.elements["gears"]
+    fn, vt = _rows(gears, q, v)
+    # ISO/TR 14179-2's load is the mesh's transverse load over its face width (every tooth pair and slice of
+    # the mesh together), one mu per mesh for its rows
+    mesh_of = np.asarray(gears.evaluator.mesh_of)
+    mesh_load = np.bincount(mesh_of, weights=fn)
+    mu_mesh = iso_tr_14179_mu(mesh_load / b, v_sum, rho, nu * fs.density, fs.roughness, fs.teeth_lubricant_factor)
+    mu = mu_mesh[mesh_of]
     out["teeth"] = float(np.sum(mu * fn * vt))
     loaded = fn > 0
     out["teeth_mu"] = float(np.sum(mu[loaded] * fn[loaded]) / np.sum(fn[loaded])) if loaded.any() else 0.0
