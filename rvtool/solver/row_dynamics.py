@@ -13,6 +13,12 @@ Exudyn element), plus the output torque. Masses: the model's rigid bodies (mass,
 inertia; centre of mass at the node). The static start is Exudyn's (the same StaticSolver as the
 Exudyn path), so both paths start from one state.
 
+Cost (rv40e, one CPU core of the shared development machine, 200 steps): 1.2-1.6x Exudyn's path;
+both evaluate the same family kernels at every Newton iteration (about 3 evaluations per step), and
+the tapered rollers' planar mapping (NumPy, :mod:`rvtool.bearings.tapered_set`) is most of one
+evaluation: the row stepper gains Exudyn's overhead only, until the families run in one fused launch
+or the tapered rows on the device.
+
 This is NOT the fused stepper (one Warp launch per K steps): every Newton iteration launches each
 family and returns its rows to the host. What a fused RV kernel still lacks is named by
 :func:`rvtool.solver.device_dynamics.unfused_element_reasons`.
@@ -54,7 +60,7 @@ class RowDrivenModel(ReferenceModel):
 
     def __init__(self, model, *, torque, motion, settings_vector, device="cpu"):
         from .device_rows import row_reasons
-        from .replica import ReplicaEvaluator, copy_families
+        from .replica import copy_families
         reasons = row_reasons(model)
         if reasons:
             raise RvtoolInputError("; ".join(reasons))
@@ -63,10 +69,21 @@ class RowDrivenModel(ReferenceModel):
             raise RvtoolInputError("the model has coordinates beyond its rigid bodies' (x, y, theta); the row "
                                    "stepper takes planar rigid bodies only")
         nb = len(model.body_names)
-        self.model = model
-        self.evaluator = ReplicaEvaluator(copy_families(model, 1, device=device), nb, 1)
-        self.evaluator.set_static(False)                 # driven runs: dQ/dv of every family
         n = 3 * nb
+        self.model = model
+        self.families = copy_families(model, 1, device=device)
+        for f in self.families:                          # driven runs: dQ/dv of every family
+            if callable(getattr(f.set, "set_velocity_tangent", None)):
+                f.set.set_velocity_tangent(True)
+        # one copy: each family's row entries summed into f (n,) and K, C (n, n) by flat indices
+        # (np.bincount; the rows' local coordinates of the copy's block scatter, -1: ground)
+        self._scatter = []
+        for f in self.families:
+            loc = np.asarray(f.scatter.local, np.int64)
+            vec = loc.reshape(-1)
+            pair = (loc[:, :, None] * n + loc[:, None, :]).reshape(-1)
+            pair_ok = ((loc[:, :, None] >= 0) & (loc[:, None, :] >= 0)).reshape(-1)
+            self._scatter.append((vec >= 0, vec[vec >= 0], pair_ok, pair[pair_ok]))
         free = np.ones(n, bool)
         free[sorted(model.fixed_coordinates())] = False
         self.B, self.n, self.nb = 1, n, nb
@@ -81,11 +98,20 @@ class RowDrivenModel(ReferenceModel):
         self.evaluations = 0
 
     def forces(self, p, q, v):
+        from .replica import family_rows
         t0 = time.perf_counter()
-        r = self.evaluator.evaluate((self.reference[p] + q).reshape(self.nb, 3), v.reshape(self.nb, 3))
-        f = np.array(r.Q[0])
+        n = self.n
+        pose = (self.reference[p] + q).reshape(self.nb, 3)
+        vel = v.reshape(self.nb, 3)
+        f, K, C = np.zeros(n), np.zeros(n * n), np.zeros(n * n)
+        for fam, (vok, vidx, pok, pidx) in zip(self.families, self._scatter):
+            Q, dQ, dV = family_rows(fam.set, pose, vel)[:3]
+            f += np.bincount(vidx, np.asarray(Q, np.float64).reshape(-1)[vok], minlength=n)
+            K += np.bincount(pidx, np.asarray(dQ, np.float64).reshape(-1)[pok], minlength=n * n)
+            if dV is not None:
+                C += np.bincount(pidx, np.asarray(dV, np.float64).reshape(-1)[pok], minlength=n * n)
         f[self.output_index] += self.torque[p]
-        out = f, r.dQdq[0], r.dQdv[0], (0.0, 0.0, 0.0)      # peak loads: not recorded by the row stepper
+        out = f, K.reshape(n, n), C.reshape(n, n), (0.0, 0.0, 0.0)   # peak loads: not recorded here
         self.forces_s += time.perf_counter() - t0
         self.evaluations += 1
         return out
