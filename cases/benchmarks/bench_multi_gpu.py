@@ -16,12 +16,15 @@ device, each started with CUDA_VISIBLE_DEVICES = its GPU (cpu workers: none visi
 are split into one contiguous batch per device, each batch cut into chunks of --chunk variants run
 one after another on that device's worker (default: 1,024 for rd40 on cuda, the single-GPU study's
 chunk CHUNK_DEVICE_GPU; 64 for rv40e, the row Newton's copy cost grows faster than linearly; the
-whole batch on cpu). Both runs use the same cluster: the one-GPU run gives every variant to the
-first worker, the N-GPU run splits them over all N.
+whole batch on cpu). Host work (per-copy parameters, Exudyn fallbacks) runs on each GPU worker's
+helper pool, the host's cores shared out: the one-GPU run on a cluster of one worker with
+cpu_count - 1 helpers, the N-GPU run on a cluster of N workers with cpu_count / N - 1 each
+(--host-workers overrides; cpu workers: none), so both runs use the whole host.
 
-Warm-up (excluded from both timings, reported as ``warm_up_s``): one variant on every worker
-first (imports, Warp kernel compilation and module loading on each device). Starting the cluster
-is excluded too (``cluster_start_s``). Fallbacks and failures are inside the timings.
+Warm-up (excluded from both timings, reported as ``warm_up_s``): one variant on every worker of
+each cluster first (imports, Warp kernel compilation and module loading on each device, the helper
+pools started). Starting the clusters is excluded too (``cluster_start_s``). Fallbacks and
+failures are inside the timings.
 
 Judged (``passed``): the N-device records equal the one-device records (every figure within 1e-12
 relative: the copies are independent), the same variants failed in both, failed variants
@@ -35,7 +38,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs, load_design
-from rvtool.variants.multi_device import (RvVariantProtocol, device_cluster, multi_device_monte_carlo, warm_up)
+from rvtool.variants.multi_device import (RvVariantProtocol, default_host_workers, device_cluster,
+                                          multi_device_monte_carlo, warm_up)
 from rvtool.variants.rv_tolerances import load_rv_tolerances
 from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants.variant import VariantProtocol
@@ -108,7 +112,9 @@ def main(argv=None):
         p.add_argument("--device", default="cpu", choices=("cpu", "cuda"),
                        help="cuda: one worker per GPU (cuda:0 .. cuda:N-1); cpu: N cpu workers"),
         p.add_argument("--gpus", type=int, default=2, help="N devices (workers) of the N-device run"),
-        p.add_argument("--chunk", type=int, default=None, help="variants per task (default: see the docstring)")))
+        p.add_argument("--chunk", type=int, default=None, help="variants per task (default: see the docstring)"),
+        p.add_argument("--host-workers", type=int, default=None,
+                       help="helper processes per worker (default: the host's cores shared out; cpu: 0)")))
     t_all = time.perf_counter()
     name, loader, tol_name, seed, protocols, cuda_chunk = CASES[args.design]
     design = load_design(designs.path(name))
@@ -117,26 +123,29 @@ def main(argv=None):
     B = args.variants or (2 if args.quick else 8192)
     devices = [f"cuda:{k}" for k in range(args.gpus)] if args.device == "cuda" else ["cpu"] * args.gpus
     chunk = args.chunk or (cuda_chunk if args.device == "cuda" or args.design == "rv40e" else None)
-    t = time.perf_counter()
-    with device_cluster(devices) as (client, slots):
-        cluster_s = time.perf_counter() - t
-        warm_s = warm_up(client, slots, design, tol, protocol, seed)
+    def study(devs):
+        """(result, wall, cluster start, warm-up, helpers per worker) on a cluster of ``devs``."""
         t = time.perf_counter()
-        one = multi_device_monte_carlo(design, tol, B, protocol=protocol, seed=seed, client=client, slots=slots[:1],
-                                       chunk=chunk)
-        one_s = time.perf_counter() - t
-        t = time.perf_counter()
-        many = multi_device_monte_carlo(design, tol, B, protocol=protocol, seed=seed, client=client, slots=slots,
-                                        chunk=chunk)
-        many_s = time.perf_counter() - t
+        with device_cluster(devs) as (client, slots):
+            start = time.perf_counter() - t
+            hw = default_host_workers(slots) if args.host_workers is None else args.host_workers
+            warm = warm_up(client, slots, design, tol, protocol, seed, host_workers=hw)
+            t = time.perf_counter()
+            res = multi_device_monte_carlo(design, tol, B, protocol=protocol, seed=seed, client=client, slots=slots,
+                                           chunk=chunk, host_workers=hw)
+            return res, time.perf_counter() - t, start, warm, hw, [s.device for s in slots]
+
+    one, one_s, c1, w1, hw1, _ = study(devices[:1])
+    many, many_s, cn, wn, hwn, worker_device = study(devices)
     ok = [r for r in many["records"] if r["status"] == "ok"]
     results = {
         "settings_echo": {"design": name, "variants": B, "te_points": protocol.n_te_points, "devices": devices,
-                          "worker_device": [s.device for s in slots], "chunk": chunk,
+                          "worker_device": worker_device, "chunk": chunk,
+                          "host_workers": {"one_device": hw1, "n_devices": hwn},
                           "judge_speedup": (not args.quick) and args.device == "cuda"},
-        "cluster_start_s": cluster_s,
-        "warm_up_s": warm_s,
-        "timing_note": ("warm-up (one variant on every worker) and the cluster start are excluded from both "
+        "cluster_start_s": {"one_device": c1, "n_devices": cn},
+        "warm_up_s": {"one_device": w1, "n_devices": wn},
+        "timing_note": ("warm-up (one variant on every worker) and the cluster starts are excluded from both "
                         "timings; fallbacks and failures are inside them"),
         "one_device": {"failed": one["failed"], **split(one, one_s), **fallbacks(one["records"])},
         "n_devices": {"failed": many["failed"], **split(many, many_s), **fallbacks(many["records"])},

@@ -244,9 +244,11 @@ def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="bat
     return out
 
 
-def _init_worker():
+def init_helper():
+    """Initializer of a helper process of the device path's host work: one BLAS/OpenMP thread."""
     for nm in THREAD_ENV:
         os.environ[nm] = "1"
+
 
 
 def chunk_path(out_dir, i):
@@ -336,7 +338,7 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
                 # on the other cores while this process holds the device
                 stack.enter_context(_single_thread_env())
                 helpers = stack.enter_context(cf.ProcessPoolExecutor(
-                    max_workers=n_workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker))
+                    max_workers=n_workers, mp_context=multiprocessing.get_context("spawn"), initializer=init_helper))
             for i in pending:
                 recs = run_batch(design, variants_of(i), protocol, device, build_kw, mode, helpers)
                 done += len(recs)
@@ -398,14 +400,16 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
 
 def _run_on_devices(devices, pending, variants_of, design, protocol, build_kw, finish_chunk, progress, done, total):
     """The device mode's chunks on one worker per device (:mod:`rvtool.variants.multi_device`):
-    every free worker takes the next chunk (equal devices, one chunk at a time each); a chunk whose
+    every free worker takes the next chunk (equal devices, one chunk at a time each), its host work
+    on a helper pool of its share of the host's cores (GPUs; none on cpu workers); a chunk whose
     task dies has its variants failed. Returns the device string the workers ran on."""
     from dask.distributed import as_completed
 
-    from .multi_device import device_cluster
+    from .multi_device import default_host_workers, device_chunk, device_cluster
     with device_cluster(devices) as (client, slots):
         dev = slots[0].device
-        futures = {client.submit(run_batch, design, variants_of(i), protocol, dev, build_kw, "device", pure=False): i
+        hw = default_host_workers(slots)
+        futures = {client.submit(device_chunk, design, variants_of(i), protocol, dev, build_kw, hw, pure=False): i
                    for i in pending}
         try:
             for fut in as_completed(list(futures)):

@@ -81,9 +81,15 @@ def device_cluster(devices):
     from dask.distributed import Client, LocalCluster
 
     from .cluster import single_thread_env
+    import dask
     slots = device_slots(devices)
+    # non-daemonic worker processes: a GPU worker runs its host work on a pool of its own
+    # (host_workers, :func:`helper_pool`); daemonic processes may not start children
+    stack = contextlib.ExitStack()
+    stack.enter_context(dask.config.set({"distributed.worker.daemon": False}))
     with single_thread_env():
         cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True, dashboard_address=None)
+    stack.callback(cluster.close)
     try:
         # one worker spec per slot: the LocalCluster's own worker template with the slot's environment
         for s in slots:
@@ -97,9 +103,13 @@ def device_cluster(devices):
             client.wait_for_workers(len(slots))
             yield client, slots
         finally:
-            client.close()
+            try:
+                # the workers' helper pools end with the study (a worker killed at close would orphan them)
+                client.run(shutdown_helper_pools)
+            finally:
+                client.close()
     finally:
-        cluster.close()
+        stack.close()
 
 
 def worker_addresses(client, slots):
@@ -148,20 +158,58 @@ def _is_cycloid(design):
     return isinstance(design, CycloidDesign)
 
 
-def cycloid_batch(design, tolerances, protocol, seed, indices, device):
-    """Records of the cycloid variants ``indices`` (sampled from ``tolerances`` with ``seed``) on the
-    device Newton on ``device`` (:func:`rvtool.variants.montecarlo.run_batch`, mode "device")."""
+_POOLS = {}
+
+
+def helper_pool(host_workers):
+    """This process's pool of ``host_workers`` spawned processes (one BLAS thread each) for the
+    device path's host work (per-copy parameters, Exudyn fallbacks), started on first use and kept
+    for the process's later tasks; None for 0."""
+    if not host_workers:
+        return None
+    if host_workers not in _POOLS:
+        import atexit
+        import concurrent.futures as cf
+        import multiprocessing
+
+        from .cluster import single_thread_env
+        from .montecarlo import init_helper
+        with single_thread_env():
+            pool = cf.ProcessPoolExecutor(max_workers=int(host_workers), initializer=init_helper,
+                                          mp_context=multiprocessing.get_context("spawn"))
+        atexit.register(pool.shutdown, wait=False, cancel_futures=True)
+        _POOLS[host_workers] = pool
+    return _POOLS[host_workers]
+
+
+def shutdown_helper_pools():
+    """End this process's helper pools (run on every worker when :func:`device_cluster` closes)."""
+    while _POOLS:
+        _POOLS.popitem()[1].shutdown(wait=True, cancel_futures=True)
+
+
+def device_chunk(design, variants, protocol, device, build_kw=None, host_workers=0):
+    """Records of cycloid ``variants`` on the device Newton on ``device``
+    (:func:`rvtool.variants.montecarlo.run_batch`, mode "device"), the host work on this
+    process's :func:`helper_pool` of ``host_workers`` processes (0: in this process)."""
     from .montecarlo import run_batch
+    return run_batch(design, variants, protocol, device, build_kw, mode="device", helpers=helper_pool(host_workers))
+
+
+def cycloid_batch(design, tolerances, protocol, seed, indices, device, host_workers=0):
+    """Records of the cycloid variants ``indices`` (sampled from ``tolerances`` with ``seed``) on the
+    device Newton on ``device`` (:func:`device_chunk`)."""
     from .tolerances import sample_variant
     variants = [sample_variant(tolerances, design, k, seed) for k in indices]
-    return run_batch(design, variants, protocol, device, mode="device")
+    return device_chunk(design, variants, protocol, device, host_workers=host_workers)
 
 
-def rv_batch(design, tolerances, protocol, seed, indices, device):
+def rv_batch(design, tolerances, protocol, seed, indices, device, host_workers=0):
     """Records of the RV variants ``indices`` (:func:`rvtool.variants.rv_tolerances.sample_rv_design`
     with ``seed``): each built here, then TE and lost motion of all of them on the device row Newton
     (:func:`rvtool.batched.device_rows_variants.device_rows_variants`). A variant that cannot be
-    built is failed with its error; the others run."""
+    built is failed with its error; the others run. host_workers: not used (the variants' Exudyn
+    builds are not picklable; they run in this process)."""
     from ..assembly import build
     from ..batched.device_rows_variants import device_rows_variants
     from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
@@ -230,14 +278,14 @@ def plan(n_variants, slots, chunk=None):
     return out
 
 
-def run_batches(client, tasks, design, tolerances, protocol, seed):
+def run_batches(client, tasks, design, tolerances, protocol, seed, host_workers=0):
     """Records of ``tasks`` ([(slot, indices)], e.g. :func:`plan`), each on its slot's worker with
     that slot's device, gathered in task order; a task that raises has all its variants failed with
-    that error. Returns (records, per-task {worker, device, variants, wall_s (of the task, as the
-    worker measured it)})."""
+    that error; host_workers: each worker's helper pool (:func:`helper_pool`). Returns (records,
+    per-task {worker, device, variants, wall_s (of the task, as the worker measured it)})."""
     addr = worker_addresses(client, list({s.name: s for s, _ in tasks}.values()))
     fn = batch_task(design)
-    futures = [(s, b, client.submit(_timed, fn, design, tolerances, protocol, seed, list(b), s.device,
+    futures = [(s, b, client.submit(_timed, fn, design, tolerances, protocol, seed, list(b), s.device, host_workers,
                                     workers=[addr[s.name]], allow_other_workers=False, pure=False))
                for s, b in tasks]
     records, info = [], []
@@ -258,23 +306,35 @@ def _timed(task, *args):
     return out, time.perf_counter() - t0
 
 
-def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1):
+def default_host_workers(slots):
+    """Helper processes per worker: on GPUs the host's cores shared out (one left to each worker
+    itself), on cpu slots none (the workers are the cores)."""
+    import os
+    if all(s.device == "cpu" for s in slots):
+        return 0
+    return max(0, (os.cpu_count() or 1) // len(slots) - 1)
+
+
+def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1, host_workers=None):
     """Run ``variants`` variants on every worker once (imports, Warp kernel compilation and module
-    loading on its device), untimed by the study; returns the wall time [s] it took."""
+    loading on its device, its helper pool started), untimed by the study; returns the wall time [s]."""
     t0 = time.perf_counter()
     protocol = protocol or default_protocol(design)
-    run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed)
+    hw = default_host_workers(slots) if host_workers is None else host_workers
+    run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed, hw)
     return time.perf_counter() - t0
 
 
 def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, protocol=None, seed=0, client=None,
-                             slots=None, chunk=None):
+                             slots=None, chunk=None, host_workers=None):
     """The device Monte Carlo of variants 0..n_variants-1 of ``design`` over several devices
     (module docstring), each device's batch in chunks of at most ``chunk`` variants (:func:`plan`). Either ``devices`` (a cluster is started for the study and closed after it:
     see :func:`device_slots`) or ``client`` and ``slots`` of a running :func:`device_cluster`
     (e.g. warmed by :func:`warm_up`). protocol: the per-variant workload (default
     :func:`default_protocol`). Returns {"records" (by index), "failed" (count), "wall_s" (the
-    study, on a running cluster), "batches" (per-batch worker, device, size, task wall time)}."""
+    study, on a running cluster), "batches" (per-batch worker, device, size, task wall time)}.
+    host_workers: helper processes of each worker for the host work (None:
+    :func:`default_host_workers`; the same count as the :func:`warm_up` that started the pools)."""
     if (client is None) == (devices is None):
         raise RvtoolInputError("give either devices (a cluster for this study) or client and slots (a running one)")
     if client is not None and not slots:
@@ -285,12 +345,15 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
     if client is None:
         with device_cluster(devices) as (client, slots):
             return multi_device_monte_carlo(design, tolerances, n_variants, protocol=protocol, seed=seed,
-                                            client=client, slots=slots, chunk=chunk)
+                                            client=client, slots=slots, chunk=chunk, host_workers=host_workers)
     t0 = time.perf_counter()
-    records, info = run_batches(client, plan(n_variants, slots, chunk), design, tolerances, protocol, seed)
+    hw = default_host_workers(slots) if host_workers is None else int(host_workers)
+    records, info = run_batches(client, plan(n_variants, slots, chunk), design, tolerances, protocol, seed, hw)
     return {"records": records, "failed": sum(r["status"] != "ok" for r in records),
-            "wall_s": time.perf_counter() - t0, "batches": info, "devices": [s.device for s in slots]}
+            "wall_s": time.perf_counter() - t0, "batches": info, "devices": [s.device for s in slots],
+            "host_workers": hw}
 
 
-__all__ = ["DeviceSlot", "RvVariantProtocol", "default_protocol", "device_cluster", "device_slots",
+__all__ = ["DeviceSlot", "RvVariantProtocol", "default_host_workers", "default_protocol", "device_chunk",
+           "device_cluster", "device_slots", "helper_pool", "shutdown_helper_pools",
            "multi_device_monte_carlo", "plan", "run_batches", "split_indices", "warm_up", "worker_addresses"]
