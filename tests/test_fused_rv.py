@@ -54,3 +54,25 @@ def test_row_stepper_equals_exudyn_generalized_alpha():
     assert np.max(np.abs(te - ex["te"])) * ARCSEC_PER_RAD <= 1e-6
     # the run moved: the output turned by the kinematic increment (not a frozen state)
     assert abs(r["theta_out"][-1] - r["theta_out"][0]) > 1e-5
+
+
+@pytest.mark.skipif(not __import__("warp").get_cuda_device_count(), reason="no CUDA device")
+def test_row_stepper_on_cuda_equals_exudyn():
+    """The same short rv40e run with the families' kernels on cuda:0: TE equal to Exudyn's to 1e-6 arcsec."""
+    import numpy as np
+
+    from rvtool.protocols.precision import dynamic_te, transmission_error
+    from rvtool.solver import RunSpec
+    from rvtool.solver.device_dynamics import DeviceDynamicsSettings
+    from rvtool.solver.row_dynamics import row_driven_run
+    from rvtool.units import ARCSEC_PER_RAD
+    d = rvtool.load_design("rv40e")
+    spec = RunSpec(end_time=12 * 2e-5, step=2e-5, abs_tol=1e-6, rel_tol=1e-8)
+    ex = dynamic_te(rvtool.build(d), torque=d.rated_torque, speed_rpm=d.input_speed_rpm, duration=spec.end_time,
+                    run_spec=spec, solver="exudyn")
+    m = rvtool.build(d)
+    r = row_driven_run(m, torque=d.rated_torque, speed_rpm=d.input_speed_rpm, duration=spec.end_time,
+                       settings=DeviceDynamicsSettings.from_run_spec(spec), device="cuda:0")
+    np.testing.assert_array_equal(r["t"], ex["t"])
+    te = transmission_error(r["theta_in"], r["theta_out"], m.ratio)
+    assert np.max(np.abs(te - ex["te"])) * ARCSEC_PER_RAD <= 1e-6
