@@ -20,6 +20,10 @@ batch of variants (scale-out delegated to Dask, :mod:`rvtool.variants.cluster`).
   :func:`rvtool.batched.device_rows_variants.device_rows_variants` (TE and lost motion on the
   device row Newton). A variant whose run fails, and every variant of a batch whose task dies
   (a lost worker), is recorded ``status = "failed"`` with its error and counted; none is dropped.
+* Host work: each GPU worker runs the device path's host work (per-copy parameters, Exudyn
+  fallbacks) on a pool of helper processes of its own (:func:`helper_pool`; the workers are
+  non-daemonic so that they may start it), the host's cores shared out between the GPUs
+  (:func:`default_host_workers`); the pools end when the cluster closes.
 
 Every figure of a variant depends on that variant alone (the device copies are independent), so
 the records equal those of one worker (tests/test_multi_gpu.py: two cpu workers against one,
@@ -104,8 +108,9 @@ def device_cluster(devices):
             yield client, slots
         finally:
             try:
-                # the workers' helper pools end with the study (a worker killed at close would orphan them)
-                client.run(shutdown_helper_pools)
+                # the workers' helper pools end with the study (a worker killed at close would orphan
+                # them); a worker that is gone has none left to end
+                client.run(shutdown_helper_pools, on_error="ignore")
             finally:
                 client.close()
     finally:
