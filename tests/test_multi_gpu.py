@@ -11,7 +11,8 @@ import rvtool
 from rvtool import designs
 from rvtool.errors import RvtoolInputError
 from rvtool.variants.multi_device import (RvVariantProtocol, cycloid_batch, device_cluster, device_slots,
-                                          multi_device_monte_carlo, plan, rv_batch, split_indices, warm_up)
+                                          multi_device_monte_carlo, plan, rv_batch, split_indices,
+                                          start_helper_pool, warm_up)
 from rvtool.variants.rv_tolerances import load_rv_tolerances
 from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants.variant import VariantProtocol
@@ -83,7 +84,9 @@ def test_two_cpu_workers_equal_one(rd40_case):
         env = client.run(_env_of_worker)
         assert sorted(env.values()) == ["", ""] and len(env) == 2
         # host_workers=1: each worker's host work on a helper process of its own (as on a GPU host;
-        # the workers are non-daemonic so that they may start it)
+        # the workers are non-daemonic so that they may start it), started ahead as warm_up does
+        addrs = list(env)
+        assert client.gather([client.submit(start_helper_pool, 1, workers=[a], pure=False) for a in addrs]) == [1, 1]
         rd = multi_device_monte_carlo(rd40, rd_tol, 2, protocol=rd_p, seed=2026, client=client, slots=slots,
                                       host_workers=1)
         rv = multi_device_monte_carlo(rv40e, rv_tol, 2, protocol=rv_p, seed=20261124, client=client, slots=slots)

@@ -187,6 +187,23 @@ def helper_pool(host_workers):
     return _POOLS[host_workers]
 
 
+def _import_device_path(_):
+    """A helper's warm-up: the modules of the host work (building, Exudyn fallbacks) imported."""
+    from . import device  # noqa: F401
+    from ..assembly import build  # noqa: F401
+    import os
+    return os.getpid()
+
+
+def start_helper_pool(host_workers):
+    """Start this process's :func:`helper_pool` and every helper in it (each imports the host
+    work's modules), so that a timed study does not pay for them; returns the helpers' count."""
+    pool = helper_pool(host_workers)
+    if pool is None:
+        return 0
+    return len(set(pool.map(_import_device_path, range(4 * int(host_workers)))))
+
+
 def shutdown_helper_pools():
     """End this process's helper pools (run on every worker when :func:`device_cluster` closes)."""
     while _POOLS:
@@ -321,11 +338,15 @@ def default_host_workers(slots):
 
 
 def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1, host_workers=None):
-    """Run ``variants`` variants on every worker once (imports, Warp kernel compilation and module
-    loading on its device, its helper pool started), untimed by the study; returns the wall time [s]."""
+    """Start every worker's helper pool (:func:`start_helper_pool`) and run ``variants`` variants on
+    every worker once (imports, Warp kernel compilation and module loading on its device), untimed
+    by the study; returns the wall time [s]."""
     t0 = time.perf_counter()
     protocol = protocol or default_protocol(design)
     hw = default_host_workers(slots) if host_workers is None else host_workers
+    addr = worker_addresses(client, slots)
+    client.gather([client.submit(start_helper_pool, hw, workers=[addr[s.name]], allow_other_workers=False,
+                                 pure=False) for s in slots])
     run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed, hw)
     return time.perf_counter() - t0
 
@@ -360,5 +381,5 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
 
 
 __all__ = ["DeviceSlot", "RvVariantProtocol", "default_host_workers", "default_protocol", "device_chunk",
-           "device_cluster", "device_slots", "helper_pool", "shutdown_helper_pools",
+           "device_cluster", "device_slots", "helper_pool", "shutdown_helper_pools", "start_helper_pool",
            "multi_device_monte_carlo", "plan", "run_batches", "split_indices", "warm_up", "worker_addresses"]
