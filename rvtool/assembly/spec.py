@@ -229,7 +229,13 @@ class Bodies:
     ``"spatial"`` (also z, gamma_x, gamma_y on the main-bearing rows, issue 32; needs rolling-element
     bearings, ``build(..., bearing_model="rolling")``, and a ball main bearing).
     flange_tilt_inertia: transverse inertia [kg m^2] of the flange (dynamic runs of a spatial flange);
-    None: half the polar inertia (a thin disc, assumed)."""
+    None: half the polar inertia (a thin disc, assumed).
+    wheel_coordinates: ``"planar"`` (default) or ``"spatial"``: each wheel also retains its axial
+    translation and two tilts about its mid-plane; the ring-pin mesh, the output pins and the
+    eccentric bearing on it are sliced across the wheel width with the relative tilt (Eq. (skew),
+    :class:`rvtool.contact.skew.SkewSlices`; needs ``build(..., bearing_model="rolling")``).
+    tilt_slices: width slices of every family on a spatial wheel [-]. wheel_tilt_inertia: transverse
+    inertia [kg m^2] of a wheel (None: a thin disc, half its polar inertia, assumed)."""
     shaft: tuple = COORDS
     wheel: tuple = COORDS
     flange: tuple = COORDS
@@ -239,6 +245,9 @@ class Bodies:
     flange_inertia: float = 1.5e-3
     flange_coordinates: str = "planar"
     flange_tilt_inertia: float | None = None
+    wheel_coordinates: str = "planar"
+    tilt_slices: int = 4
+    wheel_tilt_inertia: float | None = None
 
     def __post_init__(self):
         for nm in ("shaft", "wheel", "flange"):
@@ -250,6 +259,19 @@ class Bodies:
                                    "['planar', 'spatial']")
         if self.flange_tilt_inertia is not None:
             check_positive("bodies.flange_tilt_inertia", self.flange_tilt_inertia)
+        if self.wheel_coordinates not in ("planar", "spatial"):
+            raise RvtoolInputError(f"bodies.wheel_coordinates = {self.wheel_coordinates!r}; valid choices are "
+                                   "['planar', 'spatial']")
+        if isinstance(self.tilt_slices, bool) or not isinstance(self.tilt_slices, int) or not 1 <= self.tilt_slices <= 32:
+            raise RvtoolInputError(f"bodies.tilt_slices = {self.tilt_slices!r} is outside the valid range [1, 32] "
+                                   "(integer)")
+        if self.wheel_tilt_inertia is not None:
+            check_positive("bodies.wheel_tilt_inertia", self.wheel_tilt_inertia)
+
+    @property
+    def spatial_wheels(self):
+        """True where the wheels retain their axial and tilt coordinates."""
+        return self.wheel_coordinates == "spatial"
 
     @property
     def spatial_flange(self):
