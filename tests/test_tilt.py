@@ -135,3 +135,55 @@ def test_device_backends_name_tilting_wheels():
     from rvtool.solver.backends.base import SPATIAL_WHEELS_REASON
     m = rvtool.build(rvtool.replace_design(rvtool.load_design("rv40e"), bodies={"wheel_coordinates": "spatial"}))
     assert SPATIAL_WHEELS_REASON in DeviceBackend().supports(m, "equilibria").reasons
+
+
+def _crank_pair():
+    from rvtool.bearings.spatial_tapered import SpatialTaperedSet
+    from rvtool.bearings.tapered_set import TaperedBearingSet, TaperedMounting
+    d = rvtool.load_design("rv40e")
+    m = TaperedMounting(name="c", bearing=d.crank_bearing, inner=0, outer=1, outer_centre=(0.0, 0.047))
+    planar = TaperedBearingSet([m], 2, backend="numpy")
+    return planar, SpatialTaperedSet(planar, 2, {0: 0, 1: 1})
+
+
+def test_spatial_tapered_equals_planar_in_plane():
+    """Spatial tapered rows (crank on its pair in the carrier) at zero axial and tilt displacement: the
+    planar set's generalized forces and tangent (the same 5-DOF roller law with the out-of-plane
+    components zero; equal to rounding, 1e-12)."""
+    planar, s = _crank_pair()
+    pose = np.zeros((4, 3))
+    pose[0], pose[1] = (2e-6, 0.047 - 3e-6, 0.3), (0.0, 0.0, 1e-4)
+    a, b = planar.evaluate(pose[:2]), s.evaluate(pose)
+    assert np.max(np.abs(a.Q - b.Q[:6])) <= 1e-12 * np.max(np.abs(a.Q))
+    assert np.max(np.abs(a.dQdq - b.dQdq[:6, :6])) <= 1e-12 * np.max(np.abs(a.dQdq))
+
+
+def test_spatial_tapered_tangent_central_difference():
+    """Analytic tangent (J^T K J + cage term + the wrench times the second derivatives of the
+    kinematics) against central differences over the twelve coordinates of crank and carrier, both
+    tilted and displaced axially. Steps 1e-9 m, 1e-8 rad (tilts), 1e-7 rad (rotations): bound 1e-6 of
+    the largest entry (truncation ~(h/x)^2, rounding ~1e-16 x / h)."""
+    _, s = _crank_pair()
+    pose = np.zeros((4, 3))
+    pose[0], pose[1] = (2e-6, 0.047 - 3e-6, 0.3), (0.0, 0.0, 1e-4)
+    pose[2], pose[3] = (1e-6, 2e-5, -1e-5), (-5e-7, 1e-5, 3e-5)
+    ev = s.evaluate(pose)
+    x = pose.ravel()
+    K = np.zeros((12, 12))
+    for j in range(12):
+        h = 1e-7 if j in (2, 5) else (1e-8 if j in (7, 8, 10, 11) else 1e-9)
+        xp, xm = x.copy(), x.copy()
+        xp[j] += h
+        xm[j] -= h
+        K[:, j] = (s.evaluate(xp.reshape(4, 3)).Q - s.evaluate(xm.reshape(4, 3)).Q) / (2 * h)
+    assert np.max(np.abs(ev.dQdq - K)) <= 1e-6 * np.max(np.abs(ev.dQdq))
+    # the pair's axial force and tilting moment are fed back: on the crank's out-of-plane coordinates
+    w = s.resultants(pose)["c"]
+    assert ev.Q[6] == pytest.approx(w.axial_force, rel=1e-12)
+
+
+def test_spatial_cranks_refuse_elastic_shafts():
+    d = rvtool.load_design("rv80e")
+    ds = rvtool.replace_design(d, bodies={"crank_coordinates": "spatial"}, housing={"model": "rigid"})
+    with pytest.raises(RvtoolInputError, match="cranks.shaft"):
+        rvtool.build(ds)

@@ -571,9 +571,6 @@ def ported_ring(mbs, design, layout, meshes):
     return housing, ports, [dataclasses.replace(m, pin_bodies=pin_bodies) for m in meshes]
 
 
-SPATIAL_CRANKS_IMPLEMENTED = False
-
-
 def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
     """The retained axial and tilt coordinates of the spatial bodies (issue 32): the carrier
     (``bodies.carrier_coordinates``), the wheels (``bodies.wheel_coordinates``) and the cranks
@@ -608,9 +605,6 @@ def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
         raise RvtoolInputError(f"{said} with bearing_friction.model = {design.bearing_friction.model!r} is not "
                                "implemented (Palmgren's moment reads the planar bearing sets); valid: "
                                "bearing_friction.model = 'none' or planar carrier and cranks")
-    if b.spatial_cranks and not SPATIAL_CRANKS_IMPLEMENTED:
-        raise RvtoolInputError("bodies.crank_coordinates = 'spatial' is not implemented (the tapered crank rows on "
-                               "the crank's tilt); valid: 'planar'")
     if b.spatial_cranks and (crank_station_compliance(design) is not None or crank_torsion_compliance(design) is not None):
         raise RvtoolInputError("bodies.crank_coordinates = 'spatial' with elastic crankshafts (cranks.shaft) is not "
                                "implemented: the beam closure carries the crank's bending tilt in series; valid: "
