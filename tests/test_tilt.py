@@ -1,6 +1,8 @@
 """Tilting wheels and cranks (issue 32): the width slices with the relative tilt (Eq. skew,
 rvtool.contact.skew), the design keys bodies.wheel_coordinates / crank_coordinates, and the planar
 figures reproduced by a spatial model without out-of-plane load, per topology."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -187,3 +189,36 @@ def test_spatial_cranks_refuse_elastic_shafts():
     ds = rvtool.replace_design(d, bodies={"crank_coordinates": "spatial"}, housing={"model": "rigid"})
     with pytest.raises(RvtoolInputError, match="cranks.shaft"):
         rvtool.build(ds)
+
+
+def test_combined_moment_torque_protocol():
+    """The combined moment + torque protocol: at zero moment on a model whose only spatial body is the
+    carrier it gives the planar model's wind-up and TE (1e-9: the reproduction above); the tilts of
+    every spatial body and the axial force of every main and crank row are reported per level; the
+    loads are removed afterwards; bad input names the field."""
+    from rvtool.protocols.moment_rigidity import CombinedLoadTest, combined_moment_torque
+    d = rvtool.load_design("rv40e")
+    T = d.rated_torque
+    test = CombinedLoadTest(moment=(0.0, 0.0), torques=(0.5 * T, T), te_torque=T, te_angles=(0.0, 0.05, 0.1))
+    ms = rvtool.build(rvtool.replace_design(d, bodies={"carrier_coordinates": "spatial"}))
+    r0 = combined_moment_torque(ms, test)
+    mp = rvtool.build(d)
+    s = StaticSolver(mp)
+    mp.set_output_torque(-np.sign(mp.ratio) * T)
+    q = s.solve(0.0)
+    assert r0.output_angle[-1] == pytest.approx(q[mp.output_index], rel=1e-9)
+    te = []
+    for k, a in enumerate(test.te_angles):
+        q = s.solve(a, previous_angle=None if k == 0 else test.te_angles[k - 1])
+        te.append(q[mp.output_index] - mp.kinematic_state(a).poses[mp.body_index("carrier"), 2])
+    assert np.allclose(r0.te, te, rtol=1e-9, atol=1e-9 * np.max(np.abs(te)))
+    full = rvtool.build(rvtool.replace_design(d, bodies={"carrier_coordinates": "spatial", "wheel_coordinates": "spatial",
+                                                         "crank_coordinates": "spatial"}))
+    r = combined_moment_torque(full, dataclasses.replace(test, moment=(800.0, 0.0)))
+    assert set(r.tilts) == {"carrier", "wheel0", "wheel1", "crank0", "crank1", "crank2"}
+    assert r.crank_row_axial_forces.shape == (2, 3, 2) and r.main_row_axial_forces.shape == (2, 2)
+    assert r.tilts["carrier"][-1, 1] > 0                    # the flange tilts with the moment M_x
+    q0 = StaticSolver(full).solve(0.0)
+    assert all(np.max(np.abs(v)) < 1e-12 for v in full.tilts(q0).values())   # loads removed
+    with pytest.raises(RvtoolInputError, match="torques"):
+        CombinedLoadTest(moment=(0.0, 0.0), torques=(T,), te_torque=T, te_angles=(0.0, 0.1))
