@@ -54,16 +54,16 @@ def test_skew_tangent_central_difference():
 
 def test_zero_tilt_is_planar_and_tilt_stiffness_is_the_width_moment():
     """At zero tilt the sliced family returns the planar forces (weights sum to 1: rounding, 1e-14) and
-    its tilt tangent is the planar translation tangent times sum_s w_s a_s^2, which for n equal
-    mid-point slices of width b about the body centre is b^2 (n^2 - 1) / (12 n^2) (exact; Eq.
-    (width_resultant) of a uniform line contact). The body whose arm is offset by 10 mm also gets the
-    coupling K_x,gamma_y = K_xx sum_s w_s a_s."""
+    its tilt tangent is the planar translation tangent times sum_s w_s a_s^2, which for the
+    Gauss--Legendre stations over the width b is b^2 / 12 exactly (the second moment of a uniform line
+    contact, Eq. (width_resultant)). The body whose arm is offset by 10 mm also gets the coupling
+    K_x,gamma_y = K_xx (sum_s w_s a_s = 0.01) and K_gg = K_xx (b^2/12 + 0.01^2)."""
     planar, s, d = _needle_pair()
     pose = _loaded_pose(2)
     a, b = planar.evaluate(pose[:2]), s.evaluate(pose)
     assert np.max(np.abs(b.Q[:6] - a.Q)) <= 1e-14 * np.max(np.abs(a.Q))
-    n, width = 5, d.wheels.width
-    m2 = width ** 2 * (n * n - 1) / (12 * n * n)
+    m2 = d.wheels.width ** 2 / 12
+    width = d.wheels.width
     K = b.dQdq
     # wheel (body 1, row 1 at columns 9..11): gamma_y moves x by +a, gamma_x moves y by -a
     assert K[11, 11] == pytest.approx(a.dQdq[3, 3] * m2, rel=1e-12)

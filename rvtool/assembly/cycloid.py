@@ -599,8 +599,19 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         from ..bearings.reducer import main_bearing_mounting, rolling_bearing_sets
         for name, ev in rolling_bearing_sets(d, nw, backend=backend, precision=precision, device=device,
                                              main=not d.bodies.spatial_flange).items():
-            ev = skewed(ev, d, tilt, rows) if d.bodies.spatial_wheels else ev
-            elements[name] = element(ev, ports=tilt if ev.n_bodies > nw + 2 else None)
+            if d.bodies.spatial_wheels:
+                # the eccentric bearings (on the wheels) sliced with the tilts, an element of their own; the
+                # input (and planar main) bearings stay one planar set
+                from ..bearings.set import BearingSet
+                ecc = [mt for mt in ev.mountings if mt.outer in rows]
+                rest = [mt for mt in ev.mountings if mt.outer not in rows]
+                opts = dict(backend=backend, precision=precision, device=device)
+                elements["eccentric_bearings"] = element(skewed(BearingSet(ecc, nw + 2, name="eccentric_bearings", **opts),
+                                                                d, tilt, rows), ports=tilt)
+                if rest:
+                    elements[name] = element(BearingSet(rest, nw + 2, name=name, **opts))
+                continue
+            elements[name] = element(ev)
         if d.bodies.spatial_flange:
             # the main bearing on the flange's retained axial and tilt coordinates (pose row nw + 2 + its row)
             from ..bearings.spatial_set import SpatialBearingSet
@@ -739,11 +750,13 @@ def contact_families(elements, mesh=("pins", Family.PINS)):
     name, family = mesh
     fams = {family: (name, np.arange(len(elements[name].ids))),
             Family.OUTPUT_PINS: ("output_pins", np.arange(len(elements["output_pins"].ids)))}
-    ids = elements["bearings"].ids
+    ids = elements["bearings"].ids if "bearings" in elements else ()
     for prefix, fam in BEARING_FAMILIES.items():
         rows = np.array([i for i, cid in enumerate(ids) if cid.startswith(prefix)], dtype=int)
         if len(rows):
             fams[fam] = ("bearings", rows)
+    if "eccentric_bearings" in elements:    # spatial wheels: the eccentric bearings sliced, an element of their own
+        fams[Family.ECCENTRIC_BEARINGS] = ("eccentric_bearings", np.arange(len(elements["eccentric_bearings"].ids)))
     if "main_bearing" in elements:          # a spatial flange's main bearing, an element of its own
         fams[Family.MAIN_BEARINGS] = ("main_bearing", np.arange(len(elements["main_bearing"].ids)))
     return fams

@@ -246,7 +246,7 @@ class Bodies:
     flange_coordinates: str = "planar"
     flange_tilt_inertia: float | None = None
     wheel_coordinates: str = "planar"
-    tilt_slices: int = 4
+    tilt_slices: int = 2
     wheel_tilt_inertia: float | None = None
 
     def __post_init__(self):
@@ -262,8 +262,8 @@ class Bodies:
         if self.wheel_coordinates not in ("planar", "spatial"):
             raise RvtoolInputError(f"bodies.wheel_coordinates = {self.wheel_coordinates!r}; valid choices are "
                                    "['planar', 'spatial']")
-        if isinstance(self.tilt_slices, bool) or not isinstance(self.tilt_slices, int) or not 1 <= self.tilt_slices <= 32:
-            raise RvtoolInputError(f"bodies.tilt_slices = {self.tilt_slices!r} is outside the valid range [1, 32] "
+        if isinstance(self.tilt_slices, bool) or not isinstance(self.tilt_slices, int) or not 2 <= self.tilt_slices <= 32:
+            raise RvtoolInputError(f"bodies.tilt_slices = {self.tilt_slices!r} is outside the valid range [2, 32] "
                                    "(integer)")
         if self.wheel_tilt_inertia is not None:
             check_positive("bodies.wheel_tilt_inertia", self.wheel_tilt_inertia)

@@ -41,13 +41,17 @@ from warp_contacts.circle_pairs_ref import O_FN, O_GAP
 
 
 def slice_stations(width, n_slices):
-    """(arms (n,) [m] of the mid-points of ``n_slices`` equal slices of ``width`` about its centre,
-    weights (n,) = 1/n)."""
-    if isinstance(n_slices, bool) or not isinstance(n_slices, (int, np.integer)) or n_slices < 1:
-        raise RvtoolInputError(f"n_slices = {n_slices!r} is outside the valid range [1, inf) (integer)")
+    """(arms (n,) [m] about the centre of ``width``, weights (n,), summing to 1): the Gauss--Legendre
+    stations and weights of ``n_slices`` points over the width. n >= 2 points integrate the force and
+    the moment of a linear load distribution exactly (the width resultant of a uniform contact under
+    a tilt: sum_s w_s a_s^2 = b^2 / 12), so two slices already give the exact tilt stiffness of a
+    contact closed across its width; more slices resolve a contact that opens over part of it."""
+    if isinstance(n_slices, bool) or not isinstance(n_slices, (int, np.integer)) or n_slices < 2:
+        raise RvtoolInputError(f"n_slices = {n_slices!r} is outside the valid range [2, inf) (integer)")
     if not (np.isfinite(width) and width > 0):
         raise RvtoolInputError(f"width = {width!r} m is outside the valid range (0, inf)")
-    return width * ((np.arange(n_slices) + 0.5) / n_slices - 0.5), np.full(n_slices, 1.0 / n_slices)
+    x, w = np.polynomial.legendre.leggauss(int(n_slices))
+    return 0.5 * width * x, 0.5 * w
 
 
 class SkewSlices:
@@ -85,15 +89,24 @@ class SkewSlices:
         self.n_bodies = n + self.n_virtual
         self.ids, self.history = inner.ids, inner.history
         self.tilt_rows, self.arms, self.weights = dict(tilt_rows), arms, w
-        # T_s (3n, 3n + 3 n_virtual): identity on the planar coordinates; x_b += a gamma_y, y_b -= a gamma_x
+        # T_s = [I | A_s] (3n, 3n + 3 n_virtual): x_b += a gamma_y, y_b -= a gamma_x; A_s held as its
+        # entries: planar rows, tilt columns (both absolute) and the values per slice
+        rows_, cols_, vals = [], [], []
+        for b, r in self.tilt_rows.items():
+            c = 3 * (n + r)
+            rows_ += [3 * b, 3 * b + 1]
+            cols_ += [c + 2, c + 1]
+            vals += [arms[:, b], -arms[:, b]]
+        self._rows, self._cols = np.array(rows_, int), np.array(cols_, int)
+        self._vals = np.array(vals, float).T.reshape(len(w), len(rows_))        # (S, 2 n_tilted)
         m = 3 * self.n_bodies
         T = np.zeros((len(w), 3 * n, m))
         T[:, np.arange(3 * n), np.arange(3 * n)] = 1.0
-        for b, r in self.tilt_rows.items():
-            c = 3 * (n + r)
-            T[:, 3 * b, c + 2] = arms[:, b]
-            T[:, 3 * b + 1, c + 1] = -arms[:, b]
+        T[:, self._rows, self._cols] = self._vals
         self.maps = T
+        self._wV = w[:, None] * self._vals                                       # (S, k)
+        self._wVV = w[:, None, None] * self._vals[:, :, None] * self._vals[:, None, :]
+        self._cc, self._rr = np.ix_(self._cols, self._cols), np.ix_(self._rows, self._rows)
 
     @property
     def n_slices(self):
@@ -105,7 +118,9 @@ class SkewSlices:
         return (self.maps @ x).reshape(self.n_slices, self.n_planar, 3)
 
     def _groups(self, poses):
-        """[(slice indices, representative)] of slices at bitwise-equal poses."""
+        """[slice indices] of slices at bitwise-equal poses (all slices in one where no body tilts)."""
+        if np.all(poses == poses[0]):
+            return [list(range(self.n_slices))]
         groups = {}
         for s in range(self.n_slices):
             groups.setdefault(poses[s].tobytes(), []).append(s)
@@ -139,22 +154,30 @@ class SkewSlices:
         """The slices' :class:`Evaluation` summed (module docstring); observations: the width resultant of
         each row (normal force sum_s w_s f_s, the other columns width-weighted means, the gap the smallest
         over the slices)."""
-        m = 3 * self.n_bodies
+        m, p = 3 * self.n_bodies, 3 * self.n_planar
         Q, K = np.zeros(m), np.zeros((m, m))
         C = np.zeros((m, m))
         obs, gap, finite, damped = 0.0, None, True, True
-        for g, ev in self.slice_evaluations(pose, vel, check):
-            w = float(np.sum(self.weights[g]))
-            obs = obs + w * np.asarray(ev.obs, float)
+        r, c = self._rows, self._cols
+        groups = self.slice_evaluations(pose, vel, check)
+        for g, ev in groups:
+            # a group of every slice (no tilt: the planar poses) has weight 1 exactly
+            w = 1.0 if len(groups) == 1 else float(np.sum(self.weights[g]))
+            obs = ev.obs if len(groups) == 1 else obs + w * np.asarray(ev.obs, float)
             gap = ev.obs[:, O_GAP] if gap is None else np.minimum(gap, ev.obs[:, O_GAP])
             finite = finite and ev.finite
             damped = damped and ev.dQdv is not None
-            for s in g:
-                T, ws = self.maps[s], self.weights[s]
-                Q += ws * (T.T @ ev.Q)
-                K += ws * (T.T @ ev.dQdq @ T)
-                if ev.dQdv is not None:
-                    C += ws * (T.T @ ev.dQdv @ T)
+            # T^T X T summed over the group's slices: [[X, X A], [A^T X, A^T X A]] with A's entries
+            va, vv = self._wV[g].sum(axis=0), self._wVV[g].sum(axis=0)
+            Q[:p] += w * ev.Q
+            Q[c] += va * ev.Q[r]
+            for X, out in ((ev.dQdq, K), (ev.dQdv, C)):
+                if X is None:
+                    continue
+                out[:p, :p] += w * X
+                out[:p, c] += X[:, r] * va
+                out[c, :p] += va[:, None] * X[r, :]
+                out[self._cc] += vv * X[self._rr]
         obs = np.array(obs, float)
         obs[:, O_GAP] = gap
         return Evaluation(Q, K, C if damped else None, obs, (), finite and bool(np.all(np.isfinite(Q))))

@@ -118,7 +118,7 @@ class InvoluteStage:
 CARRIER_COORDINATES = ("planar", "spatial")
 
 #: valid range of ``bodies.tilt_slices`` (width slices of the families on tilting wheels / cranks)
-TILT_SLICES = (1, 32)
+TILT_SLICES = (2, 32)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -157,7 +157,7 @@ class RvBodies:
     carrier_tilt_inertia: float | None = None
     wheel_coordinates: str = "planar"
     crank_coordinates: str = "planar"
-    tilt_slices: int = 4
+    tilt_slices: int = 2
     wheel_tilt_inertia: float | None = None
 
     def __post_init__(self):
