@@ -270,6 +270,10 @@ class CycloidModel(ReducerModel):
             "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
                                                      2 * eb.inner_radius + eb.roller_diameter),
         }
+        if isinstance(mb, CrossedRollerBearing):
+            out["main_bearing"] = bearing_frequencies(f_out, mb.n_rollers, mb.roller_diameter, mb.pitch_diameter,
+                                                      mb.contact_angle)
+            mb = None
         for name, spec, f_ring in (("main_bearing", mb, f_out), ("input_bearing", ib, f_in)):
             if spec is not None:
                 row = ball_rows(spec)[0]
@@ -525,6 +529,9 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     if bearing_model not in ("lumped", "rolling"):
         raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
     check_lumped(design, bearing_model)
+    if isinstance(design.main_bearing, CrossedRollerBearing) and bearing_model != "rolling":
+        raise RvtoolInputError("main_bearing.kind = 'crossed_roller' with bearing_model = 'lumped': the lumped circle "
+                               "contact is a ball law; valid: build(..., bearing_model='rolling')")
     d = design
     nw = d.n_wheels
     SC = exu.SystemContainer()
