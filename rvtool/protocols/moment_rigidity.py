@@ -10,6 +10,16 @@ levels given as fractions of a reference moment (by default 0 and the catalogue'
 the whole rated range, the catalogue's graph of tilt vs moment being nearly linear for a preloaded
 pair). Nothing is tuned toward a catalogue value.
 
+Definition search (issue 32, second session): the Nabtesco definition was again not reached. The
+RD-E catalogue's contents list "Calculation of moment rigidity and torsion angle" (Nabtesco RD-E
+series catalogue, p. 22; public transcription, scribd 497875543: only the contents page came back),
+so the catalogue gives the tilt as a calculation from the moment rigidity, not its measuring points.
+The nearest manufacturer definition found is Harmonic Drive's (LynxDrive engineering data, 1018856
+08/2018 V04, sec. 7.3.4, Eq. 45.1): the angle of inclination of the output flange gamma [arcmin] =
+M / K_B, M [N m] the tilting moment on the output bearing, K_B [N m/arcmin] its moment stiffness --
+a secant from zero load, which is the default read points here (0 and the reference moment). The
+convention stays stated, not cited as Nabtesco's.
+
 Procedure (:class:`MomentRigidityTest`): the model with a spatial carrier
 (``bodies.carrier_coordinates = "spatial"``), input held at angle 0, the output torque held at
 ``output_torque``; a moment M_x at the main bearing's axial centre at each level, a static
