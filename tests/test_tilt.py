@@ -252,3 +252,18 @@ def test_crossed_roller_main_bearing_for_cycloid_drives():
     t["main_bearing"]["kind"] = "crossed"
     with pytest.raises(RvtoolInputError, match="main_bearing.kind"):
         design_from_table(t)
+
+
+def test_validate_reports_tilting_bodies_rigidity():
+    """`rvtool validate`'s moment-rigidity row carries the figure with tilting wheels and cranks beside
+    the spatial-carrier one; a design with elastic crankshafts (rv80e) keeps its cranks planar, named in
+    the result, and its wheels alone do not change the figure (the moment reaches the wheels only
+    through tilting cranks: equal within 1e-6, the regularization springs)."""
+    from rvtool.analysis import validate as V
+    from rvtool.protocols.moment_rigidity import MomentRigidityTest, moment_rigidity, spatial_design
+    d = rvtool.replace_design(rvtool.load_design("rv80e"), housing={"model": "rigid"})
+    test = MomentRigidityTest(reference_moment=2000.0, levels=(0.0, 1.0))
+    r = V.tilting_bodies_rigidity(d, test)
+    assert r["bodies"] == ["carrier_coordinates", "wheel_coordinates"]
+    ref = moment_rigidity(rvtool.build(spatial_design(d)), test).rigidity_arcmin
+    assert r["moment_rigidity_Nm_per_arcmin"] == pytest.approx(ref, rel=1e-6)

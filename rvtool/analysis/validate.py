@@ -257,6 +257,30 @@ MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
 """Latin-hypercube samples of the moment-rigidity band over the main bearing's `assumed` ranges."""
 
 
+def tilting_bodies_rigidity(design, test):
+    """The moment rigidity [N m/arcmin] with the wheels and (rigid crankshafts only) the cranks
+    tilting as well (``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"``, issue 32): the
+    moment then also passes through the cranks and wheels to the ring pins. Returns {"bodies",
+    "moment_rigidity_Nm_per_arcmin", "convention"} or {"bodies", "error"} (a side figure)."""
+    from ..assembly import build
+    from ..assembly.spec import replace as replace_design
+    from ..protocols.moment_rigidity import moment_rigidity, spatial_design
+    from ..units import RAD_PER_ARCMIN
+    from ..errors import RvtoolInputError
+    bodies = {"carrier_coordinates": "spatial", "wheel_coordinates": "spatial", "crank_coordinates": "spatial"}
+    try:
+        try:
+            model = build(replace_design(design, bodies=bodies))
+        except RvtoolInputError:       # elastic crankshafts: the cranks stay planar (named in the builder)
+            bodies.pop("crank_coordinates")
+            model = build(replace_design(design, bodies=bodies))
+        res = moment_rigidity(model, test)
+        return {"bodies": sorted(bodies), "moment_rigidity_Nm_per_arcmin": res.rigidity_arcmin,
+                "convention": res.convention}
+    except Exception as exc:           # reported, not fatal
+        return {"bodies": sorted(bodies), "error": f"{type(exc).__name__}: {exc}"}
+
+
 def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     """The moment-rigidity row (issue 32): :func:`rvtool.protocols.moment_rigidity.moment_rigidity`
     on the design with a spatial carrier (a ported housing replaced by the rigid one: the main-bearing
@@ -281,7 +305,7 @@ def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
             band = main_bearing_band(d.main_bearing, assumed, test,
                                      samples=QUICK_MOMENT_SAMPLES if quick else MOMENT_SAMPLES)
         value, note = res.rigidity_arcmin, f"{res.convention}; {ref_note}; axial stiffness {res.axial_stiffness:.4g} N/m"
-        detail = {"result": res.to_dict(), "band": band}
+        detail = {"result": res.to_dict(), "band": band, "tilting_bodies": tilting_bodies_rigidity(d, test)}
     except Exception as exc:           # reported in the table, not fatal
         value, note, band = None, f"not computed: {type(exc).__name__}: {exc}", None
         detail = {"result": None, "band": None, "error": note}
