@@ -46,8 +46,10 @@ class RetainedTilt:
                                                 initialCoordinates_t=[0.0] * (3 * nb)))
         k_z, k_g = stiffness
         M = np.column_stack([mass, inertia, inertia]).ravel()
+        #: the regularization stiffness of every coordinate [N/m, N m/rad] (the object's diagonal)
+        self.stiffness_diagonal = np.array([k_z, k_g, k_g] * nb, float)
         self.object = mbs.AddObject(ObjectGenericODE2(name=name, nodeNumbers=[self.node], massMatrix=np.diag(M),
-                                                      stiffnessMatrix=np.diag([k_z, k_g, k_g] * nb)))
+                                                      stiffnessMatrix=np.diag(self.stiffness_diagonal)))
         self.loads = tuple(mbs.AddLoad(LoadCoordinate(markerNumber=mbs.AddMarker(MarkerNodeCoordinate(
             nodeNumber=self.node, coordinate=c)), load=0.0)) for c in range(3 * nb))
         self.structure = self               # the port interface: the coordinates are their own structure

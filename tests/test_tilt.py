@@ -267,3 +267,19 @@ def test_validate_reports_tilting_bodies_rigidity():
     assert r["bodies"] == ["carrier_coordinates", "wheel_coordinates"]
     ref = moment_rigidity(rvtool.build(spatial_design(d)), test).rigidity_arcmin
     assert r["moment_rigidity_Nm_per_arcmin"] == pytest.approx(ref, rel=1e-6)
+
+
+def test_stiffness_protocol_runs_with_tilting_wheels_and_cranks():
+    """The condensed tangent of the stiffness protocol includes the retained coordinates' regularization
+    springs (a tilting wheel's axial translation has no contact stiffness: singular without them) and
+    equals the planar model's where only the carrier and wheels are spatial (1e-6: the added springs,
+    100 N/m and 0.1 N m/rad, against contact stiffnesses of ~1e8)."""
+    from rvtool.protocols.stiffness import condensed_tangent
+    d = rvtool.load_design("rv40e")
+    out = []
+    for bodies in ({}, {"carrier_coordinates": "spatial", "wheel_coordinates": "spatial"},
+                   {"carrier_coordinates": "spatial", "wheel_coordinates": "spatial", "crank_coordinates": "spatial"}):
+        m, (q, _) = _statics(rvtool.replace_design(d, bodies=bodies) if bodies else d, {})
+        out.append(condensed_tangent(m, q))
+    assert np.all(np.isfinite(out)) and min(out) > 0
+    assert out[1] == pytest.approx(out[0], rel=1e-6)

@@ -372,9 +372,15 @@ class ReducerModel:
         return out
 
     def regularization_stiffness(self):
-        """[(global index, stiffness)] of the regularization springs as they are now."""
-        return [(self.coordinate_index(body, c), self.mbs.GetObjectParameter(obj, "stiffness"))
-                for body, c, _, obj in self.reg_springs]
+        """[(global index, stiffness)] of the regularization springs as they are now, and those of the
+        retained axial and tilt coordinates of spatial bodies (issue 32: a tilting wheel's axial
+        translation has no other stiffness)."""
+        out = [(self.coordinate_index(body, c), self.mbs.GetObjectParameter(obj, "stiffness"))
+               for body, c, _, obj in self.reg_springs]
+        t = self.body_tilts if self.body_tilts is not None else self.carrier_tilt
+        if t is not None:
+            out += [(int(i), float(k)) for i, k in zip(t.coordinate_indices, t.stiffness_diagonal) if k > 0]
+        return out
 
     def regularization_spring(self, bc):
         """(Exudyn object, stiffness at build) of the regularization spring on a

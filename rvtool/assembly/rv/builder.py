@@ -13,8 +13,13 @@ Bodies (planar rigid, x, y, theta; node order = ``body_names``):
 * ``wheel0``, ``wheel1``: the cycloid wheels (free), each bored for every crank's journal;
 * ``carrier``: the output (both halves joined rigidly; free, on the main bearings). With
   ``bodies.carrier_coordinates = "spatial"`` it also retains its axial translation and two tilts
-  (:func:`spatial_flange`: an Exudyn node of three coordinates, the main bearing on them through
-  :class:`~rvtool.bearings.spatial_set.SpatialBearingSet`, NumPy whatever ``backend``).
+  (:func:`spatial_bodies`: an Exudyn node of three coordinates per spatial body, the main bearing on
+  them through :class:`~rvtool.bearings.spatial_set.SpatialBearingSet`, NumPy whatever ``backend``).
+  With ``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"`` the wheels / cranks retain
+  them too: the families on them are sliced across the wheel width with their tilts
+  (:func:`skewed`, :class:`~rvtool.contact.skew.SkewSlices`; the needles per wheel with spatial
+  cranks, :func:`spatial_needles`) and the tapered crank pairs take the 5-DOF roller law
+  (:class:`~rvtool.bearings.spatial_tapered.SpatialTaperedSet`).
 
 Contact elements (each one kernel launch per evaluation): ``pins`` (cycloid--pin meshes of
 both wheels, pins on the ground), ``gears`` (involute pairs sun--crank gear k, and the
