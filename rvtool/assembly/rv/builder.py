@@ -306,6 +306,12 @@ class RvModel(ReducerModel):
         conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`)."""
         from ...model import SeriesBeam
         fam = Family(family)
+        tilting = self.body_tilts is not None and any(n.startswith(("wheel", "crank")) for n in self.body_tilts.names)
+        if tilting and (self.crank_compliance is not None or self.torsion_compliance is not None
+                        or self.design.pins.groove != "rigid"):
+            raise RvtoolInputError("the series members (elastic cranks, pin grooves) of a model with tilting wheels or "
+                                   "cranks are closed inside the width slices; their budget paths are not implemented; "
+                                   "valid: bodies.wheel_coordinates / crank_coordinates = 'planar'")
         if fam == Family.PINS and self.design.pins.groove != "rigid":
             return GrooveSeries.of_groove(self.elements["pins"])
         if fam != Family.ECCENTRIC_BEARINGS:
