@@ -104,9 +104,7 @@ class SkewSlices:
         T[:, np.arange(3 * n), np.arange(3 * n)] = 1.0
         T[:, self._rows, self._cols] = self._vals
         self.maps = T
-        self._wV = w[:, None] * self._vals                                       # (S, k)
-        self._wVV = w[:, None, None] * self._vals[:, :, None] * self._vals[:, None, :]
-        self._cc, self._rr = np.ix_(self._cols, self._cols), np.ix_(self._rows, self._rows)
+        self._maps_t = np.ascontiguousarray(T.transpose(0, 2, 1))
 
     @property
     def n_slices(self):
@@ -154,33 +152,26 @@ class SkewSlices:
         """The slices' :class:`Evaluation` summed (module docstring); observations: the width resultant of
         each row (normal force sum_s w_s f_s, the other columns width-weighted means, the gap the smallest
         over the slices)."""
-        m, p = 3 * self.n_bodies, 3 * self.n_planar
-        Q, K = np.zeros(m), np.zeros((m, m))
-        C = np.zeros((m, m))
-        obs, gap, finite, damped = 0.0, None, True, True
-        r, c = self._rows, self._cols
         groups = self.slice_evaluations(pose, vel, check)
+        S = self.n_slices
+        ev_of = [None] * S
         for g, ev in groups:
-            # a group of every slice (no tilt: the planar poses) has weight 1 exactly
-            w = 1.0 if len(groups) == 1 else float(np.sum(self.weights[g]))
-            obs = ev.obs if len(groups) == 1 else obs + w * np.asarray(ev.obs, float)
-            gap = ev.obs[:, O_GAP] if gap is None else np.minimum(gap, ev.obs[:, O_GAP])
-            finite = finite and ev.finite
-            damped = damped and ev.dQdv is not None
-            # T^T X T summed over the group's slices: [[X, X A], [A^T X, A^T X A]] with A's entries
-            va, vv = self._wV[g].sum(axis=0), self._wVV[g].sum(axis=0)
-            Q[:p] += w * ev.Q
-            Q[c] += va * ev.Q[r]
-            for X, out in ((ev.dQdq, K), (ev.dQdv, C)):
-                if X is None:
-                    continue
-                out[:p, :p] += w * X
-                out[:p, c] += X[:, r] * va
-                out[c, :p] += va[:, None] * X[r, :]
-                out[self._cc] += vv * X[self._rr]
-        obs = np.array(obs, float)
-        obs[:, O_GAP] = gap
-        return Evaluation(Q, K, C if damped else None, obs, (), finite and bool(np.all(np.isfinite(Q))))
+            for s in g:
+                ev_of[s] = ev
+        w, Tt = self.weights, self._maps_t
+        # sum_s w_s T_s^T Q_s and sum_s w_s T_s^T X_s T_s as batched products over the slices
+        Qs = np.stack([e.Q for e in ev_of]) * w[:, None]
+        Q = np.einsum("sap,sp->a", Tt, Qs)
+        K = (Tt @ (np.stack([e.dQdq for e in ev_of]) * w[:, None, None]) @ self.maps).sum(axis=0)
+        damped = all(e.dQdv is not None for _, e in groups)
+        C = (Tt @ (np.stack([e.dQdv for e in ev_of]) * w[:, None, None]) @ self.maps).sum(axis=0) if damped else None
+        if len(groups) == 1:
+            obs = np.array(groups[0][1].obs, float)      # no tilt: the planar rows
+        else:
+            obs = sum(float(np.sum(w[g])) * np.asarray(e.obs, float) for g, e in groups)
+            obs[:, O_GAP] = np.min([e.obs[:, O_GAP] for _, e in groups], axis=0)
+        finite = all(e.finite for _, e in groups) and bool(np.all(np.isfinite(Q)))
+        return Evaluation(Q, K, C, obs, (), finite)
 
     def commit(self, pose, vel=None, evaluation=None):
         """Observation rows at the accepted state (no history to commit)."""
