@@ -214,6 +214,11 @@ def test_combined_moment_torque_protocol():
     assert np.allclose(r0.te, te, rtol=1e-9, atol=1e-9 * np.max(np.abs(te)))
     full = rvtool.build(rvtool.replace_design(d, bodies={"carrier_coordinates": "spatial", "wheel_coordinates": "spatial",
                                                          "crank_coordinates": "spatial"}))
+    # every family on a tilting crank is sliced: needles (per wheel), the sun--crank meshes, the tapered pairs
+    from rvtool.bearings.spatial_tapered import SpatialTaperedSet
+    assert isinstance(full.elements["gears"].evaluator, SkewSlices)
+    assert all(isinstance(p, SkewSlices) for p in full.elements["eccentric_bearings"].evaluator.parts)
+    assert isinstance(full.elements["crank_bearings"].evaluator, SpatialTaperedSet)
     r = combined_moment_torque(full, dataclasses.replace(test, moment=(800.0, 0.0)))
     assert set(r.tilts) == {"carrier", "wheel0", "wheel1", "crank0", "crank1", "crank2"}
     assert r.crank_row_axial_forces.shape == (2, 3, 2) and r.main_row_axial_forces.shape == (2, 2)

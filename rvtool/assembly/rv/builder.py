@@ -649,18 +649,19 @@ def crank_centre(design):
     return 0.5 * (design.wheels.midplanes[0] + design.wheels.midplanes[-1])
 
 
-def skewed(family, design, layout, tilt, rows, *, wheel=None, crank_arm=None):
+def skewed(family, design, layout, tilt, rows, *, wheel=None, crank_arm=None, width=None, wheels=True):
     """``family`` (a planar evaluator over the bodies) across the wheel width with the tilts of its
     spatial bodies (:class:`~rvtool.contact.skew.SkewSlices`, Eq. (skew)): ``bodies.tilt_slices``
     equal slices of the wheel width; a spatial wheel's arm is the slice's station about its
-    mid-plane; a spatial crank's arm (only where ``wheel`` names the one wheel the family touches)
-    the wheel mid-plane's station about the crank's centre plus the slice's. ``family`` unchanged if
+    mid-plane; a spatial crank's arm (where ``crank_arm`` is given: the station of the family's contact
+    plane about the crank's centre) that station plus the slice's. ``width``: the face width sliced
+    (default the wheel width); ``wheels=False``: the family touches no wheel. ``family`` unchanged if
     none of its bodies is spatial."""
     from ...contact.skew import SkewSlices, slice_stations
-    z, w = slice_stations(design.wheels.width, design.bodies.tilt_slices)
+    z, w = slice_stations(design.wheels.width if width is None else width, design.bodies.tilt_slices)
     arms = np.zeros((len(w), family.n_bodies))
     tilted = {}
-    for j in range(2):
+    for j in range(2 if wheels else 0):
         i = layout.wheel(j)
         if i in rows and (wheel is None or wheel == j):
             arms[:, i], tilted[i] = z, rows[i]
@@ -766,6 +767,13 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
         crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion)),)
+    gear_z = d.cranks.shaft.gear_position
+    if b.spatial_cranks and gear_z is not None:
+        # the sun--crank meshes across the crank gear's face with the crank's tilt (the sun held planar);
+        # without a declared gear position (cranks.shaft.gear_position) the meshes stay planar
+        crank_path = tuple((nm, skewed(f, d, L, tilt, rows, crank_arm=gear_z - crank_centre(d),
+                                       width=d.crank_gear.face_width, wheels=False) if nm == "gears" else f)
+                           for nm, f in crank_path)
     if tilt is not None and b.spatial_wheels:
         # every family on a wheel across its width with the wheels' tilts (Eq. skew); the pins on the ground
         pin_set = skewed(pin_set, d, L, tilt, rows)
