@@ -30,6 +30,7 @@ import numpy as np
 
 from warp_contacts import tapered_rollers_ref as ref
 from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY
+from warp_contacts.planar_ref import perp as _perp, rot as _rot
 
 from ..contact.circle_set import GROUND
 from ..contact.evaluator import Evaluation, all_finite
@@ -37,15 +38,6 @@ from ..errors import RvtoolInputError
 from .tapered_set import TaperedLoads
 
 N_Q = 5
-
-
-def _rot(theta, xi):
-    c, s = np.cos(theta), np.sin(theta)
-    return np.column_stack([c * xi[:, 0] - s * xi[:, 1], s * xi[:, 0] + c * xi[:, 1]])
-
-
-def _perp(v):
-    return np.column_stack([-v[:, 1], v[:, 0]])
 
 
 class SpatialTaperedSet:
