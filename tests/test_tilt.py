@@ -315,3 +315,25 @@ def test_skew_slices_equal_the_spatial_roller_rows():
     assert np.max(np.abs(a.dQdq[np.ix_(sel, sel)] - b.dQdq[np.ix_(sel, sel)])) <= 1e-10 * np.max(np.abs(a.dQdq))
     f = sliced.slice_forces(pose)
     assert np.any((f == 0.0).any(axis=0) & (f > 0.0).any(axis=0))     # part of the laminae open
+
+
+def test_width_load_ratio_reports_edge_loading():
+    """The combined protocol's width_load_ratio: exactly 1 for every sliced family where nothing tilts
+    (carrier and wheels spatial: the slices carry equal line loads), above 1 on the tilting cranks' gear
+    meshes under a moment (one edge of the face loaded harder), and at most 1 / min w_s = 2 (two
+    slices: one slice carries it all)."""
+    from rvtool.protocols.moment_rigidity import CombinedLoadTest, combined_moment_torque
+    d = rvtool.load_design("rv40e")
+    T = d.rated_torque
+    test = CombinedLoadTest(moment=(1000.0, 0.0), torques=(0.5 * T, T), te_torque=T, te_angles=(0.0, 0.05))
+    flat = combined_moment_torque(rvtool.build(rvtool.replace_design(
+        d, bodies={"carrier_coordinates": "spatial", "wheel_coordinates": "spatial"})), test)
+    assert set(flat.width_load_ratio) == {"pins", "eccentric_bearings"}
+    for v in flat.width_load_ratio.values():
+        assert np.allclose(v, 1.0, rtol=1e-9)
+    tilting = combined_moment_torque(rvtool.build(rvtool.replace_design(
+        d, bodies={"carrier_coordinates": "spatial", "wheel_coordinates": "spatial", "crank_coordinates": "spatial"})),
+        test)
+    r = tilting.width_load_ratio
+    assert set(r) == {"pins", "gears", "eccentric_bearings"}
+    assert np.all(r["gears"] > 1.0) and np.all(np.concatenate(list(r.values())) <= 2.0 + 1e-12)

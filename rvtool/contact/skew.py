@@ -183,7 +183,8 @@ class SkewSlices:
         """(S, N) normal force [N] of every inner row in every slice (the slice's weight applied): the load
         along the face width."""
         out = np.zeros((self.n_slices, len(self.ids)))
-        for g, ev in self.slice_evaluations(pose, None, check=True):
+        pose = np.asarray(pose, float)
+        for g, ev in self.slice_evaluations(pose, np.zeros_like(pose), check=True):   # at rest
             for s in g:
                 out[s] = self.weights[s] * np.asarray(ev.obs, float)[:, O_FN]
         return out
@@ -196,7 +197,8 @@ class SkewSlices:
         """The inner family's ``resultants`` (e.g. :class:`~rvtool.bearings.set.BearingLoads` per mounting)
         summed over the slices with their weights (each slice's at its skewed poses)."""
         out = {}
-        for g, _ in self.slice_evaluations(pose, None, check=True):
+        pose = np.asarray(pose, float)
+        for g, _ in self.slice_evaluations(pose, np.zeros_like(pose), check=True):     # at rest
             w = float(np.sum(self.weights[g]))
             res = self.inner.resultants(self.slice_poses(pose)[g[0]])
             for name, r in res.items():

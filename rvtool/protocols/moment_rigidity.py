@@ -299,7 +299,9 @@ class CombinedLoadResult:
     torsional_stiffness [N m/rad] (secant, first to last level); tilts: {body: (n, 3) (z [m],
     gamma_x, gamma_y [rad])} per level of every spatial body; main_row_axial_forces (n, rows) [N];
     crank_row_axial_forces (n, cranks, rows) [N] (spatial cranks; else the planar observation);
-    te (m,) [rad] over the sweep's input angles at te_torque; te_peak_to_peak [rad]."""
+    te (m,) [rad] over the sweep's input angles at te_torque; te_peak_to_peak [rad];
+    width_load_ratio: {element: (n,)} per level, :func:`width_load_ratios` (the peak slice line load
+    over the peak row load: 1 uniform across the width, more where a tilt loads one edge)."""
     moment: tuple
     torques: np.ndarray
     output_angle: np.ndarray
@@ -309,6 +311,7 @@ class CombinedLoadResult:
     crank_row_axial_forces: np.ndarray | None
     te_angles: np.ndarray
     te: np.ndarray
+    width_load_ratio: dict
 
     @property
     def te_peak_to_peak(self):
@@ -324,7 +327,32 @@ class CombinedLoadResult:
                 "main_row_axial_forces_N": self.main_row_axial_forces.tolist(),
                 "crank_row_axial_forces_N": None if self.crank_row_axial_forces is None
                 else self.crank_row_axial_forces.tolist(),
-                "te_arcsec": (self.te * 60 * arcmin).tolist(), "te_peak_to_peak_arcsec": self.te_peak_to_peak * 60 * arcmin}
+                "te_arcsec": (self.te * 60 * arcmin).tolist(), "te_peak_to_peak_arcsec": self.te_peak_to_peak * 60 * arcmin,
+                "width_load_ratio": {k: np.asarray(v).tolist() for k, v in self.width_load_ratio.items()}}
+
+
+def width_load_ratios(model, q):
+    """{element: the largest slice line load over the largest row load} of every family sliced across
+    the width at the static state q (:class:`~rvtool.contact.skew.SkewSlices`, also inside a stacked
+    set): max over slices s and rows r of f_sr / w_s, over max over rows of sum_s f_sr (1: the most
+    loaded contact is loaded uniformly; up to 1 / min w_s when one slice carries it all)."""
+    out = {}
+    for name, el in model.elements.items():
+        ev = el.evaluator
+        parts = getattr(ev, "parts", (ev,))
+        ql = el.local(q)
+        pose = el.pose_velocity(ql, np.zeros_like(ql))[0]
+        ratios = []
+        for p in parts:
+            if not callable(getattr(p, "slice_forces", None)):
+                continue
+            f = p.slice_forces(pose)
+            peak = float(f.sum(axis=0).max())
+            if peak > 0:
+                ratios.append(float((f / p.weights[:, None]).max() / peak))
+        if ratios:
+            out[name] = max(ratios)
+    return out
 
 
 def _crank_rows(model, q):
@@ -352,7 +380,7 @@ def combined_moment_torque(model, test: CombinedLoadTest):
     sign = -np.sign(model.ratio)
     out = model.body_index(model.output.body)
     ref = model.reference[out, 2]
-    outs, tilts, main_rows, crank_rows = [], [], [], []
+    outs, tilts, main_rows, crank_rows, widths = [], [], [], [], []
     try:
         model.set_flange_load(0.0, tuple(float(m) for m in test.moment))
         for T in test.torques:
@@ -362,6 +390,7 @@ def combined_moment_torque(model, test: CombinedLoadTest):
             tilts.append(model.tilts(q))
             main_rows.append(model.main_bearing_loads(q).row_axial_forces)
             crank_rows.append(_crank_rows(model, q))
+            widths.append(width_load_ratios(model, q))
         model.set_output_torque(sign * float(test.te_torque))
         te, prev = [], None
         for s in test.te_angles:
@@ -380,4 +409,5 @@ def combined_moment_torque(model, test: CombinedLoadTest):
         tilts={k: np.array([t[k] for t in tilts]) for k in tilts[0]},
         main_row_axial_forces=np.array(main_rows, float),
         crank_row_axial_forces=None if crank_rows[0] is None else np.array(crank_rows),
-        te_angles=np.asarray(test.te_angles, float), te=np.array(te))
+        te_angles=np.asarray(test.te_angles, float), te=np.array(te),
+        width_load_ratio={k: np.array([w[k] for w in widths]) for k in widths[0]})
