@@ -258,8 +258,7 @@ MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
 
 
 def tilting_bodies_rigidity(design, test):
-    """The moment rigidity [N m/arcmin] with the wheels and (rigid crankshafts only) the cranks
-    tilting as well (``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"``, issue 32): the
+    """The moment rigidity [N m/arcmin] with the wheels and the cranks tilting as well (``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"``, issue 32): the
     moment then also passes through the cranks and wheels to the ring pins. Returns {"bodies",
     "moment_rigidity_Nm_per_arcmin", "convention"} or {"bodies", "error"} (a side figure)."""
     from ..assembly import build
@@ -271,7 +270,7 @@ def tilting_bodies_rigidity(design, test):
     try:
         try:
             model = build(replace_design(design, bodies=bodies))
-        except RvtoolInputError:       # elastic crankshafts: the cranks stay planar (named in the builder)
+        except RvtoolInputError:       # a design whose cranks cannot tilt (named in the builder): planar cranks
             bodies.pop("crank_coordinates")
             model = build(replace_design(design, bodies=bodies))
         res = moment_rigidity(model, test)

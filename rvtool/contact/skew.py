@@ -63,9 +63,12 @@ class SkewSlices:
     index: its out-of-plane row (0-based among the n_virtual)}; arms (S, n) [m]: the axial arm of each
     planar body in slice s (a body not in ``tilt_rows`` does not move with it); weights (S,): width
     fractions, positive, summing to 1; name: element name (default the inner family's).
+    tilt_offset: None (the out-of-plane rows appended after the inner family's bodies) or the pose row
+    of out-of-plane row 0 among the inner family's own bodies (rows it carries as bodies without
+    contacts: a series closure around the sliced family passes them through).
     """
 
-    def __init__(self, inner, n_virtual, tilt_rows, arms, weights, *, name=None):
+    def __init__(self, inner, n_virtual, tilt_rows, arms, weights, *, name=None, tilt_offset=None):
         for attr in ("n_bodies", "ids", "evaluate", "history"):
             if not hasattr(inner, attr):
                 raise RvtoolInputError(f"inner must be a contact evaluator; {type(inner).__name__} lacks {attr!r}")
@@ -84,16 +87,20 @@ class SkewSlices:
             if not (0 <= b < n and 0 <= r < n_virtual):
                 raise RvtoolInputError(f"tilt_rows {{{b}: {r}}} is outside the valid range: body in [0, {n - 1}], "
                                        f"row in [0, {n_virtual - 1}]")
+        if tilt_offset is not None and not (0 <= tilt_offset and tilt_offset + n_virtual <= n):
+            raise RvtoolInputError(f"tilt_offset = {tilt_offset!r}: the out-of-plane rows must lie among the inner "
+                                   f"family's {n} bodies")
         self.inner, self.name = inner, name or inner.name
         self.n_planar, self.n_virtual = n, int(n_virtual)
-        self.n_bodies = n + self.n_virtual
+        self.n_bodies = n + self.n_virtual if tilt_offset is None else n
+        base = n if tilt_offset is None else int(tilt_offset)
         self.ids, self.history = inner.ids, inner.history
         self.tilt_rows, self.arms, self.weights = dict(tilt_rows), arms, w
         # T_s = [I | A_s] (3n, 3n + 3 n_virtual): x_b += a gamma_y, y_b -= a gamma_x; A_s held as its
         # entries: planar rows, tilt columns (both absolute) and the values per slice
         rows_, cols_, vals = [], [], []
         for b, r in self.tilt_rows.items():
-            c = 3 * (n + r)
+            c = 3 * (base + r)
             rows_ += [3 * b, 3 * b + 1]
             cols_ += [c + 2, c + 1]
             vals += [arms[:, b], -arms[:, b]]
@@ -190,7 +197,7 @@ class SkewSlices:
         return out
 
     def planar_pose(self, pose):
-        """The planar poses (n, 3) of the mid-plane (the inner family's pose without the skew)."""
+        """The inner family's poses (n, 3) at the mid-plane (without the skew)."""
         return np.asarray(pose, float)[:self.n_planar]
 
     def resultants(self, pose, vel=None):

@@ -486,19 +486,47 @@ def crank_torsion_compliance(design):
     return torsion_compliance(sh.radius, m.youngs_modulus, m.poisson_ratio, sh.gear_position, design.wheels.midplanes)
 
 
-def torsion_crank_path(design, graph, layout, compliance, opts):
+def station_skew(family, design, layout, tilt, rows, stations, width, *, wheels=True):
+    """A family on crank station bodies (a series closure's journals or gear station) across ``width``
+    with the tilts of the spatial cranks and wheels (:class:`~rvtool.contact.skew.SkewSlices`, the
+    out-of-plane rows carried as the closure's pass-through bodies n_bodies ... n_bodies + n_virtual - 1):
+    ``stations`` {station body: (crank k, axial station of the contact plane [m])}; a station's arm is
+    its station about the crank's centre plus the slice's, a spatial wheel's the slice's."""
+    from ...contact.skew import SkewSlices, slice_stations
+    z, w = slice_stations(width, design.bodies.tilt_slices)
+    arms = np.zeros((len(w), family.n_bodies))
+    tilted = {}
+    z_c = crank_centre(design)
+    for i, (k, z_k) in stations.items():
+        if layout.crank(k) in rows:
+            arms[:, i], tilted[i] = z_k - z_c + z, rows[layout.crank(k)]
+    for j in range(2 if wheels else 0):
+        i = layout.wheel(j)
+        if i in rows:
+            arms[:, i], tilted[i] = z, rows[i]
+    return SkewSlices(family, tilt.n_virtual, tilted, arms, w, name=family.name, tilt_offset=layout.n_bodies)
+
+
+def torsion_crank_path(design, graph, layout, compliance, opts, tilt=None, rows=None):
     """The needle bearings on twisting cranks: one station body per (crank k, wheel j) at index
     n_bodies + n_wheels k + j, the crank rotated about its axis by the journal's twist relative to
     the gear (the crank body's rotation is the gear's), closed per crank by Eq. (2) of
     :mod:`rvtool.structure.crank_torsion` (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`
-    with ``dofs = (2,)``). The gears and the tapered rows stay on the crank body."""
+    with ``dofs = (2,)``). The gears and the tapered rows stay on the crank body. With spatial cranks (``tilt``, ``rows``
+    of :func:`spatial_bodies`) the out-of-plane rows ride along as pass-through bodies n_bodies ...
+    and the needles are sliced with the cranks' tilts at their journal stations (:func:`station_skew`)."""
     from ...contact.pin_closure import ElasticPinClosure
-    nb, nc, nw = layout.n_bodies, layout.n_cranks, design.n_wheels
+    nc, nw = layout.n_cranks, design.n_wheels
+    nb = layout.n_bodies + (tilt.n_virtual if design.bodies.spatial_cranks else 0)
     station = nb + np.arange(nc * nw).reshape(nc, nw)
     crank_of = {layout.crank(k): k for k in range(nc)}
     mounts = [dataclasses.replace(m, inner=int(station[crank_of[m.inner], m.outer - layout.wheel0]))
               for m in needle_mountings(design, graph, layout)]
     needles = BearingSet(mounts, nb + station.size, name="eccentric_bearings", **opts)
+    if design.bodies.spatial_cranks:
+        needles = station_skew(needles, design, layout, tilt, rows,
+                               {int(station[k, j]): (k, design.wheels.midplanes[j]) for k in range(nc) for j in range(nw)},
+                               design.wheels.width)
     return ElasticPinClosure(needles, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
                              station_compliance=compliance, station=station - nb, dofs=(2,))
 
@@ -526,7 +554,7 @@ def groove_pins(design, layout, pin_set_of, meshes, ports=None):
                              station_compliance=None, station=st, support=GrooveSupport(law))
 
 
-def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None):
+def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None, tilt=None, rows=None):
     """The contact set of the crank path with elastic cranks: the involute meshes and the needle
     bearings stacked (:class:`~rvtool.contact.stacked.StackedContactSet`, element ``"cranks"``) over
     the bodies plus one station body per (crank k, station s) at index n_bodies + 3 k + s (the
@@ -538,11 +566,19 @@ def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None):
     None. With it the needles sit on one more station body per (crank k, wheel j) at n_bodies +
     3 n_cranks + n_wheels k + j, journal j's bending station rotated by the twist (an inner closure,
     ``dofs = (2,)``, carried per station), and the beam closes that closure: bending and torsion
-    in series, each solved exactly."""
+    in series, each solved exactly.
+
+    With spatial cranks (``tilt``, ``rows`` of :func:`spatial_bodies`) the out-of-plane rows ride
+    along as pass-through bodies n_bodies ... n_bodies + n_virtual - 1 (the stations after them), and
+    the meshes and needles are sliced with the cranks' tilts at their stations (:func:`station_skew`:
+    the gear at ``cranks.shaft.gear_position``, the journals at the wheel mid-planes): the beam carries
+    the in-plane bending, the tilt rows the crank's rigid tilt."""
     import dataclasses
     from ...contact.pin_closure import ElasticPinClosure
     from ...contact.stacked import StackedContactSet
-    nb, nc, nw = layout.n_bodies, layout.n_cranks, design.n_wheels
+    nc, nw = layout.n_cranks, design.n_wheels
+    spatial = design.bodies.spatial_cranks
+    nb = layout.n_bodies + (tilt.n_virtual if spatial else 0)
     station = nb + np.arange(3 * nc).reshape(nc, 3)
     crank_of = {layout.crank(k): k for k in range(nc)}
     meshes = [dataclasses.replace(m, body_b=int(station[crank_of[m.body_b], 2])) if m.body_b in crank_of else m
@@ -551,8 +587,16 @@ def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None):
     mounts = [dataclasses.replace(m, inner=int(journal[crank_of[m.inner], m.outer - layout.wheel0]))
               for m in needle_mountings(design, graph, layout)]
     n_ext = nb + station.size + (0 if torsion is None else journal.size)
-    stacked = StackedContactSet((InvoluteContactSet(meshes, n_ext, name="gears", **opts),
-                                 BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)), name="cranks")
+    gears = InvoluteContactSet(meshes, n_ext, name="gears", **opts)
+    needles = BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)
+    if spatial:
+        gear_z = design.cranks.shaft.gear_position
+        gears = station_skew(gears, design, layout, tilt, rows, {int(station[k, 2]): (k, gear_z) for k in range(nc)},
+                             design.crank_gear.face_width, wheels=False)
+        needles = station_skew(needles, design, layout, tilt, rows,
+                               {int(journal[k, j]): (k, design.wheels.midplanes[j]) for k in range(nc) for j in range(nw)},
+                               design.wheels.width)
+    stacked = StackedContactSet((gears, needles), name="cranks")
     inner = stacked
     if torsion is not None:
         inner = ElasticPinClosure(stacked, n_bodies=nb + station.size, carrier=station[:, :nw],
@@ -616,10 +660,6 @@ def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
         raise RvtoolInputError(f"{said} with bearing_friction.model = {design.bearing_friction.model!r} is not "
                                "implemented (Palmgren's moment reads the planar bearing sets); valid: "
                                "bearing_friction.model = 'none' or planar carrier and cranks")
-    if b.spatial_cranks and (crank_station_compliance(design) is not None or crank_torsion_compliance(design) is not None):
-        raise RvtoolInputError("bodies.crank_coordinates = 'spatial' with elastic crankshafts (cranks.shaft) is not "
-                               "implemented: the beam closure carries the crank's bending tilt in series; valid: "
-                               "cranks.shaft rigid (bending and torsion), or crank_coordinates = 'planar'")
     k_t, k_r = regularization
     names = tuple(n for n, *_ in bodies)
     tilt = RetainedTilt(mbs, [m for *_, m, _ in bodies], [J for *_, J in bodies], (k_t, k_r),
@@ -763,10 +803,11 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
             if b.spatial_cranks:
                 needles = spatial_needles(d, graph, L, tilt, rows, opts)
         else:
-            needles = torsion_crank_path(d, graph, L, C_torsion, opts)
+            needles = torsion_crank_path(d, graph, L, C_torsion, opts, tilt, rows)
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
-        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion)),)
+        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion, tilt=tilt,
+                                                    rows=rows)),)
     gear_z = d.cranks.shaft.gear_position
     if b.spatial_cranks and gear_z is not None:
         # the sun--crank meshes across the crank gear's face with the crank's tilt (the sun held planar);
