@@ -258,14 +258,14 @@ MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
 
 
 def tilting_bodies_rigidity(design, test):
-    """The moment rigidity [N m/arcmin] with the wheels and the cranks tilting as well (``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"``, issue 32): the
-    moment then also passes through the cranks and wheels to the ring pins. Returns {"bodies",
+    """The moment rigidity [N m/arcmin] with the wheels and the cranks tilting as well
+    (``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"``, issue 32): the moment then also
+    passes through the cranks and wheels to the ring pins. Returns {"bodies",
     "moment_rigidity_Nm_per_arcmin", "convention"} or {"bodies", "error"} (a side figure)."""
     from ..assembly import build
     from ..assembly.spec import replace as replace_design
-    from ..protocols.moment_rigidity import moment_rigidity, spatial_design
-    from ..units import RAD_PER_ARCMIN
     from ..errors import RvtoolInputError
+    from ..protocols.moment_rigidity import moment_rigidity
     bodies = {"carrier_coordinates": "spatial", "wheel_coordinates": "spatial", "crank_coordinates": "spatial"}
     try:
         try:
