@@ -197,6 +197,8 @@ def test_spatial_cranks_with_elastic_crankshafts():
     m, (q, _) = _statics(d, {})
     assert set(m.tilts(q)) == {"carrier", "wheel0", "wheel1", "crank0", "crank1", "crank2"}
     assert m.crank_deflections(q) is not None and len(m.eccentric_bearing_resultants(q)) == 6
+    from rvtool.protocols.moment_rigidity import width_load_ratios
+    assert set(width_load_ratios(m, q)) == {"pins", "cranks"}     # the slices inside the crank closures found
     el = m.elements["cranks"]
     ql = el.local(q)
     pose, vel = el.pose_velocity(ql, 0 * ql)

@@ -331,21 +331,32 @@ class CombinedLoadResult:
                 "width_load_ratio": {k: np.asarray(v).tolist() for k, v in self.width_load_ratio.items()}}
 
 
+def _sliced(ev, pose):
+    """[(SkewSlices, its poses)] inside an element's evaluator at the element's poses: the evaluator
+    itself, the parts of a stacked set, the inner set of a series closure at its extended (station)
+    poses, recursively."""
+    from ..contact.skew import SkewSlices
+    from ..contact.stacked import StackedContactSet
+    if isinstance(ev, SkewSlices):
+        return [(ev, pose)]
+    if isinstance(ev, StackedContactSet):
+        return [x for p in ev.parts for x in _sliced(p, pose)]
+    if callable(getattr(type(ev), "extended_pose", None)):         # a series closure (pin / crank beam)
+        return _sliced(ev.inner, ev.extended_pose(pose))
+    return []
+
+
 def width_load_ratios(model, q):
     """{element: the largest slice line load over the largest row load} of every family sliced across
     the width at the static state q (:class:`~rvtool.contact.skew.SkewSlices`, also inside a stacked
-    set): max over slices s and rows r of f_sr / w_s, over max over rows of sum_s f_sr (1: the most
-    loaded contact is loaded uniformly; up to 1 / min w_s when one slice carries it all)."""
+    set or a series closure): max over slices s and rows r of f_sr / w_s, over max over rows of
+    sum_s f_sr (1: the most loaded contact is loaded uniformly; up to 1 / min w_s when one slice
+    carries it all)."""
     out = {}
     for name, el in model.elements.items():
-        ev = el.evaluator
-        parts = getattr(ev, "parts", (ev,))
         ql = el.local(q)
-        pose = el.pose_velocity(ql, np.zeros_like(ql))[0]
         ratios = []
-        for p in parts:
-            if not callable(getattr(p, "slice_forces", None)):
-                continue
+        for p, pose in _sliced(el.evaluator, el.pose_velocity(ql, np.zeros_like(ql))[0]):
             f = p.slice_forces(pose)
             peak = float(f.sum(axis=0).max())
             if peak > 0:
