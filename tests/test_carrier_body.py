@@ -1,0 +1,137 @@
+"""The RV carrier as a reduced structure (issue 30, ``[carrier] body = "rigid" | "ported"``).
+
+Coarse meshes (10 mm nominal) keep these tests at a few seconds each; the figures of the shipped meshes are the
+case's (cases/rv/compliance_budget.py)."""
+import math
+
+import numpy as np
+import pytest
+
+import rvtool
+from rvtool import designs
+from rvtool.errors import RvtoolInputError
+
+COARSE = 0.010
+"""Nominal tetrahedron size [m] of the tests: about 2,000 vertices for rv40e's carrier."""
+
+
+def _rv40e(**carrier):
+    d = rvtool.load_design(designs.path("rv40e"))
+    return d if not carrier else d.replace(carrier=carrier)
+
+
+def _ported(name="rv40e", mesh_size=COARSE):
+    d = rvtool.load_design(designs.path(name))
+    return d.replace(carrier={"body": "ported", "structure": {"mesh_size": mesh_size}})
+
+
+def test_rigid_carrier_is_bit_identical_to_a_design_without_the_section():
+    """The default ("rigid", the section absent or present) builds the same model: identical static state and
+    generalized forces (exact equality, not a tolerance: the same code path)."""
+    import copy
+    from rvtool.assembly.rv.spec import design_from_dict
+    from rvtool.solver.static import StaticSolver
+    with_section = _rv40e()
+    src = copy.deepcopy(with_section.source)
+    src.pop("carrier")
+    without = design_from_dict(src)
+    assert without.carrier.body == "rigid" and with_section.carrier.body == "rigid"
+    states = []
+    for d in (with_section, without):
+        m = rvtool.build(d)
+        m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+        states.append(StaticSolver(m).solve(0.0))
+    assert np.array_equal(states[0], states[1])
+
+
+def test_reduced_carrier_static_port_compliance_matches_the_parent():
+    """Issue 30 target: the reduced structure's static port compliance H Omega^-2 H^T within 1e-6 relative of
+    the parent FE's P K^-1 P^T (exact in theory: the static port modes are in the Ritz basis; round-off of the
+    Rayleigh--Ritz eigen-solve is about 1e-12)."""
+    from rvtool.assembly.carrier import carrier_ports
+    red, C_ref, info = carrier_ports(_ported())
+    C = red.static_compliance()
+    assert C.shape == (8, 8) and info["ports"][-1] == "main_bearing"
+    err = np.abs(C - C_ref).max() / np.abs(C_ref).max()
+    assert err < 1e-6, err
+    # the compliance is a compliance: symmetric positive definite
+    assert np.allclose(C_ref, C_ref.T, rtol=0, atol=1e-12 * np.abs(C_ref).max())
+    assert np.linalg.eigvalsh(C_ref).min() > 0
+
+
+def test_reduction_without_the_static_modes_fails_the_target():
+    """The test above can fail: a basis of clamped modes only (no static port modes) misses the parent's port
+    compliance by far more than 1e-6."""
+    import scipy.linalg as sla
+    import scipy.sparse.linalg as spla
+    from rvtool.structure.carrier import carrier_fe
+    from rvtool.assembly.carrier import carrier_layout
+    d = _ported()
+    r, angles, _, _ = carrier_layout(d)
+    parent = carrier_fe(d.carrier.structure, d.material, r, angles)
+    K, M = parent.fe.stiffness, parent.fe.mass
+    w2, phi = spla.eigsh(K, k=12, M=M, sigma=0.0, which="LM")
+    H = parent.port_matrix @ phi
+    C_modes = (H / w2) @ H.T
+    C_ref = parent.compliance()
+    assert np.abs(C_modes - C_ref).max() / np.abs(C_ref).max() > 1e-3
+    assert sla.norm(C_ref) > 0
+
+
+def test_ported_carrier_adds_compliance_in_series():
+    """At rated torque the ported carrier lowers the tangent output stiffness, and the budget carries a
+    ``carrier`` path that with the others sums to one (the residual below 1 %, as compliance_budget's
+    RESIDUAL_TOL)."""
+    from rvtool.protocols.budget import stiffness_budget
+    from rvtool.solver.static import StaticSolver
+    out = {}
+    for body, d in (("rigid", _rv40e()), ("ported", _ported())):
+        m = rvtool.build(d)
+        m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+        q = StaticSolver(m).solve(0.0)
+        out[body] = stiffness_budget(m, q)
+    assert out["ported"]["K_t_Nm_per_arcmin"] < 0.95 * out["rigid"]["K_t_Nm_per_arcmin"]
+    sh = out["ported"]["shares"]
+    assert 0.05 < sh["carrier"] < 0.9
+    assert abs(sh["geometric_and_regularization"]) < 0.01
+    # the energy view and the switch-on view of the carrier agree (series member): 1 - C_rigid / C_ported
+    switch = 1.0 - out["ported"]["K_t_Nm_per_arcmin"] / out["rigid"]["K_t_Nm_per_arcmin"]
+    assert abs(switch - sh["carrier"]) < 0.05, (switch, sh["carrier"])
+
+
+def test_seat_support_turns_with_the_carrier():
+    """The seat compliance is stated in the carrier's frame: turned by theta, a seat displacement turned by theta
+    gets the force turned by theta (s(R u) = R s(u))."""
+    from rvtool.assembly.carrier import CarrierSeatSupport
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(6, 6))
+    sup = CarrierSeatSupport(A @ A.T + 6 * np.eye(6))
+    u = rng.normal(size=(1, 3, 2))
+    f0 = sup.forces(u)[0]
+    th = 0.7
+    R = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
+    sup.turn_to(th)
+    f1 = sup.forces(u @ R.T)[0]
+    assert np.allclose(f1, f0 @ R.T, rtol=0, atol=1e-12 * np.abs(f0).max())
+
+
+@pytest.mark.parametrize("key, value, match", [
+    ("body", "elastic", "carrier.body"),
+    ("flange_thickness", -0.01, "carrier.structure.flange_thickness"),
+    ("pillar_shape", "square", "carrier.structure.pillar_shape"),
+    ("seat_radius", 0.03, "carrier.structure.seat_radius"),
+    ("pillar_radius", 0.02, "carrier.structure.pillar_radius"),
+    ("inner_face_position", 0.030, "crank_bearing.row_spacing"),
+])
+def test_bad_input_names_the_key(key, value, match):
+    d = rvtool.load_design(designs.path("rv40e"))
+    change = {"body": value} if key == "body" else {"body": "ported", "structure": {key: value}}
+    with pytest.raises(RvtoolInputError, match=match.replace(".", r"\.")):
+        d.replace(carrier=change)
+
+
+def test_ported_carrier_refuses_what_it_does_not_implement():
+    """Spatial carrier coordinates and Palmgren's bearing friction are refused by name, not ignored."""
+    d = _ported()
+    with pytest.raises(RvtoolInputError, match="bodies.carrier_coordinates"):
+        rvtool.build(d.replace(bodies={"carrier_coordinates": "spatial"}))
