@@ -135,3 +135,18 @@ def test_ported_carrier_refuses_what_it_does_not_implement():
     d = _ported()
     with pytest.raises(RvtoolInputError, match="bodies.carrier_coordinates"):
         rvtool.build(d.replace(bodies={"carrier_coordinates": "spatial"}))
+    with pytest.raises(RvtoolInputError, match="bearing_friction.model"):
+        rvtool.build(d.replace(bearing_friction={"model": "palmgren"}))
+
+
+def test_device_backends_refuse_the_ported_carrier_by_name():
+    """The device row Newton (and the replica) do not copy the seat closure: supports() names carrier.body; the
+    rigid carrier stays supported."""
+    from rvtool.solver import backends
+    dev = backends.get("device")
+    ported = rvtool.build(_ported())
+    sup = dev.supports(ported, "equilibria")
+    assert not sup.ok and any("carrier.body = 'ported'" in r for r in sup.reasons)
+    sup = dev.supports(ported, "torque_path")
+    assert not sup.ok and any("carrier.body = 'ported'" in r for r in sup.reasons)
+    assert not any("carrier.body" in r for r in dev.supports(rvtool.build(_rv40e()), "torque_path").reasons)

@@ -58,8 +58,8 @@ class CarrierStructure:
     bore_radius: the plates' central bore radius [m]. seat_radius: the crank-bearing seat bore radius (the
     tapered rows' cup outer radius) [m]. pillar_shape: ``"circular"`` or ``"sector"``. pillar_circle_radius:
     the radius of the pillars' centres [m]. pillar_radius: a circular pillar's radius, a sector pillar's
-    half radial depth [m]. pillar_angle: a sector pillar's angular width [rad] (file: ``pillar_angle_deg``;
-    unused for circular pillars). material: the carrier's material (None: the design's ``[material]``).
+    half radial depth [m]. pillar_angle: a sector pillar's angular width, unused by circular pillars [rad].
+    material: the carrier's material (None: the design's ``[material]``).
     mesh_size: nominal tetrahedron size [m]. n_modes: clamped-carrier modes kept beside the static port
     modes [-] (the static port compliance does not depend on them).
     """
