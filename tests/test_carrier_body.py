@@ -150,3 +150,38 @@ def test_device_backends_refuse_the_ported_carrier_by_name():
     sup = dev.supports(ported, "torque_path")
     assert not sup.ok and any("carrier.body = 'ported'" in r for r in sup.reasons)
     assert not any("carrier.body" in r for r in dev.supports(rvtool.build(_rv40e()), "torque_path").reasons)
+
+
+def test_three_stage_rv_takes_the_ported_carrier():
+    """rv_three_stage (no [carrier] section: rigid) builds with a ported carrier of rv40e's sizes (its cranks sit
+    on the same 36 mm circle) and the carrier enters its budget."""
+    import tomllib
+    from rvtool.protocols.budget import stiffness_budget
+    from rvtool.solver.static import StaticSolver
+    d = rvtool.load_design(designs.path("rv_three_stage"))
+    assert d.carrier.body == "rigid"
+    with open(designs.path("rv40e"), "rb") as fh:
+        st = tomllib.load(fh)["carrier"]["structure"]
+    dp = d.replace(carrier={"body": "ported", "structure": {**st, "mesh_size": COARSE}})
+    m = rvtool.build(dp)
+    m.set_output_torque(-np.sign(m.ratio) * dp.rated_torque)
+    b = stiffness_budget(m, StaticSolver(m).solve(0.0))
+    assert 0.05 < b["shares"]["carrier"] < 0.9 and abs(b["shares"]["geometric_and_regularization"]) < 0.01
+
+
+def test_sector_pillars_are_stiffer_than_thin_circular_ones():
+    """The pillar shape enters the structure: sector pillars of the same radial depth and 30 deg wide (more
+    section than a circle of that radius at 36 mm: arc 2 x 36 x pi / 12 = 18.8 mm > 18 mm diameter) give a
+    smaller tangential seat compliance than circular ones."""
+    from rvtool.assembly.carrier import carrier_layout
+    from rvtool.structure.carrier import carrier_fe
+    d = _ported()
+    r, angles, _, _ = carrier_layout(d)
+    tang = {}
+    for shape in ("circular", "sector"):
+        st = d.replace(carrier={"body": "ported", "structure": {"pillar_shape": shape,
+                                                               "mesh_size": COARSE}}).carrier.structure
+        C = carrier_fe(st, d.material, r, angles).compliance()
+        t = np.array([-math.sin(angles[0]), math.cos(angles[0])])
+        tang[shape] = t @ C[:2, :2] @ t
+    assert tang["sector"] < tang["circular"]
