@@ -257,10 +257,41 @@ MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
 """Latin-hypercube samples of the moment-rigidity band over the main bearing's `assumed` ranges."""
 
 
+QUICK_CARRIER_MESH = 0.008
+"""--quick: the ported carrier's side figure meshed at 8 mm (the files give 4 mm)."""
+
+
+def carrier_share_figure(design, T_R, *, quick=False):
+    """The carrier's share of the output compliance at T_R (issue 30), a side figure where the design states a
+    ``[carrier.structure]`` but keeps ``carrier.body = "rigid"`` (as the shipped files do): the design with
+    the ported carrier, its tangent K_t [N m/arcmin] and budget shares (the carrier's under ``carrier``).
+    None where the design has no carrier structure or already runs it ported (then the main budget holds
+    it); an error is reported, not raised (a side figure)."""
+    from ..assembly.spec import replace as replace_design
+    from ..assembly import build
+    from ..protocols.budget import stiffness_budget
+    from ..solver.static import StaticSolver
+    c = getattr(design, "carrier", None)
+    if c is None or c.structure is None or c.body != "rigid":
+        return None
+    try:
+        d = replace_design(design, carrier={"body": "ported", **({"structure": {"mesh_size": QUICK_CARRIER_MESH}}
+                                                                 if quick else {})})
+        model = build(d)
+        model.set_output_torque(-np.sign(model.ratio) * T_R)
+        b = stiffness_budget(model, StaticSolver(model).solve(0.0))
+        return {"K_t_Nm_per_arcmin": b["K_t_Nm_per_arcmin"], "shares": b["shares"],
+                "carrier_share": b["shares"]["carrier"], "mesh_size_m": d.carrier.structure.mesh_size,
+                "note": "the design with carrier.body = 'ported' (its file keeps 'rigid')"}
+    except Exception as exc:           # reported, not fatal
+        return {"error": f"not computed: {type(exc).__name__}: {exc}"}
+
+
 def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     """The moment-rigidity row (issue 32): :func:`rvtool.protocols.moment_rigidity.moment_rigidity`
     on the design with a spatial carrier (a ported housing replaced by the rigid one: the main-bearing
-    seats are grounded in both), the reference moment the catalogue's allowable moment (else T_R),
+    seats are grounded in both; a ported carrier likewise by the rigid one: its seats are planar ports,
+    :mod:`rvtool.assembly.carrier`), the reference moment the catalogue's allowable moment (else T_R),
     the band over the main bearing's `assumed` ranges (bearing alone, rigid housing). Returns
     {"rows", "result", "band", "reference_moment_Nm", "note"}; an error is reported in the row, not raised
     (a side figure, as the ratio variant)."""
@@ -274,6 +305,8 @@ def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     try:
         d = design if getattr(design.housing, "model", "rigid") != "ports" else replace_design(design,
                                                                                                housing={"model": "rigid"})
+        if getattr(getattr(d, "carrier", None), "body", "rigid") != "rigid":
+            d = replace_design(d, carrier={"body": "rigid"})
         test = MomentRigidityTest(reference_moment=m_ref, axial_force=2000.0)
         res = moment_rigidity(build(spatial_design(d)), test)
         band = None
@@ -408,6 +441,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     life_angles = [k * span / n_life for k in range(n_life)]
     life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
     lives = bearing_lives(d, model, life_states, catalogue)
+    carrier_side = carrier_share_figure(d, T_R, quick=quick)
     log(f"validate {design}: moment rigidity (spatial carrier)")
     moment = moment_rigidity_figure(d, catalogue, assumed, quick=quick)
     # ratio variant
@@ -550,7 +584,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "compliance_budget": {"shares": budget["shares"], "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"],
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
                                                 "housing.model": getattr(d.housing, "model", None)
-                                                if d.housing else None}},
+                                                if d.housing else None,
+                                                "carrier.body": getattr(getattr(d, "carrier", None), "body", None)},
+                              "with_ported_carrier": carrier_side},
         "ratio_variant": variant, "uncertainty": unc,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
@@ -672,6 +708,10 @@ def table_text(out):
     if "rigidity" in v:
         lines.append(f"  ratio variant i = {v['ratio']:.4g}: rigidity {v['rigidity']:.4g} N m/arcmin "
                      f"({100 * v['rel_diff']:+.2f} % vs i = {v['ratio_central']:.4g})")
+    pc = out.get("compliance_budget", {}).get("with_ported_carrier")
+    if pc and "carrier_share" in pc:
+        lines.append(f"  with the ported carrier: K_t {pc['K_t_Nm_per_arcmin']:.4g} N m/arcmin at T_R, carrier share "
+                     f"{100 * pc['carrier_share']:.1f} % (tangent budget; the file keeps carrier.body = 'rigid')")
     u = out["uncertainty"]
     if u is not None and u["fraction_within_lost_motion_max"] is not None:
         lines.append(f"  {u['samples']} LHS samples: fraction within the catalogue's lost-motion maximum "
