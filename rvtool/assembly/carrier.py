@@ -11,8 +11,9 @@ C_s (2 N_c, 2 N_c) -- the crank rows of the reduced structure's static port comp
     Q_u(q, u) = K_s(theta_c) u,   K_s(theta_c) = R(theta_c) C_s^-1 R(theta_c)^T,
 
 R the block rotation by the carrier angle theta_c (the compliance is stated in the carrier's frame and turns with
-it). The closure's tangent holds K_s at the current angle; the derivative of K_s u along theta_c (relative size
-|u| / r_c, about 1e-5 at rated torque) is not in it.
+it). The closure's tangent holds K_s at the current angle and the turn of the seat forces with the carrier,
+d(K_s u)/d theta_c = (J K_s - K_s J) u with J the block rotation generator (R' = J R), so that the condensed
+tangent is the exact derivative (checked against central differences in tests/test_carrier_body.py).
 
 Modelling choices, stated: the main-bearing seats are ports of the reduced structure (their compliance is
 computed and reported), but in the planar model the main bearing acts on the carrier body: under torque the
@@ -104,6 +105,16 @@ class CarrierSeatSupport:
         R = np.kron(np.eye(len(self.stiffness) // 2), np.array([[c, -s], [s, c]]))
         self._K = R @ self.stiffness @ R.T
 
+    def angle_derivative(self, u):
+        """d s / d theta_c (2 n_s,) [N/rad] at seat displacements u (1, n_s, 2) [m]: (J K_s - K_s J) u."""
+        u = np.asarray(u, float).reshape(-1)
+        Ju = np.empty_like(u)
+        Ju[0::2], Ju[1::2] = -u[1::2], u[0::2]
+        Ku = self._K @ u
+        JKu = np.empty_like(Ku)
+        JKu[0::2], JKu[1::2] = -Ku[1::2], Ku[0::2]
+        return JKu - self._K @ Ju
+
     def forces(self, u):
         """(s (1, n_s, 2) [N], ds/du (1, 2 n_s, 2 n_s) [N/m]) at seat displacements u (1, n_s, 2) [m]."""
         u = np.asarray(u, float)
@@ -124,5 +135,11 @@ class CarrierSeatClosure(ElasticPinClosure):
         self.carrier_body = int(carrier)
 
     def solve(self, pose, vel, u0=None):
+        """As :meth:`ElasticPinClosure.solve`, with the support turned to the carrier's angle and the seat
+        forces' turn with it in the reduced tangent's carrier-angle column (module docstring)."""
         self.seat_support.turn_to(np.asarray(pose, float).reshape(-1, 3)[self.carrier_body, 2])
-        return super().solve(pose, vel, u0)
+        u, ev, (Q, K, D), ok = super().solve(pose, vel, u0)
+        nr = 3 * self.n_bodies
+        K = K.copy()
+        K[nr:, 3 * self.carrier_body + 2] -= self.seat_support.angle_derivative(u)
+        return u, ev, (Q, K, D), ok
