@@ -257,36 +257,6 @@ MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
 """Latin-hypercube samples of the moment-rigidity band over the main bearing's `assumed` ranges."""
 
 
-QUICK_CARRIER_MESH = 0.008
-"""--quick: the ported carrier's side figure meshed at 8 mm (the files give 4 mm)."""
-
-
-def carrier_share_figure(design, T_R, *, quick=False):
-    """The carrier's share of the output compliance at T_R (issue 30), a side figure where the design states a
-    ``[carrier.structure]`` but keeps ``carrier.body = "rigid"`` (as the shipped files do): the design with
-    the ported carrier, its tangent K_t [N m/arcmin] and budget shares (the carrier's under ``carrier``).
-    None where the design has no carrier structure or already runs it ported (then the main budget holds
-    it); an error is reported, not raised (a side figure)."""
-    from ..assembly.spec import replace as replace_design
-    from ..assembly import build
-    from ..protocols.budget import stiffness_budget
-    from ..solver.static import StaticSolver
-    c = getattr(design, "carrier", None)
-    if c is None or c.structure is None or c.body != "rigid":
-        return None
-    try:
-        d = replace_design(design, carrier={"body": "ported", **({"structure": {"mesh_size": QUICK_CARRIER_MESH}}
-                                                                 if quick else {})})
-        model = build(d)
-        model.set_output_torque(-np.sign(model.ratio) * T_R)
-        b = stiffness_budget(model, StaticSolver(model).solve(0.0))
-        return {"K_t_Nm_per_arcmin": b["K_t_Nm_per_arcmin"], "shares": b["shares"],
-                "carrier_share": b["shares"]["carrier"], "mesh_size_m": d.carrier.structure.mesh_size,
-                "note": "the design with carrier.body = 'ported' (its file keeps 'rigid')"}
-    except Exception as exc:           # reported, not fatal
-        return {"error": f"not computed: {type(exc).__name__}: {exc}"}
-
-
 def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     """The moment-rigidity row (issue 32): :func:`rvtool.protocols.moment_rigidity.moment_rigidity`
     on the design with a spatial carrier (a ported housing replaced by the rigid one: the main-bearing
@@ -441,6 +411,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     life_angles = [k * span / n_life for k in range(n_life)]
     life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
     lives = bearing_lives(d, model, life_states, catalogue)
+    from .budget import carrier_share_figure
     carrier_side = carrier_share_figure(d, T_R, quick=quick)
     log(f"validate {design}: moment rigidity (spatial carrier)")
     moment = moment_rigidity_figure(d, catalogue, assumed, quick=quick)
@@ -584,9 +555,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         "compliance_budget": {"shares": budget["shares"], "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"],
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
                                                 "housing.model": getattr(d.housing, "model", None)
-                                                if d.housing else None,
-                                                "carrier.body": getattr(getattr(d, "carrier", None), "body", None)},
-                              "with_ported_carrier": carrier_side},
+                                                if d.housing else None}},
         "ratio_variant": variant, "uncertainty": unc,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
@@ -595,6 +564,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                      "repeat_tolerance_arcmin": REPEAT_TOLERANCE_ARCMIN},
         "wall_s": time.perf_counter() - t0,
     }
+    # issue 30: the carrier's switch and the ported carrier's share beside the budget of the file's switches
+    out["compliance_budget"]["configuration"]["carrier.body"] = getattr(getattr(d, "carrier", None), "body", None)
+    out["compliance_budget"]["with_ported_carrier"] = carrier_side
     out["loop"] = {"torque_Nm": central["cycles"][-1]["torque_Nm"].tolist(),
                    "angle_arcmin": (central["cycles"][-1]["angle_rad"] / RAD_PER_ARCMIN).tolist(),
                    "labels": central["cycles"][-1]["labels"],

@@ -218,13 +218,18 @@ def crank_mountings(design, graph, layout, seats=False):
             for k, b in enumerate(graph.crank_angles)]
 
 
-def ported_carrier(design, graph, layout, opts):
+def ported_carrier(design, graph, layout, rigid, opts):
     """The crank bearings on the ported carrier (``carrier.body = "ported"``, :mod:`rvtool.assembly.carrier`):
     the tapered pairs on one seat body per crank (n_bodies + k), closed by the carrier's seat compliance
-    (:class:`~rvtool.assembly.carrier.CarrierSeatClosure`); the rigid carrier's set otherwise."""
+    (:class:`~rvtool.assembly.carrier.CarrierSeatClosure`); ``rigid``, the rigid carrier's set, otherwise
+    (unchanged: the default costs nothing)."""
     if not design.carrier.ported:
-        return TaperedBearingSet(crank_mountings(design, graph, layout), layout.n_bodies, name="crank_bearings", **opts)
+        return rigid
     from ..carrier import CarrierSeatClosure, seat_compliance
+    if type(rigid) is not TaperedBearingSet:
+        raise RvtoolInputError(f"carrier.body = 'ported' with crank bearings of {type(rigid).__name__} (spatial "
+                               "crank coordinates) is not implemented (the seats are planar ports); valid: planar "
+                               "cranks or carrier.body = 'rigid'")
     if design.bearing_friction.model != "none":
         raise RvtoolInputError(f"carrier.body = 'ported' with bearing_friction.model = "
                                f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
@@ -690,7 +695,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     pin_set = groove_pins(d, L, pin_set_of, meshes, ports)
     if pin_set is None:
         pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
-    cranks = ported_carrier(d, graph, L, opts)
+    cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
     main_mounting = Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)
     flange = None
     if b.spatial_carrier:
@@ -699,6 +704,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         main = BearingSet([main_mounting], L.n_bodies, name="main_bearings", **opts)
     C_crank = crank_station_compliance(d)
     C_torsion = crank_torsion_compliance(d)
+    cranks = ported_carrier(d, graph, L, cranks, opts)     # the rigid carrier's set unless carrier.body = "ported"
     if C_crank is None:
         gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
         if C_torsion is None:
