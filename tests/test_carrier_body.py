@@ -214,3 +214,23 @@ def test_closure_tangent_matches_central_differences():
     scale = np.abs(ev.dQdq).max()
     err = np.abs(ev.dQdq - fd).max() / scale
     assert err < 1e-6, err
+
+
+def test_rigid_fit_of_a_seat_recovers_rigid_motions_and_the_tilt_stiffness_is_reported():
+    """The main-bearing seats' rigid fit (an RBE3-type port) returns the six rigid-body coordinates of a rigid
+    displacement of the end plate's seat (no clamped vertex there) exactly (a least-squares fit of a rigid field
+    is exact: 1e-9 of the unit amplitude, round-off of the normal equations); the carrier's tilt stiffness
+    between the output face and the main seats is in the reduction's info."""
+    from rvtool.assembly.carrier import carrier_layout, carrier_ports
+    from rvtool.structure.carrier import carrier_fe
+    d = _ported()
+    r, angles, _, _ = carrier_layout(d)
+    parent = carrier_fe(d.carrier.structure, d.material, r, angles)
+    centre = (0.0, 0.0, 0.0)
+    A = parent.rigid_fit(("main_end_plate",), centre)
+    R = parent.fe.rigid_body_modes(centre)
+    assert np.abs(A @ R - np.eye(6)).max() < 1e-9
+    info = carrier_ports(d)[2]
+    C = np.array(info["main_seats_compliance"])
+    assert C.shape == (6, 6) and np.linalg.eigvalsh(0.5 * (C + C.T)).min() > 0
+    assert info["main_seats_tilt_stiffness_Nm_per_rad"] > 0

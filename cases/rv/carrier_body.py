@@ -10,6 +10,13 @@ Per design and per mesh (three nominal tetrahedron sizes, each 1.5 times the nex
   compliance (``rvtool.protocols.budget.stiffness_budget``, path ``carrier``) and its switch-on share
   1 - K_t(ported) / K_t(rigid).
 
+* the carrier's tilt stiffness between the output face and the main-bearing seats (their area-weighted rigid
+  fit, ``info["main_seats_tilt_stiffness_Nm_per_rad"]`` of ``rvtool.assembly.carrier.carrier_ports``) [N m/
+  arcmin]: the carrier's member of the moment path, which the spatial model (issue 32) does not take yet. Beside
+  it, once per design, the moment rigidity of the spatial model with the rigid carrier (``rvtool.protocols.
+  moment_rigidity``, reference moment T_R, read between its default points) and the carrier's share of the
+  moment compliance if the two act in series (an estimate: the series sum, not a coupled solve).
+
 Convergence: first-order tetrahedra are too stiff and converge from below in compliance, so the share rises as
 the mesh is refined; with three meshes h1 > h2 > h3 the changes d12 = s2 - s1 and d23 = s3 - s2 give the
 observed order p = log(d12 / d23) / log(1.5) and the Richardson estimate s3 + d23 / (1.5^p - 1) of the share at
@@ -28,7 +35,9 @@ import rvtool
 from rvtool import casekit, designs
 from rvtool.assembly.carrier import carrier_ports
 from rvtool.protocols.budget import stiffness_budget
+from rvtool.protocols.moment_rigidity import MomentRigidityTest, moment_rigidity, spatial_design
 from rvtool.solver.static import StaticSolver
+from rvtool.units import RAD_PER_ARCMIN
 
 DESIGNS = ("rv40e", "rv80e")
 MESHES = (0.006, 0.004, 0.004 / 1.5)
@@ -64,16 +73,33 @@ def carrier_study(name, meshes):
                      "K_t_Nm_per_arcmin": K, "carrier_energy_share": float(b["shares"]["carrier"]),
                      "carrier_switch_share": 1.0 - K / K0,
                      "seat_compliance_tangential_m_per_N": _tangential(red, dp),
+                     "carrier_tilt_stiffness_Nm_per_arcmin": info["main_seats_tilt_stiffness_Nm_per_rad"]
+                     * RAD_PER_ARCMIN,
                      "wall_s": time.perf_counter() - t0})
-    s = [r["carrier_energy_share"] for r in rows]
-    d12, d23 = s[1] - s[0], s[2] - s[1]
     ratio = meshes[0] / meshes[1]
+    conv = _richardson([r["carrier_energy_share"] for r in rows], ratio, "share")
+    tilt = _richardson([1.0 / r["carrier_tilt_stiffness_Nm_per_arcmin"] for r in rows], ratio,
+                       "tilt_compliance_arcmin_per_Nm")
+    K_m = moment_rigidity(rvtool.build(spatial_design(d.replace(carrier={"body": "rigid"}, **base))),
+                          MomentRigidityTest(reference_moment=d.rated_torque)).rigidity_arcmin
+    K_c = rows[-1]["carrier_tilt_stiffness_Nm_per_arcmin"]
+    moment = {"spatial_moment_rigidity_rigid_carrier_Nm_per_arcmin": K_m,
+              "carrier_tilt_stiffness_finest_Nm_per_arcmin": K_c, "tilt_convergence": tilt,
+              "series_moment_rigidity_Nm_per_arcmin": 1.0 / (1.0 / K_m + 1.0 / K_c),
+              "carrier_share_of_moment_compliance": (1.0 / K_c) / (1.0 / K_c + 1.0 / K_m)}
+    return {"K_t_rigid_carrier_Nm_per_arcmin": K0, "meshes": rows, "convergence": conv, "moment_path": moment}
+
+
+def _richardson(s, ratio, name):
+    """Changes d12, d23 of a figure over three meshes refined by ``ratio``, its observed order and the Richardson
+    estimate at h -> 0 (module docstring), where the changes shrink monotonically."""
+    d12, d23 = s[1] - s[0], s[2] - s[1]
     conv = {"d12": d12, "d23": d23}
     if d12 != 0 and d23 != 0 and d12 / d23 > 1:
         p = math.log(d12 / d23) / math.log(ratio)
         extra = d23 / (ratio ** p - 1.0)
-        conv.update({"observed_order": p, "richardson_share": s[2] + extra, "finest_mesh_error_estimate": extra})
-    return {"K_t_rigid_carrier_Nm_per_arcmin": K0, "meshes": rows, "convergence": conv}
+        conv.update({"observed_order": p, f"richardson_{name}": s[2] + extra, "finest_mesh_error_estimate": extra})
+    return conv
 
 
 def _tangential(red, design):

@@ -30,6 +30,7 @@ import numpy as np
 from ..contact.pin_closure import ElasticPinClosure
 from ..errors import RvtoolInputError
 from ..structure.carrier import carrier_fe, reduce_carrier
+from ..structure.static import SupportedCompliance
 
 
 def carrier_layout(design, graph=None):
@@ -54,16 +55,27 @@ def _reduced(structure, material, crank_radius, crank_angles):
     parent = carrier_fe(structure, material, crank_radius, crank_angles)
     red = reduce_carrier(parent, structure.n_modes)
     fe = parent.fe
+    sc = SupportedCompliance(fe.stiffness, parent.port_matrix)
+    # the main-bearing seats' rigid fit (both rows' seats, about the wheels' mid-plane): the carrier's own
+    # compliance between the output face and the main bearings, translations and tilts (issue 32's moment path)
+    C_main = sc.compliance(parent.rigid_fit(("main_flange", "main_end_plate"), (0.0, 0.0, 0.0)))
     info = {"vertices": int(len(fe.vertices)), "tetrahedra": int(len(fe.tetrahedra)), "dofs": int(fe.n_dofs),
             "seat_vertices": {k: int(len(v)) for k, v in parent.seat_vertices.items()},
             "ports": list(parent.port_names), "n_eta": int(red.n_coordinates),
-            "first_clamped_hz": float(np.sqrt(red.omega2.min()) / (2 * np.pi))}
-    return red, parent.compliance(), info
+            "first_clamped_hz": float(np.sqrt(red.omega2.min()) / (2 * np.pi)),
+            "main_seats_compliance": C_main.tolist(),
+            "main_seats_tilt_stiffness_Nm_per_rad": float(2.0 / (C_main[3, 3] + C_main[4, 4]))}
+    return red, sc.compliance(), info
 
 
 def carrier_ports(design, graph=None):
     """(PortReducedModel, parent static port compliance C_ref [m/N], info dict) of ``design.carrier``
-    (``body = "ported"``); port k (rows 2k, 2k + 1) is crank k's seat pair, the last port the main bearings."""
+    (``body = "ported"``); port k (rows 2k, 2k + 1) is crank k's seat pair, the last port the main bearings.
+    ``info["main_seats_compliance"]`` (6, 6) [m/N, rad/(N m)] is the compliance of the main-bearing seats'
+    rigid fit (:meth:`~rvtool.structure.carrier.CarrierFE.rigid_fit`: x, y, z, tilts about x and y, turn
+    about z, through the wheels' mid-plane) relative to the output face, and
+    ``main_seats_tilt_stiffness_Nm_per_rad`` the carrier's tilt stiffness between them (the mean of both
+    axes): the carrier's member in the moment path, reported (the spatial model does not take it yet)."""
     c = design.carrier
     if not c.ported:
         raise RvtoolInputError(f"carrier.body = {c.body!r}: the carrier has no ports; valid: 'ported'")

@@ -210,6 +210,35 @@ class CarrierFE:
         """Parent static port compliance P K^-1 P^T [m/N] (one sparse factorization)."""
         return SupportedCompliance(self.fe.stiffness, self.port_matrix).compliance()
 
+    def rigid_fit(self, seats, centre):
+        """Port matrix A (6, n_dofs) of the area-weighted least-squares rigid motion (translations x, y, z [m],
+        small rotations about x, y, z [rad] through ``centre`` [m]) of the union of ``seats`` (names of
+        ``seat_vertices``): A = (R^T W R)^-1 R^T W on their coordinates, an RBE3-type port whose load
+        distribution A^T F spreads a force and moment over the seats. A K^-1 A^T is its compliance
+        [m/N, rad/(N m)]."""
+        fe = self.fe
+        V = fe.vertices
+        tris = fe.surface_triangles
+        idx = np.unique(np.concatenate([self.seat_vertices[n] for n in seats]))
+        w = _surface_weights(V, tris, idx)[idx]
+        table = np.full((len(V), 3), -1, int)
+        table[fe.dof_vertex, fe.dof_component] = np.arange(fe.n_dofs)
+        r = V[idx] - np.asarray(centre, float)
+        n = len(idx)
+        R = np.zeros((3 * n, 6))
+        for c in range(3):
+            R[c::3, c] = 1.0
+        # u = theta x r
+        R[1::3, 3], R[2::3, 3] = -r[:, 2], r[:, 1]
+        R[0::3, 4], R[2::3, 4] = r[:, 2], -r[:, 0]
+        R[0::3, 5], R[1::3, 5] = -r[:, 1], r[:, 0]
+        Wd = np.repeat(w, 3)
+        A_loc = np.linalg.solve(R.T @ (Wd[:, None] * R), (R * Wd[:, None]).T)     # (6, 3 n)
+        cols = table[idx].reshape(-1)
+        free = cols >= 0
+        return sp.csr_matrix((A_loc[:, free].ravel(), (np.repeat(np.arange(6), int(free.sum())),
+                                                       np.tile(cols[free], 6))), shape=(6, fe.n_dofs))
+
 
 def _surface_weights(vertices, triangles, selected):
     """Area weight [m^2] of every selected vertex: a third of the area of each surface triangle whose three
