@@ -90,6 +90,11 @@ def test_ported_carrier_adds_compliance_in_series():
         m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
         q = StaticSolver(m).solve(0.0)
         out[body] = stiffness_budget(m, q)
+        # the crank forces on the carrier are read at the seats: they carry the output torque, shared by the
+        # three cranks (equal shares 1/3 up to the mesh phase at input angle 0: 5 % absolute)
+        share = m.crank_load_share(q)
+        assert abs(share.sum() - 1.0) < 1e-12 and np.abs(share - 1.0 / 3.0).max() < 0.05, share
+        assert abs(m.crank_torques(q).sum() - d.rated_torque) < 0.02 * d.rated_torque
     assert out["ported"]["K_t_Nm_per_arcmin"] < 0.95 * out["rigid"]["K_t_Nm_per_arcmin"]
     sh = out["ported"]["shares"]
     assert 0.05 < sh["carrier"] < 0.9
