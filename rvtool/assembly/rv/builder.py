@@ -215,12 +215,41 @@ def needle_mountings(design, graph, layout):
     return out
 
 
-def crank_mountings(design, graph, layout):
-    """Tapered pair of crank k in the carrier, cup centred on the crank circle."""
+def crank_mountings(design, graph, layout, seats=False):
+    """Tapered pair of crank k in the carrier, cup centred on the crank circle; ``seats``: the cup on crank k's
+    seat body n_bodies + k of the ported carrier (:func:`ported_carrier`) instead of the carrier body."""
     return [TaperedMounting(name=f"crank_bearing{k}", bearing=design.crank_bearing, inner=layout.crank(k),
-                            outer=layout.carrier, outer_centre=(graph.crank_radius * math.cos(b),
-                                                                graph.crank_radius * math.sin(b)))
+                            outer=layout.n_bodies + k if seats else layout.carrier,
+                            outer_centre=(graph.crank_radius * math.cos(b), graph.crank_radius * math.sin(b)))
             for k, b in enumerate(graph.crank_angles)]
+
+
+def ported_carrier(design, graph, layout, rigid, opts):
+    """The crank bearings on the ported carrier (``carrier.body = "ported"``, :mod:`rvtool.assembly.carrier`):
+    the tapered pairs on one seat body per crank (n_bodies + k), closed by the carrier's seat compliance
+    (:class:`~rvtool.assembly.carrier.CarrierSeatClosure`); ``rigid``, the rigid carrier's set, otherwise
+    (unchanged: the default costs nothing)."""
+    if not design.carrier.ported:
+        return rigid
+    from ..carrier import CarrierSeatClosure, seat_compliance
+    if type(rigid) is not TaperedBearingSet:
+        raise RvtoolInputError(f"carrier.body = 'ported' with crank bearings of {type(rigid).__name__} (spatial "
+                               "crank coordinates) is not implemented (the seats are planar ports); valid: planar "
+                               "cranks or carrier.body = 'rigid'")
+    if design.bearing_friction.model != "none":
+        raise RvtoolInputError(f"carrier.body = 'ported' with bearing_friction.model = "
+                               f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
+                               "crank bearings on the rigid carrier); valid: bearing_friction.model = 'none' or "
+                               "carrier.body = 'rigid'")
+    if design.bodies.spatial_carrier:
+        raise RvtoolInputError("carrier.body = 'ported' with bodies.carrier_coordinates = 'spatial' is not "
+                               "implemented (the seats are planar ports: the tilt and axial ports of the seats are "
+                               "not reduced); valid: bodies.carrier_coordinates = 'planar' or carrier.body = 'rigid'")
+    nc = layout.n_cranks
+    inner = TaperedBearingSet(crank_mountings(design, graph, layout, seats=True), layout.n_bodies + nc,
+                              name="crank_bearings", **opts)
+    return CarrierSeatClosure(inner, n_bodies=layout.n_bodies, carrier=layout.carrier,
+                              compliance=seat_compliance(design, graph))
 
 
 @dataclass
@@ -249,6 +278,8 @@ class RvModel(ReducerModel):
         action (the cup centre, world) at the static state q."""
         el = self.elements["crank_bearings"]
         pose = self._pose("crank_bearings", q)
+        if self.design.carrier.ported:
+            pose = el.evaluator.extended_pose(pose)            # the seat bodies at the solved seat displacements
         res = el.evaluator.resultants(pose)
         forces, points = [], []
         for k, m in enumerate(el.evaluator.mountings):
@@ -303,7 +334,8 @@ class RvModel(ReducerModel):
         reported once, with the eccentric bearings (budget path ``"cranks"``); crank torsion alone
         likewise (path ``"crank_torsion"``; with the beam on, the torsion is inside the beam's closure
         and not a path of its own: its energy falls into the budget's residual); the ring pins'
-        conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`)."""
+        conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`); the ported carrier's
+        crank seats with the crank bearings (path ``"carrier"``, :mod:`rvtool.assembly.carrier`)."""
         from ...model import SeriesBeam
         fam = Family(family)
         tilting = self.body_tilts is not None and any(n.startswith(("wheel", "crank")) for n in self.body_tilts.names)
@@ -312,6 +344,8 @@ class RvModel(ReducerModel):
             raise RvtoolInputError("the series members (elastic cranks, pin grooves) of a model with tilting wheels or "
                                    "cranks are closed inside the width slices; their budget paths are not implemented; "
                                    "valid: bodies.wheel_coordinates / crank_coordinates = 'planar'")
+        if fam == Family.CRANK_BEARINGS and self.design.carrier.ported:
+            return GrooveSeries.of_groove(self.elements["crank_bearings"], "carrier", Family.CRANK_BEARINGS)
         if fam == Family.PINS and self.design.pins.groove != "rigid":
             return GrooveSeries.of_groove(self.elements["pins"])
         if fam != Family.ECCENTRIC_BEARINGS:
@@ -403,7 +437,9 @@ class GrooveSeries(SeriesBeamBase):
         return float(du.ravel() @ self.closure.support_tangent(u) @ du.ravel())
 
     @classmethod
-    def of_groove(cls, element):
+    def of_groove(cls, element, path="pin_grooves", family=Family.PINS):
+        """The station law of ``element``'s closure as the budget path ``path`` of ``family`` (the ring pins'
+        grooves; the carrier's crank seats, path ``"carrier"`` of the crank bearings)."""
         closure = element.evaluator
 
         def pose(q):
@@ -413,7 +449,7 @@ class GrooveSeries(SeriesBeamBase):
         def stiffened(q, factor):
             u, _, red, _ = closure.solve(*pose(q))
             return element.coordinate_indices, closure.condense(red, beam_factor=factor, u=u)[1]
-        return cls("pin_grooves", Family.PINS, closure.compliance, lambda q: closure.deflections(pose(q)[0]),
+        return cls(path, family, closure.compliance, lambda q: closure.deflections(pose(q)[0]),
                    stiffened, closure, pose)
 
 
@@ -796,6 +832,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
     C_crank = crank_station_compliance(d)
     C_torsion = crank_torsion_compliance(d)
+    cranks = ported_carrier(d, graph, L, cranks, opts)     # the rigid carrier's set unless carrier.body = "ported"
     if C_crank is None:
         gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
         if C_torsion is None:

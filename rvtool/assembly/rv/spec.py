@@ -24,6 +24,7 @@ from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
 from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
+from ...structure.carrier import CarrierStructure
 from ...structure.crank_beam import CrankShaft
 from ..spec import LINKS, BearingFriction, Housing, PinContact, Pins, Wheels, build_section, load_sections
 
@@ -204,6 +205,36 @@ class RvBodies:
         return self.carrier_inertia / 2 if self.carrier_tilt_inertia is None else self.carrier_tilt_inertia
 
 
+#: the carrier's body models (``carrier.body``)
+CARRIER_BODIES = ("rigid", "ported")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Carrier:
+    """The carrier (output flange, pillars, end plate) that carries the crank bearings and sits in the main
+    bearings (issue 30).
+
+    body: ``"rigid"`` (today's model: the crank-bearing cups sit on the rigid carrier body; ``structure`` is
+    unused) or ``"ported"`` (the carrier as a reduced structure, :mod:`rvtool.structure.carrier`: each crank's
+    tapered pair acts on a seat that moves relative to the output face by the carrier's static seat
+    compliance, :mod:`rvtool.assembly.carrier`). structure: the
+    :class:`~rvtool.structure.carrier.CarrierStructure` (file: ``[carrier.structure]``; needed for
+    ``"ported"``)."""
+    body: str = "rigid"
+    structure: CarrierStructure | None = None
+
+    def __post_init__(self):
+        if self.body not in CARRIER_BODIES:
+            raise RvtoolInputError(f"carrier.body = {self.body!r}; valid choices are {list(CARRIER_BODIES)}")
+        if self.body == "ported" and not isinstance(self.structure, CarrierStructure):
+            raise RvtoolInputError("carrier.body = 'ported' needs the table [carrier.structure] (a CarrierStructure)")
+
+    @property
+    def ported(self):
+        """True where the carrier is the reduced structure."""
+        return self.body == "ported"
+
+
 @dataclass(frozen=True, kw_only=True)
 class InputStage:
     """Three-stage only: the offset input pinion meshing the compound gear's large gear.
@@ -243,6 +274,8 @@ class RVDesign:
     compound_gear: InvoluteGear | None = None
     input_stage: InputStage = field(default_factory=InputStage)
     housing: Housing = field(default_factory=Housing)
+    #: the carrier as a rigid body (default) or a reduced structure (issue 30; optional section)
+    carrier: Carrier = field(default_factory=Carrier)
     #: Palmgren friction torque of the tapered crank bearings and the main bearings (issue 17; optional
     #: section, model "none" = no element, no cost)
     bearing_friction: BearingFriction = field(default_factory=BearingFriction)
@@ -410,8 +443,9 @@ _SECTIONS = {"sun_gear": lambda d: _gear("sun_gear", d),
              "input_pinion": lambda d: _gear("input_pinion", d),
              "compound_gear": lambda d: _gear("compound_gear", d),
              "input_stage": lambda d: build_section(InputStage, "input_stage", d),
-             "bearing_friction": lambda d: build_section(BearingFriction, "bearing_friction", d)}
-_OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input_stage", "bearing_friction")
+             "bearing_friction": lambda d: build_section(BearingFriction, "bearing_friction", d),
+             "carrier": lambda d: build_section(Carrier, "carrier", d)}
+_OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input_stage", "bearing_friction", "carrier")
 #: Fields of a table the design sets, not the file (a gear is named after its table): not file keys,
 #: so the templates and the format documentation leave them out.
 SET_BY_DESIGN = {g: ("name",) for g in ("sun_gear", "crank_gear", "input_pinion", "compound_gear")}
@@ -431,7 +465,9 @@ def design_from_dict(d):
         kw[sec] = make(d.pop(sec))
     design = build_section(RVDesign, "design", {**d, **kw, "source": source})
     from .gear_graph import GearGraph
-    GearGraph.of(design)          # topology errors (spacing, crank count, declared ratio) at load
+    graph = GearGraph.of(design)  # topology errors (spacing, crank count, declared ratio) at load
+    from ..carrier import check_carrier
+    check_carrier(design, graph)  # a ported carrier fits the cranks and the bearing rows
     return design
 
 
