@@ -58,7 +58,8 @@ def main(argv=None):
                             "ratio_variant": out["ratio_variant"], "compliance_budget": out["compliance_budget"],
                             "bearing_lives": out["bearing_lives"], "uncertainty_note": out["uncertainty_note"],
                             "uncertainty": {k: v for k, v in (out["uncertainty"] or {}).items() if k != "U"},
-                            "settings": out["settings"], "report": f"{name}/report.html"}
+                            "settings": out["settings"], "report": f"{name}/report.html",
+                            "te_measured": out.get("te_measured")}
     casekit.write_results(args.out, {"designs": per_design, "passed": bool(passed and per_design),
                                      "criteria": "machinery ran (no failed sample), no NaN, loops repeat within "
                                                  f"{V.REPEAT_TOLERANCE_ARCMIN:g} arcmin, band contains central "
