@@ -83,6 +83,27 @@ def te_variants(design, tolerances, *, n, points_per_mesh, torque, seed=SEED, lo
             "angles": angles}
 
 
+def window_check(design, tolerances, *, k=0, points_per_mesh=2, torque, seed=SEED):
+    """How far the window's peak-to-peak falls below the output revolution's: variant k's TE over one output
+    revolution (|ratio| input revolutions); returns its peak-to-peak and that of each consecutive window [arcsec]."""
+    from ..assembly import build
+    from ..protocols.precision import quasi_static_te
+    from ..variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    dv, _ = sample_rv_design(load_rv_tolerances(tolerances), design, k, seed)
+    model = build(dv)
+    mesh = float(model.mesh_period)
+    per_rev = 2 * np.pi / mesh * points_per_mesh
+    n_win = int(round(te_window(design) * per_rev))
+    n = int(round(abs(model.ratio) * per_rev))
+    te = np.asarray(quasi_static_te(model, torque=torque, input_angles=np.arange(n) * mesh / points_per_mesh)["te"])
+    te = te * ARCSEC_PER_RAD
+    windows = [float(np.ptp(te[i:i + n_win])) for i in range(0, n - n_win + 1, n_win)]
+    return {"variant": k, "points_per_mesh": points_per_mesh, "input_revolutions": float(abs(model.ratio)),
+            "output_revolution_pp_arcsec": float(np.ptp(te)), "window_pp_arcsec": windows,
+            "window_to_revolution_min": min(windows) / float(np.ptp(te)),
+            "window_to_revolution_max": max(windows) / float(np.ptp(te))}
+
+
 def te_distribution(records):
     """min, p5, median, p95, max [arcsec] of the variants' peak-to-peak (None where no variant ran)."""
     x = np.sort([r["te_pp_rad"] * ARCSEC_PER_RAD for r in records if r["te_pp_rad"] is not None])
