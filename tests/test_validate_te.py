@@ -178,3 +178,19 @@ def test_window_check_windows_lie_within_the_output_revolution():
     assert len(w["window_pp_arcsec"]) == 153 // 19 and w["input_revolutions"] == pytest.approx(153.0)
     assert max(w["window_pp_arcsec"]) <= w["output_revolution_pp_arcsec"] * (1 + 1e-12)
     assert 0 < w["window_to_revolution_min"] <= w["window_to_revolution_max"] <= 1 + 1e-12
+
+
+def test_te_comparison_needs_a_measurement_file():
+    d = rvtool.load_design("rv40e")      # a tolerance file, no measurement file
+    assert designs.tolerances_of("rv40e") and VT.te_comparison("rv40e", d, d.rated_torque, quick=True) is None
+
+
+def test_validate_checks_count_failed_te_variants():
+    from rvtool.analysis import validate as V
+    out = {"central": {"torsional_rigidity": 1.0, "lost_motion": 1.0, "hysteresis_loss": 1.0, "repeat_passed": True},
+           "uncertainty": None, "te_measured": {"n_failed": 1}}
+    assert V.checks(out)["te_no_failed_variant"] is False
+    out["te_measured"]["n_failed"] = 0
+    assert V.checks(out)["te_no_failed_variant"] is True
+    out["te_measured"] = None
+    assert "te_no_failed_variant" not in V.checks(out)
