@@ -29,7 +29,8 @@ def kind(name):
     datasheet's input), "assumed" (``[[assumed]]`` tables: a design's assumed inputs with their cited
     ranges), "catalogue" (``[[figure]]`` tables: a design's catalogue figures), "measured"
     (``[[transmission_error]]`` tables: measurements of a design's prototypes published in a paper,
-    :mod:`rvtool.designs.measured`) or "design" (a reducer design)."""
+    :mod:`rvtool.designs.measured`), "friction" (a ``friction_set``), "efficiency" (an
+    ``efficiency_catalogue``) or "design" (a reducer design)."""
     import tomllib
     with open(path(name), "rb") as fh:
         table = tomllib.load(fh)
@@ -45,12 +46,16 @@ def kind(name):
         return "catalogue"
     if "transmission_error" in table:
         return "measured"
+    if "friction_set" in table:
+        return "friction"
+    if "efficiency_catalogue" in table:
+        return "efficiency"
     return "design"
 
 
 def design_names():
-    """Names of the shipped reducer designs (tolerance, sweep, allowables, assumed, catalogue and measurement files
-    left out)."""
+    """Names of the shipped reducer designs (tolerance, sweep, allowables, assumed, catalogue, measurement, friction
+    and efficiency files left out)."""
     return [n for n in names() if kind(n) == "design"]
 
 
