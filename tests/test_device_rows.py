@@ -320,3 +320,32 @@ def test_analyze_hysteresis_runs_on_the_device_with_exudyns_figures():
     assert fd["torsional_rigidity_b_over_a"] == pytest.approx(fe["torsional_rigidity_b_over_a"], rel=1e-9)
     for key in ("angle_arcmin_loop1", "angle_arcmin_loop2"):
         assert np.max(np.abs(np.asarray(dv.data[key]) - np.asarray(ex.data[key]))) <= 1e-6
+
+
+def test_variant_copies_reuse_the_built_profile_tables_and_compliances_bit_for_bit(rv):
+    """copy_families of variant models takes each variant's cycloid profile tables and tooth
+    compliances from its built sets (no second sampling: ~40 ms per copy); the copied rows and
+    tables equal those of sets built from the meshes alone."""
+    from rvtool.contact.cycloid_set import CycloidPinSet
+    from rvtool.contact.involute_set import InvoluteContactSet
+    from rvtool.solver.replica import copy_families
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    design = rv[0]
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, design, k, 7)[0]) for k in range(2)]
+    fam = {f.name: f.set for f in copy_families(models, 2)}
+    pins, gears = fam["pins"], fam["gears"]
+    built = [e.evaluator for m in models for e in m.contact_elements() if e.evaluator.name == "pins"]
+    assert len(pins.tables) == sum(len(b.tables) for b in built) > 2     # each variant's wheels' own profiles
+    assert all(any(t is u for u in pins.tables) for b in built for t in b.tables)     # taken, not sampled again
+    fresh = CycloidPinSet(pins.meshes, pins.n_bodies, samples_per_tooth=pins.samples_per_tooth, search=pins.search,
+                          search_band=pins.search_band)
+    assert fresh.window == pins.window
+    np.testing.assert_array_equal(fresh.fparams, pins.fparams)
+    np.testing.assert_array_equal(fresh.iparams, pins.iparams)
+    for a, b in zip(fresh.tables, pins.tables):
+        for x, y in zip(a, b):
+            np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+    g = InvoluteContactSet(gears.meshes, gears.n_bodies)
+    np.testing.assert_array_equal(g.fparams, gears.fparams)
+    assert dataclasses.is_dataclass(pins.meshes[0])

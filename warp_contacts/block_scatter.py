@@ -55,11 +55,16 @@ class BlockScatter:
         self.Q = wp.zeros((n_copies, n), dtype=dtype, device=device)
         self.K = wp.zeros((n_copies, n, n), dtype=dtype, device=device)
 
-    def __call__(self, rows):
+    def sum(self, rows):
         """rows: per family (q (N, k) device array, K (N, k, k) device array), in the order of
-        ``families``. Returns host arrays Q (B, n), K (B, n, n)."""
+        ``families``. Returns the device arrays Q (B, n), K (B, n, n) (overwritten by the next sum)."""
         self.Q.zero_()
         self.K.zero_()
         for (loc, rc, n_rows), (q, K) in zip(self.maps, rows):
             wp.launch(self.kernel, dim=n_rows, inputs=[q, K, loc, rc], outputs=[self.Q, self.K], device=self.device)
-        return self.Q.numpy(), self.K.numpy()
+        return self.Q, self.K
+
+    def __call__(self, rows):
+        """As :meth:`sum`; returns host arrays Q (B, n), K (B, n, n)."""
+        Q, K = self.sum(rows)
+        return Q.numpy(), K.numpy()

@@ -182,10 +182,14 @@ class CycloidPinSet(PairFamilySet):
     search_band x r_p of contact (see :func:`auto_window`); default 0.05 (150 um on RD-40,
     window 33 samples instead of 113 for the profile-keyed search).
     backend "warp" (default, one launch) or "numpy"; precision "float64" or "float32".
+    tables: profile tables computed before, {(profile, pin radius): (table, analytic parameters
+    or None, search window)} as :meth:`profile_tables` returns them for the same
+    samples_per_tooth, search and search_band (a copy of built sets reuses them instead of
+    sampling each profile again); a key not in it is computed.
     """
 
     def __init__(self, meshes, n_bodies, *, samples_per_tooth=120, backend="warp", precision="float64",
-                 device="cpu", name="pins", search="discrete", search_band=0.05):
+                 device="cpu", name="pins", search="discrete", search_band=0.05, tables=None):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one WheelPinMesh")
         check_backend(backend, precision)
@@ -204,6 +208,7 @@ class CycloidPinSet(PairFamilySet):
         self.backend = backend
         self.precision = precision
         self.tables = []
+        self.table_windows = []
         self.analytic = [] if search == "analytic" else None
         table_of = {}            # identical tables are stored once (B copies of one design: one table)
         fp, ip, ids, mesh_of, pin_of, ap = [], [], [], [], [], []
@@ -219,13 +224,18 @@ class CycloidPinSet(PairFamilySet):
             # the table depends on the (frozen, hashable) profile and the pin radius only
             key = (prof, float(rp))
             if key not in table_of:
-                tab = pin_curve_table(prof.table(samples_per_tooth * prof.n_teeth), rp)
-                ana = prof.analytic_parameters() if search == "analytic" else None
+                if tables is not None and key in tables:
+                    tab, ana, win = tables[key]
+                else:
+                    tab = pin_curve_table(prof.table(samples_per_tooth * prof.n_teeth), rp)
+                    ana = prof.analytic_parameters() if search == "analytic" else None
+                    win = auto_window(prof, tab, rp, band=search_band)
                 table_of[key] = len(self.tables)
                 self.tables.append(tab)
+                self.table_windows.append(win)
                 if ana is not None:
                     self.analytic.append(ana)
-                window = max(window, auto_window(prof, tab, rp, band=search_band))
+                window = max(window, win)
             tb = table_of[key]
             pins = pin_centres(prof, m.pin_centre_errors)
             dev = np.zeros(prof.n_pins) if m.normal_deviation is None else np.asarray(m.normal_deviation, float)
@@ -281,6 +291,18 @@ class CycloidPinSet(PairFamilySet):
                                             analytic=self.analytic, anchor_params=self.anchor_params)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
+
+    def profile_tables(self):
+        """{(profile, pin radius [m]): (table, analytic parameters or None, search window)} of this
+        set's meshes (the ``tables`` argument of a set with the same samples_per_tooth, search and
+        search_band)."""
+        out = {}
+        for m_i, m in enumerate(self.meshes):
+            rp = m.profile.pin_radius if m.pin_radius is None else m.pin_radius
+            t = int(self.iparams[np.flatnonzero(self.mesh_of == m_i)[0], ref.J_TABLE])
+            out[(m.profile, float(rp))] = (self.tables[t], None if self.analytic is None else self.analytic[t],
+                                           self.table_windows[t])
+        return out
 
     def reference(self, pose, vel, anchor=None):
         return ref.evaluate(pose, vel, self.fparams, self.iparams, self.tables, self.window, self.analytic,

@@ -164,7 +164,8 @@ class InvoluteContactSet(PairFamilySet):
     contact mode, teeth and the series-law tangent k_t).
     """
 
-    def __init__(self, meshes, n_bodies, *, backend="warp", precision="float64", device="cpu", name="gears"):
+    def __init__(self, meshes, n_bodies, *, backend="warp", precision="float64", device="cpu", name="gears",
+                 compliance=None):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one GearMesh")
         check_backend(backend, precision)
@@ -172,7 +173,9 @@ class InvoluteContactSet(PairFamilySet):
         self.meshes = tuple(meshes)
         self.backend = backend
         self.precision = precision
-        self.compliance = {}
+        # tooth compliances computed before ({gear: ToothCompliance}, e.g. the ``compliance`` of
+        # built sets that are copied): reused, the other gears' computed
+        self.compliance = {} if compliance is None else dict(compliance)
         fp, ip, ids, mesh_of, dev, ap = [], [], [], [], [], []
         offset = 0
         for m_i, m in enumerate(self.meshes):

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from warp_contacts.batched_newton_ref import ACTIVE, CONVERGED, FAILED, WARM
+from warp_contacts.block_newton_ref import StepModel, block_step
 
 from ..errors import RvtoolInputError
 from ..model.reducer import COORDINATES
@@ -120,6 +121,17 @@ class DeviceRowSum:
                 f.set.set_velocity_tangent(not on)
 
     def evaluate(self, pose, vel):
+        t0 = time.perf_counter()
+        Q, K = self.evaluate_device(pose, vel)
+        t1 = time.perf_counter()
+        Q, K = np.array(Q), np.array(K)
+        Q[self.masked], K[self.masked] = 0.0, 0.0
+        self.timing["scatter"] += time.perf_counter() - t1
+        return _Blocks(Q, K)
+
+    def evaluate_device(self, pose, vel):
+        """The per-copy sums as device arrays Q (B, n), K (B, n, n) (no download; overwritten by
+        the next evaluation; masked copies are not zeroed)."""
         import warp as wp
         from .replica import family_rows
         t0 = time.perf_counter()
@@ -139,13 +151,11 @@ class DeviceRowSum:
                 K.assign(Kh)
             rows.append((q, K))
         t1 = time.perf_counter()
-        Q, K = self.scatter(rows)
-        Q, K = np.array(Q), np.array(K)
-        Q[self.masked], K[self.masked] = 0.0, 0.0
+        Q, K = self.scatter.sum(rows)
         self.timing["kernels"] += t1 - t0
         self.timing["scatter"] += time.perf_counter() - t1
         self.timing["launches"] += len(self.families)
-        return _Blocks(Q, K)
+        return Q, K
 
 
 @dataclass
@@ -164,9 +174,14 @@ class DeviceRowNewton:
     settings: :class:`DeviceNewtonSettings` (the cycloid path's tolerances and bounds: abs_tol
     1e-6 N as Exudyn's static solver). device_sum: sum the rows into per-copy blocks on the device
     (:class:`DeviceRowSum`) instead of on the host; default on a CUDA device only (on the CPU the
-    rows are host memory already and the host scatter is deterministic)."""
+    rows are host memory already and the host scatter is deterministic). device_step: the Newton
+    step of every copy (assembly with springs, torque and fixed coordinates, the dense solve, step
+    limiting, plausibility, stage bookkeeping) as one Warp kernel on the device
+    (:class:`warp_contacts.block_newton.BlockNewtonStep`: the per-copy sums stay on the device,
+    the states and statuses come back once per iteration) instead of NumPy on the host
+    (:func:`warp_contacts.block_newton_ref.block_step`, its reference); default on."""
 
-    def __init__(self, model, copies=None, *, device="cpu", settings=None, device_sum=None):
+    def __init__(self, model, copies=None, *, device="cpu", settings=None, device_sum=None, device_step=None):
         from .replica import ReplicaEvaluator, copy_families
         self.models = list(model) if isinstance(model, (list, tuple)) else None
         if self.models is not None:
@@ -207,6 +222,8 @@ class DeviceRowNewton:
         free[self.input_local] = False
         self.free = free
         self.rot = np.arange(n) % 3 == 2
+        self.device_step = True if device_step is None else bool(device_step)
+        self._steppers = {}
         if self.models is None:
             self.reference = np.broadcast_to(np.asarray(model.reference, float).reshape(-1), (self.B, n))
         else:
@@ -309,9 +326,19 @@ class DeviceRowNewton:
             prev = (q_next, kin)
         return out
 
+    def step_model(self, cfg):
+        """The :class:`warp_contacts.block_newton_ref.StepModel` of this model under settings ``cfg``."""
+        return StepModel(spring_k=self.spring_k, free=self.free, rot=self.rot, out_index=int(self.output_local),
+                         stiffening=np.asarray(cfg.stiffening, float), abs_tol=float(cfg.abs_tol),
+                         max_iterations=int(cfg.max_iterations), max_step_translation=float(cfg.max_step_translation),
+                         max_step_rotation=float(cfg.max_step_rotation), bound_translation=float(cfg.max_translation),
+                         bound_rotation=float(cfg.max_rotation), homotopy=bool(cfg.homotopy))
+
     def _chunk(self, slots, q, kin, tq, st, timing, cfg):
         """Iterate the points on copies ``slots`` until none is active (the other copies masked at
         a kinematic state); arrays in place."""
+        if self.device_step:
+            return self._chunk_device(slots, q, kin, tq, st, timing, cfg)
         B, n = self.B, self.n
         ev = self.evaluator
         ev.masked[:] = True
@@ -334,65 +361,68 @@ class DeviceRowNewton:
         return sweeps
 
     def _step(self, Qc, Kc, q, kin, tq, st, cfg):
-        """One step of every active copy: :func:`warp_contacts.batched_newton_ref.newton_step`
-        vectorized over the copies (same order of operations per copy); cfg: the settings."""
-        status, stage, iters, total = st["status"], st["stage"], st["iters"], st["total"]
-        act = np.flatnonzero(status == ACTIVE)
-        stiff = np.asarray(cfg.stiffening, float)
-        free, rot = self.free, self.rot
-        total[act] += 1
-        f = np.where(stage[act] == WARM, 1.0, stiff[np.maximum(stage[act], 0)])
-        ks = f[:, None] * self.spring_k[None]
-        r = Qc[act] - ks * (q[act] - kin[act])
-        r[:, self.output_local] += tq[act]
-        A = -Kc[act]
-        A[:, np.arange(self.n), np.arange(self.n)] += ks
-        r[:, ~free] = 0.0
-        A[:, ~free, :] = 0.0
-        A[:, :, ~free] = 0.0
-        A[:, ~free, ~free] = 1.0
-        ok = np.isfinite(r).all(axis=1) & np.isfinite(A).all(axis=(1, 2))
-        norm = np.sqrt(np.sum(r * r, axis=1))
-        st["residual"][act] = norm
-        converged = ok & (norm <= cfg.abs_tol)
-        dq = np.zeros_like(r)
-        good = np.flatnonzero(ok)
-        if len(good):
-            try:
-                dq[good] = np.linalg.solve(A[good], r[good][:, :, None])[:, :, 0]
-            except np.linalg.LinAlgError:               # one singular block: solve them one by one
-                for i in good:
-                    try:
-                        dq[i] = np.linalg.solve(A[i], r[i])
-                    except np.linalg.LinAlgError:
-                        ok[i] = False
-        ok &= np.isfinite(dq).all(axis=1)
-        mt = np.max(np.abs(dq[:, ~rot]), axis=1)
-        mr = np.max(np.abs(dq[:, rot]), axis=1)
-        scale = np.ones(len(act))
-        lim_t = ~converged & (mt > cfg.max_step_translation)
-        scale[lim_t] = cfg.max_step_translation / mt[lim_t]
-        lim_r = ~converged & (mr * scale > cfg.max_step_rotation)
-        scale[lim_r] = cfg.max_step_rotation / mr[lim_r]
-        upd = act[ok]
-        q[upd] += scale[ok, None] * dq[ok]
-        iters[upd] += 1
-        dev = np.abs(q[act] - kin[act])
-        implausible = np.any(np.where(rot[None], dev > cfg.max_rotation, dev > cfg.max_translation), axis=1)
-        ok &= ~implausible
-        last = len(stiff) - 1
-        done = ok & converged
-        fin = done & ((stage[act] == WARM) | (stage[act] == last))
-        status[act[fin]] = CONVERGED
-        nxt = act[done & ~fin]
-        stage[nxt] += 1
-        iters[nxt] = 0
-        bad = act[~done & (~ok | (iters[act] >= cfg.max_iterations))]
-        to_h = bad[(stage[bad] == WARM) & bool(cfg.homotopy)]
-        stage[to_h] = 0
-        iters[to_h] = 0
-        q[to_h] = kin[to_h]
-        status[np.setdiff1d(bad, to_h)] = FAILED
+        """One step of every active copy on the host (:func:`warp_contacts.block_newton_ref.block_step`)."""
+        block_step(Qc, Kc, q, kin, tq, st["status"], st["stage"], st["iters"], st["total"], st["residual"],
+                   self.step_model(cfg))
+
+    def _chunk_device(self, slots, q, kin, tq, st, timing, cfg):
+        """:meth:`_chunk` with the step on the device (:class:`warp_contacts.block_newton.BlockNewtonStep`):
+        per iteration the families' launches, the per-copy sums, the step kernel, and one read of
+        the states and statuses (the next poses and the loop's end)."""
+        import warp as wp
+        from warp_contacts.block_newton import BlockNewtonStep
+        B, n = self.B, self.n
+        m = self.step_model(cfg)
+        key = (m.abs_tol, m.max_iterations, m.max_step_translation, m.max_step_rotation, m.bound_translation,
+               m.bound_rotation, m.homotopy, tuple(m.stiffening))
+        stp = self._steppers.get(key)
+        if stp is None:
+            stp = self._steppers[key] = BlockNewtonStep(m, B, n, self.device)
+        ev = self.evaluator
+        ev.masked[:] = True
+        ev.masked[slots] = False
+        qB = np.zeros((B, n))
+        if self.models is None:
+            qB[:] = kin[0]
+        kinB = qB.copy()
+        qB[slots], kinB[slots] = q, kin
+        status = np.full(B, CONVERGED, np.int32)            # the copies without a point: not stepped
+        status[slots] = st["status"]
+        tqB = np.zeros(B)
+        tqB[slots] = tq
+        stage, iters, total = (np.zeros(B, np.int32) for _ in range(3))
+        stage[slots], iters[slots], total[slots] = st["stage"], st["iters"], st["total"]
+        stp.load(q=qB, kin=kinB, torque=tqB, status=status, stage=stage, iters=iters, total=total)
+        host_sum = not isinstance(ev, DeviceRowSum)
+        if host_sum and not hasattr(self, "_QK"):
+            self._QK = (wp.zeros((B, n), dtype=wp.float64, device=self.device),
+                        wp.zeros((B, n, n), dtype=wp.float64, device=self.device))
+        vel = np.zeros((B * self.nb, 3))
+        sweeps = 0
+        while np.any(status[slots] == ACTIVE):
+            k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
+            pose = (self.reference + qB).reshape(B * self.nb, 3)
+            if host_sum:
+                r = ev.evaluate(pose, vel)
+                t1 = time.perf_counter()
+                self._QK[0].assign(r.Q)
+                self._QK[1].assign(r.dQdq)
+                Q, K = self._QK
+                ev.timing["scatter"] += time.perf_counter() - t1
+            else:
+                Q, K = ev.evaluate_device(pose, vel)
+            timing["kernels"] += ev.timing["kernels"] - k0
+            timing["scatter"] += ev.timing["scatter"] - s0
+            t0 = time.perf_counter()
+            stp.step(Q, K)
+            qB, status = stp.read("q", "status")
+            timing["solve"] += time.perf_counter() - t0
+            sweeps += 1
+        stage, iters, total, res = stp.read("stage", "iters", "total", "residual")
+        q[...] = qB[slots]
+        for nm, v in (("status", status), ("stage", stage), ("iters", iters), ("total", total), ("residual", res)):
+            st[nm][...] = v[slots]
+        return sweeps
 
 
 __all__ = ["DeviceRowNewton", "RowSolve", "row_reasons"]

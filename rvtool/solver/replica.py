@@ -64,15 +64,25 @@ def _copy_pins(sets, nb, precision, device):
     meshes = [_renamed(m, c, wheel_body=_shift(m.wheel_body, c * nb), pin_body=_shift(m.pin_body, c * nb),
                        pin_bodies=None if m.pin_bodies is None else tuple(_shift(b, c * nb) for b in m.pin_bodies))
               for c, sc in enumerate(sets) for m in sc.meshes]
+    # the copies' profile tables as built (sampling a variant's profile again costs ~40 ms per copy)
+    tables = {}
+    for sc in sets:
+        if (sc.samples_per_tooth, sc.search, sc.search_band) == (s.samples_per_tooth, s.search, s.search_band):
+            tables.update(sc.profile_tables())
     return CycloidPinSet(meshes, B * nb, samples_per_tooth=s.samples_per_tooth, backend=s.backend,
-                         precision=precision, device=device, name=s.name, search=s.search, search_band=s.search_band)
+                         precision=precision, device=device, name=s.name, search=s.search, search_band=s.search_band,
+                         tables=tables)
 
 
 def _copy_gears(sets, nb, precision, device):
     s, B = sets[0], len(sets)
     meshes = [_renamed(m, c, body_a=_shift(m.body_a, c * nb), body_b=_shift(m.body_b, c * nb))
               for c, sc in enumerate(sets) for m in sc.meshes]
-    return InvoluteContactSet(meshes, B * nb, backend=s.backend, precision=precision, device=device, name=s.name)
+    compliance = {}
+    for sc in sets:                             # the copies' tooth compliances as built
+        compliance.update(sc.compliance)
+    return InvoluteContactSet(meshes, B * nb, backend=s.backend, precision=precision, device=device, name=s.name,
+                              compliance=compliance)
 
 
 def _copy_bearings(sets, nb, precision, device):
