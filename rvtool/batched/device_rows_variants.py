@@ -52,11 +52,11 @@ class RowVariants:
 
 
 def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None, device="cpu", settings=None,
-                         device_sum=None, warm_start=True):
+                         device_sum=None, warm_start=True, device_step=None):
     """TE and lost motion of ``models`` (module docstring) on Warp ``device``. torque [N m]: the
     TE's output torque; input_angles [rad]; lost_motion_level [N m] or None; settings: the row
-    Newton's :class:`~rvtool.solver.device_newton.DeviceNewtonSettings`; device_sum: see
-    :class:`DeviceRowNewton`. Returns a :class:`RowVariants`."""
+    Newton's :class:`~rvtool.solver.device_newton.DeviceNewtonSettings`; device_sum, device_step:
+    see :class:`DeviceRowNewton`. Returns a :class:`RowVariants`."""
     t0 = time.perf_counter()
     models = list(models)
     angles = np.asarray(input_angles, float)
@@ -64,7 +64,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
         raise RvtoolInputError("input_angles must be a finite 1-D sequence of at least 1 angle [rad]")
     if not np.isfinite(torque):
         raise RvtoolInputError(f"torque = {torque!r} N m must be finite")
-    newton = DeviceRowNewton(models, device=device, settings=settings, device_sum=device_sum)
+    newton = DeviceRowNewton(models, device=device, settings=settings, device_sum=device_sum, device_step=device_step)
     V, N = len(models), len(angles)
     tq = np.full(V, -np.sign(models[0].ratio) * float(torque))
     q_out = np.zeros((V, N))

@@ -179,6 +179,7 @@ class TaperedBearingSet:
         #: influence-coefficient rollers (slices = "influence"): their indices, their lamina rows (-1 padded)
         self.slice_rollers = np.array(slice_rollers, dtype=int)
         self._slices = None
+        self._device_rows = None
         if slice_rollers:
             n_max = int(max(self.roller_ip[r, ref.RI_COUNT] for r in slice_rollers))
             self.slice_rows = np.full((len(slice_rollers), n_max), -1)
@@ -312,6 +313,25 @@ class TaperedBearingSet:
         dQ[:, 2, 2] += _cross(_perp(a), F)
         dQ[:, 5, 5] -= _cross(_perp(b), F)
         return Q, dQ, dQv, (f, rib, lam), (b, psi)
+
+    @property
+    def planar_on_device(self):
+        """Whether :meth:`device_rows` is available (Warp backend, no influence-coefficient rows)."""
+        return self.backend == "warp" and self._slices is None
+
+    def device_rows(self, pose, vel=None):
+        """:meth:`raw`'s Q (M, 6) and dQ/dq (M, 6, 6) as Warp device arrays, the planar mapping and
+        the per-mounting sums on the device too (:class:`warp_contacts.tapered_planar.TaperedPlanarRows`;
+        no per-roller transfer; overwritten by the next call)."""
+        if not self.planar_on_device:
+            raise RvtoolInputError(f"tapered set {self.name!r}: the device rows need backend 'warp' and laminae "
+                                   "rows (slices = 'laminae')")
+        if getattr(self, "_device_rows", None) is None:
+            from warp_contacts.tapered_planar import TaperedPlanarRows
+            self._device_rows = TaperedPlanarRows(self._kernel, self._bodies, self._centres.reshape(-1, 4),
+                                                  self.roller_owner, self.roller_phase, self.roller_gamma,
+                                                  self.n_bodies)
+        return self._device_rows.rows(pose, vel)
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""

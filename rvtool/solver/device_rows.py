@@ -14,16 +14,20 @@ tapered rollers (the crank bearings that carry the output carrier). This module 
    poses reference + q of all copies, and sums its rows into per-copy residuals and dense tangent
    blocks (:class:`rvtool.solver.replica.ReplicaEvaluator`, the rows' block scatter);
 3. the step of :mod:`warp_contacts.batched_newton_ref` (the reference of the device-resident
-   kernel, the same bookkeeping) vectorized over the copies: regularization springs times the
-   copy's homotopy factor, the output torque, the fixed coordinates (drive, coordinate locks,
-   journal locks: identity rows at their prescribed values), a dense solve per copy, step
-   limiting, plausibility bounds, warm start -> regularization homotopy -> failed.
+   kernel, the same bookkeeping) for every copy: regularization springs times the copy's homotopy
+   factor, the output torque, the fixed coordinates (drive, coordinate locks, journal locks:
+   identity rows at their prescribed values), a dense solve per copy, step limiting,
+   plausibility bounds, warm start -> regularization homotopy -> failed; by default as one Warp
+   kernel on the device (:mod:`warp_contacts.block_newton`, ``device_step``), else NumPy on the
+   host (:func:`warp_contacts.block_newton_ref.block_step`, its reference).
 
-Where it runs: the contact kernels on the Warp device (``cpu`` or ``cuda``); the block scatter,
-the tapered rollers' planar mapping (NumPy in :class:`rvtool.bearings.tapered_set.TaperedBearingSet`)
-and the per-copy dense solve on the host, one host round trip per iteration. It is therefore
-not a CUDA graph like the cycloid path: that needs the tapered planar mapping and a family-generic
-row sum as device kernels (issue 31, not done here).
+Where it runs: the contact kernels, the step and (``device_sum``, default on a GPU) the rows'
+per-copy sums and the tapered rollers' planar mapping (:mod:`warp_contacts.tapered_planar`) on
+the Warp device (``cpu`` or ``cuda``); per iteration the host uploads the poses and reads back
+the states and statuses (one round trip). Without ``device_sum`` the rows are summed on the host
+(:class:`rvtool.solver.replica.ReplicaEvaluator`, the tapered mapping NumPy in
+:class:`rvtool.bearings.tapered_set.TaperedBearingSet`). Not a CUDA graph like the cycloid path
+(the poses are staged from the host per iteration).
 
 Covered: every contact-set type of :data:`rvtool.solver.replica.COPIERS` (cycloid pins, involute
 pairs external and internal, rolling-element bearings: needle, cylindrical, ball, tapered; circle
@@ -95,8 +99,8 @@ class DeviceRowSum:
     (:class:`warp_contacts.block_scatter.BlockScatter`, one thread per row, atomics): a family
     with a staged launch (:class:`rvtool.contact.evaluator.StagedLaunch`: cycloid pins, involute
     pairs, rolling elements, circle pairs) is launched on the device and its row buffers are summed
-    where they are; the others (tapered rollers: planar mapping on the host; plain output pins)
-    are evaluated as in :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
+    where they are, as the tapered rollers' planar rows (:meth:`TaperedBearingSet.device_rows`,
+    laminae rows); the others (influence-coefficient tapered rows, plain output pins) are evaluated as in :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
     Only B (n + n^2) numbers come back instead of every row (on a GPU the rows' transfer and the
     host scatter cost more than the kernels). The same sums as the host scatter up to the order of
     the additions (last bits). ``timing`` as ReplicaEvaluator's ("kernels": launches, host
@@ -107,8 +111,11 @@ class DeviceRowSum:
         from warp_contacts.block_scatter import BlockScatter
         from ..contact.evaluator import StagedLaunch
         self.families, self.nb, self.B, self.device = families, nb, n_copies, device
+        from ..bearings.tapered_set import TaperedBearingSet
         self.staged = [isinstance(f.set, StagedLaunch) and getattr(f.set, "backend", None) == "warp"
                        for f in families]
+        # tapered rows with their planar mapping on the device (warp_contacts.tapered_planar)
+        self.tapered = [isinstance(f.set, TaperedBearingSet) and f.set.planar_on_device for f in families]
         self.scatter = BlockScatter([(f.scatter.local, f.scatter.row_copy) for f in families], n_copies, 3 * nb,
                                     wp.float64, device)
         self._host_rows = {}
@@ -141,6 +148,8 @@ class DeviceRowSum:
                 f.set.stage(pose, vel)
                 f.set.launch_staged()
                 _, q, K, _ = f.set.row_buffers()
+            elif self.tapered[i]:
+                q, K = f.set.device_rows(pose, vel)
             else:
                 Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in family_rows(f.set, pose, vel)[:2])
                 if i not in self._host_rows:
