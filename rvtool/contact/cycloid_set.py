@@ -8,6 +8,7 @@ deviations (Eq. (gap)), and the contact law. A :class:`CycloidPinSet`
 evaluates any number of meshes in one kernel launch and follows the
 evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
 """
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -124,6 +125,27 @@ class WheelPinMesh:
         return (np.arange(n) + 0.5) * b / n - 0.5 * b
 
 
+@functools.lru_cache(maxsize=64)
+def _sampled(profile, n_samples):
+    arrays = profile.table(n_samples)
+    for a in arrays:
+        if isinstance(a, np.ndarray):
+            a.flags.writeable = False          # shared by every set of this profile
+    return arrays
+
+
+def sampled_profile(profile, n_samples):
+    """``profile.table(n_samples)``, computed once per (profile, n) in a process (the profile is a
+    frozen dataclass: Monte Carlo variants that draw pin radii, phases or eccentricity
+    differences share their wheel profile, and sampling it costs ~40 ms on RV-40E). The arrays
+    are read-only; an unhashable profile is sampled each time."""
+    try:
+        hash(profile)
+    except TypeError:
+        return profile.table(n_samples)
+    return _sampled(profile, int(n_samples))
+
+
 def pin_curve_table(table, pin_radius):
     """The profile table ordered for the search of a pin of radius ``pin_radius`` [m].
 
@@ -227,7 +249,7 @@ class CycloidPinSet(PairFamilySet):
                 if tables is not None and key in tables:
                     tab, ana, win = tables[key]
                 else:
-                    tab = pin_curve_table(prof.table(samples_per_tooth * prof.n_teeth), rp)
+                    tab = pin_curve_table(sampled_profile(prof, samples_per_tooth * prof.n_teeth), rp)
                     ana = prof.analytic_parameters() if search == "analytic" else None
                     win = auto_window(prof, tab, rp, band=search_band)
                 table_of[key] = len(self.tables)

@@ -15,6 +15,7 @@ series relation of Eq. (series_contact) with the potential-energy tooth complian
 the evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
 """
 from dataclasses import dataclass, field
+import functools
 import math
 
 import numpy as np
@@ -133,6 +134,21 @@ def gear_block(gear, compliance: ToothCompliance, u_ref):
     return blk
 
 
+@functools.lru_cache(maxsize=256)
+def _compliance_of(gear):
+    return ToothCompliance.of(gear)
+
+
+def tooth_compliance(gear):
+    """:meth:`ToothCompliance.of` computed once per gear in a process (gears are frozen: Monte Carlo
+    variants with mesh deviations share their gears; ~8 ms per gear); an unhashable gear each time."""
+    try:
+        hash(gear)
+    except TypeError:
+        return ToothCompliance.of(gear)
+    return _compliance_of(gear)
+
+
 def pair_secant_stiffness(pair: InvolutePair, force, compliance=None):
     """Normal secant stiffness F / delta(F) [N/m] of one tooth pair of ``pair`` over its face width
     at the middle of the path of contact, Eq. (series_contact) with delta(F) = C F + delta_H(F)
@@ -186,7 +202,7 @@ class InvoluteContactSet(PairFamilySet):
             A, B = pr.gear_a, pr.gear_b
             for g in (A, B):
                 if g not in self.compliance:
-                    self.compliance[g] = ToothCompliance.of(g)
+                    self.compliance[g] = tooth_compliance(g)
             u_ref_a = 0.5 * sum(pr.path_of_contact()) / A.base_radius
             ga = gear_block(A, self.compliance[A], u_ref_a)
             gb = gear_block(B, self.compliance[B], float(pr.roll_b(u_ref_a)))
