@@ -38,9 +38,11 @@ def test_variants_share_the_sampled_profile_and_it_equals_a_fresh_sampling(varia
 
 
 def test_tooth_compliance_memo_equals_a_fresh_fit(variants):
-    g = _set(variants[0], "InvoluteContactSet").meshes[0].pair.gear_a
-    assert tooth_compliance(g) is tooth_compliance(g)
-    assert tooth_compliance(g) == ToothCompliance.of(g)
+    """Gears that differ in their single pitch deviations only share one fit, equal to each one's own."""
+    g, h = (_set(m, "InvoluteContactSet").meshes[0].pair.gear_a for m in variants)
+    assert g.single_pitch_deviations is not None and g.single_pitch_deviations != h.single_pitch_deviations
+    assert tooth_compliance(g) is tooth_compliance(h)
+    assert tooth_compliance(g) == ToothCompliance.of(g) == ToothCompliance.of(h)
 
 
 def test_tapered_predisplacements_equal_the_root_search(variants):

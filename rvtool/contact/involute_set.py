@@ -14,6 +14,7 @@ series relation of Eq. (series_contact) with the potential-energy tooth complian
 :class:`InvoluteContactSet` evaluates any number of meshes in one kernel launch and follows
 the evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
 """
+import dataclasses
 from dataclasses import dataclass, field
 import functools
 import math
@@ -140,13 +141,16 @@ def _compliance_of(gear):
 
 
 def tooth_compliance(gear):
-    """:meth:`ToothCompliance.of` computed once per gear in a process (gears are frozen: Monte Carlo
-    variants with mesh deviations share their gears; ~8 ms per gear); an unhashable gear each time."""
+    """:meth:`ToothCompliance.of` computed once per tooth geometry in a process (~8 ms per gear): the
+    key is the frozen gear without its single pitch deviations, which turn teeth rigidly
+    (:meth:`InvoluteGear.pitch_deviation_angles`) and do not enter the tooth compliance, so Monte
+    Carlo variants that draw them share one fit; an unhashable gear is fitted each time."""
+    key = gear if gear.single_pitch_deviations is None else dataclasses.replace(gear, single_pitch_deviations=None)
     try:
-        hash(gear)
+        hash(key)
     except TypeError:
         return ToothCompliance.of(gear)
-    return _compliance_of(gear)
+    return _compliance_of(key)
 
 
 def pair_secant_stiffness(pair: InvolutePair, force, compliance=None):
