@@ -349,3 +349,43 @@ def test_variant_copies_reuse_the_built_profile_tables_and_compliances_bit_for_b
     g = InvoluteContactSet(gears.meshes, gears.n_bodies)
     np.testing.assert_array_equal(g.fparams, gears.fparams)
     assert dataclasses.is_dataclass(pins.meshes[0])
+
+
+def _same_set(old, new):
+    """Every attribute of two sets equal (arrays bit for bit, kernels and assemblers by their index maps)."""
+    assert set(vars(old)) == set(vars(new)), set(vars(old)) ^ set(vars(new))
+    for k, v in vars(old).items():
+        w = getattr(new, k)
+        if isinstance(v, np.ndarray):
+            assert v.dtype == w.dtype and np.array_equal(v, w), k
+        elif isinstance(v, (tuple, str, int, float, bool, dict, list)) or v is None:
+            assert type(v) is type(w), k
+            if not (isinstance(v, (tuple, list)) and v and isinstance(v[0], tuple)):
+                assert v == w, k
+    if hasattr(old, "assembler"):
+        np.testing.assert_array_equal(old.assembler.index, new.assembler.index)
+
+
+def test_copied_sets_equal_sets_built_from_the_shifted_renamed_members(rv):
+    """copy_families concatenates the variants' built rows (bearings, cycloid pins, involute pairs)
+    instead of building the B-copy set from the renamed, shifted mountings and meshes: every
+    attribute equals the built set's."""
+    from rvtool.solver.replica import _renamed, _shift, copy_families
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, rv[0], k, 11)[0]) for k in range(3)]
+    nb = len(models[0].body_names)
+    fam = {f.name: f.set for f in copy_families(models, 3)}
+    checked = 0
+    for name, s_new in fam.items():
+        sets = [next(e.evaluator for e in m.contact_elements() if e.evaluator.name == name) for m in models]
+        s = sets[0]
+        if hasattr(s, "mountings") and type(s).__name__ == "BearingSet":
+            members = [_renamed(m, c, inner=_shift(m.inner, c * nb), outer=_shift(m.outer, c * nb))
+                       for c, sc in enumerate(sets) for m in sc.mountings]
+            old = type(s)(members, 3 * nb, name=s.name, backend=s.backend)
+        else:
+            continue
+        _same_set(old, s_new)
+        checked += 1
+    assert checked == 2                             # eccentric and main bearings

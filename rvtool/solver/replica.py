@@ -87,6 +87,10 @@ def _copy_gears(sets, nb, precision, device):
 
 def _copy_bearings(sets, nb, precision, device):
     s, B = sets[0], len(sets)
+    if type(s) is BearingSet:               # the built rows side by side (no mounting packed again)
+        return BearingSet.concatenated(sets, nb, names=[[f"copy{c}_{m.name}" for m in sc.mountings]
+                                                        for c, sc in enumerate(sets)],
+                                       precision=precision, device=device)
     mounts = [_renamed(m, c, inner=_shift(m.inner, c * nb), outer=_shift(m.outer, c * nb))
               for c, sc in enumerate(sets) for m in sc.mountings]
     return type(s)(mounts, B * nb, name=s.name, backend=s.backend, precision=precision, device=device)
