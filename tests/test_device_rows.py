@@ -380,12 +380,27 @@ def test_copied_sets_equal_sets_built_from_the_shifted_renamed_members(rv):
     for name, s_new in fam.items():
         sets = [next(e.evaluator for e in m.contact_elements() if e.evaluator.name == name) for m in models]
         s = sets[0]
-        if hasattr(s, "mountings") and type(s).__name__ == "BearingSet":
+        kind = type(s).__name__
+        if kind == "BearingSet":
             members = [_renamed(m, c, inner=_shift(m.inner, c * nb), outer=_shift(m.outer, c * nb))
                        for c, sc in enumerate(sets) for m in sc.mountings]
             old = type(s)(members, 3 * nb, name=s.name, backend=s.backend)
+        elif kind == "CycloidPinSet":
+            members = [_renamed(m, c, wheel_body=_shift(m.wheel_body, c * nb), pin_body=_shift(m.pin_body, c * nb))
+                       for c, sc in enumerate(sets) for m in sc.meshes]
+            old = type(s)(members, 3 * nb, samples_per_tooth=s.samples_per_tooth, search=s.search,
+                          search_band=s.search_band, name=s.name)
+            assert len(old.tables) == len(s_new.tables) == 6           # 3 variants x 2 wheels
+            for a, b in zip(old.tables, s_new.tables):
+                for x, y in zip(a, b):
+                    np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+        elif kind == "InvoluteContactSet":
+            members = [_renamed(m, c, body_a=_shift(m.body_a, c * nb), body_b=_shift(m.body_b, c * nb))
+                       for c, sc in enumerate(sets) for m in sc.meshes]
+            old = type(s)(members, 3 * nb, name=s.name)
+            assert old.gap_offset_ids == s_new.gap_offset_ids
         else:
             continue
         _same_set(old, s_new)
         checked += 1
-    assert checked == 2                             # eccentric and main bearings
+    assert checked == 4                             # eccentric and main bearings, cycloid pins, involute pairs

@@ -60,29 +60,17 @@ def _renamed(item, c, **bodies):
 # copy c takes its rows from sets[c] (one model's set B times, or the sets of B variant models of one topology);
 # the set-wide options (samples, backend, search) are the first set's
 def _copy_pins(sets, nb, precision, device):
-    s, B = sets[0], len(sets)
-    meshes = [_renamed(m, c, wheel_body=_shift(m.wheel_body, c * nb), pin_body=_shift(m.pin_body, c * nb),
-                       pin_bodies=None if m.pin_bodies is None else tuple(_shift(b, c * nb) for b in m.pin_bodies))
-              for c, sc in enumerate(sets) for m in sc.meshes]
-    # the copies' profile tables as built (sampling a variant's profile again costs ~40 ms per copy)
-    tables = {}
-    for sc in sets:
-        if (sc.samples_per_tooth, sc.search, sc.search_band) == (s.samples_per_tooth, s.search, s.search_band):
-            tables.update(sc.profile_tables())
-    return CycloidPinSet(meshes, B * nb, samples_per_tooth=s.samples_per_tooth, backend=s.backend,
-                         precision=precision, device=device, name=s.name, search=s.search, search_band=s.search_band,
-                         tables=tables)
+    # the copies' rows and profile tables as built (sampling a variant's profile again costs ~40 ms per copy)
+    return CycloidPinSet.concatenated(sets, nb, names=[[f"copy{c}_{m.name}" for m in sc.meshes]
+                                                       for c, sc in enumerate(sets)], precision=precision,
+                                      device=device)
 
 
 def _copy_gears(sets, nb, precision, device):
-    s, B = sets[0], len(sets)
-    meshes = [_renamed(m, c, body_a=_shift(m.body_a, c * nb), body_b=_shift(m.body_b, c * nb))
-              for c, sc in enumerate(sets) for m in sc.meshes]
-    compliance = {}
-    for sc in sets:                             # the copies' tooth compliances as built
-        compliance.update(sc.compliance)
-    return InvoluteContactSet(meshes, B * nb, backend=s.backend, precision=precision, device=device, name=s.name,
-                              compliance=compliance)
+    # the copies' rows, tooth-angle tables and tooth compliances as built
+    return InvoluteContactSet.concatenated(sets, nb, names=[[f"copy{c}_{m.name}" for m in sc.meshes]
+                                                            for c, sc in enumerate(sets)], precision=precision,
+                                           device=device)
 
 
 def _copy_bearings(sets, nb, precision, device):
