@@ -144,6 +144,21 @@ def kernel(dtype):
     return block_step
 
 
+@functools.lru_cache(maxsize=None)
+def pose_kernel(dtype):
+    """``write_poses``: pose[p nb + i // 3, i % 3] = reference[p, i] + q[p, i] (the absolute poses of
+    every copy in a contact kernel's pose array, its ground row untouched; NumPy:
+    ``(reference + q).reshape(B nb, 3)``)."""
+
+    @wp.kernel(module="unique")
+    def write_poses(reference: wp.array2d(dtype=dtype), q: wp.array2d(dtype=dtype), nb: int,
+                    pose: wp.array2d(dtype=dtype)):
+        p, i = wp.tid()
+        pose[p * nb + i // 3, i % 3] = reference[p, i] + q[p, i]
+
+    return write_poses
+
+
 class BlockNewtonStep:
     """The step's device state for B copies of n coordinates: ``model`` a
     :class:`warp_contacts.block_newton_ref.StepModel`; arrays ``q``, ``kin``, ``torque``, ``status``,
@@ -178,6 +193,11 @@ class BlockNewtonStep:
         """Host copies of the named device arrays."""
         return tuple(getattr(self, k).numpy() for k in names)
 
+    def write_poses(self, reference, pose):
+        """Absolute poses reference + q of every copy into ``pose`` ((B nb + 1, 3) device array)."""
+        wp.launch(pose_kernel(self.dtype), dim=(self.B, self.n), device=self.device,
+                  inputs=[reference, self.q, self.n // 3], outputs=[pose])
+
     def step(self, Q, K):
         m = self.model
         d = self.dtype
@@ -191,4 +211,4 @@ class BlockNewtonStep:
                            self.dq, self.active])
 
 
-__all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "WARM", "kernel"]
+__all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "WARM", "kernel", "pose_kernel"]

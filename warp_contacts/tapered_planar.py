@@ -152,8 +152,9 @@ class TaperedPlanarRows:
     :class:`~warp_contacts.tapered_rollers.TaperedRollerKernel`; bodies (M, 2) pose rows of the
     inner and outer body (the ground: the pose array's last row), centres (M, 4) the inner and
     outer ring centres in their bodies [m], owner (R,), phase (R,) [rad], gamma (R,) per roller
-    (rollers contiguous per mounting). :meth:`rows` takes host poses/velocities (nb + 1, 3) and
-    returns device arrays Q (M, 6), dQ/dq (M, 6, 6) (overwritten by the next call)."""
+    (rollers contiguous per mounting). :meth:`rows` takes host poses/velocities (nb, 3) and
+    returns device arrays Q (M, 6), dQ/dq (M, 6, 6) (overwritten by the next call); :meth:`launch`
+    reads the device arrays ``pose``, ``vel`` ((nb + 1, 3), the ground's row last) as they are."""
 
     def __init__(self, rollers, bodies, centres, owner, phase, gamma, n_bodies):
         import numpy as np
@@ -185,6 +186,11 @@ class TaperedPlanarRows:
         hv[:-1] = 0.0 if vel is None else vel
         self.pose.assign(hp)
         self.vel.assign(hv)
+        return self.launch()
+
+    def launch(self):
+        """:meth:`rows` at the poses/velocities in the device arrays ``pose``, ``vel`` as they are
+        (written on the device by the caller; no transfer)."""
         ro = self.rollers
         dev = lambda k: ro.device_array(k)
         wp.launch(self.state_kernel, dim=self.R, device=self.device,

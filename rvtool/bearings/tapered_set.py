@@ -323,15 +323,28 @@ class TaperedBearingSet:
         """:meth:`raw`'s Q (M, 6) and dQ/dq (M, 6, 6) as Warp device arrays, the planar mapping and
         the per-mounting sums on the device too (:class:`warp_contacts.tapered_planar.TaperedPlanarRows`;
         no per-roller transfer; overwritten by the next call)."""
+        return self._planar_rows().rows(pose, vel)
+
+    def device_pose_buffers(self):
+        """(pose, vel): the device arrays ((n_bodies + 1, 3), the ground's row last) that
+        :meth:`launch_device_rows` reads (written on the device by the caller)."""
+        pr = self._planar_rows()
+        return pr.pose, pr.vel
+
+    def launch_device_rows(self):
+        """:meth:`device_rows` at the poses in :meth:`device_pose_buffers` as they are."""
+        return self._planar_rows().launch()
+
+    def _planar_rows(self):
         if not self.planar_on_device:
             raise RvtoolInputError(f"tapered set {self.name!r}: the device rows need backend 'warp' and laminae "
                                    "rows (slices = 'laminae')")
-        if getattr(self, "_device_rows", None) is None:
+        if self._device_rows is None:
             from warp_contacts.tapered_planar import TaperedPlanarRows
             self._device_rows = TaperedPlanarRows(self._kernel, self._bodies, self._centres.reshape(-1, 4),
                                                   self.roller_owner, self.roller_phase, self.roller_gamma,
                                                   self.n_bodies)
-        return self._device_rows.rows(pose, vel)
+        return self._device_rows
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""

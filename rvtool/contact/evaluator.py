@@ -116,6 +116,13 @@ class StagedLaunch:
         """The kernel's recorded launch on the staged inputs (capturable)."""
         self._kernel.launch_recorded()
 
+    def pose_buffers(self):
+        """(pose, vel or None): the Warp input arrays ((n_bodies + 1, 3), the ground's row last) that
+        :meth:`stage` fills and :meth:`launch_staged` reads, for a caller that writes the poses on
+        the device (:mod:`rvtool.solver.device_rows`). Backend "warp" only."""
+        k = self._kernel
+        return k.device_array("pose"), (k.device_array("vel") if self.stages_velocity else None)
+
     def launched(self, pose, vel):
         """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
         fields are assembled from the kernel's outputs when read. Increments ``launches``."""

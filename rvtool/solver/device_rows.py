@@ -23,11 +23,14 @@ tapered rollers (the crank bearings that carry the output carrier). This module 
 
 Where it runs: the contact kernels, the step and (``device_sum``, default on a GPU) the rows'
 per-copy sums and the tapered rollers' planar mapping (:mod:`warp_contacts.tapered_planar`) on
-the Warp device (``cpu`` or ``cuda``); per iteration the host uploads the poses and reads back
-the states and statuses (one round trip). Without ``device_sum`` the rows are summed on the host
+the Warp device (``cpu`` or ``cuda``). With the device sum every family launches from poses that
+a kernel writes from the step's states, so an iteration moves nothing between host and device and
+the host reads the count of active copies every ``sync_every`` iterations (device-resident loop);
+else per iteration the host stages the poses and reads back the states and statuses (one round
+trip). Without ``device_sum`` the rows are summed on the host
 (:class:`rvtool.solver.replica.ReplicaEvaluator`, the tapered mapping NumPy in
-:class:`rvtool.bearings.tapered_set.TaperedBearingSet`). Not a CUDA graph like the cycloid path
-(the poses are staged from the host per iteration).
+:class:`rvtool.bearings.tapered_set.TaperedBearingSet`). The resident loop is not captured as a
+CUDA graph yet (the cycloid path's is): each iteration is ~15 launches from Python.
 
 Covered: every contact-set type of :data:`rvtool.solver.replica.COPIERS` (cycloid pins, involute
 pairs external and internal, rolling-element bearings: needle, cylindrical, ball, tapered; circle
@@ -127,6 +130,35 @@ class DeviceRowSum:
             if callable(getattr(f.set, "set_velocity_tangent", None)):
                 f.set.set_velocity_tangent(not on)
 
+    @property
+    def resident(self):
+        """Whether every family runs from device-written poses (:meth:`pose_buffers`, :meth:`launch_device`)."""
+        return all(s or t for s, t in zip(self.staged, self.tapered))
+
+    def pose_buffers(self):
+        """[(pose, vel or None)] device input arrays of every family ((B nb + 1, 3), the ground last)."""
+        return [f.set.pose_buffers() if s else f.set.device_pose_buffers()
+                for f, s in zip(self.families, self.staged)]
+
+    def launch_device(self):
+        """Every family launched at the poses in :meth:`pose_buffers` as they are, and the device sums
+        Q (B, n), K (B, n, n) (no transfer; :attr:`resident` families only)."""
+        t0 = time.perf_counter()
+        rows = []
+        for f, staged in zip(self.families, self.staged):
+            if staged:
+                f.set.launch_staged()
+                _, q, K, _ = f.set.row_buffers()
+            else:
+                q, K = f.set.launch_device_rows()
+            rows.append((q, K))
+        t1 = time.perf_counter()
+        Q, K = self.scatter.sum(rows)
+        self.timing["kernels"] += t1 - t0
+        self.timing["scatter"] += time.perf_counter() - t1
+        self.timing["launches"] += len(self.families)
+        return Q, K
+
     def evaluate(self, pose, vel):
         t0 = time.perf_counter()
         Q, K = self.evaluate_device(pose, vel)
@@ -188,9 +220,16 @@ class DeviceRowNewton:
     limiting, plausibility, stage bookkeeping) as one Warp kernel on the device
     (:class:`warp_contacts.block_newton.BlockNewtonStep`: the per-copy sums stay on the device,
     the states and statuses come back once per iteration) instead of NumPy on the host
-    (:func:`warp_contacts.block_newton_ref.block_step`, its reference); default on."""
+    (:func:`warp_contacts.block_newton_ref.block_step`, its reference); default on. With
+    both (and every family able to launch from device-written poses: staged launches, laminae
+    tapered rows) the loop is device-resident: the step kernel's states are written into every
+    family's pose array on the device (:func:`warp_contacts.block_newton.pose_kernel`), nothing is
+    staged from the host, and the host reads the count of active copies every ``sync_every``
+    iterations (default 1 on the CPU, 4 on a GPU: up to sync_every - 1 sweeps run after the last
+    copy finished, where the step leaves every copy as it is)."""
 
-    def __init__(self, model, copies=None, *, device="cpu", settings=None, device_sum=None, device_step=None):
+    def __init__(self, model, copies=None, *, device="cpu", settings=None, device_sum=None, device_step=None,
+                 sync_every=None):
         from .replica import ReplicaEvaluator, copy_families
         self.models = list(model) if isinstance(model, (list, tuple)) else None
         if self.models is not None:
@@ -233,6 +272,11 @@ class DeviceRowNewton:
         self.rot = np.arange(n) % 3 == 2
         self.device_step = True if device_step is None else bool(device_step)
         self._steppers = {}
+        if sync_every is None:
+            sync_every = 1 if str(device).startswith("cpu") else 4
+        if isinstance(sync_every, bool) or not isinstance(sync_every, (int, np.integer)) or sync_every < 1:
+            raise RvtoolInputError(f"sync_every = {sync_every!r} is outside the valid range [1, inf) (integer)")
+        self.sync_every = int(sync_every)
         if self.models is None:
             self.reference = np.broadcast_to(np.asarray(model.reference, float).reshape(-1), (self.B, n))
         else:
@@ -403,6 +447,8 @@ class DeviceRowNewton:
         stage[slots], iters[slots], total[slots] = st["stage"], st["iters"], st["total"]
         stp.load(q=qB, kin=kinB, torque=tqB, status=status, stage=stage, iters=iters, total=total)
         host_sum = not isinstance(ev, DeviceRowSum)
+        if not host_sum and ev.resident:
+            return self._resident_loop(stp, slots, q, st, timing, m)
         if host_sum and not hasattr(self, "_QK"):
             self._QK = (wp.zeros((B, n), dtype=wp.float64, device=self.device),
                         wp.zeros((B, n, n), dtype=wp.float64, device=self.device))
@@ -428,6 +474,46 @@ class DeviceRowNewton:
             timing["solve"] += time.perf_counter() - t0
             sweeps += 1
         stage, iters, total, res = stp.read("stage", "iters", "total", "residual")
+        q[...] = qB[slots]
+        for nm, v in (("status", status), ("stage", stage), ("iters", iters), ("total", total), ("residual", res)):
+            st[nm][...] = v[slots]
+        return sweeps
+
+    def _resident_loop(self, stp, slots, q, st, timing, m):
+        """The device-resident iterations of :meth:`_chunk_device` (class docstring): poses written
+        on the device, the families launched, summed and stepped; the active count read every
+        ``sync_every`` sweeps."""
+        import warp as wp
+        ev = self.evaluator
+        if not hasattr(self, "_reference_d"):
+            self._reference_d = wp.array(np.ascontiguousarray(self.reference, np.float64), dtype=wp.float64,
+                                         device=self.device)
+        bufs = ev.pose_buffers()
+        for _, vel in bufs:
+            if vel is not None:
+                vel.zero_()                             # static: zero velocities (the ground row too)
+        # every copy ends within the stages' iteration budget; the cap only guards the loop
+        cap = (len(m.stiffening) + 2) * m.max_iterations + self.sync_every
+        sweeps = 0
+        while sweeps < cap:
+            k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
+            t0 = time.perf_counter()
+            for pose, _ in bufs:
+                stp.write_poses(self._reference_d, pose)
+            timing["kernels"] += time.perf_counter() - t0
+            Q, K = ev.launch_device()
+            timing["kernels"] += ev.timing["kernels"] - k0
+            timing["scatter"] += ev.timing["scatter"] - s0
+            t0 = time.perf_counter()
+            stp.step(Q, K)
+            sweeps += 1
+            done = False
+            if sweeps % self.sync_every == 0:
+                done = int(stp.active.numpy()[0]) == 0
+            timing["solve"] += time.perf_counter() - t0
+            if done:
+                break
+        qB, status, stage, iters, total, res = stp.read("q", "status", "stage", "iters", "total", "residual")
         q[...] = qB[slots]
         for nm, v in (("status", status), ("stage", stage), ("iters", iters), ("total", total), ("residual", res)):
             st[nm][...] = v[slots]
