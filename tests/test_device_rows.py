@@ -358,6 +358,11 @@ def _same_set(old, new):
         w = getattr(new, k)
         if isinstance(v, np.ndarray):
             assert v.dtype == w.dtype and np.array_equal(v, w), k
+        elif hasattr(v, "tocsr"):                                   # a sparse matrix
+            assert v.shape == w.shape and (v != w).nnz == 0, k
+        elif isinstance(v, tuple) and v and isinstance(v[0], np.ndarray):
+            for x, y in zip(v, w):
+                np.testing.assert_array_equal(x, y)
         elif isinstance(v, (tuple, str, int, float, bool, dict, list)) or v is None:
             assert type(v) is type(w), k
             if not (isinstance(v, (tuple, list)) and v and isinstance(v[0], tuple)):
@@ -381,7 +386,7 @@ def test_copied_sets_equal_sets_built_from_the_shifted_renamed_members(rv):
         sets = [next(e.evaluator for e in m.contact_elements() if e.evaluator.name == name) for m in models]
         s = sets[0]
         kind = type(s).__name__
-        if kind == "BearingSet":
+        if kind in ("BearingSet", "TaperedBearingSet"):
             members = [_renamed(m, c, inner=_shift(m.inner, c * nb), outer=_shift(m.outer, c * nb))
                        for c, sc in enumerate(sets) for m in sc.mountings]
             old = type(s)(members, 3 * nb, name=s.name, backend=s.backend)
@@ -403,4 +408,4 @@ def test_copied_sets_equal_sets_built_from_the_shifted_renamed_members(rv):
             continue
         _same_set(old, s_new)
         checked += 1
-    assert checked == 4                             # eccentric and main bearings, cycloid pins, involute pairs
+    assert checked == 5                             # eccentric, crank (tapered) and main bearings, pins, gears

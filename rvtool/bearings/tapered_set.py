@@ -25,6 +25,7 @@ Example (an RV crank on a tapered pair in the carrier, bodies 0 = crank, 1 = car
     ev = s.evaluate(pose, vel)            # Evaluation(Q, dQdq, dQdv, obs, (), finite)
     loads = s.resultants(pose)            # per mounting: TaperedLoads
 """
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -155,13 +156,59 @@ class TaperedBearingSet:
                 gamma += [row.roller_diameter * math.cos(row.roller_axis_angle) / row.pitch_diameter] * Z
                 lam_roller += list(np.repeat(len(psi0) - Z + np.arange(Z), row.n_slices))
                 ids += [f"{m.name}/row{r}/roller{j}/slice{s}" for j in range(Z) for s in range(row.n_slices)]
-        self.roller_fp, self.roller_ip, self.lamina_fp = np.vstack(rf), np.vstack(ri), np.vstack(lf)
+        self._finish(np.vstack(rf), np.vstack(ri), np.vstack(lf), ids, np.array(owner), np.array(row_of),
+                     np.array(psi0), np.array(gamma), np.array(lam_roller, dtype=int), np.array(bodies, dtype=np.int32),
+                     slice_rollers, slice_fp, slice_ip, backend, precision, device)
+
+    @classmethod
+    def concatenated(cls, sets, nb, *, names=None, precision="float64", device="cpu"):
+        """The set of B built sets side by side (copy c's bodies offset by c nb, the ground at
+        B nb; mounting names ``names[c][k]``, default the built ones): rows, laminae and per-roller
+        data concatenated, equal to the set built from the renamed, shifted mountings
+        (tests/test_device_rows.py) without packing every row again. Sets with influence-coefficient
+        rollers are built from the mountings."""
+        s, B = sets[0], len(sets)
+        names = names or [[m.name for m in sc.mountings] for sc in sets]
+        mounts = [dataclasses.replace(m, name=nm, inner=m.inner if m.inner == GROUND else m.inner + c * nb,
+                                      outer=m.outer if m.outer == GROUND else m.outer + c * nb)
+                  for c, sc in enumerate(sets) for m, nm in zip(sc.mountings, names[c])]
+        if any(sc._slices is not None or sc.backend != s.backend for sc in sets):
+            return cls(mounts, B * nb, name=s.name, backend=s.backend, precision=precision, device=device)
+        self = object.__new__(cls)
+        self.name, self.n_bodies, self.backend, self.precision = s.name, int(B * nb), s.backend, precision
+        self.mountings = tuple(mounts)
+        self.history = NoHistory()
+        ri, ids, owner, lam_roller, bodies = [], [], [], [], []
+        n_lam = n_rol = n_m = 0
+        for c, sc in enumerate(sets):
+            i = sc.roller_ip.copy()
+            i[:, ref.RI_FIRST] += n_lam
+            ri.append(i)
+            rename = {m.name: nm for m, nm in zip(sc.mountings, names[c])}
+            ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
+            owner.append(sc.roller_owner + n_m)
+            lam_roller.append(sc.lamina_roller + n_rol)
+            bodies.append(np.where(sc._bodies >= sc.n_bodies, B * nb, sc._bodies + c * nb))
+            n_lam += len(sc.lamina_fp)
+            n_rol += len(sc.roller_fp)
+            n_m += len(sc.mountings)
+        cat = lambda nm: np.concatenate([getattr(sc, nm) for sc in sets])
+        self._finish(np.vstack([sc.roller_fp for sc in sets]), np.vstack(ri), np.vstack([sc.lamina_fp for sc in sets]),
+                     ids, np.concatenate(owner), cat("roller_row"), cat("roller_phase"), cat("roller_gamma"),
+                     np.concatenate(lam_roller), np.concatenate(bodies).astype(np.int32), [], [], [], s.backend,
+                     precision, device)
+        return self
+
+    def _finish(self, roller_fp, roller_ip, lamina_fp, ids, owner, row_of, psi0, gamma, lam_roller, bodies,
+                slice_rollers, slice_fp, slice_ip, backend, precision, device):
+        n_bodies = self.n_bodies
+        self.roller_fp, self.roller_ip, self.lamina_fp = roller_fp, roller_ip, lamina_fp
         self.ids = tuple(ids)
         #: per roller: mounting index, row index (0 or 1), azimuth at zero ring rotation [rad], cage ratio gamma
-        self.roller_owner, self.roller_row = np.array(owner), np.array(row_of)
-        self.roller_phase, self.roller_gamma = np.array(psi0), np.array(gamma)
+        self.roller_owner, self.roller_row = owner, row_of
+        self.roller_phase, self.roller_gamma = psi0, gamma
         #: per lamina: its roller
-        self.lamina_roller = np.array(lam_roller, dtype=int)
+        self.lamina_roller = lam_roller
         # per-mounting sums of per-roller values as 0/1 CSR products: each mounting's rollers are
         # added in roller order starting from zero, the order of np.add.at (same sums bit for bit),
         # one pass over all columns of a quantity instead of one unbuffered np.add.at
@@ -170,7 +217,7 @@ class TaperedBearingSet:
                                            shape=(len(self.mountings), R))
         # the cage angle moves with theta_in by (1 - gamma)/2 and with theta_out by (1 + gamma)/2
         self._cage_weights = (0.5 * (1 - self.roller_gamma))[:, None], (0.5 * (1 + self.roller_gamma))[:, None]
-        self._bodies = np.array(bodies, dtype=np.int32)
+        self._bodies = bodies
         self.assembler = PairAssembler(self._bodies[:, 0], self._bodies[:, 1], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))

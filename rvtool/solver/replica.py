@@ -75,8 +75,8 @@ def _copy_gears(sets, nb, precision, device):
 
 def _copy_bearings(sets, nb, precision, device):
     s, B = sets[0], len(sets)
-    if type(s) is BearingSet:               # the built rows side by side (no mounting packed again)
-        return BearingSet.concatenated(sets, nb, names=[[f"copy{c}_{m.name}" for m in sc.mountings]
+    if type(s) in (BearingSet, TaperedBearingSet):      # the built rows side by side (no mounting packed again)
+        return type(s).concatenated(sets, nb, names=[[f"copy{c}_{m.name}" for m in sc.mountings]
                                                         for c, sc in enumerate(sets)],
                                        precision=precision, device=device)
     mounts = [_renamed(m, c, inner=_shift(m.inner, c * nb), outer=_shift(m.outer, c * nb))
