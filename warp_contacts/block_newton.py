@@ -183,6 +183,7 @@ class BlockNewtonStep:
         self.residual = wp.zeros(B, dtype=dtype, device=device)
         self.status, self.stage, self.iters, self.total = zi(), zi(), zi(), zi()
         self.active = wp.zeros(1, dtype=wp.int32, device=device)
+        self._cmds = {}
 
     def load(self, **arrays):
         """Write host arrays (B, ...) into the named device arrays."""
@@ -195,20 +196,34 @@ class BlockNewtonStep:
 
     def write_poses(self, reference, pose):
         """Absolute poses reference + q of every copy into ``pose`` ((B nb + 1, 3) device array)."""
-        wp.launch(pose_kernel(self.dtype), dim=(self.B, self.n), device=self.device,
-                  inputs=[reference, self.q, self.n // 3], outputs=[pose])
+        key = ("poses", reference.ptr, pose.ptr)
+        hit = self._cmds.get(key)
+        if hit is None:
+            # the arrays are kept with the launch: their addresses stay theirs while it is cached
+            hit = self._cmds[key] = (wp.launch(pose_kernel(self.dtype), dim=(self.B, self.n), device=self.device,
+                                               inputs=[reference, self.q, self.n // 3], outputs=[pose],
+                                               record_cmd=True), (reference, pose))
+        hit[0].launch()
 
     def step(self, Q, K):
-        m = self.model
-        d = self.dtype
+        """One step of every active copy from the device sums Q (B, n), K (B, n, n) (a launch
+        recorded per pair of arrays, replayed)."""
+        key = ("step", Q.ptr, K.ptr)
+        hit = self._cmds.get(key)
+        if hit is None:
+            m = self.model
+            d = self.dtype
+            cmd = wp.launch(
+                self.kernel, dim=self.B, device=self.device,
+                inputs=[self.spring_k, self.free, self.rot, int(m.out_index), self.stiffening, d(m.abs_tol),
+                        int(m.max_iterations), d(m.max_step_translation), d(m.max_step_rotation),
+                        d(m.bound_translation), d(m.bound_rotation), int(bool(m.homotopy)),
+                        Q, K, self.kin, self.torque],
+                outputs=[self.q, self.status, self.stage, self.iters, self.total, self.residual, self.r, self.A,
+                         self.dq, self.active], record_cmd=True)
+            hit = self._cmds[key] = (cmd, (Q, K))
         self.active.zero_()
-        wp.launch(self.kernel, dim=self.B, device=self.device,
-                  inputs=[self.spring_k, self.free, self.rot, int(m.out_index), self.stiffening, d(m.abs_tol),
-                          int(m.max_iterations), d(m.max_step_translation), d(m.max_step_rotation),
-                          d(m.bound_translation), d(m.bound_rotation), int(bool(m.homotopy)),
-                          Q, K, self.kin, self.torque],
-                  outputs=[self.q, self.status, self.stage, self.iters, self.total, self.residual, self.r, self.A,
-                           self.dq, self.active])
+        hit[0].launch()
 
 
 __all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "WARM", "kernel", "pose_kernel"]

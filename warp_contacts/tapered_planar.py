@@ -179,6 +179,15 @@ class TaperedPlanarRows:
         self.dQ = wp.zeros((M, 6, 6), dtype=dt, device=d)
         self.state_kernel, self.rows_kernel = kernels(dt)
         self.M, self.R = M, R
+        dev = rollers.device_array
+        self._state_cmd = wp.launch(self.state_kernel, dim=R, device=d,
+                                    inputs=[self.bodies, self.centres, self.owner, self.phase, self.gamma, self.pose,
+                                            self.vel],
+                                    outputs=[dev("q"), dev("qdot"), dev("psi"), dev("psidot")], record_cmd=True)
+        self._rows_cmd = wp.launch(self.rows_kernel, dim=M, device=d,
+                                   inputs=[self.bodies, self.centres, self.first, self.count, self.gamma, self.pose,
+                                           self.vel, dev("f"), dev("dfdq"), dev("dfdv"), dev("dfdpsi")],
+                                   outputs=[self.Q, self.dQ], record_cmd=True)
 
     def rows(self, pose, vel=None):
         hp, hv = self._host
@@ -191,16 +200,9 @@ class TaperedPlanarRows:
     def launch(self):
         """:meth:`rows` at the poses/velocities in the device arrays ``pose``, ``vel`` as they are
         (written on the device by the caller; no transfer)."""
-        ro = self.rollers
-        dev = lambda k: ro.device_array(k)
-        wp.launch(self.state_kernel, dim=self.R, device=self.device,
-                  inputs=[self.bodies, self.centres, self.owner, self.phase, self.gamma, self.pose, self.vel],
-                  outputs=[dev("q"), dev("qdot"), dev("psi"), dev("psidot")])
-        ro.launch()
-        wp.launch(self.rows_kernel, dim=self.M, device=self.device,
-                  inputs=[self.bodies, self.centres, self.first, self.count, self.gamma, self.pose, self.vel,
-                          dev("f"), dev("dfdq"), dev("dfdv"), dev("dfdpsi")],
-                  outputs=[self.Q, self.dQ])
+        self._state_cmd.launch()
+        self.rollers.launch()
+        self._rows_cmd.launch()
         return self.Q, self.dQ
 
 
