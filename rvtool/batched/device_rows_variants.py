@@ -35,7 +35,7 @@ class RowVariants:
     theta_out (V, N) [rad] (reference included), lost_motion_rad (V,) (None: not asked), status
     per variant ("ok" / "failed"), error per variant, exudyn_points (TE points solved by Exudyn),
     exudyn_copies (lost motions by Exudyn), split of the wall time [s] (``setup_s`` copying the
-    families, ``kernels_s``, ``scatter_s``, ``step_s`` (host Newton step), ``fallback_s``,
+    families, ``kernels_s``, ``scatter_s``, ``step_s`` (the Newton step with its read-back), ``fallback_s``,
     ``rest_s``), te_s and lost_motion_s [s], wall_s [s], stats (sweeps, Newton iterations)."""
     te: np.ndarray
     theta_out: np.ndarray

@@ -64,7 +64,8 @@ class RowSolve:
     rad], status (P,) (CONVERGED / FAILED), the converged stage (-1 warm start, s homotopy stage),
     Newton iterations per copy, residual norms [N], sweeps (batch iterations) and the wall-time
     split [s]: ``kernels_s`` (the families' launches with their host transfers), ``scatter_s``
-    (rows into per-copy blocks), ``solve_s`` (the host step), ``setup_s`` (copying the families)."""
+    (rows into per-copy blocks), ``solve_s`` (the step: the device kernel with its read-back, or the host
+    step), ``setup_s`` (copying the families)."""
     q: np.ndarray
     status: np.ndarray
     stage: np.ndarray
