@@ -497,6 +497,10 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
     rows += moment["rows"]
+    log(f"validate {design}: efficiency and no-load running torque (rvtool.analysis.losses)")
+    from .losses import validate_efficiency
+    efficiency = validate_efficiency(design, d, quick=quick)
+    rows += efficiency.pop("rows")
     for fam in ("eccentric_bearings", "crank_bearings"):
         vals = [v["L10_h"] for k, v in lives.items() if v["family"] == fam and v["L10_h"] is not None]
         rows += _rows("rated_life", min(vals) if vals else None, "h", catalogue,
@@ -551,7 +555,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
                                                 "housing.model": getattr(d.housing, "model", None)
                                                 if d.housing else None}},
-        "ratio_variant": variant, "uncertainty": unc,
+        "ratio_variant": variant, "uncertainty": unc, "efficiency": efficiency,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
                      "rigidity_points": list(rigidity_points(catalogue)[0]),
@@ -638,6 +642,8 @@ def write(out, out_dir, catalogue):
         fig.savefig(os.path.join(out_dir, "tornado.png"), dpi=110)
         plt.close(fig)
         plots.append("tornado.png")
+    from .losses import efficiency_plot
+    plots += efficiency_plot(out, out_dir)
     with open(os.path.join(out_dir, "report.html"), "w") as fh:
         fh.write(report_html(out, out_dir, plots))
 
