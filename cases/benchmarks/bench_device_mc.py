@@ -33,7 +33,8 @@ device's figures with the pool's. ``passed``: per design, TE equal to 1e-6 arcse
 TE point; rd40: the TE peak-to-peak, the figure the reference run returns), lost motion to
 1e-6 arcmin, the device path's failed variants <= 0.2 % (issue 31). The pool's failures (the
 Exudyn oracle's: e.g. RD-40 variant 0's lost motion fails under load and spring control) are
-counted and reported with their errors, not judged: the oracle has no figure to compare there. Speed is reported, not judged (issue 31's
+counted and reported with their errors, not judged: the oracle has no figure to compare there.
+Speed is reported, not judged (issue 31's
 target: device >= 10x the warmed 16-core pool at 1,000 variants on a GPU).
 Default 1,000 variants per design (--variants N); --quick: 2 per design, 2 workers.
 """
@@ -149,8 +150,8 @@ def run_device(name, quick, V, device):
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
     device_rows_variants([probe], torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
                          device=device)
-    r = device_rows_variants(models, torque=torque, input_angles=angles, lost_motion_level=LM_FRACTION * design.rated_torque,
-                             device=device)
+    r = device_rows_variants(models, torque=torque, input_angles=angles,
+                             lost_motion_level=LM_FRACTION * design.rated_torque, device=device)
     return r, build_s
 
 
@@ -195,8 +196,9 @@ def judge(r):
         V = d["variants"]
         out[f"{name}_te_vs_exudyn"] = casekit.check(d["agreement"]["te_max_arcsec"], TE_TOL_ARCSEC,
                                                     why="issue 31: TE equal to 1e-6 arcsec (Exudyn is the oracle)")
-        out[f"{name}_lost_motion_vs_exudyn"] = casekit.check(d["agreement"]["lm_max_arcmin"], LM_TOL_ARCMIN,
-                                                             why="lost motion to 1e-6 arcmin (tests/test_backends_golden.py)")
+        out[f"{name}_lost_motion_vs_exudyn"] = casekit.check(
+            d["agreement"]["lm_max_arcmin"], LM_TOL_ARCMIN,
+            why="lost motion to 1e-6 arcmin (tests/test_backends_golden.py)")
         out[f"{name}_device_failed_variants"] = casekit.check(
             d["device"]["failed_variants"], int(MAX_FAILURE_SHARE * V), "<=",
             why="issue 31: failures < 0.2 % of the variants (device path, its Exudyn fallbacks included)")

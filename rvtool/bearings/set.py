@@ -243,7 +243,9 @@ class BearingSet(StagedLaunch):
             rename = {m.name: nm for m, nm in zip(sc.mountings, names[c])}
             ids += [rename[i.split("/", 1)[0]] + "/" + i.split("/", 1)[1] for i in sc.ids]
         n_m = np.cumsum([0] + [len(sc.mountings) for sc in sets])
-        self._finish(np.concatenate([sc.fparams for sc in sets]), np.concatenate(ip), ids,
+        # the built rows (a slow-state gap offset of a built set is not copied, as a set built from the mountings)
+        self._finish(np.concatenate([getattr(sc, "_built_fparams", sc.fparams) for sc in sets]), np.concatenate(ip),
+                     ids,
                      np.concatenate([sc.owner + n_m[c] for c, sc in enumerate(sets)]),
                      np.concatenate([sc.element_radius for sc in sets]),
                      np.concatenate([sc.element_station for sc in sets]),

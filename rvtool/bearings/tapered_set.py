@@ -193,7 +193,9 @@ class TaperedBearingSet:
             n_rol += len(sc.roller_fp)
             n_m += len(sc.mountings)
         cat = lambda nm: np.concatenate([getattr(sc, nm) for sc in sets])
-        self._finish(np.vstack([sc.roller_fp for sc in sets]), np.vstack(ri), np.vstack([sc.lamina_fp for sc in sets]),
+        # the built laminae (a slow-state gap offset of a built set is not copied, as a set built from the mountings)
+        self._finish(np.vstack([sc.roller_fp for sc in sets]), np.vstack(ri),
+                     np.vstack([getattr(sc, "_built_lamina_fp", sc.lamina_fp) for sc in sets]),
                      ids, np.concatenate(owner), cat("roller_row"), cat("roller_phase"), cat("roller_gamma"),
                      np.concatenate(lam_roller), np.concatenate(bodies).astype(np.int32), [], [], [], s.backend,
                      precision, device)

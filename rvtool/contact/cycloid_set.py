@@ -352,7 +352,10 @@ class CycloidPinSet(PairFamilySet):
             ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
             mesh_of.append(sc.mesh_of + n_mesh)
             n_mesh += len(sc.meshes)
-        self._finish(max(self.table_windows), np.concatenate([sc.fparams for sc in sets]), np.concatenate(ip), ids,
+        # the built rows (slow-state gap offsets and friction of a built set are not copied, as a set built from
+        # the meshes)
+        built = [getattr(sc, "_built_fparams", sc.fparams) for sc in sets]
+        self._finish(max(self.table_windows), np.concatenate(built), np.concatenate(ip), ids,
                      np.concatenate(mesh_of), np.concatenate([sc.pin_of for sc in sets]),
                      np.zeros((sum(sc.n_contacts for sc in sets), anchor_ref.N_ANCHOR)), B * nb, s.backend,
                      precision, device)

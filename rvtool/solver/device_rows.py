@@ -104,7 +104,8 @@ class DeviceRowSum:
     with a staged launch (:class:`rvtool.contact.evaluator.StagedLaunch`: cycloid pins, involute
     pairs, rolling elements, circle pairs) is launched on the device and its row buffers are summed
     where they are, as the tapered rollers' planar rows (:meth:`TaperedBearingSet.device_rows`,
-    laminae rows); the others (influence-coefficient tapered rows, plain output pins) are evaluated as in :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
+    laminae rows); the others (influence-coefficient tapered rows, plain output pins) are evaluated
+    as in :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
     Only B (n + n^2) numbers come back instead of every row (on a GPU the rows' transfer and the
     host scatter cost more than the kernels). The same sums as the host scatter up to the order of
     the additions (last bits). ``timing`` as ReplicaEvaluator's ("kernels": launches, host
