@@ -409,3 +409,27 @@ def test_copied_sets_equal_sets_built_from_the_shifted_renamed_members(rv):
         _same_set(old, s_new)
         checked += 1
     assert checked == 5                             # eccentric, crank (tapered) and main bearings, pins, gears
+
+
+def test_copies_take_the_built_rows_not_a_slow_state_offset(rv):
+    """A built set's slow-state gap offsets (thermal, wear) are not part of its copy: the
+    concatenated copy holds the built rows, as a set built from the members would."""
+    from rvtool.solver.replica import copy_families
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, rv[0], k, 13)[0]) for k in range(2)]
+    before = {f.name: np.array(f.set.fparams if hasattr(f.set, "fparams") else f.set.lamina_fp)
+              for f in copy_families(models, 2)}
+    rows = lambda s: np.array(s.fparams if hasattr(s, "fparams") else s.lamina_fp)
+    changed = 0
+    for el in models[0].contact_elements():
+        s = el.evaluator
+        if callable(getattr(s, "set_gap_offsets", None)) and s.name != "gears":
+            built = rows(s)
+            s.set_gap_offsets(np.full(len(s.ids), 1e-6))
+            changed += int(not np.array_equal(rows(s), built))
+    assert changed >= 3                               # pins, bearings, tapered rows carry an offset now
+    after = {f.name: np.array(f.set.fparams if hasattr(f.set, "fparams") else f.set.lamina_fp)
+             for f in copy_families(models, 2)}
+    for name in before:
+        np.testing.assert_array_equal(after[name], before[name], err_msg=name)
