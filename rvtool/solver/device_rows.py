@@ -114,9 +114,9 @@ class DeviceRowSum:
     def __init__(self, families, nb, n_copies, device):
         import warp as wp
         from warp_contacts.block_scatter import BlockScatter
+        from ..bearings.tapered_set import TaperedBearingSet
         from ..contact.evaluator import StagedLaunch
         self.families, self.nb, self.B, self.device = families, nb, n_copies, device
-        from ..bearings.tapered_set import TaperedBearingSet
         self.staged = [isinstance(f.set, StagedLaunch) and getattr(f.set, "backend", None) == "warp"
                        for f in families]
         # tapered rows with their planar mapping on the device (warp_contacts.tapered_planar)
@@ -274,6 +274,8 @@ class DeviceRowNewton:
         self.rot = np.arange(n) % 3 == 2
         self.device_step = True if device_step is None else bool(device_step)
         self._steppers = {}
+        self._QK = None                 # device copies of host-summed blocks (device step, host sum)
+        self._reference_d = None        # the copies' reference poses on the device (resident loop)
         if sync_every is None:
             sync_every = 1 if str(device).startswith("cpu") else 4
         if isinstance(sync_every, bool) or not isinstance(sync_every, (int, np.integer)) or sync_every < 1:
@@ -451,7 +453,7 @@ class DeviceRowNewton:
         host_sum = not isinstance(ev, DeviceRowSum)
         if not host_sum and ev.resident:
             return self._resident_loop(stp, slots, q, st, timing, m)
-        if host_sum and not hasattr(self, "_QK"):
+        if host_sum and self._QK is None:
             self._QK = (wp.zeros((B, n), dtype=wp.float64, device=self.device),
                         wp.zeros((B, n, n), dtype=wp.float64, device=self.device))
         vel = np.zeros((B * self.nb, 3))
@@ -487,7 +489,7 @@ class DeviceRowNewton:
         ``sync_every`` sweeps."""
         import warp as wp
         ev = self.evaluator
-        if not hasattr(self, "_reference_d"):
+        if self._reference_d is None:
             self._reference_d = wp.array(np.ascontiguousarray(self.reference, np.float64), dtype=wp.float64,
                                          device=self.device)
         bufs = ev.pose_buffers()
