@@ -180,3 +180,23 @@ def test_sync_every_is_checked(rv):
     from rvtool.solver.device_rows import DeviceRowNewton
     with pytest.raises(RvtoolInputError, match="sync_every"):
         DeviceRowNewton(rv, 1, sync_every=0)
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_device_resident_loop_with_plain_output_pins_equals_the_host_loop(device):
+    """std_involute (internal involute pair, plain output pins, circle pairs): the output pins'
+    kernel launches from device-written poses too (PlainPinCopies.launch_device_rows), so the loop
+    is resident; same iterations as the host-summed loop, equilibria to 1e-9 relative."""
+    _skip(device)
+    import rvtool
+    from rvtool.solver.device_rows import DeviceRowNewton
+    m = rvtool.build(rvtool.load_design("std_involute"))
+    angles = np.linspace(0.0, 0.3, 3)
+    tq = np.full(3, -np.sign(m.ratio) * 0.5 * m.design.rated_torque)
+    ref = DeviceRowNewton(m, 3, device=device, device_sum=False).solve(angles, tq)
+    nw = DeviceRowNewton(m, 3, device=device, device_sum=True)
+    assert nw.evaluator.resident and any(nw.evaluator.direct)
+    a = nw.solve(angles, tq)
+    assert np.all(ref.converged) and np.all(a.converged)
+    np.testing.assert_array_equal(a.iterations, ref.iterations)
+    assert np.max(np.abs(a.q - ref.q) / np.max(np.abs(ref.q), axis=1, keepdims=True)) < 1e-9

@@ -364,6 +364,11 @@ class TaperedBearingSet:
         return Q, dQ, dQv, (f, rib, lam), (b, psi)
 
     @property
+    def rows_on_device(self):
+        """Whether :meth:`device_rows` / :meth:`launch_device_rows` are available (as :attr:`planar_on_device`)."""
+        return self.planar_on_device
+
+    @property
     def planar_on_device(self):
         """Whether :meth:`device_rows` is available (Warp backend, no influence-coefficient rows)."""
         return self.backend == "warp" and self._slices is None

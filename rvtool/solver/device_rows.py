@@ -104,8 +104,9 @@ class DeviceRowSum:
     with a staged launch (:class:`rvtool.contact.evaluator.StagedLaunch`: cycloid pins, involute
     pairs, rolling elements, circle pairs) is launched on the device and its row buffers are summed
     where they are, as the tapered rollers' planar rows (:meth:`TaperedBearingSet.device_rows`,
-    laminae rows); the others (influence-coefficient tapered rows, plain output pins) are evaluated
-    as in :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
+    laminae rows) and the plain output pins' rows (:class:`rvtool.solver.replica.PlainPinCopies`);
+    the others (influence-coefficient tapered rows) are evaluated as in
+    :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
     Only B (n + n^2) numbers come back instead of every row (on a GPU the rows' transfer and the
     host scatter cost more than the kernels). The same sums as the host scatter up to the order of
     the additions (last bits). ``timing`` as ReplicaEvaluator's ("kernels": launches, host
@@ -114,13 +115,13 @@ class DeviceRowSum:
     def __init__(self, families, nb, n_copies, device):
         import warp as wp
         from warp_contacts.block_scatter import BlockScatter
-        from ..bearings.tapered_set import TaperedBearingSet
         from ..contact.evaluator import StagedLaunch
         self.families, self.nb, self.B, self.device = families, nb, n_copies, device
         self.staged = [isinstance(f.set, StagedLaunch) and getattr(f.set, "backend", None) == "warp"
                        for f in families]
-        # tapered rows with their planar mapping on the device (warp_contacts.tapered_planar)
-        self.tapered = [isinstance(f.set, TaperedBearingSet) and f.set.planar_on_device for f in families]
+        # families whose rows are made on the device from device poses without a staged launch: tapered
+        # rows (planar mapping, warp_contacts.tapered_planar), plain output pins (the pin kernel's launch)
+        self.direct = [not s and bool(getattr(f.set, "rows_on_device", False)) for f, s in zip(families, self.staged)]
         self.scatter = BlockScatter([(f.scatter.local, f.scatter.row_copy) for f in families], n_copies, 3 * nb,
                                     wp.float64, device)
         self._host_rows = {}
@@ -135,7 +136,7 @@ class DeviceRowSum:
     @property
     def resident(self):
         """Whether every family runs from device-written poses (:meth:`pose_buffers`, :meth:`launch_device`)."""
-        return all(s or t for s, t in zip(self.staged, self.tapered))
+        return all(s or t for s, t in zip(self.staged, self.direct))
 
     def pose_buffers(self):
         """[(pose, vel or None)] device input arrays of every family ((B nb + 1, 3), the ground last)."""
@@ -182,7 +183,7 @@ class DeviceRowSum:
                 f.set.stage(pose, vel)
                 f.set.launch_staged()
                 _, q, K, _ = f.set.row_buffers()
-            elif self.tapered[i]:
+            elif self.direct[i]:
                 q, K = f.set.device_rows(pose, vel)
             else:
                 Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in family_rows(f.set, pose, vel)[:2])

@@ -123,6 +123,26 @@ class PlainPinCopies:
             return self._kernel.evaluate(self._pose)
         return oref.evaluate_plain(self._pose, self.fparams, self.iparams, self.stations)
 
+    @property
+    def rows_on_device(self):
+        """Whether :meth:`device_rows` / :meth:`launch_device_rows` are available (backend "warp")."""
+        return self.backend == "warp"
+
+    def device_pose_buffers(self):
+        """(pose, None): the kernel's pose input ((B nb + 1, 3), the ground's row last; no velocities)."""
+        return self._kernel.device_array("pose"), None
+
+    def launch_device_rows(self):
+        """The rows Q (N, 6), dQ/dq (N, 6, 6) as device arrays at the poses in :meth:`device_pose_buffers`."""
+        self._kernel.launch_recorded()
+        return self._kernel.device_array("q"), self._kernel.device_array("dqdq")
+
+    def device_rows(self, pose, vel=None):
+        """:meth:`launch_device_rows` at host poses (B nb, 3) (uploaded)."""
+        self._pose[:-1] = pose
+        self._kernel.device_array("pose").assign(self._pose)
+        return self.launch_device_rows()
+
 
 #: contact-set type -> copier (see the module docstring)
 COPIERS = {CycloidPinSet: _copy_pins, InvoluteContactSet: _copy_gears, BearingSet: _copy_bearings,
