@@ -433,3 +433,34 @@ def test_copies_take_the_built_rows_not_a_slow_state_offset(rv):
              for f in copy_families(models, 2)}
     for name in before:
         np.testing.assert_array_equal(after[name], before[name], err_msg=name)
+
+
+def test_variant_snapshots_give_the_models_figures(rv):
+    """device_rows_variants on pickled ModelSnapshots (what prepare_variant_models' workers send)
+    gives the TE and lost motion of the built models bit for bit; a snapshot builds its model only
+    where Exudyn takes over (real_model)."""
+    import pickle
+    from rvtool.batched.device_rows_variants import device_rows_variants, prepare_variant_models
+    from rvtool.solver.model_snapshot import ModelSnapshot, real_model
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    design = rv[0]
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    designs = [sample_rv_design(tol, design, k, 17)[0] for k in range(2)]
+    models = [rvtool.build(d) for d in designs]
+    snaps = [pickle.loads(pickle.dumps(ModelSnapshot(m, d))) for m, d in zip(models, designs)]
+    angles = np.linspace(0.0, 0.4, 3)
+    kw = dict(torque=design.rated_torque, input_angles=angles, lost_motion_level=0.03 * design.rated_torque)
+    a = device_rows_variants(models, **kw)
+    b = device_rows_variants(snaps, **kw)
+    np.testing.assert_array_equal(b.te, a.te)
+    np.testing.assert_array_equal(b.lost_motion_rad, a.lost_motion_rad)
+    assert b.exudyn_points == a.exudyn_points == 0
+    assert not snaps[0].is_built                             # nothing handed over: no model built
+    m0 = real_model(snaps[0])
+    assert snaps[0].is_built and real_model(snaps[0]) is m0
+    np.testing.assert_array_equal(np.asarray(m0.reference), np.asarray(models[0].reference))
+    # the pool path: two spawned workers build and send the snapshots
+    pooled = prepare_variant_models(designs, workers=2)
+    assert all(isinstance(s, ModelSnapshot) for s in pooled)
+    c = device_rows_variants(pooled, **kw)
+    np.testing.assert_array_equal(c.te, a.te)

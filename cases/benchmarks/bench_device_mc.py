@@ -22,9 +22,12 @@ Paths, on the same variants:
   solve of all copies per angle, the lost motion the device load continuation), with the Newton
   step, the per-copy sums and the tapered rows on the device (rvtool.solver.device_rows); every
   point or copy the device does not converge is solved by Exudyn INSIDE the timing and counted
-  (``exudyn_points``, ``exudyn_copies``); building the variant models (``build_s``: Exudyn
-  models, which the device path reads its contact rows from) is timed apart and reported both
-  ways (``variants_per_s`` without, ``variants_per_s_with_build`` with).
+  (``exudyn_points``, ``exudyn_copies``); building the variant models (``build_s``) runs in
+  --workers spawned processes that send back their snapshots
+  (rvtool.batched.device_rows_variants.prepare_variant_models: rows, kinematics, constraints),
+  that pool warmed as the reference pool (one nominal build per worker, ``build_pool_warm_s``,
+  not timed); building is timed apart and reported both ways (``variants_per_s/device`` without,
+  ``variants_per_s/device_with_build`` with).
 
 Reported per design: variants/s of both paths, the speed-ups, where the device's time goes
 (``split``: copying the families, kernel launches with their staging, the per-copy row sums,
@@ -46,7 +49,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from rvtool import build, casekit, designs, load_design
-from rvtool.batched.device_rows_variants import device_rows_variants
+from rvtool.batched.device_rows_variants import device_rows_variants, prepare_variant_models
 from rvtool.errors import SolverFailure
 from rvtool.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 
@@ -90,6 +93,13 @@ def rd_variant_design(tol, design, k):
 _WORKER = {}
 
 
+def _warm_build(job):
+    """Warm-up task of the device path's build pool: one build of the nominal design."""
+    design, kw = job
+    build(design, **kw)
+    return None
+
+
 def _pool_task(job):
     """One variant's Exudyn reference run in a pool worker: (k, te (N,) [rad] or None, te_pp
     [arcsec], lost motion [rad], error or None)."""
@@ -131,32 +141,40 @@ def run_pool(name, quick, V, workers):
     return out, warm_s, wall_s
 
 
-def run_device(name, quick, V, device):
-    """Build the V variant models (timed apart) and run them on the device row Newton."""
-    t = time.perf_counter()
+def run_device(name, quick, V, device, workers):
+    """Build the V variant models in ``workers`` processes (prepare_variant_models: their
+    snapshots; timed apart, the pool's start included) and run them on the device row Newton."""
     if name == "rv40e":
         design, tol, angles = _rv_setup(quick)
-        models = [build(rv_variant_design(tol, design, k)) for k in range(V)]
+        designs_v = [rv_variant_design(tol, design, k) for k in range(V)]
+        kw = {}
         torque = design.rated_torque
-        probe = build(design)
     else:
         design, tol, protocol = _rd_setup(quick)
         kw = dict(bearing_model=protocol.bearing_model, regularization=RD_REGULARIZATION)
-        models = [build(rd_variant_design(tol, design, k), **kw) for k in range(V)]
+        designs_v = [rd_variant_design(tol, design, k) for k in range(V)]
         angles = protocol.input_angles(design)
         torque = protocol.te_torque_fraction * design.rated_torque
-        probe = build(design, **kw)
-    build_s = time.perf_counter() - t
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
+        t = time.perf_counter()
+        # warmed like the reference pool: one nominal build per worker (imports, memos), not timed
+        list(ex.map(_warm_build, [(design, kw)] * workers))
+        warm_s = time.perf_counter() - t
+        t = time.perf_counter()
+        models = prepare_variant_models(designs_v, kw, executor=ex)
+        build_s = time.perf_counter() - t
+    probe = build(design, **kw)
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
     device_rows_variants([probe], torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
                          device=device)
     r = device_rows_variants(models, torque=torque, input_angles=angles,
                              lost_motion_level=LM_FRACTION * design.rated_torque, device=device)
-    return r, build_s
+    return r, build_s, warm_s
 
 
 def bench(name, quick, V, workers, device):
-    r, build_s = run_device(name, quick, V, device)
+    r, build_s, build_warm_s = run_device(name, quick, V, device, workers)
     pool, warm_s, pool_s = run_pool(name, quick, V, workers)
     te_dev_pp = np.ptp(r.te, axis=1) * ARCSEC_PER_RAD
     te_pool_pp = np.array([p[2] for p in pool])
@@ -175,7 +193,7 @@ def bench(name, quick, V, workers, device):
     rate_dev_b = V / (r.wall_s + build_s)
     return {
         "variants": V, "te_points": int(r.te.shape[1]), "workers": workers, "device": device,
-        "device": {"wall_s": r.wall_s, "build_s": build_s, "split": r.split, "te_s": r.te_s,
+        "device": {"wall_s": r.wall_s, "build_s": build_s, "build_pool_warm_s": build_warm_s, "split": r.split, "te_s": r.te_s,
                    "lost_motion_s": r.lost_motion_s, "exudyn_points": r.exudyn_points,
                    "exudyn_copies": r.exudyn_copies, "failed_variants": failed_dev, "stats": r.stats},
         "pool": {"wall_s": pool_s, "warm_s": warm_s, "failed_variants": failed_pool,

@@ -25,6 +25,7 @@ import numpy as np
 from ..errors import RvtoolInputError, SolverFailure
 from ..protocols.precision import transmission_error
 from ..solver.device_rows import DeviceRowNewton
+from ..solver.model_snapshot import ModelSnapshot, real_model
 from ..solver.static import StaticSolver
 from .device_rows_lost_motion import device_row_lost_motion
 
@@ -89,7 +90,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
         for c in np.flatnonzero(~r.converged):
             exudyn_points += 1
             r.q[c] = kin[c]                       # the next warm start: from the kinematic state
-            m = models[c]
+            m = real_model(models[c])
             m.set_output_torque(tq[c])
             try:
                 q_out[c, k] = StaticSolver(m).solve(float(a))[m.output_index]
@@ -127,4 +128,37 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
                               "device": str(device), "device_sum": newton.device_sum})
 
 
-__all__ = ["RowVariants", "device_rows_variants"]
+def _snapshot_of(job):
+    """Pool task: the :class:`ModelSnapshot` of ``build(design, **build_kw)`` (picklable)."""
+    from ..assembly import build
+    design, build_kw = job
+    return ModelSnapshot(build(design, **build_kw), design, build_kw)
+
+
+def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=None):
+    """The variant models of ``designs`` for :func:`device_rows_variants`, built side by side in
+    worker processes and returned as :class:`~rvtool.solver.model_snapshot.ModelSnapshot` (their
+    rows, kinematics and constraints; a model itself is built here only where Exudyn takes over a
+    point or copy). workers: processes (None: all cores; 1: build here, the models themselves);
+    executor: a ``concurrent.futures`` executor to use instead (e.g. a warmed pool); build_kw: the
+    build options of every variant."""
+    import concurrent.futures as cf
+    import multiprocessing
+    import os
+    from ..assembly import build
+    designs = list(designs)
+    build_kw = dict(build_kw or {})
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1):
+        raise RvtoolInputError(f"workers = {workers!r} is outside the valid range [1, inf) (integer; None: all cores)")
+    jobs = [(d, build_kw) for d in designs]
+    if executor is not None:
+        return list(executor.map(_snapshot_of, jobs, chunksize=max(1, len(jobs) // 64)))
+    n = workers or os.cpu_count() or 1
+    if n == 1 or len(designs) < 2:
+        return [build(d, **build_kw) for d in designs]
+    ctx = multiprocessing.get_context("spawn")          # fresh interpreters: no forked Warp/Exudyn state
+    with cf.ProcessPoolExecutor(max_workers=min(n, len(designs)), mp_context=ctx) as ex:
+        return list(ex.map(_snapshot_of, jobs, chunksize=max(1, len(jobs) // (4 * n))))
+
+
+__all__ = ["RowVariants", "device_rows_variants", "prepare_variant_models"]

@@ -388,7 +388,11 @@ def copy_families(model, copies, *, precision="float64", device="cpu"):
 
 
 def held_coordinates(model):
-    """[(body index, coordinate)] held at zero by the model's coordinate locks."""
+    """[(body index, coordinate)] held at zero by the model's coordinate locks (a
+    :class:`~rvtool.solver.model_snapshot.ModelSnapshot` carries them)."""
+    from .model_snapshot import ModelSnapshot
+    if isinstance(model, ModelSnapshot):
+        return list(model.held_coordinates)
     return _held(model)
 
 
