@@ -192,7 +192,7 @@ def bench(name, quick, V, workers, device):
     rate_dev, rate_pool = V / r.wall_s, V / pool_s
     rate_dev_b = V / (r.wall_s + build_s)
     return {
-        "variants": V, "te_points": int(r.te.shape[1]), "workers": workers, "device": device,
+        "variants": V, "te_points": int(r.te.shape[1]), "workers": workers,
         "device": {"wall_s": r.wall_s, "build_s": build_s, "build_pool_warm_s": build_warm_s, "split": r.split, "te_s": r.te_s,
                    "lost_motion_s": r.lost_motion_s, "exudyn_points": r.exudyn_points,
                    "exudyn_copies": r.exudyn_copies, "failed_variants": failed_dev, "stats": r.stats},

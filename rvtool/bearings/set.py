@@ -18,7 +18,6 @@ Example (RD-40, bodies 0 = shaft, 1 = wheel, 3 = flange)::
     ev = s.evaluate(pose, vel)          # Evaluation(Q, dQdq, dQdv, obs, (), finite)
     loads = s.resultants(pose)          # per mounting: force, axial force, tilting moment
 """
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -29,7 +28,7 @@ from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows
+from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows, moved_member
 from ..errors import RvtoolInputError
 from ..validation import check_finite
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters, slice_mean_crowning
@@ -223,7 +222,7 @@ class BearingSet(StagedLaunch):
         without packing every mounting again. Sets with influence-coefficient rollers are built."""
         s, B = sets[0], len(sets)
         names = names or [[m.name for m in sc.mountings] for sc in sets]
-        mounts = [dataclasses.replace(m, name=nm, inner=m.inner if m.inner == GROUND else m.inner + c * nb,
+        mounts = [moved_member(m, name=nm, inner=m.inner if m.inner == GROUND else m.inner + c * nb,
                                       outer=m.outer if m.outer == GROUND else m.outer + c * nb)
                   for c, sc in enumerate(sets) for m, nm in zip(sc.mountings, names[c])]
         if any(sc._slices is not None for sc in sets) or any(type(sc) is not type(s) for sc in sets):

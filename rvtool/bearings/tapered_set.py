@@ -25,7 +25,6 @@ Example (an RV crank on a tapered pair in the carrier, bodies 0 = crank, 1 = car
     ev = s.evaluate(pose, vel)            # Evaluation(Q, dQdq, dQdv, obs, (), finite)
     loads = s.resultants(pose)            # per mounting: TaperedLoads
 """
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -38,7 +37,7 @@ from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX,
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows
+from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows, moved_member
 from ..errors import RvtoolInputError
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters
 from .set import Placement
@@ -169,7 +168,7 @@ class TaperedBearingSet:
         rollers are built from the mountings."""
         s, B = sets[0], len(sets)
         names = names or [[m.name for m in sc.mountings] for sc in sets]
-        mounts = [dataclasses.replace(m, name=nm, inner=m.inner if m.inner == GROUND else m.inner + c * nb,
+        mounts = [moved_member(m, name=nm, inner=m.inner if m.inner == GROUND else m.inner + c * nb,
                                       outer=m.outer if m.outer == GROUND else m.outer + c * nb)
                   for c, sc in enumerate(sets) for m, nm in zip(sc.mountings, names[c])]
         if any(sc._slices is not None or sc.backend != s.backend for sc in sets):

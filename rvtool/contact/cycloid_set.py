@@ -8,7 +8,6 @@ deviations (Eq. (gap)), and the contact law. A :class:`CycloidPinSet`
 evaluates any number of meshes in one kernel launch and follows the
 evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
 """
-import dataclasses
 import functools
 from dataclasses import dataclass, field
 
@@ -22,7 +21,7 @@ from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile, pin_centres
 from ..validation import check_finite, check_nonnegative, check_positive
 from .circle_set import GROUND, FrictionLaw, FrictionModel, NormalLaw
-from .evaluator import gap_offset_rows
+from .evaluator import gap_offset_rows, moved_member
 from .pair_set import PairFamilySet, check_backend
 
 
@@ -310,7 +309,7 @@ class CycloidPinSet(PairFamilySet):
         s, B = sets[0], len(sets)
         names = names or [[m.name for m in sc.meshes] for sc in sets]
         shift = lambda b, c: b if b == GROUND else int(b) + c * nb
-        meshes = [dataclasses.replace(m, name=nm, wheel_body=shift(m.wheel_body, c), pin_body=shift(m.pin_body, c),
+        meshes = [moved_member(m, name=nm, wheel_body=shift(m.wheel_body, c), pin_body=shift(m.pin_body, c),
                                       pin_bodies=None if m.pin_bodies is None
                                       else tuple(shift(b, c) for b in m.pin_bodies))
                   for c, sc in enumerate(sets) for m, nm in zip(sc.meshes, names[c])]

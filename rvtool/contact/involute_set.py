@@ -28,6 +28,7 @@ from ..errors import RvtoolInputError
 from ..geometry.involute import InvolutePair
 from ..validation import check_finite, check_nonnegative, check_positive
 from .circle_set import GROUND, FrictionLaw, FrictionModel
+from .evaluator import moved_member
 from .pair_set import PairFamilySet, check_backend
 from .tooth_stiffness import POLY_DEGREE, ToothCompliance
 
@@ -256,7 +257,7 @@ class InvoluteContactSet(PairFamilySet):
         s, B = sets[0], len(sets)
         names = names or [[m.name for m in sc.meshes] for sc in sets]
         shift = lambda b, c: b if b == GROUND else int(b) + c * nb
-        meshes = [dataclasses.replace(m, name=nm, body_a=shift(m.body_a, c), body_b=shift(m.body_b, c))
+        meshes = [moved_member(m, name=nm, body_a=shift(m.body_a, c), body_b=shift(m.body_b, c))
                   for c, sc in enumerate(sets) for m, nm in zip(sc.meshes, names[c])]
         compliance = {}
         for sc in sets:

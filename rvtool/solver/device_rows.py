@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from warp_contacts.batched_newton_ref import ACTIVE, CONVERGED, FAILED, WARM
+from warp_contacts.batched_newton_ref import ACTIVE, CONVERGED, WARM
 from warp_contacts.block_newton_ref import StepModel, block_step
 
 from ..errors import RvtoolInputError
@@ -163,7 +163,6 @@ class DeviceRowSum:
         return Q, K
 
     def evaluate(self, pose, vel):
-        t0 = time.perf_counter()
         Q, K = self.evaluate_device(pose, vel)
         t1 = time.perf_counter()
         Q, K = np.array(Q), np.array(K)
