@@ -257,10 +257,34 @@ MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
 """Latin-hypercube samples of the moment-rigidity band over the main bearing's `assumed` ranges."""
 
 
+def tilting_bodies_rigidity(design, test):
+    """The moment rigidity [N m/arcmin] with the wheels and the cranks tilting as well
+    (``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"``, issue 32): the moment then also
+    passes through the cranks and wheels to the ring pins. Returns {"bodies",
+    "moment_rigidity_Nm_per_arcmin", "convention"} or {"bodies", "error"} (a side figure)."""
+    from ..assembly import build
+    from ..assembly.spec import replace as replace_design
+    from ..errors import RvtoolInputError
+    from ..protocols.moment_rigidity import moment_rigidity
+    bodies = {"carrier_coordinates": "spatial", "wheel_coordinates": "spatial", "crank_coordinates": "spatial"}
+    try:
+        try:
+            model = build(replace_design(design, bodies=bodies))
+        except RvtoolInputError:       # a design whose cranks cannot tilt (named in the builder): planar cranks
+            bodies.pop("crank_coordinates")
+            model = build(replace_design(design, bodies=bodies))
+        res = moment_rigidity(model, test)
+        return {"bodies": sorted(bodies), "moment_rigidity_Nm_per_arcmin": res.rigidity_arcmin,
+                "convention": res.convention}
+    except Exception as exc:           # reported, not fatal
+        return {"bodies": sorted(bodies), "error": f"{type(exc).__name__}: {exc}"}
+
+
 def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     """The moment-rigidity row (issue 32): :func:`rvtool.protocols.moment_rigidity.moment_rigidity`
     on the design with a spatial carrier (a ported housing replaced by the rigid one: the main-bearing
-    seats are grounded in both), the reference moment the catalogue's allowable moment (else T_R),
+    seats are grounded in both; a ported carrier likewise by the rigid one: its seats are planar ports,
+    :mod:`rvtool.assembly.carrier`), the reference moment the catalogue's allowable moment (else T_R),
     the band over the main bearing's `assumed` ranges (bearing alone, rigid housing). Returns
     {"rows", "result", "band", "reference_moment_Nm", "note"}; an error is reported in the row, not raised
     (a side figure, as the ratio variant)."""
@@ -274,6 +298,8 @@ def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     try:
         d = design if getattr(design.housing, "model", "rigid") != "ports" else replace_design(design,
                                                                                                housing={"model": "rigid"})
+        if getattr(getattr(d, "carrier", None), "body", "rigid") != "rigid":
+            d = replace_design(d, carrier={"body": "rigid"})
         test = MomentRigidityTest(reference_moment=m_ref, axial_force=2000.0)
         res = moment_rigidity(build(spatial_design(d)), test)
         band = None
@@ -281,7 +307,7 @@ def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
             band = main_bearing_band(d.main_bearing, assumed, test,
                                      samples=QUICK_MOMENT_SAMPLES if quick else MOMENT_SAMPLES)
         value, note = res.rigidity_arcmin, f"{res.convention}; {ref_note}; axial stiffness {res.axial_stiffness:.4g} N/m"
-        detail = {"result": res.to_dict(), "band": band}
+        detail = {"result": res.to_dict(), "band": band, "tilting_bodies": tilting_bodies_rigidity(d, test)}
     except Exception as exc:           # reported in the table, not fatal
         value, note, band = None, f"not computed: {type(exc).__name__}: {exc}", None
         detail = {"result": None, "band": None, "error": note}
@@ -408,6 +434,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     life_angles = [k * span / n_life for k in range(n_life)]
     life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
     lives = bearing_lives(d, model, life_states, catalogue)
+    from .budget import carrier_share_figure
+    carrier_side = carrier_share_figure(d, T_R, quick=quick)
     log(f"validate {design}: moment rigidity (spatial carrier)")
     moment = moment_rigidity_figure(d, catalogue, assumed, quick=quick)
     # ratio variant
@@ -563,6 +591,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                      "repeat_tolerance_arcmin": REPEAT_TOLERANCE_ARCMIN},
         "wall_s": time.perf_counter() - t0,
     }
+    # issue 30: the carrier's switch and the ported carrier's share beside the budget of the file's switches
+    out["compliance_budget"]["configuration"]["carrier.body"] = getattr(getattr(d, "carrier", None), "body", None)
+    out["compliance_budget"]["with_ported_carrier"] = carrier_side
     out["loop"] = {"torque_Nm": central["cycles"][-1]["torque_Nm"].tolist(),
                    "angle_arcmin": (central["cycles"][-1]["angle_rad"] / RAD_PER_ARCMIN).tolist(),
                    "labels": central["cycles"][-1]["labels"],
@@ -678,6 +709,10 @@ def table_text(out):
     if "rigidity" in v:
         lines.append(f"  ratio variant i = {v['ratio']:.4g}: rigidity {v['rigidity']:.4g} N m/arcmin "
                      f"({100 * v['rel_diff']:+.2f} % vs i = {v['ratio_central']:.4g})")
+    pc = out.get("compliance_budget", {}).get("with_ported_carrier")
+    if pc and "carrier_share" in pc:
+        lines.append(f"  with the ported carrier: K_t {pc['K_t_Nm_per_arcmin']:.4g} N m/arcmin at T_R, carrier share "
+                     f"{100 * pc['carrier_share']:.1f} % (tangent budget; the file keeps carrier.body = 'rigid')")
     u = out["uncertainty"]
     if u is not None and u["fraction_within_lost_motion_max"] is not None:
         lines.append(f"  {u['samples']} LHS samples: fraction within the catalogue's lost-motion maximum "

@@ -341,6 +341,11 @@ def replica_reasons(model):
     if model.structures:
         reasons.append(f"the model has elastic structures {sorted(model.structures)}: the angle-batched path "
                        "copies planar rigid bodies only (valid: housing.model = 'rigid')")
+    carrier = getattr(getattr(model, "design", None), "carrier", None)
+    if carrier is not None and carrier.body != "rigid":
+        reasons.append(f"carrier.body = {carrier.body!r}: the carrier's crank seats are closed by its reduced seat "
+                       "compliance (rvtool.assembly.carrier), which the angle-batched path does not copy (valid: "
+                       "carrier.body = 'rigid')")
     nb = len(model.body_names)
     for el in model.contact_elements():
         s = el.evaluator

@@ -37,7 +37,8 @@ COVERED = ("cycloid pins", "output pins (plain)", "involute pairs (external, int
 """Contact families the device backend's equilibria cover (module docstring)."""
 
 NOT_COVERED = ("friction with stick--slip anchors", "elastic pin and crank closures",
-               "ported housing (modal coordinates)", "shared output pins", "driven runs of non-cycloid topologies")
+               "ported housing (modal coordinates)", "shared output pins", "driven runs of non-cycloid topologies",
+               "ported carrier (carrier.body = 'ported': the seat closure)")
 """What the device backends do not run (each is a named reason of :meth:`DeviceBackend.supports`)."""
 
 
