@@ -680,15 +680,6 @@ class OutputPinKernel(RecordedRows):
     # outputs left on the device (returned as None; read them with device_array)
     keep_on_device = frozenset()
 
-    def device_array(self, name):
-        """The device array of input or output ``name`` of the recorded launch (pose, tilt; q, dqdq,
-        tilt_m, slices, ...): read or written in place by a caller that keeps them on the device."""
-        return self._dev[name]
-
-    def launch_recorded(self):
-        """Replay the recorded launch on the device arrays as they are (no transfer)."""
-        self._cmd.launch()
-
 
     def evaluate(self, pose, tilt=None, history=None):
         """Results in the layout of :mod:`output_pins_ref` (arrays owned by this object, overwritten next call).
