@@ -464,3 +464,21 @@ def test_variant_snapshots_give_the_models_figures(rv):
     assert all(isinstance(s, ModelSnapshot) for s in pooled)
     c = device_rows_variants(pooled, **kw)
     np.testing.assert_array_equal(c.te, a.te)
+
+
+def test_variant_kinematics_come_from_one_call_per_copy_bit_for_bit(rv):
+    """prime_kinematics evaluates each variant copy's kinematics once for all angles; kinematic()
+    reads them: equal to each copy's own call at each angle, for any assignment of copies."""
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, rv[0], k, 19)[0]) for k in range(3)]
+    nw = DeviceRowNewton(models)
+    a = np.array([0.3, 0.1, 0.3])
+    cp = np.array([2, 0, 1])
+    got = nw.kinematic(a, cp)
+    want = np.array([(models[c].kinematics.poses(a[p:p + 1])[0] - models[c].reference).reshape(-1)
+                     for p, c in enumerate(cp)])
+    want[:, nw.held] = 0.0
+    want[:, nw.input_local] = a
+    np.testing.assert_array_equal(got, want)
+    assert not np.array_equal(got[0], got[1])                 # the angles are told apart

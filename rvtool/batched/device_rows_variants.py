@@ -74,6 +74,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
     error = [None] * V
     exudyn_points = sweeps = iterations = 0
     t_te = time.perf_counter()
+    newton.prime_kinematics(angles)               # every copy's kinematics once for all TE angles
     prev = None
     for k, a in enumerate(angles):
         kin = newton.kinematic(np.full(V, a))
