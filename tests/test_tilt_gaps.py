@@ -107,3 +107,23 @@ def test_spatial_input_shaft_refusals():
 def test_device_backends_name_a_spatial_input_shaft():
     from rvtool.solver.backends.base import SPATIAL_WHEELS_REASON, spatial_body_reasons
     assert spatial_body_reasons(rvtool.build(_floating_sun(input_coordinates="spatial"))) == [SPATIAL_WHEELS_REASON]
+
+
+def test_identity_ports_contract_to_the_family_result():
+    from rvtool.solver.static import StaticSolver
+    """The merged element contracts a family on the retained out-of-plane rows (ports with P = I) to the
+    family's own result (a copy, no products): the same static state as the per-family elements, whose
+    contraction forms T^T Q and T^T K T with the full block products (1e-12 relative: summation order)."""
+    d = rvtool.replace_design(rvtool.load_design("rv40e"), bodies={"carrier_coordinates": "spatial",
+                                                                   "wheel_coordinates": "spatial"})
+    out = []
+    for kind in ("merged", "per_family"):
+        m = rvtool.build(d, contact_element=kind)
+        m.set_flange_load(0.0, (300.0, 0.0))
+        q = StaticSolver(m).solve(0.0, previous_angle=0.0)
+        out.append((np.asarray(m.flange_displacement(q)), m.tilts(q)))
+    (f0, t0), (f1, t1) = out
+    assert np.allclose(f0, f1, rtol=1e-12, atol=1e-12 * np.max(np.abs(f0)))
+    assert np.max(np.abs(f0[1:])) > 0                 # the moment tilts the carrier
+    for nm in t0:
+        assert np.allclose(t0[nm], t1[nm], rtol=1e-9, atol=1e-12 * np.max(np.abs(f0[1:])))
