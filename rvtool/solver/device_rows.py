@@ -169,7 +169,8 @@ class DeviceRowSum:
     def evaluate(self, pose, vel):
         Q, K = self.evaluate_device(pose, vel)
         t1 = time.perf_counter()
-        Q, K = np.array(Q), np.array(K)
+        # .numpy() downloads a cuda array (implicit conversion is refused there); np.array copies the cpu view
+        Q, K = np.array(Q.numpy()), np.array(K.numpy())
         Q[self.masked], K[self.masked] = 0.0, 0.0
         self.timing["scatter"] += time.perf_counter() - t1
         return _Blocks(Q, K)
