@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import warp as wp
 
-from warp_contacts.block_newton import BlockNewtonStep
+from warp_contacts.block_newton import LAYOUTS, BlockNewtonStep
 from warp_contacts.block_newton_ref import ACTIVE, CONVERGED, FAILED, WARM, StepModel, block_step
 
 DEVICES = [pytest.param(d, id=d) for d in ("cpu", "cuda:0")]
@@ -36,19 +36,17 @@ def _problem(B, n, seed=3):
     return K, q_star, q
 
 
-def _device_step(m, Q, K, q, kin, tq, status, stage, iters, total, device):
+def _device_step(m, Q, K, q, kin, tq, status, stage, iters, total, device, layout="copy_fastest"):
     B, n = q.shape
-    s = BlockNewtonStep(m, B, n, device)
+    s = BlockNewtonStep(m, B, n, device, layout=layout)
     s.load(q=q, kin=kin, torque=tq, status=status, stage=stage, iters=iters, total=total)
     s.step(wp.array(Q, dtype=wp.float64, device=device), wp.array(K, dtype=wp.float64, device=device))
     return dict(zip(("q", "status", "stage", "iters", "total", "residual"),
                     s.read("q", "status", "stage", "iters", "total", "residual"))), int(s.active.numpy()[0])
 
 
-@pytest.mark.parametrize("device", DEVICES)
-def test_one_step_of_every_branch_equals_the_reference(device):
-    _skip(device)
-    B, n = 8, 12
+def _branches(B=8, n=12):
+    """One step's inputs that take every branch (see the comments)."""
     m = _model(n)
     K, q_star, q = _problem(B, n)
     kin = np.zeros((B, n))
@@ -72,10 +70,19 @@ def test_one_step_of_every_branch_equals_the_reference(device):
     K[7, 2, :] = 0.0                             # singular block (free coordinate 2 without stiffness) ...
     stage[7] = 1                                 # ... in a homotopy stage: FAILED
     q[6] = q_star[6]
+    return m, Q, K, q, kin, tq, status, stage, iters, total, q_star
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+@pytest.mark.parametrize("device", DEVICES)
+def test_one_step_of_every_branch_equals_the_reference(device, layout):
+    _skip(device)
+    m, Q, K, q, kin, tq, status, stage, iters, total, q_star = _branches()
+    B = len(q)
     ref = dict(q=q.copy(), status=status.copy(), stage=stage.copy(), iters=iters.copy(), total=total.copy(),
                residual=np.zeros(B))
     block_step(Q, K, ref["q"], kin, tq, ref["status"], ref["stage"], ref["iters"], ref["total"], ref["residual"], m)
-    dev, active = _device_step(m, Q, K, q, kin, tq, status, stage, iters, total, device)
+    dev, active = _device_step(m, Q, K, q, kin, tq, status, stage, iters, total, device, layout)
     for k in ("status", "stage", "iters", "total"):
         np.testing.assert_array_equal(dev[k], ref[k], err_msg=k)
     # the dense solves differ in their last bits (LAPACK against the kernel's elimination)
@@ -88,6 +95,38 @@ def test_one_step_of_every_branch_equals_the_reference(device):
     assert ref["stage"][2] == 0 and np.all(ref["q"][2] == kin[2]) and np.all(ref["q"][4] == q[4])
     assert np.max(np.abs(ref["q"][0] - q[0])[~m.rot]) == pytest.approx(m.max_step_translation, rel=1e-12) or \
         np.max(np.abs(ref["q"][0] - q[0])[m.rot]) == pytest.approx(m.max_step_rotation, rel=1e-12)
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_the_two_layouts_give_the_same_step(device):
+    """The copy-fastest working arrays (coalesced on a GPU) and the copy-major ones (the kernel
+    before): the same operations in the same order, so the same bits on cpu; on cuda the compiler
+    may contract differently (1e-12 relative, far below the 1e-9 equilibrium bound). Also the
+    branch inputs at many copies (B = 300, every branch repeated), where a layout slip that mixes
+    copies would show."""
+    _skip(device)
+    m, Q, K, q, kin, tq, status, stage, iters, total, _ = _branches()
+    rep = lambda a: np.concatenate([a] * 40)[:300].copy()
+    args = [rep(a) for a in (Q, K, q, kin, tq, status, stage, iters, total)]
+    rng = np.random.default_rng(5)
+    args[0] = args[0] * (1.0 + 1e-3 * rng.normal(size=args[0].shape))     # copies differ
+    out = {lay: _device_step(m, *args, device, lay) for lay in LAYOUTS}
+    (a, na), (b, nb) = out["copy_major"], out["copy_fastest"]
+    assert na == nb
+    for k in ("status", "stage", "iters", "total"):
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    assert len(set(a["status"].tolist())) >= 3                  # ACTIVE, CONVERGED and FAILED copies
+    if device == "cpu":
+        np.testing.assert_array_equal(a["q"], b["q"])
+        np.testing.assert_array_equal(a["residual"], b["residual"])
+    else:
+        np.testing.assert_allclose(b["q"], a["q"], rtol=1e-12, atol=1e-20)
+        np.testing.assert_allclose(b["residual"], a["residual"], rtol=1e-12)
+
+
+def test_an_unknown_layout_is_refused():
+    with pytest.raises(ValueError, match="layout"):
+        BlockNewtonStep(_model(6), 2, 6, "cpu", layout="rows")
 
 
 @pytest.mark.parametrize("device", DEVICES)

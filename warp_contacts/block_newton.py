@@ -16,13 +16,16 @@ import functools
 import warp as wp
 
 from .batched_newton_ref import ACTIVE, CONVERGED, FAILED, WARM
-from .dense_lu import lu_funcs
+from .dense_lu import LAYOUTS, accessors, lu_funcs
 
 
 @functools.lru_cache(maxsize=None)
-def kernel(dtype):
-    """The ``block_step`` kernel for ``dtype``."""
-    lu_solve = lu_funcs(dtype)
+def kernel(dtype, layout="copy_major"):
+    """The ``block_step`` kernel for ``dtype``; its working arrays A, r, dq in ``layout``
+    (:func:`warp_contacts.dense_lu.accessors`: "copy_major" A (B, n, n), r and dq (B, n);
+    "copy_fastest" A (n, n, B), r and dq (n, B)). Q, K, q, kin stay (B, n) / (B, n, n)."""
+    lu_solve = lu_funcs(dtype, layout)
+    mat, set_mat, vec, set_vec = accessors(dtype, layout)
 
     @wp.kernel(module="unique")
     def block_step(
@@ -72,20 +75,20 @@ def kernel(dtype):
             if i == out_index:
                 ri = ri + torque[p]
             for j in range(n):
-                A[p, i, j] = -K[p, i, j]
-            A[p, i, i] = A[p, i, i] + ks
+                set_mat(A, p, i, j, -K[p, i, j])
+            set_mat(A, p, i, i, mat(A, p, i, i) + ks)
             if free[i] == 0:
                 ri = dtype(0.0)
-            r[p, i] = ri
+            set_vec(r, p, i, ri)
             norm2 = norm2 + ri * ri
         for i in range(n):
             for j in range(n):
                 if free[i] == 0 or free[j] == 0:
-                    A[p, i, j] = dtype(0.0)
-                if not wp.isfinite(A[p, i, j]):
+                    set_mat(A, p, i, j, dtype(0.0))
+                if not wp.isfinite(mat(A, p, i, j)):
                     ok = int(0)
             if free[i] == 0:
-                A[p, i, i] = dtype(1.0)
+                set_mat(A, p, i, i, dtype(1.0))
         # NaN in a fixed coordinate's entries is removed above, as the reference's identity rows
         norm = wp.sqrt(norm2)
         if not wp.isfinite(norm):
@@ -100,7 +103,7 @@ def kernel(dtype):
         mr = dtype(0.0)
         if ok != 0:
             for i in range(n):
-                x = dq[p, i]
+                x = vec(dq, p, i)
                 if not wp.isfinite(x):
                     ok = int(0)
                 if rot[i] != 0:
@@ -116,7 +119,7 @@ def kernel(dtype):
                     scale = max_step_rotation / mr
             iters[p] = iters[p] + 1
             for i in range(n):
-                qi = q[p, i] + scale * dq[p, i]
+                qi = q[p, i] + scale * vec(dq, p, i)
                 q[p, i] = qi
                 dev = wp.abs(qi - kin[p, i])
                 if rot[i] != 0:
@@ -163,12 +166,21 @@ class BlockNewtonStep:
     """The step's device state for B copies of n coordinates: ``model`` a
     :class:`warp_contacts.block_newton_ref.StepModel`; arrays ``q``, ``kin``, ``torque``, ``status``,
     ``stage``, ``iters``, ``total``, ``residual`` (device), written by :meth:`load` and read by
-    :meth:`read`; :meth:`step` launches one step from device sums Q (B, n), K (B, n, n)."""
+    :meth:`read`; :meth:`step` launches one step from device sums Q (B, n), K (B, n, n).
 
-    def __init__(self, model, n_copies, n, device, dtype=wp.float64):
+    ``layout`` of the step's working arrays (the copy's matrix A, residual r, step dq; see
+    :func:`kernel`): "copy_fastest" (default; one thread per copy, neighbouring threads at
+    neighbouring addresses: coalesced on a GPU) or "copy_major" (each copy's block contiguous, the
+    kernel before issue 31's step work). Both run the same operations in the same order: equal
+    results (bit-identical on cpu; tests/test_block_newton.py)."""
+
+    def __init__(self, model, n_copies, n, device, dtype=wp.float64, layout="copy_fastest"):
         import numpy as np
+        if layout not in LAYOUTS:
+            raise ValueError(f"layout {layout!r}: one of {LAYOUTS}")
         self.model, self.B, self.n, self.device, self.dtype = model, int(n_copies), int(n), device, dtype
-        self.kernel = kernel(dtype)
+        self.layout = layout
+        self.kernel = kernel(dtype, layout)
         arr = lambda a, t: wp.array(np.ascontiguousarray(a), dtype=t, device=device)
         self.spring_k = arr(np.asarray(model.spring_k, float), dtype)
         self.free = arr(np.asarray(model.free, np.int32), wp.int32)
@@ -177,8 +189,13 @@ class BlockNewtonStep:
         B = self.B
         z2 = lambda: wp.zeros((B, n), dtype=dtype, device=device)
         zi = lambda: wp.zeros(B, dtype=wp.int32, device=device)
-        self.q, self.kin, self.r, self.dq = z2(), z2(), z2(), z2()
-        self.A = wp.zeros((B, n, n), dtype=dtype, device=device)
+        self.q, self.kin = z2(), z2()
+        if layout == "copy_major":
+            self.r, self.dq = z2(), z2()
+            self.A = wp.zeros((B, n, n), dtype=dtype, device=device)
+        else:
+            self.r, self.dq = (wp.zeros((n, B), dtype=dtype, device=device) for _ in range(2))
+            self.A = wp.zeros((n, n, B), dtype=dtype, device=device)
         self.torque = wp.zeros(B, dtype=dtype, device=device)
         self.residual = wp.zeros(B, dtype=dtype, device=device)
         self.status, self.stage, self.iters, self.total = zi(), zi(), zi(), zi()
@@ -226,4 +243,4 @@ class BlockNewtonStep:
         hit[0].launch()
 
 
-__all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "WARM", "kernel", "pose_kernel"]
+__all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "LAYOUTS", "WARM", "kernel", "pose_kernel"]
