@@ -172,14 +172,21 @@ class BlockNewtonStep:
     :func:`kernel`): "copy_fastest" (default; one thread per copy, neighbouring threads at
     neighbouring addresses: coalesced on a GPU) or "copy_major" (each copy's block contiguous, the
     kernel before issue 31's step work). Both run the same operations in the same order: equal
-    results (bit-identical on cpu; tests/test_block_newton.py)."""
+    results (bit-identical on cpu; tests/test_block_newton.py).
 
-    def __init__(self, model, n_copies, n, device, dtype=wp.float64, layout="copy_fastest"):
+    ``block_dim``: threads per CUDA block of the step launch (default 32, one warp: B = 1,000
+    copies spread over 32 multiprocessors instead of Warp's 256 threads on 4; ``None``: Warp's
+    default; no effect on results, every copy being its own thread). Assumed from the GPU's
+    layout, not measured here: ``cases/benchmarks/bench_block_step.py --device cuda:0`` times 32
+    ... 256."""
+
+    def __init__(self, model, n_copies, n, device, dtype=wp.float64, layout="copy_fastest", block_dim=32):
         import numpy as np
         if layout not in LAYOUTS:
             raise ValueError(f"layout {layout!r}: one of {LAYOUTS}")
         self.model, self.B, self.n, self.device, self.dtype = model, int(n_copies), int(n), device, dtype
         self.layout = layout
+        self.block_dim = None if block_dim is None else int(block_dim)
         self.kernel = kernel(dtype, layout)
         arr = lambda a, t: wp.array(np.ascontiguousarray(a), dtype=t, device=device)
         self.spring_k = arr(np.asarray(model.spring_k, float), dtype)
@@ -237,7 +244,7 @@ class BlockNewtonStep:
                         d(m.bound_translation), d(m.bound_rotation), int(bool(m.homotopy)),
                         Q, K, self.kin, self.torque],
                 outputs=[self.q, self.status, self.stage, self.iters, self.total, self.residual, self.r, self.A,
-                         self.dq, self.active], record_cmd=True)
+                         self.dq, self.active], record_cmd=True, block_dim=self.block_dim)
             hit = self._cmds[key] = (cmd, (Q, K))
         self.active.zero_()
         hit[0].launch()
