@@ -18,7 +18,10 @@ operations in the same order) and within 1e-12 on cuda (the compiler may contrac
 Timing (reported, not judged): the step launch replayed ``--reps`` times after 3 warm-up launches,
 between device synchronizations, on a model whose copies stay active (tolerance 0, no iteration
 limit, no plausibility bound: every launch does the full assembly, elimination and update), per
-launch [ms] for both layouts and their ratio. Default B = 1,000 (the bench_device_mc study's
+launch [ms] for both layouts and their ratio. Then (--device cuda) the GPU time
+per kernel name (Warp's CUDA activity timing) of one warmed rv40e row Newton solve of B points on
+B nominal copies with the new step: how much of a sweep is the step, how much the families'
+kernels and the row sums. Default B = 1,000 (the bench_device_mc study's
 batch; its split: ~11 ms per step launch on an H200 inside the Newton loop), --reps 50; --quick:
 B = 64, 3 reps.
 """
@@ -41,6 +44,8 @@ LAYOUT_REL = 1e-12              # layout vs layout on cuda (cpu: bit-identical)
 def judge(r):
     c = r["correctness"]
     checks = {
+        "profiled_solve_converged": casekit.check(r["solve_profile"]["converged"], True, "==",
+                                                  why="every point of the profiled solve converged"),
         "same_statuses_as_reference": casekit.check(c["status_mismatches"], 0, "==",
                                                     why="statuses, stages, iterations of both layouts vs NumPy"),
         "states_vs_reference": casekit.check(c["max_rel_diff_vs_reference"], REF_REL,
@@ -63,7 +68,36 @@ def blocks(points):
     q = sol.q + 1e-7 * rng.normal(size=sol.q.shape) * nw.free     # off the equilibrium: a real step
     ev = nw.evaluator
     r = ev.evaluate((nw.reference + q).reshape(points * nw.nb, 3), np.zeros((points * nw.nb, 3)))
-    return nw.step_model(nw.settings), nw.n, np.asarray(r.Q), np.asarray(r.dQdq), q, np.asarray(kin), tq
+    return m, nw.step_model(nw.settings), nw.n, np.asarray(r.Q), np.asarray(r.dQdq), q, np.asarray(kin), tq
+
+
+def solve_profile(model, copies, device):
+    """GPU time per kernel of one warmed rv40e row Newton solve of ``copies`` points on ``copies``
+    nominal copies (the device Monte Carlo's TE batch: device sums and step, the resident loop,
+    the step's default layout): {kernel name: [launches, ms]} from Warp's CUDA activity timing
+    (None on cpu), the solve's wall time [s], its sweeps and whether every point converged. Tells
+    how much of a sweep the step kernel is (bench_device_mc's "step" share is timed around the
+    host's read of the active count: it also waits for the families' kernels and row sums queued
+    before it)."""
+    nw = DeviceRowNewton(model, copies, device=device)
+    angles = np.linspace(0.0, 2.0 * np.pi, copies, endpoint=False)
+    tq = np.full(copies, -np.sign(model.ratio) * model.design.rated_torque)
+    nw.solve(angles, tq)                                  # warm-up: compiles, caches launches
+    cuda = device != "cpu"
+    if cuda:
+        wp.timing_begin(cuda_filter=wp.TIMING_KERNEL)
+    t0 = time.perf_counter()
+    sol = nw.solve(angles, tq)
+    wp.synchronize_device(device)
+    wall = time.perf_counter() - t0
+    per = None
+    if cuda:
+        per = {}
+        for t in wp.timing_end():
+            e = per.setdefault(t.name, [0, 0.0])
+            e[0] += 1
+            e[1] += t.elapsed
+    return {"kernels_ms": per, "wall_s": wall, "sweeps": int(sol.sweeps), "converged": bool(np.all(sol.converged))}
 
 
 def main(argv=None):
@@ -76,7 +110,7 @@ def main(argv=None):
     B = args.copies or (64 if args.quick else 1000)
     reps = args.reps or (3 if args.quick else 50)
     P = 4
-    model, n, Q0, K0, q0, kin0, tq0 = blocks(P)
+    rv, model, n, Q0, K0, q0, kin0, tq0 = blocks(P)
     tile = lambda a: np.ascontiguousarray(np.concatenate([a] * (B // P + 1))[:B])
     Q, K, q, kin, tq = (tile(a) for a in (Q0, K0, q0, kin0, tq0))
     zi = lambda: np.zeros(B, np.int32)
@@ -130,6 +164,7 @@ def main(argv=None):
     results = {
         "device": args.device, "copies": B, "n": n, "reps": reps, "points": P,
         "step_ms": {k: 1e3 * t for k, t in times.items()},
+        "solve_profile": solve_profile(rv, min(B, 8) if args.quick else B, args.device),
         "old": key(old_cfg), "new": key(new_cfg),
         "speedup_new_vs_old": times[key(old_cfg)] / times[key(new_cfg)],
         "correctness": {"status_mismatches": mism, "max_rel_diff_vs_reference": rel_ref,
@@ -140,6 +175,11 @@ def main(argv=None):
     print(f"block step on {args.device}, B = {B}, n = {n}, per launch (after 3 warm-up, mean of {reps}):")
     for k, t in times.items():
         print(f"  {k:32s} {1e3 * t:9.3f} ms")
+    prof = results["solve_profile"]
+    print(f"rv40e solve of {min(B, 8) if args.quick else B} points on as many copies (new step): {prof['wall_s']:.3f} s, "
+          f"{prof['sweeps']} sweeps, all converged: {prof['converged']}")
+    for k, (cnt, ms) in sorted((prof["kernels_ms"] or {}).items(), key=lambda kv: -kv[1][1]):
+        print(f"  GPU {k[:60]:60s} {cnt:6d} launches {ms:10.3f} ms")
     print(f"  new ({key(new_cfg)}) vs old ({key(old_cfg)}): {results['speedup_new_vs_old']:.2f}x; "
           f"states vs reference {rel_ref:.2e}, layouts {rel_lay:.2e}")
     casekit.verdict(results, judge)
