@@ -124,13 +124,19 @@ def test_the_two_layouts_give_the_same_step(device):
         np.testing.assert_allclose(b["residual"], a["residual"], rtol=1e-12)
 
 
+def test_the_default_layout_is_copy_major_on_cpu():
+    """On a CPU a thread walks its own contiguous block (cache); copy-fastest is for GPUs."""
+    assert BlockNewtonStep(_model(6), 2, 6, "cpu").layout == "copy_major"
+
+
 def test_an_unknown_layout_is_refused():
     with pytest.raises(ValueError, match="layout"):
         BlockNewtonStep(_model(6), 2, 6, "cpu", layout="rows")
 
 
+@pytest.mark.parametrize("layout", LAYOUTS)
 @pytest.mark.parametrize("device", DEVICES)
-def test_the_loop_converges_to_the_linear_solution_as_the_reference(device):
+def test_the_loop_converges_to_the_linear_solution_as_the_reference(device, layout):
     _skip(device)
     B, n = 5, 9
     m = _model(n, max_iterations=50, spring_k=np.zeros(n))
@@ -139,7 +145,8 @@ def test_the_loop_converges_to_the_linear_solution_as_the_reference(device):
     kin = np.zeros((B, n))
     tq = np.zeros(B)
     st = [np.full(B, ACTIVE, np.int32), np.full(B, WARM, np.int32), np.zeros(B, np.int32), np.zeros(B, np.int32)]
-    s = BlockNewtonStep(m, B, n, device)
+    s = BlockNewtonStep(m, B, n, device, layout=layout)
+    assert s.layout == layout
     s.load(q=q, kin=kin, torque=tq, status=st[0], stage=st[1], iters=st[2], total=st[3])
     qr, res = q.copy(), np.zeros(B)
     Kd = wp.array(K, dtype=wp.float64, device=device)

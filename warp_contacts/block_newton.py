@@ -21,9 +21,10 @@ from .dense_lu import LAYOUTS, accessors, lu_funcs
 
 @functools.lru_cache(maxsize=None)
 def kernel(dtype, layout="copy_major"):
-    """The ``block_step`` kernel for ``dtype``; its working arrays A, r, dq in ``layout``
-    (:func:`warp_contacts.dense_lu.accessors`: "copy_major" A (B, n, n), r and dq (B, n);
-    "copy_fastest" A (n, n, B), r and dq (n, B)). Q, K, q, kin stay (B, n) / (B, n, n)."""
+    """The ``block_step`` kernel for ``dtype``; the tangent K and the working arrays A, r, dq in
+    ``layout`` (:func:`warp_contacts.dense_lu.accessors`: "copy_major" K and A (B, n, n), r and dq
+    (B, n); "copy_fastest" K and A (n, n, B), r and dq (n, B): K from :func:`transpose_kernel`).
+    Q, q, kin stay (B, n)."""
     lu_solve = lu_funcs(dtype, layout)
     mat, set_mat, vec, set_vec = accessors(dtype, layout)
 
@@ -75,7 +76,7 @@ def kernel(dtype, layout="copy_major"):
             if i == out_index:
                 ri = ri + torque[p]
             for j in range(n):
-                set_mat(A, p, i, j, -K[p, i, j])
+                set_mat(A, p, i, j, -mat(K, p, i, j))
             set_mat(A, p, i, i, mat(A, p, i, i) + ks)
             if free[i] == 0:
                 ri = dtype(0.0)
@@ -148,6 +149,19 @@ def kernel(dtype, layout="copy_major"):
 
 
 @functools.lru_cache(maxsize=None)
+def transpose_kernel(dtype):
+    """``to_copy_fastest``: Kt[i, j, p] = K[p, i, j] (launched over (n, n, B): neighbouring threads
+    write neighbouring addresses), the copy-fastest tangent of :func:`kernel`."""
+
+    @wp.kernel(module="unique")
+    def to_copy_fastest(K: wp.array3d(dtype=dtype), Kt: wp.array3d(dtype=dtype)):
+        i, j, p = wp.tid()
+        Kt[i, j, p] = K[p, i, j]
+
+    return to_copy_fastest
+
+
+@functools.lru_cache(maxsize=None)
 def pose_kernel(dtype):
     """``write_poses``: pose[p nb + i // 3, i % 3] = reference[p, i] + q[p, i] (the absolute poses of
     every copy in a contact kernel's pose array, its ground row untouched; NumPy:
@@ -168,11 +182,13 @@ class BlockNewtonStep:
     ``stage``, ``iters``, ``total``, ``residual`` (device), written by :meth:`load` and read by
     :meth:`read`; :meth:`step` launches one step from device sums Q (B, n), K (B, n, n).
 
-    ``layout`` of the step's working arrays (the copy's matrix A, residual r, step dq; see
-    :func:`kernel`): "copy_fastest" (default; one thread per copy, neighbouring threads at
-    neighbouring addresses: coalesced on a GPU) or "copy_major" (each copy's block contiguous, the
-    kernel before issue 31's step work). Both run the same operations in the same order: equal
-    results (bit-identical on cpu; tests/test_block_newton.py).
+    ``layout`` of the step's tangent and working arrays (the copy's matrix A, residual r, step dq;
+    see :func:`kernel`): "copy_fastest" (one thread per copy, neighbouring threads at neighbouring
+    addresses: coalesced on a GPU; the tangent transposed by one extra launch) or "copy_major"
+    (each copy's block contiguous, the kernel before issue 31's step work; the faster one on a CPU,
+    where a thread walks its own block through the cache); None (default): "copy_major" on cpu,
+    else "copy_fastest". Both run the same operations in the same order: equal results
+    (bit-identical on cpu; tests/test_block_newton.py).
 
     ``block_dim``: threads per CUDA block of the step launch (default 32, one warp: B = 1,000
     copies spread over 32 multiprocessors instead of Warp's 256 threads on 4; ``None``: Warp's
@@ -180,8 +196,10 @@ class BlockNewtonStep:
     layout, not measured here: ``cases/benchmarks/bench_block_step.py --device cuda:0`` times 32
     ... 256."""
 
-    def __init__(self, model, n_copies, n, device, dtype=wp.float64, layout="copy_fastest", block_dim=32):
+    def __init__(self, model, n_copies, n, device, dtype=wp.float64, layout=None, block_dim=32):
         import numpy as np
+        if layout is None:
+            layout = "copy_major" if wp.get_device(device).is_cpu else "copy_fastest"
         if layout not in LAYOUTS:
             raise ValueError(f"layout {layout!r}: one of {LAYOUTS}")
         self.model, self.B, self.n, self.device, self.dtype = model, int(n_copies), int(n), device, dtype
@@ -203,6 +221,7 @@ class BlockNewtonStep:
         else:
             self.r, self.dq = (wp.zeros((n, B), dtype=dtype, device=device) for _ in range(2))
             self.A = wp.zeros((n, n, B), dtype=dtype, device=device)
+            self.Kt = wp.zeros((n, n, B), dtype=dtype, device=device)
         self.torque = wp.zeros(B, dtype=dtype, device=device)
         self.residual = wp.zeros(B, dtype=dtype, device=device)
         self.status, self.stage, self.iters, self.total = zi(), zi(), zi(), zi()
@@ -237,6 +256,11 @@ class BlockNewtonStep:
         if hit is None:
             m = self.model
             d = self.dtype
+            pre, held = None, (Q, K)            # the arrays kept with the launches (their addresses)
+            if self.layout == "copy_fastest":
+                pre = wp.launch(transpose_kernel(d), dim=(self.n, self.n, self.B), device=self.device,
+                                inputs=[K], outputs=[self.Kt], record_cmd=True)
+                K = self.Kt
             cmd = wp.launch(
                 self.kernel, dim=self.B, device=self.device,
                 inputs=[self.spring_k, self.free, self.rot, int(m.out_index), self.stiffening, d(m.abs_tol),
@@ -245,9 +269,12 @@ class BlockNewtonStep:
                         Q, K, self.kin, self.torque],
                 outputs=[self.q, self.status, self.stage, self.iters, self.total, self.residual, self.r, self.A,
                          self.dq, self.active], record_cmd=True, block_dim=self.block_dim)
-            hit = self._cmds[key] = (cmd, (Q, K))
+            hit = self._cmds[key] = (cmd, held, pre)
+        if hit[2] is not None:
+            hit[2].launch()
         self.active.zero_()
         hit[0].launch()
 
 
-__all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "LAYOUTS", "WARM", "kernel", "pose_kernel"]
+__all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "LAYOUTS", "WARM", "kernel", "pose_kernel",
+           "transpose_kernel"]

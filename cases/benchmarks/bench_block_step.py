@@ -143,7 +143,7 @@ def main(argv=None):
                                bound_rotation=1e300, homotopy=False)
     # (layout, block_dim): the old launch (copy-major, Warp's default block), the new default, and
     # on a GPU the other combinations (which part of the gain is the layout, which the spread)
-    old_cfg, new_cfg = ("copy_major", None), ("copy_fastest", BlockNewtonStep(busy, 1, n, "cpu").block_dim)
+    old_cfg, new_cfg = ("copy_major", None), ("copy_fastest", 32)      # BlockNewtonStep's default on a GPU
     cfgs = [old_cfg, new_cfg]
     if args.device != "cpu":
         cfgs += [("copy_major", 32)] + [("copy_fastest", d) for d in (None, 64, 128) if d != new_cfg[1]]
