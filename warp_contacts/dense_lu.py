@@ -1,10 +1,12 @@
 """Dense per-copy linear solve for the one-thread-per-copy kernels (batched static Newton, fused
 dynamic stepper): Gaussian elimination with partial pivoting and back substitution on copy p's
-block of a (B, n, n) array. Its reference is ``numpy.linalg.solve`` (tests/test_dense_lu.py).
+block of a (B, n, n) array, or of an (n, n, B) one (copy-fastest: coalesced across a GPU warp;
+:func:`accessors`). Its reference is ``numpy.linalg.solve`` (tests/test_dense_lu.py).
 
 One sequential thread per copy and a fixed operation order make the result deterministic (two
 runs bit-identical); no LAPACK call exists inside a Warp kernel, and the blocks are small (tens
-of coordinates), so the O(n^3) loop is not the cost (the contact rows are).
+of coordinates); on a GPU with one thread per copy the copy-major layout is the slow one (every
+thread of a warp reads its own cache line), hence the copy-fastest layout of the block Newton step.
 """
 import functools
 

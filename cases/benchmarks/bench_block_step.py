@@ -164,9 +164,10 @@ def main(argv=None):
     results = {
         "device": args.device, "copies": B, "n": n, "reps": reps, "points": P,
         "step_ms": {k: 1e3 * t for k, t in times.items()},
-        "solve_profile": solve_profile(rv, min(B, 8) if args.quick else B, args.device),
+        "profile_points": min(B, 8) if args.quick else B,
         "old": key(old_cfg), "new": key(new_cfg),
         "speedup_new_vs_old": times[key(old_cfg)] / times[key(new_cfg)],
+        "solve_profile": solve_profile(rv, min(B, 8) if args.quick else B, args.device),
         "correctness": {"status_mismatches": mism, "max_rel_diff_vs_reference": rel_ref,
                         "max_rel_diff_layouts": rel_lay,
                         "statuses": {int(k): int(v) for k, v in zip(*np.unique(ref["status"], return_counts=True))}},
@@ -176,8 +177,8 @@ def main(argv=None):
     for k, t in times.items():
         print(f"  {k:32s} {1e3 * t:9.3f} ms")
     prof = results["solve_profile"]
-    print(f"rv40e solve of {min(B, 8) if args.quick else B} points on as many copies (new step): {prof['wall_s']:.3f} s, "
-          f"{prof['sweeps']} sweeps, all converged: {prof['converged']}")
+    print(f"rv40e solve of {results['profile_points']} points on as many copies (default step): "
+          f"{prof['wall_s']:.3f} s, {prof['sweeps']} sweeps, all converged: {prof['converged']}")
     for k, (cnt, ms) in sorted((prof["kernels_ms"] or {}).items(), key=lambda kv: -kv[1][1]):
         print(f"  GPU {k[:60]:60s} {cnt:6d} launches {ms:10.3f} ms")
     print(f"  new ({key(new_cfg)}) vs old ({key(old_cfg)}): {results['speedup_new_vs_old']:.2f}x; "
