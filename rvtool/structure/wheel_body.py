@@ -25,8 +25,9 @@ applies F w_v at the patch's vertices, the port displacement is sum_v w_v u_v, s
 
 No double counting of the local contact compliance: the pin contact law already holds the
 approach of the wheel's surface relative to its material at the datum depth of a line contact.
-The profile ports therefore *measure* the displacement at the point ``port_depth`` below the
-sample along the inward normal (barycentric in the plane mesh, mean over the thickness) while the
+The profile ports therefore *measure* the normal displacement at the point ``port_depth`` below
+the sample along the inward normal (the tangential one on the surface: the law holds no tangential
+approach) (barycentric in the plane mesh, mean over the thickness) while the
 load stays spread on the surface, the separation of local (analytic) and global (FE) deformation
 of Andersson & Vedmar (J. Mech. Design 125 (2003) 524): the port compliance is
 C = sym(P_m K^+ P_l^T), with P_l the load rows, P_m the measurement rows (= P_l on the bores and
@@ -338,7 +339,12 @@ def wheel_body(geometry: WheelGeometry, spec: WheelBodySpec, material: ElasticMa
         for i in range(N):
             tv, bw = _barycentric(pts, tris, prof[i] - depth * normals[i])
             add(mrows, mcols, mvals, 2 * i, tv, bw)
-        Pm = sp.vstack([sp.csr_matrix((mvals, (mrows, mcols)), shape=(2 * N, ndof)), Pl[2 * N:]]).tocsr()
+        Pd = sp.csr_matrix((mvals, (mrows, mcols)), shape=(2 * N, ndof))
+        # the normal component measured at depth, the tangential one on the surface (the contact law
+        # holds the normal approach only)
+        nn = sp.block_diag([np.outer(n_, n_) for n_ in normals])
+        tt = sp.block_diag([np.eye(2) - np.outer(n_, n_) for n_ in normals])
+        Pm = sp.vstack([nn @ Pd + tt @ Pl[:2 * N], Pl[2 * N:]]).tocsr()
     else:
         Pm = Pl
     return WheelBody(fe=fe, load_matrix=Pl, measure_matrix=Pm.tocsr(), groups=groups, profile_points=prof,
