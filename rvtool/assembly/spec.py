@@ -104,7 +104,7 @@ class Wheels:
     closest point). body: the wheel body in the torque path, "rigid" (default) or "ported" (an elastic
     wheel through NGSolve, :mod:`rvtool.assembly.wheel_body`; RV topology). structure: the
     :class:`~rvtool.structure.wheel_body.WheelBodySpec` of a ported wheel (file:
-    ``[wheels.structure]``; None: its defaults)."""
+    ``[wheels.structure]``; unused while the body is rigid)."""
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
@@ -115,7 +115,7 @@ class Wheels:
     n_teeth: int | None = None
     search: str = "discrete"
     body: str = "rigid"
-    structure: WheelBodySpec | None = None
+    structure: WheelBodySpec = field(default_factory=WheelBodySpec)
 
     def __post_init__(self):
         check_positive("wheels.eccentricity", self.eccentricity)

@@ -19,6 +19,7 @@ import dataclasses
 import functools
 import math
 
+from ..errors import RvtoolInputError
 from ..structure.wheel_body import WheelBodySpec, WheelGeometry, wheel_body
 
 
@@ -27,6 +28,11 @@ def wheel_spec(design, mesh_size=None):
     ``mesh_size`` [m] replaced when given."""
     spec = design.wheels.structure or WheelBodySpec()
     return spec if mesh_size is None else dataclasses.replace(spec, mesh_size=float(mesh_size))
+
+
+def circles(hs):
+    """((x, y, r), ...) [m] of a :class:`~rvtool.structure.wheel_body.HoleSet`."""
+    return tuple((float(x), float(y), hs.radius) for x, y in hs.centres())
 
 
 def wheel_geometry(design, wheel=0, spec=None):
@@ -39,9 +45,24 @@ def wheel_geometry(design, wheel=0, spec=None):
     rb = design.eccentric_bearing.inner_radius + design.eccentric_bearing.roller_diameter
     bores = tuple((g.crank_radius * math.cos(b), g.crank_radius * math.sin(b), rb) for b in g.crank_angles)
 
-    def circles(hs):
-        return tuple((float(x), float(y), hs.radius) for x, y in hs.centres())
     depth = design.pins.pin_radius if spec.port_depth is None else spec.port_depth
+    root = design.pins.pin_circle_radius - design.pins.pin_radius - design.wheels.eccentricity
+    if depth >= 0.5 * (root - g.crank_radius - rb):
+        raise RvtoolInputError(f"wheels.structure.port_depth = {depth} m reaches the crank bores; valid range [0, "
+                               f"{0.5 * (root - g.crank_radius - rb):.4g}) m")
+    circles_all = list(bores)
+    for key, hs in (("pillar_holes", spec.pillar_holes), ("lightening_holes", spec.lightening_holes)):
+        for x, y, r in circles(hs):
+            if math.hypot(x, y) + r > root - depth - 1e-9:
+                raise RvtoolInputError(f"wheels.structure.{key}: a hole of radius {r} m on circle_radius "
+                                       f"{hs.circle_radius} m reaches the rim (root radius {root:.4g} m less "
+                                       f"port_depth); valid: circle_radius + radius < {root - depth:.4g} m")
+            for xo, yo, ro in circles_all:
+                if math.hypot(x - xo, y - yo) < r + ro + 1e-9:
+                    raise RvtoolInputError(f"wheels.structure.{key}: a hole at ({x:.4g}, {y:.4g}) m cuts another "
+                                           "hole or a crank bore; valid: disjoint holes (change angle_deg, "
+                                           "circle_radius or radius)")
+            circles_all.append((x, y, r))
     return WheelGeometry(profile=prof, thickness=design.wheels.width, bores=bores, holes=circles(spec.pillar_holes),
                          lightening=circles(spec.lightening_holes), port_depth=float(depth))
 

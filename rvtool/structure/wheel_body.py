@@ -51,8 +51,11 @@ from .fe_model import ElasticMaterial, FEModel, fe_model_from_mesh
 
 @dataclass(frozen=True, kw_only=True)
 class HoleSet:
-    """``count`` equal circular holes of ``radius`` [m] on the circle ``circle_radius`` [m], the first
-    at polar angle ``angle`` [rad] from +x (file: ``angle_deg``)."""
+    """Equal circular holes on a circle.
+
+    count: number of holes [-] (0: none). radius: hole radius [m]. circle_radius: radius of the
+    circle of hole centres [m]. angle: polar angle of the first hole from +x [rad] (file: ``angle_deg``).
+    """
     count: int = 0
     radius: float = 0.0
     circle_radius: float = 0.0
@@ -63,7 +66,7 @@ class HoleSet:
             raise RvtoolInputError(f"count = {self.count!r} is outside the valid range [0, 64] (integer)")
         if self.count:
             check_positive("radius", self.radius)
-            check_positive("circle_radius", self.circle_radius)
+            check_nonnegative("circle_radius", self.circle_radius)
 
     def centres(self):
         a = self.angle + 2 * math.pi * np.arange(self.count) / max(self.count, 1)
