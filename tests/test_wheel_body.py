@@ -79,11 +79,13 @@ def test_ports_are_spread_and_work_conjugate(coarse_wheel):
 def test_mesh_convergence_trend(rv40e):
     """The wheel's compliance under a fixed balanced load (a torque carried from four profile ports to the bores)
     over three meshes: first-order tetrahedra are too stiff, so the compliance grows with refinement, and the
-    change shrinks (the trend the case's three-mesh study reports on the share)."""
+    change shrinks. Meshes of 5, 3.5 and 2.5 mm: coarser ones (7-10 mm, larger than the web between the bores
+    and the tooth root) are not yet in the asymptotic range (measured: 5.62e-5, 5.61e-5, 5.52e-5 m/N at 10, 7,
+    5 mm, then 5.69e-5, 5.74e-5)."""
     from rvtool.assembly.wheel_body import wheel_geometry
     from rvtool.structure.wheel_body import WheelBodySpec, inertia_relief_solve, wheel_body
     out = []
-    for h, layers in ((0.010, 1), (0.007, 2), (0.005, 3)):
+    for h, layers in ((0.005, 3), (0.0035, 4), (0.0025, 6)):
         spec = WheelBodySpec(mesh_size=h, layers=layers, samples_per_tooth=4)
         d = rv40e.replace(wheels={"body": "ported"})
         wb = wheel_body(wheel_geometry(d, 0, spec), spec, rv40e.material)
@@ -93,8 +95,10 @@ def test_mesh_convergence_trend(rv40e):
             p = wb.profile_points[i]
             t = np.array([-p[1], p[0]]) / np.linalg.norm(p)
             f[wb.rows("profile")[2 * i:2 * i + 2]] = 100.0 * t
-        T = sum(np.cross(wb.profile_points[i], f[wb.rows("profile")[2 * i:2 * i + 2]])
-                for i in (0, N // 4, N // 2, 3 * N // 4))
+        T = 0.0
+        for i in (0, N // 4, N // 2, 3 * N // 4):
+            p, fi = wb.profile_points[i], f[wb.rows("profile")[2 * i:2 * i + 2]]
+            T += p[0] * fi[1] - p[1] * fi[0]
         bores = [np.array(b[:2]) for b in wb.geometry.bores]
         for k, b in enumerate(bores):        # each bore takes T / (n r) tangentially, against the ports
             f[wb.rows(f"bore{k}")] = -T / (len(bores) * b @ b) * np.array([-b[1], b[0]])
