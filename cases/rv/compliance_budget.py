@@ -14,6 +14,10 @@ by switching the three compliance switches of the RV model:
   ``[carrier.structure]`` (``carrier.body = "ported"``; the crank seats move relative to the output face);
 * ``all_on``: all three.
 
+Column ``wheel_body`` (issue 30): the elastic cycloid wheels (``wheels.body = "ported"``,
+:mod:`rvtool.assembly.wheel_body`) switched on the ``all_rigid`` variant (they do not combine with the other
+switches yet); their added compliance and share, the energy view checked against the switch-on view within SHARE_TOL.
+
 The third switch the issue names, elastic ring pins (``pins.support``), is not implemented for the RV topology (the
 builder rejects it); it is reported as such, not measured.
 
@@ -52,6 +56,8 @@ RESIDUAL_TOL = 0.01
 SHARE_TOL = 0.05
 """Energy share (infinitesimal view) vs switch-on share (finite view) of one member: they differ by the load
 redistribution the switch causes (rvtool.protocols.budget docstring): 0.05 absolute."""
+WHEEL_QUICK = {"mesh_size": 0.006, "samples_per_tooth": 4}
+"""--quick: the wheel body (issue 30) at 6 mm and 4 profile ports per tooth (the defaults: 4 mm, 8)."""
 SWITCHES = ("elastic_cranks", "ported_housing", "ported_carrier")
 MEMBER = {"elastic_cranks": "cranks", "ported_housing": "housing_ports", "ported_carrier": "carrier"}
 
@@ -86,6 +92,25 @@ def rated_budget(design):
             "rigid_switch_shares": b["rigid_shares"], "wall_s": time.perf_counter() - t0}
 
 
+def wheel_body_column(name, quick, all_rigid, all_on):
+    """The ``wheel_body`` switch (``wheels.body = "ported"``, issue 30) on the all-rigid design (the
+    closure of the wheels does not combine with the other elastic switches yet): its added compliance,
+    its share of that variant (switch-on and energy view) and, members in series adding, its share of
+    an all-on model that also had it, dC_w / (C_all_on + dC_w)."""
+    d = rvtool.load_design(designs.path(name))
+    sh = {"model": "rigid", "tilt": False}
+    v = d.replace(cranks={"shaft": sh}, housing={"model": "rigid"}, pins={"groove": "rigid"}, carrier={"body": "rigid"},
+                  wheels={"body": "ported", **({"structure": WHEEL_QUICK} if quick else {})})
+    r = rated_budget(v)
+    dC = r["C_arcmin_per_Nm"] - all_rigid["C_arcmin_per_Nm"]
+    share = dC / r["C_arcmin_per_Nm"]
+    energy = r["energy_shares"].get("wheel_bodies", float("nan"))
+    return {"variant": r, "added_compliance_arcmin_per_Nm": dC, "switch_on_share": share, "energy_share": energy,
+            "share_of_all_on_with_wheels": dC / (all_on["C_arcmin_per_Nm"] + dC),
+            "share_gap": abs(energy - share), "share_ok": bool(abs(energy - share) <= SHARE_TOL),
+            "finite": bool(math.isfinite(dC) and math.isfinite(energy))}
+
+
 def budget_of(name, quick):
     out = {v: rated_budget(d) for v, d in variants(name, quick).items()}
     C0, C = out["all_rigid"]["C_arcmin_per_Nm"], out["all_on"]["C_arcmin_per_Nm"]
@@ -101,10 +126,12 @@ def budget_of(name, quick):
               "max_residual_share": residual, "residual_ok": residual <= RESIDUAL_TOL,
               "energy_vs_switch_share_gap": share_gap,
               "share_ok": all(g <= SHARE_TOL for g in share_gap.values())}
-    return {"variants": out, "added_compliance_arcmin_per_Nm": added, "switch_on_shares_of_all_on": switch_share,
+    wheel = wheel_body_column(name, quick, out["all_rigid"], out["all_on"])
+    return {"variants": out, "wheel_body": wheel, "added_compliance_arcmin_per_Nm": added, "switch_on_shares_of_all_on": switch_share,
             "member_energy_shares_all_on": energy, "K_t_all_on_Nm_per_arcmin": out["all_on"]["K_t_Nm_per_arcmin"],
             "K_t_all_rigid_Nm_per_arcmin": out["all_rigid"]["K_t_Nm_per_arcmin"], "checks": checks,
-            "passed": bool(finite and checks["additivity_ok"] and checks["residual_ok"] and checks["share_ok"])}
+            "passed": bool(finite and checks["additivity_ok"] and checks["residual_ok"] and checks["share_ok"]
+                           and wheel["finite"] and wheel["share_ok"])}
 
 
 def main(argv=None):

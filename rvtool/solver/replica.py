@@ -40,6 +40,7 @@ from ..contact.circle_set import GROUND, CircleContactSet
 from ..contact.cycloid_set import CycloidPinSet
 from ..contact.evaluator import ContactSetEvaluator
 from ..contact.involute_set import InvoluteContactSet
+from ..contact.wheel_closure import WheelBodyClosure
 from ..errors import RvtoolInputError
 from ..model.reducer import COORDINATES
 from ..output_pins.evaluator import OutputPinEvaluator
@@ -349,6 +350,11 @@ def replica_reasons(model):
     nb = len(model.body_names)
     for el in model.contact_elements():
         s = el.evaluator
+        if isinstance(s, WheelBodyClosure):
+            reasons.append("wheels.body = 'ported': the elastic wheels' closure (WheelBodyClosure, the wheels' "
+                           "station compliance) has no device copy (valid: wheels.body = 'rigid', or backend "
+                           "'exudyn')")
+            continue
         if type(s) not in COPIERS:
             reasons.append(f"contact element {el.evaluator.name!r} ({type(s).__name__}) has no copier for the "
                            f"angle-batched path; valid set types: {sorted(t.__name__ for t in COPIERS)}")
