@@ -257,6 +257,29 @@ MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
 """Latin-hypercube samples of the moment-rigidity band over the main bearing's `assumed` ranges."""
 
 
+def tilting_bodies_rigidity(design, test):
+    """The moment rigidity [N m/arcmin] with the wheels and the cranks tilting as well
+    (``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"``, issue 32): the moment then also
+    passes through the cranks and wheels to the ring pins. Returns {"bodies",
+    "moment_rigidity_Nm_per_arcmin", "convention"} or {"bodies", "error"} (a side figure)."""
+    from ..assembly import build
+    from ..assembly.spec import replace as replace_design
+    from ..errors import RvtoolInputError
+    from ..protocols.moment_rigidity import moment_rigidity
+    bodies = {"carrier_coordinates": "spatial", "wheel_coordinates": "spatial", "crank_coordinates": "spatial"}
+    try:
+        try:
+            model = build(replace_design(design, bodies=bodies))
+        except RvtoolInputError:       # a design whose cranks cannot tilt (named in the builder): planar cranks
+            bodies.pop("crank_coordinates")
+            model = build(replace_design(design, bodies=bodies))
+        res = moment_rigidity(model, test)
+        return {"bodies": sorted(bodies), "moment_rigidity_Nm_per_arcmin": res.rigidity_arcmin,
+                "convention": res.convention}
+    except Exception as exc:           # reported, not fatal
+        return {"bodies": sorted(bodies), "error": f"{type(exc).__name__}: {exc}"}
+
+
 def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     """The moment-rigidity row (issue 32): :func:`rvtool.protocols.moment_rigidity.moment_rigidity`
     on the design with a spatial carrier (a ported housing replaced by the rigid one: the main-bearing
@@ -284,7 +307,7 @@ def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
             band = main_bearing_band(d.main_bearing, assumed, test,
                                      samples=QUICK_MOMENT_SAMPLES if quick else MOMENT_SAMPLES)
         value, note = res.rigidity_arcmin, f"{res.convention}; {ref_note}; axial stiffness {res.axial_stiffness:.4g} N/m"
-        detail = {"result": res.to_dict(), "band": band}
+        detail = {"result": res.to_dict(), "band": band, "tilting_bodies": tilting_bodies_rigidity(d, test)}
     except Exception as exc:           # reported in the table, not fatal
         value, note, band = None, f"not computed: {type(exc).__name__}: {exc}", None
         detail = {"result": None, "band": None, "error": note}
@@ -502,6 +525,10 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
     rows += moment["rows"]
+    log(f"validate {design}: efficiency and no-load running torque (rvtool.analysis.losses)")
+    from .losses import validate_efficiency
+    efficiency = validate_efficiency(design, d, quick=quick)
+    rows += efficiency.pop("rows")
     for fam in ("eccentric_bearings", "crank_bearings"):
         vals = [v["L10_h"] for k, v in lives.items() if v["family"] == fam and v["L10_h"] is not None]
         rows += _rows("rated_life", min(vals) if vals else None, "h", catalogue,
@@ -556,7 +583,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
                                                 "housing.model": getattr(d.housing, "model", None)
                                                 if d.housing else None}},
-        "ratio_variant": variant, "uncertainty": unc,
+        "ratio_variant": variant, "uncertainty": unc, "efficiency": efficiency,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
                      "rigidity_points": list(rigidity_points(catalogue)[0]),
@@ -646,6 +673,8 @@ def write(out, out_dir, catalogue):
         fig.savefig(os.path.join(out_dir, "tornado.png"), dpi=110)
         plt.close(fig)
         plots.append("tornado.png")
+    from .losses import efficiency_plot
+    plots += efficiency_plot(out, out_dir)
     with open(os.path.join(out_dir, "report.html"), "w") as fh:
         fh.write(report_html(out, out_dir, plots))
 

@@ -42,6 +42,10 @@ def kind(name):
         return "assumed"
     if "figure" in table:
         return "catalogue"
+    if "friction_set" in table:
+        return "friction"
+    if "efficiency_catalogue" in table:
+        return "efficiency"
     return "design"
 
 

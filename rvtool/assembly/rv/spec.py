@@ -114,8 +114,12 @@ class InvoluteStage:
         check_positive("involute_stage.reference_force", self.reference_force)
 
 
-#: retained coordinates of the carrier / output flange (``bodies.carrier_coordinates``)
+#: retained coordinates of the carrier / output flange (``bodies.carrier_coordinates``), of the
+#: wheels (``bodies.wheel_coordinates``) and of the cranks (``bodies.crank_coordinates``)
 CARRIER_COORDINATES = ("planar", "spatial")
+
+#: valid range of ``bodies.tilt_slices`` (width slices of the families on tilting wheels / cranks)
+TILT_SLICES = (2, 32)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -134,7 +138,15 @@ class RvBodies:
     gamma_x, gamma_y on the main-bearing rows: :class:`rvtool.bearings.spatial_set.SpatialBearingSet`).
     carrier_tilt_inertia: transverse inertia [kg m^2] of the carrier about a diameter through the
     mounting centre (dynamic runs of a spatial carrier only); None: half the polar inertia (a thin
-    disc, assumed)."""
+    disc, assumed).
+    wheel_coordinates: ``"planar"`` (default) or ``"spatial"``: each cycloid wheel also retains its
+    axial translation and two tilts about its mid-plane; the ring-pin mesh and the needle rows on it
+    are sliced across the wheel width with the relative tilt (Eq. (skew),
+    :class:`rvtool.contact.skew.SkewSlices`). crank_coordinates: likewise for the crankshafts
+    (tilts about the centre of their tapered pair; the tapered rows on the 5-DOF roller law, the
+    needle rows sliced with the crank's arm to each wheel). tilt_slices: width slices of every
+    family on a spatial wheel or crank [-] (:data:`TILT_SLICES`). wheel_tilt_inertia: transverse
+    inertia [kg m^2] of a wheel (None: a thin disc, half its polar inertia, assumed)."""
     input: tuple = ("theta",)
     sun_mass: float = 0.15
     sun_inertia: float = 1.0e-5
@@ -144,6 +156,10 @@ class RvBodies:
     carrier_inertia: float = 6.0e-3
     carrier_coordinates: str = "planar"
     carrier_tilt_inertia: float | None = None
+    wheel_coordinates: str = "planar"
+    crank_coordinates: str = "planar"
+    tilt_slices: int = 2
+    wheel_tilt_inertia: float | None = None
 
     def __post_init__(self):
         for c in self.input:
@@ -158,6 +174,25 @@ class RvBodies:
                                    f"{list(CARRIER_COORDINATES)}")
         if self.carrier_tilt_inertia is not None:
             check_positive("bodies.carrier_tilt_inertia", self.carrier_tilt_inertia)
+        for nm in ("wheel_coordinates", "crank_coordinates"):
+            if getattr(self, nm) not in CARRIER_COORDINATES:
+                raise RvtoolInputError(f"bodies.{nm} = {getattr(self, nm)!r}; valid choices are {list(CARRIER_COORDINATES)}")
+        lo, hi = TILT_SLICES
+        if isinstance(self.tilt_slices, bool) or not isinstance(self.tilt_slices, int) or not lo <= self.tilt_slices <= hi:
+            raise RvtoolInputError(f"bodies.tilt_slices = {self.tilt_slices!r} is outside the valid range [{lo}, {hi}] "
+                                   "(integer)")
+        if self.wheel_tilt_inertia is not None:
+            check_positive("bodies.wheel_tilt_inertia", self.wheel_tilt_inertia)
+
+    @property
+    def spatial_wheels(self):
+        """True where the wheels retain their axial and tilt coordinates."""
+        return self.wheel_coordinates == "spatial"
+
+    @property
+    def spatial_cranks(self):
+        """True where the cranks retain their axial and tilt coordinates."""
+        return self.crank_coordinates == "spatial"
 
     @property
     def spatial_carrier(self):
