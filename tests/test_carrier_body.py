@@ -140,6 +140,8 @@ def test_ported_carrier_refuses_what_it_does_not_implement():
     d = _ported()
     with pytest.raises(RvtoolInputError, match="bodies.carrier_coordinates"):
         rvtool.build(d.replace(bodies={"carrier_coordinates": "spatial"}))
+    with pytest.raises(RvtoolInputError, match="bodies.crank_coordinates"):
+        rvtool.build(d.replace(bodies={"crank_coordinates": "spatial"}))
     with pytest.raises(RvtoolInputError, match="bearing_friction.model"):
         rvtool.build(d.replace(bearing_friction={"model": "palmgren"}))
 
