@@ -374,7 +374,7 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             assumed=None, band=True, variant=True, log=print):
+             assumed=None, band=True, variant=True, te=True, log=print):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
@@ -382,7 +382,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     many keys, the most important first by :func:`screening` (None: every key; quick:
     :data:`QUICK_TORNADO_KEYS`); assumed: a ranges file to use instead of the shipped
     ``<design>_assumed.toml`` (its values must be the design's middles too); band, variant: False
-    skips the uncertainty band or the ratio variant (said so in the results)."""
+    skips the uncertainty band or the ratio variant (said so in the results); te: False skips the TE
+    comparison with a published measurement (:mod:`rvtool.analysis.validate_te`; it runs where the design
+    ships a ``<design>_measured.toml`` and a tolerance file)."""
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
     want_band, want_variant = bool(band), bool(variant)
@@ -525,6 +527,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
     rows += moment["rows"]
+    te_measured = _te_measured(design, d, T_R, quick=quick, want=te, log=log)
+    rows += (te_measured or {}).get("rows", [])
     log(f"validate {design}: efficiency and no-load running torque (rvtool.analysis.losses)")
     from .losses import validate_efficiency
     efficiency = validate_efficiency(design, d, quick=quick)
@@ -583,7 +587,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
                                                 "housing.model": getattr(d.housing, "model", None)
                                                 if d.housing else None}},
-        "ratio_variant": variant, "uncertainty": unc, "efficiency": efficiency,
+        "ratio_variant": variant, "uncertainty": unc, "te_measured": te_measured, "efficiency": efficiency,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
                      "rigidity_points": list(rigidity_points(catalogue)[0]),
@@ -603,6 +607,15 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     return out
 
 
+def _te_measured(design, d, rated_torque, *, quick, want, log):
+    """The TE comparison with a published measurement (:func:`rvtool.analysis.validate_te.te_comparison`), None
+    where the design has no measurement or tolerance file or ``want`` is False."""
+    if not want:
+        return None
+    from .validate_te import te_comparison
+    return te_comparison(design, d, rated_torque, quick=quick, log=log)
+
+
 def checks(out):
     """The stated criteria of a run (not agreement with the catalogue): the machinery ran (no
     failed sample), no NaN, the loops repeat, the band contains the central value."""
@@ -616,6 +629,8 @@ def checks(out):
             u["band"][k] is not None
             and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
             for k in ("torsional_rigidity", "lost_motion", "hysteresis_loss")))
+    if out.get("te_measured") is not None:
+        res["te_no_failed_variant"] = out["te_measured"]["n_failed"] == 0
     return res
 
 
@@ -673,6 +688,9 @@ def write(out, out_dir, catalogue):
         fig.savefig(os.path.join(out_dir, "tornado.png"), dpi=110)
         plt.close(fig)
         plots.append("tornado.png")
+    if out.get("te_measured") is not None:
+        from .validate_te import te_plot
+        plots.append(te_plot(out["te_measured"], out_dir))
     from .losses import efficiency_plot
     plots += efficiency_plot(out, out_dir)
     with open(os.path.join(out_dir, "report.html"), "w") as fh:
@@ -736,6 +754,8 @@ def report_html(out, out_dir, plots):
                     f'{base64.b64encode(fh.read()).decode()}">'
     extra = {k: out[k] for k in ("central", "bearing_lives", "pressures", "compliance_budget", "ratio_variant",
                                  "assumptions_commit", "settings")}
+    if out.get("te_measured") is not None:
+        extra["te_measured"] = {k: v for k, v in out["te_measured"].items() if k not in ("rows", "records")}
     if out["uncertainty"] is not None:
         extra["uncertainty"] = {k: v for k, v in out["uncertainty"].items() if k not in ("U", "figures")}
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>validate {e(out['design'])}</title></head>"
