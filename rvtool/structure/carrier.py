@@ -40,10 +40,8 @@ import scipy.sparse.linalg as spla
 from ..errors import RvtoolInputError
 from ..units import angle_field
 from ..validation import check_positive, check_range
-from .craig_bampton import factorize
 from .fe_model import ElasticMaterial, generate_mesh
 from .port_reduction import PortReducedModel
-from .static import SupportedCompliance
 
 PILLAR_SHAPES = ("circular", "sector")
 
@@ -60,7 +58,9 @@ class CarrierStructure:
     the radius of the pillars' centres [m]. pillar_radius: a circular pillar's radius, a sector pillar's
     half radial depth [m]. pillar_angle: a sector pillar's angular width, unused by circular pillars [rad].
     material: the carrier's material (None: the design's ``[material]``).
-    mesh_size: nominal tetrahedron size [m]. n_modes: clamped-carrier modes kept beside the static port
+    mesh_size: nominal tetrahedron size [m]. element_order: polynomial order of the displacement [-] (1: linear
+    tetrahedra, too stiff in the plates' and pillars' bending at practical sizes; 2: quadratic on a curved mesh).
+    n_modes: clamped-carrier modes kept beside the static port
     modes [-] (the static port compliance does not depend on them).
     """
     inner_face_position: float
@@ -75,6 +75,7 @@ class CarrierStructure:
     pillar_angle: float = angle_field(math.radians(30.0))
     material: ElasticMaterial | None = None
     mesh_size: float
+    element_order: int = 1
     n_modes: int = 6
 
     def __post_init__(self):
@@ -92,6 +93,9 @@ class CarrierStructure:
                     low_open=True, high_open=True)
         check_range("carrier.structure.mesh_size", self.mesh_size, 0.0,
                     min(self.flange_thickness, self.end_plate_thickness), low_open=True)
+        if isinstance(self.element_order, bool) or self.element_order not in (1, 2):
+            raise RvtoolInputError(f"carrier.structure.element_order = {self.element_order!r} is outside the valid "
+                                   "range [1, 2] (integer)")
         if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, int) or self.n_modes < 0:
             raise RvtoolInputError(f"carrier.structure.n_modes = {self.n_modes!r} is outside the valid range "
                                    "[0, inf) (integer)")
@@ -223,9 +227,17 @@ class CarrierFE:
         """No structural damping is stated for the carrier (quasi-static seats): zero [N s/m]."""
         return sp.csr_matrix(self.stiffness.shape)
 
-    def compliance(self):
-        """Parent static port compliance P K^-1 P^T [m/N] (one sparse factorization)."""
-        return SupportedCompliance(self.stiffness, self.port_matrix).compliance()
+    def solve(self, F):
+        """K^-1 F [m] on the free coordinates for loads F (n,) or (n, k) [N]: NGSolve's sparse Cholesky
+        factorization of the clamped carrier (made once; SciPy's SuperLU did not finish a quadratic carrier of
+        16,000 coordinates within minutes, NGSolve's factorizes 19,000 in 0.6 s)."""
+        return self.forms.solve(F)
+
+    def compliance(self, port_matrix=None):
+        """Static compliance P K^-1 P^T [m/N] of the ports (default: the distributed seat ports)."""
+        P = sp.csr_matrix(self.port_matrix if port_matrix is None else port_matrix)
+        C = P @ self.solve(P.T.toarray())
+        return 0.5 * (C + C.T)
 
     def rigid_fit(self, seats, centre):
         """Port matrix A (6, n) of the area-weighted least-squares rigid motion (translations x, y, z [m], small
@@ -243,11 +255,33 @@ class CarrierFE:
 
 
 class _SurfaceForms:
-    """Surface integrals over the carrier's named boundaries on one NGSolve space (free coordinates only)."""
+    """Surface integrals over the carrier's named boundaries on one NGSolve space (free coordinates only), and
+    the space's stiffness factorization."""
 
-    def __init__(self, mesh, fes, free, plates):
+    def __init__(self, mesh, fes, free, plates, stiffness_form):
         self.mesh, self.fes, self.free = mesh, fes, free
         self.plates = plates
+        self.stiffness_form = stiffness_form
+        self._inverse = None
+
+    def solve(self, F):
+        import ngsolve as ngs
+        if self._inverse is None:
+            with ngs.TaskManager():
+                self._inverse = self.stiffness_form.mat.Inverse(self.fes.FreeDofs(), inverse="sparsecholesky")
+        F = np.asarray(F, float)
+        cols = F.reshape(len(F), -1)
+        out = np.zeros_like(cols)
+        b = self.stiffness_form.mat.CreateColVector()
+        x = self.stiffness_form.mat.CreateColVector()
+        full = np.zeros(len(self.free))
+        for j in range(cols.shape[1]):
+            full[:] = 0.0
+            full[self.free] = cols[:, j]
+            b.FV().NumPy()[:] = full
+            x.data = self._inverse * b
+            out[:, j] = x.FV().NumPy()[self.free]
+        return out.reshape(F.shape)
 
     def seat(self, name):
         """(boundary name, indicator CoefficientFunction) of a seat ``crank{k}_flange``, ``main_end_plate``, ..."""
@@ -308,13 +342,12 @@ class _SurfaceForms:
 
 
 def carrier_fe(spec: CarrierStructure, material: ElasticMaterial, crank_radius, crank_angles, *,
-               order=1) -> CarrierFE:
-    """Mesh the carrier, clamp its output face and build the distributed ports as surface integrals (module
-    docstring). order: the displacement's polynomial order [-]; the designs use 1 (linear tetrahedra). The
-    surface forms take any order (a curved mesh above 1), but a quadratic carrier of 16,000 coordinates did
-    not finish SciPy's SuperLU factorization within minutes on the 2-core development machine, so it is not
-    offered as a design key."""
+               order=None) -> CarrierFE:
+    """Mesh the carrier (curved above order 1), clamp its output face and build the distributed ports as
+    surface integrals (module docstring). order: the displacement's polynomial order [-] (None: the spec's
+    ``element_order``)."""
     import ngsolve as ngs
+    order = spec.element_order if order is None else int(order)
     mesh = generate_mesh(spec.geometry(crank_radius, crank_angles), spec.mesh_size)
     if order > 1:
         mesh.Curve(order)
@@ -322,7 +355,7 @@ def carrier_fe(spec: CarrierStructure, material: ElasticMaterial, crank_radius, 
     mu, lam = material.lame()
     u, v = fes.TnT()
     eu, ev = ngs.Sym(ngs.Grad(u)), ngs.Sym(ngs.Grad(v))
-    a = ngs.BilinearForm(fes, symmetric=False)
+    a = ngs.BilinearForm(fes, symmetric=True)
     a += (2 * mu * ngs.InnerProduct(eu, ev) + lam * ngs.Trace(eu) * ngs.Trace(ev)) * ngs.dx
     m = ngs.BilinearForm(fes, symmetric=False)
     m += material.density * ngs.InnerProduct(u, v) * ngs.dx
@@ -330,11 +363,11 @@ def carrier_fe(spec: CarrierStructure, material: ElasticMaterial, crank_radius, 
         a.Assemble()
         m.Assemble()
     free = np.array([bool(b) for b in fes.FreeDofs()])
-    K = sp.csr_matrix(a.mat.CSR())[free][:, free]
+    K = sp.csr_matrix(a.mat.CSR())[free][:, free]     # CSR() gives the full matrix of a symmetric form
     M = sp.csr_matrix(m.mat.CSR())[free][:, free]
     # NGSolve's assembly is symmetric to round-off; the average removes that asymmetry exactly
     K, M = ((A + A.T) * 0.5 for A in (K, M))
-    forms = _SurfaceForms(mesh, fes, free, spec.plates())
+    forms = _SurfaceForms(mesh, fes, free, spec.plates(), a)
     names = tuple(f"crank{k}" for k in range(len(crank_angles))) + ("main_bearing",)
     areas, rows = {}, []
     ex, ey = ngs.CoefficientFunction((1, 0, 0)), ngs.CoefficientFunction((0, 1, 0))
@@ -361,14 +394,13 @@ def carrier_fe(spec: CarrierStructure, material: ElasticMaterial, crank_radius, 
 def reduce_carrier(parent: CarrierFE, n_modes: int) -> PortReducedModel:
     """Ritz reduction on the static port modes and ``n_modes`` clamped modes (module docstring)."""
     fe = parent
-    lu = factorize(fe.stiffness, "K of the carrier (output face clamped)")
-    static = lu.solve(parent.port_matrix.T.toarray())
+    static = parent.solve(parent.port_matrix.T.toarray())
     basis = [static]
     if n_modes > 0:
         if n_modes >= fe.n_dofs - 1:
             raise RvtoolInputError(f"carrier.structure.n_modes = {n_modes} is outside the valid range "
                                    f"[0, {fe.n_dofs - 2}]")
-        op = spla.LinearOperator(fe.stiffness.shape, matvec=lu.solve, dtype=float)
+        op = spla.LinearOperator(fe.stiffness.shape, matvec=parent.solve, dtype=float)
         _, phi = spla.eigsh(fe.stiffness, k=n_modes, M=fe.mass, sigma=0.0, OPinv=op, which="LM")
         basis.append(phi)
     X = np.hstack(basis)
