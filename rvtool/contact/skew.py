@@ -34,6 +34,7 @@ anchors would need one history per slice): refused by name.
 import dataclasses
 
 import numpy as np
+from scipy import sparse
 
 from ..errors import RvtoolInputError
 from .evaluator import Evaluation
@@ -112,6 +113,16 @@ class SkewSlices:
         T[:, self._rows, self._cols] = self._vals
         self.maps = T
         self._maps_t = np.ascontiguousarray(T.transpose(0, 2, 1))
+        # the width resultant as one sparse product per evaluation over all slices (row-major vec):
+        # Q = [w_1 T_1^T ... w_S T_S^T] [Q_1; ...; Q_S] and vec(sum_s w_s T_s^T X_s T_s) =
+        # [w_1 T_1^T (x) T_1^T ... ] [vec X_1; ...] (vec(A X B) = (A (x) B^T) vec X); the "_one" forms
+        # take a single X shared by every slice (slices at equal poses: sum_s w_s T_s^T (x) T_s^T)
+        Tt = [sparse.csr_matrix(T[s].T) for s in range(len(w))]
+        self._q_all = sparse.hstack([w[s] * Tt[s] for s in range(len(w))], format="csr")
+        kr = [w[s] * sparse.kron(Tt[s], Tt[s], format="csr") for s in range(len(w))]
+        self._k_all = sparse.hstack(kr, format="csr")
+        self._q_one = sum(w[s] * Tt[s] for s in range(len(w))).tocsr()
+        self._k_one = sum(kr[1:], kr[0]).tocsr()
 
     @property
     def n_slices(self):
@@ -124,7 +135,7 @@ class SkewSlices:
 
     def _groups(self, poses):
         """[slice indices] of slices at bitwise-equal poses (all slices in one where no body tilts)."""
-        if np.all(poses == poses[0]):
+        if (poses == poses[0]).all():
             return [list(range(self.n_slices))]
         groups = {}
         for s in range(self.n_slices):
@@ -165,13 +176,19 @@ class SkewSlices:
         for g, ev in groups:
             for s in g:
                 ev_of[s] = ev
-        w, Tt = self.weights, self._maps_t
-        # sum_s w_s T_s^T Q_s and sum_s w_s T_s^T X_s T_s as batched products over the slices
-        Qs = np.stack([e.Q for e in ev_of]) * w[:, None]
-        Q = np.einsum("sap,sp->a", Tt, Qs)
-        K = (Tt @ (np.stack([e.dQdq for e in ev_of]) * w[:, None, None]) @ self.maps).sum(axis=0)
-        damped = all(e.dQdv is not None for _, e in groups)
-        C = (Tt @ (np.stack([e.dQdv for e in ev_of]) * w[:, None, None]) @ self.maps).sum(axis=0) if damped else None
+        w = self.weights
+        m = 3 * self.n_bodies
+        # sum_s w_s T_s^T Q_s and sum_s w_s T_s^T X_s T_s: one sparse product each over all slices
+        if len(groups) == 1:
+            e = groups[0][1]
+            Q = self._q_one @ e.Q
+            K = (self._k_one @ np.ravel(e.dQdq)).reshape(m, m)
+            C = None if e.dQdv is None else (self._k_one @ np.ravel(e.dQdv)).reshape(m, m)
+        else:
+            Q = self._q_all @ np.concatenate([e.Q for e in ev_of])
+            K = (self._k_all @ np.concatenate([np.ravel(e.dQdq) for e in ev_of])).reshape(m, m)
+            damped = all(e.dQdv is not None for _, e in groups)
+            C = (self._k_all @ np.concatenate([np.ravel(e.dQdv) for e in ev_of])).reshape(m, m) if damped else None
         if len(groups) == 1:
             obs = np.array(groups[0][1].obs, float)      # no tilt: the planar rows
         else:

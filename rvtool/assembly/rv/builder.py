@@ -684,10 +684,23 @@ def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
         span = max(abs(design.wheels.midplanes[-1] - design.wheels.midplanes[0]), design.wheels.width)
         J_c = design.cranks.inertia / 2 + design.cranks.mass * span ** 2 / 12
         bodies += [(f"crank{k}", L.crank(k), design.cranks.mass, J_c) for k in range(L.n_cranks)]
+    if b.spatial_input:
+        # the floating sun (last: the rows of the other bodies as without it); transverse inertia half the
+        # polar one (a thin disc, assumed; dynamic runs only)
+        if L.three_stage:
+            raise RvtoolInputError("bodies.input_coordinates = 'spatial' is for the two-stage RV (its floating sun); "
+                                   "the three-stage input body is the offset pinion and its compound gear is held on "
+                                   "the axis; valid: input_coordinates = 'planar'")
+        sh = design.cranks.shaft
+        if sh.elastic or sh.torsion != "rigid":
+            raise RvtoolInputError("bodies.input_coordinates = 'spatial' with elastic crankshafts (cranks.shaft.model / "
+                                   "torsion) is not implemented (the sun-crank meshes are closed inside the crank "
+                                   "closures); valid: rigid crankshafts or input_coordinates = 'planar'")
+        bodies.append(("sun", L.sun, b.sun_mass, b.sun_inertia / 2))
     if not bodies:
         return None, {}
     keys = [k for k, on in (("carrier_coordinates", b.spatial_carrier), ("wheel_coordinates", b.spatial_wheels),
-                            ("crank_coordinates", b.spatial_cranks)) if on]
+                            ("crank_coordinates", b.spatial_cranks), ("input_coordinates", b.spatial_input)) if on]
     said = " / ".join(f"bodies.{k} = 'spatial'" for k in keys)
     if housing is not None:
         raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the merged element carries "
@@ -725,13 +738,14 @@ def crank_centre(design):
     return 0.5 * (design.wheels.midplanes[0] + design.wheels.midplanes[-1])
 
 
-def skewed(family, design, layout, tilt, rows, *, wheel=None, crank_arm=None, width=None, wheels=True):
+def skewed(family, design, layout, tilt, rows, *, wheel=None, crank_arm=None, width=None, wheels=True, sun=False):
     """``family`` (a planar evaluator over the bodies) across the wheel width with the tilts of its
     spatial bodies (:class:`~rvtool.contact.skew.SkewSlices`, Eq. (skew)): ``bodies.tilt_slices``
     equal slices of the wheel width; a spatial wheel's arm is the slice's station about its
     mid-plane; a spatial crank's arm (where ``crank_arm`` is given: the station of the family's contact
     plane about the crank's centre) that station plus the slice's. ``width``: the face width sliced
-    (default the wheel width); ``wheels=False``: the family touches no wheel. ``family`` unchanged if
+    (default the wheel width); ``wheels=False``: the family touches no wheel; ``sun``: a spatial sun
+    tilts about the sun gear's mid-face (its arm is the slice's station). ``family`` unchanged if
     none of its bodies is spatial."""
     from ...contact.skew import SkewSlices, slice_stations
     z, w = slice_stations(design.wheels.width if width is None else width, design.bodies.tilt_slices)
@@ -745,6 +759,8 @@ def skewed(family, design, layout, tilt, rows, *, wheel=None, crank_arm=None, wi
         i = layout.crank(k)
         if i in rows and crank_arm is not None:
             arms[:, i], tilted[i] = crank_arm + z, rows[i]
+    if sun and layout.sun in rows:
+        arms[:, layout.sun], tilted[layout.sun] = z, rows[layout.sun]
     if not tilted:
         return family
     return SkewSlices(family, tilt.n_virtual, tilted, arms, w, name=family.name)
@@ -846,11 +862,13 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion, tilt=tilt,
                                                     rows=rows)),)
     gear_z = d.cranks.shaft.gear_position
-    if b.spatial_cranks and gear_z is not None:
-        # the sun--crank meshes across the crank gear's face with the crank's tilt (the sun held planar);
-        # without a declared gear position (cranks.shaft.gear_position) the meshes stay planar
-        crank_path = tuple((nm, skewed(f, d, L, tilt, rows, crank_arm=gear_z - crank_centre(d),
-                                       width=d.crank_gear.face_width, wheels=False) if nm == "gears" else f)
+    if b.spatial_cranks and gear_z is not None or b.spatial_input:
+        # the sun--crank meshes across the crank gear's face with the crank's tilt (the sun planar unless
+        # bodies.input_coordinates = "spatial": then with the sun's tilt too); without a declared gear
+        # position (cranks.shaft.gear_position) the cranks' tilts do not enter the meshes
+        arm = None if gear_z is None or not b.spatial_cranks else gear_z - crank_centre(d)
+        crank_path = tuple((nm, skewed(f, d, L, tilt, rows, crank_arm=arm, width=d.crank_gear.face_width,
+                                       wheels=False, sun=b.spatial_input) if nm == "gears" else f)
                            for nm, f in crank_path)
     if tilt is not None and b.spatial_wheels:
         # every family on a wheel across its width with the wheels' tilts (Eq. skew); the pins on the ground

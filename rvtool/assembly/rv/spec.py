@@ -146,7 +146,13 @@ class RvBodies:
     (tilts about the centre of their tapered pair; the tapered rows on the 5-DOF roller law, the
     needle rows sliced with the crank's arm to each wheel). tilt_slices: width slices of every
     family on a spatial wheel or crank [-] (:data:`TILT_SLICES`). wheel_tilt_inertia: transverse
-    inertia [kg m^2] of a wheel (None: a thin disc, half its polar inertia, assumed)."""
+    inertia [kg m^2] of a wheel (None: a thin disc, half its polar inertia, assumed).
+    input_coordinates: ``"planar"`` (default) or ``"spatial"``: the two-stage input shaft (the sun)
+    also retains its axial translation and two tilts about the sun gear's mid-face (at the crank gears'
+    station), and the sun--crank meshes are sliced across the face with its tilt. Only a floating sun
+    (``input`` lists x and y) has a tilt to retain: a sun whose x, y are held by its bearings as rigid
+    has its tilt held by the same bearings (spatial would equal planar), refused by name. Its
+    transverse inertia is half the polar one (a thin disc, assumed; dynamic runs only)."""
     input: tuple = ("theta",)
     sun_mass: float = 0.15
     sun_inertia: float = 1.0e-5
@@ -160,6 +166,7 @@ class RvBodies:
     crank_coordinates: str = "planar"
     tilt_slices: int = 2
     wheel_tilt_inertia: float | None = None
+    input_coordinates: str = "planar"
 
     def __post_init__(self):
         for c in self.input:
@@ -174,7 +181,7 @@ class RvBodies:
                                    f"{list(CARRIER_COORDINATES)}")
         if self.carrier_tilt_inertia is not None:
             check_positive("bodies.carrier_tilt_inertia", self.carrier_tilt_inertia)
-        for nm in ("wheel_coordinates", "crank_coordinates"):
+        for nm in ("wheel_coordinates", "crank_coordinates", "input_coordinates"):
             if getattr(self, nm) not in CARRIER_COORDINATES:
                 raise RvtoolInputError(f"bodies.{nm} = {getattr(self, nm)!r}; valid choices are {list(CARRIER_COORDINATES)}")
         lo, hi = TILT_SLICES
@@ -183,6 +190,16 @@ class RvBodies:
                                    "(integer)")
         if self.wheel_tilt_inertia is not None:
             check_positive("bodies.wheel_tilt_inertia", self.wheel_tilt_inertia)
+        if self.spatial_input and not {"x", "y"} <= set(self.input):
+            raise RvtoolInputError(f"bodies.input_coordinates = 'spatial' with bodies.input = {list(self.input)}: the "
+                                   "input shaft's x, y are held by its bearings as rigid, and so is its tilt (spatial "
+                                   "would equal planar); valid: bodies.input = ['x', 'y', 'theta'] (a floating sun) "
+                                   "or input_coordinates = 'planar'")
+
+    @property
+    def spatial_input(self):
+        """True where the input shaft (the two-stage sun) retains its axial and tilt coordinates."""
+        return self.input_coordinates == "spatial"
 
     @property
     def spatial_wheels(self):

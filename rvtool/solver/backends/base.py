@@ -47,8 +47,8 @@ SPATIAL_BODIES_REASON = ("the model's carrier retains axial and tilt coordinates
 """The named reason a device backend gives for a model with spatial bodies (issue 32)."""
 
 
-SPATIAL_WHEELS_REASON = ("the model's wheels or cranks retain axial and tilt coordinates (bodies.wheel_coordinates / "
-                         "bodies.crank_coordinates = 'spatial'): their families are sliced across the width with the "
+SPATIAL_WHEELS_REASON = ("the model's wheels, cranks or input shaft retain axial and tilt coordinates "
+                         "(bodies.wheel_coordinates / crank_coordinates / input_coordinates = 'spatial'): their families are sliced across the width with the "
                          "tilts on the host (rvtool.contact.skew.SkewSlices, rvtool.bearings.spatial_tapered); the "
                          "device copies carry planar bodies and the planar kernels only")
 """The named reason a device backend gives for a model with tilting wheels or cranks (issue 32)."""
@@ -60,7 +60,7 @@ def spatial_body_reasons(model):
     out-of-plane coordinates, else []."""
     out = [SPATIAL_BODIES_REASON] if getattr(model, "carrier_tilt", None) is not None else []
     tilts = getattr(model, "body_tilts", None)
-    if tilts is not None and any(n.startswith(("wheel", "crank")) for n in tilts.names):
+    if tilts is not None and any(n.startswith(("wheel", "crank", "sun")) for n in tilts.names):
         out.append(SPATIAL_WHEELS_REASON)
     return out
 
