@@ -69,7 +69,7 @@ def test_reduction_without_the_static_modes_fails_the_target():
     d = _ported()
     r, angles, _, _ = carrier_layout(d)
     parent = carrier_fe(d.carrier.structure, d.material, r, angles)
-    K, M = parent.fe.stiffness, parent.fe.mass
+    K, M = parent.stiffness, parent.mass
     w2, phi = spla.eigsh(K, k=12, M=M, sigma=0.0, which="LM")
     H = parent.port_matrix @ phi
     C_modes = (H / w2) @ H.T
@@ -140,6 +140,8 @@ def test_ported_carrier_refuses_what_it_does_not_implement():
     d = _ported()
     with pytest.raises(RvtoolInputError, match="bodies.carrier_coordinates"):
         rvtool.build(d.replace(bodies={"carrier_coordinates": "spatial"}))
+    with pytest.raises(RvtoolInputError, match="bodies.crank_coordinates"):
+        rvtool.build(d.replace(bodies={"crank_coordinates": "spatial"}))
     with pytest.raises(RvtoolInputError, match="bearing_friction.model"):
         rvtool.build(d.replace(bearing_friction={"model": "palmgren"}))
 
@@ -233,7 +235,7 @@ def test_rigid_fit_of_a_seat_recovers_rigid_motions_and_the_tilt_stiffness_is_re
     parent = carrier_fe(d.carrier.structure, d.material, r, angles)
     centre = (0.0, 0.0, 0.0)
     A = parent.rigid_fit(("main_end_plate",), centre)
-    R = parent.fe.rigid_body_modes(centre)
+    R = parent.rigid_modes(centre)
     assert np.abs(A @ R - np.eye(6)).max() < 1e-9
     info = carrier_ports(d)[2]
     C = np.array(info["main_seats_compliance"])

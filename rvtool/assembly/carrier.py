@@ -30,7 +30,6 @@ import numpy as np
 from ..contact.pin_closure import ElasticPinClosure
 from ..errors import RvtoolInputError
 from ..structure.carrier import carrier_fe, reduce_carrier
-from ..structure.static import SupportedCompliance
 
 
 def carrier_layout(design, graph=None):
@@ -54,18 +53,15 @@ def check_carrier(design, graph=None):
 def _reduced(structure, material, crank_radius, crank_angles):
     parent = carrier_fe(structure, material, crank_radius, crank_angles)
     red = reduce_carrier(parent, structure.n_modes)
-    fe = parent.fe
-    sc = SupportedCompliance(fe.stiffness, parent.port_matrix)
     # the main-bearing seats' rigid fit (both rows' seats, about the wheels' mid-plane): the carrier's own
     # compliance between the output face and the main bearings, translations and tilts (issue 32's moment path)
-    C_main = sc.compliance(parent.rigid_fit(("main_flange", "main_end_plate"), (0.0, 0.0, 0.0)))
-    info = {"vertices": int(len(fe.vertices)), "tetrahedra": int(len(fe.tetrahedra)), "dofs": int(fe.n_dofs),
-            "seat_vertices": {k: int(len(v)) for k, v in parent.seat_vertices.items()},
+    C_main = parent.compliance(parent.rigid_fit(("main_flange", "main_end_plate"), (0.0, 0.0, 0.0)))
+    info = {**parent.counts, "seat_areas_m2": dict(parent.seat_areas),
             "ports": list(parent.port_names), "n_eta": int(red.n_coordinates),
             "first_clamped_hz": float(np.sqrt(red.omega2.min()) / (2 * np.pi)),
             "main_seats_compliance": C_main.tolist(),
             "main_seats_tilt_stiffness_Nm_per_rad": float(2.0 / (C_main[3, 3] + C_main[4, 4]))}
-    return red, sc.compliance(), info
+    return red, parent.compliance(), info
 
 
 def carrier_ports(design, graph=None):

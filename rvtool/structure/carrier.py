@@ -40,10 +40,8 @@ import scipy.sparse.linalg as spla
 from ..errors import RvtoolInputError
 from ..units import angle_field
 from ..validation import check_positive, check_range
-from .craig_bampton import factorize
-from .fe_model import ElasticMaterial, NodalClamp, fe_model_from_mesh, generate_mesh
+from .fe_model import ElasticMaterial, generate_mesh
 from .port_reduction import PortReducedModel
-from .static import SupportedCompliance
 
 PILLAR_SHAPES = ("circular", "sector")
 
@@ -60,7 +58,9 @@ class CarrierStructure:
     the radius of the pillars' centres [m]. pillar_radius: a circular pillar's radius, a sector pillar's
     half radial depth [m]. pillar_angle: a sector pillar's angular width, unused by circular pillars [rad].
     material: the carrier's material (None: the design's ``[material]``).
-    mesh_size: nominal tetrahedron size [m]. n_modes: clamped-carrier modes kept beside the static port
+    mesh_size: nominal tetrahedron size [m]. element_order: polynomial order of the displacement [-] (1: linear
+    tetrahedra, too stiff in the plates' and pillars' bending at practical sizes; 2: quadratic on a curved mesh).
+    n_modes: clamped-carrier modes kept beside the static port
     modes [-] (the static port compliance does not depend on them).
     """
     inner_face_position: float
@@ -75,6 +75,7 @@ class CarrierStructure:
     pillar_angle: float = angle_field(math.radians(30.0))
     material: ElasticMaterial | None = None
     mesh_size: float
+    element_order: int = 1
     n_modes: int = 6
 
     def __post_init__(self):
@@ -92,6 +93,9 @@ class CarrierStructure:
                     low_open=True, high_open=True)
         check_range("carrier.structure.mesh_size", self.mesh_size, 0.0,
                     min(self.flange_thickness, self.end_plate_thickness), low_open=True)
+        if isinstance(self.element_order, bool) or self.element_order not in (1, 2):
+            raise RvtoolInputError(f"carrier.structure.element_order = {self.element_order!r} is outside the valid "
+                                   "range [1, 2] (integer)")
         if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, int) or self.n_modes < 0:
             raise RvtoolInputError(f"carrier.structure.n_modes = {self.n_modes!r} is outside the valid range "
                                    "[0, inf) (integer)")
@@ -116,7 +120,8 @@ class CarrierStructure:
         if not lo < crank_radius < hi:
             raise RvtoolInputError(f"{s}.seat_radius = {self.seat_radius} m: the crank seats (crank circle radius "
                                    f"{crank_radius:.6g} m) must clear the bore and the outer edge; valid range "
-                                   f"(0, {min(crank_radius - self.bore_radius, self.outer_radius - crank_radius):.6g}) m")
+                                   f"(0, {min(crank_radius - self.bore_radius, self.outer_radius - crank_radius):.6g})"
+                                   " m")
         n = len(crank_angles)
         if 2 * crank_radius * math.sin(math.pi / n) <= 2 * self.seat_radius:
             raise RvtoolInputError(f"{s}.seat_radius = {self.seat_radius} m: neighbouring crank seats overlap; valid "
@@ -145,11 +150,13 @@ class CarrierStructure:
         def slab(z0, z1):
             return Plane(Pnt(0, 0, z0), Vec(0, 0, -1)) * Plane(Pnt(0, 0, z1), Vec(0, 0, 1))
 
-        disc = zcyl(0, 0, self.outer_radius)
-        holes = [zcyl(0, 0, self.bore_radius)] + [zcyl(crank_radius * math.cos(b), crank_radius * math.sin(b),
-                                                       self.seat_radius) for b in crank_angles]
+        disc = zcyl(0, 0, self.outer_radius).bc("outer")
+        holes = [zcyl(0, 0, self.bore_radius).bc("bore")] + [
+            zcyl(crank_radius * math.cos(b), crank_radius * math.sin(b), self.seat_radius).bc(f"seat{k}")
+            for k, b in enumerate(crank_angles)]
         (f0, f1), (e0, e1) = self.plates()
-        solid = disc * slab(f0, f1)
+        output = Plane(Pnt(0, 0, f1), Vec(0, 0, 1)).bc("output")
+        solid = disc * Plane(Pnt(0, 0, f0), Vec(0, 0, -1)) * output
         solid = solid + disc * slab(e0, e1)
         for a in pillar_angles(crank_angles):
             c, s_ = math.cos(a), math.sin(a)
@@ -197,118 +204,203 @@ def _pillar_seat_gap(spec, crank_radius, crank_angles):
 
 @dataclass(frozen=True)
 class CarrierFE:
-    """Parent of the carrier: ``fe`` (:class:`~rvtool.structure.fe_model.FEModel`, output face clamped),
-    ``port_matrix`` P (n_rows, n_dofs) of the distributed ports (module docstring), ``port_names`` and
-    ``port_rows`` (rows of P per port), ``seat_vertices`` (vertex indices per seat)."""
-    fe: object
+    """Parent of the carrier (output face clamped) on its free coordinates: ``stiffness`` K [N/m] and ``mass``
+    M [kg] (SciPy CSR), ``port_matrix`` P (n_rows, n) of the distributed ports (module docstring),
+    ``port_names`` and ``port_rows`` (rows of P per port), ``seat_areas`` [m^2] per seat, ``counts`` (mesh and
+    coordinate counts) and the NGSolve objects the surface forms are built on (``forms``, for
+    :meth:`rigid_fit` and :meth:`rigid_modes`)."""
+    stiffness: sp.csr_matrix
+    mass: sp.csr_matrix
     port_matrix: sp.csr_matrix
     port_names: tuple
     port_rows: tuple
-    seat_vertices: dict
+    seat_areas: dict
+    counts: dict
+    forms: object
 
-    def compliance(self):
-        """Parent static port compliance P K^-1 P^T [m/N] (one sparse factorization)."""
-        return SupportedCompliance(self.fe.stiffness, self.port_matrix).compliance()
+    @property
+    def n_dofs(self):
+        return self.stiffness.shape[0]
+
+    @property
+    def damping(self):
+        """No structural damping is stated for the carrier (quasi-static seats): zero [N s/m]."""
+        return sp.csr_matrix(self.stiffness.shape)
+
+    def solve(self, F):
+        """K^-1 F [m] on the free coordinates for loads F (n,) or (n, k) [N]: NGSolve's sparse Cholesky
+        factorization of the clamped carrier (made once; SciPy's SuperLU did not finish a quadratic carrier of
+        16,000 coordinates within minutes, NGSolve's factorizes 19,000 in 0.6 s)."""
+        return self.forms.solve(F)
+
+    def compliance(self, port_matrix=None):
+        """Static compliance P K^-1 P^T [m/N] of the ports (default: the distributed seat ports)."""
+        P = sp.csr_matrix(self.port_matrix if port_matrix is None else port_matrix)
+        C = P @ self.solve(P.T.toarray())
+        return 0.5 * (C + C.T)
 
     def rigid_fit(self, seats, centre):
-        """Port matrix A (6, n_dofs) of the area-weighted least-squares rigid motion (translations x, y, z [m],
-        small rotations about x, y, z [rad] through ``centre`` [m]) of the union of ``seats`` (names of
-        ``seat_vertices``): A = (R^T W R)^-1 R^T W on their coordinates, an RBE3-type port whose load
+        """Port matrix A (6, n) of the area-weighted least-squares rigid motion (translations x, y, z [m], small
+        rotations about x, y, z [rad] through ``centre`` [m]) of the union of ``seats`` (``"main_flange"``,
+        ``"main_end_plate"``, ``"crank{k}_flange"``, ...): A = G^-1 B with G_jl = int R_j . R_l dS and
+        B_j(u) = int R_j . u dS over the seats (R_j the rigid fields), an RBE3-type port whose load
         distribution A^T F spreads a force and moment over the seats. A K^-1 A^T is its compliance
         [m/N, rad/(N m)]."""
-        fe = self.fe
-        V = fe.vertices
-        tris = fe.surface_triangles
-        idx = np.unique(np.concatenate([self.seat_vertices[n] for n in seats]))
-        w = _surface_weights(V, tris, idx)[idx]
-        table = np.full((len(V), 3), -1, int)
-        table[fe.dof_vertex, fe.dof_component] = np.arange(fe.n_dofs)
-        r = V[idx] - np.asarray(centre, float)
-        n = len(idx)
-        R = np.zeros((3 * n, 6))
-        for c in range(3):
-            R[c::3, c] = 1.0
-        # u = theta x r
-        R[1::3, 3], R[2::3, 3] = -r[:, 2], r[:, 1]
-        R[0::3, 4], R[2::3, 4] = r[:, 2], -r[:, 0]
-        R[0::3, 5], R[1::3, 5] = -r[:, 1], r[:, 0]
-        Wd = np.repeat(w, 3)
-        A_loc = np.linalg.solve(R.T @ (Wd[:, None] * R), (R * Wd[:, None]).T)     # (6, 3 n)
-        cols = table[idx].reshape(-1)
-        free = cols >= 0
-        return sp.csr_matrix((A_loc[:, free].ravel(), (np.repeat(np.arange(6), int(free.sum())),
-                                                       np.tile(cols[free], 6))), shape=(6, fe.n_dofs))
+        return self.forms.rigid_fit(seats, centre)
+
+    def rigid_modes(self, centre=(0.0, 0.0, 0.0)):
+        """The six rigid displacement fields (n, 6) on the free coordinates (translations x, y, z, small
+        rotations about x, y, z through ``centre``), interpolated (exact for the linear fields)."""
+        return self.forms.rigid_modes(centre)
 
 
-def _surface_weights(vertices, triangles, selected):
-    """Area weight [m^2] of every selected vertex: a third of the area of each surface triangle whose three
-    vertices are selected."""
-    sel = np.zeros(len(vertices), bool)
-    sel[selected] = True
-    tri = triangles[np.all(sel[triangles], axis=1)]
-    a = 0.5 * np.linalg.norm(np.cross(vertices[tri[:, 1]] - vertices[tri[:, 0]],
-                                      vertices[tri[:, 2]] - vertices[tri[:, 0]]), axis=1)
-    w = np.zeros(len(vertices))
-    np.add.at(w, tri.ravel(), np.repeat(a / 3.0, 3))
-    return w
+class _SurfaceForms:
+    """Surface integrals over the carrier's named boundaries on one NGSolve space (free coordinates only), and
+    the space's stiffness factorization."""
+
+    def __init__(self, mesh, fes, free, plates, stiffness_form):
+        self.mesh, self.fes, self.free = mesh, fes, free
+        self.plates = plates
+        self.stiffness_form = stiffness_form
+        self._inverse = None
+
+    def solve(self, F):
+        import ngsolve as ngs
+        if self._inverse is None:
+            with ngs.TaskManager():
+                self._inverse = self.stiffness_form.mat.Inverse(self.fes.FreeDofs(), inverse="sparsecholesky")
+        F = np.asarray(F, float)
+        cols = F.reshape(len(F), -1)
+        out = np.zeros_like(cols)
+        b = self.stiffness_form.mat.CreateColVector()
+        x = self.stiffness_form.mat.CreateColVector()
+        full = np.zeros(len(self.free))
+        for j in range(cols.shape[1]):
+            full[:] = 0.0
+            full[self.free] = cols[:, j]
+            b.FV().NumPy()[:] = full
+            x.data = self._inverse * b
+            out[:, j] = x.FV().NumPy()[self.free]
+        return out.reshape(F.shape)
+
+    def seat(self, name):
+        """(boundary name, indicator CoefficientFunction) of a seat ``crank{k}_flange``, ``main_end_plate``, ..."""
+        import ngsolve as ngs
+        base, side = name.rsplit("_", 1) if not name.endswith("end_plate") else (name[:-len("_end_plate")], "end_plate")
+        region = "outer" if base == "main" else f"seat{base[len('crank'):]}"
+        (f0, _), (_, e1) = self.plates
+        mid = 0.5 * (f0 + e1)           # the plates are disjoint in z: the mid-plane between them splits a bore
+        ind = ngs.IfPos(ngs.z - mid, 1.0, 0.0) if side == "flange" else ngs.IfPos(mid - ngs.z, 1.0, 0.0)
+        return region, ind
+
+    def area(self, name):
+        import ngsolve as ngs
+        region, ind = self.seat(name)
+        return float(ngs.Integrate(ind, self.mesh, ngs.BND, definedon=self.mesh.Boundaries(region)))
+
+    def form(self, cf, seats):
+        """Row int_{seats} cf . v dS (n_free,) for a vector CoefficientFunction cf."""
+        import ngsolve as ngs
+        v = self.fes.TestFunction()
+        lf = ngs.LinearForm(self.fes)
+        for name in seats:
+            region, ind = self.seat(name)
+            lf += ind * ngs.InnerProduct(cf, v) * ngs.ds(region)
+        lf.Assemble()
+        return lf.vec.FV().NumPy()[self.free].copy()
+
+    def _rigid_fields(self, centre):
+        import ngsolve as ngs
+        cx, cy, cz = (float(c) for c in centre)
+        rx, ry, rz = ngs.x - cx, ngs.y - cy, ngs.z - cz
+        CF = ngs.CoefficientFunction
+        # u = theta x r: about x (0, -r_z, r_y), about y (r_z, 0, -r_x), about z (-r_y, r_x, 0)
+        return [CF((1, 0, 0)), CF((0, 1, 0)), CF((0, 0, 1)), CF((0, -rz, ry)), CF((rz, 0, -rx)), CF((-ry, rx, 0))]
+
+    def rigid_fit(self, seats, centre):
+        import ngsolve as ngs
+        R = self._rigid_fields(centre)
+        G = np.zeros((6, 6))
+        for name in seats:
+            region, ind = self.seat(name)
+            for a in range(6):
+                for b in range(a, 6):
+                    G[a, b] += float(ngs.Integrate(ind * ngs.InnerProduct(R[a], R[b]), self.mesh, ngs.BND,
+                                                   definedon=self.mesh.Boundaries(region)))
+        G = np.triu(G) + np.triu(G, 1).T
+        B = np.array([self.form(Rj, seats) for Rj in R])
+        return sp.csr_matrix(np.linalg.solve(G, B))
+
+    def rigid_modes(self, centre):
+        import ngsolve as ngs
+        gf = ngs.GridFunction(self.fes)
+        out = []
+        for Rj in self._rigid_fields(centre):
+            gf.Set(Rj)
+            out.append(gf.vec.FV().NumPy()[self.free].copy())
+        return np.array(out).T
 
 
-def carrier_fe(spec: CarrierStructure, material: ElasticMaterial, crank_radius, crank_angles) -> CarrierFE:
-    """Mesh the carrier, clamp its output face and build the distributed ports (module docstring)."""
+def carrier_fe(spec: CarrierStructure, material: ElasticMaterial, crank_radius, crank_angles, *,
+               order=None) -> CarrierFE:
+    """Mesh the carrier (curved above order 1), clamp its output face and build the distributed ports as
+    surface integrals (module docstring). order: the displacement's polynomial order [-] (None: the spec's
+    ``element_order``)."""
+    import ngsolve as ngs
+    order = spec.element_order if order is None else int(order)
     mesh = generate_mesh(spec.geometry(crank_radius, crank_angles), spec.mesh_size)
-    ngm = mesh.ngmesh
-    V = np.asarray(ngm.Coordinates(), float)
-    tris = np.asarray(ngm.Elements2D().NumPy()["nodes"], int) - 1
-    on_surface = np.zeros(len(V), bool)
-    on_surface[np.unique(tris)] = True
-    tol = 1e-6 + 1e-3 * spec.mesh_size       # boundary vertices are projected onto the CSG surfaces
-    face = np.flatnonzero(on_surface & (np.abs(V[:, 2] - spec.output_face) < tol))
-    fe = fe_model_from_mesh(mesh, material=material, supports=tuple(NodalClamp(point=tuple(V[i])) for i in face),
-                            info={"component": "RV carrier", "mesh_size": spec.mesh_size})
-    plates = spec.plates()
-    r_xy = np.hypot(V[:, 0], V[:, 1])
-    seats = {}
-    for k, b in enumerate(crank_angles):
-        c = crank_radius * np.array([math.cos(b), math.sin(b)])
-        on_bore = on_surface & (np.abs(np.hypot(V[:, 0] - c[0], V[:, 1] - c[1]) - spec.seat_radius) < tol)
-        for side, (z0, z1) in zip(("flange", "end_plate"), plates):
-            seats[f"crank{k}_{side}"] = np.flatnonzero(on_bore & (V[:, 2] >= z0 - tol) & (V[:, 2] <= z1 + tol))
-    outer = on_surface & (np.abs(r_xy - spec.outer_radius) < tol)
-    for side, (z0, z1) in zip(("flange", "end_plate"), plates):
-        seats[f"main_{side}"] = np.flatnonzero(outer & (V[:, 2] >= z0 - tol) & (V[:, 2] <= z1 + tol))
-    table = np.full((len(V), 3), -1, int)
-    table[fe.dof_vertex, fe.dof_component] = np.arange(fe.n_dofs)
-    rows_i, cols_i, vals = [], [], []
+    if order > 1:
+        mesh.Curve(order)
+    fes = ngs.VectorH1(mesh, order=order, dirichlet="output")
+    mu, lam = material.lame()
+    u, v = fes.TnT()
+    eu, ev = ngs.Sym(ngs.Grad(u)), ngs.Sym(ngs.Grad(v))
+    a = ngs.BilinearForm(fes, symmetric=True)
+    a += (2 * mu * ngs.InnerProduct(eu, ev) + lam * ngs.Trace(eu) * ngs.Trace(ev)) * ngs.dx
+    m = ngs.BilinearForm(fes, symmetric=False)
+    m += material.density * ngs.InnerProduct(u, v) * ngs.dx
+    with ngs.TaskManager():
+        a.Assemble()
+        m.Assemble()
+    free = np.array([bool(b) for b in fes.FreeDofs()])
+    K = sp.csr_matrix(a.mat.CSR())[free][:, free]     # CSR() gives the full matrix of a symmetric form
+    M = sp.csr_matrix(m.mat.CSR())[free][:, free]
+    # NGSolve's assembly is symmetric to round-off; the average removes that asymmetry exactly
+    K, M = ((A + A.T) * 0.5 for A in (K, M))
+    forms = _SurfaceForms(mesh, fes, free, spec.plates(), a)
     names = tuple(f"crank{k}" for k in range(len(crank_angles))) + ("main_bearing",)
-    for g, name in enumerate(names):
-        parts = [seats[f"{name if name != 'main_bearing' else 'main'}_{s}"] for s in ("flange", "end_plate")]
-        for part in parts:
-            w = _surface_weights(V, tris, part)[part]
-            if len(part) < 3 or w.sum() <= 0.0:
-                raise RvtoolInputError(f"carrier.structure.mesh_size = {spec.mesh_size} m leaves the seat of port "
-                                       f"{name!r} with {len(part)} surface vertices; valid: a finer mesh_size")
-            w = 0.5 * w / w.sum()            # each of the two seats carries half of the port's load
-            free = table[part] >= 0           # a seat vertex on the clamped face has no free coordinate
-            for c in range(2):
-                rows_i.extend([2 * g + c] * int(free[:, c].sum()))
-                cols_i.extend(table[part, c][free[:, c]].tolist())
-                vals.extend(w[free[:, c]].tolist())
-    P = sp.csr_matrix((vals, (rows_i, cols_i)), shape=(2 * len(names), fe.n_dofs))
-    return CarrierFE(fe=fe, port_matrix=P, port_names=names,
-                     port_rows=tuple(np.array([2 * g, 2 * g + 1]) for g in range(len(names))), seat_vertices=seats)
+    areas, rows = {}, []
+    ex, ey = ngs.CoefficientFunction((1, 0, 0)), ngs.CoefficientFunction((0, 1, 0))
+    for name in names:
+        base = "main" if name == "main_bearing" else name
+        seats = (f"{base}_flange", f"{base}_end_plate")
+        for seat in seats:
+            areas[seat] = forms.area(seat)
+            if not areas[seat] > 0.0:
+                raise RvtoolInputError(f"carrier.structure: the seat {seat!r} has no surface in the mesh "
+                                       f"(mesh_size = {spec.mesh_size} m); valid: a finer mesh_size")
+        # each of the two seats carries half of the port's load: u_g = sum_s (1/2) int_s u dS / A_s
+        for e in (ex, ey):
+            rows.append(sum(0.5 * forms.form(e, (seat,)) / areas[seat] for seat in seats))
+    P = sp.csr_matrix(np.array(rows))
+    P.eliminate_zeros()
+    counts = {"vertices": int(mesh.nv), "elements": int(mesh.ne), "dofs": int(free.sum()),
+              "element_order": int(order)}
+    return CarrierFE(stiffness=K.tocsr(), mass=M.tocsr(), port_matrix=P, port_names=names,
+                     port_rows=tuple(np.array([2 * g, 2 * g + 1]) for g in range(len(names))), seat_areas=areas,
+                     counts=counts, forms=forms)
 
 
 def reduce_carrier(parent: CarrierFE, n_modes: int) -> PortReducedModel:
     """Ritz reduction on the static port modes and ``n_modes`` clamped modes (module docstring)."""
-    fe = parent.fe
-    lu = factorize(fe.stiffness, "K of the carrier (output face clamped)")
-    static = lu.solve(parent.port_matrix.T.toarray())
+    fe = parent
+    static = parent.solve(parent.port_matrix.T.toarray())
     basis = [static]
     if n_modes > 0:
         if n_modes >= fe.n_dofs - 1:
             raise RvtoolInputError(f"carrier.structure.n_modes = {n_modes} is outside the valid range "
                                    f"[0, {fe.n_dofs - 2}]")
-        op = spla.LinearOperator(fe.stiffness.shape, matvec=lu.solve, dtype=float)
+        op = spla.LinearOperator(fe.stiffness.shape, matvec=parent.solve, dtype=float)
         _, phi = spla.eigsh(fe.stiffness, k=n_modes, M=fe.mass, sigma=0.0, OPinv=op, which="LM")
         basis.append(phi)
     X = np.hstack(basis)

@@ -232,10 +232,10 @@ def ported_carrier(design, graph, layout, rigid, opts):
     if not design.carrier.ported:
         return rigid
     from ..carrier import CarrierSeatClosure, seat_compliance
-    if type(rigid) is not TaperedBearingSet:
-        raise RvtoolInputError(f"carrier.body = 'ported' with crank bearings of {type(rigid).__name__} (spatial "
-                               "crank coordinates) is not implemented (the seats are planar ports); valid: planar "
-                               "cranks or carrier.body = 'rigid'")
+    if design.bodies.spatial_cranks or type(rigid) is not TaperedBearingSet:
+        raise RvtoolInputError("carrier.body = 'ported' with bodies.crank_coordinates = 'spatial' is not implemented "
+                               f"(the crank bearings are a {type(rigid).__name__}; the seats are planar ports); "
+                               "valid: bodies.crank_coordinates = 'planar' or carrier.body = 'rigid'")
     if design.bearing_friction.model != "none":
         raise RvtoolInputError(f"carrier.body = 'ported' with bearing_friction.model = "
                                f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
