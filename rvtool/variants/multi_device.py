@@ -282,8 +282,7 @@ def rows_batch(design, tolerances, protocol, seed, indices, device, host_workers
     jobs = [(design, tolerances, seed, int(k), kw) for k in indices]
     pool = helper_pool(host_workers)
     if pool is None:
-        pending = [variant_snapshot(j) for j in jobs]
-        results = iter(pending)
+        results = map(variant_snapshot, jobs)      # built here, each when its chunk is taken
     else:
         futures = [pool.submit(variant_snapshot, j) for j in jobs]     # all queued: builds overlap the solves
         results = (f.result() for f in futures)
