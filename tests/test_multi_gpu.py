@@ -11,8 +11,8 @@ import rvtool
 from rvtool import designs
 from rvtool.errors import RvtoolInputError
 from rvtool.variants.multi_device import (RvVariantProtocol, batch_task, cycloid_batch, device_cluster,
-                                          device_slots, multi_device_monte_carlo, plan, rows_batch, shutdown_helper_pools, split_indices,
-                                          start_helper_pool, warm_up)
+                                          device_slots, multi_device_monte_carlo, plan, rows_batch,
+                                          shutdown_helper_pools, split_indices, start_helper_pool, warm_up)
 from rvtool.variants.rv_tolerances import load_rv_tolerances
 from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants.variant import VariantProtocol

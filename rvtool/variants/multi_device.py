@@ -24,9 +24,10 @@ batch of variants (scale-out delegated to Dask, :mod:`rvtool.variants.cluster`).
   batch whose task dies (a lost worker), is recorded ``status = "failed"`` with its error and
   counted; none is dropped.
 * Host work: each GPU worker runs the device path's host work (the variants' builds; on
-  "device_newton" per-copy parameters and Exudyn fallbacks) on a pool of helper processes of its own (:func:`helper_pool`; the workers are
-  non-daemonic so that they may start it), the host's cores shared out between the GPUs
-  (:func:`default_host_workers`); the pools end when the cluster closes.
+  "device_newton" per-copy parameters and Exudyn fallbacks) on a pool of helper processes of its
+  own (:func:`helper_pool`; the workers are non-daemonic so that they may start it), the host's
+  cores shared out between the GPUs (:func:`default_host_workers`); the pools end when the
+  cluster closes.
 
 Every figure of a variant depends on that variant alone (the device copies are independent), so
 the records equal those of one worker (tests/test_multi_gpu.py: two cpu workers against one,
@@ -424,7 +425,8 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
                              slots=None, chunk=None, host_workers=None, path="rows", build_kw=None,
                              solve_chunk=1024):
     """The device Monte Carlo of variants 0..n_variants-1 of ``design`` over several devices
-    (module docstring), each device's batch in chunks of at most ``chunk`` variants (:func:`plan`). Either ``devices`` (a cluster is started for the study and closed after it:
+    (module docstring), each device's batch in chunks of at most ``chunk`` variants (:func:`plan`).
+    Either ``devices`` (a cluster is started for the study and closed after it:
     see :func:`device_slots`) or ``client`` and ``slots`` of a running :func:`device_cluster`
     (e.g. warmed by :func:`warm_up`). protocol: the per-variant workload (default
     :func:`default_protocol`). Returns {"records" (by index), "failed" (count), "wall_s" (the
