@@ -208,6 +208,26 @@ def start_helper_pool(host_workers):
     return len(set(pool.map(_import_device_path, range(4 * int(host_workers)))))
 
 
+def _nominal_build(job):
+    """A helper's warm-up build: the nominal design with the study's options (imports, memos)."""
+    import os
+
+    from ..assembly import build
+    design, build_kw = job
+    build(design, **build_kw)
+    return os.getpid()
+
+
+def warm_helper_builds(design, build_kw, host_workers):
+    """One nominal build of ``design`` per helper of this process's :func:`helper_pool` (as
+    ``bench_device_mc`` warms its build pool), so that a timed study's builds find their imports
+    and memos; returns the helpers that built (0 without helpers)."""
+    pool = helper_pool(host_workers)
+    if pool is None:
+        return 0
+    return len(set(pool.map(_nominal_build, [(design, dict(build_kw))] * int(host_workers))))
+
+
 def shutdown_helper_pools():
     """End this process's helper pools (run on every worker when :func:`device_cluster` closes)."""
     while _POOLS:
@@ -409,13 +429,18 @@ def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1
             path="rows", build_kw=None):
     """Start every worker's helper pool (:func:`start_helper_pool`) and run ``variants`` variants on
     every worker once (imports, Warp kernel compilation and module loading on its device), untimed
-    by the study, on ``path`` with ``build_kw`` (as the study); returns the wall time [s]."""
+    by the study, on ``path`` with ``build_kw`` (as the study; "rows": every helper first builds
+    the nominal design once, :func:`warm_helper_builds`); returns the wall time [s]."""
     t0 = time.perf_counter()
     protocol = protocol or default_protocol(design)
     hw = default_host_workers(slots) if host_workers is None else host_workers
     addr = worker_addresses(client, slots)
     client.gather([client.submit(start_helper_pool, hw, workers=[addr[s.name]], allow_other_workers=False,
                                  pure=False) for s in slots])
+    if path == "rows":                            # every helper builds the nominal design once
+        kw = default_build_kw(design, protocol) if build_kw is None else build_kw
+        client.gather([client.submit(warm_helper_builds, design, kw, hw, workers=[addr[s.name]],
+                                     allow_other_workers=False, pure=False) for s in slots])
     run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed, hw, path=path,
                 build_kw=build_kw)
     return time.perf_counter() - t0
@@ -460,6 +485,7 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
 
 
 __all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "batch_task", "cycloid_batch", "default_build_kw",
-           "default_host_workers", "rows_batch", "variant_snapshot", "default_protocol", "device_chunk",
-           "device_cluster", "device_slots", "helper_pool", "shutdown_helper_pools", "start_helper_pool",
-           "multi_device_monte_carlo", "plan", "run_batches", "split_indices", "warm_up", "worker_addresses"]
+           "default_host_workers", "default_protocol", "device_chunk", "device_cluster", "device_slots",
+           "helper_pool", "multi_device_monte_carlo", "plan", "rows_batch", "run_batches", "shutdown_helper_pools",
+           "split_indices", "start_helper_pool", "variant_snapshot", "warm_helper_builds", "warm_up",
+           "worker_addresses"]
