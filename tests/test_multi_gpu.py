@@ -10,9 +10,9 @@ import warp as wp
 import rvtool
 from rvtool import designs
 from rvtool.errors import RvtoolInputError
-from rvtool.variants.multi_device import (RvVariantProtocol, cycloid_batch, device_cluster, device_slots,
-                                          multi_device_monte_carlo, plan, rv_batch, split_indices,
-                                          start_helper_pool, warm_up)
+from rvtool.variants.multi_device import (RvVariantProtocol, batch_task, cycloid_batch, device_cluster,
+                                          device_slots, multi_device_monte_carlo, plan, rows_batch,
+                                          shutdown_helper_pools, split_indices, start_helper_pool, warm_up)
 from rvtool.variants.rv_tolerances import load_rv_tolerances
 from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants.variant import VariantProtocol
@@ -70,16 +70,23 @@ def rd40_case():
     return rd40, tol, p, cycloid_batch(rd40, tol, p, 2026, range(2), "cpu")
 
 
+RD_BUILD = {"bearing_model": "lumped", "regularization": (1.0e4, 100.0)}
+"""RD-40's study build options (cases/cycloid/monte_carlo_te.py's REGULARIZATION, as bench_device_mc)."""
+
+
 def test_two_cpu_workers_equal_one(rd40_case):
-    """RD-40 (device Newton) and rv40e (device row Newton), TE + lost motion: the records of two
-    cpu workers, each its batch, equal those of one batch run here; every worker starts with
-    CUDA_VISIBLE_DEVICES set by its slot (cpu: "", no GPU visible)."""
-    rd40, rd_tol, rd_p, ref_rd = rd40_case
+    """RD-40 and rv40e on the device row Newton (the path of bench_device_mc), TE + lost motion:
+    the records of two cpu workers, each its batch, its variants built on its helper pool, equal
+    those of one batch run here (built here); every worker starts with CUDA_VISIBLE_DEVICES set by
+    its slot (cpu: "", no GPU visible)."""
+    rd40, rd_tol, rd_p, _ = rd40_case
+    ref_rd = rows_batch(rd40, rd_tol, rd_p, 2026, range(2), "cpu", build_kw=RD_BUILD)
     rv40e = rvtool.load_design("rv40e")
     rv_tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
     rv_p = RvVariantProtocol(n_te_points=3)
-    ref_rv = rv_batch(rv40e, rv_tol, rv_p, 20261124, range(2), "cpu")
+    ref_rv = rows_batch(rv40e, rv_tol, rv_p, 20261124, range(2), "cpu")
     assert sum(r["status"] == "ok" for r in ref_rd) >= 1 and all(r["status"] == "ok" for r in ref_rv)
+    assert {r["lost_motion_path"] for r in ref_rd + ref_rv} == {"device_rows:cpu"}
     with device_cluster(["cpu", "cpu"]) as (client, slots):
         env = client.run(_env_of_worker)
         assert sorted(env.values()) == ["", ""] and len(env) == 2
@@ -88,14 +95,46 @@ def test_two_cpu_workers_equal_one(rd40_case):
         addrs = list(env)
         assert client.gather([client.submit(start_helper_pool, 1, workers=[a], pure=False) for a in addrs]) == [1, 1]
         rd = multi_device_monte_carlo(rd40, rd_tol, 2, protocol=rd_p, seed=2026, client=client, slots=slots,
-                                      host_workers=1)
+                                      host_workers=1, build_kw=RD_BUILD)
         rv = multi_device_monte_carlo(rv40e, rv_tol, 2, protocol=rv_p, seed=20261124, client=client, slots=slots)
     assert [b["worker"] for b in rd["batches"]] == ["device-0", "device-1"]
     assert rd["failed"] == sum(r["status"] != "ok" for r in ref_rd) and rd["host_workers"] == 1
-    assert any(r["lost_motion_fallback"] for r in rd["records"])     # the helper pool ran an Exudyn fallback
+    assert rd["path"] == "rows" and {r["te_path"] for r in rd["records"]} == {"device_rows:cpu"}
     _same(rd["records"], ref_rd)
     _same(rv["records"], ref_rv)
     assert rv["failed"] == 0
+
+
+def test_rows_batch_is_the_bench_device_mc_path(rd40_case):
+    """rows_batch (helpers building the snapshots) gives the figures and failures of the direct call
+    bench_device_mc makes: the variants sampled and built with the study's options, one
+    device_rows_variants of them (same TE angles, torque and lost-motion level)."""
+    from rvtool.batched.device_rows_variants import device_rows_variants
+    from rvtool.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
+    from rvtool.variants.tolerances import sample_variant
+    rd40, tol, p, _ = rd40_case
+    try:
+        recs = rows_batch(rd40, tol, p, 2026, [3, 4], "cpu", 1, build_kw=RD_BUILD, solve_chunk=1)
+    finally:
+        shutdown_helper_pools()                   # the helper process this test started
+    models = [rvtool.build(sample_variant(tol, rd40, k, 2026).apply(rd40), **RD_BUILD) for k in (3, 4)]
+    r = device_rows_variants(models, torque=rd40.rated_torque, input_angles=p.input_angles(rd40),
+                             lost_motion_level=0.03 * rd40.rated_torque, device="cpu")
+    assert [x["index"] for x in recs] == [3, 4] and [x["status"] for x in recs] == r.status
+    for c, x in enumerate(recs):
+        if x["status"] == "ok":
+            assert abs(x["te_pp_arcsec"] - np.ptp(r.te[c]) * ARCSEC_PER_RAD) <= EQUAL * x["te_pp_arcsec"]
+            lm = r.lost_motion_rad[c] * ARCMIN_PER_RAD
+            assert abs(x["lost_motion_arcmin"] - lm) <= EQUAL * abs(lm)
+    assert sum(x["device_s"] > 0 for x in recs) == 2        # solve_chunk=1: one device solve per variant
+
+
+def test_paths_refused_by_name():
+    with pytest.raises(RvtoolInputError, match="valid"):
+        batch_task(rvtool.load_design("rd40"), "exudyn")
+    with pytest.raises(RvtoolInputError, match="cycloid designs only"):
+        batch_task(rvtool.load_design("rv40e"), "device_newton")
+    assert batch_task(rvtool.load_design("rd40")) is rows_batch
 
 
 def test_monte_carlo_study_on_two_devices(rd40_case, tmp_path):
@@ -139,8 +178,11 @@ def test_cuda_two_gpus_each_worker_sees_one():
         seen = client.run(_cuda_seen)
         assert all(len(v[0]) == 1 for v in seen.values()) and {v[1] for v in seen.values()} == {"0", "1"}
         assert len({v[0][0] for v in seen.values()}) == 2          # two different GPUs
-        warm_up(client, slots, rd40, tol, p, 2026)
-        two = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots)
-        one = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots[:1])
+        warm_up(client, slots, rd40, tol, p, 2026, build_kw=RD_BUILD)
+        two = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots,
+                                       build_kw=RD_BUILD)
+        one = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots[:1],
+                                       build_kw=RD_BUILD)
     _same(two["records"], one["records"])
+    assert {r["te_path"] for r in two["records"] if r["status"] == "ok"} == {"device_rows:cuda:0"}
     assert np.isfinite([r["te_pp_arcsec"] for r in two["records"] if r["status"] == "ok"]).all()

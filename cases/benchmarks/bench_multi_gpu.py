@@ -1,37 +1,45 @@
 """Benchmark of the device Monte Carlo on several GPUs of one host against one GPU (issue 31: 8,192 variants, 2 GPUs >= 1.8x one).
 
-Workload per variant (fixed, the Exudyn reference run's settings):
+Path (both designs, rvtool.variants.multi_device.rows_batch): the path of
+cases/benchmarks/bench_device_mc.py. Each worker's helper processes sample its variants and build
+them as ModelSnapshots; the worker runs TE and lost motion of up to --solve-chunk copies at a time
+on the device row Newton (rvtool.batched.device_rows_variants: the Newton step and row sums on the
+device, the lost motion on the device torque path); every point or copy the device does not
+converge is solved by Exudyn inside the timing and counted. All of a worker's builds are queued
+at once, so that its helpers build the next copies while the device solves the current ones.
+
+Workload per variant (fixed, the Exudyn reference run's settings, as bench_device_mc):
 * rd40 (default): cases/cycloid/monte_carlo_te.py's protocol: quasi-static TE over one output
-  revolution at 53 points under the rated torque, the maximum pin force, the lost motion at
-  +-3 % of the rated torque; tolerances rd40_tolerances.toml, seed 2026; the device Newton
-  (rvtool.variants.device: TE and lost motion on the device, failed copies on the per-variant
-  Exudyn path inside the timing);
+  revolution at 53 points (--quick 23, a count whose warm starts hold) under the rated torque,
+  the lost motion at +-3 % of the rated torque; rd40_tolerances.toml, seed 2026; built with that
+  study's regularization (1e4 N/m, 100 N m/rad) and the lumped bearings;
 * rv40e (--design rv40e): cases/rv/monte_carlo_rv.py's: TE at the rated torque over one crank
-  revolution at 37 points, lost motion at +-3 %; rv40e_tolerances.toml, seed 20261124; each
-  variant built in its worker, then the device row Newton (rvtool.batched.device_rows_variants).
---quick: 2 variants at 13 (rd40) / 3 (rv40e) TE points on two cpu workers (CI).
+  revolution at 37 points (--quick 3), lost motion at +-3 %; rv40e_tolerances.toml, seed 20261124.
+--quick: 2 variants on two cpu workers (CI).
 
 Placement (rvtool.variants.multi_device): a LocalCluster of one single-threaded worker process per
 device, each started with CUDA_VISIBLE_DEVICES = its GPU (cpu workers: none visible); the variants
-are split into one contiguous batch per device, each batch cut into chunks of --chunk variants run
-one after another on that device's worker (default: 1,024 for rd40 on cuda, the single-GPU study's
-chunk CHUNK_DEVICE_GPU; 64 for rv40e, the row Newton's copy cost grows faster than linearly; the
-whole batch on cpu). Host work (per-copy parameters, Exudyn fallbacks) runs on each GPU worker's
-helper pool, the host's cores shared out: the one-GPU run on a cluster of one worker with
-cpu_count - 1 helpers, the N-GPU run on a cluster of N workers with cpu_count / N - 1 each
-(--host-workers overrides; cpu workers: none), so both runs use the whole host.
+are split into one contiguous batch per device, run as one task on that device's worker (--chunk
+cuts it into tasks run one after another). Builds run on each GPU worker's helper pool, the host's
+cores shared out: the one-GPU run on a cluster of one worker with cpu_count - 1 helpers, the N-GPU
+run on a cluster of N workers with cpu_count / N - 1 each (--host-workers overrides; cpu workers:
+none, they build in the worker), so both runs use the whole host.
 
 Warm-up (excluded from both timings, reported as ``warm_up_s``): one variant on every worker of
 each cluster first (imports, Warp kernel compilation and module loading on each device, the helper
-pools started). Starting the clusters is excluded too (``cluster_start_s``). Fallbacks and
-failures are inside the timings.
+pools started and their modules imported). Starting the clusters is excluded too
+(``cluster_start_s``). Building the variants, fallbacks and failures are inside the timings.
 
 Judged (``passed``): the N-device records equal the one-device records (every figure within 1e-12
 relative: the copies are independent), the same variants failed in both, failed variants
 <= 0.2 % (issue 31), and, for a full run on cuda, the speed-up N devices / one >= 1.8 (issue 31's
-target for 2 GPUs; quick and cpu runs report it only: two workers on a shared 2-core machine
-measure nothing). Split of the time: per worker, its tasks' wall time (busy_s), the study's wall
-time, Dask's share (wall minus the busiest worker) and the load imbalance (busiest / mean busy).
+target for 2 GPUs, the whole study: builds included; quick and cpu runs report it only: two
+workers on a shared 2-core machine measure nothing). Split of the time: per worker, its tasks'
+wall time (busy_s), its device path's time (device_s: device_rows_variants, Exudyn fallbacks
+included) and the time it waited for its helpers' builds (build_wait_s); the study's wall time,
+Dask's share (wall minus the busiest worker) and the load imbalance (busiest / mean busy);
+``speedup_device``: the busiest worker's device_s, one device / N (the device part alone, builds
+excluded: reported, not judged).
 """
 import time
 
@@ -48,12 +56,15 @@ FIGS = ("te_pp_arcsec", "te_rms_arcsec", "max_pin_force_N", "lost_motion_arcmin"
 EQUAL_REL = 1e-12               # the same independent copies on equal devices: equal records
 MAX_FAILURE_SHARE = 0.002       # issue 31: failures < 0.2 %
 TARGET_SPEEDUP = 1.8            # issue 31: 8,192 variants on 2 GPUs >= 1.8x one GPU
+RD_REGULARIZATION = (1.0e4, 100.0)   # cases/cycloid/monte_carlo_te.py's REGULARIZATION (as bench_device_mc)
+SOLVE_CHUNK = 1024              # copies per device solve: bench_device_mc solves its 1,000 variants in one batch
 CASES = {
-    # design, tolerances loader, tolerances, seed, protocol (full, quick), chunk on cuda
+    # design, tolerances loader, tolerances, seed, protocol (full, quick), build options
     "rd40": ("rd40", load_tolerances, "rd40_tolerances", 2026,
-             (VariantProtocol(n_te_points=53), VariantProtocol(n_te_points=13)), 1024),
+             (VariantProtocol(n_te_points=53), VariantProtocol(n_te_points=23)),
+             {"bearing_model": "lumped", "regularization": RD_REGULARIZATION}),
     "rv40e": ("rv40e", load_rv_tolerances, "rv40e_tolerances", 20261124,
-              (RvVariantProtocol(n_te_points=37), RvVariantProtocol(n_te_points=3)), 64),
+              (RvVariantProtocol(n_te_points=37), RvVariantProtocol(n_te_points=3)), {}),
 }
 
 
@@ -74,12 +85,18 @@ def judge(r):
 
 
 def split(res, wall):
-    """Per-worker busy time, Dask's share and the imbalance of one study."""
-    busy = {}
+    """Per-worker busy, device and build-wait time, Dask's share and the imbalance of one study."""
+    busy, dev, wait = {}, {}, {}
+    recs = iter(res["records"])
     for b in res["batches"]:
-        busy[b["worker"]] = busy.get(b["worker"], 0.0) + (b["wall_s"] or 0.0)
+        w = b["worker"]
+        busy[w] = busy.get(w, 0.0) + (b["wall_s"] or 0.0)
+        for _ in range(b["variants"]):
+            r = next(recs)
+            dev[w] = dev.get(w, 0.0) + float(r.get("device_s") or 0.0)
+            wait[w] = wait.get(w, 0.0) + float(r.get("build_wait_s") or 0.0)
     top = max(busy.values())
-    return {"wall_s": wall, "busy_s": busy, "dask_s": wall - top,
+    return {"wall_s": wall, "busy_s": busy, "device_s": dev, "build_wait_s": wait, "dask_s": wall - top,
             "imbalance": top / float(np.mean(list(busy.values()))), "tasks": len(res["batches"])}
 
 
@@ -112,45 +129,53 @@ def main(argv=None):
         p.add_argument("--device", default="cpu", choices=("cpu", "cuda"),
                        help="cuda: one worker per GPU (cuda:0 .. cuda:N-1); cpu: N cpu workers"),
         p.add_argument("--gpus", type=int, default=2, help="N devices (workers) of the N-device run"),
-        p.add_argument("--chunk", type=int, default=None, help="variants per task (default: see the docstring)"),
+        p.add_argument("--chunk", type=int, default=None, help="variants per task (default: a worker's whole batch)"),
+        p.add_argument("--solve-chunk", type=int, default=SOLVE_CHUNK, help="copies per device solve"),
         p.add_argument("--host-workers", type=int, default=None,
                        help="helper processes per worker (default: the host's cores shared out; cpu: 0)")))
     t_all = time.perf_counter()
-    name, loader, tol_name, seed, protocols, cuda_chunk = CASES[args.design]
+    name, loader, tol_name, seed, protocols, build_kw = CASES[args.design]
     design = load_design(designs.path(name))
     tol = loader(designs.path(tol_name))
     protocol = protocols[1] if args.quick else protocols[0]
     B = args.variants or (2 if args.quick else 8192)
     devices = [f"cuda:{k}" for k in range(args.gpus)] if args.device == "cuda" else ["cpu"] * args.gpus
-    chunk = args.chunk or (cuda_chunk if args.device == "cuda" or args.design == "rv40e" else None)
+    chunk = args.chunk
     def study(devs):
         """(result, wall, cluster start, warm-up, helpers per worker) on a cluster of ``devs``."""
         t = time.perf_counter()
         with device_cluster(devs) as (client, slots):
             start = time.perf_counter() - t
             hw = default_host_workers(slots) if args.host_workers is None else args.host_workers
-            warm = warm_up(client, slots, design, tol, protocol, seed, host_workers=hw)
+            warm = warm_up(client, slots, design, tol, protocol, seed, host_workers=hw, build_kw=build_kw)
             t = time.perf_counter()
             res = multi_device_monte_carlo(design, tol, B, protocol=protocol, seed=seed, client=client, slots=slots,
-                                           chunk=chunk, host_workers=hw)
+                                           chunk=chunk, host_workers=hw, build_kw=build_kw,
+                                           solve_chunk=args.solve_chunk)
             return res, time.perf_counter() - t, start, warm, hw, [s.device for s in slots]
 
     one, one_s, c1, w1, hw1, _ = study(devices[:1])
     many, many_s, cn, wn, hwn, worker_device = study(devices)
     ok = [r for r in many["records"] if r["status"] == "ok"]
+    s1, sn = split(one, one_s), split(many, many_s)
     results = {
         "settings_echo": {"design": name, "variants": B, "te_points": protocol.n_te_points, "devices": devices,
-                          "worker_device": worker_device, "chunk": chunk,
+                          "worker_device": worker_device, "chunk": chunk, "solve_chunk": args.solve_chunk,
+                          "path": many["path"], "build_kw": {k: list(v) if isinstance(v, tuple) else v
+                                                             for k, v in build_kw.items()},
                           "host_workers": {"one_device": hw1, "n_devices": hwn},
                           "judge_speedup": (not args.quick) and args.device == "cuda"},
         "cluster_start_s": {"one_device": c1, "n_devices": cn},
         "warm_up_s": {"one_device": w1, "n_devices": wn},
-        "timing_note": ("warm-up (one variant on every worker) and the cluster starts are excluded from both "
-                        "timings; fallbacks and failures are inside them"),
-        "one_device": {"failed": one["failed"], **split(one, one_s), **fallbacks(one["records"])},
-        "n_devices": {"failed": many["failed"], **split(many, many_s), **fallbacks(many["records"])},
+        "timing_note": ("warm-up (one variant on every worker, the helper pools started) and the cluster starts "
+                        "are excluded from both timings; building the variants, fallbacks and failures are inside "
+                        "them"),
+        "one_device": {"failed": one["failed"], **s1, **fallbacks(one["records"])},
+        "n_devices": {"failed": many["failed"], **sn, **fallbacks(many["records"])},
+        "errors": [f"variant {r['index']}: {r['error']}" for r in many["records"] if r["status"] != "ok"][:5],
         "variants_per_s": {"one_device": B / one_s, "n_devices": B / many_s},
         "speedup": one_s / many_s,
+        "speedup_device": max(s1["device_s"].values()) / max(max(sn["device_s"].values()), 1e-300),
         "agreement": compare(one["records"], many["records"]),
         "te_pp_arcsec_mean": float(np.mean([r["te_pp_arcsec"] for r in ok])) if ok else None,
         "lost_motion_arcmin_mean": float(np.mean([r["lost_motion_arcmin"] for r in ok])) if ok else None,

@@ -12,18 +12,22 @@ batch of variants (scale-out delegated to Dask, :mod:`rvtool.variants.cluster`).
 * :func:`multi_device_monte_carlo` splits variants 0..n-1 into one contiguous batch per worker
   (:func:`split_indices`, :func:`plan`), runs each batch on its own worker (pinned to it: the
   batches are sized for equal devices; a batch may be cut into chunks run one after another there)
-  and gathers the records in variant order. The per-batch task is the
-  topology's device path: a cycloid design runs
-  :func:`rvtool.variants.montecarlo.run_batch` in mode "device" (TE, max pin force and lost
-  motion on the device Newton, :mod:`rvtool.variants.device`); an RV design (every other
-  replicable topology) builds its variants in the worker and runs
-  :func:`rvtool.batched.device_rows_variants.device_rows_variants` (TE and lost motion on the
-  device row Newton). A variant whose run fails, and every variant of a batch whose task dies
-  (a lost worker), is recorded ``status = "failed"`` with its error and counted; none is dropped.
-* Host work: each GPU worker runs the device path's host work (per-copy parameters, Exudyn
-  fallbacks) on a pool of helper processes of its own (:func:`helper_pool`; the workers are
-  non-daemonic so that they may start it), the host's cores shared out between the GPUs
-  (:func:`default_host_workers`); the pools end when the cluster closes.
+  and gathers the records in variant order. The per-batch task (``path``, :func:`batch_task`) is
+  by default :func:`rows_batch` for every topology (RD-40 and rv40e alike), the path of
+  ``cases/benchmarks/bench_device_mc.py``: the worker's helpers sample and build its variants as
+  :class:`~rvtool.solver.model_snapshot.ModelSnapshot`, the worker runs TE and lost motion of
+  them on the device row Newton (:func:`rvtool.batched.device_rows_variants.device_rows_variants`,
+  the lost motion on the device torque path), points and copies the device does not converge on
+  Exudyn, counted. ``path="device_newton"`` (cycloid designs) runs the Monte Carlo's older device
+  mode (:func:`cycloid_batch`: :func:`rvtool.variants.montecarlo.run_batch`, mode "device", its
+  lost motion on per-copy Exudyn fallbacks). A variant whose run fails, and every variant of a
+  batch whose task dies (a lost worker), is recorded ``status = "failed"`` with its error and
+  counted; none is dropped.
+* Host work: each GPU worker runs the device path's host work (the variants' builds; on
+  "device_newton" per-copy parameters and Exudyn fallbacks) on a pool of helper processes of its
+  own (:func:`helper_pool`; the workers are non-daemonic so that they may start it), the host's
+  cores shared out between the GPUs (:func:`default_host_workers`); the pools end when the
+  cluster closes.
 
 Every figure of a variant depends on that variant alone (the device copies are independent), so
 the records equal those of one worker (tests/test_multi_gpu.py: two cpu workers against one,
@@ -204,6 +208,26 @@ def start_helper_pool(host_workers):
     return len(set(pool.map(_import_device_path, range(4 * int(host_workers)))))
 
 
+def _nominal_build(job):
+    """A helper's warm-up build: the nominal design with the study's options (imports, memos)."""
+    import os
+
+    from ..assembly import build
+    design, build_kw = job
+    build(design, **build_kw)
+    return os.getpid()
+
+
+def warm_helper_builds(design, build_kw, host_workers):
+    """One nominal build of ``design`` per helper of this process's :func:`helper_pool` (as
+    ``bench_device_mc`` warms its build pool), so that a timed study's builds find their imports
+    and memos; returns the helpers that built (0 without helpers)."""
+    pool = helper_pool(host_workers)
+    if pool is None:
+        return 0
+    return len(set(pool.map(_nominal_build, [(design, dict(build_kw))] * int(host_workers))))
+
+
 def shutdown_helper_pools():
     """End this process's helper pools (run on every worker when :func:`device_cluster` closes)."""
     while _POOLS:
@@ -226,52 +250,112 @@ def cycloid_batch(design, tolerances, protocol, seed, indices, device, host_work
     return device_chunk(design, variants, protocol, device, host_workers=host_workers)
 
 
-def rv_batch(design, tolerances, protocol, seed, indices, device, host_workers=0):
-    """Records of the RV variants ``indices`` (:func:`rvtool.variants.rv_tolerances.sample_rv_design`
-    with ``seed``): each built here, then TE and lost motion of all of them on the device row Newton
-    (:func:`rvtool.batched.device_rows_variants.device_rows_variants`). A variant that cannot be
-    built is failed with its error; the others run. host_workers: not used (the variants' Exudyn
-    builds are not picklable; they run in this process)."""
+def variant_snapshot(job):
+    """Helper task: (index, :class:`~rvtool.solver.model_snapshot.ModelSnapshot` of variant k or
+    None, error or None) for job (design, tolerances, seed, k, build_kw): the variant sampled
+    (cycloid: ``sample_variant(...).apply(design)``; RV: ``sample_rv_design``) and built here."""
+    from ..assembly import build
+    from ..solver.model_snapshot import ModelSnapshot
+    design, tolerances, seed, k, build_kw = job
+    try:
+        if _is_cycloid(design):
+            from .tolerances import sample_variant
+            d = sample_variant(tolerances, design, k, seed).apply(design)
+        else:
+            from .rv_tolerances import sample_rv_design
+            d = sample_rv_design(tolerances, design, k, seed)[0]
+        return int(k), ModelSnapshot(build(d, **build_kw), d, build_kw), None
+    except Exception as exc:  # an impossible sampled variant is a result of the study
+        return int(k), None, f"{type(exc).__name__}: {exc}"
+
+
+def default_build_kw(design, protocol):
+    """Build options of the variants of the row path: a cycloid design's ``bearing_model`` from
+    ``protocol``; none for an RV design. (A study passes its own, e.g. RD-40's regularization.)"""
+    return {"bearing_model": protocol.bearing_model} if _is_cycloid(design) else {}
+
+
+def rows_batch(design, tolerances, protocol, seed, indices, device, host_workers=0, *, build_kw=None,
+               solve_chunk=1024):
+    """Records of the variants ``indices`` (sampled with ``seed``) on the device row Newton, the path
+    of ``cases/benchmarks/bench_device_mc.py``: every variant sampled and built as a
+    :class:`~rvtool.solver.model_snapshot.ModelSnapshot` on this process's :func:`helper_pool` of
+    ``host_workers`` processes (0: here), then TE and lost motion of up to ``solve_chunk`` copies at
+    a time on ``device`` (:func:`rvtool.batched.device_rows_variants.device_rows_variants`; points
+    and copies the device does not converge on Exudyn, counted). All builds are queued at once, so
+    the helpers build the next copies while the device solves the current ones. The TE at
+    ``te_torque_fraction`` x T_rated over ``protocol.input_angles`` (RV: of the nominal model), the
+    lost motion at +-``lost_motion_fraction`` x T_rated. A variant that cannot be built, or whose
+    device and Exudyn runs fail, is failed with its error; every record carries index, figures,
+    status, error and paths; the first record of each solved chunk its chunk's ``exudyn_points``,
+    ``exudyn_copies``, ``device_s`` (the device path's wall time) and ``build_wait_s`` (time spent
+    waiting for the helpers' builds)."""
     from ..assembly import build
     from ..batched.device_rows_variants import device_rows_variants
     from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
-    from .rv_tolerances import sample_rv_design
+    if isinstance(solve_chunk, bool) or not isinstance(solve_chunk, (int, np.integer)) or solve_chunk < 1:
+        raise RvtoolInputError(f"solve_chunk = {solve_chunk!r} is outside the valid range [1, inf) (integer)")
     t0 = time.perf_counter()
-    recs, models, slot = [], [], []
-    for k in indices:
-        rec = {"index": int(k), "te_pp_arcsec": None, "te_rms_arcsec": None, "lost_motion_arcmin": None,
-               "status": "ok", "error": None, "te_path": None, "exudyn_points": 0, "lost_motion_path": None}
-        try:
-            models.append(build(sample_rv_design(tolerances, design, k, seed)[0]))
-            slot.append(len(recs))
-        except Exception as exc:  # an impossible sampled variant is a result of the study
-            rec.update(status="failed", error=f"{type(exc).__name__}: {exc}")
-        recs.append(rec)
-    build_s = time.perf_counter() - t0
-    if models:
-        r = device_rows_variants(models, torque=protocol.te_torque_fraction * design.rated_torque,
-                                 input_angles=protocol.input_angles(models[0]),
-                                 lost_motion_level=protocol.lost_motion_fraction * design.rated_torque, device=device)
-        path = f"device_rows:{device}"
-        for c, i in enumerate(slot):
-            te = r.te[c] - np.mean(r.te[c])
-            recs[i].update(te_pp_arcsec=float(np.ptp(r.te[c]) * ARCSEC_PER_RAD),
-                           te_rms_arcsec=float(np.sqrt(np.mean(te ** 2)) * ARCSEC_PER_RAD),
-                           lost_motion_arcmin=float(r.lost_motion_rad[c] * ARCMIN_PER_RAD),
-                           status=r.status[c], error=r.error[c], te_path=path, lost_motion_path=path)
-        # Exudyn fallbacks are counted per batch (device_rows_variants does not attribute them)
-        recs[slot[0]]["exudyn_points"] = int(r.exudyn_points)
-        recs[slot[0]]["exudyn_copies"] = int(r.exudyn_copies)
+    kw = default_build_kw(design, protocol) if build_kw is None else dict(build_kw)
+    angles = protocol.input_angles(design if _is_cycloid(design) else build(design, **kw))
+    torque = protocol.te_torque_fraction * design.rated_torque
+    level = protocol.lost_motion_fraction * design.rated_torque
+    jobs = [(design, tolerances, seed, int(k), kw) for k in indices]
+    pool = helper_pool(host_workers)
+    if pool is None:
+        results = map(variant_snapshot, jobs)      # built here, each when its chunk is taken
+    else:
+        futures = [pool.submit(variant_snapshot, j) for j in jobs]     # all queued: builds overlap the solves
+        results = (f.result() for f in futures)
+    path = f"device_rows:{device}"
+    recs = []
+    for lo in range(0, len(jobs), int(solve_chunk)):
+        tw = time.perf_counter()
+        got = [next(results) for _ in range(min(int(solve_chunk), len(jobs) - lo))]
+        wait = time.perf_counter() - tw
+        chunk, models, slot = [], [], []
+        for k, snap, err in got:
+            rec = {"index": k, "te_pp_arcsec": None, "te_rms_arcsec": None, "lost_motion_arcmin": None,
+                   "status": "ok" if err is None else "failed", "error": err, "te_path": None,
+                   "lost_motion_path": None}
+            if snap is not None:
+                models.append(snap)
+                slot.append(len(chunk))
+            chunk.append(rec)
+        chunk[0].update(build_wait_s=wait, exudyn_points=0, exudyn_copies=0, device_s=0.0)
+        if models:
+            r = device_rows_variants(models, torque=torque, input_angles=angles, lost_motion_level=level,
+                                     device=device)
+            for c, i in enumerate(slot):
+                te = r.te[c] - np.mean(r.te[c])
+                chunk[i].update(te_pp_arcsec=float(np.ptp(r.te[c]) * ARCSEC_PER_RAD),
+                                te_rms_arcsec=float(np.sqrt(np.mean(te ** 2)) * ARCSEC_PER_RAD),
+                                lost_motion_arcmin=float(r.lost_motion_rad[c] * ARCMIN_PER_RAD),
+                                status=r.status[c], error=r.error[c], te_path=path, lost_motion_path=path)
+                if r.status[c] != "ok":
+                    chunk[i].update(te_pp_arcsec=None, te_rms_arcsec=None, lost_motion_arcmin=None)
+            chunk[0].update(exudyn_points=int(r.exudyn_points), exudyn_copies=int(r.exudyn_copies),
+                            device_s=float(r.wall_s))
+        recs.extend(chunk)
     wall = time.perf_counter() - t0
     for rec in recs:
         rec["wall_s"] = wall / len(recs)
-    recs[0]["build_s"] = build_s
     return recs
 
 
-def batch_task(design):
-    """The per-batch task of ``design``'s topology (module docstring)."""
-    return cycloid_batch if _is_cycloid(design) else rv_batch
+PATHS = ("rows", "device_newton")
+"""Per-batch paths: "rows" (:func:`rows_batch`, every topology: the device row Newton of
+``bench_device_mc``) and "device_newton" (:func:`cycloid_batch`, cycloid designs only: the Monte
+Carlo's older device mode, its lost motion on Exudyn fallbacks)."""
+
+
+def batch_task(design, path="rows"):
+    """The per-batch task of ``path`` (:data:`PATHS`) for ``design``."""
+    if path not in PATHS:
+        raise RvtoolInputError(f"path = {path!r}; valid: {list(PATHS)}")
+    if path == "device_newton" and not _is_cycloid(design):
+        raise RvtoolInputError("path = 'device_newton' runs cycloid designs only; valid for this design: 'rows'")
+    return rows_batch if path == "rows" else cycloid_batch
 
 
 def default_protocol(design):
@@ -300,15 +384,19 @@ def plan(n_variants, slots, chunk=None):
     return out
 
 
-def run_batches(client, tasks, design, tolerances, protocol, seed, host_workers=0):
+def run_batches(client, tasks, design, tolerances, protocol, seed, host_workers=0, *, path="rows", build_kw=None,
+                solve_chunk=1024):
     """Records of ``tasks`` ([(slot, indices)], e.g. :func:`plan`), each on its slot's worker with
     that slot's device, gathered in task order; a task that raises has all its variants failed with
-    that error; host_workers: each worker's helper pool (:func:`helper_pool`). Returns (records,
-    per-task {worker, device, variants, wall_s (of the task, as the worker measured it)})."""
+    that error; host_workers: each worker's helper pool (:func:`helper_pool`); path, build_kw,
+    solve_chunk: see :func:`batch_task` and :func:`rows_batch` (build_kw, solve_chunk: "rows" only).
+    Returns (records, per-task {worker, device, variants, wall_s (of the task, as the worker
+    measured it)})."""
     addr = worker_addresses(client, list({s.name: s for s, _ in tasks}.values()))
-    fn = batch_task(design)
+    fn = batch_task(design, path)
+    kw = {"build_kw": build_kw, "solve_chunk": solve_chunk} if fn is rows_batch else {}
     futures = [(s, b, client.submit(_timed, fn, design, tolerances, protocol, seed, list(b), s.device, host_workers,
-                                    workers=[addr[s.name]], allow_other_workers=False, pure=False))
+                                    workers=[addr[s.name]], allow_other_workers=False, pure=False, **kw))
                for s, b in tasks]
     records, info = [], []
     for s, b, fut in futures:
@@ -322,9 +410,9 @@ def run_batches(client, tasks, design, tolerances, protocol, seed, host_workers=
     return records, info
 
 
-def _timed(task, *args):
+def _timed(task, *args, **kw):
     t0 = time.perf_counter()
-    out = task(*args)
+    out = task(*args, **kw)
     return out, time.perf_counter() - t0
 
 
@@ -337,30 +425,43 @@ def default_host_workers(slots):
     return max(0, (os.cpu_count() or 1) // len(slots) - 1)
 
 
-def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1, host_workers=None):
+def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1, host_workers=None, *,
+            path="rows", build_kw=None):
     """Start every worker's helper pool (:func:`start_helper_pool`) and run ``variants`` variants on
     every worker once (imports, Warp kernel compilation and module loading on its device), untimed
-    by the study; returns the wall time [s]."""
+    by the study, on ``path`` with ``build_kw`` (as the study; "rows": every helper first builds
+    the nominal design once, :func:`warm_helper_builds`); returns the wall time [s]."""
     t0 = time.perf_counter()
     protocol = protocol or default_protocol(design)
     hw = default_host_workers(slots) if host_workers is None else host_workers
     addr = worker_addresses(client, slots)
     client.gather([client.submit(start_helper_pool, hw, workers=[addr[s.name]], allow_other_workers=False,
                                  pure=False) for s in slots])
-    run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed, hw)
+    if path == "rows":                            # every helper builds the nominal design once
+        kw = default_build_kw(design, protocol) if build_kw is None else build_kw
+        client.gather([client.submit(warm_helper_builds, design, kw, hw, workers=[addr[s.name]],
+                                     allow_other_workers=False, pure=False) for s in slots])
+    run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed, hw, path=path,
+                build_kw=build_kw)
     return time.perf_counter() - t0
 
 
 def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, protocol=None, seed=0, client=None,
-                             slots=None, chunk=None, host_workers=None):
+                             slots=None, chunk=None, host_workers=None, path="rows", build_kw=None,
+                             solve_chunk=1024):
     """The device Monte Carlo of variants 0..n_variants-1 of ``design`` over several devices
-    (module docstring), each device's batch in chunks of at most ``chunk`` variants (:func:`plan`). Either ``devices`` (a cluster is started for the study and closed after it:
+    (module docstring), each device's batch in chunks of at most ``chunk`` variants (:func:`plan`).
+    Either ``devices`` (a cluster is started for the study and closed after it:
     see :func:`device_slots`) or ``client`` and ``slots`` of a running :func:`device_cluster`
     (e.g. warmed by :func:`warm_up`). protocol: the per-variant workload (default
     :func:`default_protocol`). Returns {"records" (by index), "failed" (count), "wall_s" (the
     study, on a running cluster), "batches" (per-batch worker, device, size, task wall time)}.
     host_workers: helper processes of each worker for the host work (None:
-    :func:`default_host_workers`; the same count as the :func:`warm_up` that started the pools)."""
+    :func:`default_host_workers`; the same count as the :func:`warm_up` that started the pools).
+    path: "rows" (default, every topology: :func:`rows_batch`, the device row Newton with the
+    variants' builds on the helper pools) or "device_newton" (cycloid designs: :func:`cycloid_batch`);
+    build_kw: the variants' build options (None: :func:`default_build_kw`); solve_chunk: copies per
+    device solve ("rows")."""
     if (client is None) == (devices is None):
         raise RvtoolInputError("give either devices (a cluster for this study) or client and slots (a running one)")
     if client is not None and not slots:
@@ -371,15 +472,20 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
     if client is None:
         with device_cluster(devices) as (client, slots):
             return multi_device_monte_carlo(design, tolerances, n_variants, protocol=protocol, seed=seed,
-                                            client=client, slots=slots, chunk=chunk, host_workers=host_workers)
+                                            client=client, slots=slots, chunk=chunk, host_workers=host_workers,
+                                            path=path, build_kw=build_kw, solve_chunk=solve_chunk)
     t0 = time.perf_counter()
     hw = default_host_workers(slots) if host_workers is None else int(host_workers)
-    records, info = run_batches(client, plan(n_variants, slots, chunk), design, tolerances, protocol, seed, hw)
+    batch_task(design, path)                      # a path the design cannot run is refused before any task
+    records, info = run_batches(client, plan(n_variants, slots, chunk), design, tolerances, protocol, seed, hw,
+                                path=path, build_kw=build_kw, solve_chunk=solve_chunk)
     return {"records": records, "failed": sum(r["status"] != "ok" for r in records),
             "wall_s": time.perf_counter() - t0, "batches": info, "devices": [s.device for s in slots],
-            "host_workers": hw}
+            "host_workers": hw, "path": path}
 
 
-__all__ = ["DeviceSlot", "RvVariantProtocol", "default_host_workers", "default_protocol", "device_chunk",
-           "device_cluster", "device_slots", "helper_pool", "shutdown_helper_pools", "start_helper_pool",
-           "multi_device_monte_carlo", "plan", "run_batches", "split_indices", "warm_up", "worker_addresses"]
+__all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "batch_task", "cycloid_batch", "default_build_kw",
+           "default_host_workers", "default_protocol", "device_chunk", "device_cluster", "device_slots",
+           "helper_pool", "multi_device_monte_carlo", "plan", "rows_batch", "run_batches", "shutdown_helper_pools",
+           "split_indices", "start_helper_pool", "variant_snapshot", "warm_helper_builds", "warm_up",
+           "worker_addresses"]
