@@ -198,6 +198,8 @@ class HostedContactElement(ContactElement):
 
     def _contract(self, ev):
         """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T on the port rows in contact only (module docstring)."""
+        if getattr(self.ports, "state_dependent", False):
+            return super()._contract(ev)
         nr, P = self.n_rigid, self.ports.P
         nb = len(ev.Q)
 

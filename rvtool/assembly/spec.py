@@ -41,6 +41,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_columns, angle_field, is_angle
 from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
+from ..structure.floating_ports import FloatingDynamics
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
@@ -100,7 +101,9 @@ class Wheels:
     the face width [-]. samples_per_tooth: resolution of the wheel-profile table [-].
     clearance: uniform clearance at the pins [m]. n_teeth: z_g, the wheel's tooth count [-]
     (None: pins.n_pins - 1). search: the contact search ("discrete" table search or "analytic"
-    closest point)."""
+    closest point). dynamics: the wheels as rigid or floating flexible bodies
+    (:class:`~rvtool.structure.floating_ports.FloatingDynamics`, sub-table ``[wheels.dynamics]``;
+    rigid by default)."""
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
@@ -110,6 +113,7 @@ class Wheels:
     clearance: float = 0.0
     n_teeth: int | None = None
     search: str = "discrete"
+    dynamics: FloatingDynamics = field(default_factory=FloatingDynamics)
 
     def __post_init__(self):
         check_positive("wheels.eccentricity", self.eccentricity)

@@ -163,6 +163,10 @@ def fused_support(model, run_spec=None):
     if not (isinstance(model.design, CycloidDesign) and isinstance(model.kinematics, CycloidKinematics)):
         reasons.append(f"topology {type(model.design).__name__}: the fused stepper runs cycloid reducers only")
         return FusedSupport(tuple(reasons))
+    from .backends.base import flexible_body_reasons
+    if flexible_body_reasons(model):
+        reasons.extend(flexible_body_reasons(model))
+        return FusedSupport(tuple(reasons))
     extra = sorted(set(model.elements) - set(FUSED_ELEMENTS))
     if extra:
         reasons.append(f"contact elements {extra} (bearing_friction.model = {model.design.bearing_friction.model!r}); "

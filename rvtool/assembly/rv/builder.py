@@ -608,6 +608,9 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     if not isinstance(design, RVDesign):
         raise RvtoolInputError(f"design must be an RVDesign; got {type(design).__name__}")
     d = design
+    if d.wheels.dynamics.flexible:
+        raise RvtoolInputError("wheels.dynamics.model = 'flexible' is implemented for the cycloid topology only (issue "
+                               "33: RD-40 first); valid for an RV design: 'rigid'")
     graph = GearGraph.of(d)
     L = Layout(d)
     kin = RvKinematics(d, graph, L)

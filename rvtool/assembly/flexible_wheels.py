@@ -1,0 +1,228 @@
+"""Flexible cycloid wheels as floating bodies (``[wheels.dynamics] model = "flexible"``, issue 33).
+
+Each wheel keeps its planar rigid node as the floating frame and gains ``n_modes`` in-plane
+free-free modes of its FE model (:mod:`rvtool.structure.floating_ports`); the modal coordinates
+of all wheels form one :class:`~exudyn_user_elements.floating_ports.ModalCoordinates`
+structure, and every contact family on a wheel acts on it through
+:class:`~exudyn_user_elements.floating_ports.FloatingPorts`:
+
+* ring pins: pin p at wheel k is a virtual body (index nw + 2 + k z_b + p) at minus the wheel's
+  elastic displacement at the contact, interpolated between the profile stations at the polar
+  angle (wheel frame) of the contact point C = P - r_p n, n the direction from the pitch point
+  I = z_b e (O_w / |O_w|) to the pin centre P (the ideal cycloid's contact normal passes
+  through the pitch point: a locator, exact for the unmodified profile; modifications move the
+  contact by a fraction of a station);
+* output pins: the flange's station body of pin p at wheel k (index nw + 2 + p nw + k, as for
+  elastic output pins) is the flange shifted by minus the hole's displacement;
+* eccentric bearings (lumped): wheel k's bore is a virtual body (index nw + 2 + k) at the wheel
+  pose plus the bore's rigid-fit motion.
+
+The frame carries the builder's rigid inertia (mass and polar inertia of the wheel annulus), so a
+frozen flexible wheel (``frozen = true``, modal coordinates held) is the rigid wheel; the FE
+mesh's own mass and inertia are reported beside it (``WheelModes.mesh_mass``).
+
+Wheel geometry and ports: the FE model comes from :func:`wheel_body_mesh`.
+"""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RvtoolInputError
+from ..structure.floating_ports import planar_modal_body
+
+_CACHE = {}
+
+
+@dataclass(frozen=True)
+class WheelMesh:
+    """A wheel's unsupported FE model with its port groups: ``profile`` (groups, one per profile
+    station), ``bore`` (port indices), ``holes`` (groups, one per output-pin hole in pin order),
+    ``centre`` (the wheel centre in the mesh frame [m]) and ``source`` (a label)."""
+    model: object
+    profile: tuple
+    bore: tuple
+    holes: tuple
+    centre: tuple = (0.0, 0.0)
+    source: str = ""
+
+
+def wheel_body_mesh(design, mesh_size=None):
+    """:class:`WheelMesh` of the design's cycloid wheel.
+
+    Interim source until issue 30's wheel body (helper "wheelbody") lands: an annulus from the
+    bore (eccentric bearing outer race) to the profile's root circle, the wheel width thick,
+    meshed once; its rim vertices are the profile stations (those at one polar angle averaged), its
+    bore vertices the bore ports, and the vertices nearest to 4 points on each output-pin hole
+    circle a hole's ports (the annulus itself has no holes). Declared a stand-in; the coupling
+    does not depend on it."""
+    from ..structure import AnnularHousingSpec, NodalPort, fe_model_from_mesh, generate_mesh
+    d = design
+    r_bore = d.eccentric_bearing.inner_radius + d.eccentric_bearing.roller_diameter
+    r_root = d.pins.pin_circle_radius - d.pins.pin_radius - d.wheels.eccentricity
+    h = d.wheels.width
+    size = min(mesh_size or 0.5 * h, h)
+    spec = AnnularHousingSpec(inner_radius=r_bore, outer_radius=r_root, height=h, mesh_size=size,
+                              material=d.material, n_ports=1, n_mounts=0, mount_radius=r_bore)
+    mesh = generate_mesh(spec.geometry(), size)
+    v = np.asarray(mesh.ngmesh.Coordinates(), float)
+    r = np.hypot(v[:, 0], v[:, 1])
+    tol = 1e-3 * size
+    ports, used = [], set()
+
+    def port(name, vtx):
+        used.add(int(vtx))
+        ports.append(NodalPort(name=name, point=tuple(v[vtx])))
+        return len(ports) - 1
+    # profile stations: the rim vertices, those at one polar angle (through the width) averaged
+    rim = np.flatnonzero(np.abs(r - r_root) < tol)
+    ang = np.round(np.mod(np.arctan2(v[rim, 1], v[rim, 0]), 2 * np.pi), 9)
+    profile = [tuple(port(f"profile{j}_{i}", vtx) for i, vtx in enumerate(rim[ang == a])) for j, a in enumerate(np.unique(ang))]
+    bore = tuple(port(f"bore{i}", vtx) for i, vtx in enumerate(np.flatnonzero(np.abs(r - r_bore) < tol)))
+    holes = []
+    op = d.output_pins
+    from scipy.spatial import cKDTree
+    tree = cKDTree(v)
+    for p, a in enumerate(op.pin_angles()):
+        c = op.hole_circle_radius * np.array([np.cos(a), np.sin(a)])
+        pts = [(c[0] + op.hole_radius * np.cos(b), c[1] + op.hole_radius * np.sin(b), 0.5 * h)
+               for b in 0.5 * np.pi * np.arange(4)]
+        idx = sorted({int(i) for i in tree.query(pts)[1]} - used)
+        holes.append(tuple(port(f"hole{p}_{i}", vtx) for i, vtx in enumerate(idx)))
+    model = fe_model_from_mesh(mesh, material=d.material, ports=tuple(ports),
+                               info={"component": "cycloid wheel (interim annulus)", "mesh_size": size})
+    return WheelMesh(model=model, profile=tuple(profile), bore=bore, holes=tuple(holes),
+                     source="interim annulus (bore to root circle)")
+
+
+def wheel_modes(design):
+    """The :class:`~rvtool.structure.floating_ports.PlanarModalBody` of the design's wheel
+    (meshed and reduced once per geometry and ``wheels.dynamics``; cached in the process)."""
+    d = design
+    dyn = d.wheels.dynamics
+    key = repr((d.pins, d.wheels, d.eccentric_bearing, d.output_pins, d.material))
+    if key not in _CACHE:
+        wm = wheel_body_mesh(d)
+        body = planar_modal_body(wm.model, n_modes=dyn.n_modes, profile=wm.profile, bore=wm.bore, holes=wm.holes,
+                                 damping_ratio=dyn.damping_ratio, centre=wm.centre)
+        _CACHE[key] = (body, wm.source, wm.model.counts())
+    return _CACHE[key]
+
+
+class FlexibleWheels:
+    """The flexible wheels of one cycloid build: the modal coordinates and the port maps of the
+    families on them (module docstring). mbs; design; ground_marker: a ground coordinate marker."""
+
+    def __init__(self, mbs, design, ground_marker):
+        from exudyn_user_elements.floating_ports import ModalCoordinates
+        d = design
+        self.design = d
+        self.nw = d.n_wheels
+        self.body, self.source, self.mesh_counts = wheel_modes(d)
+        self.coordinates = ModalCoordinates(mbs, {f"wheel{k}": self.body for k in range(self.nw)},
+                                            frozen=d.wheels.dynamics.frozen, ground_marker=ground_marker)
+        self.n_eta = self.coordinates.n
+
+    def _columns(self, k):
+        return self.coordinates.slice(f"wheel{k}")
+
+    # -- ring pins ---------------------------------------------------------------
+    def pin_bodies(self, k):
+        """Virtual pin-body indices of wheel k's mesh."""
+        nw, zb = self.nw, self.design.pins.n_pins
+        return tuple(nw + 2 + k * zb + p for p in range(zb))
+
+    @property
+    def n_pin_bodies(self):
+        return self.nw + 2 + self.nw * self.design.pins.n_pins
+
+    def contact_angles(self, pose):
+        """(nw, z_b) polar angle [rad] in each wheel's frame of the contact point with every pin
+        (the pitch-point locator of the module docstring)."""
+        from ..geometry.cycloid import pin_centres
+        d = self.design
+        P = pin_centres(d.profile)
+        out = np.zeros((self.nw, len(P)))
+        for k in range(self.nw):
+            o = pose[1 + k, :2]
+            r = math.hypot(*o)
+            u = o / r if r > 0 else np.array([math.cos(d.wheels.phases[k]), math.sin(d.wheels.phases[k])])
+            pitch = d.pins.n_pins * d.wheels.eccentricity * u
+            n = P - pitch
+            n /= np.linalg.norm(n, axis=1)[:, None]
+            C = P - d.pins.pin_radius * n - o
+            th = pose[1 + k, 2]
+            c, s = math.cos(th), math.sin(th)
+            out[k] = np.arctan2(-s * C[:, 0] + c * C[:, 1], c * C[:, 0] + s * C[:, 1])
+        return out
+
+    def pin_ports(self):
+        from exudyn_user_elements.floating_ports import FloatingPorts
+        nw, zb = self.nw, self.design.pins.n_pins
+        frame = np.repeat(1 + np.arange(nw), zb)
+
+        def maps(pose):
+            psi = self.contact_angles(pose)
+            A = np.zeros((nw * zb, 3, self.n_eta))
+            for k in range(nw):
+                A[k * zb:(k + 1) * zb, :2, self._columns(k)] = self.body.profile_map(psi[k])
+            return A
+        return FloatingPorts(self.coordinates, nw + 2, np.full(nw * zb, -1), frame, np.full(nw * zb, -1.0), maps)
+
+    # -- output pins -------------------------------------------------------------
+    def output_pin_ports(self):
+        """Station bodies nw + 2 + p nw + k: the flange shifted by minus hole p's displacement on wheel k."""
+        from exudyn_user_elements.floating_ports import FloatingPorts
+        nw, npins = self.nw, self.design.output_pins.n_pins
+        if len(self.body.hole_maps) != npins:
+            raise RvtoolInputError(f"the wheel mesh has {len(self.body.hole_maps)} hole port groups for "
+                                   f"output_pins.n_pins = {npins}; valid: one per pin")
+        A = np.zeros((npins * nw, 3, self.n_eta))
+        frame = np.zeros(npins * nw, int)
+        for p in range(npins):
+            for k in range(nw):
+                A[p * nw + k, :2, self._columns(k)] = self.body.hole_maps[p]
+                frame[p * nw + k] = 1 + k
+        return FloatingPorts(self.coordinates, nw + 2, np.full(npins * nw, nw + 1), frame, np.full(npins * nw, -1.0), A)
+
+    def output_pin_stations(self):
+        """(n_pins, n_wheels) station-body offsets p nw + k."""
+        return np.arange(self.design.output_pins.n_pins * self.nw).reshape(-1, self.nw)
+
+    # -- eccentric bearings (lumped) ----------------------------------------------
+    def bore_ports(self, n_bearing_bodies):
+        """Virtual bores nw + 2 + k (wheel k's pose plus its bore's rigid-fit motion)."""
+        from exudyn_user_elements.floating_ports import FloatingPorts
+        nw = self.nw
+        if self.body.bore_map is None:
+            raise RvtoolInputError("the wheel mesh has no bore ports; the eccentric bearing cannot couple")
+        A = np.zeros((nw, 3, self.n_eta))
+        for k in range(nw):
+            A[k, :, self._columns(k)] = self.body.bore_map
+        return FloatingPorts(self.coordinates, nw + 2, 1 + np.arange(nw), 1 + np.arange(nw), np.ones(nw), A)
+
+    def summary(self):
+        """Reported facts of the flexible wheels: source, mesh counts, retained frequencies [Hz]."""
+        return {"source": self.source, "mesh": self.mesh_counts, "n_modes": self.body.n_modes,
+                "frequencies_hz": self.body.frequencies_hz.tolist(), "in_plane_fraction": self.body.in_plane.tolist(),
+                "mesh_mass_kg": self.body.mesh_mass, "mesh_inertia_kgm2": self.body.mesh_inertia,
+                "frozen": self.design.wheels.dynamics.frozen}
+
+
+def check_flexible_wheels(design, bearing_model, tilt):
+    """Named refusals of the combinations flexible wheels do not implement (yet)."""
+    d = design
+    reasons = []
+    if d.housing.model != "rigid":
+        reasons.append("housing.model = 'ports' (the merged element carries one structure; valid: 'rigid')")
+    if d.pins.support.elastic or d.output_pins.support.elastic:
+        reasons.append("elastic ring or output pins (pins.support / output_pins.support; valid: model = 'rigid')")
+    if bearing_model != "lumped":
+        reasons.append(f"bearing_model = {bearing_model!r} (the bore couples to the lumped eccentric bearing; valid: "
+                       "build(..., bearing_model='lumped'))")
+    if tilt:
+        reasons.append("bodies.flange_coordinates = 'spatial' (valid: 'planar')")
+    if d.bearing_friction.model != "none":
+        reasons.append(f"bearing_friction.model = {d.bearing_friction.model!r} (valid: 'none')")
+    if reasons:
+        raise RvtoolInputError("wheels.dynamics.model = 'flexible' is not implemented with " + "; ".join(reasons))
