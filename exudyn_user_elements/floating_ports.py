@@ -149,12 +149,25 @@ class FloatingPorts:
 
 def contract(ev, T, n_rigid, n):
     """The evaluation ``ev`` on [rigid bodies; virtual bodies] contracted to the element's
-    coordinates [q_r; eta] with T_full = [[I, 0]; T] (Q = T_full^T Q_b, J = T_full^T J_b T_full)."""
-    from rvtool.contact.evaluator import Evaluation
-    Tf = np.zeros((n_rigid + T.shape[0], n))
-    Tf[:n_rigid, :n_rigid] = np.eye(n_rigid)
-    Tf[n_rigid:] = T
+    coordinates [q_r; eta] with T_full = [[I, 0]; T] (Q = T_full^T Q_b, J = T_full^T J_b T_full).
+    Only the virtual rows with a non-zero tangent enter the product (the others are not in
+    contact: an exact rewrite), the tangents are contracted when first read, and the products are
+    split to stay single-threaded (:func:`~exudyn_user_elements.merged_element.small_matmul`)."""
+    from .merged_element import ContractedEvaluation, small_matmul
+    nr = n_rigid
+    nb = len(ev.Q)
+    Q = np.zeros(n)
+    Q[:nr] = ev.Q[:nr]
+    Q += T.T @ ev.Q[nr:]
 
     def mat(J):
-        return Tf.T @ (J @ Tf)
-    return Evaluation(Tf.T @ ev.Q, mat(ev.dQdq), mat(ev.dQdv), ev.obs, ev.trial_history, ev.finite)
+        mask = np.any(J[nr:] != 0, axis=1) | np.any(J[:, nr:] != 0, axis=0)
+        a = np.flatnonzero(mask)
+        E = np.zeros((nr + len(a), n))
+        E[:nr, :nr] = np.eye(nr)
+        E[nr:] = T[a]
+        idx = np.concatenate([np.arange(nr), nr + a])
+        Js = J[np.ix_(idx, idx)]
+        return small_matmul(E.T, small_matmul(Js, E))
+    del nb
+    return ContractedEvaluation(Q, lambda: mat(ev.dQdq), lambda: mat(ev.dQdv), ev.obs, ev.trial_history, ev.finite)

@@ -580,7 +580,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     if C_ring is not None:
         from ..contact.pin_closure import ElasticPinClosure
         pin_eval = ElasticPinClosure(pin_set, n_bodies=nw + 2, carrier=GROUND, station_compliance=C_ring, station=st)
-    elements = {"pins": element(pin_eval, ports=ports if flex is None else flex.pin_ports())}
+    elements = {"pins": element(pin_eval, ports=ports if flex is None else flex.ports("pins"))}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
     from ..output_pins.evaluator import OutputPinEvaluator
@@ -604,7 +604,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                                    wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2 + st.size, backend=backend,
                                    precision=precision, device=device, flange_bodies=nw + 2 + st.ravel())
         op_eval = ElasticPinClosure(inner, n_bodies=nw + 2, carrier=nw + 1, station_compliance=C_out, station=st)
-    elements["output_pins"] = element(op_eval, **({} if flex is None else {"ports": flex.output_pin_ports()}))
+    elements["output_pins"] = element(op_eval, **({} if flex is None else {"ports": flex.ports("output_pins")}))
 
     # -- bearings -----------------------------------------------------------------
     if bearing_model == "rolling":
@@ -627,7 +627,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
             contacts = tuple(dataclasses.replace(c, body_b=nw + 2 + k) if k < nw else c for k, c in enumerate(contacts))
             bset = CircleContactSet(name="bearings", n_bodies=2 * nw + 2, contacts=contacts)
             elements["bearings"] = element(bset, backend=backend, precision=precision, device=device,
-                                           ports=flex.bore_ports(2 * nw + 2))
+                                           ports=flex.ports("bearings"))
     if d.bearing_friction.model != "none":
         # the friction torque of every bearing, a loss element of its own (switched off: absent); rolling
         # elements: P1 from the accepted element loads of each mounting
@@ -641,7 +641,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
                         output=BodyCoordinate("flange", "theta"), ratio=d.ratio, kinematics=CycloidKinematics(d),
-                        drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"], locks=bodies["locks"] + ([] if flex is None else flex.coordinates.locks),
+                        drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"],
+                        locks=bodies["locks"] + ([] if flex is None else flex.coordinates.locks),
                         reg_springs=bodies["reg_springs"], journal_locks=bodies["journal_locks"],
                         structures=({} if housing is None else {"housing": housing}) if flex is None
                         else {"wheels": flex.coordinates},

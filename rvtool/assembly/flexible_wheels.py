@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RvtoolInputError
-from ..structure.floating_ports import planar_modal_body
+from ..structure.floating_ports import planar_modal_body, port_operators
 
 _CACHE = {}
 
@@ -96,35 +96,84 @@ def wheel_body_mesh(design, mesh_size=None):
 
 
 def wheel_modes(design):
-    """The :class:`~rvtool.structure.floating_ports.PlanarModalBody` of the design's wheel
-    (meshed and reduced once per geometry and ``wheels.dynamics``; cached in the process)."""
+    """(:class:`~rvtool.structure.floating_ports.PlanarModalBody`, :class:`WheelMesh`,
+    :class:`~rvtool.structure.floating_ports.PortOperators`) of the design's wheel, meshed and
+    reduced once per geometry and modal settings (cached in the process; ``frozen`` shares them)."""
+    import dataclasses
     d = design
     dyn = d.wheels.dynamics
-    key = repr((d.pins, d.wheels, d.eccentric_bearing, d.output_pins, d.material))
+    key = repr((d.pins, dataclasses.replace(d.wheels, dynamics=dataclasses.replace(dyn, frozen=False)),
+                d.eccentric_bearing, d.output_pins, d.material))
     if key not in _CACHE:
         wm = wheel_body_mesh(d)
+        ops = port_operators(wm.model, profile=wm.profile, bore=wm.bore, holes=wm.holes, centre=wm.centre)
         body = planar_modal_body(wm.model, n_modes=dyn.n_modes, profile=wm.profile, bore=wm.bore, holes=wm.holes,
-                                 damping_ratio=dyn.damping_ratio, centre=wm.centre)
-        _CACHE[key] = (body, wm.source, wm.model.counts())
+                                 damping_ratio=dyn.damping_ratio, centre=wm.centre, operators=ops)
+        _CACHE[key] = (body, wm, ops)
     return _CACHE[key]
+
+
+@dataclass(frozen=True)
+class PortFamily:
+    """The virtual bodies of one contact family on the flexible wheels: ``base`` (n_v,) rigid body
+    index or -1, ``frame`` (n_v,) the wheel's rigid-body index, ``sign`` (n_v,), ``wheel`` (n_v,)
+    the wheel index k, and ``operator(pose)`` -> (n_v, 3, n_fe): each virtual body's body-frame
+    displacement (x, y) and rotation rows as operators on its wheel's FE coordinates (the modal
+    map is ``operator(pose) @ Phi``)."""
+    base: np.ndarray
+    frame: np.ndarray
+    sign: np.ndarray
+    wheel: np.ndarray
+    operator: object
 
 
 class FlexibleWheels:
     """The flexible wheels of one cycloid build: the modal coordinates and the port maps of the
-    families on them (module docstring). mbs; design; ground_marker: a ground coordinate marker."""
+    families on them (module docstring). mbs; design; ground_marker: a ground coordinate marker.
+    ``families`` maps the contact-element names ("pins", "output_pins", "bearings") to their
+    :class:`PortFamily`."""
 
     def __init__(self, mbs, design, ground_marker):
         from exudyn_user_elements.floating_ports import ModalCoordinates
         d = design
         self.design = d
         self.nw = d.n_wheels
-        self.body, self.source, self.mesh_counts = wheel_modes(d)
+        self.body, self.mesh, self.operators = wheel_modes(d)
+        if self.body.bore_map is None:
+            raise RvtoolInputError("the wheel mesh has no bore ports; the eccentric bearing cannot couple")
+        if len(self.body.hole_maps) != d.output_pins.n_pins:
+            raise RvtoolInputError(f"the wheel mesh has {len(self.body.hole_maps)} hole port groups for "
+                                   f"output_pins.n_pins = {d.output_pins.n_pins}; valid: one per pin")
         self.coordinates = ModalCoordinates(mbs, {f"wheel{k}": self.body for k in range(self.nw)},
                                             frozen=d.wheels.dynamics.frozen, ground_marker=ground_marker)
         self.n_eta = self.coordinates.n
+        self.families = {"pins": self._pin_family(), "output_pins": self._output_pin_family(),
+                         "bearings": self._bore_family()}
 
     def _columns(self, k):
         return self.coordinates.slice(f"wheel{k}")
+
+    def ports(self, name):
+        """:class:`~exudyn_user_elements.floating_ports.FloatingPorts` of contact element ``name``
+        on the modal coordinates (maps: the family's operators times the retained modes, from the
+        modal body's own tables)."""
+        from exudyn_user_elements.floating_ports import FloatingPorts
+        fam = self.families[name]
+        if name == "pins":
+            nw, zb = self.nw, self.design.pins.n_pins
+
+            def maps(pose):
+                psi = self.contact_angles(pose)
+                A = np.zeros((nw * zb, 3, self.n_eta))
+                for k in range(nw):
+                    A[k * zb:(k + 1) * zb, :2, self._columns(k)] = self.body.profile_map(psi[k])
+                return A
+        else:
+            maps = np.zeros((len(fam.base), 3, self.n_eta))
+            for v, k in enumerate(fam.wheel):
+                maps[v, :, self._columns(k)] = (self.body.bore_map if name == "bearings" else
+                                                np.vstack([self.body.hole_maps[v // self.nw], np.zeros(self.body.n_modes)]))
+        return FloatingPorts(self.coordinates, self.nw + 2, fam.base, fam.frame, fam.sign, maps)
 
     # -- ring pins ---------------------------------------------------------------
     def pin_bodies(self, k):
@@ -156,54 +205,45 @@ class FlexibleWheels:
             out[k] = np.arctan2(-s * C[:, 0] + c * C[:, 1], c * C[:, 0] + s * C[:, 1])
         return out
 
-    def pin_ports(self):
-        from exudyn_user_elements.floating_ports import FloatingPorts
+    def _pin_family(self):
         nw, zb = self.nw, self.design.pins.n_pins
-        frame = np.repeat(1 + np.arange(nw), zb)
+        ops = self.operators
 
-        def maps(pose):
+        def operator(pose):
             psi = self.contact_angles(pose)
-            A = np.zeros((nw * zb, 3, self.n_eta))
+            out = np.zeros((nw * zb, 3, ops.n))
             for k in range(nw):
-                A[k * zb:(k + 1) * zb, :2, self._columns(k)] = self.body.profile_map(psi[k])
-            return A
-        return FloatingPorts(self.coordinates, nw + 2, np.full(nw * zb, -1), frame, np.full(nw * zb, -1.0), maps)
+                out[k * zb:(k + 1) * zb, :2] = ops.profile_at(psi[k])
+            return out
+        wheel = np.repeat(np.arange(nw), zb)
+        return PortFamily(np.full(nw * zb, -1), 1 + wheel, np.full(nw * zb, -1.0), wheel, operator)
 
     # -- output pins -------------------------------------------------------------
-    def output_pin_ports(self):
-        """Station bodies nw + 2 + p nw + k: the flange shifted by minus hole p's displacement on wheel k."""
-        from exudyn_user_elements.floating_ports import FloatingPorts
-        nw, npins = self.nw, self.design.output_pins.n_pins
-        if len(self.body.hole_maps) != npins:
-            raise RvtoolInputError(f"the wheel mesh has {len(self.body.hole_maps)} hole port groups for "
-                                   f"output_pins.n_pins = {npins}; valid: one per pin")
-        A = np.zeros((npins * nw, 3, self.n_eta))
-        frame = np.zeros(npins * nw, int)
-        for p in range(npins):
-            for k in range(nw):
-                A[p * nw + k, :2, self._columns(k)] = self.body.hole_maps[p]
-                frame[p * nw + k] = 1 + k
-        return FloatingPorts(self.coordinates, nw + 2, np.full(npins * nw, nw + 1), frame, np.full(npins * nw, -1.0), A)
-
     def output_pin_stations(self):
-        """(n_pins, n_wheels) station-body offsets p nw + k."""
+        """(n_pins, n_wheels) station-body offsets p nw + k: the flange's station body of (pin p,
+        wheel k) is nw + 2 + p nw + k, the flange shifted by minus hole p's displacement."""
         return np.arange(self.design.output_pins.n_pins * self.nw).reshape(-1, self.nw)
 
+    def _output_pin_family(self):
+        nw, npins = self.nw, self.design.output_pins.n_pins
+        holes = self.operators.holes.toarray().reshape(npins, 2, -1)
+        op = np.zeros((npins * nw, 3, self.operators.n))
+        for p in range(npins):
+            op[p * nw:(p + 1) * nw, :2] = holes[p]
+        wheel = np.tile(np.arange(nw), npins)
+        return PortFamily(np.full(npins * nw, nw + 1), 1 + wheel, np.full(npins * nw, -1.0), wheel, lambda pose: op)
+
     # -- eccentric bearings (lumped) ----------------------------------------------
-    def bore_ports(self, n_bearing_bodies):
-        """Virtual bores nw + 2 + k (wheel k's pose plus its bore's rigid-fit motion)."""
-        from exudyn_user_elements.floating_ports import FloatingPorts
+    def _bore_family(self):
+        """Virtual bores nw + 2 + k: wheel k's pose plus its bore's rigid-fit motion."""
         nw = self.nw
-        if self.body.bore_map is None:
-            raise RvtoolInputError("the wheel mesh has no bore ports; the eccentric bearing cannot couple")
-        A = np.zeros((nw, 3, self.n_eta))
-        for k in range(nw):
-            A[k, :, self._columns(k)] = self.body.bore_map
-        return FloatingPorts(self.coordinates, nw + 2, 1 + np.arange(nw), 1 + np.arange(nw), np.ones(nw), A)
+        op = np.repeat(self.operators.bore.toarray()[None], nw, axis=0)
+        wheel = np.arange(nw)
+        return PortFamily(1 + wheel, 1 + wheel, np.ones(nw), wheel, lambda pose: op)
 
     def summary(self):
         """Reported facts of the flexible wheels: source, mesh counts, retained frequencies [Hz]."""
-        return {"source": self.source, "mesh": self.mesh_counts, "n_modes": self.body.n_modes,
+        return {"source": self.mesh.source, "mesh": self.mesh.model.counts(), "n_modes": self.body.n_modes,
                 "frequencies_hz": self.body.frequencies_hz.tolist(), "in_plane_fraction": self.body.in_plane.tolist(),
                 "mesh_mass_kg": self.body.mesh_mass, "mesh_inertia_kgm2": self.body.mesh_inertia,
                 "frozen": self.design.wheels.dynamics.frozen}

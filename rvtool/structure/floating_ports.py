@@ -35,6 +35,7 @@ not of the residual). :mod:`exudyn_user_elements.floating_ports` mounts it in Ex
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import RvtoolInputError
 from ..validation import check_range
@@ -90,7 +91,8 @@ class PlanarModalBody:
     zeta] in the body frame; bore_map (3, m) (x, y [m], theta [rad] per unit zeta) or None;
     hole_maps (n_h, 2, m); modes: indices of the kept modes among the free-free ones;
     in_plane (m,) their in-plane kinetic-energy fractions; mesh_mass [kg], mesh_inertia
-    [kg m^2] of the FE model about the frame origin.
+    [kg m^2] of the FE model about the frame origin; basis (n_dofs, m) the kept modes on the FE
+    coordinates.
     """
     omega2: np.ndarray
     damping: np.ndarray
@@ -102,6 +104,7 @@ class PlanarModalBody:
     in_plane: np.ndarray
     mesh_mass: float
     mesh_inertia: float
+    basis: np.ndarray | None = None
 
     @property
     def n_modes(self):
@@ -111,23 +114,10 @@ class PlanarModalBody:
     def frequencies_hz(self):
         return np.sqrt(np.maximum(self.omega2, 0.0)) / (2 * np.pi)
 
-    def profile_weights(self, psi):
-        """(i0, i1, w0, w1) of the linear interpolation at polar angle(s) psi [rad] between the two
-        neighbouring profile stations (periodic)."""
-        a = self.profile_angles
-        n = len(a)
-        psi = np.mod(np.asarray(psi, float), 2 * np.pi)
-        i1 = np.searchsorted(a, psi, side="right") % n
-        i0 = (i1 - 1) % n
-        span = np.mod(a[i1] - a[i0], 2 * np.pi)
-        span = np.where(span == 0.0, 2 * np.pi, span)
-        w1 = np.mod(psi - a[i0], 2 * np.pi) / span
-        return i0, i1, 1.0 - w1, w1
-
     def profile_map(self, psi):
-        """(k, 2, m) displacement per unit zeta in the body frame at polar angles psi (k,) [rad]."""
-        i0, i1, w0, w1 = self.profile_weights(np.atleast_1d(psi))
-        return w0[:, None, None] * self.profile_maps[i0] + w1[:, None, None] * self.profile_maps[i1]
+        """(k, 2, m) displacement per unit zeta in the body frame at polar angles psi (k,) [rad]
+        (linear between the neighbouring profile stations, :func:`interpolate`)."""
+        return interpolate(self.profile_maps, self.profile_angles, psi)
 
     def neglected_coupling(self, frame_speed):
         """(Omega_frame / omega_1)^2: the relative size of the quadratic-velocity coupling left out
@@ -135,10 +125,92 @@ class PlanarModalBody:
         return float(frame_speed ** 2 / self.omega2[0])
 
 
-def _station_xy(model, basis, group):
-    """(2, m) mean x, y displacement of the vertices of ports ``group`` per unit modal coordinate."""
-    rows = [model.vertex_dofs(model.ports[int(i)].vertex)[:2] for i in np.atleast_1d(group)]
-    return np.mean([basis[r] for r in rows], axis=0)
+@dataclass(frozen=True)
+class PortOperators:
+    """The port stations of a body as operators on its FE coordinates (n = model.n_dofs):
+    ``angles`` (n_p,) [rad] increasing, ``profile`` (2 n_p, n) sparse: mean x, y of each profile
+    station, ``bore`` (3, n) sparse: the bore's rigid fit (x, y [m], theta [rad]) or None, ``holes``
+    (2 n_h, n) sparse: mean x, y of each hole's ports; ``rigid`` (n, 3) the planar rigid fields (x, y, theta about the
+    frame origin) and ``rigid_projection`` (3, n) the mass-weighted projection onto them
+    ((R^T M R)^-1 R^T M: the mean-axis frame motion of a displacement field)."""
+    angles: np.ndarray
+    profile: object
+    bore: object
+    holes: object
+    rigid: np.ndarray
+    rigid_projection: np.ndarray
+
+    @property
+    def n(self):
+        return self.rigid.shape[0]
+
+    def profile_at(self, psi):
+        """(k, 2, n) the profile operator interpolated at polar angles psi (k,) [rad] (as
+        :meth:`PlanarModalBody.profile_map`, on the FE coordinates)."""
+        i0, i1, w1 = interpolation_weights(self.angles, psi)
+        out = np.zeros((len(i0), 2, self.n))
+        for k in range(len(psi)):
+            for c in range(2):
+                out[k, c] = ((1.0 - w1[k]) * self.profile[2 * i0[k] + c] + w1[k] * self.profile[2 * i1[k] + c]).toarray()[0]
+        return out
+
+
+def interpolation_weights(angles, psi):
+    """(i0, i1, w1): the neighbouring stations of polar angles psi (k,) [rad] among increasing
+    ``angles`` (periodic) and the weight of i1 (that of i0 is 1 - w1)."""
+    n = len(angles)
+    psi = np.mod(np.atleast_1d(np.asarray(psi, float)), 2 * np.pi)
+    i1 = np.searchsorted(angles, psi, side="right") % n
+    i0 = (i1 - 1) % n
+    span = np.mod(angles[i1] - angles[i0], 2 * np.pi)
+    span = np.where(span == 0.0, 2 * np.pi, span)
+    return i0, i1, np.mod(psi - angles[i0], 2 * np.pi) / span
+
+
+def interpolate(stack, angles, psi):
+    """Linear interpolation of ``stack`` (n_p, ...) given at increasing polar ``angles`` (n_p,)
+    [rad] to the polar angles psi (k,) [rad] (periodic): (k, ...)."""
+    i0, i1, w1 = interpolation_weights(angles, psi)
+    shape = (-1,) + (1,) * (np.ndim(stack) - 1)
+    return (1.0 - w1).reshape(shape) * stack[i0] + w1.reshape(shape) * stack[i1]
+
+
+def port_operators(model, *, profile, bore=(), holes=(), centre=(0.0, 0.0)):
+    """:class:`PortOperators` of an unsupported FE model (arguments as :func:`planar_modal_body`)."""
+    if len(profile) < 3:
+        raise RvtoolInputError(f"profile has {len(profile)} stations; valid: at least 3 (interpolation around the body)")
+    n = model.n_dofs
+    c = np.asarray(centre, float)
+
+    def mean_xy(group):
+        g = np.atleast_1d(group)
+        cols = np.array([model.vertex_dofs(model.ports[int(i)].vertex)[:2] for i in g]).T    # (2, len(g))
+        return sp.csr_matrix((np.full(cols.size, 1.0 / len(g)), (np.repeat([0, 1], len(g)), cols.ravel())),
+                             shape=(2, n))
+    pts = np.array([_station_point(model, g) for g in profile]) - c
+    ang = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
+    order = np.argsort(ang, kind="stable")
+    if np.any(np.diff(ang[order]) <= 0.0):
+        raise RvtoolInputError("two profile stations share a polar angle; valid: distinct angles")
+    prof = sp.vstack([mean_xy(profile[i]) for i in order]).tocsr()
+    bore_op = None
+    if len(bore):
+        xy = [mean_xy([i]).toarray() for i in bore]                          # (2, n) each
+        p = np.array([_station_point(model, [i]) for i in bore]) - c
+        r2 = np.einsum("ij,ij->i", p, p)
+        rot = np.mean([(-pk[1] * a[0] + pk[0] * a[1]) / rk for pk, a, rk in zip(p, xy, r2)], axis=0)
+        bore_op = sp.csr_matrix(np.vstack([np.mean([a[0] for a in xy], axis=0), np.mean([a[1] for a in xy], axis=0), rot]))
+    hole_ops = sp.vstack([mean_xy(g) for g in holes]).tocsr() if len(holes) else sp.csr_matrix((0, n))
+    rv = model.vertices[model.dof_vertex][:, :2] - c
+    comp = model.dof_component
+    R = np.zeros((n, 3))
+    R[comp == 0, 0] = 1.0
+    R[comp == 1, 1] = 1.0
+    R[comp == 0, 2] = -rv[comp == 0, 1]
+    R[comp == 1, 2] = rv[comp == 1, 0]
+    MR = model.mass @ R
+    proj = np.linalg.solve(R.T @ MR, MR.T)
+    return PortOperators(angles=ang[order], profile=prof, bore=bore_op, holes=hole_ops, rigid=R, rigid_projection=proj)
 
 
 def _station_point(model, group):
@@ -155,17 +227,16 @@ def in_plane_fractions(model, vectors):
 
 
 def planar_modal_body(model, *, n_modes, profile, bore=(), holes=(), damping_ratio=0.0, centre=(0.0, 0.0),
-                      candidates=None):
+                      candidates=None, operators=None):
     """:class:`PlanarModalBody` of an unsupported FE model.
 
     profile: port-index groups, one per profile station (the ports of a group are averaged,
     e.g. the vertices of one sample through the width); bore: port indices of the bore; holes:
     port-index groups, one per hole; centre: the frame origin in the mesh frame [m];
     candidates: free-free modes computed to pick ``n_modes`` in-plane ones from (default
-    3 n_modes + 6)."""
+    3 n_modes + 6); operators: the :class:`PortOperators` of these ports if already built."""
     from .floating import floating_basis
-    if len(profile) < 3:
-        raise RvtoolInputError(f"profile has {len(profile)} stations; valid: at least 3 (interpolation around the body)")
+    ops = operators or port_operators(model, profile=profile, bore=bore, holes=holes, centre=centre)
     n_cand = 3 * n_modes + 6 if candidates is None else int(candidates)
     b = floating_basis(model, n_modes=n_cand)
     frac = in_plane_fractions(model, b["matrix"])
@@ -175,30 +246,12 @@ def planar_modal_body(model, *, n_modes, profile, bore=(), holes=(), damping_rat
                                "free-free modes; valid: fewer modes (or pass more candidates)")
     Phi = b["matrix"][:, keep]
     lam = b["eigenvalues"][keep]
-    c = np.asarray(centre, float)
-    pts = np.array([_station_point(model, g) for g in profile]) - c
-    ang = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
-    order = np.argsort(ang, kind="stable")
-    if np.any(np.diff(ang[order]) <= 0.0):
-        raise RvtoolInputError("two profile stations share a polar angle; valid: distinct angles")
-    maps = np.array([_station_xy(model, Phi, profile[i]) for i in order])
-    bore_map = None
-    if len(bore):
-        xy = np.array([_station_xy(model, Phi, [i]) for i in bore])          # (k, 2, m)
-        p = np.array([_station_point(model, [i]) for i in bore]) - c
-        r2 = np.einsum("ij,ij->i", p, p)
-        rot = np.mean((-p[:, 1, None] * xy[:, 0] + p[:, 0, None] * xy[:, 1]) / r2[:, None], axis=0)
-        bore_map = np.vstack([xy[:, 0].mean(axis=0), xy[:, 1].mean(axis=0), rot])
-    hole_maps = np.array([_station_xy(model, Phi, g) for g in holes]).reshape(len(holes), 2, len(keep))
-    rv = model.vertices[model.dof_vertex][:, :2] - c
-    ones = np.ones(model.n_dofs)
-    m_total = float(ones[model.dof_component == 0] @ (model.mass[model.dof_component == 0][:, model.dof_component == 0]
-                                                      @ ones[model.dof_component == 0]))
-    rot_field = np.zeros(model.n_dofs)
-    rot_field[model.dof_component == 0] = -rv[model.dof_component == 0, 1]
-    rot_field[model.dof_component == 1] = rv[model.dof_component == 1, 0]
-    J = float(rot_field @ (model.mass @ rot_field))
+    R = ops.rigid
+    MR = model.mass @ R
     omega = np.sqrt(np.maximum(lam, 0.0))
-    return PlanarModalBody(omega2=lam, damping=np.diag(2.0 * damping_ratio * omega), profile_angles=ang[order],
-                           profile_maps=maps, bore_map=bore_map, hole_maps=hole_maps, modes=keep, in_plane=frac[keep],
-                           mesh_mass=m_total, mesh_inertia=J)
+    return PlanarModalBody(omega2=lam, damping=np.diag(2.0 * damping_ratio * omega), profile_angles=ops.angles,
+                           profile_maps=(ops.profile @ Phi).reshape(-1, 2, len(keep)),
+                           bore_map=None if ops.bore is None else ops.bore @ Phi,
+                           hole_maps=(ops.holes @ Phi).reshape(-1, 2, len(keep)), modes=keep,
+                           in_plane=frac[keep], mesh_mass=float(MR[:, 0] @ R[:, 0]), mesh_inertia=float(MR[:, 2] @ R[:, 2]),
+                           basis=Phi)
