@@ -258,7 +258,8 @@ class CycloidModel(ReducerModel):
         return out
 
     def marker_frequencies(self, speed_rpm):
-        """Mesh and bearing marker frequencies [Hz] at input speed [rpm]."""
+        """Mesh and bearing marker frequencies [Hz] at input speed [rpm]; with flexible wheels also
+        ``wheel_modes_hz``, the retained in-plane modes of the free wheel."""
         from ..bearings.frequencies import bearing_frequencies
         f_in = speed_rpm / 60.0
         zp = self.design.pins.n_pins
@@ -276,6 +277,9 @@ class CycloidModel(ReducerModel):
                 row = ball_rows(spec)[0]
                 out[name] = bearing_frequencies(f_ring, row.n_balls, row.ball_diameter, row.pitch_diameter,
                                                 row.contact_angle)
+        if self.flexible is not None:
+            # the flexible wheels' retained in-plane free-free modes (body modes beside the mesh and bearings)
+            out["wheel_modes_hz"] = self.flexible.body.frequencies_hz.tolist()
         return out
 
     def draw_section(self, ax, q):
