@@ -164,8 +164,8 @@ class ContactElement:
             return pose, vel
         if getattr(self.ports, "state_dependent", False):
             # floating flexible bodies (exudyn_user_elements.floating_ports): the map depends on the state
-            pv, T = self.ports.map(pose, q[nr:])
-            self._port_jacobian = T
+            pv, T, T_load = self.ports.map(pose, q[nr:])
+            self._port_jacobian = (T, T_load)
             return np.vstack([pose, pv]), np.vstack([vel, (T @ q_t).reshape(-1, 3)])
         P = self.ports.P
         return (np.vstack([pose, (P @ q[nr:]).reshape(-1, 3)]), np.vstack([vel, (P @ q_t[nr:]).reshape(-1, 3)]))
@@ -174,7 +174,8 @@ class ContactElement:
         """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T with T = blockdiag(I, P) (see module docstring)."""
         if getattr(self.ports, "state_dependent", False):
             from .floating_ports import contract
-            return contract(ev, self._port_jacobian, self.n_rigid, self.n)
+            T, T_load = self._port_jacobian
+            return contract(ev, T, self.n_rigid, self.n, T_load)
         nr, P = self.n_rigid, self.ports.P
 
         def vec(Q):

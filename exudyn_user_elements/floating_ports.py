@@ -100,11 +100,15 @@ class FloatingPorts:
     coordinates come first); base (n_v,): base body of each virtual body (-1: ground); frame
     (n_v,): the flexible body's rigid-body index (its theta rotates the map); sign (n_v,): s_v;
     maps: callable(pose (nb, 3)) -> A (n_v, 3, n_eta) in the body frames (rows x, y, theta;
-    columns all of zeta), or a constant array of that shape.
+    columns all of zeta), or a constant array of that shape: where a port *measures* its
+    displacement; load_maps: the same for where the contact force is *applied* (a port whose
+    load is spread on the surface and whose displacement is measured below it, the separation
+    of local and global deformation; None: the same as ``maps``). The element then returns
+    Q = T_l^T Q_b and dQ/dq = T_l^T (dQ_b/dq_b) T_m.
     """
     state_dependent = True
 
-    def __init__(self, structure, n_rigid_bodies, base, frame, sign, maps):
+    def __init__(self, structure, n_rigid_bodies, base, frame, sign, maps, load_maps=None):
         self.structure = structure
         self.n_rigid_bodies = int(n_rigid_bodies)
         self.base = np.asarray(base, int)
@@ -117,12 +121,20 @@ class FloatingPorts:
         if self.base.max() >= n_rigid_bodies or self.frame.min() < 0 or self.frame.max() >= n_rigid_bodies:
             raise RvtoolInputError(f"base and frame must index the element's {n_rigid_bodies} rigid bodies")
         self._maps = maps if callable(maps) else (lambda pose, A=np.asarray(maps, float): A)
+        self._load_maps = None if load_maps is None else (
+            load_maps if callable(load_maps) else (lambda pose, A=np.asarray(load_maps, float): A))
 
     def map(self, pose, eta):
-        """(virtual poses (n_v, 3), T (3 n_v, 3 nb + n_eta)) at rigid poses ``pose`` (nb, 3)
-        (absolute) and modal coordinates ``eta``."""
+        """(virtual poses (n_v, 3), T_m (3 n_v, 3 nb + n_eta), T_l) at rigid poses ``pose`` (nb, 3)
+        (absolute) and modal coordinates ``eta``: T_m = d x_v / d q (measurement maps), T_l the
+        same with the load maps (T_l is T_m where they are the same)."""
+        pv, T = self._map(pose, eta, self._maps(pose))
+        if self._load_maps is None:
+            return pv, T, T
+        return pv, T, self._map(pose, eta, self._load_maps(pose))[1]
+
+    def _map(self, pose, eta, A):
         nv, nb = self.n_virtual, self.n_rigid_bodies
-        A = self._maps(pose)
         th = pose[self.frame, 2]
         c, s = np.cos(th), np.sin(th)
         local = A @ eta                                       # (n_v, 3): body-frame displacement and rotation
@@ -147,27 +159,32 @@ class FloatingPorts:
         return out, T
 
 
-def contract(ev, T, n_rigid, n):
+def contract(ev, T, n_rigid, n, T_load=None):
     """The evaluation ``ev`` on [rigid bodies; virtual bodies] contracted to the element's
-    coordinates [q_r; eta] with T_full = [[I, 0]; T] (Q = T_full^T Q_b, J = T_full^T J_b T_full).
+    coordinates [q_r; eta] with T_full = [[I, 0]; T] (Q = T_full^T Q_b, J = T_full^T J_b T_full;
+    with ``T_load``: Q = T_l,full^T Q_b, J = T_l,full^T J_b T_full).
     Only the virtual rows with a non-zero tangent enter the product (the others are not in
     contact: an exact rewrite), the tangents are contracted when first read, and the products are
     split to stay single-threaded (:func:`~exudyn_user_elements.merged_element.small_matmul`)."""
     from .merged_element import ContractedEvaluation, small_matmul
     nr = n_rigid
-    nb = len(ev.Q)
+    Tl = T if T_load is None else T_load
     Q = np.zeros(n)
     Q[:nr] = ev.Q[:nr]
-    Q += T.T @ ev.Q[nr:]
+    Q += Tl.T @ ev.Q[nr:]
 
     def mat(J):
         mask = np.any(J[nr:] != 0, axis=1) | np.any(J[:, nr:] != 0, axis=0)
         a = np.flatnonzero(mask)
+        idx = np.concatenate([np.arange(nr), nr + a])
+        Js = J[np.ix_(idx, idx)]
         E = np.zeros((nr + len(a), n))
         E[:nr, :nr] = np.eye(nr)
         E[nr:] = T[a]
-        idx = np.concatenate([np.arange(nr), nr + a])
-        Js = J[np.ix_(idx, idx)]
-        return small_matmul(E.T, small_matmul(Js, E))
-    del nb
+        if Tl is T:
+            El = E
+        else:
+            El = E.copy()
+            El[nr:] = Tl[a]
+        return small_matmul(El.T, small_matmul(Js, E))
     return ContractedEvaluation(Q, lambda: mat(ev.dQdq), lambda: mat(ev.dQdv), ev.obs, ev.trial_history, ev.finite)

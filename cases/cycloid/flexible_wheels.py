@@ -138,7 +138,7 @@ def main(argv=None):
         "abs_tol": 1e-6, "wall_s_flexible": wall_f, "wall_s_rigid": wall_r, "cost_ratio": wall_f / wall_r,
         "wall_s_per_step_flexible": wall_f / max(rec.accepted_steps, 1),
         # (Omega_wheel / omega_1)^2: the relative size of the quadratic-velocity coupling the mean-axis frame leaves out
-        "neglected_coupling": model_f.flexible.body.neglected_coupling(2 * np.pi * d.input_speed_rpm / 60.0 / (zp - 1)),
+        "neglected_coupling": model_f.flexible.bodies[0].neglected_coupling(2 * np.pi * d.input_speed_rpm / 60.0 / (zp - 1)),
         "torsion_pp_flexible_arcsec": float(np.ptp(run_f["responses"]["torsion"]) * ARCSEC_PER_RAD),
         "torsion_pp_rigid_arcsec": float(np.ptp(run_r["responses"]["torsion"]) * ARCSEC_PER_RAD),
     }

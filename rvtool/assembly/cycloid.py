@@ -279,7 +279,7 @@ class CycloidModel(ReducerModel):
                                                 row.contact_angle)
         if self.flexible is not None:
             # the flexible wheels' retained in-plane free-free modes (body modes beside the mesh and bearings)
-            out["wheel_modes_hz"] = self.flexible.body.frequencies_hz.tolist()
+            out["wheel_modes_hz"] = sorted({float(f) for b in self.flexible.bodies for f in b.frequencies_hz})
         return out
 
     def draw_section(self, ax, q):

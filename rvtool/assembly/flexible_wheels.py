@@ -36,19 +36,28 @@ _CACHE = {}
 
 @dataclass(frozen=True)
 class WheelMesh:
-    """A wheel's unsupported FE model with its port groups: ``profile`` (groups, one per profile
-    station), ``bore`` (port indices), ``holes`` (groups, one per output-pin hole in pin order),
-    ``centre`` (the wheel centre in the mesh frame [m]) and ``source`` (a label)."""
+    """A wheel's unsupported FE model (``model``) with its port operators (``operators``, a
+    :class:`~rvtool.structure.floating_ports.PortOperators`), ``centre`` (the wheel centre in the
+    mesh frame [m]) and ``source`` (a label). ``profile``, ``bore``, ``holes``: the nodal port
+    groups the operators were made from (empty where the operators come from spread ports)."""
     model: object
-    profile: tuple
-    bore: tuple
-    holes: tuple
+    operators: object
+    profile: tuple = ()
+    bore: tuple = ()
+    holes: tuple = ()
     centre: tuple = (0.0, 0.0)
     source: str = ""
 
 
-def wheel_body_mesh(design, mesh_size=None):
-    """:class:`WheelMesh` of the design's cycloid wheel.
+def wheel_mesh_key(design, k):
+    """Cache key of wheel k's mesh: everything the wheel body is built from."""
+    d = design
+    return repr(("mesh", k, d.pins, d.profile, d.wheels.eccentricity, d.wheels.width, d.wheels.phases,
+                 d.eccentric_bearing, d.output_pins, d.material))
+
+
+def wheel_body_mesh(design, k=0, mesh_size=None):
+    """:class:`WheelMesh` of wheel k of the design.
 
     Interim source until issue 30's wheel body (helper "wheelbody") lands: an annulus from the
     bore (eccentric bearing outer race) to the profile's root circle, the wheel width thick,
@@ -91,22 +100,24 @@ def wheel_body_mesh(design, mesh_size=None):
         holes.append(tuple(port(f"hole{p}_{i}", vtx) for i, vtx in enumerate(idx)))
     model = fe_model_from_mesh(mesh, material=d.material, ports=tuple(ports),
                                info={"component": "cycloid wheel (interim annulus)", "mesh_size": size})
-    return WheelMesh(model=model, profile=tuple(profile), bore=bore, holes=tuple(holes),
+    ops = port_operators(model, profile=tuple(profile), bore=bore, holes=tuple(holes))
+    return WheelMesh(model=model, operators=ops, profile=tuple(profile), bore=bore, holes=tuple(holes),
                      source="interim annulus (bore to root circle)")
 
 
-def wheel_modes(design):
+def wheel_modes(design, k=0):
     """(:class:`~rvtool.structure.floating_ports.PlanarModalBody`, :class:`WheelMesh`,
-    :class:`~rvtool.structure.floating_ports.PortOperators`) of the design's wheel, meshed and
+    :class:`~rvtool.structure.floating_ports.PortOperators`) of wheel k of the design, meshed and
     reduced once per geometry and modal settings (cached in the process; ``frozen`` shares them)."""
     import dataclasses
     d = design
     dyn = d.wheels.dynamics
-    key = repr((d.pins, dataclasses.replace(d.wheels, dynamics=dataclasses.replace(dyn, frozen=False)),
-                d.eccentric_bearing, d.output_pins, d.material))
+    wm_key = wheel_mesh_key(d, k)
+    key = repr((wm_key, dataclasses.replace(dyn, frozen=False)))
     if key not in _CACHE:
-        wm = wheel_body_mesh(d)
-        ops = port_operators(wm.model, profile=wm.profile, bore=wm.bore, holes=wm.holes, centre=wm.centre)
+        wm = _CACHE.get(wm_key) or wheel_body_mesh(d, k)
+        _CACHE[wm_key] = wm
+        ops = wm.operators
         body = planar_modal_body(wm.model, n_modes=dyn.n_modes, profile=wm.profile, bore=wm.bore, holes=wm.holes,
                                  damping_ratio=dyn.damping_ratio, centre=wm.centre, operators=ops)
         _CACHE[key] = (body, wm, ops)
@@ -117,9 +128,10 @@ def wheel_modes(design):
 class PortFamily:
     """The virtual bodies of one contact family on the flexible wheels: ``base`` (n_v,) rigid body
     index or -1, ``frame`` (n_v,) the wheel's rigid-body index, ``sign`` (n_v,), ``wheel`` (n_v,)
-    the wheel index k, and ``operator(pose)`` -> (n_v, 3, n_fe): each virtual body's body-frame
-    displacement (x, y) and rotation rows as operators on its wheel's FE coordinates (the modal
-    map is ``operator(pose) @ Phi``)."""
+    the wheel index k, and ``operator(pose, load=False)`` -> (n_v, 3, n_fe): each virtual body's
+    body-frame displacement (x, y) and rotation rows as operators on its wheel's FE coordinates,
+    where the port measures (or, ``load``, where its force acts), a list of (3, n_fe of its wheel)
+    arrays; the modal map of virtual body v is ``operator(pose)[v] @ Phi_k``."""
     base: np.ndarray
     frame: np.ndarray
     sign: np.ndarray
@@ -130,21 +142,25 @@ class PortFamily:
 class FlexibleWheels:
     """The flexible wheels of one cycloid build: the modal coordinates and the port maps of the
     families on them (module docstring). mbs; design; ground_marker: a ground coordinate marker.
-    ``families`` maps the contact-element names ("pins", "output_pins", "bearings") to their
-    :class:`PortFamily`."""
+    ``bodies``, ``meshes``, ``operators``: per wheel k; ``families`` maps the contact-element names
+    ("pins", "output_pins", "bearings") to their :class:`PortFamily`."""
 
     def __init__(self, mbs, design, ground_marker):
         from exudyn_user_elements.floating_ports import ModalCoordinates
         d = design
         self.design = d
         self.nw = d.n_wheels
-        self.body, self.mesh, self.operators = wheel_modes(d)
-        if self.body.bore_map is None:
-            raise RvtoolInputError("the wheel mesh has no bore ports; the eccentric bearing cannot couple")
-        if len(self.body.hole_maps) != d.output_pins.n_pins:
-            raise RvtoolInputError(f"the wheel mesh has {len(self.body.hole_maps)} hole port groups for "
-                                   f"output_pins.n_pins = {d.output_pins.n_pins}; valid: one per pin")
-        self.coordinates = ModalCoordinates(mbs, {f"wheel{k}": self.body for k in range(self.nw)},
+        got = [wheel_modes(d, k) for k in range(self.nw)]
+        self.bodies = [g[0] for g in got]
+        self.meshes = [g[1] for g in got]
+        self.operators = [g[2] for g in got]
+        for b in self.bodies:
+            if b.bore_map is None:
+                raise RvtoolInputError("the wheel mesh has no bore ports; the eccentric bearing cannot couple")
+            if len(b.hole_maps) != d.output_pins.n_pins:
+                raise RvtoolInputError(f"the wheel mesh has {len(b.hole_maps)} hole port groups for "
+                                       f"output_pins.n_pins = {d.output_pins.n_pins}; valid: one per pin")
+        self.coordinates = ModalCoordinates(mbs, {f"wheel{k}": b for k, b in enumerate(self.bodies)},
                                             frozen=d.wheels.dynamics.frozen, ground_marker=ground_marker)
         self.n_eta = self.coordinates.n
         self.families = {"pins": self._pin_family(), "output_pins": self._output_pin_family(),
@@ -155,25 +171,33 @@ class FlexibleWheels:
 
     def ports(self, name):
         """:class:`~exudyn_user_elements.floating_ports.FloatingPorts` of contact element ``name``
-        on the modal coordinates (maps: the family's operators times the retained modes, from the
-        modal body's own tables)."""
+        on the modal coordinates (the modal body's own tables: the family's operators times the
+        retained modes)."""
         from exudyn_user_elements.floating_ports import FloatingPorts
         fam = self.families[name]
+        nw = self.nw
+        split = any(b.split for b in self.bodies)
         if name == "pins":
-            nw, zb = self.nw, self.design.pins.n_pins
+            zb = self.design.pins.n_pins
 
-            def maps(pose):
+            def maps(pose, load=False):
                 psi = self.contact_angles(pose)
                 A = np.zeros((nw * zb, 3, self.n_eta))
                 for k in range(nw):
-                    A[k * zb:(k + 1) * zb, :2, self._columns(k)] = self.body.profile_map(psi[k])
+                    A[k * zb:(k + 1) * zb, :2, self._columns(k)] = self.bodies[k].profile_map(psi[k], load)
                 return A
-        else:
-            maps = np.zeros((len(fam.base), 3, self.n_eta))
+            return FloatingPorts(self.coordinates, nw + 2, fam.base, fam.frame, fam.sign, maps,
+                                 (lambda pose: maps(pose, True)) if split else None)
+
+        def table(load):
+            A = np.zeros((len(fam.base), 3, self.n_eta))
             for v, k in enumerate(fam.wheel):
-                maps[v, :, self._columns(k)] = (self.body.bore_map if name == "bearings" else
-                                                np.vstack([self.body.hole_maps[v // self.nw], np.zeros(self.body.n_modes)]))
-        return FloatingPorts(self.coordinates, self.nw + 2, fam.base, fam.frame, fam.sign, maps)
+                b = self.bodies[k]
+                A[v, :, self._columns(k)] = (b.map_of("bore", load) if name == "bearings" else
+                                             np.vstack([b.map_of("holes", load)[v // nw], np.zeros(b.n_modes)]))
+            return A
+        return FloatingPorts(self.coordinates, nw + 2, fam.base, fam.frame, fam.sign, table(False),
+                             table(True) if split else None)
 
     # -- ring pins ---------------------------------------------------------------
     def pin_bodies(self, k):
@@ -207,14 +231,12 @@ class FlexibleWheels:
 
     def _pin_family(self):
         nw, zb = self.nw, self.design.pins.n_pins
-        ops = self.operators
 
-        def operator(pose):
+        def operator(pose, load=False):
             psi = self.contact_angles(pose)
-            out = np.zeros((nw * zb, 3, ops.n))
-            for k in range(nw):
-                out[k * zb:(k + 1) * zb, :2] = ops.profile_at(psi[k])
-            return out
+            return [a for k in range(nw) for a in
+                    np.concatenate([self.operators[k].profile_at(psi[k], load), np.zeros((zb, 1, self.operators[k].n))],
+                                   axis=1)]
         wheel = np.repeat(np.arange(nw), zb)
         return PortFamily(np.full(nw * zb, -1), 1 + wheel, np.full(nw * zb, -1.0), wheel, operator)
 
@@ -226,26 +248,35 @@ class FlexibleWheels:
 
     def _output_pin_family(self):
         nw, npins = self.nw, self.design.output_pins.n_pins
-        holes = self.operators.holes.toarray().reshape(npins, 2, -1)
-        op = np.zeros((npins * nw, 3, self.operators.n))
-        for p in range(npins):
-            op[p * nw:(p + 1) * nw, :2] = holes[p]
+
+        def operator(pose, load=False):
+            out = []
+            for p in range(npins):
+                for k in range(nw):
+                    h = (self.operators[k].load("holes") if load else self.operators[k].holes)[2 * p:2 * p + 2]
+                    out.append(np.vstack([h.toarray(), np.zeros((1, self.operators[k].n))]))
+            return out
         wheel = np.tile(np.arange(nw), npins)
-        return PortFamily(np.full(npins * nw, nw + 1), 1 + wheel, np.full(npins * nw, -1.0), wheel, lambda pose: op)
+        return PortFamily(np.full(npins * nw, nw + 1), 1 + wheel, np.full(npins * nw, -1.0), wheel, operator)
 
     # -- eccentric bearings (lumped) ----------------------------------------------
     def _bore_family(self):
         """Virtual bores nw + 2 + k: wheel k's pose plus its bore's rigid-fit motion."""
         nw = self.nw
-        op = np.repeat(self.operators.bore.toarray()[None], nw, axis=0)
+
+        def operator(pose, load=False):
+            return [(self.operators[k].load("bore") if load else self.operators[k].bore).toarray() for k in range(nw)]
         wheel = np.arange(nw)
-        return PortFamily(1 + wheel, 1 + wheel, np.ones(nw), wheel, lambda pose: op)
+        return PortFamily(1 + wheel, 1 + wheel, np.ones(nw), wheel, operator)
 
     def summary(self):
-        """Reported facts of the flexible wheels: source, mesh counts, retained frequencies [Hz]."""
-        return {"source": self.mesh.source, "mesh": self.mesh.model.counts(), "n_modes": self.body.n_modes,
-                "frequencies_hz": self.body.frequencies_hz.tolist(), "in_plane_fraction": self.body.in_plane.tolist(),
-                "mesh_mass_kg": self.body.mesh_mass, "mesh_inertia_kgm2": self.body.mesh_inertia,
+        """Reported facts of the flexible wheels: source, mesh counts, retained frequencies [Hz] per wheel."""
+        return {"source": self.meshes[0].source, "mesh": [m.model.counts() for m in self.meshes],
+                "n_modes": self.bodies[0].n_modes,
+                "frequencies_hz": [b.frequencies_hz.tolist() for b in self.bodies],
+                "in_plane_fraction": [b.in_plane.tolist() for b in self.bodies],
+                "mesh_mass_kg": [b.mesh_mass for b in self.bodies],
+                "mesh_inertia_kgm2": [b.mesh_inertia for b in self.bodies],
                 "frozen": self.design.wheels.dynamics.frozen}
 
 

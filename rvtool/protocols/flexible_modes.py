@@ -8,14 +8,16 @@ differ only in how a wheel's elastic field e is represented:
 
 * **mounted (reduced)**: the wheel's frame coordinates (x, y, theta) and its n retained in-plane
   free-free modes, e = Phi zeta (what the dynamic runs integrate);
-* **full FE**: every coordinate u of the wheel's mesh, the frame motion being the bore's rigid fit
-  B u and e = (I - R_rig B) u (a sparse split; in the linear model the frame choice only moves
+* **full FE**: every coordinate u of the wheel's mesh, the frame motion being a sparse fit B u
+  (x, y the bore's mean translation, theta the profile stations' mean rotation) and
+  e = (I - R_rig B) u (a sparse split; in the linear model the frame choice only moves
   the geometric terms of the contact forces, of relative size F / (k_contact r) ~ 1e-4, between
   frame and field: the material points move by u either way).
 
 Each family's virtual bodies are x_v = x_base + s [R(theta_w) A_v e ; a_v e] with A_v the port
 operator on the FE coordinates (:class:`rvtool.assembly.flexible_wheels.PortFamily`); its tangent
-contributes C^T (-J_b) C with C = d[x_rigid; x_v]/dX (the same truncations as the element: the
+contributes C_l^T (-J_b) C with C = d[x_rigid; x_v]/dX from the measuring operators and C_l from
+the loading ones (the same truncations as the element: the
 locator's dependence on the state and the geometric term are left out in both). The mass is the
 mesh's: the frame's rigid mass and inertia R_rig^T M R_rig and the identity on zeta (reduced), M
 on u (full). The regularization springs act on the frames (B u in the full model). Eigenvalues of
@@ -36,7 +38,7 @@ def system_mass(model):
     import exudyn as exu
     solver = exu.MainSolverImplicitSecondOrder()
     ss = exu.SimulationSettings()
-    ss.linearSolverType = exu.LinearSolverType.EigenDense
+    ss.linearSolver.solverType = exu.LinearSolverType.EigenDense
     solver.InitializeSolver(model.mbs, ss)
     solver.ComputeMassMatrix(model.mbs)
     return np.asarray(solver.GetSystemMassMatrix(), float)
@@ -77,39 +79,60 @@ class _Layout:
         self.wheels = [1 + k for k in range(fw.nw)]
         self.full = full
         self.ops = fw.operators
-        self.Phi = fw.body.basis
-        n_fe, m = self.Phi.shape
+        self.models = [m.model for m in fw.meshes]
+        self.Phi = [b.basis for b in fw.bodies]
+        self.n_fe = [P.shape[0] for P in self.Phi]
+        self.m = [P.shape[1] for P in self.Phi]
         self.start, n = {}, 0
         for b in range(self.nb):
             if b not in self.wheels:
                 self.start[b] = n
                 n += 3
-        for b in self.wheels:
+        for k, b in enumerate(self.wheels):
             self.start[b] = n
-            n += n_fe if full else 3 + m
+            n += self.n_fe[k] if full else 3 + self.m[k]
         self.n = n
-        self.n_fe, self.m = n_fe, m
+        self._E = {}
+
+    def size(self, k):
+        return self.n_fe[k] if self.full else 3 + self.m[k]
 
     def rigid(self, b):
         out = sp.lil_matrix((3, self.n))
         s = self.start[b]
-        if b not in self.wheels:
-            out[:, s:s + 3] = np.eye(3)
-        elif self.full:
-            out[:, s:s + self.n_fe] = self.ops.bore.toarray()
+        if b in self.wheels and self.full:
+            k = self.wheels.index(b)
+            out[:, s:s + self.n_fe[k]] = self.fit(k)
         else:
             out[:, s:s + 3] = np.eye(3)
         return out.tocsr()
 
-    def elastic(self, k):
+    def fit(self, k):
+        """(3, n_fe) sparse: the full model's frame of wheel k, x and y the bore's mean translation,
+        theta the mean rotation of the profile stations about the centre (both sparse rows)."""
+        if k not in self._E:
+            ops = self.ops[k]
+            m = self.models[k]
+            pos = m.vertices[m.dof_vertex, np.minimum(m.dof_component, 1)]
+            P = ops.profile
+            x, y = P[0::2] @ pos, P[1::2] @ pos
+            r2 = x * x + y * y
+            theta = (sp.diags(-y / r2) @ P[0::2] + sp.diags(x / r2) @ P[1::2]).mean(axis=0)
+            self._E[k] = sp.vstack([ops.bore[:2], sp.csr_matrix(theta)]).tocsr()
+        return self._E[k]
+
+    def elastic_of(self, k, A):
+        """A e_k as a sparse (rows, n_X) map: A (rows, n_fe) applied to wheel k's elastic field
+        (full: A (I - R_rig B) u = A u - (A R_rig) B u; reduced: A Phi zeta)."""
         b = self.wheels[k]
         s = self.start[b]
+        A = sp.csr_matrix(A)
         if self.full:
-            E = sp.identity(self.n_fe, format="csr") - sp.csr_matrix(self.ops.rigid) @ self.ops.bore
-            return sp.hstack([sp.csr_matrix((self.n_fe, s)), E, sp.csr_matrix((self.n_fe, self.n - s - self.n_fe))]).tocsr()
-        out = sp.lil_matrix((self.n_fe, self.n))
-        out[:, s + 3:s + 3 + self.m] = self.Phi
-        return out.tocsr()
+            blk = A - sp.csr_matrix(A @ self.ops[k].rigid) @ self.fit(k)
+        else:
+            blk = sp.hstack([sp.csr_matrix((A.shape[0], 3)), sp.csr_matrix(A @ self.Phi[k])])
+        w = blk.shape[1]
+        return sp.hstack([sp.csr_matrix((A.shape[0], s)), blk, sp.csr_matrix((A.shape[0], self.n - s - w))]).tocsr()
 
 
 def linear_model(model, q, *, full):
@@ -122,43 +145,41 @@ def linear_model(model, q, *, full):
     nb = L.nb
     zeta_idx = model.structures["wheels"].coordinate_indices()
     pose = np.array([model.body_pose(q, b) for b in range(nb)])
-    e_star = [fw.body.basis @ q[zeta_idx][fw.coordinates.slice(f"wheel{k}")] for k in range(fw.nw)]
+    e_star = [fw.bodies[k].basis @ q[zeta_idx][fw.coordinates.slice(f"wheel{k}")] for k in range(fw.nw)]
     rigid_rows = sp.vstack([L.rigid(b) for b in range(nb)]).tocsr()          # (3 nb, n)
     K = sp.csr_matrix((L.n, L.n))
     asym = 0.0
+
+    def virtual_rows(fam, A):
+        rows = []
+        for i in range(len(fam.base)):
+            k, f, sg = int(fam.wheel[i]), int(fam.frame[i]), float(fam.sign[i])
+            R, dR = _rot(pose[f, 2])
+            r = L.elastic_of(k, np.vstack([R @ A[i][:2], A[i][2:3]])) * sg
+            r = r + sp.csr_matrix(np.vstack([(dR @ (A[i][:2] @ e_star[k]))[:, None], [[0.0]]])) @ L.rigid(f)[2:3] * sg
+            if fam.base[i] >= 0:
+                r = r + L.rigid(int(fam.base[i]))
+            rows.append(r)
+        return sp.vstack([rigid_rows] + rows).tocsr()
     for name, el in model.elements.items():
         ql = np.asarray(el.local(q), float)
         p, v = el.pose_velocity(ql, np.zeros(len(ql)))
         J = el.evaluator.evaluate(p, v, check=False).dQdq
         if el.ports is None:
-            C = rigid_rows
+            C = Cl = rigid_rows
         else:
             fam = fw.families[name]
-            A = fam.operator(pose)                                            # (n_v, 3, n_fe)
-            rows = []
-            for i in range(len(fam.base)):
-                k, f, sg = int(fam.wheel[i]), int(fam.frame[i]), float(fam.sign[i])
-                R, dR = _rot(pose[f, 2])
-                E = L.elastic(k)
-                Ai = sp.csr_matrix(A[i])
-                r = sp.csr_matrix(np.vstack([R @ A[i, :2], A[i, 2:3]])) @ E * sg
-                r = r + sp.csr_matrix(np.vstack([(dR @ (A[i, :2] @ e_star[k]))[:, None], [[0.0]]])) @ L.rigid(f)[2:3] * sg
-                if fam.base[i] >= 0:
-                    r = r + L.rigid(int(fam.base[i]))
-                del Ai
-                rows.append(r)
-            C = sp.vstack([rigid_rows] + rows).tocsr()
-        Kf = C.T @ sp.csr_matrix(-J) @ C
+            C = virtual_rows(fam, fam.operator(pose))
+            Cl = virtual_rows(fam, fam.operator(pose, True)) if any(o.split for o in fw.operators) else C
         asym = max(asym, abs(J - J.T).max() / max(abs(J).max(), 1e-300))
-        K = K + Kf
+        K = K + Cl.T @ sp.csr_matrix(-J) @ C
     # the structures' own stiffness
     for k in range(fw.nw):
         s = L.start[L.wheels[k]]
         if full:
-            Ke = fw.mesh.model.elastic_stiffness
-            K = K + _embed(Ke, s, L.n)
+            K = K + _embed(fw.meshes[k].model.elastic_stiffness, s, L.n)
         else:
-            K = K + _embed(sp.diags(fw.body.omega2), s + 3, L.n)
+            K = K + _embed(sp.diags(fw.bodies[k].omega2), s + 3, L.n)
     # regularization springs on the bodies' planar coordinates
     glob = {model.coordinate_index(b, c): (b, c) for b in range(nb) for c in range(3)}
     for i, kk in model.regularization_stiffness():
@@ -176,15 +197,16 @@ def linear_model(model, q, *, full):
         s = L.start[b]
         M[s:s + 3, s:s + 3] = Mx[np.ix_(g, g)]
     M = M.tocsr()
-    for b in L.wheels:
+    for k, b in enumerate(L.wheels):
         s = L.start[b]
+        mass = fw.meshes[k].model.mass
         if full:
-            M = M + _embed(fw.mesh.model.mass, s, L.n)
+            M = M + _embed(mass, s, L.n)
         else:
-            Rr = L.ops.rigid
-            Mr = np.zeros((3 + L.m, 3 + L.m))
-            Mr[:3, :3] = Rr.T @ (fw.mesh.model.mass @ Rr)
-            Mr[3:, 3:] = np.eye(L.m)
+            Rr = L.ops[k].rigid
+            Mr = np.zeros((3 + L.m[k], 3 + L.m[k]))
+            Mr[:3, :3] = Rr.T @ (mass @ Rr)
+            Mr[3:, 3:] = np.eye(L.m[k])
             M = M + _embed(sp.csr_matrix(Mr), s, L.n)
     # held coordinates: the drive and the locks on non-wheel bodies (a lock on a wheel is refused)
     held = []
@@ -225,9 +247,8 @@ def mounted_modes(model, q, *, n=12, full=False):
     fw = model.flexible
     L = _Layout(model, True)
     z = np.zeros(L.n, bool)
-    comp = fw.mesh.model.dof_component
-    for b in L.wheels:
-        z[L.start[b]:L.start[b] + L.n_fe] = comp == 2
+    for k, b in enumerate(L.wheels):
+        z[L.start[b]:L.start[b] + L.n_fe[k]] = fw.meshes[k].model.dof_component == 2
     zf = z[free]
     k = 3 * n + 12
     # shift below the lowest mode: K - sigma M is positive definite (the out-of-plane rigid motion is free)

@@ -92,7 +92,8 @@ class PlanarModalBody:
     hole_maps (n_h, 2, m); modes: indices of the kept modes among the free-free ones;
     in_plane (m,) their in-plane kinetic-energy fractions; mesh_mass [kg], mesh_inertia
     [kg m^2] of the FE model about the frame origin; basis (n_dofs, m) the kept modes on the FE
-    coordinates.
+    coordinates; ``*_load_map(s)``: the maps where a contact force is applied, where they differ
+    from where the port measures (None: the same).
     """
     omega2: np.ndarray
     damping: np.ndarray
@@ -105,6 +106,9 @@ class PlanarModalBody:
     mesh_mass: float
     mesh_inertia: float
     basis: np.ndarray | None = None
+    profile_load_maps: np.ndarray | None = None
+    bore_load_map: np.ndarray | None = None
+    hole_load_maps: np.ndarray | None = None
 
     @property
     def n_modes(self):
@@ -114,10 +118,22 @@ class PlanarModalBody:
     def frequencies_hz(self):
         return np.sqrt(np.maximum(self.omega2, 0.0)) / (2 * np.pi)
 
-    def profile_map(self, psi):
+    def profile_map(self, psi, load=False):
         """(k, 2, m) displacement per unit zeta in the body frame at polar angles psi (k,) [rad]
-        (linear between the neighbouring profile stations, :func:`interpolate`)."""
-        return interpolate(self.profile_maps, self.profile_angles, psi)
+        (linear between the neighbouring profile stations, :func:`interpolate`); ``load``: the
+        load map."""
+        maps = self.profile_load_maps if (load and self.profile_load_maps is not None) else self.profile_maps
+        return interpolate(maps, self.profile_angles, psi)
+
+    def map_of(self, name, load=False):
+        """The bore map (3, m) or the hole maps (n_h, 2, m) (``name`` "bore" or "holes"), measured or
+        ``load``."""
+        meas, ld = (self.bore_map, self.bore_load_map) if name == "bore" else (self.hole_maps, self.hole_load_maps)
+        return ld if (load and ld is not None) else meas
+
+    @property
+    def split(self):
+        return any(v is not None for v in (self.profile_load_maps, self.bore_load_map, self.hole_load_maps))
 
     def neglected_coupling(self, frame_speed):
         """(Omega_frame / omega_1)^2: the relative size of the quadratic-velocity coupling left out
@@ -130,7 +146,9 @@ class PortOperators:
     """The port stations of a body as operators on its FE coordinates (n = model.n_dofs):
     ``angles`` (n_p,) [rad] increasing, ``profile`` (2 n_p, n) sparse: mean x, y of each profile
     station, ``bore`` (3, n) sparse: the bore's rigid fit (x, y [m], theta [rad]) or None, ``holes``
-    (2 n_h, n) sparse: mean x, y of each hole's ports; ``rigid`` (n, 3) the planar rigid fields (x, y, theta about the
+    (2 n_h, n) sparse: mean x, y of each hole's ports (where the ports *measure*);
+    ``profile_load``, ``bore_load``, ``holes_load``: the same where a contact force is *applied*
+    (None: the measurement operators); ``rigid`` (n, 3) the planar rigid fields (x, y, theta about the
     frame origin) and ``rigid_projection`` (3, n) the mass-weighted projection onto them
     ((R^T M R)^-1 R^T M: the mean-axis frame motion of a displacement field)."""
     angles: np.ndarray
@@ -139,19 +157,33 @@ class PortOperators:
     holes: object
     rigid: np.ndarray
     rigid_projection: np.ndarray
+    profile_load: object = None
+    bore_load: object = None
+    holes_load: object = None
 
     @property
     def n(self):
         return self.rigid.shape[0]
 
-    def profile_at(self, psi):
-        """(k, 2, n) the profile operator interpolated at polar angles psi (k,) [rad] (as
-        :meth:`PlanarModalBody.profile_map`, on the FE coordinates)."""
+    def load(self, name):
+        """The load operator of ``name`` ("profile", "bore", "holes")."""
+        v = getattr(self, name + "_load")
+        return getattr(self, name) if v is None else v
+
+    @property
+    def split(self):
+        """True where load and measurement operators differ."""
+        return any(getattr(self, nm + "_load") is not None for nm in ("profile", "bore", "holes"))
+
+    def profile_at(self, psi, load=False):
+        """(k, 2, n) the profile (measurement, or ``load``) operator interpolated at polar angles psi
+        (k,) [rad] (as :meth:`PlanarModalBody.profile_map`, on the FE coordinates)."""
+        P = self.load("profile") if load else self.profile
         i0, i1, w1 = interpolation_weights(self.angles, psi)
         out = np.zeros((len(i0), 2, self.n))
-        for k in range(len(psi)):
+        for k in range(len(i0)):
             for c in range(2):
-                out[k, c] = ((1.0 - w1[k]) * self.profile[2 * i0[k] + c] + w1[k] * self.profile[2 * i1[k] + c]).toarray()[0]
+                out[k, c] = ((1.0 - w1[k]) * P[2 * i0[k] + c] + w1[k] * P[2 * i1[k] + c]).toarray()[0]
         return out
 
 
@@ -201,7 +233,15 @@ def port_operators(model, *, profile, bore=(), holes=(), centre=(0.0, 0.0)):
         rot = np.mean([(-pk[1] * a[0] + pk[0] * a[1]) / rk for pk, a, rk in zip(p, xy, r2)], axis=0)
         bore_op = sp.csr_matrix(np.vstack([np.mean([a[0] for a in xy], axis=0), np.mean([a[1] for a in xy], axis=0), rot]))
     hole_ops = sp.vstack([mean_xy(g) for g in holes]).tocsr() if len(holes) else sp.csr_matrix((0, n))
-    rv = model.vertices[model.dof_vertex][:, :2] - c
+    R, proj = planar_rigid(model, c)
+    return PortOperators(angles=ang[order], profile=prof, bore=bore_op, holes=hole_ops, rigid=R, rigid_projection=proj)
+
+
+def planar_rigid(model, centre):
+    """(R (n, 3), P (3, n)): the planar rigid fields x, y, theta about ``centre`` [m] on the model's
+    coordinates and the mass-weighted projection (R^T M R)^-1 R^T M onto them."""
+    n = model.n_dofs
+    rv = model.vertices[model.dof_vertex][:, :2] - np.asarray(centre, float)
     comp = model.dof_component
     R = np.zeros((n, 3))
     R[comp == 0, 0] = 1.0
@@ -209,8 +249,7 @@ def port_operators(model, *, profile, bore=(), holes=(), centre=(0.0, 0.0)):
     R[comp == 0, 2] = -rv[comp == 0, 1]
     R[comp == 1, 2] = rv[comp == 1, 0]
     MR = model.mass @ R
-    proj = np.linalg.solve(R.T @ MR, MR.T)
-    return PortOperators(angles=ang[order], profile=prof, bore=bore_op, holes=hole_ops, rigid=R, rigid_projection=proj)
+    return R, np.linalg.solve(R.T @ MR, MR.T)
 
 
 def _station_point(model, group):
@@ -249,9 +288,51 @@ def planar_modal_body(model, *, n_modes, profile, bore=(), holes=(), damping_rat
     R = ops.rigid
     MR = model.mass @ R
     omega = np.sqrt(np.maximum(lam, 0.0))
+    m = len(keep)
+    loads = {}
+    if ops.profile_load is not None:
+        loads["profile_load_maps"] = (ops.profile_load @ Phi).reshape(-1, 2, m)
+    if ops.bore_load is not None:
+        loads["bore_load_map"] = ops.bore_load @ Phi
+    if ops.holes_load is not None:
+        loads["hole_load_maps"] = (ops.holes_load @ Phi).reshape(-1, 2, m)
     return PlanarModalBody(omega2=lam, damping=np.diag(2.0 * damping_ratio * omega), profile_angles=ops.angles,
                            profile_maps=(ops.profile @ Phi).reshape(-1, 2, len(keep)),
                            bore_map=None if ops.bore is None else ops.bore @ Phi,
                            hole_maps=(ops.holes @ Phi).reshape(-1, 2, len(keep)), modes=keep,
                            in_plane=frac[keep], mesh_mass=float(MR[:, 0] @ R[:, 0]), mesh_inertia=float(MR[:, 2] @ R[:, 2]),
-                           basis=Phi)
+                           basis=Phi, **loads)
+
+
+def port_operators_from_rows(model, *, measure, load, profile_rows, profile_points, bore_rows=(), hole_rows=(),
+                             centre=(0.0, 0.0)):
+    """:class:`PortOperators` from port matrices (n_rows, n_dofs) that already spread each port
+    over its patch: ``measure`` (where a port's displacement is read) and ``load`` (where its force
+    acts; may be the same matrix); ``profile_rows`` (2 N,) the x, y rows of the N profile
+    samples in order, ``profile_points`` (N, 2) [m] their positions in the mesh frame,
+    ``bore_rows`` the x, y rows of the bore (its rotation row is zero: a lumped bearing at the
+    bore centre does not turn its contact), ``hole_rows`` the x, y rows of each hole in pin
+    order. E.g. the wheel body of issue 30 (``rvtool.structure.wheel_body.WheelBody``:
+    ``measure_matrix``, ``load_matrix``, ``groups``)."""
+    n = model.n_dofs
+    c = np.asarray(centre, float)
+    pts = np.asarray(profile_points, float) - c
+    ang = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
+    order = np.argsort(ang, kind="stable")
+    if np.any(np.diff(ang[order]) <= 0.0):
+        raise RvtoolInputError("two profile samples share a polar angle; valid: a profile star-shaped about its centre")
+    pr = np.asarray(profile_rows, int).reshape(-1, 2)[order].ravel()
+    same = load is measure
+
+    def ops(P):
+        P = sp.csr_matrix(P)
+        bore = None
+        if len(bore_rows):
+            bore = sp.vstack([P[np.asarray(bore_rows, int)], sp.csr_matrix((1, n))]).tocsr()
+        holes = sp.vstack([P[np.asarray(r, int)] for r in hole_rows]).tocsr() if len(hole_rows) else sp.csr_matrix((0, n))
+        return P[pr], bore, holes
+    prof, bore, holes = ops(measure)
+    loads = {} if same else dict(zip(("profile_load", "bore_load", "holes_load"), ops(load)))
+    R, proj = planar_rigid(model, c)
+    return PortOperators(angles=ang[order], profile=prof, bore=bore, holes=holes, rigid=R, rigid_projection=proj,
+                         **loads)
