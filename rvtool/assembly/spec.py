@@ -42,6 +42,7 @@ from ..units import angle_columns, angle_field, is_angle
 from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
 from ..structure.floating_ports import FloatingDynamics
+from ..structure.wheel_body import WheelBodySpec
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
@@ -101,9 +102,12 @@ class Wheels:
     the face width [-]. samples_per_tooth: resolution of the wheel-profile table [-].
     clearance: uniform clearance at the pins [m]. n_teeth: z_g, the wheel's tooth count [-]
     (None: pins.n_pins - 1). search: the contact search ("discrete" table search or "analytic"
-    closest point). dynamics: the wheels as rigid or floating flexible bodies
-    (:class:`~rvtool.structure.floating_ports.FloatingDynamics`, sub-table ``[wheels.dynamics]``;
-    rigid by default)."""
+    closest point). body: the wheel body in the torque path, "rigid" (default) or "ported" (an elastic
+    wheel through NGSolve, :mod:`rvtool.assembly.wheel_body`; RV topology). structure: the
+    :class:`~rvtool.structure.wheel_body.WheelBodySpec` of a ported wheel (file:
+    ``[wheels.structure]``; None: its defaults). dynamics: the wheels as rigid or floating flexible
+    bodies in driven and quasi-static runs (:class:`~rvtool.structure.floating_ports.FloatingDynamics`,
+    sub-table ``[wheels.dynamics]``; rigid by default; cycloid topology)."""
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
@@ -113,10 +117,14 @@ class Wheels:
     clearance: float = 0.0
     n_teeth: int | None = None
     search: str = "discrete"
+    body: str = "rigid"
+    structure: WheelBodySpec | None = None
     dynamics: FloatingDynamics = field(default_factory=FloatingDynamics)
 
     def __post_init__(self):
         check_positive("wheels.eccentricity", self.eccentricity)
+        if self.body not in ("rigid", "ported"):
+            raise RvtoolInputError(f"wheels.body = {self.body!r}; valid choices are ['rigid', 'ported']")
         check_positive("wheels.width", self.width)
         if len(self.midplanes) != len(self.phases):
             raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases "

@@ -274,6 +274,9 @@ class RvModel(ReducerModel):
     def needle_state(self, q):
         """(the needle bearing set, the poses it is evaluated at) at the static state q: the
         element's bodies, and with elastic cranks the journal stations at the solved deflections."""
+        if "wheel_bodies" in self.elements:
+            closure = self.elements["wheel_bodies"].evaluator
+            return closure.inner.part("eccentric_bearings"), closure.extended_pose(self._pose("wheel_bodies", q))
         if self.crank_compliance is None:
             return self.elements["eccentric_bearings"].evaluator, self._pose("eccentric_bearings", q)
         closure = self.elements["cranks"].evaluator
@@ -299,6 +302,8 @@ class RvModel(ReducerModel):
         conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`)."""
         from ...model import SeriesBeam
         fam = Family(family)
+        if fam == Family.PINS and "wheel_bodies" in self.elements:
+            return WheelSeries.of_closure(self.elements["wheel_bodies"])
         if fam == Family.PINS and self.design.pins.groove != "rigid":
             return GrooveSeries.of_groove(self.elements["pins"])
         if fam != Family.ECCENTRIC_BEARINGS:
@@ -409,6 +414,39 @@ FAMILY_ELEMENTS = {Family.PINS: "pins", Family.INVOLUTE_STAGE: "gears", Family.E
 
 #: the stations of an elastic crank, in the order of its station compliance
 CRANK_STATIONS = ("journal_wheel0", "journal_wheel1", "gear")
+
+
+class WheelSeries:
+    """The elastic wheels for the stiffness budget (path ``"wheel_bodies"``): the strain energy
+    sum_j du_j^T K_j du_j of the wheels' station deflections along a mode and the element's tangent
+    with the wheels stiffened (the interface of :class:`rvtool.model.SeriesBeam`)."""
+    path = "wheel_bodies"
+    family = Family.PINS
+
+    def __init__(self, element):
+        self.element = element
+        self.closure = element.evaluator
+
+    @classmethod
+    def of_closure(cls, element):
+        return cls(element)
+
+    def _pose(self, q):
+        ql = self.element.local(q)
+        return self.element.pose_velocity(ql, 0 * ql)
+
+    def energy(self, q, dq, step=1e-9):
+        """2 x the wheels' strain energy along dq, du by central differences (as SeriesBeam.energy)."""
+        h = step / max(float(np.abs(dq).max()), 1e-300)
+        self.closure.update(self._pose(q)[0])
+        du = (self.closure.deflections(self._pose(q + h * dq)[0])
+              - self.closure.deflections(self._pose(q - h * dq)[0])) / (2 * h)
+        self.closure.update(self._pose(q)[0])
+        return self.closure.energy(du)
+
+    def stiffened(self, q, factor):
+        _, _, red, _ = self.closure.solve(*self._pose(q))
+        return self.element.coordinate_indices, self.closure.condense(red, beam_factor=factor)[1]
 
 
 def crank_station_compliance(design):
@@ -569,6 +607,47 @@ def ported_ring(mbs, design, layout, meshes):
     return housing, ports, [dataclasses.replace(m, pin_bodies=pin_bodies) for m in meshes]
 
 
+def ported_wheels(design, graph, layout, meshes, opts):
+    """The elastic wheels (``wheels.body = "ported"``, :mod:`rvtool.assembly.wheel_body`): the
+    wheel--pin meshes and the needle bearings stacked over station bodies (after the real bodies:
+    wheel j's z_b pin stations, then its n_c bore stations) and closed by each wheel's port
+    compliance (:class:`~rvtool.contact.wheel_closure.WheelBodyClosure`). Returns the closure, or
+    None for rigid wheels. Combinations not implemented are refused by key."""
+    import dataclasses
+    d = design
+    if d.wheels.body != "ported":
+        return None
+    others = {"housing.model": (d.housing.model, "rigid"), "pins.groove": (d.pins.groove, "rigid"),
+              "cranks.shaft.model": (d.cranks.shaft.model, "rigid"),
+              "cranks.shaft.torsion": (getattr(d.cranks.shaft, "torsion", "rigid"), "rigid"),
+              "pin_contact.friction_model (with mu > 0)": (
+                  d.pin_contact.friction_model if d.pin_contact.mu > 0 else "regularized", "regularized")}
+    for key, (value, valid) in others.items():
+        if value != valid:
+            raise RvtoolInputError(f"wheels.body = 'ported' with {key} = {value!r} is not implemented (one closure "
+                                   f"carries the wheels' stations); valid: {key} = {valid!r} or wheels.body = 'rigid'")
+    from ...contact.stacked import StackedContactSet
+    from ...contact.wheel_closure import WheelBodyClosure
+    from ...geometry.cycloid import pin_centres
+    from ..wheel_body import wheel_model
+    nb, zb, nc, nw = layout.n_bodies, d.pins.n_pins, layout.n_cranks, d.n_wheels
+    station = np.arange(nw * (zb + nc)).reshape(nw, zb + nc)
+    n_ext = nb + station.size
+    meshes = [dataclasses.replace(m, pin_bodies=tuple(int(nb + station[j, k]) for k in range(zb)))
+              for j, m in enumerate(meshes)]
+    pins = CycloidPinSet(meshes, n_ext, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
+                         search=d.wheels.search, **opts)
+    mounts = []
+    for m in needle_mountings(d, graph, layout):
+        j, k = m.outer - layout.wheel0, m.inner - layout.crank0
+        mounts.append(dataclasses.replace(m, outer=int(nb + station[j, zb + k])))
+    needles = BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)
+    stacked = StackedContactSet((pins, needles), name="wheel_bodies")
+    centres = pin_centres(d.profile, None if d.pins.centre_errors is None else np.asarray(d.pins.centre_errors, float))
+    return WheelBodyClosure(stacked, n_bodies=nb, wheels=[layout.wheel(j) for j in range(nw)],
+                            bodies=[wheel_model(d, j) for j in range(nw)], pin_centres=centres, station=station)
+
+
 def spatial_flange(mbs, design, layout, mounting, housing, regularization):
     """A spatial carrier (``bodies.carrier_coordinates = "spatial"``, issue 32): its retained axial and
     tilt coordinates (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`: mass, transverse
@@ -654,12 +733,13 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         raise RvtoolInputError(f"pins.support.model = {d.pins.support.model.value!r}: elastic ring pins are not "
                                "implemented for the RV topology; valid: 'rigid'")
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
+    wheel_path = ported_wheels(d, graph, L, meshes, opts)
     housing, ports, meshes = ported_ring(mbs, d, L, meshes)
 
     def pin_set_of(meshes, n_bodies):
         return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
                              search=d.wheels.search, **opts)
-    pin_set = groove_pins(d, L, pin_set_of, meshes, ports)
+    pin_set = groove_pins(d, L, pin_set_of, meshes, ports) if wheel_path is None else wheel_path
     if pin_set is None:
         pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
     cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
@@ -681,7 +761,12 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     else:
         crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion)),)
     element = ContactElements(mbs, nodes, contact_element, structure=housing if flange is None else flange)
-    elements = {"pins": element(pin_set, ports=ports)}
+    if wheel_path is None:
+        elements = {"pins": element(pin_set, ports=ports)}
+    else:
+        # the elastic wheels: pins and needles in one closure; the gears alone
+        elements = {"wheel_bodies": element(wheel_path)}
+        crank_path = (("gears", gears),)
     elements.update((name, element(s)) for name, s in (*crank_path, ("crank_bearings", cranks)))
     elements["main_bearings"] = element(main, ports=flange)
     if d.bearing_friction.model != "none":
@@ -693,7 +778,11 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         for name, bset in (("crank_bearing_friction", cranks), ("main_bearing_friction", main)):
             elements[name] = element(rolling_friction_evaluator(bset, d.bearing_friction, name=name))
     mbs.Assemble()
-    if C_crank is None:
+    if wheel_path is not None:
+        rows = elements["wheel_bodies"].evaluator.inner.rows
+        families = {fam: (name, np.arange(len(elements[name].ids))) if name in elements else
+                    ("wheel_bodies", rows[name]) for fam, name in FAMILY_ELEMENTS.items()}
+    elif C_crank is None:
         families = {fam: (name, np.arange(len(elements[name].ids))) for fam, name in FAMILY_ELEMENTS.items()}
     else:
         # the involute stage and the needles are one element, their rows contiguous ranges of it
