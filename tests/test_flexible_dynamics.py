@@ -18,8 +18,13 @@ def rd40():
     return rvtool.load_design(designs.path("rd40"))
 
 
+COARSE = {"mesh_size": 0.006, "samples_per_tooth": 4}
+"""A coarse wheel body (issue 30's mesh) for short tests."""
+
+
 def flexible(design, **kw):
-    return replace(design, wheels={"dynamics": {"model": "flexible", "n_modes": 4, **kw}})
+    return replace(design, wheels={"dynamics": {"model": "flexible", "n_modes": 4, "static_orders": 1, **kw},
+                                   "structure": COARSE})
 
 
 @pytest.fixture(scope="module")
@@ -66,7 +71,9 @@ def test_elastic_wheels_add_compliance(rd40, flex_model):
     assert np.abs(z).max() > 0
     assert np.all(np.isfinite(flex["te"]))
     summary = flex_model.flexible.summary()
-    assert summary["n_modes"] == 4 and min(min(f) for f in summary["in_plane_fraction"]) > 0.5
+    assert summary["n_modes"] == 4 and min(min(f[:4]) for f in summary["in_plane_fraction"]) > 0.5
+    # 4 modes + static responses to radial/tangential profile loads of orders 0, 1 (6), the bore (2), 8 holes (16)
+    assert summary["n_coordinates"] == [4 + 6 + 2 + 16] * 2
     assert rigid["te"] is not None
 
 
@@ -100,7 +107,7 @@ def test_modes_are_mean_axis_modes(rd40):
     # linear inertia coupling between frame and modes vanishes (module docstring)
     from rvtool.assembly.flexible_wheels import wheel_body_mesh
     from rvtool.structure import floating_basis
-    wm = wheel_body_mesh(rd40)
+    wm = wheel_body_mesh(rd40, 0, mesh_size=COARSE["mesh_size"])
     b = floating_basis(wm.model, n_modes=4)
     MR = wm.model.mass @ wm.model.rigid_body_modes()
     assert np.abs(b["matrix"].T @ MR).max() < 1e-8 * np.abs(MR).max()
@@ -119,6 +126,11 @@ def test_rv_builder_refuses_flexible_wheels():
     d = rvtool.load_design(designs.path("rv40e"))
     with pytest.raises(RvtoolInputError, match="cycloid topology only"):
         rvtool.build(replace(d, wheels={"dynamics": {"model": "flexible"}}))
+
+
+def test_flexible_wheels_refuse_the_ported_wheel_body(rd40):
+    with pytest.raises(RvtoolInputError, match="counted twice"):
+        rvtool.build(replace(flexible(rd40), wheels={"body": "ported"}))
 
 
 def test_short_driven_run_moves_the_modes(rd40, flex_model):

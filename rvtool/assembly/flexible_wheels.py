@@ -21,7 +21,11 @@ The frame carries the builder's rigid inertia (mass and polar inertia of the whe
 frozen flexible wheel (``frozen = true``, modal coordinates held) is the rigid wheel; the FE
 mesh's own mass and inertia are reported beside it (``WheelModes.mesh_mass``).
 
-Wheel geometry and ports: the FE model comes from :func:`wheel_body_mesh`.
+Wheel geometry and ports: issue 30's wheel body (:mod:`rvtool.structure.wheel_body`) on the cycloid
+wheel's geometry (:func:`wheel_geometry`: the turned profile, the central bore, the output-pin
+holes); :func:`wheel_body_mesh`. Its profile ports spread a contact load along the flank and
+through the width and measure the displacement at the contact datum depth, so the local
+(Hertzian) compliance the pin law holds is not counted twice.
 """
 import math
 from dataclasses import dataclass
@@ -29,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RvtoolInputError
-from ..structure.floating_ports import planar_modal_body, port_operators
+from ..structure.floating_ports import planar_modal_body
 
 _CACHE = {}
 
@@ -53,56 +57,53 @@ def wheel_mesh_key(design, k):
     """Cache key of wheel k's mesh: everything the wheel body is built from."""
     d = design
     return repr(("mesh", k, d.pins, d.profile, d.wheels.eccentricity, d.wheels.width, d.wheels.phases,
-                 d.eccentric_bearing, d.output_pins, d.material))
+                 d.wheels.structure, d.eccentric_bearing, d.output_pins, d.material))
+
+
+def wheel_geometry(design, k=0, spec=None):
+    """:class:`~rvtool.structure.wheel_body.WheelGeometry` of wheel k of a cycloid design: the
+    design's profile turned to the wheel's assembly phase (as :func:`rvtool.assembly.cycloid.pin_meshes`
+    turns it for the contact law), thickness ``wheels.width``, one central bore (the eccentric
+    needle bearing's outer raceway, ``eccentric_bearing.inner_radius + roller_diameter``), the
+    output-pin holes (``output_pins.hole_circle_radius``, ``hole_radius``, at the pins' angles) and
+    the lightening holes and datum depth of ``[wheels.structure]`` (issue 30's wheel body; the RV
+    wheel's is :func:`rvtool.assembly.wheel_body.wheel_geometry`)."""
+    import dataclasses
+    from .wheel_body import wheel_spec
+    from ..structure.wheel_body import WheelGeometry
+    d = design
+    spec = wheel_spec(d) if spec is None else spec
+    zg = d.pins.n_pins - 1
+    prof = dataclasses.replace(d.profile, rotation_mod=d.profile.rotation_mod - d.wheels.phases[k] / zg)
+    rb = d.eccentric_bearing.inner_radius + d.eccentric_bearing.roller_diameter
+    op = d.output_pins
+    holes = tuple((op.hole_circle_radius * math.cos(a), op.hole_circle_radius * math.sin(a), op.hole_radius)
+                  for a in op.pin_angles())
+    lightening = tuple((float(x), float(y), spec.lightening_holes.radius) for x, y in spec.lightening_holes.centres())
+    depth = d.pins.pin_radius if spec.port_depth is None else spec.port_depth
+    return WheelGeometry(profile=prof, thickness=d.wheels.width, bores=((0.0, 0.0, rb),), holes=holes,
+                         lightening=lightening, port_depth=float(depth))
 
 
 def wheel_body_mesh(design, k=0, mesh_size=None):
-    """:class:`WheelMesh` of wheel k of the design.
-
-    Interim source until issue 30's wheel body (helper "wheelbody") lands: an annulus from the
-    bore (eccentric bearing outer race) to the profile's root circle, the wheel width thick,
-    meshed once; its rim vertices are the profile stations (those at one polar angle averaged), its
-    bore vertices the bore ports, and the vertices nearest to 4 points on each output-pin hole
-    circle a hole's ports (the annulus itself has no holes). Declared a stand-in; the coupling
-    does not depend on it."""
-    from ..structure import AnnularHousingSpec, NodalPort, fe_model_from_mesh, generate_mesh
+    """:class:`WheelMesh` of wheel k of a cycloid design: issue 30's wheel body
+    (:func:`rvtool.structure.wheel_body.wheel_body` on :func:`wheel_geometry`, the spec of
+    ``[wheels.structure]``, ``mesh_size`` [m] replacing its mesh size when given), with its
+    profile ports (one per profile sample, loads spread along the flank and through the width,
+    displacements measured at the contact datum depth), the bore and the holes as the port
+    operators."""
+    from .wheel_body import wheel_spec
+    from ..structure.floating_ports import port_operators_from_rows
+    from ..structure.wheel_body import wheel_body
     d = design
-    r_bore = d.eccentric_bearing.inner_radius + d.eccentric_bearing.roller_diameter
-    r_root = d.pins.pin_circle_radius - d.pins.pin_radius - d.wheels.eccentricity
-    h = d.wheels.width
-    size = min(mesh_size or 0.5 * h, h)
-    spec = AnnularHousingSpec(inner_radius=r_bore, outer_radius=r_root, height=h, mesh_size=size,
-                              material=d.material, n_ports=1, n_mounts=0, mount_radius=r_bore)
-    mesh = generate_mesh(spec.geometry(), size)
-    v = np.asarray(mesh.ngmesh.Coordinates(), float)
-    r = np.hypot(v[:, 0], v[:, 1])
-    tol = 1e-3 * size
-    ports, used = [], set()
-
-    def port(name, vtx):
-        used.add(int(vtx))
-        ports.append(NodalPort(name=name, point=tuple(v[vtx])))
-        return len(ports) - 1
-    # profile stations: the rim vertices, those at one polar angle (through the width) averaged
-    rim = np.flatnonzero(np.abs(r - r_root) < tol)
-    ang = np.round(np.mod(np.arctan2(v[rim, 1], v[rim, 0]), 2 * np.pi), 9)
-    profile = [tuple(port(f"profile{j}_{i}", vtx) for i, vtx in enumerate(rim[ang == a])) for j, a in enumerate(np.unique(ang))]
-    bore = tuple(port(f"bore{i}", vtx) for i, vtx in enumerate(np.flatnonzero(np.abs(r - r_bore) < tol)))
-    holes = []
-    op = d.output_pins
-    from scipy.spatial import cKDTree
-    tree = cKDTree(v)
-    for p, a in enumerate(op.pin_angles()):
-        c = op.hole_circle_radius * np.array([np.cos(a), np.sin(a)])
-        pts = [(c[0] + op.hole_radius * np.cos(b), c[1] + op.hole_radius * np.sin(b), 0.5 * h)
-               for b in 0.5 * np.pi * np.arange(4)]
-        idx = sorted({int(i) for i in tree.query(pts)[1]} - used)
-        holes.append(tuple(port(f"hole{p}_{i}", vtx) for i, vtx in enumerate(idx)))
-    model = fe_model_from_mesh(mesh, material=d.material, ports=tuple(ports),
-                               info={"component": "cycloid wheel (interim annulus)", "mesh_size": size})
-    ops = port_operators(model, profile=tuple(profile), bore=bore, holes=tuple(holes))
-    return WheelMesh(model=model, operators=ops, profile=tuple(profile), bore=bore, holes=tuple(holes),
-                     source="interim annulus (bore to root circle)")
+    spec = wheel_spec(d, mesh_size)
+    wb = wheel_body(wheel_geometry(d, k, spec), spec, spec.material or d.material)
+    ops = port_operators_from_rows(wb.fe, measure=wb.measure_matrix, load=wb.load_matrix,
+                                   profile_rows=wb.rows("profile"), profile_points=wb.profile_points,
+                                   bore_rows=wb.rows("bore0"),
+                                   hole_rows=[wb.rows(f"hole{p}") for p in range(d.output_pins.n_pins)])
+    return WheelMesh(model=wb.fe, operators=ops, source=f"issue 30 wheel body ({spec.samples_per_tooth} profile ports "
+                                                          f"per tooth, mesh size {spec.mesh_size} m, {spec.layers} layers)")
 
 
 def wheel_modes(design, k=0):
@@ -119,7 +120,8 @@ def wheel_modes(design, k=0):
         _CACHE[wm_key] = wm
         ops = wm.operators
         body = planar_modal_body(wm.model, n_modes=dyn.n_modes, profile=wm.profile, bore=wm.bore, holes=wm.holes,
-                                 damping_ratio=dyn.damping_ratio, centre=wm.centre, operators=ops)
+                                 damping_ratio=dyn.damping_ratio, centre=wm.centre, operators=ops,
+                                 static_orders=dyn.static_orders)
         _CACHE[key] = (body, wm, ops)
     return _CACHE[key]
 
@@ -272,7 +274,9 @@ class FlexibleWheels:
     def summary(self):
         """Reported facts of the flexible wheels: source, mesh counts, retained frequencies [Hz] per wheel."""
         return {"source": self.meshes[0].source, "mesh": [m.model.counts() for m in self.meshes],
-                "n_modes": self.bodies[0].n_modes,
+                "n_modes": self.design.wheels.dynamics.n_modes,
+                "static_orders": self.design.wheels.dynamics.static_orders,
+                "n_coordinates": [b.n_modes for b in self.bodies],
                 "frequencies_hz": [b.frequencies_hz.tolist() for b in self.bodies],
                 "in_plane_fraction": [b.in_plane.tolist() for b in self.bodies],
                 "mesh_mass_kg": [b.mesh_mass for b in self.bodies],
@@ -284,6 +288,9 @@ def check_flexible_wheels(design, bearing_model, tilt):
     """Named refusals of the combinations flexible wheels do not implement (yet)."""
     d = design
     reasons = []
+    if getattr(d.wheels, "body", "rigid") != "rigid":
+        reasons.append(f"wheels.body = {d.wheels.body!r} (the wheel body's compliance would be counted twice: the "
+                       "flexible wheel carries it; valid: 'rigid')")
     if d.housing.model != "rigid":
         reasons.append("housing.model = 'ports' (the merged element carries one structure; valid: 'rigid')")
     if d.pins.support.elastic or d.output_pins.support.elastic:

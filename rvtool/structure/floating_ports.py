@@ -62,11 +62,17 @@ class FloatingDynamics:
         structures 0.005-0.05).
     frozen: true holds the modal coordinates at zero (a verification switch: the flexible
         model must then reproduce the rigid one).
+    static_orders: static correction of the basis [-]: -1 none (free-free modes only); J >= 0
+        adds the inertia-relief static responses to radial and tangential profile loads of
+        Fourier orders 0..J and to unit loads at the bore and at each hole, orthogonalized
+        against the modes (Ritz vectors: a free-free basis alone misses the quasi-static
+        compliance under the contacts).
     """
     model: str = "rigid"
     n_modes: int = 8
     damping_ratio: float = 0.02
     frozen: bool = False
+    static_orders: int = 4
 
     def __post_init__(self):
         if self.model not in MODELS:
@@ -76,6 +82,9 @@ class FloatingDynamics:
         check_range("damping_ratio", self.damping_ratio, 0.0, 1.0, high_open=True)
         if not isinstance(self.frozen, bool):
             raise RvtoolInputError(f"frozen = {self.frozen!r} must be true or false")
+        if isinstance(self.static_orders, bool) or not isinstance(self.static_orders, int) or \
+                not -1 <= self.static_orders <= 32:
+            raise RvtoolInputError(f"static_orders = {self.static_orders!r} is outside the valid range [-1, 32] (integer)")
 
     @property
     def flexible(self):
@@ -265,8 +274,39 @@ def in_plane_fractions(model, vectors):
     return 1.0 - np.einsum("ij,ij->j", vz, model.mass @ vz) / total
 
 
-def planar_modal_body(model, *, n_modes, profile, bore=(), holes=(), damping_ratio=0.0, centre=(0.0, 0.0),
-                      candidates=None, operators=None):
+def static_correction(model, ops, Phi, orders):
+    """(n, k) inertia-relief static responses of the free body (``FloatingDynamics.static_orders``)
+    to radial and tangential profile loads cos(j psi), sin(j psi), j = 0..orders (on the load
+    operators), and to unit x, y loads at the bore and at each hole, with the part in the span of
+    the modes ``Phi`` removed (M-orthogonal complement); orthogonal to the rigid modes by
+    construction (inertia relief)."""
+    from .static import InertiaReliefCompliance
+    Pl = ops.load("profile")
+    psi = ops.angles
+    c, s = np.cos(psi), np.sin(psi)
+    loads = []
+    for j in range(orders + 1):
+        for w in ((np.cos(j * psi),) if j == 0 else (np.cos(j * psi), np.sin(j * psi))):
+            for dx, dy in ((c, s), (-s, c)):                  # radial, tangential
+                g = np.zeros(2 * len(psi))
+                g[0::2], g[1::2] = w * dx, w * dy
+                loads.append(Pl.T @ g)
+    for name in ("bore", "holes"):
+        P = ops.load(name)
+        if P is None:
+            continue
+        rows = P.shape[0] if name == "holes" else 2
+        for r in range(rows):
+            loads.append(np.asarray(P[r].toarray()).ravel())
+    F = np.column_stack(loads)
+    irc = InertiaReliefCompliance(model.elastic_stiffness, model.mass, model.rigid_body_modes())
+    U, _ = irc.solve(F)
+    U = U - Phi @ (Phi.T @ (model.mass @ U))
+    return U
+
+
+def planar_modal_body(model, *, n_modes, profile=(), bore=(), holes=(), damping_ratio=0.0, centre=(0.0, 0.0),
+                      candidates=None, operators=None, static_orders=-1):
     """:class:`PlanarModalBody` of an unsupported FE model.
 
     profile: port-index groups, one per profile station (the ports of a group are averaged,
@@ -285,6 +325,19 @@ def planar_modal_body(model, *, n_modes, profile, bore=(), holes=(), damping_rat
                                "free-free modes; valid: fewer modes (or pass more candidates)")
     Phi = b["matrix"][:, keep]
     lam = b["eigenvalues"][keep]
+    if static_orders >= 0:
+        # Ritz vectors of [Phi, U]: the modes stay (U is M-orthogonal to them), the static responses
+        # are diagonalized among themselves; each is then an in-plane shape of the free body
+        U = static_correction(model, ops, Phi, static_orders)
+        Ku, Mu = U.T @ (model.elastic_stiffness @ U), U.T @ (model.mass @ U)
+        import scipy.linalg as sla
+        # drop directions the loads repeat (a load set with dependent columns)
+        w, V = np.linalg.eigh(0.5 * (Mu + Mu.T))
+        V = V[:, w > 1e-10 * w.max()] / np.sqrt(w[w > 1e-10 * w.max()])
+        mu, Y = sla.eigh(V.T @ Ku @ V)
+        Phi = np.hstack([Phi, U @ (V @ Y)])
+        lam = np.concatenate([lam, mu])
+        keep = np.concatenate([keep, -1 - np.arange(len(mu))])
     R = ops.rigid
     MR = model.mass @ R
     omega = np.sqrt(np.maximum(lam, 0.0))
@@ -300,7 +353,7 @@ def planar_modal_body(model, *, n_modes, profile, bore=(), holes=(), damping_rat
                            profile_maps=(ops.profile @ Phi).reshape(-1, 2, len(keep)),
                            bore_map=None if ops.bore is None else ops.bore @ Phi,
                            hole_maps=(ops.holes @ Phi).reshape(-1, 2, len(keep)), modes=keep,
-                           in_plane=frac[keep], mesh_mass=float(MR[:, 0] @ R[:, 0]), mesh_inertia=float(MR[:, 2] @ R[:, 2]),
+                           in_plane=in_plane_fractions(model, Phi), mesh_mass=float(MR[:, 0] @ R[:, 0]), mesh_inertia=float(MR[:, 2] @ R[:, 2]),
                            basis=Phi, **loads)
 
 
