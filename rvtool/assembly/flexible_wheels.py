@@ -119,9 +119,22 @@ def wheel_modes(design, k=0):
         wm = _CACHE.get(wm_key) or wheel_body_mesh(d, k)
         _CACHE[wm_key] = wm
         ops = wm.operators
+        # the free-free candidates of this mesh, computed once for the largest basis asked so far
+        n_cand = 3 * dyn.n_modes + 6
+        ff = _CACHE.get(("free_free", wm_key))
+        if ff is None or ff["matrix"].shape[1] < n_cand:
+            from ..structure import floating_basis
+            ff = floating_basis(wm.model, n_modes=n_cand)
+            _CACHE[("free_free", wm_key)] = ff
+        st = None
+        if dyn.static_orders >= 0:
+            st = _CACHE.get(("static", wm_key, dyn.static_orders))
+            if st is None:
+                from ..structure.floating_ports import static_responses
+                st = _CACHE[("static", wm_key, dyn.static_orders)] = static_responses(wm.model, ops, dyn.static_orders)
         body = planar_modal_body(wm.model, n_modes=dyn.n_modes, profile=wm.profile, bore=wm.bore, holes=wm.holes,
                                  damping_ratio=dyn.damping_ratio, centre=wm.centre, operators=ops,
-                                 static_orders=dyn.static_orders)
+                                 static_orders=dyn.static_orders, free_free=ff, static=st)
         _CACHE[key] = (body, wm, ops)
     return _CACHE[key]
 

@@ -274,12 +274,20 @@ def in_plane_fractions(model, vectors):
     return 1.0 - np.einsum("ij,ij->j", vz, model.mass @ vz) / total
 
 
-def static_correction(model, ops, Phi, orders):
+def static_correction(model, ops, Phi, orders, responses=None):
     """(n, k) inertia-relief static responses of the free body (``FloatingDynamics.static_orders``)
     to radial and tangential profile loads cos(j psi), sin(j psi), j = 0..orders (on the load
     operators), and to unit x, y loads at the bore and at each hole, with the part in the span of
     the modes ``Phi`` removed (M-orthogonal complement); orthogonal to the rigid modes by
-    construction (inertia relief)."""
+    construction (inertia relief). responses: :func:`static_responses` of these arguments if
+    already computed."""
+    U = static_responses(model, ops, orders) if responses is None else responses
+    return U - Phi @ (Phi.T @ (model.mass @ U))
+
+
+def static_responses(model, ops, orders):
+    """(n, k) inertia-relief static responses of :func:`static_correction` before the modes are
+    removed (one factorization of the bordered system; the loads of module :func:`static_correction`)."""
     from .static import InertiaReliefCompliance
     Pl = ops.load("profile")
     psi = ops.angles
@@ -300,24 +308,29 @@ def static_correction(model, ops, Phi, orders):
             loads.append(np.asarray(P[r].toarray()).ravel())
     F = np.column_stack(loads)
     irc = InertiaReliefCompliance(model.elastic_stiffness, model.mass, model.rigid_body_modes())
-    U, _ = irc.solve(F)
-    U = U - Phi @ (Phi.T @ (model.mass @ U))
-    return U
+    return irc.solve(F)[0]
 
 
 def planar_modal_body(model, *, n_modes, profile=(), bore=(), holes=(), damping_ratio=0.0, centre=(0.0, 0.0),
-                      candidates=None, operators=None, static_orders=-1):
+                      candidates=None, operators=None, static_orders=-1, free_free=None, static=None):
     """:class:`PlanarModalBody` of an unsupported FE model.
 
     profile: port-index groups, one per profile station (the ports of a group are averaged,
     e.g. the vertices of one sample through the width); bore: port indices of the bore; holes:
     port-index groups, one per hole; centre: the frame origin in the mesh frame [m];
     candidates: free-free modes computed to pick ``n_modes`` in-plane ones from (default
-    3 n_modes + 6); operators: the :class:`PortOperators` of these ports if already built."""
+    3 n_modes + 6); operators: the :class:`PortOperators` of these ports if already built;
+    static_orders: :attr:`FloatingDynamics.static_orders` (:func:`static_correction`); free_free:
+    a :func:`~rvtool.structure.floating_basis` result of this model with at least ``candidates``
+    modes to pick from (its lowest ones are used; None: computed here); static: the
+    :func:`static_responses` of ``static_orders`` if already computed."""
     from .floating import floating_basis
     ops = operators or port_operators(model, profile=profile, bore=bore, holes=holes, centre=centre)
     n_cand = 3 * n_modes + 6 if candidates is None else int(candidates)
-    b = floating_basis(model, n_modes=n_cand)
+    if free_free is not None and free_free["matrix"].shape[1] >= n_cand:
+        b = {"matrix": free_free["matrix"][:, :n_cand], "eigenvalues": free_free["eigenvalues"][:n_cand]}
+    else:
+        b = floating_basis(model, n_modes=n_cand)
     frac = in_plane_fractions(model, b["matrix"])
     keep = np.flatnonzero(frac >= IN_PLANE_FRACTION)[:n_modes]
     if len(keep) < n_modes:
@@ -328,7 +341,7 @@ def planar_modal_body(model, *, n_modes, profile=(), bore=(), holes=(), damping_
     if static_orders >= 0:
         # Ritz vectors of [Phi, U]: the modes stay (U is M-orthogonal to them), the static responses
         # are diagonalized among themselves; each is then an in-plane shape of the free body
-        U = static_correction(model, ops, Phi, static_orders)
+        U = static_correction(model, ops, Phi, static_orders, static)
         Ku, Mu = U.T @ (model.elastic_stiffness @ U), U.T @ (model.mass @ U)
         import scipy.linalg as sla
         # drop directions the loads repeat (a load set with dependent columns)
