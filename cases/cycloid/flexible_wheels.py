@@ -10,7 +10,8 @@ Checks and figures:
 (c) the dynamic TE spectrum against the number of retained modes (driven runs over the same window);
 (d) spectra of the output torsion with the mesh, bearing and wheel-mode markers (figure);
 (e) a driven RD-40 run at rated speed and torque with flexible wheels on the Exudyn path over one
-    input revolution (--quick: a quarter), with its cost against the rigid run's.
+    input revolution (--quick: 0.05 of one, on a coarser wheel mesh), with its cost against the
+    rigid run's.
 """
 import time
 
@@ -27,13 +28,19 @@ from rvtool.units import ARCSEC_PER_RAD
 
 DESIGN = designs.path("rd40")
 N_MODES = 8                 # retained in-plane modes per wheel in the driven run (e)
+STATIC_ORDERS = 4           # static correction of the basis (FloatingDynamics.static_orders, its default)
 STEP = 2e-5                 # s, as cases/cycloid/vibration.py
 MODES_COMPARED = 6          # (b): the first in-plane modes of the mounted assembly
 MODE_BOUND = 0.01           # (b): the issue's target, relative frequency difference
+QUICK_STRUCTURE = {"mesh_size": 0.006, "samples_per_tooth": 4}
+"""--quick: a coarser wheel body (issue 30's mesh); the full run takes [wheels.structure]'s defaults."""
 
 
-def flexible(design, n_modes, **kw):
-    return replace_design(design, wheels={"dynamics": {"model": "flexible", "n_modes": n_modes, **kw}})
+def flexible(design, n_modes, static_orders=STATIC_ORDERS, structure=None, **kw):
+    wheels = {"dynamics": {"model": "flexible", "n_modes": n_modes, "static_orders": static_orders, **kw}}
+    if structure:
+        wheels["structure"] = structure
+    return replace_design(design, wheels=wheels)
 
 
 def te_and_states(model, design, angles):
@@ -75,6 +82,10 @@ def judge(r):
         # (a converged basis changes the response by less than the modes it adds carry)
         "te_spectrum_converged_in_modes": casekit.check(c["spectrum_change_vs_peak"][-1], 0.02, "<=",
                                                         why="largest two bases: spectrum change / peak"),
+        # (b) the issue's target on the first modes of the mounted wheels, with the default basis
+        "mounted_modes_vs_full_fe": casekit.check(r["modes"]["max_rel_diff_default_basis"], MODE_BOUND, "<=",
+                                                  why=f"issue 33: the first {MODES_COMPARED} modes of the mounted "
+                                                      "flexible wheels against the full FE of the same assembly"),
         "mode_comparison_symmetric": casekit.check(r["modes"]["contact_tangent_asymmetry"], 1e-6, "<=",
                                                    why="frictionless contact tangents are symmetric (both models "
                                                        "take the symmetric part)"),
@@ -87,14 +98,16 @@ def main(argv=None):
     d = load_design(DESIGN)
     zp = d.pins.n_pins
     mesh = 2 * np.pi / zp
+    st = QUICK_STRUCTURE if args.quick else None
     results = {}
 
     # (a) frozen vs rigid, quasi-static TE over one mesh cycle
     n_pts = 8 if args.quick else 24
     angles = np.arange(n_pts) * mesh / n_pts
     te_r, q_r = te_and_states(build(d), d, angles)
-    te_f, q_f = te_and_states(build(flexible(d, N_MODES, frozen=True)), d, angles)
-    flex_qs = np.asarray(quasi_static_te(build(flexible(d, N_MODES)), torque=d.rated_torque, input_angles=angles)["te"])
+    te_f, q_f = te_and_states(build(flexible(d, N_MODES, structure=st, frozen=True)), d, angles)
+    flex_qs = np.asarray(quasi_static_te(build(flexible(d, N_MODES, structure=st)), torque=d.rated_torque,
+                                         input_angles=angles)["te"])
     results["frozen"] = {
         "te_max_abs_diff_arcsec": float(np.abs(te_f - te_r).max() * ARCSEC_PER_RAD),
         "te_max_rel_diff": float(np.abs(te_f - te_r).max() / np.abs(te_r).max()),
@@ -104,65 +117,64 @@ def main(argv=None):
         "points": n_pts,
     }
 
-    # (b) mounted modes vs the full FE of the same linearized assembly
-    bases = (4, 8, 16) if args.quick else (4, 8, 16, 32)
-    modes = {"n_modes": list(bases), "reduced_hz": [], "rel_diff": []}
-    full = None
-    for nm in bases:
-        m = build(flexible(d, nm))
+    # (b) mounted modes vs the full FE of the same linearized assembly, per basis (n_modes, static_orders)
+    bases = ((N_MODES, STATIC_ORDERS),) if args.quick else ((8, -1), (4, 4), (8, 4), (16, 4), (8, 8))
+    modes = {"bases": [list(b) for b in bases], "reduced_hz": [], "full_hz": [], "rel_diff": [],
+             "contact_tangent_asymmetry": 0.0}
+    for nm, J in bases:
+        m = build(flexible(d, nm, J, structure=st))
         q = Continuation(m, input_angle=0.0).go_to(-np.sign(m.ratio) * d.rated_torque)
         red = mounted_modes(m, q, n=MODES_COMPARED)
         ful = mounted_modes(m, q, n=MODES_COMPARED, full=True)
         modes["reduced_hz"].append(red["frequencies_hz"].tolist())
-        modes.setdefault("full_hz", []).append(ful["frequencies_hz"].tolist())
+        modes["full_hz"].append(ful["frequencies_hz"].tolist())
         modes["rel_diff"].append((red["frequencies_hz"] / ful["frequencies_hz"] - 1).tolist())
-        modes["contact_tangent_asymmetry"] = max(modes.get("contact_tangent_asymmetry", 0.0), red["asymmetry"])
-        full = m
-    worst = np.max(np.abs(modes["rel_diff"][-1]))
-    modes["max_rel_diff_largest_basis"] = float(worst)
+        modes["contact_tangent_asymmetry"] = max(modes["contact_tangent_asymmetry"], red["asymmetry"])
+    i_def = bases.index((N_MODES, STATIC_ORDERS))
+    worst = np.abs(modes["rel_diff"][i_def])
+    modes["max_rel_diff_default_basis"] = float(worst.max())
+    modes["modes_within_target_default_basis"] = int(np.argmax(worst > MODE_BOUND)) if np.any(worst > MODE_BOUND) \
+        else len(worst)
     modes["target_rel"] = MODE_BOUND
-    modes["target_met"] = bool(worst <= MODE_BOUND)
-    modes["wheel_mesh"] = full.flexible.summary()["mesh"]
-    modes["wheel_source"] = full.flexible.summary()["source"]
+    modes["target_met"] = bool(worst.max() <= MODE_BOUND)
+    summary = m.flexible.summary()
+    modes["wheel_mesh"] = summary["mesh"]
+    modes["wheel_source"] = summary["source"]
     results["modes"] = modes
 
     # (e) the driven run with flexible wheels and its cost against the rigid run
-    revs = 0.25 if args.quick else 1.0
+    revs = 0.05 if args.quick else 1.0
     run_r, proto, model_r, wall_r = driven(d, revs)
-    run_f, _, model_f, wall_f = driven(flexible(d, N_MODES), revs)
+    run_f, _, model_f, wall_f = driven(flexible(d, N_MODES, structure=st), revs)
     rec = run_f["record"]
     results["driven"] = {
-        "n_modes": N_MODES, "input_revolutions": revs,
+        "n_modes": N_MODES, "static_orders": STATIC_ORDERS, "input_revolutions": revs,
+        "n_coordinates_per_wheel": model_f.flexible.summary()["n_coordinates"],
         "input_revolutions_run": float(run_f["t"][-1] * d.input_speed_rpm / 60.0),
         "accepted_steps": rec.accepted_steps, "rejected_steps": rec.rejected_steps, "max_residual": rec.max_residual,
         "abs_tol": 1e-6, "wall_s_flexible": wall_f, "wall_s_rigid": wall_r, "cost_ratio": wall_f / wall_r,
         "wall_s_per_step_flexible": wall_f / max(rec.accepted_steps, 1),
-        # (Omega_wheel / omega_1)^2: the relative size of the quadratic-velocity coupling the mean-axis frame leaves out
-        "neglected_coupling": model_f.flexible.bodies[0].neglected_coupling(2 * np.pi * d.input_speed_rpm / 60.0 / (zp - 1)),
         "torsion_pp_flexible_arcsec": float(np.ptp(run_f["responses"]["torsion"]) * ARCSEC_PER_RAD),
         "torsion_pp_rigid_arcsec": float(np.ptp(run_r["responses"]["torsion"]) * ARCSEC_PER_RAD),
+        # (Omega_wheel / omega_1)^2: the relative size of the quadratic-velocity coupling the mean-axis frame leaves out
+        "neglected_coupling": model_f.flexible.bodies[0].neglected_coupling(2 * np.pi * d.input_speed_rpm / 60.0 / (zp - 1)),
     }
 
-    # (c) the dynamic TE spectrum against the number of modes (same window as (e) in --quick, a quarter otherwise)
+    # (c) the dynamic TE spectrum against the number of modes over one window
     conv_revs = revs if args.quick else 0.25
-    conv_bases = (4, 8, 16)
+    conv_bases = (4, 8) if args.quick else (4, 8, 16)
+    cproto = V.VibrationProtocol(speed_rpm=d.input_speed_rpm, torque=d.rated_torque,
+                                 duration=conv_revs * 60.0 / d.input_speed_rpm, sample_step=STEP)
     spectra = []
     for nm in conv_bases:
-        if nm == N_MODES and conv_revs == revs:
-            run = run_f
-        else:
-            run = driven(flexible(d, nm), conv_revs)[0]
-        spectra.append(V.vibration_spectra(run, proto if conv_revs == revs else
-                                           V.VibrationProtocol(speed_rpm=d.input_speed_rpm, torque=d.rated_torque,
-                                                               duration=conv_revs * 60.0 / d.input_speed_rpm,
-                                                               sample_step=STEP), "torsion"))
+        run = run_f if (nm == N_MODES and conv_revs == revs) else driven(flexible(d, nm, structure=st), conv_revs)[0]
+        spectra.append(V.vibration_spectra(run, cproto, "torsion"))
     change = [float(np.max(np.abs(b["spectrum"] - a["spectrum"])) / np.max(b["spectrum"][1:]))
               for a, b in zip(spectra[:-1], spectra[1:])]
-    i_mesh = int(np.argmin(np.abs(spectra[-1]["orders"] - zp)))
     results["convergence"] = {
-        "n_modes": list(conv_bases), "input_revolutions": conv_revs,
+        "n_modes": list(conv_bases), "static_orders": STATIC_ORDERS, "input_revolutions": conv_revs,
         "spectrum_change_vs_peak": change,
-        "mesh_order_amplitude_arcsec": [float(s["order_spectrum"][i_mesh] * ARCSEC_PER_RAD) for s in spectra],
+        "torsion_pp_arcsec": [float(np.ptp(s["x_uniform"]) * ARCSEC_PER_RAD) for s in spectra],
     }
 
     # (d) spectra with mesh, bearing and wheel-mode markers
@@ -170,14 +182,15 @@ def main(argv=None):
     sp_r = V.vibration_spectra(run_r, proto, "torsion")
     sw = V.vibration_spectra(run_f, proto, "wheel0_x")
     markers = V.marker_frequencies(model_f, d.input_speed_rpm)
-    markers["mounted_modes_hz"] = modes["reduced_hz"][bases.index(N_MODES)]
+    markers["mounted_modes_hz"] = modes["reduced_hz"][i_def]
     results["markers_hz"] = markers
     results["spectra"] = {"frequencies_hz": sp_f["frequencies_hz"],
                           "torsion_flexible_arcsec": sp_f["spectrum"] * ARCSEC_PER_RAD,
                           "torsion_rigid_arcsec": sp_r["spectrum"] * ARCSEC_PER_RAD,
                           "wheel0_x_flexible_m": sw["spectrum"]}
     _plot(args.out, sp_f, sp_r, sw, markers)
-    settings = {"design": d.name, "n_modes": N_MODES, "step_s": STEP, "quick": args.quick, "mode_bases": list(bases)}
+    settings = {"design": d.name, "n_modes": N_MODES, "static_orders": STATIC_ORDERS, "step_s": STEP,
+                "quick": args.quick, "wheel_structure": st or "defaults", "mode_bases": [list(b) for b in bases]}
     casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_start)
 
