@@ -186,3 +186,11 @@ def test_load_and_measure_maps_enter_force_and_gap_separately():
     assert np.allclose(ev.Q, Tlf.T @ Qb, rtol=1e-13, atol=1e-13)
     assert np.allclose(ev.dQdq, Tlf.T @ J @ Tf, rtol=1e-12, atol=1e-12)
     assert not np.allclose(T, Tl)
+
+
+def test_vibration_markers_list_the_wheel_modes(rd40, flex_model):
+    # the spectra draw the retained wheel modes beside the mesh and bearing markers; a rigid model has none
+    m = flex_model.marker_frequencies(rd40.input_speed_rpm)
+    expected = sorted({float(f) for b in flex_model.flexible.bodies for f in b.frequencies_hz})
+    assert m["wheel_modes_hz"] == expected and len(expected) >= 4
+    assert "wheel_modes_hz" not in rvtool.build(rd40).marker_frequencies(rd40.input_speed_rpm)
