@@ -116,6 +116,7 @@ class HostedContactElement(ContactElement):
         self.host = host
         self.positions = np.asarray(positions, dtype=int)
         self._cidx = None
+        self._identity_ports = None     # set on first contraction (ports.P == I)
         super().__init__(host.mbs, nodes, contact_set, **kw)
         if len(self.positions) != self.n:
             raise RvtoolInputError(f"positions has {len(self.positions)} entries for a family with {self.n} coordinates")
@@ -197,10 +198,19 @@ class HostedContactElement(ContactElement):
         return self._cidx
 
     def _contract(self, ev):
-        """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T on the port rows in contact only (module docstring)."""
+        """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T on the port rows in contact only (module docstring).
+        Ports with the identity map (P = I: the retained out-of-plane rows of
+        :class:`~exudyn_user_elements.out_of_plane.RetainedTilt`) contract to the family's own result,
+        copied (the products below give it exactly: every sum has one term times 1, the rest zeros).
+        State-dependent ports (floating flexible bodies) contract in :meth:`ContactElement._contract`."""
         if getattr(self.ports, "state_dependent", False):
             return super()._contract(ev)
         nr, P = self.n_rigid, self.ports.P
+        if self._identity_ports is None:
+            self._identity_ports = P.shape[0] == P.shape[1] and np.array_equal(P, np.eye(len(P)))
+        if self._identity_ports:
+            return ContractedEvaluation(np.array(ev.Q, float), lambda: np.array(ev.dQdq, float),
+                                        lambda: np.array(ev.dQdv, float), ev.obs, ev.trial_history, ev.finite)
         nb = len(ev.Q)
 
         def active(*Ms):

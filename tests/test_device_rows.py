@@ -320,3 +320,165 @@ def test_analyze_hysteresis_runs_on_the_device_with_exudyns_figures():
     assert fd["torsional_rigidity_b_over_a"] == pytest.approx(fe["torsional_rigidity_b_over_a"], rel=1e-9)
     for key in ("angle_arcmin_loop1", "angle_arcmin_loop2"):
         assert np.max(np.abs(np.asarray(dv.data[key]) - np.asarray(ex.data[key]))) <= 1e-6
+
+
+def test_variant_copies_reuse_the_built_profile_tables_and_compliances_bit_for_bit(rv):
+    """copy_families of variant models takes each variant's cycloid profile tables and tooth
+    compliances from its built sets (no second sampling: ~40 ms per copy); the copied rows and
+    tables equal those of sets built from the meshes alone."""
+    from rvtool.contact.cycloid_set import CycloidPinSet
+    from rvtool.contact.involute_set import InvoluteContactSet
+    from rvtool.solver.replica import copy_families
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    design = rv[0]
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, design, k, 7)[0]) for k in range(2)]
+    fam = {f.name: f.set for f in copy_families(models, 2)}
+    pins, gears = fam["pins"], fam["gears"]
+    built = [e.evaluator for m in models for e in m.contact_elements() if e.evaluator.name == "pins"]
+    assert len(pins.tables) == sum(len(b.tables) for b in built) > 2     # each variant's wheels' own profiles
+    assert all(any(t is u for u in pins.tables) for b in built for t in b.tables)     # taken, not sampled again
+    fresh = CycloidPinSet(pins.meshes, pins.n_bodies, samples_per_tooth=pins.samples_per_tooth, search=pins.search,
+                          search_band=pins.search_band)
+    assert fresh.window == pins.window
+    np.testing.assert_array_equal(fresh.fparams, pins.fparams)
+    np.testing.assert_array_equal(fresh.iparams, pins.iparams)
+    for a, b in zip(fresh.tables, pins.tables):
+        for x, y in zip(a, b):
+            np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+    g = InvoluteContactSet(gears.meshes, gears.n_bodies)
+    np.testing.assert_array_equal(g.fparams, gears.fparams)
+    assert dataclasses.is_dataclass(pins.meshes[0])
+
+
+def _same_set(old, new):
+    """Every attribute of two sets equal (arrays bit for bit, kernels and assemblers by their index maps)."""
+    assert set(vars(old)) == set(vars(new)), set(vars(old)) ^ set(vars(new))
+    for k, v in vars(old).items():
+        w = getattr(new, k)
+        if isinstance(v, np.ndarray):
+            assert v.dtype == w.dtype and np.array_equal(v, w), k
+        elif hasattr(v, "tocsr"):                                   # a sparse matrix
+            assert v.shape == w.shape and (v != w).nnz == 0, k
+        elif isinstance(v, tuple) and v and isinstance(v[0], np.ndarray):
+            for x, y in zip(v, w):
+                np.testing.assert_array_equal(x, y)
+        elif isinstance(v, (tuple, str, int, float, bool, dict, list)) or v is None:
+            assert type(v) is type(w), k
+            if not (isinstance(v, (tuple, list)) and v and isinstance(v[0], tuple)):
+                assert v == w, k
+    if hasattr(old, "assembler"):
+        np.testing.assert_array_equal(old.assembler.index, new.assembler.index)
+
+
+def test_copied_sets_equal_sets_built_from_the_shifted_renamed_members(rv):
+    """copy_families concatenates the variants' built rows (bearings, cycloid pins, involute pairs)
+    instead of building the B-copy set from the renamed, shifted mountings and meshes: every
+    attribute equals the built set's."""
+    from rvtool.solver.replica import _renamed, _shift, copy_families
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, rv[0], k, 11)[0]) for k in range(3)]
+    nb = len(models[0].body_names)
+    fam = {f.name: f.set for f in copy_families(models, 3)}
+    checked = 0
+    for name, s_new in fam.items():
+        sets = [next(e.evaluator for e in m.contact_elements() if e.evaluator.name == name) for m in models]
+        s = sets[0]
+        kind = type(s).__name__
+        if kind in ("BearingSet", "TaperedBearingSet"):
+            members = [_renamed(m, c, inner=_shift(m.inner, c * nb), outer=_shift(m.outer, c * nb))
+                       for c, sc in enumerate(sets) for m in sc.mountings]
+            old = type(s)(members, 3 * nb, name=s.name, backend=s.backend)
+        elif kind == "CycloidPinSet":
+            members = [_renamed(m, c, wheel_body=_shift(m.wheel_body, c * nb), pin_body=_shift(m.pin_body, c * nb))
+                       for c, sc in enumerate(sets) for m in sc.meshes]
+            old = type(s)(members, 3 * nb, samples_per_tooth=s.samples_per_tooth, search=s.search,
+                          search_band=s.search_band, name=s.name)
+            assert len(old.tables) == len(s_new.tables) == 6           # 3 variants x 2 wheels
+            for a, b in zip(old.tables, s_new.tables):
+                for x, y in zip(a, b):
+                    np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+        elif kind == "InvoluteContactSet":
+            members = [_renamed(m, c, body_a=_shift(m.body_a, c * nb), body_b=_shift(m.body_b, c * nb))
+                       for c, sc in enumerate(sets) for m in sc.meshes]
+            old = type(s)(members, 3 * nb, name=s.name)
+            assert old.gap_offset_ids == s_new.gap_offset_ids
+        else:
+            continue
+        _same_set(old, s_new)
+        checked += 1
+    assert checked == 5                             # eccentric, crank (tapered) and main bearings, pins, gears
+
+
+def test_copies_take_the_built_rows_not_a_slow_state_offset(rv):
+    """A built set's slow-state gap offsets (thermal, wear) are not part of its copy: the
+    concatenated copy holds the built rows, as a set built from the members would."""
+    from rvtool.solver.replica import copy_families
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, rv[0], k, 13)[0]) for k in range(2)]
+    before = {f.name: np.array(f.set.fparams if hasattr(f.set, "fparams") else f.set.lamina_fp)
+              for f in copy_families(models, 2)}
+    rows = lambda s: np.array(s.fparams if hasattr(s, "fparams") else s.lamina_fp)
+    changed = 0
+    for el in models[0].contact_elements():
+        s = el.evaluator
+        if callable(getattr(s, "set_gap_offsets", None)) and s.name != "gears":
+            built = rows(s)
+            s.set_gap_offsets(np.full(len(s.ids), 1e-6))
+            changed += int(not np.array_equal(rows(s), built))
+    assert changed >= 3                               # pins, bearings, tapered rows carry an offset now
+    after = {f.name: np.array(f.set.fparams if hasattr(f.set, "fparams") else f.set.lamina_fp)
+             for f in copy_families(models, 2)}
+    for name in before:
+        np.testing.assert_array_equal(after[name], before[name], err_msg=name)
+
+
+def test_variant_snapshots_give_the_models_figures(rv):
+    """device_rows_variants on pickled ModelSnapshots (what prepare_variant_models' workers send)
+    gives the TE and lost motion of the built models bit for bit; a snapshot builds its model only
+    where Exudyn takes over (real_model)."""
+    import pickle
+    from rvtool.batched.device_rows_variants import device_rows_variants, prepare_variant_models
+    from rvtool.solver.model_snapshot import ModelSnapshot, real_model
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    design = rv[0]
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    designs = [sample_rv_design(tol, design, k, 17)[0] for k in range(2)]
+    models = [rvtool.build(d) for d in designs]
+    snaps = [pickle.loads(pickle.dumps(ModelSnapshot(m, d))) for m, d in zip(models, designs)]
+    angles = np.linspace(0.0, 0.4, 3)
+    kw = dict(torque=design.rated_torque, input_angles=angles, lost_motion_level=0.03 * design.rated_torque)
+    a = device_rows_variants(models, **kw)
+    b = device_rows_variants(snaps, **kw)
+    np.testing.assert_array_equal(b.te, a.te)
+    np.testing.assert_array_equal(b.lost_motion_rad, a.lost_motion_rad)
+    assert b.exudyn_points == a.exudyn_points == 0
+    assert not snaps[0].is_built                             # nothing handed over: no model built
+    m0 = real_model(snaps[0])
+    assert snaps[0].is_built and real_model(snaps[0]) is m0
+    np.testing.assert_array_equal(np.asarray(m0.reference), np.asarray(models[0].reference))
+    # the pool path: two spawned workers build and send the snapshots
+    pooled = prepare_variant_models(designs, workers=2)
+    assert all(isinstance(s, ModelSnapshot) for s in pooled)
+    c = device_rows_variants(pooled, **kw)
+    np.testing.assert_array_equal(c.te, a.te)
+
+
+def test_variant_kinematics_come_from_one_call_per_copy_bit_for_bit(rv):
+    """prime_kinematics evaluates each variant copy's kinematics once for all angles; kinematic()
+    reads them: equal to each copy's own call at each angle, for any assignment of copies."""
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    models = [rvtool.build(sample_rv_design(tol, rv[0], k, 19)[0]) for k in range(3)]
+    nw = DeviceRowNewton(models)
+    a = np.array([0.3, 0.1, 0.3])
+    cp = np.array([2, 0, 1])
+    got = nw.kinematic(a, cp)
+    want = np.array([(models[c].kinematics.poses(a[p:p + 1])[0] - models[c].reference).reshape(-1)
+                     for p, c in enumerate(cp)])
+    want[:, nw.held] = 0.0
+    want[:, nw.input_local] = a
+    np.testing.assert_array_equal(got, want)
+    assert not np.array_equal(got[0], got[1])                 # the angles are told apart

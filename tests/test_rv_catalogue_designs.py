@@ -145,9 +145,53 @@ def test_assumptions_commit_holds_todays_assumed_values(name):
     then = tomllib.loads(_git("show", f"{sha}:{rel}"))
     then_assumed = tomllib.loads(_git("show", f"{sha}:{rel.with_name(f'{name}_assumed.toml')}"))
     now, now_assumed = _toml(name), _toml(f"{name}_assumed")
-    assert then_assumed["assumed"] == now_assumed["assumed"]
+    # a range may differ from the commit's only where a [[correction]] of an invalid range names its old bounds
+    corrected = {c["key"]: c for c in now_assumed.get("correction", [])}
+    then_by_key = {a["key"]: a for a in then_assumed["assumed"]}
+    assert set(then_by_key) == {a["key"] for a in now_assumed["assumed"]}
+    for a in now_assumed["assumed"]:
+        t = then_by_key[a["key"]]
+        if a["key"] in corrected:
+            c = corrected[a["key"]]
+            assert (t["low"], t["high"]) == (c["old_low"], c["old_high"]), a["key"]
+            assert (a["low"] + a["high"]) / 2 == (t["low"] + t["high"]) / 2, f"{a['key']}: a correction keeps the middle"
+            assert c["reason"].strip()
+        else:
+            assert t == a, a["key"]
     for a in now_assumed["assumed"]:
         assert _value(then, a["key"]) == _value(now, a["key"]), a["key"]
+
+
+@pytest.mark.parametrize("name", ASSUMED)
+def test_tapered_row_angle_ranges_are_jointly_valid(name):
+    """Every combination of the assumed cup and cone angle bounds is a tapered row (cone < cup: roller half-angle
+    > 0); the rv80e ranges [12, 16] and [9, 13] were not (3 of 64 LHS samples invalid), corrected in
+    rv80e_assumed.toml. Corners suffice: validity is cone < cup and cup - cone <= 20 deg, linear in both."""
+    from rvtool.bearings.tapered import TaperedRollerBearing as TaperedRow
+    from rvtool.designs.catalogue import get_key
+    ranges = {a["key"]: (a["low"], a["high"]) for a in _toml(f"{name}_assumed")["assumed"]}
+    rows = {k.rsplit(".", 1)[0] for k in ranges if k.endswith(("cup_angle_deg", "cone_angle_deg"))}
+    if not rows:
+        pytest.skip("no assumed tapered-row angles")
+    table = _toml(name)
+    for row in rows:
+        cup = ranges.get(f"{row}.cup_angle_deg", (get_key(table, f"{row}.cup_angle_deg"),) * 2)
+        cone = ranges.get(f"{row}.cone_angle_deg", (get_key(table, f"{row}.cone_angle_deg"),) * 2)
+        base = get_key(table, row)
+        for a in cup:
+            for b in cone:
+                TaperedRow(n_rollers=base["n_rollers"], pitch_diameter=base["pitch_diameter"],
+                           roller_diameter=base["roller_diameter"], roller_length=base["roller_length"],
+                           cup_angle=math.radians(a), cone_angle=math.radians(b))
+
+
+def test_old_rv80e_cup_cone_ranges_were_invalid():
+    """The check above can fail: the rv80e corner (cup 12, cone 13 deg) of the old ranges is refused by name."""
+    from rvtool.bearings.tapered import TaperedRollerBearing as TaperedRow
+    from rvtool.errors import RvtoolInputError
+    with pytest.raises(RvtoolInputError, match="cone_angle_deg"):
+        TaperedRow(n_rollers=15, pitch_diameter=0.0385, roller_diameter=0.0065, roller_length=0.0115,
+                   cup_angle=math.radians(12.0), cone_angle=math.radians(13.0))
 
 
 @pytest.mark.slow

@@ -73,6 +73,11 @@ def test_quick_validate_rv40e_end_to_end(tmp_path):
     assert out["central"]["repeat_arcmin"] < V.REPEAT_TOLERANCE_ARCMIN
     assert len(out["assumptions_commit"]) == 40
     assert abs(out["ratio_variant"]["rel_diff"]) < 0.05          # one rigidity per frame (measured +0.57 %)
+    # issue 30: the file keeps the rigid carrier; the ported carrier's share is the side figure of the budget
+    pc = out["compliance_budget"]["with_ported_carrier"]
+    assert out["compliance_budget"]["configuration"]["carrier.body"] == "rigid" and "carrier" not in \
+        out["compliance_budget"]["shares"]
+    assert 0.05 < pc["carrier_share"] < 0.9 and pc["K_t_Nm_per_arcmin"] < out["compliance_budget"]["K_t_Nm_per_arcmin"]
     for f in ("results.json", "report.html", "hysteresis.png"):
         assert os.path.isfile(tmp_path / f), f
     data = json.loads((tmp_path / "results.json").read_text())

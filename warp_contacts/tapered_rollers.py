@@ -225,6 +225,15 @@ class TaperedRollerKernel:
         assert fp.shape == tuple(self._lamina_fp.shape)
         self._lamina_fp.assign(fp)
 
+    def device_array(self, name):
+        """The device array of input or output ``name`` (q, qdot, psi, psidot; f, dfdq, dfdv, dfdpsi,
+        dfdpsidot, rib, lam) of the recorded launch."""
+        return self._buf.dev[name]
+
+    def launch(self):
+        """Replay the recorded launch on the device arrays as they are (no transfer)."""
+        self._cmd.launch()
+
     def evaluate(self, q, qdot, psi, psidot):
         """Same results as :func:`tapered_rollers_ref.evaluate` (NumPy arrays owned by this object,
         overwritten by the next call)."""

@@ -26,8 +26,8 @@ Correctness (``passed``): per variant, the device's and the replica's TE against
 1e-6 arcsec and the device's lost motion within 1e-6 arcmin (issue 31's targets), failed variants
 <= MAX_FAILURE_SHARE x B (issue 31: < 0.2 %). Speed is reported, not judged: variants/s of each
 backend (without the shared build), the device's speed-ups, and where the device's time goes
-(copying the families, kernel launches, the rows' block scatter, the host Newton step, the rest:
-kinematics and bookkeeping, Exudyn fallbacks). --device cuda runs the device's kernels on a GPU.
+(copying the families, kernel launches, the rows' block scatter, the Newton step (a device kernel
+by default), the rest: kinematics and bookkeeping, Exudyn fallbacks). --device cuda runs the device's kernels on a GPU.
 """
 import time
 

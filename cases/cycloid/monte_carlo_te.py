@@ -10,7 +10,8 @@ variants is one Exudyn system (rvtool.batched), chunks side by side in a process
 all cores; --mode pool: one Exudyn system per variant in the pool (chunks of 10); --mode
 device: the TE and the lost motion of each chunk on the device Newton (--device cpu: chunks of
 CHUNK_DEVICE side by side in the pool; cuda:0: chunks of CHUNK_DEVICE_GPU one after another;
---chunk overrides), copies that fail there on the per-variant Exudyn path; --mode auto: the
+--chunk overrides; --gpus N: one Dask worker per GPU, each taking the next chunk,
+rvtool.variants.multi_device), copies that fail there on the per-variant Exudyn path; --mode auto: the
 fastest measured path (rvtool.variants.montecarlo.resolve_mode: the device Newton, on a GPU
 if present). ``te_path`` / ``fallback_copies`` and ``lost_motion_path`` /
 ``lost_motion_fallback_copies`` say which paths ran and how many TE points and lost-motion
@@ -78,6 +79,9 @@ def _extra(parser):
                              "Newton (rvtool.solver.device_newton); auto: the fastest measured (device; on a GPU if "
                              "present) (default batched)")
     parser.add_argument("--device", default="cpu", help="device of the batched / device modes (cpu, cuda:0, auto)")
+    parser.add_argument("--gpus", type=int, default=None,
+                        help="--mode device: one Dask worker per device, the first N GPUs on cuda (N cpu workers on "
+                             "cpu), each taking the next chunk (rvtool.variants.multi_device)")
     parser.add_argument("--chunk", type=int, default=None,
                         help=f"variants per chunk (default: batched {CHUNK_BATCHED}, pool 10, device {CHUNK_DEVICE} on "
                              f"cpu, {CHUNK_DEVICE_GPU} on a GPU)")
@@ -146,8 +150,11 @@ def main(argv=None):
     mode, device = resolve_mode(args.mode, args.device)
     chunk = args.chunk or (CHUNK_BATCHED if mode == "batched" else
                            (CHUNK_DEVICE if device == "cpu" else CHUNK_DEVICE_GPU) if mode == "device" else 10)
+    devices = None
+    if args.gpus and mode == "device":
+        devices = args.gpus if str(device).startswith("cuda") else ("cpu",) * args.gpus
     settings = MonteCarloSettings(n_variants=n, seed=SEED, chunk_size=chunk, mode=mode, workers=args.workers,
-                                  device=device)
+                                  device=device, devices=devices)
     with progress.reporting("auto"):
         res = run_monte_carlo(design, tol, protocol, settings, chunk_dir, build_kw=build_kw,
                               progress=progress.callback("Monte Carlo", unit="variant"))
@@ -265,7 +272,7 @@ def main(argv=None):
     casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={
         "variants": n, "seed": SEED, "tolerances": os.path.relpath(TOLERANCES, HERE), "protocol": repr(protocol),
-        "mode": args.mode, "device": args.device, "chunk_size": settings.chunk_size, "workers": settings.workers or os.cpu_count(), "build": build_kw,
+        "mode": args.mode, "device": args.device, "gpus": args.gpus, "chunk_size": settings.chunk_size, "workers": settings.workers or os.cpu_count(), "build": build_kw,
         "quick": args.quick}, wall_s=wall)
 
 

@@ -46,7 +46,8 @@ def main(argv=None):
         kw = {}
         if args.quick:
             if designs.assumed_of(name):
-                kw = {"band": False, "variant": False}
+                # the TE row against a measurement runs as its own case under --quick (te_measured_rv80e)
+                kw = {"band": False, "variant": False, "te": False}
             elif name == "rv40e":
                 kw = {"assumed": rv40e_clearance_ranges(args.out)}
         out = V.validate(name, quick=args.quick, out_dir=f"{args.out}/{name}", **kw)
@@ -58,7 +59,8 @@ def main(argv=None):
                             "ratio_variant": out["ratio_variant"], "compliance_budget": out["compliance_budget"],
                             "bearing_lives": out["bearing_lives"], "uncertainty_note": out["uncertainty_note"],
                             "uncertainty": {k: v for k, v in (out["uncertainty"] or {}).items() if k != "U"},
-                            "settings": out["settings"], "report": f"{name}/report.html"}
+                            "settings": out["settings"], "report": f"{name}/report.html",
+                            "te_measured": out.get("te_measured")}
     casekit.write_results(args.out, {"designs": per_design, "passed": bool(passed and per_design),
                                      "criteria": "machinery ran (no failed sample), no NaN, loops repeat within "
                                                  f"{V.REPEAT_TOLERANCE_ARCMIN:g} arcmin, band contains central "

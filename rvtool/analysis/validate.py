@@ -257,10 +257,34 @@ MOMENT_SAMPLES, QUICK_MOMENT_SAMPLES = 16, 4
 """Latin-hypercube samples of the moment-rigidity band over the main bearing's `assumed` ranges."""
 
 
+def tilting_bodies_rigidity(design, test):
+    """The moment rigidity [N m/arcmin] with the wheels and the cranks tilting as well
+    (``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"``, issue 32): the moment then also
+    passes through the cranks and wheels to the ring pins. Returns {"bodies",
+    "moment_rigidity_Nm_per_arcmin", "convention"} or {"bodies", "error"} (a side figure)."""
+    from ..assembly import build
+    from ..assembly.spec import replace as replace_design
+    from ..errors import RvtoolInputError
+    from ..protocols.moment_rigidity import moment_rigidity
+    bodies = {"carrier_coordinates": "spatial", "wheel_coordinates": "spatial", "crank_coordinates": "spatial"}
+    try:
+        try:
+            model = build(replace_design(design, bodies=bodies))
+        except RvtoolInputError:       # a design whose cranks cannot tilt (named in the builder): planar cranks
+            bodies.pop("crank_coordinates")
+            model = build(replace_design(design, bodies=bodies))
+        res = moment_rigidity(model, test)
+        return {"bodies": sorted(bodies), "moment_rigidity_Nm_per_arcmin": res.rigidity_arcmin,
+                "convention": res.convention}
+    except Exception as exc:           # reported, not fatal
+        return {"bodies": sorted(bodies), "error": f"{type(exc).__name__}: {exc}"}
+
+
 def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     """The moment-rigidity row (issue 32): :func:`rvtool.protocols.moment_rigidity.moment_rigidity`
     on the design with a spatial carrier (a ported housing replaced by the rigid one: the main-bearing
-    seats are grounded in both), the reference moment the catalogue's allowable moment (else T_R),
+    seats are grounded in both; a ported carrier likewise by the rigid one: its seats are planar ports,
+    :mod:`rvtool.assembly.carrier`), the reference moment the catalogue's allowable moment (else T_R),
     the band over the main bearing's `assumed` ranges (bearing alone, rigid housing). Returns
     {"rows", "result", "band", "reference_moment_Nm", "note"}; an error is reported in the row, not raised
     (a side figure, as the ratio variant)."""
@@ -274,6 +298,8 @@ def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
     try:
         d = design if getattr(design.housing, "model", "rigid") != "ports" else replace_design(design,
                                                                                                housing={"model": "rigid"})
+        if getattr(getattr(d, "carrier", None), "body", "rigid") != "rigid":
+            d = replace_design(d, carrier={"body": "rigid"})
         test = MomentRigidityTest(reference_moment=m_ref, axial_force=2000.0)
         res = moment_rigidity(build(spatial_design(d)), test)
         band = None
@@ -281,7 +307,7 @@ def moment_rigidity_figure(design, catalogue, assumed, *, quick=False):
             band = main_bearing_band(d.main_bearing, assumed, test,
                                      samples=QUICK_MOMENT_SAMPLES if quick else MOMENT_SAMPLES)
         value, note = res.rigidity_arcmin, f"{res.convention}; {ref_note}; axial stiffness {res.axial_stiffness:.4g} N/m"
-        detail = {"result": res.to_dict(), "band": band}
+        detail = {"result": res.to_dict(), "band": band, "tilting_bodies": tilting_bodies_rigidity(d, test)}
     except Exception as exc:           # reported in the table, not fatal
         value, note, band = None, f"not computed: {type(exc).__name__}: {exc}", None
         detail = {"result": None, "band": None, "error": note}
@@ -348,7 +374,7 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             assumed=None, band=True, variant=True, log=print):
+             assumed=None, band=True, variant=True, te=True, log=print):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
@@ -356,7 +382,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     many keys, the most important first by :func:`screening` (None: every key; quick:
     :data:`QUICK_TORNADO_KEYS`); assumed: a ranges file to use instead of the shipped
     ``<design>_assumed.toml`` (its values must be the design's middles too); band, variant: False
-    skips the uncertainty band or the ratio variant (said so in the results)."""
+    skips the uncertainty band or the ratio variant (said so in the results); te: False skips the TE
+    comparison with a published measurement (:mod:`rvtool.analysis.validate_te`; it runs where the design
+    ships a ``<design>_measured.toml`` and a tolerance file)."""
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
     want_band, want_variant = bool(band), bool(variant)
@@ -408,6 +436,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     life_angles = [k * span / n_life for k in range(n_life)]
     life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
     lives = bearing_lives(d, model, life_states, catalogue)
+    from .budget import carrier_share_figure
+    carrier_side = carrier_share_figure(d, T_R, quick=quick)
     log(f"validate {design}: moment rigidity (spatial carrier)")
     moment = moment_rigidity_figure(d, catalogue, assumed, quick=quick)
     # ratio variant
@@ -497,6 +527,12 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
     rows += moment["rows"]
+    te_measured = _te_measured(design, d, T_R, quick=quick, want=te, log=log)
+    rows += (te_measured or {}).get("rows", [])
+    log(f"validate {design}: efficiency and no-load running torque (rvtool.analysis.losses)")
+    from .losses import validate_efficiency
+    efficiency = validate_efficiency(design, d, quick=quick)
+    rows += efficiency.pop("rows")
     for fam in ("eccentric_bearings", "crank_bearings"):
         vals = [v["L10_h"] for k, v in lives.items() if v["family"] == fam and v["L10_h"] is not None]
         rows += _rows("rated_life", min(vals) if vals else None, "h", catalogue,
@@ -551,7 +587,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                               "configuration": {"cranks.shaft.model": d.cranks.shaft.model if d.cranks.shaft else None,
                                                 "housing.model": getattr(d.housing, "model", None)
                                                 if d.housing else None}},
-        "ratio_variant": variant, "uncertainty": unc,
+        "ratio_variant": variant, "uncertainty": unc, "te_measured": te_measured, "efficiency": efficiency,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
                      "rigidity_points": list(rigidity_points(catalogue)[0]),
@@ -559,6 +595,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                      "repeat_tolerance_arcmin": REPEAT_TOLERANCE_ARCMIN},
         "wall_s": time.perf_counter() - t0,
     }
+    # issue 30: the carrier's switch and the ported carrier's share beside the budget of the file's switches
+    out["compliance_budget"]["configuration"]["carrier.body"] = getattr(getattr(d, "carrier", None), "body", None)
+    out["compliance_budget"]["with_ported_carrier"] = carrier_side
     out["loop"] = {"torque_Nm": central["cycles"][-1]["torque_Nm"].tolist(),
                    "angle_arcmin": (central["cycles"][-1]["angle_rad"] / RAD_PER_ARCMIN).tolist(),
                    "labels": central["cycles"][-1]["labels"],
@@ -566,6 +605,15 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     if out_dir is not None:
         write(out, out_dir, catalogue)
     return out
+
+
+def _te_measured(design, d, rated_torque, *, quick, want, log):
+    """The TE comparison with a published measurement (:func:`rvtool.analysis.validate_te.te_comparison`), None
+    where the design has no measurement or tolerance file or ``want`` is False."""
+    if not want:
+        return None
+    from .validate_te import te_comparison
+    return te_comparison(design, d, rated_torque, quick=quick, log=log)
 
 
 def checks(out):
@@ -581,6 +629,8 @@ def checks(out):
             u["band"][k] is not None
             and u["band"][k][0] - 1e-9 * abs(c[k]) <= c[k] <= u["band"][k][1] + 1e-9 * abs(c[k])
             for k in ("torsional_rigidity", "lost_motion", "hysteresis_loss")))
+    if out.get("te_measured") is not None:
+        res["te_no_failed_variant"] = out["te_measured"]["n_failed"] == 0
     return res
 
 
@@ -638,6 +688,11 @@ def write(out, out_dir, catalogue):
         fig.savefig(os.path.join(out_dir, "tornado.png"), dpi=110)
         plt.close(fig)
         plots.append("tornado.png")
+    if out.get("te_measured") is not None:
+        from .validate_te import te_plot
+        plots.append(te_plot(out["te_measured"], out_dir))
+    from .losses import efficiency_plot
+    plots += efficiency_plot(out, out_dir)
     with open(os.path.join(out_dir, "report.html"), "w") as fh:
         fh.write(report_html(out, out_dir, plots))
 
@@ -672,6 +727,10 @@ def table_text(out):
     if "rigidity" in v:
         lines.append(f"  ratio variant i = {v['ratio']:.4g}: rigidity {v['rigidity']:.4g} N m/arcmin "
                      f"({100 * v['rel_diff']:+.2f} % vs i = {v['ratio_central']:.4g})")
+    pc = out.get("compliance_budget", {}).get("with_ported_carrier")
+    if pc and "carrier_share" in pc:
+        lines.append(f"  with the ported carrier: K_t {pc['K_t_Nm_per_arcmin']:.4g} N m/arcmin at T_R, carrier share "
+                     f"{100 * pc['carrier_share']:.1f} % (tangent budget; the file keeps carrier.body = 'rigid')")
     u = out["uncertainty"]
     if u is not None and u["fraction_within_lost_motion_max"] is not None:
         lines.append(f"  {u['samples']} LHS samples: fraction within the catalogue's lost-motion maximum "
@@ -695,6 +754,8 @@ def report_html(out, out_dir, plots):
                     f'{base64.b64encode(fh.read()).decode()}">'
     extra = {k: out[k] for k in ("central", "bearing_lives", "pressures", "compliance_budget", "ratio_variant",
                                  "assumptions_commit", "settings")}
+    if out.get("te_measured") is not None:
+        extra["te_measured"] = {k: v for k, v in out["te_measured"].items() if k not in ("rows", "records")}
     if out["uncertainty"] is not None:
         extra["uncertainty"] = {k: v for k, v in out["uncertainty"].items() if k not in ("U", "figures")}
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>validate {e(out['design'])}</title></head>"

@@ -38,7 +38,7 @@ from exudyn.itemInterface import (CoordinateConstraint, LoadCoordinate, MarkerNo
 from exudyn_user_elements.contact_element import PortBodies
 
 from ..bearings.reducer import ball_rows
-from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
+from ..bearings.spec import AngularContactPair, BallBearing, CrossedRollerBearing, NeedleBearing
 from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 from ..contact.cycloid_set import (PALMGREN_EXPONENT, CycloidPinSet, WheelPinMesh, palmgren_line_coefficient,
                                      secant_line_stiffness)
@@ -272,6 +272,10 @@ class CycloidModel(ReducerModel):
             "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
                                                      2 * eb.inner_radius + eb.roller_diameter),
         }
+        if isinstance(mb, CrossedRollerBearing):
+            out["main_bearing"] = bearing_frequencies(f_out, mb.n_rollers, mb.roller_diameter, mb.pitch_diameter,
+                                                      mb.contact_angle)
+            mb = None
         for name, spec, f_ring in (("main_bearing", mb, f_out), ("input_bearing", ib, f_in)):
             if spec is not None:
                 row = ball_rows(spec)[0]
@@ -530,6 +534,9 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     if bearing_model not in ("lumped", "rolling"):
         raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
     check_lumped(design, bearing_model)
+    if isinstance(design.main_bearing, CrossedRollerBearing) and bearing_model != "rolling":
+        raise RvtoolInputError("main_bearing.kind = 'crossed_roller' with bearing_model = 'lumped': the lumped circle "
+                               "contact is a ball law; valid: build(..., bearing_model='rolling')")
     d = design
     nw = d.n_wheels
     SC = exu.SystemContainer()
@@ -569,13 +576,13 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     if d.wheels.dynamics.flexible:
         # floating flexible wheels (issue 33): pin p at wheel k on the virtual body nw + 2 + k z_b + p
         from .flexible_wheels import FlexibleWheels, check_flexible_wheels
-        check_flexible_wheels(d, bearing_model, d.bodies.spatial_flange)
+        check_flexible_wheels(d, bearing_model, d.bodies.spatial_flange or d.bodies.spatial_wheels)
         flex = FlexibleWheels(mbs, d, mg)
         meshes = [dataclasses.replace(m, pin_bodies=flex.pin_bodies(k)) for k, m in enumerate(meshes)]
         n_pin_bodies = flex.n_pin_bodies
     pin_set = CycloidPinSet(meshes, n_pin_bodies, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
                             precision=precision, device=device, name="pins", search=d.wheels.search)
-    tilt = spatial_flange(mbs, d, bearing_model, housing, regularization) if d.bodies.spatial_flange else None
+    tilt, rows = spatial_flange(mbs, d, bearing_model, housing, regularization)
     structure = housing if tilt is None else tilt
     element = ContactElements(mbs, nodes, mode, structure=structure if flex is None else flex.coordinates)
     host = element.host
@@ -584,7 +591,13 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     if C_ring is not None:
         from ..contact.pin_closure import ElasticPinClosure
         pin_eval = ElasticPinClosure(pin_set, n_bodies=nw + 2, carrier=GROUND, station_compliance=C_ring, station=st)
-    elements = {"pins": element(pin_eval, ports=ports if flex is None else flex.ports("pins"))}
+    if d.bodies.spatial_wheels:
+        pin_eval = skewed(pin_eval, d, tilt, rows)
+    if flex is not None:
+        pin_ports = flex.ports("pins")
+    else:
+        pin_ports = ports if tilt is None else (tilt if pin_eval.n_bodies > nw + 2 else None)
+    elements = {"pins": element(pin_eval, ports=pin_ports)}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
     from ..output_pins.evaluator import OutputPinEvaluator
@@ -608,19 +621,35 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                                    wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2 + st.size, backend=backend,
                                    precision=precision, device=device, flange_bodies=nw + 2 + st.ravel())
         op_eval = ElasticPinClosure(inner, n_bodies=nw + 2, carrier=nw + 1, station_compliance=C_out, station=st)
-    elements["output_pins"] = element(op_eval, **({} if flex is None else {"ports": flex.ports("output_pins")}))
+    if d.bodies.spatial_wheels:
+        op_eval = skewed(op_eval, d, tilt, rows)
+    elements["output_pins"] = element(op_eval, ports=flex.ports("output_pins") if flex is not None else
+                                      (tilt if op_eval.n_bodies > nw + 2 else None))
 
     # -- bearings -----------------------------------------------------------------
     if bearing_model == "rolling":
         from ..bearings.reducer import main_bearing_mounting, rolling_bearing_sets
         for name, ev in rolling_bearing_sets(d, nw, backend=backend, precision=precision, device=device,
-                                             main=tilt is None).items():
+                                             main=not d.bodies.spatial_flange).items():
+            if d.bodies.spatial_wheels:
+                # the eccentric bearings (on the wheels) sliced with the tilts, an element of their own; the
+                # input (and planar main) bearings stay one planar set
+                from ..bearings.set import BearingSet
+                ecc = [mt for mt in ev.mountings if mt.outer in rows]
+                rest = [mt for mt in ev.mountings if mt.outer not in rows]
+                opts = dict(backend=backend, precision=precision, device=device)
+                elements["eccentric_bearings"] = element(skewed(BearingSet(ecc, nw + 2, name="eccentric_bearings", **opts),
+                                                                d, tilt, rows), ports=tilt)
+                if rest:
+                    elements[name] = element(BearingSet(rest, nw + 2, name=name, **opts))
+                continue
             elements[name] = element(ev)
-        if tilt is not None:
-            # the main bearing on the flange's retained axial and tilt coordinates (pose row nw + 2)
+        if d.bodies.spatial_flange:
+            # the main bearing on the flange's retained axial and tilt coordinates (pose row nw + 2 + its row)
             from ..bearings.spatial_set import SpatialBearingSet
-            elements["main_bearing"] = element(SpatialBearingSet([main_bearing_mounting(d, nw)], nw + 3, {nw + 1: nw + 2},
-                                                              name="main_bearing"), ports=tilt)
+            elements["main_bearing"] = element(SpatialBearingSet([main_bearing_mounting(d, nw)], nw + 2 + tilt.n_virtual,
+                                                                 {nw + 1: nw + 2 + rows[nw + 1]}, name="main_bearing"),
+                                               ports=tilt)
     else:
         contacts = tuple(lumped_bearing_contacts(d))
         if flex is None:
@@ -652,28 +681,66 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                         else {"wheels": flex.coordinates},
                         mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
                         housing=housing, contact_host=host, family_specs=family_specs(d, meshes),
-                        material=d.material, carrier_tilt=tilt, flexible=flex)
+                        material=d.material, carrier_tilt=tilt if d.bodies.spatial_flange else None,
+                        body_tilts=tilt, flexible=flex)
+
+
+#: main bearings whose rows resolve a spatial flange (:mod:`rvtool.bearings.spatial_set`)
+SPATIAL_MAIN_BEARINGS = (BallBearing, AngularContactPair, CrossedRollerBearing)
 
 
 def spatial_flange(mbs, design, bearing_model, housing, regularization):
-    """The flange's retained axial and tilt coordinates (``bodies.flange_coordinates = "spatial"``,
-    issue 32; :class:`~exudyn_user_elements.out_of_plane.RetainedTilt` with the flange's mass, transverse
-    inertia and the builder's regularization springs), after checking what they need."""
+    """The retained axial and tilt coordinates of the spatial bodies (issue 32): the flange
+    (``bodies.flange_coordinates = "spatial"``) and the wheels (``bodies.wheel_coordinates``), in that
+    order, as one :class:`~exudyn_user_elements.out_of_plane.RetainedTilt` (masses, transverse
+    inertias, the builder's regularization springs), after checking what they need. Returns
+    (RetainedTilt or None, {body index: row})."""
     from exudyn_user_elements.out_of_plane import RetainedTilt
     d = design
+    b, nw = d.bodies, d.n_wheels
+    bodies = []
+    if b.spatial_flange:
+        bodies.append(("flange", nw + 1, b.flange_mass, b.tilt_inertia))
+    if b.spatial_wheels:
+        m_w, J_w = _mass_wheel(d)
+        J_t = J_w / 2 if b.wheel_tilt_inertia is None else b.wheel_tilt_inertia
+        bodies += [(f"wheel{k}", 1 + k, m_w, J_t) for k in range(nw)]
+    if not bodies:
+        return None, {}
+    said = " / ".join(f"bodies.{k} = 'spatial'" for k, on in (("flange_coordinates", b.spatial_flange),
+                                                             ("wheel_coordinates", b.spatial_wheels)) if on)
     if bearing_model != "rolling":
-        raise RvtoolInputError(f"bodies.flange_coordinates = 'spatial' with bearing_model = {bearing_model!r}: the "
-                               "lumped main bearing has no rows; valid: build(..., bearing_model='rolling')")
-    if not isinstance(d.main_bearing, (BallBearing, AngularContactPair)):
-        raise RvtoolInputError("bodies.flange_coordinates = 'spatial' needs a ball main bearing; valid: "
-                               "main_bearing.kind = 'angular_contact_pair', 'angular_contact' or 'deep_groove'")
+        raise RvtoolInputError(f"{said} with bearing_model = {bearing_model!r}: the lumped bearings have no rows; "
+                               "valid: build(..., bearing_model='rolling')")
+    if b.spatial_flange and not isinstance(d.main_bearing, SPATIAL_MAIN_BEARINGS):
+        raise RvtoolInputError("bodies.flange_coordinates = 'spatial' needs a ball or crossed-roller main bearing; "
+                               "valid: main_bearing.kind = 'angular_contact_pair', 'angular_contact', 'deep_groove' "
+                               "or 'crossed_roller'")
     if housing is not None:
-        raise RvtoolInputError("bodies.flange_coordinates = 'spatial' with housing.model = 'ports' is not implemented "
-                               "(the merged element carries one structure); valid: housing.model = 'rigid'")
+        raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the merged element carries "
+                               "one structure); valid: housing.model = 'rigid'")
     if d.bearing_friction.model != "none":
-        raise RvtoolInputError(f"bodies.flange_coordinates = 'spatial' with bearing_friction.model = "
-                               f"{d.bearing_friction.model!r} is not implemented; valid: 'none'")
-    return RetainedTilt(mbs, d.bodies.flange_mass, d.bodies.tilt_inertia, regularization, name="flange_tilt")
+        raise RvtoolInputError(f"{said} with bearing_friction.model = {d.bearing_friction.model!r} is not "
+                               "implemented; valid: 'none'")
+    names = tuple(n for n, *_ in bodies)
+    tilt = RetainedTilt(mbs, [m for *_, m, _ in bodies], [J for *_, J in bodies], regularization,
+                        name="flange_tilt" if names == ("flange",) else "body_tilt", names=names)
+    return tilt, {i: r for r, (_, i, _, _) in enumerate(bodies)}
+
+
+def skewed(family, design, tilt, rows):
+    """``family`` (a planar evaluator over the bodies) across the wheel width with the tilts of the
+    spatial wheels (:class:`~rvtool.contact.skew.SkewSlices`, Eq. (skew): ``bodies.tilt_slices``
+    equal slices, each wheel's arm the slice's station about its mid-plane); unchanged without
+    spatial wheels."""
+    from ..contact.skew import SkewSlices, slice_stations
+    tilted = {i: r for i, r in rows.items() if 1 <= i <= design.n_wheels}
+    if not tilted:
+        return family
+    z, w = slice_stations(design.wheels.width, design.bodies.tilt_slices)
+    arms = np.zeros((len(w), family.n_bodies))
+    arms[:, list(tilted)] = z[:, None]
+    return SkewSlices(family, tilt.n_virtual, tilted, arms, w, name=family.name)
 
 
 def family_specs(design, meshes):
@@ -725,11 +792,13 @@ def contact_families(elements, mesh=("pins", Family.PINS)):
     name, family = mesh
     fams = {family: (name, np.arange(len(elements[name].ids))),
             Family.OUTPUT_PINS: ("output_pins", np.arange(len(elements["output_pins"].ids)))}
-    ids = elements["bearings"].ids
+    ids = elements["bearings"].ids if "bearings" in elements else ()
     for prefix, fam in BEARING_FAMILIES.items():
         rows = np.array([i for i, cid in enumerate(ids) if cid.startswith(prefix)], dtype=int)
         if len(rows):
             fams[fam] = ("bearings", rows)
+    if "eccentric_bearings" in elements:    # spatial wheels: the eccentric bearings sliced, an element of their own
+        fams[Family.ECCENTRIC_BEARINGS] = ("eccentric_bearings", np.arange(len(elements["eccentric_bearings"].ids)))
     if "main_bearing" in elements:          # a spatial flange's main bearing, an element of its own
         fams[Family.MAIN_BEARINGS] = ("main_bearing", np.arange(len(elements["main_bearing"].ids)))
     return fams

@@ -312,7 +312,7 @@ def check_flexible_wheels(design, bearing_model, tilt):
         reasons.append(f"bearing_model = {bearing_model!r} (the bore couples to the lumped eccentric bearing; valid: "
                        "build(..., bearing_model='lumped'))")
     if tilt:
-        reasons.append("bodies.flange_coordinates = 'spatial' (valid: 'planar')")
+        reasons.append("bodies.flange_coordinates or bodies.wheel_coordinates = 'spatial' (valid: 'planar')")
     if d.bearing_friction.model != "none":
         reasons.append(f"bearing_friction.model = {d.bearing_friction.model!r} (valid: 'none')")
     if reasons:

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..bearings.spec import AngularContactPair, BallBearing, NeedleBearing
+from ..bearings.spec import AngularContactPair, BallBearing, CrossedRollerBearing, NeedleBearing
 from ..geometry.cycloid import CycloidProfile
 from ..output_pins.spec import OutputPinMechanism
 from ..errors import RvtoolInputError
@@ -241,7 +241,13 @@ class Bodies:
     ``"spatial"`` (also z, gamma_x, gamma_y on the main-bearing rows, issue 32; needs rolling-element
     bearings, ``build(..., bearing_model="rolling")``, and a ball main bearing).
     flange_tilt_inertia: transverse inertia [kg m^2] of the flange (dynamic runs of a spatial flange);
-    None: half the polar inertia (a thin disc, assumed)."""
+    None: half the polar inertia (a thin disc, assumed).
+    wheel_coordinates: ``"planar"`` (default) or ``"spatial"``: each wheel also retains its axial
+    translation and two tilts about its mid-plane; the ring-pin mesh, the output pins and the
+    eccentric bearing on it are sliced across the wheel width with the relative tilt (Eq. (skew),
+    :class:`rvtool.contact.skew.SkewSlices`; needs ``build(..., bearing_model="rolling")``).
+    tilt_slices: width slices of every family on a spatial wheel [-]. wheel_tilt_inertia: transverse
+    inertia [kg m^2] of a wheel (None: a thin disc, half its polar inertia, assumed)."""
     shaft: tuple = COORDS
     wheel: tuple = COORDS
     flange: tuple = COORDS
@@ -251,6 +257,9 @@ class Bodies:
     flange_inertia: float = 1.5e-3
     flange_coordinates: str = "planar"
     flange_tilt_inertia: float | None = None
+    wheel_coordinates: str = "planar"
+    tilt_slices: int = 2
+    wheel_tilt_inertia: float | None = None
 
     def __post_init__(self):
         for nm in ("shaft", "wheel", "flange"):
@@ -262,6 +271,19 @@ class Bodies:
                                    "['planar', 'spatial']")
         if self.flange_tilt_inertia is not None:
             check_positive("bodies.flange_tilt_inertia", self.flange_tilt_inertia)
+        if self.wheel_coordinates not in ("planar", "spatial"):
+            raise RvtoolInputError(f"bodies.wheel_coordinates = {self.wheel_coordinates!r}; valid choices are "
+                                   "['planar', 'spatial']")
+        if isinstance(self.tilt_slices, bool) or not isinstance(self.tilt_slices, int) or not 2 <= self.tilt_slices <= 32:
+            raise RvtoolInputError(f"bodies.tilt_slices = {self.tilt_slices!r} is outside the valid range [2, 32] "
+                                   "(integer)")
+        if self.wheel_tilt_inertia is not None:
+            check_positive("bodies.wheel_tilt_inertia", self.wheel_tilt_inertia)
+
+    @property
+    def spatial_wheels(self):
+        """True where the wheels retain their axial and tilt coordinates."""
+        return self.wheel_coordinates == "spatial"
 
     @property
     def spatial_flange(self):
@@ -338,7 +360,7 @@ class CycloidDesign:
     pin_contact: PinContact
     output_pins: OutputPinMechanism
     eccentric_bearing: NeedleBearing
-    main_bearing: BallBearing | AngularContactPair | None
+    main_bearing: BallBearing | AngularContactPair | CrossedRollerBearing | None
     input_bearing: BallBearing | None
     bodies: Bodies = field(default_factory=Bodies)
     housing: Housing = field(default_factory=Housing)
@@ -391,11 +413,15 @@ class CycloidDesign:
 BEARING_KINDS = {"deep_groove": BallBearing, "angular_contact": BallBearing,
                  "angular_contact_pair": AngularContactPair, "locked": None}
 
+#: The main bearing's kinds: the bearing kinds and a crossed-roller bearing (issue 32: one row of
+#: rollers alternating +-alpha carries radial, axial and tilting load; :mod:`rvtool.bearings.spatial_set`)
+MAIN_BEARING_KINDS = {**BEARING_KINDS, "crossed_roller": CrossedRollerBearing}
+
 #: Sections of a cycloid design file and their component specs (bearing sections: by ``kind``), in
 #: dependency order (a section's links read sections before it).
 SECTIONS = {"material": ElasticMaterial, "pins": Pins, "wheels": Wheels, "profile": CycloidProfile,
             "pin_contact": PinContact, "output_pins": OutputPinMechanism, "eccentric_bearing": NeedleBearing,
-            "main_bearing": BEARING_KINDS, "input_bearing": BEARING_KINDS, "bodies": Bodies, "housing": Housing,
+            "main_bearing": MAIN_BEARING_KINDS, "input_bearing": BEARING_KINDS, "bodies": Bodies, "housing": Housing,
             "bearing_friction": BearingFriction}
 OPTIONAL_SECTIONS = ("profile", "bodies", "housing", "bearing_friction")
 
@@ -579,21 +605,21 @@ def _file_angle_message(msg, cls):
     return f"{name}_deg = {value_deg} is outside the valid range {lb}{low_deg}, {high_deg}{hb} deg{rest}"
 
 
-def _bearing_kind(section, data):
-    """The ``kind`` key of a bearing section (default "deep_groove"), checked."""
+def _bearing_kind(section, data, kinds=BEARING_KINDS):
+    """The ``kind`` key of a bearing section (default "deep_groove"), checked against ``kinds``."""
     kind = data.get("kind", "deep_groove")
-    if not isinstance(kind, str) or kind not in BEARING_KINDS:
-        raise RvtoolInputError(f"{section}.kind = {kind!r}; valid choices are {list(BEARING_KINDS)}")
+    if not isinstance(kind, str) or kind not in kinds:
+        raise RvtoolInputError(f"{section}.kind = {kind!r}; valid choices are {list(kinds)}")
     return kind
 
 
-def _bearing_section(section, data):
-    """A bearing section: ``kind`` selects the spec; a pair's keys that are not the pair's own
-    are those of its two identical rows."""
+def _bearing_section(section, data, kinds=BEARING_KINDS):
+    """A bearing section: ``kind`` selects the spec of ``kinds``; a pair's keys that are not the
+    pair's own are those of its two identical rows."""
     data = dict(data)
-    kind = _bearing_kind(section, data)
+    kind = _bearing_kind(section, data, kinds)
     data.pop("kind", None)
-    cls = BEARING_KINDS[kind]
+    cls = kinds[kind]
     if cls is None:
         if data:
             raise RvtoolInputError(f"[{section}] is locked (no bearing): keys {sorted(data)} are not used")
@@ -651,9 +677,9 @@ def load_sections(d, sections, *, optional=(), links=None, derived=None):
         data = d.pop(sec, {})
         if not isinstance(data, dict):
             raise RvtoolInputError(f"[{sec}] must be a table of keys; got {data!r}")
-        if cls is BEARING_KINDS:
-            locked = BEARING_KINDS[_bearing_kind(sec, data)] is None
-            built[sec] = _bearing_section(sec, data if locked else _with_links(sec, data, built, links))
+        if cls is BEARING_KINDS or cls is MAIN_BEARING_KINDS:
+            locked = cls[_bearing_kind(sec, data, cls)] is None
+            built[sec] = _bearing_section(sec, data if locked else _with_links(sec, data, built, links), cls)
         else:
             data = _with_links(sec, data, built, links)
             if sec in derived:

@@ -176,6 +176,12 @@ def build(design: StdInvoluteDesign, *, bearing_model="lumped", backend="warp", 
     if bearing_model not in ("lumped", "rolling"):
         raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
     check_lumped(design, bearing_model)
+    for key in ("flange_coordinates", "wheel_coordinates"):
+        if getattr(design.bodies, key) != "planar":
+            # issue 32: the involute wheel--ring meshes and the STD bearing sets are not sliced with tilts
+            raise RvtoolInputError(f"bodies.{key} = {getattr(design.bodies, key)!r} is not implemented for the "
+                                   "small-tooth-difference topology (its meshes and bearings take planar bodies); "
+                                   "valid: 'planar'")
     d = design
     nw = d.n_wheels
     SC = exu.SystemContainer()

@@ -25,6 +25,7 @@ import numpy as np
 from ..errors import RvtoolInputError, SolverFailure
 from ..protocols.precision import transmission_error
 from ..solver.device_rows import DeviceRowNewton
+from ..solver.model_snapshot import ModelSnapshot, real_model
 from ..solver.static import StaticSolver
 from .device_rows_lost_motion import device_row_lost_motion
 
@@ -35,7 +36,7 @@ class RowVariants:
     theta_out (V, N) [rad] (reference included), lost_motion_rad (V,) (None: not asked), status
     per variant ("ok" / "failed"), error per variant, exudyn_points (TE points solved by Exudyn),
     exudyn_copies (lost motions by Exudyn), split of the wall time [s] (``setup_s`` copying the
-    families, ``kernels_s``, ``scatter_s``, ``step_s`` (host Newton step), ``fallback_s``,
+    families, ``kernels_s``, ``scatter_s``, ``step_s`` (the Newton step with its read-back), ``fallback_s``,
     ``rest_s``), te_s and lost_motion_s [s], wall_s [s], stats (sweeps, Newton iterations)."""
     te: np.ndarray
     theta_out: np.ndarray
@@ -52,11 +53,11 @@ class RowVariants:
 
 
 def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None, device="cpu", settings=None,
-                         device_sum=None, warm_start=True):
+                         device_sum=None, warm_start=True, device_step=None):
     """TE and lost motion of ``models`` (module docstring) on Warp ``device``. torque [N m]: the
     TE's output torque; input_angles [rad]; lost_motion_level [N m] or None; settings: the row
-    Newton's :class:`~rvtool.solver.device_newton.DeviceNewtonSettings`; device_sum: see
-    :class:`DeviceRowNewton`. Returns a :class:`RowVariants`."""
+    Newton's :class:`~rvtool.solver.device_newton.DeviceNewtonSettings`; device_sum, device_step:
+    see :class:`DeviceRowNewton`. Returns a :class:`RowVariants`."""
     t0 = time.perf_counter()
     models = list(models)
     angles = np.asarray(input_angles, float)
@@ -64,7 +65,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
         raise RvtoolInputError("input_angles must be a finite 1-D sequence of at least 1 angle [rad]")
     if not np.isfinite(torque):
         raise RvtoolInputError(f"torque = {torque!r} N m must be finite")
-    newton = DeviceRowNewton(models, device=device, settings=settings, device_sum=device_sum)
+    newton = DeviceRowNewton(models, device=device, settings=settings, device_sum=device_sum, device_step=device_step)
     V, N = len(models), len(angles)
     tq = np.full(V, -np.sign(models[0].ratio) * float(torque))
     q_out = np.zeros((V, N))
@@ -73,6 +74,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
     error = [None] * V
     exudyn_points = sweeps = iterations = 0
     t_te = time.perf_counter()
+    newton.prime_kinematics(angles)               # every copy's kinematics once for all TE angles
     prev = None
     for k, a in enumerate(angles):
         kin = newton.kinematic(np.full(V, a))
@@ -89,7 +91,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
         for c in np.flatnonzero(~r.converged):
             exudyn_points += 1
             r.q[c] = kin[c]                       # the next warm start: from the kinematic state
-            m = models[c]
+            m = real_model(models[c])
             m.set_output_torque(tq[c])
             try:
                 q_out[c, k] = StaticSolver(m).solve(float(a))[m.output_index]
@@ -127,4 +129,37 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
                               "device": str(device), "device_sum": newton.device_sum})
 
 
-__all__ = ["RowVariants", "device_rows_variants"]
+def _snapshot_of(job):
+    """Pool task: the :class:`ModelSnapshot` of ``build(design, **build_kw)`` (picklable)."""
+    from ..assembly import build
+    design, build_kw = job
+    return ModelSnapshot(build(design, **build_kw), design, build_kw)
+
+
+def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=None):
+    """The variant models of ``designs`` for :func:`device_rows_variants`, built side by side in
+    worker processes and returned as :class:`~rvtool.solver.model_snapshot.ModelSnapshot` (their
+    rows, kinematics and constraints; a model itself is built here only where Exudyn takes over a
+    point or copy). workers: processes (None: all cores; 1: build here, the models themselves);
+    executor: a ``concurrent.futures`` executor to use instead (e.g. a warmed pool); build_kw: the
+    build options of every variant."""
+    import concurrent.futures as cf
+    import multiprocessing
+    import os
+    from ..assembly import build
+    designs = list(designs)
+    build_kw = dict(build_kw or {})
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1):
+        raise RvtoolInputError(f"workers = {workers!r} is outside the valid range [1, inf) (integer; None: all cores)")
+    jobs = [(d, build_kw) for d in designs]
+    if executor is not None:
+        return list(executor.map(_snapshot_of, jobs, chunksize=max(1, len(jobs) // 64)))
+    n = workers or os.cpu_count() or 1
+    if n == 1 or len(designs) < 2:
+        return [build(d, **build_kw) for d in designs]
+    ctx = multiprocessing.get_context("spawn")          # fresh interpreters: no forked Warp/Exudyn state
+    with cf.ProcessPoolExecutor(max_workers=min(n, len(designs)), mp_context=ctx) as ex:
+        return list(ex.map(_snapshot_of, jobs, chunksize=max(1, len(jobs) // (4 * n))))
+
+
+__all__ = ["RowVariants", "device_rows_variants", "prepare_variant_models"]

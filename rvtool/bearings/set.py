@@ -28,7 +28,7 @@ from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows
+from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows, moved_member
 from ..errors import RvtoolInputError
 from ..validation import check_finite
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters, slice_mean_crowning
@@ -211,12 +211,54 @@ class BearingSet(StagedLaunch):
             rho += r_rho
             z += r_z
             row_of += r_row
-        self.fparams = np.array(fp)
-        self.iparams = np.array(ip, dtype=np.int32)
+        self._finish(np.array(fp), np.array(ip, dtype=np.int32), ids, np.array(owner), np.array(rho), np.array(z),
+                     np.array(row_of), backend, precision, device)
+
+    @classmethod
+    def concatenated(cls, sets, nb, *, names=None, precision="float64", device="cpu"):
+        """The set of B built sets side by side (copy c's bodies offset by c nb, the ground row at
+        B nb; mounting names ``names[c][k]``, default the built ones): their rows concatenated,
+        equal to the set built from the renamed, shifted mountings (tests/test_device_rows.py),
+        without packing every mounting again. Sets with influence-coefficient rollers are built."""
+        s, B = sets[0], len(sets)
+        names = names or [[m.name for m in sc.mountings] for sc in sets]
+        mounts = [moved_member(m, name=nm, inner=m.inner if m.inner == GROUND else m.inner + c * nb,
+                                      outer=m.outer if m.outer == GROUND else m.outer + c * nb)
+                  for c, sc in enumerate(sets) for m, nm in zip(sc.mountings, names[c])]
+        if any(sc._slices is not None for sc in sets) or any(type(sc) is not type(s) for sc in sets):
+            return cls(mounts, B * nb, name=s.name, backend=s.backend, precision=precision, device=device)
+        self = object.__new__(cls)
+        self.name, self.n_bodies, self.backend, self.precision = s.name, int(B * nb), s.backend, precision
+        self.mountings = tuple(mounts)
+        self.history = NoHistory()
+        ip = []
+        for c, sc in enumerate(sets):
+            i = sc.iparams.copy()
+            for col in (ref.K_BODY_A, ref.K_BODY_B):
+                i[:, col] = np.where(i[:, col] >= sc.n_bodies, B * nb, i[:, col] + c * nb)
+            ip.append(i)
+        ids = []
+        for c, sc in enumerate(sets):
+            rename = {m.name: nm for m, nm in zip(sc.mountings, names[c])}
+            ids += [rename[i.split("/", 1)[0]] + "/" + i.split("/", 1)[1] for i in sc.ids]
+        n_m = np.cumsum([0] + [len(sc.mountings) for sc in sets])
+        # the built rows (a slow-state gap offset of a built set is not copied, as a set built from the mountings)
+        self._finish(np.concatenate([getattr(sc, "_built_fparams", sc.fparams) for sc in sets]), np.concatenate(ip),
+                     ids,
+                     np.concatenate([sc.owner + n_m[c] for c, sc in enumerate(sets)]),
+                     np.concatenate([sc.element_radius for sc in sets]),
+                     np.concatenate([sc.element_station for sc in sets]),
+                     np.concatenate([sc.element_row for sc in sets]), s.backend, precision, device)
+        return self
+
+    def _finish(self, fparams, iparams, ids, owner, rho, z, row_of, backend, precision, device):
+        n_bodies = self.n_bodies
+        self.fparams = fparams
+        self.iparams = iparams
         self.ids = tuple(ids)
-        self.owner = np.array(owner)
+        self.owner = owner
         #: per element: radius [m] and axial station [m] of its centre, ball-row index
-        self.element_radius, self.element_station, self.element_row = np.array(rho), np.array(z), np.array(row_of)
+        self.element_radius, self.element_station, self.element_row = rho, z, row_of
         self.assembler = PairAssembler(self.iparams[:, ref.K_BODY_A], self.iparams[:, ref.K_BODY_B], n_bodies)
         self._init_slices(backend, device)
         self._pose = np.zeros((n_bodies + 1, 3))

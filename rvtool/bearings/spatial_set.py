@@ -179,6 +179,14 @@ class SpatialBearingSet:
         self.element_row, self.owner = np.array(row_of), np.array(owner)
         self.kind = np.array(kinds)
         self._ball = self.kind == ref.KIND_BALL
+        self._all_ball, self._any_ball = bool(np.all(self._ball)), bool(np.any(self._ball))
+        # the per-ball constants of :meth:`balls` (row parameters and seed rows), formed once
+        fp = self.fparams
+        self._xi = (fp[:, ref.R_XI_A:ref.R_XI_A + 2], fp[:, ref.R_XI_B:ref.R_XI_B + 2])
+        self._g, self._sig = fp[:, ref.R_GAMMA], fp[:, ref.R_SIGMA]
+        A, al0 = fp[:, ref.R_A], fp[:, ref.R_ALPHA]
+        self._ar0 = np.where(self._ball, A * np.cos(al0), 0.0)
+        self._az0 = np.where(self._ball, A * np.sin(al0) + fp[:, ref.R_SAX], 0.0)
         self._n = 3 * (n_bodies + 1)
         # the seeds that move some ball (a grounded outer ring without tilt rows has none: the tangent
         # is formed over the live seeds only, half of them for a flange on a rigid housing)
@@ -194,30 +202,32 @@ class SpatialBearingSet:
         """Per-ball results at poses (n_bodies, 3): (Q (N, 12), dQ/dq (N, 12, L) over the L live seeds
         (``self._live``: the ball's 12 coordinates less those held by the ground), obs (N, 8), aux (N, 4):
         f_u, f_z [N] on A, working angle alpha_w [rad], moment arm m [N m])."""
-        p = np.vstack([np.asarray(pose, float), np.zeros((1, 3))]).ravel()
+        p = np.zeros(3 * self.n_bodies + 3)
+        p[:-3] = np.ravel(np.asarray(pose, float))
         x = p[self.columns]                             # (N, 12)
         fp = self.fparams
         N = len(fp)
-        xiA, xiB = fp[:, ref.R_XI_A:ref.R_XI_A + 2], fp[:, ref.R_XI_B:ref.R_XI_B + 2]
+        xiA, xiB = self._xi
         a, b = _rot(x[:, 2], xiA), _rot(x[:, 8], xiB)
-        g = fp[:, ref.R_GAMMA]
+        g = self._g
         psi = fp[:, ref.R_PSI0] + 0.5 * ((1 - g) * x[:, 2] + (1 + g) * x[:, 8])
         c, s = np.cos(psi), np.sin(psi)
         u = np.column_stack([c, s])
         pu = _perp(u)
         d = x[:, 0:2] + a - x[:, 6:8] - b
         zr, gx, gy = x[:, 3] - x[:, 9], x[:, 4] - x[:, 10], x[:, 5] - x[:, 11]
-        rho, zk, sig = self.element_radius, self.element_station, fp[:, ref.R_SIGMA]
-        al0, A = fp[:, ref.R_ALPHA], fp[:, ref.R_A]
-        dr = np.sum(d * u, axis=1) + zk * (gy * c - gx * s)
+        rho, zk, sig = self.element_radius, self.element_station, self._sig
+        dr = (d[:, 0] * u[:, 0] + d[:, 1] * u[:, 1]) + zk * (gy * c - gx * s)
         da = zr + rho * (gx * s - gy * c)
         ball = self._ball
-        ar = np.where(ball, A * np.cos(al0), 0.0) + dr
-        az = np.where(ball, A * np.sin(al0) + fp[:, ref.R_SAX], 0.0) + sig * da
-        law = np.zeros((9, N))
-        if np.any(ball):
-            law[:, ball] = ball_law_spatial(ar[ball], az[ball], fp[ball])
-        if not np.all(ball):
+        ar = self._ar0 + dr
+        az = self._az0 + sig * da
+        if self._all_ball:
+            law = ball_law_spatial(ar, az, fp)
+        else:
+            law = np.zeros((9, N))
+            if self._any_ball:
+                law[:, ball] = ball_law_spatial(ar[ball], az[ball], fp[ball])
             law[:, ~ball] = lamina_law_spatial(ar[~ball], az[~ball], fp[~ball])
         delta, F, alw, Fr, Fa, Fr_r, Fr_z, Fa_r, Fa_z = law
         fu, fz = -Fr, -sig * Fa

@@ -208,7 +208,19 @@ class CrossedRollerBearing(CylindricalRollerBearing):
 
     Fields as :class:`CylindricalRollerBearing` (crowning, law and slices act along
     each roller's generator) plus contact_angle: alpha [rad] in (0, pi/2), 45 deg typical.
-    """
+
+    Geometry and stiffness model (a cycloid drive's main bearing: ``[main_bearing] kind =
+    "crossed_roller"``, issue 32): one raceway of cylindrical rollers of diameter ~ length whose axes
+    alternate by 90 deg, each contact along the roller at +-alpha to the radial plane (Harris &
+    Kotzalas, Essential Concepts of Bearing Technology, 5th ed. (2007), ch. 1, "crossed roller
+    bearings"; the pitch diameter d_m = 2 r_i + D as for any roller row). Each lamina carries
+    Palmgren's line law Q = k delta^(10/9) for both contacts in series (Palmgren, Ball and Roller
+    Bearing Engineering, 3rd ed. (1959): delta = 3.84e-5 Q^0.9 / l^0.8 [mm, N] per contact,
+    :func:`rvtool.bearings.hertz.roller_stiffness`) with the lamina's approach delta = delta_r cos(alpha)
+    + sigma delta_a sin(alpha) from the ring's radial, axial and tilt displacement
+    (:mod:`rvtool.bearings.spatial_set`): one row carries radial, axial and tilting load, the +alpha
+    and -alpha rollers on opposite sides of a tilt. A preload is declared as a negative
+    radial_clearance (interference)."""
     contact_angle: float = angle_field(math.pi / 4)
     n_slices: int = 2
 

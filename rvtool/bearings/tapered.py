@@ -44,7 +44,7 @@ RV crank support (chosen, plausible for a 30204-class bearing)::
 """
 import math
 from dataclasses import dataclass, fields
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -403,9 +403,25 @@ class TaperedPair:
         carries the preload, or opens half the end play."""
         out = []
         for row, sigma in zip(self.rows, self.senses):
-            s = row.axial_approach_for(self.axial_preload) if self.axial_preload > 0 else -0.5 * self.end_play
+            s = _axial_approach(row, self.axial_preload) if self.axial_preload > 0 else -0.5 * self.end_play
             out.append(-sigma * s)          # the loaded direction of a row is -sigma e_z
         return tuple(out)
+
+
+@lru_cache(maxsize=256)
+def _approach_cached(row, force):
+    return row.axial_approach_for(force)
+
+
+def _axial_approach(row, force):
+    """``row.axial_approach_for(force)`` computed once per (row, force) in a process (rows are frozen:
+    Monte Carlo variants share their crank bearings; a root search of ~14 ms); an unhashable row
+    each time."""
+    try:
+        hash(row)
+    except TypeError:
+        return row.axial_approach_for(force)
+    return _approach_cached(row, float(force))
 
 
 def _degrees(x):

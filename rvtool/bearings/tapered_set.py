@@ -37,7 +37,7 @@ from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX,
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows
+from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows, moved_member
 from ..errors import RvtoolInputError
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters
 from .set import Placement
@@ -155,13 +155,61 @@ class TaperedBearingSet:
                 gamma += [row.roller_diameter * math.cos(row.roller_axis_angle) / row.pitch_diameter] * Z
                 lam_roller += list(np.repeat(len(psi0) - Z + np.arange(Z), row.n_slices))
                 ids += [f"{m.name}/row{r}/roller{j}/slice{s}" for j in range(Z) for s in range(row.n_slices)]
-        self.roller_fp, self.roller_ip, self.lamina_fp = np.vstack(rf), np.vstack(ri), np.vstack(lf)
+        self._finish(np.vstack(rf), np.vstack(ri), np.vstack(lf), ids, np.array(owner), np.array(row_of),
+                     np.array(psi0), np.array(gamma), np.array(lam_roller, dtype=int), np.array(bodies, dtype=np.int32),
+                     slice_rollers, slice_fp, slice_ip, backend, precision, device)
+
+    @classmethod
+    def concatenated(cls, sets, nb, *, names=None, precision="float64", device="cpu"):
+        """The set of B built sets side by side (copy c's bodies offset by c nb, the ground at
+        B nb; mounting names ``names[c][k]``, default the built ones): rows, laminae and per-roller
+        data concatenated, equal to the set built from the renamed, shifted mountings
+        (tests/test_device_rows.py) without packing every row again. Sets with influence-coefficient
+        rollers are built from the mountings."""
+        s, B = sets[0], len(sets)
+        names = names or [[m.name for m in sc.mountings] for sc in sets]
+        mounts = [moved_member(m, name=nm, inner=m.inner if m.inner == GROUND else m.inner + c * nb,
+                                      outer=m.outer if m.outer == GROUND else m.outer + c * nb)
+                  for c, sc in enumerate(sets) for m, nm in zip(sc.mountings, names[c])]
+        if any(sc._slices is not None or sc.backend != s.backend for sc in sets):
+            return cls(mounts, B * nb, name=s.name, backend=s.backend, precision=precision, device=device)
+        self = object.__new__(cls)
+        self.name, self.n_bodies, self.backend, self.precision = s.name, int(B * nb), s.backend, precision
+        self.mountings = tuple(mounts)
+        self.history = NoHistory()
+        ri, ids, owner, lam_roller, bodies = [], [], [], [], []
+        n_lam = n_rol = n_m = 0
+        for c, sc in enumerate(sets):
+            i = sc.roller_ip.copy()
+            i[:, ref.RI_FIRST] += n_lam
+            ri.append(i)
+            rename = {m.name: nm for m, nm in zip(sc.mountings, names[c])}
+            ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
+            owner.append(sc.roller_owner + n_m)
+            lam_roller.append(sc.lamina_roller + n_rol)
+            bodies.append(np.where(sc._bodies >= sc.n_bodies, B * nb, sc._bodies + c * nb))
+            n_lam += len(sc.lamina_fp)
+            n_rol += len(sc.roller_fp)
+            n_m += len(sc.mountings)
+        cat = lambda nm: np.concatenate([getattr(sc, nm) for sc in sets])
+        # the built laminae (a slow-state gap offset of a built set is not copied, as a set built from the mountings)
+        self._finish(np.vstack([sc.roller_fp for sc in sets]), np.vstack(ri),
+                     np.vstack([getattr(sc, "_built_lamina_fp", sc.lamina_fp) for sc in sets]),
+                     ids, np.concatenate(owner), cat("roller_row"), cat("roller_phase"), cat("roller_gamma"),
+                     np.concatenate(lam_roller), np.concatenate(bodies).astype(np.int32), [], [], [], s.backend,
+                     precision, device)
+        return self
+
+    def _finish(self, roller_fp, roller_ip, lamina_fp, ids, owner, row_of, psi0, gamma, lam_roller, bodies,
+                slice_rollers, slice_fp, slice_ip, backend, precision, device):
+        n_bodies = self.n_bodies
+        self.roller_fp, self.roller_ip, self.lamina_fp = roller_fp, roller_ip, lamina_fp
         self.ids = tuple(ids)
         #: per roller: mounting index, row index (0 or 1), azimuth at zero ring rotation [rad], cage ratio gamma
-        self.roller_owner, self.roller_row = np.array(owner), np.array(row_of)
-        self.roller_phase, self.roller_gamma = np.array(psi0), np.array(gamma)
+        self.roller_owner, self.roller_row = owner, row_of
+        self.roller_phase, self.roller_gamma = psi0, gamma
         #: per lamina: its roller
-        self.lamina_roller = np.array(lam_roller, dtype=int)
+        self.lamina_roller = lam_roller
         # per-mounting sums of per-roller values as 0/1 CSR products: each mounting's rollers are
         # added in roller order starting from zero, the order of np.add.at (same sums bit for bit),
         # one pass over all columns of a quantity instead of one unbuffered np.add.at
@@ -170,7 +218,7 @@ class TaperedBearingSet:
                                            shape=(len(self.mountings), R))
         # the cage angle moves with theta_in by (1 - gamma)/2 and with theta_out by (1 + gamma)/2
         self._cage_weights = (0.5 * (1 - self.roller_gamma))[:, None], (0.5 * (1 + self.roller_gamma))[:, None]
-        self._bodies = np.array(bodies, dtype=np.int32)
+        self._bodies = bodies
         self.assembler = PairAssembler(self._bodies[:, 0], self._bodies[:, 1], n_bodies)
         self._pose = np.zeros((n_bodies + 1, 3))
         self._vel = np.zeros((n_bodies + 1, 3))
@@ -179,6 +227,7 @@ class TaperedBearingSet:
         #: influence-coefficient rollers (slices = "influence"): their indices, their lamina rows (-1 padded)
         self.slice_rollers = np.array(slice_rollers, dtype=int)
         self._slices = None
+        self._device_rows = None
         if slice_rollers:
             n_max = int(max(self.roller_ip[r, ref.RI_COUNT] for r in slice_rollers))
             self.slice_rows = np.full((len(slice_rollers), n_max), -1)
@@ -312,6 +361,43 @@ class TaperedBearingSet:
         dQ[:, 2, 2] += _cross(_perp(a), F)
         dQ[:, 5, 5] -= _cross(_perp(b), F)
         return Q, dQ, dQv, (f, rib, lam), (b, psi)
+
+    @property
+    def rows_on_device(self):
+        """Whether :meth:`device_rows` / :meth:`launch_device_rows` are available (as :attr:`planar_on_device`)."""
+        return self.planar_on_device
+
+    @property
+    def planar_on_device(self):
+        """Whether :meth:`device_rows` is available (Warp backend, no influence-coefficient rows)."""
+        return self.backend == "warp" and self._slices is None
+
+    def device_rows(self, pose, vel=None):
+        """:meth:`raw`'s Q (M, 6) and dQ/dq (M, 6, 6) as Warp device arrays, the planar mapping and
+        the per-mounting sums on the device too (:class:`warp_contacts.tapered_planar.TaperedPlanarRows`;
+        no per-roller transfer; overwritten by the next call)."""
+        return self._planar_rows().rows(pose, vel)
+
+    def device_pose_buffers(self):
+        """(pose, vel): the device arrays ((n_bodies + 1, 3), the ground's row last) that
+        :meth:`launch_device_rows` reads (written on the device by the caller)."""
+        pr = self._planar_rows()
+        return pr.pose, pr.vel
+
+    def launch_device_rows(self):
+        """:meth:`device_rows` at the poses in :meth:`device_pose_buffers` as they are."""
+        return self._planar_rows().launch()
+
+    def _planar_rows(self):
+        if not self.planar_on_device:
+            raise RvtoolInputError(f"tapered set {self.name!r}: the device rows need backend 'warp' and laminae "
+                                   "rows (slices = 'laminae')")
+        if self._device_rows is None:
+            from warp_contacts.tapered_planar import TaperedPlanarRows
+            self._device_rows = TaperedPlanarRows(self._kernel, self._bodies, self._centres.reshape(-1, 4),
+                                                  self.roller_owner, self.roller_phase, self.roller_gamma,
+                                                  self.n_bodies)
+        return self._device_rows
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""

@@ -65,12 +65,16 @@ class BlockAssembler:
         gidx = coordinate_index(bodies, n_bodies)
         self.index = gidx     # element coordinate of every row entry (-1 dropped): device-side sums
         self._vec = RowScatter(gidx, n)
-        self._mat = RowScatter(pair_index(gidx, n), n * n)
+        # the tangent map (N k^2 pair indices) is made on the first matrix(): a set that is only
+        # copied onto the device (its rows summed per copy there) never needs it
+        self._mat = None
 
     def vector(self, Q):
         return self._vec(Q)
 
     def matrix(self, K):
+        if self._mat is None:
+            self._mat = RowScatter(pair_index(self.index, self.n), self.n * self.n)
         return self._mat(K).reshape(self.n, self.n)
 
 

@@ -8,6 +8,7 @@ deviations (Eq. (gap)), and the contact law. A :class:`CycloidPinSet`
 evaluates any number of meshes in one kernel launch and follows the
 evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
 """
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,7 +21,7 @@ from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile, pin_centres
 from ..validation import check_finite, check_nonnegative, check_positive
 from .circle_set import GROUND, FrictionLaw, FrictionModel, NormalLaw
-from .evaluator import gap_offset_rows
+from .evaluator import gap_offset_rows, moved_member
 from .pair_set import PairFamilySet, check_backend
 
 
@@ -124,6 +125,27 @@ class WheelPinMesh:
         return (np.arange(n) + 0.5) * b / n - 0.5 * b
 
 
+@functools.lru_cache(maxsize=64)
+def _sampled(profile, n_samples):
+    arrays = profile.table(n_samples)
+    for a in arrays:
+        if isinstance(a, np.ndarray):
+            a.flags.writeable = False          # shared by every set of this profile
+    return arrays
+
+
+def sampled_profile(profile, n_samples):
+    """``profile.table(n_samples)``, computed once per (profile, n) in a process (the profile is a
+    frozen dataclass: Monte Carlo variants that draw pin radii, phases or eccentricity
+    differences share their wheel profile, and sampling it costs ~40 ms on RV-40E). The arrays
+    are read-only; an unhashable profile is sampled each time."""
+    try:
+        hash(profile)
+    except TypeError:
+        return profile.table(n_samples)
+    return _sampled(profile, int(n_samples))
+
+
 def pin_curve_table(table, pin_radius):
     """The profile table ordered for the search of a pin of radius ``pin_radius`` [m].
 
@@ -182,10 +204,14 @@ class CycloidPinSet(PairFamilySet):
     search_band x r_p of contact (see :func:`auto_window`); default 0.05 (150 um on RD-40,
     window 33 samples instead of 113 for the profile-keyed search).
     backend "warp" (default, one launch) or "numpy"; precision "float64" or "float32".
+    tables: profile tables computed before, {(profile, pin radius): (table, analytic parameters
+    or None, search window)} as :meth:`profile_tables` returns them for the same
+    samples_per_tooth, search and search_band (a copy of built sets reuses them instead of
+    sampling each profile again); a key not in it is computed.
     """
 
     def __init__(self, meshes, n_bodies, *, samples_per_tooth=120, backend="warp", precision="float64",
-                 device="cpu", name="pins", search="discrete", search_band=0.05):
+                 device="cpu", name="pins", search="discrete", search_band=0.05, tables=None):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one WheelPinMesh")
         check_backend(backend, precision)
@@ -204,6 +230,7 @@ class CycloidPinSet(PairFamilySet):
         self.backend = backend
         self.precision = precision
         self.tables = []
+        self.table_windows = []
         self.analytic = [] if search == "analytic" else None
         table_of = {}            # identical tables are stored once (B copies of one design: one table)
         fp, ip, ids, mesh_of, pin_of, ap = [], [], [], [], [], []
@@ -219,13 +246,18 @@ class CycloidPinSet(PairFamilySet):
             # the table depends on the (frozen, hashable) profile and the pin radius only
             key = (prof, float(rp))
             if key not in table_of:
-                tab = pin_curve_table(prof.table(samples_per_tooth * prof.n_teeth), rp)
-                ana = prof.analytic_parameters() if search == "analytic" else None
+                if tables is not None and key in tables:
+                    tab, ana, win = tables[key]
+                else:
+                    tab = pin_curve_table(sampled_profile(prof, samples_per_tooth * prof.n_teeth), rp)
+                    ana = prof.analytic_parameters() if search == "analytic" else None
+                    win = auto_window(prof, tab, rp, band=search_band)
                 table_of[key] = len(self.tables)
                 self.tables.append(tab)
+                self.table_windows.append(win)
                 if ana is not None:
                     self.analytic.append(ana)
-                window = max(window, auto_window(prof, tab, rp, band=search_band))
+                window = max(window, win)
             tb = table_of[key]
             pins = pin_centres(prof, m.pin_centre_errors)
             dev = np.zeros(prof.n_pins) if m.normal_deviation is None else np.asarray(m.normal_deviation, float)
@@ -264,23 +296,101 @@ class CycloidPinSet(PairFamilySet):
                     ids.append(f"{m.name}/pin{k}/s{s_i}")
                     mesh_of.append(m_i)
                     pin_of.append(k)
+        self._finish(window, np.array(fp), np.array(ip, dtype=np.int32), ids, np.array(mesh_of), np.array(pin_of),
+                     np.array(ap), n_bodies, backend, precision, device)
+
+    @classmethod
+    def concatenated(cls, sets, nb, *, names=None, precision="float64", device="cpu"):
+        """The set of B built sets side by side (copy c's bodies offset by c nb, the ground at
+        B nb; mesh names ``names[c][k]``, default the built ones): their rows and profile tables
+        concatenated (equal tables once), equal to the set built from the renamed, shifted meshes
+        (tests/test_device_rows.py) without the per-row loop. Sets with stick--slip anchors, or
+        whose sampling options differ, are built from the meshes."""
+        s, B = sets[0], len(sets)
+        names = names or [[m.name for m in sc.meshes] for sc in sets]
+        shift = lambda b, c: b if b == GROUND else int(b) + c * nb
+        meshes = [moved_member(m, name=nm, wheel_body=shift(m.wheel_body, c), pin_body=shift(m.pin_body, c),
+                                      pin_bodies=None if m.pin_bodies is None
+                                      else tuple(shift(b, c) for b in m.pin_bodies))
+                  for c, sc in enumerate(sets) for m, nm in zip(sc.meshes, names[c])]
+        opts = (s.samples_per_tooth, s.search, s.search_band, s.backend)
+        if any(sc.anchor for sc in sets) or any((sc.samples_per_tooth, sc.search, sc.search_band, sc.backend) != opts
+                                                for sc in sets):
+            tables = {}
+            for sc in sets:
+                if (sc.samples_per_tooth, sc.search, sc.search_band) == opts[:3]:
+                    tables.update(sc.profile_tables())
+            return cls(meshes, B * nb, samples_per_tooth=s.samples_per_tooth, backend=s.backend, precision=precision,
+                       device=device, name=s.name, search=s.search, search_band=s.search_band, tables=tables)
+        self = object.__new__(cls)
+        self.search, self.search_band, self.samples_per_tooth = s.search, s.search_band, s.samples_per_tooth
+        self.name, self.meshes, self.backend, self.precision = s.name, tuple(meshes), s.backend, precision
+        self.tables, self.table_windows = [], []
+        self.analytic = [] if s.search == "analytic" else None
+        table_of, ip, ids, mesh_of = {}, [], [], []
+        n_mesh = 0
+        for c, sc in enumerate(sets):
+            local = {}                      # the set's table index -> the concatenation's (in mesh order)
+            for m_i, m in enumerate(sc.meshes):
+                rp = m.profile.pin_radius if m.pin_radius is None else m.pin_radius
+                key = (m.profile, float(rp))
+                t = int(sc.iparams[np.flatnonzero(sc.mesh_of == m_i)[0], ref.J_TABLE])
+                if key not in table_of:
+                    table_of[key] = len(self.tables)
+                    self.tables.append(sc.tables[t])
+                    self.table_windows.append(sc.table_windows[t])
+                    if self.analytic is not None:
+                        self.analytic.append(sc.analytic[t])
+                local[t] = table_of[key]
+            i = sc.iparams.copy()
+            for col in (ref.J_BODY_A, ref.J_BODY_B):
+                i[:, col] = np.where(i[:, col] >= sc.n_bodies, B * nb, i[:, col] + c * nb)
+            i[:, ref.J_TABLE] = np.vectorize(local.__getitem__, otypes=[np.int32])(i[:, ref.J_TABLE])
+            ip.append(i)
+            rename = {m.name: nm for m, nm in zip(sc.meshes, names[c])}
+            ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
+            mesh_of.append(sc.mesh_of + n_mesh)
+            n_mesh += len(sc.meshes)
+        # the built rows (slow-state gap offsets and friction of a built set are not copied, as a set built from
+        # the meshes)
+        built = [getattr(sc, "_built_fparams", sc.fparams) for sc in sets]
+        self._finish(max(self.table_windows), np.concatenate(built), np.concatenate(ip), ids,
+                     np.concatenate(mesh_of), np.concatenate([sc.pin_of for sc in sets]),
+                     np.zeros((sum(sc.n_contacts for sc in sets), anchor_ref.N_ANCHOR)), B * nb, s.backend,
+                     precision, device)
+        return self
+
+    def _finish(self, window, fparams, iparams, ids, mesh_of, pin_of, anchor_params, n_bodies, backend, precision,
+                device):
         self.window = window
-        self.fparams = np.array(fp)
-        self.iparams = np.array(ip, dtype=np.int32)
+        self.fparams = fparams
+        self.iparams = iparams
         self.ids = tuple(ids)
-        self.mesh_of = np.array(mesh_of)
-        self.pin_of = np.array(pin_of)
-        self.n_contacts = len(fp)
+        self.mesh_of = mesh_of
+        self.pin_of = pin_of
+        self.n_contacts = len(fparams)
         anchor = bool(np.any(self.iparams[:, ref.J_FRICTION] == FrictionModel.ANCHOR))
         # committed anchors (wheel and pin-body coordinates) and slip distance per slice
         self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies,
-                             anchor_params=np.array(ap) if anchor else None)
+                             anchor_params=anchor_params if anchor else None)
         if backend == "warp":
             from warp_contacts.cycloid_pins import CycloidPinKernel
             self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device,
                                             analytic=self.analytic, anchor_params=self.anchor_params)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
+
+    def profile_tables(self):
+        """{(profile, pin radius [m]): (table, analytic parameters or None, search window)} of this
+        set's meshes (the ``tables`` argument of a set with the same samples_per_tooth, search and
+        search_band)."""
+        out = {}
+        for m_i, m in enumerate(self.meshes):
+            rp = m.profile.pin_radius if m.pin_radius is None else m.pin_radius
+            t = int(self.iparams[np.flatnonzero(self.mesh_of == m_i)[0], ref.J_TABLE])
+            out[(m.profile, float(rp))] = (self.tables[t], None if self.analytic is None else self.analytic[t],
+                                           self.table_windows[t])
+        return out
 
     def reference(self, pose, vel, anchor=None):
         return ref.evaluate(pose, vel, self.fparams, self.iparams, self.tables, self.window, self.analytic,

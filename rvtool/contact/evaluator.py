@@ -6,6 +6,7 @@ history z_n and return a trial history that is *not* stored (Eq.
 accepted step, at the accepted evaluation state, and is the only place where
 the committed history changes (Fig. (accepted_state)).
 """
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -115,6 +116,13 @@ class StagedLaunch:
     def launch_staged(self):
         """The kernel's recorded launch on the staged inputs (capturable)."""
         self._kernel.launch_recorded()
+
+    def pose_buffers(self):
+        """(pose, vel or None): the Warp input arrays ((n_bodies + 1, 3), the ground's row last) that
+        :meth:`stage` fills and :meth:`launch_staged` reads, for a caller that writes the poses on
+        the device (:mod:`rvtool.solver.device_rows`). Backend "warp" only."""
+        k = self._kernel
+        return k.device_array("pose"), (k.device_array("vel") if self.stages_velocity else None)
 
     def launched(self, pose, vel):
         """The :class:`LaunchedEvaluation` of the launch just made at poses/velocities (nb, 3): its
@@ -335,3 +343,14 @@ class ContactSetEvaluator(StagedLaunch):
         Qc, dq, dv, obs, trial = self.raw(pose, vel, self.history)
         self.history.assign(trial)
         return np.array(obs, np.float64)
+
+
+def moved_member(member, **changes):
+    """A copy of the built, frozen member ``member`` (a mesh or mounting) with ``changes`` (its name,
+    its bodies) set, without running its validation again: a copier (``concatenated`` of the sets)
+    puts validated members on other bodies under other names, B times per family, and
+    ``dataclasses.replace`` would check every field again (~0.25 ms a member)."""
+    out = copy.copy(member)
+    for k, v in changes.items():
+        object.__setattr__(out, k, v)
+    return out

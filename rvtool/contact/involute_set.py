@@ -14,7 +14,9 @@ series relation of Eq. (series_contact) with the potential-energy tooth complian
 :class:`InvoluteContactSet` evaluates any number of meshes in one kernel launch and follows
 the evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
 """
+import dataclasses
 from dataclasses import dataclass, field
+import functools
 import math
 
 import numpy as np
@@ -26,6 +28,7 @@ from ..errors import RvtoolInputError
 from ..geometry.involute import InvolutePair
 from ..validation import check_finite, check_nonnegative, check_positive
 from .circle_set import GROUND, FrictionLaw, FrictionModel
+from .evaluator import moved_member
 from .pair_set import PairFamilySet, check_backend
 from .tooth_stiffness import POLY_DEGREE, ToothCompliance
 
@@ -133,6 +136,24 @@ def gear_block(gear, compliance: ToothCompliance, u_ref):
     return blk
 
 
+@functools.lru_cache(maxsize=256)
+def _compliance_of(gear):
+    return ToothCompliance.of(gear)
+
+
+def tooth_compliance(gear):
+    """:meth:`ToothCompliance.of` computed once per tooth geometry in a process (~8 ms per gear): the
+    key is the frozen gear without its single pitch deviations, which turn teeth rigidly
+    (:meth:`InvoluteGear.pitch_deviation_angles`) and do not enter the tooth compliance, so Monte
+    Carlo variants that draw them share one fit; an unhashable gear is fitted each time."""
+    key = gear if gear.single_pitch_deviations is None else dataclasses.replace(gear, single_pitch_deviations=None)
+    try:
+        hash(key)
+    except TypeError:
+        return ToothCompliance.of(gear)
+    return _compliance_of(key)
+
+
 def pair_secant_stiffness(pair: InvolutePair, force, compliance=None):
     """Normal secant stiffness F / delta(F) [N/m] of one tooth pair of ``pair`` over its face width
     at the middle of the path of contact, Eq. (series_contact) with delta(F) = C F + delta_H(F)
@@ -164,7 +185,8 @@ class InvoluteContactSet(PairFamilySet):
     contact mode, teeth and the series-law tangent k_t).
     """
 
-    def __init__(self, meshes, n_bodies, *, backend="warp", precision="float64", device="cpu", name="gears"):
+    def __init__(self, meshes, n_bodies, *, backend="warp", precision="float64", device="cpu", name="gears",
+                 compliance=None):
         if len(meshes) == 0:
             raise RvtoolInputError("meshes must contain at least one GearMesh")
         check_backend(backend, precision)
@@ -172,7 +194,9 @@ class InvoluteContactSet(PairFamilySet):
         self.meshes = tuple(meshes)
         self.backend = backend
         self.precision = precision
-        self.compliance = {}
+        # tooth compliances computed before ({gear: ToothCompliance}, e.g. the ``compliance`` of
+        # built sets that are copied): reused, the other gears' computed
+        self.compliance = {} if compliance is None else dict(compliance)
         fp, ip, ids, mesh_of, dev, ap = [], [], [], [], [], []
         offset = 0
         for m_i, m in enumerate(self.meshes):
@@ -183,7 +207,7 @@ class InvoluteContactSet(PairFamilySet):
             A, B = pr.gear_a, pr.gear_b
             for g in (A, B):
                 if g not in self.compliance:
-                    self.compliance[g] = ToothCompliance.of(g)
+                    self.compliance[g] = tooth_compliance(g)
             u_ref_a = 0.5 * sum(pr.path_of_contact()) / A.base_radius
             ga = gear_block(A, self.compliance[A], u_ref_a)
             gb = gear_block(B, self.compliance[B], float(pr.roll_b(u_ref_a)))
@@ -220,9 +244,53 @@ class InvoluteContactSet(PairFamilySet):
                         ap.append(arow)
                         ids.append(f"{m.name}/line{line}/w{w:+d}/s{s_i}")
                         mesh_of.append(m_i)
-        self.fparams = np.array(fp)
-        self.iparams = np.array(ip, dtype=np.int32)
-        self.deviations = np.concatenate(dev)
+        self._finish(np.array(fp), np.array(ip, dtype=np.int32), np.concatenate(dev), ids, np.array(mesh_of),
+                     np.array(ap), n_bodies, backend, precision, device)
+
+    @classmethod
+    def concatenated(cls, sets, nb, *, names=None, precision="float64", device="cpu"):
+        """The set of B built sets side by side (copy c's bodies offset by c nb, the ground at
+        B nb; mesh names ``names[c][k]``, default the built ones): rows, tooth-angle tables and
+        compliances concatenated, equal to the set built from the renamed, shifted meshes
+        (tests/test_device_rows.py) without the per-row loop. Sets with stick--slip anchors are built
+        from the meshes."""
+        s, B = sets[0], len(sets)
+        names = names or [[m.name for m in sc.meshes] for sc in sets]
+        shift = lambda b, c: b if b == GROUND else int(b) + c * nb
+        meshes = [moved_member(m, name=nm, body_a=shift(m.body_a, c), body_b=shift(m.body_b, c))
+                  for c, sc in enumerate(sets) for m, nm in zip(sc.meshes, names[c])]
+        compliance = {}
+        for sc in sets:
+            compliance.update(sc.compliance)
+        if any(sc.anchor for sc in sets) or any(sc.backend != s.backend for sc in sets):
+            return cls(meshes, B * nb, backend=s.backend, precision=precision, device=device, name=s.name,
+                       compliance=compliance)
+        self = object.__new__(cls)
+        self.name, self.meshes, self.backend, self.precision = s.name, tuple(meshes), s.backend, precision
+        self.compliance = compliance
+        ip, ids, mesh_of = [], [], []
+        n_mesh = n_dev = 0
+        for c, sc in enumerate(sets):
+            i = sc.iparams.copy()
+            for col in (ref.J_BODY_A, ref.J_BODY_B):
+                i[:, col] = np.where(i[:, col] >= sc.n_bodies, B * nb, i[:, col] + c * nb)
+            i[:, (ref.J_TOOTH_A, ref.J_TOOTH_B)] += n_dev
+            ip.append(i)
+            rename = {m.name: nm for m, nm in zip(sc.meshes, names[c])}
+            ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
+            mesh_of.append(sc.mesh_of + n_mesh)
+            n_mesh += len(sc.meshes)
+            n_dev += len(sc.deviations)
+        self._finish(np.concatenate([sc.fparams for sc in sets]), np.concatenate(ip),
+                     np.concatenate([sc.deviations for sc in sets]), ids, np.concatenate(mesh_of),
+                     np.zeros((sum(sc.n_contacts for sc in sets), anchor_ref.N_ANCHOR)), B * nb, s.backend,
+                     precision, device)
+        return self
+
+    def _finish(self, fparams, iparams, deviations, ids, mesh_of, anchor_params, n_bodies, backend, precision, device):
+        self.fparams = fparams
+        self.iparams = iparams
+        self.deviations = deviations
         # slow-state gap offsets per tooth flank: identity -> index of ref.flank_offset's layout
         n_teeth, flank, base = len(self.deviations), {}, 0
         for m in self.meshes:
@@ -235,12 +303,12 @@ class InvoluteContactSet(PairFamilySet):
         self._flank_index = flank
         self._tooth_offsets = None
         self.ids = tuple(ids)
-        self.mesh_of = np.array(mesh_of)
-        self.n_contacts = len(fp)
+        self.mesh_of = mesh_of
+        self.n_contacts = len(fparams)
         anchor = bool(np.any(self.iparams[:, ref.J_FRICTION] == FrictionModel.ANCHOR))
         # committed anchors (A and B coordinates) and slip distance per row
         self.init_evaluation(self.iparams[:, ref.J_BODY_A], self.iparams[:, ref.J_BODY_B], n_bodies,
-                             anchor_params=np.array(ap) if anchor else None)
+                             anchor_params=anchor_params if anchor else None)
         if backend == "warp":
             from warp_contacts.involute_pairs import InvolutePairKernel
             self._kernel = InvolutePairKernel(self.fparams, self.iparams, self.deviations, n_bodies, precision, device,

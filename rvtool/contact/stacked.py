@@ -62,6 +62,14 @@ class StackedContactSet:
             return np.array(evaluation.obs, float)
         return stack_rows([p.commit(pose, vel) for p in self.parts])
 
+    def resultants(self, pose, vel=None):
+        """The parts' ``resultants`` (per mounting) in one dict (parts without them are skipped)."""
+        out = {}
+        for p in self.parts:
+            if callable(getattr(p, "resultants", None)):
+                out.update(p.resultants(pose, vel))
+        return out
+
     def set_gap_offsets(self, offsets):
         """Gap offsets [m] per stacked row, passed to each part that takes them; a nonzero offset
         on a part that takes none is an error naming it."""

@@ -27,8 +27,10 @@ def kind(name):
     """What a shipped file holds: "tolerances" (a ``[tolerances]`` table, the Monte Carlo's input),
     "sweep" (a ``study`` key, ``rvtool sweep``'s input), "allowables" (an ``[allowables]`` table, the
     datasheet's input), "assumed" (``[[assumed]]`` tables: a design's assumed inputs with their cited
-    ranges), "catalogue" (``[[figure]]`` tables: a design's catalogue figures) or "design" (a reducer
-    design)."""
+    ranges), "catalogue" (``[[figure]]`` tables: a design's catalogue figures), "measured"
+    (``[[transmission_error]]`` tables: measurements of a design's prototypes published in a paper,
+    :mod:`rvtool.designs.measured`), "friction" (a ``friction_set``), "efficiency" (an
+    ``efficiency_catalogue``) or "design" (a reducer design)."""
     import tomllib
     with open(path(name), "rb") as fh:
         table = tomllib.load(fh)
@@ -42,11 +44,18 @@ def kind(name):
         return "assumed"
     if "figure" in table:
         return "catalogue"
+    if "transmission_error" in table:
+        return "measured"
+    if "friction_set" in table:
+        return "friction"
+    if "efficiency_catalogue" in table:
+        return "efficiency"
     return "design"
 
 
 def design_names():
-    """Names of the shipped reducer designs (tolerance, sweep, allowables, assumed and catalogue files left out)."""
+    """Names of the shipped reducer designs (tolerance, sweep, allowables, assumed, catalogue, measurement, friction
+    and efficiency files left out)."""
     return [n for n in names() if kind(n) == "design"]
 
 
@@ -69,3 +78,10 @@ def assumed_of(name):
     stem = name[:-5] if name.endswith(".toml") else name
     companion = f"{stem}_assumed"
     return companion if companion in names() and kind(companion) == "assumed" else None
+
+
+def measured_of(name):
+    """Name of the shipped measurement file of shipped design ``name`` (``<name>_measured``), or None."""
+    stem = name[:-5] if name.endswith(".toml") else name
+    companion = f"{stem}_measured"
+    return companion if companion in names() and kind(companion) == "measured" else None

@@ -334,8 +334,10 @@ def key_table(topology):
     for sec, scls in secs.items():
         sec_table = table.get(sec, {})
         obj = getattr(design, sec, None) if design is not None else None
-        if "kind" in sec_table and kinds:
-            rows.append((sec, "kind", sec_table["kind"], "", f"one of {list(kinds)}",
+        sec_kinds = getattr(module, "SECTIONS", {}).get(sec)
+        sec_kinds = sec_kinds if isinstance(sec_kinds, dict) else kinds
+        if "kind" in sec_table and sec_kinds:
+            rows.append((sec, "kind", sec_table["kind"], "", f"one of {list(sec_kinds)}",
                          "the spec of this section (a bearing's type)", False))
         if obj is None and design is not None:
             continue                         # e.g. a locked bearing: no spec, no keys

@@ -253,6 +253,10 @@ class ReducerModel:
     #: retained axial and tilt coordinates of the output body on its main bearing
     #: (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`; issue 32), or None (planar output)
     carrier_tilt: object = None
+    #: retained axial and tilt coordinates of every spatial body (carrier / flange, wheels, cranks) in
+    #: one :class:`~exudyn_user_elements.out_of_plane.RetainedTilt` (its ``names``), or None (all planar);
+    #: the carrier's is also ``carrier_tilt``
+    body_tilts: object = None
 
     # -- coordinates -------------------------------------------------------
     def body_index(self, body):
@@ -368,9 +372,15 @@ class ReducerModel:
         return out
 
     def regularization_stiffness(self):
-        """[(global index, stiffness)] of the regularization springs as they are now."""
-        return [(self.coordinate_index(body, c), self.mbs.GetObjectParameter(obj, "stiffness"))
-                for body, c, _, obj in self.reg_springs]
+        """[(global index, stiffness)] of the regularization springs as they are now, and those of the
+        retained axial and tilt coordinates of spatial bodies (issue 32: a tilting wheel's axial
+        translation has no other stiffness)."""
+        out = [(self.coordinate_index(body, c), self.mbs.GetObjectParameter(obj, "stiffness"))
+               for body, c, _, obj in self.reg_springs]
+        t = self.body_tilts if self.body_tilts is not None else self.carrier_tilt
+        if t is not None:
+            out += [(int(i), float(k)) for i, k in zip(t.coordinate_indices, t.stiffness_diagonal) if k > 0]
+        return out
 
     def regularization_spring(self, bc):
         """(Exudyn object, stiffness at build) of the regularization spring on a
@@ -402,6 +412,26 @@ class ReducerModel:
     def flange_displacement(self, q):
         """(z [m], gamma_x, gamma_y [rad]) of the output flange at the state q (spatial output body only)."""
         return self._retained_tilt().coordinates(q)
+
+    def tilts(self, q):
+        """{body name: (z [m], gamma_x, gamma_y [rad])} of every body that retains its out-of-plane
+        coordinates at the state q (empty for a planar model)."""
+        t = self.body_tilts if self.body_tilts is not None else self.carrier_tilt
+        if t is None:
+            return {}
+        return {nm: t.coordinates(q, r) for r, nm in enumerate(t.names)}
+
+    def set_body_load(self, body, axial_force=0.0, moment=(0.0, 0.0)):
+        """External axial force [N] and tilting moment (M_x, M_y) [N m] on a spatial body (name) at its
+        centre."""
+        from ..validation import check_finite
+        check_finite("axial_force", axial_force)
+        check_finite("moment", moment)
+        t = self.body_tilts if self.body_tilts is not None else self.carrier_tilt
+        if t is None:
+            raise RvtoolInputError(f"body {body!r} is planar (its axial and tilt coordinates are held); valid: "
+                                   "bodies.*_coordinates = 'spatial' in the design file")
+        t.set_load(axial_force, moment, body=body)
 
     def main_bearing_state(self, q):
         """(the main bearing's evaluator, the poses it is evaluated at) at the static state q."""

@@ -10,6 +10,16 @@ levels given as fractions of a reference moment (by default 0 and the catalogue'
 the whole rated range, the catalogue's graph of tilt vs moment being nearly linear for a preloaded
 pair). Nothing is tuned toward a catalogue value.
 
+Definition search (issue 32, second session): the Nabtesco definition was again not reached. The
+RD-E catalogue's contents list "Calculation of moment rigidity and torsion angle" (Nabtesco RD-E
+series catalogue, p. 22; public transcription, scribd 497875543: only the contents page came back),
+so the catalogue gives the tilt as a calculation from the moment rigidity, not its measuring points.
+The nearest manufacturer definition found is Harmonic Drive's (LynxDrive engineering data, 1018856
+08/2018 V04, sec. 7.3.4, Eq. 45.1): the angle of inclination of the output flange gamma [arcmin] =
+M / K_B, M [N m] the tilting moment on the output bearing, K_B [N m/arcmin] its moment stiffness --
+a secant from zero load, which is the default read points here (0 and the reference moment). The
+convention stays stated, not cited as Nabtesco's.
+
 Procedure (:class:`MomentRigidityTest`): the model with a spatial carrier
 (``bodies.carrier_coordinates = "spatial"``), input held at angle 0, the output torque held at
 ``output_torque``; a moment M_x at the main bearing's axial centre at each level, a static
@@ -253,3 +263,162 @@ def main_bearing_band(pair, assumed, test, *, samples=16, seed=0):
         lhs.append(rigidity(p))
     vals = [v for pr in tornado.values() for v in pr] + lhs
     return {"keys": [a.key for a in inputs], "tornado": tornado, "samples": lhs, "band": (min(vals), max(vals))}
+
+
+@dataclass(frozen=True, kw_only=True)
+class CombinedLoadTest:
+    """TE and torsional stiffness under a tilting moment and the torque together (issue 32), as data.
+
+    moment: (M_x, M_y) [N m] on the output flange at the main bearing's axial centre (an arm's load),
+    held through the whole test; torques: output torque levels [N m], ascending, at least two (the
+    stiffness is the secant between the first and the last); te_torque: torque [N m] of the TE sweep;
+    te_angles: input angles [rad] of the TE sweep (ascending, e.g. one mesh period)."""
+    moment: tuple
+    torques: tuple
+    te_torque: float
+    te_angles: tuple
+
+    def __post_init__(self):
+        check_finite("moment", self.moment)
+        if np.shape(self.moment) != (2,):
+            raise RvtoolInputError(f"moment = {self.moment!r} must hold (M_x, M_y) [N m]")
+        t = np.asarray(self.torques, float)
+        check_range("torques", t, 0.0)
+        if t.ndim != 1 or len(t) < 2 or np.any(np.diff(t) <= 0):
+            raise RvtoolInputError(f"torques = {self.torques!r} must be at least two ascending levels [N m]")
+        check_range("te_torque", self.te_torque, 0.0)
+        a = np.asarray(self.te_angles, float)
+        check_finite("te_angles", a)
+        if a.ndim != 1 or len(a) < 2 or np.any(np.diff(a) <= 0):
+            raise RvtoolInputError(f"te_angles = {self.te_angles!r} must be at least two ascending input angles [rad]")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CombinedLoadResult:
+    """torques (n,) [N m]; output_angle (n,) [rad] (the output's wind-up at input angle 0);
+    torsional_stiffness [N m/rad] (secant, first to last level); tilts: {body: (n, 3) (z [m],
+    gamma_x, gamma_y [rad])} per level of every spatial body; main_row_axial_forces (n, rows) [N];
+    crank_row_axial_forces (n, cranks, rows) [N] (spatial cranks; else the planar observation);
+    te (m,) [rad] over the sweep's input angles at te_torque; te_peak_to_peak [rad];
+    width_load_ratio: {element: (n,)} per level, :func:`width_load_ratios` (the peak slice line load
+    over the peak row load: 1 uniform across the width, more where a tilt loads one edge)."""
+    moment: tuple
+    torques: np.ndarray
+    output_angle: np.ndarray
+    torsional_stiffness: float
+    tilts: dict
+    main_row_axial_forces: np.ndarray
+    crank_row_axial_forces: np.ndarray | None
+    te_angles: np.ndarray
+    te: np.ndarray
+    width_load_ratio: dict
+
+    @property
+    def te_peak_to_peak(self):
+        return float(np.ptp(self.te))
+
+    def to_dict(self):
+        arcmin = 1.0 / RAD_PER_ARCMIN
+        return {"moment_Nm": list(self.moment), "torques_Nm": self.torques.tolist(),
+                "output_angle_arcmin": (self.output_angle * arcmin).tolist(),
+                "torsional_stiffness_Nm_per_arcmin": self.torsional_stiffness * RAD_PER_ARCMIN,
+                "tilts_arcmin": {k: (np.asarray(v)[:, 1:] * arcmin).tolist() for k, v in self.tilts.items()},
+                "axial_displacement_um": {k: (np.asarray(v)[:, 0] * 1e6).tolist() for k, v in self.tilts.items()},
+                "main_row_axial_forces_N": self.main_row_axial_forces.tolist(),
+                "crank_row_axial_forces_N": None if self.crank_row_axial_forces is None
+                else self.crank_row_axial_forces.tolist(),
+                "te_arcsec": (self.te * 60 * arcmin).tolist(), "te_peak_to_peak_arcsec": self.te_peak_to_peak * 60 * arcmin,
+                "width_load_ratio": {k: np.asarray(v).tolist() for k, v in self.width_load_ratio.items()}}
+
+
+def _sliced(ev, pose):
+    """[(SkewSlices, its poses)] inside an element's evaluator at the element's poses: the evaluator
+    itself, the parts of a stacked set, the inner set of a series closure at its extended (station)
+    poses, recursively."""
+    from ..contact.skew import SkewSlices
+    from ..contact.stacked import StackedContactSet
+    if isinstance(ev, SkewSlices):
+        return [(ev, pose)]
+    if isinstance(ev, StackedContactSet):
+        return [x for p in ev.parts for x in _sliced(p, pose)]
+    if callable(getattr(type(ev), "extended_pose", None)):         # a series closure (pin / crank beam)
+        return _sliced(ev.inner, ev.extended_pose(pose))
+    return []
+
+
+def width_load_ratios(model, q):
+    """{element: the largest slice line load over the largest row load} of every family sliced across
+    the width at the static state q (:class:`~rvtool.contact.skew.SkewSlices`, also inside a stacked
+    set or a series closure): max over slices s and rows r of f_sr / w_s, over max over rows of
+    sum_s f_sr (1: the most loaded contact is loaded uniformly; up to 1 / min w_s when one slice
+    carries it all)."""
+    out = {}
+    for name, el in model.elements.items():
+        ql = el.local(q)
+        ratios = []
+        for p, pose in _sliced(el.evaluator, el.pose_velocity(ql, np.zeros_like(ql))[0]):
+            f = p.slice_forces(pose)
+            peak = float(f.sum(axis=0).max())
+            if peak > 0:
+                ratios.append(float((f / p.weights[:, None]).max() / peak))
+        if ratios:
+            out[name] = max(ratios)
+    return out
+
+
+def _crank_rows(model, q):
+    """(cranks, rows) axial force [N] of each tapered crank row on its crank (RV only; fed back with
+    spatial cranks, the planar observation otherwise), or None."""
+    el = model.elements.get("crank_bearings")
+    if el is None:
+        return None
+    ql = el.local(q)
+    res = el.evaluator.resultants(el.pose_velocity(ql, np.zeros_like(ql))[0])
+    return np.array([np.asarray(r.row_wrenches)[:, 2] for r in res.values()])
+
+
+def combined_moment_torque(model, test: CombinedLoadTest):
+    """:class:`CombinedLoadResult` of a built model with a spatial carrier / flange: the flange moment
+    held, the output torque stepped through ``test.torques`` at input angle 0 (static equilibria,
+    warm-started), then the TE sweep at ``test.te_torque`` over ``test.te_angles``. The load and
+    moment are removed afterwards. Torques act against the drive (the output torque is
+    -sign(ratio) T, as the stiffness protocol loads)."""
+    from ..solver.static import StaticSolver
+    if getattr(model, "carrier_tilt", None) is None:
+        raise RvtoolInputError("the combined moment + torque test needs the output body's tilt coordinates; valid: "
+                               "bodies.carrier_coordinates (RV) or bodies.flange_coordinates (cycloid) = 'spatial'")
+    solver = StaticSolver(model)
+    sign = -np.sign(model.ratio)
+    out = model.body_index(model.output.body)
+    ref = model.reference[out, 2]
+    outs, tilts, main_rows, crank_rows, widths = [], [], [], [], []
+    try:
+        model.set_flange_load(0.0, tuple(float(m) for m in test.moment))
+        for T in test.torques:
+            model.set_output_torque(sign * float(T))
+            q = solver.solve(0.0, previous_angle=0.0 if solver.q is not None else None)
+            outs.append(q[model.output_index])
+            tilts.append(model.tilts(q))
+            main_rows.append(model.main_bearing_loads(q).row_axial_forces)
+            crank_rows.append(_crank_rows(model, q))
+            widths.append(width_load_ratios(model, q))
+        model.set_output_torque(sign * float(test.te_torque))
+        te, prev = [], None
+        for s in test.te_angles:
+            q = solver.solve(float(s), previous_angle=prev)
+            prev = float(s)
+            kin = model.kinematic_state(float(s)).poses[out, 2] - ref
+            te.append(q[model.output_index] - kin)
+    finally:
+        model.set_flange_load(0.0, (0.0, 0.0))
+        model.set_output_torque(0.0)
+    outs = np.array(outs)
+    T = np.asarray(test.torques, float)
+    return CombinedLoadResult(
+        moment=tuple(test.moment), torques=T, output_angle=outs,
+        torsional_stiffness=float(abs((T[-1] - T[0]) / (outs[-1] - outs[0]))),
+        tilts={k: np.array([t[k] for t in tilts]) for k in tilts[0]},
+        main_row_axial_forces=np.array(main_rows, float),
+        crank_row_axial_forces=None if crank_rows[0] is None else np.array(crank_rows),
+        te_angles=np.asarray(test.te_angles, float), te=np.array(te),
+        width_load_ratio={k: np.array([w[k] for w in widths]) for k in widths[0]})

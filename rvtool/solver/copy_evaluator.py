@@ -49,9 +49,10 @@ class CopyBlockAssembler:
         local = 3 * (bodies % nb)[:, :, None] + np.arange(3)            # (N, m, 3)
         local = np.where(ground[:, :, None], -1, local).reshape(n_rows, 3 * m)
         self.local = local                       # (N, 3m) local coordinate of each row entry, -1: ground
-        pos = pair_index(local, n)
         self._vec = RowScatter(np.where(local >= 0, row_copy[:, None] * n + local, -1), n_copies * n)
-        self._mat = RowScatter(np.where(pos >= 0, row_copy[:, None, None] * n * n + pos, -1), n_copies * n * n)
+        # the block map (N (3m)^2 indices) is made on the first blocks(): the device row sum reads
+        # only local and row_copy
+        self._mat = None
 
     def vector(self, Q):
         """(B, 3 nb) from per-row forces (N, 3m)."""
@@ -59,6 +60,11 @@ class CopyBlockAssembler:
 
     def blocks(self, K):
         """(B, 3 nb, 3 nb) from per-row tangents (N, 3m, 3m)."""
+        if self._mat is None:
+            n = self.n
+            pos = pair_index(self.local, n)
+            self._mat = RowScatter(np.where(pos >= 0, self.row_copy[:, None, None] * n * n + pos, -1),
+                                   self.n_copies * n * n)
         return self._mat(K).reshape(self.n_copies, self.n, self.n)
 
 

@@ -130,6 +130,25 @@ class FusedSupport:
         return not self.reasons
 
 
+FUSED_SET_TYPES = {"CycloidPinSet": "cycloid pins", "OutputPinEvaluator": "plain output pins",
+                   "ContactSetEvaluator": "lumped circle-pair bearings"}
+"""Contact-set types whose rows the fused kernel evaluates (:mod:`warp_contacts.fused_step`)."""
+
+
+def unfused_element_reasons(model):
+    """A named reason for every contact element of ``model`` whose rows the fused kernel does not
+    evaluate (its set type is not in :data:`FUSED_SET_TYPES`): what a fused stepper for that
+    topology would still have to carry (issue 31: RV-40E's involute pairs, needle and ball rolling
+    elements, tapered crank bearings)."""
+    out = []
+    for el in model.contact_elements():
+        tname = type(el.evaluator).__name__
+        if tname not in FUSED_SET_TYPES:
+            out.append(f"contact element {el.evaluator.name!r} ({tname}): no rows of this set type in the fused "
+                       f"kernel (it evaluates {', '.join(f'{v} ({k})' for k, v in FUSED_SET_TYPES.items())})")
+    return out
+
+
 def fused_support(model, run_spec=None):
     """:class:`FusedSupport` of a built ``model`` (and ``run_spec``, when given) for the fused stepper.
 
@@ -161,7 +180,10 @@ def fused_support(model, run_spec=None):
             if repr(val) != ok:
                 reasons.append(f"run_spec.{key} = {val!r} (the fused stepper runs {ok})")
     if not (isinstance(model.design, CycloidDesign) and isinstance(model.kinematics, CycloidKinematics)):
-        reasons.append(f"topology {type(model.design).__name__}: the fused stepper runs cycloid reducers only")
+        reasons.append(f"topology {type(model.design).__name__}: the fused stepper runs cycloid reducers only "
+                       f"(its kernel, warp_contacts.fused_step, carries a cycloid drive's input shaft, wheels and "
+                       f"output flange; this model's bodies are {list(model.body_names)})")
+        reasons.extend(unfused_element_reasons(model))
         return FusedSupport(tuple(reasons))
     from .backends.base import flexible_body_reasons
     if flexible_body_reasons(model):

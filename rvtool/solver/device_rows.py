@@ -14,16 +14,23 @@ tapered rollers (the crank bearings that carry the output carrier). This module 
    poses reference + q of all copies, and sums its rows into per-copy residuals and dense tangent
    blocks (:class:`rvtool.solver.replica.ReplicaEvaluator`, the rows' block scatter);
 3. the step of :mod:`warp_contacts.batched_newton_ref` (the reference of the device-resident
-   kernel, the same bookkeeping) vectorized over the copies: regularization springs times the
-   copy's homotopy factor, the output torque, the fixed coordinates (drive, coordinate locks,
-   journal locks: identity rows at their prescribed values), a dense solve per copy, step
-   limiting, plausibility bounds, warm start -> regularization homotopy -> failed.
+   kernel, the same bookkeeping) for every copy: regularization springs times the copy's homotopy
+   factor, the output torque, the fixed coordinates (drive, coordinate locks, journal locks:
+   identity rows at their prescribed values), a dense solve per copy, step limiting,
+   plausibility bounds, warm start -> regularization homotopy -> failed; by default as one Warp
+   kernel on the device (:mod:`warp_contacts.block_newton`, ``device_step``), else NumPy on the
+   host (:func:`warp_contacts.block_newton_ref.block_step`, its reference).
 
-Where it runs: the contact kernels on the Warp device (``cpu`` or ``cuda``); the block scatter,
-the tapered rollers' planar mapping (NumPy in :class:`rvtool.bearings.tapered_set.TaperedBearingSet`)
-and the per-copy dense solve on the host, one host round trip per iteration. It is therefore
-not a CUDA graph like the cycloid path: that needs the tapered planar mapping and a family-generic
-row sum as device kernels (issue 31, not done here).
+Where it runs: the contact kernels, the step and (``device_sum``, default on a GPU) the rows'
+per-copy sums and the tapered rollers' planar mapping (:mod:`warp_contacts.tapered_planar`) on
+the Warp device (``cpu`` or ``cuda``). With the device sum every family launches from poses that
+a kernel writes from the step's states, so an iteration moves nothing between host and device and
+the host reads the count of active copies every ``sync_every`` iterations (device-resident loop);
+else per iteration the host stages the poses and reads back the states and statuses (one round
+trip). Without ``device_sum`` the rows are summed on the host
+(:class:`rvtool.solver.replica.ReplicaEvaluator`, the tapered mapping NumPy in
+:class:`rvtool.bearings.tapered_set.TaperedBearingSet`). The resident loop is not captured as a
+CUDA graph yet (the cycloid path's is): each iteration is ~15 launches from Python.
 
 Covered: every contact-set type of :data:`rvtool.solver.replica.COPIERS` (cycloid pins, involute
 pairs external and internal, rolling-element bearings: needle, cylindrical, ball, tapered; circle
@@ -37,11 +44,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from warp_contacts.batched_newton_ref import ACTIVE, CONVERGED, FAILED, WARM
+from warp_contacts.batched_newton_ref import ACTIVE, CONVERGED, WARM
+from warp_contacts.block_newton_ref import StepModel, block_step
 
 from ..errors import RvtoolInputError
 from ..model.reducer import COORDINATES
 from .device_newton import DeviceNewtonSettings
+
+
+KINEMATICS_CACHE = 4096
+"""Input angles whose variant copies' kinematic states :meth:`DeviceRowNewton.prime_kinematics` keeps."""
 
 
 def row_reasons(model):
@@ -56,7 +68,8 @@ class RowSolve:
     rad], status (P,) (CONVERGED / FAILED), the converged stage (-1 warm start, s homotopy stage),
     Newton iterations per copy, residual norms [N], sweeps (batch iterations) and the wall-time
     split [s]: ``kernels_s`` (the families' launches with their host transfers), ``scatter_s``
-    (rows into per-copy blocks), ``solve_s`` (the host step), ``setup_s`` (copying the families)."""
+    (rows into per-copy blocks), ``solve_s`` (the step: the device kernel with its read-back, or the host
+    step), ``setup_s`` (copying the families)."""
     q: np.ndarray
     status: np.ndarray
     stage: np.ndarray
@@ -94,8 +107,10 @@ class DeviceRowSum:
     (:class:`warp_contacts.block_scatter.BlockScatter`, one thread per row, atomics): a family
     with a staged launch (:class:`rvtool.contact.evaluator.StagedLaunch`: cycloid pins, involute
     pairs, rolling elements, circle pairs) is launched on the device and its row buffers are summed
-    where they are; the others (tapered rollers: planar mapping on the host; plain output pins)
-    are evaluated as in :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
+    where they are, as the tapered rollers' planar rows (:meth:`TaperedBearingSet.device_rows`,
+    laminae rows) and the plain output pins' rows (:class:`rvtool.solver.replica.PlainPinCopies`);
+    the others (influence-coefficient tapered rows) are evaluated as in
+    :class:`rvtool.solver.replica.ReplicaEvaluator` and their rows uploaded.
     Only B (n + n^2) numbers come back instead of every row (on a GPU the rows' transfer and the
     host scatter cost more than the kernels). The same sums as the host scatter up to the order of
     the additions (last bits). ``timing`` as ReplicaEvaluator's ("kernels": launches, host
@@ -108,6 +123,9 @@ class DeviceRowSum:
         self.families, self.nb, self.B, self.device = families, nb, n_copies, device
         self.staged = [isinstance(f.set, StagedLaunch) and getattr(f.set, "backend", None) == "warp"
                        for f in families]
+        # families whose rows are made on the device from device poses without a staged launch: tapered
+        # rows (planar mapping, warp_contacts.tapered_planar), plain output pins (the pin kernel's launch)
+        self.direct = [not s and bool(getattr(f.set, "rows_on_device", False)) for f, s in zip(families, self.staged)]
         self.scatter = BlockScatter([(f.scatter.local, f.scatter.row_copy) for f in families], n_copies, 3 * nb,
                                     wp.float64, device)
         self._host_rows = {}
@@ -119,7 +137,46 @@ class DeviceRowSum:
             if callable(getattr(f.set, "set_velocity_tangent", None)):
                 f.set.set_velocity_tangent(not on)
 
+    @property
+    def resident(self):
+        """Whether every family runs from device-written poses (:meth:`pose_buffers`, :meth:`launch_device`)."""
+        return all(s or t for s, t in zip(self.staged, self.direct))
+
+    def pose_buffers(self):
+        """[(pose, vel or None)] device input arrays of every family ((B nb + 1, 3), the ground last)."""
+        return [f.set.pose_buffers() if s else f.set.device_pose_buffers()
+                for f, s in zip(self.families, self.staged)]
+
+    def launch_device(self):
+        """Every family launched at the poses in :meth:`pose_buffers` as they are, and the device sums
+        Q (B, n), K (B, n, n) (no transfer; :attr:`resident` families only)."""
+        t0 = time.perf_counter()
+        rows = []
+        for f, staged in zip(self.families, self.staged):
+            if staged:
+                f.set.launch_staged()
+                _, q, K, _ = f.set.row_buffers()
+            else:
+                q, K = f.set.launch_device_rows()
+            rows.append((q, K))
+        t1 = time.perf_counter()
+        Q, K = self.scatter.sum(rows)
+        self.timing["kernels"] += t1 - t0
+        self.timing["scatter"] += time.perf_counter() - t1
+        self.timing["launches"] += len(self.families)
+        return Q, K
+
     def evaluate(self, pose, vel):
+        Q, K = self.evaluate_device(pose, vel)
+        t1 = time.perf_counter()
+        Q, K = np.array(Q), np.array(K)
+        Q[self.masked], K[self.masked] = 0.0, 0.0
+        self.timing["scatter"] += time.perf_counter() - t1
+        return _Blocks(Q, K)
+
+    def evaluate_device(self, pose, vel):
+        """The per-copy sums as device arrays Q (B, n), K (B, n, n) (no download; overwritten by
+        the next evaluation; masked copies are not zeroed)."""
         import warp as wp
         from .replica import family_rows
         t0 = time.perf_counter()
@@ -129,6 +186,8 @@ class DeviceRowSum:
                 f.set.stage(pose, vel)
                 f.set.launch_staged()
                 _, q, K, _ = f.set.row_buffers()
+            elif self.direct[i]:
+                q, K = f.set.device_rows(pose, vel)
             else:
                 Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in family_rows(f.set, pose, vel)[:2])
                 if i not in self._host_rows:
@@ -139,13 +198,11 @@ class DeviceRowSum:
                 K.assign(Kh)
             rows.append((q, K))
         t1 = time.perf_counter()
-        Q, K = self.scatter(rows)
-        Q, K = np.array(Q), np.array(K)
-        Q[self.masked], K[self.masked] = 0.0, 0.0
+        Q, K = self.scatter.sum(rows)
         self.timing["kernels"] += t1 - t0
         self.timing["scatter"] += time.perf_counter() - t1
         self.timing["launches"] += len(self.families)
-        return _Blocks(Q, K)
+        return Q, K
 
 
 @dataclass
@@ -164,9 +221,21 @@ class DeviceRowNewton:
     settings: :class:`DeviceNewtonSettings` (the cycloid path's tolerances and bounds: abs_tol
     1e-6 N as Exudyn's static solver). device_sum: sum the rows into per-copy blocks on the device
     (:class:`DeviceRowSum`) instead of on the host; default on a CUDA device only (on the CPU the
-    rows are host memory already and the host scatter is deterministic)."""
+    rows are host memory already and the host scatter is deterministic). device_step: the Newton
+    step of every copy (assembly with springs, torque and fixed coordinates, the dense solve, step
+    limiting, plausibility, stage bookkeeping) as one Warp kernel on the device
+    (:class:`warp_contacts.block_newton.BlockNewtonStep`: the per-copy sums stay on the device,
+    the states and statuses come back once per iteration) instead of NumPy on the host
+    (:func:`warp_contacts.block_newton_ref.block_step`, its reference); default on. With
+    both (and every family able to launch from device-written poses: staged launches, laminae
+    tapered rows) the loop is device-resident: the step kernel's states are written into every
+    family's pose array on the device (:func:`warp_contacts.block_newton.pose_kernel`), nothing is
+    staged from the host, and the host reads the count of active copies every ``sync_every``
+    iterations (default 1 on the CPU, 4 on a GPU: up to sync_every - 1 sweeps run after the last
+    copy finished, where the step leaves every copy as it is)."""
 
-    def __init__(self, model, copies=None, *, device="cpu", settings=None, device_sum=None):
+    def __init__(self, model, copies=None, *, device="cpu", settings=None, device_sum=None, device_step=None,
+                 sync_every=None):
         from .replica import ReplicaEvaluator, copy_families
         self.models = list(model) if isinstance(model, (list, tuple)) else None
         if self.models is not None:
@@ -207,6 +276,16 @@ class DeviceRowNewton:
         free[self.input_local] = False
         self.free = free
         self.rot = np.arange(n) % 3 == 2
+        self.device_step = True if device_step is None else bool(device_step)
+        self._steppers = {}
+        self._QK = None                 # device copies of host-summed blocks (device step, host sum)
+        self._kin_cache = {}            # angle -> (B, n) kinematic states of the variant copies
+        self._reference_d = None        # the copies' reference poses on the device (resident loop)
+        if sync_every is None:
+            sync_every = 1 if str(device).startswith("cpu") else 4
+        if isinstance(sync_every, bool) or not isinstance(sync_every, (int, np.integer)) or sync_every < 1:
+            raise RvtoolInputError(f"sync_every = {sync_every!r} is outside the valid range [1, inf) (integer)")
+        self.sync_every = int(sync_every)
         if self.models is None:
             self.reference = np.broadcast_to(np.asarray(model.reference, float).reshape(-1), (self.B, n))
         else:
@@ -223,11 +302,32 @@ class DeviceRowNewton:
             kin = (self.model.kinematics.poses(a) - self.model.reference).reshape(len(a), -1)
         else:
             cp = self._copies(len(a), copies)
-            kin = np.array([(self.models[c].kinematics.poses(a[p:p + 1])[0] - self.models[c].reference).reshape(-1)
-                            for p, c in enumerate(cp)]).reshape(len(a), self.n)
+            kin = np.empty((len(a), self.n))
+            self.prime_kinematics(a)
+            for x in np.unique(a):
+                at = a == x
+                kin[at] = self._kin_cache[float(x)][cp[at]]
         kin[:, self.held] = 0.0
         kin[:, self.input_local] = a
         return kin
+
+    def prime_kinematics(self, angles):
+        """Variant copies: the kinematic poses of every copy at ``angles`` [rad], one call of each
+        copy's kinematics for all of them (each copy has its own kinematics object: one call per
+        copy and angle costs ~40 us of Python, 1,000 copies x 37 TE angles twice ~3 s), kept for
+        :meth:`kinematic` (at most KINEMATICS_CACHE angles; then the oldest are dropped)."""
+        if self.models is None:
+            return
+        new = np.array([x for x in np.unique(np.asarray(angles, float)) if float(x) not in self._kin_cache])
+        if len(new) == 0:
+            return
+        tab = np.empty((len(new), self.B, self.n))
+        for c, m in enumerate(self.models):
+            tab[:, c] = (m.kinematics.poses(new) - np.asarray(m.reference, float)).reshape(len(new), -1)
+        while len(self._kin_cache) + len(new) > KINEMATICS_CACHE and self._kin_cache:
+            self._kin_cache.pop(next(iter(self._kin_cache)))
+        for i, x in enumerate(new):
+            self._kin_cache[float(x)] = tab[i]
 
     def _copies(self, P, copies):
         """The variant copies of P points (checked: distinct, in range)."""
@@ -309,9 +409,19 @@ class DeviceRowNewton:
             prev = (q_next, kin)
         return out
 
+    def step_model(self, cfg):
+        """The :class:`warp_contacts.block_newton_ref.StepModel` of this model under settings ``cfg``."""
+        return StepModel(spring_k=self.spring_k, free=self.free, rot=self.rot, out_index=int(self.output_local),
+                         stiffening=np.asarray(cfg.stiffening, float), abs_tol=float(cfg.abs_tol),
+                         max_iterations=int(cfg.max_iterations), max_step_translation=float(cfg.max_step_translation),
+                         max_step_rotation=float(cfg.max_step_rotation), bound_translation=float(cfg.max_translation),
+                         bound_rotation=float(cfg.max_rotation), homotopy=bool(cfg.homotopy))
+
     def _chunk(self, slots, q, kin, tq, st, timing, cfg):
         """Iterate the points on copies ``slots`` until none is active (the other copies masked at
         a kinematic state); arrays in place."""
+        if self.device_step:
+            return self._chunk_device(slots, q, kin, tq, st, timing, cfg)
         B, n = self.B, self.n
         ev = self.evaluator
         ev.masked[:] = True
@@ -334,65 +444,110 @@ class DeviceRowNewton:
         return sweeps
 
     def _step(self, Qc, Kc, q, kin, tq, st, cfg):
-        """One step of every active copy: :func:`warp_contacts.batched_newton_ref.newton_step`
-        vectorized over the copies (same order of operations per copy); cfg: the settings."""
-        status, stage, iters, total = st["status"], st["stage"], st["iters"], st["total"]
-        act = np.flatnonzero(status == ACTIVE)
-        stiff = np.asarray(cfg.stiffening, float)
-        free, rot = self.free, self.rot
-        total[act] += 1
-        f = np.where(stage[act] == WARM, 1.0, stiff[np.maximum(stage[act], 0)])
-        ks = f[:, None] * self.spring_k[None]
-        r = Qc[act] - ks * (q[act] - kin[act])
-        r[:, self.output_local] += tq[act]
-        A = -Kc[act]
-        A[:, np.arange(self.n), np.arange(self.n)] += ks
-        r[:, ~free] = 0.0
-        A[:, ~free, :] = 0.0
-        A[:, :, ~free] = 0.0
-        A[:, ~free, ~free] = 1.0
-        ok = np.isfinite(r).all(axis=1) & np.isfinite(A).all(axis=(1, 2))
-        norm = np.sqrt(np.sum(r * r, axis=1))
-        st["residual"][act] = norm
-        converged = ok & (norm <= cfg.abs_tol)
-        dq = np.zeros_like(r)
-        good = np.flatnonzero(ok)
-        if len(good):
-            try:
-                dq[good] = np.linalg.solve(A[good], r[good][:, :, None])[:, :, 0]
-            except np.linalg.LinAlgError:               # one singular block: solve them one by one
-                for i in good:
-                    try:
-                        dq[i] = np.linalg.solve(A[i], r[i])
-                    except np.linalg.LinAlgError:
-                        ok[i] = False
-        ok &= np.isfinite(dq).all(axis=1)
-        mt = np.max(np.abs(dq[:, ~rot]), axis=1)
-        mr = np.max(np.abs(dq[:, rot]), axis=1)
-        scale = np.ones(len(act))
-        lim_t = ~converged & (mt > cfg.max_step_translation)
-        scale[lim_t] = cfg.max_step_translation / mt[lim_t]
-        lim_r = ~converged & (mr * scale > cfg.max_step_rotation)
-        scale[lim_r] = cfg.max_step_rotation / mr[lim_r]
-        upd = act[ok]
-        q[upd] += scale[ok, None] * dq[ok]
-        iters[upd] += 1
-        dev = np.abs(q[act] - kin[act])
-        implausible = np.any(np.where(rot[None], dev > cfg.max_rotation, dev > cfg.max_translation), axis=1)
-        ok &= ~implausible
-        last = len(stiff) - 1
-        done = ok & converged
-        fin = done & ((stage[act] == WARM) | (stage[act] == last))
-        status[act[fin]] = CONVERGED
-        nxt = act[done & ~fin]
-        stage[nxt] += 1
-        iters[nxt] = 0
-        bad = act[~done & (~ok | (iters[act] >= cfg.max_iterations))]
-        to_h = bad[(stage[bad] == WARM) & bool(cfg.homotopy)]
-        stage[to_h] = 0
-        iters[to_h] = 0
-        q[to_h] = kin[to_h]
-        status[np.setdiff1d(bad, to_h)] = FAILED
+        """One step of every active copy on the host (:func:`warp_contacts.block_newton_ref.block_step`)."""
+        block_step(Qc, Kc, q, kin, tq, st["status"], st["stage"], st["iters"], st["total"], st["residual"],
+                   self.step_model(cfg))
+
+    def _chunk_device(self, slots, q, kin, tq, st, timing, cfg):
+        """:meth:`_chunk` with the step on the device (:class:`warp_contacts.block_newton.BlockNewtonStep`):
+        per iteration the families' launches, the per-copy sums, the step kernel, and one read of
+        the states and statuses (the next poses and the loop's end)."""
+        import warp as wp
+        from warp_contacts.block_newton import BlockNewtonStep
+        B, n = self.B, self.n
+        m = self.step_model(cfg)
+        key = (m.abs_tol, m.max_iterations, m.max_step_translation, m.max_step_rotation, m.bound_translation,
+               m.bound_rotation, m.homotopy, tuple(m.stiffening))
+        stp = self._steppers.get(key)
+        if stp is None:
+            stp = self._steppers[key] = BlockNewtonStep(m, B, n, self.device)
+        ev = self.evaluator
+        ev.masked[:] = True
+        ev.masked[slots] = False
+        qB = np.zeros((B, n))
+        if self.models is None:
+            qB[:] = kin[0]
+        kinB = qB.copy()
+        qB[slots], kinB[slots] = q, kin
+        status = np.full(B, CONVERGED, np.int32)            # the copies without a point: not stepped
+        status[slots] = st["status"]
+        tqB = np.zeros(B)
+        tqB[slots] = tq
+        stage, iters, total = (np.zeros(B, np.int32) for _ in range(3))
+        stage[slots], iters[slots], total[slots] = st["stage"], st["iters"], st["total"]
+        stp.load(q=qB, kin=kinB, torque=tqB, status=status, stage=stage, iters=iters, total=total)
+        host_sum = not isinstance(ev, DeviceRowSum)
+        if not host_sum and ev.resident:
+            return self._resident_loop(stp, slots, q, st, timing, m)
+        if host_sum and self._QK is None:
+            self._QK = (wp.zeros((B, n), dtype=wp.float64, device=self.device),
+                        wp.zeros((B, n, n), dtype=wp.float64, device=self.device))
+        vel = np.zeros((B * self.nb, 3))
+        sweeps = 0
+        while np.any(status[slots] == ACTIVE):
+            k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
+            pose = (self.reference + qB).reshape(B * self.nb, 3)
+            if host_sum:
+                r = ev.evaluate(pose, vel)
+                t1 = time.perf_counter()
+                self._QK[0].assign(r.Q)
+                self._QK[1].assign(r.dQdq)
+                Q, K = self._QK
+                ev.timing["scatter"] += time.perf_counter() - t1
+            else:
+                Q, K = ev.evaluate_device(pose, vel)
+            timing["kernels"] += ev.timing["kernels"] - k0
+            timing["scatter"] += ev.timing["scatter"] - s0
+            t0 = time.perf_counter()
+            stp.step(Q, K)
+            qB, status = stp.read("q", "status")
+            timing["solve"] += time.perf_counter() - t0
+            sweeps += 1
+        stage, iters, total, res = stp.read("stage", "iters", "total", "residual")
+        q[...] = qB[slots]
+        for nm, v in (("status", status), ("stage", stage), ("iters", iters), ("total", total), ("residual", res)):
+            st[nm][...] = v[slots]
+        return sweeps
+
+    def _resident_loop(self, stp, slots, q, st, timing, m):
+        """The device-resident iterations of :meth:`_chunk_device` (class docstring): poses written
+        on the device, the families launched, summed and stepped; the active count read every
+        ``sync_every`` sweeps."""
+        import warp as wp
+        ev = self.evaluator
+        if self._reference_d is None:
+            self._reference_d = wp.array(np.ascontiguousarray(self.reference, np.float64), dtype=wp.float64,
+                                         device=self.device)
+        bufs = ev.pose_buffers()
+        for _, vel in bufs:
+            if vel is not None:
+                vel.zero_()                             # static: zero velocities (the ground row too)
+        # every copy ends within the stages' iteration budget; the cap only guards the loop
+        cap = (len(m.stiffening) + 2) * m.max_iterations + self.sync_every
+        sweeps = 0
+        while sweeps < cap:
+            k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
+            t0 = time.perf_counter()
+            for pose, _ in bufs:
+                stp.write_poses(self._reference_d, pose)
+            timing["kernels"] += time.perf_counter() - t0
+            Q, K = ev.launch_device()
+            timing["kernels"] += ev.timing["kernels"] - k0
+            timing["scatter"] += ev.timing["scatter"] - s0
+            t0 = time.perf_counter()
+            stp.step(Q, K)
+            sweeps += 1
+            done = False
+            if sweeps % self.sync_every == 0:
+                done = int(stp.active.numpy()[0]) == 0
+            timing["solve"] += time.perf_counter() - t0
+            if done:
+                break
+        qB, status, stage, iters, total, res = stp.read("q", "status", "stage", "iters", "total", "residual")
+        q[...] = qB[slots]
+        for nm, v in (("status", status), ("stage", stage), ("iters", iters), ("total", total), ("residual", res)):
+            st[nm][...] = v[slots]
+        return sweeps
 
 
 __all__ = ["DeviceRowNewton", "RowSolve", "row_reasons"]

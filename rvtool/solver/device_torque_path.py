@@ -33,6 +33,7 @@ import numpy as np
 
 from ..errors import RvtoolInputError, SolverFailure
 from .device_newton import DeviceNewtonSettings
+from .model_snapshot import real_model
 from .torque_path import START_SCALES, ContinuationPath, ContinuationSettings, TorquePath
 
 ROW_LOST_MOTION_NEWTON = DeviceNewtonSettings(max_step_rotation=1e-3)
@@ -107,7 +108,7 @@ class DeviceTorquePath(TorquePath):
         self.failed[c] = True
         self.why[c] = why
         if self.fallback:
-            self.exudyn[c] = ContinuationPath(self.models[c], input_angle=float(self.ang[c]))
+            self.exudyn[c] = ContinuationPath(real_model(self.models[c]), input_angle=float(self.ang[c]))
 
     def go_to(self, torque):
         torque = float(torque)
@@ -169,7 +170,7 @@ class DeviceTorquePath(TorquePath):
             raise RvtoolInputError("the torque path has no state before its first go_to(torque)")
         if copy in self.exudyn and self.exudyn[copy].continuation is not None:
             return np.array(self.exudyn[copy].state())
-        model = self.models[copy]
+        model = real_model(self.models[copy])
         idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
         q = np.zeros(model.mbs.systemData.ODE2Size())
         q[idx] = self.q[copy]

@@ -60,23 +60,25 @@ def _renamed(item, c, **bodies):
 # copy c takes its rows from sets[c] (one model's set B times, or the sets of B variant models of one topology);
 # the set-wide options (samples, backend, search) are the first set's
 def _copy_pins(sets, nb, precision, device):
-    s, B = sets[0], len(sets)
-    meshes = [_renamed(m, c, wheel_body=_shift(m.wheel_body, c * nb), pin_body=_shift(m.pin_body, c * nb),
-                       pin_bodies=None if m.pin_bodies is None else tuple(_shift(b, c * nb) for b in m.pin_bodies))
-              for c, sc in enumerate(sets) for m in sc.meshes]
-    return CycloidPinSet(meshes, B * nb, samples_per_tooth=s.samples_per_tooth, backend=s.backend,
-                         precision=precision, device=device, name=s.name, search=s.search, search_band=s.search_band)
+    # the copies' rows and profile tables as built (sampling a variant's profile again costs ~40 ms per copy)
+    return CycloidPinSet.concatenated(sets, nb, names=[[f"copy{c}_{m.name}" for m in sc.meshes]
+                                                       for c, sc in enumerate(sets)], precision=precision,
+                                      device=device)
 
 
 def _copy_gears(sets, nb, precision, device):
-    s, B = sets[0], len(sets)
-    meshes = [_renamed(m, c, body_a=_shift(m.body_a, c * nb), body_b=_shift(m.body_b, c * nb))
-              for c, sc in enumerate(sets) for m in sc.meshes]
-    return InvoluteContactSet(meshes, B * nb, backend=s.backend, precision=precision, device=device, name=s.name)
+    # the copies' rows, tooth-angle tables and tooth compliances as built
+    return InvoluteContactSet.concatenated(sets, nb, names=[[f"copy{c}_{m.name}" for m in sc.meshes]
+                                                            for c, sc in enumerate(sets)], precision=precision,
+                                           device=device)
 
 
 def _copy_bearings(sets, nb, precision, device):
     s, B = sets[0], len(sets)
+    if type(s) in (BearingSet, TaperedBearingSet):      # the built rows side by side (no mounting packed again)
+        return type(s).concatenated(sets, nb, names=[[f"copy{c}_{m.name}" for m in sc.mountings]
+                                                        for c, sc in enumerate(sets)],
+                                       precision=precision, device=device)
     mounts = [_renamed(m, c, inner=_shift(m.inner, c * nb), outer=_shift(m.outer, c * nb))
               for c, sc in enumerate(sets) for m in sc.mountings]
     return type(s)(mounts, B * nb, name=s.name, backend=s.backend, precision=precision, device=device)
@@ -120,6 +122,26 @@ class PlainPinCopies:
         if self.backend == "warp":
             return self._kernel.evaluate(self._pose)
         return oref.evaluate_plain(self._pose, self.fparams, self.iparams, self.stations)
+
+    @property
+    def rows_on_device(self):
+        """Whether :meth:`device_rows` / :meth:`launch_device_rows` are available (backend "warp")."""
+        return self.backend == "warp"
+
+    def device_pose_buffers(self):
+        """(pose, None): the kernel's pose input ((B nb + 1, 3), the ground's row last; no velocities)."""
+        return self._kernel.device_array("pose"), None
+
+    def launch_device_rows(self):
+        """The rows Q (N, 6), dQ/dq (N, 6, 6) as device arrays at the poses in :meth:`device_pose_buffers`."""
+        self._kernel.launch_recorded()
+        return self._kernel.device_array("q"), self._kernel.device_array("dqdq")
+
+    def device_rows(self, pose, vel=None):
+        """:meth:`launch_device_rows` at host poses (B nb, 3) (uploaded)."""
+        self._pose[:-1] = pose
+        self._kernel.device_array("pose").assign(self._pose)
+        return self.launch_device_rows()
 
 
 #: contact-set type -> copier (see the module docstring)
@@ -320,6 +342,11 @@ def replica_reasons(model):
     if model.structures:
         reasons.append(f"the model has elastic structures {sorted(model.structures)}: the angle-batched path "
                        "copies planar rigid bodies only (valid: housing.model = 'rigid')")
+    carrier = getattr(getattr(model, "design", None), "carrier", None)
+    if carrier is not None and carrier.body != "rigid":
+        reasons.append(f"carrier.body = {carrier.body!r}: the carrier's crank seats are closed by its reduced seat "
+                       "compliance (rvtool.assembly.carrier), which the angle-batched path does not copy (valid: "
+                       "carrier.body = 'rigid')")
     nb = len(model.body_names)
     for el in model.contact_elements():
         s = el.evaluator
@@ -367,7 +394,11 @@ def copy_families(model, copies, *, precision="float64", device="cpu"):
 
 
 def held_coordinates(model):
-    """[(body index, coordinate)] held at zero by the model's coordinate locks."""
+    """[(body index, coordinate)] held at zero by the model's coordinate locks (a
+    :class:`~rvtool.solver.model_snapshot.ModelSnapshot` carries them)."""
+    from .model_snapshot import ModelSnapshot
+    if isinstance(model, ModelSnapshot):
+        return list(model.held_coordinates)
     return _held(model)
 
 

@@ -102,7 +102,11 @@ class MonteCarloSettings:
     mode on "cpu" with more than one worker runs one batch (chunk) per pool process; on a GPU,
     batches run one after another in the calling process, which holds the device.
     scheduler: the pool's Dask cluster: the address of an existing scheduler, or "" for a
-    LocalCluster of ``workers`` processes started for the study (:mod:`rvtool.variants.cluster`)."""
+    LocalCluster of ``workers`` processes started for the study (:mod:`rvtool.variants.cluster`).
+    devices: the device mode over several devices of one host, e.g. ``("cuda:0", "cuda:1")`` or
+    ``2`` (the first two GPUs): one Dask worker process per device, pinned to its GPU by
+    ``CUDA_VISIBLE_DEVICES`` (:mod:`rvtool.variants.multi_device`), each free worker taking the
+    next chunk; all cuda or all "cpu" (CI); None: one device (``device``)."""
     n_variants: int
     seed: int = 0
     chunk_size: int = 10
@@ -110,6 +114,7 @@ class MonteCarloSettings:
     workers: int | None = None
     device: str = "cpu"
     scheduler: str = ""
+    devices: object = None
 
     def __post_init__(self):
         for nm, lo in (("n_variants", 1), ("seed", 0), ("chunk_size", 1)):
@@ -120,6 +125,15 @@ class MonteCarloSettings:
             raise RvtoolInputError(f"mode = {self.mode!r}; valid choices are {list(MODES)}")
         if self.workers is not None and (not isinstance(self.workers, (int, np.integer)) or self.workers < 1):
             raise RvtoolInputError(f"workers = {self.workers!r} is outside the valid range [1, inf) (integer) or None")
+        if self.devices is not None:
+            from .multi_device import device_slots
+            kinds = {s.device for s in device_slots(self.devices)}
+            if len(kinds) != 1:
+                raise RvtoolInputError(f"devices = {self.devices!r} mixes cpu and cuda workers; valid: all 'cuda:K' "
+                                       f"or all 'cpu'")
+            if self.mode not in ("device", "auto"):
+                raise RvtoolInputError(f"devices = {self.devices!r} runs the device mode; mode = {self.mode!r} "
+                                       f"(valid with devices: 'device', 'auto')")
 
     def chunks(self):
         """Index ranges (start, stop) of the chunks."""
@@ -230,9 +244,11 @@ def run_batch(design, variants, protocol, device="cpu", build_kw=None, mode="bat
     return out
 
 
-def _init_worker():
+def init_helper():
+    """Initializer of a helper process of the device path's host work: one BLAS/OpenMP thread."""
     for nm in THREAD_ENV:
         os.environ[nm] = "1"
+
 
 
 def chunk_path(out_dir, i):
@@ -305,7 +321,12 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
         _batched_function(build_kw)   # fail early, in this process, when the batched path is missing
     chunked = mode in ("batched", "device")
     n_workers = settings.workers or os.cpu_count() or 1
-    if chunked and executor is None and (device != "cpu" or n_workers == 1):
+    if settings.devices is not None and pending:
+        if executor is not None:
+            raise RvtoolInputError("settings.devices starts its own cluster (one worker per device); give no executor")
+        device = _run_on_devices(settings.devices, pending, variants_of, design, protocol, build_kw, finish_chunk,
+                                 progress, done, total)
+    elif chunked and executor is None and (device != "cpu" or n_workers == 1):
         # one batched system at a time in this process: it is the one that holds the device
         # (on the CPU with several workers, batches run side by side in the pool below: one
         # batch of chunk_size copies per process: on 2 cores 3.3x the per-variant pool for TE alone,
@@ -317,7 +338,7 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
                 # on the other cores while this process holds the device
                 stack.enter_context(_single_thread_env())
                 helpers = stack.enter_context(cf.ProcessPoolExecutor(
-                    max_workers=n_workers, mp_context=multiprocessing.get_context("spawn"), initializer=_init_worker))
+                    max_workers=n_workers, mp_context=multiprocessing.get_context("spawn"), initializer=init_helper))
             for i in pending:
                 recs = run_batch(design, variants_of(i), protocol, device, build_kw, mode, helpers)
                 done += len(recs)
@@ -375,6 +396,36 @@ def run_monte_carlo(design, tolerances, protocol: VariantProtocol, settings: Mon
             "te_fallback_points": sum(int(r.get("te_fallback_points") or 0) for r in recs),
             "lost_motion_paths": sorted({r["lost_motion_path"] for r in recs if r.get("lost_motion_path")}),
             "lost_motion_fallback_copies": sum(bool(r.get("lost_motion_fallback")) for r in recs)}
+
+
+def _run_on_devices(devices, pending, variants_of, design, protocol, build_kw, finish_chunk, progress, done, total):
+    """The device mode's chunks on one worker per device (:mod:`rvtool.variants.multi_device`):
+    every free worker takes the next chunk (equal devices, one chunk at a time each), its host work
+    on a helper pool of its share of the host's cores (GPUs; none on cpu workers); a chunk whose
+    task dies has its variants failed. Returns the device string the workers ran on."""
+    from dask.distributed import as_completed
+
+    from .multi_device import default_host_workers, device_chunk, device_cluster
+    with device_cluster(devices) as (client, slots):
+        dev = slots[0].device
+        hw = default_host_workers(slots)
+        futures = {client.submit(device_chunk, design, variants_of(i), protocol, dev, build_kw, hw, pure=False): i
+                   for i in pending}
+        try:
+            for fut in as_completed(list(futures)):
+                i = futures[fut]
+                try:
+                    recs = fut.result()
+                except Exception as exc:  # the task itself died (a lost worker, a device error)
+                    recs = [_record(v, error=f"{type(exc).__name__}: {exc}") for v in variants_of(i)]
+                done += len(recs)
+                if progress is not None:
+                    progress(done, total)
+                finish_chunk(i, recs)
+        finally:
+            for fut in futures:
+                fut.cancel()
+    return f"{dev} x {len(slots)}"
 
 
 def order_statistic_ci(x_sorted, p, level=0.95):

@@ -14,7 +14,12 @@ Fields (SI units; distributions and their TOML form as :mod:`rvtool.variants.tol
   minus their mean so that they close the circle; ``sun_gear.single_pitch_deviations``),
 * ``crank_gear_pitch_deviation`` [m]: single pitch deviations f_pt of each crank's spur gear (one
   draw per tooth and crank, each crank's minus its mean; ``cranks.gear_pitch_deviations``). Drawn
-  last, so that adding it left the other fields' draws of a seed unchanged.
+  after the fields above, so that adding it left their draws of a seed unchanged.
+* ``pin_pitch_deviation`` [m]: single pitch deviations of the ring pins' seats in the housing, along the
+  pin circle (one draw per pin, minus their mean so that they close the circle). Pin k's position deviation
+  is the accumulated pitch deviation (the cumulative sum, minus its mean: no rigid rotation of the ring),
+  along the pin circle's tangent (``pins.centre_errors``, added to the design's). Drawn last (after
+  ``crank_gear_pitch_deviation``), so that adding it left the other fields' draws of a seed unchanged.
 
 Variant k draws from ``numpy.random.default_rng([seed, k])`` in the order of :data:`RV_FIELDS`.
 """
@@ -26,7 +31,7 @@ from ..errors import RvtoolInputError
 from .tolerances import check_design_distributions, load_design_tolerances
 
 RV_FIELDS = ("crank_phase_error", "crank_eccentricity_error", "pin_radius_error", "needle_clearance",
-             "sun_pitch_deviation", "crank_gear_pitch_deviation")
+             "sun_pitch_deviation", "crank_gear_pitch_deviation", "pin_pitch_deviation")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -38,6 +43,7 @@ class RvToleranceSpec:
     needle_clearance: object = None
     sun_pitch_deviation: object = None
     crank_gear_pitch_deviation: object = None
+    pin_pitch_deviation: object = None
 
     def __post_init__(self):
         check_design_distributions(self, RV_FIELDS)
@@ -68,7 +74,7 @@ def sample_rv_design(spec, design, k, seed):
             changes.setdefault("cranks", {})["eccentricity_errors"] = v
         elif nm == "pin_radius_error":
             v = float(d.sample(rng))
-            changes["pins"] = {"radius_error": v}
+            changes.setdefault("pins", {})["radius_error"] = v
         elif nm == "needle_clearance":
             v = float(d.sample(rng))
             changes["eccentric_bearing"] = {"radial_clearance": v}
@@ -76,9 +82,31 @@ def sample_rv_design(spec, design, k, seed):
             f = np.asarray(d.sample(rng, design.sun_gear.n_teeth), float)
             v = tuple(float(x) for x in f - f.mean())
             changes["sun_gear"] = {"single_pitch_deviations": v}
-        else:
+        elif nm == "crank_gear_pitch_deviation":
             f = np.asarray(d.sample(rng, n * design.crank_gear.n_teeth), float).reshape(n, -1)
             v = tuple(tuple(float(x) for x in row - row.mean()) for row in f)
             changes.setdefault("cranks", {})["gear_pitch_deviations"] = v
+        else:
+            f = np.asarray(d.sample(rng, design.pins.n_pins), float)
+            v = tuple(float(x) for x in f - f.mean())
+            changes.setdefault("pins", {})["centre_errors"] = pin_pitch_centre_errors(design.pins, v)
         drawn[nm] = v
     return design.replace(**changes), drawn
+
+
+def pin_pitch_centre_errors(pins, single_pitch_deviations):
+    """Pin-centre errors (z_b, 2) [m] of ring pins whose seats carry the single pitch deviations f_k [m]
+    (f_k between pin k-1 and pin k along the pin circle, summing to zero): pin k moves along the pin
+    circle's tangent by the accumulated pitch deviation s_k = f_1 + ... + f_k minus the mean of s (no rigid
+    rotation), added to the design's ``pins.centre_errors``. Pin k sits at angle a_k = 2 pi k / z_b from +y,
+    clockwise (:func:`rvtool.geometry.cycloid.pin_centres`); its tangent is (cos a_k, -sin a_k)."""
+    f = np.asarray(single_pitch_deviations, float)
+    if f.shape != (pins.n_pins,):
+        raise RvtoolInputError(f"pin single pitch deviations must have shape ({pins.n_pins},); got {f.shape}")
+    s = np.cumsum(f)
+    s = s - s.mean()
+    a = 2 * np.pi * np.arange(pins.n_pins) / pins.n_pins
+    e = s[:, None] * np.column_stack([np.cos(a), -np.sin(a)])
+    if pins.centre_errors is not None:
+        e = e + np.asarray(pins.centre_errors, float)
+    return tuple(tuple(float(x) for x in row) for row in e)

@@ -13,8 +13,13 @@ Bodies (planar rigid, x, y, theta; node order = ``body_names``):
 * ``wheel0``, ``wheel1``: the cycloid wheels (free), each bored for every crank's journal;
 * ``carrier``: the output (both halves joined rigidly; free, on the main bearings). With
   ``bodies.carrier_coordinates = "spatial"`` it also retains its axial translation and two tilts
-  (:func:`spatial_flange`: an Exudyn node of three coordinates, the main bearing on them through
-  :class:`~rvtool.bearings.spatial_set.SpatialBearingSet`, NumPy whatever ``backend``).
+  (:func:`spatial_bodies`: an Exudyn node of three coordinates per spatial body, the main bearing on
+  them through :class:`~rvtool.bearings.spatial_set.SpatialBearingSet`, NumPy whatever ``backend``).
+  With ``bodies.wheel_coordinates`` / ``crank_coordinates = "spatial"`` the wheels / cranks retain
+  them too: the families on them are sliced across the wheel width with their tilts
+  (:func:`skewed`, :class:`~rvtool.contact.skew.SkewSlices`; the needles per wheel with spatial
+  cranks, :func:`spatial_needles`) and the tapered crank pairs take the 5-DOF roller law
+  (:class:`~rvtool.bearings.spatial_tapered.SpatialTaperedSet`).
 
 Contact elements (each one kernel launch per evaluation): ``pins`` (cycloid--pin meshes of
 both wheels, pins on the ground), ``gears`` (involute pairs sun--crank gear k, and the
@@ -45,6 +50,7 @@ from ...bearings.tapered_set import TaperedBearingSet, TaperedMounting
 from ...contact.circle_set import GROUND, FrictionLaw, FrictionModel
 from ...contact.cycloid_set import CycloidPinSet
 from ...contact.involute_set import GearMesh, InvoluteContactSet, pair_secant_stiffness
+from ...contact.skew import planar_view
 from ...errors import RvtoolInputError
 from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
@@ -209,12 +215,41 @@ def needle_mountings(design, graph, layout):
     return out
 
 
-def crank_mountings(design, graph, layout):
-    """Tapered pair of crank k in the carrier, cup centred on the crank circle."""
+def crank_mountings(design, graph, layout, seats=False):
+    """Tapered pair of crank k in the carrier, cup centred on the crank circle; ``seats``: the cup on crank k's
+    seat body n_bodies + k of the ported carrier (:func:`ported_carrier`) instead of the carrier body."""
     return [TaperedMounting(name=f"crank_bearing{k}", bearing=design.crank_bearing, inner=layout.crank(k),
-                            outer=layout.carrier, outer_centre=(graph.crank_radius * math.cos(b),
-                                                                graph.crank_radius * math.sin(b)))
+                            outer=layout.n_bodies + k if seats else layout.carrier,
+                            outer_centre=(graph.crank_radius * math.cos(b), graph.crank_radius * math.sin(b)))
             for k, b in enumerate(graph.crank_angles)]
+
+
+def ported_carrier(design, graph, layout, rigid, opts):
+    """The crank bearings on the ported carrier (``carrier.body = "ported"``, :mod:`rvtool.assembly.carrier`):
+    the tapered pairs on one seat body per crank (n_bodies + k), closed by the carrier's seat compliance
+    (:class:`~rvtool.assembly.carrier.CarrierSeatClosure`); ``rigid``, the rigid carrier's set, otherwise
+    (unchanged: the default costs nothing)."""
+    if not design.carrier.ported:
+        return rigid
+    from ..carrier import CarrierSeatClosure, seat_compliance
+    if type(rigid) is not TaperedBearingSet:
+        raise RvtoolInputError(f"carrier.body = 'ported' with crank bearings of {type(rigid).__name__} (spatial "
+                               "crank coordinates) is not implemented (the seats are planar ports); valid: planar "
+                               "cranks or carrier.body = 'rigid'")
+    if design.bearing_friction.model != "none":
+        raise RvtoolInputError(f"carrier.body = 'ported' with bearing_friction.model = "
+                               f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
+                               "crank bearings on the rigid carrier); valid: bearing_friction.model = 'none' or "
+                               "carrier.body = 'rigid'")
+    if design.bodies.spatial_carrier:
+        raise RvtoolInputError("carrier.body = 'ported' with bodies.carrier_coordinates = 'spatial' is not "
+                               "implemented (the seats are planar ports: the tilt and axial ports of the seats are "
+                               "not reduced); valid: bodies.carrier_coordinates = 'planar' or carrier.body = 'rigid'")
+    nc = layout.n_cranks
+    inner = TaperedBearingSet(crank_mountings(design, graph, layout, seats=True), layout.n_bodies + nc,
+                              name="crank_bearings", **opts)
+    return CarrierSeatClosure(inner, n_bodies=layout.n_bodies, carrier=layout.carrier,
+                              compliance=seat_compliance(design, graph))
 
 
 @dataclass
@@ -243,6 +278,8 @@ class RvModel(ReducerModel):
         action (the cup centre, world) at the static state q."""
         el = self.elements["crank_bearings"]
         pose = self._pose("crank_bearings", q)
+        if self.design.carrier.ported:
+            pose = el.evaluator.extended_pose(pose)            # the seat bodies at the solved seat displacements
         res = el.evaluator.resultants(pose)
         forces, points = [], []
         for k, m in enumerate(el.evaluator.mountings):
@@ -279,8 +316,8 @@ class RvModel(ReducerModel):
             return closure.inner.part("eccentric_bearings"), closure.extended_pose(self._pose("wheel_bodies", q))
         if self.crank_compliance is None:
             return self.elements["eccentric_bearings"].evaluator, self._pose("eccentric_bearings", q)
-        closure = self.elements["cranks"].evaluator
-        pose = closure.extended_pose(self._pose("cranks", q))
+        closure, pose = planar_view(self.elements["cranks"].evaluator, self._pose("cranks", q))
+        pose = closure.extended_pose(pose)
         if self.torsion_compliance is not None:
             pose = closure.inner.extended_pose(pose)       # the twisting journals inside the beam's closure
         return closure.inner.part("eccentric_bearings"), pose
@@ -291,7 +328,8 @@ class RvModel(ReducerModel):
         None (rigid cranks)."""
         if self.crank_compliance is None:
             return None
-        return self.elements["cranks"].evaluator.deflections(self._pose("cranks", q))
+        closure, pose = planar_view(self.elements["cranks"].evaluator, self._pose("cranks", q))
+        return closure.deflections(pose)
 
     def series_compliance(self, family):
         """Elastic cranks (``cranks.shaft``): the beam of every crank with its station compliance
@@ -299,11 +337,20 @@ class RvModel(ReducerModel):
         reported once, with the eccentric bearings (budget path ``"cranks"``); crank torsion alone
         likewise (path ``"crank_torsion"``; with the beam on, the torsion is inside the beam's closure
         and not a path of its own: its energy falls into the budget's residual); the ring pins'
-        conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`)."""
+        conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`); the ported carrier's
+        crank seats with the crank bearings (path ``"carrier"``, :mod:`rvtool.assembly.carrier`)."""
         from ...model import SeriesBeam
         fam = Family(family)
+        tilting = self.body_tilts is not None and any(n.startswith(("wheel", "crank")) for n in self.body_tilts.names)
+        if tilting and (self.crank_compliance is not None or self.torsion_compliance is not None
+                        or self.design.pins.groove != "rigid"):
+            raise RvtoolInputError("the series members (elastic cranks, pin grooves) of a model with tilting wheels or "
+                                   "cranks are closed inside the width slices; their budget paths are not implemented; "
+                                   "valid: bodies.wheel_coordinates / crank_coordinates = 'planar'")
         if fam == Family.PINS and "wheel_bodies" in self.elements:
             return WheelSeries.of_closure(self.elements["wheel_bodies"])
+        if fam == Family.CRANK_BEARINGS and self.design.carrier.ported:
+            return GrooveSeries.of_groove(self.elements["crank_bearings"], "carrier", Family.CRANK_BEARINGS)
         if fam == Family.PINS and self.design.pins.groove != "rigid":
             return GrooveSeries.of_groove(self.elements["pins"])
         if fam != Family.ECCENTRIC_BEARINGS:
@@ -395,7 +442,9 @@ class GrooveSeries(SeriesBeamBase):
         return float(du.ravel() @ self.closure.support_tangent(u) @ du.ravel())
 
     @classmethod
-    def of_groove(cls, element):
+    def of_groove(cls, element, path="pin_grooves", family=Family.PINS):
+        """The station law of ``element``'s closure as the budget path ``path`` of ``family`` (the ring pins'
+        grooves; the carrier's crank seats, path ``"carrier"`` of the crank bearings)."""
         closure = element.evaluator
 
         def pose(q):
@@ -405,7 +454,7 @@ class GrooveSeries(SeriesBeamBase):
         def stiffened(q, factor):
             u, _, red, _ = closure.solve(*pose(q))
             return element.coordinate_indices, closure.condense(red, beam_factor=factor, u=u)[1]
-        return cls("pin_grooves", Family.PINS, closure.compliance, lambda q: closure.deflections(pose(q)[0]),
+        return cls(path, family, closure.compliance, lambda q: closure.deflections(pose(q)[0]),
                    stiffened, closure, pose)
 
 
@@ -511,19 +560,47 @@ def crank_torsion_compliance(design):
     return torsion_compliance(sh.radius, m.youngs_modulus, m.poisson_ratio, sh.gear_position, design.wheels.midplanes)
 
 
-def torsion_crank_path(design, graph, layout, compliance, opts):
+def station_skew(family, design, layout, tilt, rows, stations, width, *, wheels=True):
+    """A family on crank station bodies (a series closure's journals or gear station) across ``width``
+    with the tilts of the spatial cranks and wheels (:class:`~rvtool.contact.skew.SkewSlices`, the
+    out-of-plane rows carried as the closure's pass-through bodies n_bodies ... n_bodies + n_virtual - 1):
+    ``stations`` {station body: (crank k, axial station of the contact plane [m])}; a station's arm is
+    its station about the crank's centre plus the slice's, a spatial wheel's the slice's."""
+    from ...contact.skew import SkewSlices, slice_stations
+    z, w = slice_stations(width, design.bodies.tilt_slices)
+    arms = np.zeros((len(w), family.n_bodies))
+    tilted = {}
+    z_c = crank_centre(design)
+    for i, (k, z_k) in stations.items():
+        if layout.crank(k) in rows:
+            arms[:, i], tilted[i] = z_k - z_c + z, rows[layout.crank(k)]
+    for j in range(2 if wheels else 0):
+        i = layout.wheel(j)
+        if i in rows:
+            arms[:, i], tilted[i] = z, rows[i]
+    return SkewSlices(family, tilt.n_virtual, tilted, arms, w, name=family.name, tilt_offset=layout.n_bodies)
+
+
+def torsion_crank_path(design, graph, layout, compliance, opts, tilt=None, rows=None):
     """The needle bearings on twisting cranks: one station body per (crank k, wheel j) at index
     n_bodies + n_wheels k + j, the crank rotated about its axis by the journal's twist relative to
     the gear (the crank body's rotation is the gear's), closed per crank by Eq. (2) of
     :mod:`rvtool.structure.crank_torsion` (:class:`~rvtool.contact.pin_closure.ElasticPinClosure`
-    with ``dofs = (2,)``). The gears and the tapered rows stay on the crank body."""
+    with ``dofs = (2,)``). The gears and the tapered rows stay on the crank body. With spatial cranks (``tilt``, ``rows``
+    of :func:`spatial_bodies`) the out-of-plane rows ride along as pass-through bodies n_bodies ...
+    and the needles are sliced with the cranks' tilts at their journal stations (:func:`station_skew`)."""
     from ...contact.pin_closure import ElasticPinClosure
-    nb, nc, nw = layout.n_bodies, layout.n_cranks, design.n_wheels
+    nc, nw = layout.n_cranks, design.n_wheels
+    nb = layout.n_bodies + (tilt.n_virtual if design.bodies.spatial_cranks else 0)
     station = nb + np.arange(nc * nw).reshape(nc, nw)
     crank_of = {layout.crank(k): k for k in range(nc)}
     mounts = [dataclasses.replace(m, inner=int(station[crank_of[m.inner], m.outer - layout.wheel0]))
               for m in needle_mountings(design, graph, layout)]
     needles = BearingSet(mounts, nb + station.size, name="eccentric_bearings", **opts)
+    if design.bodies.spatial_cranks:
+        needles = station_skew(needles, design, layout, tilt, rows,
+                               {int(station[k, j]): (k, design.wheels.midplanes[j]) for k in range(nc) for j in range(nw)},
+                               design.wheels.width)
     return ElasticPinClosure(needles, n_bodies=nb, carrier=[layout.crank(k) for k in range(nc)],
                              station_compliance=compliance, station=station - nb, dofs=(2,))
 
@@ -551,7 +628,7 @@ def groove_pins(design, layout, pin_set_of, meshes, ports=None):
                              station_compliance=None, station=st, support=GrooveSupport(law))
 
 
-def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None):
+def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None, tilt=None, rows=None):
     """The contact set of the crank path with elastic cranks: the involute meshes and the needle
     bearings stacked (:class:`~rvtool.contact.stacked.StackedContactSet`, element ``"cranks"``) over
     the bodies plus one station body per (crank k, station s) at index n_bodies + 3 k + s (the
@@ -563,11 +640,19 @@ def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None):
     None. With it the needles sit on one more station body per (crank k, wheel j) at n_bodies +
     3 n_cranks + n_wheels k + j, journal j's bending station rotated by the twist (an inner closure,
     ``dofs = (2,)``, carried per station), and the beam closes that closure: bending and torsion
-    in series, each solved exactly."""
+    in series, each solved exactly.
+
+    With spatial cranks (``tilt``, ``rows`` of :func:`spatial_bodies`) the out-of-plane rows ride
+    along as pass-through bodies n_bodies ... n_bodies + n_virtual - 1 (the stations after them), and
+    the meshes and needles are sliced with the cranks' tilts at their stations (:func:`station_skew`:
+    the gear at ``cranks.shaft.gear_position``, the journals at the wheel mid-planes): the beam carries
+    the in-plane bending, the tilt rows the crank's rigid tilt."""
     import dataclasses
     from ...contact.pin_closure import ElasticPinClosure
     from ...contact.stacked import StackedContactSet
-    nb, nc, nw = layout.n_bodies, layout.n_cranks, design.n_wheels
+    nc, nw = layout.n_cranks, design.n_wheels
+    spatial = design.bodies.spatial_cranks
+    nb = layout.n_bodies + (tilt.n_virtual if spatial else 0)
     station = nb + np.arange(3 * nc).reshape(nc, 3)
     crank_of = {layout.crank(k): k for k in range(nc)}
     meshes = [dataclasses.replace(m, body_b=int(station[crank_of[m.body_b], 2])) if m.body_b in crank_of else m
@@ -576,8 +661,16 @@ def elastic_crank_path(design, graph, layout, compliance, opts, torsion=None):
     mounts = [dataclasses.replace(m, inner=int(journal[crank_of[m.inner], m.outer - layout.wheel0]))
               for m in needle_mountings(design, graph, layout)]
     n_ext = nb + station.size + (0 if torsion is None else journal.size)
-    stacked = StackedContactSet((InvoluteContactSet(meshes, n_ext, name="gears", **opts),
-                                 BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)), name="cranks")
+    gears = InvoluteContactSet(meshes, n_ext, name="gears", **opts)
+    needles = BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)
+    if spatial:
+        gear_z = design.cranks.shaft.gear_position
+        gears = station_skew(gears, design, layout, tilt, rows, {int(station[k, 2]): (k, gear_z) for k in range(nc)},
+                             design.crank_gear.face_width, wheels=False)
+        needles = station_skew(needles, design, layout, tilt, rows,
+                               {int(journal[k, j]): (k, design.wheels.midplanes[j]) for k in range(nc) for j in range(nw)},
+                               design.wheels.width)
+    stacked = StackedContactSet((gears, needles), name="cranks")
     inner = stacked
     if torsion is not None:
         inner = ElasticPinClosure(stacked, n_bodies=nb + station.size, carrier=station[:, :nw],
@@ -648,28 +741,108 @@ def ported_wheels(design, graph, layout, meshes, opts):
                             bodies=[wheel_model(d, j) for j in range(nw)], pin_centres=centres, station=station)
 
 
-def spatial_flange(mbs, design, layout, mounting, housing, regularization):
-    """A spatial carrier (``bodies.carrier_coordinates = "spatial"``, issue 32): its retained axial and
-    tilt coordinates (:class:`~exudyn_user_elements.out_of_plane.RetainedTilt`: mass, transverse
-    inertia, the builder's regularization springs) and the main bearing on them
-    (:class:`~rvtool.bearings.spatial_set.SpatialBearingSet`: every ball's approach and working angle
-    from the radial, axial and tilt displacement; the out-of-plane coordinates are the evaluator's
-    pose row n_bodies). The housing stays rigid out of plane. Returns (RetainedTilt, set)."""
+def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
+    """The retained axial and tilt coordinates of the spatial bodies (issue 32): the carrier
+    (``bodies.carrier_coordinates``), the wheels (``bodies.wheel_coordinates``) and the cranks
+    (``bodies.crank_coordinates``), in that order, as one
+    :class:`~exudyn_user_elements.out_of_plane.RetainedTilt` (mass, transverse inertia, the builder's
+    regularization springs; the element's pose rows n_bodies + row). Returns (RetainedTilt or None,
+    {body index: row}). The housing stays rigid out of plane."""
     from exudyn_user_elements.out_of_plane import RetainedTilt
-    from ...bearings.spatial_set import SpatialBearingSet
+    b, L = design.bodies, layout
+    bodies = []
+    if b.spatial_carrier:
+        bodies.append(("carrier", L.carrier, b.carrier_mass, b.tilt_inertia))
+    if b.spatial_wheels:
+        m_w, J_w = wheel_mass
+        J_t = J_w / 2 if b.wheel_tilt_inertia is None else b.wheel_tilt_inertia
+        bodies += [(f"wheel{j}", L.wheel(j), m_w, J_t) for j in range(2)]
+    if b.spatial_cranks:
+        # a crankshaft's transverse inertia about its bearing centre: a slender shaft over the wheel pitch
+        # (assumed; dynamic runs only)
+        span = max(abs(design.wheels.midplanes[-1] - design.wheels.midplanes[0]), design.wheels.width)
+        J_c = design.cranks.inertia / 2 + design.cranks.mass * span ** 2 / 12
+        bodies += [(f"crank{k}", L.crank(k), design.cranks.mass, J_c) for k in range(L.n_cranks)]
+    if b.spatial_input:
+        # the floating sun (last: the rows of the other bodies as without it); transverse inertia half the
+        # polar one (a thin disc, assumed; dynamic runs only)
+        if L.three_stage:
+            raise RvtoolInputError("bodies.input_coordinates = 'spatial' is for the two-stage RV (its floating sun); "
+                                   "the three-stage input body is the offset pinion and its compound gear is held on "
+                                   "the axis; valid: input_coordinates = 'planar'")
+        sh = design.cranks.shaft
+        if sh.elastic or sh.torsion != "rigid":
+            raise RvtoolInputError("bodies.input_coordinates = 'spatial' with elastic crankshafts (cranks.shaft.model / "
+                                   "torsion) is not implemented (the sun-crank meshes are closed inside the crank "
+                                   "closures); valid: rigid crankshafts or input_coordinates = 'planar'")
+        bodies.append(("sun", L.sun, b.sun_mass, b.sun_inertia / 2))
+    if not bodies:
+        return None, {}
+    keys = [k for k, on in (("carrier_coordinates", b.spatial_carrier), ("wheel_coordinates", b.spatial_wheels),
+                            ("crank_coordinates", b.spatial_cranks), ("input_coordinates", b.spatial_input)) if on]
+    said = " / ".join(f"bodies.{k} = 'spatial'" for k in keys)
     if housing is not None:
-        raise RvtoolInputError("bodies.carrier_coordinates = 'spatial' with housing.model = 'ports' is not implemented "
-                               "(the merged element carries one structure); valid: housing.model = 'rigid' or "
-                               "bodies.carrier_coordinates = 'planar'")
-    if design.bearing_friction.model != "none":
-        raise RvtoolInputError(f"bodies.carrier_coordinates = 'spatial' with bearing_friction.model = "
-                               f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
-                               "planar bearing set); valid: bearing_friction.model = 'none' or planar")
-    b = design.bodies
+        raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the merged element carries "
+                               "one structure); valid: housing.model = 'rigid' or planar bodies")
+    if design.bearing_friction.model != "none" and (b.spatial_carrier or b.spatial_cranks):
+        raise RvtoolInputError(f"{said} with bearing_friction.model = {design.bearing_friction.model!r} is not "
+                               "implemented (Palmgren's moment reads the planar bearing sets); valid: "
+                               "bearing_friction.model = 'none' or planar carrier and cranks")
     k_t, k_r = regularization
-    flange = RetainedTilt(mbs, b.carrier_mass, b.tilt_inertia, (k_t, k_r), name="carrier_tilt")
-    main = SpatialBearingSet([mounting], layout.n_bodies + 1, {layout.carrier: layout.n_bodies}, name="main_bearings")
-    return flange, main
+    names = tuple(n for n, *_ in bodies)
+    tilt = RetainedTilt(mbs, [m for *_, m, _ in bodies], [J for *_, J in bodies], (k_t, k_r),
+                        name="carrier_tilt" if names == ("carrier",) else "body_tilt", names=names)
+    return tilt, {i: r for r, (_, i, _, _) in enumerate(bodies)}
+
+
+def spatial_needles(design, graph, layout, tilt, rows, opts):
+    """The needle rows with spatial cranks: one bearing set per wheel (a crank's arm differs between
+    its two journals), each across the wheel width with the crank's and (if spatial) the wheel's
+    tilt (:func:`skewed`), stacked (:class:`~rvtool.contact.stacked.StackedContactSet`, element
+    ``"eccentric_bearings"``; rows wheel after wheel)."""
+    from ...contact.stacked import StackedContactSet
+    mounts = needle_mountings(design, graph, layout)
+    z_c = crank_centre(design)
+    parts = []
+    for j in range(2):
+        sel = [m for m in mounts if m.outer == layout.wheel(j)]
+        part = BearingSet(sel, layout.n_bodies, name=f"eccentric_bearings_w{j}", **opts)
+        parts.append(skewed(part, design, layout, tilt, rows, wheel=j, crank_arm=design.wheels.midplanes[j] - z_c))
+    return StackedContactSet(parts, name="eccentric_bearings")
+
+
+def crank_centre(design):
+    """Axial station [m] of every crank's tilt centre: the centre of its tapered pair, taken midway
+    between the wheel mid-planes (the pair straddles the wheels symmetrically; assumed)."""
+    return 0.5 * (design.wheels.midplanes[0] + design.wheels.midplanes[-1])
+
+
+def skewed(family, design, layout, tilt, rows, *, wheel=None, crank_arm=None, width=None, wheels=True, sun=False):
+    """``family`` (a planar evaluator over the bodies) across the wheel width with the tilts of its
+    spatial bodies (:class:`~rvtool.contact.skew.SkewSlices`, Eq. (skew)): ``bodies.tilt_slices``
+    equal slices of the wheel width; a spatial wheel's arm is the slice's station about its
+    mid-plane; a spatial crank's arm (where ``crank_arm`` is given: the station of the family's contact
+    plane about the crank's centre) that station plus the slice's. ``width``: the face width sliced
+    (default the wheel width); ``wheels=False``: the family touches no wheel; ``sun``: a spatial sun
+    tilts about the sun gear's mid-face (its arm is the slice's station). ``family`` unchanged if
+    none of its bodies is spatial."""
+    from ...contact.skew import SkewSlices, slice_stations
+    z, w = slice_stations(design.wheels.width if width is None else width, design.bodies.tilt_slices)
+    arms = np.zeros((len(w), family.n_bodies))
+    tilted = {}
+    for j in range(2 if wheels else 0):
+        i = layout.wheel(j)
+        if i in rows and (wheel is None or wheel == j):
+            arms[:, i], tilted[i] = z, rows[i]
+    for k in range(layout.n_cranks):
+        i = layout.crank(k)
+        if i in rows and crank_arm is not None:
+            arms[:, i], tilted[i] = crank_arm + z, rows[i]
+    if sun and layout.sun in rows:
+        arms[:, layout.sun], tilted[layout.sun] = z, rows[layout.sun]
+    if not tilted:
+        return family
+    return SkewSlices(family, tilt.n_virtual, tilted, arms, w, name=family.name)
 
 
 def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu", regularization=(100.0, 0.1),
@@ -742,33 +915,61 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     pin_set = groove_pins(d, L, pin_set_of, meshes, ports) if wheel_path is None else wheel_path
     if pin_set is None:
         pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
-    cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
+    tilt, rows = spatial_bodies(mbs, d, L, (m_w, J_w), housing, regularization)
     main_mounting = Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)
-    flange = None
     if b.spatial_carrier:
-        flange, main = spatial_flange(mbs, d, L, main_mounting, housing, regularization)
+        from ...bearings.spatial_set import SpatialBearingSet
+        main = SpatialBearingSet([main_mounting], L.n_bodies + tilt.n_virtual, {L.carrier: L.n_bodies + rows[L.carrier]},
+                                 name="main_bearings")
     else:
         main = BearingSet([main_mounting], L.n_bodies, name="main_bearings", **opts)
+    if b.spatial_cranks:
+        from ...bearings.spatial_tapered import SpatialTaperedSet
+        cranks = SpatialTaperedSet(TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings",
+                                                     **opts), tilt.n_virtual, rows)
+    else:
+        cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
     C_crank = crank_station_compliance(d)
     C_torsion = crank_torsion_compliance(d)
+    cranks = ported_carrier(d, graph, L, cranks, opts)     # the rigid carrier's set unless carrier.body = "ported"
     if C_crank is None:
         gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
         if C_torsion is None:
             needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
+            if b.spatial_cranks:
+                needles = spatial_needles(d, graph, L, tilt, rows, opts)
         else:
-            needles = torsion_crank_path(d, graph, L, C_torsion, opts)
+            needles = torsion_crank_path(d, graph, L, C_torsion, opts, tilt, rows)
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
     else:
-        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion)),)
-    element = ContactElements(mbs, nodes, contact_element, structure=housing if flange is None else flange)
+        crank_path = (("cranks", elastic_crank_path(d, graph, L, C_crank, opts, torsion=C_torsion, tilt=tilt,
+                                                    rows=rows)),)
+    gear_z = d.cranks.shaft.gear_position
+    if b.spatial_cranks and gear_z is not None or b.spatial_input:
+        # the sun--crank meshes across the crank gear's face with the crank's tilt (the sun planar unless
+        # bodies.input_coordinates = "spatial": then with the sun's tilt too); without a declared gear
+        # position (cranks.shaft.gear_position) the cranks' tilts do not enter the meshes
+        arm = None if gear_z is None or not b.spatial_cranks else gear_z - crank_centre(d)
+        crank_path = tuple((nm, skewed(f, d, L, tilt, rows, crank_arm=arm, width=d.crank_gear.face_width,
+                                       wheels=False, sun=b.spatial_input) if nm == "gears" else f)
+                           for nm, f in crank_path)
+    if tilt is not None and b.spatial_wheels:
+        # every family on a wheel across its width with the wheels' tilts (Eq. skew); the pins on the ground
+        pin_set = skewed(pin_set, d, L, tilt, rows)
+        crank_path = tuple((nm, f if nm == "gears" or f.n_bodies != L.n_bodies else skewed(f, d, L, tilt, rows))
+                           for nm, f in crank_path)
+    element = ContactElements(mbs, nodes, contact_element, structure=housing if tilt is None else tilt)
+
+    def on_tilts(f):
+        return tilt if tilt is not None and f.n_bodies > L.n_bodies else None
     if wheel_path is None:
-        elements = {"pins": element(pin_set, ports=ports)}
+        elements = {"pins": element(pin_set, ports=ports if tilt is None else on_tilts(pin_set))}
     else:
         # the elastic wheels: pins and needles in one closure; the gears alone
         elements = {"wheel_bodies": element(wheel_path)}
         crank_path = (("gears", gears),)
-    elements.update((name, element(s)) for name, s in (*crank_path, ("crank_bearings", cranks)))
-    elements["main_bearings"] = element(main, ports=flange)
+    elements.update((name, element(s, ports=on_tilts(s))) for name, s in (*crank_path, ("crank_bearings", cranks)))
+    elements["main_bearings"] = element(main, ports=on_tilts(main))
     if d.bearing_friction.model != "none":
         # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
         # (carrier -> ground), P1 from the accepted element loads of each mounting; a loss element of its
@@ -786,7 +987,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         families = {fam: (name, np.arange(len(elements[name].ids))) for fam, name in FAMILY_ELEMENTS.items()}
     else:
         # the involute stage and the needles are one element, their rows contiguous ranges of it
-        rows = elements["cranks"].evaluator.inner.rows
+        rows = planar_view(elements["cranks"].evaluator)[0].inner.rows
         families = {fam: (name, np.arange(len(elements[name].ids))) if name in elements else ("cranks", rows[name])
                     for fam, name in FAMILY_ELEMENTS.items()}
     return RvModel(design=d, SC=SC, mbs=mbs, body_names=L.names(), nodes=nodes, elements=elements, families=families,
@@ -798,4 +999,5 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
                    structures={} if housing is None else {"housing": housing},
                    graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
-                   housing=housing, contact_host=element.host, carrier_tilt=flange)
+                   housing=housing, contact_host=element.host, carrier_tilt=tilt if b.spatial_carrier else None,
+                   body_tilts=tilt)

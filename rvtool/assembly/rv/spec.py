@@ -24,6 +24,7 @@ from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
 from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
+from ...structure.carrier import CarrierStructure
 from ...structure.crank_beam import CrankShaft
 from ..spec import LINKS, BearingFriction, Housing, PinContact, Pins, Wheels, build_section, load_sections
 
@@ -113,8 +114,12 @@ class InvoluteStage:
         check_positive("involute_stage.reference_force", self.reference_force)
 
 
-#: retained coordinates of the carrier / output flange (``bodies.carrier_coordinates``)
+#: retained coordinates of the carrier / output flange (``bodies.carrier_coordinates``), of the
+#: wheels (``bodies.wheel_coordinates``) and of the cranks (``bodies.crank_coordinates``)
 CARRIER_COORDINATES = ("planar", "spatial")
+
+#: valid range of ``bodies.tilt_slices`` (width slices of the families on tilting wheels / cranks)
+TILT_SLICES = (2, 32)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -133,7 +138,21 @@ class RvBodies:
     gamma_x, gamma_y on the main-bearing rows: :class:`rvtool.bearings.spatial_set.SpatialBearingSet`).
     carrier_tilt_inertia: transverse inertia [kg m^2] of the carrier about a diameter through the
     mounting centre (dynamic runs of a spatial carrier only); None: half the polar inertia (a thin
-    disc, assumed)."""
+    disc, assumed).
+    wheel_coordinates: ``"planar"`` (default) or ``"spatial"``: each cycloid wheel also retains its
+    axial translation and two tilts about its mid-plane; the ring-pin mesh and the needle rows on it
+    are sliced across the wheel width with the relative tilt (Eq. (skew),
+    :class:`rvtool.contact.skew.SkewSlices`). crank_coordinates: likewise for the crankshafts
+    (tilts about the centre of their tapered pair; the tapered rows on the 5-DOF roller law, the
+    needle rows sliced with the crank's arm to each wheel). tilt_slices: width slices of every
+    family on a spatial wheel or crank [-] (:data:`TILT_SLICES`). wheel_tilt_inertia: transverse
+    inertia [kg m^2] of a wheel (None: a thin disc, half its polar inertia, assumed).
+    input_coordinates: ``"planar"`` (default) or ``"spatial"``: the two-stage input shaft (the sun)
+    also retains its axial translation and two tilts about the sun gear's mid-face (at the crank gears'
+    station), and the sun--crank meshes are sliced across the face with its tilt. Only a floating sun
+    (``input`` lists x and y) has a tilt to retain: a sun whose x, y are held by its bearings as rigid
+    has its tilt held by the same bearings (spatial would equal planar), refused by name. Its
+    transverse inertia is half the polar one (a thin disc, assumed; dynamic runs only)."""
     input: tuple = ("theta",)
     sun_mass: float = 0.15
     sun_inertia: float = 1.0e-5
@@ -143,6 +162,11 @@ class RvBodies:
     carrier_inertia: float = 6.0e-3
     carrier_coordinates: str = "planar"
     carrier_tilt_inertia: float | None = None
+    wheel_coordinates: str = "planar"
+    crank_coordinates: str = "planar"
+    tilt_slices: int = 2
+    wheel_tilt_inertia: float | None = None
+    input_coordinates: str = "planar"
 
     def __post_init__(self):
         for c in self.input:
@@ -157,6 +181,35 @@ class RvBodies:
                                    f"{list(CARRIER_COORDINATES)}")
         if self.carrier_tilt_inertia is not None:
             check_positive("bodies.carrier_tilt_inertia", self.carrier_tilt_inertia)
+        for nm in ("wheel_coordinates", "crank_coordinates", "input_coordinates"):
+            if getattr(self, nm) not in CARRIER_COORDINATES:
+                raise RvtoolInputError(f"bodies.{nm} = {getattr(self, nm)!r}; valid choices are {list(CARRIER_COORDINATES)}")
+        lo, hi = TILT_SLICES
+        if isinstance(self.tilt_slices, bool) or not isinstance(self.tilt_slices, int) or not lo <= self.tilt_slices <= hi:
+            raise RvtoolInputError(f"bodies.tilt_slices = {self.tilt_slices!r} is outside the valid range [{lo}, {hi}] "
+                                   "(integer)")
+        if self.wheel_tilt_inertia is not None:
+            check_positive("bodies.wheel_tilt_inertia", self.wheel_tilt_inertia)
+        if self.spatial_input and not {"x", "y"} <= set(self.input):
+            raise RvtoolInputError(f"bodies.input_coordinates = 'spatial' with bodies.input = {list(self.input)}: the "
+                                   "input shaft's x, y are held by its bearings as rigid, and so is its tilt (spatial "
+                                   "would equal planar); valid: bodies.input = ['x', 'y', 'theta'] (a floating sun) "
+                                   "or input_coordinates = 'planar'")
+
+    @property
+    def spatial_input(self):
+        """True where the input shaft (the two-stage sun) retains its axial and tilt coordinates."""
+        return self.input_coordinates == "spatial"
+
+    @property
+    def spatial_wheels(self):
+        """True where the wheels retain their axial and tilt coordinates."""
+        return self.wheel_coordinates == "spatial"
+
+    @property
+    def spatial_cranks(self):
+        """True where the cranks retain their axial and tilt coordinates."""
+        return self.crank_coordinates == "spatial"
 
     @property
     def spatial_carrier(self):
@@ -167,6 +220,36 @@ class RvBodies:
     def tilt_inertia(self):
         """Transverse inertia [kg m^2] of the carrier (``carrier_tilt_inertia`` or half the polar inertia)."""
         return self.carrier_inertia / 2 if self.carrier_tilt_inertia is None else self.carrier_tilt_inertia
+
+
+#: the carrier's body models (``carrier.body``)
+CARRIER_BODIES = ("rigid", "ported")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Carrier:
+    """The carrier (output flange, pillars, end plate) that carries the crank bearings and sits in the main
+    bearings (issue 30).
+
+    body: ``"rigid"`` (today's model: the crank-bearing cups sit on the rigid carrier body; ``structure`` is
+    unused) or ``"ported"`` (the carrier as a reduced structure, :mod:`rvtool.structure.carrier`: each crank's
+    tapered pair acts on a seat that moves relative to the output face by the carrier's static seat
+    compliance, :mod:`rvtool.assembly.carrier`). structure: the
+    :class:`~rvtool.structure.carrier.CarrierStructure` (file: ``[carrier.structure]``; needed for
+    ``"ported"``)."""
+    body: str = "rigid"
+    structure: CarrierStructure | None = None
+
+    def __post_init__(self):
+        if self.body not in CARRIER_BODIES:
+            raise RvtoolInputError(f"carrier.body = {self.body!r}; valid choices are {list(CARRIER_BODIES)}")
+        if self.body == "ported" and not isinstance(self.structure, CarrierStructure):
+            raise RvtoolInputError("carrier.body = 'ported' needs the table [carrier.structure] (a CarrierStructure)")
+
+    @property
+    def ported(self):
+        """True where the carrier is the reduced structure."""
+        return self.body == "ported"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -208,6 +291,8 @@ class RVDesign:
     compound_gear: InvoluteGear | None = None
     input_stage: InputStage = field(default_factory=InputStage)
     housing: Housing = field(default_factory=Housing)
+    #: the carrier as a rigid body (default) or a reduced structure (issue 30; optional section)
+    carrier: Carrier = field(default_factory=Carrier)
     #: Palmgren friction torque of the tapered crank bearings and the main bearings (issue 17; optional
     #: section, model "none" = no element, no cost)
     bearing_friction: BearingFriction = field(default_factory=BearingFriction)
@@ -375,8 +460,9 @@ _SECTIONS = {"sun_gear": lambda d: _gear("sun_gear", d),
              "input_pinion": lambda d: _gear("input_pinion", d),
              "compound_gear": lambda d: _gear("compound_gear", d),
              "input_stage": lambda d: build_section(InputStage, "input_stage", d),
-             "bearing_friction": lambda d: build_section(BearingFriction, "bearing_friction", d)}
-_OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input_stage", "bearing_friction")
+             "bearing_friction": lambda d: build_section(BearingFriction, "bearing_friction", d),
+             "carrier": lambda d: build_section(Carrier, "carrier", d)}
+_OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input_stage", "bearing_friction", "carrier")
 #: Fields of a table the design sets, not the file (a gear is named after its table): not file keys,
 #: so the templates and the format documentation leave them out.
 SET_BY_DESIGN = {g: ("name",) for g in ("sun_gear", "crank_gear", "input_pinion", "compound_gear")}
@@ -396,7 +482,9 @@ def design_from_dict(d):
         kw[sec] = make(d.pop(sec))
     design = build_section(RVDesign, "design", {**d, **kw, "source": source})
     from .gear_graph import GearGraph
-    GearGraph.of(design)          # topology errors (spacing, crank count, declared ratio) at load
+    graph = GearGraph.of(design)  # topology errors (spacing, crank count, declared ratio) at load
+    from ..carrier import check_carrier
+    check_carrier(design, graph)  # a ported carrier fits the cranks and the bearing rows
     return design
 
 

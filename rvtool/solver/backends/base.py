@@ -47,9 +47,22 @@ SPATIAL_BODIES_REASON = ("the model's carrier retains axial and tilt coordinates
 """The named reason a device backend gives for a model with spatial bodies (issue 32)."""
 
 
+SPATIAL_WHEELS_REASON = ("the model's wheels, cranks or input shaft retain axial and tilt coordinates "
+                         "(bodies.wheel_coordinates / crank_coordinates / input_coordinates = 'spatial'): their families are sliced across the width with the "
+                         "tilts on the host (rvtool.contact.skew.SkewSlices, rvtool.bearings.spatial_tapered); the "
+                         "device copies carry planar bodies and the planar kernels only")
+"""The named reason a device backend gives for a model with tilting wheels or cranks (issue 32)."""
+
+
 def spatial_body_reasons(model):
-    """[SPATIAL_BODIES_REASON] where ``model`` has retained out-of-plane coordinates, else []."""
-    return [SPATIAL_BODIES_REASON] if getattr(model, "carrier_tilt", None) is not None else []
+    """The named reasons (:data:`SPATIAL_BODIES_REASON` for a spatial carrier / flange,
+    :data:`SPATIAL_WHEELS_REASON` for tilting wheels or cranks) where ``model`` has retained
+    out-of-plane coordinates, else []."""
+    out = [SPATIAL_BODIES_REASON] if getattr(model, "carrier_tilt", None) is not None else []
+    tilts = getattr(model, "body_tilts", None)
+    if tilts is not None and any(n.startswith(("wheel", "crank", "sun")) for n in tilts.names):
+        out.append(SPATIAL_WHEELS_REASON)
+    return out
 
 
 FLEXIBLE_BODIES_REASON = ("the model has floating flexible bodies (wheels.dynamics.model = 'flexible'): the device "

@@ -10,7 +10,8 @@ names every difference); the device Newton also needs the model's regularization
 the parameters'. Every other model whose contact families can be copied
 (:func:`rvtool.solver.device_rows.row_reasons`: RV, small-tooth-difference, cycloid designs
 outside that set) runs on the device row Newton (:class:`rvtool.solver.device_rows.DeviceRowNewton`:
-the families' own Warp kernels on the device, the per-copy step on the host); ``stats["path"]``
+the families' own Warp kernels, the per-copy Newton step and, on a GPU, the row sums and the
+tapered rows' planar mapping on the device; one read-back per iteration); ``stats["path"]``
 says which ran. Not covered (named reasons): friction with stick--slip anchors, elastic pin and
 crank closures, the ported housing's modal coordinates, shared output pins.
 Torque paths (task ``"torque_path"``): the row Newton's
@@ -36,7 +37,8 @@ COVERED = ("cycloid pins", "output pins (plain)", "involute pairs (external, int
 """Contact families the device backend's equilibria cover (module docstring)."""
 
 NOT_COVERED = ("friction with stick--slip anchors", "elastic pin and crank closures",
-               "ported housing (modal coordinates)", "shared output pins", "driven runs of non-cycloid topologies")
+               "ported housing (modal coordinates)", "shared output pins", "driven runs of non-cycloid topologies",
+               "ported carrier (carrier.body = 'ported': the seat closure)")
 """What the device backends do not run (each is a named reason of :meth:`DeviceBackend.supports`)."""
 
 
@@ -115,9 +117,9 @@ class _VariantFallback:
 class DeviceBackend(Backend):
     """Device Newton for equilibria (module docstring). device: Warp device ("cpu", "cuda:0");
     settings: :class:`rvtool.solver.device_newton.DeviceNewtonSettings`; copies: the row Newton's
-    batch (copies of the model evaluated per launch; None: min(64, points), since copying the
-    families grows faster than linearly with the copies: RV-40E 1.6 s for 64, 34 s for 512 on the
-    development machine)."""
+    batch (copies of the model evaluated per launch; None: min(64, points); measured before the
+    variant copies reused their built profile tables: copying RV-40E's families took 1.6 s for
+    64, 34 s for 512 copies on the development machine)."""
     name = "device"
     tasks = ("equilibria", "torque_path")
 

@@ -1,0 +1,108 @@
+"""Picklable snapshots of built reducer models for the device row Newton: what
+:class:`rvtool.solver.device_rows.DeviceRowNewton` and :func:`rvtool.solver.replica.copy_families`
+read from a model (bodies, reference poses, kinematics, locks, springs, drive and load, and the
+contact sets' built rows), without its Exudyn system or its Warp kernels.
+
+A Monte Carlo study builds its variant models in worker processes and sends their snapshots to
+the process that runs the device (:func:`rvtool.batched.device_rows_variants.prepare_variant_models`):
+building a variant is serial Python (~20-100 ms: profile tables, packing rows, the Exudyn items),
+copying its rows onto the device is not. A snapshot's contact sets are copies of the built sets
+without their kernels: the copiers read their rows (:meth:`CycloidPinSet.concatenated` and the
+like), never evaluate them. Where the device hands a point or copy over to Exudyn, the model is
+built from the snapshot's design in this process (:func:`real_model`, once per snapshot).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RvtoolInputError
+from ..model.reducer import COORDINATES
+
+#: attributes of a contact set that hold device objects (Warp kernels, staged launches) or what only
+#: an evaluation reads (its assembler, pose buffers): not copied (None in the snapshot)
+DEVICE_ATTRIBUTES = ("_kernel", "_staged", "_device_rows", "_slices", "_scatter", "assembler", "_pose", "_vel",
+                     "_mounting_sum")
+
+
+@dataclass(frozen=True)
+class SnapshotElement:
+    """A contact element of a snapshot: its set without device objects, and its observation ids."""
+    evaluator: object
+    ids: tuple
+
+
+def _set_without_device(s):
+    """A copy of contact set ``s`` without its device objects (its rows, members and tables as built)."""
+    if getattr(s, "_slices", None) is not None:
+        raise RvtoolInputError(f"contact set {s.name!r} has influence-coefficient rows; a snapshot copies laminae "
+                               "rows only (valid: slices = 'laminae')")
+    out = object.__new__(type(s))
+    out.__dict__.update({k: v for k, v in vars(s).items() if k not in DEVICE_ATTRIBUTES})
+    for k in DEVICE_ATTRIBUTES:
+        if k in vars(s):
+            out.__dict__[k] = None
+    return out
+
+
+class ModelSnapshot:
+    """The device row Newton's view of a built model (module docstring): ``design`` and
+    ``build_kw`` (to build the model itself where Exudyn takes over), ``body_names``,
+    ``reference`` (nb, 3), ``kinematics``, ``journal_locks``, ``reg_springs``,
+    ``held_coordinates`` [(body, coordinate)], ``input``, ``output``, ``ratio``, ``structures``
+    and the contact elements' sets (:meth:`contact_elements`)."""
+
+    def __init__(self, model, design, build_kw=None):
+        from .replica import held_coordinates
+        self.design, self.build_kw = design, dict(build_kw or {})
+        self.body_names = tuple(model.body_names)
+        self.reference = np.array(model.reference, float)
+        self.kinematics = model.kinematics
+        self.journal_locks = list(model.journal_locks)
+        self.reg_springs = list(model.reg_springs)
+        self.held_coordinates = list(held_coordinates(model))
+        self.input, self.output, self.ratio = model.input, model.output, float(model.ratio)
+        self.structures = dict(model.structures)
+        self._elements = tuple(SnapshotElement(_set_without_device(e.evaluator), tuple(e.ids))
+                               for e in model.contact_elements())
+        self._model = None
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_model"] = None                  # a built model (Exudyn system) stays in its process
+        return state
+
+    def contact_elements(self):
+        return list(self._elements)
+
+    def body_index(self, body):
+        """Index of a body given by name or index (as :meth:`ReducerModel.body_index`)."""
+        if isinstance(body, str):
+            try:
+                return self.body_names.index(body)
+            except ValueError:
+                raise RvtoolInputError(f"body = {body!r}; valid bodies are {list(self.body_names)}") from None
+        return int(body)
+
+    def reference_value(self, bc):
+        """Reference value of a :class:`BodyCoordinate` (as :meth:`ReducerModel.reference_value`)."""
+        return float(self.reference[self.body_index(bc.body), COORDINATES.index(bc.coordinate)])
+
+    @property
+    def is_built(self):
+        """Whether :meth:`model` has built the model in this process."""
+        return self._model is not None
+
+    def model(self):
+        """The model itself, built from the design in this process (once)."""
+        if self._model is None:
+            from ..assembly import build
+            self._model = build(self.design, **self.build_kw)
+        return self._model
+
+
+def real_model(model):
+    """``model`` itself, or the model a :class:`ModelSnapshot` stands for (built on first use)."""
+    return model.model() if isinstance(model, ModelSnapshot) else model
+
+
+__all__ = ["ModelSnapshot", "SnapshotElement", "real_model"]

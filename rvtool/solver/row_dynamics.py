@@ -1,0 +1,174 @@
+"""Driven runs of any replicable topology (RV, small-tooth-difference) on the device families'
+rows: Exudyn's generalized-alpha step with the contact forces and tangents of the device row
+Newton's copied families (issue 31, deliverable 1, first part: the RV driven run off Exudyn).
+
+The step is :class:`warp_contacts.fused_step_ref.ReferenceModel`'s (Exudyn's
+``MainSolverImplicitSecondOrder``: predictor, full Newton with the index-3 coordinate constraints
+of the drive and the locks, Exudyn's convergence test, adaptive step halving and recovery), one
+copy, on the host; only its forces differ: f(q, v), K = df/dq and C = df/dv come from every
+contact element of the built model copied once on the Warp device
+(:func:`rvtool.solver.replica.copy_families`, the families of
+:class:`rvtool.solver.device_rows.DeviceRowNewton`: the same kernels and rows as the model's
+Exudyn element), plus the output torque. Masses: the model's rigid bodies (mass, mass, polar
+inertia; centre of mass at the node). The static start is Exudyn's (the same StaticSolver as the
+Exudyn path), so both paths start from one state.
+
+Cost (rv40e, one CPU core of the shared development machine, 200 steps): 1.2-1.6x Exudyn's path;
+both evaluate the same family kernels at every Newton iteration (about 3 evaluations per step), and
+the tapered rollers' planar mapping (NumPy, :mod:`rvtool.bearings.tapered_set`) is most of one
+evaluation: the row stepper gains Exudyn's overhead only, until the families run in one fused launch
+or the tapered rows on the device.
+
+This is NOT the fused stepper (one Warp launch per K steps): every Newton iteration launches each
+family and returns its rows to the host. What a fused RV kernel still lacks is named by
+:func:`rvtool.solver.device_dynamics.unfused_element_reasons`.
+"""
+import time
+
+import numpy as np
+
+from warp_contacts.fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_REJECTED, DONE, H_INPUT, H_NEWTON,
+                                          H_OUTPUT, H_STEP, H_TIME, H_TORQUE, M_SPEED, N_COUNT, N_MOTION,
+                                          ReferenceModel)
+
+from ..errors import RvtoolInputError, SolverFailure
+
+
+def rigid_body_masses(model):
+    """(3 nb,) diagonal mass matrix [kg, kg, kg m^2] of the model's bodies from their Exudyn
+    RigidBody2D objects (centre of mass at the node required)."""
+    mbs = model.mbs
+    by_node = {}
+    for i in range(mbs.systemData.NumberOfObjects()):
+        o = mbs.GetObject(i)
+        if o["objectType"] == "RigidBody2D":
+            if np.any(np.asarray(o["centerOfMass"]) != 0.0):
+                raise RvtoolInputError(f"body object {i} has its centre of mass off its node; the row stepper "
+                                       "takes bodies with the centre of mass at the node")
+            by_node[int(o["nodeNumber"])] = (float(o["mass"]), float(o["mass"]), float(o["inertia"]))
+    try:
+        return np.concatenate([by_node[int(n)] for n in model.nodes])
+    except KeyError as exc:
+        raise RvtoolInputError(f"node {exc} carries no RigidBody2D: the row stepper takes planar rigid bodies") from None
+
+
+class RowDrivenModel(ReferenceModel):
+    """One copy of a built ``model`` for :class:`ReferenceModel`'s step, forces from the copied
+    device families (module docstring). torque: output torque [N m] (signed, as applied);
+    motion (N_MOTION,): the drive's angle, speed, acceleration; settings_vector: the stepper's
+    settings (:meth:`rvtool.solver.device_dynamics.DeviceDynamicsSettings.vector`)."""
+
+    def __init__(self, model, *, torque, motion, settings_vector, device="cpu"):
+        from .device_rows import row_reasons
+        from .replica import copy_families
+        reasons = row_reasons(model)
+        if reasons:
+            raise RvtoolInputError("; ".join(reasons))
+        idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
+        if not np.array_equal(idx, np.arange(len(idx))) or len(idx) != model.mbs.systemData.ODE2Size():
+            raise RvtoolInputError("the model has coordinates beyond its rigid bodies' (x, y, theta); the row "
+                                   "stepper takes planar rigid bodies only")
+        nb = len(model.body_names)
+        n = 3 * nb
+        self.model = model
+        self.families = copy_families(model, 1, device=device)
+        for f in self.families:                          # driven runs: dQ/dv of every family
+            if callable(getattr(f.set, "set_velocity_tangent", None)):
+                f.set.set_velocity_tangent(True)
+        # one copy: each family's row entries summed into f (n,) and K, C (n, n) by flat indices
+        # (np.bincount; the rows' local coordinates of the copy's block scatter, -1: ground)
+        self._scatter = []
+        for f in self.families:
+            loc = np.asarray(f.scatter.local, np.int64)
+            vec = loc.reshape(-1)
+            pair = (loc[:, :, None] * n + loc[:, None, :]).reshape(-1)
+            pair_ok = ((loc[:, :, None] >= 0) & (loc[:, None, :] >= 0)).reshape(-1)
+            self._scatter.append((vec >= 0, vec[vec >= 0], pair_ok, pair[pair_ok]))
+        free = np.ones(n, bool)
+        free[sorted(model.fixed_coordinates())] = False
+        self.B, self.n, self.nb = 1, n, nb
+        self.reference = np.asarray(model.reference, float).reshape(1, n)
+        self.mass = rigid_body_masses(model).reshape(1, n)
+        self.free = free
+        self.input_index, self.output_index = model.input_index, model.output_index
+        self.motion = np.asarray(motion, float).reshape(1, N_MOTION)
+        self.torque = np.array([float(torque)])
+        self.settings = np.asarray(settings_vector, float)
+        self.forces_s = 0.0
+        self.evaluations = 0
+
+    def forces(self, p, q, v):
+        from .replica import family_rows
+        t0 = time.perf_counter()
+        n = self.n
+        pose = (self.reference[p] + q).reshape(self.nb, 3)
+        vel = v.reshape(self.nb, 3)
+        f, K, C = np.zeros(n), np.zeros(n * n), np.zeros(n * n)
+        for fam, (vok, vidx, pok, pidx) in zip(self.families, self._scatter):
+            Q, dQ, dV = family_rows(fam.set, pose, vel)[:3]
+            f += np.bincount(vidx, np.asarray(Q, np.float64).reshape(-1)[vok], minlength=n)
+            K += np.bincount(pidx, np.asarray(dQ, np.float64).reshape(-1)[pok], minlength=n * n)
+            if dV is not None:
+                C += np.bincount(pidx, np.asarray(dV, np.float64).reshape(-1)[pok], minlength=n * n)
+        f[self.output_index] += self.torque[p]
+        out = f, K.reshape(n, n), C.reshape(n, n), (0.0, 0.0, 0.0)   # peak loads: not recorded here
+        self.forces_s += time.perf_counter() - t0
+        self.evaluations += 1
+        return out
+
+
+def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu", q0=None):
+    """The dynamic TE protocol's driven run of ``model`` on the row stepper: from the loaded
+    quasi-static state at input angle 0 (``q0``; None: Exudyn's StaticSolver, as the Exudyn path),
+    kinematic velocities, constant input speed [rpm] and output torque [N m] (resisting the
+    nominal rotation), for ``duration`` [s] with ``settings``
+    (:class:`~rvtool.solver.device_dynamics.DeviceDynamicsSettings`). Returns a dict: t, theta_in,
+    theta_out (accepted steps, t = 0 first), omega_in, accepted, rejected, newton, and the split
+    (``forces_s``: the families' launches and row scatter; ``step_s``: the rest of the step).
+    A step that fails at the minimum step raises :class:`SolverFailure`."""
+    from .static import StaticSolver
+    omega = speed_rpm * 2 * np.pi / 60.0
+    tq = -np.sign(model.ratio) * float(torque)
+    model.set_output_torque(tq)
+    if q0 is None:
+        q0 = StaticSolver(model).solve(0.0)
+    v0 = model.body_vector(model.kinematic_state(0.0, omega).velocities)
+    motion = np.zeros(N_MOTION)
+    motion[M_SPEED] = omega
+    rm = RowDrivenModel(model, torque=tq, motion=motion, settings_vector=settings.vector(duration), device=device)
+    fixed = ~rm.free
+    q = np.array(q0, float)
+    v = np.array(v0, float)
+    q[fixed], v[fixed] = 0.0, 0.0
+    q[rm.input_index], v[rm.input_index] = 0.0, omega
+    a = rm.initial_accelerations(0, q, v)
+    state = {"q": q[None].copy(), "v": v[None].copy(), "a": a[None].copy(), "abar": a[None].copy() * 0.0,
+             "t": np.zeros(1), "h": np.full(1, settings.step), "status": np.full(1, ACTIVE),
+             "counters": np.zeros((1, N_COUNT), np.int64)}
+    # Exudyn's initial algorithmic acceleration is the initial acceleration
+    state["abar"][0] = a
+    ref_out = rm.reference[0, rm.output_index]
+    t_h, th_in, th_out, tq_in, steps, newton = [0.0], [q[rm.input_index]], [ref_out + q[rm.output_index]], [np.nan], \
+        [0.0], [0]
+    t0 = time.perf_counter()
+    while state["status"][0] == ACTIVE:
+        hist = rm.advance(state, settings.steps_per_launch)
+        k = int(state["counters"][0, 4])
+        t_h.extend(hist[0, :k, H_TIME])
+        th_in.extend(hist[0, :k, H_INPUT])
+        th_out.extend(hist[0, :k, H_OUTPUT])
+        tq_in.extend(hist[0, :k, H_TORQUE])
+        steps.extend(hist[0, :k, H_STEP])
+        newton.extend(hist[0, :k, H_NEWTON])
+    wall = time.perf_counter() - t0
+    if state["status"][0] != DONE:
+        raise SolverFailure(f"row stepper: step below the minimum step {settings.minimum_step:.3g} s at "
+                            f"t = {state['t'][0]:.9g} s")
+    c = state["counters"][0]
+    return {"t": np.array(t_h), "theta_in": np.array(th_in), "theta_out": np.array(th_out),
+            "torque_in": np.array(tq_in), "step": np.array(steps), "omega_in": omega,
+            "accepted": int(c[C_ACCEPTED]), "rejected": int(c[C_REJECTED]), "newton": int(c[C_NEWTON]),
+            "wall_s": wall, "forces_s": rm.forces_s, "step_s": wall - rm.forces_s, "evaluations": rm.evaluations}
+
+
+__all__ = ["RowDrivenModel", "rigid_body_masses", "row_driven_run"]

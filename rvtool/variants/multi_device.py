@@ -1,0 +1,385 @@
+"""The device Monte Carlo over several devices of one host (issue 31, deliverable 2): one Dask
+worker process per GPU, each pinned to its GPU, every worker running the device backend on its
+batch of variants (scale-out delegated to Dask, :mod:`rvtool.variants.cluster`).
+
+* :func:`device_slots` maps the devices asked for ("cuda:0", "cuda:1", ... or "cpu") to worker
+  slots: a worker for ``cuda:k`` starts with ``CUDA_VISIBLE_DEVICES=k`` in its environment (set
+  by its Nanny before the worker process runs any task, so before Warp initialises CUDA) and runs
+  on ``cuda:0``, the one GPU it sees; a ``cpu`` worker starts with ``CUDA_VISIBLE_DEVICES=""``
+  (it sees no GPU) and runs on Warp's ``cpu`` device (CI, and the equivalence test).
+* :func:`device_cluster` starts a LocalCluster of one single-threaded worker process per slot
+  (named ``device-k``) with each slot's environment, closed on exit.
+* :func:`multi_device_monte_carlo` splits variants 0..n-1 into one contiguous batch per worker
+  (:func:`split_indices`, :func:`plan`), runs each batch on its own worker (pinned to it: the
+  batches are sized for equal devices; a batch may be cut into chunks run one after another there)
+  and gathers the records in variant order. The per-batch task is the
+  topology's device path: a cycloid design runs
+  :func:`rvtool.variants.montecarlo.run_batch` in mode "device" (TE, max pin force and lost
+  motion on the device Newton, :mod:`rvtool.variants.device`); an RV design (every other
+  replicable topology) builds its variants in the worker and runs
+  :func:`rvtool.batched.device_rows_variants.device_rows_variants` (TE and lost motion on the
+  device row Newton). A variant whose run fails, and every variant of a batch whose task dies
+  (a lost worker), is recorded ``status = "failed"`` with its error and counted; none is dropped.
+* Host work: each GPU worker runs the device path's host work (per-copy parameters, Exudyn
+  fallbacks) on a pool of helper processes of its own (:func:`helper_pool`; the workers are
+  non-daemonic so that they may start it), the host's cores shared out between the GPUs
+  (:func:`default_host_workers`); the pools end when the cluster closes.
+
+Every figure of a variant depends on that variant alone (the device copies are independent), so
+the records equal those of one worker (tests/test_multi_gpu.py: two cpu workers against one,
+1e-12). :func:`warm_up` runs a small batch on every worker (imports, kernel compilation and
+module loading on each device), so that a timed study measures the steady state.
+"""
+import contextlib
+import copy
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RvtoolInputError
+
+
+@dataclass(frozen=True)
+class DeviceSlot:
+    """One worker of :func:`device_cluster`: its Dask worker ``name``, the environment ``env`` its
+    process starts with, and the Warp ``device`` it runs on inside that process."""
+    name: str
+    env: dict
+    device: str
+
+
+def device_slots(devices):
+    """Worker slots (:class:`DeviceSlot`) of ``devices``: an int n (the first n GPUs, "cuda:0" ..
+    "cuda:n-1") or a sequence of "cuda:k" / "cpu" (one worker each; a GPU at most once)."""
+    if isinstance(devices, (int, np.integer)) and not isinstance(devices, bool):
+        if devices < 1:
+            raise RvtoolInputError(f"devices = {devices!r} is outside the valid range [1, inf) (number of GPUs)")
+        devices = [f"cuda:{k}" for k in range(int(devices))]
+    if isinstance(devices, str) or not hasattr(devices, "__iter__"):
+        raise RvtoolInputError(f"devices = {devices!r}: give a number of GPUs or a list of 'cuda:K' / 'cpu'")
+    devices = list(devices)
+    if not devices:
+        raise RvtoolInputError("devices = []: give at least one device ('cuda:K' or 'cpu')")
+    slots, gpus = [], set()
+    for k, d in enumerate(devices):
+        d = str(d)
+        if d == "cpu":
+            slots.append(DeviceSlot(f"device-{k}", {"CUDA_VISIBLE_DEVICES": ""}, "cpu"))
+            continue
+        idx = d[5:] if d.startswith("cuda:") else None
+        if idx is None or not idx.isdigit():
+            raise RvtoolInputError(f"devices[{k}] = {d!r}; valid: 'cpu' or 'cuda:K' (K the host's GPU index)")
+        if idx in gpus:
+            raise RvtoolInputError(f"devices[{k}] = {d!r} is named twice: one worker per GPU")
+        gpus.add(idx)
+        slots.append(DeviceSlot(f"device-{k}", {"CUDA_VISIBLE_DEVICES": str(int(idx))}, "cuda:0"))
+    return tuple(slots)
+
+
+@contextlib.contextmanager
+def device_cluster(devices):
+    """(client, slots): a LocalCluster of one worker process per slot of ``devices``
+    (:func:`device_slots`), one thread each, every worker started with its slot's environment
+    (``CUDA_VISIBLE_DEVICES``) and one BLAS/OpenMP thread; closed on exit."""
+    from dask.distributed import Client, LocalCluster
+
+    from .cluster import single_thread_env
+    import dask
+    slots = device_slots(devices)
+    # non-daemonic worker processes: a GPU worker runs its host work on a pool of its own
+    # (host_workers, :func:`helper_pool`); daemonic processes may not start children
+    stack = contextlib.ExitStack()
+    stack.enter_context(dask.config.set({"distributed.worker.daemon": False}))
+    with single_thread_env():
+        cluster = LocalCluster(n_workers=0, threads_per_worker=1, processes=True, dashboard_address=None)
+    stack.callback(cluster.close)
+    try:
+        # one worker spec per slot: the LocalCluster's own worker template with the slot's environment
+        for s in slots:
+            spec = copy.deepcopy(cluster.new_spec)
+            spec["options"] = {**spec["options"], "env": dict(s.env)}
+            cluster.worker_spec[s.name] = spec
+        with single_thread_env():
+            cluster.scale(len(slots))
+        client = Client(cluster)
+        try:
+            client.wait_for_workers(len(slots))
+            yield client, slots
+        finally:
+            try:
+                # the workers' helper pools end with the study (a worker killed at close would orphan
+                # them); a worker that is gone has none left to end
+                client.run(shutdown_helper_pools, on_error="ignore")
+            finally:
+                client.close()
+    finally:
+        stack.close()
+
+
+def worker_addresses(client, slots):
+    """{slot name: worker address} of the workers of ``client``'s cluster named after ``slots``."""
+    by_name = {w["name"]: a for a, w in client.scheduler_info()["workers"].items()}
+    missing = [s.name for s in slots if s.name not in by_name]
+    if missing:
+        raise RvtoolInputError(f"the cluster has no worker named {missing} (start it with device_cluster)")
+    return {s.name: by_name[s.name] for s in slots}
+
+
+def split_indices(n, k):
+    """Variants 0..n-1 in ``k`` contiguous batches whose sizes differ by at most one (first ones larger)."""
+    if n < 1 or k < 1:
+        raise RvtoolInputError(f"n = {n!r} variants and k = {k!r} batches: valid range [1, inf) each")
+    bounds = np.linspace(0, n, min(k, n) + 1).round().astype(int)
+    return [range(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
+
+
+@dataclass(frozen=True, kw_only=True)
+class RvVariantProtocol:
+    """Per-variant workload of an RV design (the Exudyn reference run's,
+    ``cases/rv/monte_carlo_rv.py``): quasi-static TE at ``te_torque_fraction`` x T_rated over one
+    crank revolution at ``n_te_points`` points (warm-started march), and the lost motion at
+    +-``lost_motion_fraction`` x T_rated at input angle 0."""
+    n_te_points: int = 37
+    te_torque_fraction: float = 1.0
+    lost_motion_fraction: float = 0.03
+
+    def __post_init__(self):
+        from ..validation import check_range
+        if isinstance(self.n_te_points, bool) or not isinstance(self.n_te_points, (int, np.integer)) \
+                or self.n_te_points < 1:
+            raise RvtoolInputError(f"n_te_points = {self.n_te_points!r} is outside the valid range [1, inf) (integer)")
+        check_range("te_torque_fraction", self.te_torque_fraction, 0.0, 2.0)
+        check_range("lost_motion_fraction", self.lost_motion_fraction, 0.0, 1.0, low_open=True)
+
+    def input_angles(self, model):
+        """Input angles [rad] over one crank revolution of ``model`` (endpoint excluded)."""
+        crank_rev = 2 * np.pi / abs(model.graph.crank_rate)
+        return np.arange(self.n_te_points) * crank_rev / self.n_te_points
+
+
+def _is_cycloid(design):
+    from ..assembly.spec import CycloidDesign
+    return isinstance(design, CycloidDesign)
+
+
+_POOLS = {}
+
+
+def helper_pool(host_workers):
+    """This process's pool of ``host_workers`` spawned processes (one BLAS thread each) for the
+    device path's host work (per-copy parameters, Exudyn fallbacks), started on first use and kept
+    for the process's later tasks; None for 0."""
+    if not host_workers:
+        return None
+    if host_workers not in _POOLS:
+        import atexit
+        import concurrent.futures as cf
+        import multiprocessing
+
+        from .cluster import single_thread_env
+        from .montecarlo import init_helper
+        with single_thread_env():
+            pool = cf.ProcessPoolExecutor(max_workers=int(host_workers), initializer=init_helper,
+                                          mp_context=multiprocessing.get_context("spawn"))
+        atexit.register(pool.shutdown, wait=False, cancel_futures=True)
+        _POOLS[host_workers] = pool
+    return _POOLS[host_workers]
+
+
+def _import_device_path(_):
+    """A helper's warm-up: the modules of the host work (building, Exudyn fallbacks) imported."""
+    from . import device  # noqa: F401
+    from ..assembly import build  # noqa: F401
+    import os
+    return os.getpid()
+
+
+def start_helper_pool(host_workers):
+    """Start this process's :func:`helper_pool` and every helper in it (each imports the host
+    work's modules), so that a timed study does not pay for them; returns the helpers' count."""
+    pool = helper_pool(host_workers)
+    if pool is None:
+        return 0
+    return len(set(pool.map(_import_device_path, range(4 * int(host_workers)))))
+
+
+def shutdown_helper_pools():
+    """End this process's helper pools (run on every worker when :func:`device_cluster` closes)."""
+    while _POOLS:
+        _POOLS.popitem()[1].shutdown(wait=True, cancel_futures=True)
+
+
+def device_chunk(design, variants, protocol, device, build_kw=None, host_workers=0):
+    """Records of cycloid ``variants`` on the device Newton on ``device``
+    (:func:`rvtool.variants.montecarlo.run_batch`, mode "device"), the host work on this
+    process's :func:`helper_pool` of ``host_workers`` processes (0: in this process)."""
+    from .montecarlo import run_batch
+    return run_batch(design, variants, protocol, device, build_kw, mode="device", helpers=helper_pool(host_workers))
+
+
+def cycloid_batch(design, tolerances, protocol, seed, indices, device, host_workers=0):
+    """Records of the cycloid variants ``indices`` (sampled from ``tolerances`` with ``seed``) on the
+    device Newton on ``device`` (:func:`device_chunk`)."""
+    from .tolerances import sample_variant
+    variants = [sample_variant(tolerances, design, k, seed) for k in indices]
+    return device_chunk(design, variants, protocol, device, host_workers=host_workers)
+
+
+def rv_batch(design, tolerances, protocol, seed, indices, device, host_workers=0):
+    """Records of the RV variants ``indices`` (:func:`rvtool.variants.rv_tolerances.sample_rv_design`
+    with ``seed``): each built here, then TE and lost motion of all of them on the device row Newton
+    (:func:`rvtool.batched.device_rows_variants.device_rows_variants`). A variant that cannot be
+    built is failed with its error; the others run. host_workers: not used (the variants' Exudyn
+    builds are not picklable; they run in this process)."""
+    from ..assembly import build
+    from ..batched.device_rows_variants import device_rows_variants
+    from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
+    from .rv_tolerances import sample_rv_design
+    t0 = time.perf_counter()
+    recs, models, slot = [], [], []
+    for k in indices:
+        rec = {"index": int(k), "te_pp_arcsec": None, "te_rms_arcsec": None, "lost_motion_arcmin": None,
+               "status": "ok", "error": None, "te_path": None, "exudyn_points": 0, "lost_motion_path": None}
+        try:
+            models.append(build(sample_rv_design(tolerances, design, k, seed)[0]))
+            slot.append(len(recs))
+        except Exception as exc:  # an impossible sampled variant is a result of the study
+            rec.update(status="failed", error=f"{type(exc).__name__}: {exc}")
+        recs.append(rec)
+    build_s = time.perf_counter() - t0
+    if models:
+        r = device_rows_variants(models, torque=protocol.te_torque_fraction * design.rated_torque,
+                                 input_angles=protocol.input_angles(models[0]),
+                                 lost_motion_level=protocol.lost_motion_fraction * design.rated_torque, device=device)
+        path = f"device_rows:{device}"
+        for c, i in enumerate(slot):
+            te = r.te[c] - np.mean(r.te[c])
+            recs[i].update(te_pp_arcsec=float(np.ptp(r.te[c]) * ARCSEC_PER_RAD),
+                           te_rms_arcsec=float(np.sqrt(np.mean(te ** 2)) * ARCSEC_PER_RAD),
+                           lost_motion_arcmin=float(r.lost_motion_rad[c] * ARCMIN_PER_RAD),
+                           status=r.status[c], error=r.error[c], te_path=path, lost_motion_path=path)
+        # Exudyn fallbacks are counted per batch (device_rows_variants does not attribute them)
+        recs[slot[0]]["exudyn_points"] = int(r.exudyn_points)
+        recs[slot[0]]["exudyn_copies"] = int(r.exudyn_copies)
+    wall = time.perf_counter() - t0
+    for rec in recs:
+        rec["wall_s"] = wall / len(recs)
+    recs[0]["build_s"] = build_s
+    return recs
+
+
+def batch_task(design):
+    """The per-batch task of ``design``'s topology (module docstring)."""
+    return cycloid_batch if _is_cycloid(design) else rv_batch
+
+
+def default_protocol(design):
+    """The reference run's per-variant workload of ``design``'s topology: RD-40's
+    ``cases/cycloid/monte_carlo_te.py`` (53 TE points over one output revolution, lost motion at
+    +-3 % T_rated) or :class:`RvVariantProtocol` (37 points over one crank revolution)."""
+    from .variant import VariantProtocol
+    return VariantProtocol(n_te_points=53) if _is_cycloid(design) else RvVariantProtocol()
+
+
+def _failed(index, error):
+    return {"index": int(index), "te_pp_arcsec": None, "te_rms_arcsec": None, "lost_motion_arcmin": None,
+            "status": "failed", "error": error, "wall_s": None}
+
+
+def plan(n_variants, slots, chunk=None):
+    """[(slot, indices)]: variants 0..n_variants-1 in one contiguous per-device batch per slot
+    (:func:`split_indices`), each cut into chunks of at most ``chunk`` variants (None: the whole
+    batch in one task) that run one after another on that slot's worker."""
+    if chunk is not None and (isinstance(chunk, bool) or not isinstance(chunk, (int, np.integer)) or chunk < 1):
+        raise RvtoolInputError(f"chunk = {chunk!r} is outside the valid range [1, inf) (integer) or None")
+    out = []
+    for s, b in zip(slots, split_indices(int(n_variants), len(slots))):
+        step = len(b) if chunk is None else int(chunk)
+        out.extend((s, b[i:i + step]) for i in range(0, len(b), step))
+    return out
+
+
+def run_batches(client, tasks, design, tolerances, protocol, seed, host_workers=0):
+    """Records of ``tasks`` ([(slot, indices)], e.g. :func:`plan`), each on its slot's worker with
+    that slot's device, gathered in task order; a task that raises has all its variants failed with
+    that error; host_workers: each worker's helper pool (:func:`helper_pool`). Returns (records,
+    per-task {worker, device, variants, wall_s (of the task, as the worker measured it)})."""
+    addr = worker_addresses(client, list({s.name: s for s, _ in tasks}.values()))
+    fn = batch_task(design)
+    futures = [(s, b, client.submit(_timed, fn, design, tolerances, protocol, seed, list(b), s.device, host_workers,
+                                    workers=[addr[s.name]], allow_other_workers=False, pure=False))
+               for s, b in tasks]
+    records, info = [], []
+    for s, b, fut in futures:
+        try:
+            recs, wall = fut.result()
+        except Exception as exc:  # the task itself died (a lost worker, a device error): its variants failed
+            recs, wall = [_failed(k, f"{type(exc).__name__}: {exc}") for k in b], None
+        records.extend(recs)
+        info.append({"worker": s.name, "device": s.device, "env": dict(s.env), "first": b[0], "variants": len(b),
+                     "wall_s": wall})
+    return records, info
+
+
+def _timed(task, *args):
+    t0 = time.perf_counter()
+    out = task(*args)
+    return out, time.perf_counter() - t0
+
+
+def default_host_workers(slots):
+    """Helper processes per worker: on GPUs the host's cores shared out (one left to each worker
+    itself), on cpu slots none (the workers are the cores)."""
+    import os
+    if all(s.device == "cpu" for s in slots):
+        return 0
+    return max(0, (os.cpu_count() or 1) // len(slots) - 1)
+
+
+def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1, host_workers=None):
+    """Start every worker's helper pool (:func:`start_helper_pool`) and run ``variants`` variants on
+    every worker once (imports, Warp kernel compilation and module loading on its device), untimed
+    by the study; returns the wall time [s]."""
+    t0 = time.perf_counter()
+    protocol = protocol or default_protocol(design)
+    hw = default_host_workers(slots) if host_workers is None else host_workers
+    addr = worker_addresses(client, slots)
+    client.gather([client.submit(start_helper_pool, hw, workers=[addr[s.name]], allow_other_workers=False,
+                                 pure=False) for s in slots])
+    run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed, hw)
+    return time.perf_counter() - t0
+
+
+def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, protocol=None, seed=0, client=None,
+                             slots=None, chunk=None, host_workers=None):
+    """The device Monte Carlo of variants 0..n_variants-1 of ``design`` over several devices
+    (module docstring), each device's batch in chunks of at most ``chunk`` variants (:func:`plan`). Either ``devices`` (a cluster is started for the study and closed after it:
+    see :func:`device_slots`) or ``client`` and ``slots`` of a running :func:`device_cluster`
+    (e.g. warmed by :func:`warm_up`). protocol: the per-variant workload (default
+    :func:`default_protocol`). Returns {"records" (by index), "failed" (count), "wall_s" (the
+    study, on a running cluster), "batches" (per-batch worker, device, size, task wall time)}.
+    host_workers: helper processes of each worker for the host work (None:
+    :func:`default_host_workers`; the same count as the :func:`warm_up` that started the pools)."""
+    if (client is None) == (devices is None):
+        raise RvtoolInputError("give either devices (a cluster for this study) or client and slots (a running one)")
+    if client is not None and not slots:
+        raise RvtoolInputError("client needs the slots of its device_cluster")
+    if isinstance(n_variants, bool) or not isinstance(n_variants, (int, np.integer)) or n_variants < 1:
+        raise RvtoolInputError(f"n_variants = {n_variants!r} is outside the valid range [1, inf) (integer)")
+    protocol = protocol or default_protocol(design)
+    if client is None:
+        with device_cluster(devices) as (client, slots):
+            return multi_device_monte_carlo(design, tolerances, n_variants, protocol=protocol, seed=seed,
+                                            client=client, slots=slots, chunk=chunk, host_workers=host_workers)
+    t0 = time.perf_counter()
+    hw = default_host_workers(slots) if host_workers is None else int(host_workers)
+    records, info = run_batches(client, plan(n_variants, slots, chunk), design, tolerances, protocol, seed, hw)
+    return {"records": records, "failed": sum(r["status"] != "ok" for r in records),
+            "wall_s": time.perf_counter() - t0, "batches": info, "devices": [s.device for s in slots],
+            "host_workers": hw}
+
+
+__all__ = ["DeviceSlot", "RvVariantProtocol", "default_host_workers", "default_protocol", "device_chunk",
+           "device_cluster", "device_slots", "helper_pool", "shutdown_helper_pools", "start_helper_pool",
+           "multi_device_monte_carlo", "plan", "run_batches", "split_indices", "warm_up", "worker_addresses"]

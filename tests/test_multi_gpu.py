@@ -1,0 +1,146 @@
+"""The device Monte Carlo over several devices of one host (rvtool.variants.multi_device): worker
+slots and their CUDA_VISIBLE_DEVICES, the per-device batches, and two cpu workers giving the
+records of one worker (the device copies are independent: equal to 1e-12)."""
+import os
+
+import numpy as np
+import pytest
+import warp as wp
+
+import rvtool
+from rvtool import designs
+from rvtool.errors import RvtoolInputError
+from rvtool.variants.multi_device import (RvVariantProtocol, cycloid_batch, device_cluster, device_slots,
+                                          multi_device_monte_carlo, plan, rv_batch, split_indices,
+                                          start_helper_pool, warm_up)
+from rvtool.variants.rv_tolerances import load_rv_tolerances
+from rvtool.variants.tolerances import load_tolerances
+from rvtool.variants.variant import VariantProtocol
+
+FIGS = ("te_pp_arcsec", "te_rms_arcsec", "lost_motion_arcmin")
+EQUAL = 1e-12
+"""Relative bound of the one-worker / two-worker comparison: the same copies on the same device
+(cpu), computed from the same inputs; only summation order inside a launch could differ."""
+
+
+def _env_of_worker():
+    return os.environ.get("CUDA_VISIBLE_DEVICES")
+
+
+def test_slots_pin_one_gpu_per_worker():
+    s = device_slots(2)
+    assert [x.env["CUDA_VISIBLE_DEVICES"] for x in s] == ["0", "1"]
+    assert {x.device for x in s} == {"cuda:0"}          # each worker sees its one GPU as cuda:0
+    s = device_slots(["cuda:3", "cpu"])
+    assert s[0].env == {"CUDA_VISIBLE_DEVICES": "3"} and s[1].env == {"CUDA_VISIBLE_DEVICES": ""}
+    assert s[1].device == "cpu"
+    for bad in (0, [], "cuda:0", ["cuda:0", "cuda:0"], ["gpu1"], ["cuda:x"]):
+        with pytest.raises(RvtoolInputError):
+            device_slots(bad)
+
+
+def test_batches_cover_every_variant_once_in_order():
+    for n, k in ((7, 2), (8192, 2), (3, 4), (1, 1)):
+        b = split_indices(n, k)
+        assert [i for r in b for i in r] == list(range(n))
+        assert max(map(len, b)) - min(map(len, b)) <= 1
+    s = device_slots(["cpu", "cpu"])
+    p = plan(10, s, chunk=3)
+    assert [(x.name, list(r)) for x, r in p] == [("device-0", [0, 1, 2]), ("device-0", [3, 4]),
+                                                ("device-1", [5, 6, 7]), ("device-1", [8, 9])]
+    with pytest.raises(RvtoolInputError):
+        plan(10, s, chunk=0)
+
+
+def _same(a, b):
+    assert [r["index"] for r in a] == [r["index"] for r in b]
+    for x, y in zip(a, b):
+        assert x["status"] == y["status"], (x["index"], x["error"], y["error"])
+        if x["status"] != "ok":
+            continue
+        for f in FIGS:
+            assert abs(x[f] - y[f]) <= EQUAL * abs(y[f]), (x["index"], f, x[f], y[f])
+
+
+@pytest.fixture(scope="module")
+def rd40_case():
+    rd40 = rvtool.load_design("rd40")
+    tol = load_tolerances(designs.path("rd40_tolerances"))
+    p = VariantProtocol(n_te_points=7)
+    return rd40, tol, p, cycloid_batch(rd40, tol, p, 2026, range(2), "cpu")
+
+
+def test_two_cpu_workers_equal_one(rd40_case):
+    """RD-40 (device Newton) and rv40e (device row Newton), TE + lost motion: the records of two
+    cpu workers, each its batch, equal those of one batch run here; every worker starts with
+    CUDA_VISIBLE_DEVICES set by its slot (cpu: "", no GPU visible)."""
+    rd40, rd_tol, rd_p, ref_rd = rd40_case
+    rv40e = rvtool.load_design("rv40e")
+    rv_tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    rv_p = RvVariantProtocol(n_te_points=3)
+    ref_rv = rv_batch(rv40e, rv_tol, rv_p, 20261124, range(2), "cpu")
+    assert sum(r["status"] == "ok" for r in ref_rd) >= 1 and all(r["status"] == "ok" for r in ref_rv)
+    with device_cluster(["cpu", "cpu"]) as (client, slots):
+        env = client.run(_env_of_worker)
+        assert sorted(env.values()) == ["", ""] and len(env) == 2
+        # host_workers=1: each worker's host work on a helper process of its own (as on a GPU host;
+        # the workers are non-daemonic so that they may start it), started ahead as warm_up does
+        addrs = list(env)
+        assert client.gather([client.submit(start_helper_pool, 1, workers=[a], pure=False) for a in addrs]) == [1, 1]
+        rd = multi_device_monte_carlo(rd40, rd_tol, 2, protocol=rd_p, seed=2026, client=client, slots=slots,
+                                      host_workers=1)
+        rv = multi_device_monte_carlo(rv40e, rv_tol, 2, protocol=rv_p, seed=20261124, client=client, slots=slots)
+    assert [b["worker"] for b in rd["batches"]] == ["device-0", "device-1"]
+    assert rd["failed"] == sum(r["status"] != "ok" for r in ref_rd) and rd["host_workers"] == 1
+    assert any(r["lost_motion_fallback"] for r in rd["records"])     # the helper pool ran an Exudyn fallback
+    _same(rd["records"], ref_rd)
+    _same(rv["records"], ref_rv)
+    assert rv["failed"] == 0
+
+
+def test_monte_carlo_study_on_two_devices(rd40_case, tmp_path):
+    """The resumable study (run_monte_carlo, mode "device") with settings.devices: its chunks on two
+    cpu workers give the one-batch records; mixed or non-device settings are refused by name."""
+    from rvtool.variants.montecarlo import MonteCarloSettings, run_monte_carlo
+    rd40, tol, p, ref = rd40_case
+    out = run_monte_carlo(rd40, tol, p, MonteCarloSettings(n_variants=2, seed=2026, chunk_size=1, mode="device",
+                                                            devices=("cpu", "cpu")), str(tmp_path))
+    assert out["device"] == "cpu x 2" and out["chunks_run"] == 2
+    _same(out["records"], ref)
+    with pytest.raises(RvtoolInputError, match="mixes cpu and cuda"):
+        MonteCarloSettings(n_variants=2, mode="device", devices=("cpu", "cuda:0"))
+    with pytest.raises(RvtoolInputError, match="runs the device mode"):
+        MonteCarloSettings(n_variants=2, mode="pool", devices=2)
+
+
+def test_workers_start_with_their_gpu_visible_only():
+    """The environment pinning itself, without a GPU: slots for cuda:0 and cuda:1 start workers
+    whose CUDA_VISIBLE_DEVICES are "0" and "1" (set before any task, so before Warp initialises)."""
+    with device_cluster(["cuda:0", "cuda:1"]) as (client, slots):
+        env = client.run(_env_of_worker)
+        names = {w["name"]: a for a, w in client.scheduler_info()["workers"].items()}
+    assert {env[names[s.name]] for s in slots} == {"0", "1"}
+    assert env[names["device-0"]] == "0" and env[names["device-1"]] == "1"
+
+
+def _cuda_seen():
+    import warp
+    warp.init()
+    return [d.uuid for d in warp.get_cuda_devices()], os.environ.get("CUDA_VISIBLE_DEVICES")
+
+
+@pytest.mark.skipif(wp.get_cuda_device_count() < 2, reason="needs two CUDA devices")
+def test_cuda_two_gpus_each_worker_sees_one():
+    """cuda: each worker sees exactly one GPU, and the RD-40 records of two GPUs equal one GPU's."""
+    rd40 = rvtool.load_design("rd40")
+    tol = load_tolerances(designs.path("rd40_tolerances"))
+    p = VariantProtocol(n_te_points=7)
+    with device_cluster(2) as (client, slots):
+        seen = client.run(_cuda_seen)
+        assert all(len(v[0]) == 1 for v in seen.values()) and {v[1] for v in seen.values()} == {"0", "1"}
+        assert len({v[0][0] for v in seen.values()}) == 2          # two different GPUs
+        warm_up(client, slots, rd40, tol, p, 2026)
+        two = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots)
+        one = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots[:1])
+    _same(two["records"], one["records"])
+    assert np.isfinite([r["te_pp_arcsec"] for r in two["records"] if r["status"] == "ok"]).all()
