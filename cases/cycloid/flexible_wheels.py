@@ -28,7 +28,7 @@ from rvtool.units import ARCSEC_PER_RAD
 
 DESIGN = designs.path("rd40")
 N_MODES = 8                 # retained in-plane modes per wheel in the driven run (e)
-STATIC_ORDERS = 4           # static correction of the basis (FloatingDynamics.static_orders, its default)
+STATIC_ORDERS = 8           # static correction of the basis (FloatingDynamics.static_orders, its default)
 STEP = 2e-5                 # s, as cases/cycloid/vibration.py
 MODES_COMPARED = 6          # (b): the first in-plane modes of the mounted assembly
 MODE_BOUND = 0.01           # (b): the target, relative frequency difference

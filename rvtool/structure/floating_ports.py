@@ -72,7 +72,7 @@ class FloatingDynamics:
     n_modes: int = 8
     damping_ratio: float = 0.02
     frozen: bool = False
-    static_orders: int = 4
+    static_orders: int = 8
 
     def __post_init__(self):
         if self.model not in MODELS:
