@@ -18,6 +18,9 @@ with T = blockdiag(I, P) (P stacks the x, y, theta rows per port body, theta row
 zero), the element returns Q = T^T Q_b and dQ/dq = T^T (dQ_b/dq_b) T: the
 constant-map contraction of Eq. (port_runtime_transform), exact, with all
 rigid--port and port--port blocks.
+A state-dependent map (:class:`~exudyn_user_elements.floating_ports.FloatingPorts`, the
+ports of floating flexible bodies) hands the element the virtual poses and their Jacobian T at
+each state; the contraction is the same with that T.
 
 The callbacks keep Exudyn's exact signatures and contain no physics; the
 physics lives in :mod:`warp_contacts` and :mod:`rvtool.contact`.
@@ -159,11 +162,20 @@ class ContactElement:
         vel = q_t[:nr].reshape(-1, 3)
         if self.ports is None:
             return pose, vel
+        if getattr(self.ports, "state_dependent", False):
+            # floating flexible bodies (exudyn_user_elements.floating_ports): the map depends on the state
+            pv, T, T_load = self.ports.map(pose, q[nr:])
+            self._port_jacobian = (T, T_load)
+            return np.vstack([pose, pv]), np.vstack([vel, (T @ q_t).reshape(-1, 3)])
         P = self.ports.P
         return (np.vstack([pose, (P @ q[nr:]).reshape(-1, 3)]), np.vstack([vel, (P @ q_t[nr:]).reshape(-1, 3)]))
 
     def _contract(self, ev):
         """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T with T = blockdiag(I, P) (see module docstring)."""
+        if getattr(self.ports, "state_dependent", False):
+            from .floating_ports import contract
+            T, T_load = self._port_jacobian
+            return contract(ev, T, self.n_rigid, self.n, T_load)
         nr, P = self.n_rigid, self.ports.P
 
         def vec(Q):

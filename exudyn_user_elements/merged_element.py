@@ -201,7 +201,10 @@ class HostedContactElement(ContactElement):
         """Q = T^T Q_b, dQ/dq = T^T (dQ_b/dq_b) T on the port rows in contact only (module docstring).
         Ports with the identity map (P = I: the retained out-of-plane rows of
         :class:`~exudyn_user_elements.out_of_plane.RetainedTilt`) contract to the family's own result,
-        copied (the products below give it exactly: every sum has one term times 1, the rest zeros)."""
+        copied (the products below give it exactly: every sum has one term times 1, the rest zeros).
+        State-dependent ports (floating flexible bodies) contract in :meth:`ContactElement._contract`."""
+        if getattr(self.ports, "state_dependent", False):
+            return super()._contract(ev)
         nr, P = self.n_rigid, self.ports.P
         if self._identity_ports is None:
             self._identity_ports = P.shape[0] == P.shape[1] and np.array_equal(P, np.eye(len(P)))

@@ -105,6 +105,7 @@ def _plot(out, sp, markers, zp):
     ax[0].axvline(markers["mesh_hz"], color="r", ls="--", lw=0.8, label="mesh")
     for k, name in enumerate(("eccentric_bearing", "main_bearing", "input_bearing")):
         ax[0].axvline(markers[name]["bpfo"], color=f"C{k + 1}", ls=":", lw=0.8, label=f"{name} BPFO")
+    V.body_mode_markers(ax[0], markers)      # flexible wheels' modes (wheels.dynamics.model = "flexible")
     ax[0].set_xlabel("frequency [Hz]")
     ax[0].set_ylabel("torsion amplitude [arcsec]")
     ax[0].legend(fontsize=6)

@@ -99,6 +99,7 @@ class CycloidModel(ReducerModel):
     profiles: list = field(default_factory=list)
     n_wheels: int = 1
     housing: object = None          # ReducedStructure of an elastic housing, or None (rigid)
+    flexible: object = None         # FlexibleWheels (wheels.dynamics.model = 'flexible'), or None (rigid)
 
     @property
     def flange(self):
@@ -257,7 +258,8 @@ class CycloidModel(ReducerModel):
         return out
 
     def marker_frequencies(self, speed_rpm):
-        """Mesh and bearing marker frequencies [Hz] at input speed [rpm]."""
+        """Mesh and bearing marker frequencies [Hz] at input speed [rpm]; with flexible wheels also
+        ``wheel_modes_hz``, the retained in-plane modes of the free wheel."""
         from ..bearings.frequencies import bearing_frequencies
         f_in = speed_rpm / 60.0
         zp = self.design.pins.n_pins
@@ -279,6 +281,9 @@ class CycloidModel(ReducerModel):
                 row = ball_rows(spec)[0]
                 out[name] = bearing_frequencies(f_ring, row.n_balls, row.ball_diameter, row.pitch_diameter,
                                                 row.contact_angle)
+        if self.flexible is not None:
+            # the flexible wheels' retained in-plane free-free modes (body modes beside the mesh and bearings)
+            out["wheel_modes_hz"] = sorted({float(f) for b in self.flexible.bodies for f in b.frequencies_hz})
         return out
 
     def draw_section(self, ax, q):
@@ -570,10 +575,19 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         meshes = [dataclasses.replace(m, pin_bodies=tuple(int(b) for b in nw + 2 + st[:, k]))
                   for k, m in enumerate(meshes)]
         n_pin_bodies = nw + 2 + st.size
+    flex = None
+    if d.wheels.dynamics.flexible:
+        # floating flexible wheels (issue 33): pin p at wheel k on the virtual body nw + 2 + k z_b + p
+        from .flexible_wheels import FlexibleWheels, check_flexible_wheels
+        check_flexible_wheels(d, bearing_model, d.bodies.spatial_flange or d.bodies.spatial_wheels)
+        flex = FlexibleWheels(mbs, d, mg)
+        meshes = [dataclasses.replace(m, pin_bodies=flex.pin_bodies(k)) for k, m in enumerate(meshes)]
+        n_pin_bodies = flex.n_pin_bodies
     pin_set = CycloidPinSet(meshes, n_pin_bodies, samples_per_tooth=d.wheels.samples_per_tooth, backend=backend,
                             precision=precision, device=device, name="pins", search=d.wheels.search)
     tilt, rows = spatial_flange(mbs, d, bearing_model, housing, regularization)
-    element = ContactElements(mbs, nodes, mode, structure=housing if tilt is None else tilt)
+    structure = housing if tilt is None else tilt
+    element = ContactElements(mbs, nodes, mode, structure=structure if flex is None else flex.coordinates)
     host = element.host
 
     pin_eval = pin_set
@@ -582,12 +596,22 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         pin_eval = ElasticPinClosure(pin_set, n_bodies=nw + 2, carrier=GROUND, station_compliance=C_ring, station=st)
     if d.bodies.spatial_wheels:
         pin_eval = skewed(pin_eval, d, tilt, rows)
-    elements = {"pins": element(pin_eval, ports=ports if tilt is None else (tilt if pin_eval.n_bodies > nw + 2 else None))}
+    if flex is not None:
+        pin_ports = flex.ports("pins")
+    else:
+        pin_ports = ports if tilt is None else (tilt if pin_eval.n_bodies > nw + 2 else None)
+    elements = {"pins": element(pin_eval, ports=pin_ports)}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
     from ..output_pins.evaluator import OutputPinEvaluator
     C_out = pin_station_compliance(d, Family.OUTPUT_PINS)
-    if C_out is None:
+    if flex is not None:
+        # the flange's station body of (pin p, wheel k): the flange shifted by minus hole p's displacement
+        st = flex.output_pin_stations()
+        op_eval = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
+                                     wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2 + st.size, backend=backend,
+                                     precision=precision, device=device, flange_bodies=nw + 2 + st.ravel())
+    elif C_out is None:
         op_eval = OutputPinEvaluator(d.output_pins, name="output_pins", flange=nw + 1,
                                      wheels=tuple(range(1, nw + 1)), n_bodies=nw + 2, backend=backend,
                                      precision=precision, device=device)
@@ -602,7 +626,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
         op_eval = ElasticPinClosure(inner, n_bodies=nw + 2, carrier=nw + 1, station_compliance=C_out, station=st)
     if d.bodies.spatial_wheels:
         op_eval = skewed(op_eval, d, tilt, rows)
-    elements["output_pins"] = element(op_eval, ports=tilt if op_eval.n_bodies > nw + 2 else None)
+    elements["output_pins"] = element(op_eval, ports=flex.ports("output_pins") if flex is not None else
+                                      (tilt if op_eval.n_bodies > nw + 2 else None))
 
     # -- bearings -----------------------------------------------------------------
     if bearing_model == "rolling":
@@ -629,8 +654,16 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                                                                  {nw + 1: nw + 2 + rows[nw + 1]}, name="main_bearing"),
                                                ports=tilt)
     else:
-        bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=tuple(lumped_bearing_contacts(d)))
-        elements["bearings"] = element(bset, backend=backend, precision=precision, device=device)
+        contacts = tuple(lumped_bearing_contacts(d))
+        if flex is None:
+            bset = CircleContactSet(name="bearings", n_bodies=nw + 2, contacts=contacts)
+            elements["bearings"] = element(bset, backend=backend, precision=precision, device=device)
+        else:
+            # wheel k's bore: the virtual body nw + 2 + k (the wheel pose plus the bore's rigid-fit motion)
+            contacts = tuple(dataclasses.replace(c, body_b=nw + 2 + k) if k < nw else c for k, c in enumerate(contacts))
+            bset = CircleContactSet(name="bearings", n_bodies=2 * nw + 2, contacts=contacts)
+            elements["bearings"] = element(bset, backend=backend, precision=precision, device=device,
+                                           ports=flex.ports("bearings"))
     if d.bearing_friction.model != "none":
         # the friction torque of every bearing, a loss element of its own (switched off: absent); rolling
         # elements: P1 from the accepted element loads of each mounting
@@ -644,13 +677,15 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
                         output=BodyCoordinate("flange", "theta"), ratio=d.ratio, kinematics=CycloidKinematics(d),
-                        drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"], locks=bodies["locks"],
+                        drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"],
+                        locks=bodies["locks"] + ([] if flex is None else flex.coordinates.locks),
                         reg_springs=bodies["reg_springs"], journal_locks=bodies["journal_locks"],
-                        structures={} if housing is None else {"housing": housing},
+                        structures=({} if housing is None else {"housing": housing}) if flex is None
+                        else {"wheels": flex.coordinates},
                         mesh_period=2 * np.pi / d.pins.n_pins, pin_set=pin_set, profiles=profiles, n_wheels=nw,
                         housing=housing, contact_host=host, family_specs=family_specs(d, meshes),
                         material=d.material, carrier_tilt=tilt if d.bodies.spatial_flange else None,
-                        body_tilts=tilt)
+                        body_tilts=tilt, flexible=flex)
 
 
 #: main bearings whose rows resolve a spatial flange (:mod:`rvtool.bearings.spatial_set`)

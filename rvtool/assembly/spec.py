@@ -41,6 +41,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_columns, angle_field, is_angle
 from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
+from ..structure.floating_ports import FloatingDynamics
 from ..structure.wheel_body import WheelBodySpec
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 
@@ -104,7 +105,9 @@ class Wheels:
     closest point). body: the wheel body in the torque path, "rigid" (default) or "ported" (an elastic
     wheel through NGSolve, :mod:`rvtool.assembly.wheel_body`; RV topology). structure: the
     :class:`~rvtool.structure.wheel_body.WheelBodySpec` of a ported wheel (file:
-    ``[wheels.structure]``; unused while the body is rigid)."""
+    ``[wheels.structure]``; unused while the body is rigid). dynamics: the wheels as rigid or floating flexible
+    bodies in driven and quasi-static runs (:class:`~rvtool.structure.floating_ports.FloatingDynamics`,
+    sub-table ``[wheels.dynamics]``; rigid by default; cycloid topology)."""
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)
@@ -116,6 +119,7 @@ class Wheels:
     search: str = "discrete"
     body: str = "rigid"
     structure: WheelBodySpec = field(default_factory=WheelBodySpec)
+    dynamics: FloatingDynamics = field(default_factory=FloatingDynamics)
 
     def __post_init__(self):
         check_positive("wheels.eccentricity", self.eccentricity)

@@ -160,6 +160,9 @@ def copy_parameters(design: CycloidDesign, variants, *, regularization=(100.0, 0
     variants = tuple(variants)
     if len(variants) < 1:
         raise RvtoolInputError("variants must contain at least one Variant (valid range of B: [1, inf))")
+    if design.wheels.dynamics.flexible:
+        raise RvtoolInputError("wheels.dynamics.model = 'flexible'; the device copies carry planar rigid wheels "
+                               "(valid: 'rigid')")
     if design.housing.model != "rigid":
         raise RvtoolInputError(f"housing.model = {design.housing.model!r}; the device Newton supports ['rigid']")
     from ..assembly.spec import replace

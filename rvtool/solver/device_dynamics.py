@@ -185,6 +185,10 @@ def fused_support(model, run_spec=None):
                        f"output flange; this model's bodies are {list(model.body_names)})")
         reasons.extend(unfused_element_reasons(model))
         return FusedSupport(tuple(reasons))
+    from .backends.base import flexible_body_reasons
+    if flexible_body_reasons(model):
+        reasons.extend(flexible_body_reasons(model))
+        return FusedSupport(tuple(reasons))
     extra = sorted(set(model.elements) - set(FUSED_ELEMENTS))
     if extra:
         reasons.append(f"contact elements {extra} (bearing_friction.model = {model.design.bearing_friction.model!r}); "

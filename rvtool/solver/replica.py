@@ -338,7 +338,8 @@ class ReplicatedModel:
 
 def replica_reasons(model):
     """Every named reason why :func:`replicate` cannot copy ``model`` (empty: it can)."""
-    reasons = []
+    from .backends.base import flexible_body_reasons
+    reasons = flexible_body_reasons(model)
     if model.structures:
         reasons.append(f"the model has elastic structures {sorted(model.structures)}: the angle-batched path "
                        "copies planar rigid bodies only (valid: housing.model = 'rigid')")

@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from ..errors import RvtoolInputError
-from .craig_bampton import craig_bampton_matrices
+from .craig_bampton import craig_bampton_matrices, factorize
 
 RIGID_MODES = 6
 RIGID_SEPARATION = 1e-6
@@ -38,7 +38,12 @@ def floating_basis(model, *, n_modes, frame_vertices=None, boundary_vertices=())
             raise RvtoolInputError("n_modes = 0: a free-free basis needs at least one elastic mode (valid [1, inf))")
         # K is singular for a free body: shift-invert about a negative shift, where K - sigma M is positive definite
         scale = float(np.max(K.diagonal() / M.diagonal()))
-        lam, vec = spla.eigsh(K.tocsc(), k=n_modes + RIGID_MODES, M=M.tocsc(), sigma=-1e-6 * scale, which="LM")
+        sigma = -1e-6 * scale
+        # the shifted operator factorized once with the symmetric ordering of craig_bampton.factorize
+        # (ARPACK's default SuperLU options took ~4x longer on a 16k-coordinate wheel, measured)
+        lu = factorize((K - sigma * M).tocsc(), "K - sigma M")
+        op = spla.LinearOperator(K.shape, matvec=lu.solve, dtype=float)
+        lam, vec = spla.eigsh(K.tocsc(), k=n_modes + RIGID_MODES, M=M.tocsc(), sigma=sigma, which="LM", OPinv=op)
         order = np.argsort(lam)
         lam, vec = lam[order], vec[:, order]
         if np.max(np.abs(lam[:RIGID_MODES])) > RIGID_SEPARATION * lam[RIGID_MODES]:

@@ -347,10 +347,10 @@ class RvModel(ReducerModel):
             raise RvtoolInputError("the series members (elastic cranks, pin grooves) of a model with tilting wheels or "
                                    "cranks are closed inside the width slices; their budget paths are not implemented; "
                                    "valid: bodies.wheel_coordinates / crank_coordinates = 'planar'")
-        if fam == Family.CRANK_BEARINGS and self.design.carrier.ported:
-            return GrooveSeries.of_groove(self.elements["crank_bearings"], "carrier", Family.CRANK_BEARINGS)
         if fam == Family.PINS and "wheel_bodies" in self.elements:
             return WheelSeries.of_closure(self.elements["wheel_bodies"])
+        if fam == Family.CRANK_BEARINGS and self.design.carrier.ported:
+            return GrooveSeries.of_groove(self.elements["crank_bearings"], "carrier", Family.CRANK_BEARINGS)
         if fam == Family.PINS and self.design.pins.groove != "rigid":
             return GrooveSeries.of_groove(self.elements["pins"])
         if fam != Family.ECCENTRIC_BEARINGS:
@@ -863,6 +863,9 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     if not isinstance(design, RVDesign):
         raise RvtoolInputError(f"design must be an RVDesign; got {type(design).__name__}")
     d = design
+    if d.wheels.dynamics.flexible:
+        raise RvtoolInputError("wheels.dynamics.model = 'flexible' is implemented for the cycloid topology only (issue "
+                               "33: RD-40 first); valid for an RV design: 'rigid'")
     graph = GearGraph.of(d)
     L = Layout(d)
     kin = RvKinematics(d, graph, L)

@@ -65,6 +65,17 @@ def spatial_body_reasons(model):
     return out
 
 
+FLEXIBLE_BODIES_REASON = ("the model has floating flexible bodies (wheels.dynamics.model = 'flexible'): the device "
+                          "copies carry planar rigid bodies only, not the modal coordinates and port maps of "
+                          "exudyn_user_elements.floating_ports")
+"""The named reason a device backend gives for a model with flexible wheels or cranks (issue 33)."""
+
+
+def flexible_body_reasons(model):
+    """[FLEXIBLE_BODIES_REASON] where ``model`` has floating flexible bodies, else []."""
+    return [FLEXIBLE_BODIES_REASON] if getattr(model, "flexible", None) is not None else []
+
+
 @dataclass(frozen=True, kw_only=True)
 class EquilibriumBatch:
     """Drive/load states of a quasi-static protocol: ``input_angles`` [rad] (prescribed input

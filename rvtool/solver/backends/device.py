@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import RvtoolInputError, SolverFailure
-from .base import Backend, DrivenHistory, Equilibria, Support, spatial_body_reasons
+from .base import Backend, DrivenHistory, Equilibria, Support, flexible_body_reasons, spatial_body_reasons
 
 
 COVERED = ("cycloid pins", "output pins (plain)", "involute pairs (external, internal)",
@@ -156,7 +156,7 @@ class DeviceBackend(Backend):
         if not self._task(task):
             return Support.of([f"device does not implement {task!r} (equilibria and torque paths; driven runs: "
                                "'fused')"])
-        spatial = spatial_body_reasons(model)
+        spatial = spatial_body_reasons(model) + flexible_body_reasons(model)
         if spatial:
             return Support.of(spatial)
         if task == "torque_path":

@@ -1,0 +1,266 @@
+"""Modes of a reducer with floating flexible wheels, linearized at a static state (issue 33, target
+"the mounted flexible wheel (contacts linearized at the rated torque) against a full FE of the
+same assembly: first modes within 1 %").
+
+Both models share the static state q (the reduced model's equilibrium at the load), the contact
+laws' tangents J_b of every family on its bodies (rigid and virtual) and the port operators; they
+differ only in how a wheel's elastic field e is represented:
+
+* **mounted (reduced)**: the wheel's frame coordinates (x, y, theta) and its n retained in-plane
+  free-free modes, e = Phi zeta (what the dynamic runs integrate);
+* **full FE**: every coordinate u of the wheel's mesh, the frame motion being a sparse fit B u
+  (x, y the bore's mean translation, theta the profile stations' mean rotation) and
+  e = (I - R_rig B) u (a sparse split; in the linear model the frame choice only moves
+  the geometric terms of the contact forces, of relative size F / (k_contact r) ~ 1e-4, between
+  frame and field: the material points move by u either way).
+
+Each family's virtual bodies are x_v = x_base + s [R(theta_w) A_v e ; a_v e] with A_v the port
+operator on the FE coordinates (:class:`rvtool.assembly.flexible_wheels.PortFamily`); its tangent
+contributes C_l^T (-J_b) C with C = d[x_rigid; x_v]/dX from the measuring operators and C_l from
+the loading ones (the same truncations as the element: the
+locator's dependence on the state and the geometric term are left out in both). The mass is the
+mesh's: the frame's rigid mass and inertia R_rig^T M R_rig and the identity on zeta (reduced), M
+on u (full). The regularization springs act on the frames (B u in the full model). Eigenvalues of
+(K, M) over the free coordinates (the drive and the locks held): the reduced by dense ``eig``,
+the full by shift-invert Lanczos on the sparse symmetric part (the asymmetry is reported).
+"""
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..errors import RvtoolInputError
+from ..model.reducer import COORDINATES
+
+
+def system_mass(model):
+    """Exudyn's system mass matrix (n, n) of ``model`` (dense; the builder's rigid inertia)."""
+    import exudyn as exu
+    solver = exu.MainSolverImplicitSecondOrder()
+    ss = exu.SimulationSettings()
+    ss.linearSolver.solverType = exu.LinearSolverType.EigenDense
+    solver.InitializeSolver(model.mbs, ss)
+    solver.ComputeMassMatrix(model.mbs)
+    return np.asarray(solver.GetSystemMassMatrix(), float)
+
+
+def element_modes(model, q, n=12):
+    """Frequencies [Hz] of the n lowest modes of the built model linearized at q, from the contact
+    elements' own contracted tangents (:func:`rvtool.protocols.stiffness.assembled_stiffness`) and
+    Exudyn's mass matrix, over the free coordinates."""
+    from .stiffness import assembled_stiffness
+    K = assembled_stiffness(model, q)
+    M = system_mass(model)
+    free = np.array(sorted(set(range(len(q))) - set(model.fixed_coordinates())))
+    lam = sla.eigvals(K[np.ix_(free, free)], M[np.ix_(free, free)])
+    return _frequencies(lam, n)
+
+
+def _frequencies(lam, n):
+    lam = np.sort(np.real(np.asarray(lam)))
+    lam = lam[np.isfinite(lam)]
+    return np.sqrt(np.maximum(lam[:n], 0.0)) / (2 * np.pi)
+
+
+def _rot(theta):
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s], [s, c]]), np.array([[-s, -c], [c, -s]])
+
+
+class _Layout:
+    """The coordinates X of one linear model: the rigid coordinates of the non-wheel bodies (3 per
+    body), then per wheel its block (reduced: 3 frame + m modal; full: n_fe mesh coordinates).
+    ``rigid(b)`` (3, n_X) and ``elastic(k)`` (n_fe, n_X) map X to a body's planar coordinates and a
+    wheel's elastic field."""
+
+    def __init__(self, model, full):
+        fw = model.flexible
+        self.nb = len(model.body_names)
+        self.wheels = [1 + k for k in range(fw.nw)]
+        self.full = full
+        self.ops = fw.operators
+        self.models = [m.model for m in fw.meshes]
+        self.Phi = [b.basis for b in fw.bodies]
+        self.n_fe = [P.shape[0] for P in self.Phi]
+        self.m = [P.shape[1] for P in self.Phi]
+        self.start, n = {}, 0
+        for b in range(self.nb):
+            if b not in self.wheels:
+                self.start[b] = n
+                n += 3
+        for k, b in enumerate(self.wheels):
+            self.start[b] = n
+            n += self.n_fe[k] if full else 3 + self.m[k]
+        self.n = n
+        self._E = {}
+
+    def size(self, k):
+        return self.n_fe[k] if self.full else 3 + self.m[k]
+
+    def rigid(self, b):
+        out = sp.lil_matrix((3, self.n))
+        s = self.start[b]
+        if b in self.wheels and self.full:
+            k = self.wheels.index(b)
+            out[:, s:s + self.n_fe[k]] = self.fit(k)
+        else:
+            out[:, s:s + 3] = np.eye(3)
+        return out.tocsr()
+
+    def fit(self, k):
+        """(3, n_fe) sparse: the full model's frame of wheel k, x and y the bore's mean translation,
+        theta the mean rotation of the profile stations about the centre (both sparse rows)."""
+        if k not in self._E:
+            ops = self.ops[k]
+            m = self.models[k]
+            pos = m.vertices[m.dof_vertex, np.minimum(m.dof_component, 1)]
+            P = ops.profile
+            x, y = P[0::2] @ pos, P[1::2] @ pos
+            r2 = x * x + y * y
+            theta = (sp.diags(-y / r2) @ P[0::2] + sp.diags(x / r2) @ P[1::2]).mean(axis=0)
+            self._E[k] = sp.vstack([ops.bore[:2], sp.csr_matrix(theta)]).tocsr()
+        return self._E[k]
+
+    def elastic_of(self, k, A):
+        """A e_k as a sparse (rows, n_X) map: A (rows, n_fe) applied to wheel k's elastic field
+        (full: A (I - R_rig B) u = A u - (A R_rig) B u; reduced: A Phi zeta)."""
+        b = self.wheels[k]
+        s = self.start[b]
+        A = sp.csr_matrix(A)
+        if self.full:
+            blk = A - sp.csr_matrix(A @ self.ops[k].rigid) @ self.fit(k)
+        else:
+            blk = sp.hstack([sp.csr_matrix((A.shape[0], 3)), sp.csr_matrix(A @ self.Phi[k])])
+        w = blk.shape[1]
+        return sp.hstack([sp.csr_matrix((A.shape[0], s)), blk, sp.csr_matrix((A.shape[0], self.n - s - w))]).tocsr()
+
+
+def linear_model(model, q, *, full):
+    """(K, M, free) of the mounted (``full=False``) or full-FE (``full=True``) linear model at the
+    static state q (module docstring); K and M sparse over X, free: the indices of X not held."""
+    fw = model.flexible
+    if fw is None:
+        raise RvtoolInputError("the model has no flexible wheels (wheels.dynamics.model = 'flexible')")
+    L = _Layout(model, full)
+    nb = L.nb
+    zeta_idx = model.structures["wheels"].coordinate_indices()
+    pose = np.array([model.body_pose(q, b) for b in range(nb)])
+    e_star = [fw.bodies[k].basis @ q[zeta_idx][fw.coordinates.slice(f"wheel{k}")] for k in range(fw.nw)]
+    rigid_rows = sp.vstack([L.rigid(b) for b in range(nb)]).tocsr()          # (3 nb, n)
+    K = sp.csr_matrix((L.n, L.n))
+    asym = 0.0
+
+    def virtual_rows(fam, A):
+        rows = []
+        for i in range(len(fam.base)):
+            k, f, sg = int(fam.wheel[i]), int(fam.frame[i]), float(fam.sign[i])
+            R, dR = _rot(pose[f, 2])
+            r = L.elastic_of(k, np.vstack([R @ A[i][:2], A[i][2:3]])) * sg
+            r = r + sp.csr_matrix(np.vstack([(dR @ (A[i][:2] @ e_star[k]))[:, None], [[0.0]]])) @ L.rigid(f)[2:3] * sg
+            if fam.base[i] >= 0:
+                r = r + L.rigid(int(fam.base[i]))
+            rows.append(r)
+        return sp.vstack([rigid_rows] + rows).tocsr()
+    for name, el in model.elements.items():
+        ql = np.asarray(el.local(q), float)
+        p, v = el.pose_velocity(ql, np.zeros(len(ql)))
+        J = el.evaluator.evaluate(p, v, check=False).dQdq
+        if el.ports is None:
+            C = Cl = rigid_rows
+        else:
+            fam = fw.families[name]
+            C = virtual_rows(fam, fam.operator(pose))
+            Cl = virtual_rows(fam, fam.operator(pose, True)) if any(o.split for o in fw.operators) else C
+        asym = max(asym, abs(J - J.T).max() / max(abs(J).max(), 1e-300))
+        K = K + Cl.T @ sp.csr_matrix(-J) @ C
+    # the structures' own stiffness
+    for k in range(fw.nw):
+        s = L.start[L.wheels[k]]
+        if full:
+            K = K + _embed(fw.meshes[k].model.elastic_stiffness, s, L.n)
+        else:
+            K = K + _embed(sp.diags(fw.bodies[k].omega2), s + 3, L.n)
+    # regularization springs on the bodies' planar coordinates
+    glob = {model.coordinate_index(b, c): (b, c) for b in range(nb) for c in range(3)}
+    for i, kk in model.regularization_stiffness():
+        if i in glob:
+            b, c = glob[i]
+            row = L.rigid(b)[c]
+            K = K + kk * (row.T @ row)
+    # mass: non-wheel bodies from Exudyn's matrix, wheels from the mesh
+    Mx = system_mass(model)
+    M = sp.lil_matrix((L.n, L.n))
+    for b in range(nb):
+        if b in L.wheels:
+            continue
+        g = [model.coordinate_index(b, c) for c in range(3)]
+        s = L.start[b]
+        M[s:s + 3, s:s + 3] = Mx[np.ix_(g, g)]
+    M = M.tocsr()
+    for k, b in enumerate(L.wheels):
+        s = L.start[b]
+        mass = fw.meshes[k].model.mass
+        if full:
+            M = M + _embed(mass, s, L.n)
+        else:
+            Rr = L.ops[k].rigid
+            Mr = np.zeros((3 + L.m[k], 3 + L.m[k]))
+            Mr[:3, :3] = Rr.T @ (mass @ Rr)
+            Mr[3:, 3:] = np.eye(L.m[k])
+            M = M + _embed(sp.csr_matrix(Mr), s, L.n)
+    # held coordinates: the drive and the locks on non-wheel bodies (a lock on a wheel is refused)
+    held = []
+    for i in model.fixed_coordinates():
+        if i in glob:
+            b, c = glob[i]
+            if b in L.wheels:
+                raise RvtoolInputError(f"wheel coordinate {COORDINATES[c]} of body {b} is locked; the full-FE model "
+                                       "keeps every wheel coordinate free (valid: bodies.wheel = ['x', 'y', 'theta'])")
+            held.append(L.start[b] + c)
+    free = np.setdiff1d(np.arange(L.n), held)
+    return K.tocsr(), M.tocsr(), free, asym
+
+
+def _embed(A, s, n):
+    A = sp.csr_matrix(A)
+    k = A.shape[0]
+    return sp.bmat([[sp.csr_matrix((s, s)), None, None], [None, A, None],
+                    [None, None, sp.csr_matrix((n - s - k, n - s - k))]], format="csr") if n - s - k > 0 else \
+        sp.bmat([[sp.csr_matrix((s, s)), None], [None, A]], format="csr")
+
+
+def mounted_modes(model, q, *, n=12, full=False):
+    """dict(frequencies_hz (n,), asymmetry, in_plane (n,)): the n lowest in-plane modes of the
+    mounted reduced model or of the full FE of the same assembly, linearized at q (module
+    docstring). Both use the symmetric part of K (``asymmetry``: the largest relative asymmetry of
+    a family's contact tangent). The full mesh also has the wheel's out-of-plane motion (rigid z
+    translation and tilts, which no planar contact holds, and plate modes): modes with less than
+    half their kinetic energy in the plane are left out, as in the choice of the retained modes
+    (:data:`rvtool.structure.floating_ports.IN_PLANE_FRACTION`)."""
+    from ..structure.floating_ports import IN_PLANE_FRACTION
+    K, M, free, asym = linear_model(model, q, full=full)
+    Kf, Mf = K[free][:, free], M[free][:, free]
+    Ks = 0.5 * (Kf + Kf.T)
+    if not full:
+        lam = sla.eigh(Ks.toarray(), Mf.toarray(), eigvals_only=True)
+        return {"frequencies_hz": _frequencies(lam, n), "asymmetry": asym, "in_plane": np.ones(n)}
+    fw = model.flexible
+    L = _Layout(model, True)
+    z = np.zeros(L.n, bool)
+    for k, b in enumerate(L.wheels):
+        z[L.start[b]:L.start[b] + L.n_fe[k]] = fw.meshes[k].model.dof_component == 2
+    zf = z[free]
+    k = 3 * n + 12
+    # shift below the lowest mode: K - sigma M is positive definite (the out-of-plane rigid motion is free)
+    lam, vec = spla.eigsh(Ks.tocsc(), k=k, M=Mf.tocsc(), sigma=-1.0, which="LM")
+    order = np.argsort(lam)
+    lam, vec = lam[order], vec[:, order]
+    Mv = Mf @ vec
+    total = np.einsum("ij,ij->j", vec, Mv)
+    vz = np.where(zf[:, None], vec, 0.0)
+    frac = 1.0 - np.einsum("ij,ij->j", vz, Mf @ vz) / total
+    keep = np.flatnonzero(frac >= IN_PLANE_FRACTION)[:n]
+    if len(keep) < n:
+        raise RvtoolInputError(f"only {len(keep)} in-plane modes among the {k} lowest of the full model; valid: n <= "
+                               f"{len(keep)}")
+    return {"frequencies_hz": _frequencies(lam[keep], n), "asymmetry": asym, "in_plane": frac[keep]}
