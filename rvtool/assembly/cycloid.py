@@ -534,7 +534,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     if bearing_model not in ("lumped", "rolling"):
         raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are ['lumped', 'rolling']")
     check_lumped(design, bearing_model)
-    if design.wheels.body != "rigid":
+    if design.wheels.body != "rigid" and design.wheels.dynamics.model == "rigid":   # flexible: its own refusal
         raise RvtoolInputError(f"wheels.body = {design.wheels.body!r} is implemented for the RV topology only (the "
                                "output pins of a cycloid drive are not ported yet); valid: wheels.body = 'rigid'")
     if isinstance(design.main_bearing, CrossedRollerBearing) and bearing_model != "rolling":
