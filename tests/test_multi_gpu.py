@@ -19,6 +19,7 @@ from rvtool.variants.variant import VariantProtocol
 
 FIGS = ("te_pp_arcsec", "te_rms_arcsec", "lost_motion_arcmin")
 EQUAL = 1e-12
+EQUAL_CUDA = 1e-9   # cuda row sums are atomic adds in varying order (3.9e-12 seen on 2x H200): the equilibrium bound
 """Relative bound of the one-worker / two-worker comparison: the same copies on the same device
 (cpu), computed from the same inputs; only summation order inside a launch could differ."""
 
@@ -52,14 +53,14 @@ def test_batches_cover_every_variant_once_in_order():
         plan(10, s, chunk=0)
 
 
-def _same(a, b):
+def _same(a, b, bound=EQUAL):
     assert [r["index"] for r in a] == [r["index"] for r in b]
     for x, y in zip(a, b):
         assert x["status"] == y["status"], (x["index"], x["error"], y["error"])
         if x["status"] != "ok":
             continue
         for f in FIGS:
-            assert abs(x[f] - y[f]) <= EQUAL * abs(y[f]), (x["index"], f, x[f], y[f])
+            assert abs(x[f] - y[f]) <= bound * abs(y[f]), (x["index"], f, x[f], y[f])
 
 
 @pytest.fixture(scope="module")
@@ -183,6 +184,6 @@ def test_cuda_two_gpus_each_worker_sees_one():
                                        build_kw=RD_BUILD)
         one = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots[:1],
                                        build_kw=RD_BUILD)
-    _same(two["records"], one["records"])
+    _same(two["records"], one["records"], EQUAL_CUDA)
     assert {r["te_path"] for r in two["records"] if r["status"] == "ok"} == {"device_rows:cuda:0"}
     assert np.isfinite([r["te_pp_arcsec"] for r in two["records"] if r["status"] == "ok"]).all()

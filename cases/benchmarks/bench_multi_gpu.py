@@ -31,7 +31,7 @@ pools started and their modules imported). Starting the clusters is excluded too
 (``cluster_start_s``). Building the variants, fallbacks and failures are inside the timings.
 
 Judged (``passed``): the N-device records equal the one-device records (every figure within 1e-12
-relative: the copies are independent), the same variants failed in both, failed variants
+relative on cpu, 1e-9 on cuda where atomic row sums vary in order: the copies are independent), the same variants failed in both, failed variants
 <= 0.2 % (issue 31), and, for a full run on cuda, the speed-up N devices / one >= 1.8 (issue 31's
 target for 2 GPUs, the whole study: builds included; quick and cpu runs report it only: two
 workers on a shared 2-core machine measure nothing). Split of the time: per worker, its tasks'
@@ -53,7 +53,12 @@ from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants.variant import VariantProtocol
 
 FIGS = ("te_pp_arcsec", "te_rms_arcsec", "max_pin_force_N", "lost_motion_arcmin")
-EQUAL_REL = 1e-12               # the same independent copies on equal devices: equal records
+EQUAL_REL = 1e-12               # the same independent copies on equal devices: equal records (cpu)
+EQUAL_REL_CUDA = 1e-9
+"""On cuda the row sums are float64 atomic adds whose order varies from launch to launch, so two runs of
+the same copy differ in the last digits and Newton stops at a slightly different iterate: the backends'
+equilibrium bound (1e-9 relative, tests/test_backends_golden.py). Set after the first 2x H200 run showed
+6.1e-11 (RD-40) and 4.1e-11 (rv40e) against the 1e-12 cpu bound."""
 MAX_FAILURE_SHARE = 0.002       # issue 31: failures < 0.2 %
 TARGET_SPEEDUP = 1.8            # issue 31: 8,192 variants on 2 GPUs >= 1.8x one GPU
 RD_REGULARIZATION = (1.0e4, 100.0)   # cases/cycloid/monte_carlo_te.py's REGULARIZATION (as bench_device_mc)
@@ -68,10 +73,16 @@ CASES = {
 }
 
 
+def equal_bound(r):
+    """EQUAL_REL on cpu, EQUAL_REL_CUDA when the workers ran on cuda (atomic summation order)."""
+    devices = r["settings_echo"].get("devices", ())
+    return EQUAL_REL_CUDA if any(str(d).startswith("cuda") for d in devices) else EQUAL_REL
+
+
 def judge(r):
     b = r["settings_echo"]["variants"]
     checks = {
-        "records_equal": casekit.check(r["agreement"]["max_rel_diff"], EQUAL_REL,
+        "records_equal": casekit.check(r["agreement"]["max_rel_diff"], equal_bound(r),
                                        why="the N-device records equal the one-device records (independent copies)"),
         "same_failures": casekit.check(r["agreement"]["status_mismatches"], 0, "==",
                                        why="the same variants fail on one and on N devices"),
