@@ -68,3 +68,21 @@ def check_choice(name, value, choices):
     if value not in choices:
         raise RvtoolInputError(f"{name} = {value!r} is not one of the valid choices {sorted(map(str, choices))}")
     return value
+
+
+PLANAR_LAYOUT = "x, y, theta per body"
+SPATIAL_LAYOUT = "x, y, theta per planar body; z, gamma_x, gamma_y per out-of-plane row"
+
+
+def check_body_state(owner, pose, vel, shape, layout=PLANAR_LAYOUT):
+    """Raise :class:`RvtoolInputError` for a pose or velocity array (None: skipped) of another shape
+    than ``shape`` or with NaN/inf, naming ``owner`` (e.g. "bearing set 'needles'") and the layout."""
+    for nm, arr in (("pose", pose), ("vel", vel)):
+        if arr is None:
+            continue
+        a = np.asarray(arr)
+        if a.shape != tuple(shape):
+            raise RvtoolInputError(f"{nm} must have shape {tuple(shape)} for {owner} ({layout}); got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            rows = np.unique(np.nonzero(~np.isfinite(a))[0]).tolist()
+            raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf) at rows {rows}; valid: finite reals")

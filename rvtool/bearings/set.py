@@ -30,7 +30,7 @@ from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
 from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows, moved_member
 from ..errors import RvtoolInputError
-from ..validation import check_finite
+from ..validation import check_finite, check_body_state
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters, slice_mean_crowning
 from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
 
@@ -325,15 +325,7 @@ class BearingSet(StagedLaunch):
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
-        for nm, arr in (("pose", pose), ("vel", vel)):
-            if arr is None:
-                continue
-            a = np.asarray(arr)
-            if a.shape != (self.n_bodies, 3):
-                raise RvtoolInputError(f"{nm} must have shape ({self.n_bodies}, 3) for bearing set '{self.name}' "
-                                       f"(x, y, theta per body); got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf); valid: finite reals")
+        check_body_state(f"bearing set '{self.name}'", pose, vel, (self.n_bodies, 3))
 
     def evaluate(self, pose, vel=None, history=None, check=True):
         """Assembled :class:`Evaluation` at absolute poses/velocities (nb, 3) (no history)."""

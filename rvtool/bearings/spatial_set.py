@@ -60,6 +60,7 @@ from .set import BearingLoads, Mounting, NoHistory, pack_mounting
 from warp_contacts import laws_ref
 
 from .spec import AngularContactPair, BallBearing, CylindricalRollerBearing
+from ..validation import check_body_state, SPATIAL_LAYOUT
 
 #: bearings whose rows resolve the spatial state
 SPATIAL_TYPES = (BallBearing, AngularContactPair, CylindricalRollerBearing)
@@ -270,16 +271,8 @@ class SpatialBearingSet:
 
     # -- evaluator protocol ------------------------------------------------------
     def check_state(self, pose, vel):
-        for nm, arr in (("pose", pose), ("vel", vel)):
-            if arr is None:
-                continue
-            v = np.asarray(arr)
-            if v.shape != (self.n_bodies, 3):
-                raise RvtoolInputError(f"{nm} must have shape ({self.n_bodies}, 3) for bearing set '{self.name}' "
-                                       f"(x, y, theta per planar body; z, gamma_x, gamma_y per out-of-plane row); "
-                                       f"got {v.shape}")
-            if not np.all(np.isfinite(v)):
-                raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf); valid: finite reals")
+        """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
+        check_body_state(f"bearing set '{self.name}'", pose, vel, (self.n_bodies, 3), SPATIAL_LAYOUT)
 
     def evaluate(self, pose, vel=None, history=None, check=True):
         """Assembled :class:`Evaluation` at absolute poses (n_bodies, 3) (no history, no damping)."""

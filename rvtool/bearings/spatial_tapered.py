@@ -36,6 +36,7 @@ from ..contact.circle_set import GROUND
 from ..contact.evaluator import Evaluation, all_finite
 from ..errors import RvtoolInputError
 from .tapered_set import TaperedLoads
+from ..validation import check_body_state, SPATIAL_LAYOUT
 
 N_Q = 5
 
@@ -132,16 +133,8 @@ class SpatialTaperedSet:
         return Q, dQ, dQv, rel, st
 
     def check_state(self, pose, vel):
-        for nm, arr in (("pose", pose), ("vel", vel)):
-            if arr is None:
-                continue
-            v = np.asarray(arr)
-            if v.shape != (self.n_bodies, 3):
-                raise RvtoolInputError(f"{nm} must have shape ({self.n_bodies}, 3) for bearing set '{self.name}' "
-                                       f"(x, y, theta per planar body; z, gamma_x, gamma_y per out-of-plane row); "
-                                       f"got {v.shape}")
-            if not np.all(np.isfinite(v)):
-                raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf); valid: finite reals")
+        """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
+        check_body_state(f"bearing set '{self.name}'", pose, vel, (self.n_bodies, 3), SPATIAL_LAYOUT)
 
     def observations(self, pose, rel, st):
         """(L, 8) observation rows per lamina: normal force, gap = -approach, the lamina's point

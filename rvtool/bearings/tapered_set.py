@@ -42,6 +42,7 @@ from ..errors import RvtoolInputError
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters
 from .set import Placement
 from .tapered import TaperedPair, TaperedRollerBearing
+from ..validation import check_body_state
 
 N_Q = ref.N_Q
 
@@ -401,15 +402,7 @@ class TaperedBearingSet:
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
-        for nm, arr in (("pose", pose), ("vel", vel)):
-            if arr is None:
-                continue
-            a = np.asarray(arr)
-            if a.shape != (self.n_bodies, 3):
-                raise RvtoolInputError(f"{nm} must have shape ({self.n_bodies}, 3) for bearing set '{self.name}' "
-                                       f"(x, y, theta per body); got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf); valid: finite reals")
+        check_body_state(f"bearing set '{self.name}'", pose, vel, (self.n_bodies, 3))
 
     def _observations(self, pose, lam, b, psi):
         """(L, 8) observation columns of :mod:`warp_contacts.circle_pairs_ref` per lamina: normal force,

@@ -18,6 +18,7 @@ from warp_contacts.circle_pairs_ref import I_BODY_A, I_BODY_B
 from ..errors import RvtoolInputError
 from .assembly import PairAssembler
 from .circle_set import CircleContactSet
+from ..validation import check_body_state
 
 BACKENDS = ("warp", "numpy")
 
@@ -297,14 +298,7 @@ class ContactSetEvaluator(StagedLaunch):
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
-        for name, arr in (("pose", pose), ("vel", vel)):
-            a = np.asarray(arr)
-            if a.shape != (self.n_bodies, 3):
-                raise RvtoolInputError(f"{name} must have shape ({self.n_bodies}, 3) for contact set "
-                                       f"'{self.name}' (x, y, theta per body); got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise RvtoolInputError(f"{name} contains non-finite values (NaN or inf) at bodies "
-                                       f"{np.unique(np.nonzero(~np.isfinite(a))[0]).tolist()}; valid: finite reals")
+        check_body_state(f"contact set '{self.name}'", pose, vel, (self.n_bodies, 3))
 
     def evaluate(self, pose, vel, history=None, check=True):
         """Assembled :class:`Evaluation` at absolute poses/velocities (nb, 3) with the committed history.

@@ -38,6 +38,7 @@ from scipy import sparse
 
 from ..errors import RvtoolInputError
 from .evaluator import Evaluation
+from ..validation import check_body_state, SPATIAL_LAYOUT
 from warp_contacts.circle_pairs_ref import O_FN, O_GAP
 
 
@@ -143,16 +144,8 @@ class SkewSlices:
         return list(groups.values())
 
     def check_state(self, pose, vel):
-        for nm, arr in (("pose", pose), ("vel", vel)):
-            if arr is None:
-                continue
-            a = np.asarray(arr)
-            if a.shape != (self.n_bodies, 3):
-                raise RvtoolInputError(f"{nm} must have shape ({self.n_bodies}, 3) for contact set '{self.name}' "
-                                       f"(x, y, theta per planar body; z, gamma_x, gamma_y per out-of-plane row); "
-                                       f"got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf); valid: finite reals")
+        """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
+        check_body_state(f"contact set '{self.name}'", pose, vel, (self.n_bodies, 3), SPATIAL_LAYOUT)
 
     def slice_evaluations(self, pose, vel=None, check=True):
         """[(slice indices, the inner :class:`Evaluation` at their common poses)]."""

@@ -22,7 +22,7 @@ from warp_contacts import circle_pairs_ref as cref
 from warp_contacts import output_pins_ref as ref
 
 from ..errors import RvtoolInputError
-from ..validation import check_choice
+from ..validation import check_choice, check_body_state
 from .spec import OutputPinMechanism, PinMode
 
 GROUND = -1
@@ -147,13 +147,7 @@ class OutputPinEvaluator(StagedLaunch):
 
     def check_state(self, pose, vel):
         """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
-        for name, arr in (("pose", pose), ("vel", vel)):
-            a = np.asarray(arr)
-            if a.shape != (self.n_bodies, 3):
-                raise RvtoolInputError(f"{name} must have shape ({self.n_bodies}, 3) for output pins "
-                                       f"'{self.name}' (x, y, theta per body); got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise RvtoolInputError(f"{name} contains non-finite values (NaN or inf); valid: finite reals")
+        check_body_state(f"output pins '{self.name}'", pose, vel, (self.n_bodies, 3))
 
     def evaluate(self, pose, vel, history=None, check=True):
         """Assembled :class:`rvtool.contact.evaluator.Evaluation` at poses/velocities (nb, 3).

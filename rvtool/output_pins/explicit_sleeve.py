@@ -35,6 +35,7 @@ from warp_contacts import output_pins_ref as ref
 
 from ..errors import RvtoolInputError, SolverFailure
 from .spec import ExplicitSleeveInterface, OutputPinMechanism, PinMode
+from ..validation import check_body_state
 
 
 def _perp(a):
@@ -235,12 +236,8 @@ class ExplicitSleeveEvaluator:
         self.history = NoHistory()
 
     def check_state(self, pose, vel):
-        for nm, arr in (("pose", pose), ("vel", vel)):
-            a = np.asarray(arr)
-            if a.shape != (4, 3):
-                raise RvtoolInputError(f"{nm} must have shape (4, 3) (flange, wheel 0, wheel 1, sleeve); got {a.shape}")
-            if not np.all(np.isfinite(a)):
-                raise RvtoolInputError(f"{nm} contains non-finite values (NaN or inf); valid: finite reals")
+        """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
+        check_body_state("the explicit sleeve", pose, vel, (4, 3), "flange, wheel 0, wheel 1, sleeve")
 
     @staticmethod
     def _observations(info):
