@@ -66,7 +66,9 @@ def _num(table, key, where, low=-math.inf, high=math.inf, low_open=False, high_o
     return float(v)
 
 
-def _read(path, what):
+def read_data_file(path, what):
+    """(table, path) of a data file beside a design (a path or a shipped name): valid TOML, the current
+    ``format_version`` and a ``design`` key; ``what`` names the file kind in the errors."""
     p = Path(path)
     if not p.is_file():
         from . import path as shipped
@@ -151,7 +153,7 @@ class Catalogue:
 
 def load_catalogue(path):
     """:class:`Catalogue` from a file path or a shipped name (``rv40e_catalogue``)."""
-    t, p = _read(path, "catalogue")
+    t, p = read_data_file(path, "catalogue")
     src = t.get("source")
     if not isinstance(src, dict):
         raise RvtoolInputError("section [source] is missing from the catalogue file (title, edition)")
@@ -262,7 +264,7 @@ def _bound(table, key, where):
 
 def load_assumed(path):
     """:class:`AssumedRanges` from a file path or a shipped name (``rv40e_assumed``)."""
-    t, p = _read(path, "assumed")
+    t, p = read_data_file(path, "assumed")
     raw = t.get("assumed", [])
     if not isinstance(raw, list) or not raw:
         raise RvtoolInputError("assumed must be a non-empty array of tables ([[assumed]] with key, low, high, unit, "

@@ -13,14 +13,10 @@ Schema::
 :func:`load_measured` returns a frozen :class:`Measured` in SI (rad); bad input raises
 :class:`~rvtool.errors.RvtoolInputError` naming the key and its valid range.
 """
-import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 
 from ..errors import RvtoolInputError
-from ..validation import check_integer
 
-FORMAT_VERSION = 2
 STATUSES = ("read", "transcribed")
 """How the figures were read: from the printed page, or through a cited transcription."""
 
@@ -83,17 +79,8 @@ def _number(table, key, where):
 
 def load_measured(path):
     """:class:`Measured` from a file path or a shipped name (``rv80e_measured``)."""
-    from .catalogue import UNITS
-    p = Path(path)
-    if not p.is_file():
-        from . import path as shipped
-        p = Path(shipped(str(path)))
-    try:
-        with open(p, "rb") as fh:
-            t = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise RvtoolInputError(f"measurement file {str(p)!r} is not valid TOML: {exc}") from None
-    check_integer("format_version", t.get("format_version"), FORMAT_VERSION, FORMAT_VERSION)
+    from .catalogue import UNITS, read_data_file
+    t, p = read_data_file(path, "measurement")
     design = _text(t, "design", "file")
     s = t.get("source")
     if not isinstance(s, dict):
