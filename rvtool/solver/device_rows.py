@@ -159,6 +159,10 @@ class DeviceRowSum:
             else:
                 q, K = f.set.launch_device_rows()
             rows.append((q, K))
+        return self._summed(rows, t0)
+
+    def _summed(self, rows, t0):
+        """The per-copy device sums of the families' ``rows`` launched since ``t0``, with the timing."""
         t1 = time.perf_counter()
         Q, K = self.scatter.sum(rows)
         self.timing["kernels"] += t1 - t0
@@ -198,12 +202,7 @@ class DeviceRowSum:
                 q.assign(Qh)
                 K.assign(Kh)
             rows.append((q, K))
-        t1 = time.perf_counter()
-        Q, K = self.scatter.sum(rows)
-        self.timing["kernels"] += t1 - t0
-        self.timing["scatter"] += time.perf_counter() - t1
-        self.timing["launches"] += len(self.families)
-        return Q, K
+        return self._summed(rows, t0)
 
 
 @dataclass
