@@ -46,7 +46,8 @@ def _unit_factor(unit, where):
     return UNITS[unit]
 
 
-def _str(table, key, where, required=True):
+def text_field(table, key, where, required=True):
+    """``table[key]`` as a non-empty string (None where absent and not required); errors name ``where.key``."""
     v = table.get(key)
     if v is None and not required:
         return None
@@ -80,7 +81,7 @@ def read_data_file(path, what):
         raise RvtoolInputError(f"{what} file {str(p)!r} is not valid TOML: {exc}") from None
     fv = table.get("format_version")
     check_integer("format_version", fv, FORMAT_VERSION, FORMAT_VERSION)
-    _str(table, "design", "file")
+    text_field(table, "design", "file")
     return table, p
 
 
@@ -157,8 +158,8 @@ def load_catalogue(path):
     src = t.get("source")
     if not isinstance(src, dict):
         raise RvtoolInputError("section [source] is missing from the catalogue file (title, edition)")
-    source = CatalogueSource(title=_str(src, "title", "source"), edition=_str(src, "edition", "source"),
-                             url=_str(src, "url", "source", required=False))
+    source = CatalogueSource(title=text_field(src, "title", "source"), edition=text_field(src, "edition", "source"),
+                             url=text_field(src, "url", "source", required=False))
     te = t.get("test")
     if not isinstance(te, dict):
         raise RvtoolInputError("section [test] is missing from the catalogue file")
@@ -183,9 +184,9 @@ def load_catalogue(path):
     figs, seen = [], set()
     for i, f in enumerate(raw):
         w = f"figure[{i}]"
-        key = _str(f, "key", w)
-        unit = _str(f, "unit", w)
-        kind = _str(f, "kind", w)
+        key = text_field(f, "key", w)
+        unit = text_field(f, "unit", w)
+        kind = text_field(f, "kind", w)
         if kind not in KINDS:
             raise RvtoolInputError(f"{w}.kind = {kind!r} is not valid (valid: {list(KINDS)})")
         if (key, kind) in seen:
@@ -195,11 +196,11 @@ def load_catalogue(path):
         value = _num(f, "value", w)
         low = _num(f, "low", w) if "low" in f else None
         high = _num(f, "high", w, low if low is not None else -math.inf) if "high" in f else None
-        status = _str(f, "status", w, required=False)
+        status = text_field(f, "status", w, required=False)
         if status is not None and status not in STATUSES:
             raise RvtoolInputError(f"{w}.status = {status!r} is not valid (valid: {list(STATUSES)})")
         figs.append(CatalogueFigure(key=key, value=value, unit=unit, value_si=value * _unit_factor(unit, f"{w}.unit"),
-                                    page=_str(f, "page", w), conditions=_str(f, "conditions", w, required=False) or "",
+                                    page=text_field(f, "page", w), conditions=text_field(f, "conditions", w, required=False) or "",
                                     kind=kind, low=low, high=high, status=status))
     commit = t.get("assumptions_commit")
     if commit is not None and (not isinstance(commit, str) or len(commit) < 7
@@ -272,7 +273,7 @@ def load_assumed(path):
     out, seen = [], set()
     for i, a in enumerate(raw):
         w = f"assumed[{i}]"
-        key = _str(a, "key", w)
+        key = text_field(a, "key", w)
         if key in seen:
             raise RvtoolInputError(f"{w}.key = {key!r} appears twice (valid: one range per key)")
         seen.add(key)
@@ -282,7 +283,7 @@ def load_assumed(path):
         if not np.all(np.asarray(low, float) <= np.asarray(high, float)) or np.all(np.asarray(low) == np.asarray(high)):
             raise RvtoolInputError(f"{w}.high = {high!r} is outside the valid range [low = {low!r}, inf) (element-wise, "
                                    "and above low somewhere: a range, not a value)")
-        out.append(AssumedInput(key=key, low=low, high=high, unit=_str(a, "unit", w), source=_str(a, "source", w)))
+        out.append(AssumedInput(key=key, low=low, high=high, unit=text_field(a, "unit", w), source=text_field(a, "source", w)))
     return AssumedRanges(design=t["design"], inputs=tuple(out), path=str(p))
 
 

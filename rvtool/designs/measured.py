@@ -16,6 +16,7 @@ Schema::
 from dataclasses import dataclass
 
 from ..errors import RvtoolInputError
+from .catalogue import text_field
 
 STATUSES = ("read", "transcribed")
 """How the figures were read: from the printed page, or through a cited transcription."""
@@ -61,15 +62,6 @@ class Measured:
     path: str
 
 
-def _text(table, key, where, required=True):
-    v = table.get(key)
-    if v is None and not required:
-        return None
-    if not isinstance(v, str) or not v.strip():
-        raise RvtoolInputError(f"{where}.{key} = {v!r} is not valid (valid: a non-empty string)")
-    return v
-
-
 def _number(table, key, where):
     v = table.get(key)
     if isinstance(v, bool) or not isinstance(v, (int, float)):
@@ -81,17 +73,17 @@ def load_measured(path):
     """:class:`Measured` from a file path or a shipped name (``rv80e_measured``)."""
     from .catalogue import UNITS, read_data_file
     t, p = read_data_file(path, "measurement")
-    design = _text(t, "design", "file")
+    design = text_field(t, "design", "file")
     s = t.get("source")
     if not isinstance(s, dict):
         raise RvtoolInputError("section [source] is missing from the measurement file (title, authors, reference, "
                                "status)")
-    status = _text(s, "status", "source")
+    status = text_field(s, "status", "source")
     if status not in STATUSES:
         raise RvtoolInputError(f"source.status = {status!r} is not valid (valid: {list(STATUSES)})")
-    source = MeasuredSource(title=_text(s, "title", "source"), authors=_text(s, "authors", "source"),
-                            reference=_text(s, "reference", "source"), status=status,
-                            read_through=_text(s, "read_through", "source", required=False))
+    source = MeasuredSource(title=text_field(s, "title", "source"), authors=text_field(s, "authors", "source"),
+                            reference=text_field(s, "reference", "source"), status=status,
+                            read_through=text_field(s, "read_through", "source", required=False))
     if status == "transcribed" and source.read_through is None:
         raise RvtoolInputError("source.read_through is missing (valid: where the transcription was read, required "
                                "for status = 'transcribed')")
@@ -101,7 +93,7 @@ def load_measured(path):
     te = []
     for i, r in enumerate(raw):
         w = f"transmission_error[{i}]"
-        unit = _text(r, "unit", w)
+        unit = text_field(r, "unit", w)
         if unit not in ("arcsec", "arcmin", "rad", "deg"):
             raise RvtoolInputError(f"{w}.unit = {unit!r} is not valid (valid: ['arcsec', 'arcmin', 'rad', 'deg'])")
         f = UNITS[unit]
@@ -113,7 +105,7 @@ def load_measured(path):
         if (ml is None) != (mh is None) or (ml is not None and not ml < mh):
             raise RvtoolInputError(f"{w}: model_low and model_high must both be given, model_low < model_high "
                                    f"(got {ml!r}, {mh!r})")
-        te.append(MeasuredTE(specimen=_text(r, "specimen", w), low=lo * f, high=hi * f, unit=unit, low_printed=lo,
-                             high_printed=hi, conditions=_text(r, "conditions", w),
+        te.append(MeasuredTE(specimen=text_field(r, "specimen", w), low=lo * f, high=hi * f, unit=unit, low_printed=lo,
+                             high_printed=hi, conditions=text_field(r, "conditions", w),
                              model_low=None if ml is None else ml * f, model_high=None if mh is None else mh * f))
     return Measured(design=design, source=source, transmission_error=tuple(te), path=str(p))
