@@ -210,6 +210,16 @@ class ClearanceVariant:
     restore: object
 
 
+def body_index(body_names, body):
+    """Index of ``body`` (a name in ``body_names`` or an index); an unknown name names the valid ones."""
+    if isinstance(body, str):
+        try:
+            return list(body_names).index(body)
+        except ValueError:
+            raise RvtoolInputError(f"body = {body!r}; valid bodies are {list(body_names)}") from None
+    return int(body)
+
+
 @dataclass
 class ReducerModel:
     """An assembled reducer (see the module docstring for the contract).
@@ -261,12 +271,7 @@ class ReducerModel:
     # -- coordinates -------------------------------------------------------
     def body_index(self, body):
         """Index of a body given by name or index."""
-        if isinstance(body, str):
-            try:
-                return self.body_names.index(body)
-            except ValueError:
-                raise RvtoolInputError(f"body = {body!r}; valid bodies are {list(self.body_names)}") from None
-        return int(body)
+        return body_index(self.body_names, body)
 
     def coordinate_index(self, body, coord):
         """Global ODE2 index of coordinate ``coord`` (0/"x", 1/"y", 2/"theta") of ``body`` (name or index)."""

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RvtoolInputError
-from ..model.reducer import COORDINATES
+from ..model.reducer import COORDINATES, body_index
 
 #: attributes of a contact set that hold device objects (Warp kernels, staged launches) or what only
 #: an evaluation reads (its assembler, pose buffers): not copied (None in the snapshot)
@@ -76,12 +76,7 @@ class ModelSnapshot:
 
     def body_index(self, body):
         """Index of a body given by name or index (as :meth:`ReducerModel.body_index`)."""
-        if isinstance(body, str):
-            try:
-                return self.body_names.index(body)
-            except ValueError:
-                raise RvtoolInputError(f"body = {body!r}; valid bodies are {list(self.body_names)}") from None
-        return int(body)
+        return body_index(self.body_names, body)
 
     def reference_value(self, bc):
         """Reference value of a :class:`BodyCoordinate` (as :meth:`ReducerModel.reference_value`)."""
