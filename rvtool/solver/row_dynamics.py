@@ -28,8 +28,9 @@ import time
 import numpy as np
 
 from warp_contacts.fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_REJECTED, DONE, H_INPUT, H_NEWTON,
-                                          H_OUTPUT, H_STEP, H_TIME, H_TORQUE, M_SPEED, N_COUNT, N_MOTION,
-                                          ReferenceModel)
+                                          H_OUTPUT, H_STEP, H_TIME, H_TORQUE, M_ACCEL, M_ANGLE, M_SPEED, N_COUNT,
+                                          N_MOTION, S_ABS_TOL, S_ALPHA_F, S_ALPHA_M, S_BETA, S_GAMMA, S_MAX_IT,
+                                          S_REL_TOL, ReferenceModel)
 
 from ..errors import RvtoolInputError, SolverFailure
 
@@ -58,9 +59,11 @@ class RowDrivenModel(ReferenceModel):
     motion (N_MOTION,): the drive's angle, speed, acceleration; settings_vector: the stepper's
     settings (:meth:`rvtool.solver.device_dynamics.DeviceDynamicsSettings.vector`)."""
 
-    def __init__(self, model, *, torque, motion, settings_vector, device="cpu"):
+    def __init__(self, model, *, torque, motion, settings_vector, device="cpu", sums="device"):
         from .device_rows import row_reasons
         from .replica import copy_families
+        if sums not in SUMS:
+            raise RvtoolInputError(f"sums = {sums!r}; valid: {list(SUMS)}")
         reasons = row_reasons(model)
         if reasons:
             raise RvtoolInputError("; ".join(reasons))
@@ -71,19 +74,24 @@ class RowDrivenModel(ReferenceModel):
         nb = len(model.body_names)
         n = 3 * nb
         self.model = model
-        self.families = copy_families(model, 1, device=device)
-        for f in self.families:                          # driven runs: dQ/dv of every family
-            if callable(getattr(f.set, "set_velocity_tangent", None)):
-                f.set.set_velocity_tangent(True)
-        # one copy: each family's row entries summed into f (n,) and K, C (n, n) by flat indices
-        # (np.bincount; the rows' local coordinates of the copy's block scatter, -1: ground)
-        self._scatter = []
-        for f in self.families:
-            loc = np.asarray(f.scatter.local, np.int64)
-            vec = loc.reshape(-1)
-            pair = (loc[:, :, None] * n + loc[:, None, :]).reshape(-1)
-            pair_ok = ((loc[:, :, None] >= 0) & (loc[:, None, :] >= 0)).reshape(-1)
-            self._scatter.append((vec >= 0, vec[vec >= 0], pair_ok, pair[pair_ok]))
+        self.sums = sums
+        if sums == "device":
+            from .row_forces import RowForces
+            self.row_forces = RowForces(model, device=device)
+        else:
+            self.families = copy_families(model, 1, device=device)
+            for f in self.families:                          # driven runs: dQ/dv of every family
+                if callable(getattr(f.set, "set_velocity_tangent", None)):
+                    f.set.set_velocity_tangent(True)
+            # one copy: each family's row entries summed into f (n,) and K, C (n, n) by flat indices
+            # (np.bincount; the rows' local coordinates of the copy's block scatter, -1: ground)
+            self._scatter = []
+            for f in self.families:
+                loc = np.asarray(f.scatter.local, np.int64)
+                vec = loc.reshape(-1)
+                pair = (loc[:, :, None] * n + loc[:, None, :]).reshape(-1)
+                pair_ok = ((loc[:, :, None] >= 0) & (loc[:, None, :] >= 0)).reshape(-1)
+                self._scatter.append((vec >= 0, vec[vec >= 0], pair_ok, pair[pair_ok]))
         free = np.ones(n, bool)
         free[sorted(model.fixed_coordinates())] = False
         self.B, self.n, self.nb = 1, n, nb
@@ -94,15 +102,27 @@ class RowDrivenModel(ReferenceModel):
         self.motion = np.asarray(motion, float).reshape(1, N_MOTION)
         self.torque = np.array([float(torque)])
         self.settings = np.asarray(settings_vector, float)
-        self.forces_s = 0.0
+        self.forces_s = self.forces_cpu_s = 0.0
         self.evaluations = 0
+        # the lean step's constants (device sums): free/fixed index lists, the diagonal mass matrix
+        self._fi = np.flatnonzero(free)
+        self._xi = np.flatnonzero(~free)
+        self._ff = np.ix_(self._fi, self._fi)
+        self._mass_diag = np.diag(self.mass[0])
 
     def forces(self, p, q, v):
-        from .replica import family_rows
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         n = self.n
         pose = (self.reference[p] + q).reshape(self.nb, 3)
         vel = v.reshape(self.nb, 3)
+        if self.sums == "device":
+            f, K, C = self.row_forces.evaluate(pose, vel)
+            f[self.output_index] += self.torque[p]        # f is the device sums' buffer: rewritten by each launch
+            self.forces_s += time.perf_counter() - t0
+            self.forces_cpu_s += time.process_time() - c0
+            self.evaluations += 1
+            return f, K, C, (0.0, 0.0, 0.0)
+        from .replica import family_rows
         f, K, C = np.zeros(n), np.zeros(n * n), np.zeros(n * n)
         for fam, (vok, vidx, pok, pidx) in zip(self.families, self._scatter):
             Q, dQ, dV = family_rows(fam.set, pose, vel)[:3]
@@ -113,11 +133,74 @@ class RowDrivenModel(ReferenceModel):
         f[self.output_index] += self.torque[p]
         out = f, K.reshape(n, n), C.reshape(n, n), (0.0, 0.0, 0.0)   # peak loads: not recorded here
         self.forces_s += time.perf_counter() - t0
+        self.forces_cpu_s += time.process_time() - c0
         self.evaluations += 1
         return out
 
+    def attempt(self, p, q0, v0, a0, g0, t0, h):
+        """:meth:`ReferenceModel.attempt` (the same arithmetic, Exudyn's step) with the dense work on
+        the free block only and no per-iteration allocations beyond NumPy's temporaries; the
+        reference's ``attempt`` with ``sums="host"``."""
+        if self.sums != "device":
+            return super().attempt(p, q0, v0, a0, g0, t0, h)
+        s = self.settings
+        am, af, beta, gamma = s[S_ALPHA_M], s[S_ALPHA_F], s[S_BETA], s[S_GAMMA]
+        abs_tol, rel_tol, max_it = s[S_ABS_TOL], s[S_REL_TOL], int(s[S_MAX_IT])
+        fi, xi, ff = self._fi, self._xi, self._ff
+        M = self.mass[p]
+        q = q0 + h * v0 + h * h * (0.5 - beta) * g0
+        v = v0 + h * (1.0 - gamma) * g0
+        g = (af * a0 - am * g0) / (1.0 - am)
+        q = q + h * h * beta * g
+        v = v + h * gamma * g
+        a = np.zeros_like(q)
+        # the fixed coordinates: locks 0, the drive's angle, speed and acceleration at the step end
+        mo, tt, ii = self.motion[p], t0 + h, self.input_index
+        q[xi], v[xi], a[xi] = 0.0, 0.0, 0.0
+        q[ii] = mo[M_ANGLE] + mo[M_SPEED] * tt + 0.5 * mo[M_ACCEL] * tt * tt
+        v[ii] = mo[M_SPEED] + mo[M_ACCEL] * tt
+        a[ii] = mo[M_ACCEL]
+        sc = beta * h * h
+        bp = (1.0 - am) / (h * h * beta * (1.0 - af))
+        gp = gamma / (h * beta)
+        lam = np.zeros_like(q)
+        f, K, C, peaks = self.forces(p, q, v)
+        r = M * a - f
+        initial = float(np.sqrt(np.dot(r, r)))
+        if not np.isfinite(initial):
+            return False, q, v, a, g, 0, 0.0, peaks
+        initial = max(initial, 2.0 * abs_tol)
+        for it in range(1, max_it + 1):
+            J = sc * (bp * self._mass_diag - K - gp * C)
+            try:
+                d = np.linalg.solve(J[ff], sc * r[fi])
+            except np.linalg.LinAlgError:
+                return False, q, v, a, g, it, 0.0, peaks
+            # Exudyn's multiplier update on the fixed rows: lam -= (s r_x - J_xf D_f) / s
+            lam[xi] -= (sc * r[xi] - J[xi][:, fi] @ d) / sc
+            q[fi] -= d
+            v[fi] -= gp * d
+            a[fi] -= bp * d
+            f, K, C, peaks = self.forces(p, q, v)
+            r = M * a - f + lam
+            res = float(np.sqrt(np.dot(r, r)))
+            if not np.isfinite(res):
+                return False, q, v, a, g, it, 0.0, peaks
+            if it == 1 and res > initial:
+                initial = res
+            if res / initial <= rel_tol or res <= abs_tol:
+                torque = M[ii] * a[ii] - f[ii]
+                return True, q, v, a, g + (1.0 - af) / (1.0 - am) * a, it, torque, peaks
+        return False, q, v, a, g, max_it, 0.0, peaks
 
-def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu", q0=None):
+
+SUMS = ("device", "host")
+"""Where the row stepper sums its families' rows: on the Warp device in one gather launch
+(:class:`rvtool.solver.row_forces.RowForces`, with the lean step) or on the host (the rows
+brought back, ``np.bincount``; the reference, with :class:`ReferenceModel`'s step)."""
+
+
+def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu", q0=None, sums="device"):
     """The dynamic TE protocol's driven run of ``model`` on the row stepper: from the loaded
     quasi-static state at input angle 0 (``q0``; None: Exudyn's StaticSolver, as the Exudyn path),
     kinematic velocities, constant input speed [rpm] and output torque [N m] (resisting the
@@ -135,7 +218,8 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
     v0 = model.body_vector(model.kinematic_state(0.0, omega).velocities)
     motion = np.zeros(N_MOTION)
     motion[M_SPEED] = omega
-    rm = RowDrivenModel(model, torque=tq, motion=motion, settings_vector=settings.vector(duration), device=device)
+    rm = RowDrivenModel(model, torque=tq, motion=motion, settings_vector=settings.vector(duration), device=device,
+                        sums=sums)
     fixed = ~rm.free
     q = np.array(q0, float)
     v = np.array(v0, float)
@@ -150,7 +234,7 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
     ref_out = rm.reference[0, rm.output_index]
     t_h, th_in, th_out, tq_in, steps, newton = [0.0], [q[rm.input_index]], [ref_out + q[rm.output_index]], [np.nan], \
         [0.0], [0]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     while state["status"][0] == ACTIVE:
         hist = rm.advance(state, settings.steps_per_launch)
         k = int(state["counters"][0, 4])
@@ -160,7 +244,7 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
         tq_in.extend(hist[0, :k, H_TORQUE])
         steps.extend(hist[0, :k, H_STEP])
         newton.extend(hist[0, :k, H_NEWTON])
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     if state["status"][0] != DONE:
         raise SolverFailure(f"row stepper: step below the minimum step {settings.minimum_step:.3g} s at "
                             f"t = {state['t'][0]:.9g} s")
@@ -168,7 +252,8 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
     return {"t": np.array(t_h), "theta_in": np.array(th_in), "theta_out": np.array(th_out),
             "torque_in": np.array(tq_in), "step": np.array(steps), "omega_in": omega,
             "accepted": int(c[C_ACCEPTED]), "rejected": int(c[C_REJECTED]), "newton": int(c[C_NEWTON]),
-            "wall_s": wall, "forces_s": rm.forces_s, "step_s": wall - rm.forces_s, "evaluations": rm.evaluations}
+            "wall_s": wall, "forces_s": rm.forces_s, "step_s": wall - rm.forces_s, "evaluations": rm.evaluations,
+            "cpu_s": cpu, "forces_cpu_s": rm.forces_cpu_s, "step_cpu_s": cpu - rm.forces_cpu_s}
 
 
 __all__ = ["RowDrivenModel", "rigid_body_masses", "row_driven_run"]
