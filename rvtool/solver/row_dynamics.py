@@ -23,14 +23,17 @@ This is NOT the fused stepper (one Warp launch per K steps): every Newton iterat
 family and returns its rows to the host. What a fused RV kernel still lacks is named by
 :func:`rvtool.solver.device_dynamics.unfused_element_reasons`.
 """
+import math
 import time
 
 import numpy as np
 
-from warp_contacts.fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_REJECTED, DONE, H_INPUT, H_NEWTON,
-                                          H_OUTPUT, H_STEP, H_TIME, H_TORQUE, M_ACCEL, M_ANGLE, M_SPEED, N_COUNT,
-                                          N_MOTION, S_ABS_TOL, S_ALPHA_F, S_ALPHA_M, S_BETA, S_GAMMA, S_MAX_IT,
-                                          S_REL_TOL, ReferenceModel)
+from warp_contacts.fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_RECORDED, C_REJECTED, C_RUN, DONE,
+                                          END_TOLERANCE, FAILED, H_INPUT, H_NEWTON, H_OUTPUT, H_STEP, H_TIME,
+                                          H_TORQUE, M_ACCEL, M_ANGLE, M_SPEED, N_COUNT, N_HISTORY, N_MOTION,
+                                          S_ABS_TOL, S_ALPHA_F, S_ALPHA_M, S_BETA, S_GAMMA, S_H_MIN, S_H_NOM,
+                                          S_MAX_IT, S_RECOVERY, S_RECOVERY_ITERATIONS, S_REL_TOL, S_T_END,
+                                          ReferenceModel)
 
 from ..errors import RvtoolInputError, SolverFailure
 
@@ -102,27 +105,28 @@ class RowDrivenModel(ReferenceModel):
         self.motion = np.asarray(motion, float).reshape(1, N_MOTION)
         self.torque = np.array([float(torque)])
         self.settings = np.asarray(settings_vector, float)
-        self.forces_s = self.forces_cpu_s = 0.0
-        self.evaluations = 0
+        self.forces_s = self.forces_cpu_s = self.evaluate_cpu_s = self.tangents_cpu_s = 0.0
+        self.evaluations = self.tangent_gathers = 0
         # the lean step's constants (device sums): free/fixed index lists, the diagonal mass matrix
         self._fi = np.flatnonzero(free)
         self._xi = np.flatnonzero(~free)
         self._ff = np.ix_(self._fi, self._fi)
         self._mass_diag = np.diag(self.mass[0])
+        st = self.settings
+        self._floats = tuple(float(st[c]) for c in (S_ALPHA_M, S_ALPHA_F, S_BETA, S_GAMMA, S_ABS_TOL, S_REL_TOL)) + (
+            int(st[S_MAX_IT]),)
+        self._motion = tuple(float(self.motion[0, c]) for c in (M_ANGLE, M_SPEED, M_ACCEL))
 
     def forces(self, p, q, v):
+        if self.sums == "device":
+            f = self._device_forces(p, q, v)
+            K, C = self._tangents()
+            return f, K, C, (0.0, 0.0, 0.0)
+        from .replica import family_rows
         t0, c0 = time.perf_counter(), time.process_time()
         n = self.n
         pose = (self.reference[p] + q).reshape(self.nb, 3)
         vel = v.reshape(self.nb, 3)
-        if self.sums == "device":
-            f, K, C = self.row_forces.evaluate(pose, vel)
-            f[self.output_index] += self.torque[p]        # f is the device sums' buffer: rewritten by each launch
-            self.forces_s += time.perf_counter() - t0
-            self.forces_cpu_s += time.process_time() - c0
-            self.evaluations += 1
-            return f, K, C, (0.0, 0.0, 0.0)
-        from .replica import family_rows
         f, K, C = np.zeros(n), np.zeros(n * n), np.zeros(n * n)
         for fam, (vok, vidx, pok, pidx) in zip(self.families, self._scatter):
             Q, dQ, dV = family_rows(fam.set, pose, vel)[:3]
@@ -137,15 +141,36 @@ class RowDrivenModel(ReferenceModel):
         self.evaluations += 1
         return out
 
+    def _device_forces(self, p, q, v):
+        """f (n,) of copy p at (q, v) from the device sums (its rows kept for :meth:`_tangents`)."""
+        t0, c0 = time.perf_counter(), time.process_time()
+        f = self.row_forces.evaluate((self.reference[p] + q).reshape(self.nb, 3), v.reshape(self.nb, 3))
+        f[self.output_index] += self.torque[p]        # f is the device sums' buffer: rewritten by each launch
+        dc = time.process_time() - c0
+        self.forces_s += time.perf_counter() - t0
+        self.forces_cpu_s += dc
+        self.evaluate_cpu_s += dc
+        self.evaluations += 1
+        return f
+
+    def _tangents(self):
+        """K, C (n, n) of the last evaluation (the device gather of its rows)."""
+        t0, c0 = time.perf_counter(), time.process_time()
+        K, C = self.row_forces.tangents()
+        dc = time.process_time() - c0
+        self.forces_s += time.perf_counter() - t0
+        self.forces_cpu_s += dc
+        self.tangents_cpu_s += dc
+        self.tangent_gathers += 1
+        return K, C
+
     def attempt(self, p, q0, v0, a0, g0, t0, h):
         """:meth:`ReferenceModel.attempt` (the same arithmetic, Exudyn's step) with the dense work on
         the free block only and no per-iteration allocations beyond NumPy's temporaries; the
         reference's ``attempt`` with ``sums="host"``."""
         if self.sums != "device":
             return super().attempt(p, q0, v0, a0, g0, t0, h)
-        s = self.settings
-        am, af, beta, gamma = s[S_ALPHA_M], s[S_ALPHA_F], s[S_BETA], s[S_GAMMA]
-        abs_tol, rel_tol, max_it = s[S_ABS_TOL], s[S_REL_TOL], int(s[S_MAX_IT])
+        am, af, beta, gamma, abs_tol, rel_tol, max_it = self._floats
         fi, xi, ff = self._fi, self._xi, self._ff
         M = self.mass[p]
         q = q0 + h * v0 + h * h * (0.5 - beta) * g0
@@ -155,22 +180,24 @@ class RowDrivenModel(ReferenceModel):
         v = v + h * gamma * g
         a = np.zeros_like(q)
         # the fixed coordinates: locks 0, the drive's angle, speed and acceleration at the step end
-        mo, tt, ii = self.motion[p], t0 + h, self.input_index
+        (angle, speed, accel), tt, ii = self._motion, t0 + h, self.input_index
         q[xi], v[xi], a[xi] = 0.0, 0.0, 0.0
-        q[ii] = mo[M_ANGLE] + mo[M_SPEED] * tt + 0.5 * mo[M_ACCEL] * tt * tt
-        v[ii] = mo[M_SPEED] + mo[M_ACCEL] * tt
-        a[ii] = mo[M_ACCEL]
+        q[ii] = angle + speed * tt + 0.5 * accel * tt * tt
+        v[ii] = speed + accel * tt
+        a[ii] = accel
         sc = beta * h * h
         bp = (1.0 - am) / (h * h * beta * (1.0 - af))
         gp = gamma / (h * beta)
         lam = np.zeros_like(q)
-        f, K, C, peaks = self.forces(p, q, v)
+        peaks = (0.0, 0.0, 0.0)                          # peak loads: not recorded here
+        f = self._device_forces(p, q, v)
         r = M * a - f
-        initial = float(np.sqrt(np.dot(r, r)))
-        if not np.isfinite(initial):
+        initial = math.sqrt(float(np.dot(r, r)))
+        if not math.isfinite(initial):
             return False, q, v, a, g, 0, 0.0, peaks
         initial = max(initial, 2.0 * abs_tol)
         for it in range(1, max_it + 1):
+            K, C = self._tangents()                      # of the last evaluation (a converged one needs none)
             J = sc * (bp * self._mass_diag - K - gp * C)
             try:
                 d = np.linalg.solve(J[ff], sc * r[fi])
@@ -181,10 +208,10 @@ class RowDrivenModel(ReferenceModel):
             q[fi] -= d
             v[fi] -= gp * d
             a[fi] -= bp * d
-            f, K, C, peaks = self.forces(p, q, v)
+            f = self._device_forces(p, q, v)
             r = M * a - f + lam
-            res = float(np.sqrt(np.dot(r, r)))
-            if not np.isfinite(res):
+            res = math.sqrt(float(np.dot(r, r)))
+            if not math.isfinite(res):
                 return False, q, v, a, g, it, 0.0, peaks
             if it == 1 and res > initial:
                 initial = res
@@ -192,6 +219,54 @@ class RowDrivenModel(ReferenceModel):
                 torque = M[ii] * a[ii] - f[ii]
                 return True, q, v, a, g + (1.0 - af) / (1.0 - am) * a, it, torque, peaks
         return False, q, v, a, g, max_it, 0.0, peaks
+
+    def advance(self, state, n_steps):
+        """:meth:`ReferenceModel.advance` for the one copy (the same step control: Exudyn's adaptive
+        halving and recovery, the end test) with its scalars as Python numbers; the reference's
+        ``advance`` with ``sums="host"``."""
+        if self.sums != "device":
+            return super().advance(state, n_steps)
+        st = self.settings
+        t_end, h_nom, h_min = float(st[S_T_END]), float(st[S_H_NOM]), float(st[S_H_MIN])
+        recovery, recovery_its = float(st[S_RECOVERY]), float(st[S_RECOVERY_ITERATIONS])
+        hist = np.zeros((1, n_steps, N_HISTORY))
+        cnt = state["counters"][0]
+        accepted, rejected, newton, run = (int(cnt[c]) for c in (C_ACCEPTED, C_REJECTED, C_NEWTON, C_RUN))
+        status, t, h_state = int(state["status"][0]), float(state["t"][0]), float(state["h"][0])
+        q, v, a, g = (np.array(state[k][0]) for k in ("q", "v", "a", "abar"))
+        ii, oi = self.input_index, self.output_index
+        ref_out = float(self.reference[0, oi])
+        k = 0
+        while status == ACTIVE and k < n_steps:
+            h = h_state
+            if t + h > t_end:
+                h = t_end - t
+            ok, q1, v1, a1, g1, its, torque, _ = self.attempt(0, q, v, a, g, t, h)
+            newton += its
+            if ok:
+                t = t + h
+                q, v, a, g = q1, v1, a1, g1
+                accepted += 1
+                run += 1
+                hist[0, k, :] = (t, q[ii], ref_out + q[oi], torque, 0.0, 0.0, 0.0, h, its)  # H_* order
+                k += 1
+                if run >= recovery and its + 1 < recovery_its:
+                    h_state = min(h_nom, 2.0 * h_state)
+                    run = 0
+                if t >= t_end - END_TOLERANCE:
+                    status = DONE
+            else:
+                rejected += 1
+                run = 0
+                if h_state > h_min:
+                    h_state = max(h_min, 0.5 * h_state)
+                else:
+                    status = FAILED
+        state["q"][0], state["v"][0], state["a"][0], state["abar"][0] = q, v, a, g
+        state["t"][0], state["h"][0], state["status"][0] = t, h_state, status
+        cnt[C_ACCEPTED], cnt[C_REJECTED], cnt[C_NEWTON], cnt[C_RUN], cnt[C_RECORDED] = (accepted, rejected, newton,
+                                                                                      run, k)
+        return hist
 
 
 SUMS = ("device", "host")
@@ -253,7 +328,9 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
             "torque_in": np.array(tq_in), "step": np.array(steps), "omega_in": omega,
             "accepted": int(c[C_ACCEPTED]), "rejected": int(c[C_REJECTED]), "newton": int(c[C_NEWTON]),
             "wall_s": wall, "forces_s": rm.forces_s, "step_s": wall - rm.forces_s, "evaluations": rm.evaluations,
-            "cpu_s": cpu, "forces_cpu_s": rm.forces_cpu_s, "step_cpu_s": cpu - rm.forces_cpu_s}
+            "cpu_s": cpu, "forces_cpu_s": rm.forces_cpu_s, "step_cpu_s": cpu - rm.forces_cpu_s,
+            "evaluate_cpu_s": rm.evaluate_cpu_s, "tangents_cpu_s": rm.tangents_cpu_s,
+            "tangent_gathers": rm.tangent_gathers}
 
 
 __all__ = ["RowDrivenModel", "rigid_body_masses", "row_driven_run"]

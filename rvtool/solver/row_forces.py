@@ -12,9 +12,12 @@ copy: the same kernels and rows as the model's Exudyn element). One evaluation:
    rolling elements (their staged launch, velocity tangent on), tapered rollers (planar state,
    rollers, planar rows and their dQ/dv: :mod:`warp_contacts.tapered_planar`), plain output
    pins; a family without device rows is evaluated on the host and its rows uploaded;
-3. the rows are summed into f (n,), K, C (n, n) on the device in one launch
-   (:class:`warp_contacts.row_gather.RowGather`: one thread per output entry gathers its row
-   entries, no atomics) and read (CPU: views of the device memory; GPU: one download).
+3. the rows are summed into f (n,) on the device (:class:`warp_contacts.row_gather.RowGather`:
+   one thread per output entry gathers its row entries, no atomics) and read (CPU: a view of the
+   device memory; GPU: one download); K, C (n, n) are gathered from the same rows only when the
+   caller asks (:meth:`RowForces.tangents`: a converged Newton iterate needs none).
+
+Steps 1 (on a GPU) to 3 are captured once as a graph and replayed per evaluation.
 
 Reference: :class:`rvtool.solver.row_dynamics.RowDrivenModel`'s ``forces`` (the rows brought to
 the host and summed with ``np.bincount``); the same sums up to the order of the additions.
@@ -29,10 +32,14 @@ from ..errors import RvtoolInputError
 class RowForces:
     """f, K, C of one copy of ``model`` (module docstring) on the Warp ``device``.
     :meth:`evaluate` takes body poses and velocities (nb, 3) (absolute; the ground is added) and
-    returns host arrays f (n,), K (n, n), C (n, n), valid until the next call (on the CPU they are
-    views of the device sums). ``timing``: seconds in writing inputs, launches, sums and reads."""
+    returns the host array f (n,); :meth:`tangents` then gives K, C (n, n) of the same rows (on
+    the CPU the results are views of the device sums, valid until the next call). capture: the
+    evaluation's launches (and on a GPU the input copies) as one captured graph
+    (``wp.ScopedCapture``: a CUDA graph on a GPU, an APIC replay on the CPU), replayed by
+    ``wp.capture_launch``; False: launched one by one. ``timing``: wall seconds in evaluations
+    (inputs, launches, f read) and in tangents (gather, read)."""
 
-    def __init__(self, model, *, device="cpu"):
+    def __init__(self, model, *, device="cpu", capture=True):
         import warp as wp
 
         from warp_contacts.row_gather import RowGather, gather_lists
@@ -45,7 +52,7 @@ class RowForces:
         self.nb = nb = len(model.body_names)
         self.n = n = 3 * nb
         self.families = copy_families(model, 1, device=device)
-        self._launch, inputs, buffers, lists = [], [], [], []
+        self.launches, inputs, buffers, lists = [], [], [], []
         for f in self.families:
             s = f.set
             if callable(getattr(s, "set_velocity_tangent", None)):
@@ -53,16 +60,16 @@ class RowForces:
             if isinstance(s, StagedLaunch) and getattr(s, "backend", None) == "warp":
                 pose, vel = s.pose_buffers()
                 _, q, dq, dv = s.row_buffers()
-                self._launch.append(s.launch_staged)
+                self.launches.append(s.launch_staged)
             elif isinstance(s, TaperedBearingSet) and s.planar_on_device:
                 pose, vel = s.device_pose_buffers()
                 q, dq, dv = s.launch_device_velocity_rows()   # allocates the dQ/dv rows once
-                self._launch.append(s.launch_device_velocity_rows)
+                self.launches.append(s.launch_device_velocity_rows)
             elif isinstance(s, PlainPinCopies) and s.rows_on_device:
                 pose, vel = s.device_pose_buffers()
                 q, dq = s.launch_device_rows()
                 dv = None
-                self._launch.append(s.launch_device_rows)
+                self.launches.append(s.launch_device_rows)
             else:
                 raise RvtoolInputError(f"contact element '{f.name}' ({type(s).__name__}) has no device rows "
                                        "(backend 'warp' with staged or device rows); the row stepper's device "
@@ -70,53 +77,92 @@ class RowForces:
             inputs.append((pose, vel))
             buffers.append((q, dq, dv))
             loc = np.asarray(f.scatter.local)
-            lists.append(gather_lists(loc, n, loc.shape[0], loc.shape[1], dv is not None))
+            lists.append(gather_lists(loc, n, loc.shape[0], loc.shape[1]))
         self.gather = RowGather(lists, buffers, n, wp.float64, device)
-        # every input buffer once (families may share none; a buffer listed twice would be written twice)
+        # every input buffer of every family (pose, or velocity)
         bufs = []
         for pose, vel in inputs:
             bufs.append((pose, False))
             if vel is not None:
                 bufs.append((vel, True))
-        self._inputs = bufs
         if self.on_cpu:
+            # the device buffers' own memory: written in place, read by the launches
             self._views = [(b.numpy()[:nb], is_vel) for b, is_vel in bufs]
         else:
-            self._host = {id(b): np.zeros(tuple(b.shape)) for b, _ in bufs}
-        self._out = None
-        self.timing = {"inputs": 0.0, "launches": 0.0, "sums": 0.0, "read": 0.0}
+            # one upload of poses and velocities per evaluation into two staging arrays, copied on the
+            # device into every family's buffers (inside the captured graph)
+            self._stage_h = np.zeros((2, nb + 1, 3))
+            self._stage = [wp.zeros((nb + 1, 3), dtype=wp.float64, device=device) for _ in range(2)]
+        self._bufs = bufs
+        self._f_dev, self._kc_dev = self.gather.out[:n], self.gather.out[n:]
+        o = self.gather.out.numpy() if self.on_cpu else None   # CPU: a view of the device sums (no copy)
+        self._out = None if o is None else (o[:n], o[n:n + n * n].reshape(n, n), o[n + n * n:].reshape(n, n))
+        self.graph = self.tangent_graph = None
+        self._launch_all()                                # loads every module before a capture
+        self.gather.launch()
+        if capture:
+            with wp.ScopedCapture(device=self.device) as cap:
+                self._launch_all()
+            self.graph = cap.graph
+            with wp.ScopedCapture(device=self.device) as cap:
+                self.gather.launch_tangents()
+            self.tangent_graph = cap.graph
+        self.timing = {"launches": 0.0, "tangents": 0.0}
         self.evaluations = 0
 
+    def _launch_all(self):
+        import warp as wp
+        if not self.on_cpu:
+            for b, is_vel in self._bufs:
+                wp.copy(b, self._stage[1 if is_vel else 0])
+        for launch in self.launches:
+            launch()
+        self.gather.launch_forces()
+
     def evaluate(self, pose, vel):
-        """(f (n,), K (n, n), C (n, n)) at absolute body poses and velocities (nb, 3)."""
+        """f (n,) at absolute body poses and velocities (nb, 3); the families' rows stay on the
+        device for :meth:`tangents`. On the CPU f is a view of the device sums (valid until the
+        next evaluation)."""
+        import warp as wp
         t0 = time.perf_counter()
         if self.on_cpu:
             for view, is_vel in self._views:
                 view[...] = vel if is_vel else pose
         else:
-            for b, is_vel in self._inputs:
-                h = self._host[id(b)]
-                h[:self.nb] = vel if is_vel else pose
-                b.assign(h)
-        t1 = time.perf_counter()
-        for launch in self._launch:
-            launch()
-        t2 = time.perf_counter()
-        out = self.gather.launch()
-        t3 = time.perf_counter()
-        if self._out is None or not self.on_cpu:
-            o = out.numpy()                      # CPU: a view of the device sums (no copy)
-            n = self.n
-            self._out = (o[:n], o[n:n + n * n].reshape(n, n), o[n + n * n:].reshape(n, n))
-        out = self._out
-        t4 = time.perf_counter()
-        tm = self.timing
-        tm["inputs"] += t1 - t0
-        tm["launches"] += t2 - t1
-        tm["sums"] += t3 - t2
-        tm["read"] += t4 - t3
+            self._stage_h[0, :self.nb] = pose
+            self._stage_h[1, :self.nb] = vel
+            self._stage[0].assign(self._stage_h[0])
+            self._stage[1].assign(self._stage_h[1])
+        if self.graph is not None:
+            wp.capture_launch(self.graph)
+        else:
+            self._launch_all()
+        f = self._out[0] if self.on_cpu else self._f_dev.numpy()
+        self.timing["launches"] += time.perf_counter() - t0
         self.evaluations += 1
-        return out
+        return f
+
+    def tangents(self):
+        """(K, C) (n, n) of the last :meth:`evaluate` (one gather launch over its rows)."""
+        import warp as wp
+        t0 = time.perf_counter()
+        if self.tangent_graph is not None:
+            wp.capture_launch(self.tangent_graph)
+        else:
+            self.gather.launch_tangents()
+        if self.on_cpu:
+            K, C = self._out[1:]
+        else:
+            n = self.n
+            o = self._kc_dev.numpy()
+            K, C = o[:n * n].reshape(n, n), o[n * n:].reshape(n, n)
+        self.timing["tangents"] += time.perf_counter() - t0
+        return K, C
+
+    def evaluate_all(self, pose, vel):
+        """(f, K, C) at absolute body poses and velocities (nb, 3)."""
+        f = self.evaluate(pose, vel)
+        return (f,) + self.tangents()
 
 
 __all__ = ["RowForces"]
