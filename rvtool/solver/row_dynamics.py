@@ -38,6 +38,13 @@ from warp_contacts.fused_step_ref import (ACTIVE, C_ACCEPTED, C_NEWTON, C_RECORD
 from ..errors import RvtoolInputError, SolverFailure
 
 
+def _as_slice(idx):
+    """``idx`` (sorted, unique) as a slice where it is contiguous, else as it is."""
+    if len(idx) and idx[-1] - idx[0] + 1 == len(idx):
+        return slice(int(idx[0]), int(idx[-1]) + 1)
+    return idx
+
+
 def rigid_body_masses(model):
     """(3 nb,) diagonal mass matrix [kg, kg, kg m^2] of the model's bodies from their Exudyn
     RigidBody2D objects (centre of mass at the node required)."""
@@ -108,9 +115,13 @@ class RowDrivenModel(ReferenceModel):
         self.forces_s = self.forces_cpu_s = self.evaluate_cpu_s = self.tangents_cpu_s = 0.0
         self.evaluations = self.tangent_gathers = 0
         # the lean step's constants (device sums): free/fixed index lists, the diagonal mass matrix
-        self._fi = np.flatnonzero(free)
-        self._xi = np.flatnonzero(~free)
-        self._ff = np.ix_(self._fi, self._fi)
+        # (contiguous index sets as slices: views instead of fancy-index copies; rv40e's locks and drive
+        # are the first body's three coordinates)
+        self._fi = _as_slice(np.flatnonzero(free))
+        self._xi = _as_slice(np.flatnonzero(~free))
+        both_slices = isinstance(self._fi, slice) and isinstance(self._xi, slice)
+        self._ff = (self._fi, self._fi) if both_slices else np.ix_(np.flatnonzero(free), np.flatnonzero(free))
+        self._xf = (self._xi, self._fi) if both_slices else np.ix_(np.flatnonzero(~free), np.flatnonzero(free))
         self._mass_diag = np.diag(self.mass[0])
         st = self.settings
         self._floats = tuple(float(st[c]) for c in (S_ALPHA_M, S_ALPHA_F, S_BETA, S_GAMMA, S_ABS_TOL, S_REL_TOL)) + (
@@ -204,7 +215,7 @@ class RowDrivenModel(ReferenceModel):
             except np.linalg.LinAlgError:
                 return False, q, v, a, g, it, 0.0, peaks
             # Exudyn's multiplier update on the fixed rows: lam -= (s r_x - J_xf D_f) / s
-            lam[xi] -= (sc * r[xi] - J[xi][:, fi] @ d) / sc
+            lam[xi] -= (sc * r[xi] - J[self._xf] @ d) / sc
             q[fi] -= d
             v[fi] -= gp * d
             a[fi] -= bp * d
