@@ -10,13 +10,19 @@ tangent entry (i, j) sums ``dQdq_s`` (K) and ``dQdv_s`` (C) over the list of out
 entry (f) or per tangent entry (K and C together) walks every slot's list, in row order. Up to
 ``MAX_SLOTS`` families (one launch for all); unused slots have empty lists. f and the tangents
 are two launches, so that a caller gathers the tangents only where it needs them (a Newton
-iterate that has converged does not). NumPy reference: :func:`gather_ref` (and the host
+iterate that has converged does not). The lists are :mod:`warp_contacts.segment_sum_ref`'s
+(the merged Exudyn element's sums, :class:`warp_contacts.segment_sum.ElementSums`, which launches
+per family and keeps each family's tangents in a slot for Exudyn's Jacobian factors; the row
+stepper needs K and C apart, all families in one launch, tangents on demand). NumPy reference:
+:func:`gather_ref` (:func:`warp_contacts.segment_sum_ref.family_sums` per family; and the host
 ``np.bincount`` sums of :class:`rvtool.solver.row_dynamics.RowDrivenModel`).
 """
 import functools
 
 import numpy as np
 import warp as wp
+
+from .segment_sum_ref import family_sums, segments
 
 MAX_SLOTS = 8
 
@@ -140,38 +146,27 @@ def _kernels(dtype):
     return gather_forces, gather_tangents
 
 
-def gather_lists(local, n, rows, k):
+def gather_lists(local, n):
     """(ptr (n + n^2 + 1,), idx) of one family: ``local`` (R, k) the copy's coordinate of each row
-    entry (-1: ground), n coordinates, R rows of k entries. Output e < n (f) sums the flattened
-    Q rows at idx[ptr[e]:ptr[e + 1]], output n + i n + j (K, and C with the same list) the
-    flattened dQ/dq (dQ/dv) rows; in row order."""
-    loc = np.asarray(local, np.int64).reshape(rows, k)
-    pair = (loc[:, :, None] * n + loc[:, None, :]).reshape(-1)
-    pair_ok = ((loc[:, :, None] >= 0) & (loc[:, None, :] >= 0)).reshape(-1)
-    vec = loc.reshape(-1)
-    src = np.concatenate([np.arange(rows * k), np.arange(rows * k * k)])
-    dst = np.concatenate([vec, np.where(pair_ok, n + pair, -1)])
-    keep = dst >= 0
-    src, dst = src[keep], dst[keep]
-    order = np.argsort(dst, kind="stable")                # per output: row order
-    ptr = np.zeros(n + n * n + 1, np.int64)
-    np.add.at(ptr, dst + 1, 1)
-    return np.cumsum(ptr).astype(np.int32), src[order].astype(np.int32)
+    entry (-1: the ground). Output e < n (f) sums the flattened Q rows at idx[ptr[e]:ptr[e + 1]],
+    output n + i n + j (K, and C with the same list) the flattened dQ/dq (dQ/dv) rows: the lists
+    of :func:`warp_contacts.segment_sum_ref.segments` (ascending source order) joined."""
+    vec_start, vec_src, mat_start, mat_src = segments(local, n)
+    ptr = np.concatenate([vec_start, vec_start[-1] + mat_start[1:]]).astype(np.int32)
+    return ptr, np.concatenate([vec_src, mat_src]).astype(np.int32)
 
 
-def gather_ref(lists, data, n):
-    """NumPy reference: (f (n,), K (n, n), C (n, n)) from per-family (ptr, idx) and the flattened
-    (Q, dQ/dq, dQ/dv or None) rows."""
-    size = n + n * n
-    f, K, C = np.zeros(n), np.zeros(n * n), np.zeros(n * n)
-    for (ptr, idx), (q, dq, dv) in zip(lists, data):
-        dst = np.repeat(np.arange(size), np.diff(ptr))
-        fo = dst < n
-        f += np.bincount(dst[fo], q[idx[fo]], minlength=n)
-        K += np.bincount(dst[~fo] - n, dq[idx[~fo]], minlength=n * n)
-        if dv is not None:
-            C += np.bincount(dst[~fo] - n, dv[idx[~fo]], minlength=n * n)
-    return f, K.reshape(n, n), C.reshape(n, n)
+def gather_ref(locals_, data, n):
+    """NumPy reference: (f (n,), K (n, n), C (n, n)) of the families' rows ``data`` [(Q (R, k),
+    dQ/dq, dQ/dv or None)] at their coordinates ``locals_`` [(R, k)], each family summed by
+    :func:`warp_contacts.segment_sum_ref.family_sums` and the families added in order."""
+    f, K, C = np.zeros(n), np.zeros((n, n)), np.zeros((n, n))
+    for loc, (q, dq, dv) in zip(locals_, data):
+        fq, Kq, Kv = family_sums(q, dq, dv, loc, n)
+        f += fq
+        K += Kq
+        C += Kv
+    return f, K, C
 
 
 class RowGather:

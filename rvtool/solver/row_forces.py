@@ -77,7 +77,7 @@ class RowForces:
             inputs.append((pose, vel))
             buffers.append((q, dq, dv))
             loc = np.asarray(f.scatter.local)
-            lists.append(gather_lists(loc, n, loc.shape[0], loc.shape[1]))
+            lists.append(gather_lists(loc, n))
         self.gather = RowGather(lists, buffers, n, wp.float64, device)
         # every input buffer of every family (pose, or velocity)
         bufs = []
