@@ -13,15 +13,22 @@ Exudyn element), plus the output torque. Masses: the model's rigid bodies (mass,
 inertia; centre of mass at the node). The static start is Exudyn's (the same StaticSolver as the
 Exudyn path), so both paths start from one state.
 
-Cost (rv40e, one CPU core of the shared development machine, 200 steps): 1.2-1.6x Exudyn's path;
-both evaluate the same family kernels at every Newton iteration (about 3 evaluations per step), and
-the tapered rollers' planar mapping (NumPy, :mod:`rvtool.bearings.tapered_set`) is most of one
-evaluation: the row stepper gains Exudyn's overhead only, until the families run in one fused launch
-or the tapered rows on the device.
+Where the forces are summed (``sums``): "device" (default) evaluates and sums every family on the
+Warp device (:class:`rvtool.solver.row_forces.RowForces`: one captured graph per evaluation, f
+read back, K and C gathered only where a Newton iteration needs them), and steps with
+:meth:`RowDrivenModel.attempt` / :meth:`RowDrivenModel.advance` (the reference's arithmetic on
+the free block, Python scalars for the step control); "host" brings every family's rows back and
+sums them with ``np.bincount``, stepping with ReferenceModel's own loop (the reference).
 
-This is NOT the fused stepper (one Warp launch per K steps): every Newton iteration launches each
-family and returns its rows to the host. What a fused RV kernel still lacks is named by
-:func:`rvtool.solver.device_dynamics.unfused_element_reasons`.
+Cost (rv40e, one CPU core, CPU time; docs/benchmarks/fused_rv.md): per accepted step about 3.2
+evaluations (the predictor and Exudyn's ~2.2 Newton iterations) and 2.2 tangent gathers; the
+families' kernels are most of an evaluation, and they run in Exudyn's path too, so the row
+stepper's gain is Exudyn's own overhead per evaluation (``cases/benchmarks/bench_fused_rv.py``
+measures it).
+
+This is NOT the fused stepper (one Warp launch per K steps): every Newton iteration replays the
+evaluation's graph and reads f back, and the step is on the host. What a fused RV kernel still
+lacks is named by :func:`rvtool.solver.device_dynamics.unfused_element_reasons`.
 """
 import math
 import time
