@@ -26,6 +26,11 @@ wall time is reported beside it (``*_wall``); on a machine of its own the two ag
 ``--device cuda:N`` the measure is wall time (the row stepper waits for the GPU; run it on a
 host of its own).
 
+The Newton iterations: by default each is one captured graph on the device (the tangent gather,
+the dense step of :mod:`warp_contacts.row_step`, the next evaluation, the residual) and the host
+reads the residual norm (``evaluate`` in the split then covers whole iterations, ``tangents`` is
+zero); ``--host-step`` keeps the step on the host (NumPy; evaluations and tangent gathers apart).
+
 Judged (``passed``): TE of the row stepper against Exudyn's on the same accepted steps within
 1e-6 arcsec, the same accepted steps, no rejected or failed step. Speed is reported against the
 issue's 3x (``speedup``: fastest run over fastest run; ``speedup_per_rep``: each alternating pair;
@@ -101,7 +106,9 @@ def main(argv=None):
                                                                    "--quick 50)"),
         p.add_argument("--reps", type=int, default=None, help="runs of each path, alternating (default 3, "
                                                                   "--quick 2); the fastest is reported"),
-        p.add_argument("--device", default="cpu", help="Warp device of the row stepper's kernels (cpu, cuda:0)")))
+        p.add_argument("--device", default="cpu", help="Warp device of the row stepper's kernels (cpu, cuda:0)"),
+        p.add_argument("--host-step", action="store_true", help="the Newton iterations' dense step on the host "
+                                                                "(default: on the device, one graph per iteration)")))
     t_all = time.perf_counter()
     d = load_design(designs.path("rv40e"))
     probe = build(d)
@@ -120,13 +127,15 @@ def main(argv=None):
     # warm both paths (imports, kernel loading, graph capture): 2 steps each, not timed
     warm = RunSpec(end_time=2 * STEP, step=STEP, abs_tol=1e-6, rel_tol=1e-8)
     dynamic_te(build(d), duration=2 * STEP, run_spec=warm, solver="exudyn", **kw)
+    device_step = not args.host_step
     row_driven_run(build(d), duration=2 * STEP, settings=DeviceDynamicsSettings.from_run_spec(warm),
-                   device=args.device, q0=q0, **kw)
+                   device=args.device, q0=q0, device_step=device_step, **kw)
     ex_runs, rw_runs = [], []
     for _ in range(reps):
         ex_runs.append(dynamic_te(build(d), duration=dur, run_spec=spec, solver="exudyn", **kw))
         m = build(d)
-        rw_runs.append(row_driven_run(m, duration=dur, settings=settings, device=args.device, q0=q0, **kw))
+        rw_runs.append(row_driven_run(m, duration=dur, settings=settings, device=args.device, q0=q0,
+                                      device_step=device_step, **kw))
     # the clock: CPU time on the CPU; on a GPU the row stepper waits for the device, which CPU time
     # need not count, so wall time there (a GPU host of its own)
     clock = "cpu" if args.device == "cpu" else "wall"
@@ -141,7 +150,8 @@ def main(argv=None):
     ex_ms, rw_ms = (ex_cpu_ms, rw_cpu_ms) if clock == "cpu" else (ex_wall_ms, rw_wall_ms)
     results = {
         "settings_echo": {"design": "rv40e", "steps": n_steps, "duration_s": dur, "step_s": STEP, "reps": reps,
-                          "device": args.device, "speed_rpm": d.input_speed_rpm, "torque_Nm": d.rated_torque,
+                          "device": args.device, "device_step": device_step, "speed_rpm": d.input_speed_rpm,
+                          "torque_Nm": d.rated_torque,
                           "exudyn_threads": 1, "run_spec": spec.to_dict(), "clock": clock,
                           "time": "process CPU time (time.process_time) on cpu, wall time on cuda; fastest rep"},
         "crank_revolution_s": crank_rev_s,
@@ -180,7 +190,7 @@ def main(argv=None):
     }
     casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"quick": args.quick, "steps": n_steps, "reps": reps,
-                                                              "device": args.device},
+                                                              "device": args.device, "device_step": device_step},
                                  wall_s=results["wall_s"])
 
 

@@ -74,9 +74,11 @@ class RowDrivenModel(ReferenceModel):
     """One copy of a built ``model`` for :class:`ReferenceModel`'s step, forces from the copied
     device families (module docstring). torque: output torque [N m] (signed, as applied);
     motion (N_MOTION,): the drive's angle, speed, acceleration; settings_vector: the stepper's
-    settings (:meth:`rvtool.solver.device_dynamics.DeviceDynamicsSettings.vector`)."""
+    settings (:meth:`rvtool.solver.device_dynamics.DeviceDynamicsSettings.vector`); sums: where
+    the rows are summed (:data:`SUMS`); device_step: the Newton iterations on the device
+    (:class:`DeviceIteration`; None: with the device sums)."""
 
-    def __init__(self, model, *, torque, motion, settings_vector, device="cpu", sums="device"):
+    def __init__(self, model, *, torque, motion, settings_vector, device="cpu", sums="device", device_step=None):
         from .device_rows import row_reasons
         from .replica import copy_families
         if sums not in SUMS:
@@ -134,6 +136,11 @@ class RowDrivenModel(ReferenceModel):
         self._floats = tuple(float(st[c]) for c in (S_ALPHA_M, S_ALPHA_F, S_BETA, S_GAMMA, S_ABS_TOL, S_REL_TOL)) + (
             int(st[S_MAX_IT]),)
         self._motion = tuple(float(self.motion[0, c]) for c in (M_ANGLE, M_SPEED, M_ACCEL))
+        if device_step is None:
+            device_step = sums == "device"
+        if device_step and sums != "device":
+            raise RvtoolInputError("device_step = True needs sums = 'device' (the step reads the device sums)")
+        self.device_iteration = DeviceIteration(self) if device_step else None
 
     def forces(self, p, q, v):
         if self.sums == "device":
@@ -185,9 +192,12 @@ class RowDrivenModel(ReferenceModel):
     def attempt(self, p, q0, v0, a0, g0, t0, h):
         """:meth:`ReferenceModel.attempt` (the same arithmetic, Exudyn's step) with the dense work on
         the free block only and no per-iteration allocations beyond NumPy's temporaries; the
-        reference's ``attempt`` with ``sums="host"``."""
+        reference's ``attempt`` with ``sums="host"``; the Newton iterations on the device with
+        ``device_step`` (:class:`DeviceIteration`)."""
         if self.sums != "device":
             return super().attempt(p, q0, v0, a0, g0, t0, h)
+        if self.device_iteration is not None:
+            return self.device_iteration.attempt(q0, v0, a0, g0, t0, h)
         am, af, beta, gamma, abs_tol, rel_tol, max_it = self._floats
         fi, xi, ff = self._fi, self._xi, self._ff
         M = self.mass[p]
@@ -287,21 +297,162 @@ class RowDrivenModel(ReferenceModel):
         return hist
 
 
+class DeviceIteration:
+    """The Newton iterations of :meth:`RowDrivenModel.attempt` on the Warp device
+    (``device_step=True``): the predictor on the host, then per iteration one captured graph
+    (the tangent gather, :func:`warp_contacts.row_step.kernels`' ``newton_update`` with the dense
+    solve, the evaluation from the poses it writes, the ``residual``) and one read of the
+    residual norm; the state (q, v, a) comes back once per step. The same formulas as the host
+    step (the solve and the norm summed in another order: last bits)."""
+
+    def __init__(self, rm):
+        import warp as wp
+
+        from warp_contacts.row_step import kernels
+        self.rm = rm
+        rf = rm.row_forces
+        dev, f64 = rf.device, wp.float64
+        n = rm.n
+        free = np.flatnonzero(rm.free).astype(np.int32)
+        fixed = np.flatnonzero(~rm.free).astype(np.int32)
+        nf = len(free)
+        arr = lambda x, t=f64: wp.array(np.ascontiguousarray(x), dtype=t, device=dev)
+        self.mass, self.free, self.fixed = arr(rm.mass[0]), arr(free, wp.int32), arr(fixed, wp.int32)
+        self.reference = arr(rm.reference[0])
+        self.torque = arr(np.asarray(rm.torque[:1], float))
+        # q, v, a, lambda in one array (one transfer each way); the step constants; [|r|, pivot flag]
+        self.state = wp.zeros((4, n), dtype=f64, device=dev)
+        self.coef = wp.zeros(3, dtype=f64, device=dev)
+        self.status = wp.zeros(2, dtype=f64, device=dev)
+        self.r = wp.zeros(n, dtype=f64, device=dev)
+        self.J = wp.zeros((1, nf, nf), dtype=f64, device=dev)
+        self.rhs = wp.zeros((1, nf), dtype=f64, device=dev)
+        self.d = wp.zeros((1, nf), dtype=f64, device=dev)
+        q, v, a, lam = (self.state[i] for i in range(4))
+        update, residual = kernels()
+        on_cpu = rf.on_cpu
+        self._host = {k: (getattr(self, k).numpy() if on_cpu else np.zeros(getattr(self, k).shape))
+                      for k in ("state", "coef", "status")}
+
+        def residual_launch():
+            wp.launch(residual, dim=1, device=dev, inputs=[self.mass, int(rm.output_index), self.torque,
+                                                           rf.gather.out, a, lam], outputs=[self.r, self.status])
+
+        def iteration():
+            rf.gather.launch_tangents()
+            wp.launch(update, dim=1, device=dev,
+                      inputs=[self.mass, self.free, self.fixed, self.reference, self.coef, rf.gather.out, self.r,
+                              self.J, self.rhs, self.d, q, v, a, lam],
+                      outputs=[rf.pose_stage, rf.vel_stage, self.status])
+            rf.launch_evaluation()
+            residual_launch()
+
+        def first():
+            rf.launch_evaluation()
+            residual_launch()
+
+        first()                       # loads the modules before the captures
+        iteration()
+        self.graphs = []
+        for body in (first, iteration):
+            with wp.ScopedCapture(device=dev) as cap:
+                body()
+            self.graphs.append(cap.graph)
+        self.on_cpu = on_cpu
+
+    def _put(self, name):
+        if not self.on_cpu:
+            getattr(self, name).assign(self._host[name])
+
+    def _get(self, name):
+        if not self.on_cpu:
+            self._host[name][...] = getattr(self, name).numpy()
+        return self._host[name]
+
+    def _count(self, t0, c0):
+        """Book the device work since (wall t0, CPU c0) as evaluation time of the row model."""
+        rm, dc = self.rm, time.process_time() - c0
+        rm.forces_s += time.perf_counter() - t0
+        rm.forces_cpu_s += dc
+        rm.evaluate_cpu_s += dc
+
+    def attempt(self, q0, v0, a0, g0, t0, h):
+        """:meth:`RowDrivenModel.attempt` with the iterations on the device (class docstring)."""
+        import warp as wp
+        rm = self.rm
+        am, af, beta, gamma, abs_tol, rel_tol, max_it = rm._floats
+        xi, ii = rm._xi, rm.input_index
+        M = rm.mass[0]
+        q = q0 + h * v0 + h * h * (0.5 - beta) * g0
+        v = v0 + h * (1.0 - gamma) * g0
+        g = (af * a0 - am * g0) / (1.0 - am)
+        q = q + h * h * beta * g
+        v = v + h * gamma * g
+        a = np.zeros_like(q)
+        (angle, speed, accel), tt = rm._motion, t0 + h
+        q[xi], v[xi], a[xi] = 0.0, 0.0, 0.0
+        q[ii] = angle + speed * tt + 0.5 * accel * tt * tt
+        v[ii] = speed + accel * tt
+        a[ii] = accel
+        sc = beta * h * h
+        st, co, ss = self._host["state"], self._host["coef"], self._host["status"]
+        st[0], st[1], st[2], st[3] = q, v, a, 0.0
+        co[0], co[1], co[2] = sc, (1.0 - am) / (h * h * beta * (1.0 - af)), gamma / (h * beta)
+        ss[...] = 0.0
+        for nm in ("state", "coef", "status"):
+            self._put(nm)
+        peaks = (0.0, 0.0, 0.0)
+        t0, c0 = time.perf_counter(), time.process_time()
+        rm.row_forces.stage((rm.reference[0] + q).reshape(rm.nb, 3), v.reshape(rm.nb, 3))
+        wp.capture_launch(self.graphs[0])
+        initial = float(self._get("status")[0])
+        rm.evaluations += 1
+        self._count(t0, c0)
+        if not math.isfinite(initial):
+            return False, q, v, a, g, 0, 0.0, peaks
+        initial = max(initial, 2.0 * abs_tol)
+        for it in range(1, max_it + 1):
+            t0, c0 = time.perf_counter(), time.process_time()
+            wp.capture_launch(self.graphs[1])
+            stat = self._get("status")
+            res, singular = float(stat[0]), stat[1] != 0.0
+            rm.evaluations += 1
+            rm.tangent_gathers += 1
+            self._count(t0, c0)
+            if singular or not math.isfinite(res):
+                return False, q, v, a, g, it, 0.0, peaks
+            if it == 1 and res > initial:
+                initial = res
+            if res / initial <= rel_tol or res <= abs_tol:
+                s = self._get("state")
+                q, v, a = np.array(s[0]), np.array(s[1]), np.array(s[2])
+                f_in = float(rm.row_forces.forces_view()[ii])
+                if ii == rm.output_index:
+                    f_in += float(rm.torque[0])
+                torque = M[ii] * a[ii] - f_in
+                return True, q, v, a, g + (1.0 - af) / (1.0 - am) * a, it, torque, peaks
+        return False, q, v, a, g, max_it, 0.0, peaks
+
+
 SUMS = ("device", "host")
 """Where the row stepper sums its families' rows: on the Warp device in one gather launch
 (:class:`rvtool.solver.row_forces.RowForces`, with the lean step) or on the host (the rows
 brought back, ``np.bincount``; the reference, with :class:`ReferenceModel`'s step)."""
 
 
-def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu", q0=None, sums="device"):
+def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu", q0=None, sums="device",
+                   device_step=None):
     """The dynamic TE protocol's driven run of ``model`` on the row stepper: from the loaded
     quasi-static state at input angle 0 (``q0``; None: Exudyn's StaticSolver, as the Exudyn path),
     kinematic velocities, constant input speed [rpm] and output torque [N m] (resisting the
     nominal rotation), for ``duration`` [s] with ``settings``
     (:class:`~rvtool.solver.device_dynamics.DeviceDynamicsSettings`). Returns a dict: t, theta_in,
-    theta_out (accepted steps, t = 0 first), omega_in, accepted, rejected, newton, and the split
-    (``forces_s``: the families' launches and row scatter; ``step_s``: the rest of the step).
-    A step that fails at the minimum step raises :class:`SolverFailure`."""
+    theta_out (accepted steps, t = 0 first), omega_in, accepted, rejected, newton, and the split:
+    wall (``forces_s``, ``step_s``) and CPU seconds (``evaluate_cpu_s``: evaluations, with
+    ``device_step`` whole Newton iterations on the device; ``tangents_cpu_s``: host-step tangent
+    gathers; ``step_cpu_s``: the rest), ``evaluations``, ``tangent_gathers``. sums, device_step:
+    :data:`SUMS` and :class:`DeviceIteration` (None: on with the device sums). A step that fails
+    at the minimum step raises :class:`SolverFailure`."""
     from .static import StaticSolver
     omega = speed_rpm * 2 * np.pi / 60.0
     tq = -np.sign(model.ratio) * float(torque)
@@ -312,7 +463,7 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
     motion = np.zeros(N_MOTION)
     motion[M_SPEED] = omega
     rm = RowDrivenModel(model, torque=tq, motion=motion, settings_vector=settings.vector(duration), device=device,
-                        sums=sums)
+                        sums=sums, device_step=device_step)
     fixed = ~rm.free
     q = np.array(q0, float)
     v = np.array(v0, float)
@@ -348,7 +499,7 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
             "wall_s": wall, "forces_s": rm.forces_s, "step_s": wall - rm.forces_s, "evaluations": rm.evaluations,
             "cpu_s": cpu, "forces_cpu_s": rm.forces_cpu_s, "step_cpu_s": cpu - rm.forces_cpu_s,
             "evaluate_cpu_s": rm.evaluate_cpu_s, "tangents_cpu_s": rm.tangents_cpu_s,
-            "tangent_gathers": rm.tangent_gathers}
+            "tangent_gathers": rm.tangent_gathers, "device_step": rm.device_iteration is not None}
 
 
 __all__ = ["RowDrivenModel", "rigid_body_masses", "row_driven_run"]

@@ -5,9 +5,9 @@ once: the force evaluation of the row stepper (:mod:`rvtool.solver.row_dynamics`
 The families are the device row Newton's (:func:`rvtool.solver.replica.copy_families`, one
 copy: the same kernels and rows as the model's Exudyn element). One evaluation:
 
-1. the absolute poses (reference + q) and velocities are written into every family's input
-   buffers (on the CPU the buffers' own memory through NumPy views, no copy; on a GPU one
-   upload per buffer);
+1. the absolute poses (reference + q) and velocities are written into two staging arrays (on
+   the CPU through NumPy views of their memory; on a GPU one upload each) and copied on the
+   device into every family's input buffers;
 2. one recorded launch per family (no argument packing): cycloid pins, involute pairs and
    rolling elements (their staged launch, velocity tangent on), tapered rollers (planar state,
    rollers, planar rows and their dQ/dv: :mod:`warp_contacts.tapered_planar`), plain output
@@ -17,7 +17,7 @@ copy: the same kernels and rows as the model's Exudyn element). One evaluation:
    device memory; GPU: one download); K, C (n, n) are gathered from the same rows only when the
    caller asks (:meth:`RowForces.tangents`: a converged Newton iterate needs none).
 
-Steps 1 (on a GPU) to 3 are captured once as a graph and replayed per evaluation.
+The device part of steps 1 to 3 is captured once as a graph and replayed per evaluation.
 
 Reference: :class:`rvtool.solver.row_dynamics.RowDrivenModel`'s ``forces`` (the rows brought to
 the host and summed with ``np.bincount``); the same sums up to the order of the additions.
@@ -34,7 +34,7 @@ class RowForces:
     :meth:`evaluate` takes body poses and velocities (nb, 3) (absolute; the ground is added) and
     returns the host array f (n,); :meth:`tangents` then gives K, C (n, n) of the same rows (on
     the CPU the results are views of the device sums, valid until the next call). capture: the
-    evaluation's launches (and on a GPU the input copies) as one captured graph
+    evaluation's copies and launches as one captured graph
     (``wp.ScopedCapture``: a CUDA graph on a GPU, an APIC replay on the CPU), replayed by
     ``wp.capture_launch``; False: launched one by one. ``timing``: wall seconds in evaluations
     (inputs, launches, f read) and in tangents (gather, read)."""
@@ -85,24 +85,25 @@ class RowForces:
             bufs.append((pose, False))
             if vel is not None:
                 bufs.append((vel, True))
+        # poses and velocities (nb + 1, 3) (the ground's row last, zero) in two staging arrays, copied
+        # on the device into every family's input buffers by each evaluation (inside its graph); on
+        # the CPU written through views of their memory, on a GPU from host twins (one upload each)
+        self.pose_stage = wp.zeros((nb + 1, 3), dtype=wp.float64, device=device)
+        self.vel_stage = wp.zeros((nb + 1, 3), dtype=wp.float64, device=device)
         if self.on_cpu:
-            # the device buffers' own memory: written in place, read by the launches
-            self._views = [(b.numpy()[:nb], is_vel) for b, is_vel in bufs]
+            self._stage_views = (self.pose_stage.numpy()[:nb], self.vel_stage.numpy()[:nb])
         else:
-            # one upload of poses and velocities per evaluation into two staging arrays, copied on the
-            # device into every family's buffers (inside the captured graph)
-            self._stage_h = np.zeros((2, nb + 1, 3))
-            self._stage = [wp.zeros((nb + 1, 3), dtype=wp.float64, device=device) for _ in range(2)]
+            self._stage_views = (np.zeros((nb + 1, 3)), np.zeros((nb + 1, 3)))
         self._bufs = bufs
         self._f_dev, self._kc_dev = self.gather.out[:n], self.gather.out[n:]
         o = self.gather.out.numpy() if self.on_cpu else None   # CPU: a view of the device sums (no copy)
         self._out = None if o is None else (o[:n], o[n:n + n * n].reshape(n, n), o[n + n * n:].reshape(n, n))
         self.graph = self.tangent_graph = None
-        self._launch_all()                                # loads every module before a capture
+        self.launch_evaluation()                          # loads every module before a capture
         self.gather.launch()
         if capture:
             with wp.ScopedCapture(device=self.device) as cap:
-                self._launch_all()
+                self.launch_evaluation()
             self.graph = cap.graph
             with wp.ScopedCapture(device=self.device) as cap:
                 self.gather.launch_tangents()
@@ -110,14 +111,32 @@ class RowForces:
         self.timing = {"launches": 0.0, "tangents": 0.0}
         self.evaluations = 0
 
-    def _launch_all(self):
+    def launch_evaluation(self):
+        """One evaluation from the staging arrays (:attr:`pose_stage`, :attr:`vel_stage`) as they
+        are: the copies into the families' buffers, the families' launches and the f gather (no
+        host transfer; capturable)."""
         import warp as wp
-        if not self.on_cpu:
-            for b, is_vel in self._bufs:
-                wp.copy(b, self._stage[1 if is_vel else 0])
+        for b, is_vel in self._bufs:
+            wp.copy(b, self.vel_stage if is_vel else self.pose_stage)
         for launch in self.launches:
             launch()
         self.gather.launch_forces()
+
+    def stage(self, pose, vel):
+        """Write body poses and velocities (nb, 3) into the staging arrays (no launch)."""
+        hp, hv = self._stage_views
+        if self.on_cpu:
+            hp[...] = pose
+            hv[...] = vel
+        else:
+            hp[:self.nb] = pose
+            hv[:self.nb] = vel
+            self.pose_stage.assign(hp)
+            self.vel_stage.assign(hv)
+
+    def forces_view(self):
+        """f (n,) of the last evaluation (CPU: a view of the device sums; GPU: downloaded)."""
+        return self._out[0] if self.on_cpu else self._f_dev.numpy()
 
     def evaluate(self, pose, vel):
         """f (n,) at absolute body poses and velocities (nb, 3); the families' rows stay on the
@@ -125,19 +144,12 @@ class RowForces:
         next evaluation)."""
         import warp as wp
         t0 = time.perf_counter()
-        if self.on_cpu:
-            for view, is_vel in self._views:
-                view[...] = vel if is_vel else pose
-        else:
-            self._stage_h[0, :self.nb] = pose
-            self._stage_h[1, :self.nb] = vel
-            self._stage[0].assign(self._stage_h[0])
-            self._stage[1].assign(self._stage_h[1])
+        self.stage(pose, vel)
         if self.graph is not None:
             wp.capture_launch(self.graph)
         else:
-            self._launch_all()
-        f = self._out[0] if self.on_cpu else self._f_dev.numpy()
+            self.launch_evaluation()
+        f = self.forces_view()
         self.timing["launches"] += time.perf_counter() - t0
         self.evaluations += 1
         return f
