@@ -651,7 +651,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
             # the main bearing on the flange's retained axial and tilt coordinates (pose row nw + 2 + its row)
             from ..bearings.spatial_set import SpatialBearingSet
             elements["main_bearing"] = element(SpatialBearingSet([main_bearing_mounting(d, nw)], nw + 2 + tilt.n_virtual,
-                                                                 {nw + 1: nw + 2 + rows[nw + 1]}, name="main_bearing"),
+                                                                 {nw + 1: nw + 2 + rows[nw + 1]}, name="main_bearing",
+                                                                 backend=backend, precision=precision, device=device),
                                                ports=tilt)
     else:
         contacts = tuple(lumped_bearing_contacts(d))

@@ -923,7 +923,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     if b.spatial_carrier:
         from ...bearings.spatial_set import SpatialBearingSet
         main = SpatialBearingSet([main_mounting], L.n_bodies + tilt.n_virtual, {L.carrier: L.n_bodies + rows[L.carrier]},
-                                 name="main_bearings")
+                                 name="main_bearings", **opts)
     else:
         main = BearingSet([main_mounting], L.n_bodies, name="main_bearings", **opts)
     if b.spatial_cranks:
