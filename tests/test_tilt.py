@@ -139,6 +139,25 @@ def test_device_backends_name_tilting_wheels():
     assert SPATIAL_WHEELS_REASON in DeviceBackend().supports(m, "equilibria").reasons
 
 
+def test_every_copying_backend_names_spatial_bodies():
+    """rd40 with a spatial flange and tilting wheels (whose families the exudyn backend now sums on the
+    device): the device, fused and replica backends refuse it with both named reasons for every task
+    they implement; the exudyn backend takes it."""
+    from rvtool.solver.backends.base import SPATIAL_BODIES_REASON, SPATIAL_WHEELS_REASON
+    from rvtool.solver.backends.device import DeviceBackend, FusedBackend
+    from rvtool.solver.backends.exudyn import ExudynBackend
+    from rvtool.solver.backends.replica import ReplicaBackend
+    d = rvtool.replace_design(rvtool.load_design("rd40"), bodies={"flange_coordinates": "spatial",
+                                                                  "wheel_coordinates": "spatial"})
+    m = rvtool.build(d, bearing_model="rolling")
+    for backend, tasks in ((DeviceBackend(), ("equilibria", "torque_path")), (FusedBackend(), ("dynamic",)),
+                           (ReplicaBackend(), ("equilibria",))):
+        for task in tasks:
+            sup = backend.supports(m, task)
+            assert not sup.ok and sup.reasons[:2] == (SPATIAL_BODIES_REASON, SPATIAL_WHEELS_REASON), (backend, task)
+    assert ExudynBackend().supports(m, "equilibria").ok
+
+
 def _crank_pair():
     from rvtool.bearings.spatial_tapered import SpatialTaperedSet
     from rvtool.bearings.tapered_set import TaperedBearingSet, TaperedMounting
