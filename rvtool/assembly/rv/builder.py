@@ -241,10 +241,6 @@ def ported_carrier(design, graph, layout, rigid, opts):
                                f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
                                "crank bearings on the rigid carrier); valid: bearing_friction.model = 'none' or "
                                "carrier.body = 'rigid'")
-    if design.bodies.spatial_carrier:
-        raise RvtoolInputError("carrier.body = 'ported' with bodies.carrier_coordinates = 'spatial' is not "
-                               "implemented (the seats are planar ports: the tilt and axial ports of the seats are "
-                               "not reduced); valid: bodies.carrier_coordinates = 'planar' or carrier.body = 'rigid'")
     nc = layout.n_cranks
     inner = TaperedBearingSet(crank_mountings(design, graph, layout, seats=True), layout.n_bodies + nc,
                               name="crank_bearings", **opts)
@@ -754,8 +750,11 @@ def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
     from exudyn_user_elements.out_of_plane import RetainedTilt
     b, L = design.bodies, layout
     bodies = []
+    # a ported carrier's face and main seats: two rows closed by its out-of-plane seat compliance (the seats'
+    # row last; mass and tilt inertia split equally between them, assumed: dynamic runs only)
+    seats = b.spatial_carrier and design.carrier.ported
     if b.spatial_carrier:
-        bodies.append(("carrier", L.carrier, b.carrier_mass, b.tilt_inertia))
+        bodies.append(("carrier", L.carrier, b.carrier_mass / (1 + seats), b.tilt_inertia / (1 + seats)))
     if b.spatial_wheels:
         m_w, J_w = wheel_mass
         J_t = J_w / 2 if b.wheel_tilt_inertia is None else b.wheel_tilt_inertia
@@ -792,10 +791,13 @@ def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
                                "implemented (Palmgren's moment reads the planar bearing sets); valid: "
                                "bearing_friction.model = 'none' or planar carrier and cranks")
     k_t, k_r = regularization
+    rows = {i: r for r, (_, i, _, _) in enumerate(bodies)}
+    if seats:
+        bodies.append(("carrier_seats", L.carrier, b.carrier_mass / 2, b.tilt_inertia / 2))
     names = tuple(n for n, *_ in bodies)
     tilt = RetainedTilt(mbs, [m for *_, m, _ in bodies], [J for *_, J in bodies], (k_t, k_r),
-                        name="carrier_tilt" if names == ("carrier",) else "body_tilt", names=names)
-    return tilt, {i: r for r, (_, i, _, _) in enumerate(bodies)}
+                        name="carrier_tilt" if names[0] == "carrier" and len(rows) == 1 else "body_tilt", names=names)
+    return tilt, rows
 
 
 def spatial_needles(design, graph, layout, tilt, rows, opts):
@@ -922,7 +924,8 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     main_mounting = Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)
     if b.spatial_carrier:
         from ...bearings.spatial_set import SpatialBearingSet
-        main = SpatialBearingSet([main_mounting], L.n_bodies + tilt.n_virtual, {L.carrier: L.n_bodies + rows[L.carrier]},
+        seat_row = tilt.row("carrier_seats") if d.carrier.ported else rows[L.carrier]    # the main bearing's seats
+        main = SpatialBearingSet([main_mounting], L.n_bodies + tilt.n_virtual, {L.carrier: L.n_bodies + seat_row},
                                  name="main_bearings", **opts)
     else:
         main = BearingSet([main_mounting], L.n_bodies, name="main_bearings", **opts)
@@ -973,6 +976,11 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         crank_path = (("gears", gears),)
     elements.update((name, element(s, ports=on_tilts(s))) for name, s in (*crank_path, ("crank_bearings", cranks)))
     elements["main_bearings"] = element(main, ports=on_tilts(main))
+    if b.spatial_carrier and d.carrier.ported:
+        from ..carrier import CarrierTiltSeats, tilt_seat_compliance
+        elements["carrier_seats"] = element(CarrierTiltSeats(
+            tilt_seat_compliance(d, graph), n_bodies=L.n_bodies + tilt.n_virtual, carrier=L.carrier,
+            face=L.n_bodies + rows[L.carrier], seat=L.n_bodies + tilt.row("carrier_seats")), ports=tilt)
     if d.bearing_friction.model != "none":
         # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
         # (carrier -> ground), P1 from the accepted element loads of each mounting; a loss element of its
