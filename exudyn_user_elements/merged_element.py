@@ -260,7 +260,8 @@ class MergedContactElement:
 
     mbs: the MainSystem; nodes: the rigid-body node numbers (``NodeRigidBody2D``) every family
     is evaluated on, in body order; structure: a
-    :class:`~exudyn_user_elements.reduced_structure.ReducedStructure` whose eta follow the
+    :class:`~exudyn_user_elements.reduced_structure.ReducedStructure` (or a
+    :class:`~exudyn_user_elements.stacked_structure.StackedStructure` of several) whose eta follow the
     rigid coordinates (families with ``ports`` act on it), or None. Families are added with
     :meth:`add` before ``mbs.Assemble()``.
     """
@@ -301,7 +302,9 @@ class MergedContactElement:
         # is called without the contact elements (a frozen drive would be wrong, not slow)
         mbs.variables.setdefault(HOSTS_KEY, []).append(self)
         self.object_number = mbs.AddObject(ObjectGenericODE2(
-            name=name, nodeNumbers=nodes + ([] if structure is None else [structure.node]), **mats,
+            name=name, nodeNumbers=nodes + ([] if structure is None else
+                                            list(structure.nodes) if hasattr(structure, "nodes") else [structure.node]),
+            **mats,
             forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,
             visualization=VObjectGenericODE2(show=False)))
 

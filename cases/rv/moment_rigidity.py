@@ -6,8 +6,8 @@ bearing's centre at 0, 25, 50, 75, 100 % of the reference moment (the catalogue 
 static equilibrium per level; the flange tilt, each row's axial force and the working contact angles; the
 moment rigidity as the secant between 0 and 100 % (a STATED CONVENTION: the catalogue's own measuring points
 were not read) [N m/arcmin]; the axial stiffness between 0 and 2 kN. rv80e's ported housing is replaced by the
-rigid one for this test (its main-bearing seats are not ported in either model, so the figure is the same; the
-spatial carrier is not implemented with a ported housing). The same test on the main bearing alone (rigid
+rigid one for this test (its main-bearing seats are not ported in either model, so the figure is the same:
+tests/test_tilt.py builds the spatial carrier with the ported housing too). The same test on the main bearing alone (rigid
 housing) gives the uncertainty band over the main bearing's `assumed` ranges (rv80e_assumed.toml: one-at-a-time
 ends and Latin-hypercube samples; 16, --quick 4); rv40e has no assumed file (chosen geometry): no band.
 The elastic carrier (issue 32, the carrier's member in the moment path): the same test with

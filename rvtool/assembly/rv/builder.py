@@ -56,7 +56,7 @@ from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
 from ...model import SeriesBeam as SeriesBeamBase
 from ...output_pins.calibration import mindlin_tangential_ratio
-from ..contact_layout import ContactElements
+from ..contact_layout import ContactElements, contact_element_mode
 from ..cycloid import pin_meshes
 from .gear_graph import GearGraph
 from .spec import RVDesign
@@ -783,9 +783,10 @@ def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
     keys = [k for k, on in (("carrier_coordinates", b.spatial_carrier), ("wheel_coordinates", b.spatial_wheels),
                             ("crank_coordinates", b.spatial_cranks), ("input_coordinates", b.spatial_input)) if on]
     said = " / ".join(f"bodies.{k} = 'spatial'" for k in keys)
-    if housing is not None:
-        raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the merged element carries "
-                               "one structure); valid: housing.model = 'rigid' or planar bodies")
+    if housing is not None and b.spatial_wheels:
+        raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the ring pins on the "
+                               "housing's port bodies are not sliced with the wheels' tilts); valid: "
+                               "housing.model = 'rigid' or bodies.wheel_coordinates = 'planar'")
     if design.bearing_friction.model != "none" and (b.spatial_carrier or b.spatial_cranks):
         raise RvtoolInputError(f"{said} with bearing_friction.model = {design.bearing_friction.model!r} is not "
                                "implemented (Palmgren's moment reads the planar bearing sets); valid: "
@@ -964,12 +965,20 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         pin_set = skewed(pin_set, d, L, tilt, rows)
         crank_path = tuple((nm, f if nm == "gears" or f.n_bodies != L.n_bodies else skewed(f, d, L, tilt, rows))
                            for nm, f in crank_path)
-    element = ContactElements(mbs, nodes, contact_element, structure=housing if tilt is None else tilt)
+    # the ported housing and the retained out-of-plane coordinates both behind the merged element: stacked
+    stack = None
+    if housing is not None and tilt is not None and contact_element_mode(contact_element) == "merged":
+        from exudyn_user_elements.stacked_structure import StackedStructure
+        stack = StackedStructure((housing, tilt))
+    element = ContactElements(mbs, nodes, contact_element, structure=stack or (housing if tilt is None else tilt))
+
+    def on_stack(p):
+        return p if stack is None or p is None else stack.ports(p)
 
     def on_tilts(f):
-        return tilt if tilt is not None and f.n_bodies > L.n_bodies else None
+        return on_stack(tilt) if tilt is not None and f.n_bodies > L.n_bodies else None
     if wheel_path is None:
-        elements = {"pins": element(pin_set, ports=ports if tilt is None else on_tilts(pin_set))}
+        elements = {"pins": element(pin_set, ports=on_stack(ports) if housing is not None else on_tilts(pin_set))}
     else:
         # the elastic wheels: pins and needles in one closure; the gears alone
         elements = {"wheel_bodies": element(wheel_path)}
@@ -980,7 +989,7 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         from ..carrier import CarrierTiltSeats, tilt_seat_compliance
         elements["carrier_seats"] = element(CarrierTiltSeats(
             tilt_seat_compliance(d, graph), n_bodies=L.n_bodies + tilt.n_virtual, carrier=L.carrier,
-            face=L.n_bodies + rows[L.carrier], seat=L.n_bodies + tilt.row("carrier_seats")), ports=tilt)
+            face=L.n_bodies + rows[L.carrier], seat=L.n_bodies + tilt.row("carrier_seats")), ports=on_stack(tilt))
     if d.bearing_friction.model != "none":
         # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
         # (carrier -> ground), P1 from the accepted element loads of each mounting; a loss element of its
