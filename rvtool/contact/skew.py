@@ -352,13 +352,17 @@ class SkewSlices:
 
 def stacked_copy(family, n_copies):
     """``family`` stacked ``n_copies`` times over as many copies of its bodies (copy c's bodies
-    offset by c n_bodies: its ``concatenated``), or None where its type has no ``concatenated`` or
-    the family carries a contact history."""
-    conc = getattr(type(family), "concatenated", None)
+    offset by c n_bodies: its ``concatenated``), or None where its type defines no ``concatenated`` of its
+    own (the per-slice path then evaluates it)."""
+    # the type's own concatenated only: a subclass that inherits its parent's builds its copies as the parent
+    conc = type(family).__dict__.get("concatenated")
     if conc is None or getattr(family, "backend", None) not in ("warp", "numpy"):
         return None
+    conc = getattr(type(family), "concatenated")
     device = "cpu"
     if family.backend == "warp":
+        if not callable(getattr(family, "row_buffers", None)):
+            return None         # its kernel's device is not exposed: the per-slice path
         device = str(family.row_buffers()[1].device)
     return conc([family] * n_copies, family.n_bodies, names=[[f"slice{c}_{m}" for m in _member_names(family)]
                                                               for c in range(n_copies)],
