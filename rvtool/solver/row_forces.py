@@ -72,8 +72,9 @@ class RowForces:
                 self.launches.append(s.launch_device_rows)
             else:
                 raise RvtoolInputError(f"contact element '{f.name}' ({type(s).__name__}) has no device rows "
-                                       "(backend 'warp' with staged or device rows); the row stepper's device "
-                                       "sums take none other")
+                                       "(backend 'warp' with staged or device rows, e.g. tapered rows with slices "
+                                       "'laminae'); the row stepper's device sums take none other: run it with "
+                                       "sums='host' (the rows summed on the host)")
             inputs.append((pose, vel))
             buffers.append((q, dq, dv))
             loc = np.asarray(f.scatter.local)
