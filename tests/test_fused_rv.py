@@ -189,3 +189,19 @@ def test_row_stepper_device_iterations_equal_the_host_step():
     np.testing.assert_allclose(dev["theta_out"], host["theta_out"], rtol=0, atol=1e-12)
     # the drive torque (read back at convergence): the same to round-off of the ~1e3 N m balance
     np.testing.assert_allclose(dev["torque_in"][1:], host["torque_in"][1:], rtol=1e-9, atol=1e-6)
+
+
+def test_row_forces_refuse_a_family_without_device_rows_by_name():
+    """Influence-coefficient tapered rows have no device rows: the device sums refuse the family by
+    name and point at the host sums (no silent fallback)."""
+    import dataclasses
+
+    from rvtool.errors import RvtoolInputError
+    from rvtool.solver.row_forces import RowForces
+    d = rvtool.load_design("rv40e")
+    cb = d.crank_bearing
+    d2 = dataclasses.replace(d, crank_bearing=dataclasses.replace(
+        cb, rows=tuple(dataclasses.replace(r, slices="influence") for r in cb.rows)))
+    with pytest.raises(RvtoolInputError, match=r"'crank_bearings' \(TaperedBearingSet\) has no device rows.*"
+                                               r"sums='host'"):
+        RowForces(rvtool.build(d2))
