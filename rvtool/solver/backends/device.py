@@ -208,7 +208,12 @@ class DeviceBackend(Backend):
              else newton.solve(angles, np.full(A, tq)))
         idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
         qs = np.zeros((A, model.mbs.systemData.ODE2Size()))
-        qs[:, idx] = r.q
+        qs[:, idx] = r.q[:, :len(idx)]
+        if newton.extension is not None:
+            # a reduced structure's coordinates from its port unknowns (the closures' stations are
+            # condensed in the model: no coordinates of their own)
+            for p in newton.extension.ports:
+                qs[:, p.structure.coordinate_indices()] = r.q[:, p.coords] @ p.eta_of_ports.T
         theta_in = angles.copy()
         failed = np.flatnonzero(r.status != CONVERGED)
         model.set_output_torque(tq)
@@ -216,7 +221,7 @@ class DeviceBackend(Backend):
         for p in failed:
             static = static or StaticSolver(model)
             static.q = np.zeros(qs.shape[1])
-            static.q[idx] = newton.kinematic(angles[p:p + 1])[0]
+            static.q[idx] = newton.kinematic(angles[p:p + 1])[0][:len(idx)]
             try:
                 qs[p] = static.solve(float(angles[p]), float(angles[p]))
             except SolverFailure as exc:
