@@ -34,9 +34,11 @@ CUDA graph yet (the cycloid path's is): each iteration is ~15 launches from Pyth
 
 Covered: every contact-set type of :data:`rvtool.solver.replica.COPIERS` (cycloid pins, involute
 pairs external and internal, rolling-element bearings: needle, cylindrical, ball, tapered; circle
-pairs, plain output pins). Not covered (named by :func:`row_reasons`): friction with stick--slip
-anchors (history), elastic pin and crank closures (pin bodies), the ported housing's modal
-coordinates (elastic structures), shared output pins.
+pairs, plain output pins), and on extended bodies (:mod:`rvtool.solver.row_extension`: extra
+unknowns with constant stiffness blocks) the linear series closures (elastic ring and output pins,
+the RV crank beam and torsion) and reduced structures on port bodies (the ported housing). Not
+covered (named by :func:`row_reasons`): friction with stick--slip anchors (history), closures
+with a station law (conformal grooves, the ported carrier), ported wheels, shared output pins.
 """
 import dataclasses
 import time
@@ -72,7 +74,7 @@ def row_reasons(model):
     return kept + [r for r in extension_reasons(model) if r not in kept]
 
 
-def _extended(model):
+def needs_extension(model):
     """Whether ``model`` needs the row coordinates of :mod:`rvtool.solver.row_extension` (closures,
     port bodies), checked on its contact elements (cheap; the extension itself is built once)."""
     from ..contact.pin_closure import ElasticPinClosure
@@ -285,7 +287,7 @@ class DeviceRowNewton:
         if device_sum is None:
             device_sum = not str(device).startswith("cpu")
         self.device_sum = bool(device_sum)
-        if _extended(model):
+        if needs_extension(model):
             from .row_extension import copy_rows
             families, self.extension = copy_rows(self.models or model, self.B, device=device,
                                                  host_structure=not self.device_sum)
@@ -608,4 +610,4 @@ class DeviceRowNewton:
         return sweeps
 
 
-__all__ = ["DeviceRowNewton", "RowSolve", "row_reasons"]
+__all__ = ["DeviceRowNewton", "RowSolve", "needs_extension", "row_reasons"]

@@ -207,9 +207,11 @@ class _Builder:
 
     def closure(self, s, bmap, element):
         if s.support is not None:
-            self.reasons.append(f"contact element {element!r}: the closure {s.name!r} has a nonlinear station law "
-                                f"({type(s.support).__name__}, pins.groove = 'conformal'): the device row Newton "
-                                "takes linear closures (constant beam stiffness) only (valid: pins.groove = 'rigid')")
+            self.reasons.append(f"contact element {element!r}: the closure {s.name!r} has a station law "
+                                f"({type(s.support).__name__}: the nonlinear station law of pins.groove = "
+                                "'conformal', or the carrier's turned seats of carrier.body = 'ported'): the device "
+                                "row Newton takes linear closures with a constant beam stiffness only (valid: "
+                                "pins.groove = 'rigid', carrier.body = 'rigid')")
             return
         if len(bmap) != s.n_bodies:
             self.reasons.append(f"contact element {element!r}: closure over {s.n_bodies} bodies where its element "
