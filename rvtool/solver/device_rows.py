@@ -79,6 +79,8 @@ def needs_extension(model):
     port bodies), checked on its contact elements (cheap; the extension itself is built once)."""
     from ..contact.pin_closure import ElasticPinClosure
     from ..contact.stacked import StackedContactSet
+    if getattr(model, "row_extension", None) is not None:      # a snapshot of such a model
+        return True
     return any(getattr(el, "ports", None) is not None or isinstance(el.evaluator, (ElasticPinClosure,
                                                                                    StackedContactSet))
                for el in model.contact_elements())

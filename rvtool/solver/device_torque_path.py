@@ -170,11 +170,8 @@ class DeviceTorquePath(TorquePath):
             raise RvtoolInputError("the torque path has no state before its first go_to(torque)")
         if copy in self.exudyn and self.exudyn[copy].continuation is not None:
             return np.array(self.exudyn[copy].state())
-        model = real_model(self.models[copy])
-        idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
-        q = np.zeros(model.mbs.systemData.ODE2Size())
-        q[idx] = self.q[copy]
-        return q
+        from .row_extension import model_states
+        return model_states(real_model(self.models[copy]), self.q[copy], self.newton.extension)[0]
 
     def stats(self):
         return dict(self._stats, exudyn_copies=len(self.exudyn),

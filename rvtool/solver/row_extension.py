@@ -130,6 +130,21 @@ class RowExtension:
         return {p.name: q[:, p.coords] @ p.eta_of_ports.T for p in self.ports}
 
 
+def model_states(model, q, extension=None):
+    """States (P, ODE2 size) in the coordinates of the built ``model`` (a ReducerModel) of row
+    states q (P, n): the bodies' coordinates, and with an ``extension`` each reduced structure's
+    coordinates from its port unknowns (:meth:`RowExtension.structure_states`; the closures'
+    stations have no model coordinates: Exudyn condenses them)."""
+    q = np.atleast_2d(np.asarray(q, float))
+    idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
+    out = np.zeros((len(q), model.mbs.systemData.ODE2Size()))
+    out[:, idx] = q[:, :len(idx)]
+    if extension is not None:
+        for name, eta in extension.structure_states(q).items():
+            out[:, model.structures[name].coordinate_indices()] = eta
+    return out
+
+
 class _Builder:
     def __init__(self, model):
         self.model = model
@@ -278,6 +293,8 @@ class _Builder:
 
 
 def _build(model):
+    if hasattr(model, "row_extension_reasons"):            # a snapshot: the extension of the model it was taken of
+        return model.row_extension, list(model.row_extension_reasons)
     b = _Builder(model)
     for el in model.contact_elements():
         b.element(el)
@@ -292,6 +309,23 @@ def _build(model):
 def extension_reasons(model):
     """Every named reason why the row coordinates of ``model`` cannot be built (empty: they can)."""
     return _build(model)[1]
+
+
+def snapshot_extension(model, strip):
+    """(extension, reasons) of a built model for its picklable snapshot
+    (:class:`rvtool.solver.model_snapshot.ModelSnapshot`): the :class:`RowExtension` with every
+    leaf's set copied by ``strip`` (the snapshot's copy of a set without its device objects) and the
+    structures' objects dropped, or None where the model needs none or cannot have one (then
+    ``reasons`` names why)."""
+    from .device_rows import needs_extension
+    if not needs_extension(model):
+        return None, []
+    ext, reasons = _build(model)
+    if reasons:
+        return None, reasons
+    return dataclasses.replace(
+        ext, leaves=tuple(dataclasses.replace(lf, set=strip(lf.set)) for lf in ext.leaves),
+        ports=tuple(dataclasses.replace(p, structure=None) for p in ext.ports)), []
 
 
 def row_extension(model):
@@ -456,4 +490,5 @@ def copy_rows(models, copies, *, precision="float64", device="cpu", host_structu
 
 
 __all__ = ["Leaf", "MappedAssembler", "PortStructure", "RowExtension", "StructureBlock", "StructureRows",
-           "copy_rows", "extension_reasons", "gather_poses", "pose_map", "row_extension"]
+           "copy_rows", "extension_reasons", "gather_poses", "model_states", "pose_map", "row_extension",
+           "snapshot_extension"]

@@ -224,14 +224,11 @@ class DeviceBackend(Backend):
         # warm-started segments where the batch asks for it and there are more points than copies
         r = (newton.solve_sequence(angles, tq) if batch.warm_start and A > copies
              else newton.solve(angles, np.full(A, tq)))
+        from ..row_extension import model_states
         idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
-        qs = np.zeros((A, model.mbs.systemData.ODE2Size()))
-        qs[:, idx] = r.q[:, :len(idx)]
-        if newton.extension is not None:
-            # a reduced structure's coordinates from its port unknowns (the closures' stations are
-            # condensed in the model: no coordinates of their own)
-            for p in newton.extension.ports:
-                qs[:, p.structure.coordinate_indices()] = r.q[:, p.coords] @ p.eta_of_ports.T
+        # a reduced structure's coordinates from its port unknowns (row_extension; the closures' stations are
+        # condensed in the model: no coordinates of their own)
+        qs = model_states(model, r.q, newton.extension)
         theta_in = angles.copy()
         failed = np.flatnonzero(r.status != CONVERGED)
         model.set_output_torque(tq)
