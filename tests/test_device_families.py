@@ -215,3 +215,38 @@ def test_the_linear_rows_and_the_pose_gather_kernels_equal_their_references():
     stp.write_poses_gathered(wp.array(ref, dtype=wp.float64), pose,
                              wp.array(index.reshape(-1).astype(np.int64), dtype=wp.int64))
     assert np.array_equal(pose.numpy()[:3], gather_poses(ref + q, index))
+
+
+def _anchored_rv40e():
+    import dataclasses
+    d = rvtool.load_design("rv40e")
+    return d, dataclasses.replace(d, involute_stage=dataclasses.replace(d.involute_stage, mu=0.05,
+                                                                        friction_model="anchor"))
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_friction_anchors_on_the_device_torque_path_equal_exudyn(device):
+    """Stick--slip anchors (RV-40E's involute stage, mu = 0.05) on the device: a loading and
+    unloading sequence through +-T_R (the lost-motion and hysteresis protocols' kind) with the
+    contact history committed once per level (as Exudyn's continuation) equals Exudyn's levels to
+    1e-6 arcmin (measured 5e-12 on the development machine); the loop is open (loading and
+    unloading differ at 0.5 T_R by more than the bound: the history matters and is carried).
+    Equilibria (never committed, as Exudyn's static solver) likewise 1e-9."""
+    from rvtool.solver.backends import ExudynBackend
+    _skip_absent(device)
+    d, an = _anchored_rv40e()
+    T = d.rated_torque
+    levels = [0.03 * T, 0.5 * T, T, 0.5 * T, 0.03 * T, -0.03 * T, -0.5 * T, -T, -0.5 * T, -0.03 * T, 0.03 * T]
+    dev = DeviceBackend(device=device).torque_path(rvtool.build(an))
+    a_dev = np.array([dev.go_to(x) for x in levels])
+    assert dev.status() == ["device"] and dev.newton.history_families
+    path = ExudynBackend().torque_path(rvtool.build(an))
+    a_exu = np.array([path.go_to(x) for x in levels])
+    assert np.max(np.abs(a_dev - a_exu)) * ARCMIN_PER_RAD <= 1e-6
+    assert abs(a_exu[1] - a_exu[3]) * ARCMIN_PER_RAD > 1e-5          # loading != unloading at 0.5 T_R
+    m = rvtool.build(an)
+    eq = DeviceBackend(device=device).solve_equilibria(m, EquilibriumBatch(input_angles=ANGLES, torque=T))
+    m.set_output_torque(-np.sign(m.ratio) * T)
+    q_ref = np.array([StaticSolver(m).solve(a) for a in ANGLES])
+    assert eq.stats["exudyn_points"] == 0
+    _equal_states(eq.q, q_ref, m)

@@ -36,9 +36,11 @@ Covered: every contact-set type of :data:`rvtool.solver.replica.COPIERS` (cycloi
 pairs external and internal, rolling-element bearings: needle, cylindrical, ball, tapered; circle
 pairs, plain output pins), and on extended bodies (:mod:`rvtool.solver.row_extension`: extra
 unknowns with constant stiffness blocks) the linear series closures (elastic ring and output pins,
-the RV crank beam and torsion) and reduced structures on port bodies (the ported housing). Not
-covered (named by :func:`row_reasons`): friction with stick--slip anchors (history), closures
-with a station law (conformal grooves, the ported carrier), ported wheels, shared output pins.
+the RV crank beam and torsion) and reduced structures on port bodies (the ported housing), and
+stick--slip anchors of the pair families (the committed history staged into their kernels,
+committed per torque-path level by :meth:`DeviceRowNewton.commit`). Not covered (named by
+:func:`row_reasons`): anchors inside closures or on plain output pins, closures with a station
+law (conformal grooves, the ported carrier), ported wheels, shared output pins.
 """
 import dataclasses
 import time
@@ -195,6 +197,14 @@ class DeviceRowSum:
         self.timing["launches"] += len(self.families)
         return Q, K
 
+    def stage_history(self, pose, vel):
+        """Write the committed history of every staged family with stick--slip anchors into its
+        kernel's inputs (with the poses ``pose``, overwritten by the resident loop's pose writes):
+        the resident loop launches without staging."""
+        for f, staged in zip(self.families, self.staged):
+            if staged and getattr(f.set, "anchor", False):
+                f.set.stage(*f.poses(pose, vel))
+
     def evaluate(self, pose, vel):
         Q, K = self.evaluate_device(pose, vel)
         t1 = time.perf_counter()
@@ -297,6 +307,9 @@ class DeviceRowNewton:
         else:
             families = copy_families(self.models or model, self.B, device=device)
         self.families = families
+        #: the copied families with stick--slip anchors: their committed history is read by every
+        #: evaluation and changed only by :meth:`commit` (a level of a torque path, as Exudyn's continuation)
+        self.history_families = [f for f in families if getattr(f.set, "anchor", False)]
         self.evaluator = (DeviceRowSum(families, nb, self.B, device, n=n) if self.device_sum
                           else ReplicaEvaluator(families, nb, self.B))
         self.evaluator.set_static(True)              # static residual: no velocity tangent
@@ -459,6 +472,29 @@ class DeviceRowNewton:
             prev = (q_next, kin)
         return out
 
+    def commit(self, q, copies=None):
+        """Commit the contact history (stick--slip anchors) of the points ``q`` (P, n) at their
+        states (an accepted level; Exudyn commits once per level of its continuation): point p on
+        copy ``copies[p]`` (default: point p on copy p); the other copies' history stays as it is.
+        Without anchors nothing to do."""
+        if not self.history_families:
+            return
+        q = np.atleast_2d(np.asarray(q, float))
+        cp = self._copies(len(q), copies)
+        qB = np.zeros((self.B, self.n))
+        qB[cp] = q
+        a = self._poses(self.reference + qB)
+        vel = np.zeros((self.B * self.nb, 3))
+        for f in self.history_families:
+            h = f.set.history
+            keep = ~np.isin(f.scatter.row_copy, cp)
+            old = [np.array(x) for x in (h.active, h.anchor_a, h.anchor_b, h.slip_distance)]
+            pf, vf = f.poses(a, vel)
+            f.set.commit(pf, vf)
+            h = f.set.history
+            for nm, x in zip(("active", "anchor_a", "anchor_b", "slip_distance"), old):
+                getattr(h, nm)[keep] = x[keep]
+
     def step_model(self, cfg):
         """The :class:`warp_contacts.block_newton_ref.StepModel` of this model under settings ``cfg``."""
         return StepModel(spring_k=self.spring_k, free=self.free, rot=self.rot, out_index=int(self.output_local),
@@ -528,6 +564,8 @@ class DeviceRowNewton:
         stp.load(q=qB, kin=kinB, torque=tqB, status=status, stage=stage, iters=iters, total=total)
         host_sum = not isinstance(ev, DeviceRowSum)
         if not host_sum and ev.resident:
+            if self.history_families:
+                ev.stage_history(self._poses(self.reference + qB), np.zeros((B * self.nb, 3)))
             return self._resident_loop(stp, slots, q, st, timing, m)
         if host_sum and self._QK is None:
             self._QK = (wp.zeros((B, n), dtype=wp.float64, device=self.device),

@@ -107,6 +107,12 @@ class DeviceTorquePath(TorquePath):
         """Copy c leaves the device at level ``torque``: Exudyn from there on, or NaN."""
         self.failed[c] = True
         self.why[c] = why
+        if self.newton.history_families:
+            # Exudyn's continuation would start from its own model's history, not the levels the device
+            # committed: no hand-over (the copy fails, named)
+            self.why[c] += ("; no Exudyn hand-over: the model has stick--slip anchors, whose history the device "
+                            "committed (a continuation on Exudyn would start without it)")
+            return
         if self.fallback:
             self.exudyn[c] = ContinuationPath(real_model(self.models[c]), input_angle=float(self.ang[c]))
 
@@ -142,6 +148,10 @@ class DeviceTorquePath(TorquePath):
                                       f"{torque:.6g} N m (increment below min_increment = {cs.min_increment:g})")
         for c in np.flatnonzero(running):
             self._fail(c, torque, f"device torque continuation not finished in max_rounds = {cs.max_rounds} rounds")
+        done = np.flatnonzero(~self.failed)
+        if len(done) and self.newton.history_families:
+            # the level's contact history (stick--slip anchors), once per level as Exudyn's continuation
+            self.newton.commit(self.q[done], copies=self._cp(done))
         i = self.newton.output_local
         out = self.q[:, i] - self.kin[:, i]
         out[self.failed] = np.nan
@@ -160,7 +170,7 @@ class DeviceTorquePath(TorquePath):
     def status(self):
         """Per copy: "device", "exudyn" (continued on Exudyn after a device failure) or "failed"."""
         bad = self.exudyn_failed
-        return ["failed" if (c in bad or (f and not self.fallback)) else "exudyn" if f else "device"
+        return ["failed" if (c in bad or (f and c not in self.exudyn)) else "exudyn" if f else "device"
                 for c, f in enumerate(self.failed)]
 
     def state(self, copy=0):

@@ -194,7 +194,7 @@ class _Builder:
             out[i] = rows[b][0]
         return out.reshape(-1, 3)
 
-    def walk(self, s, bmap, element):
+    def walk(self, s, bmap, element, closed=False):
         from .replica import COPIERS
         from ..output_pins.evaluator import OutputPinEvaluator
         from ..output_pins.spec import PinMode
@@ -202,11 +202,15 @@ class _Builder:
             self.closure(s, bmap, element)
         elif isinstance(s, StackedContactSet):
             for part in s.parts:
-                self.walk(part, bmap, element)
+                self.walk(part, bmap, element, closed)
         elif type(s) in COPIERS:
-            if getattr(s, "anchor", False):
-                self.reasons.append(f"contact element {s.name!r} has stick--slip anchors: the device row Newton "
-                                    "takes history-free contacts (valid: frictionless or regularized friction)")
+            if getattr(s, "anchor", False) and (closed or not history_capable(s)):
+                self.reasons.append(f"contact element {s.name!r} has stick--slip anchors "
+                                    + ("inside a series closure (its history is not committed there either)"
+                                       if closed else f"on a {type(s).__name__}, whose history the device does not "
+                                       "stage and commit") + ": the device row Newton takes anchors on the pair "
+                                    "families (cycloid pins, involute pairs, circle pairs) on the model's bodies "
+                                    "(valid: frictionless or regularized friction)")
             if isinstance(s, OutputPinEvaluator) and s.mode != PinMode.PLAIN:
                 self.reasons.append(f"output_pins.mode = {s.mode.value!r}: the device row Newton copies plain "
                                     "output pins only (valid: 'plain')")
@@ -260,7 +264,7 @@ class _Builder:
                     G[i, pos[c]] -= 1.0
             Kb = np.kron(s.beam_stiffness, np.eye(nd))       # u ordered (station, dof), as the closure's
             self.blocks.append(StructureBlock(f"{s.name}:pin{p}", np.array(coords, int), G.T @ Kb @ G))
-        self.walk(s.inner, ext, element)
+        self.walk(s.inner, ext, element, True)
 
     def structures(self):
         out = []
@@ -290,6 +294,19 @@ class _Builder:
                 self.reasons.append(f"the model has the elastic structure {k!r} without a contact element on its "
                                     "ports: the device row Newton takes structures through their port bodies only")
         return tuple(out)
+
+
+def history_capable(s):
+    """Whether contact set ``s``'s stick--slip anchors run on the device row Newton: a pair family
+    whose kernel stages the committed history (``stages_history``) and whose ``commit`` takes the
+    trial history of an evaluation at the accepted state (cycloid pins, involute pairs, circle pairs)."""
+    from ..contact.cycloid_set import CycloidPinSet
+    from ..contact.evaluator import ContactHistory, ContactSetEvaluator
+    from ..contact.involute_set import InvoluteContactSet
+    # the copiers of these types carry the anchor rows (rvtool.solver.replica.COPIERS; the plain output
+    # pins' copier does not)
+    return type(s) in (CycloidPinSet, InvoluteContactSet, ContactSetEvaluator) \
+        and isinstance(getattr(s, "history", None), ContactHistory)
 
 
 def _build(model):
@@ -490,5 +507,5 @@ def copy_rows(models, copies, *, precision="float64", device="cpu", host_structu
 
 
 __all__ = ["Leaf", "MappedAssembler", "PortStructure", "RowExtension", "StructureBlock", "StructureRows",
-           "copy_rows", "extension_reasons", "gather_poses", "model_states", "pose_map", "row_extension",
+           "copy_rows", "extension_reasons", "gather_poses", "history_capable", "model_states", "pose_map", "row_extension",
            "snapshot_extension"]

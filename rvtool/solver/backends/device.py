@@ -15,9 +15,13 @@ tapered rows' planar mapping on the device; one read-back per iteration); ``stat
 says which ran. The row Newton takes the linear series closures (elastic ring and output pins,
 the RV crank beam and torsion) and reduced structures on port bodies (the ported housing) as
 extra unknowns with their constant stiffness blocks (:mod:`rvtool.solver.row_extension`); the
-structure's modal coordinates of a result are recovered from its port unknowns. Not covered
-(named reasons): friction with stick--slip anchors, closures with a station law (conformal
-grooves, the ported carrier's seats), shared output pins, ported wheels.
+structure's modal coordinates of a result are recovered from its port unknowns. Stick--slip
+anchors of the pair families (cycloid pins, involute pairs, circle pairs) run there too: the
+committed history is staged into their kernels and committed once per level of a torque path
+(:meth:`rvtool.solver.device_rows.DeviceRowNewton.commit`, as Exudyn's continuation; equilibria
+never commit, as Exudyn's static solver). Not covered (named reasons): anchors inside a closure or
+on plain output pins, closures with a station law (conformal grooves, the ported carrier's
+seats), shared output pins, ported wheels.
 Torque paths (task ``"torque_path"``): the row Newton's
 :class:`~rvtool.solver.device_torque_path.DeviceTorquePath` on one copy, for every model the row
 Newton takes (the cycloid included).
@@ -39,10 +43,12 @@ from .base import Backend, DrivenHistory, Equilibria, Support, flexible_body_rea
 COVERED = ("cycloid pins", "output pins (plain)", "involute pairs (external, internal)",
            "rolling elements (needle, cylindrical, ball)", "tapered rollers", "circle pairs (lumped bearings)",
            "elastic ring and output pins (linear closures)", "elastic crank beam and torsion (linear closures)",
-           "ported housing (port unknowns)")
+           "ported housing (port unknowns)",
+           "stick--slip anchors of cycloid pins, involute pairs, circle pairs (history committed per torque-path level)")
 """Contact families the device backend's equilibria cover (module docstring)."""
 
-NOT_COVERED = ("friction with stick--slip anchors", "closures with a station law (pins.groove = 'conformal')",
+NOT_COVERED = ("stick--slip anchors inside a series closure or on plain output pins",
+               "closures with a station law (pins.groove = 'conformal')",
                "shared output pins", "driven runs of non-cycloid topologies",
                "ported carrier (carrier.body = 'ported': the seat closure)", "ported wheels (wheels.body = 'ported')",
                "elastic closures and ported housings on the resident (cycloid copy-parameter) path and the fused "
