@@ -274,8 +274,9 @@ class _Builder:
             red = getattr(structure, "reduced", None)
             omega2 = None if red is None else np.asarray(red.omega2, float)
             if omega2 is None or np.any(~np.isfinite(omega2)) or np.any(omega2 <= 0):
-                self.reasons.append(f"structure {name!r}: the device row Newton needs a grounded reduced structure "
-                                    "(positive stiffness diag(omega^2))")
+                self.reasons.append(f"structure {name!r} ({type(structure).__name__}): the device row Newton takes "
+                                    "port bodies of a grounded reduced structure only (a ReducedStructure with "
+                                    "positive stiffness diag(omega^2); not retained tilt rows or floating bodies)")
                 continue
             C = (Pw / omega2) @ Pw.T
             C = 0.5 * (C + C.T)
