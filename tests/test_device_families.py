@@ -250,3 +250,21 @@ def test_friction_anchors_on_the_device_torque_path_equal_exudyn(device):
     q_ref = np.array([StaticSolver(m).solve(a) for a in ANGLES])
     assert eq.stats["exudyn_points"] == 0
     _equal_states(eq.q, q_ref, m)
+
+
+def test_rv80e_snapshots_carry_the_extension_through_a_pickle():
+    """The Monte Carlo's variant snapshots (rvtool.solver.model_snapshot, sent from build workers):
+    rv80e's snapshot carries its row extension (the closures' inner sets without device objects,
+    the structures by name), survives a pickle, and its device TE equals Exudyn's (1e-6 arcsec)."""
+    import pickle
+    from rvtool.batched.device_rows_variants import device_rows_variants
+    from rvtool.solver.model_snapshot import ModelSnapshot
+    d, m, _ = _built("rv80e")
+    snap = pickle.loads(pickle.dumps(ModelSnapshot(m, d)))
+    assert snap.row_extension is not None and snap.row_extension.n == row_extension(m).n
+    assert snap.structures == {"housing": None}
+    angles = np.array([0.0, 0.05, 0.1])
+    r = device_rows_variants([snap, snap], torque=d.rated_torque, input_angles=angles)
+    assert r.status == ["ok", "ok"] and r.exudyn_points == 0
+    te = quasi_static_te(m, torque=d.rated_torque, input_angles=angles, backend="exudyn")["te"]
+    assert np.max(np.abs(r.te - te[None])) * ARCSEC_PER_RAD <= TE_TOL
