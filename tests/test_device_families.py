@@ -268,3 +268,17 @@ def test_rv80e_snapshots_carry_the_extension_through_a_pickle():
     assert r.status == ["ok", "ok"] and r.exudyn_points == 0
     te = quasi_static_te(m, torque=d.rated_torque, input_angles=angles, backend="exudyn")["te"]
     assert np.max(np.abs(r.te - te[None])) * ARCSEC_PER_RAD <= TE_TOL
+
+
+def test_hysteresis_with_friction_anchors_on_the_device_equals_exudyn():
+    """The catalogue hysteresis protocol (rvtool analyze's, --quick) with the anchored involute stage on
+    --backend device against --backend exudyn: the catalogue figures (rigidity, lost motion,
+    hysteresis loss) within 1e-9 relative, as tests/test_device_rows.py's frictionless loop (measured:
+    hysteresis loss 5e-12 relative on the development machine)."""
+    _, an = _anchored_rv40e()
+    a = rvtool.analyze(an, "hysteresis", quick=True, out_dir=None, backend="device")["hysteresis"]
+    b = rvtool.analyze(an, "hysteresis", quick=True, out_dir=None, backend="exudyn")["hysteresis"]
+    assert a.settings["backend"]["ran"] == "device" and b.settings["backend"]["ran"] == "exudyn"
+    fa, fb = ({f.name: f.value for f in r.figures} for r in (a, b))
+    for name in ("torsional_rigidity_b_over_a", "lost_motion_catalogue", "hysteresis_loss"):
+        assert fa[name] == pytest.approx(fb[name], rel=1e-9)
