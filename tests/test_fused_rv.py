@@ -312,3 +312,24 @@ def test_row_stepper_step_control_with_rejections_equals_the_reference():
     te = [transmission_error(r["theta_in"], r["theta_out"], ratio) for r in (ref, dev)]
     assert dev["t"][-1] == ref["t"][-1] and dev["rejected"] > 10
     assert abs(te[1][-1] - te[0][-1]) * ARCSEC_PER_RAD <= 1e-6
+
+
+def test_analyze_vibration_on_the_fused_backend_equals_exudyn():
+    """rvtool analyze rv40e --protocols vibration --quick (the driven run at rated speed and torque,
+    the dynamic TE as its torsion response) with --backend fused runs the row stepper (path named
+    in the backend record) and gives Exudyn's figures: the torsion p-p to issue 31's 1e-6 arcsec
+    (measured 1e-10: the starts differ, Exudyn's torque continuation against the StaticSolver, by
+    their Newton tolerances only); replica runs no driven run and skips with the reason."""
+    import numpy as np
+    res = {b: rvtool.analyze("rv40e", "vibration", quick=True, out_dir=None, backend=b)["vibration"]
+           for b in ("fused", "exudyn")}
+    fu, ex = res["fused"], res["exudyn"]
+    assert fu.status == ex.status == "ok"
+    assert fu.settings["backend"]["ran"] == "fused" and fu.settings["backend"]["path"] == "row_stepper"
+    assert ex.settings["backend"]["ran"] == "exudyn"
+    assert abs(fu.figure("torsion_pp").value - ex.figure("torsion_pp").value) <= 1e-6
+    assert fu.figure("torsion_pp").value > 0.1                      # resolved: ~0.4 arcsec over the quick run
+    np.testing.assert_allclose(fu.figure("mesh_order_amplitude").value, ex.figure("mesh_order_amplitude").value,
+                               rtol=1e-6)
+    rep = rvtool.analyze("rv40e", "vibration", quick=True, out_dir=None, backend="replica")["vibration"]
+    assert rep.status == "skipped" and "does not run dynamic" in rep.reason

@@ -442,12 +442,13 @@ class FusedBackend(Backend):
         from ..device_dynamics import fused_support
         from ..row_dynamics import row_stepper_reasons
         spec = run.run_spec if run is not None else None
-        reasons = spatial_body_reasons(model)
-        if not reasons:
-            try:
-                reasons = list(fused_support(model, spec).reasons)
-            except RvtoolInputError as exc:
-                reasons = [str(exc)]
+        spatial = spatial_body_reasons(model)
+        if spatial:                               # neither path: planar copies only
+            return None, spatial
+        try:
+            reasons = list(fused_support(model, spec).reasons)
+        except RvtoolInputError as exc:
+            reasons = [str(exc)]
         if not reasons:
             return "fused_stepper", []
         rows = row_stepper_reasons(model, spec)
