@@ -314,6 +314,26 @@ def test_row_stepper_step_control_with_rejections_equals_the_reference():
     assert abs(te[1][-1] - te[0][-1]) * ARCSEC_PER_RAD <= 1e-6
 
 
+@pytest.mark.skipif(not __import__("warp").get_cuda_device_count(), reason="no CUDA device")
+def test_fused_backend_on_cuda_through_the_protocol_equals_exudyn():
+    """solver='fused', device='cuda:0' on rv40e (the row stepper's families, sums and Newton
+    iterations on the GPU) against Exudyn: the same accepted steps, TE equal to 1e-6 arcsec (the
+    GPU's fused multiply-adds differ from the CPU's in the last bits only)."""
+    import numpy as np
+
+    from rvtool.protocols.precision import dynamic_te
+    from rvtool.solver import RunSpec
+    from rvtool.units import ARCSEC_PER_RAD
+    d = rvtool.load_design("rv40e")
+    spec = RunSpec(end_time=12 * 2e-5, step=2e-5, abs_tol=1e-6, rel_tol=1e-8)
+    kw = dict(torque=d.rated_torque, speed_rpm=d.input_speed_rpm, duration=spec.end_time, run_spec=spec)
+    ex = dynamic_te(rvtool.build(d), solver="exudyn", **kw)
+    fu = dynamic_te(rvtool.build(d), solver="fused", device="cuda:0", **kw)
+    assert fu["stats"]["path"] == "row_stepper" and fu["stats"]["device"].startswith("cuda")
+    np.testing.assert_array_equal(fu["t"], ex["t"])
+    assert np.max(np.abs(fu["te"] - ex["te"])) * ARCSEC_PER_RAD <= 1e-6
+
+
 def test_analyze_vibration_on_the_fused_backend_equals_exudyn():
     """rvtool analyze rv40e --protocols vibration --quick (the driven run at rated speed and torque,
     the dynamic TE as its torsion response) with --backend fused runs the row stepper (path named
