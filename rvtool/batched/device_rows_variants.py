@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import RvtoolInputError, SolverFailure
 from ..protocols.precision import transmission_error
 from ..solver.device_rows import DeviceRowNewton
-from ..solver.model_snapshot import ModelSnapshot, real_model
+from ..solver.model_snapshot import build_snapshot, real_model
 from ..solver.static import StaticSolver
 from .device_rows_lost_motion import device_row_lost_motion
 
@@ -130,10 +130,10 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
 
 
 def _snapshot_of(job):
-    """Pool task: the :class:`ModelSnapshot` of ``build(design, **build_kw)`` (picklable)."""
-    from ..assembly import build
+    """Pool task: the :class:`ModelSnapshot` of ``build(design, **build_kw)`` (picklable; built
+    without device objects, :func:`~rvtool.solver.model_snapshot.build_snapshot`)."""
     design, build_kw = job
-    return ModelSnapshot(build(design, **build_kw), design, build_kw)
+    return build_snapshot(design, build_kw)
 
 
 def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=None):

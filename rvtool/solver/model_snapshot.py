@@ -95,9 +95,35 @@ class ModelSnapshot:
         return self._model
 
 
+def build_snapshot(design, build_kw=None):
+    """The :class:`ModelSnapshot` of ``build(design, **build_kw)``, built without device objects.
+
+    A snapshot drops every device object of its sets (:data:`DEVICE_ATTRIBUTES`), so a worker that
+    builds one for the device need not make them: the sets are built with the NumPy backend (the
+    same rows, tables and members: the backend only decides whether a set makes its Warp kernel in
+    ``_finish``) and then carry the backend of ``build_kw`` (default "warp"), which the copiers
+    (:func:`rvtool.solver.replica.copy_families`) use for the device copies. On RD-40 the Warp
+    kernels and arrays are ~2/3 of a variant's build. The snapshot equals the snapshot of the full
+    build attribute for attribute (tests/test_model_snapshot.py); ``build_kw`` is kept as given, so
+    a model built for an Exudyn fallback (:meth:`ModelSnapshot.model`) is the full one. A build
+    whose precision is not float64 (the NumPy backend's only one) is built in full."""
+    from ..assembly import build
+    kw = dict(build_kw or {})
+    backend = kw.get("backend", "warp")
+    if kw.get("precision", "float64") != "float64" or backend == "numpy":
+        return ModelSnapshot(build(design, **kw), design, kw)
+    snap = ModelSnapshot(build(design, **dict(kw, backend="numpy")), design, kw)
+    for el in snap.contact_elements():
+        s = el.evaluator
+        if getattr(s, "backend", None) == "numpy":
+            s.backend = backend
+            s.__dict__.setdefault("_kernel", None)      # as a set built with a kernel, dropped (DEVICE_ATTRIBUTES)
+    return snap
+
+
 def real_model(model):
     """``model`` itself, or the model a :class:`ModelSnapshot` stands for (built on first use)."""
     return model.model() if isinstance(model, ModelSnapshot) else model
 
 
-__all__ = ["ModelSnapshot", "SnapshotElement", "real_model"]
+__all__ = ["ModelSnapshot", "SnapshotElement", "build_snapshot", "real_model"]
