@@ -108,6 +108,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
         lm_s = time.perf_counter() - t_lm
         for key in ("kernels_s", "scatter_s", "step_s"):
             split[key] += r["stats"][key]
+        split["fallback_s"] += r["stats"]["exudyn_s"]      # the copies continued on Exudyn, their builds included
         lm = r["lost_motion_rad"]
         exudyn_copies = r["stats"]["exudyn_copies"]
         for c, st in enumerate(r["status"]):

@@ -1,0 +1,72 @@
+"""The lost motion's levels on the device row Newton reached directly (a loaded start at each level)
+or by the load continuation through the free play (rvtool.batched.device_rows_lost_motion): the
+same figures, and the direct levels against the Exudyn oracle on the RD-40 Monte Carlo variants
+whose continuation stalled in the free play."""
+import numpy as np
+import pytest
+
+from rvtool import build, designs, load_design
+from rvtool.batched.device_rows_lost_motion import device_row_lost_motion
+from rvtool.errors import RvtoolInputError
+from rvtool.solver.device_rows import DeviceRowNewton
+from rvtool.solver.model_snapshot import build_snapshot
+from rvtool.units import ARCMIN_PER_RAD
+
+RD_KW = {"bearing_model": "lumped", "regularization": (1.0e4, 100.0)}   # cases/cycloid/monte_carlo_te.py's build
+RD_SEED = 2026                                                          # cases/cycloid/monte_carlo_te.py
+# RD-40 variants whose device continuation +f -> -f stalled in the free play (measured on cpu,
+# variants 0-499): 477 ran 102 rounds of halved increments, 285 stalled and went on on Exudyn,
+# 432 stalled on the device and on Exudyn's continuation (the oracle's own load steps of 1 % T_R
+# solve it)
+STALLED = (285, 432, 477)
+LM_TOL_ARCMIN = 1e-6            # cases/benchmarks/bench_device_mc.py's lost-motion bound
+
+
+def _cuda_absent(device):
+    import warp as wp
+    return device.startswith("cuda") and wp.get_cuda_device_count() == 0
+
+
+@pytest.fixture(scope="module")
+def rd40():
+    from rvtool.variants.tolerances import load_tolerances, sample_variant
+    d = load_design(designs.path("rd40"))
+    tol = load_tolerances(designs.path("rd40_tolerances"))
+    return d, lambda k: sample_variant(tol, d, k, RD_SEED).apply(d)
+
+
+@pytest.mark.parametrize("device", [pytest.param(d, id=d) for d in ("cpu", "cuda:0")])
+def test_direct_levels_give_the_oracles_lost_motion_where_the_continuation_stalled(rd40, device):
+    """Every stalled variant on the device (no Exudyn hand-over), each lost motion equal to the
+    Exudyn reference run's (rvtool.variants.variant_lost_motion: load steps of 1 % T_R, spring
+    control where they fail) within the benchmark's 1e-6 arcmin."""
+    from rvtool.variants import VariantProtocol, variant_lost_motion
+    if _cuda_absent(device):
+        pytest.skip("no CUDA device")
+    d, variant = rd40
+    ds = [variant(k) for k in STALLED]
+    f = 0.03 * d.rated_torque
+    r = device_row_lost_motion(DeviceRowNewton([build_snapshot(x, RD_KW) for x in ds], device=device), f)
+    assert r["path"] == ["device"] * len(ds) and r["stats"]["exudyn_copies"] == 0
+    assert r["stats"]["levels_path"] == "direct"
+    for c, x in enumerate(ds):
+        ref = variant_lost_motion(build(x, **RD_KW), x, VariantProtocol())["lost_motion_arcmin"]
+        assert abs(r["lost_motion_rad"][c] * ARCMIN_PER_RAD - ref) <= LM_TOL_ARCMIN
+
+
+def test_direct_and_continued_levels_give_one_lost_motion(rd40):
+    """Two RD-40 variants both ways: the same equilibria at +-f (the contacts keep no history), so
+    the same lost motion to 1e-9 arcmin (two Newton iterates of one equilibrium, each converged
+    to abs_tol = 1e-6 N; measured 1.7e-12 arcmin over 250 variants); the continuation's +f level
+    is the direct one's (the same loaded start)."""
+    d, variant = rd40
+    models = [build_snapshot(variant(k), RD_KW) for k in (1, 2)]
+    f = 0.03 * d.rated_torque
+    direct = device_row_lost_motion(DeviceRowNewton(models), f)
+    cont = device_row_lost_motion(DeviceRowNewton(models), f, levels="continuation")
+    assert direct["path"] == cont["path"] == ["device", "device"]
+    np.testing.assert_array_equal(direct["theta_plus"], cont["theta_plus"])
+    assert np.max(np.abs(direct["lost_motion_rad"] - cont["lost_motion_rad"])) * ARCMIN_PER_RAD <= 1e-9
+    assert cont["stats"]["levels_path"] == "continuation" and cont["stats"]["rounds"] >= 1
+    with pytest.raises(RvtoolInputError, match=r"levels = 'both'"):
+        device_row_lost_motion(DeviceRowNewton(models), f, levels="both")
