@@ -100,7 +100,8 @@ def variant_figures(design, variant: Variant, protocol: VariantProtocol = Varian
             "wall_s": time.perf_counter() - t0}
 
 
-def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtocol()):
+def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtocol(), *, abs_tol=1e-6,
+                        rel_tol=1e-9):
     """Lost motion of a built variant at input angle 0: theta_out(+f) - theta_out(-f) [arcmin],
     f = ``protocol.lost_motion_fraction`` x T_rated.
 
@@ -111,7 +112,8 @@ def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtoc
     free play and starts at a larger torque if needed. Both give the same figure where both
     succeed (to 4e-7 arcmin on those 100 variants). Returns ``lost_motion_arcmin``, ``method``
     ("load" or "spring") and ``newton_iterations``; raises :class:`SolverFailure` naming both
-    errors if both fail."""
+    errors if both fail. abs_tol [N], rel_tol [-]: the load continuation's Newton tolerances
+    (default the static solver's; the spring control keeps its own)."""
     from ..errors import SolverFailure
     from ..protocols.lost_motion import lost_motion
     from ..solver.continuation import Continuation
@@ -119,7 +121,8 @@ def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtoc
     torques = protocol.lost_motion_torques(design)
     i_out = model.output_index
     try:
-        cont = Continuation(model, input_angle=0.0, initial_torque=float(torques[0]))
+        cont = Continuation(model, input_angle=0.0, initial_torque=float(torques[0]), abs_tol=abs_tol,
+                            rel_tol=rel_tol)
         angles = [cont.q[i_out]] + [cont.go_to(float(t))[i_out] for t in torques[1:]]
         return {"lost_motion_arcmin": float((angles[0] - angles[-1]) * ARCMIN_PER_RAD), "method": "load",
                 "newton_iterations": int(cont.static.stats.newton_iterations)}
