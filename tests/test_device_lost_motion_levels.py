@@ -93,3 +93,21 @@ def test_at_equal_tight_tolerance_device_and_oracle_agree_where_the_oracles_defa
     assert abs(oracle[1e-6] - oracle[1e-9]) > 1e-8           # the default stops early (measured 1.05e-7)
     assert abs(dev[1e-6] - dev[1e-9]) < 1e-11
     assert abs(oracle[1e-9] - dev[1e-9]) < 1e-11
+
+
+def test_a_solve_of_few_copies_on_their_own_row_newton_gives_the_same_figures(rd40):
+    """RD-40 variants of which some start at 2.5 f and continue down to f on their own: with every
+    solve of fewer than all copies on a row Newton of those copies (compact_below = 1) the lost
+    motion is bit for bit the one without (cpu, host sums: each copy's rows and step are its own),
+    and compaction happened."""
+    d, variant = rd40
+    models = [build_snapshot(variant(k), RD_KW) for k in (285, 432, 477, 34, 82)]
+    f = 0.03 * d.rated_torque
+    whole = device_row_lost_motion(DeviceRowNewton(models), f, compact_below=0.0)
+    parts = device_row_lost_motion(DeviceRowNewton(models), f, compact_below=1.0)
+    assert whole["stats"]["start_scales"]["2.5"] >= 1            # some copies continued from a larger start
+    assert whole["stats"]["compactions"] == 0 and parts["stats"]["compactions"] >= 1
+    np.testing.assert_array_equal(whole["lost_motion_rad"], parts["lost_motion_rad"])
+    assert whole["path"] == parts["path"]
+    with pytest.raises(RvtoolInputError, match=r"compact_below = 2"):
+        device_row_lost_motion(DeviceRowNewton(models), f, compact_below=2)

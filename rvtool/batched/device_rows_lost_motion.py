@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 from ..errors import RvtoolInputError
-from ..solver.device_torque_path import ROW_LOST_MOTION_NEWTON, DeviceTorquePath
+from ..solver.device_torque_path import COMPACT_BELOW, ROW_LOST_MOTION_NEWTON, DeviceTorquePath
 from ..solver.torque_path import ContinuationSettings
 
 LEVEL_PATHS = ("direct", "continuation")
@@ -36,21 +36,23 @@ LEVEL_PATHS = ("direct", "continuation")
 
 
 def device_row_lost_motion(newton, torque_level, *, input_angle=0.0, settings=ROW_LOST_MOTION_NEWTON,
-                           continuation=ContinuationSettings(), fallback=True, levels="direct"):
+                           continuation=ContinuationSettings(), fallback=True, levels="direct",
+                           compact_below=COMPACT_BELOW):
     """Lost motion of every copy of ``newton`` at ``input_angle`` [rad] between +-``torque_level``
     [N m] (module docstring; ``levels``: one of :data:`LEVEL_PATHS`). Returns {"lost_motion_rad"
     (P,), "theta_plus", "theta_minus" [rad] (output angle from the kinematic position), "path"
     ("device" / "exudyn" / None: failed), "status" ("ok" / "failed"), "error", "stats"} with P =
     the number of copies (variants) or 1 (one model); the stats of the two levels' paths summed
     (``exudyn_copies``: copies that continued on Exudyn at either level; ``exudyn_s``: their
-    Exudyn time, their models' builds included)."""
+    Exudyn time, their models' builds included). compact_below: see :class:`DeviceTorquePath`."""
     if not (np.isfinite(torque_level) and torque_level > 0):
         raise RvtoolInputError(f"torque_level = {torque_level!r} N m is outside the valid range (0, inf)")
     if levels not in LEVEL_PATHS:
         raise RvtoolInputError(f"levels = {levels!r}; valid choices are {list(LEVEL_PATHS)}")
     t0 = time.perf_counter()
     f = float(torque_level)
-    kw = dict(input_angle=input_angle, settings=settings, continuation=continuation, fallback=fallback)
+    kw = dict(input_angle=input_angle, settings=settings, continuation=continuation, fallback=fallback,
+              compact_below=compact_below)
     plus = DeviceTorquePath(newton, **kw)
     th_p = np.atleast_1d(plus.go_to(f)).astype(float)
     minus = plus if levels == "continuation" else DeviceTorquePath(newton, initial_torque=-f, **kw)

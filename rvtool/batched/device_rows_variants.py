@@ -109,6 +109,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
         for key in ("kernels_s", "scatter_s", "step_s"):
             split[key] += r["stats"][key]
         split["fallback_s"] += r["stats"]["exudyn_s"]      # the copies continued on Exudyn, their builds included
+        split["setup_s"] += r["stats"]["compact_setup_s"]  # copying the few copies a compacted solve runs
         lm = r["lost_motion_rad"]
         exudyn_copies = r["stats"]["exudyn_copies"]
         for c, st in enumerate(r["status"]):
