@@ -109,6 +109,14 @@ class DeviceTorquePath(TorquePath):
         st["step_s"] += r.solve_s
         return r
 
+    def _start_stages(self):
+        """The homotopy switch of a loaded start's solves at one scale: (True,) one solve, warm start
+        then homotopy; with compaction (False, True): the warm start of every copy, then warm start
+        and homotopy of the copies it failed, compacted where few (the same iterations as one
+        solve, from the same kinematic state: the same equilibria; the homotopy's tail no longer
+        runs over the whole batch)."""
+        return (False, True) if (self.newton.models is not None and self.compact_below > 0.0) else (True,)
+
     def _start(self, torque):
         P = self.P
         self.q = self.kin.copy()
@@ -117,11 +125,15 @@ class DeviceTorquePath(TorquePath):
             todo = np.flatnonzero(np.isnan(scale))
             if not len(todo):
                 break
-            r = self._solve(todo, np.full(len(todo), sc * torque), None, True)
-            got = r.converged
-            self.q[todo[got]] = r.q[got]
-            scale[todo[got]] = sc
-            self._stats["start_scales"][f"{sc:g}"] += int(got.sum())
+            for homotopy in self._start_stages():
+                r = self._solve(todo, np.full(len(todo), sc * torque), None, homotopy)
+                got = r.converged
+                self.q[todo[got]] = r.q[got]
+                scale[todo[got]] = sc
+                self._stats["start_scales"][f"{sc:g}"] += int(got.sum())
+                todo = todo[~got]
+                if not len(todo):
+                    break
         self.t_now = np.where(np.isnan(scale), np.nan, scale * torque)
         for c in np.flatnonzero(np.isnan(scale)):
             self._fail(c, torque, f"no loaded start on the device at {', '.join(f'{s:g}' for s in START_SCALES)} "
