@@ -27,7 +27,9 @@ Paths, on the same variants:
   (rvtool.batched.device_rows_variants.prepare_variant_models: rows, kinematics, constraints),
   that pool warmed as the reference pool (one nominal build per worker, ``build_pool_warm_s``,
   not timed); building is timed apart and reported both ways (``variants_per_s/device`` without,
-  ``variants_per_s/device_with_build`` with).
+  ``variants_per_s/device_with_build`` with); after the timings, one variant build's CPU time in
+  this process (``build_cpu_ms_per_variant``) and a snapshot's pickled size (``snapshot_kb``) tell
+  the builds' own work from the pool's transfer and scheduling in ``build_s``.
 
 Reported per design: variants/s of both paths, the speed-ups, where the device's time goes
 (``split``: copying the families, kernel launches with their staging, the per-copy row sums,
@@ -218,11 +220,28 @@ def run_device(name, quick, V, device, workers):
                          device=device)
     r = device_rows_variants(models, torque=torque, input_angles=angles,
                              lost_motion_level=LM_FRACTION * design.rated_torque, device=device)
-    return r, build_s, warm_s, models, design.rated_torque
+    return r, dict(build_s=build_s, build_pool_warm_s=warm_s, **build_cost(designs_v, kw, models)), models, \
+        design.rated_torque
+
+
+def build_cost(designs_v, kw, models, n=8):
+    """What one variant's build costs, after the timings: the CPU time of building ``n`` of them
+    in this process (``build_cpu_ms_per_variant``: the builds' own work; ``build_s`` above it is the
+    pool's transfer and scheduling) and the pickled size of a snapshot the pool sends back
+    (``snapshot_kb``)."""
+    import pickle
+    from rvtool.solver.model_snapshot import build_snapshot
+    n = min(n, len(designs_v))
+    t = time.process_time()
+    for d in designs_v[:n]:
+        build_snapshot(d, kw)
+    cpu = (time.process_time() - t) / n
+    return {"build_cpu_ms_per_variant": 1e3 * cpu, "snapshot_kb": len(pickle.dumps(models[0])) / 1024.0}
 
 
 def bench(name, quick, V, workers, device):
-    r, build_s, build_warm_s, models, rated = run_device(name, quick, V, device, workers)
+    r, cost, models, rated = run_device(name, quick, V, device, workers)
+    build_s = cost["build_s"]
     pool, warm_s, pool_s = run_pool(name, quick, V, workers)
     te_dev_pp = np.ptp(r.te, axis=1) * ARCSEC_PER_RAD
     te_pool_pp = np.array([p[2] for p in pool])
@@ -251,7 +270,7 @@ def bench(name, quick, V, workers, device):
     rate_dev_b = V / (r.wall_s + build_s)
     return {
         "variants": V, "te_points": int(r.te.shape[1]), "workers": workers,
-        "device": {"wall_s": r.wall_s, "build_s": build_s, "build_pool_warm_s": build_warm_s, "split": r.split, "te_s": r.te_s,
+        "device": {"wall_s": r.wall_s, **cost, "split": r.split, "te_s": r.te_s,
                    "lost_motion_s": r.lost_motion_s, "exudyn_points": r.exudyn_points,
                    "exudyn_copies": r.exudyn_copies, "failed_variants": failed_dev, "stats": r.stats},
         "pool": {"wall_s": pool_s, "warm_s": warm_s, "failed_variants": failed_pool,
