@@ -15,13 +15,15 @@ form is the device backend's ``"torque_path"`` task, :meth:`rvtool.solver.backen
 * ``"continuation"``: +f by a loaded start, then the load continuation +f -> -f through the
   free play (increments halved on every rejection).
 
-The contacts are history-free, so the equilibrium at a level does not depend on the path to it
-where it is unique; both give the same lost motion: on RD-40's first 250 Monte Carlo variants to
+Without stick--slip anchors the contacts are history-free, so the equilibrium at a level does
+not depend on the path to it where it is unique; both give the same lost motion: on RD-40's first 250 Monte Carlo variants to
 1.7e-12 arcmin (measured with this module on cpu), where the continuation needed 90 rounds of
 the whole batch (each up to ``max_iterations`` sweeps: the copies in the free play stall and halve
 their increments) and the direct levels one start each (tests/test_device_rows.py checks the
 equality on RV-40E and RD-40 variants). A copy whose loaded start fails at a level continues on
-Exudyn (``fallback``) and is counted in ``exudyn_copies``.
+Exudyn (``fallback``) and is counted in ``exudyn_copies``. A model with stick--slip anchors (its
+contact history committed per level, :meth:`DeviceRowNewton.commit`) always takes the
+continuation (``stats["levels_path"]`` says which ran).
 """
 import time
 
@@ -49,6 +51,8 @@ def device_row_lost_motion(newton, torque_level, *, input_angle=0.0, settings=RO
         raise RvtoolInputError(f"torque_level = {torque_level!r} N m is outside the valid range (0, inf)")
     if levels not in LEVEL_PATHS:
         raise RvtoolInputError(f"levels = {levels!r}; valid choices are {list(LEVEL_PATHS)}")
+    if levels == "direct" and newton.history_families:
+        levels = "continuation"     # stick--slip anchors: the level's equilibrium depends on the path (its history)
     t0 = time.perf_counter()
     f = float(torque_level)
     kw = dict(input_angle=input_angle, settings=settings, continuation=continuation, fallback=fallback,

@@ -58,7 +58,7 @@ class DeviceTorquePath(TorquePath):
     the torque of the loaded start (None: the first torque asked for; the path then continues
     from there to that torque, as :class:`~rvtool.solver.torque_path.ContinuationPath`).
     compact_below: share of the copies at or below which a solve runs on a row Newton of its
-    copies only (:data:`COMPACT_BELOW`; 0: never); counted in ``stats()["compactions"]``, their
+    copies only (:data:`COMPACT_BELOW`; 0: never; not with stick--slip anchors); counted in ``stats()["compactions"]``, their
     setup in ``compact_setup_s``."""
 
     def __init__(self, newton, *, input_angle=0.0, settings=ROW_LOST_MOTION_NEWTON,
@@ -92,7 +92,7 @@ class DeviceTorquePath(TorquePath):
 
     def _solve(self, idx, torque, q_start, homotopy):
         newton, cp = self.newton, self._cp(idx)
-        if self.newton.models is not None and len(idx) < self.P and len(idx) <= self.compact_below * self.P:
+        if self._compacts() and len(idx) < self.P and len(idx) <= self.compact_below * self.P:
             key = tuple(int(c) for c in idx)
             if self._sub is None or self._sub[0] != key:
                 t0 = time.perf_counter()
@@ -115,7 +115,13 @@ class DeviceTorquePath(TorquePath):
         and homotopy of the copies it failed, compacted where few (the same iterations as one
         solve, from the same kinematic state: the same equilibria; the homotopy's tail no longer
         runs over the whole batch)."""
-        return (False, True) if (self.newton.models is not None and self.compact_below > 0.0) else (True,)
+        return (False, True) if self._compacts() else (True,)
+
+    def _compacts(self):
+        """Whether solves of few copies run on a row Newton of their own: variant copies, compaction
+        on, and no contact history (stick--slip anchors: their committed history lives in this
+        path's row Newton, not in one made from the models)."""
+        return self.newton.models is not None and self.compact_below > 0.0 and not self.newton.history_families
 
     def _start(self, torque):
         P = self.P
@@ -143,6 +149,12 @@ class DeviceTorquePath(TorquePath):
         """Copy c leaves the device at level ``torque``: Exudyn from there on, or NaN."""
         self.failed[c] = True
         self.why[c] = why
+        if self.newton.history_families:
+            # Exudyn's continuation would start from its own model's history, not the levels the device
+            # committed: no hand-over (the copy fails, named)
+            self.why[c] += ("; no Exudyn hand-over: the model has stick--slip anchors, whose history the device "
+                            "committed (a continuation on Exudyn would start without it)")
+            return
         if self.fallback:
             t0 = time.perf_counter()            # the model's build is part of the fallback's time
             self.exudyn[c] = ContinuationPath(real_model(self.models[c]), input_angle=float(self.ang[c]))
@@ -180,6 +192,10 @@ class DeviceTorquePath(TorquePath):
                                       f"{torque:.6g} N m (increment below min_increment = {cs.min_increment:g})")
         for c in np.flatnonzero(running):
             self._fail(c, torque, f"device torque continuation not finished in max_rounds = {cs.max_rounds} rounds")
+        done = np.flatnonzero(~self.failed)
+        if len(done) and self.newton.history_families:
+            # the level's contact history (stick--slip anchors), once per level as Exudyn's continuation
+            self.newton.commit(self.q[done], copies=self._cp(done))
         i = self.newton.output_local
         out = self.q[:, i] - self.kin[:, i]
         out[self.failed] = np.nan
@@ -198,7 +214,7 @@ class DeviceTorquePath(TorquePath):
     def status(self):
         """Per copy: "device", "exudyn" (continued on Exudyn after a device failure) or "failed"."""
         bad = self.exudyn_failed
-        return ["failed" if (c in bad or (f and not self.fallback)) else "exudyn" if f else "device"
+        return ["failed" if (c in bad or (f and c not in self.exudyn)) else "exudyn" if f else "device"
                 for c, f in enumerate(self.failed)]
 
     def state(self, copy=0):
@@ -208,11 +224,8 @@ class DeviceTorquePath(TorquePath):
             raise RvtoolInputError("the torque path has no state before its first go_to(torque)")
         if copy in self.exudyn and self.exudyn[copy].continuation is not None:
             return np.array(self.exudyn[copy].state())
-        model = real_model(self.models[copy])
-        idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
-        q = np.zeros(model.mbs.systemData.ODE2Size())
-        q[idx] = self.q[copy]
-        return q
+        from .row_extension import model_states
+        return model_states(real_model(self.models[copy]), self.q[copy], self.newton.extension)[0]
 
     def stats(self):
         return dict(self._stats, exudyn_copies=len(self.exudyn),

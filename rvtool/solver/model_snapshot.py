@@ -31,8 +31,14 @@ class SnapshotElement:
     ids: tuple
 
 
-def _set_without_device(s):
-    """A copy of contact set ``s`` without its device objects (its rows, members and tables as built)."""
+def _set_without_device(s, memo=None, backend=None):
+    """A copy of contact set ``s`` without its device objects (its rows, members and tables as built);
+    a series closure's inner set and a stacked set's parts likewise (``memo``: id -> copy, so a set
+    reached twice is copied once). backend: the backend a set built with the NumPy backend carries
+    in the copy (:func:`build_snapshot`; None: as built)."""
+    memo = {} if memo is None else memo
+    if id(s) in memo:
+        return memo[id(s)]
     if getattr(s, "_slices", None) is not None:
         raise RvtoolInputError(f"contact set {s.name!r} has influence-coefficient rows; a snapshot copies laminae "
                                "rows only (valid: slices = 'laminae')")
@@ -41,6 +47,16 @@ def _set_without_device(s):
     for k in DEVICE_ATTRIBUTES:
         if k in vars(s):
             out.__dict__[k] = None
+    if backend is not None and out.__dict__.get("backend") == "numpy":
+        out.__dict__["backend"] = backend
+        out.__dict__.setdefault("_kernel", None)      # as a set built with a kernel, dropped (DEVICE_ATTRIBUTES)
+    memo[id(s)] = out
+    from ..contact.pin_closure import ElasticPinClosure
+    from ..contact.stacked import StackedContactSet
+    if isinstance(s, ElasticPinClosure):
+        out.__dict__["inner"] = _set_without_device(s.inner, memo, backend)
+    elif isinstance(s, StackedContactSet):
+        out.__dict__["parts"] = tuple(_set_without_device(p, memo, backend) for p in s.parts)
     return out
 
 
@@ -51,7 +67,8 @@ class ModelSnapshot:
     ``held_coordinates`` [(body, coordinate)], ``input``, ``output``, ``ratio``, ``structures``
     and the contact elements' sets (:meth:`contact_elements`)."""
 
-    def __init__(self, model, design, build_kw=None):
+    def __init__(self, model, design, build_kw=None, *, backend=None):
+        """backend: the backend the copied sets built with the NumPy backend carry (:func:`build_snapshot`)."""
         from .replica import held_coordinates
         self.design, self.build_kw = design, dict(build_kw or {})
         self.body_names = tuple(model.body_names)
@@ -61,9 +78,15 @@ class ModelSnapshot:
         self.reg_springs = list(model.reg_springs)
         self.held_coordinates = list(held_coordinates(model))
         self.input, self.output, self.ratio = model.input, model.output, float(model.ratio)
-        self.structures = dict(model.structures)
-        self._elements = tuple(SnapshotElement(_set_without_device(e.evaluator), tuple(e.ids))
+        # the structures by name (their objects hold the Exudyn system); the row Newton's extra unknowns
+        # of closures and port bodies (rvtool.solver.row_extension), their sets copied as the elements'
+        from .row_extension import snapshot_extension
+        self.structures = {k: None for k in model.structures}
+        memo = {}
+        self._elements = tuple(SnapshotElement(_set_without_device(e.evaluator, memo, backend), tuple(e.ids))
                                for e in model.contact_elements())
+        self.row_extension, self.row_extension_reasons = snapshot_extension(
+            model, lambda st: _set_without_device(st, memo, backend))
         self._model = None
 
     def __getstate__(self):
@@ -112,13 +135,7 @@ def build_snapshot(design, build_kw=None):
     backend = kw.get("backend", "warp")
     if kw.get("precision", "float64") != "float64" or backend == "numpy":
         return ModelSnapshot(build(design, **kw), design, kw)
-    snap = ModelSnapshot(build(design, **dict(kw, backend="numpy")), design, kw)
-    for el in snap.contact_elements():
-        s = el.evaluator
-        if getattr(s, "backend", None) == "numpy":
-            s.backend = backend
-            s.__dict__.setdefault("_kernel", None)      # as a set built with a kernel, dropped (DEVICE_ATTRIBUTES)
-    return snap
+    return ModelSnapshot(build(design, **dict(kw, backend="numpy")), design, kw, backend=backend)
 
 
 def real_model(model):
