@@ -115,3 +115,18 @@ def test_a_solve_of_few_copies_on_their_own_row_newton_gives_the_same_figures(rd
     assert whole["path"] == parts["path"]
     with pytest.raises(RvtoolInputError, match=r"compact_below = 2"):
         device_row_lost_motion(DeviceRowNewton(models), f, compact_below=2)
+
+
+def test_with_stick_slip_anchors_the_levels_are_continued_not_restarted():
+    """RV-40E with anchored involute pairs (the device keeps their history, committed per level):
+    the lost motion's -f depends on the path to it, so device_row_lost_motion continues from +f even
+    when asked for direct levels (stats levels_path), on the whole batch (no compaction)."""
+    import dataclasses
+
+    d = load_design(designs.path("rv40e"))
+    an = build(dataclasses.replace(d, involute_stage=dataclasses.replace(d.involute_stage, mu=0.05,
+                                                                         friction_model="anchor")))
+    newton = DeviceRowNewton(an, 1)
+    assert newton.history_families                     # the anchors are on the device
+    r = device_row_lost_motion(newton, 0.03 * d.rated_torque)
+    assert r["stats"]["levels_path"] == "continuation" and r["stats"]["compactions"] == 0
