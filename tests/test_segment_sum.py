@@ -146,7 +146,10 @@ def test_weighted_family_sums_match_the_dense_map(device):
     sums.add(0, True, True)
     Q, finite = sums.vector()
     assert finite
-    # the kernel sums in the reference's order: the same bits
-    assert np.array_equal(Q, Qr)
-    assert np.array_equal(-sums.jacobian(1.0, 0.0), Kqr)
-    assert np.array_equal(sums.Kv[0].reshape(n, n), Kvr)
+    # the kernel sums in the reference's order: the same bits on cpu; nvcc contracts the weighted
+    # multiply-adds into FMAs, so on cuda the sums differ in the last bits (seen on an H200)
+    for got, want in ((Q, Qr), (-sums.jacobian(1.0, 0.0), Kqr), (sums.Kv[0].reshape(n, n), Kvr)):
+        if str(device).startswith("cuda"):
+            assert np.max(np.abs(got - want)) <= 8 * np.finfo(float).eps * np.max(np.abs(want))
+        else:
+            assert np.array_equal(got, want)
