@@ -18,7 +18,7 @@ CASE_TIMEOUT_S = 300
 OPEN_TARGETS = {
     "verification/wheel_body_contact": {
         "wheel_twist_vs_reference": "issue 30 (open): the reduced wheel body is stiffer than the 2D plane-stress "
-                                    "contact reference by more than 5 % (docs/validation/compliance_members.md)"},
+                                    "contact reference by more than 5 % (docs/validation/wheel_body.md)"},
 }
 """Checks of a case that record an open target honestly (``passed`` false): the case's other checks must pass,
 and a listed check that starts passing fails here so that its entry is removed."""

@@ -27,14 +27,18 @@ output) is theta at the journals' torque T_w about the wheel centre. The candida
   is not used here because the reference's pins are rigid. Contacts interpolated on the profile ports, bores tied
   to their journals through the bore ports (their mean motion), active set and Newton on the nonlinear law.
 
-The check: |theta_reduced / theta_reference - 1| <= 5 % (issue 30's target), with the reference at its finest
+The checks: |theta_reduced / theta_reference - 1| <= 5 % (issue 30's target), with the reference at its finest
 level; its own discretisation error (the change between the two finest levels) must be below 1 %, a fifth of the
-bound, and every window's end nodes must stay open (the contact inside the refined flank). Also reported: the local
-share of the reduced twist and the twist with the FE's near field counted twice (ports measured on the surface,
-``port_depth = 0``), the reference's pin forces beside the reduced ones.
+bound, and every window's end nodes must stay open (the contact inside the refined flank). A diagnostic separates
+the bore model from the body: the reference once more on its second finest level with the reduced model's bore tie
+(each bore's mean displacement follows its journal's centre, Lagrange multipliers, no bore contact); the reduced
+member against it is held to the same 5 % (check ``body_with_the_same_bore_tie``). Also reported: the local share
+of the reduced twist, the twist with the FE's near field counted twice (ports measured on the surface,
+``port_depth = 0``, the local law still to r_p), the reference's pin forces beside the reduced ones.
 
---quick: the wheel at 6 mm / 4 ports per tooth, the reference at levels 1 and 2; full: the design's wheel mesh
-(4 mm / 8 per tooth) and the reference at levels 1, 2 and 3.
+--quick: the wheel at 6 mm / 4 ports per tooth, the reference at levels 1, 2 and 3; full: the design's wheel mesh
+(4 mm / 8 per tooth), the port depths r_p / 2 and 2 r_p besides (the ends of the assumed range; reported, not
+judged) and the reference at levels 1 to 4.
 """
 import dataclasses
 import math
@@ -249,9 +253,10 @@ def reference_mesh(design, prof, pins, cand, level):
     return geo.GenerateMesh(maxh=4e-3 / level, grading=GRADING), spacing
 
 
-def reference_twist(design, prof, pins, cand, torque, level):
+def reference_twist(design, prof, pins, cand, torque, level, bores="contact"):
     """(theta [rad], info) of the 2D plane-stress contact model at journal torque ``torque`` [N m] (module
-    docstring)."""
+    docstring). bores: "contact" (the reference: rigid journals, compression only) or "mean" (a diagnostic: each
+    bore's mean displacement tied to its journal's centre, the reduced model's bore tie)."""
     import ngsolve as ngs
     t0 = time.perf_counter()
     E, nu, t = design.material.youngs_modulus, design.material.poisson_ratio, design.wheels.width
@@ -301,46 +306,102 @@ def reference_twist(design, prof, pins, cand, torque, level):
     Krc = Kr.tocsr()
     t_mesh = time.perf_counter() - t0
     journal = np.array([bores_g[int(n[4:])][:2] if n.startswith("bore") else (0.0, 0.0) for n in names])
-    state = {"theta": 0.0, "x": None, "factorizations": 0}
+    bores_xy = np.array([b[:2] for b in bores_g])
+    if bores == "mean":
+        # the reduced model's bore tie (diagnostic): each bore's mean displacement follows its journal's centre
+        # (Lagrange multipliers), the bore vertices carry no contact
+        rows_w = []
+        for b in range(len(bores_g)):
+            length = ngs.Integrate(ngs.CF(1.0), mesh, ngs.BND, definedon=mesh.Boundaries(f"bore{b}"))
+            for c in range(2):
+                f = ngs.LinearForm(fes)
+                f += v[c] / length * ngs.ds(definedon=mesh.Boundaries(f"bore{b}"))
+                f.Assemble()
+                rows_w.append(Q.T @ f.vec.FV().NumPy())
+        Wt = np.array(rows_w)
+        lcp = ~is_bore
+    else:
+        Wt = np.zeros((0, ndof))
+        lcp = np.ones(nc, bool)
+    state = {"theta": 0.0, "x": None, "factorizations": 0, "mu": np.zeros(len(Wt))}
+    il = ix[lcp]
 
     def solve_active(act):
         th = state["theta"]
         rot = np.array([[math.cos(th) - 1, -math.sin(th)], [math.sin(th), math.cos(th) - 1]])
-        u_obs = np.where(is_bore[:, None], journal @ rot.T, 0.0)
-        d_n = g0 + np.einsum("ij,ij->i", nrm, u_obs)          # the normal displacement that closes the gap
-        fd = ngs.BitArray(ndof)
-        fd.Set()
-        for i in ix[act]:
-            fd.Clear(int(i))
-        inv = Kn.Inverse(fd, inverse="sparsecholesky")
-        state["factorizations"] += 1
+        u_obs = np.where(is_bore[:, None], journal @ rot.T, 0.0)[lcp]
+        d_n = g0[lcp] + np.einsum("ij,ij->i", nrm[lcp], u_obs)  # the normal displacement that closes the gap
+        key = act.tobytes()
+        if state.get("key") != key:                          # one factorization per active set
+            fd = ngs.BitArray(ndof)
+            fd.Set()
+            for i in il[act]:
+                fd.Clear(int(i))
+            state["inv"], state["key"], state["Y"] = Kn.Inverse(fd, inverse="sparsecholesky"), key, None
+            state["factorizations"] += 1
+        inv = state["inv"]
         x = Kn.CreateColVector()
         xv = np.zeros(ndof)
-        xv[ix[act]] = d_n[act]
+        xv[il[act]] = d_n[act]
         x.FV().NumPy()[:] = xv
         r = Kn.CreateColVector()
         r.data = -1.0 * Kn * x
         x.data += inv * r
         xv = x.FV().NumPy().copy()
-        react = Krc @ xv                                     # the reactions at the prescribed normals
-        lam = -react[ix]                                     # compression positive (force on the wheel -lam n)
-        gap = d_n - xv[ix]
-        state["x"] = xv
+        mu = np.zeros(len(Wt))
+        if len(Wt):
+            if state["Y"] is None:
+                Y = np.zeros((ndof, len(Wt)))
+                for j, wrow in enumerate(Wt):
+                    r.FV().NumPy()[:] = wrow
+                    x.data = inv * r
+                    Y[:, j] = x.FV().NumPy()
+                state["Y"] = Y
+            Y = state["Y"]
+            uc = (bores_xy @ rot.T).ravel()
+            mu = np.linalg.solve(Wt @ Y, Wt @ xv - uc)
+            xv = xv - Y @ mu
+        react = Krc @ xv + Wt.T @ mu                         # the reactions at the prescribed normals
+        lam = -react[il]                                     # compression positive (force on the wheel -lam n)
+        gap = d_n - xv[il]
+        state["x"], state["mu"] = xv, mu
         return lam, gap, xv
 
-    theta, act, outer = 3e-5, np.asarray(is_bore | (g0 <= 0.0)), []
+    def journal_torque(lam_all):
+        if len(Wt):
+            fb = -state["mu"].reshape(-1, 2)                 # the ties' resultants on the wheel
+            return float(np.sum(bores_xy[:, 0] * fb[:, 1] - bores_xy[:, 1] * fb[:, 0]))
+        F = -lam_all[:, None] * nrm
+        return float(np.sum((X[:, 0] * F[:, 1] - X[:, 1] * F[:, 0])[is_bore]))
+
+    theta, act, outer = 3e-5, np.asarray(is_bore | (g0 <= 1e-12))[lcp], []
+    lam, prev = np.zeros(nc), None
     for _ in range(20):
         state["theta"] = theta
-        lam, gap, act, it, murty, xv = active_set_contact(solve_active, act, gap_tol=1e-9 * theta * 0.05)
+        lam_l, gap, act, it, murty, xv = active_set_contact(solve_active, act, gap_tol=1e-9 * theta * 0.05)
+        lam = np.zeros(nc)
+        lam[lcp] = lam_l
         outer.append(it)
-        F = -lam[:, None] * nrm
-        T = float(np.sum((X[:, 0] * F[:, 1] - X[:, 1] * F[:, 0])[is_bore]))
-        new = theta * torque / T
+        T = journal_torque(lam)
+        # T is affine in theta while the active set holds (the gaps are): the secant through the last two solves
+        # on the same set is exact; otherwise the proportional step
+        if prev is not None and prev[2] == act.tobytes() and T != prev[1]:
+            new = theta + (torque - T) * (theta - prev[0]) / (T - prev[1])
+        else:
+            new = theta * torque / T
+        prev = (theta, T, act.tobytes())
         if abs(new / theta - 1) < 1e-9:
             break
         theta = new
+    act_all = np.zeros(nc, bool)
+    act_all[lcp] = act
+    act = act_all
     F = -lam[:, None] * nrm
-    balance = np.array([F[:, 0].sum(), F[:, 1].sum(), float(np.sum(X[:, 0] * F[:, 1] - X[:, 1] * F[:, 0]))])
+    fb = -state["mu"].reshape(-1, 2)                         # the ties' resultants (none in the reference)
+    c_t = bores_xy[:len(fb)]
+    balance = np.array([F[:, 0].sum() + fb[:, 0].sum(), F[:, 1].sum() + fb[:, 1].sum(),
+                        float(np.sum(X[:, 0] * F[:, 1] - X[:, 1] * F[:, 0])
+                              + np.sum(c_t[:, 0] * fb[:, 1] - c_t[:, 1] * fb[:, 0]))])
     ends_open, pin_force = True, np.zeros(len(cand))
     for k in range(len(cand)):
         m = names == f"pin{k}"
@@ -348,7 +409,7 @@ def reference_twist(design, prof, pins, cand, torque, level):
         a_k = act[m][s]
         ends_open &= not (a_k[0] or a_k[-1])
         pin_force[k] = lam[m].sum()
-    info = {"level": level, "elements": int(mesh.ne), "vertices": int(mesh.nv), "dofs": int(ndof),
+    info = {"level": level, "bores": bores, "elements": int(mesh.ne), "vertices": int(mesh.nv), "dofs": int(ndof),
             "contact_nodes": int(nc), "active_nodes": int(act.sum()),
             "window_spacing_um": [float(h * 1e6) for h in spacing], "active_set_solves": outer,
             "factorizations": state["factorizations"], "window_ends_open": bool(ends_open),
@@ -366,6 +427,10 @@ def judge(r):
         "reference_converged": casekit.check(
             r["reference_last_step_rel"], CONVERGED, "<=", "the reference's change between its two finest levels, "
             "a fifth of the 5 % bound"),
+        "body_with_the_same_bore_tie": casekit.check(
+            r["mean_tie_diagnostic"]["rel_err"], BOUND, "<=", "the wheel body (ports, datum depth, local law) "
+            "against the plane-stress contact model with the reduced model's bore tie (each bore's mean motion "
+            "follows its journal): the same 5 % with the bore model taken out of the comparison"),
         "reference_windows_hold_contacts": casekit.check(
             int(all(x["window_ends_open"] for x in r["reference_levels"])), 1, "==",
             "every pin's contact lies inside its refined flank window (its end nodes open) on every level"),
@@ -387,7 +452,7 @@ def main(argv=None):
     # time) and at the ends of the datum depth's assumed range (WheelBodySpec: r_p / 2 to 2 r_p); reported only
     rp = d.pins.pin_radius
     depth_variants = {}
-    for depth in (0.0, 0.5 * rp, 2.0 * rp):
+    for depth in (0.0,) if args.quick else (0.0, 0.5 * rp, 2.0 * rp):
         wb_d = wheel_body(dataclasses.replace(wb.geometry, port_depth=depth), wb.spec, wb.fe.material)
         # port_depth 0: the local law still reaches r_p (the near field counted twice, not dropped)
         depth_variants[f"{depth * 1e3:.3g} mm"] = reduced_twist(d, wb_d, pins, cand, torque,
@@ -399,6 +464,10 @@ def main(argv=None):
         th, info = reference_twist(d, prof, pins, cand, torque, lv)
         info["theta_rad"] = th
         ref.append(info)
+    # diagnostic: the reference with the reduced model's bore tie (mean motion), on the second finest level
+    diag_level = levels[-2]
+    th_mean, info_mean = reference_twist(d, prof, pins, cand, torque, diag_level, bores="mean")
+    th_contact_diag = ref[-2]["theta_rad"]
     th_ref = ref[-1]["theta_rad"]
     thetas = np.array([x["theta_rad"] for x in ref])
     local_work = float(np.sum(F_red * local))           # the local approaches' work against the journals' (T theta)
@@ -411,29 +480,37 @@ def main(argv=None):
         "ratio_by_port_depth": {k: v / th_ref for k, v in depth_variants.items()},
         "local_contact_share_of_twist": local_work / (torque * th_red),
         "reference_theta_by_level_rad": thetas.tolist(),
+        "reference_dofs_by_level": [x["dofs"] for x in ref],
         "reference_step_rel": (thetas[1:] / thetas[:-1] - 1.0).tolist(),
         "reference_last_step_rel": float(abs(thetas[-1] / thetas[-2] - 1.0)),
         "reference_levels": ref,
+        "mean_tie_diagnostic": {
+            "level": diag_level, "theta_reference_mean_ties_rad": th_mean,
+            "ratio_reduced_to_mean_tie_reference": th_red / th_mean,
+            "rel_err": abs(th_red / th_mean - 1.0),
+            "bore_model_ratio_contact_to_mean": th_contact_diag / th_mean,
+            "pin_forces_N": info_mean["pin_forces_N"], "wall_s": info_mean["wall_s"]},
         "contacts_candidates": len(cand), "contacts_active_reduced": int((F_red > 0).sum()),
         "pin_forces_reduced_N": F_red.tolist(), "pin_forces_reference_N": ref[-1]["pin_forces_N"],
         "reduced_mesh": wb.fe.counts(), "reduced_s": t_red,
         "stiffness_reference_Nm_per_arcmin": torque / th_ref * math.pi / (180 * 60),
         "stiffness_reduced_Nm_per_arcmin": torque / th_red * math.pi / (180 * 60)}
     casekit.verdict(results, judge)
-    _plot(args.out, cand, F_red, ref)
+    _plot(args.out, cand, F_red, ref, info_mean)
     settings = {"quick": args.quick, "design": "rv40e", "wheel": 0, "reference_levels": list(levels),
                 "gap_candidate_m": GAP_CANDIDATE, "gap_window_m": GAP_WINDOW, "grading": GRADING,
                 "wheel_spec": dataclasses.asdict(wb.spec)}
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t0)
 
 
-def _plot(out, cand, F_red, ref):
+def _plot(out, cand, F_red, ref, info_mean):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
     pins = [c["pin"] for c in cand]
     ax[0].plot(pins, F_red, "o-", label="reduced (ports + local law)")
     for x in ref:
         ax[0].plot(pins, x["pin_forces_N"], ".--", lw=0.8, label=f"reference, level {x['level']}")
+    ax[0].plot(pins, info_mean["pin_forces_N"], "x:", label=f"reference with mean bore ties, level {info_mean['level']}")
     ax[0].set(xlabel="ring pin", ylabel="pin force [N]", title="pin forces at T_w = T_R / 2")
     ax[0].legend(fontsize=8)
     ax[1].plot([x["dofs"] for x in ref], [x["theta_rad"] * 1e6 for x in ref], "o-")
