@@ -16,8 +16,9 @@ output) is theta at the journals' torque T_w about the wheel centre. The candida
   small-displacement gaps g = g0 - n . (u - u_obstacle). The complementarity problem is solved by active sets
   (:func:`rvtool.contact.lcp.active_set_contact`): the active nodes' normal displacements are prescribed in
   rotated nodal coordinates, one sparse Cholesky factorization per active set, the contact forces are the
-  reactions; no penalty. Mesh levels l = 1, 2, 3: global size 4 mm / l, bore vertices every r_b / (12 l), window
-  points n_w = 8 l (half-window; the spacing is a few um at l = 2, against Hertz half-widths of 10-20 um).
+  reactions; no penalty. Mesh levels l = 1, 2, 3 (and 4 in the full run): global size 4 mm / l, bore vertices
+  every r_b / (12 l), window points n_w = 8 l (half-window; the spacing is a few um at l = 2, against Hertz
+  half-widths of 10-20 um).
 * Reduced member: the wheel body of rvtool (:func:`rvtool.assembly.wheel_body.wheel_model`: 3D tetrahedra, spread
   ports, the profile ports measuring the normal displacement at the datum depth d = r_p) for the body, and for the
   local contact of each rigid pin the plane-stress approach of a half-plane under a rigid cylinder from the
@@ -510,7 +511,8 @@ def _plot(out, cand, F_red, ref, info_mean):
     ax[0].plot(pins, F_red, "o-", label="reduced (ports + local law)")
     for x in ref:
         ax[0].plot(pins, x["pin_forces_N"], ".--", lw=0.8, label=f"reference, level {x['level']}")
-    ax[0].plot(pins, info_mean["pin_forces_N"], "x:", label=f"reference with mean bore ties, level {info_mean['level']}")
+    ax[0].plot(pins, info_mean["pin_forces_N"], "x:",
+               label=f"reference with mean bore ties, level {info_mean['level']}")
     ax[0].set(xlabel="ring pin", ylabel="pin force [N]", title="pin forces at T_w = T_R / 2")
     ax[0].legend(fontsize=8)
     ax[1].plot([x["dofs"] for x in ref], [x["theta_rad"] * 1e6 for x in ref], "o-")

@@ -104,8 +104,9 @@ def solve_contact_lcp(A, b, E=None, e=None, active=None, tol=1e-10, max_iteratio
 
     A (n, n) symmetric positive definite [m/N]; b (n,) [m]; E (k, n) and e (k,) (default: none);
     active (n,) bool: the first active set (default: the nodes with b <= 0); tol: relative
-    tolerance of the complementarity conditions (forces against max |lam|, gaps against max |b|). Raises :class:`RvtoolInputError` on bad shapes, a singular bordered system
-    or no convergence in ``max_iterations`` active-set solves.
+    tolerance of the complementarity conditions (forces against max |lam|, gaps against max |b|).
+    Raises :class:`RvtoolInputError` on bad shapes, a singular bordered system or no convergence in
+    ``max_iterations`` active-set solves.
     """
     A = np.asarray(A, float)
     b = np.asarray(b, float)
