@@ -98,3 +98,16 @@ def test_bad_input_is_refused():
     # two nodes that push the same way cannot balance a free body (E lam = 0 with a net force)
     with pytest.raises(RvtoolInputError):
         solve_contact_lcp(np.eye(2), -np.ones(2), E=np.ones((2, 2)), e=np.array([0.0, 1.0]))
+
+
+def test_a_cycling_primal_dual_update_falls_back_to_murty():
+    # found by a random search: from the empty set the primal-dual update returns to a set it has seen (A is
+    # positive definite but not an M-matrix); the least-index rule must still end at the enumerated solution
+    A = np.array([[2.085941, -0.964898, 3.100086, -1.239435], [-0.964898, 0.806822, -0.912789, 1.506943],
+                  [3.100086, -0.912789, 5.981048, -0.041274], [-1.239435, 1.506943, -0.041274, 4.486762]])
+    b = np.array([1.558347, -1.549628, 0.112725, -0.952991])
+    sol = solve_contact_lcp(A, b, active=np.zeros(4, bool))
+    assert sol.murty
+    hits = _brute_force(A, b, np.zeros((0, 4)), np.zeros(0))
+    assert len(hits) == 1
+    assert np.allclose(sol.lam, hits[0], rtol=1e-10, atol=1e-12)
