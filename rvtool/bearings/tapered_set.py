@@ -37,7 +37,7 @@ from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX,
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows, moved_member
+from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows, moved_member, renamed_ids
 from ..errors import RvtoolInputError
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters
 from .set import Placement
@@ -185,7 +185,7 @@ class TaperedBearingSet:
             i[:, ref.RI_FIRST] += n_lam
             ri.append(i)
             rename = {m.name: nm for m, nm in zip(sc.mountings, names[c])}
-            ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
+            ids += renamed_ids(sc.ids, rename)
             owner.append(sc.roller_owner + n_m)
             lam_roller.append(sc.lamina_roller + n_rol)
             bodies.append(np.where(sc._bodies >= sc.n_bodies, B * nb, sc._bodies + c * nb))
@@ -388,6 +388,11 @@ class TaperedBearingSet:
     def launch_device_rows(self):
         """:meth:`device_rows` at the poses in :meth:`device_pose_buffers` as they are."""
         return self._planar_rows().launch()
+
+    def launch_device_velocity_rows(self):
+        """:meth:`launch_device_rows` with dQ/dv: (Q (M, 6), dQ/dq, dQ/dv (M, 6, 6)) device arrays at
+        the poses and velocities in :meth:`device_pose_buffers` (driven runs; :meth:`raw`'s dQ/dv)."""
+        return self._planar_rows().launch_velocity()
 
     def _planar_rows(self):
         if not self.planar_on_device:
