@@ -58,11 +58,12 @@ class WheelSet:
         check_positive("eccentricity", self.eccentricity)
         check_positive("width", self.width)
         if len(self.midplanes) != len(self.phases):
-            raise RvtoolInputError(f"midplanes ({len(self.midplanes)}) and phases ({len(self.phases)}) must "
+            raise RvtoolInputError(f"midplanes ({len(self.midplanes)}) and phases_deg ({len(self.phases)}) must "
                                    "have one entry per wheel")
         check_finite("phases", np.asarray(self.phases, float))
         if not 1 <= len(self.midplanes) <= 2:
-            raise RvtoolInputError(f"midplanes: {len(self.midplanes)} wheels; valid range [1, 2]")
+            raise RvtoolInputError(f"midplanes has {len(self.midplanes)} entries, one per wheel; valid range [1, 2] "
+                                   "wheels (n_wheels)")
 
 
 @dataclass(frozen=True, kw_only=True)

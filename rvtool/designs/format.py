@@ -326,7 +326,8 @@ def key_table(topology):
     set_by_design = getattr(module, "SET_BY_DESIGN", {})
     kinds = getattr(module, "BEARING_KINDS", {})
     for f in top_fields:
-        kw = {g.name: getattr(design, g.name) for g in dataclasses.fields(cls)} if design is not None else {}
+        # the constructor's keywords only (a derived field, init=False, e.g. the std design's pair, is not one)
+        kw = {g.name: getattr(design, g.name) for g in dataclasses.fields(cls) if g.init} if design is not None else {}
         meaning, unit = describe(cls, f.name)
         value = table.get(f.name, None if f.default is dataclasses.MISSING else f.default)
         rng = valid_range(cls, kw, f.name) if kw else ""

@@ -1,0 +1,106 @@
+"""What a new user meets first (helper "newuser"): the `rvtool new` template of each topology, edited
+wrongly, must stop with an error that names the design-file key and its valid range -- never an
+Exudyn traceback, a list of internal field names or a probe's TypeError in the template's comments.
+Each test failed before its fix (the message quoted in its docstring)."""
+import re
+import tomllib
+
+import pytest
+
+import rvtool
+from rvtool.assembly import topologies
+from rvtool.designs.format import key_table, template
+from rvtool.errors import RvtoolInputError
+
+TOPOLOGIES = [t for t in topologies.TOPOLOGIES if topologies.available(t) is None]
+
+
+def _template_table(topology):
+    return tomllib.loads(template(topology, name="mine"))
+
+
+def _load(tmp_path, table):
+    import tomlkit
+    p = tmp_path / "mine.toml"
+    p.write_text(tomlkit.dumps(table))
+    return rvtool.load_design(str(p))
+
+
+@pytest.mark.parametrize("topology", TOPOLOGIES)
+def test_template_ranges_are_never_a_python_error(topology):
+    """The std-involute template said ``n_wheels = 2 # valid: constrained by other keys: TypeError:
+    StdInvoluteDesign.__init__() got an unexpected keyword argument 'pair'`` (the range probe passed
+    the design's derived ``pair`` field back to its constructor)."""
+    for sec, key, value, unit, rng, meaning, required in key_table(topology):
+        assert not re.search(r"\w+Error\b|__init__", rng), f"{topology}: {sec}.{key}: valid: {rng}"
+
+
+def test_std_involute_top_level_ranges_are_the_specs_own():
+    rows = {key: rng for sec, key, value, unit, rng, meaning, required in key_table("std-involute") if sec == ""}
+    assert rows["rated_torque"] == "(0.0, inf)"
+    assert rows["input_speed_rpm"] == "(0.0, inf)"
+
+
+@pytest.mark.parametrize("topology", ["cycloid", "std-involute"])
+@pytest.mark.parametrize("key", ["shaft_mass", "shaft_inertia", "flange_mass", "flange_inertia"])
+def test_negative_body_mass_names_the_key(topology, key, tmp_path):
+    """Before: ``exudyn.exudynCPP.ExudynValueError: parameter ObjectRigidBody2D.mass may not be
+    negative, but received -1.2`` from deep inside the builder (the file was accepted)."""
+    table = _template_table(topology)
+    table["bodies"][key] = -1.0
+    with pytest.raises(RvtoolInputError, match=rf"bodies\.{key} = .*-1\.0.* is outside the valid range \(0\.0, inf\)"):
+        _load(tmp_path, table)
+    table["bodies"][key] = 0.0          # a massless body: singular in the driven runs
+    with pytest.raises(RvtoolInputError, match=rf"bodies\.{key}"):
+        _load(tmp_path, table)
+
+
+def test_unknown_key_lists_the_file_keys_not_the_field_names(tmp_path):
+    """Before: ``[wheels] has unknown keys ['widht']; valid keys are [..., 'phases', ...]``: 'phases' is
+    the spec's field (radians), the file key is 'phases_deg'; writing 'phases' is itself refused."""
+    table = _template_table("cycloid")
+    table["wheels"]["widht"] = 0.008
+    with pytest.raises(RvtoolInputError) as exc:
+        _load(tmp_path, table)
+    msg = str(exc.value)
+    assert "'widht'" in msg and "'phases_deg'" in msg and "'phases'" not in msg, msg
+
+
+def test_unknown_top_level_key_lists_no_internal_fields(tmp_path):
+    """Before: ``[design] has unknown keys ['rated_torq']; valid keys are [..., 'source', ...,
+    'topology'...]``: 'source' is the loader's copy of the file, not a key a file may give."""
+    table = _template_table("rv3")
+    table["rated_torq"] = 400.0
+    with pytest.raises(RvtoolInputError) as exc:
+        _load(tmp_path, table)
+    msg = str(exc.value)
+    assert "'rated_torq'" in msg and "'rated_torque'" in msg and "'source'" not in msg, msg
+
+
+@pytest.mark.parametrize("topology,section", [("cycloid", "pin_contact"), ("rv3", "compound_gear"),
+                                              ("rv2", "cranks"), ("std-involute", "mesh")])
+def test_misspelt_section_is_named_with_its_correct_spelling(topology, section, tmp_path):
+    """Before: cycloid ``section [pin_contact] is missing from the design`` (the misspelt table not
+    named), rv3 ``[compound_gear]: InvoluteGear.__init__() missing 3 required keyword-only
+    arguments``."""
+    table = _template_table(topology)
+    wrong = section[:3] + section[4:]           # one letter left out
+    table[wrong] = table.pop(section)
+    with pytest.raises(RvtoolInputError) as exc:
+        _load(tmp_path, table)
+    msg = str(exc.value)
+    assert f"[{wrong}]" in msg and f"[{section}]" in msg and "__init__" not in msg, msg
+
+
+@pytest.mark.parametrize("topology", ["cycloid", "std-involute"])
+def test_three_wheels_names_n_wheels(topology, tmp_path):
+    """Before (cycloid): ``wheels.wheels: 3 wheels; valid range [1, 2]`` (no such key)."""
+    table = _template_table(topology)
+    table["n_wheels"] = 3
+    table["wheels"]["midplanes"] = [-0.012, 0.0, 0.012]
+    table["wheels"]["phases_deg"] = [0.0, 120.0, 240.0]
+    table["output_pins"].pop("wheel_midplanes", None)
+    table["output_pins"]["gap_offsets"] = [0.0, 0.0, 0.0]
+    with pytest.raises(RvtoolInputError, match=r"wheels\.midplanes has 3 entries.*valid range \[1, 2\]") as exc:
+        _load(tmp_path, table)
+    assert "wheels.wheels" not in str(exc.value)
