@@ -104,3 +104,22 @@ def test_three_wheels_names_n_wheels(topology, tmp_path):
     with pytest.raises(RvtoolInputError, match=r"wheels\.midplanes has 3 entries.*valid range \[1, 2\]") as exc:
         _load(tmp_path, table)
     assert "wheels.wheels" not in str(exc.value)
+
+
+@pytest.mark.parametrize("topology", ["cycloid", "std-involute"])
+def test_n_wheels_range_and_what_else_to_change(topology, tmp_path):
+    """Before: the template said ``n_wheels = 2 # valid: constrained by other keys: n_wheels = VALUE but
+    wheels.midplanes has 2 entries`` and n_wheels = 1 alone stopped with that sentence, naming none of
+    the other keys a one-wheel design changes."""
+    rows = {key: rng for sec, key, value, unit, rng, meaning, required in key_table(topology) if sec == ""}
+    assert rows["n_wheels"] == "[1, 2] (integer)", rows["n_wheels"]
+    table = _template_table(topology)
+    table["n_wheels"] = 1
+    with pytest.raises(RvtoolInputError, match=r"n_wheels = 1 but wheels\.midplanes has 2 entries; valid: .*"
+                                               r"wheels\.phases_deg.*output_pins\.gap_offsets"):
+        _load(tmp_path, table)
+    table["wheels"]["midplanes"] = [0.0]
+    table["wheels"]["phases_deg"] = [0.0]
+    table["output_pins"].pop("wheel_midplanes", None)
+    table["output_pins"]["gap_offsets"] = [0.0]
+    assert _load(tmp_path, table).n_wheels == 1     # the steps docs/guide/cycloid.md lists

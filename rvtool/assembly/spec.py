@@ -43,7 +43,7 @@ from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
 from ..structure.floating_ports import FloatingDynamics
 from ..structure.wheel_body import WheelBodySpec
-from ..validation import check_finite, check_nonnegative, check_positive, check_range
+from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
 
@@ -372,8 +372,11 @@ class CycloidDesign:
     bearing_friction: BearingFriction = field(default_factory=BearingFriction)
 
     def __post_init__(self):
+        check_integer("n_wheels", self.n_wheels, 1, 2)
         if self.n_wheels != len(self.wheels.midplanes):
-            raise RvtoolInputError(f"n_wheels = {self.n_wheels} but wheels.midplanes has {len(self.wheels.midplanes)} entries")
+            raise RvtoolInputError(f"n_wheels = {self.n_wheels} but wheels.midplanes has {len(self.wheels.midplanes)} "
+                                   f"entries; valid: one entry per wheel in wheels.midplanes and wheels.phases_deg "
+                                   f"(and in output_pins.wheel_midplanes, output_pins.gap_offsets where the file gives them)")
         check_positive("rated_torque", self.rated_torque)
         check_positive("input_speed_rpm", self.input_speed_rpm)
         zg = self.wheels.n_teeth if self.wheels.n_teeth is not None else self.pins.n_pins - 1

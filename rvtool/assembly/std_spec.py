@@ -140,9 +140,11 @@ class StdInvoluteDesign:
     pair: InvolutePair = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
+        check_integer("n_wheels", self.n_wheels, 1, 2)
         if self.n_wheels != len(self.wheels.midplanes):
             raise RvtoolInputError(f"n_wheels = {self.n_wheels} but wheels.midplanes has {len(self.wheels.midplanes)} "
-                                   "entries; valid: one midplane per wheel")
+                                   "entries; valid: one entry per wheel in wheels.midplanes and wheels.phases_deg "
+                                   "(and in output_pins.wheel_midplanes, output_pins.gap_offsets where the file gives them)")
         check_positive("rated_torque", self.rated_torque)
         check_positive("input_speed_rpm", self.input_speed_rpm)
         W, R = self.wheel, self.ring
