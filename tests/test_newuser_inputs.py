@@ -123,3 +123,30 @@ def test_n_wheels_range_and_what_else_to_change(topology, tmp_path):
     table["output_pins"].pop("wheel_midplanes", None)
     table["output_pins"]["gap_offsets"] = [0.0]
     assert _load(tmp_path, table).n_wheels == 1     # the steps docs/guide/cycloid.md lists
+
+
+def test_std_involute_has_marker_frequencies():
+    """Before: ``rvtool analyze std_involute`` warned "vibration: no marker frequencies:
+    'StdInvoluteModel' object has no attribute 'marker_frequencies'". STD-39 at 1500 rpm
+    (rvtool/designs/std_involute.toml): f_in = 25 Hz; ring 80 teeth fixed, the eccentric carries the
+    mesh point round it once per input revolution: mesh 80 x 25 = 2000 Hz (the frequency the
+    vibration protocol's spectrum reports); wheels 78 teeth, |i| = 78 / 2 = 39: output 25 / 39 Hz;
+    eccentric needles between the journal (25 Hz) and the wheel bore (-25/39 Hz): cage
+    FTF = f_r / 2 (1 - D / d_m) with f_r = 25 + 25/39 Hz, D = 3 mm, d_m = 2 x 12 + 3 = 27 mm."""
+    d = rvtool.load_design("std_involute")
+    m = rvtool.build(d).marker_frequencies(1500.0)
+    assert m["input_hz"] == pytest.approx(25.0, rel=1e-12)
+    assert m["mesh_hz"] == pytest.approx(2000.0, rel=1e-12)
+    assert m["output_hz"] == pytest.approx(25.0 / 39.0, rel=1e-12)
+    eb = d.eccentric_bearing
+    assert (eb.roller_diameter, eb.inner_radius) == pytest.approx((0.003, 0.012))   # the numbers above
+    f_r = 25.0 + 25.0 / 39.0
+    assert m["eccentric_bearing"]["ftf"] == pytest.approx(f_r / 2 * (1 - 3.0 / 27.0), rel=1e-12)
+    assert {"main_bearing", "input_bearing"} <= set(m)
+
+
+def test_cycloid_markers_unchanged_by_the_shared_function():
+    """RD-40 (40 pins, 39 lobes) at 1500 rpm: mesh 40 x 25 Hz, output 25 / 39 Hz (as before the
+    cycloid's body moved to eccentric_drive_markers)."""
+    m = rvtool.build(rvtool.load_design("rd40")).marker_frequencies(1500.0)
+    assert m["mesh_hz"] == pytest.approx(1000.0, rel=1e-12) and m["output_hz"] == pytest.approx(25 / 39, rel=1e-12)
