@@ -150,3 +150,18 @@ def test_cycloid_markers_unchanged_by_the_shared_function():
     cycloid's body moved to eccentric_drive_markers)."""
     m = rvtool.build(rvtool.load_design("rd40")).marker_frequencies(1500.0)
     assert m["mesh_hz"] == pytest.approx(1000.0, rel=1e-12) and m["output_hz"] == pytest.approx(25 / 39, rel=1e-12)
+
+
+def test_template_linked_keys_follow_the_key_they_name(tmp_path):
+    """Before, the cycloid template wrote its linked keys out: a wheel made wider (wheels.width
+    0.008 -> 0.010) kept output_pins.contact_length = 0.008 silently, and a new pins.pin_radius was
+    refused ("profile.pin_radius = 0.003 differs from pins.pin_radius"). Now they are commented out
+    ("# contact_length = 0.008 # ... (left out: wheels.width).") and follow."""
+    text = template("cycloid", name="mine")
+    assert re.search(r"^# contact_length = 0\.008 # .*\(left out: wheels\.width\)\.$", text, re.M), text
+    table = tomllib.loads(text)
+    assert "contact_length" not in table["output_pins"] and "pin_radius" not in table["profile"]
+    table["wheels"]["width"] = 0.010
+    table["pins"]["pin_radius"] = 0.0032
+    d = _load(tmp_path, table)
+    assert d.output_pins.contact_length == 0.010 and d.profile.pin_radius == 0.0032

@@ -37,6 +37,10 @@ from ..units import angle_columns, file_key, is_angle
 
 _RANGE = re.compile(r"valid range\s*(?:is\s*)?([\[\(][^\]\)]*[\]\)])")
 _CHOICES = re.compile(r"valid(?: choices are|:)?\s*(\[[^\]]*\])")
+LEFT_OUT = "(left out: {})"
+"""How a key's meaning ends when the key follows another key where the file leaves it out (a link);
+the template writes such a key commented out, so that it follows the key it names."""
+_LINKED = re.compile(r"\(left out: [^()]*\)\.?$")
 PROBES = (-1e30, 1e30)
 """Values far outside any physical range: the spec's validation quotes its bounds."""
 
@@ -301,7 +305,7 @@ def _field_rows(path, cls, fields, kw, raw, links, set_by_design):
             rng = angle_range(cls, kw, f.name) if f.name in kw else ""
             meaning = re.sub(r"\s*\(file: ``[^`]*``\)?|\s*\[rad\]", "", meaning).strip(" ,;")
         if f.name in links.get(path, {}) and f.name not in raw and key not in raw:
-            meaning = f"{meaning} (left out: {links[path][f.name]})".strip()
+            meaning = f"{meaning} {LEFT_OUT.format(links[path][f.name])}".strip()
             required = False
         rows.append((path, key, shown, unit, rng, meaning, required))
     return rows + subs
@@ -376,6 +380,8 @@ def template(topology, name=None):
                             "[unit], the valid range its spec enforces, optional (a default applies when the key "
                             "is left out), meaning."))
     doc.add(tomlkit.comment(f"Example values: {top.reference or 'field defaults'}. Check: rvtool analyze THIS_FILE --quick"))
+    doc.add(tomlkit.comment("A key written commented out, '(left out: OTHER)', follows OTHER (e.g. the profile's pin radius "
+                            "follows pins.pin_radius): uncomment it only to give it a value of its own."))
     doc.add(tomlkit.nl())
     version = tomlkit.item(topologies.FORMAT_VERSION)
     version.comment("the design file format: every angle in degrees (NAME_deg), every other key SI")
@@ -394,8 +400,14 @@ def template(topology, name=None):
         text = _comment(unit, rng, meaning, required)
         if text:
             item.comment(text)
+        if _LINKED.search(meaning):
+            # a linked key written out would keep its value when the key it follows changes (a wheel
+            # made wider kept the output pins' 8 mm contact length; a new pins.pin_radius was refused
+            # as differing from profile.pin_radius): commented out, it follows
+            commented = tomlkit.comment(f"{key} = {item.as_string()}" + (f" # {text}" if text else ""))
+            item = None
         if sec == "":
-            doc.add(key, item)
+            doc.add(key, item) if item is not None else doc.add(commented)
         else:
             if sec not in tables:
                 t = tomlkit.table()
@@ -404,7 +416,7 @@ def template(topology, name=None):
                     for line in textwrap.wrap(f"{c.__name__}: {summary(c)}", 100):
                         t.add(tomlkit.comment(line))
                 tables[sec] = t
-            tables[sec].add(key, item)
+            tables[sec].add(key, item) if item is not None else tables[sec].add(commented)
     for sec, t in tables.items():
         head, _, tail = sec.rpartition(".")
         if head:
