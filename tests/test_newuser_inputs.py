@@ -165,3 +165,16 @@ def test_template_linked_keys_follow_the_key_they_name(tmp_path):
     table["pins"]["pin_radius"] = 0.0032
     d = _load(tmp_path, table)
     assert d.output_pins.contact_length == 0.010 and d.profile.pin_radius == 0.0032
+
+
+@pytest.mark.parametrize("topology", TOPOLOGIES)
+def test_template_meanings_read_as_sentences(topology):
+    """Comments a newcomer could not read, taken from docstrings cut in the wrong place: end_play
+    "/ 2 off contact) or ``interference`` [m] (...", interference "[m] (the axial overlap ...",
+    crank_bearing.row_spacing "/2 from the mounting's axial centre [m] ...", reference_roller_load
+    "the load of that secant [N]", output_pins.mode "class:`PinMode`", flange_coordinates
+    "needs rolling-element bearings, , and a ball main bearing"."""
+    for sec, key, value, unit, rng, meaning, required in key_table(topology):
+        where = f"{topology}: {sec}.{key}: {meaning!r}"
+        assert not re.match(r"^[\[/),;:]|^class:", meaning), where
+        assert ", ," not in meaning and "the load of that" not in meaning, where

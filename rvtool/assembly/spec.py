@@ -240,7 +240,7 @@ class Bodies:
     output flange [kg m^2].
     flange_coordinates: ``"planar"`` (default: the flange's axial translation and tilts held) or
     ``"spatial"`` (also z, gamma_x, gamma_y on the main-bearing rows, issue 32; needs rolling-element
-    bearings, ``build(..., bearing_model="rolling")``, and a ball main bearing).
+    bearings, bearing_model "rolling" of :func:`rvtool.build`, and a ball main bearing).
     flange_tilt_inertia: transverse inertia [kg m^2] of the flange (dynamic runs of a spatial flange);
     None: half the polar inertia (a thin disc, assumed).
     wheel_coordinates: ``"planar"`` (default) or ``"spatial"``: each wheel also retains its axial

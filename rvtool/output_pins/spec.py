@@ -96,14 +96,15 @@ class OutputPinMechanism:
     pin_radius: outer pin (sleeve) radius r_p [m]; hole_radius: R_h [m] > r_p.
     coefficient: whole-contact coefficient k [N m^-p], or None: k calibrated so that the law
     meets the Hertz pin-in-hole approach at the reference force; :attr:`law_coefficient` is the k
-    in use. reference_force: the load of that calibration [N]. youngs_modulus: E of pins and
+    in use. reference_force: the load [N] at which a coefficient left out is calibrated to the Hertz
+    pin-in-hole approach. youngs_modulus: E of pins and
     flange [Pa]. poisson_ratio: nu of pins and flange [-].
     exponent: p [-] (10/9).
     contact_length: axial contact width [m], integrated by ``n_slices`` equal-weight
     midpoint slices (stations s relative to each wheel midplane).
     wheel_midplanes: axial positions z_i of the wheel midplanes relative to the flange [m].
     gap_offsets: u_off of Eq. (output_gap) per wheel [m] (e.g. thermal; positive opens).
-    mode: :class:`PinMode`. compliance: the pins' compliance of the shared mode [m/N] (None: rigid;
+    mode: the output-pin model, "plain" or "shared" (:class:`PinMode`). compliance: the pins' compliance of the shared mode [m/N] (None: rigid;
     shared mode only). sleeve: the sleeve iteration of the shared mode.
     support: the pin as a beam (:class:`~rvtool.structure.pin_beam.PinSupport`; rigid by default).
     The mechanism's own contacts are those of rigid pins; an elastic pin is closed per pin by the

@@ -91,7 +91,7 @@ class InvoluteStage:
     anchors per row, as ``pin_contact``). tangential_stiffness: stiffness of the anchors per tooth
     pair over the face width [N/m] (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the pair's normal
     secant stiffness of Eq. (series_contact) at reference_force, mid path of contact).
-    reference_force: the load of that secant stiffness [N]."""
+    reference_force: the tooth-pair load [N] at which that normal secant stiffness is taken."""
     n_slices: int = 1
     window: int | None = None
     damping: float = 0.0
