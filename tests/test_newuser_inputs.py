@@ -178,3 +178,22 @@ def test_template_meanings_read_as_sentences(topology):
         where = f"{topology}: {sec}.{key}: {meaning!r}"
         assert not re.match(r"^[\[/),;:]|^class:", meaning), where
         assert ", ," not in meaning and "the load of that" not in meaning, where
+
+
+def test_std_involute_light_load_cold_start_solves():
+    """`rvtool new --topology std-involute`, rated_torque = 1.0, `rvtool analyze --quick --protocols te`:
+    the TE failed ("no plausible static equilibrium at input angles [2.2580197197676637] rad (batch
+    warm start, homotopy and the per-variant ladder failed)"; auto ran the replica, whose segment
+    starts are cold; Exudyn's warm march solved it). The static solver from the kinematic state at
+    that angle under 1 N m failed; with the guide-spring homotopy (the RV's free-play fallback) it
+    solves to a plausible state (every body within the solver's bounds of its kinematic position)."""
+    import math
+
+    from rvtool.solver.static import StaticSolver
+    d = rvtool.replace_design(rvtool.load_design("std_involute"), rated_torque=1.0)
+    m = rvtool.build(d)
+    m.set_output_torque(-math.copysign(1.0, m.ratio) * 1.0)     # as the protocols load it
+    s = StaticSolver(m)
+    q = s.solve(2.2580197197676637, None)
+    assert s.stats.guided_levels == 1          # reached by the homotopy, not by an earlier rung
+    assert s.plausible(q, 2.2580197197676637)

@@ -98,6 +98,10 @@ class StdInvoluteModel(ReducerModel):
     n_wheels: int = 1
     tooth_phases: tuple = ()
     housing: object = None          # ReducedStructure of an elastic housing, or None (rigid)
+    #: the backlashed wheel--ring mesh leaves the wheels without contact stiffness at light load: a
+    #: cold start there (a replica segment's first point) needs the guide-spring homotopy (STD-39 at
+    #: 1 N m, input angle 2.258 rad: every other fallback failed)
+    guided_free_play: bool = True
 
     @property
     def flange(self):
