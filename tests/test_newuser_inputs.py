@@ -197,3 +197,14 @@ def test_std_involute_light_load_cold_start_solves():
     q = s.solve(2.2580197197676637, None)
     assert s.stats.guided_levels == 1          # reached by the homotopy, not by an earlier rung
     assert s.plausible(q, 2.2580197197676637)
+
+
+def test_pressure_angle_typed_in_radians_is_named(tmp_path):
+    """``pressure_angle_deg = 0.349`` (20 deg typed in radians) passes its own range (0, 45) deg and
+    stopped with "sun_gear.profile_shift = 0.1 undercuts the tooth ...; valid range [0.8720, inf) for
+    z = 18", which does not point at the angle; the message now quotes the pressure angle it used."""
+    table = _template_table("rv2")
+    table["sun_gear"]["rack"]["pressure_angle_deg"] = 0.349
+    with pytest.raises(RvtoolInputError, match=r"sun_gear\.profile_shift = .* undercuts .* and "
+                                               r"sun_gear\.rack\.pressure_angle_deg = 0\.349\b"):
+        _load(tmp_path, table)
