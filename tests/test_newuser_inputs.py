@@ -208,3 +208,16 @@ def test_pressure_angle_typed_in_radians_is_named(tmp_path):
     with pytest.raises(RvtoolInputError, match=r"sun_gear\.profile_shift = .* undercuts .* and "
                                                r"sun_gear\.rack\.pressure_angle_deg = 0\.349\b"):
         _load(tmp_path, table)
+
+
+def test_docs_name_the_topology_keys_the_loader_accepts():
+    """docs/guide/std_involute.md said "the file's key is ``topology = "std_involute"``", which the
+    loader refuses ("'std_involute' is not a known topology"): every ``topology = "X"`` a guide page
+    shows must be a topology key."""
+    from pathlib import Path
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    pages = [p for p in docs.rglob("*.md") if "history" not in p.parts and "changelog.d" not in p.parts]
+    shown = {(p.name, m) for p in pages for m in re.findall(r'topology = "([\w-]+)"', p.read_text())}
+    assert shown, "no page shows a topology key"
+    bad = [(page, key) for page, key in shown if key not in topologies.TOPOLOGIES]
+    assert not bad, bad
