@@ -221,3 +221,15 @@ def test_docs_name_the_topology_keys_the_loader_accepts():
     assert shown, "no page shows a topology key"
     bad = [(page, key) for page, key in shown if key not in topologies.TOPOLOGIES]
     assert not bad, bad
+
+
+def test_design_name_without_toml_points_at_the_file(tmp_path, monkeypatch):
+    """`rvtool new --name mydrive` then `rvtool analyze mydrive` (the suffix left out): the error
+    listed the shipped designs only; it now names mydrive.toml."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mydrive.toml").write_text(template("cycloid", name="mydrive"))
+    with pytest.raises(RvtoolInputError, match=r"the file 'mydrive\.toml' exists"):
+        topologies.resolve_design_path("mydrive")
+    with pytest.raises(RvtoolInputError) as exc:
+        topologies.resolve_design_path("nothing_here")
+    assert "exists" not in str(exc.value)

@@ -263,7 +263,9 @@ def resolve_design_path(design):
     stem = str(design)[:-5] if str(design).endswith(".toml") else str(design)
     if stem in designs.design_names():
         return designs.path(stem)
-    raise RvtoolInputError(f"design = {str(design)!r} is neither a design file nor a shipped design; "
+    hint = f" (the file {str(design) + '.toml'!r} exists: give its name with .toml)" \
+        if Path(str(design) + ".toml").is_file() else ""
+    raise RvtoolInputError(f"design = {str(design)!r} is neither a design file nor a shipped design{hint}; "
                            f"shipped designs are {designs.design_names()}")
 
 
