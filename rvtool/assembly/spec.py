@@ -586,7 +586,8 @@ def build_section(cls, section, data):
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = set(data) - set(fields)
     if unknown:
-        raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are "
+        where = "the top level" if section == "design" else f"[{section}]"   # "design": the file's top level
+        raise RvtoolInputError(f"{where} has unknown keys {sorted(unknown)}; valid keys are "
                                f"{file_keys(cls)}{_did_you_mean(unknown, file_keys(cls))}")
     hints = _field_types(cls)
     kw = {}
