@@ -234,3 +234,18 @@ def test_design_name_without_toml_points_at_the_file(tmp_path, monkeypatch):
     with pytest.raises(RvtoolInputError) as exc:
         topologies.resolve_design_path("nothing_here")
     assert "exists" not in str(exc.value)
+
+
+def test_interference_is_named_as_geometry_not_as_rated_torque():
+    """The cycloid template with wheels.eccentricity 0.0008 -> 0.0009 m (profile generated with
+    0.0008 m): the wheels are pressed 0.1 mm into the pins. Before: "rated_torque = 140 N m: the
+    needles contacts reach a Hertz peak of 6.734 GPa ...; valid range: 0 < rated_torque <= 98.88 N m",
+    a torque limit that does not exist (at 1.4e-4 N m the needles are at 6.73 GPa already)."""
+    from rvtool.analysis.admissible import check_rated_state
+    d = rvtool.replace_design(rvtool.load_design("rd40"), wheels={"eccentricity": 0.0009})
+    with pytest.raises(RvtoolInputError) as exc:
+        check_rated_state(d, lambda: rvtool.build(d))
+    msg = str(exc.value)
+    assert "already at 0.00014 N m" in msg and "no rated_torque is admissible" in msg, msg
+    assert "wheels.eccentricity = 0.0009 m exceeds profile.generating_eccentricity = 0.0008 m" in msg, msg
+    assert "rated_torque <=" not in msg, msg
