@@ -249,3 +249,21 @@ def test_interference_is_named_as_geometry_not_as_rated_torque():
     assert "already at 0.00014 N m" in msg and "no rated_torque is admissible" in msg, msg
     assert "wheels.eccentricity = 0.0009 m exceeds profile.generating_eccentricity = 0.0008 m" in msg, msg
     assert "rated_torque <=" not in msg, msg
+
+
+def test_paths_the_docs_create_in_the_checkout_are_ignored():
+    """docs/install.md creates the virtual environment in the checkout (``python -m venv .venv``):
+    .venv/ was not in .gitignore, so `git status` listed the whole environment and `git add -A`
+    would commit it. Every path the install and getting-started pages create in the checkout is
+    ignored."""
+    import shutil
+    import subprocess
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    if shutil.which("git") is None or not (root / ".git").exists():
+        pytest.skip("not a git checkout")
+    install = (root / "docs" / "install.md").read_text()
+    assert "python -m venv .venv" in install                   # what the page tells a user to run
+    for path in (".venv/bin/python", "docs/_build/html/index.html", "results/rd40/results.json"):
+        proc = subprocess.run(["git", "check-ignore", "-q", path], cwd=root)
+        assert proc.returncode == 0, f"{path} is not ignored by .gitignore"
