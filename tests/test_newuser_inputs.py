@@ -267,3 +267,19 @@ def test_paths_the_docs_create_in_the_checkout_are_ignored():
     for path in (".venv/bin/python", "docs/_build/html/index.html", "results/rd40/results.json"):
         proc = subprocess.run(["git", "check-ignore", "-q", path], cwd=root)
         assert proc.returncode == 0, f"{path} is not ignored by .gitignore"
+
+
+def test_equidistant_mod_has_a_range_and_a_negative_generating_radius_is_refused(tmp_path):
+    """Before: the template said ``equidistant_mod = 0.0 # valid: constrained by other keys: the profile
+    is undercut or pointed: generating radius VALUE m exceeds ...`` and a large negative value
+    (pin_radius + equidistant_mod < 0, a generating circle of negative radius) was accepted. RD-40:
+    r_p = 3 mm, the epitrochoid's smallest convex curvature radius 4.74877 mm (the number the old
+    message quoted), so equidistant_mod lies in (-0.003, 0.00174877) m."""
+    rows = {key: rng for sec, key, value, unit, rng, meaning, required in key_table("cycloid") if sec == "profile"}
+    assert rows["equidistant_mod"] == "(-0.003, 0.00174877)", rows["equidistant_mod"]
+    for bad in (-0.0031, 0.0018):
+        table = _template_table("cycloid")
+        table["profile"]["equidistant_mod"] = bad
+        with pytest.raises(RvtoolInputError, match=r"profile\.equidistant_mod = .* is outside the valid range "
+                                                   r"\(-0\.003, 0\.00174877\) m"):
+            _load(tmp_path, table)
