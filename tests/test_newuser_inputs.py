@@ -121,9 +121,9 @@ def test_n_wheels_range_and_what_else_to_change(topology, tmp_path):
         _load(tmp_path, table)
     table["wheels"]["midplanes"] = [0.0]
     table["wheels"]["phases_deg"] = [0.0]
-    table["output_pins"].pop("wheel_midplanes", None)
-    table["output_pins"]["gap_offsets"] = [0.0]
-    assert _load(tmp_path, table).n_wheels == 1     # the steps docs/guide/cycloid.md lists
+    # the template leaves output_pins.wheel_midplanes and gap_offsets commented out: they follow
+    assert "wheel_midplanes" not in table["output_pins"] and "gap_offsets" not in table["output_pins"]
+    assert _load(tmp_path, table).n_wheels == 1     # the three keys docs/guide/cycloid.md lists
 
 
 def test_std_involute_has_marker_frequencies():

@@ -307,6 +307,9 @@ def _field_rows(path, cls, fields, kw, raw, links, set_by_design):
         if f.name in links.get(path, {}) and f.name not in raw and key not in raw:
             meaning = f"{meaning} {LEFT_OUT.format(links[path][f.name])}".strip()
             required = False
+        elif f.default is None and value is not None and f.name not in raw and key not in raw:
+            # a default the spec fills in from other keys (e.g. output_pins.gap_offsets: one 0 per wheel)
+            meaning = f"{meaning} {LEFT_OUT.format('filled in by the spec from the other keys')}".strip()
         rows.append((path, key, shown, unit, rng, meaning, required))
     return rows + subs
 
