@@ -283,3 +283,17 @@ def test_equidistant_mod_has_a_range_and_a_negative_generating_radius_is_refused
         with pytest.raises(RvtoolInputError, match=r"profile\.equidistant_mod = .* is outside the valid range "
                                                    r"\(-0\.003, 0\.00174877\) m"):
             _load(tmp_path, table)
+
+
+def test_misspelt_case_name_suggests_the_case(tmp_path):
+    """`rvtool run cycloid_singel --quick` printed the whole list of cases (50 names) and no hint."""
+    from rvtool import cli
+    (tmp_path / "cycloid").mkdir()
+    (tmp_path / "cycloid" / "cycloid_single.py").write_text('"""A case."""\ndef main(argv=None):\n    pass\n')
+    (tmp_path / "rv").mkdir()
+    (tmp_path / "rv" / "rv_two_stage.py").write_text('"""A case."""\ndef main(argv=None):\n    pass\n')
+    with pytest.raises(LookupError, match=r"did you mean 'cycloid/cycloid_single'\?"):
+        cli.resolve_case("cycloid_singel", tmp_path)
+    with pytest.raises(LookupError) as exc:
+        cli.resolve_case("zzzz", tmp_path)
+    assert "did you mean" not in str(exc.value)
