@@ -297,3 +297,19 @@ def test_misspelt_case_name_suggests_the_case(tmp_path):
     with pytest.raises(LookupError) as exc:
         cli.resolve_case("zzzz", tmp_path)
     assert "did you mean" not in str(exc.value)
+
+
+def test_failed_te_names_the_backend_that_failed(tmp_path, monkeypatch):
+    """A failed TE wrote ``"reason": "SolverFailure: no plausible static equilibrium ..."`` and empty
+    settings: nothing said that auto had run the replica (whose cold segment starts failed where
+    Exudyn's march solved). The reason now names the backend."""
+    from rvtool.errors import SolverFailure
+    from rvtool.protocols import precision
+
+    def fail(*args, **kwargs):
+        raise SolverFailure("no plausible static equilibrium at input angles [2.258] rad")
+    monkeypatch.setattr(precision, "quasi_static_te", fail)
+    res = rvtool.analyze(rvtool.load_design("rd40"), "te", quick=True, out_dir=str(tmp_path / "out"))
+    te = res["te"]
+    assert te.status == "failed"
+    assert "no plausible static equilibrium" in te.reason and "[backend 'exudyn', requested 'auto']" in te.reason, te.reason
