@@ -179,6 +179,10 @@ def test_template_meanings_read_as_sentences(topology):
         where = f"{topology}: {sec}.{key}: {meaning!r}"
         assert not re.match(r"^[\[/),;:]|^class:", meaning), where
         assert ", ," not in meaning and "the load of that" not in meaning, where
+        # a "(file: ``NAME_deg``; ...)" note cut to "...)" (std wheels.phases_deg, crank_bearing.cone_angle_deg)
+        plain = re.sub(r"[\[(][^\[\]()]*,[^\[\]()]*[\])]", "", meaning)    # intervals such as [0, pi/2)
+        assert plain.count("(") == plain.count(")"), where
+        assert "() =" not in meaning, where                         # TOML has no (): an empty list is []
 
 
 def test_std_involute_light_load_cold_start_solves():

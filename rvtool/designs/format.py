@@ -303,6 +303,8 @@ def _field_rows(path, cls, fields, kw, raw, links, set_by_design):
                 shown = raw.get(key, None if value is None else [
                     [_degrees(x) if j in cols else x for j, x in enumerate(row)] for row in value])
             rng = angle_range(cls, kw, f.name) if f.name in kw else ""
+            # "(file: ``NAME_deg``)" says what the key above says; "(file: ``NAME_deg``; more)" keeps "(more)"
+            meaning = re.sub(r"\(file: ``[^`]*``;\s*", "(", meaning)
             meaning = re.sub(r"\s*\(file: ``[^`]*``\)?|\s*\[rad\]", "", meaning).strip(" ,;")
         if f.name in links.get(path, {}) and f.name not in raw and key not in raw:
             meaning = f"{meaning} {LEFT_OUT.format(links[path][f.name])}".strip()
