@@ -317,3 +317,15 @@ def test_failed_te_names_the_backend_that_failed(tmp_path, monkeypatch):
     te = res["te"]
     assert te.status == "failed"
     assert "no plausible static equilibrium" in te.reason and "[backend 'exudyn', requested 'auto']" in te.reason, te.reason
+
+
+def test_output_pin_slices_have_an_upper_bound(tmp_path):
+    """``output_pins.n_slices = 1000000`` (valid range "[1, inf)") made `rvtool analyze --quick
+    --protocols stiffness` build for more than 90 s without a word (killed); the wheels' slices stop
+    at 64 for that reason. The bound is stated in the template and enforced."""
+    rows = {(sec, key): rng for sec, key, value, unit, rng, meaning, required in key_table("cycloid")}
+    assert rows[("output_pins", "n_slices")] == "[1, 64] (integer)", rows[("output_pins", "n_slices")]
+    table = _template_table("cycloid")
+    table["output_pins"]["n_slices"] = 1000000
+    with pytest.raises(RvtoolInputError, match=r"output_pins\.n_slices = 1000000 is outside the valid range \[1, 64\]"):
+        _load(tmp_path, table)
