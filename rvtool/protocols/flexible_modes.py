@@ -76,7 +76,7 @@ class _Layout:
     def __init__(self, model, full):
         fw = model.flexible
         self.nb = len(model.body_names)
-        self.wheels = [1 + k for k in range(fw.nw)]
+        self.wheels = list(fw.frames)
         self.full = full
         self.ops = fw.operators
         self.models = [m.model for m in fw.meshes]
@@ -108,8 +108,9 @@ class _Layout:
         return out.tocsr()
 
     def fit(self, k):
-        """(3, n_fe) sparse: the full model's frame of wheel k, x and y the bore's mean translation,
-        theta the mean rotation of the profile stations about the centre (both sparse rows)."""
+        """(3, n_fe) sparse: the full model's frame of wheel k, x and y the bore's mean translation
+        (a wheel without a central bore, the RV's: the mean translation of its holes, the crank
+        bores), theta the mean rotation of the profile stations about the centre (sparse rows)."""
         if k not in self._E:
             ops = self.ops[k]
             m = self.models[k]
@@ -118,7 +119,13 @@ class _Layout:
             x, y = P[0::2] @ pos, P[1::2] @ pos
             r2 = x * x + y * y
             theta = (sp.diags(-y / r2) @ P[0::2] + sp.diags(x / r2) @ P[1::2]).mean(axis=0)
-            self._E[k] = sp.vstack([ops.bore[:2], sp.csr_matrix(theta)]).tocsr()
+            if ops.bore is not None:
+                xy = ops.bore[:2]
+            else:
+                nh = ops.holes.shape[0] // 2
+                avg = sp.csr_matrix(np.full((1, nh), 1.0 / nh))
+                xy = sp.vstack([avg @ ops.holes[0::2], avg @ ops.holes[1::2]])
+            self._E[k] = sp.vstack([sp.csr_matrix(xy), sp.csr_matrix(theta)]).tocsr()
         return self._E[k]
 
     def elastic_of(self, k, A):

@@ -267,6 +267,8 @@ class RvModel(ReducerModel):
     housing: object = None
     #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
     guided_free_play: bool = True
+    #: RvFlexibleWheels (wheels.dynamics.model = "flexible", :mod:`.flexible_wheels`), or None (rigid wheels)
+    flexible: object = None
 
     def _pose(self, name, q):
         el = self.elements[name]
@@ -394,6 +396,9 @@ class RvModel(ReducerModel):
                                                    mb.contact_angle)}
         if self.layout.three_stage:
             out["input_stage_mesh_hz"] = d.input_pinion.n_teeth * f_in
+        if self.flexible is not None:
+            # the flexible wheels' retained in-plane free-free modes (body modes beside the mesh and bearings)
+            out["wheel_modes_hz"] = sorted({float(f) for b in self.flexible.bodies for f in b.frequencies_hz})
         return out
 
     def refined_design(self):
@@ -863,9 +868,6 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     if not isinstance(design, RVDesign):
         raise RvtoolInputError(f"design must be an RVDesign; got {type(design).__name__}")
     d = design
-    if d.wheels.dynamics.flexible:
-        raise RvtoolInputError("wheels.dynamics.model = 'flexible' is implemented for the cycloid topology only (issue "
-                               "33: RD-40 first); valid for an RV design: 'rigid'")
     graph = GearGraph.of(d)
     L = Layout(d)
     kin = RvKinematics(d, graph, L)
@@ -911,13 +913,20 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
     wheel_path = ported_wheels(d, graph, L, meshes, opts)
     housing, ports, meshes = ported_ring(mbs, d, L, meshes)
+    flex = None
+    if d.wheels.dynamics.flexible:
+        # floating flexible wheels (issue 33): the pins and the needles on the wheels' port bodies
+        from .flexible_wheels import RvFlexibleWheels
+        flex = RvFlexibleWheels(mbs, d, mg, graph, L)
+        meshes = flex.pin_meshes(meshes)
 
     def pin_set_of(meshes, n_bodies):
         return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
                              search=d.wheels.search, **opts)
     pin_set = groove_pins(d, L, pin_set_of, meshes, ports) if wheel_path is None else wheel_path
     if pin_set is None:
-        pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
+        pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual) if flex is None
+                             else flex.n_pin_bodies)
     tilt, rows = spatial_bodies(mbs, d, L, (m_w, J_w), housing, regularization)
     main_mounting = Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)
     if b.spatial_carrier:
@@ -941,6 +950,8 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
             needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
             if b.spatial_cranks:
                 needles = spatial_needles(d, graph, L, tilt, rows, opts)
+            if flex is not None:
+                needles = flex.needles(opts)
         else:
             needles = torsion_crank_path(d, graph, L, C_torsion, opts, tilt, rows)
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
@@ -961,17 +972,20 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         pin_set = skewed(pin_set, d, L, tilt, rows)
         crank_path = tuple((nm, f if nm == "gears" or f.n_bodies != L.n_bodies else skewed(f, d, L, tilt, rows))
                            for nm, f in crank_path)
-    element = ContactElements(mbs, nodes, contact_element, structure=housing if tilt is None else tilt)
+    element = ContactElements(mbs, nodes, contact_element, structure=(housing if tilt is None else tilt)
+                              if flex is None else flex.coordinates)
 
-    def on_tilts(f):
+    def on_tilts(f, name=None):
+        if flex is not None and name in flex.families:
+            return flex.ports(name)
         return tilt if tilt is not None and f.n_bodies > L.n_bodies else None
     if wheel_path is None:
-        elements = {"pins": element(pin_set, ports=ports if tilt is None else on_tilts(pin_set))}
+        elements = {"pins": element(pin_set, ports=ports if tilt is None and flex is None else on_tilts(pin_set, "pins"))}
     else:
         # the elastic wheels: pins and needles in one closure; the gears alone
         elements = {"wheel_bodies": element(wheel_path)}
         crank_path = (("gears", gears),)
-    elements.update((name, element(s, ports=on_tilts(s))) for name, s in (*crank_path, ("crank_bearings", cranks)))
+    elements.update((name, element(s, ports=on_tilts(s, name))) for name, s in (*crank_path, ("crank_bearings", cranks)))
     elements["main_bearings"] = element(main, ports=on_tilts(main))
     if d.bearing_friction.model != "none":
         # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
@@ -995,12 +1009,14 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                     for fam, name in FAMILY_ELEMENTS.items()}
     return RvModel(design=d, SC=SC, mbs=mbs, body_names=L.names(), nodes=nodes, elements=elements, families=families,
                    input=BodyCoordinate(L.names()[0], "theta"), output=BodyCoordinate("carrier", "theta"),
-                   ratio=graph.ratio, kinematics=kin, drive=drive, load=load, reference=ref, locks=locks,
+                   ratio=graph.ratio, kinematics=kin, drive=drive, load=load, reference=ref,
+                   locks=locks + ([] if flex is None else flex.coordinates.locks),
                    reg_springs=reg_springs, main_mesh=Family.PINS, material=d.material,
                    family_specs={Family.PINS: tuple(meshes), Family.ECCENTRIC_BEARINGS: d.eccentric_bearing,
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
-                   structures={} if housing is None else {"housing": housing},
+                   structures=({} if housing is None else {"housing": housing}) if flex is None
+                   else {"wheels": flex.coordinates},
                    graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
                    housing=housing, contact_host=element.host, carrier_tilt=tilt if b.spatial_carrier else None,
-                   body_tilts=tilt)
+                   body_tilts=tilt, flexible=flex)

@@ -389,7 +389,8 @@ class FusedBackend(Backend):
         if not self._task(task):
             return Support.of([f"fused does not implement {task!r} (driven runs only; equilibria: 'device')"])
         from ..device_dynamics import fused_support
-        reasons = spatial_body_reasons(model)
+        # floating flexible bodies (any topology: an RV model's too) are named before the topology
+        reasons = spatial_body_reasons(model) + flexible_body_reasons(model)
         if not reasons:
             try:
                 reasons = list(fused_support(model, run.run_spec if run is not None else None).reasons)
