@@ -271,3 +271,86 @@ def mounted_modes(model, q, *, n=12, full=False):
         raise RvtoolInputError(f"only {len(keep)} in-plane modes among the {k} lowest of the full model; valid: n <= "
                                f"{len(keep)}")
     return {"frequencies_hz": _frequencies(lam[keep], n), "asymmetry": asym, "in_plane": frac[keep]}
+
+
+def crank_linear_model(model, q, *, full=False):
+    """(K, M, free, asymmetry) of the RV model with flexible cranks (``cranks.dynamics.model =
+    "flexible"``, :mod:`rvtool.assembly.rv.flexible_cranks`) linearized at the static state q,
+    every crank's elastic field on a basis B: its retained basis (``full=False``: the mounted
+    reduced model the dynamic runs integrate) or every elastic mode of its beam FE (``full=True``:
+    the full FE of the same assembly, the crank beam's every coordinate less its five rigid
+    modes; the frame holds the tilts as the planar crank does).
+
+    Coordinates X: 3 per body (the cranks' frames included), then per crank the coordinates on B.
+    Each family on the cranks contributes C^T (-J_b) C, with J_b the contact law's tangent over
+    [rigid bodies; virtual bodies] and C = d[x_rigid; x_v]/dX: a virtual body's row is its base's
+    plus R(theta) S_v B on its crank's block (S_v the station operators on the beam's FE
+    coordinates) plus the frame-rotation term dR S_v e* (e* the elastic field at q). The beam
+    block is diag(omega^2) and its mass the identity (B is M-orthonormal and K-diagonal); the
+    bodies' mass is Exudyn's; the regularization springs act on the frames."""
+    fc = model.flexible_cranks
+    if fc is None:
+        raise RvtoolInputError("the model has no flexible cranks (cranks.dynamics.model = 'flexible')")
+    from ..assembly.rv.flexible_cranks import crank_body
+    nb = len(model.body_names)
+    body = crank_body(model.design, full=full) if full else fc.body
+    beam = fc.body.beam
+    B = body.basis
+    m = B.shape[1]
+    n = 3 * nb + fc.nc * m
+    zeta_idx = model.structures["cranks"].coordinate_indices()
+    pose = np.array([model.body_pose(q, b) for b in range(nb)])
+    e_star = [fc.body.basis @ q[zeta_idx][fc.coordinates.slice(f"crank{k}")] for k in range(fc.nc)]
+    R3 = np.zeros((3 * nb, n))
+    R3[:, :3 * nb] = np.eye(3 * nb)
+    K = np.zeros((n, n))
+    asym = 0.0
+    for name, el in model.elements.items():
+        ql = np.asarray(el.local(q), float)
+        p, v = el.pose_velocity(ql, np.zeros(len(ql)))
+        J = np.asarray(el.evaluator.evaluate(p, v, check=False).dQdq, float)
+        if el.ports is None:
+            C = R3
+        else:
+            fam = fc.families[name]
+            S = fam.operator(beam)                                   # (n_v, 3, n_fe)
+            rows = []
+            for i in range(len(fam.frame)):
+                k, f = int(fam.crank[i]), int(fam.frame[i])
+                Rm, dR = _rot(pose[f, 2])
+                r = np.zeros((3, n))
+                r[:, 3 * f:3 * f + 3] = np.eye(3)                    # base = frame: the crank itself
+                blk = slice(3 * nb + k * m, 3 * nb + (k + 1) * m)
+                r[:2, blk] = Rm @ (S[i][:2] @ B)
+                r[2, blk] = S[i][2] @ B
+                r[:2, 3 * f + 2] += dR @ (S[i][:2] @ e_star[k])
+                rows.append(r)
+            C = np.vstack([R3] + rows)
+        asym = max(asym, np.abs(J - J.T).max() / max(np.abs(J).max(), 1e-300))
+        K += C.T @ (-J) @ C
+    for k in range(fc.nc):
+        s = 3 * nb + k * m
+        K[s:s + m, s:s + m] += np.diag(body.omega2)
+    glob = {model.coordinate_index(b, c): (b, c) for b in range(nb) for c in range(3)}
+    for i, kk in model.regularization_stiffness():
+        if i in glob:
+            b, c = glob[i]
+            K[3 * b + c, 3 * b + c] += kk
+    Mx = system_mass(model)
+    M = np.zeros((n, n))
+    g = [model.coordinate_index(b, c) for b in range(nb) for c in range(3)]
+    M[:3 * nb, :3 * nb] = Mx[np.ix_(g, g)]
+    M[3 * nb:, 3 * nb:] = np.eye(fc.nc * m)
+    held = [3 * glob[i][0] + glob[i][1] for i in model.fixed_coordinates() if i in glob]
+    free = np.setdiff1d(np.arange(n), held)
+    return K, M, free, asym
+
+
+def crank_modes(model, q, *, n=12, full=False):
+    """dict(frequencies_hz (n,), asymmetry, n_coordinates): the n lowest modes of the RV model with
+    flexible cranks linearized at q, mounted (reduced) or with every elastic mode of the crank beam
+    (``full``; :func:`crank_linear_model`), from the symmetric part of K."""
+    K, M, free, asym = crank_linear_model(model, q, full=full)
+    Kf, Mf = K[np.ix_(free, free)], M[np.ix_(free, free)]
+    lam = sla.eigh(0.5 * (Kf + Kf.T), Mf, eigvals_only=True)
+    return {"frequencies_hz": _frequencies(lam, n), "asymmetry": asym, "n_coordinates": int(len(free))}

@@ -269,6 +269,8 @@ class RvModel(ReducerModel):
     guided_free_play: bool = True
     #: RvFlexibleWheels (wheels.dynamics.model = "flexible", :mod:`.flexible_wheels`), or None (rigid wheels)
     flexible: object = None
+    #: FlexibleCranks (cranks.dynamics.model = "flexible", :mod:`.flexible_cranks`), or None (rigid cranks)
+    flexible_cranks: object = None
 
     def _pose(self, name, q):
         el = self.elements[name]
@@ -399,6 +401,9 @@ class RvModel(ReducerModel):
         if self.flexible is not None:
             # the flexible wheels' retained in-plane free-free modes (body modes beside the mesh and bearings)
             out["wheel_modes_hz"] = sorted({float(f) for b in self.flexible.bodies for f in b.frequencies_hz})
+        if self.flexible_cranks is not None:
+            # the flexible cranks' retained modes (free-free bending and torsion, then the static Ritz vectors)
+            out["crank_modes_hz"] = sorted({float(f) for f in self.flexible_cranks.body.frequencies_hz})
         return out
 
     def refined_design(self):
@@ -919,6 +924,12 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         from .flexible_wheels import RvFlexibleWheels
         flex = RvFlexibleWheels(mbs, d, mg, graph, L)
         meshes = flex.pin_meshes(meshes)
+    fcr = None
+    if d.cranks.dynamics.flexible:
+        # floating flexible cranks (issue 33): the gears, needles and tapered pairs on the cranks' stations
+        from .flexible_cranks import FlexibleCranks
+        fcr = FlexibleCranks(mbs, d, mg, graph, L)
+    floating = flex or fcr          # the flexible bodies' modal structure (one per build)
 
     def pin_set_of(meshes, n_bodies):
         return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
@@ -941,16 +952,22 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                                                      **opts), tilt.n_virtual, rows)
     else:
         cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
+        if fcr is not None:
+            cranks = fcr.crank_bearings(crank_mountings(d, graph, L), opts)
     C_crank = crank_station_compliance(d)
     C_torsion = crank_torsion_compliance(d)
     cranks = ported_carrier(d, graph, L, cranks, opts)     # the rigid carrier's set unless carrier.body = "ported"
     if C_crank is None:
         gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
+        if fcr is not None:
+            gears = fcr.gears(gear_meshes(d, graph, L), opts)
         if C_torsion is None:
             needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
             if b.spatial_cranks:
                 needles = spatial_needles(d, graph, L, tilt, rows, opts)
-            if flex is not None:
+            if fcr is not None:
+                needles = fcr.needles(needle_mountings(d, graph, L), opts)
+            elif flex is not None:
                 needles = flex.needles(opts)
         else:
             needles = torsion_crank_path(d, graph, L, C_torsion, opts, tilt, rows)
@@ -973,14 +990,15 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         crank_path = tuple((nm, f if nm == "gears" or f.n_bodies != L.n_bodies else skewed(f, d, L, tilt, rows))
                            for nm, f in crank_path)
     element = ContactElements(mbs, nodes, contact_element, structure=(housing if tilt is None else tilt)
-                              if flex is None else flex.coordinates)
+                              if floating is None else floating.coordinates)
 
     def on_tilts(f, name=None):
-        if flex is not None and name in flex.families:
-            return flex.ports(name)
+        if floating is not None and name in floating.families:
+            return floating.ports(name)
         return tilt if tilt is not None and f.n_bodies > L.n_bodies else None
     if wheel_path is None:
-        elements = {"pins": element(pin_set, ports=ports if tilt is None and flex is None else on_tilts(pin_set, "pins"))}
+        elements = {"pins": element(pin_set, ports=ports if tilt is None and floating is None else
+                                         on_tilts(pin_set, "pins"))}
     else:
         # the elastic wheels: pins and needles in one closure; the gears alone
         elements = {"wheel_bodies": element(wheel_path)}
@@ -1010,13 +1028,13 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     return RvModel(design=d, SC=SC, mbs=mbs, body_names=L.names(), nodes=nodes, elements=elements, families=families,
                    input=BodyCoordinate(L.names()[0], "theta"), output=BodyCoordinate("carrier", "theta"),
                    ratio=graph.ratio, kinematics=kin, drive=drive, load=load, reference=ref,
-                   locks=locks + ([] if flex is None else flex.coordinates.locks),
+                   locks=locks + ([] if floating is None else floating.coordinates.locks),
                    reg_springs=reg_springs, main_mesh=Family.PINS, material=d.material,
                    family_specs={Family.PINS: tuple(meshes), Family.ECCENTRIC_BEARINGS: d.eccentric_bearing,
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
-                   structures=({} if housing is None else {"housing": housing}) if flex is None
-                   else {"wheels": flex.coordinates},
+                   structures=({} if housing is None else {"housing": housing}) if floating is None
+                   else {"wheels" if fcr is None else "cranks": floating.coordinates},
                    graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
                    housing=housing, contact_host=element.host, carrier_tilt=tilt if b.spatial_carrier else None,
-                   body_tilts=tilt, flexible=flex)
+                   body_tilts=tilt, flexible=flex, flexible_cranks=fcr)
