@@ -291,9 +291,8 @@ def crank_linear_model(model, q, *, full=False):
     fc = model.flexible_cranks
     if fc is None:
         raise RvtoolInputError("the model has no flexible cranks (cranks.dynamics.model = 'flexible')")
-    from ..assembly.rv.flexible_cranks import crank_body
     nb = len(model.body_names)
-    body = crank_body(model.design, full=full) if full else fc.body
+    body = fc.full_body() if full else fc.body
     beam = fc.body.beam
     B = body.basis
     m = B.shape[1]

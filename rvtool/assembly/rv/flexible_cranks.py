@@ -171,6 +171,11 @@ class FlexibleCranks:
         mounts = [dataclasses.replace(m, inner=of[m.inner]) for m in mounts]
         return TaperedBearingSet(mounts, self.n_rigid + self.nc, name="crank_bearings", **opts)
 
+    def full_body(self):
+        """The crank's :class:`~rvtool.structure.crank_modes.CrankModalBody` with every elastic
+        mode of its beam FE (the full FE the reduction is compared with)."""
+        return crank_body(self.design, full=True)
+
     def summary(self):
         """Reported facts of the flexible cranks: beam nodes and mass, retained frequencies [Hz]."""
         b = self.body
