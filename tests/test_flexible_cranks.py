@@ -107,7 +107,6 @@ def test_mounted_crank_modes_against_the_full_beam(flex_model, rated_state):
 
 @pytest.mark.parametrize("section, change, key", [
     ("cranks", {"shaft": {"model": "simply_supported"}}, "cranks.shaft.model"),
-    ("wheels", {"dynamics": {"model": "flexible"}}, "wheels.dynamics.model"),
     ("bodies", {"crank_coordinates": "spatial"}, "bodies.crank_coordinates"),
     ("carrier", {"body": "ported"}, "carrier.body"),
 ])
@@ -132,3 +131,37 @@ def test_backends_markers_and_a_short_driven_run(rv40e, flex_model):
                                 sample_step=2e-5)
     run = V.driven_response(flex_model, proto, RunSpec(end_time=duration, step=2e-5, abs_tol=1e-6, rel_tol=1e-8))
     assert run["record"].accepted_steps >= 10 and np.all(np.isfinite(run["responses"]["torsion"]))
+
+
+def test_flexible_wheels_and_cranks_share_one_modal_structure(rv40e):
+    # both switches on: one modal structure (wheels, then cranks), the needle rows between two virtual bodies;
+    # frozen both = rigid, and each frozen flag holds its own bodies only
+    from rvtool.protocols.precision import quasi_static_te
+    coarse = {"mesh_size": 0.006, "samples_per_tooth": 4}
+
+    def both(wf, cf):
+        d = replace(flexible(rv40e, frozen=cf), wheels={"dynamics": {"model": "flexible", "n_modes": 4,
+                                                                     "static_orders": 1, "frozen": wf},
+                                                        "structure": coarse})
+        return rvtool.build(d)
+    rigid = rvtool.build(rv40e)
+    angles = np.arange(2) * rigid.mesh_period / 2
+    frozen = both(True, True)
+    fb = frozen.structures["flexible_bodies"]
+    assert frozen.flexible is not None and frozen.flexible_cranks is not None
+    assert fb is frozen.flexible.coordinates is frozen.flexible_cranks.coordinates
+    assert set(fb.coordinate_indices()) <= frozen.fixed_coordinates()
+    te_r = np.asarray(quasi_static_te(rigid, torque=rv40e.rated_torque, input_angles=angles)["te"])
+    te_f = np.asarray(quasi_static_te(frozen, torque=rv40e.rated_torque, input_angles=angles)["te"])
+    assert np.abs(te_f - te_r).max() * 206264.8 < 1e-6
+    m = both(False, True)
+    held = set(m.fixed_coordinates())
+    idx = m.structures["flexible_bodies"].coordinate_indices()
+    assert not set(idx[fb.slice("wheel0")]) & held and set(idx[fb.slice("crank0")]) <= held
+    needles = m.elements["eccentric_bearings"].evaluator
+    nm = len(needles.mountings)
+    assert all(mt.inner == m.layout.n_bodies + i and mt.outer == m.layout.n_bodies + nm + i
+               for i, mt in enumerate(needles.mountings))
+    from rvtool.protocols.flexible_modes import crank_modes
+    with pytest.raises(RvtoolInputError, match="not implemented"):
+        crank_modes(m, np.zeros(1))

@@ -172,9 +172,10 @@ class FloatingWheels:
     of the contact elements (the virtual bodies follow them); pins: (z_b, 2) [m] the ring-pin
     centres (the contact locator). ``bodies``, ``meshes``, ``operators``: per wheel k;
     ``families`` maps contact-element names to their :class:`PortFamily` (filled by the topology,
-    :meth:`family`)."""
+    :meth:`family`); coordinates: a :class:`~exudyn_user_elements.floating_ports.ModalCoordinates`
+    shared with other flexible bodies (holding ``wheel{k}``), or None (the wheels' own)."""
 
-    def __init__(self, mbs, design, ground_marker, got, frames, n_rigid, pins):
+    def __init__(self, mbs, design, ground_marker, got, frames, n_rigid, pins, coordinates=None):
         from exudyn_user_elements.floating_ports import ModalCoordinates
         d = design
         self.design = d
@@ -185,8 +186,10 @@ class FloatingWheels:
         self.bodies = [g[0] for g in got]
         self.meshes = [g[1] for g in got]
         self.operators = [g[2] for g in got]
-        self.coordinates = ModalCoordinates(mbs, {f"wheel{k}": b for k, b in enumerate(self.bodies)},
-                                            frozen=d.wheels.dynamics.frozen, ground_marker=ground_marker)
+        # one modal structure per build: a shared one (coordinates: with other flexible bodies) or the wheels' own
+        self.coordinates = coordinates or ModalCoordinates(mbs, {f"wheel{k}": b for k, b in enumerate(self.bodies)},
+                                                           frozen=d.wheels.dynamics.frozen,
+                                                           ground_marker=ground_marker)
         self.n_eta = self.coordinates.n
         self.families = {}
 
@@ -242,15 +245,18 @@ class FloatingWheels:
             return FloatingPorts(self.coordinates, self.n_rigid, fam.base, fam.frame, fam.sign, maps,
                                  (lambda pose: maps(pose, True)) if split else None)
 
-        def table(load):
-            A = np.zeros((len(fam.base), 3, self.n_eta))
-            for v, k in enumerate(fam.wheel):
-                b = self.bodies[k]
-                A[v, :, self._columns(k)] = (b.map_of("bore", load) if fam.kind == "bore" else
-                                             np.vstack([b.map_of("holes", load)[fam.port[v]], np.zeros(b.n_modes)]))
-            return A
-        return FloatingPorts(self.coordinates, self.n_rigid, fam.base, fam.frame, fam.sign, table(False),
-                             table(True) if split else None)
+        return FloatingPorts(self.coordinates, self.n_rigid, fam.base, fam.frame, fam.sign, self.table(name),
+                             self.table(name, True) if split else None)
+
+    def table(self, name, load=False):
+        """(n_v, 3, n_eta) the constant port maps of a bore or hole family ``name`` (measured, or ``load``)."""
+        fam = self.families[name]
+        A = np.zeros((len(fam.base), 3, self.n_eta))
+        for v, k in enumerate(fam.wheel):
+            b = self.bodies[k]
+            A[v, :, self._columns(k)] = (b.map_of("bore", load) if fam.kind == "bore" else
+                                         np.vstack([b.map_of("holes", load)[fam.port[v]], np.zeros(b.n_modes)]))
+        return A
 
     # -- ring pins ---------------------------------------------------------------
     def pin_bodies(self, k):

@@ -148,6 +148,9 @@ def linear_model(model, q, *, full):
     fw = model.flexible
     if fw is None:
         raise RvtoolInputError("the model has no flexible wheels (wheels.dynamics.model = 'flexible')")
+    if "wheels" not in model.structures:
+        raise RvtoolInputError("the mounted-mode comparison of flexible wheels with other flexible bodies (flexible "
+                               "cranks too) is not implemented; valid: cranks.dynamics.model = 'rigid'")
     L = _Layout(model, full)
     nb = L.nb
     zeta_idx = model.structures["wheels"].coordinate_indices()
@@ -291,6 +294,9 @@ def crank_linear_model(model, q, *, full=False):
     fc = model.flexible_cranks
     if fc is None:
         raise RvtoolInputError("the model has no flexible cranks (cranks.dynamics.model = 'flexible')")
+    if "cranks" not in model.structures:
+        raise RvtoolInputError("the mode comparison of flexible cranks with flexible wheels too is not implemented; "
+                               "valid: wheels.dynamics.model = 'rigid'")
     nb = len(model.body_names)
     body = fc.full_body() if full else fc.body
     beam = fc.body.beam

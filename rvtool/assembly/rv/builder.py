@@ -918,18 +918,15 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
     wheel_path = ported_wheels(d, graph, L, meshes, opts)
     housing, ports, meshes = ported_ring(mbs, d, L, meshes)
-    flex = None
-    if d.wheels.dynamics.flexible:
-        # floating flexible wheels (issue 33): the pins and the needles on the wheels' port bodies
-        from .flexible_wheels import RvFlexibleWheels
-        flex = RvFlexibleWheels(mbs, d, mg, graph, L)
-        meshes = flex.pin_meshes(meshes)
-    fcr = None
-    if d.cranks.dynamics.flexible:
-        # floating flexible cranks (issue 33): the gears, needles and tapered pairs on the cranks' stations
-        from .flexible_cranks import FlexibleCranks
-        fcr = FlexibleCranks(mbs, d, mg, graph, L)
-    floating = flex or fcr          # the flexible bodies' modal structure (one per build)
+    flex = fcr = floating = None
+    if d.wheels.dynamics.flexible or d.cranks.dynamics.flexible:
+        # floating flexible wheels and/or cranks (issue 33), one modal structure: the pins, needles, gears and
+        # tapered pairs on the bodies' port bodies
+        from .flexible_cranks import RvFloatingBodies
+        floating = RvFloatingBodies(mbs, d, mg, graph, L)
+        flex, fcr = floating.wheels, floating.cranks
+        if flex is not None:
+            meshes = flex.pin_meshes(meshes)
 
     def pin_set_of(meshes, n_bodies):
         return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
@@ -965,10 +962,8 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
             needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
             if b.spatial_cranks:
                 needles = spatial_needles(d, graph, L, tilt, rows, opts)
-            if fcr is not None:
-                needles = fcr.needles(needle_mountings(d, graph, L), opts)
-            elif flex is not None:
-                needles = flex.needles(opts)
+            if floating is not None:
+                needles = floating.needles(opts)
         else:
             needles = torsion_crank_path(d, graph, L, C_torsion, opts, tilt, rows)
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
@@ -1034,7 +1029,8 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
                    structures=({} if housing is None else {"housing": housing}) if floating is None
-                   else {"wheels" if fcr is None else "cranks": floating.coordinates},
+                   else {"cranks" if flex is None else "wheels" if fcr is None else "flexible_bodies":
+                         floating.coordinates},
                    graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
                    housing=housing, contact_host=element.host, carrier_tilt=tilt if b.spatial_carrier else None,
                    body_tilts=tilt, flexible=flex, flexible_cranks=fcr)

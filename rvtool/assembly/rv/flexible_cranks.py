@@ -70,8 +70,7 @@ def check_flexible_cranks(design):
         raise RvtoolInputError("cranks.dynamics.model = 'flexible' needs the crank beam's geometry: "
                                + ", ".join(f"cranks.shaft.{nm}" for nm in missing)
                                + " (valid: see rvtool/designs/rv40e.toml [cranks.shaft])")
-    others = {"wheels.dynamics.model": (d.wheels.dynamics.model, "rigid", "one modal structure per build"),
-              "wheels.body": (d.wheels.body, "rigid", "the needles sit inside the wheel closure"),
+    others = {"wheels.body": (d.wheels.body, "rigid", "the needles sit inside the wheel closure"),
               "housing.model": (d.housing.model, "rigid", "the merged element carries one structure"),
               "carrier.body": (d.carrier.body, "rigid", "the tapered pairs sit inside the seat closure"),
               "cranks.shaft.model": (sh.model, "rigid", "the flexible crank carries the beam; counted twice"),
@@ -114,9 +113,10 @@ class FlexibleCranks:
     """The flexible cranks of one RV build (module docstring). mbs; design; ground_marker; graph;
     layout. ``body`` (the :class:`~rvtool.structure.crank_modes.CrankModalBody` every crank
     shares), ``coordinates`` (one :class:`~exudyn_user_elements.floating_ports.ModalCoordinates`
-    of all cranks: ``crank{k}``), ``families`` {element name: :class:`CrankFamily`}."""
+    of all cranks: ``crank{k}``, or the shared one passed as ``coordinates``), ``families``
+    {element name: :class:`CrankFamily`}."""
 
-    def __init__(self, mbs, design, ground_marker, graph, layout):
+    def __init__(self, mbs, design, ground_marker, graph, layout, coordinates=None):
         from exudyn_user_elements.floating_ports import ModalCoordinates
         from .builder import needle_mountings
         check_flexible_cranks(design)
@@ -127,9 +127,9 @@ class FlexibleCranks:
         self.nc = nc
         self.frames = tuple(L.crank(k) for k in range(nc))
         self.n_rigid = L.n_bodies
-        self.coordinates = ModalCoordinates(mbs, {f"crank{k}": self.body for k in range(nc)},
-                                            frozen=d.cranks.dynamics.frozen, ground_marker=ground_marker,
-                                            name="flexible_cranks")
+        self.coordinates = coordinates or ModalCoordinates(mbs, {f"crank{k}": self.body for k in range(nc)},
+                                                           frozen=d.cranks.dynamics.frozen,
+                                                           ground_marker=ground_marker, name="flexible_cranks")
         self.n_eta = self.coordinates.n
         ks = np.arange(nc)
         mounts = needle_mountings(d, graph, L)
@@ -145,10 +145,15 @@ class FlexibleCranks:
         """:class:`~exudyn_user_elements.floating_ports.FloatingPorts` of contact element ``name``."""
         from exudyn_user_elements.floating_ports import FloatingPorts
         fam = self.families[name]
+        return FloatingPorts(self.coordinates, self.n_rigid, fam.base, fam.frame, fam.sign, self.table(name))
+
+    def table(self, name):
+        """(n_v, 3, n_eta) the constant port maps of family ``name``."""
+        fam = self.families[name]
         A = np.zeros((len(fam.frame), 3, self.n_eta))
         for v, (k, st) in enumerate(zip(fam.crank, fam.stations)):
             A[v, :, self.coordinates.slice(f"crank{k}")] = np.mean([self.body.station_maps[s] for s in st], axis=0)
-        return FloatingPorts(self.coordinates, self.n_rigid, fam.base, fam.frame, fam.sign, A)
+        return A
 
     def gears(self, meshes, opts):
         """The involute set with each sun--crank mesh on its crank's gear station body (the
@@ -184,3 +189,65 @@ class FlexibleCranks:
                 "frame_mass_kg": self.design.cranks.mass, "n_modes": self.design.cranks.dynamics.n_modes,
                 "n_coordinates": b.n_modes, "frequencies_hz": b.frequencies_hz.tolist(),
                 "frozen": self.design.cranks.dynamics.frozen}
+
+
+class RvFloatingBodies:
+    """The flexible bodies of one RV build, wheels and/or cranks, on one modal structure
+    (``coordinates``: ``wheel{j}`` then ``crank{k}``; each switch's ``frozen`` holds its own
+    bodies). ``wheels`` (:class:`~rvtool.assembly.rv.flexible_wheels.RvFlexibleWheels` or None),
+    ``cranks`` (:class:`FlexibleCranks` or None). The needle rows sit between a crank and a wheel:
+    with both flexible, mounting i's inner ring is the virtual body n_bodies + i (the crank's
+    journal) and its outer ring n_bodies + n_m + i (the wheel's bore), one port map over both."""
+
+    def __init__(self, mbs, design, ground_marker, graph, layout):
+        from exudyn_user_elements.floating_ports import ModalCoordinates
+        from .flexible_wheels import RvFlexibleWheels, check_rv_flexible_wheels, rv_wheel_modes
+        d, L = design, layout
+        self.design, self.graph, self.layout = d, graph, L
+        self.n_rigid = L.n_bodies
+        bodies, frozen = {}, []
+        if d.wheels.dynamics.flexible:
+            check_rv_flexible_wheels(d)
+            for j in range(d.n_wheels):
+                bodies[f"wheel{j}"] = rv_wheel_modes(d, j)[0]
+                if d.wheels.dynamics.frozen:
+                    frozen.append(f"wheel{j}")
+        if d.cranks.dynamics.flexible:
+            check_flexible_cranks(d)
+            for k in range(L.n_cranks):
+                bodies[f"crank{k}"] = crank_body(d)
+                if d.cranks.dynamics.frozen:
+                    frozen.append(f"crank{k}")
+        self.coordinates = ModalCoordinates(mbs, bodies, frozen=frozen, ground_marker=ground_marker)
+        c = self.coordinates
+        self.wheels = RvFlexibleWheels(mbs, d, ground_marker, graph, L, c) if d.wheels.dynamics.flexible else None
+        self.cranks = FlexibleCranks(mbs, d, ground_marker, graph, L, c) if d.cranks.dynamics.flexible else None
+        self.families = {**(self.wheels.families if self.wheels else {}), **(self.cranks.families if self.cranks else {})}
+
+    @property
+    def both(self):
+        return self.wheels is not None and self.cranks is not None
+
+    def ports(self, name):
+        """The port map of contact element ``name`` (the needle rows over both bodies where both are flexible)."""
+        if not (self.both and name == "eccentric_bearings"):
+            return (self.cranks if self.cranks is not None and name in self.cranks.families else self.wheels).ports(name)
+        from exudyn_user_elements.floating_ports import FloatingPorts
+        fc, fw = self.cranks.families[name], self.wheels.families[name]
+        cat = np.concatenate
+        split = any(b.split for b in self.wheels.bodies)
+        A_c = self.cranks.table(name)
+        return FloatingPorts(self.coordinates, self.n_rigid, cat([fc.base, fw.base]), cat([fc.frame, fw.frame]),
+                             cat([fc.sign, fw.sign]), cat([A_c, self.wheels.table(name)]),
+                             cat([A_c, self.wheels.table(name, True)]) if split else None)
+
+    def needles(self, opts):
+        """The needle set on the virtual bodies of the flexible side(s) (class docstring)."""
+        from ...bearings.set import BearingSet
+        from .builder import needle_mountings
+        mounts = needle_mountings(self.design, self.graph, self.layout)
+        if not self.both:
+            return self.cranks.needles(mounts, opts) if self.cranks is not None else self.wheels.needles(opts)
+        nm, first = len(mounts), self.n_rigid
+        mounts = [dataclasses.replace(m, inner=first + i, outer=first + nm + i) for i, m in enumerate(mounts)]
+        return BearingSet(mounts, first + 2 * nm, name="eccentric_bearings", **opts)

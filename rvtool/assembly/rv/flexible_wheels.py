@@ -78,9 +78,10 @@ def check_rv_flexible_wheels(design):
 class RvFlexibleWheels(FloatingWheels):
     """The flexible wheels of one RV build (module docstring): families "pins" and
     "eccentric_bearings" (the contact-element names). mbs; design; ground_marker; graph: the
-    :class:`~rvtool.assembly.rv.gear_graph.GearGraph`; layout: the builder's ``Layout``."""
+    :class:`~rvtool.assembly.rv.gear_graph.GearGraph`; layout: the builder's ``Layout``; coordinates:
+    a shared modal structure (:class:`rvtool.assembly.rv.flexible_cranks.RvFloatingBodies`) or None."""
 
-    def __init__(self, mbs, design, ground_marker, graph, layout):
+    def __init__(self, mbs, design, ground_marker, graph, layout, coordinates=None):
         from ...geometry.cycloid import pin_centres
         check_rv_flexible_wheels(design)
         d, L = design, layout
@@ -92,7 +93,7 @@ class RvFlexibleWheels(FloatingWheels):
                                        f"cranks.count = {L.n_cranks}; valid: one per crank")
         errors = None if d.pins.centre_errors is None else np.asarray(d.pins.centre_errors, float)
         super().__init__(mbs, d, ground_marker, got, frames=[L.wheel(j) for j in range(nw)], n_rigid=L.n_bodies,
-                         pins=pin_centres(d.profile, errors))
+                         pins=pin_centres(d.profile, errors), coordinates=coordinates)
         self.graph, self.layout = graph, L
         zb = d.pins.n_pins
         wheel = np.arange(nw)
