@@ -13,7 +13,9 @@ B outer, ring-centre arms a = R(theta_A) xi_A, b = R(theta_B) xi_B):
   the cage sensitivities summed over the rollers, dr/dq = [I, perp(a), -I, -perp(b)],
   dF = K2 dr/dq + C2 drdot/dq (+ the cage terms on theta_A, theta_B), and
   Q = (F, a x F, -F, -b x F), dQ/dq with the arms turning with their bodies.
-dQ/dv is not produced (the static row Newton reads none).
+* ``planar_velocity_rows`` (one thread per mounting, for driven runs): dQ/dv from C2 and the
+  cage-rate sensitivities, dF/dv = C2 dr/dq (+ the cage-rate terms on omega_A, omega_B) mapped
+  as dQ/dq (the arms do not depend on velocities); :meth:`TaperedPlanarRows.launch_velocity`.
 """
 import functools
 
@@ -147,6 +149,72 @@ def kernels(dtype):
     return planar_state, planar_rows
 
 
+@functools.lru_cache(maxsize=None)
+def velocity_kernel(dtype):
+    """``planar_velocity_rows`` for ``dtype`` (module docstring; reference: the dQ/dv of
+    :meth:`rvtool.bearings.tapered_set.TaperedBearingSet.raw`)."""
+
+    @wp.kernel(module="unique")
+    def planar_velocity_rows(
+        # Model:
+        bodies: wp.array2d(dtype=wp.int32),
+        centres: wp.array2d(dtype=dtype),
+        first: wp.array(dtype=wp.int32),
+        count: wp.array(dtype=wp.int32),
+        gamma: wp.array(dtype=dtype),
+        # Data in:
+        pose: wp.array2d(dtype=dtype),
+        dfdv: wp.array3d(dtype=dtype),
+        dfdpsidot: wp.array2d(dtype=dtype),
+        # Data out:
+        dQv: wp.array3d(dtype=dtype),
+    ):
+        k = wp.tid()
+        A = bodies[k, 0]
+        B = bodies[k, 1]
+        th = pose[A, 2]
+        ax = wp.cos(th) * centres[k, 0] - wp.sin(th) * centres[k, 1]
+        ay = wp.sin(th) * centres[k, 0] + wp.cos(th) * centres[k, 1]
+        th = pose[B, 2]
+        bx = wp.cos(th) * centres[k, 2] - wp.sin(th) * centres[k, 3]
+        by = wp.sin(th) * centres[k, 2] + wp.cos(th) * centres[k, 3]
+        C2 = wp.matrix(dtype(0.0), dtype(0.0), dtype(0.0), dtype(0.0), shape=(2, 2), dtype=dtype)
+        FdA = wp.vector(dtype(0.0), dtype(0.0), length=2, dtype=dtype)
+        FdB = wp.vector(dtype(0.0), dtype(0.0), length=2, dtype=dtype)
+        h = dtype(0.5)
+        for jj in range(count[k]):
+            j = first[k] + jj
+            wa = h * (dtype(1.0) - gamma[j])
+            wb = h * (dtype(1.0) + gamma[j])
+            for a in range(2):
+                FdA[a] = FdA[a] + dfdpsidot[j, a] * wa
+                FdB[a] = FdB[a] + dfdpsidot[j, a] * wb
+                for b in range(2):
+                    C2[a, b] = C2[a, b] + dfdv[j, a, b]
+        for a in range(2):
+            d0 = C2[a, 0]
+            d1 = C2[a, 1]
+            d2 = C2[a, 0] * (-ay) + C2[a, 1] * ax + FdA[a]
+            d5 = C2[a, 0] * by + C2[a, 1] * (-bx) + FdB[a]
+            dQv[k, a, 0] = d0
+            dQv[k, a, 1] = d1
+            dQv[k, a, 2] = d2
+            dQv[k, a, 3] = -d0
+            dQv[k, a, 4] = -d1
+            dQv[k, a, 5] = d5
+            dQv[k, 3 + a, 0] = -d0
+            dQv[k, 3 + a, 1] = -d1
+            dQv[k, 3 + a, 2] = -d2
+            dQv[k, 3 + a, 3] = d0
+            dQv[k, 3 + a, 4] = d1
+            dQv[k, 3 + a, 5] = -d5
+        for c in range(6):
+            dQv[k, 2, c] = ax * dQv[k, 1, c] - ay * dQv[k, 0, c]
+            dQv[k, 5, c] = -(bx * dQv[k, 1, c] - by * dQv[k, 0, c])
+
+    return planar_velocity_rows
+
+
 class TaperedPlanarRows:
     """The planar rows of a tapered set on the device: ``rollers`` its
     :class:`~warp_contacts.tapered_rollers.TaperedRollerKernel`; bodies (M, 2) pose rows of the
@@ -179,6 +247,7 @@ class TaperedPlanarRows:
         self.dQ = wp.zeros((M, 6, 6), dtype=dt, device=d)
         self.state_kernel, self.rows_kernel = kernels(dt)
         self.M, self.R = M, R
+        self.dQv = None                               # dQ/dv (M, 6, 6): allocated by the first launch_velocity
         dev = rollers.device_array
         self._state_cmd = wp.launch(self.state_kernel, dim=R, device=d,
                                     inputs=[self.bodies, self.centres, self.owner, self.phase, self.gamma, self.pose,
@@ -205,5 +274,18 @@ class TaperedPlanarRows:
         self._rows_cmd.launch()
         return self.Q, self.dQ
 
+    def launch_velocity(self):
+        """:meth:`launch` and dQ/dv: (Q (M, 6), dQ/dq, dQ/dv (M, 6, 6)) device arrays (driven runs)."""
+        if self.dQv is None:
+            dev = self.rollers.device_array
+            self.dQv = wp.zeros((self.M, 6, 6), dtype=self.rollers.wdtype, device=self.device)
+            self._vel_cmd = wp.launch(velocity_kernel(self.rollers.wdtype), dim=self.M, device=self.device,
+                                      inputs=[self.bodies, self.centres, self.first, self.count, self.gamma,
+                                              self.pose, dev("dfdv"), dev("dfdpsidot")],
+                                      outputs=[self.dQv], record_cmd=True)
+        self.launch()
+        self._vel_cmd.launch()
+        return self.Q, self.dQ, self.dQv
 
-__all__ = ["TaperedPlanarRows", "kernels"]
+
+__all__ = ["TaperedPlanarRows", "kernels", "velocity_kernel"]

@@ -389,6 +389,11 @@ class TaperedBearingSet:
         """:meth:`device_rows` at the poses in :meth:`device_pose_buffers` as they are."""
         return self._planar_rows().launch()
 
+    def launch_device_velocity_rows(self):
+        """:meth:`launch_device_rows` with dQ/dv: (Q (M, 6), dQ/dq, dQ/dv (M, 6, 6)) device arrays at
+        the poses and velocities in :meth:`device_pose_buffers` (driven runs; :meth:`raw`'s dQ/dv)."""
+        return self._planar_rows().launch_velocity()
+
     def _planar_rows(self):
         if not self.planar_on_device:
             raise RvtoolInputError(f"tapered set {self.name!r}: the device rows need backend 'warp' and laminae "
