@@ -341,7 +341,9 @@ def build_parser():
     an.add_argument("--backend", default="auto", choices=("auto", "exudyn", "replica", "device", "fused"),
                     help="solver backend: auto (default: the fastest that supports the model, the choice and "
                          "the reasons recorded in results.json), exudyn (every model), replica, device or fused "
-                         "(device Newton and fused stepper: cycloid, lumped bearings)")
+                         "(the device family: device Newton for equilibria and torque paths; driven runs, e.g. "
+                         "--protocols vibration, on the fused stepper for cycloids with lumped bearings, else "
+                         "on the row stepper: RV and other models with device rows)")
     an.add_argument("--scheduler", default=None, metavar="ADDRESS",
                     help="Dask scheduler of the Monte Carlo's CPU pool (default: a LocalCluster started for it)")
     an.add_argument("--quiet", action="store_true", help="no progress output")

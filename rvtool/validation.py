@@ -16,6 +16,9 @@ def check_finite(name, value):
 
 def check_range(name, value, low=-math.inf, high=math.inf, low_open=False, high_open=False):
     """Check ``low <= value <= high`` (open ends where requested) element-wise."""
+    if (type(value) is float and type(low) in (float, int) and type(high) in (float, int) and math.isfinite(value)
+            and (value > low if low_open else value >= low) and (value < high if high_open else value <= high)):
+        return value          # a Python number within range: the array path's verdict without its arrays
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):

@@ -87,17 +87,33 @@ def test_auto_runs_exudyn_for_a_rolling_bearing_model(design):
 
 
 def test_fused_on_ineligible_models_is_named(design):
-    """solver='fused' on a model it cannot run names why and the valid choices (no run starts)."""
+    """solver='fused' on a model neither of its paths runs names why (the fused stepper's reasons
+    and the row stepper's) and the valid choices (no run starts). A model only the row stepper
+    takes (rolling elements, RV) is not refused: it runs there, the path named."""
     from rvtool.assembly import rv
+    from rvtool.solver.backends import FusedBackend
+    locked = build(design, rigid_supports=True)
+    with pytest.raises(RvtoolInputError, match=r"backend = 'fused'.*fused stepper: rigid_supports=True.*"
+                                               r"row stepper: rigid_supports=True \(journal locks\).*Valid choices"):
+        _run(locked, design, "fused")
     rolling = build(design, bearing_model="rolling")
-    with pytest.raises(RvtoolInputError, match=r"backend = 'fused'.*bearing_model='lumped'.*Valid choices"):
-        _run(rolling, design, "fused")
     rv_model = rv.build(load_design(designs.path("rv40e")))
-    with pytest.raises(RvtoolInputError, match=r"topology RVDesign.*Valid choices"):
-        _run(rv_model, design, "fused")
-    assert not fused_support(rv_model).eligible
+    for m in (rolling, rv_model):
+        assert not fused_support(m).eligible and FusedBackend().path(m) == ("row_stepper", [])
     with pytest.raises(RvtoolInputError, match=r"solver = 'gpu' is not one of the valid choices"):
         _run(rolling, design, "gpu")
+
+
+def test_fused_on_rolling_elements_runs_the_row_stepper(design):
+    """RD-40 with rolling-element bearings (outside the fused stepper's copy parameters) through
+    solver='fused': the row stepper, the same accepted steps as Exudyn's, TE equal to issue 31's
+    1e-6 arcsec (the same integrator on the same kernels' rows)."""
+    rolling = build(design, bearing_model="rolling")
+    exu = _run(build(design, bearing_model="rolling"), design, "exudyn", n=10)
+    fused = _run(rolling, design, "fused", n=10)
+    assert fused["solver"] == "fused" and fused["stats"]["path"] == "row_stepper"
+    np.testing.assert_array_equal(fused["t"], exu["t"])
+    assert np.max(np.abs(fused["te"] - exu["te"])) * ARCSEC_PER_RAD <= 1e-6
 
 
 def test_fused_support_checks_the_model_against_its_design(design, model):

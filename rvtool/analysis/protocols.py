@@ -363,13 +363,46 @@ def run_hysteresis(ctx):
 
 # -- vibration ---------------------------------------------------------------------------------
 
+def _driven_run(ctx, model, proto, spec):
+    """(run, backend record) of the vibration protocol's driven run. auto and exudyn: Exudyn's
+    driven run (:func:`rvtool.protocols.vibration.driven_response`: loaded start by torque
+    continuation, the torsion recorded at every accepted step); auto keeps it (the place of a
+    device run for this protocol is not measured: the default figures do not change). A named
+    device backend ("fused", or "device", whose driven runs are the fused backend's) runs the
+    dynamic TE protocol's driven run on it (:func:`rvtool.protocols.precision.dynamic_te`: the
+    same boundary conditions and RunSpec, the torsion is its TE on the accepted steps; the loaded
+    start is the backend's static solve, :class:`rvtool.solver.backends.FusedBackend`); one that
+    cannot run the model skips the protocol with the reasons."""
+    from ..protocols import vibration as V
+    from ..protocols.precision import dynamic_te
+    from ..solver.backends import CHOICES, DrivenRun, choose
+    if ctx.backend in ("auto", "exudyn"):
+        why = ("auto keeps Exudyn's driven run for the vibration protocol (a device run's place here is not "
+               "measured; --backend fused runs it)" if ctx.backend == "auto"
+               else f"not requested (--backend {ctx.backend})")
+        rec = {"requested": ctx.backend, "ran": "exudyn", "not_taken": {
+            b: (why if b == "fused" else "implements no driven run") if ctx.backend == "auto" else why
+            for b in CHOICES if b not in ("auto", "exudyn")}}
+        return V.driven_response(model, proto, spec), rec
+    run = DrivenRun(torque=proto.torque, speed_rpm=proto.speed_rpm, duration=proto.duration, run_spec=spec)
+    try:
+        backend, rec = choose(ctx.backend, model, "dynamic", run=run, device=ctx.device)
+    except RvtoolInputError as exc:
+        raise Unsupported(str(exc)) from None
+    t0 = time.perf_counter()
+    dyn = dynamic_te(model, torque=proto.torque, speed_rpm=proto.speed_rpm, duration=proto.duration, run_spec=spec,
+                     solver=backend, device=None if ctx.device in (None, "auto") else ctx.device)
+    rec = dict(rec, path=dyn.get("stats", {}).get("path"))
+    return {"t": dyn["t"], "phase_in": dyn["theta_in"], "responses": {"torsion": dyn["te"]}, "record": dyn["record"],
+            "wall_s": time.perf_counter() - t0}, rec
+
+
 @register("vibration", "driven rotation at rated speed and torque: torsion spectra, mesh order vs the quasi-static limit")
 def run_vibration(ctx):
     from ..protocols import vibration as V
     from ..protocols.precision import quasi_static_te
     from ..solver import RunSpec
     rated, speed = ctx.require("rated_torque", "input_speed_rpm")
-    backend = _exudyn_only(ctx, "driven run with the torsion observers of the vibration protocol")
     out = Outcome()
     model = ctx.build()
     mesh = _mesh_period(model)
@@ -378,7 +411,7 @@ def run_vibration(ctx):
     duration = revs * 60.0 / speed
     proto = V.VibrationProtocol(speed_rpm=speed, torque=rated, duration=duration, sample_step=step)
     spec = RunSpec(end_time=duration, step=step, abs_tol=1e-6, rel_tol=1e-8)
-    run = V.driven_response(model, proto, spec)
+    run, backend = _driven_run(ctx, model, proto, spec)
     sp = V.vibration_spectra(run, proto, "torsion")
     mesh_order = 2 * np.pi / mesh
     try:

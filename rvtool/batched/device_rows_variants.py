@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import RvtoolInputError, SolverFailure
 from ..protocols.precision import transmission_error
 from ..solver.device_rows import DeviceRowNewton
-from ..solver.model_snapshot import ModelSnapshot, real_model
+from ..solver.model_snapshot import build_snapshot, real_model
 from ..solver.static import StaticSolver
 from .device_rows_lost_motion import device_row_lost_motion
 
@@ -37,7 +37,10 @@ class RowVariants:
     per variant ("ok" / "failed"), error per variant, exudyn_points (TE points solved by Exudyn),
     exudyn_copies (lost motions by Exudyn), split of the wall time [s] (``setup_s`` copying the
     families, ``kernels_s``, ``scatter_s``, ``step_s`` (the Newton step with its read-back), ``fallback_s``,
-    ``rest_s``), te_s and lost_motion_s [s], wall_s [s], stats (sweeps, Newton iterations)."""
+    ``rest_s``; the lost motion's Exudyn continuations, their models' builds included, are in
+    ``fallback_s``, the setup of its compacted solves in ``setup_s``), te_s and lost_motion_s [s],
+    wall_s [s], stats (sweeps, Newton iterations; ``lost_motion``: how its levels were reached,
+    continuation rounds, copy solves, compactions, start scales)."""
     te: np.ndarray
     theta_out: np.ndarray
     lost_motion_rad: np.ndarray | None
@@ -101,13 +104,15 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
                 error[c] = f"TE point {k} (input angle {a:.9g} rad): device and Exudyn failed: {exc}"
         split["fallback_s"] += time.perf_counter() - tf
     te_s = time.perf_counter() - t_te
-    lm, lm_s, exudyn_copies = None, 0.0, 0
+    lm, lm_s, exudyn_copies, lm_stats = None, 0.0, 0, {}
     if lost_motion_level is not None:
         t_lm = time.perf_counter()
         r = device_row_lost_motion(newton, lost_motion_level)
         lm_s = time.perf_counter() - t_lm
         for key in ("kernels_s", "scatter_s", "step_s"):
             split[key] += r["stats"][key]
+        split["fallback_s"] += r["stats"]["exudyn_s"]      # the copies continued on Exudyn, their builds included
+        split["setup_s"] += r["stats"]["compact_setup_s"]  # copying the few copies a compacted solve runs
         lm = r["lost_motion_rad"]
         exudyn_copies = r["stats"]["exudyn_copies"]
         for c, st in enumerate(r["status"]):
@@ -116,6 +121,7 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
                 error[c] = (error[c] + "; " if error[c] else "") + f"lost motion: {r['error'][c]}"
         sweeps += r["stats"]["rounds"]
         iterations += r["stats"]["newton_iterations"]
+        lm_stats = {k: r["stats"][k] for k in ("levels_path", "rounds", "copy_solves", "compactions", "start_scales")}
     ref_out = np.array([m.reference_value(m.output) for m in models])
     theta_out = ref_out[:, None] + q_out
     te = np.array([transmission_error(angles, theta_out[c], m.ratio, unwrap=False) for c, m in enumerate(models)])
@@ -126,14 +132,14 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
                        status=["failed" if f else "ok" for f in failed], error=error, exudyn_points=exudyn_points,
                        exudyn_copies=exudyn_copies, split=split, te_s=te_s, lost_motion_s=lm_s, wall_s=wall,
                        stats={"variants": V, "points": N, "sweeps": sweeps, "newton_iterations": iterations,
-                              "device": str(device), "device_sum": newton.device_sum})
+                              "device": str(device), "device_sum": newton.device_sum, "lost_motion": lm_stats})
 
 
 def _snapshot_of(job):
-    """Pool task: the :class:`ModelSnapshot` of ``build(design, **build_kw)`` (picklable)."""
-    from ..assembly import build
+    """Pool task: the :class:`ModelSnapshot` of ``build(design, **build_kw)`` (picklable; built
+    without device objects, :func:`~rvtool.solver.model_snapshot.build_snapshot`)."""
     design, build_kw = job
-    return ModelSnapshot(build(design, **build_kw), design, build_kw)
+    return build_snapshot(design, build_kw)
 
 
 def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=None):

@@ -28,7 +28,8 @@ from warp_contacts import rolling_elements_ref as ref
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows, moved_member
+from ..contact.evaluator import (BACKENDS, Evaluation, StagedLaunch, all_finite, gap_offset_rows, moved_member,
+                                 renamed_ids)
 from ..errors import RvtoolInputError
 from ..validation import check_finite, check_body_state
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters, slice_mean_crowning
@@ -240,7 +241,7 @@ class BearingSet(StagedLaunch):
         ids = []
         for c, sc in enumerate(sets):
             rename = {m.name: nm for m, nm in zip(sc.mountings, names[c])}
-            ids += [rename[i.split("/", 1)[0]] + "/" + i.split("/", 1)[1] for i in sc.ids]
+            ids += renamed_ids(sc.ids, rename)
         n_m = np.cumsum([0] + [len(sc.mountings) for sc in sets])
         # the built rows (a slow-state gap offset of a built set is not copied, as a set built from the mountings)
         self._finish(np.concatenate([getattr(sc, "_built_fparams", sc.fparams) for sc in sets]), np.concatenate(ip),

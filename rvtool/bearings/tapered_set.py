@@ -37,7 +37,7 @@ from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX,
 
 from ..contact.assembly import PairAssembler
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows, moved_member
+from ..contact.evaluator import BACKENDS, Evaluation, all_finite, gap_offset_rows, moved_member, renamed_ids
 from ..errors import RvtoolInputError
 from .influence import RollerSlices, SliceLaw, bearing_slice_parameters
 from .set import Placement
@@ -185,7 +185,7 @@ class TaperedBearingSet:
             i[:, ref.RI_FIRST] += n_lam
             ri.append(i)
             rename = {m.name: nm for m, nm in zip(sc.mountings, names[c])}
-            ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
+            ids += renamed_ids(sc.ids, rename)
             owner.append(sc.roller_owner + n_m)
             lam_roller.append(sc.lamina_roller + n_rol)
             bodies.append(np.where(sc._bodies >= sc.n_bodies, B * nb, sc._bodies + c * nb))

@@ -21,7 +21,7 @@ from ..errors import RvtoolInputError
 from ..geometry.cycloid import CycloidProfile, pin_centres
 from ..validation import check_finite, check_nonnegative, check_positive
 from .circle_set import GROUND, FrictionLaw, FrictionModel, NormalLaw
-from .evaluator import gap_offset_rows, moved_member
+from .evaluator import gap_offset_rows, moved_member, renamed_ids
 from .pair_set import PairFamilySet, check_backend
 
 
@@ -348,7 +348,7 @@ class CycloidPinSet(PairFamilySet):
             i[:, ref.J_TABLE] = np.vectorize(local.__getitem__, otypes=[np.int32])(i[:, ref.J_TABLE])
             ip.append(i)
             rename = {m.name: nm for m, nm in zip(sc.meshes, names[c])}
-            ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
+            ids += renamed_ids(sc.ids, rename)
             mesh_of.append(sc.mesh_of + n_mesh)
             n_mesh += len(sc.meshes)
         # the built rows (slow-state gap offsets and friction of a built set are not copied, as a set built from

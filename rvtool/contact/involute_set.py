@@ -28,7 +28,7 @@ from ..errors import RvtoolInputError
 from ..geometry.involute import InvolutePair
 from ..validation import check_finite, check_nonnegative, check_positive
 from .circle_set import GROUND, FrictionLaw, FrictionModel
-from .evaluator import moved_member
+from .evaluator import moved_member, renamed_ids
 from .pair_set import PairFamilySet, check_backend
 from .tooth_stiffness import POLY_DEGREE, ToothCompliance
 
@@ -277,7 +277,7 @@ class InvoluteContactSet(PairFamilySet):
             i[:, (ref.J_TOOTH_A, ref.J_TOOTH_B)] += n_dev
             ip.append(i)
             rename = {m.name: nm for m, nm in zip(sc.meshes, names[c])}
-            ids += [rename[x.split("/", 1)[0]] + "/" + x.split("/", 1)[1] for x in sc.ids]
+            ids += renamed_ids(sc.ids, rename)
             mesh_of.append(sc.mesh_of + n_mesh)
             n_mesh += len(sc.meshes)
             n_dev += len(sc.deviations)

@@ -16,7 +16,8 @@ rotation (the profile turned by delta_rot [rad]) and a tabulated radial
 modification r_c(phi) = r_c + table(phi). The nominal generating
 eccentricity and the assembly eccentricity are separate inputs.
 """
-from dataclasses import dataclass
+import functools
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -97,21 +98,30 @@ class CycloidProfile:
     def epitrochoid(self, phi):
         """Pin-centre path E(phi) and its first two derivatives (wheel coordinates)."""
         phi = np.asarray(phi, float)
+        return self._epitrochoid(_trig(phi, self.n_pins))
+
+    def _epitrochoid(self, trig):
+        """:meth:`epitrochoid` from the angles' (sin phi, cos phi, sin z_b phi, cos z_b phi)."""
         R, K1, zb = self.R, self.K1, self.n_pins
-        s, c, S, C = np.sin(phi), np.cos(phi), np.sin(zb * phi), np.cos(zb * phi)
+        s, c, S, C = trig
         E = R * np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1)
         dE = R * np.stack([c - K1 * C, -s + K1 * S], axis=-1)
         ddE = R * np.stack([-s + K1 * zb * S, -c + K1 * zb * C], axis=-1)
         return E, dE, ddE
 
     def points(self, phi):
-        """Profile points c(phi) of Eq. (cycloid_geometry), before the rotation modification."""
+        """Profile points c(phi) of Eq. (cycloid_geometry), turned by the rotation modification."""
         phi = np.asarray(phi, float)
-        E, dE, _ = self.epitrochoid(phi)
+        return self._rotate(self._unrotated_points(phi, _trig(phi, self.n_pins)))
+
+    def _unrotated_points(self, phi, trig):
+        """:meth:`points` before the rotation, from the angles' :func:`_trig` (the same operations)."""
+        E, dE, _ = self._epitrochoid(trig)
         D = np.linalg.norm(dE, axis=-1) / self.R   # = sqrt(1 + K1^2 - 2 K1 cos(z_g phi))
-        K1, zb = self.K1, self.n_pins
-        inward = np.stack([K1 * np.sin(zb * phi) - np.sin(phi), K1 * np.cos(zb * phi) - np.cos(phi)], axis=-1) / D[..., None]
-        return self._rotate(E + self.generating_radius(phi)[..., None] * inward)
+        K1 = self.K1
+        s, c, S, C = trig
+        inward = np.stack([K1 * S - s, K1 * C - c], axis=-1) / D[..., None]
+        return E + self.generating_radius(phi)[..., None] * inward
 
     def _rotate(self, xy):
         if self.rotation_mod == 0.0:
@@ -152,8 +162,7 @@ class CycloidProfile:
         if n_samples < 8 * self.n_teeth:
             raise RvtoolInputError(f"n_samples = {n_samples} is too small; valid range [{8 * self.n_teeth}, inf) "
                                    f"(at least 8 per tooth)")
-        dense = np.linspace(0, 2 * np.pi, 16 * n_samples, endpoint=False)
-        P = self.points(dense)
+        dense, P = _dense_points(self, 16 * n_samples)
         seg = np.linalg.norm(np.diff(np.vstack([P, P[:1]]), axis=0), axis=1)
         s = np.concatenate([[0.0], np.cumsum(seg)])
         total = s[-1]
@@ -177,6 +186,52 @@ class CycloidProfile:
             raise RvtoolInputError("search = 'analytic' does not support radial_mod_table; valid: search = 'discrete' "
                                    "for a tabulated generating-radius modification")
         return (self.R, self.K1, float(self.n_pins), self.pin_radius + self.equidistant_mod, self.rotation_mod)
+
+
+def _trig(phi, n_pins):
+    """(sin phi, cos phi, sin z_b phi, cos z_b phi) of angles phi [rad]: the terms of
+    :meth:`CycloidProfile.epitrochoid` and :meth:`CycloidProfile.points`."""
+    zp = n_pins * phi
+    return np.sin(phi), np.cos(phi), np.sin(zp), np.cos(zp)
+
+
+@functools.lru_cache(maxsize=4)
+def _dense_trig(n_dense, n_pins):
+    """The dense grid of :meth:`CycloidProfile.table` (n_dense angles in [0, 2 pi)) and its
+    :func:`_trig`: the same for every profile of n_pins pins (Monte Carlo variants, the wheels of
+    one reducer), so computed once per process; read-only."""
+    dense = np.linspace(0, 2 * np.pi, n_dense, endpoint=False)
+    out = (dense,) + _trig(dense, n_pins)
+    for a in out:
+        a.flags.writeable = False
+    return out
+
+
+@functools.lru_cache(maxsize=4)
+def _dense_unrotated(key, n_dense):
+    """Unrotated points of the profile of ``key`` (its fields but the rotation) on the dense grid:
+    the wheels of one reducer differ in their rotation only (their assembly phases), so each
+    wheel's table after the first rotates these; read-only."""
+    profile = CycloidProfile(**dict(key))
+    trig = _dense_trig(n_dense, profile.n_pins)
+    out = profile._unrotated_points(trig[0], trig[1:])
+    out.flags.writeable = False
+    return out
+
+
+def _dense_points(profile, n_dense):
+    """(dense grid, the profile's points on it) of :meth:`CycloidProfile.table`: bit for bit what
+    ``profile.points(np.linspace(0, 2 pi, n_dense, endpoint=False))`` gives (the same operations
+    on the same numbers; tests/test_cycloid_table.py), the grid's trigonometry and the unrotated
+    points kept between calls (:func:`_dense_trig`, :func:`_dense_unrotated`; ~2/3 of a table's
+    time on RD-40 variants, whose profiles differ per variant and per wheel)."""
+    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name != "rotation_mod")
+    try:
+        hash(key)
+    except TypeError:                     # an unhashable member (a list table): computed here
+        dense = np.linspace(0, 2 * np.pi, n_dense, endpoint=False)
+        return dense, profile.points(dense)
+    return _dense_trig(n_dense, profile.n_pins)[0], profile._rotate(_dense_unrotated(key, n_dense))
 
 
 def pin_centres(profile: CycloidProfile, pin_centre_errors=None):

@@ -109,16 +109,21 @@ def dynamic_te(model, *, torque, speed_rpm, duration, run_spec, observers=None, 
     ``backend`` ({"requested", "ran", "not_taken"}).
 
     solver: one of :data:`DYNAMIC_SOLVERS` or a :class:`~rvtool.solver.backends.Backend`.
-    ``"fused"`` runs the built model's design on the fused stepper with the same RunSpec (its
-    eligibility, and that the model equals what the fused path rebuilds from ``model.design``, is
-    :func:`rvtool.solver.device_dynamics.fused_support`; an ineligible model is a named
-    RvtoolInputError); the result adds "torque_in" and "peak_loads"; the static start is the
-    device Newton's (Exudyn's StaticSolver is its oracle). ``"auto"``: fused where eligible,
-    else Exudyn with the reasons in "solver_reasons". Observers need the Exudyn driver (auto
-    runs Exudyn with them). device: the fused stepper's Warp device (None: run_spec.device);
+    ``"fused"`` runs on the fused backend with the same RunSpec, on one of its two paths
+    (:class:`~rvtool.solver.backends.FusedBackend`, recorded in ``stats["path"]``): the fused
+    stepper for the built model's design (its eligibility, and that the model equals what the
+    fused path rebuilds from ``model.design``, is
+    :func:`rvtool.solver.device_dynamics.fused_support`; the result adds "torque_in" and
+    "peak_loads"; the static start is the device Newton's, whose oracle is Exudyn's StaticSolver),
+    else the row stepper (:func:`rvtool.solver.row_dynamics.row_driven_run`: RV and every model
+    whose families have device rows; the result adds "torque_in"; the static start is Exudyn's
+    StaticSolver); a model neither takes is a named RvtoolInputError. ``"auto"``: the fused
+    stepper where eligible, else Exudyn with the reasons in "solver_reasons" (auto does not take
+    the row stepper, :meth:`FusedBackend.auto_reason`). Observers need the Exudyn driver (auto
+    runs Exudyn with them). device: the fused backend's Warp device (None: run_spec.device);
     the Exudyn path evaluates contacts on the device the model was built for.
-    on_start: called just before the run (after the static start on the Exudyn path, before
-    the device Newton's start on the fused path)."""
+    on_start: called just before the run (after the static start on the Exudyn path and the row
+    stepper, before the device Newton's start on the fused stepper)."""
     from ..solver.backends import DrivenRun, choose
     from ..validation import check_choice
     if isinstance(solver, str):

@@ -28,11 +28,15 @@ class Continuation:
     Newton step is treated as a failure and the increment halved).
     min_increment: smallest torque increment [N m] before :class:`SolverFailure`.
     initial_torque: output torque [N m] of the first equilibrium (found by a load ramp).
+    abs_tol [N], rel_tol [-]: the static solver's Newton tolerances (:class:`StaticSolver`'s
+    defaults; a tighter abs_tol converges each level further, e.g. to compare with another solver
+    at equal tolerance).
     """
 
-    def __init__(self, model, *, input_angle=0.0, max_step=2e-3, min_increment=1e-4, initial_torque=0.0):
+    def __init__(self, model, *, input_angle=0.0, max_step=2e-3, min_increment=1e-4, initial_torque=0.0,
+                 abs_tol=1e-6, rel_tol=1e-9):
         self.model = model
-        self.static = StaticSolver(model)
+        self.static = StaticSolver(model, abs_tol=abs_tol, rel_tol=rel_tol)
         self.input_angle = input_angle
         self.max_step = max_step
         self.min_increment = min_increment

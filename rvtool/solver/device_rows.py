@@ -347,6 +347,18 @@ class DeviceRowNewton:
             self.reference = self._extend(np.array([np.asarray(m.reference, float).reshape(-1) for m in self.models]))
         self.setup_s = time.perf_counter() - t0
 
+    def subset(self, copies):
+        """A row Newton of the variant copies ``copies`` only (their models, this one's device and
+        settings): a solve of a few copies then launches the families over those copies instead of
+        all B (a solve's sweeps cost the whole batch, active or not). The copies' rows are the
+        same, so are their equilibria (bit for bit with host sums; with device sums up to the
+        order of the atomic additions)."""
+        if self.models is None:
+            raise RvtoolInputError("subset() takes copies of variant models; one model's copies are all alike")
+        cp = self._copies(len(copies), copies)
+        return DeviceRowNewton([self.models[c] for c in cp], device=self.device, settings=self.settings,
+                               device_sum=self.device_sum, device_step=self.device_step, sync_every=self.sync_every)
+
     def kinematic(self, angles, copies=None):
         """(P, 3 nb) kinematic displacement states at input angles (P,) [rad], with the values the
         model's constraints prescribe: drive = angle, coordinate locks 0, journal locks and springs

@@ -31,10 +31,11 @@ class SnapshotElement:
     ids: tuple
 
 
-def _set_without_device(s, memo=None):
+def _set_without_device(s, memo=None, backend=None):
     """A copy of contact set ``s`` without its device objects (its rows, members and tables as built);
     a series closure's inner set and a stacked set's parts likewise (``memo``: id -> copy, so a set
-    reached twice is copied once)."""
+    reached twice is copied once). backend: the backend a set built with the NumPy backend carries
+    in the copy (:func:`build_snapshot`; None: as built)."""
     memo = {} if memo is None else memo
     if id(s) in memo:
         return memo[id(s)]
@@ -46,13 +47,16 @@ def _set_without_device(s, memo=None):
     for k in DEVICE_ATTRIBUTES:
         if k in vars(s):
             out.__dict__[k] = None
+    if backend is not None and out.__dict__.get("backend") == "numpy":
+        out.__dict__["backend"] = backend
+        out.__dict__.setdefault("_kernel", None)      # as a set built with a kernel, dropped (DEVICE_ATTRIBUTES)
     memo[id(s)] = out
     from ..contact.pin_closure import ElasticPinClosure
     from ..contact.stacked import StackedContactSet
     if isinstance(s, ElasticPinClosure):
-        out.__dict__["inner"] = _set_without_device(s.inner, memo)
+        out.__dict__["inner"] = _set_without_device(s.inner, memo, backend)
     elif isinstance(s, StackedContactSet):
-        out.__dict__["parts"] = tuple(_set_without_device(p, memo) for p in s.parts)
+        out.__dict__["parts"] = tuple(_set_without_device(p, memo, backend) for p in s.parts)
     return out
 
 
@@ -63,7 +67,8 @@ class ModelSnapshot:
     ``held_coordinates`` [(body, coordinate)], ``input``, ``output``, ``ratio``, ``structures``
     and the contact elements' sets (:meth:`contact_elements`)."""
 
-    def __init__(self, model, design, build_kw=None):
+    def __init__(self, model, design, build_kw=None, *, backend=None):
+        """backend: the backend the copied sets built with the NumPy backend carry (:func:`build_snapshot`)."""
         from .replica import held_coordinates
         self.design, self.build_kw = design, dict(build_kw or {})
         self.body_names = tuple(model.body_names)
@@ -78,10 +83,10 @@ class ModelSnapshot:
         from .row_extension import snapshot_extension
         self.structures = {k: None for k in model.structures}
         memo = {}
-        self._elements = tuple(SnapshotElement(_set_without_device(e.evaluator, memo), tuple(e.ids))
+        self._elements = tuple(SnapshotElement(_set_without_device(e.evaluator, memo, backend), tuple(e.ids))
                                for e in model.contact_elements())
         self.row_extension, self.row_extension_reasons = snapshot_extension(
-            model, lambda st: _set_without_device(st, memo))
+            model, lambda st: _set_without_device(st, memo, backend))
         self._model = None
 
     def __getstate__(self):
@@ -113,9 +118,29 @@ class ModelSnapshot:
         return self._model
 
 
+def build_snapshot(design, build_kw=None):
+    """The :class:`ModelSnapshot` of ``build(design, **build_kw)``, built without device objects.
+
+    A snapshot drops every device object of its sets (:data:`DEVICE_ATTRIBUTES`), so a worker that
+    builds one for the device need not make them: the sets are built with the NumPy backend (the
+    same rows, tables and members: the backend only decides whether a set makes its Warp kernel in
+    ``_finish``) and then carry the backend of ``build_kw`` (default "warp"), which the copiers
+    (:func:`rvtool.solver.replica.copy_families`) use for the device copies. On RD-40 the Warp
+    kernels and arrays are ~2/3 of a variant's build. The snapshot equals the snapshot of the full
+    build attribute for attribute (tests/test_model_snapshot.py); ``build_kw`` is kept as given, so
+    a model built for an Exudyn fallback (:meth:`ModelSnapshot.model`) is the full one. A build
+    whose precision is not float64 (the NumPy backend's only one) is built in full."""
+    from ..assembly import build
+    kw = dict(build_kw or {})
+    backend = kw.get("backend", "warp")
+    if kw.get("precision", "float64") != "float64" or backend == "numpy":
+        return ModelSnapshot(build(design, **kw), design, kw)
+    return ModelSnapshot(build(design, **dict(kw, backend="numpy")), design, kw, backend=backend)
+
+
 def real_model(model):
     """``model`` itself, or the model a :class:`ModelSnapshot` stands for (built on first use)."""
     return model.model() if isinstance(model, ModelSnapshot) else model
 
 
-__all__ = ["ModelSnapshot", "SnapshotElement", "real_model"]
+__all__ = ["ModelSnapshot", "SnapshotElement", "build_snapshot", "real_model"]

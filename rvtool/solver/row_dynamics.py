@@ -440,6 +440,58 @@ SUMS = ("device", "host")
 brought back, ``np.bincount``; the reference, with :class:`ReferenceModel`'s step)."""
 
 
+RUN_SPEC_REQUIRED = (("newton_mode", "'full'"), ("strict_abs_tol", "None"), ("reference_length", "None"),
+                     ("adaptive", "True"), ("precision", "'float64'"))
+"""RunSpec fields the row stepper runs with one value each (its step is Exudyn's with these)."""
+
+
+def row_stepper_reasons(model, run_spec=None):
+    """Every named reason why :func:`row_driven_run` cannot run ``model`` (and ``run_spec``, a
+    :class:`~rvtool.solver.run_spec.RunSpec`, when given) as Exudyn's driven run would (empty: it
+    can; checked on the built model, nothing copied): the device row Newton's families
+    (:func:`rvtool.solver.device_rows.row_reasons`) on planar rigid bodies, summed on the device
+    (:func:`rvtool.solver.row_forces.device_row_reasons`), and not
+
+    * retained out-of-plane coordinates or floating flexible bodies (planar rigid copies only);
+    * elastic closures or reduced structures on port bodies (the row Newton's extra unknowns,
+      :mod:`rvtool.solver.row_extension`, are not in the stepper's coordinates);
+    * stick--slip anchors (the stepper commits no history per accepted step);
+    * journal locks (``rigid_supports=True``: the stepper holds the drive and the coordinate locks);
+    * contact sets in another precision than float64 (the copies are float64);
+    * run settings other than :data:`RUN_SPEC_REQUIRED`."""
+    from .backends.base import flexible_body_reasons, spatial_body_reasons
+    from .device_rows import needs_extension, row_reasons
+    from .row_forces import device_row_reasons
+    reasons = spatial_body_reasons(model) + flexible_body_reasons(model)
+    if run_spec is not None:
+        reasons += [f"run_spec.{k} = {getattr(run_spec, k)!r} (the row stepper runs {ok})"
+                    for k, ok in RUN_SPEC_REQUIRED if repr(getattr(run_spec, k)) != ok]
+    if reasons:
+        return reasons
+    reasons = list(row_reasons(model))
+    if needs_extension(model):
+        reasons.append("the model has elastic closures or a reduced structure on port bodies (elastic ring or "
+                       "output pins, crank beam or torsion, ported housing): the device row Newton takes them as "
+                       "extra unknowns (rvtool.solver.row_extension), the row stepper steps planar rigid bodies "
+                       "only (valid: rigid pins, cranks and housing, or backend 'exudyn')")
+    for el in model.contact_elements():
+        s = el.evaluator
+        if getattr(s, "anchor", False):
+            reasons.append(f"contact element {s.name!r} has stick--slip anchors: the row stepper commits no anchor "
+                           "history per accepted step (valid: frictionless or regularized friction, or backend "
+                           "'exudyn')")
+        precision = getattr(s, "precision", "float64")
+        if precision != "float64":
+            reasons.append(f"contact element {s.name!r} has precision = {precision!r}: the row stepper's copies "
+                           "are 'float64'")
+    if getattr(model, "journal_locks", None):
+        reasons.append("rigid_supports=True (journal locks): the row stepper holds the drive and the coordinate "
+                       "locks only (valid: rigid_supports=False)")
+    # an element the row Newton already names (no copier) is not named again for its rows
+    reasons += [r for r in device_row_reasons(model) if not any(r.split(" (")[0] in k for k in reasons)]
+    return [r for i, r in enumerate(reasons) if r not in reasons[:i]]
+
+
 def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu", q0=None, sums="device",
                    device_step=None):
     """The dynamic TE protocol's driven run of ``model`` on the row stepper: from the loaded
@@ -502,4 +554,4 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
             "tangent_gathers": rm.tangent_gathers, "device_step": rm.device_iteration is not None}
 
 
-__all__ = ["RowDrivenModel", "rigid_body_masses", "row_driven_run"]
+__all__ = ["RUN_SPEC_REQUIRED", "RowDrivenModel", "rigid_body_masses", "row_driven_run", "row_stepper_reasons"]

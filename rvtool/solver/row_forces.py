@@ -29,6 +29,33 @@ import numpy as np
 from ..errors import RvtoolInputError
 
 
+NO_DEVICE_ROWS = ("has no device rows (backend 'warp' with staged or device rows, e.g. tapered rows with slices "
+                  "'laminae'); the row stepper's device sums take none other")
+"""The named reason of a contact element without device rows (:func:`device_row_reasons`, :class:`RowForces`)."""
+
+
+def has_device_rows(s):
+    """Whether the contact set ``s`` (a model's evaluator, or its copy) evaluates its rows on the
+    device for :class:`RowForces`: a staged launch of backend "warp" (pair families, rolling
+    elements, circle pairs, plain output pins), tapered rows with planar device rows (laminae),
+    plain output-pin copies of backend "warp"."""
+    from ..bearings.tapered_set import TaperedBearingSet
+    from ..contact.evaluator import StagedLaunch
+    from .replica import PlainPinCopies
+    if isinstance(s, TaperedBearingSet):
+        return bool(s.planar_on_device)
+    if isinstance(s, PlainPinCopies):
+        return bool(s.rows_on_device)
+    return isinstance(s, StagedLaunch) and getattr(s, "backend", None) == "warp"
+
+
+def device_row_reasons(model):
+    """A named reason for every contact element of ``model`` whose rows :class:`RowForces` cannot
+    sum on the device (:func:`has_device_rows`; checked on the model's own sets, no copy made)."""
+    return [f"contact element '{el.evaluator.name}' ({type(el.evaluator).__name__}) {NO_DEVICE_ROWS}"
+            for el in model.contact_elements() if not has_device_rows(el.evaluator)]
+
+
 class RowForces:
     """f, K, C of one copy of ``model`` (module docstring) on the Warp ``device``.
     :meth:`evaluate` takes body poses and velocities (nb, 3) (absolute; the ground is added) and
@@ -71,10 +98,8 @@ class RowForces:
                 dv = None
                 self.launches.append(s.launch_device_rows)
             else:
-                raise RvtoolInputError(f"contact element '{f.name}' ({type(s).__name__}) has no device rows "
-                                       "(backend 'warp' with staged or device rows, e.g. tapered rows with slices "
-                                       "'laminae'); the row stepper's device sums take none other: run it with "
-                                       "sums='host' (the rows summed on the host)")
+                raise RvtoolInputError(f"contact element '{f.name}' ({type(s).__name__}) {NO_DEVICE_ROWS}: run it "
+                                       "with sums='host' (the rows summed on the host)")
             inputs.append((pose, vel))
             buffers.append((q, dq, dv))
             loc = np.asarray(f.scatter.local)
@@ -178,4 +203,4 @@ class RowForces:
         return (f,) + self.tangents()
 
 
-__all__ = ["RowForces"]
+__all__ = ["NO_DEVICE_ROWS", "RowForces", "device_row_reasons", "has_device_rows"]

@@ -48,11 +48,12 @@ class SpringControl:
     torsional spring k_s [N m/rad] to target angles phi [rad] (output displacement coordinate).
 
     max_step: largest phi step [rad] of the march; min_step: smallest before
-    :class:`SolverFailure`; torque_tol: accepted |T - level| [N m].
+    :class:`SolverFailure`; torque_tol: accepted |T - level| [N m]; abs_tol [N], rel_tol [-]: the
+    equilibria's Newton tolerances (:class:`StaticSolver`'s defaults).
     """
 
     def __init__(self, model, *, k_s, input_angle=0.0, start_torque=0.0, max_step=2e-4, min_step=1e-8,
-                 torque_tol=None):
+                 torque_tol=None, abs_tol=1e-6, rel_tol=1e-9):
         check_positive("k_s", k_s)
         check_positive("max_step", max_step)
         check_positive("min_step", min_step)
@@ -63,7 +64,7 @@ class SpringControl:
         self.input_angle = input_angle
         self.obj, self.k_reg = output_rotation_spring(model)
         self.stats = SolverStats()
-        self.static = StaticSolver(model)
+        self.static = StaticSolver(model, abs_tol=abs_tol, rel_tol=rel_tol)
         self.i_out = model.output_index
         self.phi_reg = float(model.mbs.GetObjectParameter(self.obj, "offset"))
         t0 = time.perf_counter()
@@ -71,7 +72,8 @@ class SpringControl:
         # a loaded state is regular, while a zero-load start inside the free play can converge
         # to a preloaded state off the branch the march then follows). Under the spring with
         # phi = theta + start_torque / k_s and no applied torque the same state is in equilibrium.
-        cont = Continuation(model, input_angle=input_angle, initial_torque=float(start_torque))
+        cont = Continuation(model, input_angle=input_angle, initial_torque=float(start_torque), abs_tol=abs_tol,
+                            rel_tol=rel_tol)
         model.set_output_torque(0.0)
         self.phi = float(cont.q[self.i_out] + start_torque / self.k_s)
         ok, q = self.solve_at(self.phi, cont.q)

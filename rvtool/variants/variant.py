@@ -100,7 +100,8 @@ def variant_figures(design, variant: Variant, protocol: VariantProtocol = Varian
             "wall_s": time.perf_counter() - t0}
 
 
-def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtocol()):
+def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtocol(), *, abs_tol=1e-6,
+                        rel_tol=1e-9, torque_tol=None):
     """Lost motion of a built variant at input angle 0: theta_out(+f) - theta_out(-f) [arcmin],
     f = ``protocol.lost_motion_fraction`` x T_rated.
 
@@ -111,7 +112,9 @@ def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtoc
     free play and starts at a larger torque if needed. Both give the same figure where both
     succeed (to 4e-7 arcmin on those 100 variants). Returns ``lost_motion_arcmin``, ``method``
     ("load" or "spring") and ``newton_iterations``; raises :class:`SolverFailure` naming both
-    errors if both fail."""
+    errors if both fail. abs_tol [N], rel_tol [-]: the Newton tolerances of both methods (default
+    the static solver's); torque_tol [N m]: the spring control's accepted |T - level| (None: its
+    default, 1e-7 x the level)."""
     from ..errors import SolverFailure
     from ..protocols.lost_motion import lost_motion
     from ..solver.continuation import Continuation
@@ -119,7 +122,8 @@ def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtoc
     torques = protocol.lost_motion_torques(design)
     i_out = model.output_index
     try:
-        cont = Continuation(model, input_angle=0.0, initial_torque=float(torques[0]))
+        cont = Continuation(model, input_angle=0.0, initial_torque=float(torques[0]), abs_tol=abs_tol,
+                            rel_tol=rel_tol)
         angles = [cont.q[i_out]] + [cont.go_to(float(t))[i_out] for t in torques[1:]]
         return {"lost_motion_arcmin": float((angles[0] - angles[-1]) * ARCMIN_PER_RAD), "method": "load",
                 "newton_iterations": int(cont.static.stats.newton_iterations)}
@@ -127,7 +131,8 @@ def variant_lost_motion(model, design, protocol: VariantProtocol = VariantProtoc
         load_error = str(exc)
     model.set_output_torque(0.0)
     try:
-        r = lost_motion(model, torque_level=protocol.lost_motion_fraction * design.rated_torque)
+        r = lost_motion(model, torque_level=protocol.lost_motion_fraction * design.rated_torque, abs_tol=abs_tol,
+                        rel_tol=rel_tol, torque_tol=torque_tol)
     except (SolverFailure, RvtoolInputError) as exc:
         raise SolverFailure(f"lost motion failed under load control ({load_error}) and under spring control "
                             f"({exc})") from None

@@ -8,7 +8,10 @@ replica    B copies in one Exudyn system               --
 device     device Newton (Warp, cpu or cuda): the      --
            cycloid CUDA-graph path or the row Newton
            (every replicable topology, e.g. RV)
-fused      --                                          fused stepper (Warp, cpu or cuda)
+fused      --                                          fused stepper (Warp, cpu or cuda; the
+                                                       cycloid copy-parameter set), else the row
+                                                       stepper (Exudyn's step on the device rows:
+                                                       RV and every model with device rows)
 =========  ==========================================  ==========================================
 
 Torque paths (task ``"torque_path"``, :meth:`Backend.torque_path`; the stiffness, lost-motion and
@@ -16,7 +19,7 @@ hysteresis sequences): ``exudyn`` (the load continuation, the oracle) and ``devi
 :class:`~rvtool.solver.device_torque_path.DeviceTorquePath`).
 
 ``--backend device`` asks for the device family: the device Newton for equilibria and the fused
-stepper for driven runs. :func:`choose` resolves a requested name for a task on a model: a named
+backend for driven runs. :func:`choose` resolves a requested name for a task on a model: a named
 backend that cannot run the model is a :class:`RvtoolInputError` naming every reason (no silent
 fallback); ``auto`` takes the first supporting backend in the measured order (:func:`auto_order`,
 docs/api/backends.md) and returns, for every other backend, the named reason it was not taken.
@@ -77,7 +80,8 @@ def auto_order(task, *, n_states=None, device="cpu"):
     device Newton last (from the kinematic state at every point, 1.9-2.2 ms per RD-40 state on one
     CPU core: no faster than Exudyn's warm-started march). Driven runs: the fused stepper, then
     Exudyn (RD-40, 1,000 steps on a CPU: 0.9-1.2 s against 1.0-1.1 s; on a GPU the fused stepper
-    runs many copies at once). Torque paths: :data:`TORQUE_PATH_ORDER`."""
+    runs many copies at once); the fused backend's row stepper is not taken by auto
+    (:meth:`FusedBackend.auto_reason`: measured on rv40e only). Torque paths: :data:`TORQUE_PATH_ORDER`."""
     if task == "dynamic":
         return ["fused", "exudyn"]
     if task == "torque_path":

@@ -49,7 +49,9 @@ COVERED = ("cycloid pins", "output pins (plain)", "involute pairs (external, int
 
 NOT_COVERED = ("stick--slip anchors inside a series closure or on plain output pins",
                "closures with a station law (pins.groove = 'conformal')",
-               "shared output pins", "driven runs of non-cycloid topologies",
+               "shared output pins",
+               "driven runs (fused backend) of models with anchors, elastic closures, ported structures, journal "
+               "locks or families without device rows (rvtool.solver.row_dynamics.row_stepper_reasons)",
                "ported carrier (carrier.body = 'ported': the seat closure)", "ported wheels (wheels.body = 'ported')",
                "elastic closures and ported housings on the resident (cycloid copy-parameter) path and the fused "
                "stepper")
@@ -401,44 +403,125 @@ class DeviceBackend(Backend):
                                  iterations=iters.reshape(V, A), fallback_points=fallback_points, stats=stats)
 
 
+FUSED_PATHS = ("fused_stepper", "row_stepper")
+"""The driven-run paths of :class:`FusedBackend` (``stats["path"]`` of a run, :meth:`FusedBackend.path`)."""
+
+ROW_STEPPER_AUTO_REASON = ("the model runs on the row stepper (rvtool.solver.row_dynamics), whose place in auto's "
+                           "order is measured on rv40e only (one CPU core, cases/benchmarks/bench_fused_rv.py), so auto "
+                           "keeps Exudyn's path for driven runs of models the fused stepper does not take "
+                           "(--backend fused runs it)")
+"""Why auto does not take the fused backend's row stepper (it supports the model)."""
+
+
 class FusedBackend(Backend):
-    """The fused stepper for driven runs (module docstring; the whole generalized-alpha step of
-    every copy in one Warp launch per ``steps_per_launch`` steps). A failed run raises
-    :class:`SolverFailure` with its state saved; it never hands over to Exudyn."""
+    """Driven runs off Exudyn (module docstring), on one of two paths (:meth:`path`):
+
+    * ``"fused_stepper"``: the whole generalized-alpha step of every copy in one Warp launch per
+      ``steps_per_launch`` steps (:mod:`rvtool.solver.device_dynamics`; the cycloid copy-parameter
+      set: lumped bearings, rigid housing, plain output pins, no anchors). A failed run raises
+      :class:`SolverFailure` with its state saved;
+    * ``"row_stepper"``: every other model whose contact families all have device rows (RV,
+      small-tooth-difference, a cycloid with rolling elements;
+      :func:`rvtool.solver.row_dynamics.row_stepper_reasons` names what it refuses): Exudyn's
+      generalized-alpha step on the device families' rows, summed on the device, the Newton
+      iterations one captured graph each (:func:`rvtool.solver.row_dynamics.row_driven_run`). Its
+      static start is Exudyn's StaticSolver, as the Exudyn path's. A failed run raises
+      :class:`SolverFailure` (no state saved).
+
+    Neither hands over to Exudyn. ``auto`` takes the fused stepper only (:meth:`auto_reason`)."""
     name = "fused"
     tasks = ("dynamic",)
 
     def __init__(self, *, device=None):
         self.device = device
 
+    def path(self, model, run=None):
+        """(path, reasons): the path of :data:`FUSED_PATHS` that runs ``model`` (and the
+        :class:`DrivenRun` ``run``, when given), the fused stepper first; None with the reasons of
+        both."""
+        from ..device_dynamics import fused_support
+        from ..row_dynamics import row_stepper_reasons
+        spec = run.run_spec if run is not None else None
+        # neither path: planar rigid copies only (floating flexible bodies, any topology, named first)
+        spatial = spatial_body_reasons(model) + flexible_body_reasons(model)
+        if spatial:
+            return None, spatial
+        try:
+            reasons = list(fused_support(model, spec).reasons)
+        except RvtoolInputError as exc:
+            reasons = [str(exc)]
+        if not reasons:
+            return "fused_stepper", []
+        rows = row_stepper_reasons(model, spec)
+        if not rows:
+            return "row_stepper", []
+        return None, [f"fused stepper: {r}" for r in reasons] + [f"row stepper: {r}" for r in rows]
+
     def supports(self, model, task, run=None):
         if not self._task(task):
             return Support.of([f"fused does not implement {task!r} (driven runs only; equilibria: 'device')"])
-        from ..device_dynamics import fused_support
-        # floating flexible bodies (any topology: an RV model's too) are named before the topology
-        reasons = spatial_body_reasons(model) + flexible_body_reasons(model)
-        if not reasons:
-            try:
-                reasons = list(fused_support(model, run.run_spec if run is not None else None).reasons)
-            except RvtoolInputError as exc:
-                reasons = [str(exc)]
+        reasons = list(self.path(model, run)[1])
         if run is not None and run.observers:
             reasons.append("observers are recorded by the Exudyn driver only")
         return Support.of(reasons)
+
+    def auto_reason(self, model, task):
+        """auto takes the fused stepper; a model on the row stepper stays on Exudyn
+        (:data:`ROW_STEPPER_AUTO_REASON`), and the reason names why the fused stepper does not take
+        it (the figures ``rvtool analyze`` writes by default do not change)."""
+        if task != "dynamic" or self.path(model)[0] != "row_stepper":
+            return None
+        from ..device_dynamics import fused_support
+        try:
+            fused = list(fused_support(model).reasons)
+        except RvtoolInputError as exc:
+            fused = [str(exc)]
+        return "; ".join([ROW_STEPPER_AUTO_REASON] + [f"fused stepper: {r}" for r in fused])
 
     def step_dynamic(self, model, run):
         from ..device_dynamics import DeviceDynamicsSettings, dynamic_te_fused, fused_support
         reasons = self.supports(model, "dynamic", run).reasons
         if reasons:
             raise RvtoolInputError(f"backend 'fused' cannot run this model: {'; '.join(reasons)}")
+        path = self.path(model, run)[0]
+        device = run.device or self.device or run.run_spec.device
+        settings = DeviceDynamicsSettings.from_run_spec(run.run_spec)
+        if path == "row_stepper":
+            return self._row_stepper(model, run, settings, device)
         sup = fused_support(model, run.run_spec)
         if run.on_start is not None:
             run.on_start()
         out = dynamic_te_fused(model.design, torque=run.torque, speed_rpm=run.speed_rpm, duration=run.duration,
-                               settings=DeviceDynamicsSettings.from_run_spec(run.run_spec),
-                               device=run.device or self.device or run.run_spec.device, out_dir=run.out_dir,
-                               params=sup.params)
+                               settings=settings, device=device, out_dir=run.out_dir, params=sup.params)
         return DrivenHistory(t=out["t"], theta_in=out["theta_in"], theta_out=out["theta_out"], record=out["record"],
                              omega_in=out["omega_in"], extras={"torque_in": out["torque_in"],
                                                                "peak_loads": out["peak_loads"],
-                                                               "device_run": out["device_run"]})
+                                                               "device_run": out["device_run"],
+                                                               "stats": {"path": "fused_stepper",
+                                                                         "device": str(device)}})
+
+    @staticmethod
+    def _row_stepper(model, run, settings, device):
+        """The driven run on :func:`rvtool.solver.row_dynamics.row_driven_run` from Exudyn's static
+        start (``run.on_start`` after it, as on the Exudyn path)."""
+        from ..driver import RunRecord
+        from ..row_dynamics import row_driven_run
+        from ..static import StaticSolver
+        model.set_output_torque(-np.sign(model.ratio) * float(run.torque))
+        q0 = StaticSolver(model).solve(0.0)
+        if run.on_start is not None:
+            run.on_start()
+        out = row_driven_run(model, torque=run.torque, speed_rpm=run.speed_rpm, duration=run.duration,
+                             settings=settings, device=device, q0=q0)
+        steps = out["step"][1:]
+        rec = RunRecord(accepted_steps=out["accepted"], attempts=out["accepted"] + out["rejected"],
+                        rejected_steps=out["rejected"], newton_iterations=out["newton"],
+                        jacobian_updates=out["newton"], min_step_s=float(np.min(steps)) if len(steps) else np.inf,
+                        max_step_s=float(np.max(steps)) if len(steps) else 0.0, end_time=float(out["t"][-1]),
+                        wall_s=out["wall_s"], cpu_s=out["cpu_s"])
+        stats = {"path": "row_stepper", "device": str(device), "evaluations": out["evaluations"],
+                 "tangent_gathers": out["tangent_gathers"], "device_step": out["device_step"],
+                 "split_cpu_s": {"evaluate": out["evaluate_cpu_s"], "tangents": out["tangents_cpu_s"],
+                                 "step": out["step_cpu_s"]}}
+        return DrivenHistory(t=out["t"], theta_in=out["theta_in"], theta_out=out["theta_out"], record=rec,
+                             omega_in=out["omega_in"], extras={"torque_in": out["torque_in"], "stats": stats})
