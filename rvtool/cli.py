@@ -86,7 +86,11 @@ def resolve_case(name, folder=None):
         return matches[0]
     if matches:
         raise LookupError(f"case {name!r} is ambiguous in {folder}: " + ", ".join(matches))
-    raise LookupError(f"unknown case {name!r} in {folder}; available cases: "
+    import difflib
+    stems = {n.rpartition("/")[2]: n for n in available}
+    close = difflib.get_close_matches(name.rpartition("/")[2], list(stems), n=3)
+    hint = f" (did you mean {', '.join(repr(stems[c]) for c in close)}?)" if close else ""
+    raise LookupError(f"unknown case {name!r} in {folder}{hint}; available cases: "
                       + (", ".join(available) if available else "(none)"))
 
 

@@ -15,6 +15,13 @@ ROOT = Path(__file__).resolve().parents[1]
 CASES = cli.discover_cases(ROOT / "cases")
 CASE_TIMEOUT_S = 300
 """A --quick run is meant to take seconds; five minutes means it is no longer quick."""
+OPEN_TARGETS = {
+    "verification/wheel_body_contact": {
+        "wheel_twist_vs_reference": "issue 30 (open): the reduced wheel body is stiffer than the 2D plane-stress "
+                                    "contact reference by more than 5 % (docs/validation/wheel_body.md)"},
+}
+"""Checks of a case that record an open target honestly (``passed`` false): the case's other checks must pass,
+and a listed check that starts passing fails here so that its entry is removed."""
 
 
 def test_cases_are_grouped():
@@ -46,13 +53,18 @@ def test_case_quick(name, tmp_path):
         assert key in prov, f"{name}: provenance lacks {key!r}"
     wall = prov.get("wall_s_total")
     assert isinstance(wall, (int, float)) and wall >= 0, f"{name}: wall time {wall!r} is not a duration"
-    judge(name, data)
+    judge(name, data, OPEN_TARGETS.get(name, {}))
 
 
-def judge(name, data):
-    """The verdict of one case's results dict (raises AssertionError naming what failed)."""
+def judge(name, data, open_checks=()):
+    """The verdict of one case's results dict (raises AssertionError naming what failed); ``open_checks``:
+    names of its checks that record an open target (OPEN_TARGETS)."""
     assert "passed" in data, f"{name}: results.json has no top-level 'passed' (every case judges itself)"
-    failed = [path for path, ok in _passed_flags(data) if ok is not True]
+    for check in open_checks:
+        assert data.get("checks", {}).get(check, {}).get("passed") is False, \
+            f"{name}: the open target {check!r} passes now; remove it from OPEN_TARGETS"
+    skip = {f"/checks/{c}/passed" for c in open_checks} | ({"/passed"} if open_checks else set())
+    failed = [path for path, ok in _passed_flags(data) if ok is not True and path not in skip]
     assert not failed, f"{name}: its own criteria failed at {failed}: " + json.dumps(
         {k: v for k, v in data.get("checks", {}).items() if not v.get("passed")})[:2000]
     nans = casekit.nan_paths(data)
@@ -70,6 +82,15 @@ def judge(name, data):
 def test_judge_can_fail(data, reason):
     with pytest.raises(AssertionError, match=reason):
         judge("dummy", data)
+
+
+def test_an_open_target_excuses_only_its_own_check():
+    checks = {"open": {"passed": False}, "other": {"passed": True}}
+    judge("dummy", {"passed": False, "checks": checks}, {"open"})
+    with pytest.raises(AssertionError, match="criteria failed"):
+        judge("dummy", {"passed": False, "checks": dict(checks, other={"passed": False})}, {"open"})
+    with pytest.raises(AssertionError, match="passes now"):
+        judge("dummy", {"passed": True, "checks": dict(checks, open={"passed": True})}, {"open"})
 
 
 def _passed_flags(obj, path=""):

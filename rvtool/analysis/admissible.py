@@ -75,6 +75,42 @@ def _hertz_bound(design, model, q, torque):
     return torque * (p_lim / p0) ** 2, fam, p0
 
 
+PRELOAD_PROBE = 1e-6
+"""Fraction of the rated torque at which a design whose rated state is beyond the Hertz validity is
+solved once more: a contact family already beyond it there is pressed by the geometry (an
+interference), not by the load, and no rated torque is admissible."""
+
+
+def _eccentricity_hint(design):
+    """`` (wheels.eccentricity = e m against profile.generating_eccentricity = e_g m)`` where a
+    design's wheels ride a larger eccentric than their profile was generated with, else ""."""
+    e = getattr(getattr(design, "wheels", None), "eccentricity", None)
+    e_g = getattr(getattr(design, "profile", None), "generating_eccentricity", None)
+    if e is None or e_g is None or e <= e_g:
+        return ""
+    return (f"; e.g. wheels.eccentricity = {_fmt(e)} m exceeds profile.generating_eccentricity = {_fmt(e_g)} m, "
+            "which presses the wheels into the pins")
+
+
+def _check_preload(design, build, rated, family):
+    """Raise :class:`RvtoolInputError` naming the geometry where ``family``'s Hertz peak is beyond the
+    law's validity already at :data:`PRELOAD_PROBE` x ``rated`` (then p0 ~ sqrt(torque) does not
+    hold and no rated torque would do)."""
+    small = rated * PRELOAD_PROBE
+    m, q = _solve(build, small)
+    if q is None:
+        return
+    p0 = m.hertz_peaks(q).get(family)
+    p_lim = hertz_limit_pressure(design)
+    if p0 is not None and p_lim is not None and p0 > p_lim:
+        raise RvtoolInputError(
+            f"the {family} contacts reach a Hertz peak of {_fmt(p0 / 1e9)} GPa already at {_fmt(small)} N m "
+            f"({PRELOAD_PROBE:g} x rated_torque), beyond the line-contact law's validity p0 <= {_fmt(p_lim / 1e9)} GPa: "
+            f"the geometry, not the load, presses them together (an interference), so no rated_torque is "
+            f"admissible; check the eccentricities, clearances and radii against 'rvtool designs --format-doc'"
+            f"{_eccentricity_hint(design)}")
+
+
 def check_rated_state(design, build):
     """Solve ``design``'s rated state with models from ``build()``; returns (model, q) for reuse, or
     raises :class:`RvtoolInputError` naming ``rated_torque`` and its admissible range (see the
@@ -115,6 +151,7 @@ def check_rated_state(design, build):
     hz = _hertz_bound(design, model, q, rated)
     if hz is not None and hz[0] < rated:
         t_lim, fam, p0 = hz
+        _check_preload(design, build, rated, fam)
         raise RvtoolInputError(
             f"rated_torque = {_fmt(rated)} N m: the {fam} contacts reach a Hertz peak of {_fmt(p0 / 1e9)} GPa at the "
             f"rated state, beyond the line-contact law's validity p0 <= {_fmt(hertz_limit_pressure(design) / 1e9)} "

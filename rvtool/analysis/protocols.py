@@ -132,7 +132,13 @@ def run_te(ctx):
     angles, revs, ppm = _te_angles(model, ctx.quick)
     mesh = _mesh_period(model)
     backend, choice = _backend(ctx, model, "equilibria", len(angles))
-    qs = quasi_static_te(model, torque=rated, input_angles=angles, backend=backend)
+    try:
+        qs = quasi_static_te(model, torque=rated, input_angles=angles, backend=backend)
+    except SolverFailure as exc:
+        # the failed result records no settings: the message says which backend failed
+        failure = SolverFailure(f"{exc} [backend {choice['ran']!r}, requested {choice['requested']!r}]")
+        failure.state_file = exc.state_file
+        raise failure from exc
     met = te_metrics(qs["te"], n_revolutions=revs)
     # refinement reference: one mesh cycle at the topology's refined resolution and twice the points
     window = np.arange(2 * ppm + 1) * mesh / (2 * ppm)

@@ -258,29 +258,10 @@ class CycloidModel(ReducerModel):
         return out
 
     def marker_frequencies(self, speed_rpm):
-        """Mesh and bearing marker frequencies [Hz] at input speed [rpm]; with flexible wheels also
-        ``wheel_modes_hz``, the retained in-plane modes of the free wheel."""
-        from ..bearings.frequencies import bearing_frequencies
-        f_in = speed_rpm / 60.0
-        zp = self.design.pins.n_pins
-        zg = zp - 1
-        f_out = f_in / zg
-        eb, mb, ib = self.design.eccentric_bearing, self.design.main_bearing, self.design.input_bearing
-        out = {
-            "input_hz": f_in, "output_hz": f_out, "mesh_hz": zp * f_in,
-            # eccentric needle bearing: journal (input) against the wheel bore (wheel speed -f_out)
-            "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
-                                                     2 * eb.inner_radius + eb.roller_diameter),
-        }
-        if isinstance(mb, CrossedRollerBearing):
-            out["main_bearing"] = bearing_frequencies(f_out, mb.n_rollers, mb.roller_diameter, mb.pitch_diameter,
-                                                      mb.contact_angle)
-            mb = None
-        for name, spec, f_ring in (("main_bearing", mb, f_out), ("input_bearing", ib, f_in)):
-            if spec is not None:
-                row = ball_rows(spec)[0]
-                out[name] = bearing_frequencies(f_ring, row.n_balls, row.ball_diameter, row.pitch_diameter,
-                                                row.contact_angle)
+        """Mesh and bearing marker frequencies [Hz] at input speed [rpm] (:func:`eccentric_drive_markers`,
+        a mesh per pin); with flexible wheels also ``wheel_modes_hz``, the retained in-plane modes of
+        the free wheel."""
+        out = eccentric_drive_markers(self.design, speed_rpm, self.design.pins.n_pins)
         if self.flexible is not None:
             # the flexible wheels' retained in-plane free-free modes (body modes beside the mesh and bearings)
             out["wheel_modes_hz"] = sorted({float(f) for b in self.flexible.bodies for f in b.frequencies_hz})
@@ -301,6 +282,34 @@ class CycloidModel(ReducerModel):
             ax.add_patch(plt.Circle(p, self.design.pins.pin_radius, fill=False, color="k", lw=0.6))
         super().draw_section(ax, q)
         ax.legend(fontsize=8)
+
+
+def eccentric_drive_markers(design, speed_rpm, mesh_teeth):
+    """Mesh and bearing marker frequencies [Hz] at input speed [rpm] of a single-stage drive whose
+    wheels ride eccentric journals of the input shaft in a fixed ring and turn the output (the cycloid
+    drive, the small-tooth-difference involute reducer): input, output (f_in / |ratio|), mesh
+    (``mesh_teeth`` ring pins or teeth passed per input revolution), and the eccentric, main and input
+    bearings' (:func:`rvtool.bearings.frequencies.bearing_frequencies`)."""
+    from ..bearings.frequencies import bearing_frequencies
+    f_in = speed_rpm / 60.0
+    f_out = f_in / abs(design.ratio)
+    eb, mb, ib = design.eccentric_bearing, design.main_bearing, design.input_bearing
+    out = {
+        "input_hz": f_in, "output_hz": f_out, "mesh_hz": mesh_teeth * f_in,
+        # eccentric needle bearing: journal (input) against the wheel bore (wheel speed -f_out)
+        "eccentric_bearing": bearing_frequencies(f_in + f_out, eb.n_rollers, eb.roller_diameter,
+                                                 2 * eb.inner_radius + eb.roller_diameter),
+    }
+    if isinstance(mb, CrossedRollerBearing):
+        out["main_bearing"] = bearing_frequencies(f_out, mb.n_rollers, mb.roller_diameter, mb.pitch_diameter,
+                                                  mb.contact_angle)
+        mb = None
+    for name, spec, f_ring in (("main_bearing", mb, f_out), ("input_bearing", ib, f_in)):
+        if spec is not None:
+            row = ball_rows(spec)[0]
+            out[name] = bearing_frequencies(f_ring, row.n_balls, row.ball_diameter, row.pitch_diameter,
+                                            row.contact_angle)
+    return out
 
 
 def _mass_wheel(design):

@@ -38,12 +38,12 @@ from ..bearings.spec import AngularContactPair, BallBearing, CrossedRollerBearin
 from ..geometry.cycloid import CycloidProfile
 from ..output_pins.spec import OutputPinMechanism
 from ..errors import RvtoolInputError
-from ..units import angle_columns, angle_field, is_angle
+from ..units import angle_columns, angle_field, file_key, is_angle
 from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
 from ..structure.floating_ports import FloatingDynamics
 from ..structure.wheel_body import WheelBodySpec
-from ..validation import check_finite, check_nonnegative, check_positive, check_range
+from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 
 COORDS = ("x", "y", "theta")
 
@@ -127,10 +127,11 @@ class Wheels:
             raise RvtoolInputError(f"wheels.body = {self.body!r}; valid choices are ['rigid', 'ported']")
         check_positive("wheels.width", self.width)
         if len(self.midplanes) != len(self.phases):
-            raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases "
+            raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases_deg "
                                    f"({len(self.phases)}) must have one entry per wheel")
         if not 1 <= len(self.midplanes) <= 2:
-            raise RvtoolInputError(f"wheels: {len(self.midplanes)} wheels; valid range [1, 2]")
+            raise RvtoolInputError(f"wheels.midplanes has {len(self.midplanes)} entries, one per wheel; valid range "
+                                   "[1, 2] wheels (n_wheels)")
         check_finite("wheels.phases", np.asarray(self.phases, float))
         # upper bounds: the largest resolutions the solvers are built and tested for (a fuzzed or mistyped
         # 1e6 would otherwise build for hours instead of failing with a named error)
@@ -239,7 +240,7 @@ class Bodies:
     output flange [kg m^2].
     flange_coordinates: ``"planar"`` (default: the flange's axial translation and tilts held) or
     ``"spatial"`` (also z, gamma_x, gamma_y on the main-bearing rows, issue 32; needs rolling-element
-    bearings, ``build(..., bearing_model="rolling")``, and a ball main bearing).
+    bearings, bearing_model "rolling" of :func:`rvtool.build`, and a ball main bearing).
     flange_tilt_inertia: transverse inertia [kg m^2] of the flange (dynamic runs of a spatial flange);
     None: half the polar inertia (a thin disc, assumed).
     wheel_coordinates: ``"planar"`` (default) or ``"spatial"``: each wheel also retains its axial
@@ -262,6 +263,8 @@ class Bodies:
     wheel_tilt_inertia: float | None = None
 
     def __post_init__(self):
+        for nm in ("shaft_mass", "shaft_inertia", "flange_mass", "flange_inertia"):
+            check_positive(f"bodies.{nm}", getattr(self, nm))     # Exudyn's rigid body refuses <= 0 deep inside
         for nm in ("shaft", "wheel", "flange"):
             for c in getattr(self, nm):
                 if c not in COORDS:
@@ -369,8 +372,11 @@ class CycloidDesign:
     bearing_friction: BearingFriction = field(default_factory=BearingFriction)
 
     def __post_init__(self):
+        check_integer("n_wheels", self.n_wheels, 1, 2)
         if self.n_wheels != len(self.wheels.midplanes):
-            raise RvtoolInputError(f"n_wheels = {self.n_wheels} but wheels.midplanes has {len(self.wheels.midplanes)} entries")
+            raise RvtoolInputError(f"n_wheels = {self.n_wheels} but wheels.midplanes has {len(self.wheels.midplanes)} "
+                                   f"entries; valid: one entry per wheel in wheels.midplanes and wheels.phases_deg "
+                                   f"(and in output_pins.wheel_midplanes, output_pins.gap_offsets where the file gives them)")
         check_positive("rated_torque", self.rated_torque)
         check_positive("input_speed_rpm", self.input_speed_rpm)
         zg = self.wheels.n_teeth if self.wheels.n_teeth is not None else self.pins.n_pins - 1
@@ -552,6 +558,21 @@ def _check_type(key, value, tp):
         raise RvtoolInputError(f"{key} = {value!r} has the wrong type; valid: {want}")
 
 
+def file_keys(cls):
+    """The keys a design file may give in the table of spec ``cls``, sorted: its constructor's fields
+    under their file names (an angle as ``NAME_deg``), not the loader's own (``source``)."""
+    return sorted(file_key(f) for f in dataclasses.fields(cls) if f.init and f.metadata.get("file", True))
+
+
+def _did_you_mean(unknown, valid, form="'{}'"):
+    """`` (did you mean 'x'?)`` for the unknown names that are a misspelling of a valid one, else ""
+    (``form``: how a name is written, e.g. ``"[{}]"`` for a section)."""
+    import difflib
+    close = {u: difflib.get_close_matches(u, valid, n=1) for u in sorted(unknown)}
+    hints = [f"{form.format(u)} -> {form.format(m[0])}" for u, m in close.items() if m]
+    return f" (did you mean {', '.join(hints)}?)" if hints else ""
+
+
 def build_section(cls, section, data):
     """Construct the component spec ``cls`` from the design-file table ``data`` of ``[section]``:
     ``NAME_deg`` keys become the field NAME in radians (the one unit conversion), lists become
@@ -565,7 +586,9 @@ def build_section(cls, section, data):
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = set(data) - set(fields)
     if unknown:
-        raise RvtoolInputError(f"[{section}] has unknown keys {sorted(unknown)}; valid keys are {sorted(fields)}")
+        where = "the top level" if section == "design" else f"[{section}]"   # "design": the file's top level
+        raise RvtoolInputError(f"{where} has unknown keys {sorted(unknown)}; valid keys are "
+                               f"{file_keys(cls)}{_did_you_mean(unknown, file_keys(cls))}")
     hints = _field_types(cls)
     kw = {}
     for k, v in data.items():

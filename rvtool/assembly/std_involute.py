@@ -49,7 +49,8 @@ from ..errors import RvtoolInputError
 from ..geometry.eccentric import journal_centre
 from ..model import BodyCoordinate, Family, ReducerModel
 from .contact_layout import ContactElements
-from .cycloid import (CycloidKinematics, add_bodies, body_names, contact_families, lumped_bearing_contacts)
+from .cycloid import (CycloidKinematics, add_bodies, body_names, contact_families, eccentric_drive_markers,
+                      lumped_bearing_contacts)
 from .spec import replace
 from .std_spec import StdInvoluteDesign
 
@@ -97,6 +98,10 @@ class StdInvoluteModel(ReducerModel):
     n_wheels: int = 1
     tooth_phases: tuple = ()
     housing: object = None          # ReducedStructure of an elastic housing, or None (rigid)
+    #: the backlashed wheel--ring mesh leaves the wheels without contact stiffness at light load: a
+    #: cold start there (a replica segment's first point) needs the guide-spring homotopy (STD-39 at
+    #: 1 N m, input angle 2.258 rad: every other fallback failed)
+    guided_free_play: bool = True
 
     @property
     def flange(self):
@@ -117,6 +122,12 @@ class StdInvoluteModel(ReducerModel):
 
     def resolution_settings(self):
         return {"mesh_window_teeth": self.gear_set.meshes[0].window_teeth, "mesh_n_slices": self.design.mesh.n_slices}
+
+    def marker_frequencies(self, speed_rpm):
+        """Mesh and bearing marker frequencies [Hz] at input speed [rpm]: the eccentric turns the
+        wheels' mesh point once round the fixed ring per input revolution, so z_ring teeth mesh per
+        revolution (:func:`rvtool.assembly.cycloid.eccentric_drive_markers`)."""
+        return eccentric_drive_markers(self.design, speed_rpm, self.design.ring.n_teeth)
 
     def draw_section(self, ax, q):
         """Tip and root circles of the wheels (at their state-q centres) and of the ring, and the

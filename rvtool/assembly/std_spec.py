@@ -58,11 +58,12 @@ class WheelSet:
         check_positive("eccentricity", self.eccentricity)
         check_positive("width", self.width)
         if len(self.midplanes) != len(self.phases):
-            raise RvtoolInputError(f"midplanes ({len(self.midplanes)}) and phases ({len(self.phases)}) must "
+            raise RvtoolInputError(f"midplanes ({len(self.midplanes)}) and phases_deg ({len(self.phases)}) must "
                                    "have one entry per wheel")
         check_finite("phases", np.asarray(self.phases, float))
         if not 1 <= len(self.midplanes) <= 2:
-            raise RvtoolInputError(f"midplanes: {len(self.midplanes)} wheels; valid range [1, 2]")
+            raise RvtoolInputError(f"midplanes has {len(self.midplanes)} entries, one per wheel; valid range [1, 2] "
+                                   "wheels (n_wheels)")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -139,9 +140,11 @@ class StdInvoluteDesign:
     pair: InvolutePair = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
+        check_integer("n_wheels", self.n_wheels, 1, 2)
         if self.n_wheels != len(self.wheels.midplanes):
             raise RvtoolInputError(f"n_wheels = {self.n_wheels} but wheels.midplanes has {len(self.wheels.midplanes)} "
-                                   "entries; valid: one midplane per wheel")
+                                   "entries; valid: one entry per wheel in wheels.midplanes and wheels.phases_deg "
+                                   "(and in output_pins.wheel_midplanes, output_pins.gap_offsets where the file gives them)")
         check_positive("rated_torque", self.rated_torque)
         check_positive("input_speed_rpm", self.input_speed_rpm)
         W, R = self.wheel, self.ring

@@ -216,9 +216,25 @@ def design_from_table(data):
     cls = _import(top.design, top)
     loader = _import(top.loader, top)
     import dataclasses
+    if dataclasses.is_dataclass(cls):
+        _check_tables(name, cls, data)
     if dataclasses.is_dataclass(cls) and "topology" in {f.name for f in dataclasses.fields(cls)}:
         data["topology"] = name   # a design class that records its topology keeps the key
     return loader(data)
+
+
+def _check_tables(name, cls, data):
+    """A table (``[section]``) the topology does not have is an error naming it and, for a
+    misspelling, the section meant -- before the loaders, which would otherwise report the
+    section meant as missing (or fail building it from nothing)."""
+    from .spec import _did_you_mean, file_keys
+    valid = file_keys(cls)
+    stray = sorted(k for k, v in data.items() if isinstance(v, dict) and k not in valid)
+    if stray:
+        sections = sorted(k for k in valid if k not in data)
+        raise RvtoolInputError(f"topology {name!r} has no section{'s' if len(stray) > 1 else ''} "
+                               f"{', '.join(f'[{k}]' for k in stray)}{_did_you_mean(stray, sections or valid, '[{}]')}; "
+                               f"valid sections and top-level keys: {valid}")
 
 
 def read_table(path):
@@ -247,7 +263,9 @@ def resolve_design_path(design):
     stem = str(design)[:-5] if str(design).endswith(".toml") else str(design)
     if stem in designs.design_names():
         return designs.path(stem)
-    raise RvtoolInputError(f"design = {str(design)!r} is neither a design file nor a shipped design; "
+    hint = f" (the file {str(design) + '.toml'!r} exists: give its name with .toml)" \
+        if Path(str(design) + ".toml").is_file() else ""
+    raise RvtoolInputError(f"design = {str(design)!r} is neither a design file nor a shipped design{hint}; "
                            f"shipped designs are {designs.design_names()}")
 
 

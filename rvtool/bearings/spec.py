@@ -93,7 +93,8 @@ class CylindricalRollerBearing:
     n_slices: laminae per roller. crowning: drop of the generator [m], either the
     drop at the roller ends of a parabolic crown (scalar) or one drop per slice.
     law: "power" (Palmgren, k delta^(10/9)) or "linear" (the secant of the power
-    law at the reference roller load). reference_roller_load: the load of that secant [N].
+    law at the reference roller load). reference_roller_load: the roller load [N] at which the "linear" law is the
+    power law's secant.
     lamina_stiffness: None (the law above, shared by the laminae in proportion to
     their length) or a coefficient per lamina [N m^-p] (scalar or one per slice).
     damping: c_d per roller [N s/m] (shared by the laminae); ramp_depth: delta_r [m]
@@ -348,12 +349,12 @@ class AngularContactPair:
     mounting's axial centre). arrangement: "back_to_back" (contact lines diverge toward the
     axis: pressure centres outside the rows) or "face_to_face".
 
-    Preload by axial displacement, declared one of three ways (at most one nonzero):
-    the rows' ``axial_preload`` [N] (each row pressed to carry that force at zero external
-    load), ``end_play`` [m] (the axial play of the pair: each row held end_play / 2 off
-    contact) or ``interference`` [m] (the axial overlap the pair is clamped through at
-    assembly, e.g. a ground spacer: each row pressed by interference / 2). Each row's
-    axial approach s_a at zero external load is :attr:`axial_offsets`.
+    end_play: the axial play of the pair [m] (each row held end_play / 2 off contact).
+    interference: the axial overlap the pair is clamped through at assembly [m] (e.g. a ground
+    spacer: each row pressed by interference / 2).
+    Preload by axial displacement is declared one of three ways, at most one nonzero: the rows'
+    ``axial_preload`` [N] (each row pressed to carry that force at zero external load), end_play or
+    interference. Each row's axial approach s_a at zero external load is :attr:`axial_offsets`.
 
     In the planar model both rows carry radial load through their balls; the
     axial force and tilting moment of each row and of the pair are computed

@@ -88,7 +88,8 @@ class TaperedRollerBearing:
     (file: ``cone_angle_deg``; the roller half-angle phi = (alpha_o - alpha_i) / 2 is in (0, 10] deg).
     n_slices: laminae per roller. crowning: end drop of a parabolic crown (scalar) or one
     drop per slice [m]. law: "power" (Palmgren 10/9) or "linear" (its secant at the reference
-    roller load). reference_roller_load: the load of that secant [N].
+    roller load). reference_roller_load: the roller load [N] at which the "linear" law is the power
+    law's secant.
     rib_contact: False (cone and rib lumped, rigid rib) or True (elastic rib, the roller's
     axial position resolved per roller; requires damping = 0).
     rib_end_radius: radius of the roller's spherical large end [m]; None: the apex
@@ -319,9 +320,10 @@ class TaperedRollerBearing:
 
 @dataclass(frozen=True, kw_only=True)
 class TaperedPair:
-    """Two tapered rows on one shaft: ``rows`` = (row 0, row 1), row 0 at -row_spacing/2 and
-    row 1 at +row_spacing/2 from the mounting's axial centre [m] (stations of the roller
-    mid-points).
+    """Two tapered rows on one shaft: ``rows`` = (row 0, row 1).
+
+    row_spacing: the rows' axial distance [m], row 0 at -row_spacing/2 and row 1 at +row_spacing/2
+    from the mounting's axial centre (stations of the roller mid-points).
 
     arrangement: "back_to_back" (O: large ends face away from each other, load centres outside
     the rows, effective spread row_spacing + both load-centre offsets) or "face_to_face" (X:

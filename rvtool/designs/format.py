@@ -37,6 +37,10 @@ from ..units import angle_columns, file_key, is_angle
 
 _RANGE = re.compile(r"valid range\s*(?:is\s*)?([\[\(][^\]\)]*[\]\)])")
 _CHOICES = re.compile(r"valid(?: choices are|:)?\s*(\[[^\]]*\])")
+LEFT_OUT = "(left out: {})"
+"""How a key's meaning ends when the key follows another key where the file leaves it out (a link);
+the template writes such a key commented out, so that it follows the key it names."""
+_LINKED = re.compile(r"\(left out: [^()]*\)\.?$")
 PROBES = (-1e30, 1e30)
 """Values far outside any physical range: the spec's validation quotes its bounds."""
 
@@ -299,10 +303,15 @@ def _field_rows(path, cls, fields, kw, raw, links, set_by_design):
                 shown = raw.get(key, None if value is None else [
                     [_degrees(x) if j in cols else x for j, x in enumerate(row)] for row in value])
             rng = angle_range(cls, kw, f.name) if f.name in kw else ""
+            # "(file: ``NAME_deg``)" says what the key above says; "(file: ``NAME_deg``; more)" keeps "(more)"
+            meaning = re.sub(r"\(file: ``[^`]*``;\s*", "(", meaning)
             meaning = re.sub(r"\s*\(file: ``[^`]*``\)?|\s*\[rad\]", "", meaning).strip(" ,;")
         if f.name in links.get(path, {}) and f.name not in raw and key not in raw:
-            meaning = f"{meaning} (left out: {links[path][f.name]})".strip()
+            meaning = f"{meaning} {LEFT_OUT.format(links[path][f.name])}".strip()
             required = False
+        elif f.default is None and value is not None and f.name not in raw and key not in raw:
+            # a default the spec fills in from other keys (e.g. output_pins.gap_offsets: one 0 per wheel)
+            meaning = f"{meaning} {LEFT_OUT.format('filled in by the spec from the other keys')}".strip()
         rows.append((path, key, shown, unit, rng, meaning, required))
     return rows + subs
 
@@ -326,7 +335,8 @@ def key_table(topology):
     set_by_design = getattr(module, "SET_BY_DESIGN", {})
     kinds = getattr(module, "BEARING_KINDS", {})
     for f in top_fields:
-        kw = {g.name: getattr(design, g.name) for g in dataclasses.fields(cls)} if design is not None else {}
+        # the constructor's keywords only (a derived field, init=False, e.g. the std design's pair, is not one)
+        kw = {g.name: getattr(design, g.name) for g in dataclasses.fields(cls) if g.init} if design is not None else {}
         meaning, unit = describe(cls, f.name)
         value = table.get(f.name, None if f.default is dataclasses.MISSING else f.default)
         rng = valid_range(cls, kw, f.name) if kw else ""
@@ -375,6 +385,8 @@ def template(topology, name=None):
                             "[unit], the valid range its spec enforces, optional (a default applies when the key "
                             "is left out), meaning."))
     doc.add(tomlkit.comment(f"Example values: {top.reference or 'field defaults'}. Check: rvtool analyze THIS_FILE --quick"))
+    doc.add(tomlkit.comment("A key written commented out, '(left out: OTHER)', follows OTHER (e.g. the profile's pin radius "
+                            "follows pins.pin_radius): uncomment it only to give it a value of its own."))
     doc.add(tomlkit.nl())
     version = tomlkit.item(topologies.FORMAT_VERSION)
     version.comment("the design file format: every angle in degrees (NAME_deg), every other key SI")
@@ -393,8 +405,14 @@ def template(topology, name=None):
         text = _comment(unit, rng, meaning, required)
         if text:
             item.comment(text)
+        if _LINKED.search(meaning):
+            # a linked key written out would keep its value when the key it follows changes (a wheel
+            # made wider kept the output pins' 8 mm contact length; a new pins.pin_radius was refused
+            # as differing from profile.pin_radius): commented out, it follows
+            commented = tomlkit.comment(f"{key} = {item.as_string()}" + (f" # {text}" if text else ""))
+            item = None
         if sec == "":
-            doc.add(key, item)
+            doc.add(key, item) if item is not None else doc.add(commented)
         else:
             if sec not in tables:
                 t = tomlkit.table()
@@ -403,7 +421,7 @@ def template(topology, name=None):
                     for line in textwrap.wrap(f"{c.__name__}: {summary(c)}", 100):
                         t.add(tomlkit.comment(line))
                 tables[sec] = t
-            tables[sec].add(key, item)
+            tables[sec].add(key, item) if item is not None else tables[sec].add(commented)
     for sec, t in tables.items():
         head, _, tail = sec.rpartition(".")
         if head:

@@ -148,11 +148,19 @@ class CycloidProfile:
         kE = -cross / np.linalg.norm(dE, axis=-1) ** 3
         rc = self.generating_radius(phi)
         worst = np.max(rc * kE)
-        if worst >= 1.0:
+        if worst >= 1.0 or np.min(rc) <= 0.0:
             rho_min = 1.0 / np.max(kE)
-            raise RvtoolInputError(f"the profile is undercut or pointed: generating radius {np.max(rc):.6g} m exceeds the "
-                                   f"minimum convex curvature radius {rho_min:.6g} m of the epitrochoid; valid range of "
-                                   f"pin_radius + equidistant_mod: (0, {rho_min:.6g}) m")
+            # the design key a user moves: equidistant_mod, whose range follows from 0 < r_p + delta_eq (+ table) < rho_min
+            eq = self.equidistant_mod
+            tab = np.zeros(1) if self.radial_mod_table is None else self.generating_radius(phi) - (self.pin_radius + eq)
+            lo, hi = -(self.pin_radius + np.min(tab)), rho_min - self.pin_radius - np.max(tab)
+            what = (f"the generating radius pin_radius + equidistant_mod = {np.min(rc):.6g} m is not positive"
+                    if np.min(rc) <= 0.0 else
+                    f"the profile is undercut or pointed: generating radius {np.max(rc):.6g} m exceeds the minimum "
+                    f"convex curvature radius {rho_min:.6g} m of the epitrochoid")
+            raise RvtoolInputError(f"equidistant_mod = {eq:.6g} m is outside the valid range ({lo:.6g}, {hi:.6g}) m at "
+                                   f"pin_radius = {self.pin_radius:.6g} m: {what} (valid range of pin_radius + "
+                                   f"equidistant_mod: (0, {rho_min:.6g}) m)")
 
     # -- tables for the contact search ---------------------------------------
     def table(self, n_samples):

@@ -339,7 +339,8 @@ class InvoluteGear:
         if not self.internal and self.form_roll < 0:
             x_min = self.rack.form_height_coefficient - 0.5 * z * math.sin(a) ** 2
             raise RvtoolInputError(f"{p}.profile_shift = {self.profile_shift} undercuts the tooth (the rack's straight "
-                                   f"flank ends inside the base circle); valid range [{x_min:.4f}, inf) for z = {z}")
+                                   f"flank ends inside the base circle); valid range [{x_min:.4f}, inf) for z = {z} "
+                                   f"and {p}.rack.pressure_angle_deg = {math.degrees(a):.6g}")
         s_a = 2 * ra * float(self.half_angle(ra))
         if s_a <= self.min_tip_thickness:
             raise RvtoolInputError(f"{p}.tip_diameter = {2 * ra:.6g} m gives a pointed tip (tooth thickness at the tip "

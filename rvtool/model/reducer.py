@@ -257,7 +257,8 @@ class ReducerModel:
     #: a stalled load continuation, and a static point every other fallback missed, are reached by
     #: the guide-spring homotopy (:mod:`rvtool.solver.guide`): set by topologies whose free play
     #: leaves crank-like coordinates without contact stiffness at zero load (RV with needle
-    #: clearance and backlash); off elsewhere, so no existing model's path or failure changes
+    #: clearance and backlash; the small-tooth-difference reducer's backlashed mesh at light load);
+    #: off elsewhere, so no existing model's path or failure changes
     guided_free_play: bool = False
     contact_host: object = None     # MergedContactElement carrying every family (one element per system), or None
     #: retained axial and tilt coordinates of the output body on its main bearing

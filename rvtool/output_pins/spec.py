@@ -27,6 +27,10 @@ from ..structure.pin_beam import PinSupport
 from ..validation import check_finite, check_nonnegative, check_positive, check_range
 from .calibration import PIN_EXPONENT, hertz_calibrated_coefficient, mindlin_tangential_ratio
 
+MAX_SLICES = 64
+"""Largest ``n_slices`` (the wheels' bound, :class:`rvtool.assembly.spec.Wheels`: the largest resolution
+the solvers are built and tested for; ``output_pins.n_slices = 1000000`` built for minutes)."""
+
 
 class PinMode(str, Enum):
     """Output-pin contact model."""
@@ -96,14 +100,15 @@ class OutputPinMechanism:
     pin_radius: outer pin (sleeve) radius r_p [m]; hole_radius: R_h [m] > r_p.
     coefficient: whole-contact coefficient k [N m^-p], or None: k calibrated so that the law
     meets the Hertz pin-in-hole approach at the reference force; :attr:`law_coefficient` is the k
-    in use. reference_force: the load of that calibration [N]. youngs_modulus: E of pins and
+    in use. reference_force: the load [N] at which a coefficient left out is calibrated to the Hertz
+    pin-in-hole approach. youngs_modulus: E of pins and
     flange [Pa]. poisson_ratio: nu of pins and flange [-].
     exponent: p [-] (10/9).
     contact_length: axial contact width [m], integrated by ``n_slices`` equal-weight
     midpoint slices (stations s relative to each wheel midplane).
     wheel_midplanes: axial positions z_i of the wheel midplanes relative to the flange [m].
     gap_offsets: u_off of Eq. (output_gap) per wheel [m] (e.g. thermal; positive opens).
-    mode: :class:`PinMode`. compliance: the pins' compliance of the shared mode [m/N] (None: rigid;
+    mode: the output-pin model, "plain" or "shared" (:class:`PinMode`). compliance: the pins' compliance of the shared mode [m/N] (None: rigid;
     shared mode only). sleeve: the sleeve iteration of the shared mode.
     support: the pin as a beam (:class:`~rvtool.structure.pin_beam.PinSupport`; rigid by default).
     The mechanism's own contacts are those of rigid pins; an elastic pin is closed per pin by the
@@ -161,8 +166,10 @@ class OutputPinMechanism:
         check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.5, high_open=True)
         check_range("exponent", self.exponent, 1.0)
         check_positive("contact_length", self.contact_length)
-        if not isinstance(self.n_slices, (int, np.integer)) or self.n_slices < 1:
-            raise RvtoolInputError(f"n_slices = {self.n_slices!r} is outside the valid range [1, inf) (an integer)")
+        # upper bound: the wheels' (rvtool.assembly.spec.Wheels); a mistyped 1e6 built for minutes instead of failing
+        if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, (int, np.integer)) \
+                or not 1 <= self.n_slices <= MAX_SLICES:
+            raise RvtoolInputError(f"n_slices = {self.n_slices!r} is outside the valid range [1, {MAX_SLICES}] (integer)")
         z = np.asarray(self.wheel_midplanes, dtype=float)
         if z.ndim != 1 or z.size < 1:
             raise RvtoolInputError(f"wheel_midplanes must list one axial position per wheel [m]; got {self.wheel_midplanes!r}")

@@ -47,7 +47,8 @@ class Support(str, Enum):
 class PinSupport:
     """Declared support of a pin (design sub-table ``[pins.support]`` or ``[output_pins.support]``).
 
-    model: :class:`Support` value ("rigid" = rigid pin, the default and the "nothing" variant).
+    model: the support of the pin, a :class:`Support` value ("rigid" = rigid pin, the default and the "nothing"
+    variant).
     ends: (z_a, z_b) axial positions of the supports [m], in the frame of the wheel
         midplanes (cantilever: clamped at z_a, free end at z_b).
     shear: True = Timoshenko (bending + shear), False = Euler--Bernoulli (bending only).

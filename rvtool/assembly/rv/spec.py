@@ -39,11 +39,11 @@ class Cranks:
     count: N_c, the number of cranks [-] (2 or 3, equally spaced on the crank circle, whose radius
     is the sun--crank-gear centre distance). mass: mass of each crank [kg]. inertia: polar inertia
     of each crank [kg m^2].
-    phase_errors: the eccentric phase of crank k off its nominal by this angle [rad] (file:
-    ``phase_errors_deg``; both journals; () = none); eccentricity_errors: e_k - e [m] per crank (() = none);
-    gear_pitch_deviations: per crank, the single pitch deviations f_pt,j [m] of its spur gear
-    (``crank_gear.n_teeth`` entries summing to zero, as ``InvoluteGear.single_pitch_deviations``;
-    () = every crank gear as ``crank_gear``).
+    phase_errors: the eccentric phase of crank k off its nominal by this angle [rad], one per crank,
+    on both journals (an empty list: none) (file: ``phase_errors_deg``); eccentricity_errors: e_k - e
+    [m] per crank (an empty list: none); gear_pitch_deviations: per crank, the single pitch deviations
+    f_pt,j [m] of its spur gear (``crank_gear.n_teeth`` entries summing to zero, as
+    ``InvoluteGear.single_pitch_deviations``; an empty list: every crank gear as ``crank_gear``).
     shaft: the crankshaft as a beam between its tapered rows
     (:class:`~rvtool.structure.crank_beam.CrankShaft`, sub-table ``[cranks.shaft]``; rigid by
     default, the "nothing" variant).
@@ -96,7 +96,7 @@ class InvoluteStage:
     anchors per row, as ``pin_contact``). tangential_stiffness: stiffness of the anchors per tooth
     pair over the face width [N/m] (0 = Mindlin's ratio 2(1 - nu)/(2 - nu) of the pair's normal
     secant stiffness of Eq. (series_contact) at reference_force, mid path of contact).
-    reference_force: the load of that secant stiffness [N]."""
+    reference_force: the tooth-pair load [N] at which that normal secant stiffness is taken."""
     n_slices: int = 1
     window: int | None = None
     damping: float = 0.0
