@@ -10,8 +10,8 @@ import warp as wp
 import rvtool
 from rvtool import designs
 from rvtool.errors import RvtoolInputError
-from rvtool.variants.multi_device import (RvVariantProtocol, batch_task, cycloid_batch, device_cluster,
-                                          device_slots, multi_device_monte_carlo, plan, rows_batch,
+from rvtool.variants.multi_device import (RvVariantProtocol, batch_task, chunk_schedule, cycloid_batch,
+                                          device_cluster, device_slots, multi_device_monte_carlo, plan, rows_batch,
                                           shutdown_helper_pools, split_indices, start_helper_pool, warm_up)
 from rvtool.variants.rv_tolerances import load_rv_tolerances
 from rvtool.variants.tolerances import load_tolerances
@@ -128,6 +128,28 @@ def test_rows_batch_is_the_bench_device_mc_path(rd40_case):
             lm = r.lost_motion_rad[c] * ARCMIN_PER_RAD
             assert abs(x["lost_motion_arcmin"] - lm) <= EQUAL * abs(lm)
     assert sum(x["device_s"] > 0 for x in recs) == 2        # solve_chunk=1: one device solve per variant
+
+
+def test_ramped_solves_give_the_records_of_full_chunks(rd40_case):
+    """A worker's first device solve of a few copies, the next ones doubling (chunk_schedule), gives
+    the records of solves of whole chunks bit for bit on cpu (the copies are independent: the
+    chunks only decide when the device starts); each solve's first record carries its build wait,
+    the batch's first record the time to its first device solve."""
+    rd40, tol, p, _ = rd40_case
+    assert chunk_schedule(4096, 1024) == [128, 256, 512, 1024, 1024, 1024, 128]
+    assert chunk_schedule(5, 4, 4) == [4, 1] and chunk_schedule(5, 4, 1) == [1, 2, 2] and chunk_schedule(0, 4) == []
+    for bad in ((4, 0, None), (4, 2, 0), (4, True, None), (4, 2, 1.5)):
+        with pytest.raises(RvtoolInputError, match="valid range"):
+            chunk_schedule(*bad)
+    idx = [5, 6, 7, 8, 9]
+    full = rows_batch(rd40, tol, p, 2026, idx, "cpu", build_kw=RD_BUILD, solve_chunk=4, first_chunk=4)
+    ramp = rows_batch(rd40, tol, p, 2026, idx, "cpu", build_kw=RD_BUILD, solve_chunk=4, first_chunk=1)
+    assert sum(r["status"] == "ok" for r in full) >= 3
+    keys = ("index", "status", "error", "te_path", "lost_motion_path") + FIGS
+    assert [[r[k] for k in keys] for r in ramp] == [[r[k] for k in keys] for r in full]     # bit for bit
+    assert [r["index"] for r in ramp if "build_wait_s" in r] == [5, 6, 8]      # solves of 1, 2, 2 copies
+    assert [r["index"] for r in full if "build_wait_s" in r] == [5, 9]
+    assert 0 <= ramp[0]["first_device_start_s"] <= sum(r["wall_s"] for r in ramp)
 
 
 def test_paths_refused_by_name():

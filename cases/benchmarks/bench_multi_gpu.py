@@ -20,10 +20,13 @@ Workload per variant (fixed, the Exudyn reference run's settings, as bench_devic
 Placement (rvtool.variants.multi_device): a LocalCluster of one single-threaded worker process per
 device, each started with CUDA_VISIBLE_DEVICES = its GPU (cpu workers: none visible); the variants
 are split into one contiguous batch per device, run as one task on that device's worker (--chunk
-cuts it into tasks run one after another). Builds run on each GPU worker's helper pool, the host's
-cores shared out: the one-GPU run on a cluster of one worker with cpu_count - 1 helpers, the N-GPU
-run on a cluster of N workers with cpu_count / N - 1 each (--host-workers overrides; cpu workers:
-none, they build in the worker), so both runs use the whole host.
+cuts it into tasks run one after another). A worker's first device solve takes --first-chunk copies
+(default --solve-chunk / 8), each next one twice as many up to --solve-chunk, so that the device
+starts after a few builds (``first_device_start_s``) instead of a whole chunk of them. Builds run on
+each GPU worker's helper pool, the host's cores shared out: the one-GPU run on a cluster of one
+worker with cpu_count - 1 helpers, the N-GPU run on a cluster of N workers with cpu_count / N - 1
+each (--host-workers overrides; cpu workers: none, they build in the worker), so both runs use the
+whole host.
 
 Warm-up (excluded from both timings, reported as ``warm_up_s``): one variant on every worker of
 each cluster first (imports, Warp kernel compilation and module loading on each device, the helper
@@ -36,7 +39,8 @@ relative on cpu, 1e-9 on cuda where atomic row sums vary in order: the copies ar
 target for 2 GPUs, the whole study: builds included; quick and cpu runs report it only: two
 workers on a shared 2-core machine measure nothing). Split of the time: per worker, its tasks'
 wall time (busy_s), its device path's time (device_s: device_rows_variants, Exudyn fallbacks
-included) and the time it waited for its helpers' builds (build_wait_s); the study's wall time,
+included), the time it waited for its helpers' builds (build_wait_s) and the time from its first
+task's start to its first device solve (first_device_start_s); the study's wall time,
 Dask's share (wall minus the busiest worker) and the load imbalance (busiest / mean busy);
 ``speedup_device``: the busiest worker's device_s, one device / N (the device part alone, builds
 excluded: reported, not judged).
@@ -46,8 +50,8 @@ import time
 import numpy as np
 
 from rvtool import casekit, designs, load_design
-from rvtool.variants.multi_device import (RvVariantProtocol, default_host_workers, device_cluster,
-                                          multi_device_monte_carlo, warm_up)
+from rvtool.variants.multi_device import (RvVariantProtocol, chunk_schedule, default_host_workers, device_cluster,
+                                          multi_device_monte_carlo, split_indices, warm_up)
 from rvtool.variants.rv_tolerances import load_rv_tolerances
 from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants.variant import VariantProtocol
@@ -96,8 +100,9 @@ def judge(r):
 
 
 def split(res, wall):
-    """Per-worker busy, device and build-wait time, Dask's share and the imbalance of one study."""
-    busy, dev, wait = {}, {}, {}
+    """Per-worker busy, device and build-wait time, the time to its first device solve, Dask's share
+    and the imbalance of one study."""
+    busy, dev, wait, start = {}, {}, {}, {}
     recs = iter(res["records"])
     for b in res["batches"]:
         w = b["worker"]
@@ -106,8 +111,11 @@ def split(res, wall):
             r = next(recs)
             dev[w] = dev.get(w, 0.0) + float(r.get("device_s") or 0.0)
             wait[w] = wait.get(w, 0.0) + float(r.get("build_wait_s") or 0.0)
+            if r.get("first_device_start_s") is not None and w not in start:
+                start[w] = float(r["first_device_start_s"])      # the worker's first task's
     top = max(busy.values())
-    return {"wall_s": wall, "busy_s": busy, "device_s": dev, "build_wait_s": wait, "dask_s": wall - top,
+    return {"wall_s": wall, "busy_s": busy, "device_s": dev, "build_wait_s": wait, "first_device_start_s": start,
+            "dask_s": wall - top,
             "imbalance": top / float(np.mean(list(busy.values()))), "tasks": len(res["batches"])}
 
 
@@ -142,6 +150,9 @@ def main(argv=None):
         p.add_argument("--gpus", type=int, default=2, help="N devices (workers) of the N-device run"),
         p.add_argument("--chunk", type=int, default=None, help="variants per task (default: a worker's whole batch)"),
         p.add_argument("--solve-chunk", type=int, default=SOLVE_CHUNK, help="copies per device solve"),
+        p.add_argument("--first-chunk", type=int, default=None,
+                       help="copies of a worker's first device solve, the next ones doubling up to --solve-chunk "
+                            "(default: solve-chunk / 8; = --solve-chunk: every solve a full chunk)"),
         p.add_argument("--host-workers", type=int, default=None,
                        help="helper processes per worker (default: the host's cores shared out; cpu: 0)")))
     t_all = time.perf_counter()
@@ -162,7 +173,7 @@ def main(argv=None):
             t = time.perf_counter()
             res = multi_device_monte_carlo(design, tol, B, protocol=protocol, seed=seed, client=client, slots=slots,
                                            chunk=chunk, host_workers=hw, build_kw=build_kw,
-                                           solve_chunk=args.solve_chunk)
+                                           solve_chunk=args.solve_chunk, first_chunk=args.first_chunk)
             return res, time.perf_counter() - t, start, warm, hw, [s.device for s in slots]
 
     one, one_s, c1, w1, hw1, _ = study(devices[:1])
@@ -172,6 +183,10 @@ def main(argv=None):
     results = {
         "settings_echo": {"design": name, "variants": B, "te_points": protocol.n_te_points, "devices": devices,
                           "worker_device": worker_device, "chunk": chunk, "solve_chunk": args.solve_chunk,
+                          "first_chunk": args.first_chunk,
+                          "solve_schedule_n_devices": chunk_schedule(min(len(split_indices(B, args.gpus)[0]),
+                                                                         chunk or B), args.solve_chunk,
+                                                                     args.first_chunk),
                           "path": many["path"], "build_kw": {k: list(v) if isinstance(v, tuple) else v
                                                              for k, v in build_kw.items()},
                           "host_workers": {"one_device": hw1, "n_devices": hwn},

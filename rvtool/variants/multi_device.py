@@ -274,26 +274,51 @@ def default_build_kw(design, protocol):
     return {"bearing_model": protocol.bearing_model} if _is_cycloid(design) else {}
 
 
+def chunk_schedule(n, solve_chunk, first_chunk=None):
+    """Sizes of the device solves of ``n`` copies (:func:`rows_batch`): ``first_chunk`` copies first
+    (None: ``solve_chunk // 8``, at least 1), each next solve twice the last, up to ``solve_chunk``;
+    so that the device starts after a few builds instead of a whole ``solve_chunk`` of them, and
+    the helpers build the next (larger) chunk while it solves. The sizes sum to ``n``; equal to
+    ``solve_chunk`` throughout for ``first_chunk = solve_chunk``."""
+    for name, v in (("solve_chunk", solve_chunk), ("first_chunk", first_chunk)):
+        if v is None and name == "first_chunk":
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+            raise RvtoolInputError(f"{name} = {v!r} is outside the valid range [1, inf) (integer)")
+    solve_chunk = int(solve_chunk)
+    size = max(1, solve_chunk // 8) if first_chunk is None else min(int(first_chunk), solve_chunk)
+    sizes, left = [], int(n)
+    while left > 0:
+        sizes.append(min(size, left))
+        left -= sizes[-1]
+        size = min(2 * size, solve_chunk)
+    return sizes
+
+
 def rows_batch(design, tolerances, protocol, seed, indices, device, host_workers=0, *, build_kw=None,
-               solve_chunk=1024):
+               solve_chunk=1024, first_chunk=None):
     """Records of the variants ``indices`` (sampled with ``seed``) on the device row Newton, the path
     of ``cases/benchmarks/bench_device_mc.py``: every variant sampled and built as a
     :class:`~rvtool.solver.model_snapshot.ModelSnapshot` on this process's :func:`helper_pool` of
     ``host_workers`` processes (0: here), then TE and lost motion of up to ``solve_chunk`` copies at
     a time on ``device`` (:func:`rvtool.batched.device_rows_variants.device_rows_variants`; points
-    and copies the device does not converge on Exudyn, counted). All builds are queued at once, so
+    and copies the device does not converge on Exudyn, counted), the first solve of ``first_chunk``
+    copies and the next ones doubling up to ``solve_chunk`` (:func:`chunk_schedule`). All builds are queued at once, so
     the helpers build the next copies while the device solves the current ones. The TE at
     ``te_torque_fraction`` x T_rated over ``protocol.input_angles`` (RV: of the nominal model), the
     lost motion at +-``lost_motion_fraction`` x T_rated. A variant that cannot be built, or whose
     device and Exudyn runs fail, is failed with its error; every record carries index, figures,
     status, error and paths; the first record of each solved chunk its chunk's ``exudyn_points``,
     ``exudyn_copies``, ``device_s`` (the device path's wall time) and ``build_wait_s`` (time spent
-    waiting for the helpers' builds)."""
+    waiting for the helpers' builds); the first record ``first_device_start_s`` (from the call to
+    the first device solve). A snapshot reaches this process through the helper pool's own
+    result thread (``concurrent.futures``: it receives and unpickles every result as it comes), so
+    receiving overlaps the device solves already. The records do not depend on the chunks (the
+    copies are independent: equal bit for bit on cpu, tests/test_multi_gpu.py)."""
     from ..assembly import build
     from ..batched.device_rows_variants import device_rows_variants
     from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
-    if isinstance(solve_chunk, bool) or not isinstance(solve_chunk, (int, np.integer)) or solve_chunk < 1:
-        raise RvtoolInputError(f"solve_chunk = {solve_chunk!r} is outside the valid range [1, inf) (integer)")
+    sizes = chunk_schedule(len(indices), solve_chunk, first_chunk)
     t0 = time.perf_counter()
     kw = default_build_kw(design, protocol) if build_kw is None else dict(build_kw)
     angles = protocol.input_angles(design if _is_cycloid(design) else build(design, **kw))
@@ -307,10 +332,10 @@ def rows_batch(design, tolerances, protocol, seed, indices, device, host_workers
         futures = [pool.submit(variant_snapshot, j) for j in jobs]     # all queued: builds overlap the solves
         results = (f.result() for f in futures)
     path = f"device_rows:{device}"
-    recs = []
-    for lo in range(0, len(jobs), int(solve_chunk)):
+    recs, first_start = [], None
+    for size in sizes:
         tw = time.perf_counter()
-        got = [next(results) for _ in range(min(int(solve_chunk), len(jobs) - lo))]
+        got = [next(results) for _ in range(size)]
         wait = time.perf_counter() - tw
         chunk, models, slot = [], [], []
         for k, snap, err in got:
@@ -323,6 +348,8 @@ def rows_batch(design, tolerances, protocol, seed, indices, device, host_workers
             chunk.append(rec)
         chunk[0].update(build_wait_s=wait, exudyn_points=0, exudyn_copies=0, device_s=0.0)
         if models:
+            if first_start is None:
+                first_start = time.perf_counter() - t0
             r = device_rows_variants(models, torque=torque, input_angles=angles, lost_motion_level=level,
                                      device=device)
             for c, i in enumerate(slot):
@@ -339,6 +366,8 @@ def rows_batch(design, tolerances, protocol, seed, indices, device, host_workers
     wall = time.perf_counter() - t0
     for rec in recs:
         rec["wall_s"] = wall / len(recs)
+    if recs:
+        recs[0]["first_device_start_s"] = first_start
     return recs
 
 
@@ -384,16 +413,17 @@ def plan(n_variants, slots, chunk=None):
 
 
 def run_batches(client, tasks, design, tolerances, protocol, seed, host_workers=0, *, path="rows", build_kw=None,
-                solve_chunk=1024):
+                solve_chunk=1024, first_chunk=None):
     """Records of ``tasks`` ([(slot, indices)], e.g. :func:`plan`), each on its slot's worker with
     that slot's device, gathered in task order; a task that raises has all its variants failed with
     that error; host_workers: each worker's helper pool (:func:`helper_pool`); path, build_kw,
-    solve_chunk: see :func:`batch_task` and :func:`rows_batch` (build_kw, solve_chunk: "rows" only).
+    solve_chunk, first_chunk: see :func:`batch_task` and :func:`rows_batch` (build_kw, solve_chunk,
+    first_chunk: "rows" only).
     Returns (records, per-task {worker, device, variants, wall_s (of the task, as the worker
     measured it)})."""
     addr = worker_addresses(client, list({s.name: s for s, _ in tasks}.values()))
     fn = batch_task(design, path)
-    kw = {"build_kw": build_kw, "solve_chunk": solve_chunk} if fn is rows_batch else {}
+    kw = {"build_kw": build_kw, "solve_chunk": solve_chunk, "first_chunk": first_chunk} if fn is rows_batch else {}
     futures = [(s, b, client.submit(_timed, fn, design, tolerances, protocol, seed, list(b), s.device, host_workers,
                                     workers=[addr[s.name]], allow_other_workers=False, pure=False, **kw))
                for s, b in tasks]
@@ -447,7 +477,7 @@ def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1
 
 def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, protocol=None, seed=0, client=None,
                              slots=None, chunk=None, host_workers=None, path="rows", build_kw=None,
-                             solve_chunk=1024):
+                             solve_chunk=1024, first_chunk=None):
     """The device Monte Carlo of variants 0..n_variants-1 of ``design`` over several devices
     (module docstring), each device's batch in chunks of at most ``chunk`` variants (:func:`plan`).
     Either ``devices`` (a cluster is started for the study and closed after it:
@@ -460,7 +490,7 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
     path: "rows" (default, every topology: :func:`rows_batch`, the device row Newton with the
     variants' builds on the helper pools) or "device_newton" (cycloid designs: :func:`cycloid_batch`);
     build_kw: the variants' build options (None: :func:`default_build_kw`); solve_chunk: copies per
-    device solve ("rows")."""
+    device solve, first_chunk: copies of the first solve ("rows": :func:`chunk_schedule`)."""
     if (client is None) == (devices is None):
         raise RvtoolInputError("give either devices (a cluster for this study) or client and slots (a running one)")
     if client is not None and not slots:
@@ -472,19 +502,20 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
         with device_cluster(devices) as (client, slots):
             return multi_device_monte_carlo(design, tolerances, n_variants, protocol=protocol, seed=seed,
                                             client=client, slots=slots, chunk=chunk, host_workers=host_workers,
-                                            path=path, build_kw=build_kw, solve_chunk=solve_chunk)
+                                            path=path, build_kw=build_kw, solve_chunk=solve_chunk,
+                                            first_chunk=first_chunk)
     t0 = time.perf_counter()
     hw = default_host_workers(slots) if host_workers is None else int(host_workers)
     batch_task(design, path)                      # a path the design cannot run is refused before any task
     records, info = run_batches(client, plan(n_variants, slots, chunk), design, tolerances, protocol, seed, hw,
-                                path=path, build_kw=build_kw, solve_chunk=solve_chunk)
+                                path=path, build_kw=build_kw, solve_chunk=solve_chunk, first_chunk=first_chunk)
     return {"records": records, "failed": sum(r["status"] != "ok" for r in records),
             "wall_s": time.perf_counter() - t0, "batches": info, "devices": [s.device for s in slots],
             "host_workers": hw, "path": path}
 
 
-__all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "batch_task", "cycloid_batch", "default_build_kw",
-           "default_host_workers", "default_protocol", "device_chunk", "device_cluster", "device_slots",
-           "helper_pool", "multi_device_monte_carlo", "plan", "rows_batch", "run_batches", "shutdown_helper_pools",
-           "split_indices", "start_helper_pool", "variant_snapshot", "warm_helper_builds", "warm_up",
-           "worker_addresses"]
+__all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "batch_task", "chunk_schedule", "cycloid_batch",
+           "default_build_kw", "default_host_workers", "default_protocol", "device_chunk", "device_cluster",
+           "device_slots", "helper_pool", "multi_device_monte_carlo", "plan", "rows_batch", "run_batches",
+           "shutdown_helper_pools", "split_indices", "start_helper_pool", "variant_snapshot", "warm_helper_builds",
+           "warm_up", "worker_addresses"]
