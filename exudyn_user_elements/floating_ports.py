@@ -37,9 +37,10 @@ from rvtool.errors import RvtoolInputError
 class ModalCoordinates:
     """Modal coordinates of the floating flexible bodies of one system.
 
-    mbs; bodies: {name: :class:`~rvtool.structure.floating_ports.PlanarModalBody`} in order;
-    frozen: hold every modal coordinate at zero (constraints to ``ground_marker``, returned in
-    ``locks``). ``offsets[name]`` is the first index of a body's coordinates in zeta.
+    mbs; bodies: {name: :class:`~rvtool.structure.floating_ports.PlanarModalBody`} in order (any
+    modal body with ``omega2``, ``damping``, ``n_modes``); frozen: hold every modal coordinate at
+    zero (True), or those of the bodies named in a collection (constraints to ``ground_marker``,
+    returned in ``locks``). ``offsets[name]`` is the first index of a body's coordinates in zeta.
     """
 
     def __init__(self, mbs, bodies, *, frozen=False, ground_marker=None, name="flexible_bodies"):
@@ -65,10 +66,11 @@ class ModalCoordinates:
             name=name, nodeNumbers=[self.node], massMatrix=np.eye(n), stiffnessMatrix=np.diag(self.omega2),
             dampingMatrix=D, visualization=VObjectGenericODE2(show=False)))
         self.locks = []
-        if frozen:
+        held = range(n) if frozen is True else [c for nm in (frozen or ()) for c in range(n)[self.slice(nm)]]
+        if len(held):
             if ground_marker is None:
                 raise RvtoolInputError("frozen modal coordinates need a ground coordinate marker")
-            for c in range(n):
+            for c in held:
                 m = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=self.node, coordinate=c))
                 self.locks.append(mbs.AddObject(CoordinateConstraint(markerNumbers=[ground_marker, m])))
 

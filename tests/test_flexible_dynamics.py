@@ -122,12 +122,6 @@ def test_device_backends_refuse_flexible_wheels_by_name(flex_model):
         assert any(FLEXIBLE_BODIES_REASON in r for r in sup.reasons), (name, sup.reasons)
 
 
-def test_rv_builder_refuses_flexible_wheels():
-    d = rvtool.load_design(designs.path("rv40e"))
-    with pytest.raises(RvtoolInputError, match="cycloid topology only"):
-        rvtool.build(replace(d, wheels={"dynamics": {"model": "flexible"}}))
-
-
 def test_flexible_wheels_refuse_the_ported_wheel_body(rd40):
     with pytest.raises(RvtoolInputError, match="counted twice"):
         rvtool.build(replace(flexible(rd40), wheels={"body": "ported"}))

@@ -460,6 +460,7 @@ def run_vibration(ctx):
     ax[0].semilogy(sp["frequencies_hz"][1:], sp["spectrum"][1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8)
     ax[0].axvline(speed / 60.0 * mesh_order, color="r", ls="--", lw=0.8, label="mesh")
     V.body_mode_markers(ax[0], markers)
+    V.body_mode_markers(ax[0], markers, key="crank_modes_hz", label="crank modes", color="y")   # flexible RV cranks
     ax[0].set(xlabel="frequency [Hz]", ylabel="torsion amplitude [arcsec]")
     ax[0].legend(fontsize=7)
     ax[1].semilogy(sp["orders"][1:], sp["order_spectrum"][1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8, label="dynamic")

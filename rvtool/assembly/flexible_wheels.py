@@ -106,17 +106,21 @@ def wheel_body_mesh(design, k=0, mesh_size=None):
                                                           f"per tooth, mesh size {spec.mesh_size} m, {spec.layers} layers)")
 
 
-def wheel_modes(design, k=0):
+def wheel_modes(design, k=0, *, mesh_key=None, mesh_of=None):
     """(:class:`~rvtool.structure.floating_ports.PlanarModalBody`, :class:`WheelMesh`,
     :class:`~rvtool.structure.floating_ports.PortOperators`) of wheel k of the design, meshed and
-    reduced once per geometry and modal settings (cached in the process; ``frozen`` shares them)."""
+    reduced once per geometry and modal settings (cached in the process; ``frozen`` shares them).
+    mesh_key, mesh_of: the cache key and a no-argument builder of the :class:`WheelMesh` (default:
+    the cycloid wheel, :func:`wheel_mesh_key`, :func:`wheel_body_mesh`; the RV wheel's come from
+    :mod:`rvtool.assembly.rv.flexible_wheels`)."""
     import dataclasses
     d = design
     dyn = d.wheels.dynamics
-    wm_key = wheel_mesh_key(d, k)
+    wm_key = wheel_mesh_key(d, k) if mesh_key is None else mesh_key
+    mesh_of = (lambda: wheel_body_mesh(d, k)) if mesh_of is None else mesh_of
     key = repr((wm_key, dataclasses.replace(dyn, frozen=False)))
     if key not in _CACHE:
-        wm = _CACHE.get(wm_key) or wheel_body_mesh(d, k)
+        wm = _CACHE.get(wm_key) or mesh_of()
         _CACHE[wm_key] = wm
         ops = wm.operators
         # the free-free candidates of this mesh, computed once for the largest basis asked so far
@@ -143,46 +147,83 @@ def wheel_modes(design, k=0):
 class PortFamily:
     """The virtual bodies of one contact family on the flexible wheels: ``base`` (n_v,) rigid body
     index or -1, ``frame`` (n_v,) the wheel's rigid-body index, ``sign`` (n_v,), ``wheel`` (n_v,)
-    the wheel index k, and ``operator(pose, load=False)`` -> (n_v, 3, n_fe): each virtual body's
-    body-frame displacement (x, y) and rotation rows as operators on its wheel's FE coordinates,
-    where the port measures (or, ``load``, where its force acts), a list of (3, n_fe of its wheel)
-    arrays; the modal map of virtual body v is ``operator(pose)[v] @ Phi_k``."""
+    the wheel index k, ``kind`` ("profile", "bore" or "holes": the port group the family meets),
+    ``port`` (n_v,) the hole index of each virtual body (kind "holes"), and
+    ``operator(pose, load=False)`` -> (n_v, 3, n_fe): each virtual body's body-frame displacement
+    (x, y) and rotation rows as operators on its wheel's FE coordinates, where the port measures
+    (or, ``load``, where its force acts), a list of (3, n_fe of its wheel) arrays; the modal map of
+    virtual body v is ``operator(pose)[v] @ Phi_k``."""
     base: np.ndarray
     frame: np.ndarray
     sign: np.ndarray
     wheel: np.ndarray
     operator: object
+    kind: str = "profile"
+    port: np.ndarray = None
 
 
-class FlexibleWheels:
-    """The flexible wheels of one cycloid build: the modal coordinates and the port maps of the
-    families on them (module docstring). mbs; design; ground_marker: a ground coordinate marker.
-    ``bodies``, ``meshes``, ``operators``: per wheel k; ``families`` maps the contact-element names
-    ("pins", "output_pins", "bearings") to their :class:`PortFamily`."""
+class FloatingWheels:
+    """The flexible wheels of one build, whatever the topology: the modal coordinates of every
+    wheel (one :class:`~exudyn_user_elements.floating_ports.ModalCoordinates`) and the port maps
+    of the contact families on them (module docstring).
 
-    def __init__(self, mbs, design, ground_marker):
+    mbs; design; ground_marker: a ground coordinate marker; got: per wheel k the
+    :func:`wheel_modes` triple; frames: the wheels' rigid-body indices; n_rigid: the rigid bodies
+    of the contact elements (the virtual bodies follow them); pins: (z_b, 2) [m] the ring-pin
+    centres (the contact locator). ``bodies``, ``meshes``, ``operators``: per wheel k;
+    ``families`` maps contact-element names to their :class:`PortFamily` (filled by the topology,
+    :meth:`family`); coordinates: a :class:`~exudyn_user_elements.floating_ports.ModalCoordinates`
+    shared with other flexible bodies (holding ``wheel{k}``), or None (the wheels' own)."""
+
+    def __init__(self, mbs, design, ground_marker, got, frames, n_rigid, pins, coordinates=None):
         from exudyn_user_elements.floating_ports import ModalCoordinates
         d = design
         self.design = d
-        self.nw = d.n_wheels
-        got = [wheel_modes(d, k) for k in range(self.nw)]
+        self.frames = tuple(int(f) for f in frames)
+        self.nw = len(self.frames)
+        self.n_rigid = int(n_rigid)
+        self.pins = np.asarray(pins, float)
         self.bodies = [g[0] for g in got]
         self.meshes = [g[1] for g in got]
         self.operators = [g[2] for g in got]
-        for b in self.bodies:
-            if b.bore_map is None:
-                raise RvtoolInputError("the wheel mesh has no bore ports; the eccentric bearing cannot couple")
-            if len(b.hole_maps) != d.output_pins.n_pins:
-                raise RvtoolInputError(f"the wheel mesh has {len(b.hole_maps)} hole port groups for "
-                                       f"output_pins.n_pins = {d.output_pins.n_pins}; valid: one per pin")
-        self.coordinates = ModalCoordinates(mbs, {f"wheel{k}": b for k, b in enumerate(self.bodies)},
-                                            frozen=d.wheels.dynamics.frozen, ground_marker=ground_marker)
+        # one modal structure per build: a shared one (coordinates: with other flexible bodies) or the wheels' own
+        self.coordinates = coordinates or ModalCoordinates(mbs, {f"wheel{k}": b for k, b in enumerate(self.bodies)},
+                                                           frozen=d.wheels.dynamics.frozen,
+                                                           ground_marker=ground_marker)
         self.n_eta = self.coordinates.n
-        self.families = {"pins": self._pin_family(), "output_pins": self._output_pin_family(),
-                         "bearings": self._bore_family()}
+        self.families = {}
 
     def _columns(self, k):
         return self.coordinates.slice(f"wheel{k}")
+
+    # -- families ------------------------------------------------------------------
+    def family(self, kind, base, wheel, sign, port=None):
+        """:class:`PortFamily` of virtual bodies on the wheels ``wheel`` (n_v,) (indices k), each
+        at ``base`` (n_v,) (-1: ground) moved by ``sign`` (n_v,) times its wheel's displacement at
+        the port group ``kind``: "profile" (the contact with the ring pins, z_b virtual bodies per
+        wheel, wheel after wheel), "bore" (the central bore's rigid fit) or "holes" (hole
+        ``port[v]``'s mean translation)."""
+        wheel = np.asarray(wheel, int)
+        port = None if port is None else np.asarray(port, int)
+        ops = self.operators
+        if kind == "profile":
+            zb = len(self.pins)
+
+            def operator(pose, load=False):
+                psi = self.contact_angles(pose)
+                return [a for k in range(self.nw) for a in
+                        np.concatenate([ops[k].profile_at(psi[k], load), np.zeros((zb, 1, ops[k].n))], axis=1)]
+        elif kind == "bore":
+            def operator(pose, load=False):
+                return [(ops[k].load("bore") if load else ops[k].bore).toarray() for k in wheel]
+        elif kind == "holes":
+            def operator(pose, load=False):
+                return [np.vstack([(ops[k].load("holes") if load else ops[k].holes)[2 * p:2 * p + 2].toarray(),
+                                   np.zeros((1, ops[k].n))]) for k, p in zip(wheel, port)]
+        else:
+            raise RvtoolInputError(f"port group {kind!r}; valid: 'profile', 'bore', 'holes'")
+        return PortFamily(np.asarray(base, int), np.asarray([self.frames[k] for k in wheel], int),
+                          np.asarray(sign, float), wheel, operator, kind, port)
 
     def ports(self, name):
         """:class:`~exudyn_user_elements.floating_ports.FloatingPorts` of contact element ``name``
@@ -192,8 +233,8 @@ class FlexibleWheels:
         fam = self.families[name]
         nw = self.nw
         split = any(b.split for b in self.bodies)
-        if name == "pins":
-            zb = self.design.pins.n_pins
+        if fam.kind == "profile":
+            zb = len(self.pins)
 
             def maps(pose, load=False):
                 psi = self.contact_angles(pose)
@@ -201,88 +242,50 @@ class FlexibleWheels:
                 for k in range(nw):
                     A[k * zb:(k + 1) * zb, :2, self._columns(k)] = self.bodies[k].profile_map(psi[k], load)
                 return A
-            return FloatingPorts(self.coordinates, nw + 2, fam.base, fam.frame, fam.sign, maps,
+            return FloatingPorts(self.coordinates, self.n_rigid, fam.base, fam.frame, fam.sign, maps,
                                  (lambda pose: maps(pose, True)) if split else None)
 
-        def table(load):
-            A = np.zeros((len(fam.base), 3, self.n_eta))
-            for v, k in enumerate(fam.wheel):
-                b = self.bodies[k]
-                A[v, :, self._columns(k)] = (b.map_of("bore", load) if name == "bearings" else
-                                             np.vstack([b.map_of("holes", load)[v // nw], np.zeros(b.n_modes)]))
-            return A
-        return FloatingPorts(self.coordinates, nw + 2, fam.base, fam.frame, fam.sign, table(False),
-                             table(True) if split else None)
+        return FloatingPorts(self.coordinates, self.n_rigid, fam.base, fam.frame, fam.sign, self.table(name),
+                             self.table(name, True) if split else None)
+
+    def table(self, name, load=False):
+        """(n_v, 3, n_eta) the constant port maps of a bore or hole family ``name`` (measured, or ``load``)."""
+        fam = self.families[name]
+        A = np.zeros((len(fam.base), 3, self.n_eta))
+        for v, k in enumerate(fam.wheel):
+            b = self.bodies[k]
+            A[v, :, self._columns(k)] = (b.map_of("bore", load) if fam.kind == "bore" else
+                                         np.vstack([b.map_of("holes", load)[fam.port[v]], np.zeros(b.n_modes)]))
+        return A
 
     # -- ring pins ---------------------------------------------------------------
     def pin_bodies(self, k):
-        """Virtual pin-body indices of wheel k's mesh."""
-        nw, zb = self.nw, self.design.pins.n_pins
-        return tuple(nw + 2 + k * zb + p for p in range(zb))
+        """Virtual pin-body indices of wheel k's mesh (after the rigid bodies, wheel after wheel)."""
+        zb = len(self.pins)
+        return tuple(self.n_rigid + k * zb + p for p in range(zb))
 
     @property
     def n_pin_bodies(self):
-        return self.nw + 2 + self.nw * self.design.pins.n_pins
+        return self.n_rigid + self.nw * len(self.pins)
 
     def contact_angles(self, pose):
         """(nw, z_b) polar angle [rad] in each wheel's frame of the contact point with every pin
         (the pitch-point locator of the module docstring)."""
-        from ..geometry.cycloid import pin_centres
         d = self.design
-        P = pin_centres(d.profile)
+        P = self.pins
         out = np.zeros((self.nw, len(P)))
-        for k in range(self.nw):
-            o = pose[1 + k, :2]
+        for k, f in enumerate(self.frames):
+            o = pose[f, :2]
             r = math.hypot(*o)
             u = o / r if r > 0 else np.array([math.cos(d.wheels.phases[k]), math.sin(d.wheels.phases[k])])
             pitch = d.pins.n_pins * d.wheels.eccentricity * u
             n = P - pitch
             n /= np.linalg.norm(n, axis=1)[:, None]
             C = P - d.pins.pin_radius * n - o
-            th = pose[1 + k, 2]
+            th = pose[f, 2]
             c, s = math.cos(th), math.sin(th)
             out[k] = np.arctan2(-s * C[:, 0] + c * C[:, 1], c * C[:, 0] + s * C[:, 1])
         return out
-
-    def _pin_family(self):
-        nw, zb = self.nw, self.design.pins.n_pins
-
-        def operator(pose, load=False):
-            psi = self.contact_angles(pose)
-            return [a for k in range(nw) for a in
-                    np.concatenate([self.operators[k].profile_at(psi[k], load), np.zeros((zb, 1, self.operators[k].n))],
-                                   axis=1)]
-        wheel = np.repeat(np.arange(nw), zb)
-        return PortFamily(np.full(nw * zb, -1), 1 + wheel, np.full(nw * zb, -1.0), wheel, operator)
-
-    # -- output pins -------------------------------------------------------------
-    def output_pin_stations(self):
-        """(n_pins, n_wheels) station-body offsets p nw + k: the flange's station body of (pin p,
-        wheel k) is nw + 2 + p nw + k, the flange shifted by minus hole p's displacement."""
-        return np.arange(self.design.output_pins.n_pins * self.nw).reshape(-1, self.nw)
-
-    def _output_pin_family(self):
-        nw, npins = self.nw, self.design.output_pins.n_pins
-
-        def operator(pose, load=False):
-            out = []
-            for p in range(npins):
-                for k in range(nw):
-                    h = (self.operators[k].load("holes") if load else self.operators[k].holes)[2 * p:2 * p + 2]
-                    out.append(np.vstack([h.toarray(), np.zeros((1, self.operators[k].n))]))
-            return out
-        wheel = np.tile(np.arange(nw), npins)
-        return PortFamily(np.full(npins * nw, nw + 1), 1 + wheel, np.full(npins * nw, -1.0), wheel, operator)
-
-    # -- eccentric bearings (lumped) ----------------------------------------------
-    def _bore_family(self):
-        """Virtual bores nw + 2 + k: wheel k's pose plus its bore's rigid-fit motion."""
-        nw = self.nw
-
-        def operator(pose, load=False):
-            return [(self.operators[k].load("bore") if load else self.operators[k].bore).toarray() for k in range(nw)]
-        wheel = np.arange(nw)
-        return PortFamily(1 + wheel, 1 + wheel, np.ones(nw), wheel, operator)
 
     def summary(self):
         """Reported facts of the flexible wheels: source, mesh counts, retained frequencies [Hz] per wheel."""
@@ -295,6 +298,42 @@ class FlexibleWheels:
                 "mesh_mass_kg": [b.mesh_mass for b in self.bodies],
                 "mesh_inertia_kgm2": [b.mesh_inertia for b in self.bodies],
                 "frozen": self.design.wheels.dynamics.frozen}
+
+
+class FlexibleWheels(FloatingWheels):
+    """The flexible wheels of one cycloid build (module docstring): wheel k is body 1 + k, the
+    families "pins", "output_pins" and "bearings" (the contact-element names) on them."""
+
+    def __init__(self, mbs, design, ground_marker):
+        from ..geometry.cycloid import pin_centres
+        d = design
+        nw = d.n_wheels
+        got = [wheel_modes(d, k) for k in range(nw)]
+        for b, _, _ in got:
+            if b.bore_map is None:
+                raise RvtoolInputError("the wheel mesh has no bore ports; the eccentric bearing cannot couple")
+            if len(b.hole_maps) != d.output_pins.n_pins:
+                raise RvtoolInputError(f"the wheel mesh has {len(b.hole_maps)} hole port groups for "
+                                       f"output_pins.n_pins = {d.output_pins.n_pins}; valid: one per pin")
+        super().__init__(mbs, d, ground_marker, got, frames=[1 + k for k in range(nw)], n_rigid=nw + 2,
+                         pins=pin_centres(d.profile))
+        zb, npins = d.pins.n_pins, d.output_pins.n_pins
+        wheel = np.arange(nw)
+        # ring pins: pin p at wheel k is the virtual body nw + 2 + k z_b + p (ground less the wheel's displacement)
+        pins_w = np.repeat(wheel, zb)
+        # output pins: the flange's station body of (pin p, wheel k) is nw + 2 + p nw + k, the flange less hole p's
+        out_w = np.tile(wheel, npins)
+        self.families = {
+            "pins": self.family("profile", np.full(nw * zb, -1), pins_w, np.full(nw * zb, -1.0)),
+            "output_pins": self.family("holes", np.full(npins * nw, nw + 1), out_w, np.full(npins * nw, -1.0),
+                                       port=np.repeat(np.arange(npins), nw)),
+            # eccentric bearings (lumped): wheel k's bore is the virtual body nw + 2 + k, its pose plus the bore's fit
+            "bearings": self.family("bore", 1 + wheel, wheel, np.ones(nw))}
+
+    def output_pin_stations(self):
+        """(n_pins, n_wheels) station-body offsets p nw + k: the flange's station body of (pin p,
+        wheel k) is nw + 2 + p nw + k, the flange shifted by minus hole p's displacement."""
+        return np.arange(self.design.output_pins.n_pins * self.nw).reshape(-1, self.nw)
 
 
 def check_flexible_wheels(design, bearing_model, tilt):

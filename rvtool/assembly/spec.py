@@ -107,7 +107,7 @@ class Wheels:
     :class:`~rvtool.structure.wheel_body.WheelBodySpec` of a ported wheel (file:
     ``[wheels.structure]``; unused while the body is rigid). dynamics: the wheels as rigid or floating flexible
     bodies in driven and quasi-static runs (:class:`~rvtool.structure.floating_ports.FloatingDynamics`,
-    sub-table ``[wheels.dynamics]``; rigid by default; cycloid topology)."""
+    sub-table ``[wheels.dynamics]``; rigid by default; cycloid and RV topologies)."""
     eccentricity: float
     width: float
     midplanes: tuple = (0.0,)

@@ -113,8 +113,9 @@ def dominant(freqs, amp, n=5):
 
 def body_mode_markers(ax, markers, key="wheel_modes_hz", label="wheel modes", color="m"):
     """Vertical markers at the flexible bodies' modes (``markers[key]``, a list [Hz], as
-    :meth:`rvtool.assembly.cycloid.CycloidModel.marker_frequencies` gives them; absent: nothing
-    drawn) on a spectrum axis, with one legend entry."""
+    :meth:`rvtool.assembly.cycloid.CycloidModel.marker_frequencies` gives them: ``wheel_modes_hz``,
+    and for flexible RV cranks ``crank_modes_hz``; absent: nothing drawn) on a spectrum axis, with
+    one legend entry."""
     for i, f in enumerate(markers.get(key, ()) if isinstance(markers, dict) else ()):
         ax.axvline(f, color=color, ls="-.", lw=0.7, label=label if i == 0 else None)
 

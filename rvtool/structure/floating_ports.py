@@ -66,7 +66,10 @@ class FloatingDynamics:
         adds the inertia-relief static responses to radial and tangential profile loads of
         Fourier orders 0..J and to unit loads at the bore and at each hole, orthogonalized
         against the modes (Ritz vectors: a free-free basis alone misses the quasi-static
-        compliance under the contacts).
+        compliance under the contacts). For a crank (``[cranks.dynamics]``, a beam:
+        :mod:`rvtool.structure.crank_modes`) the modes are its free-free bending and torsion
+        modes, and any J >= 0 adds the responses to unit x, y forces and a unit torque at every
+        station (gear, journals, tapered rows).
     """
     model: str = "rigid"
     n_modes: int = 8

@@ -263,6 +263,10 @@ class RvModel(ReducerModel):
     housing: object = None
     #: free play (needle clearance, backlash) leaves the cranks without contact stiffness at zero load
     guided_free_play: bool = True
+    #: RvFlexibleWheels (wheels.dynamics.model = "flexible", :mod:`.flexible_wheels`), or None (rigid wheels)
+    flexible: object = None
+    #: FlexibleCranks (cranks.dynamics.model = "flexible", :mod:`.flexible_cranks`), or None (rigid cranks)
+    flexible_cranks: object = None
 
     def _pose(self, name, q):
         el = self.elements[name]
@@ -390,6 +394,12 @@ class RvModel(ReducerModel):
                                                    mb.contact_angle)}
         if self.layout.three_stage:
             out["input_stage_mesh_hz"] = d.input_pinion.n_teeth * f_in
+        if self.flexible is not None:
+            # the flexible wheels' retained in-plane free-free modes (body modes beside the mesh and bearings)
+            out["wheel_modes_hz"] = sorted({float(f) for b in self.flexible.bodies for f in b.frequencies_hz})
+        if self.flexible_cranks is not None:
+            # the flexible cranks' retained modes (free-free bending and torsion, then the static Ritz vectors)
+            out["crank_modes_hz"] = sorted({float(f) for f in self.flexible_cranks.body.frequencies_hz})
         return out
 
     def refined_design(self):
@@ -866,9 +876,6 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     if not isinstance(design, RVDesign):
         raise RvtoolInputError(f"design must be an RVDesign; got {type(design).__name__}")
     d = design
-    if d.wheels.dynamics.flexible:
-        raise RvtoolInputError("wheels.dynamics.model = 'flexible' is implemented for the cycloid topology only (issue "
-                               "33: RD-40 first); valid for an RV design: 'rigid'")
     graph = GearGraph.of(d)
     L = Layout(d)
     kin = RvKinematics(d, graph, L)
@@ -914,13 +921,23 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
     wheel_path = ported_wheels(d, graph, L, meshes, opts)
     housing, ports, meshes = ported_ring(mbs, d, L, meshes)
+    flex = fcr = floating = None
+    if d.wheels.dynamics.flexible or d.cranks.dynamics.flexible:
+        # floating flexible wheels and/or cranks (issue 33), one modal structure: the pins, needles, gears and
+        # tapered pairs on the bodies' port bodies
+        from .flexible_cranks import RvFloatingBodies
+        floating = RvFloatingBodies(mbs, d, mg, graph, L)
+        flex, fcr = floating.wheels, floating.cranks
+        if flex is not None:
+            meshes = flex.pin_meshes(meshes)
 
     def pin_set_of(meshes, n_bodies):
         return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
                              search=d.wheels.search, **opts)
     pin_set = groove_pins(d, L, pin_set_of, meshes, ports) if wheel_path is None else wheel_path
     if pin_set is None:
-        pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual))
+        pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual) if flex is None
+                             else flex.n_pin_bodies)
     tilt, rows = spatial_bodies(mbs, d, L, (m_w, J_w), housing, regularization)
     main_mounting = Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)
     if b.spatial_carrier:
@@ -936,15 +953,21 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                                                      **opts), tilt.n_virtual, rows)
     else:
         cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
+        if fcr is not None:
+            cranks = fcr.crank_bearings(crank_mountings(d, graph, L), opts)
     C_crank = crank_station_compliance(d)
     C_torsion = crank_torsion_compliance(d)
     cranks = ported_carrier(d, graph, L, cranks, opts)     # the rigid carrier's set unless carrier.body = "ported"
     if C_crank is None:
         gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
+        if fcr is not None:
+            gears = fcr.gears(gear_meshes(d, graph, L), opts)
         if C_torsion is None:
             needles = BearingSet(needle_mountings(d, graph, L), L.n_bodies, name="eccentric_bearings", **opts)
             if b.spatial_cranks:
                 needles = spatial_needles(d, graph, L, tilt, rows, opts)
+            if floating is not None:
+                needles = floating.needles(opts)
         else:
             needles = torsion_crank_path(d, graph, L, C_torsion, opts, tilt, rows)
         crank_path = (("gears", gears), ("eccentric_bearings", needles))
@@ -970,20 +993,24 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     if housing is not None and tilt is not None and contact_element_mode(contact_element) == "merged":
         from exudyn_user_elements.stacked_structure import StackedStructure
         stack = StackedStructure((housing, tilt))
-    element = ContactElements(mbs, nodes, contact_element, structure=stack or (housing if tilt is None else tilt))
+    element = ContactElements(mbs, nodes, contact_element, structure=(stack or (housing if tilt is None else tilt))
+                              if floating is None else floating.coordinates)
 
     def on_stack(p):
         return p if stack is None or p is None else stack.ports(p)
 
-    def on_tilts(f):
+    def on_tilts(f, name=None):
+        if floating is not None and name in floating.families:
+            return floating.ports(name)       # flexible wheels / cranks (refused with a ported housing or tilts)
         return on_stack(tilt) if tilt is not None and f.n_bodies > L.n_bodies else None
     if wheel_path is None:
-        elements = {"pins": element(pin_set, ports=on_stack(ports) if housing is not None else on_tilts(pin_set))}
+        elements = {"pins": element(pin_set, ports=on_stack(ports) if housing is not None else
+                                         on_tilts(pin_set, "pins"))}
     else:
         # the elastic wheels: pins and needles in one closure; the gears alone
         elements = {"wheel_bodies": element(wheel_path)}
         crank_path = (("gears", gears),)
-    elements.update((name, element(s, ports=on_tilts(s))) for name, s in (*crank_path, ("crank_bearings", cranks)))
+    elements.update((name, element(s, ports=on_tilts(s, name))) for name, s in (*crank_path, ("crank_bearings", cranks)))
     elements["main_bearings"] = element(main, ports=on_tilts(main))
     if b.spatial_carrier and d.carrier.ported:
         from ..carrier import CarrierTiltSeats, tilt_seat_compliance
@@ -1012,12 +1039,15 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                     for fam, name in FAMILY_ELEMENTS.items()}
     return RvModel(design=d, SC=SC, mbs=mbs, body_names=L.names(), nodes=nodes, elements=elements, families=families,
                    input=BodyCoordinate(L.names()[0], "theta"), output=BodyCoordinate("carrier", "theta"),
-                   ratio=graph.ratio, kinematics=kin, drive=drive, load=load, reference=ref, locks=locks,
+                   ratio=graph.ratio, kinematics=kin, drive=drive, load=load, reference=ref,
+                   locks=locks + ([] if floating is None else floating.coordinates.locks),
                    reg_springs=reg_springs, main_mesh=Family.PINS, material=d.material,
                    family_specs={Family.PINS: tuple(meshes), Family.ECCENTRIC_BEARINGS: d.eccentric_bearing,
                                  Family.MAIN_BEARINGS: d.main_bearing},
                    mesh_period=abs(2 * math.pi / d.pins.n_pins / graph.crank_rate),
-                   structures={} if housing is None else {"housing": housing},
+                   structures=({} if housing is None else {"housing": housing}) if floating is None
+                   else {"cranks" if flex is None else "wheels" if fcr is None else "flexible_bodies":
+                         floating.coordinates},
                    graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
                    housing=housing, contact_host=element.host, carrier_tilt=tilt if b.spatial_carrier else None,
-                   body_tilts=tilt)
+                   body_tilts=tilt, flexible=flex, flexible_cranks=fcr)

@@ -26,6 +26,7 @@ from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
 from ...structure.carrier import CarrierStructure
 from ...structure.crank_beam import CrankShaft
+from ...structure.floating_ports import FloatingDynamics
 from ..spec import LINKS, BearingFriction, Housing, PinContact, Pins, Wheels, build_section, load_sections
 
 TOPOLOGIES = ("rv2", "rv3")
@@ -45,7 +46,10 @@ class Cranks:
     ``InvoluteGear.single_pitch_deviations``; an empty list: every crank gear as ``crank_gear``).
     shaft: the crankshaft as a beam between its tapered rows
     (:class:`~rvtool.structure.crank_beam.CrankShaft`, sub-table ``[cranks.shaft]``; rigid by
-    default, the "nothing" variant)."""
+    default, the "nothing" variant).
+    dynamics: the cranks as rigid or floating flexible bodies in driven and quasi-static runs
+    (:class:`~rvtool.structure.floating_ports.FloatingDynamics`, sub-table ``[cranks.dynamics]``;
+    rigid by default; the beam of ``[cranks.shaft]``'s geometry, :mod:`rvtool.assembly.rv.flexible_cranks`)."""
     count: int
     mass: float = 0.25
     inertia: float = 2.0e-5
@@ -53,6 +57,7 @@ class Cranks:
     eccentricity_errors: tuple = ()
     gear_pitch_deviations: tuple = ()
     shaft: CrankShaft = field(default_factory=CrankShaft)
+    dynamics: FloatingDynamics = field(default_factory=FloatingDynamics)
 
     def __post_init__(self):
         if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count not in (2, 3):

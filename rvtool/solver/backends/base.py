@@ -69,7 +69,8 @@ def spatial_body_reasons(model):
     return out
 
 
-FLEXIBLE_BODIES_REASON = ("the model has floating flexible bodies (wheels.dynamics.model = 'flexible'): the device "
+FLEXIBLE_BODIES_REASON = ("the model has floating flexible bodies (wheels.dynamics.model or cranks.dynamics.model = "
+                          "'flexible'): the device "
                           "copies carry planar rigid bodies only, not the modal coordinates and port maps of "
                           "exudyn_user_elements.floating_ports")
 """The named reason a device backend gives for a model with flexible wheels or cranks (issue 33)."""
@@ -77,7 +78,8 @@ FLEXIBLE_BODIES_REASON = ("the model has floating flexible bodies (wheels.dynami
 
 def flexible_body_reasons(model):
     """[FLEXIBLE_BODIES_REASON] where ``model`` has floating flexible bodies, else []."""
-    return [FLEXIBLE_BODIES_REASON] if getattr(model, "flexible", None) is not None else []
+    flexible = getattr(model, "flexible", None) is not None or getattr(model, "flexible_cranks", None) is not None
+    return [FLEXIBLE_BODIES_REASON] if flexible else []
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -442,8 +442,9 @@ class FusedBackend(Backend):
         from ..device_dynamics import fused_support
         from ..row_dynamics import row_stepper_reasons
         spec = run.run_spec if run is not None else None
-        spatial = spatial_body_reasons(model)
-        if spatial:                               # neither path: planar copies only
+        # neither path: planar rigid copies only (floating flexible bodies, any topology, named first)
+        spatial = spatial_body_reasons(model) + flexible_body_reasons(model)
+        if spatial:
             return None, spatial
         try:
             reasons = list(fused_support(model, spec).reasons)
