@@ -15,6 +15,10 @@ import pytest
 pytest.importorskip("sphinx", reason="the docs need the 'docs' or 'test' extra (sphinx, myst-parser)")
 pytest.importorskip("myst_parser", reason="the docs need the 'docs' or 'test' extra (sphinx, myst-parser)")
 
+pytestmark = pytest.mark.xdist_group("docs")
+"""Under pytest-xdist (``-n``, ``--dist=loadgroup`` in setup.cfg) every docs test runs on one worker: one
+Sphinx build, and no two builds writing the same generated figures in docs/_generated at once."""
+
 ROOT = Path(__file__).resolve().parents[1]
 BUILD_TIMEOUT_S = 240
 """Generous against a loaded CI machine; a quiet 2-core machine builds in ~10 s."""
