@@ -40,10 +40,12 @@ class WheelBodyClosure(ElasticPinClosure):
 
     inner: the stacked pins + needle set over n_bodies + n_wheels (z_b + n_c) bodies;
     wheels: real body index of each wheel (n_w,); bodies: (n_w,) :class:`WheelBody` models;
-    pin_centres: (z_b, 2) ring pin centres [m] (ground); station: (n_w, z_b + n_c) station indices.
+    pin_centres: (z_b, 2) ring pin centres [m] (ground); station: (n_w, z_b + n_c) station indices;
+    pin_carrier: the body carrying the ring pins' stations, GROUND or one index per pin (z_b,) (the
+    ported housing's port bodies; the contact point on the wheel is found from the nominal centres).
     """
 
-    def __init__(self, inner, *, n_bodies, wheels, bodies, pin_centres, station, **kw):
+    def __init__(self, inner, *, n_bodies, wheels, bodies, pin_centres, station, pin_carrier=GROUND, **kw):
         wheels = tuple(int(w) for w in wheels)
         station = np.asarray(station, int)
         self.pin_centres = np.asarray(pin_centres, float)
@@ -54,6 +56,7 @@ class WheelBodyClosure(ElasticPinClosure):
             raise RvtoolInputError(f"{len(wheels)} wheels, {len(bodies)} wheel bodies and {station.shape[0]} station "
                                    "rows must agree")
         carrier = np.full(station.shape, GROUND)
+        carrier[:, :zb] = np.broadcast_to(np.asarray(pin_carrier, int), (zb,))
         for j, w in enumerate(wheels):
             carrier[j, zb:] = w
         super().__init__(inner, n_bodies=n_bodies, carrier=carrier, station_compliance=np.eye(station.shape[1]),
