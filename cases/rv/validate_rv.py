@@ -7,7 +7,10 @@ crank-bearing ISO 281 L10 at T_R and the catalogue's rated output speed against 
 against declared allowables; the hysteresis curve (hysteresis.png), the compliance budget at the rated state,
 the rigidity of another ratio variant of the same frame, an uncertainty band from 64 Latin-hypercube samples
 over the `assumed` ranges with a one-at-a-time tornado (tornado.png), the fraction of those variants within the
-catalogue's lost-motion maximum; the assumptions_commit of each design.
+catalogue's lost-motion maximum; the assumptions_commit of each design; and (issue 30) the rigidity b/a with every
+member of the torque path on (rvtool.analysis.validate_members: wheel bodies, pin grooves, ported carrier, crank
+torsion, from <design>_members.toml at the middles of its ranges) with its Latin-hypercube band (2 samples and
+coarser meshes under --quick, 64 in the full run).
 
 --quick (a loop of rv80e costs 31 s, of rv40e 4 s): the central loops at 50 % level steps (the catalogue's
 levels are in every spacing); rv40e with its ratio variant and a band over the needle clearance range its
@@ -60,7 +63,7 @@ def main(argv=None):
                             "bearing_lives": out["bearing_lives"], "uncertainty_note": out["uncertainty_note"],
                             "uncertainty": {k: v for k, v in (out["uncertainty"] or {}).items() if k != "U"},
                             "settings": out["settings"], "report": f"{name}/report.html",
-                            "te_measured": out.get("te_measured")}
+                            "te_measured": out.get("te_measured"), "all_members_on": out.get("all_members_on")}
     casekit.write_results(args.out, {"designs": per_design, "passed": bool(passed and per_design),
                                      "criteria": "machinery ran (no failed sample), no NaN, loops repeat within "
                                                  f"{V.REPEAT_TOLERANCE_ARCMIN:g} arcmin, band contains central "
