@@ -374,7 +374,7 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             assumed=None, band=True, variant=True, te=True, members=True, members_samples=None, log=print):
+             assumed=None, band=True, variant=True, te=True, members=True, members_samples=None, members_workers=None, log=print):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
@@ -386,7 +386,8 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     comparison with a published measurement (:mod:`rvtool.analysis.validate_te`; it runs where the design
     ships a ``<design>_measured.toml`` and a tolerance file); members: False skips the all-members-on
     rigidity row (:mod:`rvtool.analysis.validate_members`; it runs where the design ships a
-    ``<design>_members.toml``), members_samples its Latin-hypercube size (None: that module's default)."""
+    ``<design>_members.toml``), members_samples its Latin-hypercube size (None: that module's default),
+    members_workers its processes (None: ``workers``)."""
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
     want_band, want_variant = bool(band), bool(variant)
@@ -534,7 +535,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         from ..designs.catalogue import load_assumed as _load_assumed
         base = assumed if assumed is not None else (_load_assumed(assumed_name) if assumed_name else None)
         members_row = members_rigidity(design, table, catalogue, base, quick=quick, samples=members_samples,
-                                       seed=seed, workers=workers, log=log)
+                                       seed=seed, workers=members_workers or workers, log=log)
     at = sum(r["figure"] == "torsional_rigidity" for r in rows)               # beside the file's rigidity rows
     rows[at:at] = [] if members_row is None else members_row.pop("rows")
     rows += moment["rows"]

@@ -139,7 +139,7 @@ def _sample(args):
     table, catalogue = args
     from ..assembly.topologies import design_from_table
     try:
-        return rigidity_ba(design_from_table(table), catalogue)["value"], None
+        return rigidity_ba(design_from_table(table), catalogue), None
     except Exception as exc:       # a failed variant is counted and reported
         return None, f"{type(exc).__name__}: {exc}"
 
@@ -159,7 +159,6 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     (:func:`rigidity_ba` at the middles), ``band``, the samples and failures, the members file and its commit;
     None where the design has no members file."""
     from scipy.stats import qmc
-    from ..assembly.topologies import design_from_table
     from ..designs.catalogue import set_key
     from .validate import catalogue_rows, map_samples, rigidity_points
     name = members_name(design)
@@ -170,27 +169,29 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     recorded, last, date = members_commit(name)
     numerics = QUICK_NUMERICS if quick else None
     mid = {a.key: a.middle for a in assumed.inputs}
-    log(f"validate {design}: all members on ({name}), central b/a")
-    central = rigidity_ba(design_from_table(members_table(table, switches, derived, mid, numerics)), catalogue)
     base = list(base_assumed.inputs) if base_assumed is not None else []
     inputs = base + list(assumed.inputs)
     n = samples if samples is not None else (QUICK_SAMPLES if quick else SAMPLES)
-    band, values, failures, U = None, [], [], None
-    if n > 0:
-        U = qmc.LatinHypercube(d=len(inputs), seed=seed).random(n)
+    U = qmc.LatinHypercube(d=len(inputs), seed=seed).random(n) if n > 0 else np.zeros((0, len(inputs)))
 
-        def table_of(u):
-            t = table
-            for a, uj in zip(inputs[:len(base)], u[:len(base)]):
-                t = set_key(t, a.key, a.at(uj))
-            vals = {a.key: a.at(uj) for a, uj in zip(inputs[len(base):], u[len(base):])}
-            return members_table(t, switches, derived, vals, numerics)
-        log(f"validate {design}: all members on, {n} Latin-hypercube samples over {len(inputs)} ranges")
-        res = map_samples(_sample, [(table_of(u), catalogue) for u in U], workers, log)
-        values = [v for v, _ in res]
-        failures = [e for _, e in res if e]
-        ok = [v for v in values if v is not None]
-        band = [float(min(ok)), float(max(ok))] if ok else None
+    def table_of(u):
+        t = table
+        for a, uj in zip(inputs[:len(base)], u[:len(base)]):
+            t = set_key(t, a.key, a.at(uj))
+        vals = {a.key: a.at(uj) for a, uj in zip(inputs[len(base):], u[len(base):])}
+        return members_table(t, switches, derived, vals, numerics)
+    # the central design (every input at its middle) first, then the samples: one map (``workers`` processes)
+    log(f"validate {design}: all members on ({name}), central b/a and {n} Latin-hypercube samples over "
+        f"{len(inputs)} ranges ({workers} worker(s))")
+    res = map_samples(_sample, [(members_table(table, switches, derived, mid, numerics), catalogue)]
+                      + [(table_of(u), catalogue) for u in U], workers, log)
+    central, err = res[0]
+    if central is None:
+        raise RvtoolInputError(f"validate {design}: the all-members-on central design failed: {err}")
+    values = [None if r is None else r["value"] for r, _ in res[1:]]
+    failures = [e for _, e in res[1:] if e]
+    ok = [v for v in values if v is not None]
+    band = [float(min(ok)), float(max(ok))] if ok else None
     pts, pts_source = rigidity_points(catalogue)
     note = (f"ALL MEMBERS ON ({name}.toml: {', '.join(sorted(switches))} switched on, new inputs at the middles of "
             f"their ranges, fixed at {recorded or last}); b/a on the loading branches at {pts} T_R: {pts_source}; "
@@ -200,7 +201,7 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     for r in rows:
         r["figure"] = "torsional_rigidity_all_members_on"
     return {"rows": rows, "central": central, "band": band, "samples": n, "sample_values": values,
-            "failures": failures, "keys": [a.key for a in inputs], "U": None if U is None else U.tolist(),
+            "failures": failures, "keys": [a.key for a in inputs], "U": U.tolist(),
             "members_file": f"{name}.toml", "switches": switches, "derived": derived,
             "inputs_at_middle": mid, "assumptions_commit": recorded, "last_commit_touching_members": last,
             "last_commit_date": date, "quick_numerics": numerics, "seed": seed, "wall_s": time.perf_counter() - t0}
