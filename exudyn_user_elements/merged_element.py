@@ -149,15 +149,27 @@ class HostedContactElement(ContactElement):
         return self._evaluate_fresh(key, pose, vel)
 
     @property
+    def identity_ports(self):
+        """True if this family's port bodies are the host's structural coordinates themselves (P = I:
+        the retained out-of-plane rows of :class:`~exudyn_user_elements.out_of_plane.RetainedTilt`)
+        and it spans every host coordinate: its coordinates are the host's."""
+        if self.ports is None or getattr(self.ports, "state_dependent", False):
+            return False
+        if self._identity_ports is None:
+            P = self.ports.P
+            self._identity_ports = P.shape[0] == P.shape[1] and np.array_equal(P, np.eye(len(P)))
+        return self._identity_ports and np.array_equal(self.positions, np.arange(self.host.n))
+
+    @property
     def launchable(self):
         """True if the host may sum this family's rows on the device: a family on the host's rigid
-        coordinates whose evaluator launches its Warp kernel without assembling (``launch``,
-        ``row_buffers``)."""
+        coordinates (or on all of them with identity ports, :attr:`identity_ports`) whose evaluator
+        launches its Warp kernel without assembling (``launch``, ``row_buffers``)."""
         ev = self.evaluator
         # looked up on the class: a wrapper that forwards unknown attributes to an inner set (the
         # elastic pin closure) evaluates other bodies than the inner set's launch would
         cls = type(ev)
-        return (self.prefix is not None and getattr(ev, "backend", None) == "warp"
+        return ((self.prefix is not None or self.identity_ports) and getattr(ev, "backend", None) == "warp"
                 and all(callable(getattr(cls, nm, None)) for nm in ("stage", "launch_staged", "launched",
                                                                     "launched_field", "row_buffers")))
 
@@ -248,7 +260,8 @@ class MergedContactElement:
 
     mbs: the MainSystem; nodes: the rigid-body node numbers (``NodeRigidBody2D``) every family
     is evaluated on, in body order; structure: a
-    :class:`~exudyn_user_elements.reduced_structure.ReducedStructure` whose eta follow the
+    :class:`~exudyn_user_elements.reduced_structure.ReducedStructure` (or a
+    :class:`~exudyn_user_elements.stacked_structure.StackedStructure` of several) whose eta follow the
     rigid coordinates (families with ``ports`` act on it), or None. Families are added with
     :meth:`add` before ``mbs.Assemble()``.
     """
@@ -273,6 +286,7 @@ class MergedContactElement:
         self._sums = None       # warp_contacts.segment_sum.ElementSums of the launchable families
         self._slot = {}         # member index -> slot in _sums
         self._used = None       # set once the device sums are built (row_sums)
+        self._n_sums = self.n_rigid   # coordinates the device sums span (row_sums)
         self._fast = False      # the cached evaluation summed families on the device
         self._launched = frozenset()   # members summed on the device in the cached evaluation
         self._device_only = False
@@ -288,7 +302,9 @@ class MergedContactElement:
         # is called without the contact elements (a frozen drive would be wrong, not slow)
         mbs.variables.setdefault(HOSTS_KEY, []).append(self)
         self.object_number = mbs.AddObject(ObjectGenericODE2(
-            name=name, nodeNumbers=nodes + ([] if structure is None else [structure.node]), **mats,
+            name=name, nodeNumbers=nodes + ([] if structure is None else
+                                            list(structure.nodes) if hasattr(structure, "nodes") else [structure.node]),
+            **mats,
             forceUserFunction=self.force_callback, jacobianUserFunction=self.jacobian_callback,
             visualization=VObjectGenericODE2(show=False)))
 
@@ -345,6 +361,7 @@ class MergedContactElement:
         vel_r = vr.reshape(-1, 3)
         sums = self.row_sums()
         evs, host, launches, launched = [None] * len(self.members), [], [], []
+        states = {}
         for i, m in enumerate(self.members):
             slot = self._slot.get(i)
             if m.prescribed_velocity is not None:
@@ -352,10 +369,20 @@ class MergedContactElement:
                 # velocity (ContactElement.evaluate), not at the solver's
                 evs[i] = m.evaluate(t, q[m.positions], q_t[m.positions])
                 host.append((m, evs[i]))
-            elif slot is not None and key_r != m._key and (m.n_evaluations + 1) not in m.inject_nan_at:
-                # rows summed on the device (warp_contacts.segment_sum): no host assembly
+            elif (slot is not None and (key_r if m.prefix is not None else key) != m._key
+                  and (m.n_evaluations + 1) not in m.inject_nan_at):
+                # rows summed on the device (warp_contacts.segment_sum): no host assembly; a family
+                # with identity ports on every host coordinate at its own poses (the planar bodies
+                # and the retained out-of-plane rows)
                 ev = m.evaluator
-                ev.stage(pose_r, vel_r)
+                if m.prefix is not None:
+                    states[i] = (key_r, pose_r, vel_r)
+                else:       # identity ports: every such family's poses are the same
+                    full = states.get("full")
+                    if full is None:
+                        full = states["full"] = (key, *m.pose_velocity(q, q_t))
+                    states[i] = full
+                ev.stage(*states[i][1:])
                 launches.append((slot, ev.launch_staged, ev.velocity_rows))
                 launched.append(i)
             elif m.prefix is not None:
@@ -369,11 +396,12 @@ class MergedContactElement:
         self._launched = frozenset(launched)
         # every family summed on the device and no structural coordinates: the sums' Jacobian is
         # the element's
-        self._device_only = self._fast and not host and self.n == nr
+        ns = self._n_sums
+        self._device_only = self._fast and not host and self.n == ns
         if self._fast:
             sums.run(launches)
             for i in launched:
-                evs[i] = self.members[i].launched(key_r, pose_r, vel_r)
+                evs[i] = self.members[i].launched(*states[i])
             sums.set_used(self._used_slots(launches))
             Qf, finite = sums.vector()
             if not finite:
@@ -385,7 +413,7 @@ class MergedContactElement:
                 Q = Qf.copy()
             else:
                 Q = np.zeros(self.n)
-                Q[:nr] = Qf
+                Q[:ns] = Qf
         else:
             Q = np.zeros(self.n)
         for m, ev in host:
@@ -413,9 +441,12 @@ class MergedContactElement:
             self._slot = {i: s for s, i in enumerate(fams)}
             self._all_slots = (True,) * len(fams)
             self._used = True
+            # the sums span the rigid coordinates, or every host coordinate where a family with
+            # identity ports (retained out-of-plane rows) is summed on the device
+            self._n_sums = self.n if any(self.members[i].prefix is None for i in fams) else self.n_rigid
             if fams:
                 from warp_contacts.segment_sum import ElementSums
-                self._sums = ElementSums([self.members[i].evaluator.row_buffers() for i in fams], self.n_rigid)
+                self._sums = ElementSums([self.members[i].evaluator.row_buffers() for i in fams], self._n_sums)
         return self._sums
 
     def user_jacobian(self, t, q, q_t, f_q, f_v):
@@ -423,13 +454,13 @@ class MergedContactElement:
         launched families' part from the device-side sums (a buffer of the sums where no other
         family adds: copy it to keep it)."""
         _, evs = self.evaluate(t, q, q_t)
-        nr = self.n_rigid
+        ns = self._n_sums
         if self._fast:
             Jf = self._sums.jacobian(f_q, f_v)
             if self._device_only:
                 return Jf
             J = np.zeros((self.n, self.n))
-            J[:nr, :nr] = Jf
+            J[:ns, :ns] = Jf
         else:
             J = np.zeros((self.n, self.n))
         for i, (m, ev) in enumerate(zip(self.members, evs)):

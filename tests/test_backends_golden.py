@@ -133,13 +133,12 @@ def test_auto_names_why_each_other_backend_was_not_taken(name):
 
 
 def test_a_named_backend_that_cannot_run_the_model_is_an_error():
-    """No silent fallback: --backend device on an RV model with stick--slip (anchor) friction
-    names the reasons (the frictionless RV-40E runs on the device row Newton, tests/test_device_rows.py)."""
-    import dataclasses
+    """No silent fallback: --backend device on an RV model with conformal pin grooves (a closure with a
+    nonlinear station law) names the reasons (RV-40E, with or without stick--slip anchors, runs on the
+    device row Newton: tests/test_device_rows.py, tests/test_device_families.py)."""
     from rvtool.errors import RvtoolInputError
     d = rvtool.load_design("rv40e")
-    model = rvtool.build(dataclasses.replace(d, involute_stage=dataclasses.replace(d.involute_stage, mu=0.05,
-                                                                                   friction_model="anchor")))
+    model = rvtool.build(d.replace(pins={"groove": "conformal", "groove_clearance": 5e-6}))
     with pytest.raises(RvtoolInputError, match=r"backend = 'device'.*cannot run equilibria.*Valid choices"):
         choose("device", model, "equilibria")
     with pytest.raises(RvtoolInputError, match=r"valid choices are"):

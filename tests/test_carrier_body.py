@@ -136,10 +136,9 @@ def test_bad_input_names_the_key(key, value, match):
 
 
 def test_ported_carrier_refuses_what_it_does_not_implement():
-    """Spatial carrier coordinates and Palmgren's bearing friction are refused by name, not ignored."""
+    """Spatial crank coordinates and Palmgren's bearing friction are refused by name, not ignored (a spatial
+    carrier is taken: test_spatial_ported_carrier_*)."""
     d = _ported()
-    with pytest.raises(RvtoolInputError, match="bodies.carrier_coordinates"):
-        rvtool.build(d.replace(bodies={"carrier_coordinates": "spatial"}))
     with pytest.raises(RvtoolInputError, match="bodies.crank_coordinates"):
         rvtool.build(d.replace(bodies={"crank_coordinates": "spatial"}))
     with pytest.raises(RvtoolInputError, match="bearing_friction.model"):
@@ -241,3 +240,98 @@ def test_rigid_fit_of_a_seat_recovers_rigid_motions_and_the_tilt_stiffness_is_re
     C = np.array(info["main_seats_compliance"])
     assert C.shape == (6, 6) and np.linalg.eigvalsh(0.5 * (C + C.T)).min() > 0
     assert info["main_seats_tilt_stiffness_Nm_per_rad"] > 0
+
+
+@pytest.fixture(scope="module")
+def spatial_ported():
+    """(planar + ported model, spatial + ported model) of rv40e on the coarse carrier mesh."""
+    from rvtool.protocols.moment_rigidity import spatial_design
+    d = _ported()
+    return rvtool.build(d), rvtool.build(spatial_design(d))
+
+
+def test_spatial_ported_carrier_without_out_of_plane_load_is_the_planar_ported_carrier(spatial_ported):
+    """bodies.carrier_coordinates = "spatial" with carrier.body = "ported" (issue 32): the face and the main seats
+    retain (z, gamma_x, gamma_y), closed by the carrier's out-of-plane seat compliance; without out-of-plane load
+    the quasi-static output angle and TE equal the planar ported carrier's to 1e-9 relative (issue 32; measured
+    ~3e-16: the seat spring carries nothing and the main bearing's in-plane rows are the planar ones)."""
+    from rvtool.protocols.precision import quasi_static_te
+    from rvtool.solver.static import StaticSolver
+    m0, m1 = spatial_ported
+    assert m1.body_tilts.names == ("carrier", "carrier_seats") and "carrier_seats" in m1.elements
+    d = m0.design
+    ang = np.arange(3) * m0.mesh_period / 40
+    r0 = quasi_static_te(m0, torque=float(d.rated_torque), input_angles=ang, solver=StaticSolver(m0))
+    r1 = quasi_static_te(m1, torque=float(d.rated_torque), input_angles=ang, solver=StaticSolver(m1))
+    scale = np.max(np.abs(r0["theta_out"]))
+    assert np.max(np.abs(r1["theta_out"] - r0["theta_out"])) <= 1e-9 * scale
+    assert np.max(np.abs(r1["te"] - r0["te"])) <= 1e-9 * scale
+
+
+def test_spatial_ported_carrier_seat_compliance_is_the_parents(spatial_ported):
+    """The seat spring's static compliance -- the face's (z, gamma_x, gamma_y) under unit loads with the seats
+    held, from the element's own tangent -- is the parent FE's rigid-fit compliance block of the main seats
+    relative to the clamped output face (issue 30's port check, 1e-6 relative: the same matrix inverted twice,
+    ~1e-12), turned with the carrier: at carrier angle 0.4 rad it is R C_o R^T."""
+    from rvtool.assembly.carrier import OUT_OF_PLANE, carrier_ports
+    _, m1 = spatial_ported
+    ev = m1.elements["carrier_seats"].evaluator
+    _, _, info = carrier_ports(m1.design)
+    C_parent = np.asarray(info["main_seats_compliance"])[np.ix_(OUT_OF_PLANE, OUT_OF_PLANE)]
+    for angle in (0.0, 0.4):
+        pose = np.zeros((ev.n_bodies, 3))
+        pose[ev.carrier, 2] = angle
+        K = -ev.evaluate(pose).dQdq
+        f = slice(3 * ev.face, 3 * ev.face + 3)
+        C = np.linalg.inv(K[f, f])
+        c, s = math.cos(angle), math.sin(angle)
+        R = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+        want = R @ C_parent @ R.T
+        assert np.max(np.abs(C - want)) <= 1e-6 * np.max(np.abs(want))
+
+
+def test_spatial_ported_carrier_tangent_central_difference(spatial_ported):
+    """The merged element's analytic tangent of the spatial ported carrier against central differences over
+    every coordinate at a loaded, tilted state (the seat spring's turn with the carrier in its angle column, the
+    seat closure, the spatial main-bearing rows). Steps 1e-10 m / 1e-8 rad against displacements ~1e-6 m: bound
+    1e-6 of the largest entry (the issue's check)."""
+    _, m1 = spatial_ported
+    host = m1.contact_host
+    rng = np.random.default_rng(2)
+    from rvtool.solver.static import StaticSolver
+    m1.set_output_torque(-np.sign(m1.ratio) * m1.design.rated_torque)
+    m1.set_flange_load(200.0, (300.0, -150.0))
+    try:
+        q_all = StaticSolver(m1).solve(0.0)
+    finally:
+        m1.set_flange_load(0.0, (0.0, 0.0))
+        m1.set_output_torque(0.0)
+    q = np.asarray(q_all)[host.coordinate_indices] + 1e-8 * rng.standard_normal(host.n)
+    v = np.zeros(host.n)
+    K = host.tangent(0.0, q, v)
+    fd = np.zeros_like(K)
+    for j in range(host.n):
+        h = 1e-8 if j % 3 == 2 or j >= host.n_rigid else 1e-10
+        qp, qm = q.copy(), q.copy()
+        qp[j] += h
+        qm[j] -= h
+        fd[:, j] = (host.evaluate(1.0 + j, qp, v)[0] - host.evaluate(2.0 + j, qm, v)[0]) / (2 * h)
+    assert np.max(np.abs(K - fd)) <= 1e-6 * np.max(np.abs(K))
+
+
+def test_moment_rigidity_runs_with_the_ported_carrier(spatial_ported):
+    """The moment-rigidity protocol on the elastic carrier: the carrier's tilt compliance between the face and
+    the main seats adds in series to the main bearing's, 1/K = 1/K_rigid + C_gamma within the bearing's change
+    over the moment range and the small z--gamma couplings (measured 7e-4; bound 1e-2), and the axial
+    stiffness likewise with C_z (measured 3e-7; bound 1e-5)."""
+    from rvtool.protocols.moment_rigidity import MomentRigidityTest, moment_rigidity, spatial_design
+    _, m1 = spatial_ported
+    test = MomentRigidityTest(reference_moment=1000.0, levels=(0.0, 0.5, 1.0), axial_force=1000.0)
+    ported = moment_rigidity(m1, test)
+    rigid = moment_rigidity(rvtool.build(spatial_design(_rv40e())), test)
+    C = m1.elements["carrier_seats"].evaluator.compliance
+    assert ported.rigidity < rigid.rigidity
+    want = 1.0 / rigid.rigidity + 0.5 * (C[1, 1] + C[2, 2])
+    assert abs(1.0 / ported.rigidity - want) <= 1e-2 * want
+    want = 1.0 / rigid.axial_stiffness + C[0, 0]
+    assert abs(1.0 / ported.axial_stiffness - want) <= 1e-5 * want

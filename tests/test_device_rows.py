@@ -174,16 +174,19 @@ def test_auto_does_not_take_the_unmeasured_row_path(rv):
 
 
 def test_what_the_device_does_not_cover_is_named(rv):
-    """Friction with stick--slip anchors (history) is not on the device: a named reason, and
-    --backend device refuses instead of running something else."""
+    """Friction with stick--slip anchors runs on the device row Newton (history committed per level:
+    tests/test_device_families.py); a closure with a nonlinear station law (conformal grooves) does
+    not: a named reason, and --backend device refuses instead of running something else."""
     d, _ = rv
     anchored = dataclasses.replace(d, involute_stage=dataclasses.replace(d.involute_stage, mu=0.05,
                                                                          friction_model="anchor"))
     model = rvtool.build(anchored)
-    sup = DeviceBackend().supports(model, "equilibria")
-    assert not sup.ok and any("stick--slip anchors" in r and "row path" in r for r in sup.reasons)
-    with pytest.raises(RvtoolInputError, match=r"backend = 'device'.*stick--slip anchors"):
-        choose("device", model, "equilibria")
+    assert DeviceBackend().supports(model, "equilibria").ok
+    grooved = rvtool.build(d.replace(pins={"groove": "conformal", "groove_clearance": 5e-6}))
+    sup = DeviceBackend().supports(grooved, "equilibria")
+    assert not sup.ok and any("station law" in r and "row path" in r for r in sup.reasons)
+    with pytest.raises(RvtoolInputError, match=r"backend = 'device'.*station law"):
+        choose("device", grooved, "equilibria")
     with pytest.raises(RvtoolInputError, match=r"backend = 'device' \(fused\) cannot run dynamic.*cycloid reducers only"):
         choose("device", model, "dynamic")           # no driven runs of RV on the device (fused stepper)
     with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):

@@ -108,3 +108,48 @@ def test_element_sums_in_float32_hand_back_double():
     assert np.allclose(Q, Qr, rtol=0, atol=24 * np.finfo(np.float32).eps * np.abs(q64).sum())
     Jr = ref.element_jacobian(Kq[None], Kv[None], 1.0, 0.5)
     assert np.allclose(J, Jr, rtol=0, atol=24 * np.finfo(np.float32).eps * (np.abs(dq64).sum() + np.abs(dv64).sum()))
+
+
+@pytest.mark.parametrize("device", DEVICES)
+def test_weighted_family_sums_match_the_dense_map(device):
+    # a family reaching the element through linear maps, C of the forces and D of the displacements
+    # (the width slices of tilting bodies: C = T^T W A, D = T^T A): Q = C vec(q), K = sum_i C_i K_i
+    # D_i^T. The reference's and the kernel's weighted segmented sums against the dense products;
+    # they sum in another order than the BLAS products, so the bound is some roundings of the largest
+    # term (|C|, |D| <= 1, entries up to ~1e9: 50 roundings relative to the largest entry)
+    from scipy import sparse
+    rng = np.random.default_rng(11)
+    nb, n_rows, n = 3, 20, 14
+    bodies, q, dq, dv = _family(rng, n_rows, 2, nb)
+    k = q.shape[1]
+    ix = coordinate_index(bodies, nb)
+    A = np.zeros((3 * nb, n_rows * k))          # the plain scatter of the rows into 3 nb coordinates
+    keep = np.flatnonzero(ix.ravel() >= 0)
+    A[ix.ravel()[keep], keep] = 1.0
+    T = rng.uniform(-1, 1, size=(n, 3 * nb)) * (rng.uniform(size=(n, 3 * nb)) < 0.3)
+    W = rng.uniform(0.1, 1, size=3 * nb)
+    C, D = (T * W) @ A, T @ A
+    Q_d = C @ q.ravel()
+    K_d = sum(C[:, i * k:(i + 1) * k] @ dq[i] @ D[:, i * k:(i + 1) * k].T for i in range(n_rows))
+    V_d = sum(C[:, i * k:(i + 1) * k] @ dv[i] @ D[:, i * k:(i + 1) * k].T for i in range(n_rows))
+    Cs, Ds = sparse.csr_matrix(C), sparse.csr_matrix(D)
+    Qr, Kqr, Kvr = ref.weighted_family_sums(q, dq, dv, Cs, Ds)
+    for got, want in ((Qr, Q_d), (Kqr, K_d), (Kvr, V_d)):
+        assert np.max(np.abs(got - want)) <= 50 * np.finfo(float).eps * np.max(np.abs(want))
+    # C = D with unit weights reproduces the plain lists (one entry per column: a row scatter)
+    plain = ref.segments(ix, 3 * nb)
+    weighted = ref.weighted_segments(sparse.csr_matrix(A), k)
+    for p, w in zip(plain, weighted[0:2] + weighted[3:5]):
+        assert np.array_equal(p, w)
+    assert np.all(weighted[2] == 1.0) and np.all(weighted[5] == 1.0)
+    sums = ElementSums([((Cs, Ds), _device_rows(q, device), _device_rows(dq, device), _device_rows(dv, device))], n)
+    sums.add(0, True, True)
+    Q, finite = sums.vector()
+    assert finite
+    # the kernel sums in the reference's order: the same bits on cpu; nvcc contracts the weighted
+    # multiply-adds into FMAs, so on cuda the sums differ in the last bits (seen on an H200)
+    for got, want in ((Q, Qr), (-sums.jacobian(1.0, 0.0), Kqr), (sums.Kv[0].reshape(n, n), Kvr)):
+        if str(device).startswith("cuda"):
+            assert np.max(np.abs(got - want)) <= 8 * np.finfo(float).eps * np.max(np.abs(want))
+        else:
+            assert np.array_equal(got, want)

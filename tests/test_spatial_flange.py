@@ -254,3 +254,54 @@ def test_crossed_roller_carries_moment_and_axial_load():
     m_p = flange_equilibrium(CROSSED, (0, 0, 0, 150.0, 0))
     m_m = flange_equilibrium(CROSSED, (0, 0, 0, -150.0, 0))
     assert m_p[3] > 0 and m_m[3] == pytest.approx(-m_p[3], rel=1e-6)
+
+
+SPATIAL_DEVICES = ["cpu", pytest.param("cuda:0", marks=pytest.mark.skipif(
+    __import__("warp").get_cuda_device_count() == 0, reason="no CUDA device"))]
+
+
+@pytest.mark.parametrize("device", SPATIAL_DEVICES)
+@pytest.mark.parametrize("bearing", ["pair", "end_play", "crossed"])
+def test_spatial_row_kernel_equals_the_reference(bearing, device):
+    """The Warp kernel of the spatial rows (warp_contacts.spatial_balls) against the NumPy reference
+    (SpatialBearingSet.balls) at a loaded, tilted state where some elements have lost contact: the same
+    expressions in another order (atan2, pow and the forward-mode sums), so the bound is some roundings
+    of the largest entry, 1e-13 relative (measured ~4e-16); and the kernel's tangent against central
+    differences (1e-6, the issue's check)."""
+    pair = {"pair": _pair(), "end_play": _pair(axial_preload=0.0, end_play=2e-6), "crossed": CROSSED}[bearing]
+    ms = [Mounting(name="m", bearing=pair, inner=0, outer=GROUND, inner_centre=(2e-4, -1e-4))]
+    ref, kern = SpatialBearingSet(ms, 2, {0: 1}), SpatialBearingSet(ms, 2, {0: 1}, backend="warp", device=device)
+    pose = np.array([[4e-6, -3e-6, 0.37], [3e-6, 2e-5, -1.5e-5]])
+    a, b = ref.evaluate(pose), kern.evaluate(pose)
+    assert 0 < np.count_nonzero(a.obs[:, 0]) < len(a.obs)
+    for f in ("Q", "dQdq", "obs"):
+        x, y = getattr(b, f), getattr(a, f)
+        assert np.max(np.abs(x - y)) <= 1e-13 * np.max(np.abs(y)), f
+    K = _fd(kern, pose, [1e-9, 1e-9, 1e-7, 1e-9, 1e-9, 1e-9] if bearing != "crossed"
+            else [1e-10, 1e-10, 1e-8, 1e-10, 1e-10, 1e-10])
+    assert np.max(np.abs(b.dQdq - K)) <= 1e-6 * np.max(np.abs(b.dQdq))
+
+
+def test_spatial_flange_rows_are_summed_on_the_device():
+    """rd40 with a spatial flange: the main bearing's spatial rows (backend "warp") join the merged
+    element's device sums, which then span the retained coordinates too; the element's force and
+    tangent equal the per-family host assembly (the identity ports reading the same rows; sums in
+    another order: 1e-13 relative)."""
+    d = rvtool.replace_design(rvtool.load_design("rd40"), bodies={"flange_coordinates": "spatial"})
+    m = rvtool.build(d, bearing_model="rolling")
+    host = m.contact_host
+    main = next(mm for mm in host.members if mm.evaluator.name == "main_bearing")
+    assert main.launchable and main.identity_ports
+    rng = np.random.default_rng(3)
+    q = 2e-6 * rng.standard_normal(host.n)
+    v = np.zeros(host.n)
+    Q, _ = host.evaluate(0.0, q, v)
+    J = host.tangent(0.0, q, v)
+    assert host.row_sums().n == host.n
+    Qh, Jh = np.zeros(host.n), np.zeros((host.n, host.n))
+    for mm in host.members:
+        ev = mm.evaluator.evaluate(*mm.pose_velocity(q[mm.positions], v[mm.positions]), check=False)
+        Qh[mm.positions] += ev.Q
+        Jh[np.ix_(mm.positions, mm.positions)] += ev.dQdq
+    assert np.max(np.abs(Q - Qh)) <= 1e-13 * np.max(np.abs(Qh))
+    assert np.max(np.abs(J - Jh)) <= 1e-13 * np.max(np.abs(Jh))

@@ -64,7 +64,11 @@ def _floating_sun(**bodies):
 def test_spatial_input_shaft_reproduces_planar_and_carries_a_tilting_moment():
     """bodies.input_coordinates = "spatial" (a floating sun): the sun--crank meshes are sliced with the
     sun's tilt; without out-of-plane load the quasi-static TE equals the planar floating sun's (1e-9
-    relative, issue 32; measured exactly equal: at zero tilt the slices share one evaluation); a
+    relative to the output angle, issue 32: the slices are evaluated in one stacked launch and summed
+    with their width fractions, which rounds otherwise than the planar sum, so Newton stops at another
+    iterate inside its tolerance; measured 4e-13 of the output angle. The TE differs exactly as the
+    output angle does, its kinematic part being the same; over these three points its peak-to-peak is
+    only ~3e-5 of the output angle, so 1e-9 of it would ask for the iterates' last bits); a
     tilting moment on the sun is carried by the meshes' width moments, not by the regularization
     spring (0.1 N m/rad would give 5 rad under 0.5 N m)."""
     from rvtool.protocols.precision import quasi_static_te
@@ -80,7 +84,7 @@ def test_spatial_input_shaft_reproduces_planar_and_carries_a_tilting_moment():
     s1 = StaticSolver(m1)
     r1 = quasi_static_te(m1, torque=float(d.rated_torque), input_angles=ang, solver=s1)
     assert np.max(np.abs(r1["theta_out"] - r0["theta_out"])) <= 1e-9 * np.max(np.abs(r0["theta_out"]))
-    assert np.max(np.abs(r1["te"] - r0["te"])) <= 1e-9 * np.ptp(r0["te"])
+    assert np.max(np.abs(r1["te"] - r0["te"])) <= 1e-9 * np.max(np.abs(r0["theta_out"]))
     m1.set_body_load("sun", 0.0, (0.5, 0.0))
     q = s1.solve(float(ang[-1]), previous_angle=float(ang[-1]))
     gx = m1.tilts(q)["sun"][1]

@@ -176,6 +176,29 @@ def pose_kernel(dtype):
     return write_poses
 
 
+@functools.lru_cache(maxsize=None)
+def gather_pose_kernel(dtype):
+    """``gather_poses``: pose[i // 3, i % 3] = reference[m // n, m % n] + q[m // n, m % n] for m =
+    index[i] >= 0, else 0 (the poses of a set on extended bodies, whose coordinates are selections
+    of the copies' row coordinates, :mod:`rvtool.solver.row_extension`; its ground row untouched;
+    NumPy: :func:`rvtool.solver.row_extension.gather_poses` of reference + q)."""
+
+    @wp.kernel(module="unique")
+    def gather_poses(reference: wp.array2d(dtype=dtype), q: wp.array2d(dtype=dtype), index: wp.array(dtype=wp.int64),
+                     pose: wp.array2d(dtype=dtype)):
+        i = wp.tid()
+        m = index[i]
+        n = wp.int64(q.shape[1])
+        v = dtype(0.0)
+        if m >= wp.int64(0):
+            p = int(m // n)
+            j = int(m % n)
+            v = reference[p, j] + q[p, j]
+        pose[i // 3, i % 3] = v
+
+    return gather_poses
+
+
 class BlockNewtonStep:
     """The step's device state for B copies of n coordinates: ``model`` a
     :class:`warp_contacts.block_newton_ref.StepModel`; arrays ``q``, ``kin``, ``torque``, ``status``,
@@ -248,6 +271,18 @@ class BlockNewtonStep:
                                                record_cmd=True), (reference, pose))
         hit[0].launch()
 
+    def write_poses_gathered(self, reference, pose, index):
+        """Poses of a set on extended bodies into ``pose`` ((N + 1, 3) device array) from the
+        absolute row coordinates reference + q through ``index`` ((3 N,) int64 device array, -1:
+        zero; :func:`gather_pose_kernel`)."""
+        key = ("gather", reference.ptr, pose.ptr, index.ptr)
+        hit = self._cmds.get(key)
+        if hit is None:
+            hit = self._cmds[key] = (wp.launch(gather_pose_kernel(self.dtype), dim=index.shape[0], device=self.device,
+                                               inputs=[reference, self.q, index], outputs=[pose], record_cmd=True),
+                                     (reference, pose, index))
+        hit[0].launch()
+
     def step(self, Q, K):
         """One step of every active copy from the device sums Q (B, n), K (B, n, n) (a launch
         recorded per pair of arrays, replayed)."""
@@ -276,5 +311,6 @@ class BlockNewtonStep:
         hit[0].launch()
 
 
-__all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "LAYOUTS", "WARM", "kernel", "pose_kernel",
+__all__ = ["ACTIVE", "BlockNewtonStep", "CONVERGED", "FAILED", "LAYOUTS", "WARM", "gather_pose_kernel", "kernel",
+           "pose_kernel",
            "transpose_kernel"]

@@ -21,14 +21,10 @@ from .rolling_elements_ref import (AUX_ALPHA, AUX_FU, AUX_FZ, HB_E0, HB_E1, HB_F
 
 
 @functools.lru_cache(maxsize=None)
-def _kernel(dtype):
-    G = planar_funcs(dtype)
-    L = law_funcs(dtype)
-    vec2, perp, cross2, rot = G.vec2, G.perp, G.cross2, G.rot
-    body_state, param_vec2, pair_seed = G.body_state, G.param_vec2, G.pair_seed
-    store_pair_forces, store_pair_column, store_pair_observation = (G.store_pair_forces, G.store_pair_column,
-                                                                    G.store_pair_observation)
-    normal_force, damping_ramp = L.normal_force, L.damping_ramp
+def stiffness_funcs(dtype):
+    """(hertz_point_stiffness, ball_stiffness): the Hamrock--Brewe point contact and a ball's two
+    contacts in series as Warp functions for scalar type ``dtype`` (shared with the spatial rows of
+    :mod:`warp_contacts.spatial_balls`)."""
     kc, ke, e0, e1, f0, f1 = (dtype(HB_K_COEF), dtype(HB_K_EXP), dtype(HB_E0), dtype(HB_E1), dtype(HB_F0),
                               dtype(HB_F1))
 
@@ -58,6 +54,20 @@ def _kernel(dtype):
         s = wi + wo
         K = dtype(1.0) / (s * wp.sqrt(s))
         return K, K * (wi * dlki + wo * dlko) / s
+
+    return hertz_point_stiffness, ball_stiffness
+
+
+@functools.lru_cache(maxsize=None)
+def _kernel(dtype):
+    G = planar_funcs(dtype)
+    L = law_funcs(dtype)
+    vec2, perp, cross2, rot = G.vec2, G.perp, G.cross2, G.rot
+    body_state, param_vec2, pair_seed = G.body_state, G.param_vec2, G.pair_seed
+    store_pair_forces, store_pair_column, store_pair_observation = (G.store_pair_forces, G.store_pair_column,
+                                                                    G.store_pair_observation)
+    normal_force, damping_ramp = L.normal_force, L.damping_ramp
+    _, ball_stiffness = stiffness_funcs(dtype)
 
     @wp.func
     def lamina_law(r: dtype, rdot: dtype, k: dtype, p: dtype, alpha: dtype, c: dtype, crown: dtype, cd: dtype,

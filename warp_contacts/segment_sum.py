@@ -15,7 +15,7 @@ import functools
 import numpy as np
 import warp as wp
 
-from .segment_sum_ref import segments
+from .segment_sum_ref import segments, weighted_segments
 
 
 @functools.lru_cache(maxsize=None)
@@ -57,6 +57,46 @@ def _scatter_kernel(dtype):
 
 
 @functools.lru_cache(maxsize=None)
+def _weighted_scatter_kernel(dtype):
+    """:func:`_scatter_kernel` for a family whose row entries reach the element through a linear
+    map (:func:`segment_sum_ref.weighted_segments`): every source times its weight."""
+    @wp.kernel(module="unique")
+    def scatter_weighted_family(
+            # Model:
+            vec_start: wp.array(dtype=wp.int32), vec_src: wp.array(dtype=wp.int32), vec_w: wp.array(dtype=dtype),
+            mat_start: wp.array(dtype=wp.int32), mat_src: wp.array(dtype=wp.int32), mat_w: wp.array(dtype=dtype),
+            n: int, slot: int, accumulate: int, with_v: int,
+            # Data in:
+            q_in: wp.array2d(dtype=dtype), dqdq_in: wp.array3d(dtype=dtype), dqdv_in: wp.array3d(dtype=dtype),
+            # Data out:
+            q_out: wp.array(dtype=dtype), kq_out: wp.array2d(dtype=dtype), kv_out: wp.array2d(dtype=dtype)):
+        e = wp.tid()
+        k = q_in.shape[1]
+        if e < n:
+            s = dtype(0.0)
+            for j in range(vec_start[e], vec_start[e + 1]):
+                src = vec_src[j]
+                s += vec_w[j] * q_in[src // k, src % k]
+            if accumulate != 0:
+                q_out[e] = q_out[e] + s
+            else:
+                q_out[e] = s
+        sq = dtype(0.0)
+        sv = dtype(0.0)
+        kk = k * k
+        for j in range(mat_start[e], mat_start[e + 1]):
+            src = mat_src[j]
+            i = src // kk
+            r = src % kk
+            sq += mat_w[j] * dqdq_in[i, r // k, r % k]
+            if with_v != 0:
+                sv += mat_w[j] * dqdv_in[i, r // k, r % k]
+        kq_out[slot, e] = sq
+        kv_out[slot, e] = sv
+    return scatter_weighted_family
+
+
+@functools.lru_cache(maxsize=None)
 def _jacobian_kernel(dtype):
     @wp.kernel(module="unique")
     def element_jacobian(
@@ -84,7 +124,9 @@ class ElementSums:
     """Device-side sums of several contact families' rows into one element's vector and tangent.
 
     families: per family its row index (N_f, k_f) (element coordinate of each row entry, -1
-    dropped) and its row buffers as Warp arrays (q (N_f, k_f), dqdq (N_f, k_f, k_f), dqdv
+    dropped) -- or the sparse maps (C, D) (n, N_f k_f) of forces and displacements through which its
+    row entries reach the element (weighted sources, :func:`segment_sum_ref.weighted_segments`) --
+    and its row buffers as Warp arrays (q (N_f, k_f), dqdq (N_f, k_f, k_f), dqdv
     (N_f, k_f, k_f) or None), the arrays its kernel writes in place at every launch;
     n: element coordinates. Scalar type and device are the row buffers' (one for all families).
 
@@ -121,10 +163,21 @@ class ElementSums:
         self._q, self._kq, self._kv, self._j = wrap(self.Q), wrap(self.Kq), wrap(self.Kv), wrap(self.J)
         self._used = wrap(self.used, wp.int32)
         dummy = wp.zeros((1, 1, 1), dtype=dt, device=d)
-        scatter = _scatter_kernel(dt)
         self._cmds = []
         for f, (index, q, dqdq, dqdv) in enumerate(families):
-            maps = [wp.array(a, dtype=wp.int32, device=d) for a in segments(index, n)]
+            if isinstance(index, np.ndarray):
+                scatter = _scatter_kernel(dt)
+                maps = [wp.array(a, dtype=wp.int32, device=d) for a in segments(index, n)]
+            else:       # sparse maps (C, D): weighted sources
+                C, D = index
+                if C.shape[0] != n or D.shape != C.shape:
+                    raise ValueError(f"family {f}'s maps have shapes {C.shape}, {D.shape} for an element of {n} "
+                                     "coordinates")
+                scatter = _weighted_scatter_kernel(dt)
+                vs, vsrc, vw, ms, msrc, mw = weighted_segments(C, q.shape[1], D)
+                maps = [wp.array(vs, dtype=wp.int32, device=d), wp.array(vsrc, dtype=wp.int32, device=d),
+                        wp.array(vw, dtype=dt, device=d), wp.array(ms, dtype=wp.int32, device=d),
+                        wp.array(msrc, dtype=wp.int32, device=d), wp.array(mw, dtype=dt, device=d)]
             # one recorded launch per (accumulate, with_v): the argument list never changes
             cmds = {}
             for acc in (0, 1):

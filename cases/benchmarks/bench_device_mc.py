@@ -1,4 +1,4 @@
-"""Monte Carlo (TE + lost motion) of RD-40 and RV-40E variants on the device row Newton against a warmed process pool of the Exudyn reference run, failures and fallbacks inside the timing, with the split of the device's time.
+"""Monte Carlo (TE + lost motion) of RD-40, RV-40E and RV-80E variants on the device row Newton against a warmed process pool of the Exudyn reference run, failures and fallbacks inside the timing, with the split of the device's time.
 
 Per variant (fixed workload, the Exudyn reference runs' settings):
 
@@ -7,6 +7,9 @@ Per variant (fixed workload, the Exudyn reference runs' settings):
   quasi-static TE at rated torque over one crank revolution at 37 points (--quick 7), and the
   lost motion at +-3 % rated torque at input angle 0 (rvtool.protocols.lost_motion on a fresh
   build, as the reference run);
+* rv80e (--designs rv80e; not in the default set): as rv40e with rv80e_tolerances.toml, the same
+  seed and counts; its elastic tilting cranks and ported housing run on the device as extra
+  unknowns (rvtool.solver.row_extension: 119 row coordinates per copy instead of 21);
 * rd40 (cases/cycloid/monte_carlo_te.py): rd40_tolerances.toml sampled by
   rvtool.variants.tolerances (seed 2026), built with that study's regularization; the TE over
   one output revolution at 53 points (--quick 23, also a count whose warm starts hold) and the
@@ -63,13 +66,16 @@ RD_REGULARIZATION = (1.0e4, 100.0)   # cases/cycloid/monte_carlo_te.py's REGULAR
 
 
 # -- per-design setup (also imported by the pool's workers) ------------------------------------------------
-def _rv_setup(quick):
+RV_NAMES = ("rv40e", "rv80e")     # the RV designs: the same workload (cases/rv/monte_carlo_rv.py's)
+
+
+def _rv_setup(quick, name="rv40e"):
     from rvtool.variants.rv_tolerances import load_rv_tolerances
-    design = load_design(designs.path("rv40e"))
+    design = load_design(designs.path(name))
     n_pts = 7 if quick else 37
     probe = build(design)
     crank_rev = 2 * np.pi / abs(probe.graph.crank_rate)
-    return design, load_rv_tolerances(designs.path("rv40e_tolerances")), np.arange(n_pts) * crank_rev / n_pts
+    return design, load_rv_tolerances(designs.path(f"{name}_tolerances")), np.arange(n_pts) * crank_rev / n_pts
 
 
 def _rd_setup(quick):
@@ -105,9 +111,9 @@ def _pool_task(job):
     [arcsec], lost motion [rad], error or None)."""
     name, quick, k = job
     if (name, quick) not in _WORKER:
-        _WORKER[(name, quick)] = _rv_setup(quick) if name == "rv40e" else _rd_setup(quick)
+        _WORKER[(name, quick)] = _rv_setup(quick, name) if name in RV_NAMES else _rd_setup(quick)
     try:
-        if name == "rv40e":
+        if name in RV_NAMES:
             from rvtool.protocols.lost_motion import lost_motion
             from rvtool.protocols.precision import quasi_static_te
             design, tol, angles = _WORKER[(name, quick)]
@@ -144,8 +150,8 @@ def run_pool(name, quick, V, workers):
 def run_device(name, quick, V, device, workers):
     """Build the V variant models in ``workers`` processes (prepare_variant_models: their
     snapshots; timed apart, the pool's start included) and run them on the device row Newton."""
-    if name == "rv40e":
-        design, tol, angles = _rv_setup(quick)
+    if name in RV_NAMES:
+        design, tol, angles = _rv_setup(quick, name)
         designs_v = [rv_variant_design(tol, design, k) for k in range(V)]
         kw = {}
         torque = design.rated_torque
@@ -180,7 +186,7 @@ def bench(name, quick, V, workers, device):
     te_pool_pp = np.array([p[2] for p in pool])
     lm_pool = np.array([p[3] for p in pool])
     both = np.isfinite(te_dev_pp) & np.isfinite(te_pool_pp)
-    if name == "rv40e":
+    if name in RV_NAMES:
         te_diff = max((float(np.max(np.abs(r.te[k] - pool[k][1]))) * ARCSEC_PER_RAD for k in range(V) if both[k]),
                       default=np.nan)
     else:
@@ -201,7 +207,7 @@ def bench(name, quick, V, workers, device):
         "variants_per_s": {"device": rate_dev, "device_with_build": rate_dev_b, "pool": rate_pool},
         "speedup_device_vs_pool": rate_dev / rate_pool,
         "speedup_device_with_build_vs_pool": rate_dev_b / rate_pool,
-        "agreement": {"te_max_arcsec": te_diff, "te_compared": "TE at every point" if name == "rv40e" else "TE p-p",
+        "agreement": {"te_max_arcsec": te_diff, "te_compared": "TE at every point" if name in RV_NAMES else "TE p-p",
                       "lm_max_arcmin": lm_diff, "compared_variants": int(np.sum(both & lm_ok))},
         "te_pp_arcsec_mean": float(np.nanmean(te_pool_pp)),
         "lost_motion_arcmin_mean": float(np.nanmean(lm_pool) * ARCMIN_PER_RAD),
@@ -229,23 +235,23 @@ def judge(r):
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__, extra=lambda p: (
         p.add_argument("--variants", type=int, default=None, help="variants per design (default 1000, --quick 2)"),
-        p.add_argument("--designs", default="rd40,rv40e", help="comma-separated: rd40, rv40e"),
+        p.add_argument("--designs", default="rd40,rv40e", help="comma-separated: rd40, rv40e, rv80e"),
         p.add_argument("--workers", type=int, default=None, help="pool processes (default: all cores; --quick 2)"),
         p.add_argument("--device", default="cpu", help="Warp device of the device path (cpu, cuda:0)")))
     t_all = time.perf_counter()
     V = args.variants or (2 if args.quick else 1000)
     workers = args.workers or (2 if args.quick else os.cpu_count() or 1)
     names = [n.strip() for n in args.designs.split(",") if n.strip()]
-    bad = [n for n in names if n not in ("rd40", "rv40e")]
+    bad = [n for n in names if n not in ("rd40",) + RV_NAMES]
     if bad:
         from rvtool.errors import RvtoolInputError
-        raise RvtoolInputError(f"--designs {bad} not valid; valid: rd40, rv40e")
+        raise RvtoolInputError(f"--designs {bad} not valid; valid: rd40, rv40e, rv80e")
     results = {"settings_echo": {"variants": V, "workers": workers, "device": args.device, "quick": args.quick},
                "designs": {n: bench(n, args.quick, V, workers, args.device) for n in names}}
     results["wall_s"] = time.perf_counter() - t_all
     casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"quick": args.quick, "variants": V, "workers": workers,
-                                                              "designs": names, "seeds": {"rv40e": RV_SEED,
+                                                              "designs": names, "seeds": {"rv40e": RV_SEED, "rv80e": RV_SEED,
                                                                                           "rd40": RD_SEED}},
                                  wall_s=results["wall_s"], device=args.device)
 

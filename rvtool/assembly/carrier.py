@@ -21,15 +21,39 @@ cranks' forces on the carrier have no resultant (equal cranks on a circle), so t
 and its seat's coupling to the crank seats does no work; under an external radial load it would. The carrier's
 mass stays the rigid body's (quasi-static seats: the carrier's lowest clamped mode is reported, far above the
 torque path's).
+
+Spatial carrier (``bodies.carrier_coordinates = "spatial"``, issue 32): the carrier retains the axial and tilt
+coordinates of its output face (the external moment's body, the clamped face of the parent) and, as a second
+out-of-plane row, those of its main-bearing seats (the main bearing's rows act on them). The two rows are closed
+by the carrier's out-of-plane seat compliance C_o (3, 3) -- the (z, gamma_x, gamma_y) block of the main seats'
+rigid-fit compliance from the same NGSolve parent (:func:`carrier_ports`, ``main_seats_compliance``) -- as a
+linear spring turning with the carrier (:class:`CarrierTiltSeats`): with d = (seat row - face row),
+
+    Q_seat = -K_o(theta_c) d,   Q_face = +K_o(theta_c) d,   K_o(theta_c) = R(theta_c) C_o^-1 R(theta_c)^T,
+
+R rotating (gamma_x, gamma_y) by the carrier angle, and the turn of the moment with the carrier in the tangent's
+carrier-angle column. Stated: C_o^-1 is the seats' out-of-plane stiffness with no in-plane force on them (the
+main bearing's in-plane forces act on the carrier body, as in the planar ported model), so the seats' in-plane
+translation that a tilt causes about the clamped face (the lever in ``main_seats_compliance``'s x--gamma_y
+block) does not reach the main bearing; the crank seats stay planar ports, and the coupling between crank-seat
+forces and the main seats' out-of-plane motion is not carried (under pure torque the crank forces are
+self-equilibrated).
 """
 import functools
 import math
 
 import numpy as np
 
+from warp_contacts.circle_pairs_ref import N_OBS, O_FN
+
+from ..contact.evaluator import Evaluation
 from ..contact.pin_closure import ElasticPinClosure
 from ..errors import RvtoolInputError
 from ..structure.carrier import carrier_fe, reduce_carrier
+from ..validation import check_body_state, SPATIAL_LAYOUT
+
+#: the out-of-plane components (z, gamma_x, gamma_y) among the rigid fit's (x, y, z, gamma_x, gamma_y, gamma_z)
+OUT_OF_PLANE = (2, 3, 4)
 
 
 def carrier_layout(design, graph=None):
@@ -127,6 +151,78 @@ class CarrierSeatSupport:
         """(s (1, n_s, 2) [N], ds/du (1, 2 n_s, 2 n_s) [N/m]) at seat displacements u (1, n_s, 2) [m]."""
         u = np.asarray(u, float)
         return (self._K @ u.reshape(-1)).reshape(u.shape), self._K[None]
+
+
+def tilt_seat_compliance(design, graph=None):
+    """C_o (3, 3) [m/N, rad/(N m)]: the (z, gamma_x, gamma_y) block of the main seats' rigid-fit compliance relative
+    to the output face (the carrier's frame; module docstring), symmetric."""
+    _, _, info = carrier_ports(design, graph)
+    C = np.asarray(info["main_seats_compliance"], float)[np.ix_(OUT_OF_PLANE, OUT_OF_PLANE)]
+    return 0.5 * (C + C.T)
+
+
+class _NoHistory:
+    """The seat spring carries no contact memory."""
+
+
+class CarrierTiltSeats:
+    """The carrier's output face and its main-bearing seats, out of plane, closed by the carrier's out-of-plane
+    seat compliance (module docstring): an evaluator over ``n_bodies`` pose rows (the planar bodies and the
+    out-of-plane rows) with the carrier's planar body ``carrier`` (its angle turns the compliance), the face's
+    out-of-plane pose row ``face`` and the seats' ``seat``; compliance C_o (3, 3) in the carrier's frame."""
+
+    def __init__(self, compliance, *, n_bodies, carrier, face, seat, name="carrier_seats"):
+        C = np.asarray(compliance, float)
+        if C.shape != (3, 3) or not np.all(np.isfinite(C)) or np.linalg.eigvalsh(0.5 * (C + C.T)).min() <= 0:
+            raise RvtoolInputError("the carrier's out-of-plane seat compliance must be a finite, symmetric positive "
+                                   f"definite (3, 3) matrix; got shape {C.shape}")
+        for nm, b in (("carrier", carrier), ("face", face), ("seat", seat)):
+            if not 0 <= b < n_bodies:
+                raise RvtoolInputError(f"{nm} = {b} is outside the valid range [0, {n_bodies - 1}]")
+        self.name, self.n_bodies = name, int(n_bodies)
+        self.carrier, self.face, self.seat = int(carrier), int(face), int(seat)
+        self.compliance = C
+        K = np.linalg.inv(C)
+        self.stiffness = 0.5 * (K + K.T)
+        self.ids = (f"{name}/main",)
+        self.history = _NoHistory()
+        self.backend = "numpy"
+
+    def stiffness_at(self, angle):
+        """K_o(theta_c) (3, 3) and dK_o/d theta_c at the carrier angle [rad]."""
+        c, s = math.cos(angle), math.sin(angle)
+        R = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+        J = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+        K = R @ self.stiffness @ R.T
+        return K, J @ K - K @ J
+
+    def check_state(self, pose, vel):
+        """Raise :class:`RvtoolInputError` for a state of the wrong shape or with NaN/inf."""
+        check_body_state(f"carrier seats '{self.name}'", pose, vel, (self.n_bodies, 3), SPATIAL_LAYOUT)
+
+    def evaluate(self, pose, vel=None, history=None, check=True):
+        """:class:`~rvtool.contact.evaluator.Evaluation` at poses (n_bodies, 3) (linear spring: no damping)."""
+        if check:
+            self.check_state(pose, vel)
+        pose = np.asarray(pose, float)
+        n = 3 * self.n_bodies
+        K, dK = self.stiffness_at(pose[self.carrier, 2])
+        d = pose[self.seat] - pose[self.face]
+        f = K @ d
+        fs, ff = slice(3 * self.seat, 3 * self.seat + 3), slice(3 * self.face, 3 * self.face + 3)
+        Q = np.zeros(n)
+        Q[fs], Q[ff] = -f, f
+        T = np.zeros((n, n))
+        T[fs, fs], T[fs, ff], T[ff, fs], T[ff, ff] = -K, K, K, -K
+        t = 3 * self.carrier + 2
+        T[fs, t], T[ff, t] = -(dK @ d), dK @ d
+        obs = np.zeros((1, N_OBS))
+        obs[0, O_FN] = float(np.hypot(f[1], f[2]))      # the seats' tilting moment [N m]
+        return Evaluation(Q, T, np.zeros((n, n)), obs, (), bool(np.all(np.isfinite(Q)) and np.all(np.isfinite(T))))
+
+    def commit(self, pose, vel=None, evaluation=None):
+        """Observation row (1, 8) at the accepted state (nothing to commit)."""
+        return np.array((evaluation if evaluation is not None else self.evaluate(pose, vel, check=False)).obs, float)
 
 
 class CarrierSeatClosure(ElasticPinClosure):

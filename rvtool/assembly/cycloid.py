@@ -587,6 +587,14 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                             precision=precision, device=device, name="pins", search=d.wheels.search)
     tilt, rows = spatial_flange(mbs, d, bearing_model, housing, regularization)
     structure = housing if tilt is None else tilt
+    stack = None
+    if housing is not None and tilt is not None and flex is None and contact_element_mode(mode) == "merged":
+        # the ported housing and the flange's out-of-plane coordinates both behind the merged element
+        from exudyn_user_elements.stacked_structure import StackedStructure
+        structure = stack = StackedStructure((housing, tilt))
+
+    def on_stack(p):
+        return p if stack is None or p is None else stack.ports(p)
     element = ContactElements(mbs, nodes, mode, structure=structure if flex is None else flex.coordinates)
     host = element.host
 
@@ -599,7 +607,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     if flex is not None:
         pin_ports = flex.ports("pins")
     else:
-        pin_ports = ports if tilt is None else (tilt if pin_eval.n_bodies > nw + 2 else None)
+        pin_ports = on_stack(ports) if housing is not None or tilt is None else (
+            tilt if pin_eval.n_bodies > nw + 2 else None)
     elements = {"pins": element(pin_eval, ports=pin_ports)}
 
     # -- output pins (plain rigid pins in the wheel holes) -------------------------
@@ -627,7 +636,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     if d.bodies.spatial_wheels:
         op_eval = skewed(op_eval, d, tilt, rows)
     elements["output_pins"] = element(op_eval, ports=flex.ports("output_pins") if flex is not None else
-                                      (tilt if op_eval.n_bodies > nw + 2 else None))
+                                      (on_stack(tilt) if op_eval.n_bodies > nw + 2 else None))
 
     # -- bearings -----------------------------------------------------------------
     if bearing_model == "rolling":
@@ -642,7 +651,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                 rest = [mt for mt in ev.mountings if mt.outer not in rows]
                 opts = dict(backend=backend, precision=precision, device=device)
                 elements["eccentric_bearings"] = element(skewed(BearingSet(ecc, nw + 2, name="eccentric_bearings", **opts),
-                                                                d, tilt, rows), ports=tilt)
+                                                                d, tilt, rows), ports=on_stack(tilt))
                 if rest:
                     elements[name] = element(BearingSet(rest, nw + 2, name=name, **opts))
                 continue
@@ -651,8 +660,9 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
             # the main bearing on the flange's retained axial and tilt coordinates (pose row nw + 2 + its row)
             from ..bearings.spatial_set import SpatialBearingSet
             elements["main_bearing"] = element(SpatialBearingSet([main_bearing_mounting(d, nw)], nw + 2 + tilt.n_virtual,
-                                                                 {nw + 1: nw + 2 + rows[nw + 1]}, name="main_bearing"),
-                                               ports=tilt)
+                                                                 {nw + 1: nw + 2 + rows[nw + 1]}, name="main_bearing",
+                                                                 backend=backend, precision=precision, device=device),
+                                               ports=on_stack(tilt))
     else:
         contacts = tuple(lumped_bearing_contacts(d))
         if flex is None:
@@ -719,9 +729,10 @@ def spatial_flange(mbs, design, bearing_model, housing, regularization):
         raise RvtoolInputError("bodies.flange_coordinates = 'spatial' needs a ball or crossed-roller main bearing; "
                                "valid: main_bearing.kind = 'angular_contact_pair', 'angular_contact', 'deep_groove' "
                                "or 'crossed_roller'")
-    if housing is not None:
-        raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the merged element carries "
-                               "one structure); valid: housing.model = 'rigid'")
+    if housing is not None and b.spatial_wheels:
+        raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the ring pins on the "
+                               "housing's port bodies are not sliced with the wheels' tilts); valid: "
+                               "housing.model = 'rigid' or bodies.wheel_coordinates = 'planar'")
     if d.bearing_friction.model != "none":
         raise RvtoolInputError(f"{said} with bearing_friction.model = {d.bearing_friction.model!r} is not "
                                "implemented; valid: 'none'")

@@ -45,6 +45,10 @@ spatial use (a named error): the quasi-static protocols need none.
 
 Tangent: forward mode over the 12 unit seeds (planar and out-of-plane coordinates of A and B),
 analytic; tests check it against central differences.
+
+Backends: "numpy" (:meth:`SpatialBearingSet.balls`, the readable reference) or "warp" (the kernel of
+:mod:`warp_contacts.spatial_balls`, one thread per element; its rows reach the merged element's
+device sums like a planar family's, :mod:`warp_contacts.segment_sum`).
 """
 from functools import lru_cache
 
@@ -54,7 +58,7 @@ from warp_contacts import rolling_elements_ref as ref
 from warp_contacts.circle_pairs_ref import N_OBS, O_FN, O_GAP, O_NX, O_NY, O_PX, O_PY
 
 from ..contact.circle_set import GROUND
-from ..contact.evaluator import Evaluation, all_finite
+from ..contact.evaluator import Evaluation, StagedLaunch, all_finite
 from ..errors import RvtoolInputError
 from .set import BearingLoads, Mounting, NoHistory, pack_mounting
 from warp_contacts import laws_ref
@@ -121,17 +125,19 @@ def lamina_law_spatial(ar, az, fp):
     return delta, F, al, F * ca, F * sa, dF * ca * ca, dF * ca * sa, dF * sa * ca, dF * sa * sa
 
 
-class SpatialBearingSet:
+class SpatialBearingSet(StagedLaunch):
     """Ball-bearing mountings whose rings retain axial and tilt coordinates (module docstring).
 
     mountings: :class:`~rvtool.bearings.set.Mounting` of a BallBearing or AngularContactPair;
     n_bodies: pose rows of the evaluator (planar bodies and out-of-plane rows together);
     tilt_bodies: {planar body index: pose row of its (z, gamma_x, gamma_y)}; a ring body not in it
-    holds its out-of-plane coordinates. name: element name. Follows the evaluator protocol of
-    :class:`exudyn_user_elements.contact_element.ContactElement` (NumPy, float64).
+    holds its out-of-plane coordinates. name: element name. backend "numpy" (default) or "warp",
+    precision "float64" | "float32" (warp only), device "cpu" | "cuda:N". Follows the evaluator
+    protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
     """
 
-    def __init__(self, mountings, n_bodies, tilt_bodies, *, name="bearings"):
+    def __init__(self, mountings, n_bodies, tilt_bodies, *, name="bearings", backend="numpy", precision="float64",
+                 device="cpu"):
         if isinstance(n_bodies, bool) or not isinstance(n_bodies, (int, np.integer)) or n_bodies < 1:
             raise RvtoolInputError(f"n_bodies = {n_bodies!r} is outside the valid range [1, inf)")
         if len(mountings) == 0:
@@ -197,6 +203,23 @@ class SpatialBearingSet:
         # scatter of the per-ball rows into the assembled vector and matrix (np.bincount)
         self._flat_q = self.columns.ravel()
         self._flat_k = (self.columns[:, :, None] * self._n + self.columns[:, None, self._live]).ravel()
+        if backend not in ("numpy", "warp"):
+            raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are ['numpy', 'warp']")
+        if backend == "numpy" and precision != "float64":
+            raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
+        self.backend, self.precision = backend, precision
+        self.launches = 0
+        self._staged = None
+        if backend == "warp":
+            from warp_contacts import spatial_balls as sb
+            self._flat_k12 = (self.columns[:, :, None] * self._n + self.columns[:, None, :]).ravel()
+            ip = np.zeros((len(fp), sb.N_INT), np.int32)
+            ip[:, [sb.S_A, sb.S_TA, sb.S_B, sb.S_TB]] = self.columns[:, 0::3] // 3
+            ip[:, sb.S_KIND] = self.kind
+            geom = np.zeros((len(fp), sb.N_GEOM))
+            geom[:, sb.G_RHO], geom[:, sb.G_Z] = self.element_radius, self.element_station
+            geom[:, sb.G_AR0], geom[:, sb.G_AZ0] = self._ar0, self._az0
+            self._kernel = sb.SpatialBallKernel(fp, geom, ip, n_bodies, precision, device)
 
     # -- per ball ----------------------------------------------------------------
     def balls(self, pose, vel=None):
@@ -278,12 +301,43 @@ class SpatialBearingSet:
         """Assembled :class:`Evaluation` at absolute poses (n_bodies, 3) (no history, no damping)."""
         if check:
             self.check_state(pose, vel)
+        if self.backend == "warp":
+            self.launches += 1      # the kernel's buffers change: launched evaluations read afresh
+            Qb, dQb, obs, _ = self._kernel.evaluate(pose)
+            return self._assembled(Qb, dQb, np.array(obs, float), self._flat_k12)
         Qb, dQb, obs, _ = self.balls(pose)
+        return self._assembled(Qb, dQb, obs, self._flat_k)
+
+    def _assembled(self, Qb, dQb, obs, flat_k):
         n = self._n
-        Q = np.bincount(self._flat_q, weights=Qb.ravel(), minlength=n)
-        K = np.bincount(self._flat_k, weights=dQb.ravel(), minlength=n * n).reshape(n, n)
+        Q = np.bincount(self._flat_q, weights=np.ravel(Qb), minlength=n)
+        K = np.bincount(flat_k, weights=np.ravel(dQb), minlength=n * n).reshape(n, n)
         m = 3 * self.n_bodies
         return Evaluation(Q[:m], K[:m, :m], np.zeros((m, m)), obs, (), all_finite(Q, K))
+
+    # -- rows summed on the device (the merged element: warp_contacts.segment_sum), backend "warp" ----
+    velocity_rows = False
+    """No damping in the spatial use: no velocity tangent rows."""
+
+    stages_velocity = False
+    """The kernel reads poses only."""
+
+    def row_buffers(self):
+        """(index (N, 12) element coordinate of every row entry, -1 for the ground; the Warp arrays q,
+        dqdq that every launch overwrites; None: no velocity tangent)."""
+        k = self._kernel
+        m = 3 * self.n_bodies
+        return np.where(self.columns < m, self.columns, -1), k.device_array("q"), k.device_array("dqdq"), None
+
+    def launched_field(self, name):
+        """Field ``name`` of :class:`Evaluation` from the outputs of the last launch."""
+        r = self._staged.read
+        if name in ("Q", "dQdq", "dQdv", "finite"):
+            ev = self._assembled(r("q"), r("dqdq"), None, self._flat_k12)
+            return ev.finite if name == "finite" else getattr(ev, name)
+        if name == "obs":
+            return np.array(r("obs"), float)
+        return ()
 
     def commit(self, pose, vel=None, evaluation=None):
         """Observations (N, 8) at the accepted state (nothing to commit)."""

@@ -30,6 +30,18 @@ figures. Slices whose poses coincide are evaluated once. The slices multiply any
 slices the family has of its own (each wrapped slice evaluates the whole family at its poses;
 crowning across the width stays the family's). The family must carry no contact history (friction
 anchors would need one history per slice): refused by name.
+
+One launch per family (issue 32's cost target): where the family's type can stack copies of itself
+(``concatenated``: the S slices' rows over S copies of its bodies, copy s offset by s n, in one
+kernel), :class:`SkewSlices` evaluates every slice in one launch at the stacked poses x_st = T x
+(T = [T_1; ...; T_S]) and maps the stacked result with one constant operator each,
+
+    Q = T^T W Q_st,    dQ/dx = T^T W K_st T      (W = diag(w_s), K_st block diagonal),
+
+and, for a Warp family, its rows reach the merged element's device sums
+(:mod:`warp_contacts.segment_sum`) through the sparse maps C = T^T W A of the forces and D = T^T A
+of the displacements (A the stacked family's row scatter), so the sliced family is summed in the merged element's captured launch like a planar one.
+The per-slice path stays for families without ``concatenated`` and for the observers' views.
 """
 import dataclasses
 
@@ -37,7 +49,7 @@ import numpy as np
 from scipy import sparse
 
 from ..errors import RvtoolInputError
-from .evaluator import Evaluation
+from .evaluator import Evaluation, LaunchedEvaluation, all_finite
 from ..validation import check_body_state, SPATIAL_LAYOUT
 from warp_contacts.circle_pairs_ref import O_FN, O_GAP
 
@@ -68,9 +80,11 @@ class SkewSlices:
     tilt_offset: None (the out-of-plane rows appended after the inner family's bodies) or the pose row
     of out-of-plane row 0 among the inner family's own bodies (rows it carries as bodies without
     contacts: a series closure around the sliced family passes them through).
+    stack: True (default) evaluates all slices in one launch of a stacked copy of ``inner`` where its
+    type has ``concatenated`` (module docstring); False keeps the per-slice evaluation.
     """
 
-    def __init__(self, inner, n_virtual, tilt_rows, arms, weights, *, name=None, tilt_offset=None):
+    def __init__(self, inner, n_virtual, tilt_rows, arms, weights, *, name=None, tilt_offset=None, stack=True):
         for attr in ("n_bodies", "ids", "evaluate", "history"):
             if not hasattr(inner, attr):
                 raise RvtoolInputError(f"inner must be a contact evaluator; {type(inner).__name__} lacks {attr!r}")
@@ -124,6 +138,11 @@ class SkewSlices:
         self._k_all = sparse.hstack(kr, format="csr")
         self._q_one = sum(w[s] * Tt[s] for s in range(len(w))).tocsr()
         self._k_one = sum(kr[1:], kr[0]).tocsr()
+        self.stacked = stacked_copy(inner, len(w)) if stack and tilt_offset is None else None
+        if self.stacked is not None:
+            # the stacked operators: T (S 3n, m) and T^T W (m, S 3n)
+            self._T_all = T.reshape(len(w) * 3 * n, m)
+            self._TW = np.ascontiguousarray((T * w[:, None, None]).reshape(len(w) * 3 * n, m).T)
 
     @property
     def n_slices(self):
@@ -163,6 +182,14 @@ class SkewSlices:
         """The slices' :class:`Evaluation` summed (module docstring); observations: the width resultant of
         each row (normal force sum_s w_s f_s, the other columns width-weighted means, the gap the smallest
         over the slices)."""
+        if self.stacked is not None:
+            if check:
+                self.check_state(pose, vel)
+            P = self.slice_poses(pose)
+            V = np.zeros_like(P) if vel is None else self.slice_poses(vel)
+            S, n = self.n_slices, self.n_planar
+            e = self.stacked.evaluate(P.reshape(S * n, 3), V.reshape(S * n, 3), check=False)
+            return self._stacked_evaluation(P, V, e.Q, e.dQdq, e.dQdv, e.obs, e.finite)
         groups = self.slice_evaluations(pose, vel, check)
         S = self.n_slices
         ev_of = [None] * S
@@ -189,6 +216,89 @@ class SkewSlices:
             obs[:, O_GAP] = np.min([e.obs[:, O_GAP] for _, e in groups], axis=0)
         finite = all(e.finite for _, e in groups) and bool(np.all(np.isfinite(Q)))
         return Evaluation(Q, K, C, obs, (), finite)
+
+    def _stacked_evaluation(self, P, V, Q_st, K_st, C_st, obs_st, finite):
+        """The :class:`Evaluation` from the stacked family's results at slice poses P, velocities V (S, n, 3)."""
+        TW, T = self._TW, self._T_all
+        Q = TW @ Q_st
+        K = TW @ K_st @ T
+        C = None if C_st is None else TW @ C_st @ T
+        return Evaluation(Q, K, C, self._stacked_obs(P, V, obs_st), (),
+                          bool(finite) and bool(np.all(np.isfinite(Q))))
+
+    def _stacked_obs(self, P, V, obs_st):
+        """The width resultant of the observation rows (see :meth:`evaluate`) from the stacked rows
+        (S N, 8): the planar rows themselves where every slice sits at the same poses and velocities."""
+        o = np.asarray(obs_st, float).reshape(self.n_slices, -1, np.shape(obs_st)[-1])
+        if (P == P[0]).all() and (V == V[0]).all():
+            return np.array(o[0])
+        obs = np.tensordot(self.weights, o, axes=1)
+        obs[:, O_GAP] = np.min(o[:, :, O_GAP], axis=0)
+        return obs
+
+    # -- every slice in one launch, rows summed on the device (the merged element) -----------------
+    @property
+    def backend(self):
+        """The stacked family's backend ("warp": the merged element may sum this family's rows on the
+        device), or "host" (evaluated slice by slice)."""
+        return "host" if self.stacked is None else self.stacked.backend
+
+    @property
+    def launches(self):
+        """The stacked family's launch count (a launched evaluation made before reads afresh)."""
+        return self.stacked.launches
+
+    @property
+    def velocity_rows(self):
+        return self.stacked.velocity_rows
+
+    def _stacked_state(self, pose, vel):
+        P = self.slice_poses(pose)
+        V = np.zeros_like(P) if vel is None else self.slice_poses(vel)
+        return P, V
+
+    def stage(self, pose, vel):
+        """Write the stacked slice poses/velocities into the stacked family's kernel inputs (no launch)."""
+        P, V = self._staged_state = self._stacked_state(pose, vel)
+        S, n = self.n_slices, self.n_planar
+        self.stacked.stage(P.reshape(S * n, 3), V.reshape(S * n, 3))
+
+    def launch_staged(self):
+        """The stacked family's recorded launch on the staged inputs (capturable)."""
+        self.stacked.launch_staged()
+
+    def launched(self, pose, vel):
+        """The :class:`~rvtool.contact.evaluator.LaunchedEvaluation` of the launch just made at element
+        poses/velocities (n_bodies, 3) (the ones :meth:`stage` was given)."""
+        P, V = self._staged_state
+        S, n = self.n_slices, self.n_planar
+        self.stacked.launched(P.reshape(S * n, 3), V.reshape(S * n, 3))
+        self._launched_state = (P, V)
+        return LaunchedEvaluation(self, pose, vel)
+
+    def launched_field(self, name):
+        """Field ``name`` of the :class:`Evaluation` from the stacked family's last launch."""
+        st = self.stacked
+        if name == "Q":
+            return self._TW @ st.launched_field("Q")
+        if name in ("dQdq", "dQdv"):
+            return self._TW @ st.launched_field(name) @ self._T_all
+        if name == "obs":
+            return self._stacked_obs(*self._launched_state, st.launched_field("obs"))
+        if name == "trial_history":
+            return ()
+        return bool(st.launched_field("finite"))
+
+    def row_buffers(self):
+        """((C, D), q, dqdq, dqdv): the stacked family's row buffers and the sparse maps through which
+        its row entries reach this family's coordinates (:func:`warp_contacts.segment_sum_ref.weighted_segments`),
+        forces C = T^T W A and displacements D = T^T A (m, N_st k), A the stacked rows' scatter:
+        Q = C vec(q), K = sum_i C_i K_i D_i^T (module docstring)."""
+        index, q, dqdq, dqdv = self.stacked.row_buffers()
+        flat = np.asarray(index).ravel()
+        keep = np.flatnonzero(flat >= 0)
+        A = sparse.csr_matrix((np.ones(len(keep)), (flat[keep], keep)), shape=(self._TW.shape[1], flat.size))
+        return (sparse.csr_matrix(self._TW) @ A, sparse.csr_matrix(self._T_all.T) @ A), q, dqdq, dqdv
 
     def commit(self, pose, vel=None, evaluation=None):
         """Observation rows at the accepted state (no history to commit)."""
@@ -236,6 +346,35 @@ class SkewSlices:
                 raise RvtoolInputError(f"contact set {self.name!r} takes no gap offsets; valid: zero offsets")
             return
         self.inner.set_gap_offsets(offsets)
+        if self.stacked is not None:
+            self.stacked.set_gap_offsets(np.tile(np.asarray(offsets, float), self.n_slices))
+
+
+def stacked_copy(family, n_copies):
+    """``family`` stacked ``n_copies`` times over as many copies of its bodies (copy c's bodies
+    offset by c n_bodies: its ``concatenated``), or None where its type defines no ``concatenated`` of its
+    own (the per-slice path then evaluates it)."""
+    # the type's own concatenated only: a subclass that inherits its parent's builds its copies as the parent
+    conc = type(family).__dict__.get("concatenated")
+    if conc is None or getattr(family, "backend", None) not in ("warp", "numpy"):
+        return None
+    conc = getattr(type(family), "concatenated")
+    device = "cpu"
+    if family.backend == "warp":
+        if not callable(getattr(family, "row_buffers", None)):
+            return None         # its kernel's device is not exposed: the per-slice path
+        device = str(family.row_buffers()[1].device)
+    return conc([family] * n_copies, family.n_bodies, names=[[f"slice{c}_{m}" for m in _member_names(family)]
+                                                              for c in range(n_copies)],
+                precision=getattr(family, "precision", "float64"), device=device)
+
+
+def _member_names(family):
+    """The names of the members (meshes or mountings) a family's ``concatenated`` renames."""
+    members = getattr(family, "meshes", None)
+    if members is None:
+        members = getattr(family, "mountings", None)
+    return [family.name] if members is None else [m.name for m in members]
 
 
 def planar_view(evaluator, pose=None):

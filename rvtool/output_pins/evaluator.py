@@ -65,6 +65,7 @@ class OutputPinEvaluator(StagedLaunch):
         self.mechanism = mechanism
         self.name = name
         self.backend = backend
+        self.precision = precision
         self.mode = mechanism.mode
         self.stations = mechanism.stations
         self.fparams, self.iparams = mechanism.packed(fl, wheels)
@@ -77,24 +78,55 @@ class OutputPinEvaluator(StagedLaunch):
             self.iparams[:, ref.J_FLANGE] = fb
         ns = mechanism.n_slices
         if self.mode == PinMode.SHARED:
-            bodies = self.iparams[:, [ref.I_FLANGE, ref.I_WHEEL0, ref.I_WHEEL1]]
             self.ids = tuple(f"{name}/pin{p}/wheel{w}/slice{s}" for p in range(mechanism.n_pins)
                              for w in range(2) for s in range(ns))
         else:
-            bodies = self.iparams[:, [ref.J_FLANGE, ref.J_WHEEL]]
             self.ids = tuple(f"{name}/pin{p}/wheel{w}/slice{s}" for p in range(mechanism.n_pins)
                              for w in range(mechanism.n_wheels) for s in range(ns))
-        self.assembler = BlockAssembler(bodies, self.n_bodies)
-        self.anchor = mechanism.anchors
-        self.anchor_params = mechanism.anchor_params() if self.anchor else None
+        self._finish(device)
+
+    def _body_columns(self):
+        return [ref.I_FLANGE, ref.I_WHEEL0, ref.I_WHEEL1] if self.mode == PinMode.SHARED else [ref.J_FLANGE, ref.J_WHEEL]
+
+    def _finish(self, device):
+        """The assembler, history and kernel of the rows in ``fparams`` / ``iparams``."""
+        self.assembler = BlockAssembler(self.iparams[:, self._body_columns()], self.n_bodies)
+        self.anchor = self.mechanism.anchors
+        self.anchor_params = self.mechanism.anchor_params() if self.anchor else None
         self.history = ContactHistory(len(self.ids)) if self.anchor else NoHistory()
         self._pose = np.zeros((self.n_bodies + 1, 3))
         self.launches = 0
         self._staged = None
-        if backend == "warp":
+        if self.backend == "warp":
             from warp_contacts.output_pins import OutputPinKernel
             self._kernel = OutputPinKernel(self.fparams, self.iparams, self.stations, self.n_bodies + 1,
-                                           self.mode.value, precision, device, anchor_params=self.anchor_params)
+                                           self.mode.value, self.precision, device, anchor_params=self.anchor_params)
+
+    @classmethod
+    def concatenated(cls, sets, nb, *, names=None, precision="float64", device="cpu"):
+        """The evaluator of B built evaluators side by side (copy c's bodies offset by c nb, the
+        ground row at B nb; ids prefixed by ``names[c][0]`` + "/" where given): their built rows
+        concatenated, one launch for all. Copies of one mechanism without anchors only (the
+        width slices of tilting wheels, :class:`rvtool.contact.skew.SkewSlices`)."""
+        s, B = sets[0], len(sets)
+        if any(sc.anchor for sc in sets) or any(sc.mechanism is not s.mechanism or sc.backend != s.backend for sc in sets):
+            raise RvtoolInputError("output pins are stacked only as copies of one mechanism without stick--slip "
+                                   "anchors (valid: output_pins friction without anchors)")
+        self = object.__new__(cls)
+        self.n_bodies, self.mechanism, self.name, self.backend = int(B * nb), s.mechanism, s.name, s.backend
+        self.precision, self.mode, self.stations = precision, s.mode, s.stations
+        cols = s._body_columns()
+        ip = []
+        for c, sc in enumerate(sets):
+            i = sc.iparams.copy()
+            i[:, cols] = np.where(i[:, cols] >= sc.n_bodies, B * nb, i[:, cols] + c * nb)
+            ip.append(i)
+        # the built rows (a slow-state gap offset of a built evaluator is not copied)
+        self.fparams = np.concatenate([getattr(sc, "_built_fparams", sc.fparams) for sc in sets])
+        self.iparams = np.concatenate(ip)
+        self.ids = tuple((f"{names[c][0]}/" if names else "") + i for c, sc in enumerate(sets) for i in sc.ids)
+        self._finish(device)
+        return self
 
     def raw(self, pose, history=None):
         """Per-row results (layout of :mod:`warp_contacts.output_pins_ref`) at poses (nb, 3); with

@@ -34,9 +34,13 @@ CUDA graph yet (the cycloid path's is): each iteration is ~15 launches from Pyth
 
 Covered: every contact-set type of :data:`rvtool.solver.replica.COPIERS` (cycloid pins, involute
 pairs external and internal, rolling-element bearings: needle, cylindrical, ball, tapered; circle
-pairs, plain output pins). Not covered (named by :func:`row_reasons`): friction with stick--slip
-anchors (history), elastic pin and crank closures (pin bodies), the ported housing's modal
-coordinates (elastic structures), shared output pins.
+pairs, plain output pins), and on extended bodies (:mod:`rvtool.solver.row_extension`: extra
+unknowns with constant stiffness blocks) the linear series closures (elastic ring and output pins,
+the RV crank beam and torsion) and reduced structures on port bodies (the ported housing), and
+stick--slip anchors of the pair families (the committed history staged into their kernels,
+committed per torque-path level by :meth:`DeviceRowNewton.commit`). Not covered (named by
+:func:`row_reasons`): anchors inside closures or on plain output pins, closures with a station
+law (conformal grooves, the ported carrier), ported wheels, shared output pins.
 """
 import dataclasses
 import time
@@ -57,9 +61,32 @@ KINEMATICS_CACHE = 4096
 
 
 def row_reasons(model):
-    """Every named reason why the row Newton cannot run ``model`` (empty: it can)."""
+    """Every named reason why the row Newton cannot run ``model`` (empty: it can): the replica
+    path's (:func:`rvtool.solver.replica.replica_reasons`), except elastic structures on port bodies
+    and linear series closures, which the row Newton takes as extra unknowns
+    (:mod:`rvtool.solver.row_extension`; its own reasons instead)."""
     from .replica import replica_reasons
-    return [r.replace("the angle-batched path", "the device row Newton") for r in replica_reasons(model)]
+    from .row_extension import extension_reasons
+    reasons = [r.replace("the angle-batched path", "the device row Newton") for r in replica_reasons(model)]
+    if not reasons:
+        return reasons
+    # named again (or taken) by the extension's walk of every contact set
+    handled = ("has elastic structures", "(port or pin bodies)", "has no copier for the device row Newton",
+               "stick--slip anchors", "output_pins.mode")
+    kept = [r for r in reasons if not any(h in r for h in handled)]
+    return kept + [r for r in extension_reasons(model) if r not in kept]
+
+
+def needs_extension(model):
+    """Whether ``model`` needs the row coordinates of :mod:`rvtool.solver.row_extension` (closures,
+    port bodies), checked on its contact elements (cheap; the extension itself is built once)."""
+    from ..contact.pin_closure import ElasticPinClosure
+    from ..contact.stacked import StackedContactSet
+    if getattr(model, "row_extension", None) is not None:      # a snapshot of such a model
+        return True
+    return any(getattr(el, "ports", None) is not None or isinstance(el.evaluator, (ElasticPinClosure,
+                                                                                   StackedContactSet))
+               for el in model.contact_elements())
 
 
 @dataclass
@@ -116,17 +143,18 @@ class DeviceRowSum:
     the additions (last bits). ``timing`` as ReplicaEvaluator's ("kernels": launches, host
     families and uploads; "scatter": the device sum and its download)."""
 
-    def __init__(self, families, nb, n_copies, device):
+    def __init__(self, families, nb, n_copies, device, n=None):
         import warp as wp
         from warp_contacts.block_scatter import BlockScatter
         from ..contact.evaluator import StagedLaunch
         self.families, self.nb, self.B, self.device = families, nb, n_copies, device
+        n = 3 * nb if n is None else int(n)         # row coordinates per copy (extra unknowns: row_extension)
         self.staged = [isinstance(f.set, StagedLaunch) and getattr(f.set, "backend", None) == "warp"
                        for f in families]
         # families whose rows are made on the device from device poses without a staged launch: tapered
         # rows (planar mapping, warp_contacts.tapered_planar), plain output pins (the pin kernel's launch)
         self.direct = [not s and bool(getattr(f.set, "rows_on_device", False)) for f, s in zip(families, self.staged)]
-        self.scatter = BlockScatter([(f.scatter.local, f.scatter.row_copy) for f in families], n_copies, 3 * nb,
+        self.scatter = BlockScatter([(f.scatter.local, f.scatter.row_copy) for f in families], n_copies, n,
                                     wp.float64, device)
         self._host_rows = {}
         self.masked = np.zeros(n_copies, bool)
@@ -170,6 +198,14 @@ class DeviceRowSum:
         self.timing["launches"] += len(self.families)
         return Q, K
 
+    def stage_history(self, pose, vel):
+        """Write the committed history of every staged family with stick--slip anchors into its
+        kernel's inputs (with the poses ``pose``, overwritten by the resident loop's pose writes):
+        the resident loop launches without staging."""
+        for f, staged in zip(self.families, self.staged):
+            if staged and getattr(f.set, "anchor", False):
+                f.set.stage(*f.poses(pose, vel))
+
     def evaluate(self, pose, vel):
         Q, K = self.evaluate_device(pose, vel)
         t1 = time.perf_counter()
@@ -187,14 +223,15 @@ class DeviceRowSum:
         t0 = time.perf_counter()
         rows = []
         for i, (f, staged) in enumerate(zip(self.families, self.staged)):
+            pf, vf = f.poses(pose, vel)
             if staged:
-                f.set.stage(pose, vel)
+                f.set.stage(pf, vf)
                 f.set.launch_staged()
                 _, q, K, _ = f.set.row_buffers()
             elif self.direct[i]:
-                q, K = f.set.device_rows(pose, vel)
+                q, K = f.set.device_rows(pf, vf)
             else:
-                Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in family_rows(f.set, pose, vel)[:2])
+                Qh, Kh = (np.ascontiguousarray(x, np.float64) for x in family_rows(f.set, pf, vf)[:2])
                 if i not in self._host_rows:
                     self._host_rows[i] = (wp.empty(Qh.shape, dtype=wp.float64, device=self.device),
                                           wp.empty(Kh.shape, dtype=wp.float64, device=self.device))
@@ -257,11 +294,24 @@ class DeviceRowNewton:
         self.settings = settings or DeviceNewtonSettings()
         self.nb = nb = len(model.body_names)
         self.n = n = 3 * nb
-        families = copy_families(self.models or model, self.B, device=device)
+        #: the extra unknowns (elastic closures, structure ports) of :mod:`rvtool.solver.row_extension`,
+        #: None where the model has none (the rows on the model's bodies as they are: the path before them)
+        self.extension = None
         if device_sum is None:
             device_sum = not str(device).startswith("cpu")
         self.device_sum = bool(device_sum)
-        self.evaluator = (DeviceRowSum(families, nb, self.B, device) if self.device_sum
+        if needs_extension(model):
+            from .row_extension import copy_rows
+            families, self.extension = copy_rows(self.models or model, self.B, device=device,
+                                                 host_structure=not self.device_sum)
+            self.n = n = self.extension.n
+        else:
+            families = copy_families(self.models or model, self.B, device=device)
+        self.families = families
+        #: the copied families with stick--slip anchors: their committed history is read by every
+        #: evaluation and changed only by :meth:`commit` (a level of a torque path, as Exudyn's continuation)
+        self.history_families = [f for f in families if getattr(f.set, "anchor", False)]
+        self.evaluator = (DeviceRowSum(families, nb, self.B, device, n=n) if self.device_sum
                           else ReplicaEvaluator(families, nb, self.B))
         self.evaluator.set_static(True)              # static residual: no velocity tangent
         cons = _constraints(model)
@@ -270,26 +320,31 @@ class DeviceRowNewton:
             if not all(np.array_equal(a, b) for a, b in zip(cons, other)):
                 raise RvtoolInputError(f"model {i} has other locks, springs, drive or load than model 0; the copies "
                                        "must be models of one topology")
+        if self.extension is not None:            # the extra unknowns: free, no springs, no locks
+            pad = n - 3 * nb
+            cons = (np.concatenate([cons[0], np.zeros(pad, bool)]), np.concatenate([cons[1], np.zeros(pad, bool)]),
+                    np.concatenate([cons[2], np.zeros(pad)]), cons[3], cons[4])
         self.held, self.journal, self.spring_k, self.input_local, self.output_local = cons
         free = np.ones(n, bool)
         free[self.held | self.journal] = False
         free[self.input_local] = False
         self.free = free
-        self.rot = np.arange(n) % 3 == 2
+        self.rot = np.arange(n) % 3 == 2 if self.extension is None else self.extension.rot.copy()
         self.device_step = True if device_step is None else bool(device_step)
         self._steppers = {}
         self._QK = None                 # device copies of host-summed blocks (device step, host sum)
         self._kin_cache = {}            # angle -> (B, n) kinematic states of the variant copies
         self._reference_d = None        # the copies' reference poses on the device (resident loop)
+        self._gather_d = {}             # family -> its pose map on the device (extended families)
         if sync_every is None:
             sync_every = 1 if str(device).startswith("cpu") else 4
         if isinstance(sync_every, bool) or not isinstance(sync_every, (int, np.integer)) or sync_every < 1:
             raise RvtoolInputError(f"sync_every = {sync_every!r} is outside the valid range [1, inf) (integer)")
         self.sync_every = int(sync_every)
         if self.models is None:
-            self.reference = np.broadcast_to(np.asarray(model.reference, float).reshape(-1), (self.B, n))
+            self.reference = np.broadcast_to(self._extend(np.asarray(model.reference, float).reshape(-1)), (self.B, n))
         else:
-            self.reference = np.array([np.asarray(m.reference, float).reshape(-1) for m in self.models])
+            self.reference = self._extend(np.array([np.asarray(m.reference, float).reshape(-1) for m in self.models]))
         self.setup_s = time.perf_counter() - t0
 
     def kinematic(self, angles, copies=None):
@@ -299,7 +354,7 @@ class DeviceRowNewton:
         is copy ``copies[p]`` (default: point p on copy p)."""
         a = np.asarray(angles, float)
         if self.models is None:
-            kin = (self.model.kinematics.poses(a) - self.model.reference).reshape(len(a), -1)
+            kin = self._extend((self.model.kinematics.poses(a) - self.model.reference).reshape(len(a), -1))
         else:
             cp = self._copies(len(a), copies)
             kin = np.empty((len(a), self.n))
@@ -323,11 +378,20 @@ class DeviceRowNewton:
             return
         tab = np.empty((len(new), self.B, self.n))
         for c, m in enumerate(self.models):
-            tab[:, c] = (m.kinematics.poses(new) - np.asarray(m.reference, float)).reshape(len(new), -1)
+            tab[:, c] = self._extend((m.kinematics.poses(new) - np.asarray(m.reference, float)).reshape(len(new), -1))
         while len(self._kin_cache) + len(new) > KINEMATICS_CACHE and self._kin_cache:
             self._kin_cache.pop(next(iter(self._kin_cache)))
         for i, x in enumerate(new):
             self._kin_cache[float(x)] = tab[i]
+
+    def _extend(self, x):
+        """Body-coordinate values (..., 3 nb) with the extra unknowns' appended (their sources')."""
+        return x if self.extension is None else self.extension.extend(x)
+
+    def _poses(self, a):
+        """What the evaluator takes for absolute row coordinates ``a`` (B, n): the body poses (B nb, 3),
+        or ``a`` itself for the extended families (each gathers its own poses)."""
+        return a.reshape(self.B * self.nb, 3) if self.extension is None else a
 
     def _copies(self, P, copies):
         """The variant copies of P points (checked: distinct, in range)."""
@@ -409,6 +473,29 @@ class DeviceRowNewton:
             prev = (q_next, kin)
         return out
 
+    def commit(self, q, copies=None):
+        """Commit the contact history (stick--slip anchors) of the points ``q`` (P, n) at their
+        states (an accepted level; Exudyn commits once per level of its continuation): point p on
+        copy ``copies[p]`` (default: point p on copy p); the other copies' history stays as it is.
+        Without anchors nothing to do."""
+        if not self.history_families:
+            return
+        q = np.atleast_2d(np.asarray(q, float))
+        cp = self._copies(len(q), copies)
+        qB = np.zeros((self.B, self.n))
+        qB[cp] = q
+        a = self._poses(self.reference + qB)
+        vel = np.zeros((self.B * self.nb, 3))
+        for f in self.history_families:
+            h = f.set.history
+            keep = ~np.isin(f.scatter.row_copy, cp)
+            old = [np.array(x) for x in (h.active, h.anchor_a, h.anchor_b, h.slip_distance)]
+            pf, vf = f.poses(a, vel)
+            f.set.commit(pf, vf)
+            h = f.set.history
+            for nm, x in zip(("active", "anchor_a", "anchor_b", "slip_distance"), old):
+                getattr(h, nm)[keep] = x[keep]
+
     def step_model(self, cfg):
         """The :class:`warp_contacts.block_newton_ref.StepModel` of this model under settings ``cfg``."""
         return StepModel(spring_k=self.spring_k, free=self.free, rot=self.rot, out_index=int(self.output_local),
@@ -434,7 +521,7 @@ class DeviceRowNewton:
         while np.any(st["status"] == ACTIVE):
             pose_q[slots] = q
             k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
-            r = ev.evaluate((self.reference + pose_q).reshape(B * self.nb, 3), vel)
+            r = ev.evaluate(self._poses(self.reference + pose_q), vel)
             timing["kernels"] += ev.timing["kernels"] - k0
             timing["scatter"] += ev.timing["scatter"] - s0
             t0 = time.perf_counter()
@@ -478,6 +565,8 @@ class DeviceRowNewton:
         stp.load(q=qB, kin=kinB, torque=tqB, status=status, stage=stage, iters=iters, total=total)
         host_sum = not isinstance(ev, DeviceRowSum)
         if not host_sum and ev.resident:
+            if self.history_families:
+                ev.stage_history(self._poses(self.reference + qB), np.zeros((B * self.nb, 3)))
             return self._resident_loop(stp, slots, q, st, timing, m)
         if host_sum and self._QK is None:
             self._QK = (wp.zeros((B, n), dtype=wp.float64, device=self.device),
@@ -486,7 +575,7 @@ class DeviceRowNewton:
         sweeps = 0
         while np.any(status[slots] == ACTIVE):
             k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
-            pose = (self.reference + qB).reshape(B * self.nb, 3)
+            pose = self._poses(self.reference + qB)
             if host_sum:
                 r = ev.evaluate(pose, vel)
                 t1 = time.perf_counter()
@@ -509,6 +598,15 @@ class DeviceRowNewton:
             st[nm][...] = v[slots]
         return sweeps
 
+    def _gather_index(self, f):
+        """The device copy of family ``f``'s pose map (flat, int64; made once)."""
+        import warp as wp
+        key = id(f)
+        if key not in self._gather_d:
+            self._gather_d[key] = wp.array(np.ascontiguousarray(f.pose_map.reshape(-1), np.int64), dtype=wp.int64,
+                                           device=self.device)
+        return self._gather_d[key]
+
     def _resident_loop(self, stp, slots, q, st, timing, m):
         """The device-resident iterations of :meth:`_chunk_device` (class docstring): poses written
         on the device, the families launched, summed and stepped; the active count read every
@@ -528,8 +626,11 @@ class DeviceRowNewton:
         while sweeps < cap:
             k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
             t0 = time.perf_counter()
-            for pose, _ in bufs:
-                stp.write_poses(self._reference_d, pose)
+            for f, (pose, _) in zip(self.families, bufs):
+                if f.pose_map is None:
+                    stp.write_poses(self._reference_d, pose)
+                else:
+                    stp.write_poses_gathered(self._reference_d, pose, self._gather_index(f))
             timing["kernels"] += time.perf_counter() - t0
             Q, K = ev.launch_device()
             timing["kernels"] += ev.timing["kernels"] - k0
@@ -550,4 +651,4 @@ class DeviceRowNewton:
         return sweeps
 
 
-__all__ = ["DeviceRowNewton", "RowSolve", "row_reasons"]
+__all__ = ["DeviceRowNewton", "RowSolve", "needs_extension", "row_reasons"]

@@ -107,6 +107,12 @@ class DeviceTorquePath(TorquePath):
         """Copy c leaves the device at level ``torque``: Exudyn from there on, or NaN."""
         self.failed[c] = True
         self.why[c] = why
+        if self.newton.history_families:
+            # Exudyn's continuation would start from its own model's history, not the levels the device
+            # committed: no hand-over (the copy fails, named)
+            self.why[c] += ("; no Exudyn hand-over: the model has stick--slip anchors, whose history the device "
+                            "committed (a continuation on Exudyn would start without it)")
+            return
         if self.fallback:
             self.exudyn[c] = ContinuationPath(real_model(self.models[c]), input_angle=float(self.ang[c]))
 
@@ -142,6 +148,10 @@ class DeviceTorquePath(TorquePath):
                                       f"{torque:.6g} N m (increment below min_increment = {cs.min_increment:g})")
         for c in np.flatnonzero(running):
             self._fail(c, torque, f"device torque continuation not finished in max_rounds = {cs.max_rounds} rounds")
+        done = np.flatnonzero(~self.failed)
+        if len(done) and self.newton.history_families:
+            # the level's contact history (stick--slip anchors), once per level as Exudyn's continuation
+            self.newton.commit(self.q[done], copies=self._cp(done))
         i = self.newton.output_local
         out = self.q[:, i] - self.kin[:, i]
         out[self.failed] = np.nan
@@ -160,7 +170,7 @@ class DeviceTorquePath(TorquePath):
     def status(self):
         """Per copy: "device", "exudyn" (continued on Exudyn after a device failure) or "failed"."""
         bad = self.exudyn_failed
-        return ["failed" if (c in bad or (f and not self.fallback)) else "exudyn" if f else "device"
+        return ["failed" if (c in bad or (f and c not in self.exudyn)) else "exudyn" if f else "device"
                 for c, f in enumerate(self.failed)]
 
     def state(self, copy=0):
@@ -170,11 +180,8 @@ class DeviceTorquePath(TorquePath):
             raise RvtoolInputError("the torque path has no state before its first go_to(torque)")
         if copy in self.exudyn and self.exudyn[copy].continuation is not None:
             return np.array(self.exudyn[copy].state())
-        model = real_model(self.models[copy])
-        idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
-        q = np.zeros(model.mbs.systemData.ODE2Size())
-        q[idx] = self.q[copy]
-        return q
+        from .row_extension import model_states
+        return model_states(real_model(self.models[copy]), self.q[copy], self.newton.extension)[0]
 
     def stats(self):
         return dict(self._stats, exudyn_copies=len(self.exudyn),

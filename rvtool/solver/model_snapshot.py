@@ -31,8 +31,13 @@ class SnapshotElement:
     ids: tuple
 
 
-def _set_without_device(s):
-    """A copy of contact set ``s`` without its device objects (its rows, members and tables as built)."""
+def _set_without_device(s, memo=None):
+    """A copy of contact set ``s`` without its device objects (its rows, members and tables as built);
+    a series closure's inner set and a stacked set's parts likewise (``memo``: id -> copy, so a set
+    reached twice is copied once)."""
+    memo = {} if memo is None else memo
+    if id(s) in memo:
+        return memo[id(s)]
     if getattr(s, "_slices", None) is not None:
         raise RvtoolInputError(f"contact set {s.name!r} has influence-coefficient rows; a snapshot copies laminae "
                                "rows only (valid: slices = 'laminae')")
@@ -41,6 +46,13 @@ def _set_without_device(s):
     for k in DEVICE_ATTRIBUTES:
         if k in vars(s):
             out.__dict__[k] = None
+    memo[id(s)] = out
+    from ..contact.pin_closure import ElasticPinClosure
+    from ..contact.stacked import StackedContactSet
+    if isinstance(s, ElasticPinClosure):
+        out.__dict__["inner"] = _set_without_device(s.inner, memo)
+    elif isinstance(s, StackedContactSet):
+        out.__dict__["parts"] = tuple(_set_without_device(p, memo) for p in s.parts)
     return out
 
 
@@ -61,9 +73,15 @@ class ModelSnapshot:
         self.reg_springs = list(model.reg_springs)
         self.held_coordinates = list(held_coordinates(model))
         self.input, self.output, self.ratio = model.input, model.output, float(model.ratio)
-        self.structures = dict(model.structures)
-        self._elements = tuple(SnapshotElement(_set_without_device(e.evaluator), tuple(e.ids))
+        # the structures by name (their objects hold the Exudyn system); the row Newton's extra unknowns
+        # of closures and port bodies (rvtool.solver.row_extension), their sets copied as the elements'
+        from .row_extension import snapshot_extension
+        self.structures = {k: None for k in model.structures}
+        memo = {}
+        self._elements = tuple(SnapshotElement(_set_without_device(e.evaluator, memo), tuple(e.ids))
                                for e in model.contact_elements())
+        self.row_extension, self.row_extension_reasons = snapshot_extension(
+            model, lambda st: _set_without_device(st, memo))
         self._model = None
 
     def __getstate__(self):

@@ -170,6 +170,18 @@ class FamilyCopies:
     set: object
     scatter: CopyBlockAssembler
     obs_rows: int
+    #: (B nb_f, 3) flat indices into the copies' row coordinates (B, n) of the set's body coordinates
+    #: (-1: zero), for a set on extended bodies (:mod:`rvtool.solver.row_extension`); None: the set's
+    #: bodies are the copies' bodies and it takes the poses (B nb, 3) as they are
+    pose_map: np.ndarray | None = None
+
+    def poses(self, pose, vel):
+        """(pose, vel) of the set's bodies: as given, or gathered from absolute row coordinates
+        ``pose`` (B, n) through :attr:`pose_map` (static: zero velocities)."""
+        if self.pose_map is None:
+            return pose, vel
+        from .row_extension import gather_poses
+        return gather_poses(pose, self.pose_map), np.zeros(self.pose_map.shape)
 
 
 class ReplicaEvaluator:
@@ -193,7 +205,7 @@ class ReplicaEvaluator:
 
     def evaluate(self, pose, vel):
         t0 = time.perf_counter()
-        rows = [family_rows(f.set, pose, vel) for f in self.families]
+        rows = [family_rows(f.set, *f.poses(pose, vel)) for f in self.families]
         t1 = time.perf_counter()
         Q = sum(f.scatter.vector(np.asarray(r[0], np.float64)) for f, r in zip(self.families, rows))
         K = sum(f.scatter.blocks(np.asarray(r[1], np.float64)) for f, r in zip(self.families, rows))

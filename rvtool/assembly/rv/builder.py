@@ -56,7 +56,7 @@ from ...geometry.eccentric import journal_centre, journal_velocity
 from ...model import BodyCoordinate, Family, ReducerModel
 from ...model import SeriesBeam as SeriesBeamBase
 from ...output_pins.calibration import mindlin_tangential_ratio
-from ..contact_layout import ContactElements
+from ..contact_layout import ContactElements, contact_element_mode
 from ..cycloid import pin_meshes
 from .gear_graph import GearGraph
 from .spec import RVDesign
@@ -242,10 +242,6 @@ def ported_carrier(design, graph, layout, rigid, opts):
                                f"{design.bearing_friction.model!r} is not implemented (Palmgren's moment reads the "
                                "crank bearings on the rigid carrier); valid: bearing_friction.model = 'none' or "
                                "carrier.body = 'rigid'")
-    if design.bodies.spatial_carrier:
-        raise RvtoolInputError("carrier.body = 'ported' with bodies.carrier_coordinates = 'spatial' is not "
-                               "implemented (the seats are planar ports: the tilt and axial ports of the seats are "
-                               "not reduced); valid: bodies.carrier_coordinates = 'planar' or carrier.body = 'rigid'")
     nc = layout.n_cranks
     inner = TaperedBearingSet(crank_mountings(design, graph, layout, seats=True), layout.n_bodies + nc,
                               name="crank_bearings", **opts)
@@ -690,8 +686,11 @@ def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
     from exudyn_user_elements.out_of_plane import RetainedTilt
     b, L = design.bodies, layout
     bodies = []
+    # a ported carrier's face and main seats: two rows closed by its out-of-plane seat compliance (the seats'
+    # row last; mass and tilt inertia split equally between them, assumed: dynamic runs only)
+    seats = b.spatial_carrier and design.carrier.ported
     if b.spatial_carrier:
-        bodies.append(("carrier", L.carrier, b.carrier_mass, b.tilt_inertia))
+        bodies.append(("carrier", L.carrier, b.carrier_mass / (1 + seats), b.tilt_inertia / (1 + seats)))
     if b.spatial_wheels:
         m_w, J_w = wheel_mass
         J_t = J_w / 2 if b.wheel_tilt_inertia is None else b.wheel_tilt_inertia
@@ -720,18 +719,22 @@ def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
     keys = [k for k, on in (("carrier_coordinates", b.spatial_carrier), ("wheel_coordinates", b.spatial_wheels),
                             ("crank_coordinates", b.spatial_cranks), ("input_coordinates", b.spatial_input)) if on]
     said = " / ".join(f"bodies.{k} = 'spatial'" for k in keys)
-    if housing is not None:
-        raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the merged element carries "
-                               "one structure); valid: housing.model = 'rigid' or planar bodies")
+    if housing is not None and b.spatial_wheels:
+        raise RvtoolInputError(f"{said} with housing.model = 'ports' is not implemented (the ring pins on the "
+                               "housing's port bodies are not sliced with the wheels' tilts); valid: "
+                               "housing.model = 'rigid' or bodies.wheel_coordinates = 'planar'")
     if design.bearing_friction.model != "none" and (b.spatial_carrier or b.spatial_cranks):
         raise RvtoolInputError(f"{said} with bearing_friction.model = {design.bearing_friction.model!r} is not "
                                "implemented (Palmgren's moment reads the planar bearing sets); valid: "
                                "bearing_friction.model = 'none' or planar carrier and cranks")
     k_t, k_r = regularization
+    rows = {i: r for r, (_, i, _, _) in enumerate(bodies)}
+    if seats:
+        bodies.append(("carrier_seats", L.carrier, b.carrier_mass / 2, b.tilt_inertia / 2))
     names = tuple(n for n, *_ in bodies)
     tilt = RetainedTilt(mbs, [m for *_, m, _ in bodies], [J for *_, J in bodies], (k_t, k_r),
-                        name="carrier_tilt" if names == ("carrier",) else "body_tilt", names=names)
-    return tilt, {i: r for r, (_, i, _, _) in enumerate(bodies)}
+                        name="carrier_tilt" if names[0] == "carrier" and len(rows) == 1 else "body_tilt", names=names)
+    return tilt, rows
 
 
 def spatial_needles(design, graph, layout, tilt, rows, opts):
@@ -861,8 +864,9 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
     main_mounting = Mounting(name="main_bearing", bearing=d.main_bearing, inner=L.carrier, outer=GROUND)
     if b.spatial_carrier:
         from ...bearings.spatial_set import SpatialBearingSet
-        main = SpatialBearingSet([main_mounting], L.n_bodies + tilt.n_virtual, {L.carrier: L.n_bodies + rows[L.carrier]},
-                                 name="main_bearings")
+        seat_row = tilt.row("carrier_seats") if d.carrier.ported else rows[L.carrier]    # the main bearing's seats
+        main = SpatialBearingSet([main_mounting], L.n_bodies + tilt.n_virtual, {L.carrier: L.n_bodies + seat_row},
+                                 name="main_bearings", **opts)
     else:
         main = BearingSet([main_mounting], L.n_bodies, name="main_bearings", **opts)
     if b.spatial_cranks:
@@ -898,19 +902,32 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         pin_set = skewed(pin_set, d, L, tilt, rows)
         crank_path = tuple((nm, f if nm == "gears" or f.n_bodies != L.n_bodies else skewed(f, d, L, tilt, rows))
                            for nm, f in crank_path)
-    element = ContactElements(mbs, nodes, contact_element, structure=housing if tilt is None else tilt)
+    # the ported housing and the retained out-of-plane coordinates both behind the merged element: stacked
+    stack = None
+    if housing is not None and tilt is not None and contact_element_mode(contact_element) == "merged":
+        from exudyn_user_elements.stacked_structure import StackedStructure
+        stack = StackedStructure((housing, tilt))
+    element = ContactElements(mbs, nodes, contact_element, structure=stack or (housing if tilt is None else tilt))
+
+    def on_stack(p):
+        return p if stack is None or p is None else stack.ports(p)
 
     def on_tilts(f):
-        return tilt if tilt is not None and f.n_bodies > L.n_bodies else None
+        return on_stack(tilt) if tilt is not None and f.n_bodies > L.n_bodies else None
     if wheels is None:
-        elements = {"pins": element(pin_set, ports=ports if tilt is None else on_tilts(pin_set))}
+        elements = {"pins": element(pin_set, ports=on_stack(ports) if housing is not None else on_tilts(pin_set))}
     else:
         # the elastic wheels: pins and needles (and the gears on bending cranks) in one nested closure
-        elements = {"wheel_bodies": element(wheels.evaluator, ports=ports)}
+        elements = {"wheel_bodies": element(wheels.evaluator, ports=on_stack(ports) if housing is not None else None)}
         crank_path = () if wheels.gears_inside else (("gears", InvoluteContactSet(gear_meshes(d, graph, L),
                                                                                    L.n_bodies, name="gears", **opts)),)
     elements.update((name, element(s, ports=on_tilts(s))) for name, s in (*crank_path, ("crank_bearings", cranks)))
     elements["main_bearings"] = element(main, ports=on_tilts(main))
+    if b.spatial_carrier and d.carrier.ported:
+        from ..carrier import CarrierTiltSeats, tilt_seat_compliance
+        elements["carrier_seats"] = element(CarrierTiltSeats(
+            tilt_seat_compliance(d, graph), n_bodies=L.n_bodies + tilt.n_virtual, carrier=L.carrier,
+            face=L.n_bodies + rows[L.carrier], seat=L.n_bodies + tilt.row("carrier_seats")), ports=on_stack(tilt))
     if d.bearing_friction.model != "none":
         # Palmgren's moment on each tapered crank pair (crank -> carrier) and on the main bearing pair
         # (carrier -> ground), P1 from the accepted element loads of each mounting; a loss element of its

@@ -41,16 +41,20 @@ class Support:
         return cls(not reasons, reasons)
 
 
-SPATIAL_BODIES_REASON = ("the model's carrier retains axial and tilt coordinates (bodies.carrier_coordinates = "
-                         "'spatial'): the device copies carry planar bodies (x, y, theta) and the planar bearing "
-                         "kernels only, not the spatial ball rows of rvtool.bearings.spatial_set")
+SPATIAL_BODIES_REASON = ("the model's carrier retains axial and tilt coordinates (bodies.carrier_coordinates, or "
+                         "bodies.flange_coordinates of a cycloid drive, = 'spatial'): the device copies carry planar "
+                         "bodies (x, y, theta) and the planar bearing kernels only, not the out-of-plane rows and the "
+                         "spatial ball rows (rvtool.bearings.spatial_set; their Warp kernel, "
+                         "warp_contacts.spatial_balls, runs inside the exudyn backend's merged element)")
 """The named reason a device backend gives for a model with spatial bodies (issue 32)."""
 
 
 SPATIAL_WHEELS_REASON = ("the model's wheels, cranks or input shaft retain axial and tilt coordinates "
-                         "(bodies.wheel_coordinates / crank_coordinates / input_coordinates = 'spatial'): their families are sliced across the width with the "
-                         "tilts on the host (rvtool.contact.skew.SkewSlices, rvtool.bearings.spatial_tapered); the "
-                         "device copies carry planar bodies and the planar kernels only")
+                         "(bodies.wheel_coordinates / crank_coordinates / input_coordinates = 'spatial'): their families "
+                         "are sliced across the width with the tilts (rvtool.contact.skew.SkewSlices, whose stacked "
+                         "slices the exudyn backend's merged element sums on the device through weighted maps; "
+                         "rvtool.bearings.spatial_tapered on the host); the device copies carry planar bodies and the "
+                         "planar kernels only")
 """The named reason a device backend gives for a model with tilting wheels or cranks (issue 32)."""
 
 

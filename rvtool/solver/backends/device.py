@@ -12,8 +12,16 @@ the parameters'. Every other model whose contact families can be copied
 outside that set) runs on the device row Newton (:class:`rvtool.solver.device_rows.DeviceRowNewton`:
 the families' own Warp kernels, the per-copy Newton step and, on a GPU, the row sums and the
 tapered rows' planar mapping on the device; one read-back per iteration); ``stats["path"]``
-says which ran. Not covered (named reasons): friction with stick--slip anchors, elastic pin and
-crank closures, the ported housing's modal coordinates, shared output pins.
+says which ran. The row Newton takes the linear series closures (elastic ring and output pins,
+the RV crank beam and torsion) and reduced structures on port bodies (the ported housing) as
+extra unknowns with their constant stiffness blocks (:mod:`rvtool.solver.row_extension`); the
+structure's modal coordinates of a result are recovered from its port unknowns. Stick--slip
+anchors of the pair families (cycloid pins, involute pairs, circle pairs) run there too: the
+committed history is staged into their kernels and committed once per level of a torque path
+(:meth:`rvtool.solver.device_rows.DeviceRowNewton.commit`, as Exudyn's continuation; equilibria
+never commit, as Exudyn's static solver). Not covered (named reasons): anchors inside a closure or
+on plain output pins, closures with a station law (conformal grooves, the ported carrier's
+seats), shared output pins, ported wheels.
 Torque paths (task ``"torque_path"``): the row Newton's
 :class:`~rvtool.solver.device_torque_path.DeviceTorquePath` on one copy, for every model the row
 Newton takes (the cycloid included).
@@ -33,12 +41,18 @@ from .base import Backend, DrivenHistory, Equilibria, Support, flexible_body_rea
 
 
 COVERED = ("cycloid pins", "output pins (plain)", "involute pairs (external, internal)",
-           "rolling elements (needle, cylindrical, ball)", "tapered rollers", "circle pairs (lumped bearings)")
+           "rolling elements (needle, cylindrical, ball)", "tapered rollers", "circle pairs (lumped bearings)",
+           "elastic ring and output pins (linear closures)", "elastic crank beam and torsion (linear closures)",
+           "ported housing (port unknowns)",
+           "stick--slip anchors of cycloid pins, involute pairs, circle pairs (history committed per torque-path level)")
 """Contact families the device backend's equilibria cover (module docstring)."""
 
-NOT_COVERED = ("friction with stick--slip anchors", "elastic pin and crank closures",
-               "ported housing (modal coordinates)", "shared output pins", "driven runs of non-cycloid topologies",
-               "ported carrier (carrier.body = 'ported': the seat closure)")
+NOT_COVERED = ("stick--slip anchors inside a series closure or on plain output pins",
+               "closures with a station law (pins.groove = 'conformal')",
+               "shared output pins", "driven runs of non-cycloid topologies",
+               "ported carrier (carrier.body = 'ported': the seat closure)", "ported wheels (wheels.body = 'ported')",
+               "elastic closures and ported housings on the resident (cycloid copy-parameter) path and the fused "
+               "stepper")
 """What the device backends do not run (each is a named reason of :meth:`DeviceBackend.supports`)."""
 
 
@@ -62,6 +76,12 @@ TORQUE_PATH_CYCLOID_REASON = ("on a cycloid drive the device torque path is slow
                               "a CPU (measured: RD-40's quick stiffness sequence 0.08-0.11 s against 0.05 s, "
                               "rvtool.solver.backends.TORQUE_PATH_ORDER); --backend device runs it")
 """Why auto does not take the device torque path of a cycloid model (it supports it)."""
+
+TORQUE_PATH_EXTENDED_REASON = ("the model has elastic closures or a ported structure, which the device row Newton "
+                               "takes as extra unknowns (rvtool.solver.row_extension: rv80e solves 119 coordinates "
+                               "per copy instead of 21); their place in auto's order is not measured, so auto keeps "
+                               "Exudyn's continuation (--backend device runs it)")
+"""Why auto does not take the device torque path of a model with extra unknowns (it supports it)."""
 
 
 #: default copies per device loop of :meth:`DeviceBackend.solve_variants`: bounded by memory (RD-40:
@@ -181,11 +201,15 @@ class DeviceBackend(Backend):
         """Equilibria: auto takes the resident path only: the row path's place in auto's measured
         order is not measured yet (on a CPU it is no faster than Exudyn for one model's points; on
         CUDA not measured). Torque paths: auto leaves the cycloid to Exudyn's continuation (measured
-        faster there, :data:`rvtool.solver.backends.TORQUE_PATH_ORDER`). --backend device runs both."""
+        faster there, :data:`rvtool.solver.backends.TORQUE_PATH_ORDER`), and a model with extra
+        unknowns (elastic closures, ported structures: not measured). --backend device runs both."""
         if task == "torque_path":
             from ...assembly.spec import CycloidDesign
+            from ..device_rows import needs_extension
             if isinstance(getattr(model, "design", None), CycloidDesign):
                 return TORQUE_PATH_CYCLOID_REASON
+            if needs_extension(model):
+                return TORQUE_PATH_EXTENDED_REASON
             return None
         if task == "equilibria" and self.path(model)[0] == "rows":
             return ("the device row path (non-cycloid topology) has no measured place in auto's order yet "
@@ -206,9 +230,11 @@ class DeviceBackend(Backend):
         # warm-started segments where the batch asks for it and there are more points than copies
         r = (newton.solve_sequence(angles, tq) if batch.warm_start and A > copies
              else newton.solve(angles, np.full(A, tq)))
+        from ..row_extension import model_states
         idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
-        qs = np.zeros((A, model.mbs.systemData.ODE2Size()))
-        qs[:, idx] = r.q
+        # a reduced structure's coordinates from its port unknowns (row_extension; the closures' stations are
+        # condensed in the model: no coordinates of their own)
+        qs = model_states(model, r.q, newton.extension)
         theta_in = angles.copy()
         failed = np.flatnonzero(r.status != CONVERGED)
         model.set_output_torque(tq)
@@ -216,7 +242,7 @@ class DeviceBackend(Backend):
         for p in failed:
             static = static or StaticSolver(model)
             static.q = np.zeros(qs.shape[1])
-            static.q[idx] = newton.kinematic(angles[p:p + 1])[0]
+            static.q[idx] = newton.kinematic(angles[p:p + 1])[0][:len(idx)]
             try:
                 qs[p] = static.solve(float(angles[p]), float(angles[p]))
             except SolverFailure as exc:

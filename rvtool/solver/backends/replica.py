@@ -20,7 +20,7 @@ import numpy as np
 
 from ...errors import RvtoolInputError, SolverFailure
 from ...validation import check_choice
-from .base import Backend, Equilibria, Support
+from .base import Backend, Equilibria, Support, spatial_body_reasons
 
 
 def segments(n, copies):
@@ -104,7 +104,8 @@ class ReplicaBackend(Backend):
         if not self._task(task):
             return Support.of([f"replica does not implement {task!r} (equilibria only)"])
         from ..replica import replica_reasons
-        return Support.of(replica_reasons(model))
+        # spatial bodies first, by name (issue 32); the set types without a copier follow
+        return Support.of(spatial_body_reasons(model) + list(replica_reasons(model)))
 
     def solve_equilibria(self, model, batch, *, record=None):
         if record is not None:
