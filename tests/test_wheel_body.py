@@ -174,8 +174,8 @@ def test_bad_input_names_the_key(rv40e, change, key):
 
 
 def test_unsupported_combination_named(rv40e):
-    d = rv40e.replace(wheels={"body": "ported", "structure": COARSE}, housing={"model": "ports"})
-    with pytest.raises(RvtoolInputError, match=r"wheels\.body = 'ported' with housing\.model"):
+    d = rv40e.replace(wheels={"body": "ported", "structure": COARSE}, bodies={"wheel_coordinates": "spatial"})
+    with pytest.raises(RvtoolInputError, match=r"wheels\.body = 'ported' with bodies\.wheel_coordinates"):
         rvtool.build(d)
 
 

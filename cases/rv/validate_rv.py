@@ -7,7 +7,10 @@ crank-bearing ISO 281 L10 at T_R and the catalogue's rated output speed against 
 against declared allowables; the hysteresis curve (hysteresis.png), the compliance budget at the rated state,
 the rigidity of another ratio variant of the same frame, an uncertainty band from 64 Latin-hypercube samples
 over the `assumed` ranges with a one-at-a-time tornado (tornado.png), the fraction of those variants within the
-catalogue's lost-motion maximum; the assumptions_commit of each design.
+catalogue's lost-motion maximum; the assumptions_commit of each design; and (issue 30) the rigidity b/a with every
+member of the torque path on (rvtool.analysis.validate_members: wheel bodies, pin grooves, ported carrier, crank
+torsion, from <design>_members.toml at the middles of its ranges) with its Latin-hypercube band (64 samples; in
+the full run only, see main()).
 
 --quick (a loop of rv80e costs 31 s, of rv40e 4 s): the central loops at 50 % level steps (the catalogue's
 levels are in every spacing); rv40e with its ratio variant and a band over the needle clearance range its
@@ -21,7 +24,10 @@ passed (stated criteria, NOT agreement with the catalogue, which is reported as 
 import os
 import time
 
+from concurrent.futures import ProcessPoolExecutor
+
 import rvtool.analysis.validate as V
+import rvtool.analysis.validate_members as VM
 from rvtool import casekit, designs
 
 
@@ -38,34 +44,53 @@ def rv40e_clearance_ranges(out_dir):
     return path
 
 
+def one_design(job):
+    """Validate one design (a process of its own): (name, its results entry, its criteria, its table text)."""
+    name, quick, out = job
+    kw = {}
+    if quick:
+        if designs.assumed_of(name):
+            # the TE row against a measurement runs as its own case under --quick (te_measured_rv80e)
+            kw = {"band": False, "variant": False, "te": False}
+        elif name == "rv40e":
+            kw = {"assumed": rv40e_clearance_ranges(out)}
+        # the all-members-on row runs in the full mode only: its b/a costs 15-25 CPU-minutes per design (the
+        # nested elastic wheel bodies at every Newton step; rv80e's central value took 1534 s wall on the shared
+        # 2-core machine), beyond the quick suite's 300 s per case
+        kw["members"] = False
+    res = V.validate(name, quick=quick, out_dir=f"{out}/{name}", **kw)
+    crit = V.checks(res)
+    entry = {"table": res["table"], "central": res["central"], "checks": crit,
+             "assumptions_commit": res["assumptions_commit"], "pressures": res["pressures"],
+             "ratio_variant": res["ratio_variant"], "compliance_budget": res["compliance_budget"],
+             "bearing_lives": res["bearing_lives"], "uncertainty_note": res["uncertainty_note"],
+             "uncertainty": {k: v for k, v in (res["uncertainty"] or {}).items() if k != "U"},
+             "settings": res["settings"], "report": f"{name}/report.html",
+             "te_measured": res.get("te_measured"), "all_members_on": res.get("all_members_on")}
+    return name, entry, crit, V.table_text(res)
+
+
 def main(argv=None):
     args = casekit.parse_args(argv, description=__doc__.splitlines()[0])
     t0 = time.perf_counter()
     per_design, passed = {}, True
-    for name in V.validated_designs():
-        kw = {}
-        if args.quick:
-            if designs.assumed_of(name):
-                # the TE row against a measurement runs as its own case under --quick (te_measured_rv80e)
-                kw = {"band": False, "variant": False, "te": False}
-            elif name == "rv40e":
-                kw = {"assumed": rv40e_clearance_ranges(args.out)}
-        out = V.validate(name, quick=args.quick, out_dir=f"{args.out}/{name}", **kw)
-        crit = V.checks(out)
+    names = V.validated_designs()
+    os.makedirs(args.out, exist_ok=True)
+    jobs = [(name, args.quick, args.out) for name in names]
+    # one process per design: the designs are independent (results in the designs' order)
+    with ProcessPoolExecutor(max_workers=len(jobs)) as pool:
+        done = list(pool.map(one_design, jobs))
+    for name, entry, crit, text in done:
         passed = passed and all(crit.values())
-        print(V.table_text(out))
-        per_design[name] = {"table": out["table"], "central": out["central"], "checks": crit,
-                            "assumptions_commit": out["assumptions_commit"], "pressures": out["pressures"],
-                            "ratio_variant": out["ratio_variant"], "compliance_budget": out["compliance_budget"],
-                            "bearing_lives": out["bearing_lives"], "uncertainty_note": out["uncertainty_note"],
-                            "uncertainty": {k: v for k, v in (out["uncertainty"] or {}).items() if k != "U"},
-                            "settings": out["settings"], "report": f"{name}/report.html",
-                            "te_measured": out.get("te_measured")}
+        print(text)
+        per_design[name] = entry
     casekit.write_results(args.out, {"designs": per_design, "passed": bool(passed and per_design),
                                      "criteria": "machinery ran (no failed sample), no NaN, loops repeat within "
                                                  f"{V.REPEAT_TOLERANCE_ARCMIN:g} arcmin, band contains central "
-                                                 "where a band ran; NOT agreement with the catalogue"},
-                          settings={"quick": args.quick, "samples": V.QUICK_SAMPLES if args.quick else V.SAMPLES},
+                                                 "where a band ran; the all-members-on row computed with no failed "
+                                                 "sample; NOT agreement with the catalogue"},
+                          settings={"quick": args.quick, "samples": V.QUICK_SAMPLES if args.quick else V.SAMPLES,
+                                    "members_samples": None if args.quick else VM.SAMPLES},
                           wall_s=time.perf_counter() - t0)
 
 

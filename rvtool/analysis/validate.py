@@ -374,7 +374,7 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             assumed=None, band=True, variant=True, te=True, log=print):
+             assumed=None, band=True, variant=True, te=True, members=True, members_samples=None, members_workers=None, log=print):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
@@ -384,7 +384,10 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     ``<design>_assumed.toml`` (its values must be the design's middles too); band, variant: False
     skips the uncertainty band or the ratio variant (said so in the results); te: False skips the TE
     comparison with a published measurement (:mod:`rvtool.analysis.validate_te`; it runs where the design
-    ships a ``<design>_measured.toml`` and a tolerance file)."""
+    ships a ``<design>_measured.toml`` and a tolerance file); members: False skips the all-members-on
+    rigidity row (:mod:`rvtool.analysis.validate_members`; it runs where the design ships a
+    ``<design>_members.toml``), members_samples its Latin-hypercube size (None: that module's default),
+    members_workers its processes (None: ``workers``)."""
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
     want_band, want_variant = bool(band), bool(variant)
@@ -526,6 +529,15 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         + _rows("hysteresis_loss", fig_c["hysteresis_loss"], "arcmin", catalogue, band.get("hysteresis_loss"),
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
+    members_row = None
+    if members:
+        from .validate_members import members_rigidity
+        from ..designs.catalogue import load_assumed as _load_assumed
+        base = assumed if assumed is not None else (_load_assumed(assumed_name) if assumed_name else None)
+        members_row = members_rigidity(design, table, catalogue, base, quick=quick, samples=members_samples,
+                                       seed=seed, workers=members_workers or workers, log=log)
+    at = sum(r["figure"] == "torsional_rigidity" for r in rows)               # beside the file's rigidity rows
+    rows[at:at] = [] if members_row is None else members_row.pop("rows")
     rows += moment["rows"]
     te_measured = _te_measured(design, d, T_R, quick=quick, want=te, log=log)
     rows += (te_measured or {}).get("rows", [])
@@ -588,6 +600,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                                                 "housing.model": getattr(d.housing, "model", None)
                                                 if d.housing else None}},
         "ratio_variant": variant, "uncertainty": unc, "te_measured": te_measured, "efficiency": efficiency,
+        "all_members_on": members_row,
         "settings": {"quick": quick, "samples": n_samples, "workers": workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
                      "rigidity_points": list(rigidity_points(catalogue)[0]),
@@ -631,6 +644,10 @@ def checks(out):
             for k in ("torsional_rigidity", "lost_motion", "hysteresis_loss")))
     if out.get("te_measured") is not None:
         res["te_no_failed_variant"] = out["te_measured"]["n_failed"] == 0
+    m = out.get("all_members_on")
+    if m is not None:
+        res["all_members_no_nan"] = bool(np.isfinite(m["central"]["value"]))
+        res["all_members_no_failed_sample"] = not m["failures"]
     return res
 
 
@@ -770,3 +787,9 @@ def report_html(out, out_dir, plots):
 
 def _f(v):
     return "-" if v is None else f"{v:.4g}"
+
+
+#: public names of the table-row and sample-map helpers (:mod:`rvtool.analysis.validate_members` builds its
+#: all-members-on row with them)
+catalogue_rows = _rows
+map_samples = _map

@@ -37,6 +37,8 @@ replaces the linear K_b u by a nonlinear station law s(u) with its tangent ds/du
 conformal contact in its housing groove, :mod:`rvtool.contact.groove`): R_p = Q_u - s(u_p) = 0 and
 dQ/dq = K_qq - K_qu (K_uu - ds/du)^-1 K_uq.
 """
+import contextlib
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -70,7 +72,7 @@ class ElasticPinClosure:
     """
 
     def __init__(self, inner, *, n_bodies, carrier, station_compliance, station, tolerance=1e-8,
-                 max_iterations=40, dofs=(0, 1), support=None):
+                 max_iterations=40, dofs=(0, 1), support=None, coupled=False):
         dofs = tuple(int(c) for c in dofs)
         if not dofs or len(set(dofs)) != len(dofs) or any(c not in (0, 1, 2) for c in dofs):
             raise RvtoolInputError(f"dofs = {dofs!r}; valid: distinct station coordinates among (0, 1, 2) = (x, y, theta)")
@@ -141,6 +143,8 @@ class ElasticPinClosure:
         self._Kb = np.kron(np.eye(self.n_pins), np.kron(self.beam_stiffness, np.eye(nd)))
         self._u = np.zeros(self._n_u)
         self.last_iterations = 0
+        self.coupled = bool(coupled)
+        self._condense_factor = 1.0
 
     def __getattr__(self, name):
         # row attributes of the inner set (mesh_of, pin_of, meshes, pin_forces, ...); only reached
@@ -214,7 +218,11 @@ class ElasticPinClosure:
         return r <= self.tolerance or r <= RELATIVE_TOLERANCE * np.abs(ev.Q).max(initial=0.0)
 
     def _solve_uu(self, Kuu, rhs):
-        """Kuu^-1 rhs with Kuu block diagonal per pin (n_d n_s square blocks)."""
+        """Kuu^-1 rhs with Kuu block diagonal per pin (n_d n_s square blocks); the full Kuu where
+        ``coupled`` (an inner closure couples the pins: its condensed tangent links stations of
+        different pins, e.g. the cranks' journals through an elastic wheel)."""
+        if self.coupled:
+            return np.linalg.solve(Kuu, rhs)
         m = len(self.dofs) * self.n_stations
         n = self.n_pins
         blocks = Kuu.reshape(n, m, n, m)[np.arange(n), :, np.arange(n), :]
@@ -252,6 +260,25 @@ class ElasticPinClosure:
             dQdv = D[:nr, :nr] - K[:nr, nr:] @ self._solve_uu(Kuu, D[nr:, :nr])
         return Q[:nr], dQdq, dQdv
 
+    @contextlib.contextmanager
+    def stiffened_view(self, factor):
+        """Within the block, :meth:`evaluate` condenses with the station stiffness times ``factor``
+        (the solved deflections unchanged: only the tangent it returns differs): the switch-to-rigid
+        and sensitivity views of a closure nested inside another one (the budget's series paths,
+        :class:`rvtool.assembly.rv.builder.NestedSeries`)."""
+        old = self._condense_factor
+        self._condense_factor = float(factor)
+        try:
+            yield self
+        finally:
+            self._condense_factor = old
+
+    def station_energy(self, du, u):
+        """du^T (ds/du) du [N m]: twice the station law's strain energy along station deflection
+        increments du (n_pins, n_s, n_d) at solved deflections u (the beam: du^T K_b du)."""
+        du = np.asarray(du, float).ravel()
+        return float(du @ self.support_tangent(u) @ du)
+
     # -- evaluator protocol --------------------------------------------------------------
     def evaluate(self, pose, vel, history=None, check=True):
         if check:
@@ -259,7 +286,7 @@ class ElasticPinClosure:
         u, ev, red, ok = self.solve(pose, vel)
         if ok:
             self._u = u
-        Q, dQdq, dQdv = self.condense(red)
+        Q, dQdq, dQdv = self.condense(red, beam_factor=self._condense_factor, u=u)
         finite = ok and ev.finite and all_finite(Q, dQdq) and (dQdv is None or all_finite(dQdv))
         return Evaluation(Q, dQdq, dQdv, ev.obs, ev.trial_history, finite)
 

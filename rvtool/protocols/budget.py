@@ -12,7 +12,8 @@ give its approach Jacobian G_r and its normal stiffness k_r = (dF_r . G_r)/(G_r 
 elastic tangent is K_f = sum_r k_r G_r G_r^T, and its share of the output compliance is its strain
 energy in the mode, u^T K_f u / C (the shares of springs in series are their compliance
 fractions; Euler's theorem for a network homogeneous in its stiffnesses makes the energy shares
-sum to one). The beams of elastic pins (``series_compliance``) are closed per pin with their full
+sum to one). The beams of elastic pins (``series_compliance``: one member or a tuple of members of the family,
+e.g. the nested wheel bodies and pin grooves) are closed per pin with their full
 station compliance (:mod:`rvtool.contact.pin_closure`): the rows observe the contact approach
 only, and the beams' energy is sum_p du_p^T K_b du_p over the station deflections du_p along the
 mode (K_b = C^-1; equal to f_p^T C f_p with f_p the increments of the station resultants,
@@ -64,14 +65,22 @@ def row_jacobians(model, q, free, step=1e-9):
     base = {f.value: model.observe(q, f) for f in fams}
     G = {f.value: np.zeros((len(base[f.value].ids), len(free))) for f in fams}
     dF = {f.value: np.zeros_like(G[f.value]) for f in fams}
+    # a coordinate outside a family's element leaves its rows unchanged (zero columns, not evaluated); the
+    # families at +step first, then at -step, so that families sharing an element (a nested closure) reuse
+    # its cached evaluation of that state
+    coords = {f.value: set(int(c) for c in model.family_rows(f)[0].coordinate_indices) for f in fams}
     for j, i in enumerate(free):
+        active = [f for f in fams if int(i) in coords[f.value]]
+        if not active:
+            continue
         qp, qm = q.copy(), q.copy()
         qp[i] += step
         qm[i] -= step
-        for f in fams:
-            op, om = model.observe(qp, f), model.observe(qm, f)
-            G[f.value][:, j] = -(op.obs[:, 2] - om.obs[:, 2]) / (2 * step)     # approach = -gap (O_GAP = 2)
-            dF[f.value][:, j] = (op.normal_force - om.normal_force) / (2 * step)
+        op = {f: model.observe(qp, f) for f in active}
+        om = {f: model.observe(qm, f) for f in active}
+        for f in active:
+            G[f.value][:, j] = -(op[f].obs[:, 2] - om[f].obs[:, 2]) / (2 * step)     # approach = -gap (O_GAP = 2)
+            dF[f.value][:, j] = (op[f].normal_force - om[f].normal_force) / (2 * step)
     return {f: (G[f], dF[f], base[f].normal_force) for f in G}
 
 
@@ -97,8 +106,8 @@ def stiffness_budget(model, q):
         rigid[fam] = (C - Cr) / C
         cp, cm = (float(np.linalg.solve(K + s * SENSITIVITY_STEP * Kf, e)[i_out]) for s in (1.0, -1.0))
         sens[fam] = (cm - cp) / (2 * SENSITIVITY_STEP * C)
-        beam = model.series_compliance(fam)
-        if beam is not None:
+        beams = model.series_compliance(fam)
+        for beam in (() if beams is None else beams if isinstance(beams, tuple) else (beams,)):
             dq = np.zeros(len(q))
             dq[free] = u
             shares[beam.path] = beam.energy(q, dq) / C

@@ -60,6 +60,7 @@ from ..contact_layout import ContactElements, contact_element_mode
 from ..cycloid import pin_meshes
 from .gear_graph import GearGraph
 from .spec import RVDesign
+from .wheel_path import NestedSeries, leaf_rows, leaf_state, wheel_path
 
 
 class Layout:
@@ -267,6 +268,9 @@ class RvModel(ReducerModel):
     flexible: object = None
     #: FlexibleCranks (cranks.dynamics.model = "flexible", :mod:`.flexible_cranks`), or None (rigid cranks)
     flexible_cranks: object = None
+    #: budget path -> depth of its closure in the elastic wheels' nested element ``"wheel_bodies"``
+    #: (:mod:`rvtool.assembly.rv.wheel_path`); empty without elastic wheels
+    series_paths: dict = field(default_factory=dict)
 
     def _pose(self, name, q):
         el = self.elements[name]
@@ -312,8 +316,8 @@ class RvModel(ReducerModel):
         """(the needle bearing set, the poses it is evaluated at) at the static state q: the
         element's bodies, and with elastic cranks the journal stations at the solved deflections."""
         if "wheel_bodies" in self.elements:
-            closure = self.elements["wheel_bodies"].evaluator
-            return closure.inner.part("eccentric_bearings"), closure.extended_pose(self._pose("wheel_bodies", q))
+            return leaf_state(self.elements["wheel_bodies"].evaluator, self._pose("wheel_bodies", q),
+                              "eccentric_bearings")
         if self.crank_compliance is None:
             return self.elements["eccentric_bearings"].evaluator, self._pose("eccentric_bearings", q)
         closure, pose = planar_view(self.elements["cranks"].evaluator, self._pose("cranks", q))
@@ -328,15 +332,19 @@ class RvModel(ReducerModel):
         None (rigid cranks)."""
         if self.crank_compliance is None:
             return None
+        if "wheel_bodies" in self.elements:
+            return NestedSeries("cranks", self.elements["wheel_bodies"], self.series_paths["cranks"]).deflections(q)
         closure, pose = planar_view(self.elements["cranks"].evaluator, self._pose("cranks", q))
         return closure.deflections(pose)
 
     def series_compliance(self, family):
         """Elastic cranks (``cranks.shaft``): the beam of every crank with its station compliance
         over the two journals and the gear, closed per crank (:mod:`rvtool.contact.pin_closure`),
-        reported once, with the eccentric bearings (budget path ``"cranks"``); crank torsion alone
-        likewise (path ``"crank_torsion"``; with the beam on, the torsion is inside the beam's closure
-        and not a path of its own: its energy falls into the budget's residual); the ring pins'
+        reported once, with the eccentric bearings (budget path ``"cranks"``); crank torsion likewise
+        (path ``"crank_torsion"``; with the beam on, the torsion's closure nested inside the beam's,
+        :class:`~rvtool.assembly.rv.wheel_path.NestedSeries`); with elastic wheels every member nested in
+        their element (paths ``"wheel_bodies"``, ``"pin_grooves"``, ``"cranks"``, ``"crank_torsion"``,
+        :mod:`rvtool.assembly.rv.wheel_path`); the ring pins'
         conformal grooves with the pins (path ``"pin_grooves"``, :class:`GrooveSeries`); the ported carrier's
         crank seats with the crank bearings (path ``"carrier"``, :mod:`rvtool.assembly.carrier`)."""
         from ...model import SeriesBeam
@@ -347,8 +355,10 @@ class RvModel(ReducerModel):
             raise RvtoolInputError("the series members (elastic cranks, pin grooves) of a model with tilting wheels or "
                                    "cranks are closed inside the width slices; their budget paths are not implemented; "
                                    "valid: bodies.wheel_coordinates / crank_coordinates = 'planar'")
-        if fam == Family.PINS and "wheel_bodies" in self.elements:
-            return WheelSeries.of_closure(self.elements["wheel_bodies"])
+        if "wheel_bodies" in self.elements and fam in (Family.PINS, Family.ECCENTRIC_BEARINGS):
+            # the nested members of the elastic wheels' element (rvtool.assembly.rv.wheel_path)
+            return tuple(NestedSeries(p, self.elements["wheel_bodies"], k) for p, k in self.series_paths.items()
+                         if NestedSeries.family_of(p) == fam) or None
         if fam == Family.CRANK_BEARINGS and self.design.carrier.ported:
             return GrooveSeries.of_groove(self.elements["crank_bearings"], "carrier", Family.CRANK_BEARINGS)
         if fam == Family.PINS and self.design.pins.groove != "rigid":
@@ -360,7 +370,10 @@ class RvModel(ReducerModel):
                                          self.elements["eccentric_bearings"])
         if self.crank_compliance is None:
             return None
-        return SeriesBeam.of_closure("cranks", Family.ECCENTRIC_BEARINGS, self.crank_compliance, self.elements["cranks"])
+        beam = SeriesBeam.of_closure("cranks", Family.ECCENTRIC_BEARINGS, self.crank_compliance, self.elements["cranks"])
+        if self.torsion_compliance is None:
+            return beam
+        return beam, NestedSeries("crank_torsion", self.elements["cranks"], 1)      # the torsion inside the beam's
 
     def input_torque(self, q):
         """Torque [N m] the drive applies to the input rotation at the static state q: minus the
@@ -469,39 +482,6 @@ FAMILY_ELEMENTS = {Family.PINS: "pins", Family.INVOLUTE_STAGE: "gears", Family.E
 
 #: the stations of an elastic crank, in the order of its station compliance
 CRANK_STATIONS = ("journal_wheel0", "journal_wheel1", "gear")
-
-
-class WheelSeries:
-    """The elastic wheels for the stiffness budget (path ``"wheel_bodies"``): the strain energy
-    sum_j du_j^T K_j du_j of the wheels' station deflections along a mode and the element's tangent
-    with the wheels stiffened (the interface of :class:`rvtool.model.SeriesBeam`)."""
-    path = "wheel_bodies"
-    family = Family.PINS
-
-    def __init__(self, element):
-        self.element = element
-        self.closure = element.evaluator
-
-    @classmethod
-    def of_closure(cls, element):
-        return cls(element)
-
-    def _pose(self, q):
-        ql = self.element.local(q)
-        return self.element.pose_velocity(ql, 0 * ql)
-
-    def energy(self, q, dq, step=1e-9):
-        """2 x the wheels' strain energy along dq, du by central differences (as SeriesBeam.energy)."""
-        h = step / max(float(np.abs(dq).max()), 1e-300)
-        self.closure.update(self._pose(q)[0])
-        du = (self.closure.deflections(self._pose(q + h * dq)[0])
-              - self.closure.deflections(self._pose(q - h * dq)[0])) / (2 * h)
-        self.closure.update(self._pose(q)[0])
-        return self.closure.energy(du)
-
-    def stiffened(self, q, factor):
-        _, _, red, _ = self.closure.solve(*self._pose(q))
-        return self.element.coordinate_indices, self.closure.condense(red, beam_factor=factor)[1]
 
 
 def crank_station_compliance(design):
@@ -706,50 +686,6 @@ def ported_ring(mbs, design, layout, meshes):
     return housing, ports, [dataclasses.replace(m, pin_bodies=pin_bodies) for m in meshes]
 
 
-def ported_wheels(design, graph, layout, meshes, opts):
-    """The elastic wheels (``wheels.body = "ported"``, :mod:`rvtool.assembly.wheel_body`): the
-    wheel--pin meshes and the needle bearings stacked over station bodies (after the real bodies:
-    wheel j's z_b pin stations, then its n_c bore stations) and closed by each wheel's port
-    compliance (:class:`~rvtool.contact.wheel_closure.WheelBodyClosure`). Returns the closure, or
-    None for rigid wheels. Combinations not implemented are refused by key."""
-    import dataclasses
-    d = design
-    if d.wheels.body != "ported":
-        return None
-    others = {"housing.model": (d.housing.model, "rigid"), "pins.groove": (d.pins.groove, "rigid"),
-              "cranks.shaft.model": (d.cranks.shaft.model, "rigid"),
-              "cranks.shaft.torsion": (getattr(d.cranks.shaft, "torsion", "rigid"), "rigid"),
-              "bodies.wheel_coordinates": (d.bodies.wheel_coordinates, "planar"),
-              "bodies.crank_coordinates": (d.bodies.crank_coordinates, "planar"),
-              "carrier.body": (d.carrier.body, "rigid"),
-              "pin_contact.friction_model (with mu > 0)": (
-                  d.pin_contact.friction_model if d.pin_contact.mu > 0 else "regularized", "regularized")}
-    for key, (value, valid) in others.items():
-        if value != valid:
-            raise RvtoolInputError(f"wheels.body = 'ported' with {key} = {value!r} is not implemented (one closure "
-                                   f"carries the wheels' stations); valid: {key} = {valid!r} or wheels.body = 'rigid'")
-    from ...contact.stacked import StackedContactSet
-    from ...contact.wheel_closure import WheelBodyClosure
-    from ...geometry.cycloid import pin_centres
-    from ..wheel_body import wheel_model
-    nb, zb, nc, nw = layout.n_bodies, d.pins.n_pins, layout.n_cranks, d.n_wheels
-    station = np.arange(nw * (zb + nc)).reshape(nw, zb + nc)
-    n_ext = nb + station.size
-    meshes = [dataclasses.replace(m, pin_bodies=tuple(int(nb + station[j, k]) for k in range(zb)))
-              for j, m in enumerate(meshes)]
-    pins = CycloidPinSet(meshes, n_ext, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
-                         search=d.wheels.search, **opts)
-    mounts = []
-    for m in needle_mountings(d, graph, layout):
-        j, k = m.outer - layout.wheel0, m.inner - layout.crank0
-        mounts.append(dataclasses.replace(m, outer=int(nb + station[j, zb + k])))
-    needles = BearingSet(mounts, n_ext, name="eccentric_bearings", **opts)
-    stacked = StackedContactSet((pins, needles), name="wheel_bodies")
-    centres = pin_centres(d.profile, None if d.pins.centre_errors is None else np.asarray(d.pins.centre_errors, float))
-    return WheelBodyClosure(stacked, n_bodies=nb, wheels=[layout.wheel(j) for j in range(nw)],
-                            bodies=[wheel_model(d, j) for j in range(nw)], pin_centres=centres, station=station)
-
-
 def spatial_bodies(mbs, design, layout, wheel_mass, housing, regularization):
     """The retained axial and tilt coordinates of the spatial bodies (issue 32): the carrier
     (``bodies.carrier_coordinates``), the wheels (``bodies.wheel_coordinates``) and the cranks
@@ -919,7 +855,6 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         raise RvtoolInputError(f"pins.support.model = {d.pins.support.model.value!r}: elastic ring pins are not "
                                "implemented for the RV topology; valid: 'rigid'")
     profiles, meshes = pin_meshes(d, offset=L.wheel0 - 1)
-    wheel_path = ported_wheels(d, graph, L, meshes, opts)
     housing, ports, meshes = ported_ring(mbs, d, L, meshes)
     flex = fcr = floating = None
     if d.wheels.dynamics.flexible or d.cranks.dynamics.flexible:
@@ -930,11 +865,15 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         flex, fcr = floating.wheels, floating.cranks
         if flex is not None:
             meshes = flex.pin_meshes(meshes)
+    C_crank = crank_station_compliance(d)
+    C_torsion = crank_torsion_compliance(d)
+    # the elastic wheels with the other members nested (rvtool.assembly.rv.wheel_path), or None
+    wheels = wheel_path(d, graph, L, meshes, opts, ports=ports, crank=C_crank, torsion=C_torsion)
 
     def pin_set_of(meshes, n_bodies):
         return CycloidPinSet(meshes, n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, name="pins",
                              search=d.wheels.search, **opts)
-    pin_set = groove_pins(d, L, pin_set_of, meshes, ports) if wheel_path is None else wheel_path
+    pin_set = groove_pins(d, L, pin_set_of, meshes, ports) if wheels is None else wheels.evaluator
     if pin_set is None:
         pin_set = pin_set_of(meshes, L.n_bodies + (0 if ports is None else ports.n_virtual) if flex is None
                              else flex.n_pin_bodies)
@@ -955,8 +894,6 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         cranks = TaperedBearingSet(crank_mountings(d, graph, L), L.n_bodies, name="crank_bearings", **opts)
         if fcr is not None:
             cranks = fcr.crank_bearings(crank_mountings(d, graph, L), opts)
-    C_crank = crank_station_compliance(d)
-    C_torsion = crank_torsion_compliance(d)
     cranks = ported_carrier(d, graph, L, cranks, opts)     # the rigid carrier's set unless carrier.body = "ported"
     if C_crank is None:
         gears = InvoluteContactSet(gear_meshes(d, graph, L), L.n_bodies, name="gears", **opts)
@@ -1003,13 +940,14 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         if floating is not None and name in floating.families:
             return floating.ports(name)       # flexible wheels / cranks (refused with a ported housing or tilts)
         return on_stack(tilt) if tilt is not None and f.n_bodies > L.n_bodies else None
-    if wheel_path is None:
+    if wheels is None:
         elements = {"pins": element(pin_set, ports=on_stack(ports) if housing is not None else
                                          on_tilts(pin_set, "pins"))}
     else:
-        # the elastic wheels: pins and needles in one closure; the gears alone
-        elements = {"wheel_bodies": element(wheel_path)}
-        crank_path = (("gears", gears),)
+        # the elastic wheels: pins and needles (and the gears on bending cranks) in one nested closure
+        elements = {"wheel_bodies": element(wheels.evaluator, ports=on_stack(ports) if housing is not None else None)}
+        crank_path = () if wheels.gears_inside else (("gears", InvoluteContactSet(gear_meshes(d, graph, L),
+                                                                                   L.n_bodies, name="gears", **opts)),)
     elements.update((name, element(s, ports=on_tilts(s, name))) for name, s in (*crank_path, ("crank_bearings", cranks)))
     elements["main_bearings"] = element(main, ports=on_tilts(main))
     if b.spatial_carrier and d.carrier.ported:
@@ -1026,8 +964,8 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
         for name, bset in (("crank_bearing_friction", cranks), ("main_bearing_friction", main)):
             elements[name] = element(rolling_friction_evaluator(bset, d.bearing_friction, name=name))
     mbs.Assemble()
-    if wheel_path is not None:
-        rows = elements["wheel_bodies"].evaluator.inner.rows
+    if wheels is not None:
+        rows = leaf_rows(elements["wheel_bodies"].evaluator)
         families = {fam: (name, np.arange(len(elements[name].ids))) if name in elements else
                     ("wheel_bodies", rows[name]) for fam, name in FAMILY_ELEMENTS.items()}
     elif C_crank is None:
@@ -1050,4 +988,5 @@ def build(design: RVDesign, *, backend="warp", precision="float64", device="cpu"
                          floating.coordinates},
                    graph=graph, layout=L, profiles=profiles, crank_compliance=C_crank, torsion_compliance=C_torsion,
                    housing=housing, contact_host=element.host, carrier_tilt=tilt if b.spatial_carrier else None,
-                   body_tilts=tilt, flexible=flex, flexible_cranks=fcr)
+                   body_tilts=tilt, flexible=flex, flexible_cranks=fcr,
+                   series_paths={} if wheels is None else wheels.paths)

@@ -1,0 +1,207 @@
+"""The "all members on" rigidity row of ``rvtool validate`` (issue 30): a design's torsional rigidity by the
+catalogue's b/a with every member of the torque path switched on, beside the row of the design as its file has it.
+
+The validation designs keep the members added after their inputs were frozen (issue 28, Deliver 4) off. Each such
+member and the new inputs it needs are listed in ``rvtool/designs/<design>_members.toml``:
+
+* ``[members]``: design-file tables merged into the design (the switches: the wheel bodies, the ring pins' grooves,
+  the ported carrier, crank torsion, and the housing and crank bending where the file keeps them off);
+* ``[members.derived]``: geometry that follows from the design: the wheels' pillar holes, one per carrier pillar,
+  concentric with it (``carrier.structure.pillar_circle_radius``, at ``pillar_hole_angle_deg``), of radius
+  pillar radius + eccentricity + ``members.pillar_running_gap`` (the wheel orbits the pillar without touching it);
+* ``[[assumed]]``: the new inputs with their ranges and sources (the :mod:`rvtool.designs.catalogue` schema; keys
+  ``members.*`` are inputs of the derivation above, every other key a dotted design-file key). The row takes
+  every input at the MIDDLE of its range; the ranges were committed before any all-members-on figure was
+  computed, and the file records that commit as ``assumptions_commit`` (:func:`members_commit`).
+
+**Rigidity.** b/a on the catalogue's torque points T_1 < T_2 (:func:`rvtool.analysis.validate.rigidity_points`)
+on both loading branches, as :func:`rvtool.protocols.catalogue.torsional_rigidity` reads the loop: the loading
+path (:class:`~rvtool.solver.torque_path.ContinuationPath`) is driven to +T_1, +T_2, -T_1, -T_2 only. For a
+frictionless model (every validation design: ``pin_contact.mu = 0`` and no bearing friction; checked, else
+refused) the angle at a torque of one sign is the static equilibrium's, the same on the loop's loading branch
+(the points lie clear of the free play), so this is the loop's b/a at four solves instead of a loop
+(tests/test_validate_members.py checks it against the loop on rv40e).
+
+**Band.** A Latin hypercube (:mod:`scipy.stats.qmc`) over the design's own assumed ranges (``<design>_assumed.toml``
+or the ranges file ``validate`` was given) together with the members' ranges: ``SAMPLES`` (64) samples in the
+full run, ``QUICK_SAMPLES`` under quick; failed samples are counted and reported, never dropped silently.
+"""
+import copy
+import os
+import time
+
+import numpy as np
+
+from ..errors import RvtoolInputError
+from ..units import RAD_PER_ARCMIN
+
+SAMPLES = 64
+"""Latin-hypercube samples of the full run (issue 28: >= 64)."""
+
+QUICK_SAMPLES = 2
+"""Samples under quick (the machinery, not the band's convergence: a sample builds four FE structures)."""
+
+QUICK_NUMERICS = {"wheels": {"structure": {"mesh_size": 0.006, "samples_per_tooth": 4}},
+                  "housing": {"structure": {"mesh_size": 0.008}}, "carrier": {"structure": {"mesh_size": 0.008}}}
+"""--quick: coarser FE meshes (numerics only; compliance_budget --quick uses the same): the wheels at 6 mm with 4
+profile ports per tooth, housing and carrier at 8 mm."""
+
+DERIVED_KEYS = ("members.pillar_running_gap",)
+
+
+def members_name(design):
+    """Name of the shipped members file of ``design`` (``<design>_members``), or None."""
+    from .. import designs
+    name = f"{design}_members"
+    return name if name in designs.names() else None
+
+
+def load_members(name):
+    """(switch tables, derived settings, :class:`~rvtool.designs.catalogue.AssumedRanges`, recorded commit or
+    None) of a members file (a path or a shipped name)."""
+    from ..designs.catalogue import load_assumed, read_data_file
+    table, _ = read_data_file(name, "members")
+    members = table.get("members")
+    if not isinstance(members, dict) or not members:
+        raise RvtoolInputError(f"members file {name!r}: [members] must hold the design-file tables that switch the "
+                               "members on")
+    switches = {k: v for k, v in members.items() if k != "derived"}
+    derived = members.get("derived", {})
+    return switches, derived, load_assumed(name), table.get("assumptions_commit")
+
+
+def _merge(base, over):
+    out = copy.deepcopy(base)
+    for k, v in over.items():
+        out[k] = _merge(out.get(k, {}), v) if isinstance(v, dict) and isinstance(out.get(k), dict) else copy.deepcopy(v)
+    return out
+
+
+def members_table(table, switches, derived, values, numerics=None):
+    """The design table with the members on: ``switches`` merged, ``values`` {key: value} set (the members'
+    inputs; ``members.*`` keys feed the derivation), the pillar holes derived (module docstring), ``numerics``
+    (mesh sizes) merged last."""
+    t = _merge(table, switches)
+    gap = None
+    for k, v in values.items():
+        if k == "members.pillar_running_gap":
+            gap = float(v)
+        elif k.startswith("members."):
+            raise RvtoolInputError(f"assumed key {k!r}: unknown members input (valid: {list(DERIVED_KEYS)} or a "
+                                   "design-file key)")
+        else:
+            node = {}
+            for part in reversed(k.split(".")):
+                node = {part: node} if node != {} else {part: v}
+            t = _merge(t, node)
+    if derived.get("pillar_hole_count"):
+        if gap is None:
+            raise RvtoolInputError("members.derived.pillar_hole_count needs the assumed input "
+                                   "members.pillar_running_gap")
+        cs = t["carrier"]["structure"]
+        holes = {"count": int(derived["pillar_hole_count"]), "circle_radius": cs["pillar_circle_radius"],
+                 "radius": cs["pillar_radius"] + t["wheels"]["eccentricity"] + gap,
+                 "angle_deg": float(derived.get("pillar_hole_angle_deg", 0.0))}
+        t = _merge(t, {"wheels": {"structure": {"pillar_holes": holes}}})
+    return _merge(t, numerics or {})
+
+
+def check_frictionless(design):
+    """Refuse a design whose loading branches depend on history (friction): the four-solve b/a needs none."""
+    mu = design.pin_contact.mu
+    bf = getattr(getattr(design, "bearing_friction", None), "model", "none")
+    if mu > 0 or bf != "none":
+        raise RvtoolInputError(f"the all-members-on row reads b/a at four static solves, valid for a frictionless "
+                               f"model only; got pin_contact.mu = {mu}, bearing_friction.model = {bf!r} (valid: 0 "
+                               "and 'none')")
+
+
+def rigidity_ba(design, catalogue):
+    """{"value": b/a [N m/arcmin] (mean of the loading branches), "per_branch", "angles_arcmin", "torques_Nm"}
+    on the catalogue's points (module docstring)."""
+    from ..assembly import build
+    from ..protocols import catalogue as C
+    from .validate import rigidity_points
+    check_frictionless(design)
+    pts, _ = rigidity_points(catalogue)
+    T_R = catalogue.test.rated_torque
+    t1, t2 = (p * T_R for p in pts)
+    torques = np.array([t1, t2, -t1, -t2])
+    path = C.ContinuationPath(build(design))
+    angles = np.array([path.go_to(float(t)) for t in torques])
+    labels = ["pos_loading", "pos_loading", "neg_loading", "neg_loading"]
+    r = C.torsional_rigidity(torques, angles, labels, torque_points=(t1, t2))
+    return {"value": r.value * RAD_PER_ARCMIN, "per_branch": {k: v * RAD_PER_ARCMIN for k, v in r.per_branch.items()},
+            "torques_Nm": torques.tolist(), "angles_arcmin": (angles / RAD_PER_ARCMIN).tolist()}
+
+
+def _sample(args):
+    table, catalogue = args
+    from ..assembly.topologies import design_from_table
+    try:
+        return rigidity_ba(design_from_table(table), catalogue), None
+    except Exception as exc:       # a failed variant is counted and reported
+        return None, f"{type(exc).__name__}: {exc}"
+
+
+def members_commit(name):
+    """The commit recorded in the members file (``assumptions_commit``) and the last commit touching it."""
+    from .. import designs
+    from .validate import assumptions_commit
+    _, _, _, recorded = load_members(name)
+    last, date = assumptions_commit([designs.path(name)])
+    return recorded, last, date
+
+
+def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False, samples=None, seed=0, workers=1,
+                     log=print):
+    """The all-members-on row (module docstring): a dict with ``rows`` (validate's table rows), ``central``
+    (:func:`rigidity_ba` at the middles), ``band``, the samples and failures, the members file and its commit;
+    None where the design has no members file."""
+    from scipy.stats import qmc
+    from ..designs.catalogue import set_key
+    from .validate import catalogue_rows, map_samples, rigidity_points
+    name = members_name(design)
+    if name is None:
+        return None
+    t0 = time.perf_counter()
+    switches, derived, assumed, _ = load_members(name)
+    recorded, last, date = members_commit(name)
+    numerics = QUICK_NUMERICS if quick else None
+    mid = {a.key: a.middle for a in assumed.inputs}
+    base = list(base_assumed.inputs) if base_assumed is not None else []
+    inputs = base + list(assumed.inputs)
+    n = samples if samples is not None else (QUICK_SAMPLES if quick else SAMPLES)
+    U = qmc.LatinHypercube(d=len(inputs), seed=seed).random(n) if n > 0 else np.zeros((0, len(inputs)))
+
+    def table_of(u):
+        t = table
+        for a, uj in zip(inputs[:len(base)], u[:len(base)]):
+            t = set_key(t, a.key, a.at(uj))
+        vals = {a.key: a.at(uj) for a, uj in zip(inputs[len(base):], u[len(base):])}
+        return members_table(t, switches, derived, vals, numerics)
+    # the central design (every input at its middle) first, then the samples: one map (``workers`` processes)
+    log(f"validate {design}: all members on ({name}), central b/a and {n} Latin-hypercube samples over "
+        f"{len(inputs)} ranges ({workers} worker(s))")
+    res = map_samples(_sample, [(members_table(table, switches, derived, mid, numerics), catalogue)]
+                      + [(table_of(u), catalogue) for u in U], workers, log)
+    central, err = res[0]
+    if central is None:
+        raise RvtoolInputError(f"validate {design}: the all-members-on central design failed: {err}")
+    values = [None if r is None else r["value"] for r, _ in res[1:]]
+    failures = [e for _, e in res[1:] if e]
+    ok = [v for v in values if v is not None]
+    band = [float(min(ok)), float(max(ok))] if ok else None
+    pts, pts_source = rigidity_points(catalogue)
+    note = (f"ALL MEMBERS ON ({name}.toml: {', '.join(sorted(switches))} switched on, new inputs at the middles of "
+            f"their ranges, fixed at {recorded or last}); b/a on the loading branches at {pts} T_R: {pts_source}; "
+            f"band: {n} Latin-hypercube samples over {len(inputs)} ranges ({len(base)} of the design, "
+            f"{len(assumed.inputs)} of the members)" + ("; --quick meshes" if quick else ""))
+    rows = catalogue_rows("torsional_rigidity", central["value"], "N m/arcmin", catalogue, band, note)
+    for r in rows:
+        r["figure"] = "torsional_rigidity_all_members_on"
+    return {"rows": rows, "central": central, "band": band, "samples": n, "sample_values": values,
+            "failures": failures, "keys": [a.key for a in inputs], "U": U.tolist(),
+            "members_file": f"{name}.toml", "switches": switches, "derived": derived,
+            "inputs_at_middle": mid, "assumptions_commit": recorded, "last_commit_touching_members": last,
+            "last_commit_date": date, "quick_numerics": numerics, "seed": seed, "wall_s": time.perf_counter() - t0}

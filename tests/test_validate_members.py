@@ -1,0 +1,100 @@
+"""The all-members-on rigidity row of `rvtool validate` (issue 30; rvtool.analysis.validate_members): the members
+files (switches, ranges at their middles, fixed at a recorded commit), the derived pillar holes, and the four-solve
+b/a against the loop's b/a of the catalogue protocol."""
+import re
+import subprocess
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rvtool
+from rvtool import designs
+from rvtool.analysis import validate_members as VM
+from rvtool.assembly.topologies import design_from_table, read_table
+from rvtool.errors import RvtoolInputError
+
+MEMBERS = sorted(n[: -len("_members")] for n in designs.names() if n.endswith("_members"))
+
+
+def _git(*args):
+    try:
+        out = subprocess.run(["git", *args], cwd=Path(designs.path("rv80e")).parent, capture_output=True, text=True,
+                             timeout=30)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout if out.returncode == 0 else None
+
+
+def test_validation_designs_have_members_files():
+    assert {"rv40e", "rv80e"} <= set(MEMBERS)
+
+
+@pytest.mark.parametrize("name", MEMBERS)
+def test_members_table_at_the_middles_builds_a_valid_design(name):
+    """Every switch on, every input at the middle of its range, the pillar holes around the carrier's pillars
+    (radius = pillar radius + eccentricity + running gap): a design the loader accepts."""
+    switches, derived, assumed, _ = VM.load_members(f"{name}_members")
+    mid = {a.key: a.middle for a in assumed.inputs}
+    t = VM.members_table(read_table(designs.path(name)), switches, derived, mid)
+    d = design_from_table(t)
+    assert d.wheels.body == "ported" and d.pins.groove == "conformal" and d.carrier.body == "ported"
+    assert d.cranks.shaft.elastic and d.cranks.shaft.torsion == "elastic" and d.housing.model == "ports"
+    assert d.pins.groove_clearance == pytest.approx(mid["pins.groove_clearance"], rel=0, abs=0)
+    hs = d.wheels.structure.pillar_holes
+    cs = t["carrier"]["structure"]
+    assert hs.radius == pytest.approx(cs["pillar_radius"] + d.wheels.eccentricity + mid["members.pillar_running_gap"],
+                                      rel=1e-12)
+    assert hs.circle_radius == cs["pillar_circle_radius"] and hs.count == 3
+    for a in assumed.inputs:
+        assert a.source.strip() and ("not a citation" in a.source or "[" in a.source), a.key
+
+
+@pytest.mark.parametrize("name", MEMBERS)
+def test_members_commit_holds_todays_inputs(name):
+    """Issue 28 Deliver 4: the members file records the commit that fixed its ranges before the first
+    all-members-on comparison; that commit's switches and ranges equal today's."""
+    now = tomllib.loads(Path(designs.path(f"{name}_members")).read_text())
+    sha = now.get("assumptions_commit")
+    if sha is None:
+        pytest.skip("assumptions_commit not yet recorded")
+    assert re.fullmatch(r"[0-9a-f]{7,40}", sha)
+    root = _git("rev-parse", "--show-toplevel")
+    if root is None or _git("cat-file", "-e", f"{sha}^{{commit}}") is None:
+        pytest.skip("no git history here (installed copy)")
+    rel = Path(designs.path(f"{name}_members")).resolve().relative_to(Path(root.strip()).resolve())
+    then = tomllib.loads(_git("show", f"{sha}:{rel}"))
+    assert then["members"] == now["members"]
+    assert then["assumed"] == now["assumed"]
+
+
+def test_unknown_members_key_and_friction_refused():
+    switches, derived, assumed, _ = VM.load_members("rv40e_members")
+    t = read_table(designs.path("rv40e"))
+    with pytest.raises(RvtoolInputError, match=r"members\.bogus"):
+        VM.members_table(t, switches, derived, {"members.bogus": 1.0})
+    d = rvtool.load_design(designs.path("rv40e")).replace(pin_contact={"mu": 0.05})
+    with pytest.raises(RvtoolInputError, match=r"pin_contact\.mu"):
+        VM.check_frictionless(d)
+
+
+def test_four_solve_rigidity_equals_the_loops(tmp_path):
+    """On rv40e as its file has it (frictionless), b/a from +-T_1, +-T_2 alone equals the catalogue loop's b/a
+    (rvtool.analysis.validate's central loop at 50 % steps) within 1e-6 relative: the loading branches of a
+    frictionless model are its static curve (the Newton tolerance moves an angle by ~1e-7 arcmin of ~0.5)."""
+    from rvtool.analysis.validate import QUICK_STEP, rigidity_points
+    from rvtool.designs.catalogue import load_catalogue
+    from rvtool.protocols import catalogue as C
+    from rvtool.units import RAD_PER_ARCMIN
+    cat = load_catalogue(designs.catalogue_of("rv40e"))
+    d = rvtool.load_design(designs.path("rv40e"))
+    pts, _ = rigidity_points(cat)
+    seq = C.catalogue_sequence(cat.test.rated_torque, rigidity_points=pts,
+                               lost_motion_fraction=cat.test.lost_motion_torque_fraction, step=QUICK_STEP)
+    r = C.catalogue_loop(C.ContinuationPath(rvtool.build(d)), seq, rigidity_points=pts,
+                         lost_motion_fraction=cat.test.lost_motion_torque_fraction)
+    loop = r["metrics"].rigidity.value * RAD_PER_ARCMIN
+    four = VM.rigidity_ba(d, cat)
+    assert four["value"] == pytest.approx(loop, rel=1e-6)
+    assert np.all(np.isfinite(four["angles_arcmin"]))
