@@ -43,6 +43,7 @@ RV crank support (chosen, plausible for a 30204-class bearing)::
                                 axial_preload=300.0)
 """
 import math
+import sys
 from dataclasses import dataclass, fields
 from functools import cached_property, lru_cache
 
@@ -127,7 +128,8 @@ class TaperedRollerBearing:
         check_positive("roller_diameter", self.roller_diameter)
         check_range("pitch_diameter", self.pitch_diameter, self.roller_diameter, math.inf, low_open=True)
         # n D_m < pi d_m: the rollers fit around the pitch circle without touching
-        check_integer("n_rollers", self.n_rollers, 3, math.ceil(math.pi * self.pitch_diameter / self.roller_diameter) - 1)
+        fit = math.pi * self.pitch_diameter / self.roller_diameter     # inf for a subnormal roller_diameter
+        check_integer("n_rollers", self.n_rollers, 3, math.ceil(fit) - 1 if math.isfinite(fit) else sys.maxsize)
         check_positive("roller_length", self.roller_length)
         # checked in degrees under the design file's keys (the spec holds radians)
         check_finite("cup_angle", self.cup_angle)
