@@ -8,9 +8,9 @@ Coarse meshes (8 mm wheels with 4 profile ports per tooth, 8 mm housing): the ma
 import numpy as np
 import pytest
 
-# the nested elastic wheels' budgets build several FE-reduced models of rv40e (about 12 min of one core for the
-# whole file on the shared 2-core machine, measured with the compliance budget case): longer than setup.cfg's
-# 600 s per test, which is for hung tests, not for these
+# the nested elastic wheels' budgets build several FE-reduced models of rv40e (the compliance budget case with the
+# same members took 12.3 min for two designs on the shared 2-core machine): longer than setup.cfg's 600 s per
+# test, which guards against hung tests, not against these
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(2400)]
 
 import rvtool
