@@ -236,17 +236,40 @@ def run_device(name, quick, V, device, workers):
 
 def build_cost(designs_v, kw, models, n=8):
     """What one variant's build costs, after the timings: the CPU time of building ``n`` of them
-    in this process (``build_cpu_ms_per_variant``: the builds' own work; ``build_s`` above it is the
-    pool's transfer and scheduling) and the pickled size of a snapshot the pool sends back
-    (``snapshot_kb``)."""
+    in this process as the pool does (shared profile tables; ``build_cpu_ms_per_variant``: the
+    builds' own work; ``build_s`` above it is the pool's transfer and scheduling) and with a table
+    of its own per variant (``build_cpu_ms_per_variant_own_tables``, the build before shared
+    tables), the pickled size of a snapshot the pool sends back (``snapshot_kb``), and the profile
+    tables the device holds (``profile_tables``: distinct tables over all variants, ``profile_table_mb``
+    their float64 size)."""
     import pickle
     from rvtool.solver.model_snapshot import build_snapshot
-    n = min(n, len(designs_v))
-    t = time.process_time()
-    for d in designs_v[:n]:
-        build_snapshot(d, kw)
-    cpu = (time.process_time() - t) / n
-    return {"build_cpu_ms_per_variant": 1e3 * cpu, "snapshot_kb": len(pickle.dumps(models[0])) / 1024.0}
+    # the pickled size first: a shared table goes by its key once this process has used it twice
+    out = {"snapshot_kb": len(pickle.dumps(models[-1])) / 1024.0, **table_stats(models)}
+    n = max(1, min(n, len(designs_v) // 2))
+    # two disjoint sets of the last variants, none built in this process before (no profile sampled twice)
+    for key, shared, ds in (("build_cpu_ms_per_variant", True, designs_v[len(designs_v) - n:]),
+                            ("build_cpu_ms_per_variant_own_tables", False, designs_v[-2 * n:len(designs_v) - n])):
+        t = time.process_time()
+        for d in ds:
+            build_snapshot(d, kw, shared_tables=shared)
+        out[key] = 1e3 * (time.process_time() - t) / len(ds)
+    return out
+
+
+def table_stats(models):
+    """{profile_tables, profile_table_mb}: the distinct cycloid profile tables of ``models`` (what the
+    device copies hold: one per shared key, else one per (profile, pin radius)) and their size."""
+    from rvtool.contact.cycloid_set import CycloidPinSet, ProfileTable
+    seen = {}
+    for m in models:
+        for e in m.contact_elements():
+            if isinstance(e.evaluator, CycloidPinSet):
+                for key, (tab, _, _) in e.evaluator.profile_tables().items():
+                    key = tab.key if isinstance(tab, ProfileTable) else key
+                    if key not in seen:
+                        seen[key] = sum(np.asarray(a).size for a in tab) * 8
+    return {"profile_tables": len(seen), "profile_table_mb": sum(seen.values()) / 1e6}
 
 
 def bench(name, quick, V, workers, device):

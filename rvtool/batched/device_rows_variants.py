@@ -138,17 +138,19 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
 def _snapshot_of(job):
     """Pool task: the :class:`ModelSnapshot` of ``build(design, **build_kw)`` (picklable; built
     without device objects, :func:`~rvtool.solver.model_snapshot.build_snapshot`)."""
-    design, build_kw = job
-    return build_snapshot(design, build_kw)
+    design, build_kw, shared = job
+    return build_snapshot(design, build_kw, shared_tables=shared)
 
 
-def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=None):
+def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=None, shared_tables=True):
     """The variant models of ``designs`` for :func:`device_rows_variants`, built side by side in
     worker processes and returned as :class:`~rvtool.solver.model_snapshot.ModelSnapshot` (their
     rows, kinematics and constraints; a model itself is built here only where Exudyn takes over a
     point or copy). workers: processes (None: all cores; 1: build here, the models themselves);
     executor: a ``concurrent.futures`` executor to use instead (e.g. a warmed pool); build_kw: the
-    build options of every variant."""
+    build options of every variant; shared_tables: the snapshots' cycloid pin sets share one profile
+    table per distinct wheel profile (:func:`~rvtool.solver.model_snapshot.build_snapshot`; False: one
+    per variant as the full build; workers = 1 builds the full models either way)."""
     import concurrent.futures as cf
     import multiprocessing
     import os
@@ -157,7 +159,7 @@ def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=Non
     build_kw = dict(build_kw or {})
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1):
         raise RvtoolInputError(f"workers = {workers!r} is outside the valid range [1, inf) (integer; None: all cores)")
-    jobs = [(d, build_kw) for d in designs]
+    jobs = [(d, build_kw, bool(shared_tables)) for d in designs]
     if executor is not None:
         return list(executor.map(_snapshot_of, jobs, chunksize=max(1, len(jobs) // 64)))
     n = workers or os.cpu_count() or 1

@@ -253,7 +253,8 @@ def cycloid_batch(design, tolerances, protocol, seed, indices, device, host_work
 def variant_snapshot(job):
     """Helper task: (index, :class:`~rvtool.solver.model_snapshot.ModelSnapshot` of variant k or
     None, error or None) for job (design, tolerances, seed, k, build_kw): the variant sampled
-    (cycloid: ``sample_variant(...).apply(design)``; RV: ``sample_rv_design``) and built here."""
+    (cycloid: ``sample_variant(...).apply(design)``; RV: ``sample_rv_design``) and built here, its
+    cycloid pins on shared profile tables (``build_snapshot(shared_tables=True)``)."""
     from ..solver.model_snapshot import build_snapshot
     design, tolerances, seed, k, build_kw = job
     try:
@@ -263,7 +264,7 @@ def variant_snapshot(job):
         else:
             from .rv_tolerances import sample_rv_design
             d = sample_rv_design(tolerances, design, k, seed)[0]
-        return int(k), build_snapshot(d, build_kw), None
+        return int(k), build_snapshot(d, build_kw, shared_tables=True), None
     except Exception as exc:  # an impossible sampled variant is a result of the study
         return int(k), None, f"{type(exc).__name__}: {exc}"
 
