@@ -119,3 +119,26 @@ def test_a_pin_radius_beyond_the_slack_gets_its_own_table_and_the_shared_window_
     with pytest.raises(RvtoolInputError, match="slack"):
         with shared_profile_tables(0.5):
             pass
+
+
+def test_copied_circle_pairs_equal_the_moved_contacts_packed(rd40):
+    """The circle-pair copier (RD-40's lumped bearings) moves the built rows' body columns instead of
+    packing the moved contacts again: the same rows, bodies and ids as packing the renamed, shifted
+    contacts."""
+    import dataclasses
+    from rvtool.contact.circle_set import GROUND, CircleContactSet
+    from rvtool.contact.evaluator import ContactSetEvaluator
+    from rvtool.solver.replica import COPIERS
+    d, ds = rd40
+    sets = [next(e.evaluator for e in build_snapshot(x, RD_KW).contact_elements()
+                 if isinstance(e.evaluator, ContactSetEvaluator)) for x in ds]
+    nb = sets[0].n_bodies
+    got = COPIERS[ContactSetEvaluator](sets, nb, "float64", "cpu")
+    sh = lambda b, c: b if b == GROUND else b + c * nb
+    ref = CircleContactSet(name=sets[0].name, n_bodies=2 * nb, contacts=tuple(
+        dataclasses.replace(ct, name=f"copy{c}_{ct.name}", body_a=sh(ct.body_a, c), body_b=sh(ct.body_b, c))
+        for c, s in enumerate(sets) for ct in s.set.contacts))
+    fp, ip = ref.packed()
+    np.testing.assert_array_equal(got.fparams, fp)
+    np.testing.assert_array_equal(got.iparams, ip)
+    assert got.iparams.dtype == ip.dtype and got.ids == ref.ids and got.set.contacts == ref.contacts
