@@ -142,3 +142,21 @@ def test_copied_circle_pairs_equal_the_moved_contacts_packed(rd40):
     np.testing.assert_array_equal(got.fparams, fp)
     np.testing.assert_array_equal(got.iparams, ip)
     assert got.iparams.dtype == ip.dtype and got.ids == ref.ids and got.set.contacts == ref.contacts
+
+
+def test_the_wheels_of_a_variant_share_a_window_that_covers_each_wheels_own(rd40):
+    """RD-40's two wheels differ in their rotation only: inside the context the second wheel takes the
+    first one's search window (no second window search), which is at least the window its own turned
+    table gives with the widened band (so its nearest samples are found as with its own window); the
+    tables themselves stay each wheel's own (bit for bit)."""
+    from rvtool.contact.cycloid_set import PIN_RADIUS_SLACK, auto_window, pin_curve_table
+    d, ds = rd40
+    for x in ds:
+        s = _pins(build_snapshot(x, RD_KW, shared_tables=True))
+        assert s.table_windows[0] == s.table_windows[1]
+        for t, tab in enumerate(s.tables):
+            prof = s.meshes[t].profile
+            for a, b in zip(tab, pin_curve_table(prof.table(s.samples_per_tooth * prof.n_teeth), prof.pin_radius)):
+                np.testing.assert_array_equal(a, b)
+            band = s.search_band + PIN_RADIUS_SLACK * (1.0 + s.search_band)
+            assert s.table_windows[t] >= auto_window(prof, tab, prof.pin_radius, band=band)

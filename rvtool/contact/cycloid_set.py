@@ -10,6 +10,7 @@ evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElemen
 """
 import contextlib
 import contextvars
+import dataclasses
 import functools
 from dataclasses import dataclass, field
 
@@ -227,16 +228,36 @@ def shared_profile_tables(slack=PIN_RADIUS_SLACK):
         _SHARED_SLACK.reset(token)
 
 
+_TURN_WINDOWS = {}
+"""Search windows of the shared tables by profile without its rotation (:func:`_shared_entry`)."""
+
+
 @functools.lru_cache(maxsize=256)
 def _shared_entry(profile, n_samples, search, band, slack):
-    """(table, analytic parameters or None, window) of a :class:`ProfileTable` key, once per process."""
+    """(table, analytic parameters or None, window) of a :class:`ProfileTable` key, once per process.
+    The table is the profile's own (:meth:`CycloidProfile.table`, bit for bit); profiles that differ in
+    their rotation only (the wheels of one reducer: their assembly phases) take the search window of the
+    first of them: the window counts samples between a pin's polar angle and its foot, which turning
+    every sample keeps, so an RD-40 variant (its profile drawn per variant) searches its window once,
+    not per wheel (~1-2 ms a wheel)."""
     rp = profile.pin_radius
     tab = pin_curve_table(sampled_profile(profile, n_samples), rp)
+    key = (tuple((f.name, getattr(profile, f.name)) for f in dataclasses.fields(profile) if f.name != "rotation_mod"),
+           n_samples, search, band, slack)
+    try:
+        window = _TURN_WINDOWS.get(key)
+    except TypeError:                     # an unhashable member (a list table): its own window
+        key = window = None
+    if window is None:
+        window = auto_window(profile, tab, rp, band=band + slack * (1.0 + band))
+        if key is not None:
+            if len(_TURN_WINDOWS) > 1024:
+                _TURN_WINDOWS.clear()
+            _TURN_WINDOWS[key] = window
     for a in tab:
         if isinstance(a, np.ndarray) and a.flags.owndata:
             a.flags.writeable = False
-    ana = profile.analytic_parameters() if search == "analytic" else None
-    return tab, ana, auto_window(profile, tab, rp, band=band + slack * (1.0 + band))
+    return tab, profile.analytic_parameters() if search == "analytic" else None, window
 
 
 class ProfileTable:
