@@ -114,9 +114,10 @@ class CycloidProfile:
         phi = np.asarray(phi, float)
         return self._rotate(self._unrotated_points(phi, _trig(phi, self.n_pins)))
 
-    def _unrotated_points(self, phi, trig):
-        """:meth:`points` before the rotation, from the angles' :func:`_trig` (the same operations)."""
-        E, dE, _ = self._epitrochoid(trig)
+    def _unrotated_points(self, phi, trig, epi=None):
+        """:meth:`points` before the rotation, from the angles' :func:`_trig` (the same operations;
+        ``epi``: their :meth:`_epitrochoid` where the caller has it)."""
+        E, dE, _ = self._epitrochoid(trig) if epi is None else epi
         D = _length(dE) / self.R   # = sqrt(1 + K1^2 - 2 K1 cos(z_g phi))
         K1 = self.K1
         s, c, S, C = trig
@@ -132,7 +133,11 @@ class CycloidProfile:
     def curvature_of_points(self, phi, h=None):
         """Signed curvature of the profile (positive where it is convex outward), by the
         analytic offset-curve relation kappa = kappa_E / (1 - r_c kappa_E) for constant r_c."""
-        E, dE, ddE = self.epitrochoid(phi)
+        _, dE, ddE = self.epitrochoid(phi)
+        return self._curvature(phi, dE, ddE)
+
+    def _curvature(self, phi, dE, ddE):
+        """:meth:`curvature_of_points` from the epitrochoid's derivatives at ``phi`` (the same operations)."""
         cross = dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]
         speed = _length(dE)
         # the curve runs clockwise for increasing phi (x ~ sin, y ~ cos), so convex-outward is cross < 0
@@ -177,12 +182,16 @@ class CycloidProfile:
         target = np.arange(n_samples) * total / n_samples
         phi_dense = np.concatenate([dense, [2 * np.pi]])
         phi = np.interp(target, s, phi_dense)
-        pts = self.points(phi)
-        _, dE, _ = self.epitrochoid(phi)
+        # the samples' trigonometry and epitrochoid once for points, tangents and curvature (the same
+        # operations as points(), epitrochoid() and curvature_of_points())
+        trig = _trig(phi, self.n_pins)
+        epi = self._epitrochoid(trig)
+        pts = self._rotate(self._unrotated_points(phi, trig, epi))
+        _, dE, ddE = epi
         tang = self._rotate(dE / _length(dE)[..., None])
         # outward normal: the curve runs clockwise, so the outward normal is the tangent turned by +90 deg
         nrm = np.stack([-tang[..., 1], tang[..., 0]], axis=-1)
-        kap = self.curvature_of_points(phi)
+        kap = self._curvature(phi, dE, ddE)
         polar = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
         order = np.argsort(polar)
         return pts[order], nrm[order], kap[order], polar[order], total / n_samples, phi[order]
