@@ -54,8 +54,9 @@ def _run(models, d, angles, device):
 def test_rv40e_variants_share_one_table_per_wheel_with_the_figures_of_their_own_tables(rv40e, device):
     """Three RV-40E variants (different pin radii): the device copies hold 2 tables (one per wheel)
     instead of 6, the pickled snapshot carries the tables' keys (smaller by more than the 2 x ~260 kB
-    tables), and TE and lost motion equal the per-variant tables' to 1e-12 relative (the same nearest
-    samples: measured bit for bit on cpu). Fails if a shared table moved a contact."""
+    tables), and TE and lost motion equal the per-variant tables' (the same nearest samples): bit for
+    bit on cpu; on cuda, whose atomic row sums vary in order between any two runs, to 1e-9 arcsec and
+    1e-9 relative. Fails if a shared table moved a contact."""
     if _cuda_absent(device):
         pytest.skip("no CUDA device")
     d, ds = rv40e
@@ -71,8 +72,12 @@ def test_rv40e_variants_share_one_table_per_wheel_with_the_figures_of_their_own_
     angles = np.array([0.0, 0.7])
     a, b = _run(own, d, angles, device), _run(shared, d, angles, device)
     assert a.status == b.status == ["ok"] * 3
-    np.testing.assert_allclose(b.te, a.te, rtol=1e-12, atol=1e-12 * np.max(np.abs(a.te)))
-    np.testing.assert_allclose(b.lost_motion_rad, a.lost_motion_rad, rtol=1e-12)
+    if device == "cpu":             # host sums: deterministic, the same nearest samples give the same figures
+        np.testing.assert_array_equal(b.te, a.te)
+        np.testing.assert_array_equal(b.lost_motion_rad, a.lost_motion_rad)
+    else:                           # atomic row sums vary in order: rounding of the angles (~1e-16 rad)
+        assert np.max(np.abs(b.te - a.te)) * ARCSEC_PER_RAD <= 1e-9
+        np.testing.assert_allclose(b.lost_motion_rad, a.lost_motion_rad, rtol=1e-9)
 
 
 def test_rv40e_shared_tables_against_the_exudyn_oracle(rv40e):
@@ -89,7 +94,7 @@ def test_rv40e_shared_tables_against_the_exudyn_oracle(rv40e):
 
 def test_rd40_drawn_profiles_keep_their_tables_and_figures(rd40):
     """RD-40 variants draw profile modifications: a table per variant and wheel stays (pickled with
-    its arrays, 4 on the device for 2 variants) and the figures equal the full snapshots' to 1e-12."""
+    its arrays, 4 on the device for 2 variants) and the figures equal the full snapshots' bit for bit (cpu)."""
     d, ds = rd40
     own = [build_snapshot(x, RD_KW) for x in ds]
     shared = [pickle.loads(pickle.dumps(build_snapshot(x, RD_KW, shared_tables=True))) for x in ds]
@@ -97,8 +102,8 @@ def test_rd40_drawn_profiles_keep_their_tables_and_figures(rd40):
     angles = 2 * np.pi * abs(d.ratio) * np.arange(2) / 23
     a, b = _run(own, d, angles, "cpu"), _run(shared, d, angles, "cpu")
     assert len(next(f.set for f in DeviceRowNewton(shared).families if isinstance(f.set, CycloidPinSet)).tables) == 4
-    np.testing.assert_allclose(b.te, a.te, rtol=1e-12, atol=1e-12 * np.max(np.abs(a.te)))
-    np.testing.assert_allclose(b.lost_motion_rad, a.lost_motion_rad, rtol=1e-12)
+    np.testing.assert_array_equal(b.te, a.te)
+    np.testing.assert_array_equal(b.lost_motion_rad, a.lost_motion_rad)
 
 
 def test_a_pin_radius_beyond_the_slack_gets_its_own_table_and_the_shared_window_covers_the_slack(rv40e):
