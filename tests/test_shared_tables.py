@@ -38,7 +38,8 @@ def rd40():
     from rvtool.variants.tolerances import load_tolerances, sample_variant
     d = load_design(designs.path("rd40"))
     tol = load_tolerances(designs.path("rd40_tolerances"))
-    return d, [sample_variant(tol, d, k, RD_SEED).apply(d) for k in (1, 2)]
+    # variants no other test builds with shared tables: a process that used a table for two sets pickles its key
+    return d, [sample_variant(tol, d, k, RD_SEED).apply(d) for k in (4, 6)]
 
 
 def _pins(model):

@@ -216,12 +216,12 @@ def run_pool(name, quick, V, workers):
 
 
 def _snapshot_group(jobs):
-    """Build-pool task: [(k, ModelSnapshot or None, error or None)] of variant jobs
-    (rvtool.variants.multi_device.variant_snapshot: the variant sampled and built in this worker,
-    its cycloid pins on shared profile tables), a group per task (100,000 single-variant tasks would
-    cost the submitting process ~0.1 ms each)."""
-    from rvtool.variants.multi_device import variant_snapshot
-    return [variant_snapshot(j) for j in jobs]
+    """Build-pool task: [(k, ModelSnapshot or None, error or None)] of variant jobs (design, tolerances,
+    seed, k, build options) sampled and built in this worker, a group per task (100,000 single-variant
+    tasks would cost the submitting process ~0.1 ms each): rvtool.variants.multi_device.variant_snapshots
+    (cycloid variants written into the nominal snapshot, their pins on shared profile tables)."""
+    from rvtool.variants.multi_device import variant_snapshots
+    return variant_snapshots(jobs)
 
 
 def merge_chunks(parts, V):
@@ -335,30 +335,35 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
                 build_wait_s=sum(waits), end_to_end_s=wall_s, solve_chunks=[int(x) for x in sizes],
                 device_memory_high_mb=device_memory_mb(device),
                 **{k + "_largest_chunk": v for k, v in table.items()})
-    ks = list(range(max(0, V - 16), V))
-    designs_v = [(rv_variant_design if name in RV_NAMES else rd_variant_design)(tol, design, k) for k in ks]
-    cost.update(build_cost(designs_v, kw, last_models))
+    cost.update(build_cost(design, tol, seed, kw, list(range(max(0, V - 16), V)), last_models))
     return r, cost, kw, design.rated_torque
 
 
-def build_cost(designs_v, kw, models, n=8):
-    """What one variant's build costs, after the timings: the CPU time of building ``n`` of them
-    in this process as the pool does (shared profile tables; ``build_cpu_ms_per_variant``: the
-    builds' own work; ``build_s`` above it is the pool's transfer and scheduling) and with a table
-    of its own per variant (``build_cpu_ms_per_variant_own_tables``, the build before shared
-    tables), and the pickled size of a snapshot the pool sends back (``snapshot_kb``)."""
+def build_cost(design, tol, seed, kw, ks, models, n=8):
+    """What one variant's build costs, after the timings, on the last variants ``ks`` (none built in
+    this process before): the CPU time in this process of sampling and building ``n`` of them as the
+    pool does (``build_cpu_ms_per_variant``: _snapshot_group; ``build_s`` above it is the pool's
+    transfer and scheduling) and as before shared tables (``build_cpu_ms_per_variant_own_tables``:
+    each variant's whole model built, a table per variant), and the pickled size of a snapshot the pool
+    sends back (``snapshot_kb``)."""
     import pickle
     from rvtool.solver.model_snapshot import build_snapshot
     # the pickled size first: a shared table goes by its key once this process has used it twice
     out = {"snapshot_kb": len(pickle.dumps(models[-1])) / 1024.0}
-    n = max(1, min(n, len(designs_v) // 2))
-    # two disjoint sets of the last variants, none built in this process before (no profile sampled twice)
-    for key, shared, ds in (("build_cpu_ms_per_variant", True, designs_v[len(designs_v) - n:]),
-                            ("build_cpu_ms_per_variant_own_tables", False, designs_v[-2 * n:len(designs_v) - n])):
-        t = time.process_time()
-        for d in ds:
-            build_snapshot(d, kw, shared_tables=shared)
-        out[key] = 1e3 * (time.process_time() - t) / len(ds)
+    n = max(1, min(n, len(ks) // 2))
+    vdesign = rv_variant_design if design.__class__.__name__ != "CycloidDesign" else rd_variant_design
+    build_snapshot(design, kw, shared_tables=True)            # this process's nominal tables and snapshot: not timed
+    if vdesign is rd_variant_design:
+        from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
+        from rvtool.variants import Variant
+        cycloid_variant_snapshots(design, [Variant()], kw)
+    t = time.process_time()
+    _snapshot_group([(design, tol, seed, k, kw) for k in ks[len(ks) - n:]])
+    out["build_cpu_ms_per_variant"] = 1e3 * (time.process_time() - t) / n
+    t = time.process_time()
+    for k in ks[-2 * n:len(ks) - n]:
+        build_snapshot(vdesign(tol, design, k), kw)
+    out["build_cpu_ms_per_variant_own_tables"] = 1e3 * (time.process_time() - t) / n
     return out
 
 

@@ -302,6 +302,13 @@ class ProfileTable:
     def __iter__(self):
         return iter(self.entry[0])
 
+    def __eq__(self, other):
+        """Equal keys: the same table (its arrays are a function of the key)."""
+        return isinstance(other, ProfileTable) and self.key == other.key
+
+    def __hash__(self):
+        return hash(self.key)
+
     def __reduce__(self):
         if ProfileTable._uses.get(self.key, 0) > 1:
             return ProfileTable, self.key

@@ -60,6 +60,12 @@ def _set_without_device(s, memo=None, backend=None):
     return out
 
 
+def snapshot_set(s, backend=None):
+    """A copy of contact set ``s`` as a :class:`ModelSnapshot` holds it: without its device objects (see
+    :data:`DEVICE_ATTRIBUTES`); a set built with the NumPy backend carries ``backend`` (None: as built)."""
+    return _set_without_device(s, None, backend)
+
+
 class ModelSnapshot:
     """The device row Newton's view of a built model (module docstring): ``design`` and
     ``build_kw`` (to build the model itself where Exudyn takes over), ``body_names``,
@@ -153,4 +159,4 @@ def real_model(model):
     return model.model() if isinstance(model, ModelSnapshot) else model
 
 
-__all__ = ["ModelSnapshot", "SnapshotElement", "build_snapshot", "real_model"]
+__all__ = ["ModelSnapshot", "SnapshotElement", "build_snapshot", "real_model", "snapshot_set"]
