@@ -71,7 +71,7 @@ class CycloidProfile:
             check_finite("radial_mod_table", t)
             if np.any(np.diff(t[:, 0]) <= 0):
                 raise RvtoolInputError("radial_mod_table angles must increase strictly (valid: sorted phi in [0, 2 pi / z_g])")
-        self._check_undercut()
+        _checked_undercut(self)
 
     @property
     def n_teeth(self):
@@ -220,6 +220,27 @@ def _trig(phi, n_pins):
     return np.sin(phi), np.cos(phi), np.sin(zp), np.cos(zp)
 
 
+_UNDERCUT_CHECKED = {}
+"""Profiles (their fields but the rotation) whose undercut check passed, per process."""
+
+
+def _checked_undercut(profile):
+    """:meth:`CycloidProfile._check_undercut`, once per profile up to its rotation (which does not change
+    the curvature: the wheels of one reducer, turned to their phases, and the profile rebuilt for the
+    dense points check it once)."""
+    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name != "rotation_mod")
+    try:
+        if key in _UNDERCUT_CHECKED:
+            return
+    except TypeError:                     # an unhashable member (a list table): checked each time
+        profile._check_undercut()
+        return
+    profile._check_undercut()
+    if len(_UNDERCUT_CHECKED) > 4096:
+        _UNDERCUT_CHECKED.clear()
+    _UNDERCUT_CHECKED[key] = True
+
+
 @functools.lru_cache(maxsize=4)
 def _dense_trig(n_dense, n_pins):
     """The dense grid of :meth:`CycloidProfile.table` (n_dense angles in [0, 2 pi)) and its
@@ -238,9 +259,29 @@ def _dense_unrotated(key, n_dense):
     the wheels of one reducer differ in their rotation only (their assembly phases), so each
     wheel's table after the first rotates these; read-only."""
     profile = CycloidProfile(**dict(key))
-    trig = _dense_trig(n_dense, profile.n_pins)
-    out = profile._unrotated_points(trig[0], trig[1:])
+    dense = _dense_trig(n_dense, profile.n_pins)[0]
+    E_u, dE_u, W_u = _dense_units(profile.K1, profile.n_pins, n_dense)
+    # _unrotated_points on the dense grid, its R-free stacks kept (the same operations on the same numbers)
+    R = profile.R
+    E, dE = R * E_u, R * dE_u
+    D = _length(dE) / R
+    out = E + profile.generating_radius(dense)[..., None] * (W_u / D[..., None])
     out.flags.writeable = False
+    return out
+
+
+@functools.lru_cache(maxsize=4)
+def _dense_units(K1, n_pins, n_dense):
+    """The stacks of :meth:`CycloidProfile._epitrochoid` (E / R, dE / R) and of the inward offset direction
+    (times D) of :meth:`CycloidProfile._unrotated_points` on the dense grid: they depend on the
+    eccentricity coefficient K1 and the pin count only (Monte Carlo variants draw R and the generating
+    radius, not K1), so computed once per process; read-only."""
+    s, c, S, C = _dense_trig(n_dense, n_pins)[1:]
+    zb = n_pins
+    out = (np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1), np.stack([c - K1 * C, -s + K1 * S], axis=-1),
+           np.stack([K1 * S - s, K1 * C - c], axis=-1))
+    for a in out:
+        a.flags.writeable = False
     return out
 
 
