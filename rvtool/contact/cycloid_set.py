@@ -275,6 +275,8 @@ class ProfileTable:
         self.key = (profile, int(n_samples), str(search), float(band), float(slack))
         self._entry = None
         self._arrays = arrays
+        if len(ProfileTable._uses) > 65536:     # a process that saw 100,000 drawn profiles: forget the old ones
+            ProfileTable._uses.clear()
         ProfileTable._uses[self.key] = ProfileTable._uses.get(self.key, 0) + 1
 
     @property
