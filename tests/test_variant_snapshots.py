@@ -74,3 +74,24 @@ def test_what_is_not_written_is_named_and_built_in_full(rd40):
     s = cycloid_variant_snapshots(d, vs[1:2], kw)[0]
     assert [e.evaluator.name for e in s.contact_elements()] == [
         e.evaluator.name for e in build_snapshot(vs[1].apply(d), kw, shared_tables=True).contact_elements()]
+
+
+def test_stacked_cycloid_kinematics_equal_each_copys_bit_for_bit(rd40):
+    """The row Newton primes the kinematic states of RD-40 variant copies (their eccentricities differ) in
+    one stacked evaluation (CycloidKinematics.stacked_poses): equal to each copy's own poses at each
+    angle bit for bit; kinematics with other phases are not stacked."""
+    import dataclasses
+    from rvtool.assembly.cycloid import CycloidKinematics
+    from rvtool.solver.device_rows import DeviceRowNewton
+    d, vs = rd40
+    models = cycloid_variant_snapshots(d, vs, RD_KW)
+    nw = DeviceRowNewton(models)
+    a = np.array([0.3, 0.1, 0.7])
+    got = nw.kinematic(a)
+    want = np.array([(m.kinematics.poses(a[c:c + 1])[0] - m.reference).reshape(-1) for c, m in enumerate(models)])
+    want[:, nw.held] = 0.0
+    want[:, nw.input_local] = a
+    np.testing.assert_array_equal(got, want)
+    assert len({float(m.kinematics.eccentricity) for m in models}) == 3
+    other = CycloidKinematics(dataclasses.replace(d, wheels=dataclasses.replace(d.wheels, phases=(0.0, 3.0))))
+    assert CycloidKinematics.stacked_poses([models[0].kinematics, other], a) is None
