@@ -231,7 +231,8 @@ def merge_chunks(parts, V):
     split = {k: sum(p.split[k] for p in parts) for k in parts[0].split}
     lm = [p.lost_motion_rad for p in parts]
     stats = parts[0].stats if len(parts) == 1 else {
-        "variants": V, "points": parts[0].stats["points"], "chunks": len(parts),
+        "variants": V, "points": parts[0].stats["points"], "te_order": parts[0].stats.get("te_order"),
+        "chunks": len(parts),
         "sweeps": sum(p.stats["sweeps"] for p in parts),
         "newton_iterations": sum(p.stats["newton_iterations"] for p in parts),
         "device": parts[0].stats["device"], "device_sum": parts[0].stats["device_sum"],
