@@ -246,15 +246,29 @@ def merge_chunks(parts, V):
                        wall_s=sum(p.wall_s for p in parts), stats=stats)
 
 
-def _failed_rows(ks, n_points, errors):
-    """A RowVariants of variants that could not be built (every figure NaN, failed with its error)."""
+def with_failed_builds(part, built, errors, n_points):
+    """The RowVariants of a chunk whose variants ``built`` (bool per variant) were built and solved in
+    ``part`` (None: none was), the others failed with their build ``errors`` (figures NaN)."""
     from rvtool.batched.device_rows_variants import RowVariants
-    n = len(ks)
-    zero = {"setup_s": 0.0, "kernels_s": 0.0, "scatter_s": 0.0, "step_s": 0.0, "fallback_s": 0.0, "rest_s": 0.0}
-    return RowVariants(te=np.full((n, n_points), np.nan), theta_out=np.full((n, n_points), np.nan),
-                       lost_motion_rad=np.full(n, np.nan), status=["failed"] * n, error=list(errors),
-                       exudyn_points=0, exudyn_copies=0, split=zero, te_s=0.0, lost_motion_s=0.0, wall_s=0.0,
-                       stats={"points": n_points, "sweeps": 0, "newton_iterations": 0, "lost_motion": {}})
+    built = np.asarray(built, bool)
+    n = len(built)
+    te, th, lm = np.full((n, n_points), np.nan), np.full((n, n_points), np.nan), np.full(n, np.nan)
+    status, error = ["failed"] * n, [None] * n
+    for i, e in zip(np.flatnonzero(~built), errors):
+        error[i] = f"build: {e}"
+    if part is None:
+        zero = {"setup_s": 0.0, "kernels_s": 0.0, "scatter_s": 0.0, "step_s": 0.0, "fallback_s": 0.0, "rest_s": 0.0}
+        return RowVariants(te=te, theta_out=th, lost_motion_rad=lm, status=status, error=error, exudyn_points=0,
+                           exudyn_copies=0, split=zero, te_s=0.0, lost_motion_s=0.0, wall_s=0.0,
+                           stats={"points": n_points, "te_order": None, "sweeps": 0, "newton_iterations": 0,
+                                  "device": None, "device_sum": None, "lost_motion": {}})
+    idx = np.flatnonzero(built)
+    te[idx], th[idx], lm[idx] = part.te, part.theta_out, part.lost_motion_rad
+    for j, i in enumerate(idx):
+        status[i], error[i] = part.status[j], part.error[j]
+    return RowVariants(te=te, theta_out=th, lost_motion_rad=lm, status=status, error=error,
+                       exudyn_points=part.exudyn_points, exudyn_copies=part.exudyn_copies, split=part.split,
+                       te_s=part.te_s, lost_motion_s=part.lost_motion_s, wall_s=part.wall_s, stats=part.stats)
 
 
 def device_memory_mb(device):
@@ -320,16 +334,18 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
                 queued[i + 2] = submit(i + 2)
             models = [m for _, m, _ in got if m is not None]
             bad = [(k, e) for k, m, e in got if m is None]
-            if bad:
-                raise SolverFailure(f"variants {[k for k, _ in bad][:5]} could not be built: {bad[0][1]}")
             ta = time.perf_counter()
             stats = table_stats(models)           # bookkeeping of the report: not timed
             if stats["profile_table_mb"] >= table["profile_table_mb"]:
                 table = stats
             aside += time.perf_counter() - ta
-            parts.append(device_rows_variants(models, torque=torque, input_angles=angles,
-                                              lost_motion_level=LM_FRACTION * design.rated_torque, device=device))
-            last_models = models
+            part = device_rows_variants(models, torque=torque, input_angles=angles,
+                                        lost_motion_level=LM_FRACTION * design.rated_torque, device=device) \
+                if models else None
+            if bad:                               # a variant that cannot be built is a failed variant of the study
+                part = with_failed_builds(part, [m is not None for _, m, _ in got], [e for _, _, e in bad], len(angles))
+            parts.append(part)
+            last_models = models or last_models
         wall_s = time.perf_counter() - t0 - aside
     r = merge_chunks(parts, V)
     cost = dict(build_s=waits[0] if len(sizes) == 1 else sum(waits), build_pool_warm_s=warm_s,
