@@ -9,7 +9,8 @@ tables), the lumped bearings' circle contacts, the bodies' reference poses and t
 :func:`cycloid_variant_snapshots` builds the nominal design's snapshot once and writes those four
 per variant with the builder's own pieces (:func:`rvtool.assembly.cycloid.pin_meshes`,
 :func:`~rvtool.assembly.cycloid.lumped_bearing_contacts`, :class:`~rvtool.assembly.cycloid.CycloidKinematics`,
-the journal centres of :func:`~rvtool.assembly.cycloid.add_bodies`), the pin set on shared profile
+the journal centres of :func:`~rvtool.assembly.cycloid.add_bodies`) from the variant's design made
+without loading it again (:func:`light_design`), the pin set on shared profile
 tables (:func:`rvtool.contact.cycloid_set.shared_profile_tables`): equal to
 ``build_snapshot(variant design, build_kw, shared_tables=True)`` attribute for attribute
 (tests/test_variant_snapshots.py). The rest (output pins, locks, springs, drive and load) is the
@@ -116,30 +117,17 @@ def _bearings(nominal, d):
     return out
 
 
-class VariantSnapshot(ModelSnapshot):
-    """A :class:`~rvtool.solver.model_snapshot.ModelSnapshot` of a variant written into its nominal
-    design's snapshot; its ``design`` (``variant.apply(nominal design)``: the file-form data loaded
-    again, ~1/3 of writing a variant) is made on first use (an Exudyn hand-over, a report)."""
-
-    @property
-    def design(self):
-        d = self.__dict__.get("_design")
-        if d is None:
-            d = self._design = self._variant.apply(self._nominal_design)
-        return d
-
-
 def light_design(design, variant):
     """The design of ``variant`` of cycloid ``design`` with the fields :meth:`Variant.apply` writes set by
-    ``dataclasses.replace`` (each section validated, the file-form data not loaded again): equal to
-    ``variant.apply(design)`` where no link of the file form follows those fields (checked once per design by
-    :func:`cycloid_variant_snapshots`); what the builder's pieces read, not a design to ``replace`` further
-    (its ``source`` is the nominal's)."""
+    ``dataclasses.replace`` (each section validated) and its file-form data (``source``: what ``apply``
+    would load, :func:`rvtool.assembly.spec.replaced_source`) without loading it again (~3 ms a variant):
+    equal to ``variant.apply(design)``, source included, where no link of the file form follows those fields
+    (checked once per design by :func:`cycloid_variant_snapshots`)."""
     import dataclasses
+    from ..assembly.spec import replaced_source
+    sections = variant.sections(design)      # checked as apply checks them (its errors, by name)
     w, prof, pins = design.wheels, design.profile, design.pins
     e = prof.generating_eccentricity + variant.eccentricity_error
-    if e <= 0:
-        return variant.apply(design)          # its error, by name
     changes = {"wheels": dataclasses.replace(w, eccentricity=e, clearance=w.clearance + variant.pin_clearance),
                "profile": dataclasses.replace(prof, equidistant_mod=prof.equidistant_mod + variant.equidistant_mod,
                                               offset_mod=prof.offset_mod + variant.offset_mod)}
@@ -153,18 +141,17 @@ def light_design(design, variant):
         p["radius_error"] = pins.radius_error + variant.pin_radius_error
     if p:
         changes["pins"] = dataclasses.replace(pins, **p)
-    return dataclasses.replace(design, **changes)
+    return dataclasses.replace(design, **changes, source=replaced_source(design, **sections))
 
 
-def _variant_snapshot(nominal, design, variant, d):
-    """The snapshot of ``variant`` of ``design`` written into ``nominal`` (module docstring), its pieces
-    from the variant design ``d`` (:func:`light_design`)."""
+def _variant_snapshot(nominal, d):
+    """The snapshot of variant design ``d`` written into ``nominal`` (module docstring)."""
     from ..assembly.cycloid import CycloidKinematics
     from ..geometry.eccentric import journal_centre
     from .model_snapshot import SnapshotElement
-    out = object.__new__(VariantSnapshot)
-    out.__dict__.update({k: v for k, v in vars(nominal).items() if k != "design"})
-    out._variant, out._nominal_design, out._design = variant, design, None
+    out = object.__new__(ModelSnapshot)
+    out.__dict__.update(vars(nominal))
+    out.design = d
     out.build_kw = dict(nominal.build_kw)
     out.journal_locks, out.reg_springs = list(nominal.journal_locks), list(nominal.reg_springs)
     out.held_coordinates = list(nominal.held_coordinates)
@@ -197,9 +184,12 @@ def cycloid_variant_snapshots(design, variants, build_kw=None):
     if not entry[1] or not variants:
         return [build_snapshot(v.apply(design), kw, shared_tables=True) for v in variants]
     if entry[2] is None:                  # once per design: the light design equals the loaded one
-        entry[2] = light_design(design, variants[0]) == variants[0].apply(design)
-    return [_variant_snapshot(entry[0], design, v, light_design(design, v) if entry[2] else v.apply(design))
-            for v in variants]
+        light, loaded = light_design(design, variants[0]), variants[0].apply(design)
+        try:
+            entry[2] = bool(light == loaded and light.source == loaded.source)
+        except (TypeError, ValueError):   # members that do not compare (arrays): load every variant
+            entry[2] = False
+    return [_variant_snapshot(entry[0], light_design(design, v) if entry[2] else v.apply(design)) for v in variants]
 
 
-__all__ = ["ELEMENTS", "VariantSnapshot", "cycloid_variant_snapshots", "light_design", "patchable"]
+__all__ = ["ELEMENTS", "cycloid_variant_snapshots", "light_design", "patchable"]
