@@ -54,8 +54,8 @@ def _influence_rows():
      r"row stepper: contact element 'crank_bearings' \(TaperedBearingSet\) has no device rows"),
     ("involute_anchors", lambda: _edited(involute_stage={"mu": 0.05, "friction_model": "anchor"}),
      r"row stepper: contact element 'gears' has stick--slip anchors: the row stepper commits no anchor history"),
-    ("elastic_crank_torsion", lambda: _edited(cranks={"shaft": {"torsion": "elastic"}}),
-     r"row stepper: the model has elastic closures or a reduced structure on port bodies"),
+    ("conformal_pin_grooves", lambda: _edited(pins={"groove": "conformal", "groove_clearance": 8e-6}),
+     r"row stepper: contact element 'pins': the closure 'pins' has a station law"),
 ])
 def test_fused_refuses_what_the_row_stepper_cannot_take_by_name(case, make, named):
     """A model neither path takes: --backend fused raises with the fused stepper's reasons and the
