@@ -52,8 +52,6 @@ def _influence_rows():
 @pytest.mark.parametrize("case, make, named", [
     ("influence_tapered_rows", _influence_rows,
      r"row stepper: contact element 'crank_bearings' \(TaperedBearingSet\) has no device rows"),
-    ("involute_anchors", lambda: _edited(involute_stage={"mu": 0.05, "friction_model": "anchor"}),
-     r"row stepper: contact element 'gears' has stick--slip anchors: the row stepper commits no anchor history"),
     ("conformal_pin_grooves", lambda: _edited(pins={"groove": "conformal", "groove_clearance": 8e-6}),
      r"row stepper: contact element 'pins': the closure 'pins' has a station law"),
 ])

@@ -199,7 +199,7 @@ class ExtendedRowForces:
         from ..contact.evaluator import StagedLaunch
         from .replica import FamilyCopies, PlainPinCopies
         from .row_extension import MappedAssembler, StructureRows, copy_rows
-        from .row_forces import NO_DEVICE_ROWS
+        from .row_forces import NO_DEVICE_ROWS, history_families
         self.device = wp.get_device(device)
         self.on_cpu = self.device.is_cpu
         families, ext = copy_rows(model, 1, device=device, host_structure=True)
@@ -280,6 +280,23 @@ class ExtendedRowForces:
         self._vy = np.zeros(co.n)
         self.timing = {"launches": 0.0, "tangents": 0.0}
         self.evaluations = 0
+        self.history_families = history_families(self.families)
+        self._maps = {id(f): (np.asarray(f.pose_map, np.int64), velocity_map(np.asarray(f.pose_map, np.int64)))
+                      for f in self.history_families}
+
+    def commit(self, q, v):
+        """Commit the contact history of every anchored family at the accepted state (q, v) of the
+        step's unknowns (:meth:`rvtool.solver.row_forces.RowForces.commit`)."""
+        from .row_forces import commit_families
+        if not self.history_families:
+            return
+        co = self.coords
+        x, vx = co.reference + co.T @ q, co.T_v @ v
+
+        def poses(f):
+            pm, vm = self._maps[id(f)]
+            return (np.where(pm >= 0, x[np.maximum(pm, 0)], 0.0), np.where(vm >= 0, vx[np.maximum(vm, 0)], 0.0))
+        commit_families(self.history_families, None, None, poses)
 
     def launch_evaluation(self):
         """The gathers of every family's body poses and velocities from the staged row coordinates,

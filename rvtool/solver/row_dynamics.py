@@ -115,6 +115,9 @@ class RowDrivenModel(ReferenceModel):
             from .row_forces import RowForces
             self.row_forces = RowForces(model, device=device)
         elif not self.extended:
+            if any(getattr(el.evaluator, "anchor", False) for el in model.contact_elements()):
+                raise RvtoolInputError("sums = 'host' (ReferenceModel's step) commits no anchor history; a model "
+                                       "with stick--slip anchors steps with sums='device'")
             self.families = copy_families(model, 1, device=device)
             for f in self.families:                          # driven runs: dQ/dv of every family
                 if callable(getattr(f.set, "set_velocity_tangent", None)):
@@ -168,6 +171,17 @@ class RowDrivenModel(ReferenceModel):
         if device_step and sums != "device":
             raise RvtoolInputError("device_step = True needs sums = 'device' (the step reads the device sums)")
         self.device_iteration = DeviceIteration(self) if device_step else None
+
+    def commit_history(self, q, v):
+        """Commit the anchored families' contact history at the accepted state (q, v) (Exudyn's
+        driver commits every contact element after each accepted step, at its state)."""
+        t0, c0 = time.perf_counter(), time.process_time()
+        if self.extended:
+            self.row_forces.commit(q, v)
+        else:
+            self.row_forces.commit((self.reference[0] + q).reshape(self.nb, 3), v.reshape(self.nb, 3))
+        self.forces_s += time.perf_counter() - t0
+        self.forces_cpu_s += time.process_time() - c0
 
     def initial_accelerations(self, p, q, v):
         """:meth:`ReferenceModel.initial_accelerations` (Exudyn's M a = f on the free coordinates);
@@ -346,6 +360,8 @@ class RowDrivenModel(ReferenceModel):
             if ok:
                 t = t + h
                 q, v, a, g = q1, v1, a1, g1
+                if self.row_forces.history_families:      # stick--slip anchors: Exudyn commits per accepted step
+                    self.commit_history(q, v)
                 accepted += 1
                 run += 1
                 hist[0, k, :] = (t, q[ii], ref_out + q[oi], torque, 0.0, 0.0, 0.0, h, its)  # H_* order
@@ -527,7 +543,8 @@ def row_stepper_reasons(model, run_spec=None):
     * retained out-of-plane coordinates or floating flexible bodies (planar rigid copies only);
     * elastic closures or reduced structures on port bodies (the row Newton's extra unknowns,
       :mod:`rvtool.solver.row_extension`, are not in the stepper's coordinates);
-    * stick--slip anchors (the stepper commits no history per accepted step);
+    * stick--slip anchors where the device row Newton names them (inside closures, on families whose
+      kernels do not stage the history); the others are committed per accepted step;
     * journal locks (``rigid_supports=True``: the stepper holds the drive and the coordinate locks);
     * contact sets in another precision than float64 (the copies are float64);
     * run settings other than :data:`RUN_SPEC_REQUIRED`."""
@@ -548,10 +565,6 @@ def row_stepper_reasons(model, run_spec=None):
         reasons += extended_row_reasons(model)
     for el in model.contact_elements():
         s = el.evaluator
-        if getattr(s, "anchor", False):
-            reasons.append(f"contact element {s.name!r} has stick--slip anchors: the row stepper commits no anchor "
-                           "history per accepted step (valid: frictionless or regularized friction, or backend "
-                           "'exudyn')")
         precision = getattr(s, "precision", "float64")
         if precision != "float64":
             reasons.append(f"contact element {s.name!r} has precision = {precision!r}: the row stepper's copies "
