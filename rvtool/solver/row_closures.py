@@ -273,9 +273,22 @@ class ExtendedRowForces:
             with wp.ScopedCapture(device=self.device) as cap:
                 self.gather.launch_tangents()
             self.tangent_graph = cap.graph
-        self._TT = np.ascontiguousarray(co.T.T)
+        # T's structure: the x coordinates that are selections of y (bodies, stations: y = [them; eta]) and the
+        # ports (x_w = P_w eta); the stations' velocity columns folded into their sources' (C_x F, F the
+        # velocity-source selection: T_v = F T)
+        T = co.T
+        ns = co.n_real + len(co.stations)
+        self._sel = np.array([int(np.flatnonzero(T[:, j])[0]) for j in range(ns)], np.int64)
+        self._ports = np.setdiff1d(np.arange(nx), self._sel)
+        self._Pw = np.ascontiguousarray(T[self._ports, ns:])
+        self._ns = ns
+        self._identity = not len(self._ports) and np.array_equal(self._sel, np.arange(nx))
+        folded = np.array([c for c in range(nx) if co.velocity_source[c] != c], np.int64)
+        self._fold_from = folded[co.velocity_source[folded] >= 0]
+        self._fold_to = co.velocity_source[self._fold_from]
+        self._fold_zero = folded
+        self._T = np.ascontiguousarray(T)
         self._Tv = np.ascontiguousarray(co.T_v)
-        self._T = np.ascontiguousarray(co.T)
         self._y = np.zeros(co.n)
         self._vy = np.zeros(co.n)
         self.timing = {"launches": 0.0, "tangents": 0.0}
@@ -297,6 +310,33 @@ class ExtendedRowForces:
             pm, vm = self._maps[id(f)]
             return (np.where(pm >= 0, x[np.maximum(pm, 0)], 0.0), np.where(vm >= 0, vx[np.maximum(vm, 0)], 0.0))
         commit_families(self.history_families, None, None, poses)
+
+    def _vector(self, fx):
+        """T^T f_x."""
+        if self._identity:
+            return np.array(fx)
+        return np.concatenate([fx[self._sel], self._Pw.T @ fx[self._ports]])
+
+    def _fold(self, Cx):
+        """C_x F: the stations' velocity columns added into their velocity sources' (T_v = F T)."""
+        if not len(self._fold_zero):
+            return Cx
+        C = np.array(Cx)
+        np.add.at(C.T, self._fold_to, Cx.T[self._fold_from])
+        C[:, self._fold_zero] = 0.0
+        return C
+
+    def _matrix(self, A):
+        """T^T A T (dense A (n_x, n_x))."""
+        if self._identity:
+            return np.array(A)
+        ns, s, w, P = self._ns, self._sel, self._ports, self._Pw
+        Y = np.empty((self.coords.n, self.coords.n))
+        Y[:ns, :ns] = A[np.ix_(s, s)]
+        Y[:ns, ns:] = A[np.ix_(s, w)] @ P
+        Y[ns:, :ns] = P.T @ A[np.ix_(w, s)]
+        Y[ns:, ns:] = P.T @ A[np.ix_(w, w)] @ P
+        return Y
 
     def launch_evaluation(self):
         """The gathers of every family's body poses and velocities from the staged row coordinates,
@@ -325,7 +365,7 @@ class ExtendedRowForces:
         else:
             self.launch_evaluation()
         fx = self._out[0] if self.on_cpu else self.gather.out[:co.n_x].numpy()
-        f = self._TT @ fx
+        f = self._vector(fx)
         for _, sl, omega2, D, _ in co.modal:
             f[sl] -= omega2 * q[sl] + D @ v[sl]
         self.timing["launches"] += time.perf_counter() - t0
@@ -347,8 +387,8 @@ class ExtendedRowForces:
             nx = co.n_x
             o = self.gather.out[nx:].numpy()
             Kx, Cx = o[:nx * nx].reshape(nx, nx), o[nx * nx:].reshape(nx, nx)
-        K = self._TT @ Kx @ self._T
-        C = self._TT @ Cx @ self._Tv
+        K = self._matrix(Kx)
+        C = self._matrix(self._fold(Cx))
         for _, sl, omega2, D, _ in co.modal:
             K[sl, sl] -= np.diag(omega2)
             C[sl, sl] -= D
