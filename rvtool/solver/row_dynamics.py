@@ -592,7 +592,14 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
     gathers; ``step_cpu_s``: the rest), ``evaluations``, ``tangent_gathers``. sums, device_step:
     :data:`SUMS` and :class:`DeviceIteration` (None: on with the device sums). A step that fails
     at the minimum step raises :class:`SolverFailure`."""
+    import dataclasses
+
     from .static import StaticSolver
+    # Exudyn's nominal step: the run divided into ceil(duration / step) equal steps (rvtool.solver.driver),
+    # not steps of ``step`` with a short last one (a duration that is no multiple of the step, e.g. the
+    # vibration protocol's quarter input revolution, would otherwise take other steps than Exudyn's)
+    n_nominal = int(np.ceil(duration / settings.step - 1e-9))
+    settings = dataclasses.replace(settings, step=duration / n_nominal, min_step=settings.minimum_step)
     omega = speed_rpm * 2 * np.pi / 60.0
     tq = -np.sign(model.ratio) * float(torque)
     model.set_output_torque(tq)
