@@ -20,8 +20,10 @@ abs_tol 1e-6, rel_tol 1e-8, full Newton, adaptive), the rated input speed and to
 static start (Exudyn's StaticSolver), both paths warmed by a 2-step run, ``--reps`` alternating runs
 each (the fastest counts), ``--steps`` steps (default 500, ``--quick`` 20).
 
-Time: this process's CPU time (``time.process_time``; the development machine is shared, CPU time
-counts the one core each path used; wall time beside it). Exudyn on one thread (OMP/MKL/OpenBLAS
+Time: on the CPU this process's CPU time (``time.process_time``; the development machine is shared,
+CPU time counts the one core each path used; wall time beside it); with ``--device cuda:N`` wall
+time (the row stepper waits for the GPU; a host of its own). Rows with the ported housing need
+NGSolve (its reduction) and are skipped, named, without it (the bare GPU image). Exudyn on one thread (OMP/MKL/OpenBLAS
 threads 1 set before NumPy loads); the row stepper's Warp kernels on ``--device`` (cpu: the calling
 thread).
 
@@ -62,9 +64,15 @@ ROWS = {
 }
 
 
+NEEDS_NGSOLVE = ("rv80e", "cycloid_ported_housing")
+"""Rows whose ported housing is reduced with NGSolve (skipped, named, where it is absent: the bare GPU image)."""
+
+
 def judge(r):
     out = {}
     for name, row in r["rows"].items():
+        if "skipped" in row:
+            continue
         out[f"{name}_te_vs_exudyn"] = casekit.check(row["te_max_err_arcsec"], TE_TOL_ARCSEC,
                                                     why="issue 31: TE equal to 1e-6 arcsec (Exudyn is the oracle)")
         out[f"{name}_same_steps"] = casekit.check(row["step_time_max_diff_s"], 0.0, "==",
@@ -78,6 +86,12 @@ def judge(r):
 
 
 def run_row(name, n_steps, reps, device):
+    if name in NEEDS_NGSOLVE:
+        try:
+            import ngsolve  # noqa: F401
+        except ImportError:
+            return {"skipped": "the ported housing is reduced with NGSolve, which this environment lacks"}
+    clock = "cpu" if device == "cpu" else "wall"
     base, edit = ROWS[name]
     d = load_design(designs.path(base))
     if edit:
@@ -98,13 +112,13 @@ def run_row(name, n_steps, reps, device):
         ex_runs.append(dynamic_te(build(d), duration=dur, run_spec=spec, solver="exudyn", **kw))
         m = build(d)
         rw_runs.append(row_driven_run(m, duration=dur, settings=settings, device=device, q0=q0, **kw))
-    ex = min(ex_runs, key=lambda e: e["record"].cpu_s)
-    rw = min(rw_runs, key=lambda r: r["cpu_s"])
+    ex = min(ex_runs, key=lambda e: getattr(e["record"], f"{clock}_s"))
+    rw = min(rw_runs, key=lambda r: r[f"{clock}_s"])
     rec = ex["record"]
     te_row = transmission_error(rw["theta_in"], rw["theta_out"], m.ratio)
     same = len(rw["t"]) == len(ex["t"])
     acc_ex, acc_rw = max(rec.accepted_steps, 1), max(rw["accepted"], 1)
-    ex_ms, rw_ms = 1e3 * rec.cpu_s / acc_ex, 1e3 * rw["cpu_s"] / acc_rw
+    ex_ms, rw_ms = 1e3 * getattr(rec, f"{clock}_s") / acc_ex, 1e3 * rw[f"{clock}_s"] / acc_rw
     return {
         "design": base, "edit": edit, "n_coordinates_exudyn": int(m.mbs.systemData.ODE2Size()),
         "te_max_err_arcsec": float(np.max(np.abs(te_row - ex["te"])) * ARCSEC_PER_RAD) if same else float("inf"),
@@ -113,10 +127,12 @@ def run_row(name, n_steps, reps, device):
         "accepted": {"exudyn": rec.accepted_steps, "row_stepper": rw["accepted"]},
         "rejected": int(rec.rejected_steps + rw["rejected"]),
         "newton_per_step": {"exudyn": rec.newton_iterations / acc_ex, "row_stepper": rw["newton"] / acc_rw},
-        "ms_per_step_cpu": {"exudyn": ex_ms, "row_stepper": rw_ms},
+        "clock": clock,
+        "ms_per_step_cpu": {"exudyn": 1e3 * rec.cpu_s / acc_ex, "row_stepper": 1e3 * rw["cpu_s"] / acc_rw},
         "ms_per_step_wall": {"exudyn": 1e3 * rec.wall_s / acc_ex, "row_stepper": 1e3 * rw["wall_s"] / acc_rw},
         "speedup": ex_ms / rw_ms,
-        "speedup_per_rep": [e["record"].cpu_s / acc_ex / (r["cpu_s"] / acc_rw) for e, r in zip(ex_runs, rw_runs)],
+        "speedup_per_rep": [getattr(e["record"], f"{clock}_s") / acc_ex / (r[f"{clock}_s"] / acc_rw)
+                            for e, r in zip(ex_runs, rw_runs)],
         "row_stepper_split_ms_per_step_cpu": {"evaluate": 1e3 * rw["evaluate_cpu_s"] / acc_rw,
                                               "tangents": 1e3 * rw["tangents_cpu_s"] / acc_rw,
                                               "step": 1e3 * rw["step_cpu_s"] / acc_rw},
@@ -141,12 +157,15 @@ def main(argv=None):
     rows = {name: run_row(name, n_steps, reps, args.device) for name in names}
     results = {
         "settings_echo": {"steps": n_steps, "step_s": STEP, "reps": reps, "device": args.device, "rows": names,
-                          "exudyn_threads": 1, "clock": "process CPU time (time.process_time), fastest rep",
+                          "exudyn_threads": 1, "clock": "process CPU time (time.process_time) on cpu, wall time on "
+                                                        "cuda; fastest rep",
                           "run_spec": RunSpec(end_time=n_steps * STEP, step=STEP, abs_tol=1e-6,
                                               rel_tol=1e-8).to_dict()},
         "rows": rows,
-        "te_max_err_arcsec": max(r["te_max_err_arcsec"] for r in rows.values()),
-        "speedup": {k: r["speedup"] for k, r in rows.items()},
+        "te_max_err_arcsec": max((r["te_max_err_arcsec"] for r in rows.values() if "skipped" not in r),
+                                 default=float("nan")),
+        "speedup": {k: r["speedup"] for k, r in rows.items() if "skipped" not in r},
+        "skipped": {k: r["skipped"] for k, r in rows.items() if "skipped" in r},
         "wall_s": time.perf_counter() - t_all,
     }
     casekit.verdict(results, judge)
