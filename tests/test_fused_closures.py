@@ -121,3 +121,68 @@ def test_friction_anchors_driven_on_the_row_stepper_equal_exudyn(device, monkeyp
     monkeypatch.setattr(RowDrivenModel, "commit_history", lambda self, q, v: None)
     stale = dynamic_te(rvtool.build(d), solver="fused", device=device, **kw)
     assert np.max(np.abs(stale["te"] - ex["te"])) * ARCSEC_PER_RAD > 1e3 * TE_TOL
+
+
+def _loaded_crank_model():
+    """rv40e with the crank beam and torsion at its loaded static start with moving bodies: (model, q_y, v_y)
+    in the row stepper's unknowns (stations settled)."""
+    from rvtool.solver.device_dynamics import DeviceDynamicsSettings
+    from rvtool.solver.row_dynamics import RowDrivenModel
+    from rvtool.solver.static import StaticSolver
+    d = _design("crank_beam_and_torsion")
+    m = rvtool.build(d)
+    tq = -np.sign(m.ratio) * d.rated_torque
+    m.set_output_torque(tq)
+    q0 = StaticSolver(m).solve(0.0)
+    rm = RowDrivenModel(m, torque=tq, motion=np.zeros(3), settings_vector=DeviceDynamicsSettings(step=2e-5).vector(1e-4))
+    co = rm.row_forces.coords
+    q = co.from_model(q0)
+    v = co.from_model(m.body_vector(np.random.default_rng(3).normal(size=(len(m.body_names), 3)) * 1e-2))
+    rm.settle_stations(q, v)
+    return m, q, v
+
+
+def test_extended_tangents_equal_central_differences():
+    """The row stepper's K_y = df/dy and C_y = df/dv_y of rv40e with the crank beam and torsion
+    (ExtendedRowForces: T^T K T, the stations' velocity columns folded into their carriers') against
+    central differences of its own f_y at a loaded, moving state: within 1e-5 of the largest entry
+    (differences of contact forces with steps of 1e-9 m / rad: truncation and round-off ~1e-7
+    relative). The stations' velocity columns are zero (Exudyn's closure: the deflection rate is not a
+    contact velocity); a station velocity handed to the kernels would make them the carriers'."""
+    from rvtool.solver.row_closures import ExtendedRowForces
+    m, q, v = _loaded_crank_model()
+    rf = ExtendedRowForces(m)
+    rf.evaluate(q, v)
+    K, C = (np.array(x) for x in rf.tangents())
+    co = rf.coords
+    assert len(co.stations) > 0 and co.n == 3 * len(m.body_names) + len(co.stations)
+    h = 1e-9
+    for A, moved in ((K, "q"), (C, "v")):
+        fd = np.zeros_like(A)
+        for j in range(co.n):
+            e = np.zeros(co.n)
+            e[j] = h
+            fp = np.array(rf.evaluate(*((q + e, v) if moved == "q" else (q, v + e))))
+            fm = np.array(rf.evaluate(*((q - e, v) if moved == "q" else (q, v - e))))
+            fd[:, j] = (fp - fm) / (2 * h)
+        scale = np.max(np.abs(A))
+        assert scale > 0.0
+        np.testing.assert_allclose(A, fd, rtol=0, atol=1e-5 * scale)
+    assert np.all(C[:, co.station_slice] == 0.0) and np.max(np.abs(C[:, :co.n_real])) > 0.0
+
+
+@pytest.mark.skipif(not __import__("warp").get_cuda_device_count(), reason="no CUDA device")
+def test_extended_row_forces_on_cuda_equal_cpu():
+    """ExtendedRowForces on cuda:0 (the pose and velocity gathers, the families and the sums inside
+    one CUDA graph) against the cpu's at a loaded, moving state: the same kernels and gather order; the
+    GPU's fused multiply-adds differ in the last bits."""
+    from rvtool.solver.row_closures import ExtendedRowForces
+    m, q, v = _loaded_crank_model()
+    out = {}
+    for dev in ("cpu", "cuda:0"):
+        rf = ExtendedRowForces(m, device=dev)
+        f = np.array(rf.evaluate(q, v))
+        out[dev] = (f,) + tuple(np.array(x) for x in rf.tangents())
+    np.testing.assert_allclose(out["cuda:0"][0], out["cpu"][0], rtol=0, atol=1e-7)     # a balance of ~1e4 N
+    for a, b in zip(out["cuda:0"][1:], out["cpu"][1:]):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-10 * np.max(np.abs(b)))
