@@ -15,7 +15,8 @@ integrates Exudyn's generalized-alpha step with
 Rows: ``rv80e`` (elastic tilting cranks + ported housing, the design as shipped), and one family
 switched on at a time: ``crank_beam_and_torsion`` (rv40e), ``elastic_ring_and_output_pins`` (rd40),
 ``cycloid_ported_housing`` (rd40, coarse housing mesh), ``involute_anchors`` (rv40e, mu = 0.05
-anchors on the involute stage). Per row: the same built design, the same RunSpec (step 2e-5 s,
+anchors on the involute stage), ``cycloid_pin_anchors_ported_housing`` (rd40, mu = 0.05 anchors on the
+cycloid pins, which sit on the ported housing's port bodies). Per row: the same built design, the same RunSpec (step 2e-5 s,
 abs_tol 1e-6, rel_tol 1e-8, full Newton, adaptive), the rated input speed and torque, the same
 static start (Exudyn's StaticSolver), both paths warmed by a 2-step run, ``--reps`` alternating runs
 each (the fastest counts), ``--steps`` steps (default 500, ``--quick`` 20).
@@ -61,10 +62,12 @@ ROWS = {
     "elastic_ring_and_output_pins": ("rd40", {"pins": {"support": RING}, "output_pins": {"support": OUT}}),
     "cycloid_ported_housing": ("rd40", {"housing": {"model": "ports", "structure": {"mesh_size": 0.008}}}),
     "involute_anchors": ("rv40e", {"involute_stage": {"mu": 0.05, "friction_model": "anchor"}}),
+    "cycloid_pin_anchors_ported_housing": ("rd40", {"pin_contact": {"mu": 0.05, "friction_model": "anchor"},
+                                                    "housing": {"model": "ports", "structure": {"mesh_size": 0.008}}}),
 }
 
 
-NEEDS_NGSOLVE = ("rv80e", "cycloid_ported_housing")
+NEEDS_NGSOLVE = ("rv80e", "cycloid_ported_housing", "cycloid_pin_anchors_ported_housing")
 """Rows whose ported housing is reduced with NGSolve (skipped, named, where it is absent: the bare GPU image)."""
 
 
