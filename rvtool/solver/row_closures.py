@@ -51,8 +51,8 @@ class StepCoordinates:
     n_real ..), then the structures' eta (``modal``: (name, y slice, omega2, damping D, ODE2
     indices of eta in the model)); ``T``, ``T_v`` (n_x, n) the pose and velocity maps
     (``velocity_source`` (n_x,): the row coordinate whose velocity each one takes, -1: zero),
-    ``reference`` (n_x,) the row coordinates' reference; ``mass`` (n,) the diagonal mass [kg,
-    kg m^2, 1 (modal)], 0 for the massless stations."""
+    ``reference`` (n_x,) the row coordinates' reference. The diagonal mass of y (bodies [kg, kg
+    m^2], stations 0, eta 1) is :class:`rvtool.solver.row_dynamics.RowDrivenModel`'s ``mass``."""
     n_real: int
     n: int
     n_x: int
