@@ -21,6 +21,22 @@ Fields (SI units; distributions and their TOML form as :mod:`rvtool.variants.tol
   along the pin circle's tangent (``pins.centre_errors``, added to the design's). Drawn last (after
   ``crank_gear_pitch_deviation``), so that adding it left the other fields' draws of a seed unchanged.
 
+Position and profile fields (issue 30, Deliver 3), drawn after ``pin_pitch_deviation`` in this order, so that
+adding them left the fields above drawn the same for a seed. A position tolerance (ISO 1101) of diameter t
+confines a centre to a circle of radius t / 2; a file states it as the distribution of each coordinate of the
+deviation (e.g. normal with std = t / 6, so that 99 % of the centres fall in the zone):
+
+* ``pin_radial_position_error`` [m]: radial deviation of each ring pin's seat from the pin circle (one draw per
+  pin, outward positive; the tangential part is ``pin_pitch_deviation``'s), added to ``pins.centre_errors``,
+* ``wheel_bore_position_error`` [m]: the x and y deviation of crank k's bore in wheel j from its true position
+  (one draw per coordinate, crank and wheel; ``cranks.wheel_bore_errors``, wheel frame),
+* ``carrier_bore_position_error`` [m]: the x and y deviation of crank k's bearing seat in the carrier (one draw
+  per coordinate and crank; ``cranks.carrier_bore_errors``, carrier frame),
+* ``profile_equidistant_error`` [m]: the ground wheel profile's equidistant deviation, one value per reducer
+  (both wheels ground alike), added to ``profile.equidistant_mod`` (positive removes material),
+* ``profile_offset_error`` [m]: the ground profile's offset (pin-circle radius) deviation, one value per
+  reducer, added to ``profile.offset_mod``.
+
 Variant k draws from ``numpy.random.default_rng([seed, k])`` in the order of :data:`RV_FIELDS`.
 """
 from dataclasses import dataclass
@@ -31,7 +47,9 @@ from ..errors import RvtoolInputError
 from .tolerances import check_design_distributions, load_design_tolerances
 
 RV_FIELDS = ("crank_phase_error", "crank_eccentricity_error", "pin_radius_error", "needle_clearance",
-             "sun_pitch_deviation", "crank_gear_pitch_deviation", "pin_pitch_deviation")
+             "sun_pitch_deviation", "crank_gear_pitch_deviation", "pin_pitch_deviation", "pin_radial_position_error",
+             "wheel_bore_position_error", "carrier_bore_position_error", "profile_equidistant_error",
+             "profile_offset_error")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -44,6 +62,11 @@ class RvToleranceSpec:
     sun_pitch_deviation: object = None
     crank_gear_pitch_deviation: object = None
     pin_pitch_deviation: object = None
+    pin_radial_position_error: object = None
+    wheel_bore_position_error: object = None
+    carrier_bore_position_error: object = None
+    profile_equidistant_error: object = None
+    profile_offset_error: object = None
 
     def __post_init__(self):
         check_design_distributions(self, RV_FIELDS)
@@ -86,10 +109,28 @@ def sample_rv_design(spec, design, k, seed):
             f = np.asarray(d.sample(rng, n * design.crank_gear.n_teeth), float).reshape(n, -1)
             v = tuple(tuple(float(x) for x in row - row.mean()) for row in f)
             changes.setdefault("cranks", {})["gear_pitch_deviations"] = v
-        else:
+        elif nm == "pin_pitch_deviation":
             f = np.asarray(d.sample(rng, design.pins.n_pins), float)
             v = tuple(float(x) for x in f - f.mean())
             changes.setdefault("pins", {})["centre_errors"] = pin_pitch_centre_errors(design.pins, v)
+        elif nm == "pin_radial_position_error":
+            v = tuple(float(x) for x in d.sample(rng, design.pins.n_pins))
+            base = changes.get("pins", {}).get("centre_errors", design.pins.centre_errors)
+            changes.setdefault("pins", {})["centre_errors"] = pin_radial_centre_errors(design.pins, v, base)
+        elif nm == "wheel_bore_position_error":
+            f = np.asarray(d.sample(rng, (n, design.n_wheels, 2)), float)
+            v = tuple(tuple(tuple(float(x) for x in xy) for xy in row) for row in f)
+            changes.setdefault("cranks", {})["wheel_bore_errors"] = v
+        elif nm == "carrier_bore_position_error":
+            f = np.asarray(d.sample(rng, (n, 2)), float)
+            v = tuple(tuple(float(x) for x in xy) for xy in f)
+            changes.setdefault("cranks", {})["carrier_bore_errors"] = v
+        elif nm == "profile_equidistant_error":
+            v = float(d.sample(rng))
+            changes.setdefault("profile", {})["equidistant_mod"] = design.profile.equidistant_mod + v
+        else:
+            v = float(d.sample(rng))
+            changes.setdefault("profile", {})["offset_mod"] = design.profile.offset_mod + v
         drawn[nm] = v
     return design.replace(**changes), drawn
 
@@ -109,4 +150,18 @@ def pin_pitch_centre_errors(pins, single_pitch_deviations):
     e = s[:, None] * np.column_stack([np.cos(a), -np.sin(a)])
     if pins.centre_errors is not None:
         e = e + np.asarray(pins.centre_errors, float)
+    return tuple(tuple(float(x) for x in row) for row in e)
+
+
+def pin_radial_centre_errors(pins, radial, base=None):
+    """Pin-centre errors (z_b, 2) [m] of ring pins whose seats lie off the pin circle by ``radial`` [m] (one per
+    pin, outward positive), added to ``base`` ((z_b, 2) or None). Pin k sits at angle a_k = 2 pi k / z_b from +y,
+    clockwise (:func:`rvtool.geometry.cycloid.pin_centres`); its outward normal is (sin a_k, cos a_k)."""
+    r = np.asarray(radial, float)
+    if r.shape != (pins.n_pins,):
+        raise RvtoolInputError(f"pin radial position errors must have shape ({pins.n_pins},); got {r.shape}")
+    a = 2 * np.pi * np.arange(pins.n_pins) / pins.n_pins
+    e = r[:, None] * np.column_stack([np.sin(a), np.cos(a)])
+    if base is not None:
+        e = e + np.asarray(base, float)
     return tuple(tuple(float(x) for x in row) for row in e)

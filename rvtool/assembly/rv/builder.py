@@ -202,7 +202,8 @@ def gear_meshes(design, graph, layout):
 
 def needle_mountings(design, graph, layout):
     """Needle bearing of journal j of crank k into wheel j's bore k: the journal centre in the crank's
-    frame at the wheel's absolute phase (plus the crank's declared phase error), the bore on the crank circle."""
+    frame at the wheel's absolute phase (plus the crank's declared phase error), the bore on the crank circle
+    (plus its declared position error ``cranks.wheel_bore_errors``, in the wheel's frame)."""
     d = design
     out = []
     for k, b in enumerate(graph.crank_angles):
@@ -210,19 +211,28 @@ def needle_mountings(design, graph, layout):
         for j, ph in enumerate(d.wheels.phases):
             phase = ph + d.cranks.phase_error(k) - graph.crank_gear_angles0[k]
             jc = journal_centre(e_k, phase)
+            oc = (graph.crank_radius * math.cos(b), graph.crank_radius * math.sin(b))
+            if d.cranks.wheel_bore_errors:                      # absent: the nominal centre, bit-identical
+                dx, dy = d.cranks.wheel_bore_error(k, j)
+                oc = (oc[0] + dx, oc[1] + dy)
             out.append(Mounting(name=f"eccentric_bearing_c{k}w{j}", bearing=d.eccentric_bearing, inner=layout.crank(k),
-                                outer=layout.wheel(j), inner_centre=(float(jc[0]), float(jc[1])),
-                                outer_centre=(graph.crank_radius * math.cos(b), graph.crank_radius * math.sin(b))))
+                                outer=layout.wheel(j), inner_centre=(float(jc[0]), float(jc[1])), outer_centre=oc))
     return out
 
 
 def crank_mountings(design, graph, layout, seats=False):
     """Tapered pair of crank k in the carrier, cup centred on the crank circle; ``seats``: the cup on crank k's
-    seat body n_bodies + k of the ported carrier (:func:`ported_carrier`) instead of the carrier body."""
-    return [TaperedMounting(name=f"crank_bearing{k}", bearing=design.crank_bearing, inner=layout.crank(k),
-                            outer=layout.n_bodies + k if seats else layout.carrier,
-                            outer_centre=(graph.crank_radius * math.cos(b), graph.crank_radius * math.sin(b)))
-            for k, b in enumerate(graph.crank_angles)]
+    seat body n_bodies + k of the ported carrier (:func:`ported_carrier`) instead of the carrier body; the cup
+    off the crank circle by its declared seat position error (``cranks.carrier_bore_errors``, carrier frame)."""
+    out = []
+    for k, b in enumerate(graph.crank_angles):
+        oc = (graph.crank_radius * math.cos(b), graph.crank_radius * math.sin(b))
+        if design.cranks.carrier_bore_errors:                   # absent: the nominal centre, bit-identical
+            dx, dy = design.cranks.carrier_bore_error(k)
+            oc = (oc[0] + dx, oc[1] + dy)
+        out.append(TaperedMounting(name=f"crank_bearing{k}", bearing=design.crank_bearing, inner=layout.crank(k),
+                                   outer=layout.n_bodies + k if seats else layout.carrier, outer_centre=oc))
+    return out
 
 
 def ported_carrier(design, graph, layout, rigid, opts):

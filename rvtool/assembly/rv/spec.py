@@ -16,6 +16,8 @@ import math
 import tomllib
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from ...bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ...bearings.tapered import TaperedPair
 from ...errors import RvtoolInputError
@@ -44,6 +46,11 @@ class Cranks:
     [m] per crank (an empty list: none); gear_pitch_deviations: per crank, the single pitch deviations
     f_pt,j [m] of its spur gear (``crank_gear.n_teeth`` entries summing to zero, as
     ``InvoluteGear.single_pitch_deviations``; an empty list: every crank gear as ``crank_gear``).
+    wheel_bore_errors: per crank k, per wheel j, the (x, y) position error [m] of crank k's bore in
+    wheel j (the needle row's outer ring centre), in the wheel's frame, off the crank circle (an
+    empty list: every bore at its true position; a position tolerance of ISO 1101).
+    carrier_bore_errors: per crank k, the (x, y) position error [m] of crank k's bearing seat in the
+    carrier (the tapered pair's cup centre), in the carrier's frame (an empty list: none).
     shaft: the crankshaft as a beam between its tapered rows
     (:class:`~rvtool.structure.crank_beam.CrankShaft`, sub-table ``[cranks.shaft]``; rigid by
     default, the "nothing" variant).
@@ -56,6 +63,8 @@ class Cranks:
     phase_errors: tuple = angle_field(())
     eccentricity_errors: tuple = ()
     gear_pitch_deviations: tuple = ()
+    wheel_bore_errors: tuple = ()
+    carrier_bore_errors: tuple = ()
     shaft: CrankShaft = field(default_factory=CrankShaft)
     dynamics: FloatingDynamics = field(default_factory=FloatingDynamics)
 
@@ -75,6 +84,18 @@ class Cranks:
                                    f"valid: 0 or cranks.count = {self.count} (one list of pitch deviations per crank)")
         for k, f in enumerate(self.gear_pitch_deviations):
             check_finite(f"cranks.gear_pitch_deviations[{k}]", f)
+        if self.carrier_bore_errors:
+            e = np.asarray(self.carrier_bore_errors, float)
+            if e.shape != (self.count, 2):
+                raise RvtoolInputError(f"cranks.carrier_bore_errors must have shape ({self.count}, 2) (one (x, y) per "
+                                       f"crank) or be empty; got {e.shape}")
+            check_finite("cranks.carrier_bore_errors", e)
+        if self.wheel_bore_errors:
+            e = np.asarray(self.wheel_bore_errors, float)
+            if e.ndim != 3 or e.shape[0] != self.count or e.shape[2] != 2:
+                raise RvtoolInputError(f"cranks.wheel_bore_errors must have shape ({self.count}, n_wheels, 2) (per "
+                                       f"crank, one (x, y) per wheel) or be empty; got {e.shape}")
+            check_finite("cranks.wheel_bore_errors", e)
 
     def phase_error(self, k):
         """Eccentric phase error of crank k [rad]."""
@@ -82,6 +103,20 @@ class Cranks:
 
     def eccentricity_error(self, k):
         return float(self.eccentricity_errors[k]) if self.eccentricity_errors else 0.0
+
+    def wheel_bore_error(self, k, j):
+        """(x, y) position error [m] of crank k's bore in wheel j (wheel frame)."""
+        if not self.wheel_bore_errors:
+            return 0.0, 0.0
+        e = self.wheel_bore_errors[k][j]
+        return float(e[0]), float(e[1])
+
+    def carrier_bore_error(self, k):
+        """(x, y) position error [m] of crank k's seat in the carrier (carrier frame)."""
+        if not self.carrier_bore_errors:
+            return 0.0, 0.0
+        e = self.carrier_bore_errors[k]
+        return float(e[0]), float(e[1])
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -333,6 +368,15 @@ class RVDesign:
         if self.topology == "rv2" and (self.input_pinion is not None or self.compound_gear is not None):
             raise RvtoolInputError("topology = 'rv2' has no input_pinion / compound_gear sections; valid: "
                                    "remove them or set topology = 'rv3'")
+        if self.cranks.wheel_bore_errors:
+            nw = np.asarray(self.cranks.wheel_bore_errors, float).shape[1]
+            if nw != self.n_wheels:
+                raise RvtoolInputError(f"cranks.wheel_bore_errors has {nw} entries per crank; valid: one (x, y) per "
+                                       f"wheel, {self.n_wheels} (wheels.midplanes)")
+            if self.wheels.body == "ported":
+                raise RvtoolInputError("cranks.wheel_bore_errors with wheels.body = 'ported' is not implemented (the "
+                                       "ported wheel's FE bores sit at their true positions); valid: wheels.body = "
+                                       "'rigid' or no cranks.wheel_bore_errors")
         z = self.crank_gear.n_teeth
         for k, f in enumerate(self.cranks.gear_pitch_deviations):
             f = tuple(float(x) for x in f)
