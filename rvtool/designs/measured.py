@@ -5,6 +5,7 @@ Schema::
 
     format_version = 2
     design = "rv80e"
+    tolerances_commit = "..."   (optional: the commit that fixed <design>_tolerances.toml before the comparison)
     [source]            title, authors, reference (journal, volume, year, article), read_through
                         (where it was read, when not from the printed page), status ("read" | "transcribed")
     [[transmission_error]]  specimen, low, high (the measured TE range over the output revolution),
@@ -60,6 +61,7 @@ class Measured:
     source: MeasuredSource
     transmission_error: tuple
     path: str
+    tolerances_commit: str | None = None
 
 
 def _number(table, key, where):
@@ -74,6 +76,10 @@ def load_measured(path):
     from .catalogue import UNITS, read_data_file
     t, p = read_data_file(path, "measurement")
     design = text_field(t, "design", "file")
+    tc = text_field(t, "tolerances_commit", "file", required=False)
+    if tc is not None and not (len(tc) == 40 and all(c in "0123456789abcdef" for c in tc)):
+        raise RvtoolInputError(f"tolerances_commit = {tc!r} is not valid (valid: a 40-digit lower-case hex git commit, "
+                               "the commit that fixed the tolerance file before the comparison)")
     s = t.get("source")
     if not isinstance(s, dict):
         raise RvtoolInputError("section [source] is missing from the measurement file (title, authors, reference, "
@@ -108,4 +114,4 @@ def load_measured(path):
         te.append(MeasuredTE(specimen=text_field(r, "specimen", w), low=lo * f, high=hi * f, unit=unit, low_printed=lo,
                              high_printed=hi, conditions=text_field(r, "conditions", w),
                              model_low=None if ml is None else ml * f, model_high=None if mh is None else mh * f))
-    return Measured(design=design, source=source, transmission_error=tuple(te), path=str(p))
+    return Measured(design=design, source=source, transmission_error=tuple(te), path=str(p), tolerances_commit=tc)
