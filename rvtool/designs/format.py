@@ -489,4 +489,20 @@ def format_doc():
             ex = "" if value is None else f"`{value}`"
             out.append(f"| `{key}` | {unit} | {rng} | {'yes' if required else 'no'} | {ex} | {sentence(meaning)} |")
         out.append("")
+    out += _rv_tolerance_doc()
     return "\n".join(out) + "\n"
+
+
+def _rv_tolerance_doc():
+    """The keys of an RV tolerance file (``<design>_tolerances.toml``, :mod:`rvtool.variants.rv_tolerances`)."""
+    from .tolerance_keys import RV_TOLERANCE_KEYS as K
+    out = ["## RV tolerance files (`<design>_tolerances.toml`)", "",
+           "A `[tolerances]` table; every key optional (absent: no deviation, the design as it is), each an inline "
+           "table `{ dist = \"normal\" | \"uniform\" | \"truncnormal\" | \"fixed\", ... }` of the drawn value "
+           "(normal: mean, std > 0; uniform: low < high; truncnormal: mean, std, low, high; fixed: value), any "
+           "finite values. Variant k draws from `default_rng([seed, k])` in the order below "
+           "(`rvtool/variants/rv_tolerances.py`). A position tolerance (ISO 1101) of diameter t is written as the "
+           "distribution of each deviation coordinate.", "",
+           "| key | unit | meaning | writes |", "|---|---|---|---|"]
+    out += [f"| `{k}` | {unit} | {sentence(meaning)} | `{writes}` |" for k, (unit, meaning, writes) in K.items()]
+    return out + [""]

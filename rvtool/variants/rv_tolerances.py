@@ -43,13 +43,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..designs.tolerance_keys import RV_TOLERANCE_KEYS
 from ..errors import RvtoolInputError
 from .tolerances import check_design_distributions, load_design_tolerances
 
-RV_FIELDS = ("crank_phase_error", "crank_eccentricity_error", "pin_radius_error", "needle_clearance",
-             "sun_pitch_deviation", "crank_gear_pitch_deviation", "pin_pitch_deviation", "pin_radial_position_error",
-             "wheel_bore_position_error", "carrier_bore_position_error", "profile_equidistant_error",
-             "profile_offset_error")
+RV_FIELDS = tuple(RV_TOLERANCE_KEYS)
+"""The fields in the order a variant draws them (the keys of :data:`rvtool.designs.tolerance_keys.RV_TOLERANCE_KEYS`,
+which documents each for the format doc)."""
 
 
 @dataclass(frozen=True, kw_only=True)

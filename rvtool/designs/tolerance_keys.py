@@ -1,0 +1,31 @@
+"""The keys of the RV tolerance files (``<design>_tolerances.toml``): units and meanings, in draw order
+(sampler: :mod:`rvtool.variants.rv_tolerances`)."""
+
+RV_TOLERANCE_KEYS = {
+    "crank_phase_error": ("arcmin", "eccentric phase error of each crank (one draw per crank)",
+                          "cranks.phase_errors_deg"),
+    "crank_eccentricity_error": ("m", "e_k - e of each crank (one draw per crank)", "cranks.eccentricity_errors"),
+    "pin_radius_error": ("m", "actual minus nominal pin radius, one value per reducer", "pins.radius_error"),
+    "needle_clearance": ("m", "radial clearance of the needle sets, one value per reducer (support >= 0)",
+                         "eccentric_bearing.radial_clearance"),
+    "sun_pitch_deviation": ("m", "single pitch deviation of each sun tooth (minus their mean)",
+                            "sun_gear.single_pitch_deviations"),
+    "crank_gear_pitch_deviation": ("m", "single pitch deviation of each crank gear's teeth (per crank, minus its "
+                                   "mean)", "cranks.gear_pitch_deviations"),
+    "pin_pitch_deviation": ("m", "single pitch deviation of each pin seat along the pin circle; pin k moves "
+                            "tangentially by the accumulated pitch", "pins.centre_errors"),
+    "pin_radial_position_error": ("m", "radial deviation of each pin seat from the pin circle (outward positive)",
+                                  "pins.centre_errors"),
+    "wheel_bore_position_error": ("m", "x and y deviation of each crank's bore in each wheel (wheel frame)",
+                                  "cranks.wheel_bore_errors"),
+    "carrier_bore_position_error": ("m", "x and y deviation of each crank's bearing seat in the carrier",
+                                    "cranks.carrier_bore_errors"),
+    "profile_equidistant_error": ("m", "equidistant deviation of the ground wheel profile, one value per reducer "
+                                  "(positive removes material)", "profile.equidistant_mod (added)"),
+    "profile_offset_error": ("m", "offset deviation of the ground wheel profile, one value per reducer",
+                             "profile.offset_mod (added)"),
+}
+"""The keys of an RV tolerance file in the order a variant draws them (:data:`rvtool.variants.rv_tolerances.RV_FIELDS`
+is this order): (unit of the drawn value, meaning, the design key it writes), for the format documentation
+(:func:`rvtool.designs.format.format_doc`). A new key goes at the end, so that the earlier keys' draws of a seed
+stay as they were."""
