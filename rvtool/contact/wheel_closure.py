@@ -149,6 +149,17 @@ class WheelBodyClosure(ElasticPinClosure):
             K[nr + j * m:nr + (j + 1) * m, 3 * w:3 * w + 3] -= np.einsum("cab,b->ac", self._dKb[j], uj)
         return Q, K, D
 
+    def station_forces(self, pose, u):
+        """(K u, K, dK u/dq) of the wheels' station stiffness K at real-body poses ``pose`` (the pose
+        derivative on each wheel's coordinates, as :meth:`_reduced` subtracts it)."""
+        self.update(pose)
+        u = np.asarray(u, float)
+        m = 2 * self.station.shape[1]
+        Gq = np.zeros((self.n_u, 3 * self.n_bodies))
+        for j, w in enumerate(self.wheels):
+            Gq[j * m:(j + 1) * m, 3 * w:3 * w + 3] = np.einsum("cab,b->ac", self._dKb[j], u[j * m:(j + 1) * m])
+        return self._Kb @ u, self._Kb, Gq
+
     def solve(self, pose, vel, u0=None):
         self.update(pose)
         return super().solve(pose, vel, u0)
