@@ -255,8 +255,8 @@ class ElasticPinClosure:
         u = np.asarray(u, float)
         if self.support is None:
             return self._Kb @ u, self._Kb, None
-        F, _ = self.support.forces(u.reshape(self.n_pins, self.n_stations, len(self.dofs)))
-        return F.ravel(), self.support_tangent(u), None
+        F, G = self.support.forces(u.reshape(self.n_pins, self.n_stations, len(self.dofs)))
+        return F.ravel(), self._block_diagonal(G), None
 
     @property
     def extension(self):
@@ -280,6 +280,10 @@ class ElasticPinClosure:
         if self.support is None:
             return self._Kb
         _, G = self.support.forces(np.asarray(u, float).reshape(self.n_pins, self.n_stations, len(self.dofs)))
+        return self._block_diagonal(G)
+
+    def _block_diagonal(self, G):
+        """(n_u, n_u) from the per-pin blocks G (n_pins, m, m)."""
         m = self.n_stations * len(self.dofs)
         out = np.zeros((self._n_u, self._n_u))
         for p in range(self.n_pins):
