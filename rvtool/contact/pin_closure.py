@@ -147,6 +147,9 @@ class ElasticPinClosure:
         self._condense_factor = 1.0
         self.joint = bool(joint)
         self._network = None          # the JointNetwork of a joint closure, built on its first solve
+        #: evaluations of the inner set made by this closure's solves (of the leaf contact set where this is the
+        #: innermost closure, by a joint network above it included): the cost counter of the nesting
+        self.inner_evaluations = 0
 
     def __getattr__(self, name):
         # row attributes of the inner set (mesh_of, pin_of, meshes, pin_forces, ...); only reached
@@ -209,6 +212,7 @@ class ElasticPinClosure:
                 u = np.zeros(self._n_u)
             ext, vext = self._extended(pose, vel, u)
             ev = self.inner.evaluate(ext, vext, check=False)
+            self.inner_evaluations += 1
             Q, K, D = self._reduced(ev, u)
             r = np.abs(Q[nr:]).max(initial=0.0)
             for it in range(self.max_iterations):
@@ -220,6 +224,7 @@ class ElasticPinClosure:
                     un = u + step * du
                     ext, vext = self._extended(pose, vel, un)
                     evn = self.inner.evaluate(ext, vext, check=False)
+                    self.inner_evaluations += 1
                     Qn, Kn, Dn = self._reduced(evn, un)
                     rn = np.abs(Qn[nr:]).max(initial=0.0)
                     if rn < r or self._accepted(rn, evn):
@@ -405,6 +410,7 @@ class JointNetwork:
         x = np.concatenate([np.asarray(pose, float).ravel(), U])
         v = np.concatenate([np.asarray(vel, float).ravel(), np.zeros_like(U)])
         ev = self.leaf.evaluate((self.P @ x).reshape(-1, 3), (self.P @ v).reshape(-1, 3), check=False)
+        self.chain[-1].inner_evaluations += 1
         Q = self.PT @ ev.Q
         K = np.ascontiguousarray((self.PT @ (self.PT @ np.asarray(ev.dQdq)).T).T)
         D = None if ev.dQdv is None else np.ascontiguousarray((self.PT @ (self.PT @ np.asarray(ev.dQdv)).T).T)
@@ -430,7 +436,6 @@ class JointNetwork:
         U = self._U.copy()
         if u0 is not None:
             U[:n0] = u0
-        top = self.chain[0]
         for restart in (False, True):
             if restart:
                 U = np.zeros_like(U)

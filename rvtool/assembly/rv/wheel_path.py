@@ -182,6 +182,14 @@ def chain_of(evaluator):
     return chain, e
 
 
+def contact_evaluations(evaluator):
+    """Evaluations of the innermost contact set made so far through the closures nested in ``evaluator``
+    (:attr:`~rvtool.contact.pin_closure.ElasticPinClosure.inner_evaluations` of the innermost closure): the cost
+    counter of the nesting (cases/benchmarks/bench_nested_wheels.py)."""
+    chain, _ = chain_of(evaluator)
+    return chain[-1].inner_evaluations if chain else 0
+
+
 def inner_pose(chain, depth, pose):
     """Poses of the bodies closure ``chain[depth]`` is evaluated on, from the top element's static
     poses ``pose``: every outer closure's extended pose at its solved deflections."""
