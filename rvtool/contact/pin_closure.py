@@ -195,7 +195,9 @@ class ElasticPinClosure:
         reduced system; where it does not converge, the nested solve below (each inner closure
         solved for every evaluation of this one)."""
         if self.joint and isinstance(self.inner, ElasticPinClosure):
-            if self._network is None:
+            if self._network is None or self._network.chain[0] is not self:
+                # (built on the first solve; rebuilt for a copy of the closure, e.g. a model snapshot's, whose
+                # copied __dict__ still names the original's network)
                 self._network = JointNetwork(self)
             out = self._network.solve(pose, vel, u0)
             if out[3]:
