@@ -70,13 +70,17 @@ def main(argv=None):
     t0 = time.perf_counter()
     names = tuple(args.designs.split(",")) if args.designs else (QUICK["designs"] if args.quick else DESIGNS)
     samples = args.samples if args.samples is not None else (QUICK["samples"] if args.quick else SAMPLES)
-    per = {name: one_design(name, samples) for name in names}
-    results = {"designs": per, "samples_per_design": samples, "band_is_short": samples < SAMPLES,
-               "issue_samples": SAMPLES}
-    casekit.verdict(results, judge)
-    return casekit.write_results(args.out, results, settings={"quick": args.quick, "samples": samples,
-                                                              "designs": list(names), "seed": 0},
-                                 wall_s=time.perf_counter() - t0)
+    per, out = {}, None
+    for name in names:
+        per[name] = one_design(name, samples)
+        # written after every design (a long run that stops keeps the designs it finished; ``designs_done``)
+        results = {"designs": dict(per), "samples_per_design": samples, "band_is_short": samples < SAMPLES,
+                   "issue_samples": SAMPLES, "designs_done": list(per), "designs_asked": list(names)}
+        casekit.verdict(results, judge)
+        out = casekit.write_results(args.out, results, settings={"quick": args.quick, "samples": samples,
+                                                                 "designs": list(names), "seed": 0},
+                                    wall_s=time.perf_counter() - t0)
+    return out
 
 
 if __name__ == "__main__":
