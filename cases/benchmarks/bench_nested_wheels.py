@@ -65,7 +65,7 @@ SOLVE_PARTS = {"contact_evaluations": ("contact/stacked.py", "evaluate"),
                "wheel_station_stiffness": ("contact/wheel_closure.py", "update"),
                "groove_law": ("contact/groove.py", "forces"),
                "network_condensation": ("contact/pin_closure.py", "_condensed"),
-               "nested_element": ("contact/pin_closure.py", "solve")}
+               "series_closures": ("contact/pin_closure.py", "solve")}
 
 
 def all_on_design():
@@ -193,21 +193,24 @@ def main(argv=None):
     n0 = contact_evaluations(el)
     (ba, states), ba_cpu, st = profiled(lambda: b_over_a(model))
     parts = cumulative(st, SOLVE_PARTS)
-    element_cpu = parts.pop("nested_element")
+    element_cpu = parts.pop("series_closures")
     n_eval = ncalls(st, "contact/pin_closure.py", "evaluate")      # the element's evaluations (its top closure's)
     joint = {"cpu_s": ba_cpu, "value_Nm_per_arcmin": ba["value_Nm_per_arcmin"], "solver": ba["solver"],
              "contact_evaluations": contact_evaluations(el) - n0, "element_evaluations": n_eval,
-             "nested_element_cpu_s": element_cpu, "parts_cpu_s": parts,
-             "rest_note": "rest_cpu_s: the b/a less the nested element (Exudyn's Newton, the other contact elements)",
+             "series_closures_cpu_s": element_cpu, "parts_cpu_s": parts,
+             "rest_note": "series_closures_cpu_s: every series closure's solves (the nested element's joint network "
+                          "and the ported carrier's seat closure); rest_cpu_s: the b/a less those (Exudyn's Newton, "
+                          "the other contact elements)",
              "rest_cpu_s": None if element_cpu is None else ba_cpu - element_cpu}
     elements, diff = element_evaluations(model, states[0])
     nested_warm = elements["nested"]["warm"]["cpu_s"]
     results = {"design": DESIGN, "build": build, "b_over_a_joint": joint, "element": elements,
                "element_joint_vs_nested": diff, "blas_threads": blas_threads(),
                "b_over_a_nested_estimate_cpu_s": ba_cpu - (element_cpu or 0.0) + nested_warm * n_eval,
-               "b_over_a_nested_estimate_note": "ESTIMATE, not a run: the joint b/a's rest (outside the element) plus "
+               "b_over_a_nested_estimate_note": "ESTIMATE, not a run: the joint b/a's rest (outside the closures) plus "
                                                 "its element evaluations times the nested element's warm evaluation "
-                                                "(CPU s); the full mode runs the nested b/a"}
+                                                "(CPU s; the carrier's closure counted in the latter's place); the "
+                                                "full mode runs the nested b/a"}
     if not args.quick:
         os.environ[ENVIRONMENT_VARIABLE] = "nested"
         m2 = rvtool.build(d)
