@@ -280,7 +280,12 @@ def mounted_modes(model, q, *, n=12, full=False):
     Kr, Mr, fr, _ = linear_model(model, q, full=False)
     lam_r = sla.eigh((0.5 * (Kr[fr][:, fr] + Kr[fr][:, fr].T)).toarray(), Mr[fr][:, fr].toarray(), eigvals_only=True)
     sigma = 0.5 * float(lam_r[lam_r > 0][0])
-    lam, vec = spla.eigsh(Ks.tocsc(), k=k, M=Mf.tocsc(), sigma=sigma, which="LM", v0=np.ones(Ks.shape[0]))
+    # the shift-invert factorization with a minimum-degree ordering of A + A^T (A is symmetric): on RD-40's
+    # coarse wheels 26 s and 26 M entries in L + U, each solve 0.09 s, against 33 s, 54 M and 0.24 s with
+    # eigsh's own (COLAMD), the contacts coupling every profile coordinate of a wheel
+    lu = spla.splu((Ks - sigma * Mf).tocsc(), permc_spec="MMD_AT_PLUS_A")
+    op = spla.LinearOperator(Ks.shape, matvec=lu.solve, dtype=float)
+    lam, vec = spla.eigsh(Ks.tocsc(), k=k, M=Mf.tocsc(), sigma=sigma, OPinv=op, which="LM", v0=np.ones(Ks.shape[0]))
     order = np.argsort(lam)
     lam, vec = lam[order], vec[:, order]
     Mv = Mf @ vec
