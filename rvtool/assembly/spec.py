@@ -757,7 +757,13 @@ def replace(design, **sections):
     ``replace(d, wheels={"n_slices": 4}, n_wheels=1)``. The changed file-form data is loaded
     again, so links follow (a new wheel width is the output pins' contact length)."""
     from . import topologies
+    return topologies.design_from_table(replaced_source(design, **sections))
+
+
+def replaced_source(design, **sections):
+    """The file-form data :func:`replace` loads for ``replace(design, **sections)`` (the design's
+    ``source`` with the sections written in), without loading it."""
     source = getattr(design, "source", None)
     if source is None:
         raise RvtoolInputError("replace needs a design loaded from file-form data (load_design / design_from_dict)")
-    return topologies.design_from_table(_merge(copy.deepcopy(source), sections))
+    return _merge(copy.deepcopy(source), sections)
