@@ -78,7 +78,10 @@ def judge(r):
     """The case's checks on its results (see casekit.verdict)."""
     a = r["frozen"]
     return {
-        "frozen_te_rel": casekit.check(a["te_max_rel_diff"], 1e-9, "<=", why="issue 33: frozen = rigid, 1e-9 relative TE"),
+        "frozen_te_abs": casekit.check(a["te_max_abs_diff_arcsec"], 1e-6, "<=",
+                                       why="issue 33: frozen = rigid, TE within the golden backends' 1e-6 arcsec (1e-9 "
+                                           "of the rigid TE peak, ~1e-7 rad over the quick points, is one ulp of the "
+                                           "angles: measured 2e-10..1.7e-9 between processes)"),
         "frozen_states_rel": casekit.check(a["states_max_rel_diff"], 1e-9, "<=",
                                            why="frozen = rigid, equilibria 1e-9 relative (the golden backends' bound)"),
         "frozen_driven_rel": casekit.check(a["driven_torsion_max_diff_vs_pp"], 1e-6, "<=",
