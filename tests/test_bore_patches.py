@@ -1,0 +1,135 @@
+"""Compression-only bore patches of the elastic wheel (issue 30, ``wheels.structure.bore_ports``): the patch law
+and its tangent, the patch ports against the parent FE, the key off bit-identical, bad input by key.
+
+The law's tests use a synthetic stiffness (milliseconds); the wheel's use the coarse 8 mm mesh of
+tests/test_wheel_body.py (one mesh, a few seconds)."""
+import numpy as np
+import pytest
+
+import rvtool
+from rvtool import designs
+from rvtool.contact.bore_patches import patch_law, patch_matrix
+from rvtool.errors import RvtoolInputError
+from rvtool.structure.wheel_body import WheelBodySpec
+
+COARSE = {"mesh_size": 0.008, "samples_per_tooth": 4, "layers": 1}
+
+
+def synthetic(n_fixed=4, n_bores=2, n_patches=8, seed=3):
+    """A symmetric positive definite row stiffness [N/m] of the order of a wheel's and the patches' map."""
+    rng = np.random.default_rng(seed)
+    n_r = n_fixed + n_bores * n_patches
+    B = rng.standard_normal((n_r, n_r))
+    K = 1e8 * (B @ B.T / n_r + np.eye(n_r))
+    a = 2 * np.pi * np.arange(n_patches) / n_patches
+    normals = [0.95 * np.column_stack([np.cos(a + 0.1 * b), np.sin(a + 0.1 * b)]) for b in range(n_bores)]
+    return K, patch_matrix(n_fixed, normals), n_fixed
+
+
+def test_patch_law_is_compression_only_and_complementary():
+    """Patch forces p >= 0, gaps z >= 0, p . z = 0; the race's force is sum_k p_k n_k; a race pushed one way loads
+    the patches on that side only (the other arc opens), and pulled back the other way loads the opposite arc."""
+    K, P, nf = synthetic()
+    u = np.zeros(P.shape[1])
+    u[nf:nf + 2] = (1e-6, 0.0)                       # bore 0's race pushed along +x
+    s, T, open_, p, z = patch_law(K, P, nf, u)
+    assert p.min() >= 0 and z.min() >= 0
+    assert abs(p @ z) <= 1e-12 * np.abs(p).max() * np.abs(z).max() * len(p)
+    assert open_.any() and not open_.all()
+    n0 = P[nf:nf + 8, nf:nf + 2]
+    assert np.allclose(s[nf:nf + 2], n0.T @ p[:8], rtol=1e-9, atol=1e-9 * np.abs(s).max())
+    loaded = np.flatnonzero(p[:8] > 1e-9 * p.max())
+    assert np.all(n0[loaded, 0] > 0)                 # only the arc the race presses on carries load
+    s2, _, open2, p2, _ = patch_law(K, P, nf, -u)
+    assert np.all(n0[np.flatnonzero(p2[:8] > 1e-9 * p2.max()), 0] < 0)
+    assert s[nf] > 0 and s2[nf] < 0
+
+
+def test_patch_law_tangent_matches_central_differences():
+    """ds/du = P^T K_S P against central differences of s at a generic state (the set of open patches unchanged
+    over the step); the law is piecewise linear, so the match is to round-off (1e-7 relative)."""
+    K, P, nf = synthetic()
+    rng = np.random.default_rng(7)
+    u = 1e-6 * rng.standard_normal(P.shape[1])
+    s, T, open_, _, _ = patch_law(K, P, nf, u)
+    assert open_.any()
+    h = 1e-12
+    J = np.column_stack([(patch_law(K, P, nf, u + h * e)[0] - patch_law(K, P, nf, u - h * e)[0]) / (2 * h)
+                         for e in np.eye(len(u))])
+    assert np.abs(J - T).max() <= 1e-7 * np.abs(T).max()
+    assert np.allclose(T @ u, s, rtol=0, atol=1e-12 * np.abs(s).max())
+
+
+def test_all_closed_at_zero_and_bad_shapes():
+    """At u = 0 every patch counts as closed (the stiffest tangent: a Newton start sees every patch); shapes that
+    do not agree are refused."""
+    K, P, nf = synthetic()
+    s, T, open_, p, z = patch_law(K, P, nf, np.zeros(P.shape[1]))
+    assert not open_.any() and not s.any()
+    assert np.allclose(T, P.T @ K @ P)
+    with pytest.raises(RvtoolInputError):
+        patch_law(K, P, nf, np.zeros(3))
+
+
+@pytest.fixture(scope="module")
+def rv40e():
+    return rvtool.load_design(designs.path("rv40e"))
+
+
+@pytest.fixture(scope="module")
+def patched(rv40e):
+    from rvtool.assembly.wheel_body import wheel_model
+    return wheel_model(rv40e.replace(wheels={"body": "ported", "structure": {**COARSE, "bore_ports": 8}}), 0)
+
+
+def test_patch_ports_spread_and_against_parent_fe(patched):
+    """The patches read a uniform radial expansion of their bore as 1 and a translation t as n_k . t (n_k their
+    mean outward normal, about 0.95 long for a hat over 2 pi / N either side); their compliance (3-2-1 support and
+    projections) equals the parent's bordered inertia-relief solve to 1e-6 relative (the existing check)."""
+    from rvtool.structure.static import InertiaReliefCompliance
+    wb = patched
+    rows = wb.rows("bore1_patches")
+    assert len(rows) == 8 and rows.min() > max(wb.rows("bore2"))       # appended after every other row
+    V = wb.fe.vertices[wb.fe.dof_vertex]            # the vertex of every dof
+    c = np.array(wb.geometry.bores[1][:2])
+    r = np.linalg.norm(V[:, :2] - c, axis=1)
+    comp = wb.fe.dof_component
+    radial = np.zeros(wb.fe.n_dofs)                  # the unit radial field about bore 1's centre
+    for k in range(2):
+        radial[comp == k] = (V[comp == k, k] - c[k]) / r[comp == k]
+    assert np.allclose(wb.load_matrix[rows] @ radial, 1.0, atol=1e-9)
+    n = wb.patch_normals(1)
+    assert np.all((np.linalg.norm(n, axis=1) > 0.9) & (np.linalg.norm(n, axis=1) < 1.0))
+    sub = np.concatenate([wb.rows("bore0"), rows])
+    irc = InertiaReliefCompliance(wb.fe.elastic_stiffness, wb.fe.mass, wb.fe.rigid_body_modes())
+    u, _ = irc.solve(wb.load_matrix[sub].T.toarray())
+    C_ref = wb.measure_matrix[sub] @ u
+    C_ref = 0.5 * (C_ref + C_ref.T)
+    C = wb.static_compliance[np.ix_(sub, sub)]
+    assert np.abs(C - C_ref).max() <= 1e-6 * np.abs(C_ref).max()
+
+
+def test_key_off_is_the_mean_tie_bit_for_bit(rv40e, patched):
+    """bore_ports = 0 (the default) builds no patch rows and no patch law; with patches the other rows' load and
+    measure matrices are unchanged bit for bit (the patches only append rows)."""
+    from rvtool.assembly.wheel_body import wheel_model
+    assert WheelBodySpec().bore_ports == 0
+    off = wheel_model(rv40e.replace(wheels={"body": "ported", "structure": COARSE}), 0)
+    assert not any(g.endswith("_patches") for g in off.groups)
+    n = off.load_matrix.shape[0]
+    for a, b in ((off.load_matrix, patched.load_matrix), (off.measure_matrix, patched.measure_matrix)):
+        d = (b[:n] - a)
+        assert d.nnz == 0 or not d.data.any()
+        assert np.array_equal(a.indices, b[:n].indices) and np.array_equal(a.data, b[:n].data)
+
+
+@pytest.mark.parametrize("value", [3, 65, -1, 2.5, True, "8"])
+def test_bad_bore_ports_names_the_key(rv40e, value):
+    with pytest.raises(RvtoolInputError, match=r"wheels\.structure\.bore_ports = .*valid"):
+        rv40e.replace(wheels={"body": "ported", "structure": {"bore_ports": value}})
+
+
+def test_more_patches_than_the_bore_mesh_carries_is_refused(rv40e):
+    from rvtool.assembly.wheel_body import wheel_model
+    with pytest.raises(RvtoolInputError, match=r"wheels\.structure\.bore_ports = 64 .*mesh_size"):
+        wheel_model(rv40e.replace(wheels={"body": "ported", "structure": {**COARSE, "bore_ports": 64}}), 0)
