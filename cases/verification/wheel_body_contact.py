@@ -39,7 +39,9 @@ bore's mean displacement follows its journal's centre, Lagrange multipliers, no 
 member with the same tie (``bore_ports = 0``, the model before the patches), held to the same 5 % (check
 ``body_with_the_same_bore_tie``). Also reported: the reduced member with the mean tie against the reference (the
 figure before the patches), the patch count's convergence (4, 8, 16 per bore), in the full run the reduced wheel
-on three meshes, the local share of the reduced twist, the twist with the FE's near field counted twice (ports
+on three meshes, both models once more with Poisson's ratio 0 (``poisson_diagnostic``: the 3D body and plane
+stress are then the same elasticity, so what remains is the ports, the local law and the bore patches), the local
+share of the reduced twist, the twist with the FE's near field counted twice (ports
 measured on the surface, ``port_depth = 0``, the local law still to r_p), the reference's pin forces beside the
 reduced ones.
 
@@ -530,6 +532,11 @@ def main(argv=None):
     diag_level = levels[-2]
     th_mean, info_mean = reference_twist(d, prof, pins, cand, torque, diag_level, bores="mean")
     th_contact_diag = ref[-2]["theta_rad"]
+    # diagnostic: Poisson's coupling off in both models (nu = 0: the 3D body and plane stress are the same
+    # elasticity), the reference on the second finest level, the reduced wheel with its patches
+    d0 = d.replace(material={"poisson_ratio": 0.0})
+    th_nu0_red = reduced_twist(d0, wheel_model(d0, 0), pins, cand, torque)[0]
+    th_nu0_ref = reference_twist(d0, prof, pins, cand, torque, diag_level)[0]
     th_ref = ref[-1]["theta_rad"]
     thetas = np.array([x["theta_rad"] for x in ref])
     local_work = float(np.sum(F_red * local))           # the local approaches' work against the journals' (T theta)
@@ -558,6 +565,10 @@ def main(argv=None):
             "bore_model_ratio_contact_to_mean": th_contact_diag / th_mean,
             "reduced_bore_model_ratio_patches_to_mean": th_red / th_mean_red,
             "pin_forces_N": info_mean["pin_forces_N"], "wall_s": info_mean["wall_s"]},
+        "poisson_diagnostic": {
+            "level": diag_level, "theta_reduced_nu0_rad": th_nu0_red, "theta_reference_nu0_rad": th_nu0_ref,
+            "ratio_reduced_to_reference_nu0": th_nu0_red / th_nu0_ref,
+            "ratio_reduced_to_reference_same_level": th_red / th_contact_diag},
         "contacts_candidates": len(cand), "contacts_active_reduced": int((F_red > 0).sum()),
         "pin_forces_reduced_N": F_red.tolist(), "pin_forces_reference_N": ref[-1]["pin_forces_N"],
         "reduced_mesh": wb.fe.counts(), "reduced_s": t_red,

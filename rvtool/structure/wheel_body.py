@@ -95,8 +95,9 @@ class WheelBodySpec:
     r_p/2 to 2 r_p, the case reports the share at both ends). pillar_holes, lightening_holes:
     :class:`HoleSet` tables (``[wheels.structure.pillar_holes]``; count 0 = none). material: the
     wheel's material (None: the design's ``[material]``). bore_ports: radial patch ports per
-    crank bore [-] (0, the default: only the bore's mean motion ``bore{k}``, the journal tied to it;
-    N in [4, 64]: also N compression-only patches ``bore{k}_patches``, module docstring).
+    crank bore [-] (0, the default: the bore's mean motion follows its journal, a bilateral tie; 4
+    to 64: N compression-only patches around each bore, which the journal's needle row loads on its
+    loaded arc only, so the bore ovalises; at most the vertices the bore's mesh carries).
     """
     mesh_size: float = 0.004
     layers: int = 2
