@@ -241,6 +241,14 @@ class WheelBodyClosure(ElasticPinClosure):
         self.update(pose)
         return super().solve(pose, vel, u0)
 
+    @property
+    def open_patches(self):
+        """Per wheel the open patches (n_c N,) bool (bore k's at k N ... (k + 1) N - 1) of the last
+        evaluation of the station law; None without bore patches or before an evaluation."""
+        if not self.bore_ports or self.support.open_sets is None:
+            return None
+        return [None if o is None else o.copy() for o in self.support.open_sets]
+
     def energy(self, du):
         """sum_j du_j^T K_j du_j for station deflection increments du (n_w, n_s, 2) [m] (the mean bore tie;
         with bore patches :meth:`station_energy` at the solved deflections)."""
@@ -259,7 +267,8 @@ class _PatchSupport:
     def __init__(self, closure):
         self.closure = closure
         self.zero_load_stiffness = None         # the closure passes its own (identity) station compliance
-        self._open = None
+        #: per wheel, the open patches (n_c N,) bool of the last evaluation of the law (None before one)
+        self.open_sets = None
 
     def forces(self, u):
         """(s (n_w, n_s, 2) [N], ds/du (n_w, 2 n_s, 2 n_s) [N/m]) at station deflections u (n_w, n_s, 2)."""
@@ -267,13 +276,13 @@ class _PatchSupport:
         u = np.asarray(u, float)
         n_w, n_s, _ = u.shape
         zb2 = 2 * cl.n_ring_pins
-        if self._open is None:
-            self._open = [None] * n_w
+        if self.open_sets is None:
+            self.open_sets = [None] * n_w
         s = np.zeros((n_w, 2 * n_s))
         G = np.zeros((n_w, 2 * n_s, 2 * n_s))
         for j in range(n_w):
             K, P, _ = cl._patch_data[j]
-            s[j], G[j], self._open[j], _, _ = patch_law(K, P, zb2, u[j].ravel(), self._open[j])
+            s[j], G[j], self.open_sets[j], _, _ = patch_law(K, P, zb2, u[j].ravel(), self.open_sets[j])
         return s.reshape(u.shape), G
 
     def pose_derivative(self, j, uj):
@@ -282,7 +291,7 @@ class _PatchSupport:
         cl = self.closure
         zb2 = 2 * cl.n_ring_pins
         _, _, steps = cl._patch_data[j]
-        open_ = self._open[j] if self._open is not None and self._open[j] is not None else None
+        open_ = self.open_sets[j] if self.open_sets is not None and self.open_sets[j] is not None else None
         if open_ is None:
             K, P, _ = cl._patch_data[j]
             open_ = patch_law(K, P, zb2, uj)[2]
