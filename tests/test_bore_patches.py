@@ -168,3 +168,12 @@ def test_patched_closure_tangent_matches_central_differences(rv40e):
     fd = (ev.evaluate(pose + step * v, vel).Q - ev.evaluate(pose - step * v, vel).Q) / (2 * step)
     Kv = K @ v.ravel()
     assert np.abs(fd - Kv).max() <= 1e-6 * np.abs(Kv).max()
+
+
+def test_flexible_wheels_refuse_bore_patches_by_key(rv40e):
+    """The floating flexible wheels of dynamic runs keep mean-motion bore ports: bore_ports > 0 is refused there
+    by key (before any mesh is built)."""
+    from rvtool.assembly.rv.flexible_wheels import wheel_mesh
+    d = rv40e.replace(wheels={"structure": {**COARSE, "bore_ports": 8}})
+    with pytest.raises(RvtoolInputError, match=r"wheels\.structure\.bore_ports = 8 with wheels\.dynamics"):
+        wheel_mesh(d, 0)
