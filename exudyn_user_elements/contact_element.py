@@ -185,6 +185,21 @@ class ContactElement:
             return np.block([[J[:nr, :nr], J[:nr, nr:] @ P], [P.T @ J[nr:, :nr], P.T @ J[nr:, nr:] @ P]])
         return Evaluation(vec(ev.Q), mat(ev.dQdq), mat(ev.dQdv), ev.obs, ev.trial_history, ev.finite)
 
+    def element_tangent(self, dQdq):
+        """dQ/dq (n, n) in the element's coordinates [q_r; eta] of a tangent dQ_b/dq_b of the contact
+        set on its bodies (the rigid ones, then the port bodies): T^T (dQ_b/dq_b) T with the port map
+        at the poses of the last :meth:`pose_velocity` (module docstring); ``dQdq`` itself without
+        ports. A tangent the set's evaluator forms outside :meth:`evaluate` (the stiffness budget's
+        stiffened view of an elastic closure, :mod:`rvtool.protocols.budget`) enters the element's
+        coordinates so."""
+        if self.ports is None:
+            return dQdq
+        J = np.asarray(dQdq, float)
+        if J.shape != (3 * self.evaluator.n_bodies,) * 2:
+            raise RvtoolInputError(f"dQdq has shape {J.shape}; the contact set's bodies give "
+                                   f"{(3 * self.evaluator.n_bodies,) * 2}")
+        return np.asarray(self._contract(Evaluation(np.zeros(len(J)), J, np.zeros_like(J), None, None, True)).dQdq)
+
     def evaluate(self, t, q, q_t):
         """Cached evaluation at element coordinates (trial: committed history is only read)."""
         q = np.asarray(q, dtype=float)

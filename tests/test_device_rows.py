@@ -187,8 +187,11 @@ def test_what_the_device_does_not_cover_is_named(rv):
     assert not sup.ok and any("station law" in r and "row path" in r for r in sup.reasons)
     with pytest.raises(RvtoolInputError, match=r"backend = 'device'.*station law"):
         choose("device", grooved, "equilibria")
-    with pytest.raises(RvtoolInputError, match=r"backend = 'device' \(fused\) cannot run dynamic.*cycloid reducers only"):
-        choose("device", model, "dynamic")           # no driven runs of RV on the device (fused stepper)
+    # driven runs of anchored RV take the fused backend's row stepper (anchors committed per accepted step,
+    # tests/test_fused_closures.py); the grooves' station law is refused there by name as well
+    assert choose("device", model, "dynamic")[1]["ran"] == "fused"
+    with pytest.raises(RvtoolInputError, match=r"backend = 'device'.*groove"):
+        choose("device", grooved, "dynamic")
     with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):
         DeviceRowNewton(rvtool.build(d), 0)
     with pytest.raises(RvtoolInputError, match=r"copies = 0 is outside the valid range"):

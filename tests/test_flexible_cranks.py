@@ -5,18 +5,19 @@ import numpy as np
 import pytest
 
 import rvtool
+from _flex_helpers import (COARSE, assert_backends_refuse, assert_frozen_is_rigid, assert_tangent_is_the_linear_model,
+                           short_driven_run)
+from _flex_helpers import flexible_cranks as flexible
+from _flex_helpers import rated_state as _rated_state
 from rvtool import designs
 from rvtool.assembly.spec import replace
 from rvtool.errors import RvtoolInputError
+from rvtool.units import ARCSEC_PER_RAD
 
 
 @pytest.fixture(scope="module")
 def rv40e():
     return rvtool.load_design(designs.path("rv40e"))
-
-
-def flexible(design, **kw):
-    return replace(design, cranks={"dynamics": {"model": "flexible", "n_modes": 4, **kw}})
 
 
 @pytest.fixture(scope="module")
@@ -26,8 +27,7 @@ def flex_model(rv40e):
 
 @pytest.fixture(scope="module")
 def rated_state(rv40e, flex_model):
-    from rvtool.solver.continuation import Continuation
-    return Continuation(flex_model, input_angle=0.0).go_to(-np.sign(flex_model.ratio) * rv40e.rated_torque)
+    return _rated_state(flex_model, rv40e)
 
 
 def test_free_beam_modes_against_the_euler_bernoulli_closed_form():
@@ -58,40 +58,17 @@ def test_switch_defaults_to_rigid(rv40e):
 
 
 def test_frozen_flexible_cranks_reproduce_the_rigid_te(rv40e):
-    from rvtool.protocols.precision import quasi_static_te
-    rigid = rvtool.build(rv40e)
-    angles = np.arange(3) * rigid.mesh_period / 3
-
-    def run(model):
-        qs = []
-        te = quasi_static_te(model, torque=rv40e.rated_torque, input_angles=angles, backend="exudyn",
-                             record=lambda k, a, q: qs.append([model.body_pose(q, b) - model.reference[b]
-                                                               for b in range(len(model.body_names))]))["te"]
-        return np.asarray(te), np.asarray(qs)
-    te_r, q_r = run(rigid)
-    frozen = rvtool.build(flexible(rv40e, frozen=True))
-    te_f, q_f = run(frozen)
     # held modal coordinates: every virtual body sits on its crank, so only the Newton system's size changes
     # its round-off; TE within 1e-6 arcsec (the golden backends' bound), equilibria 1e-9 relative
-    assert np.abs(te_f - te_r).max() * 206264.8 < 1e-6
-    assert np.abs(q_f - q_r).max() <= 1e-9 * np.abs(q_r).max()
-    assert set(frozen.structures["cranks"].coordinate_indices()) <= frozen.fixed_coordinates()
+    angles = np.arange(3) * rvtool.build(rv40e).mesh_period / 3
+    assert_frozen_is_rigid(rv40e, flexible(rv40e, frozen=True), angles, structure="cranks")
 
 
 def test_element_tangent_equals_the_crank_linear_model(flex_model, rated_state):
     from rvtool.protocols.flexible_modes import crank_linear_model
-    from rvtool.protocols.stiffness import assembled_stiffness
     m, q = flex_model, rated_state
     assert np.abs(m.structures["cranks"].coordinates()).max() > 0
-    K = assembled_stiffness(m, q)
-    free = sorted(set(range(len(q))) - set(m.fixed_coordinates()))
-    Ke = K[np.ix_(free, free)]
-    Kl, _, fl, _ = crank_linear_model(m, q)
-    Kl = Kl[np.ix_(fl, fl)]
-    ev_e = np.sort(np.linalg.eigvalsh(0.5 * (Ke + Ke.T)))
-    ev_l = np.sort(np.linalg.eigvalsh(0.5 * (Kl + Kl.T)))
-    # the same operator summed in two orders: round-off relative to the largest eigenvalue
-    assert len(ev_e) == len(ev_l) and np.abs(ev_e - ev_l).max() < 1e-9 * np.abs(ev_e).max()
+    assert_tangent_is_the_linear_model(m, q, crank_linear_model(m, q))
 
 
 def test_mounted_crank_modes_against_the_full_beam(flex_model, rated_state):
@@ -117,32 +94,21 @@ def test_unsupported_combinations_are_refused_by_name(rv40e, section, change, ke
 
 
 def test_backends_markers_and_a_short_driven_run(rv40e, flex_model):
-    from rvtool.protocols import vibration as V
-    from rvtool.solver import RunSpec
-    from rvtool.solver.backends import get as get_backend
-    from rvtool.solver.backends.base import FLEXIBLE_BODIES_REASON
-    for name, task in (("device", "equilibria"), ("fused", "dynamic")):
-        sup = get_backend(name).supports(flex_model, task)
-        assert not sup.ok and any(FLEXIBLE_BODIES_REASON in r for r in sup.reasons), (name, sup.reasons)
+    assert_backends_refuse(flex_model, (("device", "equilibria"), ("fused", "dynamic")))
     mk = flex_model.marker_frequencies(rv40e.input_speed_rpm)
     assert mk["crank_modes_hz"] == sorted({float(f) for f in flex_model.flexible_cranks.body.frequencies_hz})
-    duration = 10 * 2e-5
-    proto = V.VibrationProtocol(speed_rpm=rv40e.input_speed_rpm, torque=rv40e.rated_torque, duration=duration,
-                                sample_step=2e-5)
-    run = V.driven_response(flex_model, proto, RunSpec(end_time=duration, step=2e-5, abs_tol=1e-6, rel_tol=1e-8))
-    assert run["record"].accepted_steps >= 10 and np.all(np.isfinite(run["responses"]["torsion"]))
+    short_driven_run(flex_model, rv40e, 10)
 
 
 def test_flexible_wheels_and_cranks_share_one_modal_structure(rv40e):
     # both switches on: one modal structure (wheels, then cranks), the needle rows between two virtual bodies;
     # frozen both = rigid, and each frozen flag holds its own bodies only
     from rvtool.protocols.precision import quasi_static_te
-    coarse = {"mesh_size": 0.006, "samples_per_tooth": 4}
 
     def both(wf, cf):
         d = replace(flexible(rv40e, frozen=cf), wheels={"dynamics": {"model": "flexible", "n_modes": 4,
                                                                      "static_orders": 1, "frozen": wf},
-                                                        "structure": coarse})
+                                                        "structure": COARSE})
         return rvtool.build(d)
     rigid = rvtool.build(rv40e)
     angles = np.arange(2) * rigid.mesh_period / 2
@@ -153,7 +119,7 @@ def test_flexible_wheels_and_cranks_share_one_modal_structure(rv40e):
     assert set(fb.coordinate_indices()) <= frozen.fixed_coordinates()
     te_r = np.asarray(quasi_static_te(rigid, torque=rv40e.rated_torque, input_angles=angles)["te"])
     te_f = np.asarray(quasi_static_te(frozen, torque=rv40e.rated_torque, input_angles=angles)["te"])
-    assert np.abs(te_f - te_r).max() * 206264.8 < 1e-6
+    assert np.abs(te_f - te_r).max() * ARCSEC_PER_RAD < 1e-6
     m = both(False, True)
     held = set(m.fixed_coordinates())
     idx = m.structures["flexible_bodies"].coordinate_indices()

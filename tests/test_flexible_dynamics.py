@@ -5,10 +5,12 @@ import numpy as np
 import pytest
 
 import rvtool
+from _flex_helpers import (COARSE, assert_backends_refuse, assert_frozen_is_rigid, assert_tangent_is_the_linear_model,
+                           rated_state, short_driven_run)
+from _flex_helpers import flexible_wheels as flexible
 from rvtool import designs
 from rvtool.assembly.spec import replace
 from rvtool.errors import RvtoolInputError
-from rvtool.units import ARCSEC_PER_RAD
 
 QUARTER_MESH = np.arange(4) * 2 * np.pi / (40 * 4)     # 4 points over one RD-40 mesh cycle
 
@@ -16,15 +18,6 @@ QUARTER_MESH = np.arange(4) * 2 * np.pi / (40 * 4)     # 4 points over one RD-40
 @pytest.fixture(scope="module")
 def rd40():
     return rvtool.load_design(designs.path("rd40"))
-
-
-COARSE = {"mesh_size": 0.006, "samples_per_tooth": 4}
-"""A coarse wheel body (issue 30's mesh) for short tests."""
-
-
-def flexible(design, **kw):
-    return replace(design, wheels={"dynamics": {"model": "flexible", "n_modes": 4, "static_orders": 1, **kw},
-                                   "structure": COARSE})
 
 
 @pytest.fixture(scope="module")
@@ -42,24 +35,9 @@ def test_switch_defaults_to_rigid_and_refuses_bad_input(rd40):
 
 
 def test_frozen_flexible_wheels_reproduce_the_rigid_te(rd40):
-    from rvtool.protocols.precision import quasi_static_te
-    def run(model):
-        qs = []
-        te = quasi_static_te(model, torque=rd40.rated_torque, input_angles=QUARTER_MESH, backend="exudyn",
-                             record=lambda k, a, q: qs.append([model.body_pose(q, b) - model.reference[b]
-                                                               for b in range(len(model.body_names))]))["te"]
-        return np.asarray(te), np.asarray(qs)
-    te_r, q_r = run(rvtool.build(rd40))
-    frozen_model = rvtool.build(flexible(rd40, frozen=True))
-    te_f, q_f = run(frozen_model)
-    # the issue's bounds (those of the golden backend tests): TE 1e-6 arcsec, equilibria 1e-9 relative (held
-    # modal coordinates: the virtual bodies sit exactly on their base poses, so only the larger Newton
-    # system's round-off and stopping point differ)
-    assert np.abs(te_f - te_r).max() * ARCSEC_PER_RAD < 1e-6
-    assert np.abs(q_f - q_r).max() <= 1e-9 * np.abs(q_r).max()
-    # and the held coordinates are reported as fixed
-    zeta = frozen_model.structures["wheels"].coordinate_indices()
-    assert set(zeta) <= frozen_model.fixed_coordinates()
+    # the issue's bounds (those of the golden backend tests): TE 1e-6 arcsec, equilibria 1e-9 relative; the held
+    # coordinates are reported as fixed
+    assert_frozen_is_rigid(rd40, flexible(rd40, frozen=True), QUARTER_MESH, structure="wheels")
 
 
 def test_elastic_wheels_add_compliance(rd40, flex_model):
@@ -114,12 +92,7 @@ def test_modes_are_mean_axis_modes(rd40):
 
 
 def test_device_backends_refuse_flexible_wheels_by_name(flex_model):
-    from rvtool.solver.backends import get as get_backend
-    from rvtool.solver.backends.base import FLEXIBLE_BODIES_REASON
-    for name, task in (("device", "equilibria"), ("fused", "dynamic"), ("replica", "equilibria")):
-        sup = get_backend(name).supports(flex_model, task)
-        assert not sup.ok
-        assert any(FLEXIBLE_BODIES_REASON in r for r in sup.reasons), (name, sup.reasons)
+    assert_backends_refuse(flex_model, (("device", "equilibria"), ("fused", "dynamic"), ("replica", "equilibria")))
 
 
 def test_flexible_wheels_refuse_the_ported_wheel_body(rd40):
@@ -128,35 +101,16 @@ def test_flexible_wheels_refuse_the_ported_wheel_body(rd40):
 
 
 def test_short_driven_run_moves_the_modes(rd40, flex_model):
-    from rvtool.protocols import vibration as V
-    from rvtool.solver import RunSpec
-    speed = rd40.input_speed_rpm
-    duration = 20 * 2e-5
-    proto = V.VibrationProtocol(speed_rpm=speed, torque=rd40.rated_torque, duration=duration, sample_step=2e-5)
-    run = V.driven_response(flex_model, proto, RunSpec(end_time=duration, step=2e-5, abs_tol=1e-6, rel_tol=1e-8))
-    assert run["record"].accepted_steps >= 20
-    assert np.all(np.isfinite(run["responses"]["torsion"]))
+    short_driven_run(flex_model, rd40, 20)
     assert np.abs(flex_model.structures["wheels"].coordinates()).max() > 0
 
 
 def test_element_tangent_equals_the_mounted_linear_model(rd40, flex_model):
-    # the contact elements' contracted tangent (what Newton and the stiffness protocols use) and the
-    # independent assembly of rvtool.protocols.flexible_modes (operators times modes, the same contact
-    # tangents) are the same linear operator: equal spectra of K over the free coordinates
+    # the contact elements' contracted tangent and the independent assembly of rvtool.protocols.flexible_modes
+    # (operators times modes, the same contact tangents) are the same linear operator
     from rvtool.protocols.flexible_modes import linear_model
-    from rvtool.protocols.stiffness import assembled_stiffness
-    from rvtool.solver.continuation import Continuation
-    m = flex_model
-    q = Continuation(m, input_angle=0.0).go_to(-np.sign(m.ratio) * rd40.rated_torque)
-    K = assembled_stiffness(m, q)
-    free = sorted(set(range(len(q))) - set(m.fixed_coordinates()))
-    Ke = K[np.ix_(free, free)]
-    Kl, _, fl, _ = linear_model(m, q, full=False)
-    Kl = Kl[fl][:, fl].toarray()
-    ev_e = np.sort(np.linalg.eigvalsh(0.5 * (Ke + Ke.T)))
-    ev_l = np.sort(np.linalg.eigvalsh(0.5 * (Kl + Kl.T)))
-    # round-off of the two summation orders, relative to the largest eigenvalue (contact stiffness ~1e9)
-    assert np.abs(ev_e - ev_l).max() < 1e-9 * np.abs(ev_e).max()
+    q = rated_state(flex_model, rd40)
+    assert_tangent_is_the_linear_model(flex_model, q, linear_model(flex_model, q, full=False))
 
 
 def test_load_and_measure_maps_enter_force_and_gap_separately():

@@ -5,23 +5,17 @@ import numpy as np
 import pytest
 
 import rvtool
+from _flex_helpers import (assert_backends_refuse, assert_frozen_is_rigid, assert_tangent_is_the_linear_model,
+                           rated_state, short_driven_run)
+from _flex_helpers import flexible_wheels as flexible
 from rvtool import designs
 from rvtool.assembly.spec import replace
 from rvtool.errors import RvtoolInputError
-from rvtool.units import ARCSEC_PER_RAD
-
-COARSE = {"mesh_size": 0.006, "samples_per_tooth": 4}
-"""A coarse RV wheel body (issue 30's mesh) for short tests."""
 
 
 @pytest.fixture(scope="module")
 def rv40e():
     return rvtool.load_design(designs.path("rv40e"))
-
-
-def flexible(design, **kw):
-    return replace(design, wheels={"dynamics": {"model": "flexible", "n_modes": 4, "static_orders": 1, **kw},
-                                   "structure": COARSE})
 
 
 @pytest.fixture(scope="module")
@@ -55,24 +49,12 @@ def test_ports_and_coordinates_of_the_rv_wheels(rv40e, flex_model):
 
 
 def test_frozen_flexible_rv_wheels_reproduce_the_rigid_te(rv40e):
-    from rvtool.protocols.precision import quasi_static_te
-    rigid = rvtool.build(rv40e)
-    angles = np.arange(3) * rigid.mesh_period / 3
-
-    def run(model):
-        qs = []
-        te = quasi_static_te(model, torque=rv40e.rated_torque, input_angles=angles, backend="exudyn",
-                             record=lambda k, a, q: qs.append([model.body_pose(q, b) - model.reference[b]
-                                                               for b in range(len(model.body_names))]))["te"]
-        return np.asarray(te), np.asarray(qs)
-    te_r, q_r = run(rigid)
-    frozen = rvtool.build(flexible(rv40e, frozen=True))
-    te_f, q_f = run(frozen)
-    # the issue's bound, 1e-9 relative TE (held modal coordinates: the virtual bodies sit exactly on their
-    # bases, so only the larger Newton system's round-off and stopping point differ); equilibria likewise
-    assert np.abs(te_f - te_r).max() <= 1e-9 * np.abs(te_r).max()
-    assert np.abs(q_f - q_r).max() <= 1e-9 * np.abs(q_r).max()
-    assert set(frozen.structures["wheels"].coordinate_indices()) <= frozen.fixed_coordinates()
+    # the golden backends' bounds: TE 1e-6 arcsec, equilibria 1e-9 relative. Not the issue's 1e-9 relative TE
+    # (cases/rv/flexible_bodies.py): over these 3 points the rigid TE peaks at 1e-7 rad, so 1e-9 of it is
+    # 1e-16 rad, one ulp of the angles it is the difference of; measured 2e-10 to 1.7e-9 relative between
+    # processes (the wheel FE's round-off), a test that failed at random
+    angles = np.arange(3) * rvtool.build(rv40e).mesh_period / 3
+    assert_frozen_is_rigid(rv40e, flexible(rv40e, frozen=True), angles, structure="wheels")
 
 
 def test_flexible_rv_wheels_soften_the_torque_path(rv40e, flex_model):
@@ -93,19 +75,8 @@ def test_element_tangent_equals_the_mounted_linear_model(rv40e, flex_model):
     # the contact elements' contracted tangent and the independent assembly of rvtool.protocols.flexible_modes
     # (operators times modes, the same contact tangents) are the same linear operator over the free coordinates
     from rvtool.protocols.flexible_modes import linear_model
-    from rvtool.protocols.stiffness import assembled_stiffness
-    from rvtool.solver.continuation import Continuation
-    m = flex_model
-    q = Continuation(m, input_angle=0.0).go_to(-np.sign(m.ratio) * rv40e.rated_torque)
-    K = assembled_stiffness(m, q)
-    free = sorted(set(range(len(q))) - set(m.fixed_coordinates()))
-    Ke = K[np.ix_(free, free)]
-    Kl, _, fl, _ = linear_model(m, q, full=False)
-    Kl = Kl[fl][:, fl].toarray()
-    ev_e = np.sort(np.linalg.eigvalsh(0.5 * (Ke + Ke.T)))
-    ev_l = np.sort(np.linalg.eigvalsh(0.5 * (Kl + Kl.T)))
-    # round-off of the two summation orders, relative to the largest eigenvalue (contact stiffness ~1e9)
-    assert np.abs(ev_e - ev_l).max() < 1e-9 * np.abs(ev_e).max()
+    q = rated_state(flex_model, rv40e)
+    assert_tangent_is_the_linear_model(flex_model, q, linear_model(flex_model, q, full=False))
 
 
 @pytest.mark.parametrize("section, change, key", [
@@ -125,25 +96,13 @@ def test_unsupported_rv_combinations_are_refused_by_name(rv40e, section, change,
 
 
 def test_device_backends_refuse_flexible_rv_wheels_by_name(flex_model):
-    from rvtool.solver.backends import get as get_backend
-    from rvtool.solver.backends.base import FLEXIBLE_BODIES_REASON
-    for name, task in (("device", "equilibria"), ("fused", "dynamic")):
-        sup = get_backend(name).supports(flex_model, task)
-        assert not sup.ok
-        assert any(FLEXIBLE_BODIES_REASON in r for r in sup.reasons), (name, sup.reasons)
+    assert_backends_refuse(flex_model, (("device", "equilibria"), ("fused", "dynamic")))
 
 
 def test_markers_and_a_short_driven_run(rv40e, flex_model):
-    from rvtool.protocols import vibration as V
-    from rvtool.solver import RunSpec
     mk = flex_model.marker_frequencies(rv40e.input_speed_rpm)
     assert mk["wheel_modes_hz"] == sorted({float(f) for b in flex_model.flexible.bodies for f in b.frequencies_hz})
-    duration = 10 * 2e-5
-    proto = V.VibrationProtocol(speed_rpm=rv40e.input_speed_rpm, torque=rv40e.rated_torque, duration=duration,
-                                sample_step=2e-5)
-    run = V.driven_response(flex_model, proto, RunSpec(end_time=duration, step=2e-5, abs_tol=1e-6, rel_tol=1e-8))
-    assert run["record"].accepted_steps >= 10
-    assert np.all(np.isfinite(run["responses"]["torsion"])) and ARCSEC_PER_RAD > 0
+    short_driven_run(flex_model, rv40e, 10)
 
 
 def test_mounted_wheel_modes_against_the_full_fe(rv40e, flex_model):
@@ -153,8 +112,7 @@ def test_mounted_wheel_modes_against_the_full_fe(rv40e, flex_model):
     # target belongs to the default basis (cases/rv/flexible_bodies.py); this small basis (4 modes, orders 0-1)
     # is looser
     from rvtool.protocols.flexible_modes import mounted_modes
-    from rvtool.solver.continuation import Continuation
-    q = Continuation(flex_model, input_angle=0.0).go_to(-np.sign(flex_model.ratio) * rv40e.rated_torque)
+    q = rated_state(flex_model, rv40e)
     red = mounted_modes(flex_model, q, n=4)["frequencies_hz"]
     ful = mounted_modes(flex_model, q, n=4, full=True)["frequencies_hz"]
     assert np.all(red >= ful * (1 - 1e-9))

@@ -52,10 +52,8 @@ def _influence_rows():
 @pytest.mark.parametrize("case, make, named", [
     ("influence_tapered_rows", _influence_rows,
      r"row stepper: contact element 'crank_bearings' \(TaperedBearingSet\) has no device rows"),
-    ("involute_anchors", lambda: _edited(involute_stage={"mu": 0.05, "friction_model": "anchor"}),
-     r"row stepper: contact element 'gears' has stick--slip anchors: the row stepper commits no anchor history"),
-    ("elastic_crank_torsion", lambda: _edited(cranks={"shaft": {"torsion": "elastic"}}),
-     r"row stepper: the model has elastic closures or a reduced structure on port bodies"),
+    ("conformal_pin_grooves", lambda: _edited(pins={"groove": "conformal", "groove_clearance": 8e-6}),
+     r"row stepper: contact element 'pins': the closure 'pins' has a station law"),
 ])
 def test_fused_refuses_what_the_row_stepper_cannot_take_by_name(case, make, named):
     """A model neither path takes: --backend fused raises with the fused stepper's reasons and the
@@ -353,3 +351,23 @@ def test_analyze_vibration_on_the_fused_backend_equals_exudyn():
                                rtol=1e-6)
     rep = rvtool.analyze("rv40e", "vibration", quick=True, out_dir=None, backend="replica")["vibration"]
     assert rep.status == "skipped" and "does not run dynamic" in rep.reason
+
+
+def test_row_stepper_divides_the_run_as_exudyn():
+    """A duration that is no multiple of the step (the vibration protocol's quarter input revolution
+    is one): Exudyn takes ceil(duration / step) equal steps, and so does the row stepper (it took
+    steps of ``step`` and a short last one, which on rv80e's quick vibration run moved the torsion
+    p-p by 8e-4 arcsec); the same accepted times, TE equal to 1e-6 arcsec."""
+    import numpy as np
+
+    from rvtool.protocols.precision import dynamic_te
+    from rvtool.solver import RunSpec
+    from rvtool.units import ARCSEC_PER_RAD
+    d = rvtool.load_design("rv40e")
+    spec = RunSpec(end_time=6.5 * 2e-5, step=2e-5, abs_tol=1e-6, rel_tol=1e-8)
+    kw = dict(torque=d.rated_torque, speed_rpm=d.input_speed_rpm, duration=spec.end_time, run_spec=spec)
+    ex = dynamic_te(rvtool.build(d), solver="exudyn", **kw)
+    fu = dynamic_te(rvtool.build(d), solver="fused", **kw)
+    assert fu["stats"]["path"] == "row_stepper" and len(ex["t"]) == 8
+    np.testing.assert_array_equal(fu["t"], ex["t"])
+    assert np.max(np.abs(fu["te"] - ex["te"])) * ARCSEC_PER_RAD <= 1e-6

@@ -329,3 +329,50 @@ def test_output_pin_slices_have_an_upper_bound(tmp_path):
     table["output_pins"]["n_slices"] = 1000000
     with pytest.raises(RvtoolInputError, match=r"output_pins\.n_slices = 1000000 is outside the valid range \[1, 64\]"):
         _load(tmp_path, table)
+
+
+# (topology, section path, key, the valid range the template states and the loader enforces); each key was
+# "[lo, inf)" before, and a mistyped 1e6 built (meshed, factored, unrolled) for minutes without a word
+COUNT_BOUNDS = [
+    ("rv2", ("involute_stage",), "n_slices", "[1, 64] (integer)"),
+    ("std-involute", ("mesh",), "n_slices", "[1, 64] (integer)"),
+    ("cycloid", ("output_pins", "sleeve"), "updates", "[0, 256] (integer)"),
+    ("cycloid", ("housing",), "n_modes", "[0, 200] (integer)"),
+    ("cycloid", ("housing",), "n_fixed_interface_modes", "[0, 200] (integer)"),
+    ("cycloid", ("housing", "structure"), "n_ports", "[1, 256] (integer)"),
+    ("rv2", ("carrier", "structure"), "n_modes", "[0, 200] (integer)"),
+]
+
+
+@pytest.mark.parametrize("topology, path, key, valid", COUNT_BOUNDS)
+def test_count_keys_have_an_upper_bound(topology, path, key, valid, tmp_path):
+    """Count keys (slices, sleeve updates, retained modes, ports) stated "[lo, inf)": the template now
+    states the cost limit and the loader refuses a value above it by its key, before any meshing."""
+    rows = {(sec, k): rng for sec, k, value, unit, rng, meaning, required in key_table(topology)}
+    assert rows[(".".join(path), key)] == valid, rows[(".".join(path), key)]
+    table = _template_table(topology)
+    sub = table
+    for p in path:
+        sub = sub.setdefault(p, {})
+    sub[key] = 1000000
+    hi = re.search(r", (\d+)\]", valid).group(1)
+    with pytest.raises(RvtoolInputError, match=rf"{re.escape('.'.join(path))}\.{key} = 1000000 is outside the valid "
+                                               rf"range \[\d, {hi}\]"):
+        _load(tmp_path, table)
+    sub[key] = int(hi)                   # the bound itself is valid (the loader may refuse it for other reasons)
+    try:
+        _load(tmp_path, table)
+    except RvtoolInputError as exc:
+        assert f"{key} = {hi} is outside" not in str(exc), exc
+
+
+def test_std_mesh_window_is_bounded_by_the_wheels_teeth(tmp_path):
+    """``mesh.window`` ("[0, inf)") counts wheel teeth on each side of the pitch point: beyond
+    (wheel.n_teeth - 1) // 2 a tooth would be evaluated twice (and a mistyped 1e6 built for minutes)."""
+    table = _template_table("std-involute")
+    w_max = (table["wheel"]["n_teeth"] - 1) // 2
+    table["mesh"]["window"] = w_max + 1
+    with pytest.raises(RvtoolInputError, match=rf"mesh\.window = {w_max + 1} is outside the valid range \[0, {w_max}\]"):
+        _load(tmp_path, table)
+    table["mesh"]["window"] = w_max
+    assert _load(tmp_path, table).mesh.window == w_max

@@ -7,7 +7,8 @@ own buffers (Q (R, k), dQ/dq and dQ/dv (R, k, k)). Each output is a fixed sum of
 f_e of slot s (a family) sums ``Q_s[idx_s[j]]`` for j in ``ptr_s[e] .. ptr_s[e + 1]``, and the
 tangent entry (i, j) sums ``dQdq_s`` (K) and ``dQdv_s`` (C) over the list of output n + i n + j
 (both tangents have the same rows); the row buffers are read flattened. One thread per output
-entry (f) or per tangent entry (K and C together) walks every slot's list, in row order. Up to
+entry (f) or per reached tangent entry (K and C together; an entry no family's rows reach stays 0)
+walks every slot's list, in row order. Up to
 ``MAX_SLOTS`` families (one launch for all); unused slots have empty lists. f and the tangents
 are two launches, so that a caller gathers the tangents only where it needs them (a Newton
 iterate that has converged does not). The lists are :mod:`warp_contacts.segment_sum_ref`'s
@@ -100,6 +101,7 @@ def _kernels(dtype):
         p6: wp.array(dtype=wp.int32), i6: wp.array(dtype=wp.int32),
         p7: wp.array(dtype=wp.int32), i7: wp.array(dtype=wp.int32),
         n: int,
+        entries: wp.array(dtype=wp.int32),
         # Data in:
         k0: wp.array(dtype=dtype), v0: wp.array(dtype=dtype),
         k1: wp.array(dtype=dtype), v1: wp.array(dtype=dtype),
@@ -112,8 +114,8 @@ def _kernels(dtype):
         # Data out:
         out: wp.array(dtype=dtype),
     ):
-        e = wp.tid()
-        m = n + e                                  # the list of K entry e (row-major)
+        e = entries[wp.tid()]                      # a K entry (row-major) that some family's rows reach
+        m = n + e                                  # its list
         K = dtype(0.0)
         C = dtype(0.0)
         k, c = slot_tangents(m, p0, i0, k0, v0)
@@ -194,13 +196,21 @@ class RowGather:
                 model += [empty_ptr, dummy_i]
                 qs.append(dummy)
                 kv += [dummy, dummy]
+        # the tangent entries some family's rows reach (the others stay 0): one thread each, not n^2 (the
+        # extended models' tangents are sparse: rv80e 119^2 entries, RD-40's elastic pins 204^2)
+        reach = np.zeros(n * n, bool)
+        for ptr, _ in lists:
+            reach |= np.diff(np.asarray(ptr, np.int64)[n:n + n * n + 1]) > 0
+        self.entries = wp.array(np.flatnonzero(reach).astype(np.int32) if reach.any() else np.zeros(1, np.int32),
+                                dtype=wp.int32, device=device)
         self._args = (model, qs, kv)                      # the launches read these arrays in place
         self.out = wp.zeros(n + 2 * n * n, dtype=dtype, device=device)
         forces, tangents = _kernels(dtype)
         self._forces_cmd = wp.launch(forces, dim=n, inputs=model + qs, outputs=[self.out], device=device,
                                      record_cmd=True)
-        self._tangents_cmd = wp.launch(tangents, dim=n * n, inputs=model + [n] + kv, outputs=[self.out],
-                                       device=device, record_cmd=True)
+        self._tangents_cmd = wp.launch(tangents, dim=int(reach.sum()) if reach.any() else 1,
+                                       inputs=model + [n, self.entries] + kv, outputs=[self.out], device=device,
+                                       record_cmd=True)
         self.n = n
 
     def launch_forces(self):

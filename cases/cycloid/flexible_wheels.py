@@ -6,7 +6,8 @@ Checks and figures:
     (bound 1e-6 arcsec and 1e-9 relative, the issue's);
 (b) the mounted wheels, linearized at the rated torque (input angle 0), against a full FE of the
     same assembly (every mesh coordinate of both wheels, the same contact tangents and port
-    operators; rvtool.protocols.flexible_modes): the first in-plane modes;
+    operators; rvtool.protocols.flexible_modes): the first in-plane modes (--quick: the mounted
+    modes alone, positive; the full FE's shift-invert solve runs in the full run);
 (c) the dynamic TE spectrum against the number of retained modes (driven runs over the same window);
 (d) spectra of the output torsion with the mesh, bearing and wheel-mode markers (figure);
 (e) a driven RD-40 run at rated speed and torque with flexible wheels on the Exudyn path over one
@@ -19,11 +20,8 @@ import numpy as np
 
 from rvtool import build, casekit, designs, load_design
 from rvtool.assembly.spec import replace as replace_design
-from rvtool.protocols import vibration as V
-from rvtool.protocols.flexible_modes import mounted_modes
+from rvtool.protocols import flexible_modes as F
 from rvtool.protocols.precision import quasi_static_te
-from rvtool.solver import RunSpec
-from rvtool.solver.continuation import Continuation
 from rvtool.units import ARCSEC_PER_RAD
 
 DESIGN = designs.path("rd40")
@@ -43,27 +41,12 @@ def flexible(design, n_modes, static_orders=STATIC_ORDERS, structure=None, **kw)
     return replace_design(design, wheels=wheels)
 
 
-def te_and_states(model, design, angles):
-    """(TE [rad], body displacements (n, nb, 3)) of the quasi-static sequence at the rated torque."""
-    qs = []
-    nb = len(model.body_names)
-
-    def keep(k, angle, q):
-        qs.append([model.body_pose(q, b) - model.reference[b] for b in range(nb)])
-    te = quasi_static_te(model, torque=design.rated_torque, input_angles=angles, backend="exudyn", record=keep)["te"]
-    return np.asarray(te), np.asarray(qs)
-
-
 def driven(design, revs):
     """(run, protocol, model, wall_s) of a driven run at rated speed and torque over ``revs`` input revolutions."""
     model = build(design)
-    duration = revs * 60.0 / design.input_speed_rpm
-    proto = V.VibrationProtocol(speed_rpm=design.input_speed_rpm, torque=design.rated_torque, duration=duration,
-                                sample_step=STEP)
-    t0 = time.perf_counter()
-    run = V.driven_response(model, proto, RunSpec(end_time=duration, step=STEP, abs_tol=1e-6, rel_tol=1e-8),
-                            coordinates={"wheel0_x": (1, 0)})
-    return run, proto, model, time.perf_counter() - t0
+    run, proto, wall = F.driven_run(model, design.input_speed_rpm, design.rated_torque, revs, STEP,
+                                    {"wheel0_x": (1, 0)})
+    return run, proto, model, wall
 
 
 def judge(r):
@@ -82,13 +65,20 @@ def judge(r):
         # (a converged basis changes the response by less than the modes it adds carry)
         "te_spectrum_converged_in_modes": casekit.check(c["spectrum_change_vs_peak"][-1], 0.02, "<=",
                                                         why="largest two bases: spectrum change / peak"),
-        # (b) the issue's target on the first modes of the mounted wheels, with the default basis
-        "mounted_modes_vs_full_fe": casekit.check(r["modes"]["max_rel_diff_default_basis"], MODE_BOUND, "<=",
-                                                  why=f"issue 33: the first {MODES_COMPARED} modes of the mounted "
-                                                      "flexible wheels against the full FE of the same assembly"),
+        # (b) the mounted wheels: the contact tangents, their modes, and the issue's target on the first modes
+        # against the full FE with the default basis
         "mode_comparison_symmetric": casekit.check(r["modes"]["contact_tangent_asymmetry"], 1e-6, "<=",
                                                    why="frictionless contact tangents are symmetric (both models "
                                                        "take the symmetric part)"),
+        "mounted_modes_positive": casekit.check(min(r["modes"]["reduced_hz"][0]), 0.0, ">",
+                                                why="the mounted wheels at the rated torque: every free coordinate "
+                                                    "held by contacts or springs (no zero or unstable mode)"),
+        # the full FE of the mounted wheels (a shift-invert solve of ~17k coordinates with dense contact
+        # coupling, about 2/3 of the quick run's time) runs in the full run only
+        **({"mounted_modes_vs_full_fe": casekit.check(
+            r["modes"]["max_rel_diff_default_basis"], MODE_BOUND, "<=",
+            why=f"issue 33: the first {MODES_COMPARED} modes of the mounted flexible wheels against the full FE of "
+                "the same assembly")} if r["modes"].get("full_fe", True) else {}),
     }
 
 
@@ -104,39 +94,22 @@ def main(argv=None):
     # (a) frozen vs rigid, quasi-static TE over one mesh cycle
     n_pts = 8 if args.quick else 24
     angles = np.arange(n_pts) * mesh / n_pts
-    te_r, q_r = te_and_states(build(d), d, angles)
-    te_f, q_f = te_and_states(build(flexible(d, N_MODES, structure=st, frozen=True)), d, angles)
+    rigid = F.te_and_states(build(d), d.rated_torque, angles)
+    frozen = F.te_and_states(build(flexible(d, N_MODES, structure=st, frozen=True)), d.rated_torque, angles)
     flex_qs = np.asarray(quasi_static_te(build(flexible(d, N_MODES, structure=st)), torque=d.rated_torque,
                                          input_angles=angles)["te"])
     results["frozen"] = {
-        "te_max_abs_diff_arcsec": float(np.abs(te_f - te_r).max() * ARCSEC_PER_RAD),
-        "te_max_rel_diff": float(np.abs(te_f - te_r).max() / np.abs(te_r).max()),
-        "states_max_rel_diff": float(np.abs(q_f - q_r).max() / np.abs(q_r).max()),
-        "te_pp_rigid_arcsec": float(np.ptp(te_r) * ARCSEC_PER_RAD),
+        **F.frozen_differences(rigid, frozen),
+        "te_pp_rigid_arcsec": float(np.ptp(rigid[0]) * ARCSEC_PER_RAD),
         "te_pp_flexible_arcsec": float(np.ptp(flex_qs) * ARCSEC_PER_RAD),
         "points": n_pts,
     }
 
     # (b) mounted modes vs the full FE of the same linearized assembly, per basis (n_modes, static_orders)
     bases = ((N_MODES, STATIC_ORDERS),) if args.quick else ((8, -1), (8, 4), (8, 8))
-    modes = {"bases": [list(b) for b in bases], "reduced_hz": [], "full_hz": [], "rel_diff": [],
-             "contact_tangent_asymmetry": 0.0}
-    for nm, J in bases:
-        m = build(flexible(d, nm, J, structure=st))
-        q = Continuation(m, input_angle=0.0).go_to(-np.sign(m.ratio) * d.rated_torque)
-        red = mounted_modes(m, q, n=MODES_COMPARED)
-        ful = mounted_modes(m, q, n=MODES_COMPARED, full=True)
-        modes["reduced_hz"].append(red["frequencies_hz"].tolist())
-        modes["full_hz"].append(ful["frequencies_hz"].tolist())
-        modes["rel_diff"].append((red["frequencies_hz"] / ful["frequencies_hz"] - 1).tolist())
-        modes["contact_tangent_asymmetry"] = max(modes["contact_tangent_asymmetry"], red["asymmetry"])
-    i_def = bases.index((N_MODES, STATIC_ORDERS))
-    worst = np.abs(modes["rel_diff"][i_def])
-    modes["max_rel_diff_default_basis"] = float(worst.max())
-    modes["modes_within_target_default_basis"] = int(np.argmax(worst > MODE_BOUND)) if np.any(worst > MODE_BOUND) \
-        else len(worst)
-    modes["target_rel"] = MODE_BOUND
-    modes["target_met"] = bool(worst.max() <= MODE_BOUND)
+    modes, m = F.mode_comparison(lambda nm, J: build(flexible(d, nm, J, structure=st)), bases, d.rated_torque,
+                                 n=MODES_COMPARED, bound=MODE_BOUND, default=(N_MODES, STATIC_ORDERS),
+                                 full=not args.quick)
     summary = m.flexible.summary()
     modes["wheel_mesh"] = summary["mesh"]
     modes["wheel_source"] = summary["source"]
@@ -146,16 +119,10 @@ def main(argv=None):
     revs = 0.05 if args.quick else 1.0
     run_r, proto, model_r, wall_r = driven(d, revs)
     run_f, _, model_f, wall_f = driven(flexible(d, N_MODES, structure=st), revs)
-    rec = run_f["record"]
     results["driven"] = {
-        "n_modes": N_MODES, "static_orders": STATIC_ORDERS, "input_revolutions": revs,
+        "n_modes": N_MODES, "static_orders": STATIC_ORDERS,
         "n_coordinates_per_wheel": model_f.flexible.summary()["n_coordinates"],
-        "input_revolutions_run": float(run_f["t"][-1] * d.input_speed_rpm / 60.0),
-        "accepted_steps": rec.accepted_steps, "rejected_steps": rec.rejected_steps, "max_residual": rec.max_residual,
-        "abs_tol": 1e-6, "wall_s_flexible": wall_f, "wall_s_rigid": wall_r, "cost_ratio": wall_f / wall_r,
-        "wall_s_per_step_flexible": wall_f / max(rec.accepted_steps, 1),
-        "torsion_pp_flexible_arcsec": float(np.ptp(run_f["responses"]["torsion"]) * ARCSEC_PER_RAD),
-        "torsion_pp_rigid_arcsec": float(np.ptp(run_r["responses"]["torsion"]) * ARCSEC_PER_RAD),
+        **F.driven_cost((run_f, wall_f), (run_r, wall_r), revs, d.input_speed_rpm, STEP),
         # (Omega_wheel / omega_1)^2: the relative size of the quadratic-velocity coupling the mean-axis frame leaves out
         "neglected_coupling": model_f.flexible.bodies[0].neglected_coupling(2 * np.pi * d.input_speed_rpm / 60.0 / (zp - 1)),
     }
@@ -163,14 +130,9 @@ def main(argv=None):
     # (c) the dynamic TE spectrum against the number of modes over one window
     conv_revs = revs if args.quick else 0.1
     conv_bases = (4, 8) if args.quick else (4, 8, 16)
-    cproto = V.VibrationProtocol(speed_rpm=d.input_speed_rpm, torque=d.rated_torque,
-                                 duration=conv_revs * 60.0 / d.input_speed_rpm, sample_step=STEP)
-    spectra = []
-    for nm in conv_bases:
-        run = run_f if (nm == N_MODES and conv_revs == revs) else driven(flexible(d, nm, structure=st), conv_revs)[0]
-        spectra.append(V.vibration_spectra(run, cproto, "torsion"))
-    change = [float(np.max(np.abs(b["spectrum"] - a["spectrum"])) / np.max(b["spectrum"][1:]))
-              for a, b in zip(spectra[:-1], spectra[1:])]
+    runs = [run_f if (nm == N_MODES and conv_revs == revs) else driven(flexible(d, nm, structure=st), conv_revs)[0]
+            for nm in conv_bases]
+    spectra, change = F.spectrum_convergence(runs, F.driven_protocol(d.input_speed_rpm, d.rated_torque, conv_revs, STEP))
     results["convergence"] = {
         "n_modes": list(conv_bases), "static_orders": STATIC_ORDERS, "input_revolutions": conv_revs,
         "spectrum_change_vs_peak": change,
@@ -178,40 +140,21 @@ def main(argv=None):
     }
 
     # (d) spectra with mesh, bearing and wheel-mode markers
-    sp_f = V.vibration_spectra(run_f, proto, "torsion")
-    sp_r = V.vibration_spectra(run_r, proto, "torsion")
-    sw = V.vibration_spectra(run_f, proto, "wheel0_x")
-    markers = V.marker_frequencies(model_f, d.input_speed_rpm)
-    markers["mounted_modes_hz"] = modes["reduced_hz"][i_def]
+    results["spectra"], markers, sp = F.spectra_and_markers(run_f, run_r, proto, model_f, d.input_speed_rpm,
+                                                            modes["reduced_hz"][bases.index((N_MODES, STATIC_ORDERS))])
     results["markers_hz"] = markers
-    results["spectra"] = {"frequencies_hz": sp_f["frequencies_hz"],
-                          "torsion_flexible_arcsec": sp_f["spectrum"] * ARCSEC_PER_RAD,
-                          "torsion_rigid_arcsec": sp_r["spectrum"] * ARCSEC_PER_RAD,
-                          "wheel0_x_flexible_m": sw["spectrum"]}
-    _plot(args.out, sp_f, sp_r, sw, markers)
+    _plot(args.out, sp, markers)
     settings = {"design": d.name, "n_modes": N_MODES, "static_orders": STATIC_ORDERS, "step_s": STEP,
                 "quick": args.quick, "wheel_structure": st or "defaults", "mode_bases": [list(b) for b in bases]}
     casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_start)
 
 
-def _plot(out, sp_f, sp_r, sw, markers):
+def _plot(out, spectra, markers):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(11, 3.6))
-    for a, (sp, unit, scale) in zip(ax, ((sp_f, "torsion amplitude [arcsec]", ARCSEC_PER_RAD),
-                                         (sw, "wheel 0 x amplitude [m]", 1.0))):
-        a.semilogy(sp["frequencies_hz"][1:], sp["spectrum"][1:] * scale + 1e-15, lw=0.8, label="flexible wheels")
-        if sp is sp_f:
-            a.semilogy(sp_r["frequencies_hz"][1:], sp_r["spectrum"][1:] * scale + 1e-15, lw=0.6, alpha=0.7,
-                       label="rigid wheels")
-        a.axvline(markers["mesh_hz"], color="r", ls="--", lw=0.8, label="mesh")
-        for k, name in enumerate(("eccentric_bearing", "main_bearing", "input_bearing")):
-            if name in markers:
-                a.axvline(markers[name]["bpfo"], color=f"C{k + 2}", ls=":", lw=0.8, label=f"{name} BPFO")
-        V.body_mode_markers(a, markers)
-        V.body_mode_markers(a, markers, key="mounted_modes_hz", label="mounted modes", color="c")
-        a.set(xlabel="frequency [Hz]", ylabel=unit)
-    ax[0].legend(fontsize=6)
+    F.draw_spectra(ax, spectra, markers, meshes=(("mesh_hz", "mesh", "r"),),
+                   bearings=("eccentric_bearing", "main_bearing", "input_bearing"))
     casekit.save_figure(fig, out, "flexible_wheels")
 
 

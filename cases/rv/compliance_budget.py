@@ -35,7 +35,8 @@ member under SKIP_SHARE to be skipped with the figure that says so).
 Criteria (``passed``): every K_t and share finite; members in series add their compliances:
 |C_all_on - (C_all_rigid + sum_i dC_i)| / C_all_on <= ADDITIVITY_TOL; the residual share |geometric_and_
 regularization| <= RESIDUAL_TOL in every variant; each switched member's energy share in ``all_on`` (summed over its
-paths) agrees with its switch-on share dC_i / C_all_on within SHARE_TOL.
+paths) agrees with its switch-on share dC_i / C_all_on within SHARE_TOL; in ``all_on`` every member path's infinitesimal
+switch (sensitivity share) equals its energy share within SENSITIVITY_TOL and its rigid-switch share lies in (0, 1).
 
 --quick: the housing and the carrier meshed at 8 mm instead of the files' sizes, the wheels at 6 mm with 4 profile
 ports per tooth (a smoke run: K_t moves by the meshes' error; the full run's figures are the reported ones).
@@ -63,6 +64,11 @@ SHARE_TOL = 0.05
 redistribution the switch causes (rvtool.protocols.budget docstring): 0.05 absolute."""
 WHEEL_QUICK = {"mesh_size": 0.006, "samples_per_tooth": 4}
 """--quick: the wheel body at 6 mm and 4 profile ports per tooth (the defaults: 4 mm, 8)."""
+SENSITIVITY_TOL = 1e-3
+"""The infinitesimal switch of every member path (its station stiffness times 1 +- 1e-4, NestedSeries.stiffened for
+the nested members) equals its energy share (Rayleigh: dC/dlambda = -u^T K_f u) to the central difference's
+truncation, ~1e-8, and the tangent's round-off: 1e-3 absolute, which a view that missed a member or a nesting that
+dropped a coupling exceeds by far (moved here from tests/test_wheel_combined.py, whose budgets took > 10 min)."""
 SKIP_SHARE = 0.05
 """Issue 30: a member under 5 % of the all-on compliance may be skipped, with the figure that says so."""
 SWITCHES = ("elastic_cranks", "ported_housing", "ported_carrier", "wheel_body", "pin_grooves")
@@ -137,13 +143,19 @@ def budget_of(name, quick):
     energy = out["all_on"]["energy_shares"]
     member_energy = {s: sum(energy.get(p, 0.0) for p in MEMBER[s]) for s in SW}
     share_gap = {s: abs(member_energy[s] - v) for s, v in switch_share.items()}
+    all_on = out["all_on"]
+    paths = [p for sw in SW for p in MEMBER[sw] if p in all_on["sensitivity_shares"]]
+    sensitivity_gap = {p: abs(all_on["sensitivity_shares"][p] - all_on["energy_shares"][p]) for p in paths}
+    rigid_share_ok = all(0.0 < all_on["rigid_switch_shares"][p] < 1.0 for p in paths if p in all_on["rigid_switch_shares"])
     residual = max(abs(v["energy_shares"].get("geometric_and_regularization", 0.0)) for v in out.values())
     finite = all(math.isfinite(v["K_t_Nm_per_arcmin"]) and all(math.isfinite(x) for x in v["energy_shares"].values())
                  for v in out.values())
     checks = {"finite": finite, "additivity_rel_err": additivity, "additivity_ok": additivity <= ADDITIVITY_TOL,
               "max_residual_share": residual, "residual_ok": residual <= RESIDUAL_TOL,
               "energy_vs_switch_share_gap": share_gap,
-              "share_ok": all(g <= SHARE_TOL for g in share_gap.values())}
+              "share_ok": all(g <= SHARE_TOL for g in share_gap.values()),
+              "sensitivity_vs_energy_gap": sensitivity_gap,
+              "sensitivity_ok": all(g <= SENSITIVITY_TOL for g in sensitivity_gap.values()) and rigid_share_ok}
     column = {s: {"switch_on_share_of_all_on": switch_share[s], "energy_share_all_on": member_energy[s],
                   "paths": {p: energy.get(p) for p in MEMBER[s]},
                   "below_skip_threshold": bool(switch_share[s] < SKIP_SHARE)} for s in SW}
@@ -151,7 +163,8 @@ def budget_of(name, quick):
             "member_energy_shares_all_on": energy, "budget_column": column,
             "K_t_all_on_Nm_per_arcmin": out["all_on"]["K_t_Nm_per_arcmin"],
             "K_t_all_rigid_Nm_per_arcmin": out["all_rigid"]["K_t_Nm_per_arcmin"], "checks": checks,
-            "passed": bool(finite and checks["additivity_ok"] and checks["residual_ok"] and checks["share_ok"])}
+            "passed": bool(finite and checks["additivity_ok"] and checks["residual_ok"] and checks["share_ok"]
+                          and checks["sensitivity_ok"])}
 
 
 def main(argv=None):
@@ -167,7 +180,8 @@ def main(argv=None):
     settings = {"designs": list(DESIGNS), "quick": args.quick, "housing_mesh_size_quick_m": QUICK_MESH_SIZE,
                 "wheel_quick": WHEEL_QUICK, "skip_share": SKIP_SHARE,
                 "member_inputs": {n: member_inputs(n) for n in DESIGNS},
-                "criteria": {"additivity_tol": ADDITIVITY_TOL, "residual_tol": RESIDUAL_TOL, "share_tol": SHARE_TOL}}
+                "criteria": {"additivity_tol": ADDITIVITY_TOL, "residual_tol": RESIDUAL_TOL, "share_tol": SHARE_TOL,
+                             "sensitivity_tol": SENSITIVITY_TOL}}
     _plot(per_design, args.out)
     return casekit.write_results(args.out, results, settings=settings, wall_s=time.perf_counter() - t_all)
 

@@ -41,6 +41,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_columns, angle_field, file_key, is_angle
 from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
+from ..structure.fe_model import MAX_STRUCTURE_MODES
 from ..structure.floating_ports import FloatingDynamics
 from ..structure.wheel_body import WheelBodySpec
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
@@ -208,10 +209,13 @@ class Housing:
             raise RvtoolInputError(f"housing.model = {self.model!r}; valid choices are ['rigid', 'ports']")
         if self.model == "ports" and not isinstance(self.structure, AnnularHousingSpec):
             raise RvtoolInputError("housing.model = 'ports' needs the table [housing.structure] (an AnnularHousingSpec)")
-        for nm, lo in (("n_fixed_interface_modes", 0), ("n_modes", 0), ("n_residual", -1)):
+        # upper bounds of the mode counts: a cost limit (MAX_STRUCTURE_MODES); n_residual is bounded by the ports
+        for nm, lo, hi in (("n_fixed_interface_modes", 0, MAX_STRUCTURE_MODES), ("n_modes", 0, MAX_STRUCTURE_MODES),
+                           ("n_residual", -1, None)):
             v = getattr(self, nm)
-            if not isinstance(v, int) or v < lo:
-                raise RvtoolInputError(f"housing.{nm} = {v!r} is outside the valid range [{lo}, inf) (integer)")
+            if isinstance(v, bool) or not isinstance(v, int) or v < lo or (hi is not None and v > hi):
+                raise RvtoolInputError(f"housing.{nm} = {v!r} is outside the valid range [{lo}, "
+                                       f"{'inf)' if hi is None else str(hi) + ']'} (integer)")
         if self.n_residual != -1 and self.n_modes + self.n_residual < 1:
             raise RvtoolInputError("housing.n_modes + housing.n_residual = 0; valid range [1, inf)")
 

@@ -85,7 +85,9 @@ class MeshSettings:
     radial_assembly: bool = False
 
     def __post_init__(self):
-        check_integer("n_slices", self.n_slices, 1)
+        # upper bound: the wheels' slices (rvtool.assembly.spec.Wheels, 64: the largest resolution the solvers are
+        # built and tested for); a mistyped 1e6 built for minutes instead of failing
+        check_integer("n_slices", self.n_slices, 1, 64)
         if self.window is not None:
             check_integer("window", self.window, 0)
         check_nonnegative("clearance", self.clearance)
@@ -155,6 +157,13 @@ class StdInvoluteDesign:
         if W.face_width != self.wheels.width:
             raise RvtoolInputError(f"wheel.face_width = {W.face_width} m differs from wheels.width = {self.wheels.width} m; "
                                    "valid: equal (the wheel's face width is wheels.width)")
+        # the window's 2 window + 1 teeth of the wheel around the pitch point: beyond the wheel's teeth a tooth
+        # would be evaluated twice (and the rows grow with the window: a mistyped 1e6 built for minutes)
+        w_max = (W.n_teeth - 1) // 2
+        if self.mesh.window is not None and self.mesh.window > w_max:
+            raise RvtoolInputError(f"mesh.window = {self.mesh.window} is outside the valid range [0, {w_max}] (integer; "
+                                   f"at most (wheel.n_teeth - 1) // 2 teeth on each side of the pitch point, "
+                                   f"wheel.n_teeth = {W.n_teeth})")
         dz = R.n_teeth - W.n_teeth
         lo, hi = TOOTH_DIFFERENCES
         if not lo <= dz <= hi:

@@ -194,7 +194,7 @@ class SeriesBeam:
 
         def stiffened(q, factor):
             _, _, red, _ = closure.solve(*pose(q))
-            return element.coordinate_indices, closure.condense(red, beam_factor=factor)[1]
+            return element.coordinate_indices, element.element_tangent(closure.condense(red, beam_factor=factor)[1])
         return cls(path, family, compliance, lambda q: closure.deflections(pose(q)[0]), stiffened)
 
 

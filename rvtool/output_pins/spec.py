@@ -30,6 +30,8 @@ from .calibration import PIN_EXPONENT, hertz_calibrated_coefficient, mindlin_tan
 MAX_SLICES = 64
 """Largest ``n_slices`` (the wheels' bound, :class:`rvtool.assembly.spec.Wheels`: the largest resolution
 the solvers are built and tested for; ``output_pins.n_slices = 1000000`` built for minutes)."""
+MAX_SLEEVE_UPDATES = 256
+"""Largest ``output_pins.sleeve.updates`` (a cost limit, :class:`SleeveFit`: 16 x the default 16)."""
 
 
 class PinMode(str, Enum):
@@ -81,8 +83,13 @@ class SleeveFit:
 
     def __post_init__(self):
         check_nonnegative("clearance", self.clearance)
-        if not isinstance(self.updates, (int, np.integer)) or self.updates < 0:
-            raise RvtoolInputError(f"updates = {self.updates!r} is outside the valid range [0, inf) (an integer)")
+        # upper bound: a cost limit. Every update is a pass over every pin slice in the kernel, its derivative
+        # carried through each; the relaxed update converges geometrically (the default 16 reaches the Newton
+        # tolerance), so 16 x the default only costs time, and a mistyped 1e6 would run for hours without a word
+        if isinstance(self.updates, bool) or not isinstance(self.updates, (int, np.integer)) \
+                or not 0 <= self.updates <= MAX_SLEEVE_UPDATES:
+            raise RvtoolInputError(f"updates = {self.updates!r} is outside the valid range [0, {MAX_SLEEVE_UPDATES}] "
+                                   "(an integer)")
         check_range("relaxation", self.relaxation, 0.0, 2.0, low_open=True, high_open=True)
         check_positive("tangent_floor", self.tangent_floor)
         check_positive("determinant_floor", self.determinant_floor)

@@ -23,7 +23,17 @@ mesh's: the frame's rigid mass and inertia R_rig^T M R_rig and the identity on z
 on u (full). The regularization springs act on the frames (B u in the full model). Eigenvalues of
 (K, M) over the free coordinates (the drive and the locks held): the reduced by dense ``eig``,
 the full by shift-invert Lanczos on the sparse symmetric part (the asymmetry is reported).
+
+The checks the flexible-body cases share (``cases/cycloid/flexible_wheels.py``,
+``cases/rv/flexible_bodies.py``; they hand in built models, never a design):
+:func:`te_and_states` and :func:`frozen_differences` (frozen modal coordinates = the rigid model),
+:func:`mode_comparison` (mounted against full FE per basis), :func:`driven_run` and
+:func:`driven_cost` (a driven run and its cost against the rigid one), :func:`spectrum_convergence`
+(the dynamic TE spectrum against the retained modes) and :func:`spectra_and_markers` /
+:func:`draw_spectra` (spectra with the mesh, bearing and body-mode markers).
 """
+import time
+
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -31,6 +41,7 @@ import scipy.sparse.linalg as spla
 
 from ..errors import RvtoolInputError
 from ..model.reducer import COORDINATES
+from ..units import ARCSEC_PER_RAD
 
 
 def system_mass(model):
@@ -366,3 +377,165 @@ def crank_modes(model, q, *, n=12, full=False):
     Kf, Mf = K[np.ix_(free, free)], M[np.ix_(free, free)]
     lam = sla.eigh(0.5 * (Kf + Kf.T), Mf, eigvals_only=True)
     return {"frequencies_hz": _frequencies(lam, n), "asymmetry": asym, "n_coordinates": int(len(free))}
+
+
+# -- checks the flexible-body cases share ---------------------------------------------------------
+DRIVEN_ABS_TOL = 1e-6
+"""Absolute tolerance of the driven runs' steps (as ``cases/cycloid/vibration.py``) [N, N m]."""
+
+
+def te_and_states(model, torque, angles):
+    """(TE [rad] (n,), body displacements (n, nb, 3)) of the quasi-static sequence of ``model`` at
+    output ``torque`` [N m] over input ``angles`` [rad] on the Exudyn path."""
+    from .precision import quasi_static_te
+    qs = []
+    nb = len(model.body_names)
+
+    def keep(k, angle, q):
+        qs.append([model.body_pose(q, b) - model.reference[b] for b in range(nb)])
+    te = quasi_static_te(model, torque=torque, input_angles=angles, backend="exudyn", record=keep)["te"]
+    return np.asarray(te), np.asarray(qs)
+
+
+def frozen_differences(rigid, frozen):
+    """Largest TE difference [arcsec] and relative TE and state differences of two
+    :func:`te_and_states` results, the rigid model's and the frozen flexible one's."""
+    (te_r, q_r), (te_f, q_f) = rigid, frozen
+    d = np.abs(te_f - te_r).max()
+    return {"te_max_abs_diff_arcsec": float(d * ARCSEC_PER_RAD), "te_max_rel_diff": float(d / np.abs(te_r).max()),
+            "states_max_rel_diff": float(np.abs(q_f - q_r).max() / np.abs(q_r).max())}
+
+
+def mode_comparison(model_of, bases, torque, *, n, bound, default, modes=None, full=True):
+    """(dict, model) of the mounted modes against the full FE of the same assembly for every basis
+    (n_modes, static_orders) in ``bases``: ``model_of(n_modes, static_orders)`` a built model, loaded
+    to output ``torque`` [N m] at input angle 0 by continuation; ``modes`` :func:`mounted_modes`
+    (default) or :func:`crank_modes`, each giving the ``n`` lowest. The dict holds per basis the
+    reduced frequencies [Hz] and the largest contact tangent asymmetry; with ``full`` also the full
+    FE's frequencies, the relative differences, and for the ``default`` basis the largest difference,
+    how many modes lie within ``bound`` (relative) and whether all do (``full=False``: the mounted
+    modes alone, without the full FE's shift-invert solve). ``model`` is the last basis's."""
+    from ..solver.continuation import Continuation
+    modes = modes or mounted_modes
+    out = {"bases": [list(b) for b in bases], "reduced_hz": [], "contact_tangent_asymmetry": 0.0, "full_fe": bool(full)}
+    if full:
+        out.update(full_hz=[], rel_diff=[])
+    for basis in bases:
+        m = model_of(*basis)
+        q = Continuation(m, input_angle=0.0).go_to(-np.sign(m.ratio) * torque)
+        red = modes(m, q, n=n)
+        out["reduced_hz"].append(red["frequencies_hz"].tolist())
+        out["contact_tangent_asymmetry"] = max(out["contact_tangent_asymmetry"], red["asymmetry"])
+        if not full:
+            continue
+        ful = modes(m, q, n=n, full=True)
+        out["full_hz"].append(ful["frequencies_hz"].tolist())
+        out["rel_diff"].append((red["frequencies_hz"] / ful["frequencies_hz"] - 1).tolist())
+        if "n_coordinates" in ful:
+            out["full_coordinates"] = ful["n_coordinates"]
+    if full:
+        worst = np.abs(out["rel_diff"][list(bases).index(tuple(default))])
+        out["max_rel_diff_default_basis"] = float(worst.max())
+        out["modes_within_target_default_basis"] = int(np.argmax(worst > bound)) if np.any(worst > bound) \
+            else len(worst)
+        out["target_rel"] = bound
+        out["target_met"] = bool(worst.max() <= bound)
+    return out, m
+
+
+def driven_run(model, speed_rpm, torque, revs, step, coordinates=None):
+    """(run, protocol, wall_s) of a driven run of ``model`` at input speed [rpm] and output torque
+    [N m] over ``revs`` input revolutions with step ``step`` [s] (:func:`rvtool.protocols.vibration.driven_response`;
+    ``coordinates`` its recorded responses besides the torsion)."""
+    from ..solver import RunSpec
+    from .vibration import driven_response
+    proto = driven_protocol(speed_rpm, torque, revs, step)
+    t0 = time.perf_counter()
+    run = driven_response(model, proto, RunSpec(end_time=proto.duration, step=step, abs_tol=DRIVEN_ABS_TOL,
+                                                rel_tol=1e-8), coordinates=coordinates or {})
+    return run, proto, time.perf_counter() - t0
+
+
+def driven_protocol(speed_rpm, torque, revs, step):
+    """The :class:`rvtool.protocols.vibration.VibrationProtocol` of :func:`driven_run` (its spectra's window)."""
+    from .vibration import VibrationProtocol
+    return VibrationProtocol(speed_rpm=speed_rpm, torque=torque, duration=revs * 60.0 / speed_rpm, sample_step=step)
+
+
+def driven_cost(flexible, rigid, revs, speed_rpm, step):
+    """The cost of a driven run with flexible bodies against the rigid one: ``flexible`` and
+    ``rigid`` (run, wall_s) of :func:`driven_run` over ``revs`` input revolutions at ``speed_rpm``
+    with ``step`` [s]. The cost of one input revolution is the integration's wall time (the run
+    record's, without the loaded start's static solve), measured over a whole revolution, else
+    extrapolated from the cost per accepted step (``per_revolution_extrapolated``)."""
+    (run_f, wall_f), (run_r, wall_r) = flexible, rigid
+    rec, rec_r = run_f["record"], run_r["record"]
+    steps_per_rev = 60.0 / speed_rpm / step
+
+    def per_revolution(r):
+        return r.wall_s / revs if revs >= 1 else r.wall_s / max(r.accepted_steps, 1) * steps_per_rev
+    return {
+        "input_revolutions": revs, "input_revolutions_run": float(run_f["t"][-1] * speed_rpm / 60.0),
+        "accepted_steps": rec.accepted_steps, "rejected_steps": rec.rejected_steps, "max_residual": rec.max_residual,
+        "abs_tol": DRIVEN_ABS_TOL, "wall_s_flexible": wall_f, "wall_s_rigid": wall_r, "cost_ratio": wall_f / wall_r,
+        "wall_s_per_step_flexible": wall_f / max(rec.accepted_steps, 1),
+        "wall_s_per_step_rigid": wall_r / max(rec_r.accepted_steps, 1),
+        "integration_wall_s_flexible": rec.wall_s, "integration_wall_s_rigid": rec_r.wall_s,
+        "wall_s_per_input_revolution_flexible": per_revolution(rec),
+        "wall_s_per_input_revolution_rigid": per_revolution(rec_r),
+        "per_revolution_extrapolated": revs < 1,
+        "torsion_pp_flexible_arcsec": float(np.ptp(run_f["responses"]["torsion"]) * ARCSEC_PER_RAD),
+        "torsion_pp_rigid_arcsec": float(np.ptp(run_r["responses"]["torsion"]) * ARCSEC_PER_RAD),
+    }
+
+
+def spectrum_convergence(runs, protocol, response="torsion"):
+    """(spectra, changes) of driven runs with growing bases over one window (``protocol``): the
+    spectra of ``response`` (:func:`rvtool.protocols.vibration.vibration_spectra`) and the change of
+    each to the next, max |S_(i+1) - S_i| / max S_(i+1) (the peak without the mean)."""
+    from .vibration import vibration_spectra
+    spectra = [vibration_spectra(r, protocol, response) for r in runs]
+    return spectra, [float(np.max(np.abs(b["spectrum"] - a["spectrum"])) / np.max(b["spectrum"][1:]))
+                     for a, b in zip(spectra[:-1], spectra[1:])]
+
+
+def spectra_and_markers(flexible, rigid, protocol, model, speed_rpm, mounted_hz, body="wheel0_x"):
+    """(spectra dict, markers, (torsion flexible, torsion rigid, body)) of the driven runs
+    ``flexible`` and ``rigid`` over ``protocol``: the torsion spectra [arcsec] and the flexible run's
+    ``body`` response [m]; the markers of ``model`` at ``speed_rpm`` with ``mounted_modes_hz``
+    (``mounted_hz``)."""
+    from . import vibration as V
+    sp_f = V.vibration_spectra(flexible, protocol, "torsion")
+    sp_r = V.vibration_spectra(rigid, protocol, "torsion")
+    sw = V.vibration_spectra(flexible, protocol, body)
+    markers = V.marker_frequencies(model, speed_rpm)
+    markers["mounted_modes_hz"] = mounted_hz
+    spectra = {"frequencies_hz": sp_f["frequencies_hz"], "torsion_flexible_arcsec": sp_f["spectrum"] * ARCSEC_PER_RAD,
+               "torsion_rigid_arcsec": sp_r["spectrum"] * ARCSEC_PER_RAD, f"{body}_flexible_m": sw["spectrum"]}
+    return spectra, markers, (sp_f, sp_r, sw)
+
+
+def draw_spectra(axes, spectra, markers, *, meshes, bearings, modes=()):
+    """Draw the torsion spectra (flexible and rigid) and the body response's spectrum
+    (``spectra`` the triple of :func:`spectra_and_markers`) on two axes, with vertical markers:
+    ``meshes`` (key, label, colour) of mesh frequencies, the BPFO of the ``bearings`` named, the
+    retained and mounted modes and the further body-mode keys ``modes`` (key, label, colour)."""
+    from .vibration import body_mode_markers
+    sp_f, sp_r, sw = spectra
+    for a, (spec, unit, scale) in zip(axes, ((sp_f, "torsion amplitude [arcsec]", ARCSEC_PER_RAD),
+                                             (sw, "wheel 0 x amplitude [m]", 1.0))):
+        a.semilogy(spec["frequencies_hz"][1:], spec["spectrum"][1:] * scale + 1e-15, lw=0.8, label="flexible wheels")
+        if spec is sp_f:
+            a.semilogy(sp_r["frequencies_hz"][1:], sp_r["spectrum"][1:] * scale + 1e-15, lw=0.6, alpha=0.7,
+                       label="rigid wheels")
+        for key, label, colour in meshes:
+            a.axvline(markers[key], color=colour, ls="--", lw=0.8, label=label)
+        for k, name in enumerate(bearings):
+            if name in markers:
+                a.axvline(markers[name]["bpfo"], color=f"C{k + 2}", ls=":", lw=0.8, label=f"{name} BPFO")
+        body_mode_markers(a, markers)
+        body_mode_markers(a, markers, key="mounted_modes_hz", label="mounted modes", color="c")
+        for key, label, colour in modes:
+            body_mode_markers(a, markers, key=key, label=label, color=colour)
+        a.set(xlabel="frequency [Hz]", ylabel=unit)
+    axes[0].legend(fontsize=6)

@@ -22,8 +22,40 @@ from ..contact.assembly import RowScatter, pair_index
 from ..errors import RvtoolInputError
 
 
-class CopyBlockAssembler:
-    """Scatter per-row generalized forces and tangents into per-copy blocks.
+class RowBlockAssembler:
+    """Sum per-row generalized forces and tangents into per-copy blocks of ``n`` coordinates.
+
+    local: (N, k) the coordinate of every row entry within its copy (-1: dropped, e.g. the
+    ground); row_copy: (N,) the copy of every row; n_copies: B. The device row sums
+    (:class:`warp_contacts.block_scatter.BlockScatter`) read ``local`` and ``row_copy``.
+    """
+
+    def __init__(self, local, row_copy, n, n_copies):
+        self.local = np.asarray(local, np.int64)
+        self.row_copy = np.asarray(row_copy, np.int64)
+        self.n, self.n_copies = int(n), int(n_copies)
+        self._vec = RowScatter(np.where(self.local >= 0, self.row_copy[:, None] * self.n + self.local, -1),
+                               self.n_copies * self.n)
+        # the block map (N k^2 indices) is made on the first blocks(): the device row sum reads
+        # only local and row_copy
+        self._mat = None
+
+    def vector(self, Q):
+        """(B, n) from per-row forces (N, k)."""
+        return self._vec(Q).reshape(self.n_copies, self.n)
+
+    def blocks(self, K):
+        """(B, n, n) from per-row tangents (N, k, k)."""
+        if self._mat is None:
+            n = self.n
+            pos = pair_index(self.local, n)
+            self._mat = RowScatter(np.where(pos >= 0, self.row_copy[:, None, None] * n * n + pos, -1),
+                                   self.n_copies * n * n)
+        return self._mat(K).reshape(self.n_copies, self.n, self.n)
+
+
+class CopyBlockAssembler(RowBlockAssembler):
+    """:class:`RowBlockAssembler` of rows over the bodies of B copies (n = 3 nb coordinates per copy).
 
     bodies: (N, m) global body indices of each row's m bodies (``n_copies * nb`` or more
     = the ground row of the kernels' padded pose array: dropped). Every row must couple
@@ -43,29 +75,10 @@ class CopyBlockAssembler:
             bad = int(np.flatnonzero(np.any((copy >= 0) & (copy != row_copy[:, None]), axis=1))[0])
             raise RvtoolInputError(f"contact row {bad} couples bodies {bodies[bad].tolist()} of different copies "
                                    f"(nb = {nb} bodies per copy); copies must be independent")
-        self.nb, self.n_copies = nb, n_copies
-        self.n = n = 3 * nb
-        self.row_copy = row_copy
+        self.nb = nb
         local = 3 * (bodies % nb)[:, :, None] + np.arange(3)            # (N, m, 3)
         local = np.where(ground[:, :, None], -1, local).reshape(n_rows, 3 * m)
-        self.local = local                       # (N, 3m) local coordinate of each row entry, -1: ground
-        self._vec = RowScatter(np.where(local >= 0, row_copy[:, None] * n + local, -1), n_copies * n)
-        # the block map (N (3m)^2 indices) is made on the first blocks(): the device row sum reads
-        # only local and row_copy
-        self._mat = None
-
-    def vector(self, Q):
-        """(B, 3 nb) from per-row forces (N, 3m)."""
-        return self._vec(Q).reshape(self.n_copies, self.n)
-
-    def blocks(self, K):
-        """(B, 3 nb, 3 nb) from per-row tangents (N, 3m, 3m)."""
-        if self._mat is None:
-            n = self.n
-            pos = pair_index(self.local, n)
-            self._mat = RowScatter(np.where(pos >= 0, self.row_copy[:, None, None] * n * n + pos, -1),
-                                   self.n_copies * n * n)
-        return self._mat(K).reshape(self.n_copies, self.n, self.n)
+        super().__init__(local, row_copy, 3 * nb, n_copies)
 
 
 class BatchEvaluation:

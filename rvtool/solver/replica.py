@@ -45,7 +45,7 @@ from ..errors import RvtoolInputError
 from ..model.reducer import COORDINATES
 from ..output_pins.evaluator import OutputPinEvaluator
 from ..output_pins.spec import PinMode
-from .copy_evaluator import BatchEvaluation, CopyBlockAssembler
+from .copy_evaluator import BatchEvaluation, CopyBlockAssembler, RowBlockAssembler
 
 
 def _shift(body, offset):
@@ -168,7 +168,7 @@ class FamilyCopies:
     scatter of its rows and the number of observation rows per copy (the element's ids)."""
     name: str
     set: object
-    scatter: CopyBlockAssembler
+    scatter: RowBlockAssembler
     obs_rows: int
     #: (B nb_f, 3) flat indices into the copies' row coordinates (B, n) of the set's body coordinates
     #: (-1: zero), for a set on extended bodies (:mod:`rvtool.solver.row_extension`); None: the set's

@@ -79,25 +79,45 @@ class RowDrivenModel(ReferenceModel):
     (:class:`DeviceIteration`; None: with the device sums)."""
 
     def __init__(self, model, *, torque, motion, settings_vector, device="cpu", sums="device", device_step=None):
-        from .device_rows import row_reasons
+        from .device_rows import needs_extension, row_reasons
         from .replica import copy_families
         if sums not in SUMS:
             raise RvtoolInputError(f"sums = {sums!r}; valid: {list(SUMS)}")
         reasons = row_reasons(model)
         if reasons:
             raise RvtoolInputError("; ".join(reasons))
-        idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
-        if not np.array_equal(idx, np.arange(len(idx))) or len(idx) != model.mbs.systemData.ODE2Size():
-            raise RvtoolInputError("the model has coordinates beyond its rigid bodies' (x, y, theta); the row "
-                                   "stepper takes planar rigid bodies only")
         nb = len(model.body_names)
-        n = 3 * nb
+        #: elastic closures / ported structures: the step's unknowns are rvtool.solver.row_closures' y
+        self.extended = needs_extension(model)
+        idx = np.concatenate([np.asarray(model.mbs.systemData.GetNodeLTGODE2(n), int) for n in model.nodes])
+        if self.extended:
+            from .row_closures import ExtendedRowForces
+            if sums != "device" or device_step:
+                raise RvtoolInputError("a model with elastic closures or a ported structure steps with the device "
+                                       "sums and the host step only (valid: sums='device', device_step=False)")
+            device_step = False
+            self.row_forces = ExtendedRowForces(model, device=device)
+            co = self.row_forces.coords
+            n = co.n
+            eta = [int(i) for m in co.modal for i in m[4]]
+            if not np.array_equal(idx, np.arange(len(idx))) or len(idx) + len(eta) != model.mbs.systemData.ODE2Size():
+                raise RvtoolInputError("the model has coordinates beyond its rigid bodies' (x, y, theta) and its "
+                                       "reduced structures' eta; the row stepper takes planar rigid bodies, elastic "
+                                       "closures and grounded reduced structures")
+        else:
+            if not np.array_equal(idx, np.arange(len(idx))) or len(idx) != model.mbs.systemData.ODE2Size():
+                raise RvtoolInputError("the model has coordinates beyond its rigid bodies' (x, y, theta); the row "
+                                       "stepper takes planar rigid bodies only")
+            n = 3 * nb
         self.model = model
         self.sums = sums
-        if sums == "device":
+        if sums == "device" and not self.extended:
             from .row_forces import RowForces
             self.row_forces = RowForces(model, device=device)
-        else:
+        elif not self.extended:
+            if any(getattr(el.evaluator, "anchor", False) for el in model.contact_elements()):
+                raise RvtoolInputError("sums = 'host' (ReferenceModel's step) commits no anchor history; a model "
+                                       "with stick--slip anchors steps with sums='device'")
             self.families = copy_families(model, 1, device=device)
             for f in self.families:                          # driven runs: dQ/dv of every family
                 if callable(getattr(f.set, "set_velocity_tangent", None)):
@@ -114,8 +134,18 @@ class RowDrivenModel(ReferenceModel):
         free = np.ones(n, bool)
         free[sorted(model.fixed_coordinates())] = False
         self.B, self.n, self.nb = 1, n, nb
-        self.reference = np.asarray(model.reference, float).reshape(1, n)
-        self.mass = rigid_body_masses(model).reshape(1, n)
+        if self.extended:
+            # the stations: massless, referenced at their carriers; the modal coordinates: M = I, reference 0
+            co = self.row_forces.coords
+            self.reference = np.zeros((1, n))
+            self.reference[0, :co.n_real] = np.asarray(model.reference, float).reshape(-1)
+            self.reference[0, co.station_slice] = co.reference[co.stations]
+            self.mass = np.ones((1, n))
+            self.mass[0, :co.n_real] = rigid_body_masses(model)
+            self.mass[0, co.station_slice] = 0.0
+        else:
+            self.reference = np.asarray(model.reference, float).reshape(1, n)
+            self.mass = rigid_body_masses(model).reshape(1, n)
         self.free = free
         self.input_index, self.output_index = model.input_index, model.output_index
         self.motion = np.asarray(motion, float).reshape(1, N_MOTION)
@@ -141,6 +171,59 @@ class RowDrivenModel(ReferenceModel):
         if device_step and sums != "device":
             raise RvtoolInputError("device_step = True needs sums = 'device' (the step reads the device sums)")
         self.device_iteration = DeviceIteration(self) if device_step else None
+
+    def commit_history(self, q, v):
+        """Commit the anchored families' contact history at the accepted state (q, v) (Exudyn's
+        driver commits every contact element after each accepted step, at its state)."""
+        t0, c0 = time.perf_counter(), time.process_time()
+        if self.extended:
+            self.row_forces.commit(q, v)
+        else:
+            self.row_forces.commit((self.reference[0] + q).reshape(self.nb, 3), v.reshape(self.nb, 3))
+        self.forces_s += time.perf_counter() - t0
+        self.forces_cpu_s += time.process_time() - c0
+
+    def initial_accelerations(self, p, q, v):
+        """:meth:`ReferenceModel.initial_accelerations` (Exudyn's M a = f on the free coordinates);
+        the massless stations of elastic closures take a = 0 (their rows are algebraic:
+        :meth:`settle_stations` first)."""
+        if not self.extended:
+            return super().initial_accelerations(p, q, v)
+        f = np.array(self._device_forces(p, q, v))
+        M = self.mass[p]
+        a = np.where(M > 0.0, f / np.where(M > 0.0, M, 1.0), 0.0)
+        (_, _, accel), ii = self._motion, self.input_index
+        a[self._xi] = 0.0
+        a[ii] = accel
+        return a
+
+    def settle_stations(self, q, v, max_iterations=40):
+        """The closures' stations of state q (its bodies and modal coordinates held) at their
+        equilibrium R_s = 0 with the velocities v (in place; Newton on the station rows to the
+        closure's own tolerance: 1e-8 N, or 1e-13 of the largest force where that is larger,
+        :data:`rvtool.contact.pin_closure.RELATIVE_TOLERANCE`), or until a step no longer moves the
+        stations' absolute coordinates (16 machine epsilons of them: the beam rows are K_b times a
+        difference of absolute coordinates, whose round-off floors the residual near 1e-8 N on
+        rv80e): the start of a driven run, as Exudyn's condensed closure evaluates it. Returns the
+        Newton iterations."""
+        from ..contact.pin_closure import RELATIVE_TOLERANCE
+        if not self.extended:
+            return 0
+        sl = self.row_forces.coords.station_slice
+        if sl.stop == sl.start:
+            return 0
+        for it in range(max_iterations + 1):
+            f = self._device_forces(0, q, v)
+            r = f[sl]
+            if np.max(np.abs(r)) <= max(1e-8, RELATIVE_TOLERANCE * np.max(np.abs(f))):
+                return it
+            K, _ = self._tangents()
+            d = np.linalg.solve(K[sl, sl], r)
+            q[sl] -= d
+            if np.max(np.abs(d)) <= 16 * np.finfo(float).eps * np.max(np.abs(self.reference[0, sl] + q[sl])):
+                return it + 1
+        raise SolverFailure(f"row stepper: the closures' stations did not settle in {max_iterations} Newton "
+                            f"iterations at the start (largest station residual {np.max(np.abs(r)):.3g} N)")
 
     def forces(self, p, q, v):
         if self.sums == "device":
@@ -169,7 +252,10 @@ class RowDrivenModel(ReferenceModel):
     def _device_forces(self, p, q, v):
         """f (n,) of copy p at (q, v) from the device sums (its rows kept for :meth:`_tangents`)."""
         t0, c0 = time.perf_counter(), time.process_time()
-        f = self.row_forces.evaluate((self.reference[p] + q).reshape(self.nb, 3), v.reshape(self.nb, 3))
+        if self.extended:
+            f = self.row_forces.evaluate(q, v)
+        else:
+            f = self.row_forces.evaluate((self.reference[p] + q).reshape(self.nb, 3), v.reshape(self.nb, 3))
         f[self.output_index] += self.torque[p]        # f is the device sums' buffer: rewritten by each launch
         dc = time.process_time() - c0
         self.forces_s += time.perf_counter() - t0
@@ -274,6 +360,8 @@ class RowDrivenModel(ReferenceModel):
             if ok:
                 t = t + h
                 q, v, a, g = q1, v1, a1, g1
+                if self.row_forces.history_families:      # stick--slip anchors: Exudyn commits per accepted step
+                    self.commit_history(q, v)
                 accepted += 1
                 run += 1
                 hist[0, k, :] = (t, q[ii], ref_out + q[oi], torque, 0.0, 0.0, 0.0, h, its)  # H_* order
@@ -455,7 +543,8 @@ def row_stepper_reasons(model, run_spec=None):
     * retained out-of-plane coordinates or floating flexible bodies (planar rigid copies only);
     * elastic closures or reduced structures on port bodies (the row Newton's extra unknowns,
       :mod:`rvtool.solver.row_extension`, are not in the stepper's coordinates);
-    * stick--slip anchors (the stepper commits no history per accepted step);
+    * stick--slip anchors where the device row Newton names them (inside closures, on families whose
+      kernels do not stage the history); the others are committed per accepted step;
     * journal locks (``rigid_supports=True``: the stepper holds the drive and the coordinate locks);
     * contact sets in another precision than float64 (the copies are float64);
     * run settings other than :data:`RUN_SPEC_REQUIRED`."""
@@ -470,16 +559,12 @@ def row_stepper_reasons(model, run_spec=None):
         return reasons
     reasons = list(row_reasons(model))
     if needs_extension(model):
-        reasons.append("the model has elastic closures or a reduced structure on port bodies (elastic ring or "
-                       "output pins, crank beam or torsion, ported housing): the device row Newton takes them as "
-                       "extra unknowns (rvtool.solver.row_extension), the row stepper steps planar rigid bodies "
-                       "only (valid: rigid pins, cranks and housing, or backend 'exudyn')")
+        # elastic closures and ported structures: the row extension's unknowns in the step
+        # (rvtool.solver.row_closures); their contact sets need device rows
+        from .row_closures import extended_row_reasons
+        reasons += extended_row_reasons(model)
     for el in model.contact_elements():
         s = el.evaluator
-        if getattr(s, "anchor", False):
-            reasons.append(f"contact element {s.name!r} has stick--slip anchors: the row stepper commits no anchor "
-                           "history per accepted step (valid: frictionless or regularized friction, or backend "
-                           "'exudyn')")
         precision = getattr(s, "precision", "float64")
         if precision != "float64":
             reasons.append(f"contact element {s.name!r} has precision = {precision!r}: the row stepper's copies "
@@ -487,8 +572,10 @@ def row_stepper_reasons(model, run_spec=None):
     if getattr(model, "journal_locks", None):
         reasons.append("rigid_supports=True (journal locks): the row stepper holds the drive and the coordinate "
                        "locks only (valid: rigid_supports=False)")
-    # an element the row Newton already names (no copier) is not named again for its rows
-    reasons += [r for r in device_row_reasons(model) if not any(r.split(" (")[0] in k for k in reasons)]
+    # an element the row Newton already names (no copier) is not named again for its rows; an extended
+    # model's sets are checked leaf by leaf above (its closure elements have no rows of their own)
+    if not needs_extension(model):
+        reasons += [r for r in device_row_reasons(model) if not any(r.split(" (")[0] in k for k in reasons)]
     return [r for i, r in enumerate(reasons) if r not in reasons[:i]]
 
 
@@ -505,7 +592,14 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
     gathers; ``step_cpu_s``: the rest), ``evaluations``, ``tangent_gathers``. sums, device_step:
     :data:`SUMS` and :class:`DeviceIteration` (None: on with the device sums). A step that fails
     at the minimum step raises :class:`SolverFailure`."""
+    import dataclasses
+
     from .static import StaticSolver
+    # Exudyn's nominal step: the run divided into ceil(duration / step) equal steps (rvtool.solver.driver),
+    # not steps of ``step`` with a short last one (a duration that is no multiple of the step, e.g. the
+    # vibration protocol's quarter input revolution, would otherwise take other steps than Exudyn's)
+    n_nominal = int(np.ceil(duration / settings.step - 1e-9))
+    settings = dataclasses.replace(settings, step=duration / n_nominal, min_step=settings.minimum_step)
     omega = speed_rpm * 2 * np.pi / 60.0
     tq = -np.sign(model.ratio) * float(torque)
     model.set_output_torque(tq)
@@ -517,10 +611,15 @@ def row_driven_run(model, *, torque, speed_rpm, duration, settings, device="cpu"
     rm = RowDrivenModel(model, torque=tq, motion=motion, settings_vector=settings.vector(duration), device=device,
                         sums=sums, device_step=device_step)
     fixed = ~rm.free
-    q = np.array(q0, float)
-    v = np.array(v0, float)
+    if rm.extended:                  # the step's unknowns (rvtool.solver.row_closures): stations settled below
+        co = rm.row_forces.coords
+        q, v = co.from_model(q0), co.from_model(v0)
+    else:
+        q = np.array(q0, float)
+        v = np.array(v0, float)
     q[fixed], v[fixed] = 0.0, 0.0
     q[rm.input_index], v[rm.input_index] = 0.0, omega
+    rm.settle_stations(q, v)
     a = rm.initial_accelerations(0, q, v)
     state = {"q": q[None].copy(), "v": v[None].copy(), "a": a[None].copy(), "abar": a[None].copy() * 0.0,
              "t": np.zeros(1), "h": np.full(1, settings.step), "status": np.full(1, ACTIVE),

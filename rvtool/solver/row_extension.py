@@ -57,6 +57,7 @@ import numpy as np
 
 from ..contact.pin_closure import GROUND as CLOSURE_GROUND, ElasticPinClosure
 from ..contact.stacked import StackedContactSet
+from .copy_evaluator import CopyBlockAssembler, RowBlockAssembler
 from ..errors import RvtoolInputError
 
 PORT_CONDITION_LIMIT = 1e12
@@ -355,42 +356,22 @@ def row_extension(model):
 
 
 # -- copies -------------------------------------------------------------------------------------
-class MappedAssembler:
+class MappedAssembler(RowBlockAssembler):
     """Per-copy sums of rows whose entries are row coordinates: ``local`` (N, k) the coordinate of
     every entry within its copy (-1: dropped), ``row_copy`` (N,), ``n`` coordinates per copy (the
-    interface of :class:`rvtool.solver.copy_evaluator.CopyBlockAssembler` that the row sums read)."""
-
-    def __init__(self, local, row_copy, n, n_copies):
-        from ..contact.assembly import RowScatter
-        self.local = np.asarray(local, np.int64)
-        self.row_copy = np.asarray(row_copy, np.int64)
-        self.n, self.n_copies = int(n), int(n_copies)
-        self._vec = RowScatter(np.where(self.local >= 0, self.row_copy[:, None] * self.n + self.local, -1),
-                               self.n_copies * self.n)
-        self._mat = None
+    sums of :class:`rvtool.solver.copy_evaluator.RowBlockAssembler`, which the device row sums read)."""
 
     @classmethod
     def of_bodies(cls, bodies, body_map, n, n_copies):
         """The rows of a copied set over n_copies x nb_f bodies (``bodies`` (N, m) per row, the ground
-        at n_copies nb_f and beyond) through ``body_map`` (nb_f, 3)."""
-        from ..solver.copy_evaluator import CopyBlockAssembler
+        at n_copies nb_f and beyond) through ``body_map`` (nb_f, 3): the copies' body assembler
+        (:class:`rvtool.solver.copy_evaluator.CopyBlockAssembler`) with every body coordinate
+        remapped to its row coordinate."""
         nb_f = len(body_map)
         a = CopyBlockAssembler(bodies, nb_f, n_copies)
         flat = np.asarray(body_map, np.int64).reshape(-1)
         local = np.where(a.local >= 0, flat[np.maximum(a.local, 0)], -1)
         return cls(local, a.row_copy, n, n_copies)
-
-    def vector(self, Q):
-        return self._vec(Q).reshape(self.n_copies, self.n)
-
-    def blocks(self, K):
-        from ..contact.assembly import RowScatter, pair_index
-        if self._mat is None:
-            n = self.n
-            pos = pair_index(self.local, n)
-            self._mat = RowScatter(np.where(pos >= 0, self.row_copy[:, None, None] * n * n + pos, -1),
-                                   self.n_copies * n * n)
-        return self._mat(K).reshape(self.n_copies, self.n, self.n)
 
 
 def pose_map(body_map, n, n_copies):

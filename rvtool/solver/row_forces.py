@@ -56,6 +56,21 @@ def device_row_reasons(model):
             for el in model.contact_elements() if not has_device_rows(el.evaluator)]
 
 
+def history_families(families):
+    """The families of ``families`` whose kernels read a committed history (stick--slip anchors)."""
+    return [f for f in families if getattr(f.set, "anchor", False)
+            and callable(getattr(f.set, "stages_history", None)) and f.set.stages_history()]
+
+
+def commit_families(families, pose, vel, poses=None):
+    """Commit every family's trial history at the state (pose, vel) (``poses``: a function of the
+    family giving its own (pose, vel); default the state as it is) and stage it into its kernel."""
+    for f in families:
+        pf, vf = (pose, vel) if poses is None else poses(f)
+        f.set.commit(pf, vf)                 # a fresh launch at the accepted state from the committed history
+        f.set.stage(pf, vf)                  # the new history into the kernel's inputs
+
+
 class RowForces:
     """f, K, C of one copy of ``model`` (module docstring) on the Warp ``device``.
     :meth:`evaluate` takes body poses and velocities (nb, 3) (absolute; the ground is added) and
@@ -136,6 +151,15 @@ class RowForces:
             self.tangent_graph = cap.graph
         self.timing = {"launches": 0.0, "tangents": 0.0}
         self.evaluations = 0
+        #: the families with stick--slip anchors (their kernels read the committed history: :meth:`commit`)
+        self.history_families = history_families(self.families)
+
+    def commit(self, pose, vel):
+        """Commit the contact history of every anchored family at the accepted state (absolute body
+        poses and velocities (nb, 3)), as Exudyn's driver commits each contact element after an
+        accepted step, and write it into the family's kernel inputs (read by the next evaluations'
+        graph replays)."""
+        commit_families(self.history_families, pose, vel)
 
     def launch_evaluation(self):
         """One evaluation from the staging arrays (:attr:`pose_stage`, :attr:`vel_stage`) as they
@@ -203,4 +227,5 @@ class RowForces:
         return (f,) + self.tangents()
 
 
-__all__ = ["NO_DEVICE_ROWS", "RowForces", "device_row_reasons", "has_device_rows"]
+__all__ = ["NO_DEVICE_ROWS", "RowForces", "commit_families", "device_row_reasons", "has_device_rows",
+           "history_families"]

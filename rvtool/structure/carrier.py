@@ -40,7 +40,7 @@ import scipy.sparse.linalg as spla
 from ..errors import RvtoolInputError
 from ..units import angle_field
 from ..validation import check_positive, check_range
-from .fe_model import ElasticMaterial, generate_mesh
+from .fe_model import MAX_STRUCTURE_MODES, ElasticMaterial, generate_mesh
 from .port_reduction import PortReducedModel
 
 PILLAR_SHAPES = ("circular", "sector")
@@ -96,9 +96,12 @@ class CarrierStructure:
         if isinstance(self.element_order, bool) or self.element_order not in (1, 2):
             raise RvtoolInputError(f"carrier.structure.element_order = {self.element_order!r} is outside the valid "
                                    "range [1, 2] (integer)")
-        if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, int) or self.n_modes < 0:
+        # upper bound: a cost limit (fe_model.MAX_STRUCTURE_MODES: each mode an eigenpair of the sparse solve and a
+        # coordinate of every Newton step), checked before the carrier is meshed
+        if isinstance(self.n_modes, bool) or not isinstance(self.n_modes, int) \
+                or not 0 <= self.n_modes <= MAX_STRUCTURE_MODES:
             raise RvtoolInputError(f"carrier.structure.n_modes = {self.n_modes!r} is outside the valid range "
-                                   "[0, inf) (integer)")
+                                   f"[0, {MAX_STRUCTURE_MODES}] (integer)")
 
     @property
     def output_face(self):

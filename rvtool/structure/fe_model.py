@@ -26,6 +26,16 @@ import scipy.sparse as sp
 from ..errors import RvtoolInputError
 from ..validation import check_positive, check_range, check_shape
 
+MAX_PORTS = 256
+"""Largest ``n_ports`` of an annular housing (a cost limit, :class:`AnnularHousingSpec`)."""
+MAX_STRUCTURE_MODES = 200
+"""Largest count of retained modes of an elastic structure (``housing.n_modes``,
+``housing.n_fixed_interface_modes``, ``carrier.structure.n_modes``): a cost limit. Each mode is an
+eigenpair of the FE model's sparse shift-invert solve and a coordinate of every Newton step (dense
+blocks); 200 is ten times the defaults (12, 20, 6) and above the 2 x 40 port rows of the shipped
+designs. A mistyped 1e6 would mesh and factor the structure for minutes before the build's own
+check against the FE model's size."""
+
 
 @dataclass(frozen=True, kw_only=True)
 class ElasticMaterial:
@@ -354,8 +364,11 @@ class AnnularHousingSpec:
         check_range("outer_radius", self.outer_radius, self.inner_radius, math.inf, low_open=True)
         check_positive("height", self.height)
         check_range("mesh_size", self.mesh_size, 0.0, self.height, low_open=True)
-        if not isinstance(self.n_ports, int) or self.n_ports < 1:
-            raise RvtoolInputError(f"n_ports = {self.n_ports!r} is outside the valid range [1, inf) (integer)")
+        # upper bound: a cost limit. One port per ring pin, two coordinates each, and the port reduction's static
+        # compliance is a dense (2 n_ports)^2 block of every Newton step; 256 is over six times the 40 pins of
+        # the shipped designs (a mistyped 1e6 meshed for minutes instead of failing)
+        if isinstance(self.n_ports, bool) or not isinstance(self.n_ports, int) or not 1 <= self.n_ports <= MAX_PORTS:
+            raise RvtoolInputError(f"n_ports = {self.n_ports!r} is outside the valid range [1, {MAX_PORTS}] (integer)")
         if not isinstance(self.n_mounts, int) or self.n_mounts < 0:
             raise RvtoolInputError(f"n_mounts = {self.n_mounts!r} is outside the valid range [0, inf) (integer)")
         if self.port_height is not None:

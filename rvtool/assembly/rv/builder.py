@@ -472,7 +472,9 @@ class GrooveSeries(SeriesBeamBase):
 
         def stiffened(q, factor):
             u, _, red, _ = closure.solve(*pose(q))
-            return element.coordinate_indices, closure.condense(red, beam_factor=factor, u=u)[1]
+            # the closure's tangent is on its bodies (the port bodies of a ported housing): into the
+            # element's coordinates (the housing's eta) as the element's own evaluation
+            return element.coordinate_indices, element.element_tangent(closure.condense(red, beam_factor=factor, u=u)[1])
         return cls(path, family, closure.compliance, lambda q: closure.deflections(pose(q)[0]),
                    stiffened, closure, pose)
 

@@ -107,8 +107,11 @@ class InvoluteStage:
     reference_force: float = 1000.0
 
     def __post_init__(self):
-        if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, int) or self.n_slices < 1:
-            raise RvtoolInputError(f"involute_stage.n_slices = {self.n_slices!r} is outside the valid range [1, inf)")
+        # upper bound: the wheels' (rvtool.assembly.spec.Wheels, 64: the largest resolution the solvers are built
+        # and tested for); a mistyped 1e6 built for minutes instead of failing
+        if isinstance(self.n_slices, bool) or not isinstance(self.n_slices, int) or not 1 <= self.n_slices <= 64:
+            raise RvtoolInputError(f"involute_stage.n_slices = {self.n_slices!r} is outside the valid range [1, 64] "
+                                   "(integer)")
         check_range("involute_stage.damping", self.damping, 0.0)
         check_positive("involute_stage.ramp_depth", self.ramp_depth)
         check_range("involute_stage.mu", self.mu, 0.0)

@@ -221,9 +221,9 @@ class NestedSeries:
         top = self.chain[0]
         u, _, red, _ = top.solve(pose, np.zeros_like(pose))
         if self.depth == 0:
-            return self.element.coordinate_indices, top.condense(red, beam_factor=factor, u=u)[1]
+            return self.element.coordinate_indices, self.element.element_tangent(top.condense(red, beam_factor=factor, u=u)[1])
         with self.closure.stiffened_view(factor):
             _, _, red, ok = top.solve(pose, np.zeros_like(pose), u0=u)
         if not ok:
             raise RvtoolInputError(f"budget path {self.path!r}: the nested closures did not converge at the state")
-        return self.element.coordinate_indices, top.condense(red)[1]
+        return self.element.coordinate_indices, self.element.element_tangent(top.condense(red)[1])

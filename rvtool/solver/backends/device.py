@@ -50,8 +50,9 @@ COVERED = ("cycloid pins", "output pins (plain)", "involute pairs (external, int
 NOT_COVERED = ("stick--slip anchors inside a series closure or on plain output pins",
                "closures with a station law (pins.groove = 'conformal')",
                "shared output pins",
-               "driven runs (fused backend) of models with anchors, elastic closures, ported structures, journal "
-               "locks or families without device rows (rvtool.solver.row_dynamics.row_stepper_reasons)",
+               "driven runs (fused backend) of models with journal locks or families without device rows "
+               "(rvtool.solver.row_dynamics.row_stepper_reasons; the row stepper takes the row Newton's closures, "
+               "ported housings and anchors: rvtool.solver.row_closures)",
                "ported carrier (carrier.body = 'ported': the seat closure)", "ported wheels (wheels.body = 'ported')",
                "elastic closures and ported housings on the resident (cycloid copy-parameter) path and the fused "
                "stepper")
@@ -421,7 +422,9 @@ class FusedBackend(Backend):
       set: lumped bearings, rigid housing, plain output pins, no anchors). A failed run raises
       :class:`SolverFailure` with its state saved;
     * ``"row_stepper"``: every other model whose contact families all have device rows (RV,
-      small-tooth-difference, a cycloid with rolling elements;
+      small-tooth-difference, a cycloid with rolling elements; with the device row Newton's
+      closures and ported housings as unknowns of the step and anchors committed per accepted
+      step, :mod:`rvtool.solver.row_closures`;
       :func:`rvtool.solver.row_dynamics.row_stepper_reasons` names what it refuses): Exudyn's
       generalized-alpha step on the device families' rows, summed on the device, the Newton
       iterations one captured graph each (:func:`rvtool.solver.row_dynamics.row_driven_run`). Its
