@@ -145,8 +145,9 @@ def test_patched_closure_tangent_matches_central_differences(rv40e):
     unloaded arc), and the condensed tangent (the patches' exact law, its pose term by central differences at the
     open set held) along random directions matches central differences of the forces to 1e-6 relative (measured
     1.4e-7 at a 1e-10 step, the mean tie's 1.2e-7: the contact points interpolate linearly between profile ports,
-    so the step stays far below a port spacing). Slow: a static solve of rv40e with two FE wheels (3 min on the
-    shared 2-core machine)."""
+    so the step stays far below a port spacing). Marked slow: a static solve of rv40e with two FE wheels, 3.7 s
+    with OPENBLAS_NUM_THREADS=1 but about 3 min on the loaded shared 2-core machine with OpenBLAS's own threads
+    (oversubscribed: one 104x104 inverse took 0.18 s instead of 2.5 ms)."""
     from rvtool.contact.wheel_closure import WheelBodyClosure
     from rvtool.solver.static import StaticSolver
     d = rv40e.replace(wheels={"body": "ported", "structure": {**COARSE, "bore_ports": 8}})
