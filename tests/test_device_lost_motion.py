@@ -5,9 +5,9 @@ failing copy, the Exudyn fallback. cpu always; cuda where present.
 The variants are Monte Carlo samples of RD-40 (seed 2026, the case's regularization), as in
 tests/test_lost_motion.py: 1 and 3: the sequential load continuation succeeds; 2: it fails and
 spring control succeeds; 30: the sequential load continuation succeeds, the device Newton
-finds its loaded start only at 2.5 f (the start ladder); 0: both fail sequentially (the
-free-play branch ends in a snap-through), and the device continuation stalls where the
-sequential one does."""
+finds its loaded start only at 2.5 f (the start ladder); 0: the sequential load continuation
+stalls where the torque--angle curve folds (spring control passes the fold with a stiffer spring),
+and the device continuation stalls where the sequential one does."""
 import numpy as np
 import pytest
 import warp as wp

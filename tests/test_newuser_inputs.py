@@ -340,6 +340,8 @@ COUNT_BOUNDS = [
     ("cycloid", ("housing",), "n_modes", "[0, 200] (integer)"),
     ("cycloid", ("housing",), "n_fixed_interface_modes", "[0, 200] (integer)"),
     ("cycloid", ("housing", "structure"), "n_ports", "[1, 256] (integer)"),
+    ("cycloid", ("housing",), "n_residual", "[-1, 512] (integer)"),
+    ("cycloid", ("housing", "structure"), "n_mounts", "[0, 256] (integer)"),
     ("rv2", ("carrier", "structure"), "n_modes", "[0, 200] (integer)"),
 ]
 
@@ -357,7 +359,7 @@ def test_count_keys_have_an_upper_bound(topology, path, key, valid, tmp_path):
     sub[key] = 1000000
     hi = re.search(r", (\d+)\]", valid).group(1)
     with pytest.raises(RvtoolInputError, match=rf"{re.escape('.'.join(path))}\.{key} = 1000000 is outside the valid "
-                                               rf"range \[\d, {hi}\]"):
+                                               rf"range \[-?\d, {hi}\]"):
         _load(tmp_path, table)
     sub[key] = int(hi)                   # the bound itself is valid (the loader may refuse it for other reasons)
     try:

@@ -42,7 +42,12 @@ switch (sensitivity share) equals its energy share within SENSITIVITY_TOL and it
 ports per tooth (a smoke run: K_t moves by the meshes' error; the full run's figures are the reported ones).
 """
 import math
+import os
 import time
+
+# one BLAS thread per process (before NumPy loads): the closures' dense solves have a few hundred unknowns, where a
+# second OpenBLAS thread on a shared 2-core machine spins instead of computing (cases/benchmarks/bench_nested_wheels.py)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np
 
@@ -72,14 +77,13 @@ dropped a coupling exceeds by far (moved here from tests/test_wheel_combined.py,
 SKIP_SHARE = 0.05
 """Issue 30: a member under 5 % of the all-on compliance may be skipped, with the figure that says so."""
 SWITCHES = ("elastic_cranks", "ported_housing", "ported_carrier", "wheel_body", "pin_grooves")
-QUICK_SWITCHES = tuple(s for s in SWITCHES if s != "wheel_body")
-"""--quick leaves the elastic wheel bodies out (of their own variant and of all_on): with the wheels nested the
-quick run took 12.3 min wall on the shared 2-core machine (docs/case_results/rv/compliance_budget is such a run,
-collected by hand), beyond the quick suite's 300 s per case; the full run has all five."""
+"""Every member in both modes: with the nested closures solved as one network (rvtool.contact.pin_closure.
+JointNetwork) the quick run with the wheel bodies nested fits the quick suite (it took 12.3 min wall when each inner
+closure was solved at every iterate of the outer one; cases/benchmarks/bench_nested_wheels.py measures both)."""
 
 
 def switches(quick):
-    return QUICK_SWITCHES if quick else SWITCHES
+    return SWITCHES
 MEMBER = {"elastic_cranks": ("cranks", "crank_torsion"), "ported_housing": ("housing_ports",),
           "ported_carrier": ("carrier",), "wheel_body": ("wheel_bodies",), "pin_grooves": ("pin_grooves",)}
 
@@ -107,8 +111,6 @@ def variants(name, quick):
     m = member_inputs(name)
     on["wheels"] = {**m["wheels"], "structure": {**m["wheels"]["structure"], **(WHEEL_QUICK if quick else {})}}
     on["pins"] = m["pins"]
-    if quick:
-        on["wheels"] = {"body": "rigid"}
     off = {"cranks": {"shaft": {"model": "rigid", "tilt": False, "torsion": "rigid"}}, "housing": {"model": "rigid"},
            "carrier": {"body": "rigid"}, "wheels": {"body": "rigid"}, "pins": {"groove": "rigid"}}
     section = {"elastic_cranks": "cranks", "ported_housing": "housing", "ported_carrier": "carrier",
@@ -122,7 +124,7 @@ def variants(name, quick):
 
 def rated_budget(design):
     """K_t [N m/arcmin], C [arcmin/(N m)] and the budget at T_R, input angle 0."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     model = rvtool.build(design)
     model.set_output_torque(-np.sign(model.ratio) * design.rated_torque)
     q = StaticSolver(model).solve(0.0)
@@ -130,7 +132,7 @@ def rated_budget(design):
     K = float(b["K_t_Nm_per_arcmin"])
     return {"K_t_Nm_per_arcmin": K, "C_arcmin_per_Nm": 1.0 / K, "energy_shares": b["shares"],
             "rigid_switch_shares": b["rigid_shares"], "sensitivity_shares": b["sensitivity_shares"],
-            "wall_s": time.perf_counter() - t0}
+            "wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
 
 
 def budget_of(name, quick):

@@ -76,20 +76,17 @@ def driven(design, revs):
 
 def judge(r):
     """The case's checks on its results (see casekit.verdict)."""
-    a, c, e = r["frozen"], r["convergence"], r["driven"]
+    a = r["frozen"]
     return {
-        "frozen_te_rel": casekit.check(a["te_max_rel_diff"], 1e-9, "<=", why="issue 33: frozen = rigid, 1e-9 relative TE"),
+        "frozen_te_abs": casekit.check(a["te_max_abs_diff_arcsec"], 1e-6, "<=",
+                                       why="issue 33: frozen = rigid, TE within the golden backends' 1e-6 arcsec (1e-9 "
+                                           "of the rigid TE peak, ~1e-7 rad over the quick points, is one ulp of the "
+                                           "angles: measured 2e-10..1.7e-9 between processes)"),
         "frozen_states_rel": casekit.check(a["states_max_rel_diff"], 1e-9, "<=",
                                            why="frozen = rigid, equilibria 1e-9 relative (the golden backends' bound)"),
         "frozen_driven_rel": casekit.check(a["driven_torsion_max_diff_vs_pp"], 1e-6, "<=",
                                            why="frozen = rigid in a driven run: the same equations, modal "
                                                "coordinates held by constraints (Newton tolerance 1e-6 abs)"),
-        "driven_run_complete": casekit.check(e["input_revolutions_run"], e["input_revolutions"] * (1 - 1e-9), ">=",
-                                             why="the run reaches its end time (one input revolution in the full run)"),
-        "driven_steps_converged": casekit.check(e["max_residual"], e["abs_tol"], "<=",
-                                                why="every accepted step meets the run's absolute tolerance"),
-        "te_spectrum_converged_in_modes": casekit.check(c["spectrum_change_vs_peak"][-1], 0.02, "<=",
-                                                        why="largest two bases: spectrum change / peak"),
         "cranks_frozen_te_abs": casekit.check(r["cranks"]["frozen"]["te_max_abs_diff_arcsec"], 1e-6, "<=",
                                               why="frozen cranks = rigid, 1e-6 arcsec (the golden backends' bound)"),
         "cranks_frozen_states_rel": casekit.check(r["cranks"]["frozen"]["states_max_rel_diff"], 1e-9, "<=",
@@ -102,15 +99,8 @@ def judge(r):
                                                                0.02, "<=", why="largest two bases: change / peak"),
         "cranks_driven_steps_converged": casekit.check(r["cranks"]["driven"]["max_residual"], 1e-6, "<=",
                                                        why="every accepted step meets the run's absolute tolerance"),
-        "mounted_modes_positive": casekit.check(min(r["modes"]["reduced_hz"][0]), 0.0, ">",
-                                                why="the mounted wheels at the rated torque: every free coordinate "
-                                                    "held by contacts or springs (no zero or unstable mode)"),
-        # the full FE of the mounted wheels (a shift-invert solve of ~17k coordinates with dense contact
-        # coupling, about 2/3 of the quick run's time) runs in the full run only
-        **({"mounted_modes_vs_full_fe": casekit.check(
-            r["modes"]["max_rel_diff_default_basis"], MODE_BOUND, "<=",
-            why=f"issue 33: the first {MODES_COMPARED} modes of the mounted flexible wheels against the full FE of "
-                "the same assembly")} if r["modes"].get("full_fe", True) else {}),
+        **{k: casekit.check(*v)
+           for k, v in F.wheel_criteria(r, n_compared=MODES_COMPARED, bound=MODE_BOUND).items()},
     }
 
 

@@ -9,8 +9,8 @@ the rigidity of another ratio variant of the same frame, an uncertainty band fro
 over the `assumed` ranges with a one-at-a-time tornado (tornado.png), the fraction of those variants within the
 catalogue's lost-motion maximum; the assumptions_commit of each design; and (issue 30) the rigidity b/a with every
 member of the torque path on (rvtool.analysis.validate_members: wheel bodies, pin grooves, ported carrier, crank
-torsion, from <design>_members.toml at the middles of its ranges) with its Latin-hypercube band (64 samples; in
-the full run only, see main()).
+torsion, from <design>_members.toml at the middles of its ranges) with its Latin-hypercube band (64 samples, the
+full run; --quick: the central value on the quick meshes, no band).
 
 --quick (a loop of rv80e costs 31 s, of rv40e 4 s): the central loops at 50 % level steps (the catalogue's
 levels are in every spacing); rv40e with its ratio variant and a band over the needle clearance range its
@@ -23,6 +23,12 @@ passed (stated criteria, NOT agreement with the catalogue, which is reported as 
 """
 import os
 import time
+
+# one BLAS thread per process (before NumPy loads): the solves here are small dense systems (a few hundred
+# unknowns), where a second OpenBLAS thread on a shared 2-core machine spins instead of computing (measured: a
+# 340 x 340 solve with 380 right-hand sides took 22x the CPU time with the default threads under load,
+# cases/benchmarks/bench_nested_wheels.py)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from concurrent.futures import ProcessPoolExecutor
 
@@ -54,10 +60,10 @@ def one_design(job):
             kw = {"band": False, "variant": False, "te": False}
         elif name == "rv40e":
             kw = {"assumed": rv40e_clearance_ranges(out)}
-        # the all-members-on row runs in the full mode only: its b/a costs 15-25 CPU-minutes per design (the
-        # nested elastic wheel bodies at every Newton step; rv80e's central value took 1534 s wall on the shared
-        # 2-core machine), beyond the quick suite's 300 s per case
-        kw["members"] = False
+        # the all-members-on row: its central b/a on the quick meshes (validate_members.QUICK_NUMERICS; about a
+        # CPU-minute per design with the nested closures solved as one network, bench_nested_wheels), no band:
+        # the band's samples are the full run's
+        kw["members_samples"] = 0
     res = V.validate(name, quick=quick, out_dir=f"{out}/{name}", **kw)
     crit = V.checks(res)
     entry = {"table": res["table"], "central": res["central"], "checks": crit,

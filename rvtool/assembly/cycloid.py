@@ -74,6 +74,24 @@ class CycloidKinematics:
         q[:, 1:, 2] = -a[:, None] / self.z_g
         return q
 
+    @staticmethod
+    def stacked_poses(kinematics, input_angles):
+        """(B, n, nb, 3) poses of B :class:`CycloidKinematics` at input angles (n,) [rad] in one evaluation
+        (Monte Carlo variants: their eccentricities differ), each equal to its :meth:`poses` bit for bit
+        (the same operations per element), or None where their phases, tooth or wheel counts differ."""
+        k0 = kinematics[0]
+        if any(not isinstance(k, CycloidKinematics) or k.n_wheels != k0.n_wheels or k.z_g != k0.z_g
+               or not np.array_equal(k.phases, k0.phases) for k in kinematics):
+            return None
+        a = np.asarray(input_angles, float)
+        nw = k0.n_wheels
+        e = np.array([k.eccentricity for k in kinematics], float)[:, None, None]
+        q = np.zeros((len(kinematics), len(a), nw + 2, 3))
+        q[:, :, SHAFT, 2] = a
+        q[:, :, 1:nw + 1, 0], q[:, :, 1:nw + 1, 1] = journal_centre(e, k0.phases[None, None, :], a[None, :, None])
+        q[:, :, 1:, 2] = -a[None, :, None] / k0.z_g
+        return q
+
     def velocities(self, input_angle, omega_in):
         """(nb, 3) velocities at input angle [rad] and input speed omega_in [rad/s]."""
         nw = self.n_wheels

@@ -41,7 +41,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_columns, angle_field, file_key, is_angle
 from ..structure import AnnularHousingSpec, ElasticMaterial
 from ..structure.pin_beam import PinSupport
-from ..structure.fe_model import MAX_STRUCTURE_MODES
+from ..structure.fe_model import MAX_PORTS, MAX_STRUCTURE_MODES
 from ..structure.floating_ports import FloatingDynamics
 from ..structure.wheel_body import WheelBodySpec
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
@@ -209,9 +209,10 @@ class Housing:
             raise RvtoolInputError(f"housing.model = {self.model!r}; valid choices are ['rigid', 'ports']")
         if self.model == "ports" and not isinstance(self.structure, AnnularHousingSpec):
             raise RvtoolInputError("housing.model = 'ports' needs the table [housing.structure] (an AnnularHousingSpec)")
-        # upper bounds of the mode counts: a cost limit (MAX_STRUCTURE_MODES); n_residual is bounded by the ports
+        # upper bounds of the mode counts: a cost limit (MAX_STRUCTURE_MODES); n_residual at most one residual
+        # attachment mode per port row (x, y of at most MAX_PORTS ports; -1 takes exactly that)
         for nm, lo, hi in (("n_fixed_interface_modes", 0, MAX_STRUCTURE_MODES), ("n_modes", 0, MAX_STRUCTURE_MODES),
-                           ("n_residual", -1, None)):
+                           ("n_residual", -1, 2 * MAX_PORTS)):
             v = getattr(self, nm)
             if isinstance(v, bool) or not isinstance(v, int) or v < lo or (hi is not None and v > hi):
                 raise RvtoolInputError(f"housing.{nm} = {v!r} is outside the valid range [{lo}, "
@@ -756,7 +757,13 @@ def replace(design, **sections):
     ``replace(d, wheels={"n_slices": 4}, n_wheels=1)``. The changed file-form data is loaded
     again, so links follow (a new wheel width is the output pins' contact length)."""
     from . import topologies
+    return topologies.design_from_table(replaced_source(design, **sections))
+
+
+def replaced_source(design, **sections):
+    """The file-form data :func:`replace` loads for ``replace(design, **sections)`` (the design's
+    ``source`` with the sections written in), without loading it."""
     source = getattr(design, "source", None)
     if source is None:
         raise RvtoolInputError("replace needs a design loaded from file-form data (load_design / design_from_dict)")
-    return topologies.design_from_table(_merge(copy.deepcopy(source), sections))
+    return _merge(copy.deepcopy(source), sections)

@@ -36,6 +36,10 @@ class Variant:
     def apply(self, design):
         """The design of this variant of ``design`` (deviations written into its sections)."""
         from ..assembly.spec import replace
+        return replace(design, **self.sections(design))
+
+    def sections(self, design):
+        """The changed sections :meth:`apply` writes into ``design`` (the ``replace`` form), checked."""
         w, prof = design.wheels, design.profile
         e_g = prof.generating_eccentricity
         e = e_g + self.eccentricity_error
@@ -61,4 +65,4 @@ class Variant:
             pins["radius_error"] = design.pins.radius_error + self.pin_radius_error
         if pins:
             sections["pins"] = pins
-        return replace(design, **sections)
+        return sections

@@ -8,7 +8,13 @@ for k = 0..V-1) and runs the per-variant work of the Monte Carlo reference run
 * TE: the quasi-static equilibria at ``input_angles`` under ``torque`` (resisting the nominal
   output rotation, as :func:`rvtool.protocols.precision.quasi_static_te`), each point warm-started
   from the copy's previous equilibrium shifted by its kinematic increment (``warm_start``; the
-  first point, and every point with ``warm_start=False``, from the kinematic state); a failed warm
+  first point, and every point with ``warm_start=False``, from the kinematic state). The points are
+  solved in the order of their input angle modulo 2 pi (``te_order="phase"``, default): the contacts
+  of an eccentric drive repeat with the crank angle (up to which pin or tooth is engaged), so over an
+  output revolution (RD-40: 53 points 0.74 crank revolutions apart) the previous point in crank phase
+  is a closer start than the previous in time (~30 % fewer batch iterations, the same equilibria to
+  the Newton tolerance); a TE over one crank revolution is in that order already
+  (``te_order="given"``: as given); a failed warm
   start runs the regularization homotopy from the kinematic state on the device; a point that
   still fails is solved by the Exudyn static solver on the variant's model and counted
   (``exudyn_points``);
@@ -56,11 +62,13 @@ class RowVariants:
 
 
 def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None, device="cpu", settings=None,
-                         device_sum=None, warm_start=True, device_step=None):
+                         device_sum=None, warm_start=True, device_step=None, te_order="phase"):
     """TE and lost motion of ``models`` (module docstring) on Warp ``device``. torque [N m]: the
     TE's output torque; input_angles [rad]; lost_motion_level [N m] or None; settings: the row
     Newton's :class:`~rvtool.solver.device_newton.DeviceNewtonSettings`; device_sum, device_step:
-    see :class:`DeviceRowNewton`. Returns a :class:`RowVariants`."""
+    see :class:`DeviceRowNewton`; te_order: "phase" or "given", the order the TE points are solved
+    and warm-started in (module docstring; the figures are per angle either way). Returns a
+    :class:`RowVariants`."""
     t0 = time.perf_counter()
     models = list(models)
     angles = np.asarray(input_angles, float)
@@ -68,6 +76,8 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
         raise RvtoolInputError("input_angles must be a finite 1-D sequence of at least 1 angle [rad]")
     if not np.isfinite(torque):
         raise RvtoolInputError(f"torque = {torque!r} N m must be finite")
+    if te_order not in ("phase", "given"):
+        raise RvtoolInputError(f"te_order = {te_order!r}; valid: 'phase', 'given'")
     newton = DeviceRowNewton(models, device=device, settings=settings, device_sum=device_sum, device_step=device_step)
     V, N = len(models), len(angles)
     tq = np.full(V, -np.sign(models[0].ratio) * float(torque))
@@ -79,7 +89,9 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
     t_te = time.perf_counter()
     newton.prime_kinematics(angles)               # every copy's kinematics once for all TE angles
     prev = None
-    for k, a in enumerate(angles):
+    order = np.argsort(np.mod(angles, 2 * np.pi), kind="stable") if te_order == "phase" else np.arange(N)
+    for k in order:
+        a = angles[k]
         kin = newton.kinematic(np.full(V, a))
         start = prev[0] + kin - prev[1] if (warm_start and prev is not None) else None
         r = newton.solve(np.full(V, a), tq, start)
@@ -131,24 +143,27 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
     return RowVariants(te=te, theta_out=theta_out, lost_motion_rad=lm,
                        status=["failed" if f else "ok" for f in failed], error=error, exudyn_points=exudyn_points,
                        exudyn_copies=exudyn_copies, split=split, te_s=te_s, lost_motion_s=lm_s, wall_s=wall,
-                       stats={"variants": V, "points": N, "sweeps": sweeps, "newton_iterations": iterations,
+                       stats={"variants": V, "points": N, "te_order": te_order, "sweeps": sweeps,
+                              "newton_iterations": iterations,
                               "device": str(device), "device_sum": newton.device_sum, "lost_motion": lm_stats})
 
 
 def _snapshot_of(job):
     """Pool task: the :class:`ModelSnapshot` of ``build(design, **build_kw)`` (picklable; built
     without device objects, :func:`~rvtool.solver.model_snapshot.build_snapshot`)."""
-    design, build_kw = job
-    return build_snapshot(design, build_kw)
+    design, build_kw, shared = job
+    return build_snapshot(design, build_kw, shared_tables=shared)
 
 
-def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=None):
+def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=None, shared_tables=True):
     """The variant models of ``designs`` for :func:`device_rows_variants`, built side by side in
     worker processes and returned as :class:`~rvtool.solver.model_snapshot.ModelSnapshot` (their
     rows, kinematics and constraints; a model itself is built here only where Exudyn takes over a
     point or copy). workers: processes (None: all cores; 1: build here, the models themselves);
     executor: a ``concurrent.futures`` executor to use instead (e.g. a warmed pool); build_kw: the
-    build options of every variant."""
+    build options of every variant; shared_tables: the snapshots' cycloid pin sets share one profile
+    table per distinct wheel profile (:func:`~rvtool.solver.model_snapshot.build_snapshot`; False: one
+    per variant as the full build; workers = 1 builds the full models either way)."""
     import concurrent.futures as cf
     import multiprocessing
     import os
@@ -157,7 +172,7 @@ def prepare_variant_models(designs, build_kw=None, *, workers=None, executor=Non
     build_kw = dict(build_kw or {})
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1):
         raise RvtoolInputError(f"workers = {workers!r} is outside the valid range [1, inf) (integer; None: all cores)")
-    jobs = [(d, build_kw) for d in designs]
+    jobs = [(d, build_kw, bool(shared_tables)) for d in designs]
     if executor is not None:
         return list(executor.map(_snapshot_of, jobs, chunksize=max(1, len(jobs) // 64)))
     n = workers or os.cpu_count() or 1

@@ -289,7 +289,10 @@ def psi_inverse(y, tol=1e-14, max_iterations=100):
         hi = np.where(r > 0, u, hi)
         step = r / (d * np.exp(u))
         un = u - step
-        bad = (un <= lo) | (un >= hi) | ~np.isfinite(un)
+        # a converged step (below tol, possibly below u's round-off: un == u, which may equal the bracket end the
+        # residual's round-off sign just set) is accepted, not bisected: bisecting it restarted from the far end of
+        # the initial bracket (~50 halvings back to the same root)
+        bad = (np.abs(step) > tol) & ((un <= lo) | (un >= hi)) | ~np.isfinite(un)
         un = np.where(bad, 0.5 * (lo + hi), un)
         done = np.abs(un - u) <= tol
         u = un

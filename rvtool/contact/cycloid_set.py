@@ -8,6 +8,9 @@ deviations (Eq. (gap)), and the contact law. A :class:`CycloidPinSet`
 evaluates any number of meshes in one kernel launch and follows the
 evaluator protocol of :class:`exudyn_user_elements.contact_element.ContactElement`.
 """
+import contextlib
+import contextvars
+import dataclasses
 import functools
 from dataclasses import dataclass, field
 
@@ -193,6 +196,141 @@ def auto_window(profile, table, pin_radius, band=0.05, margin=1.5):
     return int(np.ceil(margin * off)) + 2
 
 
+PIN_RADIUS_SLACK = 0.01
+"""Default relative pin-radius allowance of :func:`shared_profile_tables`: a mesh whose pin radius is within
+1 % of its profile's generating radius (Monte Carlo pin-radius tolerances are ~0.1 %: h4 on 6-7 mm pins)
+searches the profile's shared table."""
+
+_SHARED_SLACK = contextvars.ContextVar("rvtool_shared_profile_tables", default=None)
+
+
+@contextlib.contextmanager
+def shared_profile_tables(slack=PIN_RADIUS_SLACK):
+    """Within this context a :class:`CycloidPinSet` takes its profile tables from one shared table per
+    (profile, sampling) (:class:`ProfileTable`) instead of one per (profile, pin radius).
+
+    A table depends on the pin radius r_p only through its search key (the polar angle of the pin-centre
+    curve P + r_p N, :func:`pin_curve_table`) and its window (:func:`auto_window`); the points, normals,
+    curvatures and generating angles are the profile's. The shared table is keyed at the profile's
+    generating radius r_0 and its window covers every pin radius within ``slack`` x r_0 (the search band
+    widened by the slack), so a mesh of pin radius r_p with |r_p - r_0| <= slack r_0 finds the same nearest
+    sample as with its own table, and the contact (discrete projection or analytic Newton from that sample)
+    is the same: Monte Carlo variants that differ in pin radius, clearances, pin positions or
+    eccentricity share their wheel's table (the device holds one table per distinct profile, a pickled
+    snapshot carries its key; tests/test_shared_tables.py). Only the window grows (by a sample or two).
+    Builds outside the context are unchanged."""
+    if not (isinstance(slack, (int, float)) and 0.0 <= slack <= 0.1):
+        raise RvtoolInputError(f"slack = {slack!r} is outside the valid range [0, 0.1] (fraction of the pin radius)")
+    token = _SHARED_SLACK.set(float(slack))
+    try:
+        yield
+    finally:
+        _SHARED_SLACK.reset(token)
+
+
+_TURN_WINDOWS = {}
+"""Search windows of the shared tables by profile without its rotation (:func:`_shared_entry`)."""
+
+
+@functools.lru_cache(maxsize=256)
+def _shared_entry(profile, n_samples, search, band, slack):
+    """(table, analytic parameters or None, window) of a :class:`ProfileTable` key, once per process.
+    The table is the profile's own (:meth:`CycloidProfile.table`, bit for bit); profiles that differ in
+    their rotation only (the wheels of one reducer: their assembly phases) take the search window of the
+    first of them: the window counts samples between a pin's polar angle and its foot, which turning
+    every sample keeps, so an RD-40 variant (its profile drawn per variant) searches its window once,
+    not per wheel (~1-2 ms a wheel)."""
+    rp = profile.pin_radius
+    tab = pin_curve_table(sampled_profile(profile, n_samples), rp)
+    key = (tuple((f.name, getattr(profile, f.name)) for f in dataclasses.fields(profile) if f.name != "rotation_mod"),
+           n_samples, search, band, slack)
+    try:
+        window = _TURN_WINDOWS.get(key)
+    except TypeError:                     # an unhashable member (a list table): its own window
+        key = window = None
+    if window is None:
+        window = auto_window(profile, tab, rp, band=band + slack * (1.0 + band))
+        if key is not None:
+            if len(_TURN_WINDOWS) > 1024:
+                _TURN_WINDOWS.clear()
+            _TURN_WINDOWS[key] = window
+    for a in tab:
+        if isinstance(a, np.ndarray) and a.flags.owndata:
+            a.flags.writeable = False
+    return tab, profile.analytic_parameters() if search == "analytic" else None, window
+
+
+class ProfileTable:
+    """A profile table shared by every mesh of one profile and sampling (:func:`shared_profile_tables`):
+    the sequence (points, normals, curvature, key polar angle, spacing, phi) of :func:`pin_curve_table` at
+    the profile's generating radius, computed on first use once per process. ``key`` identifies it
+    (equal keys: the same table). Pickled as its key where this process used it for more than one set
+    (the receiving process computes it once), else with its arrays (a profile of one variant only, e.g.
+    RD-40's drawn profile modifications: computing it again would move the build into the receiver)."""
+
+    __slots__ = ("key", "_entry", "_arrays")
+    _uses = {}
+
+    def __init__(self, profile, n_samples, search, band, slack, arrays=None):
+        self.key = (profile, int(n_samples), str(search), float(band), float(slack))
+        self._entry = None
+        self._arrays = arrays
+        if len(ProfileTable._uses) > 65536:     # a process that saw 100,000 drawn profiles: forget the old ones
+            ProfileTable._uses.clear()
+        ProfileTable._uses[self.key] = ProfileTable._uses.get(self.key, 0) + 1
+
+    @property
+    def entry(self):
+        """(table, analytic parameters or None, search window)."""
+        if self._entry is None:
+            if self._arrays is not None:
+                prof, n, search, band, slack = self.key
+                self._entry = (self._arrays[0], prof.analytic_parameters() if search == "analytic" else None,
+                               self._arrays[1])
+            else:
+                self._entry = _shared_entry(*self.key)
+        return self._entry
+
+    @property
+    def window(self):
+        return self.entry[2]
+
+    def __getitem__(self, i):
+        return self.entry[0][i]
+
+    def __len__(self):
+        return len(self.entry[0])
+
+    def __iter__(self):
+        return iter(self.entry[0])
+
+    def __eq__(self, other):
+        """Equal keys: the same table (its arrays are a function of the key)."""
+        return isinstance(other, ProfileTable) and self.key == other.key
+
+    def __hash__(self):
+        return hash(self.key)
+
+    def __reduce__(self):
+        if ProfileTable._uses.get(self.key, 0) > 1:
+            return ProfileTable, self.key
+        return ProfileTable, self.key + ((self.entry[0], self.entry[2]),)
+
+
+def _shared_table(prof, rp, samples_per_tooth, search, band):
+    """(ProfileTable, analytic parameters or None, window) of a mesh of pin radius ``rp`` inside
+    :func:`shared_profile_tables`, or None (outside it, or ``rp`` beyond the slack: a table of its own)."""
+    slack = _SHARED_SLACK.get()
+    if slack is None or abs(rp - prof.pin_radius) > slack * prof.pin_radius:
+        return None
+    try:
+        hash(prof)
+    except TypeError:
+        return None
+    t = ProfileTable(prof, samples_per_tooth * prof.n_teeth, search, band, slack)
+    return t, t.entry[1], t.window
+
+
 class CycloidPinSet(PairFamilySet):
     """Evaluator of cycloid--pin meshes between ``n_bodies`` planar bodies.
 
@@ -243,10 +381,17 @@ class CycloidPinSet(PairFamilySet):
                     raise RvtoolInputError(f"meshes[{m_i}].{nm} = {b} is outside the valid range [0, {n_bodies - 1}] or GROUND")
             prof = m.profile
             rp = prof.pin_radius if m.pin_radius is None else m.pin_radius
-            # the table depends on the (frozen, hashable) profile and the pin radius only
-            key = (prof, float(rp))
+            # the table depends on the (frozen, hashable) profile and the pin radius only; inside
+            # shared_profile_tables one table per profile (its key)
+            shared = _shared_table(prof, float(rp), samples_per_tooth, search, self.search_band)
+            if shared is None and tables is not None and isinstance(tables.get((prof, float(rp)), (None,))[0],
+                                                                    ProfileTable):
+                shared = tables[(prof, float(rp))]          # a copy of sets that shared their tables
+            key = shared[0].key if shared is not None else (prof, float(rp))
             if key not in table_of:
-                if tables is not None and key in tables:
+                if shared is not None:
+                    tab, ana, win = shared
+                elif tables is not None and key in tables:
                     tab, ana, win = tables[key]
                 else:
                     tab = pin_curve_table(sampled_profile(prof, samples_per_tooth * prof.n_teeth), rp)
@@ -333,8 +478,9 @@ class CycloidPinSet(PairFamilySet):
             local = {}                      # the set's table index -> the concatenation's (in mesh order)
             for m_i, m in enumerate(sc.meshes):
                 rp = m.profile.pin_radius if m.pin_radius is None else m.pin_radius
-                key = (m.profile, float(rp))
                 t = int(sc.iparams[np.flatnonzero(sc.mesh_of == m_i)[0], ref.J_TABLE])
+                # a shared table (shared_profile_tables) once for every set that holds it
+                key = sc.tables[t].key if isinstance(sc.tables[t], ProfileTable) else (m.profile, float(rp))
                 if key not in table_of:
                     table_of[key] = len(self.tables)
                     self.tables.append(sc.tables[t])

@@ -214,7 +214,10 @@ class ContactSetEvaluator(StagedLaunch):
     reference implementation). precision: "float64" (default) or "float32".
     """
 
-    def __init__(self, contact_set: CircleContactSet, backend="warp", precision="float64", device="cpu"):
+    def __init__(self, contact_set: CircleContactSet, backend="warp", precision="float64", device="cpu", *,
+                 packed=None):
+        """packed: the set's ``packed()`` rows (fparams, iparams) where the caller has them already (a
+        copier: the copies' built rows with their body columns moved), else packed here."""
         if backend not in BACKENDS:
             raise RvtoolInputError(f"backend = {backend!r} is not valid; valid choices are {list(BACKENDS)}")
         self.set = contact_set
@@ -222,7 +225,7 @@ class ContactSetEvaluator(StagedLaunch):
         self.ids = contact_set.ids
         self.backend = backend
         self.precision = precision
-        self.fparams, self.iparams = contact_set.packed()
+        self.fparams, self.iparams = contact_set.packed() if packed is None else packed
         self.n_contacts = len(contact_set.contacts)
         self.n_bodies = contact_set.n_bodies
         self.history = ContactHistory(self.n_contacts)

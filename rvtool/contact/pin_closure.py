@@ -72,7 +72,7 @@ class ElasticPinClosure:
     """
 
     def __init__(self, inner, *, n_bodies, carrier, station_compliance, station, tolerance=1e-8,
-                 max_iterations=40, dofs=(0, 1), support=None, coupled=False):
+                 max_iterations=40, dofs=(0, 1), support=None, coupled=False, joint=False):
         dofs = tuple(int(c) for c in dofs)
         if not dofs or len(set(dofs)) != len(dofs) or any(c not in (0, 1, 2) for c in dofs):
             raise RvtoolInputError(f"dofs = {dofs!r}; valid: distinct station coordinates among (0, 1, 2) = (x, y, theta)")
@@ -145,6 +145,11 @@ class ElasticPinClosure:
         self.last_iterations = 0
         self.coupled = bool(coupled)
         self._condense_factor = 1.0
+        self.joint = bool(joint)
+        self._network = None          # the JointNetwork of a joint closure, built on its first solve
+        #: evaluations of the inner set made by this closure's solves (of the leaf contact set where this is the
+        #: innermost closure, by a joint network above it included): the cost counter of the nesting
+        self.inner_evaluations = 0
 
     def __getattr__(self, name):
         # row attributes of the inner set (mesh_of, pin_of, meshes, pin_forces, ...); only reached
@@ -183,7 +188,25 @@ class ElasticPinClosure:
 
     def solve(self, pose, vel, u0=None):
         """Station deflections u (2 n_pins n_s,) [m] at poses/velocities (nb, 3), the inner
-        evaluation there and the reduced (Q, K, D). Raises nothing: ``converged`` says."""
+        evaluation there and the reduced (Q, K, D). Raises nothing: ``converged`` says.
+
+        ``joint`` (and the inner set another closure): one Newton over the stations of every closure
+        nested below (:class:`JointNetwork`), the inner closures' stations condensed out of the
+        reduced system; where it does not converge, the nested solve below (each inner closure
+        solved for every evaluation of this one)."""
+        if self.joint and isinstance(self.inner, ElasticPinClosure):
+            if self._network is None or self._network.chain[0] is not self:
+                # (built on the first solve; rebuilt for a copy of the closure, e.g. a model snapshot's, whose
+                # copied __dict__ still names the original's network)
+                self._network = JointNetwork(self)
+            out = self._network.solve(pose, vel, u0)
+            if out[3]:
+                return out
+        return self.nested_solve(pose, vel, u0)
+
+    def nested_solve(self, pose, vel, u0=None):
+        """:meth:`solve` by Newton over this closure's stations, the inner set evaluated (an inner
+        closure solved) at every iterate."""
         nr = 3 * self.n_bodies
         u = self._u.copy() if u0 is None else np.asarray(u0, float).copy()
         for restart in (False, True):
@@ -191,6 +214,7 @@ class ElasticPinClosure:
                 u = np.zeros(self._n_u)
             ext, vext = self._extended(pose, vel, u)
             ev = self.inner.evaluate(ext, vext, check=False)
+            self.inner_evaluations += 1
             Q, K, D = self._reduced(ev, u)
             r = np.abs(Q[nr:]).max(initial=0.0)
             for it in range(self.max_iterations):
@@ -202,6 +226,7 @@ class ElasticPinClosure:
                     un = u + step * du
                     ext, vext = self._extended(pose, vel, un)
                     evn = self.inner.evaluate(ext, vext, check=False)
+                    self.inner_evaluations += 1
                     Qn, Kn, Dn = self._reduced(evn, un)
                     rn = np.abs(Qn[nr:]).max(initial=0.0)
                     if rn < r or self._accepted(rn, evn):
@@ -229,12 +254,43 @@ class ElasticPinClosure:
         x = np.linalg.solve(blocks, np.asarray(rhs).reshape(n, m, -1))
         return x.reshape(n * m, -1) if np.ndim(rhs) == 2 else x.reshape(-1)
 
+    def station_forces(self, pose, u):
+        """(F, dF/du, dF/dq or None): the station law's forces F (n_u,) on the stations at deflections
+        u (n_u,) and real-body poses ``pose`` (n_bodies, 3), its tangent along u and, where the law
+        depends on the poses (:class:`~rvtool.contact.wheel_closure.WheelBodyClosure`), along the
+        real coordinates (n_u, 3 n_bodies) (the terms :meth:`_reduced` subtracts)."""
+        u = np.asarray(u, float)
+        if self.support is None:
+            return self._Kb @ u, self._Kb, None
+        F, G = self.support.forces(u.reshape(self.n_pins, self.n_stations, len(self.dofs)))
+        return F.ravel(), self._block_diagonal(G), None
+
+    @property
+    def extension(self):
+        """M (sparse, 3 (n_bodies + n_pins n_s) x (3 n_bodies + n_u)): the poses of the real and the
+        station bodies the inner set is evaluated on, from [real poses; station deflections]."""
+        return self._M
+
+    @property
+    def n_u(self):
+        """Number of station deflection coordinates (n_pins n_s n_d)."""
+        return self._n_u
+
+    @property
+    def condense_factor(self):
+        """The station stiffness factor of the condensation (1; another inside :meth:`stiffened_view`)."""
+        return self._condense_factor
+
     def support_tangent(self, u):
         """The station law's tangent ds/du (n_u, n_u) at deflections u (block diagonal per pin);
         K_b for the linear beam."""
         if self.support is None:
             return self._Kb
         _, G = self.support.forces(np.asarray(u, float).reshape(self.n_pins, self.n_stations, len(self.dofs)))
+        return self._block_diagonal(G)
+
+    def _block_diagonal(self, G):
+        """(n_u, n_u) from the per-pin blocks G (n_pins, m, m)."""
         m = self.n_stations * len(self.dofs)
         out = np.zeros((self._n_u, self._n_u))
         for p in range(self.n_pins):
@@ -307,3 +363,121 @@ class ElasticPinClosure:
         """Station deflections (n_pins, n_s, n_d) [m or rad] at static poses (nb, 3)."""
         u = self.solve(pose, np.zeros_like(np.asarray(pose, float)))[0]
         return u[self._u_index]
+
+
+class JointNetwork:
+    """The closures nested in a ``joint`` :class:`ElasticPinClosure` (``top``; each inner set another
+    closure down to a contact set, the *leaf*) solved as one series network: one Newton over the
+    station deflections of every closure at once, the leaf evaluated once per iterate, instead of
+    every inner closure solved to convergence at every iterate of the one outside it (whose cost
+    grows as the product of the levels' iteration counts).
+
+    Coordinates x = [q (3 n_bodies); u_0; u_1; ...] (u_k the stations of closure k, 0 the top). The
+    poses each closure is evaluated on are linear in x, p_{k+1} = M_k [p_k; u_k] (M_k its
+    :attr:`~ElasticPinClosure.extension`), composed once into sparse maps P_k. The residual on u_k
+    is the leaf's generalized force through P_leaf minus closure k's station forces
+    (:meth:`ElasticPinClosure.station_forces`): the equations the nested solve satisfies level by
+    level (at an inner closure's solution its condensed force is the leaf's force through the maps
+    below it), so the solution is the nested one within the closures' tolerance. The inner stations
+    are then condensed out (each closure's block of the station tangent times its
+    :attr:`~ElasticPinClosure.condense_factor`, as its own condensation would), which leaves the
+    top's reduced system (Q, K, D) over [q; u_0]: the Schur complements of a nested condensation
+    compose to the one of the whole network. D's station columns (unused by the condensation) are
+    zero."""
+
+    def __init__(self, top):
+        chain = [top]
+        while isinstance(chain[-1].inner, ElasticPinClosure):
+            chain.append(chain[-1].inner)
+        self.chain = chain
+        self.leaf = chain[-1].inner
+        nr = 3 * top.n_bodies
+        sizes = [c.n_u for c in chain]
+        self.offsets = np.cumsum([nr] + sizes)          # x rows of u_k: offsets[k]:offsets[k + 1]
+        nx = int(self.offsets[-1])
+        self.nx, self.nr = nx, nr
+        P = sp.identity(nx, format="csr")[:nr]
+        self.maps = []
+        for k, c in enumerate(chain):
+            self.maps.append(P)
+            E = sp.identity(nx, format="csr")[self.offsets[k]:self.offsets[k + 1]]
+            P = (c.extension @ sp.vstack([P, E])).tocsr()
+        self.P, self.PT = P, P.T.tocsr()
+        self._U = np.zeros(nx - nr)
+        self.last_iterations = 0
+
+    def _reduced(self, pose, vel, U):
+        """(leaf evaluation, Q (nx,), K (nx, nx), D (nx, nx) or None, the closures' station tangents
+        [dF_k/du_k]) at stations U."""
+        x = np.concatenate([np.asarray(pose, float).ravel(), U])
+        v = np.concatenate([np.asarray(vel, float).ravel(), np.zeros_like(U)])
+        ev = self.leaf.evaluate((self.P @ x).reshape(-1, 3), (self.P @ v).reshape(-1, 3), check=False)
+        self.chain[-1].inner_evaluations += 1
+        Q = self.PT @ ev.Q
+        K = np.ascontiguousarray((self.PT @ (self.PT @ np.asarray(ev.dQdq)).T).T)
+        D = None if ev.dQdv is None else np.ascontiguousarray((self.PT @ (self.PT @ np.asarray(ev.dQdv)).T).T)
+        Gs = []
+        for k, c in enumerate(self.chain):
+            sl = slice(self.offsets[k], self.offsets[k + 1])
+            F, G, Gq = c.station_forces((self.maps[k] @ x).reshape(-1, 3), U[sl.start - self.nr:sl.stop - self.nr])
+            Q[sl] -= F
+            K[sl, sl] -= G
+            if Gq is not None:
+                K[sl] -= (self.maps[k].T @ Gq.T).T
+            Gs.append(G)
+        return ev, Q, K, D, Gs
+
+    def _accepted(self, r, ev):
+        tol = min(c.tolerance for c in self.chain)
+        return r <= tol or r <= RELATIVE_TOLERANCE * np.abs(ev.Q).max(initial=0.0)
+
+    def solve(self, pose, vel, u0=None):
+        """As :meth:`ElasticPinClosure.solve` of the top (its stations u_0, the leaf evaluation, the
+        top's reduced system with the inner stations condensed, converged)."""
+        nr, n0 = self.nr, self.chain[0].n_u
+        U = self._U.copy()
+        if u0 is not None:
+            U[:n0] = u0
+        for restart in (False, True):
+            if restart:
+                U = np.zeros_like(U)
+            ev, Q, K, D, G = self._reduced(pose, vel, U)
+            r = np.abs(Q[nr:]).max(initial=0.0)
+            for it in range(max(c.max_iterations for c in self.chain)):
+                if self._accepted(r, ev) or not np.isfinite(r):
+                    break
+                try:
+                    dU = -np.linalg.solve(K[nr:, nr:], Q[nr:])
+                except np.linalg.LinAlgError:
+                    break
+                step = 1.0
+                for _ in range(12):
+                    Un = U + step * dU
+                    evn, Qn, Kn, Dn, Gn = self._reduced(pose, vel, Un)
+                    rn = np.abs(Qn[nr:]).max(initial=0.0)
+                    if rn < r or self._accepted(rn, evn):
+                        break
+                    step *= 0.5
+                U, ev, Q, K, D, G, r = Un, evn, Qn, Kn, Dn, Gn, rn
+                self.last_iterations = it + 1
+            if self._accepted(r, ev):
+                self._U = U.copy()
+                return U[:n0].copy(), ev, self._condensed(Q, K, D, G), True
+        return U[:n0].copy(), ev, self._condensed(Q, K, D, G), False
+
+    def _condensed(self, Q, K, D, G):
+        """The top's reduced (Q, K, D) over [q; u_0]: the inner stations condensed (class docstring)."""
+        a = int(self.offsets[1])
+        Kbb = K[a:, a:].copy()
+        for k, c in enumerate(self.chain[1:], start=1):
+            f = c.condense_factor
+            if f != 1.0:
+                sl = slice(self.offsets[k] - a, self.offsets[k + 1] - a)
+                Kbb[sl, sl] -= (f - 1.0) * G[k]
+        X = np.linalg.solve(Kbb, np.hstack([K[a:, :a]] + ([] if D is None else [D[a:, :self.nr]])))
+        Kr = K[:a, :a] - K[:a, a:] @ X[:, :a]
+        Dr = None
+        if D is not None:
+            Dr = np.zeros((a, a))
+            Dr[:, :self.nr] = D[:a, :self.nr] - K[:a, a:] @ X[:, a:]
+        return Q[:a].copy(), Kr, Dr

@@ -107,15 +107,15 @@ class WheelBodyClosure(ElasticPinClosure):
         local = (self.pin_centres - np.array([x, y])) @ Rt          # R(-th) (p - x): rows times R
         b = self.bodies[j]
         Wp, _ = profile_interpolation(b, local)
-        n_rows = self._port_compliance[j].shape[0]
-        Wpin = np.zeros((2 * self.n_ring_pins, n_rows))
-        Wpin[:, b.rows("profile")] = -Wp                            # S = -1 on the pin stations
-        Wb = np.zeros((2 * self.n_bores, n_rows))
-        Wb[np.arange(2 * self.n_bores), self._bore_rows[j]] = 1.0
-        W = np.vstack([Wpin, Wb])
-        Rb = np.kron(np.eye(W.shape[0] // 2), Rt)
-        A = Rb @ W
-        C = A @ self._port_compliance[j] @ A.T
+        # W (2 n_s, port rows) has two profile ports per pin station and one row per bore station: only
+        # the port rows it touches enter C_j (the product over the others adds exact zeros)
+        used = np.flatnonzero(np.any(Wp != 0.0, axis=0))
+        rows = np.concatenate([np.asarray(b.rows("profile"))[used], self._bore_rows[j]])
+        W = np.zeros((2 * (self.n_ring_pins + self.n_bores), len(rows)))
+        W[:2 * self.n_ring_pins, :len(used)] = -Wp[:, used]          # S = -1 on the pin stations
+        W[2 * self.n_ring_pins + np.arange(2 * self.n_bores), len(used) + np.arange(2 * self.n_bores)] = 1.0
+        A = np.einsum("ab,nbk->nak", Rt, W.reshape(-1, 2, len(rows))).reshape(W.shape)     # R (x) I_2 per station
+        C = A @ self._port_compliance[j][np.ix_(rows, rows)] @ A.T
         # the wheel's rigid motion at the stations (global frame, about the wheel centre; the pins'
         # normal forces and the needles' radial forces pass through the pin and bore centres), signed
         # by S: a compliance along it does not change the response to a balanced load (G^T S Q = 0)
@@ -236,6 +236,17 @@ class WheelBodyClosure(ElasticPinClosure):
             else:
                 K[nr + j * m:nr + (j + 1) * m, 3 * w:3 * w + 3] -= np.einsum("cab,b->ac", self._dKb[j], uj)
         return Q, K, D
+
+    def station_forces(self, pose, u):
+        """(K u, K, dK u/dq) of the wheels' station stiffness K at real-body poses ``pose`` (the pose
+        derivative on each wheel's coordinates, as :meth:`_reduced` subtracts it)."""
+        self.update(pose)
+        u = np.asarray(u, float)
+        m = 2 * self.station.shape[1]
+        Gq = np.zeros((self.n_u, 3 * self.n_bodies))
+        for j, w in enumerate(self.wheels):
+            Gq[j * m:(j + 1) * m, 3 * w:3 * w + 3] = np.einsum("cab,b->ac", self._dKb[j], u[j * m:(j + 1) * m])
+        return self._Kb @ u, self._Kb, Gq
 
     def solve(self, pose, vel, u0=None):
         self.update(pose)

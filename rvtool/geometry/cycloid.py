@@ -71,7 +71,7 @@ class CycloidProfile:
             check_finite("radial_mod_table", t)
             if np.any(np.diff(t[:, 0]) <= 0):
                 raise RvtoolInputError("radial_mod_table angles must increase strictly (valid: sorted phi in [0, 2 pi / z_g])")
-        self._check_undercut()
+        _checked_undercut(self)
 
     @property
     def n_teeth(self):
@@ -114,10 +114,11 @@ class CycloidProfile:
         phi = np.asarray(phi, float)
         return self._rotate(self._unrotated_points(phi, _trig(phi, self.n_pins)))
 
-    def _unrotated_points(self, phi, trig):
-        """:meth:`points` before the rotation, from the angles' :func:`_trig` (the same operations)."""
-        E, dE, _ = self._epitrochoid(trig)
-        D = np.linalg.norm(dE, axis=-1) / self.R   # = sqrt(1 + K1^2 - 2 K1 cos(z_g phi))
+    def _unrotated_points(self, phi, trig, epi=None):
+        """:meth:`points` before the rotation, from the angles' :func:`_trig` (the same operations;
+        ``epi``: their :meth:`_epitrochoid` where the caller has it)."""
+        E, dE, _ = self._epitrochoid(trig) if epi is None else epi
+        D = _length(dE) / self.R   # = sqrt(1 + K1^2 - 2 K1 cos(z_g phi))
         K1 = self.K1
         s, c, S, C = trig
         inward = np.stack([K1 * S - s, K1 * C - c], axis=-1) / D[..., None]
@@ -132,9 +133,13 @@ class CycloidProfile:
     def curvature_of_points(self, phi, h=None):
         """Signed curvature of the profile (positive where it is convex outward), by the
         analytic offset-curve relation kappa = kappa_E / (1 - r_c kappa_E) for constant r_c."""
-        E, dE, ddE = self.epitrochoid(phi)
+        _, dE, ddE = self.epitrochoid(phi)
+        return self._curvature(phi, dE, ddE)
+
+    def _curvature(self, phi, dE, ddE):
+        """:meth:`curvature_of_points` from the epitrochoid's derivatives at ``phi`` (the same operations)."""
         cross = dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]
-        speed = np.linalg.norm(dE, axis=-1)
+        speed = _length(dE)
         # the curve runs clockwise for increasing phi (x ~ sin, y ~ cos), so convex-outward is cross < 0
         kE = -cross / speed ** 3
         rc = self.generating_radius(phi)
@@ -145,7 +150,7 @@ class CycloidProfile:
         phi = np.linspace(0, 2 * np.pi / self.n_teeth, 4001)
         E, dE, ddE = self.epitrochoid(phi)
         cross = dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]
-        kE = -cross / np.linalg.norm(dE, axis=-1) ** 3
+        kE = -cross / _length(dE) ** 3
         rc = self.generating_radius(phi)
         worst = np.max(rc * kE)
         if worst >= 1.0 or np.min(rc) <= 0.0:
@@ -171,18 +176,22 @@ class CycloidProfile:
             raise RvtoolInputError(f"n_samples = {n_samples} is too small; valid range [{8 * self.n_teeth}, inf) "
                                    f"(at least 8 per tooth)")
         dense, P = _dense_points(self, 16 * n_samples)
-        seg = np.linalg.norm(np.diff(np.vstack([P, P[:1]]), axis=0), axis=1)
+        seg = _length(np.diff(np.vstack([P, P[:1]]), axis=0))
         s = np.concatenate([[0.0], np.cumsum(seg)])
         total = s[-1]
         target = np.arange(n_samples) * total / n_samples
         phi_dense = np.concatenate([dense, [2 * np.pi]])
         phi = np.interp(target, s, phi_dense)
-        pts = self.points(phi)
-        _, dE, _ = self.epitrochoid(phi)
-        tang = self._rotate(dE / np.linalg.norm(dE, axis=-1)[..., None])
+        # the samples' trigonometry and epitrochoid once for points, tangents and curvature (the same
+        # operations as points(), epitrochoid() and curvature_of_points())
+        trig = _trig(phi, self.n_pins)
+        epi = self._epitrochoid(trig)
+        pts = self._rotate(self._unrotated_points(phi, trig, epi))
+        _, dE, ddE = epi
+        tang = self._rotate(dE / _length(dE)[..., None])
         # outward normal: the curve runs clockwise, so the outward normal is the tangent turned by +90 deg
         nrm = np.stack([-tang[..., 1], tang[..., 0]], axis=-1)
-        kap = self.curvature_of_points(phi)
+        kap = self._curvature(phi, dE, ddE)
         polar = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
         order = np.argsort(polar)
         return pts[order], nrm[order], kap[order], polar[order], total / n_samples, phi[order]
@@ -196,11 +205,40 @@ class CycloidProfile:
         return (self.R, self.K1, float(self.n_pins), self.pin_radius + self.equidistant_mod, self.rotation_mod)
 
 
+def _length(v):
+    """Euclidean length of 2-vectors ``v`` (..., 2): bit for bit ``np.linalg.norm(v, axis=-1)`` (the square
+    root of x*x + y*y, what its reduction over a length-2 axis adds) without the reduction over a short
+    axis (~1/3 of a profile table's time)."""
+    x, y = v[..., 0], v[..., 1]
+    return np.sqrt(x * x + y * y)
+
+
 def _trig(phi, n_pins):
     """(sin phi, cos phi, sin z_b phi, cos z_b phi) of angles phi [rad]: the terms of
     :meth:`CycloidProfile.epitrochoid` and :meth:`CycloidProfile.points`."""
     zp = n_pins * phi
     return np.sin(phi), np.cos(phi), np.sin(zp), np.cos(zp)
+
+
+_UNDERCUT_CHECKED = {}
+"""Profiles (their fields but the rotation) whose undercut check passed, per process."""
+
+
+def _checked_undercut(profile):
+    """:meth:`CycloidProfile._check_undercut`, once per profile up to its rotation (which does not change
+    the curvature: the wheels of one reducer, turned to their phases, and the profile rebuilt for the
+    dense points check it once)."""
+    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name != "rotation_mod")
+    try:
+        if key in _UNDERCUT_CHECKED:
+            return
+    except TypeError:                     # an unhashable member (a list table): checked each time
+        profile._check_undercut()
+        return
+    profile._check_undercut()
+    if len(_UNDERCUT_CHECKED) > 4096:
+        _UNDERCUT_CHECKED.clear()
+    _UNDERCUT_CHECKED[key] = True
 
 
 @functools.lru_cache(maxsize=4)
@@ -221,9 +259,29 @@ def _dense_unrotated(key, n_dense):
     the wheels of one reducer differ in their rotation only (their assembly phases), so each
     wheel's table after the first rotates these; read-only."""
     profile = CycloidProfile(**dict(key))
-    trig = _dense_trig(n_dense, profile.n_pins)
-    out = profile._unrotated_points(trig[0], trig[1:])
+    dense = _dense_trig(n_dense, profile.n_pins)[0]
+    E_u, dE_u, W_u = _dense_units(profile.K1, profile.n_pins, n_dense)
+    # _unrotated_points on the dense grid, its R-free stacks kept (the same operations on the same numbers)
+    R = profile.R
+    E, dE = R * E_u, R * dE_u
+    D = _length(dE) / R
+    out = E + profile.generating_radius(dense)[..., None] * (W_u / D[..., None])
     out.flags.writeable = False
+    return out
+
+
+@functools.lru_cache(maxsize=4)
+def _dense_units(K1, n_pins, n_dense):
+    """The stacks of :meth:`CycloidProfile._epitrochoid` (E / R, dE / R) and of the inward offset direction
+    (times D) of :meth:`CycloidProfile._unrotated_points` on the dense grid: they depend on the
+    eccentricity coefficient K1 and the pin count only (Monte Carlo variants draw R and the generating
+    radius, not K1), so computed once per process; read-only."""
+    s, c, S, C = _dense_trig(n_dense, n_pins)[1:]
+    zb = n_pins
+    out = (np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1), np.stack([c - K1 * C, -s + K1 * S], axis=-1),
+           np.stack([K1 * S - s, K1 * C - c], axis=-1))
+    for a in out:
+        a.flags.writeable = False
     return out
 
 

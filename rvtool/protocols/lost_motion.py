@@ -14,7 +14,9 @@ def lost_motion(model, *, torque_level, input_angle=0.0, k_s=None, **kw):
     1e5 holds the flange firmly enough). The march starts at the load-controlled equilibrium at
     the first of :data:`START_SCALES` x torque_level that is found. Returns a dict with
     ``lost_motion_rad``, ``theta_plus``, ``theta_minus`` (flange coordinates [rad]), the states
-    ``q_plus``/``q_minus``, ``start_torque`` [N m] and ``stats``. The flange spring and the
+    ``q_plus``/``q_minus``, ``start_torque`` [N m], ``stats`` and ``control_stiffness`` (k_s at
+    the end [N m/rad]: stiffer than asked where the march met a snap-through, see
+    :mod:`rvtool.solver.spring_march`; ``max_k_s`` in ``kw`` bounds it). The flange spring and the
     output torque (zero) are restored afterwards."""
     check_positive("torque_level", torque_level)
     level = float(torque_level)
@@ -37,4 +39,5 @@ def lost_motion(model, *, torque_level, input_angle=0.0, k_s=None, **kw):
         model.set_output_torque(0.0)
     i = ctl.i_out
     return {"lost_motion_rad": float(qp[i] - qm[i]), "theta_plus": float(qp[i]), "theta_minus": float(qm[i]),
-            "q_plus": qp, "q_minus": qm, "start_torque": scale * level, "stats": ctl.stats.to_dict()}
+            "q_plus": qp, "q_minus": qm, "start_torque": scale * level, "stats": ctl.stats.to_dict(),
+            "control_stiffness": ctl.k_s}

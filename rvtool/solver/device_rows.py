@@ -389,8 +389,16 @@ class DeviceRowNewton:
         if len(new) == 0:
             return
         tab = np.empty((len(new), self.B, self.n))
-        for c, m in enumerate(self.models):
-            tab[:, c] = self._extend((m.kinematics.poses(new) - np.asarray(m.reference, float)).reshape(len(new), -1))
+        # one evaluation of all copies where their kinematics can stack them (e.g. CycloidKinematics.stacked_poses)
+        stacked = getattr(type(self.models[0].kinematics), "stacked_poses", None)
+        poses = None if stacked is None else stacked([m.kinematics for m in self.models], new)
+        if poses is not None:
+            ref = np.array([np.asarray(m.reference, float) for m in self.models])
+            tab[:] = self._extend((poses - ref[:, None]).reshape(self.B, len(new), -1)).transpose(1, 0, 2)
+        else:
+            for c, m in enumerate(self.models):
+                tab[:, c] = self._extend((m.kinematics.poses(new) - np.asarray(m.reference, float)).reshape(len(new),
+                                                                                                           -1))
         while len(self._kin_cache) + len(new) > KINEMATICS_CACHE and self._kin_cache:
             self._kin_cache.pop(next(iter(self._kin_cache)))
         for i, x in enumerate(new):

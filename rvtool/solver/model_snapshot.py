@@ -60,6 +60,12 @@ def _set_without_device(s, memo=None, backend=None):
     return out
 
 
+def snapshot_set(s, backend=None):
+    """A copy of contact set ``s`` as a :class:`ModelSnapshot` holds it: without its device objects (see
+    :data:`DEVICE_ATTRIBUTES`); a set built with the NumPy backend carries ``backend`` (None: as built)."""
+    return _set_without_device(s, None, backend)
+
+
 class ModelSnapshot:
     """The device row Newton's view of a built model (module docstring): ``design`` and
     ``build_kw`` (to build the model itself where Exudyn takes over), ``body_names``,
@@ -118,8 +124,15 @@ class ModelSnapshot:
         return self._model
 
 
-def build_snapshot(design, build_kw=None):
+def build_snapshot(design, build_kw=None, *, shared_tables=False):
     """The :class:`ModelSnapshot` of ``build(design, **build_kw)``, built without device objects.
+
+    shared_tables: build inside :func:`rvtool.contact.cycloid_set.shared_profile_tables`: the cycloid
+    pin sets take one shared table per wheel profile (the nominal design's for every variant that
+    draws pin radii, clearances, positions or eccentricities but keeps the profile), so the build
+    skips the per-pin-radius table and search window and the pickled snapshot carries the table's key
+    instead of its arrays; the device copies then hold one table per distinct profile. The device's
+    figures are those of the full tables (the same nearest samples; tests/test_shared_tables.py).
 
     A snapshot drops every device object of its sets (:data:`DEVICE_ATTRIBUTES`), so a worker that
     builds one for the device need not make them: the sets are built with the NumPy backend (the
@@ -130,12 +143,15 @@ def build_snapshot(design, build_kw=None):
     build attribute for attribute (tests/test_model_snapshot.py); ``build_kw`` is kept as given, so
     a model built for an Exudyn fallback (:meth:`ModelSnapshot.model`) is the full one. A build
     whose precision is not float64 (the NumPy backend's only one) is built in full."""
+    import contextlib
     from ..assembly import build
+    from ..contact.cycloid_set import shared_profile_tables
     kw = dict(build_kw or {})
     backend = kw.get("backend", "warp")
-    if kw.get("precision", "float64") != "float64" or backend == "numpy":
-        return ModelSnapshot(build(design, **kw), design, kw)
-    return ModelSnapshot(build(design, **dict(kw, backend="numpy")), design, kw, backend=backend)
+    with shared_profile_tables() if shared_tables else contextlib.nullcontext():
+        if kw.get("precision", "float64") != "float64" or backend == "numpy":
+            return ModelSnapshot(build(design, **kw), design, kw)
+        return ModelSnapshot(build(design, **dict(kw, backend="numpy")), design, kw, backend=backend)
 
 
 def real_model(model):
@@ -143,4 +159,4 @@ def real_model(model):
     return model.model() if isinstance(model, ModelSnapshot) else model
 
 
-__all__ = ["ModelSnapshot", "SnapshotElement", "build_snapshot", "real_model"]
+__all__ = ["ModelSnapshot", "SnapshotElement", "build_snapshot", "real_model", "snapshot_set"]

@@ -86,11 +86,21 @@ def _copy_bearings(sets, nb, precision, device):
 
 
 def _copy_circles(sets, nb, precision, device):
+    # the built contacts moved without validating them again (moved_member) and the built rows with their
+    # body columns moved (what packing the moved contacts gives; ~0.1 ms a contact less, 4 per RD-40 copy)
+    from ..contact.evaluator import moved_member
+    from warp_contacts.circle_pairs_ref import I_BODY_A, I_BODY_B
     s, B = sets[0], len(sets)
-    contacts = tuple(_renamed(ct, c, body_a=_shift(ct.body_a, c * nb), body_b=_shift(ct.body_b, c * nb))
+    contacts = tuple(moved_member(ct, name=f"copy{c}_{ct.name}", body_a=_shift(ct.body_a, c * nb),
+                                  body_b=_shift(ct.body_b, c * nb))
                      for c, sc in enumerate(sets) for ct in sc.set.contacts)
+    ip = np.concatenate([sc.iparams for sc in sets])
+    off = np.concatenate([np.full(len(sc.iparams), c * nb) for c, sc in enumerate(sets)])[:, None]
+    cols = [I_BODY_A, I_BODY_B]
+    ip[:, cols] = np.where(ip[:, cols] >= s.n_bodies, B * nb, ip[:, cols] + off)
     return ContactSetEvaluator(CircleContactSet(name=s.name, n_bodies=B * nb, contacts=contacts), backend=s.backend,
-                               precision=precision, device=device)
+                               precision=precision, device=device,
+                               packed=(np.concatenate([sc.fparams for sc in sets]), ip.astype(np.int32)))
 
 
 class PlainPinCopies:

@@ -22,6 +22,17 @@ The spring is the flange's rotational regularization spring with stiffness k_reg
 the stiffness-weighted offset (k_reg phi_reg + k_s phi) / (k_reg + k_s): two parallel
 linear springs are exactly one, so nothing is added to the Exudyn system and the
 regularization acts as in load control.
+
+dT/dphi > 0 holds where the reducer's tangent stiffness K about the flange stays above -k_s.
+In the free play the wheels float in their pin and bearing clearances, and where the output
+pins change flanks the torque--angle curve can fold back (K < 0: RD-40's Monte Carlo variant 0
+folds at -0.06 N m, the flange then jumping by ~50 urad). A spring softer than the fold makes
+T(phi) jump there (:class:`SnapThrough`; the load-controlled continuation stalls at the same
+torque). The march then goes back to its last equilibrium before the jump and takes a stiffer
+spring (x :data:`STIFFENING`, up to ``max_k_s``): the state is kept (phi moved so that the
+stiffer spring carries the same torque), and the stiffer spring follows the curve through the
+fold. The equilibria at the levels are the load-controlled ones whatever k_s (variant 0: the
+lost motion agrees to 1e-10 arcmin between k_s = 1e6 and 1e7).
 """
 import time
 
@@ -32,6 +43,18 @@ from ..validation import check_positive
 from .continuation import Continuation
 from .static import StaticSolver
 from .stats import SolverStats
+
+STIFFENING = 10.0
+"""Factor of the control spring after a snap-through (:meth:`SpringControl.go_to`)."""
+
+
+class SnapThrough(SolverFailure):
+    """The spring-controlled torque jumps across the level between two targets closer than the
+    march resolves: ``last`` = (phi, q) the last equilibrium before the jump."""
+
+    def __init__(self, message, last):
+        super().__init__(message)
+        self.last = last
 
 
 def output_rotation_spring(model):
@@ -49,16 +72,22 @@ class SpringControl:
 
     max_step: largest phi step [rad] of the march; min_step: smallest before
     :class:`SolverFailure`; torque_tol: accepted |T - level| [N m]; abs_tol [N], rel_tol [-]: the
-    equilibria's Newton tolerances (:class:`StaticSolver`'s defaults).
+    equilibria's Newton tolerances (:class:`StaticSolver`'s defaults); max_k_s: the stiffest control
+    spring a snap-through may call for [N m/rad] (module docstring; default 100 k_s, k_s: none).
     """
 
     def __init__(self, model, *, k_s, input_angle=0.0, start_torque=0.0, max_step=2e-4, min_step=1e-8,
-                 torque_tol=None, abs_tol=1e-6, rel_tol=1e-9):
+                 torque_tol=None, abs_tol=1e-6, rel_tol=1e-9, max_k_s=None):
         check_positive("k_s", k_s)
         check_positive("max_step", max_step)
         check_positive("min_step", min_step)
         self.model = model
         self.k_s = float(k_s)
+        self.max_k_s = 100.0 * self.k_s if max_k_s is None else float(max_k_s)
+        if self.max_k_s < self.k_s:
+            raise RvtoolInputError(f"max_k_s = {max_k_s!r} N m/rad is outside the valid range [k_s, inf) "
+                                   f"(k_s = {self.k_s:g} N m/rad)")
+        self.stiffenings = 0
         self.max_step, self.min_step = max_step, min_step
         self.torque_tol = torque_tol
         self.input_angle = input_angle
@@ -144,8 +173,32 @@ class SpringControl:
 
     def go_to(self, level):
         """Equilibrium at output torque ``level`` [N m]: march phi towards it in adaptive
-        steps (halved on a failed Newton solve), then regula falsi on the bracket. Returns q."""
+        steps (halved on a failed Newton solve), then regula falsi on the bracket; after a
+        snap-through, again from the last equilibrium before it with a stiffer spring (module
+        docstring). Returns q."""
         t0 = time.perf_counter()
+        while True:
+            try:
+                q = self._march(level)
+                break
+            except SnapThrough as exc:
+                if self.k_s * STIFFENING > self.max_k_s * (1.0 + 1e-12):
+                    raise SolverFailure(f"{exc} (control spring {self.k_s:g} N m/rad; max_k_s = "
+                                        f"{self.max_k_s:g} N m/rad)") from None
+                self.stiffen(*exc.last)
+        self.stats.wall_s += time.perf_counter() - t0
+        return q
+
+    def stiffen(self, phi, q, factor=STIFFENING):
+        """A ``factor`` stiffer control spring holding the equilibrium q (reached at target phi):
+        the target moves to theta_out + T / k_s' so that the spring carries the same torque T."""
+        T = self.torque(q, phi)
+        self.k_s *= float(factor)
+        self.phi, self.q = float(q[self.i_out] + T / self.k_s), q
+        self._apply(self.phi)
+        self.stiffenings += 1
+
+    def _march(self, level):
         # 1e-7 of the level: 4e-7 N m on RD-40, i.e. ~1e-10 rad of flange angle at the engaged stiffness
         tol = self.torque_tol if self.torque_tol is not None else 1e-7 * max(abs(level), 1.0)
         T = self.torque(self.q, self.phi) - level
@@ -171,7 +224,6 @@ class SpringControl:
             b = self._refine(a, b, tol, level)
         self.phi, self.q = b[0], b[1]
         self._apply(self.phi)
-        self.stats.wall_s += time.perf_counter() - t0
         return self.q
 
     def _refine(self, a, b, tol, level, max_iter=100):
@@ -182,9 +234,9 @@ class SpringControl:
             if abs(b[0] - a[0]) <= 1e-13 * max(1.0, abs(a[0])):
                 # the bracket has closed on a point where T jumps across the level: the march
                 # left its equilibrium branch there (a snap-through to another contact state)
-                raise SolverFailure(f"the spring-controlled output torque jumps from {a[2] + level:.6g} to "
-                                    f"{b[2] + level:.6g} N m at phi = {a[0]:.12g} rad without passing "
-                                    f"{level:.6g} N m (snap-through between equilibrium branches)")
+                raise SnapThrough(f"the spring-controlled output torque jumps from {a[2] + level:.6g} to "
+                                  f"{b[2] + level:.6g} N m at phi = {a[0]:.12g} rad without passing "
+                                  f"{level:.6g} N m (snap-through between equilibrium branches)", (a[0], a[1]))
             phi = b[0] - fb_w * (b[0] - a[0]) / (fb_w - fa_w)
             near = b if abs(phi - b[0]) < abs(phi - a[0]) else a
             got = self._reach((near[0], near[1]), phi)

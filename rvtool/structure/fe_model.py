@@ -27,7 +27,7 @@ from ..errors import RvtoolInputError
 from ..validation import check_positive, check_range, check_shape
 
 MAX_PORTS = 256
-"""Largest ``n_ports`` of an annular housing (a cost limit, :class:`AnnularHousingSpec`)."""
+"""Largest ``n_ports`` and ``n_mounts`` of an annular housing (a cost limit, :class:`AnnularHousingSpec`)."""
 MAX_STRUCTURE_MODES = 200
 """Largest count of retained modes of an elastic structure (``housing.n_modes``,
 ``housing.n_fixed_interface_modes``, ``carrier.structure.n_modes``): a cost limit. Each mode is an
@@ -369,8 +369,9 @@ class AnnularHousingSpec:
         # the shipped designs (a mistyped 1e6 meshed for minutes instead of failing)
         if isinstance(self.n_ports, bool) or not isinstance(self.n_ports, int) or not 1 <= self.n_ports <= MAX_PORTS:
             raise RvtoolInputError(f"n_ports = {self.n_ports!r} is outside the valid range [1, {MAX_PORTS}] (integer)")
-        if not isinstance(self.n_mounts, int) or self.n_mounts < 0:
-            raise RvtoolInputError(f"n_mounts = {self.n_mounts!r} is outside the valid range [0, inf) (integer)")
+        # upper bound: a cost limit as n_ports (each mount a spring on the FE model's lower face)
+        if isinstance(self.n_mounts, bool) or not isinstance(self.n_mounts, int) or not 0 <= self.n_mounts <= MAX_PORTS:
+            raise RvtoolInputError(f"n_mounts = {self.n_mounts!r} is outside the valid range [0, {MAX_PORTS}] (integer)")
         if self.port_height is not None:
             check_range("port_height", self.port_height, 0.0, self.height)
         check_range("mount_radius", self.mount_radius, self.inner_radius, self.outer_radius)

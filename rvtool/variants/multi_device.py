@@ -253,19 +253,28 @@ def cycloid_batch(design, tolerances, protocol, seed, indices, device, host_work
 def variant_snapshot(job):
     """Helper task: (index, :class:`~rvtool.solver.model_snapshot.ModelSnapshot` of variant k or
     None, error or None) for job (design, tolerances, seed, k, build_kw): the variant sampled
-    (cycloid: ``sample_variant(...).apply(design)``; RV: ``sample_rv_design``) and built here."""
+    (cycloid: ``sample_variant``, written into this process's nominal snapshot by
+    :func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`; RV: ``sample_rv_design``, built
+    by ``build_snapshot``) here, its cycloid pins on shared profile tables. The same snapshot as
+    ``build_snapshot(variant design, build_kw, shared_tables=True)`` (tests/test_variant_snapshots.py)."""
     from ..solver.model_snapshot import build_snapshot
     design, tolerances, seed, k, build_kw = job
     try:
         if _is_cycloid(design):
+            from ..solver.variant_snapshots import cycloid_variant_snapshots
             from .tolerances import sample_variant
-            d = sample_variant(tolerances, design, k, seed).apply(design)
-        else:
-            from .rv_tolerances import sample_rv_design
-            d = sample_rv_design(tolerances, design, k, seed)[0]
-        return int(k), build_snapshot(d, build_kw), None
+            return int(k), cycloid_variant_snapshots(design, [sample_variant(tolerances, design, k, seed)],
+                                                     build_kw)[0], None
+        from .rv_tolerances import sample_rv_design
+        return int(k), build_snapshot(sample_rv_design(tolerances, design, k, seed)[0], build_kw,
+                                      shared_tables=True), None
     except Exception as exc:  # an impossible sampled variant is a result of the study
         return int(k), None, f"{type(exc).__name__}: {exc}"
+
+
+def variant_snapshots(jobs):
+    """Helper task: [:func:`variant_snapshot` of each job] (one task for a group of variants)."""
+    return [variant_snapshot(j) for j in jobs]
 
 
 def default_build_kw(design, protocol):

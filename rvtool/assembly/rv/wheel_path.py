@@ -40,6 +40,27 @@ from ...contact.stacked import StackedContactSet
 from ...errors import RvtoolInputError
 from ...model import Family
 
+NESTED_SOLVES = ("joint", "nested")
+"""How the nested closures are solved: ``"joint"`` (the default), every closure of the nesting solves
+the stations below it as one network (:class:`~rvtool.contact.pin_closure.JointNetwork`: one Newton
+over all stations, the contacts evaluated once per iterate); ``"nested"``, each inner closure solved to
+convergence at every iterate of the one outside it (the former solve, kept selectable to measure the
+difference). Same equations, same solution within the closures' tolerance (tests/test_joint_network.py;
+cases/benchmarks/bench_nested_wheels.py measures both)."""
+
+ENVIRONMENT_VARIABLE = "RVTOOL_NESTED_SOLVE"
+
+
+def nested_solve_mode(value=None):
+    """``value``, else the environment variable ``RVTOOL_NESTED_SOLVE``, else ``"joint"`` (checked
+    against :data:`NESTED_SOLVES`)."""
+    import os
+    mode = value if value is not None else os.environ.get(ENVIRONMENT_VARIABLE, "joint")
+    if mode not in NESTED_SOLVES:
+        raise RvtoolInputError(f"nested solve = {mode!r}; valid choices are {list(NESTED_SOLVES)} (environment "
+                               f"variable {ENVIRONMENT_VARIABLE})")
+    return mode
+
 #: budget path -> contact family of the nested members (outermost first)
 PATH_FAMILY = {"cranks": Family.ECCENTRIC_BEARINGS, "crank_torsion": Family.ECCENTRIC_BEARINGS,
                "wheel_bodies": Family.PINS, "pin_grooves": Family.PINS}
@@ -84,6 +105,7 @@ def wheel_path(design, graph, layout, meshes, opts, *, ports=None, crank=None, t
     if d.wheels.body != "ported":
         return None
     refuse_unsupported(d)
+    joint = nested_solve_mode() == "joint"
     nc, nw, zb = layout.n_cranks, d.n_wheels, d.pins.n_pins
     n_real = layout.n_bodies + (0 if ports is None else ports.n_virtual)
     n = n_real
@@ -128,22 +150,22 @@ def wheel_path(design, graph, layout, meshes, opts, *, ports=None, crank=None, t
     chain = []
     if groove is not None:
         closure = ElasticPinClosure(closure, n_bodies=n_wheel, carrier=wheel[:, :zb].T, station_compliance=None,
-                                    station=groove - n_wheel, support=GrooveSupport(law))
+                                    station=groove - n_wheel, support=GrooveSupport(law), joint=joint)
         chain.append("pin_grooves")
     pin_carrier = GROUND if ports is None else [layout.n_bodies + p for p in range(zb)]
     centres = pin_centres(d.profile, None if d.pins.centre_errors is None else np.asarray(d.pins.centre_errors, float))
     closure = WheelBodyClosure(closure, n_bodies=n_twist, wheels=[layout.wheel(j) for j in range(nw)],
                                bodies=[wheel_model(d, j) for j in range(nw)], pin_centres=centres,
-                               station=wheel - n_twist, pin_carrier=pin_carrier)
+                               station=wheel - n_twist, pin_carrier=pin_carrier, joint=joint)
     chain.append("wheel_bodies")
     if twist is not None:
         carrier = bend[:, :nw] if bend is not None else [layout.crank(k) for k in range(nc)]
         closure = ElasticPinClosure(closure, n_bodies=n_bend, carrier=carrier, station_compliance=torsion,
-                                    station=twist - n_bend, dofs=(2,), coupled=True)
+                                    station=twist - n_bend, dofs=(2,), coupled=True, joint=joint)
         chain.append("crank_torsion")
     if bend is not None:
         closure = ElasticPinClosure(closure, n_bodies=n_real, carrier=[layout.crank(k) for k in range(nc)],
-                                    station_compliance=crank, station=bend - n_real, coupled=True)
+                                    station_compliance=crank, station=bend - n_real, coupled=True, joint=joint)
         chain.append("cranks")
     chain.reverse()
     return WheelPath(closure, {p: k for k, p in enumerate(chain)}, bend is not None)
@@ -158,6 +180,14 @@ def chain_of(evaluator):
         chain.append(e)
         e = e.inner
     return chain, e
+
+
+def contact_evaluations(evaluator):
+    """Evaluations of the innermost contact set made so far through the closures nested in ``evaluator``
+    (:attr:`~rvtool.contact.pin_closure.ElasticPinClosure.inner_evaluations` of the innermost closure): the cost
+    counter of the nesting (cases/benchmarks/bench_nested_wheels.py)."""
+    chain, _ = chain_of(evaluator)
+    return chain[-1].inner_evaluations if chain else 0
 
 
 def inner_pose(chain, depth, pose):

@@ -1,0 +1,88 @@
+"""The all-members-on rigidity of the validation designs with its Latin-hypercube band (issue 30; the row
+``torsional_rigidity_all_members_on`` of ``rvtool validate``, rvtool.analysis.validate_members).
+
+For rv40e and rv80e: every member of the torque path on (elastic cranks bending + torsion, ported housing, ported
+carrier, pin grooves, elastic wheel bodies nested with them) as ``<design>_members.toml`` lists them, the catalogue's
+b/a on the catalogue's torque points (four static solves) at the middles of every range (the central value) and at
+Latin-hypercube samples over the design's own assumed ranges together with the members' (validate_members.members_
+rigidity, seed 0). The band is [min, max] over the samples; the verdict row says whether the catalogue lies in it.
+
+Meshes: the quick meshes of ``rvtool validate --quick`` (validate_members.QUICK_NUMERICS: wheels at 6 mm with 4
+profile ports per tooth, housing and carrier at 8 mm) in both modes: the band is over the assumed inputs, and these
+meshes keep one sample near 40 CPU seconds (cases/benchmarks/bench_nested_wheels.py).
+
+Modes: full, 64 samples per design (issue 28's number); --quick, the central value of rv40e only (no sample: a
+Latin-hypercube sample of rv40e, seed 0, took several CPU-minutes, its element falling back from the joint network to
+the nested solve at Exudyn's far trial states; see docs/validation/validate.md); ``--samples N`` sets the number
+explicitly (a SHORT band where N < 64, stated in the results as ``band_is_short``).
+
+Criteria (``passed``): the central value and every sample finite, no failed sample (a failed sample is counted and
+reported, never dropped). NOT agreement with the catalogue (reported as it is).
+"""
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")     # small dense solves: one BLAS thread (bench_nested_wheels)
+
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from rvtool import casekit, designs  # noqa: E402
+from rvtool.analysis.validate_members import SAMPLES, members_rigidity  # noqa: E402
+from rvtool.assembly.topologies import read_table  # noqa: E402
+from rvtool.designs.catalogue import load_assumed, load_catalogue  # noqa: E402
+
+DESIGNS = ("rv40e", "rv80e")
+QUICK = {"designs": ("rv40e",), "samples": 0}
+
+
+def extra(parser):
+    parser.add_argument("--samples", type=int, default=None, metavar="N",
+                        help=f"Latin-hypercube samples per design (default {SAMPLES}; --quick: {QUICK['samples']})")
+    parser.add_argument("--designs", default=None, metavar="LIST", help="comma-separated designs (default: both)")
+
+
+def one_design(name, samples):
+    t0, c0 = time.perf_counter(), time.process_time()
+    catalogue = load_catalogue(designs.catalogue_of(name))
+    assumed_name = designs.assumed_of(name)
+    base = load_assumed(assumed_name) if assumed_name else None
+    r = members_rigidity(name, read_table(designs.path(name)), catalogue, base, quick=True, samples=samples)
+    r.pop("U", None)
+    r["band_is_short"] = samples < SAMPLES
+    r["cpu_s"] = time.process_time() - c0
+    r["wall_s"] = time.perf_counter() - t0
+    r["cpu_s_per_b_over_a"] = r["cpu_s"] / (samples + 1)
+    return r
+
+
+def judge(r):
+    out = {}
+    for name, d in r["designs"].items():
+        vals = [d["central"]["value"]] + [v for v in d["sample_values"] if v is not None]
+        out[f"{name}_finite"] = casekit.check(float(all(np.isfinite(vals))), 1.0, "==", "every b/a finite")
+        out[f"{name}_failed_samples"] = casekit.check(len(d["failures"]), 0, "==",
+                                                      "a failed sample is counted, never dropped")
+    return out
+
+
+def main(argv=None):
+    args = casekit.parse_args(argv, __doc__.splitlines()[0], extra=extra)
+    t0 = time.perf_counter()
+    names = tuple(args.designs.split(",")) if args.designs else (QUICK["designs"] if args.quick else DESIGNS)
+    samples = args.samples if args.samples is not None else (QUICK["samples"] if args.quick else SAMPLES)
+    per, out = {}, None
+    for name in names:
+        per[name] = one_design(name, samples)
+        # written after every design (a long run that stops keeps the designs it finished; ``designs_done``)
+        results = {"designs": dict(per), "samples_per_design": samples, "band_is_short": samples < SAMPLES,
+                   "issue_samples": SAMPLES, "designs_done": list(per), "designs_asked": list(names)}
+        casekit.verdict(results, judge)
+        out = casekit.write_results(args.out, results, settings={"quick": args.quick, "samples": samples,
+                                                                 "designs": list(names), "seed": 0},
+                                    wall_s=time.perf_counter() - t0)
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,171 @@
+"""Shared profile tables of Monte Carlo variants (rvtool.contact.cycloid_set.shared_profile_tables,
+build_snapshot(shared_tables=True)): variants that keep their wheel profile (RV-40E: pin radii,
+clearances, phases, eccentricities drawn) share one table per wheel on the device, with the device
+figures of per-variant tables; RD-40's drawn profile modifications keep a table per variant."""
+import pickle
+
+import numpy as np
+import pytest
+
+from rvtool import build, designs, load_design
+from rvtool.batched.device_rows_variants import device_rows_variants
+from rvtool.contact.cycloid_set import CycloidPinSet, ProfileTable, shared_profile_tables
+from rvtool.errors import RvtoolInputError
+from rvtool.solver.device_rows import DeviceRowNewton
+from rvtool.solver.model_snapshot import build_snapshot
+from rvtool.units import ARCSEC_PER_RAD
+
+RV_SEED = 20261124                                                      # cases/rv/monte_carlo_rv.py
+RD_SEED = 2026                                                          # cases/cycloid/monte_carlo_te.py
+RD_KW = {"bearing_model": "lumped", "regularization": (1.0e4, 100.0)}   # cases/cycloid/monte_carlo_te.py's build
+
+
+def _cuda_absent(device):
+    import warp as wp
+    return device.startswith("cuda") and wp.get_cuda_device_count() == 0
+
+
+@pytest.fixture(scope="module")
+def rv40e():
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    d = load_design(designs.path("rv40e"))
+    tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    return d, [sample_rv_design(tol, d, k, RV_SEED)[0] for k in (1, 2, 3)]
+
+
+@pytest.fixture(scope="module")
+def rd40():
+    from rvtool.variants.tolerances import load_tolerances, sample_variant
+    d = load_design(designs.path("rd40"))
+    tol = load_tolerances(designs.path("rd40_tolerances"))
+    # profiles no other test builds (a process that used a table for two sets pickles its key): the drawn
+    # equidistant modification moved by a nanometre
+    import dataclasses
+    return d, [dataclasses.replace(v, equidistant_mod=v.equidistant_mod + 1.234e-9).apply(d)
+               for v in (sample_variant(tol, d, k, RD_SEED) for k in (4, 6))]
+
+
+def _pins(model):
+    return next(e.evaluator for e in model.contact_elements() if isinstance(e.evaluator, CycloidPinSet))
+
+
+def _run(models, d, angles, device):
+    return device_rows_variants(models, torque=d.rated_torque, input_angles=angles,
+                                lost_motion_level=0.03 * d.rated_torque, device=device)
+
+
+@pytest.mark.parametrize("device", [pytest.param(d, id=d) for d in ("cpu", "cuda:0")])
+def test_rv40e_variants_share_one_table_per_wheel_with_the_figures_of_their_own_tables(rv40e, device):
+    """Three RV-40E variants (different pin radii): the device copies hold 2 tables (one per wheel)
+    instead of 6, the pickled snapshot carries the tables' keys (smaller by more than the 2 x ~260 kB
+    tables), and TE and lost motion equal the per-variant tables' (the same nearest samples): bit for
+    bit on cpu; on cuda, whose atomic row sums vary in order between any two runs, to 1e-9 arcsec and
+    1e-9 relative. Fails if a shared table moved a contact."""
+    if _cuda_absent(device):
+        pytest.skip("no CUDA device")
+    d, ds = rv40e
+    assert len({float(_pins(build_snapshot(x)).meshes[0].pin_radius) for x in ds}) == 3
+    own = [build_snapshot(x) for x in ds]
+    build_snapshot(d, shared_tables=True)                          # the nominal build first, as a warmed worker
+    shared = [build_snapshot(x, shared_tables=True) for x in ds]
+    assert len(pickle.dumps(shared[0])) < len(pickle.dumps(own[0])) - 400e3
+    shared = [pickle.loads(pickle.dumps(s)) for s in shared]      # as the build pool sends them
+    rows = [DeviceRowNewton(m, device=device) for m in (own, shared)]
+    tables = [len(next(f.set for f in r.families if isinstance(f.set, CycloidPinSet)).tables) for r in rows]
+    assert tables == [6, 2]
+    angles = np.array([0.0, 0.7])
+    a, b = _run(own, d, angles, device), _run(shared, d, angles, device)
+    assert a.status == b.status == ["ok"] * 3
+    if device == "cpu":             # host sums: deterministic, the same nearest samples give the same figures
+        np.testing.assert_array_equal(b.te, a.te)
+        np.testing.assert_array_equal(b.lost_motion_rad, a.lost_motion_rad)
+    else:                           # atomic row sums vary in order: rounding of the angles (~1e-16 rad)
+        assert np.max(np.abs(b.te - a.te)) * ARCSEC_PER_RAD <= 1e-9
+        np.testing.assert_allclose(b.lost_motion_rad, a.lost_motion_rad, rtol=1e-9)
+
+
+def test_rv40e_shared_tables_against_the_exudyn_oracle(rv40e):
+    """Two variants' TE with shared tables (cpu) against Exudyn's quasi-static TE on the variants'
+    own full builds: equal to 1e-6 arcsec (issue 31)."""
+    from rvtool.protocols.precision import quasi_static_te
+    d, ds = rv40e
+    angles = np.array([0.0, 0.7])
+    r = _run([build_snapshot(x, shared_tables=True) for x in ds[:2]], d, angles, "cpu")
+    for c, x in enumerate(ds[:2]):
+        ref = quasi_static_te(build(x), torque=d.rated_torque, input_angles=angles, backend="exudyn")["te"]
+        assert np.max(np.abs(r.te[c] - ref)) * ARCSEC_PER_RAD <= 1e-6
+
+
+def test_rd40_drawn_profiles_keep_their_tables_and_figures(rd40):
+    """RD-40 variants draw profile modifications: a table per variant and wheel stays (pickled with
+    its arrays, 4 on the device for 2 variants) and the figures equal the full snapshots' bit for bit (cpu)."""
+    d, ds = rd40
+    own = [build_snapshot(x, RD_KW) for x in ds]
+    shared = [pickle.loads(pickle.dumps(build_snapshot(x, RD_KW, shared_tables=True))) for x in ds]
+    assert all(isinstance(t, ProfileTable) and t._arrays is not None for s in shared for t in _pins(s).tables)
+    angles = 2 * np.pi * abs(d.ratio) * np.arange(2) / 23
+    a, b = _run(own, d, angles, "cpu"), _run(shared, d, angles, "cpu")
+    assert len(next(f.set for f in DeviceRowNewton(shared).families if isinstance(f.set, CycloidPinSet)).tables) == 4
+    np.testing.assert_array_equal(b.te, a.te)
+    np.testing.assert_array_equal(b.lost_motion_rad, a.lost_motion_rad)
+
+
+def test_a_pin_radius_beyond_the_slack_gets_its_own_table_and_the_shared_window_covers_the_slack(rv40e):
+    """Inside the context a mesh within the slack takes the shared table, whose window is at least the
+    own table's; a pin radius 2 % off the generating radius (slack 1 %) builds its own table; a slack
+    outside [0, 0.1] is refused by name."""
+    import dataclasses
+    d, ds = rv40e
+    m = _pins(build(d, backend="numpy")).meshes[0]
+    own = CycloidPinSet([m], 16, backend="numpy", search=d.wheels.search)
+    with shared_profile_tables():
+        near = CycloidPinSet([m], 16, backend="numpy", search=d.wheels.search)
+        far = CycloidPinSet([dataclasses.replace(m, pin_radius=1.02 * m.profile.pin_radius)], 16, backend="numpy",
+                            search=d.wheels.search)
+    assert isinstance(near.tables[0], ProfileTable) and not isinstance(far.tables[0], ProfileTable)
+    assert near.table_windows[0] >= own.table_windows[0]
+    np.testing.assert_array_equal(near.tables[0][0], own.tables[0][0])      # the same sampled points
+    with pytest.raises(RvtoolInputError, match="slack"):
+        with shared_profile_tables(0.5):
+            pass
+
+
+def test_copied_circle_pairs_equal_the_moved_contacts_packed(rd40):
+    """The circle-pair copier (RD-40's lumped bearings) moves the built rows' body columns instead of
+    packing the moved contacts again: the same rows, bodies and ids as packing the renamed, shifted
+    contacts."""
+    import dataclasses
+    from rvtool.contact.circle_set import GROUND, CircleContactSet
+    from rvtool.contact.evaluator import ContactSetEvaluator
+    from rvtool.solver.replica import COPIERS
+    d, ds = rd40
+    sets = [next(e.evaluator for e in build_snapshot(x, RD_KW).contact_elements()
+                 if isinstance(e.evaluator, ContactSetEvaluator)) for x in ds]
+    nb = sets[0].n_bodies
+    got = COPIERS[ContactSetEvaluator](sets, nb, "float64", "cpu")
+    sh = lambda b, c: b if b == GROUND else b + c * nb
+    ref = CircleContactSet(name=sets[0].name, n_bodies=2 * nb, contacts=tuple(
+        dataclasses.replace(ct, name=f"copy{c}_{ct.name}", body_a=sh(ct.body_a, c), body_b=sh(ct.body_b, c))
+        for c, s in enumerate(sets) for ct in s.set.contacts))
+    fp, ip = ref.packed()
+    np.testing.assert_array_equal(got.fparams, fp)
+    np.testing.assert_array_equal(got.iparams, ip)
+    assert got.iparams.dtype == ip.dtype and got.ids == ref.ids and got.set.contacts == ref.contacts
+
+
+def test_the_wheels_of_a_variant_share_a_window_that_covers_each_wheels_own(rd40):
+    """RD-40's two wheels differ in their rotation only: inside the context the second wheel takes the
+    first one's search window (no second window search), which is at least the window its own turned
+    table gives with the widened band (so its nearest samples are found as with its own window); the
+    tables themselves stay each wheel's own (bit for bit)."""
+    from rvtool.contact.cycloid_set import PIN_RADIUS_SLACK, auto_window, pin_curve_table
+    d, ds = rd40
+    for x in ds:
+        s = _pins(build_snapshot(x, RD_KW, shared_tables=True))
+        assert s.table_windows[0] == s.table_windows[1]
+        for t, tab in enumerate(s.tables):
+            prof = s.meshes[t].profile
+            for a, b in zip(tab, pin_curve_table(prof.table(s.samples_per_tooth * prof.n_teeth), prof.pin_radius)):
+                np.testing.assert_array_equal(a, b)
+            band = s.search_band + PIN_RADIUS_SLACK * (1.0 + s.search_band)
+            assert s.table_windows[t] >= auto_window(prof, tab, prof.pin_radius, band=band)
