@@ -244,6 +244,11 @@ class WheelBodyClosure(ElasticPinClosure):
         u = np.asarray(u, float)
         m = 2 * self.station.shape[1]
         Gq = np.zeros((self.n_u, 3 * self.n_bodies))
+        if self.bore_ports:                     # the patches' law (its tangent and pose term at the open set)
+            F, G = self.support.forces(u.reshape(self.n_pins, self.n_stations, len(self.dofs)))
+            for j, w in enumerate(self.wheels):
+                Gq[j * m:(j + 1) * m, 3 * w:3 * w + 3] = self.support.pose_derivative(j, u[j * m:(j + 1) * m])
+            return F.ravel(), self._block_diagonal(G), Gq
         for j, w in enumerate(self.wheels):
             Gq[j * m:(j + 1) * m, 3 * w:3 * w + 3] = np.einsum("cab,b->ac", self._dKb[j], u[j * m:(j + 1) * m])
         return self._Kb @ u, self._Kb, Gq
