@@ -27,11 +27,23 @@ follows the wheel's pose: it is recomputed at every evaluation (at a fixed input
 contacts move by the elastic displacement only; the tangent omits the derivative of C_j along the
 pose, a second-order term). The contact law already holds the local contact approach; the
 ports measure below the flank (:mod:`rvtool.structure.wheel_body`), so the FE does not add it twice.
+
+Bore patches (``wheels.structure.bore_ports = N > 0``): the bore station is no longer tied to the
+bore's mean motion. It carries the needle row's outer envelope as a rigid race that presses on the
+bore's N radial patch ports through compression-only contacts (:mod:`rvtool.contact.bore_patches`):
+only the loaded arc carries load and the bore ovalises. The wheel's rows are then its pin stations'
+profile ports (as above) and the patches (scalar, turned by nothing), their compliance
+C_r = A C A^T plus the rigid-motion term (the patches' readings of the wheel's rigid motion), and the
+station law is the patches' piecewise-linear law with its exact tangent, a nonlinear station law
+(``support``) of the closure. Its dependence on the pose (the contact points on the flank, the
+turning frame) enters the tangent by central differences of the law at the current set of open
+patches.
 """
 import numpy as np
 
 from ..errors import RvtoolInputError
 from ..structure.wheel_body import profile_interpolation
+from .bore_patches import patch_law, patch_matrix, station_tangent
 from .pin_closure import GROUND, ElasticPinClosure
 
 POSE_STEP = 1e-7
@@ -63,14 +75,27 @@ class WheelBodyClosure(ElasticPinClosure):
         carrier[:, :zb] = np.broadcast_to(np.asarray(pin_carrier, int), (zb,))
         for j, w in enumerate(wheels):
             carrier[j, zb:] = w
+        n_ports = {b.spec.bore_ports for b in bodies}
+        if len(n_ports) > 1:
+            raise RvtoolInputError(f"the wheels' bore_ports differ ({sorted(n_ports)}); valid: one "
+                                   "wheels.structure.bore_ports for every wheel")
+        self.bore_ports = n_ports.pop() if n_ports else 0
+        support = _PatchSupport(self) if self.bore_ports else None
         super().__init__(inner, n_bodies=n_bodies, carrier=carrier, station_compliance=np.eye(station.shape[1]),
-                         station=station, dofs=(0, 1), **kw)
+                         station=station, dofs=(0, 1), support=support, **kw)
         self.wheels = wheels
         self.bodies = tuple(bodies)
         self._port_compliance = [b.static_compliance for b in bodies]
         self._bore_rows = [np.concatenate([b.rows(f"bore{k}") for k in range(self.n_bores)]) for b in bodies]
         self.compliance = None          # not one isotropic matrix: see station_compliances
         self.station_compliances = np.zeros((len(wheels), 2 * station.shape[1], 2 * station.shape[1]))
+        if self.bore_ports:
+            self._patch_rows = [np.concatenate([b.rows(f"bore{k}_patches") for k in range(self.n_bores)])
+                                for b in bodies]
+            self._patch_readings = [b.rigid_readings(r) for b, r in zip(bodies, self._patch_rows)]
+            n_r = 2 * zb + len(self._patch_rows[0])
+            # with patches: the compliance of each wheel's rows (pin stations, patches), not of its stations
+            self.station_compliances = np.zeros((len(wheels), n_r, n_r))
         self._pose_key = None
         self.update(np.zeros((n_bodies, 3)))
 
@@ -106,11 +131,70 @@ class WheelBodyClosure(ElasticPinClosure):
         C = C + np.trace(C) / len(C) * (G @ G.T)
         return 0.5 * (C + C.T)
 
+    def port_matrix(self, j, pose):
+        """(C_r, P) of wheel j at real-body poses ``pose`` with bore patches (module docstring): C_r
+        (n_r, n_r) [m/N] the compliance of its rows (2 z_b pin-station rows in the global frame, signed
+        -1, then the patches' radial rows) with the rigid-motion term, P the patches' map from the
+        station displacements (:func:`rvtool.contact.bore_patches.patch_matrix`, normals turned to
+        the global frame)."""
+        x, y, th = np.asarray(pose, float)[self.wheels[j]]
+        c, s = np.cos(th), np.sin(th)
+        Rt = np.array([[c, -s], [s, c]])
+        local = (self.pin_centres - np.array([x, y])) @ Rt
+        b = self.bodies[j]
+        Wp, _ = profile_interpolation(b, local)
+        Cp = self._port_compliance[j]
+        prof = b.rows("profile")
+        pr = self._patch_rows[j]
+        zb2 = 2 * self.n_ring_pins
+        A = np.zeros((zb2 + len(pr), Cp.shape[0]))
+        A[:zb2, prof] = -np.kron(np.eye(self.n_ring_pins), Rt) @ Wp
+        A[zb2 + np.arange(len(pr)), pr] = 1.0
+        C = A @ Cp @ A.T
+        r = self.pin_centres - np.array([x, y])
+        G = np.zeros((len(A), 3))
+        G[0:zb2:2, 0] = G[1:zb2:2, 1] = -1.0
+        G[0:zb2:2, 2], G[1:zb2:2, 2] = r[:, 1], -r[:, 0]
+        rd = self._patch_readings[j]
+        G[zb2:, :2] = rd[:, :2] @ Rt.T
+        G[zb2:, 2] = rd[:, 2]
+        G /= np.linalg.norm(G, axis=0)
+        C = C + np.trace(C) / len(C) * (G @ G.T)
+        N = self.bore_ports
+        normals = [(rd[k * N:(k + 1) * N, :2] @ Rt.T) for k in range(self.n_bores)]
+        return 0.5 * (C + C.T), patch_matrix(zb2, normals)
+
+    def _update_patches(self, pose):
+        """The rows' stiffness K_r and map P of every wheel at ``pose`` and at the pose steps of its
+        three coordinates (for the pose term of the tangent)."""
+        data = []
+        for j in range(self.n_pins):
+            C, P = self.port_matrix(j, pose)
+            lam = np.linalg.eigvalsh(C)
+            if lam.min() <= 0:
+                raise RvtoolInputError(f"the port compliance of wheel {j} is not positive definite (eigenvalues "
+                                       f"{lam[:3].tolist()}...); valid: wheels.structure.samples_per_tooth large "
+                                       "enough that no two pins share a profile port, and bore_ports small enough "
+                                       "for the bores' mesh")
+            self.station_compliances[j] = C
+            steps = []
+            for c in range(3):
+                pp, pm = pose.copy(), pose.copy()
+                pp[self.wheels[j], c] += POSE_STEP
+                pm[self.wheels[j], c] -= POSE_STEP
+                steps.append([(np.linalg.inv(Cx), Px) for Cx, Px in (self.port_matrix(j, pp), self.port_matrix(j, pm))])
+            data.append((np.linalg.inv(C), P, steps))
+        self._patch_data = data
+
     def update(self, pose):
         """Recompute the station stiffness blocks at real-body poses ``pose`` (nb, 3)."""
         pose = np.asarray(pose, float)
         key = pose[list(self.wheels)].round(12).tobytes()
         if key == self._pose_key:
+            return
+        if self.bore_ports:
+            self._update_patches(pose)
+            self._pose_key = key
             return
         m = 2 * self.station.shape[1]
         Kb = np.zeros((self.n_pins * m, self.n_pins * m))
@@ -146,7 +230,11 @@ class WheelBodyClosure(ElasticPinClosure):
         m = 2 * self.station.shape[1]
         for j, w in enumerate(self.wheels):
             uj = u[j * m:(j + 1) * m]
-            K[nr + j * m:nr + (j + 1) * m, 3 * w:3 * w + 3] -= np.einsum("cab,b->ac", self._dKb[j], uj)
+            if self.bore_ports:
+                dK = self.support.pose_derivative(j, uj)
+                K[nr + j * m:nr + (j + 1) * m, 3 * w:3 * w + 3] -= dK
+            else:
+                K[nr + j * m:nr + (j + 1) * m, 3 * w:3 * w + 3] -= np.einsum("cab,b->ac", self._dKb[j], uj)
         return Q, K, D
 
     def station_forces(self, pose, u):
@@ -156,6 +244,11 @@ class WheelBodyClosure(ElasticPinClosure):
         u = np.asarray(u, float)
         m = 2 * self.station.shape[1]
         Gq = np.zeros((self.n_u, 3 * self.n_bodies))
+        if self.bore_ports:                     # the patches' law (its tangent and pose term at the open set)
+            F, G = self.support.forces(u.reshape(self.n_pins, self.n_stations, len(self.dofs)))
+            for j, w in enumerate(self.wheels):
+                Gq[j * m:(j + 1) * m, 3 * w:3 * w + 3] = self.support.pose_derivative(j, u[j * m:(j + 1) * m])
+            return F.ravel(), self._block_diagonal(G), Gq
         for j, w in enumerate(self.wheels):
             Gq[j * m:(j + 1) * m, 3 * w:3 * w + 3] = np.einsum("cab,b->ac", self._dKb[j], u[j * m:(j + 1) * m])
         return self._Kb @ u, self._Kb, Gq
@@ -164,7 +257,61 @@ class WheelBodyClosure(ElasticPinClosure):
         self.update(pose)
         return super().solve(pose, vel, u0)
 
+    @property
+    def open_patches(self):
+        """Per wheel the open patches (n_c N,) bool (bore k's at k N ... (k + 1) N - 1) of the last
+        evaluation of the station law; None without bore patches or before an evaluation."""
+        if not self.bore_ports or self.support.open_sets is None:
+            return None
+        return [None if o is None else o.copy() for o in self.support.open_sets]
+
     def energy(self, du):
-        """sum_j du_j^T K_j du_j for station deflection increments du (n_w, n_s, 2) [m]."""
+        """sum_j du_j^T K_j du_j for station deflection increments du (n_w, n_s, 2) [m] (the mean bore tie;
+        with bore patches :meth:`station_energy` at the solved deflections)."""
+        if self.bore_ports:
+            raise RvtoolInputError("energy(du) is the mean bore tie's; with wheels.structure.bore_ports > 0 use "
+                                   "station_energy(du, u) (the patches' tangent depends on u)")
         du = np.asarray(du, float).reshape(-1)
         return float(du @ self._Kb @ du)
+
+
+class _PatchSupport:
+    """The station law of wheels with bore patches for :class:`ElasticPinClosure` (``support``):
+    per wheel the patches' law (:func:`rvtool.contact.bore_patches.patch_law`) on the rows' stiffness
+    of the closure's current pose (:meth:`WheelBodyClosure.update`)."""
+
+    def __init__(self, closure):
+        self.closure = closure
+        self.zero_load_stiffness = None         # the closure passes its own (identity) station compliance
+        #: per wheel, the open patches (n_c N,) bool of the last evaluation of the law (None before one)
+        self.open_sets = None
+
+    def forces(self, u):
+        """(s (n_w, n_s, 2) [N], ds/du (n_w, 2 n_s, 2 n_s) [N/m]) at station deflections u (n_w, n_s, 2)."""
+        cl = self.closure
+        u = np.asarray(u, float)
+        n_w, n_s, _ = u.shape
+        zb2 = 2 * cl.n_ring_pins
+        if self.open_sets is None:
+            self.open_sets = [None] * n_w
+        s = np.zeros((n_w, 2 * n_s))
+        G = np.zeros((n_w, 2 * n_s, 2 * n_s))
+        for j in range(n_w):
+            K, P, _ = cl._patch_data[j]
+            s[j], G[j], self.open_sets[j], _, _ = patch_law(K, P, zb2, u[j].ravel(), self.open_sets[j])
+        return s.reshape(u.shape), G
+
+    def pose_derivative(self, j, uj):
+        """d s_j / d(wheel j's pose) (2 n_s, 3) at station deflections uj, the open patches held (central
+        differences over the closure's POSE_STEP)."""
+        cl = self.closure
+        zb2 = 2 * cl.n_ring_pins
+        _, _, steps = cl._patch_data[j]
+        open_ = self.open_sets[j] if self.open_sets is not None and self.open_sets[j] is not None else None
+        if open_ is None:
+            K, P, _ = cl._patch_data[j]
+            open_ = patch_law(K, P, zb2, uj)[2]
+        out = np.zeros((len(uj), 3))
+        for c, ((Kp, Pp), (Km, Pm)) in enumerate(steps):
+            out[:, c] = (station_tangent(Kp, Pp, zb2, open_) - station_tangent(Km, Pm, zb2, open_)) @ uj / (2 * POSE_STEP)
+        return out

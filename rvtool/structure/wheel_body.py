@@ -21,7 +21,17 @@ applies F w_v at the patch's vertices, the port displacement is sum_v w_v u_v, s
   continuously;
 * ``bore{k}``: crank bore k, the tributary-weighted mean of the bore surface (the needle set's outer
   race carried as the mean motion of the bore);
-* ``hole{k}``: pillar / output-pin hole k, likewise.
+* ``hole{k}``: pillar / output-pin hole k, likewise;
+* ``bore{k}_patches`` (only with ``bore_ports = N > 0``): N radial ports around crank bore k, patch i
+  centred at the polar angle 2 pi i / N about the bore centre (from +x of the wheel frame) and
+  spread over the hat function in the polar angle between its neighbours (weight = hat value x the
+  vertex's tributary arc length x the thickness weight). A patch force p (compression positive)
+  pushes every patch vertex along its own outward radius, p w_v n_v; the port displacement is the
+  weighted mean outward radial displacement sum_v w_v n_v . u_v (work-conjugate). A journal (or
+  the race of its needle row) presses on the loaded arc only: each patch closes against it through
+  a compression-only contact (:mod:`rvtool.contact.bore_patches`), so the bore ovalises and the
+  unloaded arc carries nothing. The mean rows ``bore{k}`` stay (the patches add rows after all
+  other rows).
 
 No double counting of the local contact compliance: the pin contact law already holds the
 approach of the wheel's surface relative to its material at the datum depth of a line contact.
@@ -84,7 +94,10 @@ class WheelBodySpec:
     is of the order of the contact radii, Johnson, Contact Mechanics (1985) Sec. 5.6; range
     r_p/2 to 2 r_p, the case reports the share at both ends). pillar_holes, lightening_holes:
     :class:`HoleSet` tables (``[wheels.structure.pillar_holes]``; count 0 = none). material: the
-    wheel's material (None: the design's ``[material]``).
+    wheel's material (None: the design's ``[material]``). bore_ports: radial patch ports per
+    crank bore [-] (0, the default: the bore's mean motion follows its journal, a bilateral tie; 4
+    to 64: N compression-only patches around each bore, which the journal's needle row loads on its
+    loaded arc only, so the bore ovalises; at most the vertices the bore's mesh carries).
     """
     mesh_size: float = 0.004
     layers: int = 2
@@ -93,9 +106,14 @@ class WheelBodySpec:
     pillar_holes: HoleSet = HoleSet()
     lightening_holes: HoleSet = HoleSet()
     material: ElasticMaterial | None = None
+    bore_ports: int = 0
 
     def __post_init__(self):
         check_positive("mesh_size", self.mesh_size)
+        b = self.bore_ports
+        if isinstance(b, bool) or not isinstance(b, int) or not (b == 0 or 4 <= b <= 64):
+            raise RvtoolInputError(f"bore_ports = {b!r} is outside the valid range [0, 64] (integer: 0, the bore's "
+                                   "mean motion, or 4 to 64 compression-only patches per crank bore)")
         for nm, lo, hi in (("layers", 1, 16), ("samples_per_tooth", 2, 64)):
             v = getattr(self, nm)
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
@@ -129,7 +147,8 @@ class WheelBody:
 
     fe: the free :class:`FEModel` (its own ``ports`` empty: the spread ports are here).
     load_matrix P_l and measure_matrix P_m (n_rows, n_dofs) CSR; groups: {name: row indices}
-    (``"profile"`` (2 N rows, sample i at rows 2 i, 2 i + 1), ``"bore{k}"``, ``"hole{k}"``);
+    (``"profile"`` (2 N rows, sample i at rows 2 i, 2 i + 1), ``"bore{k}"``, ``"hole{k}"``, with
+    ``spec.bore_ports`` > 0 ``"bore{k}_patches"``: one radial row per patch);
     profile_points (N, 2) [m], profile_normals (N, 2) outward, profile_arc (N,) cumulative arc
     length [m] (closing length ``profile_length``); geometry, spec.
     """
@@ -162,6 +181,25 @@ class WheelBody:
         rows = np.concatenate([self.rows(n) for n in names])
         cols = np.unique(self.load_matrix[rows].indices)
         return np.unique(self.fe.dof_vertex[cols])
+
+    def rigid_readings(self, rows):
+        """(n, 3) readings of ports ``rows`` under the wheel's planar rigid motions: unit x and y
+        translations and a unit rotation about z through the wheel-frame origin (a patch row reads
+        (n_x, n_y, n . (z x c)) of its mean outward normal n)."""
+        V = self.fe.vertices
+        comp = self.fe.dof_component
+        vert = self.fe.dof_vertex
+        T = np.zeros((self.fe.n_dofs, 3))
+        T[comp == 0, 0] = 1.0
+        T[comp == 1, 1] = 1.0
+        T[comp == 0, 2] = -V[vert[comp == 0], 1]
+        T[comp == 1, 2] = V[vert[comp == 1], 0]
+        return np.asarray(self.load_matrix[np.asarray(rows)] @ T)
+
+    def patch_normals(self, k):
+        """(N, 2) mean outward normals of crank bore k's patches in the wheel frame (the reading of a
+        unit translation; |n| = 1 - O(1/N^2) for a hat-spread patch)."""
+        return self.rigid_readings(self.rows(f"bore{k}_patches"))[:, :2]
 
     @functools.cached_property
     def static_compliance(self):
@@ -334,6 +372,33 @@ def wheel_body(geometry: WheelGeometry, spec: WheelBodySpec, material: ElasticMa
         add(rows_i, cols_i, vals, r0, np.flatnonzero(on), w / w.sum())
         groups[name] = np.arange(r0, r0 + 2)
         r0 += 2
+    nbp = spec.bore_ports
+    for k, (x, y, rad) in enumerate(geometry.bores if nbp else ()):
+        d = np.abs(np.linalg.norm(pts - np.array([x, y]), axis=1) - rad)
+        on = bnd & (d < 1e-6 * rad + 1e-3 * spec.mesh_size)
+        vs = np.flatnonzero(on)
+        if len(vs) < nbp:
+            raise RvtoolInputError(f"wheels.structure.bore_ports = {nbp} is more than crank bore {k}'s mesh carries "
+                                   f"({len(vs)} vertices on the bore at mesh_size = {spec.mesh_size} m); valid range "
+                                   f"[4, {len(vs)}] at this mesh, or a smaller mesh_size")
+        trib = _tributary(pts, edges, on)[vs]
+        rel = pts[vs] - np.array([x, y])
+        nv = rel / np.linalg.norm(rel, axis=1)[:, None]
+        psi = np.arctan2(rel[:, 1], rel[:, 0])
+        step = 2 * np.pi / nbp
+        for i in range(nbp):
+            dpsi = (psi - i * step + np.pi) % (2 * np.pi) - np.pi
+            hat = np.clip(1.0 - np.abs(dpsi) / step, 0.0, None)
+            sel = hat > 1e-12
+            w = hat[sel] * trib[sel]
+            w = w / w.sum()
+            for layer in range(L + 1):
+                for c in range(2):
+                    rows_i.extend([r0 + i] * int(sel.sum()))
+                    cols_i.extend(3 * (vs[sel] + layer * n2) + c)
+                    vals.extend(w * nv[sel, c] * wz[layer])
+        groups[f"bore{k}_patches"] = np.arange(r0, r0 + nbp)
+        r0 += nbp
     n_rows = r0
     # the 3D dofs are node-interleaved over all vertices (no clamps): dof = 3 vertex + component
     Pl = sp.csr_matrix((vals, (rows_i, cols_i)), shape=(n_rows, ndof))

@@ -37,6 +37,10 @@ def wheel_mesh(design, j):
     from ..wheel_body import wheel_model, wheel_spec
     d = design
     spec = wheel_spec(d)
+    if spec.bore_ports:
+        raise RvtoolInputError(f"wheels.structure.bore_ports = {spec.bore_ports} with wheels.dynamics.model = "
+                               "'flexible' is not implemented (the floating wheel's crank bores are mean-motion hole "
+                               "ports); valid: wheels.structure.bore_ports = 0 for flexible wheels")
     wb = wheel_model(d, j)
     holes = [wb.rows(f"bore{k}") for k in range(d.cranks.count)]
     ops = port_operators_from_rows(wb.fe, measure=wb.measure_matrix, load=wb.load_matrix,
