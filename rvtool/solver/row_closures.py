@@ -263,16 +263,8 @@ class ExtendedRowForces:
         o = self.gather.out.numpy() if self.on_cpu else None
         self._out = None if o is None else (o[:nx], o[nx:nx + nx * nx].reshape(nx, nx),
                                             o[nx + nx * nx:].reshape(nx, nx))
-        self.graph = self.tangent_graph = None
-        self.launch_evaluation()
-        self.gather.launch()
-        if capture:
-            with wp.ScopedCapture(device=self.device) as cap:
-                self.launch_evaluation()
-            self.graph = cap.graph
-            with wp.ScopedCapture(device=self.device) as cap:
-                self.gather.launch_tangents()
-            self.tangent_graph = cap.graph
+        from .row_forces import warm_and_capture
+        self.graph, self.tangent_graph = warm_and_capture(self.device, self.launch_evaluation, self.gather, capture)
         # T's structure: the x coordinates that are selections of y (bodies, stations: y = [them; eta]) and the
         # ports (x_w = P_w eta); the stations' velocity columns folded into their sources' (C_x F, F the
         # velocity-source selection: T_v = F T)

@@ -71,6 +71,23 @@ def commit_families(families, pose, vel, poses=None):
         f.set.stage(pf, vf)                  # the new history into the kernel's inputs
 
 
+def warm_and_capture(device, launch_evaluation, gather, capture):
+    """Run the evaluation launches and the gather once (it loads every module before a capture), then,
+    with ``capture``, record the evaluation and the tangent gather as two CUDA graphs: (graph,
+    tangent_graph), (None, None) without capture. Shared by the row stepper's plain and extended forces."""
+    import warp as wp
+    launch_evaluation()
+    gather.launch()
+    if not capture:
+        return None, None
+    with wp.ScopedCapture(device=device) as cap:
+        launch_evaluation()
+    graph = cap.graph
+    with wp.ScopedCapture(device=device) as cap:
+        gather.launch_tangents()
+    return graph, cap.graph
+
+
 class RowForces:
     """f, K, C of one copy of ``model`` (module docstring) on the Warp ``device``.
     :meth:`evaluate` takes body poses and velocities (nb, 3) (absolute; the ground is added) and
@@ -139,16 +156,7 @@ class RowForces:
         self._f_dev, self._kc_dev = self.gather.out[:n], self.gather.out[n:]
         o = self.gather.out.numpy() if self.on_cpu else None   # CPU: a view of the device sums (no copy)
         self._out = None if o is None else (o[:n], o[n:n + n * n].reshape(n, n), o[n + n * n:].reshape(n, n))
-        self.graph = self.tangent_graph = None
-        self.launch_evaluation()                          # loads every module before a capture
-        self.gather.launch()
-        if capture:
-            with wp.ScopedCapture(device=self.device) as cap:
-                self.launch_evaluation()
-            self.graph = cap.graph
-            with wp.ScopedCapture(device=self.device) as cap:
-                self.gather.launch_tangents()
-            self.tangent_graph = cap.graph
+        self.graph, self.tangent_graph = warm_and_capture(self.device, self.launch_evaluation, self.gather, capture)
         self.timing = {"launches": 0.0, "tangents": 0.0}
         self.evaluations = 0
         #: the families with stick--slip anchors (their kernels read the committed history: :meth:`commit`)
