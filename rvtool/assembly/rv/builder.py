@@ -97,6 +97,12 @@ class RvKinematics:
         self.phases = np.asarray(design.wheels.phases, float)
         self.reference = reference_poses(design, graph, layout)
 
+    @property
+    def crank_rate(self):
+        """omega_crank / omega_in: the eccentric orbit per input radian (the gear graph's), the period
+        2 pi / |crank_rate| [rad of input] with which the wheels' contacts repeat."""
+        return float(self.g.crank_rate)
+
     def poses(self, input_angles):
         """(n, nb, 3) poses at input angles (n,) [rad]."""
         s = np.asarray(input_angles, float)
