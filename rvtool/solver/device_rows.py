@@ -248,6 +248,19 @@ class _Blocks:
     dQdq: np.ndarray
 
 
+def provide_profile_tables(models, device):
+    """Compute the deferred cycloid profile tables of ``models`` (snapshots built with
+    ``defer_tables``, :func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`) on Warp
+    ``device``, each distinct table once (:func:`rvtool.contact.cycloid_set.compute_profile_tables`).
+    :class:`DeviceRowNewton` does this on a GPU (inside its ``setup_s``); on the cpu a deferred table is
+    computed by the host where it is first read (the Warp kernels' serial parts are slower there than
+    NumPy). Returns the number of tables computed."""
+    from ..contact.cycloid_set import ProfileTable, compute_profile_tables
+    tables = [t for m in models for e in m.contact_elements()
+              for t in (getattr(e.evaluator, "tables", None) or ()) if isinstance(t, ProfileTable) and not t.computed]
+    return compute_profile_tables(tables, device) if tables else 0
+
+
 class DeviceRowNewton:
     """Batched static Newton of B copies of ``model`` from its families' rows (module docstring).
 
@@ -290,6 +303,9 @@ class DeviceRowNewton:
         if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
             raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer)")
         t0 = time.perf_counter()
+        if self.models is not None and not str(device).startswith("cpu"):
+            # variant profile tables left to this process (deferred by the build helpers): on the GPU, all at once
+            provide_profile_tables(self.models, device)
         self.model, self.B, self.device = model, int(copies), device
         self.settings = settings or DeviceNewtonSettings()
         self.nb = nb = len(model.body_names)
@@ -671,4 +687,4 @@ class DeviceRowNewton:
         return sweeps
 
 
-__all__ = ["DeviceRowNewton", "RowSolve", "needs_extension", "row_reasons"]
+__all__ = ["DeviceRowNewton", "RowSolve", "needs_extension", "provide_profile_tables", "row_reasons"]

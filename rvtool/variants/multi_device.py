@@ -250,13 +250,15 @@ def cycloid_batch(design, tolerances, protocol, seed, indices, device, host_work
     return device_chunk(design, variants, protocol, device, host_workers=host_workers)
 
 
-def variant_snapshot(job):
+def variant_snapshot(job, defer_tables=False):
     """Helper task: (index, :class:`~rvtool.solver.model_snapshot.ModelSnapshot` of variant k or
     None, error or None) for job (design, tolerances, seed, k, build_kw): the variant sampled
     (cycloid: ``sample_variant``, written into this process's nominal snapshot by
     :func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`; RV: ``sample_rv_design``, built
     by ``build_snapshot``) here, its cycloid pins on shared profile tables. The same snapshot as
-    ``build_snapshot(variant design, build_kw, shared_tables=True)`` (tests/test_variant_snapshots.py)."""
+    ``build_snapshot(variant design, build_kw, shared_tables=True)`` (tests/test_variant_snapshots.py).
+    defer_tables: a cycloid variant's profile tables are left to the receiver (pickled as its profiles;
+    :func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`); default off."""
     from ..solver.model_snapshot import build_snapshot
     design, tolerances, seed, k, build_kw = job
     try:
@@ -264,7 +266,7 @@ def variant_snapshot(job):
             from ..solver.variant_snapshots import cycloid_variant_snapshots
             from .tolerances import sample_variant
             return int(k), cycloid_variant_snapshots(design, [sample_variant(tolerances, design, k, seed)],
-                                                     build_kw)[0], None
+                                                     build_kw, defer_tables=defer_tables)[0], None
         from .rv_tolerances import sample_rv_design
         return int(k), build_snapshot(sample_rv_design(tolerances, design, k, seed)[0], build_kw,
                                       shared_tables=True), None
@@ -272,9 +274,9 @@ def variant_snapshot(job):
         return int(k), None, f"{type(exc).__name__}: {exc}"
 
 
-def variant_snapshots(jobs):
+def variant_snapshots(jobs, defer_tables=False):
     """Helper task: [:func:`variant_snapshot` of each job] (one task for a group of variants)."""
-    return [variant_snapshot(j) for j in jobs]
+    return [variant_snapshot(j, defer_tables) for j in jobs]
 
 
 def default_build_kw(design, protocol):
