@@ -242,14 +242,15 @@ def _kernels():
     return dense_lengths, arc_lengths, resampled, keyed, window_offsets
 
 
-def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5):
+def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5, as_numpy=True):
     """Profile tables of T profiles on Warp ``device`` (module docstring).
 
     params (T, 5): per profile R (pin-circle radius plus offset modification) [m], K1 [-], z_b
     (float), r_c (generating radius) [m], rotation [rad]; n_pins (T,) z_b; rp (T,) the pin radius of
     the key and window [m]; n_samples, n_dense (the host's 16 n_samples): counts; band: the window's
     search band (fraction of r_p). Returns (points (T, n, 2), normals (T, n, 2), curvature (T, n),
-    key (T, n), spacing (T,), phi (T, n), window (T,), ok (T,) bool) as NumPy arrays: table t is
+    key (T, n), spacing (T,), phi (T, n), window (T,), ok (T,) bool), the five table columns as NumPy
+    arrays (``as_numpy``) or as the Warp device arrays (left on the device), the rest NumPy: table t is
     (points[t], normals[t], curvature[t], key[t], spacing[t], phi[t]) of
     ``pin_curve_table(profile.table(n_samples), rp)`` and its ``auto_window`` where ok[t]."""
     dense_lengths, arc_lengths, resampled, keyed, window_offsets = _kernels()
@@ -278,7 +279,7 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     off = wp.zeros(T, dtype=wp.int32, device=d)
     wp.launch(window_offsets, dim=(T, n, 9), inputs=[n, rp_d, dist, out[0], out[1], out[3], off], device=d)
     total = s.numpy()[:, nd]
-    pts, nrm, kap, key, phi = (a.numpy() for a in out)
+    pts, nrm, kap, key, phi = (a.numpy() for a in out) if as_numpy else out
     window = np.ceil(margin * off.numpy()).astype(int) + 2
     return pts, nrm, kap, key, total / n, phi, window, ok.numpy() == 1
 

@@ -410,8 +410,8 @@ def table_stats(models):
             if isinstance(e.evaluator, CycloidPinSet):
                 for key, (tab, _, _) in e.evaluator.profile_tables().items():
                     key = tab.key if isinstance(tab, ProfileTable) else key
-                    if key not in seen:
-                        seen[key] = sum(np.asarray(a).size for a in tab) * 8
+                    if key not in seen:      # 7 columns per sample and the spacing (a device table not read back)
+                        seen[key] = (7 * (tab.n_samples if isinstance(tab, ProfileTable) else len(tab[0])) + 1) * 8
     return {"profile_tables": len(seen), "profile_table_mb": sum(seen.values()) / 1e6}
 
 

@@ -275,13 +275,14 @@ class ProfileTable:
     not computed in this process (deferred: :func:`shared_profile_tables` ``defer``) is pickled as its key;
     :meth:`provide` gives it arrays computed elsewhere (:func:`compute_profile_tables`)."""
 
-    __slots__ = ("key", "_entry", "_arrays")
+    __slots__ = ("key", "_entry", "_arrays", "_device")
     _uses = {}
 
     def __init__(self, profile, n_samples, search, band, slack, arrays=None):
         self.key = (profile, int(n_samples), str(search), float(band), float(slack))
         self._entry = None
         self._arrays = arrays
+        self._device = None             # (_DeviceTables, row, window, spacing): computed on a Warp device
         if len(ProfileTable._uses) > 65536:     # a process that saw 100,000 drawn profiles: forget the old ones
             ProfileTable._uses.clear()
         ProfileTable._uses[self.key] = ProfileTable._uses.get(self.key, 0) + 1
@@ -289,7 +290,7 @@ class ProfileTable:
     @property
     def computed(self):
         """Whether this object holds its table (computed or provided), i.e. reading it costs nothing."""
-        return self._entry is not None or self._arrays is not None
+        return self._entry is not None or self._arrays is not None or self._device is not None
 
     def provide(self, table, window):
         """Give this table its arrays ``table`` (points, normals, curvature, key, spacing, phi: as
@@ -298,10 +299,40 @@ class ProfileTable:
         if not self.computed:
             self._arrays = (tuple(table), int(window))
 
+    def provide_device(self, batch, row, window, spacing):
+        """Give this table its columns as row ``row`` of a batch computed on a Warp device
+        (:func:`compute_profile_tables`): the device's kernels copy them there
+        (:meth:`device_column`); the host arrays are read back only where the host reads them."""
+        if not self.computed:
+            self._device = (batch, int(row), int(window), float(spacing))
+
+    @property
+    def n_samples(self):
+        """Samples of the table (its key's count: every table of the key has that many)."""
+        return self.key[1]
+
+    @property
+    def spacing(self):
+        """The table's sample spacing [m] (without reading a device table back)."""
+        if self._entry is None and self._arrays is None and self._device is not None:
+            return self._device[3]
+        return self.entry[0][4]
+
+    def device_column(self, i, device):
+        """(device array (T, n[, 2]), row) holding column ``i`` (0 points, 1 normals, 2 curvature, 3 key,
+        5 phi) of this table on Warp ``device``, or None (not computed there)."""
+        if self._device is None or i not in _DEVICE_COLUMN:
+            return None
+        return self._device[0].columns[_DEVICE_COLUMN[i]], self._device[1]
+
     @property
     def entry(self):
         """(table, analytic parameters or None, search window)."""
         if self._entry is None:
+            if self._arrays is None and self._device is not None:
+                batch, t, window, h = self._device
+                pts, nrm, kap, key, phi = batch.host()
+                self._arrays = ((pts[t], nrm[t], kap[t], key[t], h, phi[t]), window)
             if self._arrays is not None:
                 prof, n, search, band, slack = self.key
                 self._entry = (self._arrays[0], prof.analytic_parameters() if search == "analytic" else None,
@@ -312,6 +343,8 @@ class ProfileTable:
 
     @property
     def window(self):
+        if self._entry is None and self._arrays is None and self._device is not None:
+            return self._device[2]
         return self.entry[2]
 
     def __getitem__(self, i):
@@ -355,6 +388,28 @@ def _shared_table(prof, rp, samples_per_tooth, search, band):
     return t, t.entry[1], t.window
 
 
+_DEVICE_COLUMN = {0: 0, 1: 1, 2: 2, 3: 3, 5: 4}
+"""Table column -> column of a device batch (the spacing, column 4, is a host number)."""
+
+
+class _DeviceTables:
+    """The columns (points, normals, curvature, key, phi) of a batch of profile tables on a Warp device,
+    read back (once, read-only) only where the host reads a table of it."""
+
+    __slots__ = ("columns", "_host")
+
+    def __init__(self, columns):
+        self.columns, self._host = tuple(columns), None
+
+    def host(self):
+        if self._host is None:
+            host = tuple(c.numpy() for c in self.columns)
+            for a in host:
+                a.flags.writeable = False
+            self._host = host
+        return self._host
+
+
 DEVICE_TABLE_GROUP = 256
 """Profile tables per launch of :func:`compute_profile_tables` (its dense arc lengths: 16 x 8 bytes per
 sample and table, ~150 MB for 256 RD-40 tables)."""
@@ -367,8 +422,10 @@ def compute_profile_tables(tables, device="cpu", group=DEVICE_TABLE_GROUP):
     rounding: on the cpu bit for bit but for ~1 ulp of the curvature and the key; the device's own sine
     and cosine on a GPU), and give them to every object of that key (:meth:`ProfileTable.provide`).
     Profiles with a tabulated radial modification, and a table whose polar angle or key is not monotone
-    (checked on the device), are left to the host (computed where first read). Returns the number of
-    distinct tables computed on the device."""
+    (checked on the device), are left to the host (computed where first read). The columns stay on the
+    device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there copies them, nothing is read
+    back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
+    computed on the device."""
     from warp_contacts.profile_tables import profile_tables
     todo = {}
     for t in tables:
@@ -386,14 +443,13 @@ def compute_profile_tables(tables, device="cpu", group=DEVICE_TABLE_GROUP):
             profs = [k[0] for k in chunk]
             params = [(p.R, p.K1, float(p.n_pins), p.pin_radius + p.equidistant_mod, p.rotation_mod) for p in profs]
             pts, nrm, kap, key, h, phi, window, ok = profile_tables(
-                params, [p.n_pins for p in profs], [p.pin_radius for p in profs], n, 16 * n, band, device=device)
-            for a in (pts, nrm, kap, key, phi):
-                a.flags.writeable = False        # shared by every set of that table, as the host's
+                params, [p.n_pins for p in profs], [p.pin_radius for p in profs], n, 16 * n, band, device=device,
+                as_numpy=False)
+            batch = _DeviceTables((pts, nrm, kap, key, phi))      # left on the device (CycloidPinKernel copies)
             for i, k in enumerate(chunk):
                 if ok[i]:
-                    tab = (pts[i], nrm[i], kap[i], key[i], float(h[i]), phi[i])
                     for t in todo[k]:
-                        t.provide(tab, window[i])
+                        t.provide_device(batch, i, window[i], h[i])
                     done += 1
     return done
 
