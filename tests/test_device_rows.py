@@ -511,3 +511,18 @@ def test_resident_loop_as_a_cuda_graph():
         runs[graph] = (r2.q[:, newton.output_local], newton.loop_path)
     assert runs[True][1] == "cuda_graph" and runs[False][1] == "host_loop"
     assert np.max(np.abs(runs[True][0] - runs[False][0])) * ARCSEC_PER_RAD <= 1e-9
+
+
+def test_rv_variant_kinematics_stacked_bit_for_bit():
+    """RvKinematics.stacked_poses (the row Newton primes the kinematic states of RV variant copies in one
+    evaluation, as CycloidKinematics'): equal to each variant's poses bit for bit; None for kinematics of
+    another layout. Fails if a stacked operation differs from the per-variant one."""
+    from rvtool.assembly.rv.builder import RvKinematics
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    d = rvtool.load_design("rv40e")
+    tol = load_rv_tolerances(rvtool.designs.path("rv40e_tolerances"))
+    ks = [rvtool.build(sample_rv_design(tol, d, k, 20261124)[0]).kinematics for k in (0, 1, 2)]
+    angles = np.linspace(-1.0, 19.0, 11)
+    assert np.array_equal(RvKinematics.stacked_poses(ks, angles), np.array([k.poses(angles) for k in ks]))
+    from rvtool.assembly.cycloid import CycloidKinematics
+    assert RvKinematics.stacked_poses(ks + [CycloidKinematics(rvtool.load_design("rd40"))], angles) is None
