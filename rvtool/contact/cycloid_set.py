@@ -410,14 +410,16 @@ class _DeviceTables:
         return self._host
 
 
-DEVICE_TABLE_GROUP = 256
-"""Profile tables per launch of :func:`compute_profile_tables` (its dense arc lengths: 16 x 8 bytes per
-sample and table, ~150 MB for 256 RD-40 tables)."""
+DEVICE_TABLE_GROUP = {"cpu": 256, "cuda": 2048}
+"""Profile tables per launch of :func:`compute_profile_tables` by device kind (its dense arc lengths: 16 x 8
+bytes per sample and table, ~150 MB for 256 RD-40 tables; on a GPU the serial arc-length pass of a launch
+takes as long for 2,048 tables as for 256, so fewer, larger launches)."""
 
 
-def compute_profile_tables(tables, device="cpu", group=DEVICE_TABLE_GROUP):
+def compute_profile_tables(tables, device="cpu", group=None):
     """Compute the deferred :class:`ProfileTable` objects among ``tables`` (:func:`shared_profile_tables`
-    ``defer``) on Warp ``device``, each distinct key once, ``group`` tables per launch
+    ``defer``) on Warp ``device``, each distinct key once, ``group`` tables per launch (None:
+    :data:`DEVICE_TABLE_GROUP` of the device kind)
     (:func:`warp_contacts.profile_tables.profile_tables`: the host's operations, equal to its tables to
     rounding: on the cpu bit for bit but for ~1 ulp of the curvature and the key; the device's own sine
     and cosine on a GPU), and give them to every object of that key (:meth:`ProfileTable.provide`).
@@ -436,6 +438,8 @@ def compute_profile_tables(tables, device="cpu", group=DEVICE_TABLE_GROUP):
         prof, n, _, band, slack = key
         if prof.radial_mod_table is None:
             batches.setdefault((n, band + slack * (1.0 + band)), []).append(key)
+    if group is None:
+        group = DEVICE_TABLE_GROUP["cpu" if str(device).startswith("cpu") else "cuda"]
     done = 0
     for (n, band), keys in batches.items():
         for g in range(0, len(keys), int(group)):
