@@ -288,7 +288,7 @@ def device_memory_mb(device):
     return None
 
 
-def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=None, tables="helpers"):
+def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=None, tables="helpers", graph=True):
     """The device path of variants 0..V-1: built in ``workers`` processes as snapshots (shared profile
     tables) and run on the device row Newton, ``solve_chunk`` copies per device solve (None: all V
     in one solve, the run of record at 1,000; chunks: rvtool.variants.multi_device.chunk_schedule,
@@ -299,7 +299,10 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     whole build, the pool's transfer included, as ``build_s``). tables: "helpers" (the build pool computes
     each variant's cycloid profile tables and sends them) or "device" (the pool sends the profiles; the
     device row Newton computes the tables on a GPU inside its setup, on the cpu the host where read:
-    rvtool.contact.cycloid_set.compute_profile_tables)."""
+    rvtool.contact.cycloid_set.compute_profile_tables). graph: on CUDA the row Newton's resident loop as a
+    captured CUDA graph (rvtool.solver.device_rows; False: the host loop)."""
+    from rvtool.solver.device_newton import DeviceNewtonSettings
+    settings = DeviceNewtonSettings(graph=bool(graph))
     import functools
     from rvtool.variants.multi_device import chunk_schedule
     if name in RV_NAMES:
@@ -318,7 +321,7 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     probe = build(design, **kw)
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
     device_rows_variants([probe], torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
-                         device=device)
+                         device=device, settings=settings)
     ctx = multiprocessing.get_context("spawn")
     parts, waits = [], []
     table = {"profile_tables": 0, "profile_table_mb": 0.0}
@@ -346,7 +349,8 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
             models = [m for _, m, _ in got if m is not None]
             bad = [(k, e) for k, m, e in got if m is None]
             part = device_rows_variants(models, torque=torque, input_angles=angles,
-                                        lost_motion_level=LM_FRACTION * design.rated_torque, device=device) \
+                                        lost_motion_level=LM_FRACTION * design.rated_torque, device=device,
+                                        settings=settings) \
                 if models else None
             ta = time.perf_counter()
             stats = table_stats(models)           # bookkeeping of the report (after the solve: deferred tables
@@ -364,6 +368,7 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
                 **{k + "_largest_chunk": v for k, v in table.items()})
     cost.update(build_cost(design, tol, seed, kw, list(range(V, V + 25))))
     cost["tables"] = tables
+    cost["graph"] = bool(graph)
     return r, cost, kw, design.rated_torque
 
 
@@ -415,8 +420,9 @@ def table_stats(models):
     return {"profile_tables": len(seen), "profile_table_mb": sum(seen.values()) / 1e6}
 
 
-def bench(name, quick, V, workers, device, solve_chunk=None, first_chunk=None, pool_variants=None, tables="helpers"):
-    r, cost, kw, rated = run_device(name, quick, V, device, workers, solve_chunk, first_chunk, tables)
+def bench(name, quick, V, workers, device, solve_chunk=None, first_chunk=None, pool_variants=None, tables="helpers",
+          graph=True):
+    r, cost, kw, rated = run_device(name, quick, V, device, workers, solve_chunk, first_chunk, tables, graph)
     M = V if pool_variants is None else min(int(pool_variants), V)
     pool, warm_s, pool_s = run_pool(name, quick, M, workers)
     te_dev_pp = np.ptp(r.te[:M], axis=1) * ARCSEC_PER_RAD
@@ -500,7 +506,10 @@ def main(argv=None):
         p.add_argument("--tables", default="helpers", choices=("helpers", "device"),
                        help="where RD-40 variants' cycloid profile tables are computed: the build helpers (default; "
                             "each snapshot carries its tables) or the device's process (a GPU computes them in the "
-                            "device setup; the helpers send the profiles)")))
+                            "device setup; the helpers send the profiles)"),
+        p.add_argument("--graph", default="on", choices=("on", "off"),
+                       help="on CUDA: the row Newton's resident loop as a captured CUDA graph (default on; off: "
+                            "the host loop)")))
     t_all = time.perf_counter()
     V = args.variants or (2 if args.quick else 1000)
     workers = args.workers or (2 if args.quick else os.cpu_count() or 1)
@@ -516,9 +525,9 @@ def main(argv=None):
             raise RvtoolInputError(f"--{nm.replace('_', '-')} = {v} is outside the valid range [1, inf)")
     results = {"settings_echo": {"variants": V, "workers": workers, "device": args.device, "quick": args.quick,
                                  "solve_chunk": args.solve_chunk, "first_chunk": args.first_chunk,
-                                 "pool_variants": args.pool_variants, "tables": args.tables},
+                                 "pool_variants": args.pool_variants, "tables": args.tables, "graph": args.graph},
                "designs": {n: bench(n, args.quick, V, workers, args.device, args.solve_chunk, args.first_chunk,
-                                    args.pool_variants, args.tables) for n in names}}
+                                    args.pool_variants, args.tables, args.graph == "on") for n in names}}
     results["wall_s"] = time.perf_counter() - t_all
     casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"quick": args.quick, "variants": V, "workers": workers,
