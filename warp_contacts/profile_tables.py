@@ -87,13 +87,14 @@ def _kernels():
         seg[t, j + 1] = wp.sqrt(d[0] * d[0] + d[1] * d[1])
 
     @wp.kernel
-    def arc_lengths(n_dense: int, s: wp.array2d(dtype=f64)):
+    def arc_lengths(n_dense: int, s: wp.array2d(dtype=f64), total: wp.array(dtype=f64)):
         t = wp.tid()
         acc = f64(0.0)
         s[t, 0] = acc
         for j in range(n_dense):
             acc = acc + s[t, j + 1]
             s[t, j + 1] = acc
+        total[t] = acc
 
     @wp.kernel
     def resampled(prm: wp.array2d(dtype=f64), nz: wp.array(dtype=wp.int32), s: wp.array2d(dtype=f64),
@@ -267,7 +268,8 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     rp_d = wp.array(np.asarray(rp, np.float64), dtype=wp.float64, device=d)
     s = wp.zeros((T, nd + 1), dtype=wp.float64, device=d)
     wp.launch(dense_lengths, dim=(T, nd), inputs=[prm_d, nz_d, nd, step, s], device=d)
-    wp.launch(arc_lengths, dim=T, inputs=[nd, s], device=d)
+    total_d = wp.zeros(T, dtype=wp.float64, device=d)
+    wp.launch(arc_lengths, dim=T, inputs=[nd, s, total_d], device=d)
     raw = [wp.empty((T, n, 2), dtype=wp.float64, device=d), wp.empty((T, n, 2), dtype=wp.float64, device=d)] + \
         [wp.empty((T, n), dtype=wp.float64, device=d) for _ in range(3)]
     wp.launch(resampled, dim=(T, n), inputs=[prm_d, nz_d, s, nd, step, n] + raw, device=d)
@@ -278,7 +280,7 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     dist = wp.array(np.linspace(1.0 - band, 1.0 + band, 9), dtype=wp.float64, device=d)
     off = wp.zeros(T, dtype=wp.int32, device=d)
     wp.launch(window_offsets, dim=(T, n, 9), inputs=[n, rp_d, dist, out[0], out[1], out[3], off], device=d)
-    total = s.numpy()[:, nd]
+    total = total_d.numpy()                         # (not the whole arc-length table back: ~1 GB a launch)
     pts, nrm, kap, key, phi = (a.numpy() for a in out) if as_numpy else out
     window = np.ceil(margin * off.numpy()).astype(int) + 2
     return pts, nrm, kap, key, total / n, phi, window, ok.numpy() == 1
