@@ -318,9 +318,13 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
         seed = RD_SEED
     sizes = chunk_schedule(V, solve_chunk or V, V if solve_chunk is None else first_chunk)
     starts = np.concatenate([[0], np.cumsum(sizes)])
-    probe = build(design, **kw)
+    warm = [build(design, **kw)]
+    if tables == "device" and name not in RV_NAMES:    # the profile-table kernels compiled before the timing too
+        from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
+        from rvtool.variants import Variant
+        warm = cycloid_variant_snapshots(design, [Variant()], kw, defer_tables=True)
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
-    device_rows_variants([probe], torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
+    device_rows_variants(warm, torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
                          device=device, settings=settings)
     ctx = multiprocessing.get_context("spawn")
     parts, waits = [], []
