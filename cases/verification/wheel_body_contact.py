@@ -59,7 +59,8 @@ counted twice (ports measured on the surface, ``port_depth = 0``, the local law 
 forces beside the reduced ones.
 
 --quick: the member as above with its 16 bore patches only, the reference at levels 1, 2 and 3; full: besides, the
-port depths r_p / 2 and 2 r_p (the ends of the assumed range; reported, not judged), the solid member on three
+design's density in plane stress, the port depths 0 (the surface), r_p / 2 and 2 r_p (the ends of the assumed
+range; reported, not judged), the solid member on three
 meshes (MESHES) and the plane-stress member on three (MESHES_PLANE_STRESS), and the reference at levels 1 to 4.
 """
 import dataclasses
@@ -583,7 +584,8 @@ def main(argv=None):
     th_ps = twist(d_ps)[0][0]                                  # (a) the same wheel, ports and load in plane stress
     th_mean_red = twist(d_mean)[0][0]                          # (c) the bores' mean motion tied to the journals
     (th_dflt, _, _), wb_dflt = twist(d_dflt)                   # (d) the design's port density (samples_per_tooth)
-    th_dflt_ps = twist(d_dflt.replace(wheels={"structure": {"elasticity": "plane_stress"}}))[0][0]
+    th_dflt_ps = None if args.quick else \
+        twist(d_dflt.replace(wheels={"structure": {"elasticity": "plane_stress"}}))[0][0]
     # (b) the ports' spread against the local law's concentrated load, closed form, at both port densities
     spread = {}
     for key, dd, wb_, th0 in (("member", d, wb, th_red), ("design_ports", d_dflt, wb_dflt, th_dflt)):
@@ -610,7 +612,7 @@ def main(argv=None):
     # the datum depth's assumed range (WheelBodySpec: r_p / 2 to 2 r_p); reported only
     rp = d.pins.pin_radius
     depth_variants = {}
-    for depth in (0.0,) if args.quick else (0.0, 0.5 * rp, 2.0 * rp):
+    for depth in () if args.quick else (0.0, 0.5 * rp, 2.0 * rp):          # full run only
         wb_d = wheel_body(dataclasses.replace(wb.geometry, port_depth=depth), wb.spec, wb.fe.material)
         # port_depth 0: the local law still reaches r_p (the near field counted twice, not dropped)
         depth_variants[f"{depth * 1e3:.3g} mm"] = reduced_twist(d, wb_d, pins, cand, torque,
@@ -645,7 +647,7 @@ def main(argv=None):
     th_ref = ref[-1]["theta_rad"]
     thetas = np.array([x["theta_rad"] for x in ref])
     local_work = float(np.sum(F_red * local))           # the local approaches' work against the journals' (T theta)
-    th_dbl = depth_variants["0 mm"]
+    th_dbl = depth_variants.get("0 mm")
     results = {
         "wheel_torque_Nm": torque, "bore_ports": BORE_PORTS, "member_discretisation": dict(MEMBER),
         "theta_reference_rad": th_ref, "theta_reduced_rad": th_red, "ratio_reduced_to_reference": th_red / th_ref,
@@ -656,7 +658,8 @@ def main(argv=None):
         "design_ports": {"mesh_size_m": wb_dflt.spec.mesh_size, "samples_per_tooth": wb_dflt.spec.samples_per_tooth,
                          "theta_rad": th_dflt, "theta_plane_stress_rad": th_dflt_ps},
         "decomposition": {
-            "a_solid_over_plane_stress": {"member": th_red / th_ps, "design_ports": th_dflt / th_dflt_ps},
+            "a_solid_over_plane_stress": {"member": th_red / th_ps,
+                                          "design_ports": None if th_dflt_ps is None else th_dflt / th_dflt_ps},
             "b_port_spread": spread,
             "c_bore_model": {"ratio_patches_to_mean_tie": th_red / th_mean_red,
                              "ratio_by_bore_ports": {k: v / th_ref for k, v in th_by_ports.items()}},
@@ -673,7 +676,8 @@ def main(argv=None):
         "reduced_mesh_convergence": {k: {**v, "ratio_to_reference": v["theta_rad"] / th_ref} for k, v in meshes.items()},
         "plane_stress_mesh_convergence": {k: {**v, "ratio_to_reference": v["theta_rad"] / th_ref}
                                           for k, v in meshes_ps.items()},
-        "theta_surface_ports_rad": th_dbl, "surface_ports_ratio_to_reference": th_dbl / th_ref,
+        "theta_surface_ports_rad": th_dbl,
+        "surface_ports_ratio_to_reference": None if th_dbl is None else th_dbl / th_ref,
         "theta_by_port_depth_rad": depth_variants,
         "ratio_by_port_depth": {k: v / th_ref for k, v in depth_variants.items()},
         "local_contact_share_of_twist": local_work / (torque * th_red),
