@@ -100,3 +100,11 @@ def test_flexible_wheels_refuse_plane_stress_by_key(rv40e):
     d = rv40e.replace(wheels={"body": "ported", "structure": {**COARSE, "elasticity": "plane_stress"}})
     with pytest.raises(RvtoolInputError, match=r"wheels\.structure\.elasticity = 'plane_stress'"):
         wheel_mesh(d, 0)
+
+
+def test_cycloid_flexible_wheels_refuse_plane_stress_by_key():
+    from rvtool.assembly.flexible_wheels import wheel_body_mesh
+    rd40 = rvtool.load_design(designs.path("rd40"))
+    d = rd40.replace(wheels={"structure": {**COARSE, "elasticity": "plane_stress"}})
+    with pytest.raises(RvtoolInputError, match=r"wheels\.structure\.elasticity = 'plane_stress'"):
+        wheel_body_mesh(d, 0)
