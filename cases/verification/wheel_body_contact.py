@@ -183,6 +183,33 @@ def port_spread_correction(wb, points, E, nu, width):
     return out
 
 
+def segment_ripple(wb, point, E, nu, width, n_t=5):
+    """The near field of the profile ports at the segment that holds the contact nearest to ``point`` (a pin
+    centre): (segment length [m], FE ripple, closed-form ripple). A ripple is the normal self-compliance of a
+    contact at the segment's middle less the mean of its ends, in units of 1 / (pi E t): the FE's from the member's
+    station compliance (the contact moved along the segment, interpolated on the two ports), the closed form's from
+    :func:`port_spread_correction` (the half-plane, Flamant). Negative: the middle is stiffer."""
+    P = wb.profile_points
+    N = len(P)
+    Wm, _ = profile_interpolation(wb, np.asarray(point, float)[None, :])
+    nz = np.flatnonzero(Wm[0]) // 2
+    i = N - 1 if set(nz.tolist()) == {0, N - 1} else int(nz[0])
+    j = (i + 1) % N
+    seg = P[j] - P[i]
+    h = float(np.linalg.norm(seg))
+    nrm = np.array([seg[1], -seg[0]]) / h
+    nrm = nrm if nrm @ wb.profile_normals[i] > 0 else -nrm
+    ts = np.linspace(0.0, 1.0, n_t)
+    Wr = np.zeros((n_t, wb.load_matrix.shape[0]))
+    for r, t in enumerate(ts):
+        Wr[r, 2 * i:2 * i + 2] += (1 - t) * nrm
+        Wr[r, 2 * j:2 * j + 2] += t * nrm
+    c = np.diag(wb.station_compliance(Wr))
+    dl = port_spread_correction(wb, np.array([(1 - t) * P[i] + t * P[j] for t in ts]) + 1e-9 * nrm, E, nu, width)
+    m, unit = n_t // 2, math.pi * E * width
+    return h, float((c[m] - 0.5 * (c[0] + c[-1])) * unit), float(-(dl[m] - 0.5 * (dl[0] + dl[-1])) * unit)
+
+
 def reduced_twist(design, wb, pins, cand, torque, law_depth=None, extra_local=None):
     """(theta [rad], pin forces (nc,) [N], local approaches (nc,) [m]) of the reduced member at journal torque
     ``torque`` [N m] (module docstring). The bores: with ``wb.spec.bore_ports = 0`` each bore's mean motion is tied
@@ -597,6 +624,17 @@ def main(argv=None):
                        "twist_change_rel": th_c / th0 - 1.0,
                        "correction_of_local_compliance_max": float(np.max(corr / loc1)),
                        "correction_of_local_compliance_mean": float(np.mean(corr / loc1))}
+    # (b) the near field at the most loaded pin's segment: the FE's ripple against the closed form's (full run)
+    k_max = int(np.argmax(F_red))
+    ripple = {}
+    for key, wb_ in (() if args.quick else (("member", wb), ("design_ports", wb_dflt))):
+        h, r_fe, r_cf = segment_ripple(wb_, centres[k_max], E, nu, width)
+        ripple[key] = {"segment_mm": h * 1e3, "ripple_fe": r_fe, "ripple_closed_form": r_cf}
+    seg_len = {}
+    for key, wb_ in (("member", wb), ("design_ports", wb_dflt)):
+        L_ = np.linalg.norm(np.roll(wb_.profile_points, -1, axis=0) - wb_.profile_points, axis=1)
+        Wm_, _ = profile_interpolation(wb_, centres)
+        seg_len[key] = float(max(L_[int(np.flatnonzero(Wm_[2 * k])[0] // 2)] for k in range(len(cand))))
     # (d) the port density's convergence: the plane-stress member (the same ports, a fraction of the cost)
     th_by_density = {}
     for n_s in DENSITIES_QUICK if args.quick else DENSITIES:
@@ -660,7 +698,9 @@ def main(argv=None):
         "decomposition": {
             "a_solid_over_plane_stress": {"member": th_red / th_ps,
                                           "design_ports": None if th_dflt_ps is None else th_dflt / th_dflt_ps},
-            "b_port_spread": spread,
+            "b_port_spread": {**spread, "pin_of_ripple": int(cand[k_max]["pin"]), "ripple_at_most_loaded_pin": ripple,
+                              "longest_contact_segment_over_depth": {k: v / wb.geometry.port_depth
+                                                                     for k, v in seg_len.items()}},
             "c_bore_model": {"ratio_patches_to_mean_tie": th_red / th_mean_red,
                              "ratio_by_bore_ports": {k: v / th_ref for k, v in th_by_ports.items()}},
             "d_port_density": {"ratio_plane_stress_by_samples_per_tooth": {k: v / th_ref for k, v in
