@@ -12,7 +12,7 @@ import warp as wp
 
 from .anchor import anchor_funcs
 from .circle_pairs_ref import FRICTION_ANCHOR, FRICTION_REGULARIZED, N_OBS
-from .cycloid_pins_ref import (A_ANALYTIC, A_K1, A_R, A_RC, A_ROT, A_ZB, ANALYTIC_ITERATIONS, C_C, C_DR, C_E, C_K,
+from .cycloid_pins_ref import (A_ANALYTIC, A_K1, A_NLOBE, A_R, A_RC, A_ROT, A_ZB, ANALYTIC_ITERATIONS, C_C, C_DR, C_E, C_K,
                                C_MUK, C_MUS, C_P, C_RP, C_TX, C_TY, C_VREG, C_VS, C_XI_B, C_Z, J_BODY_A, J_BODY_B,
                                J_FRICTION, J_TABLE, N_ANALYTIC, N_FLOAT, N_INT)
 from .laws import law_funcs
@@ -120,6 +120,12 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
             arc = tab_ana[tb, A_RC]
             arot = tab_ana[tb, A_ROT]
             phi = tab_phi[off + best]
+            nlobe = int(tab_ana[tb, A_NLOBE])
+            if nlobe > 0:
+                # lobe rotations: the nearest sample's lobe turned by its angle (cycloid_pins_ref.lobe_of)
+                lobe = int(wp.floor(phi * dtype(nlobe) / two_pi))
+                lobe = ((lobe % nlobe) + nlobe) % nlobe
+                arot = arot + tab_ana[tb, N_ANALYTIC + lobe]
             for it in range(ANALYTIC_ITERATIONS):
                 pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
                 wa_ = pl - pa
@@ -334,13 +340,19 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
 
 
 def _analytic_rows(tables, analytic, ndtype):
-    """One analytic row per profile table (columns A_* of cycloid_pins_ref); all zero for a
-    table searched on its samples."""
-    rows = np.zeros((len(tables), N_ANALYTIC), ndtype)
+    """One analytic row per profile table (columns A_* of cycloid_pins_ref, then the lobe rotations of
+    a profile that has them: the rows as wide as the most lobes); all zero for a table searched on its
+    samples."""
+    n_l = [len(a[5]) if a is not None and len(a) > 5 else 0
+           for a in (analytic if analytic is not None else [None] * len(tables))]
+    rows = np.zeros((len(tables), N_ANALYTIC + max(n_l, default=0)), ndtype)
     for k in range(len(tables)):
         if analytic is not None and analytic[k] is not None:
             rows[k, A_ANALYTIC] = 1.0
-            rows[k, A_R:A_ROT + 1] = analytic[k]
+            rows[k, A_R:A_ROT + 1] = analytic[k][:5]
+            if n_l[k]:
+                rows[k, A_NLOBE] = n_l[k]
+                rows[k, N_ANALYTIC:N_ANALYTIC + n_l[k]] = analytic[k][5]
     return rows
 
 

@@ -59,10 +59,12 @@ J_BODY_B = 1        # pose row of the pin carrier (body B)
 J_FRICTION = 2      # friction mode (circle_pairs_ref.FRICTION_NONE or FRICTION_REGULARIZED)
 J_TABLE = 3         # index of the profile table
 N_INT = 4
-# columns of a profile table's analytic row (Warp kernel): a flag (1.0: analytic search) and
-# the profile parameters of :func:`analytic_point` in their order
-(A_ANALYTIC, A_R, A_K1, A_ZB, A_RC, A_ROT) = range(6)
-N_ANALYTIC = 6
+# columns of a profile table's analytic row (Warp kernel): a flag (1.0: analytic search), the
+# profile parameters of :func:`analytic_point` in their order, and the number n_l of lobe rotations
+# (0: none) whose angles [rad] follow in columns N_ANALYTIC .. N_ANALYTIC + n_l - 1 (lobe j of the
+# generating angles [2 pi j / n_l, 2 pi (j + 1) / n_l), :func:`lobe_of`)
+(A_ANALYTIC, A_R, A_K1, A_ZB, A_RC, A_ROT, A_NLOBE) = range(7)
+N_ANALYTIC = 7
 
 
 ANALYTIC_ITERATIONS = 4
@@ -86,6 +88,12 @@ def analytic_point(params, phi):
     return rot(rot_angle, pt), rot(rot_angle, n), kap, dsdphi
 
 
+def lobe_of(phi, n_lobes):
+    """Lobe index of generating angle(s) phi: floor(phi n_l / 2 pi) mod n_l (the kernel's rule,
+    :meth:`rvtool.geometry.cycloid.CycloidProfile.lobe_index`)."""
+    return np.mod(np.floor(np.asarray(phi, float) * n_lobes / (2 * np.pi)).astype(np.int64), n_lobes)
+
+
 def search(table, pin_local, window, analytic=None):
     """Contact location for pins given in wheel coordinates.
 
@@ -93,7 +101,10 @@ def search(table, pin_local, window, analytic=None):
     osculating arc. Analytic path (``analytic`` = profile parameters, see
     :func:`analytic_point`): starting from the nearest sample, Newton iterations
     on (c - p) . c' = 0 with the osculating-circle step, so the contact point is
-    the exact closest point of the analytic profile (never clamped).
+    the exact closest point of the analytic profile (never clamped). With lobe
+    rotations (a sixth entry of ``analytic``) the profile is the nearest sample's
+    lobe, turned by its rotation, for the whole Newton path (a contact near a root,
+    where two lobes meet, stays on the lobe of its nearest sample).
     table: (points (n,2), normals (n,2), kappa (n,), polar (n,), spacing, phi (n,)).
     Returns (c (N,2), n (N,2), kappa (N,), clamped (N,) bool, sampled distance (N,)).
     """
@@ -107,6 +118,10 @@ def search(table, pin_local, window, analytic=None):
     ci, ni, ki = P[best], Nn[best], K[best]
     if analytic is not None:
         phi = table[5][best]
+        if len(analytic) > 5:
+            lobes = np.asarray(analytic[5], float)
+            R, K1, zb, rc, rot0 = analytic[:5]
+            analytic = (R, K1, zb, rc, rot0 + lobes[lobe_of(phi, len(lobes))])
         for _ in range(ANALYTIC_ITERATIONS):
             c, nn, kk, ds = analytic_point(analytic, phi)
             w = pin_local - c

@@ -12,12 +12,15 @@ with R_z the pin-circle radius, K1 = e_g z_b / R_z the eccentricity
 coefficient (e_g the nominal generating eccentricity), z_b = z_g + 1 the pin
 count and r_c the generating radius. Modifications (all lengths in m):
 equidistant (r_c = r_p + delta_eq), offset (R_z -> R_z + delta_off),
-rotation (the profile turned by delta_rot [rad]) and a tabulated radial
-modification r_c(phi) = r_c + table(phi). The nominal generating
-eccentricity and the assembly eccentricity are separate inputs.
+rotation (the profile turned by delta_rot [rad]), a tabulated radial
+modification r_c(phi) = r_c + table(phi), and lobe-by-lobe rotations (lobe j,
+the tooth from the root at phi = 2 pi j / z_g to the next, turned about the
+wheel centre by its own angle: the wheel's accumulated pitch deviations,
+issue 30). The nominal generating eccentricity and the assembly eccentricity
+are separate inputs.
 """
 import functools
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -37,6 +40,11 @@ class CycloidProfile:
     rotation_mod: delta_rot [rad], profile rotation about the wheel centre.
     radial_mod_table: optional (phi [rad], delta_r [m]) pairs of a tabulated
     generating-radius modification, periodic over one tooth (2 pi / z_g).
+    lobe_rotations: optional rotation [rad] of each lobe about the wheel centre, z_g entries (lobe j: the
+    generating angles phi in [2 pi j / z_g, 2 pi (j + 1) / z_g), from the root at phi = 2 pi j / z_g through the
+    tip to the next root): the accumulated pitch deviation of each lobe as an angle. Not a design-file key (the
+    design gives ``wheels.lobe_pitch_deviations`` per wheel, :func:`lobe_pitch_rotations`); None: every lobe at
+    its nominal place (the profile as before, bit for bit).
     """
     pin_circle_radius: float
     pin_radius: float
@@ -46,6 +54,7 @@ class CycloidProfile:
     offset_mod: float = 0.0
     rotation_mod: float = angle_field(0.0)
     radial_mod_table: tuple | None = angle_table_field()  # (phi [rad], delta_r [m]) pairs; file: radial_mod_table_deg
+    lobe_rotations: tuple | None = field(default=None, metadata={"file": False, "unit": "rad"})
 
     def __post_init__(self):
         check_positive("pin_circle_radius", self.pin_circle_radius)
@@ -71,6 +80,17 @@ class CycloidProfile:
             check_finite("radial_mod_table", t)
             if np.any(np.diff(t[:, 0]) <= 0):
                 raise RvtoolInputError("radial_mod_table angles must increase strictly (valid: sorted phi in [0, 2 pi / z_g])")
+        if self.lobe_rotations is not None:
+            r = np.asarray(self.lobe_rotations, dtype=float)
+            if r.shape != (self.n_teeth,):
+                raise RvtoolInputError(f"lobe_rotations must have shape ({self.n_teeth},) (one angle per lobe); "
+                                       f"got {r.shape}")
+            check_finite("lobe_rotations", r)
+            # a pitch deviation is micro-radians; a lobe turned by a tenth of its pitch is no longer a deviation
+            lim = 0.1 * 2 * np.pi / self.n_teeth
+            if np.max(np.abs(r)) > lim:
+                raise RvtoolInputError(f"lobe_rotations = {np.max(np.abs(r)):.4g} rad is outside the valid range "
+                                       f"[-{lim:.4g}, {lim:.4g}] rad (a tenth of the lobe pitch 2 pi / z_g)")
         _checked_undercut(self)
 
     @property
@@ -110,9 +130,25 @@ class CycloidProfile:
         return E, dE, ddE
 
     def points(self, phi):
-        """Profile points c(phi) of Eq. (cycloid_geometry), turned by the rotation modification."""
+        """Profile points c(phi) of Eq. (cycloid_geometry), turned by the rotation modification (and each
+        lobe by its lobe rotation)."""
         phi = np.asarray(phi, float)
-        return self._rotate(self._unrotated_points(phi, _trig(phi, self.n_pins)))
+        return self._turn_lobes(phi, self._rotate(self._unrotated_points(phi, _trig(phi, self.n_pins))))
+
+    def lobe_index(self, phi):
+        """Lobe j of generating angle(s) phi [rad]: floor(phi z_g / 2 pi) mod z_g (lobe j from the root at
+        2 pi j / z_g to the next root; the same rule as the contact kernel's analytic search)."""
+        zg = self.n_teeth
+        return np.mod(np.floor(np.asarray(phi, float) * zg / (2 * np.pi)).astype(np.int64), zg)
+
+    def _turn_lobes(self, phi, xy):
+        """``xy`` (points or vectors of generating angles phi) turned by their lobe's rotation; unchanged (the
+        same array) without lobe rotations."""
+        if self.lobe_rotations is None:
+            return xy
+        a = np.asarray(self.lobe_rotations, float)[self.lobe_index(phi)]
+        c, s = np.cos(a), np.sin(a)
+        return np.stack([c * xy[..., 0] - s * xy[..., 1], s * xy[..., 0] + c * xy[..., 1]], axis=-1)
 
     def _unrotated_points(self, phi, trig, epi=None):
         """:meth:`points` before the rotation, from the angles' :func:`_trig` (the same operations;
@@ -186,9 +222,9 @@ class CycloidProfile:
         # operations as points(), epitrochoid() and curvature_of_points())
         trig = _trig(phi, self.n_pins)
         epi = self._epitrochoid(trig)
-        pts = self._rotate(self._unrotated_points(phi, trig, epi))
+        pts = self._turn_lobes(phi, self._rotate(self._unrotated_points(phi, trig, epi)))
         _, dE, ddE = epi
-        tang = self._rotate(dE / _length(dE)[..., None])
+        tang = self._turn_lobes(phi, self._rotate(dE / _length(dE)[..., None]))
         # outward normal: the curve runs clockwise, so the outward normal is the tangent turned by +90 deg
         nrm = np.stack([-tang[..., 1], tang[..., 0]], axis=-1)
         kap = self._curvature(phi, dE, ddE)
@@ -198,11 +234,15 @@ class CycloidProfile:
 
     def analytic_parameters(self):
         """(R, K1, z_b, r_c, rotation) for the analytic closest-point path, which supports the
-        equidistant, offset and rotation modifications but not a tabulated r_c(phi)."""
+        equidistant, offset and rotation modifications and the lobe rotations (then a sixth entry, the
+        tuple of z_g lobe rotations [rad]) but not a tabulated r_c(phi)."""
         if self.radial_mod_table is not None:
             raise RvtoolInputError("search = 'analytic' does not support radial_mod_table; valid: search = 'discrete' "
                                    "for a tabulated generating-radius modification")
-        return (self.R, self.K1, float(self.n_pins), self.pin_radius + self.equidistant_mod, self.rotation_mod)
+        base = (self.R, self.K1, float(self.n_pins), self.pin_radius + self.equidistant_mod, self.rotation_mod)
+        if self.lobe_rotations is None:
+            return base
+        return base + (tuple(float(x) for x in self.lobe_rotations),)
 
 
 def _length(v):
@@ -221,14 +261,18 @@ def _trig(phi, n_pins):
 
 
 _UNDERCUT_CHECKED = {}
-"""Profiles (their fields but the rotation) whose undercut check passed, per process."""
+"""Profiles (their fields but the rotations) whose undercut check passed, per process."""
+
+_TURNS = ("rotation_mod", "lobe_rotations")
+"""The profile's rigid turns (of the whole profile, of each lobe): they change neither its curvature nor its
+unturned points, so the process caches key a profile without them."""
 
 
 def _checked_undercut(profile):
     """:meth:`CycloidProfile._check_undercut`, once per profile up to its rotation (which does not change
     the curvature: the wheels of one reducer, turned to their phases, and the profile rebuilt for the
     dense points check it once)."""
-    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name != "rotation_mod")
+    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name not in _TURNS)
     try:
         if key in _UNDERCUT_CHECKED:
             return
@@ -286,18 +330,34 @@ def _dense_units(K1, n_pins, n_dense):
 
 
 def _dense_points(profile, n_dense):
-    """(dense grid, the profile's points on it) of :meth:`CycloidProfile.table`: bit for bit what
-    ``profile.points(np.linspace(0, 2 pi, n_dense, endpoint=False))`` gives (the same operations
+    """(dense grid, the profile's points on it, its lobes unturned) of :meth:`CycloidProfile.table`: bit for bit
+    what ``profile.points(np.linspace(0, 2 pi, n_dense, endpoint=False))`` gives without lobe rotations (the same operations
     on the same numbers; tests/test_cycloid_table.py), the grid's trigonometry and the unrotated
     points kept between calls (:func:`_dense_trig`, :func:`_dense_unrotated`; ~2/3 of a table's
     time on RD-40 variants, whose profiles differ per variant and per wheel)."""
-    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name != "rotation_mod")
+    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name not in _TURNS)
     try:
         hash(key)
     except TypeError:                     # an unhashable member (a list table): computed here
         dense = np.linspace(0, 2 * np.pi, n_dense, endpoint=False)
-        return dense, profile.points(dense)
+        return dense, profile._rotate(profile._unrotated_points(dense, _trig(dense, profile.n_pins)))
     return _dense_trig(n_dense, profile.n_pins)[0], profile._rotate(_dense_unrotated(key, n_dense))
+
+
+def lobe_pitch_rotations(profile: CycloidProfile, single_pitch_deviations):
+    """Lobe rotations [rad] (``CycloidProfile.lobe_rotations``) of a wheel whose lobes carry the single pitch
+    deviations f_j [m] (f_j between lobe j-1 and lobe j, z_g entries summing to zero) on the reference circle of
+    radius r = R_z z_g / z_b (the wheel as a gear of the pin ring's module 2 R_z / z_b): lobe j sits off its
+    nominal place by the accumulated pitch deviation s_j = f_0 + ... + f_j minus the mean of s (no rigid turn of
+    the wheel), along the direction of increasing lobe index (clockwise: the profile runs clockwise for
+    increasing phi), i.e. turned by -s_j / r."""
+    f = np.asarray(single_pitch_deviations, float)
+    if f.shape != (profile.n_teeth,):
+        raise RvtoolInputError(f"lobe single pitch deviations must have shape ({profile.n_teeth},); got {f.shape}")
+    s = np.cumsum(f)
+    s = s - s.mean()
+    r = profile.pin_circle_radius * profile.n_teeth / profile.n_pins
+    return tuple(float(x) for x in -s / r)
 
 
 def pin_centres(profile: CycloidProfile, pin_centre_errors=None):
