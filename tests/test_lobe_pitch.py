@@ -44,28 +44,46 @@ def rv80e():
     return rvtool.load_design("rv80e")
 
 
-def test_each_lobe_turns_about_the_wheel_centre():
-    """points() and the table turn each sample by its own lobe's angle (lobe j: phi in [2 pi j / z_g, ...))."""
+def test_each_pitch_unit_turns_about_the_wheel_centre():
+    """points() and the table turn each sample by its pitch unit's angle (unit j: the tooth space about the root
+    at phi = 2 pi j / z_g, from tip to tip), blended linearly within 5 % of the pitch about the tips (continuous)."""
     pr = _profile()
-    lob = _lobes(pr.n_teeth)
+    zg = pr.n_teeth
+    lob = _lobes(zg)
     pt = dataclasses.replace(pr, lobe_rotations=lob)
-    phi = np.random.default_rng(0).uniform(0, 2 * np.pi, 200)
-    j = np.floor(phi * pr.n_teeth / (2 * np.pi)).astype(int)
-    a = np.asarray(lob)[j]
+    phi = np.random.default_rng(0).uniform(0, 2 * np.pi, 400)
+    u = phi * zg / (2 * np.pi) + 0.5
+    j, t = np.floor(u).astype(int) % zg, u - np.floor(u)
+    inner = np.abs(t - 0.5) < 0.45
+    d, dd = pt.lobe_turn(phi)
+    assert np.array_equal(d[inner], np.asarray(lob)[j[inner]]) and not np.any(dd[inner])
     p0 = pr.points(phi)
-    turned = np.column_stack([np.cos(a) * p0[:, 0] - np.sin(a) * p0[:, 1], np.sin(a) * p0[:, 0] + np.cos(a) * p0[:, 1]])
+    turned = np.column_stack([np.cos(d) * p0[:, 0] - np.sin(d) * p0[:, 1], np.sin(d) * p0[:, 0] + np.cos(d) * p0[:, 1]])
     np.testing.assert_allclose(pt.points(phi), turned, rtol=0, atol=1e-15)
-    n = 30 * pr.n_teeth
+    # continuous at every tip (t = 0 / 1): both units meet at the mean of their rotations
+    tips = 2 * np.pi * (np.arange(zg) + 0.5) / zg
+    for eps in (1e-9, -1e-9):
+        np.testing.assert_allclose(pt.lobe_turn(tips + eps)[0], 0.5 * (np.asarray(lob) + np.roll(lob, -1)),
+                                   rtol=0, atol=1e-11)        # slope ~3e-3 over eps
+    # d' is the slope of d (central differences inside a blend)
+    ph = tips + 0.02 * 2 * np.pi / zg
+    h = 1e-7
+    np.testing.assert_allclose(pt.lobe_turn(ph)[1], (pt.lobe_turn(ph + h)[0] - pt.lobe_turn(ph - h)[0]) / (2 * h),
+                               rtol=1e-6)
+    n = 30 * zg
     t0, t1 = pr.table(n), pt.table(n)
     order0, order1 = np.argsort(t0[5]), np.argsort(t1[5])       # the same generating angles, matched
     assert np.array_equal(t0[5][order0], t1[5][order1])
-    a = np.asarray(lob)[pt.lobe_index(t1[5][order1])]
-    c, s = np.cos(a), np.sin(a)
-    P0, N0 = t0[0][order0], t0[1][order0]
+    d = pt.lobe_turn(t1[5][order1])[0]
+    c, s = np.cos(d), np.sin(d)
+    P0 = t0[0][order0]
     np.testing.assert_allclose(t1[0][order1], np.column_stack([c * P0[:, 0] - s * P0[:, 1], s * P0[:, 0] + c * P0[:, 1]]),
                                rtol=0, atol=1e-15)
-    np.testing.assert_allclose(t1[1][order1], np.column_stack([c * N0[:, 0] - s * N0[:, 1], s * N0[:, 0] + c * N0[:, 1]]),
-                               rtol=0, atol=1e-13)
+    # normals: the turned curve's (finite differences of the turned points)
+    ph = t1[5][order1]
+    tang = (pt.points(ph + 1e-7) - pt.points(ph - 1e-7))
+    tang /= np.linalg.norm(tang, axis=1)[:, None]
+    np.testing.assert_allclose(t1[1][order1], np.column_stack([-tang[:, 1], tang[:, 0]]), rtol=0, atol=1e-6)
     assert np.array_equal(t1[2][order1], t0[2][order0])                                   # curvature unchanged
     assert np.all(np.diff(t1[3]) >= 0)                                                    # sorted by polar angle
 
@@ -91,19 +109,18 @@ def test_equal_lobe_rotations_are_the_rotation_modification():
 
 
 def test_analytic_search_finds_the_closest_point_of_the_turned_lobe():
-    """Pins off the lobe boundaries (> 1/8 lobe from a root): the analytic path's contact point is the closest
-    point of the turned lobe (brute force over that lobe, 2e5 points: chordal error < 1e-12 m)."""
+    """The analytic path's contact point is the closest point of the turned profile, blends included (brute force
+    over 2e6 points: chordal error < 1e-12 m)."""
     from scipy.spatial import cKDTree
     pr = dataclasses.replace(_profile(equidistant_mod=1e-5), lobe_rotations=_lobes(39))
     zg, tab = pr.n_teeth, pr.table(30 * pr.n_teeth)
     rng = np.random.default_rng(2)
-    j = 7
-    phi = 2 * np.pi / zg * (j + rng.uniform(0.125, 0.875, 40))
-    _, nn, _, _ = ref.analytic_point(pr.analytic_parameters()[:4] + (pr.lobe_rotations[j],), phi)
-    p = pr.points(phi) + 0.003 * nn + rng.normal(0, 1e-6, (40, 2))
+    phi = rng.uniform(0, 2 * np.pi, 100)
+    d, dd = pr.lobe_turn(phi)
+    _, nn, _, _ = ref.analytic_point_turned(pr.analytic_parameters()[:5], d, dd, phi)
+    p = pr.points(phi) + 0.003 * nn + rng.normal(0, 1e-6, (100, 2))
     c = ref.search(tab, p, 40, pr.analytic_parameters())[0]
-    lobe = pr.points(2 * np.pi / zg * (j + np.linspace(0.0, 1.0, 200_000, endpoint=False)))
-    dist, _ = cKDTree(lobe).query(p)
+    dist, _ = cKDTree(pr.points(np.linspace(0, 2 * np.pi, 2_000_000, endpoint=False))).query(p)
     assert np.max(np.abs(np.linalg.norm(p - c, axis=1) - dist)) < 1e-10
 
 
@@ -220,8 +237,8 @@ def test_once_around_pitch_deviation_gives_the_closed_form_te(rv80e):
     r = e z_g sin(phi) / S, S = sqrt(1 - 2 K1 cos(phi) + K1^2) (the normal passes through the pitch point), and
     a wheel rotation theta moves its gap by -theta r; a lobe turned by d_j moves it by -d_j r. With every pin of
     r > 0 loaded, T = k sum r^2 (theta + d_j) so the TE moves by -sum r^2 d_j / sum r^2 (the lobe j of each pin is
-    that of its generating angle a_k - chi / z_g at input angle chi). For an accumulated pitch s_j = A sin(2 pi
-    (j + 1/2) / z_g + psi) (d_j = -s_j / r_ref, r_ref = R_z z_g / z_b) the first harmonic of the TE, at z_b / z_g
+    that of its generating angle a_k - chi / z_g at input angle chi, the rotation there the profile's
+    lobe_turn: its unit's, blended near the tips). For an accumulated pitch s_j = A sin(2 pi j / z_g + psi) (d_j = -s_j / r_ref, r_ref = R_z z_g / z_b) the first harmonic of the TE, at z_b / z_g
     per input revolution, has the amplitude (A / r_ref) sinc(pi / z_g) C1 in the continuum of pins, with
     C1 = |I_c + i I_s| / (pi / 2), I_c = pi K1 / 4, I_s = (1 + K1^2) / (2 K1^2) - (1 - K1^2)^2 / (4 K1^3)
     ln((1 + K1) / (1 - K1)) (the integrals of r^2 cos(phi), r^2 sin(phi) over the loaded half; -> 8 / (3 pi) for
@@ -235,7 +252,7 @@ def test_once_around_pitch_deviation_gives_the_closed_form_te(rv80e):
     r_ref = R * zg / zb
     A, psi, k, T = 1e-7, 0.7, 2e8, 50.0
     j = np.arange(zg)
-    s = A * np.sin(2 * np.pi * (j + 0.5) / zg + psi)
+    s = A * np.sin(2 * np.pi * j / zg + psi)                         # at each unit's root
     f = s - np.roll(s, 1)                                             # f_j = s_j - s_(j-1)
     lob = np.asarray(lobe_pitch_rotations(pr, f))
     np.testing.assert_allclose(lob, -s / r_ref, rtol=0, atol=1e-12 * A / r_ref)
@@ -249,7 +266,7 @@ def test_once_around_pitch_deviation_gives_the_closed_form_te(rv80e):
         out = []
         for chi in chis:
             x, y = journal_centre(e, 0.0, chi)
-            th = -chi / zg
+            th = -chi / zg + 5e-6        # a little into the load (~T / (k sum r^2)): some contact carries stiffness
             for _ in range(30):
                 ev = st.evaluate(np.array([[x, y, th]]), np.zeros((1, 3)))
                 step = -(ev.Q[2] - T) / ev.dQdq[2, 2]
@@ -260,15 +277,16 @@ def test_once_around_pitch_deviation_gives_the_closed_form_te(rv80e):
             out.append(th + chi / zg)
         return np.array(out)
 
-    d_te = te(dataclasses.replace(pr, lobe_rotations=tuple(lob))) - te(pr)
+    prof_dev = dataclasses.replace(pr, lobe_rotations=tuple(lob))
+    d_te = te(prof_dev) - te(pr)
     a = 2 * np.pi * np.arange(zb) / zb
     pred = []
     for chi in chis:
         phi = a + chi
         r = e * zg * np.sin(phi) / np.sqrt(1 - 2 * K1 * np.cos(phi) + K1 ** 2)
-        lobe = np.mod(np.floor(np.mod(a - chi / zg, 2 * np.pi) * zg / (2 * np.pi)).astype(int), zg)
+        turn = prof_dev.lobe_turn(np.mod(a - chi / zg, 2 * np.pi))[0]        # the input field at each contact
         on = r > 0
-        pred.append(-np.sum(r[on] ** 2 * lob[lobe[on]]) / np.sum(r[on] ** 2))
+        pred.append(-np.sum(r[on] ** 2 * turn[on]) / np.sum(r[on] ** 2))
     assert np.max(np.abs(d_te - np.array(pred))) < 1e-3 * A / r_ref
     w = zb / zg
     c = np.linalg.lstsq(np.column_stack([np.cos(w * chis), np.sin(w * chis), np.ones_like(chis)]), d_te, rcond=None)[0]

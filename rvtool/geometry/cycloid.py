@@ -13,16 +13,18 @@ coefficient (e_g the nominal generating eccentricity), z_b = z_g + 1 the pin
 count and r_c the generating radius. Modifications (all lengths in m):
 equidistant (r_c = r_p + delta_eq), offset (R_z -> R_z + delta_off),
 rotation (the profile turned by delta_rot [rad]), a tabulated radial
-modification r_c(phi) = r_c + table(phi), and lobe-by-lobe rotations (lobe j,
-the tooth from the root at phi = 2 pi j / z_g to the next, turned about the
-wheel centre by its own angle: the wheel's accumulated pitch deviations,
-issue 30). The nominal generating eccentricity and the assembly eccentricity
+modification r_c(phi) = r_c + table(phi), and lobe-by-lobe rotations (pitch
+unit j, the tooth space about the root at phi = 2 pi j / z_g from tip to tip,
+turned about the wheel centre by its own angle: the wheel's accumulated pitch
+deviations, issue 30). The nominal generating eccentricity and the assembly eccentricity
 are separate inputs.
 """
 import functools
 from dataclasses import dataclass, field, fields
 
 import numpy as np
+
+from warp_contacts.cycloid_pins_ref import lobe_turn
 
 from ..errors import RvtoolInputError
 from ..units import angle_field, angle_table_field
@@ -40,9 +42,10 @@ class CycloidProfile:
     rotation_mod: delta_rot [rad], profile rotation about the wheel centre.
     radial_mod_table: optional (phi [rad], delta_r [m]) pairs of a tabulated
     generating-radius modification, periodic over one tooth (2 pi / z_g).
-    lobe_rotations: optional rotation [rad] of each lobe about the wheel centre, z_g entries (lobe j: the
-    generating angles phi in [2 pi j / z_g, 2 pi (j + 1) / z_g), from the root at phi = 2 pi j / z_g through the
-    tip to the next root): the accumulated pitch deviation of each lobe as an angle. Not a design-file key (the
+    lobe_rotations: optional rotation [rad] of each pitch unit about the wheel centre, z_g entries (unit j: the
+    tooth space about the root at phi = 2 pi j / z_g with its two flanks, from tip to tip, as an indexed grinding
+    pass places it; two units blend within 5 % of the pitch about the tip between them, :meth:`lobe_turn`): the
+    accumulated pitch deviation of each unit as an angle. Not a design-file key (the
     design gives ``wheels.lobe_pitch_deviations`` per wheel, :func:`lobe_pitch_rotations`); None: every lobe at
     its nominal place (the profile as before, bit for bit).
     """
@@ -135,20 +138,37 @@ class CycloidProfile:
         phi = np.asarray(phi, float)
         return self._turn_lobes(phi, self._rotate(self._unrotated_points(phi, _trig(phi, self.n_pins))))
 
-    def lobe_index(self, phi):
-        """Lobe j of generating angle(s) phi [rad]: floor(phi z_g / 2 pi) mod z_g (lobe j from the root at
-        2 pi j / z_g to the next root; the same rule as the contact kernel's analytic search)."""
-        zg = self.n_teeth
-        return np.mod(np.floor(np.asarray(phi, float) * zg / (2 * np.pi)).astype(np.int64), zg)
+    def lobe_turn(self, phi):
+        """(d(phi), d'(phi)) [rad, rad/rad]: the lobe rotation of the profile point of generating angle phi and
+        its derivative (:func:`warp_contacts.cycloid_pins_ref.lobe_turn`: pitch unit j, the tooth space about the
+        root at phi = 2 pi j / z_g from tip to tip, turns by ``lobe_rotations[j]``; two units blend linearly within
+        5 % of the pitch about the tip between them); zeros without lobe rotations."""
+        if self.lobe_rotations is None:
+            z = np.zeros_like(np.asarray(phi, float))
+            return z, z
+        return lobe_turn(self.lobe_rotations, phi)
 
     def _turn_lobes(self, phi, xy):
-        """``xy`` (points or vectors of generating angles phi) turned by their lobe's rotation; unchanged (the
+        """``xy`` (points or vectors of generating angles phi) turned by their lobe rotation d(phi); unchanged (the
         same array) without lobe rotations."""
         if self.lobe_rotations is None:
             return xy
-        a = np.asarray(self.lobe_rotations, float)[self.lobe_index(phi)]
+        a = self.lobe_turn(phi)[0]
         c, s = np.cos(a), np.sin(a)
         return np.stack([c * xy[..., 0] - s * xy[..., 1], s * xy[..., 0] + c * xy[..., 1]], axis=-1)
+
+    def _turned_tangents(self, phi, pts, dE, ddE):
+        """Unit tangents of the lobe-turned curve at generating angles phi from the unturned points ``pts`` and
+        the epitrochoid's derivatives: R(d) (c_0' + d' J c_0) normalised (c_0' = ds/dphi dE/|dE|), turned by the
+        profile rotation and d; where d' = 0 the unturned tangent turned (as without the blend)."""
+        speed = _length(dE)
+        tau = dE / speed[..., None]
+        kE = -(dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]) / speed ** 3
+        ds = speed * (1.0 - self.generating_radius(phi) * kE)
+        d, dd = self.lobe_turn(phi)
+        v = ds[..., None] * tau + dd[..., None] * np.stack([-pts[..., 1], pts[..., 0]], axis=-1)
+        t = np.where((dd != 0.0)[..., None], v / _length(v)[..., None], tau)
+        return self._turn_lobes(phi, self._rotate(t))
 
     def _unrotated_points(self, phi, trig, epi=None):
         """:meth:`points` before the rotation, from the angles' :func:`_trig` (the same operations;
@@ -222,9 +242,13 @@ class CycloidProfile:
         # operations as points(), epitrochoid() and curvature_of_points())
         trig = _trig(phi, self.n_pins)
         epi = self._epitrochoid(trig)
-        pts = self._turn_lobes(phi, self._rotate(self._unrotated_points(phi, trig, epi)))
+        unturned = self._unrotated_points(phi, trig, epi)
+        pts = self._turn_lobes(phi, self._rotate(unturned))
         _, dE, ddE = epi
-        tang = self._turn_lobes(phi, self._rotate(dE / _length(dE)[..., None]))
+        if self.lobe_rotations is None:
+            tang = self._rotate(dE / _length(dE)[..., None])
+        else:
+            tang = self._turned_tangents(phi, unturned, dE, ddE)
         # outward normal: the curve runs clockwise, so the outward normal is the tangent turned by +90 deg
         nrm = np.stack([-tang[..., 1], tang[..., 0]], axis=-1)
         kap = self._curvature(phi, dE, ddE)
