@@ -304,3 +304,19 @@ def test_lobe_rotations_are_not_a_design_file_key(rv80e):
         rv80e.replace(profile={"lobe_rotations": [0.0] * 39})
     doc = format_doc()
     assert "`lobe_rotations`" not in doc and "`lobe_pitch_deviations` | m |" in doc
+
+
+def test_device_profile_tables_leave_lobed_profiles_to_the_host():
+    """The device table kernels (warp_contacts.profile_tables) compute no lobe rotations: a deferred table of a
+    lobed profile is left to the host (computed where read, with its lobes), a plain one is computed on the
+    device; nothing is dropped silently."""
+    from rvtool.contact.cycloid_set import ProfileTable, _shared_entry, compute_profile_tables
+    pr = _profile()
+    lobed = dataclasses.replace(pr, lobe_rotations=_lobes(pr.n_teeth))
+    tabs = [ProfileTable(p, 8 * pr.n_teeth, "analytic", 0.05, 0.01) for p in (pr, lobed)]
+    assert not any(t.computed for t in tabs)
+    assert compute_profile_tables(tabs, "cpu") == 1
+    assert tabs[0].computed and not tabs[1].computed
+    host = _shared_entry(*tabs[1].key)
+    assert all(np.array_equal(a, b) for a, b in zip(tabs[1].entry[0], host[0]))
+    assert len(tabs[1].entry[1]) == 6 and tabs[1].entry[1][5] == lobed.lobe_rotations      # the analytic row's lobes
