@@ -320,3 +320,16 @@ def test_device_profile_tables_leave_lobed_profiles_to_the_host():
     host = _shared_entry(*tabs[1].key)
     assert all(np.array_equal(a, b) for a, b in zip(tabs[1].entry[0], host[0]))
     assert len(tabs[1].entry[1]) == 6 and tabs[1].entry[1][5] == lobed.lobe_rotations      # the analytic row's lobes
+
+
+def test_lobe_pitch_grade_follows_the_cited_formula(rv80e):
+    """wheel_lobe_pitch_deviation of rv80e_tolerances.toml: 3 std = f_pT of ISO 1328-1:2013 class 5, (0.001 d + 0.4 m
+    + 5) um rounded to 0.5 um, of the analogue gear m = 2 R_z / z_b, z = z_g (std written to 4 digits)."""
+    import tomllib
+    with open(designs.path("rv80e_tolerances"), "rb") as fh:
+        t = tomllib.load(fh)["tolerances"]["wheel_lobe_pitch_deviation"]
+    m = 2e3 * rv80e.pins.pin_circle_radius / rv80e.pins.n_pins
+    d = m * (rv80e.pins.n_pins - 1)
+    f_pt = round(2 * (0.001 * d + 0.4 * m + 5.0)) / 2
+    assert t["dist"] == "normal" and t["mean"] == 0.0
+    assert 3 * t["std"] * 1e6 == pytest.approx(f_pt, abs=2e-3) and f_pt == 6.5
