@@ -423,8 +423,8 @@ def compute_profile_tables(tables, device="cpu", group=None):
     (:func:`warp_contacts.profile_tables.profile_tables`: the host's operations, equal to its tables to
     rounding: on the cpu bit for bit but for ~1 ulp of the curvature and the key; the device's own sine
     and cosine on a GPU), and give them to every object of that key (:meth:`ProfileTable.provide`).
-    Profiles with a tabulated radial modification, and a table whose polar angle or key is not monotone
-    (checked on the device), are left to the host (computed where first read). The columns stay on the
+    Profiles with a tabulated radial modification or lobe rotations (the device kernels compute neither), and a
+    table whose polar angle or key is not monotone (checked on the device), are left to the host (computed where first read). The columns stay on the
     device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there copies them, nothing is read
     back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
     computed on the device."""
@@ -436,7 +436,7 @@ def compute_profile_tables(tables, device="cpu", group=None):
     batches = {}
     for key in todo:
         prof, n, _, band, slack = key
-        if prof.radial_mod_table is None:
+        if prof.radial_mod_table is None and prof.lobe_rotations is None:
             batches.setdefault((n, band + slack * (1.0 + band)), []).append(key)
     if group is None:
         group = DEVICE_TABLE_GROUP["cpu" if str(device).startswith("cpu") else "cuda"]

@@ -359,6 +359,7 @@ class RVDesign:
         if zg != self.pins.n_pins - 1:
             raise RvtoolInputError(f"wheels.n_teeth = {zg} with pins.n_pins = {self.pins.n_pins}: only Z_pins = "
                                    f"Z_wheel + 1 is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
+        self.wheels.check_lobes(zg)
         if self.ratio_target is not None:
             check_positive("ratio_target", abs(self.ratio_target))
         self.housing.check_pin_ring(self.pins)
