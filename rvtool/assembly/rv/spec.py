@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...bearings.spec import AngularContactPair, BallBearing, NeedleBearing
-from ...bearings.tapered import TaperedPair
+from ...bearings.tapered import TaperedPair, TaperedRollerBearing
 from ...errors import RvtoolInputError
 from ...units import angle_field
 from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
@@ -469,10 +469,13 @@ def _main_bearing(data):
     """The AngularContactPair from ``[main_bearing]`` with its two rows as ``[[main_bearing.rows]]``
     tables (each a BallBearing spec), one ``[main_bearing.row]`` table for both, or the rows' keys
     in the pair's table (:func:`_flat_rows`)."""
-    data = _flat_rows(AngularContactPair, _table("main_bearing", data))
+    table = _table("main_bearing", data)
+    data = _flat_rows(AngularContactPair, table)
     if "row" in data:
-        table = data.pop("row")
-        data["rows"] = [table, table]
+        # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
+        name = "main_bearing" if "row" not in table else "main_bearing.row"
+        row = build_section(BallBearing, name, _table(name, data.pop("row")))
+        data["rows"] = (row, row)
     rows = data.get("rows")
     if not (isinstance(rows, (list, tuple)) and len(rows) == 2):
         raise RvtoolInputError(f"main_bearing.rows must hold 2 row tables (BallBearing specs); got {rows!r}")
@@ -485,9 +488,13 @@ def _main_bearing(data):
 def _crank_bearing(data):
     """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables,
     or the rows' keys in the pair's table (:func:`_flat_rows`)."""
-    data = _flat_rows(TaperedPair, _table("crank_bearing", data))
+    table = _table("crank_bearing", data)
+    data = _flat_rows(TaperedPair, table)
     if "row" in data:
-        data["row"] = _table("crank_bearing.row", data["row"])
+        # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
+        name = "crank_bearing" if "row" not in table else "crank_bearing.row"
+        row = TaperedRollerBearing.from_mapping(_table(name, data.pop("row")), name)
+        data["rows"] = (row, row)
     if isinstance(data.get("rows"), (list, tuple)):
         data["rows"] = [r if not isinstance(r, dict) else _table(f"crank_bearing.rows[{k}]", r)
                         for k, r in enumerate(data["rows"])]

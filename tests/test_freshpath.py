@@ -1,0 +1,71 @@
+"""The newcomer's path, walked again in a fresh virtual environment (helper "freshpath", session 5):
+`rvtool new` for each topology, one wrong key each, `rvtool analyze --quick`, the report and its
+plots. Each test failed before its fix (the message or behaviour quoted in its docstring)."""
+import os
+import re
+import stat
+import tomllib
+
+import pytest
+
+import rvtool
+from rvtool.designs.format import template
+from rvtool.errors import RvtoolInputError
+from rvtool.validation import check_range
+
+
+def _load(tmp_path, table):
+    import tomlkit
+    p = tmp_path / "mine.toml"
+    p.write_text(tomlkit.dumps(table))
+    return rvtool.load_design(str(p))
+
+
+@pytest.mark.parametrize("topology", ["rv2", "rv3"])
+@pytest.mark.parametrize("section, key, value, shown", [
+    ("crank_bearing", "n_rollers", 25, r"25 is outside the valid range \[3, 19\] \(integer\)"),
+    ("crank_bearing", "roller_length", -0.01, r"-0\.01 is outside the valid range \(0\.0, inf\)"),
+    ("main_bearing", "n_balls", 1, r"1 is outside the valid range \[3, 1000\] \(integer\)"),
+    ("main_bearing", "contact_angle_deg", 120.0, r"120 is outside the valid range \[0, 90\) deg")])
+def test_rv_bearing_row_keys_are_named_as_the_template_writes_them(topology, section, key, value, shown, tmp_path):
+    """The RV template writes the bearing pairs' row keys flat in ``[crank_bearing]`` and
+    ``[main_bearing]``; before, a wrong one was reported under a key the file does not have:
+    ``crank_bearing.rows[0].n_rollers = 25 is outside the valid range [3, 19] (integer)``."""
+    table = tomllib.loads(template(topology, name="mine"))
+    assert key in table[section] and "rows" not in table[section]      # the flat form, as written
+    table[section][key] = value
+    with pytest.raises(RvtoolInputError, match=rf"^{section}\.{key} = {shown}$"):
+        _load(tmp_path, table)
+
+
+def test_rv_bearing_row_table_errors_name_that_table(tmp_path):
+    """One ``[crank_bearing.row]`` table for both rows: the error names ``crank_bearing.row.KEY``;
+    explicit ``rows`` tables keep ``crank_bearing.rows[k].KEY``."""
+    table = tomllib.loads(template("rv2", name="mine"))
+    pair = table["crank_bearing"]
+    own = {"row_spacing", "arrangement", "axial_preload", "end_play"}
+    row = {k: v for k, v in pair.items() if k not in own}
+    table["crank_bearing"] = {**{k: v for k, v in pair.items() if k in own}, "row": {**row, "n_rollers": 2}}
+    with pytest.raises(RvtoolInputError, match=r"^crank_bearing\.row\.n_rollers = 2 is outside"):
+        _load(tmp_path, table)
+    table["crank_bearing"] = {**{k: v for k, v in pair.items() if k in own}, "rows": [row, {**row, "n_rollers": 2}]}
+    with pytest.raises(RvtoolInputError, match=r"^crank_bearing\.rows\[1\]\.n_rollers = 2 is outside"):
+        _load(tmp_path, table)
+
+
+def test_a_number_out_of_range_is_shown_as_written():
+    """Before: ``pins.pin_radius = [-0.003] is outside the valid range (0.0, inf)``: the user wrote a
+    number and read back a one-element list. A list keeps its list form (its first bad values)."""
+    with pytest.raises(RvtoolInputError, match=r"^pin_radius = -0\.003 is outside the valid range \(0\.0, inf\)$"):
+        check_range("pin_radius", -0.003, 0.0, low_open=True)
+    with pytest.raises(RvtoolInputError, match=r"^n = 7 is outside the valid range \[0, 5\]$"):
+        check_range("n", 7, 0, 5)
+    with pytest.raises(RvtoolInputError, match=r"^midplanes = \[-1\.0, -2\.0\] is outside"):
+        check_range("midplanes", [0.5, -1.0, -2.0], 0.0)
+
+
+def test_cycloid_template_negative_pin_radius_message(tmp_path):
+    table = tomllib.loads(template("cycloid", name="mine"))
+    table["pins"]["pin_radius"] = -0.003
+    with pytest.raises(RvtoolInputError, match=r"^pins\.pin_radius = -0\.003 is outside the valid range \(0\.0, inf\)$"):
+        _load(tmp_path, table)
