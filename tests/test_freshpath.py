@@ -69,3 +69,18 @@ def test_cycloid_template_negative_pin_radius_message(tmp_path):
     table["pins"]["pin_radius"] = -0.003
     with pytest.raises(RvtoolInputError, match=r"^pins\.pin_radius = -0\.003 is outside the valid range \(0\.0, inf\)$"):
         _load(tmp_path, table)
+
+
+@pytest.mark.parametrize("topology", ["cycloid", "rv2", "rv3", "std-involute"])
+def test_template_lists_the_choices_of_every_choice_key(topology):
+    """Before: ``law = "power" # valid: text``, ``slices = "laminae" # valid: text``,
+    ``arrangement = "back_to_back" # valid: text``: the template's range probe read the choices from
+    "valid choices are [...]" but not from :func:`rvtool.validation.check_choice`'s "is not one of
+    the valid choices [...]", so every key validated that way was offered as free text. Only the
+    labels (``name``) are free text."""
+    from rvtool.designs.format import key_table
+    free = [(sec, key) for sec, key, value, unit, rng, meaning, required in key_table(topology) if rng == "text"]
+    assert all(key == "name" for sec, key in free), free
+    rows = {(sec, key): rng for sec, key, value, unit, rng, meaning, required in key_table(topology)}
+    assert rows[("eccentric_bearing", "law")] == "one of ['power', 'linear']"
+    assert rows[("eccentric_bearing", "slices")] == "one of ['laminae', 'influence']"
