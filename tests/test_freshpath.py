@@ -2,7 +2,6 @@
 `rvtool new` for each topology, one wrong key each, `rvtool analyze --quick`, the report and its
 plots. Each test failed before its fix (the message or behaviour quoted in its docstring)."""
 import os
-import re
 import stat
 import tomllib
 
@@ -84,3 +83,22 @@ def test_template_lists_the_choices_of_every_choice_key(topology):
     rows = {(sec, key): rng for sec, key, value, unit, rng, meaning, required in key_table(topology)}
     assert rows[("eccentric_bearing", "law")] == "one of ['power', 'linear']"
     assert rows[("eccentric_bearing", "slices")] == "one of ['laminae', 'influence']"
+
+
+def test_results_and_sweep_tables_are_written_with_the_usual_file_mode(tmp_path):
+    """Before: ``-rw------- results.json`` beside ``-rw-r--r-- report.html`` and the PNGs (the atomic
+    write went through tempfile.mkstemp, which creates 0600 whatever the umask): a shared results
+    folder or a web server could show the report but not its data. Now 0666 less the umask, as
+    any file the run writes; no temporary file is left behind."""
+    from rvtool.analysis.output import write_results
+    from rvtool.variants.sweep import write_table
+    mask = os.umask(0o022)
+    try:
+        write_results(str(tmp_path), {"passed": True})
+        paths = write_table([{"a": 1.0, "b": 2.0}], str(tmp_path / "sweep"))
+    finally:
+        os.umask(mask)
+    for p in [tmp_path / "results.json", *paths]:
+        assert stat.S_IMODE(os.stat(p).st_mode) == 0o644, p
+    assert sorted(os.listdir(tmp_path)) == ["results.json", "sweep"]
+    assert sorted(os.listdir(tmp_path / "sweep")) == ["results.csv", "results.json"]
