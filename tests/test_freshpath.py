@@ -102,3 +102,37 @@ def test_results_and_sweep_tables_are_written_with_the_usual_file_mode(tmp_path)
         assert stat.S_IMODE(os.stat(p).st_mode) == 0o644, p
     assert sorted(os.listdir(tmp_path)) == ["results.json", "sweep"]
     assert sorted(os.listdir(tmp_path / "sweep")) == ["results.csv", "results.json"]
+
+
+@pytest.mark.parametrize("name", ["rd40", "std_involute"])
+def test_section_plot_says_what_its_arrows_and_circles_are(name):
+    """Before: the report's section plot drew red and blue arrows with no legend entry and no scale
+    (a reader could not tell a 200 N pin load from a 2 kN bearing load), the RV section had no
+    legend at all, and the std-involute section drew each wheel's root circle in a colour of its
+    own, unlabelled (five circles, two named). Now every outline and arrow kind is in the legend,
+    each wheel's circles share its colour, and the arrow key gives the largest force."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    from matplotlib.quiver import QuiverKey
+    from rvtool.solver.static import StaticSolver
+    d = rvtool.load_design(name)
+    m = rvtool.build(d)
+    m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+    q = StaticSolver(m).solve(0.0)
+    fig, ax = plt.subplots()
+    try:
+        m.draw_section(ax, q)
+        labels = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert "contact force, main mesh" in labels and "contact force, other contacts" in labels
+        assert {"wheel 0", "wheel 1"} <= {lb.split(",")[0] for lb in labels}
+        keys = [a for a in ax.get_children() if isinstance(a, QuiverKey)]
+        peak = max(m.family_peaks(q).values())
+        assert len(keys) == 1 and keys[0].text.get_text() == f"{peak:.4g} N"
+        drawn = [ln for ln in ax.get_lines()]
+        unlabelled = {ln.get_color() for ln in drawn if ln.get_label().startswith("_")}
+        labelled = {ln.get_color() for ln in drawn if not ln.get_label().startswith("_")}
+        assert unlabelled <= labelled          # every outline's colour is in the legend
+    finally:
+        plt.close(fig)
