@@ -136,3 +136,41 @@ def test_section_plot_says_what_its_arrows_and_circles_are(name):
         assert unlabelled <= labelled          # every outline's colour is in the legend
     finally:
         plt.close(fig)
+
+
+def test_run_prints_the_case_verdict(tmp_path, monkeypatch, capsys):
+    """Before: ``rvtool run hard_rd40 --quick`` printed only ``results written to ...``: whether the
+    case passed its own criteria was in results.json alone."""
+    from rvtool import cli
+    folder = tmp_path / "cases" / "hard"
+    folder.mkdir(parents=True)
+    for name, passed in (("good", True), ("bad", False)):
+        (folder / f"{name}.py").write_text(
+            f'"""A case that writes passed = {passed}."""\n'
+            "from rvtool import casekit\n\n\n"
+            "def main(argv=None):\n"
+            "    args = casekit.parse_args(argv, __doc__)\n"
+            f"    return casekit.write_results(args.out, {{'passed': {passed}}})\n")
+    monkeypatch.setenv(cli.CASES_ENV, str(tmp_path / "cases"))
+    assert cli.main(["run", "good", "--out", str(tmp_path / "g")]) == 0
+    assert "good: passed = true" in capsys.readouterr().out
+    assert cli.main(["run", "bad", "--out", str(tmp_path / "b")]) == 0
+    assert "bad: passed = false" in capsys.readouterr().out
+
+
+def test_hard_case_plot_labels_do_not_overlap_the_neighbouring_panel(tmp_path, monkeypatch):
+    """Before: hard_<case>.png (``rvtool run hard_rd40``) had the pin-force and kinetic-energy y
+    labels drawn over the panel to their left (three panels, no layout engine), and no title."""
+    import matplotlib
+    matplotlib.use("Agg")
+    from rvtool import casekit
+    figs = []
+    monkeypatch.setattr(casekit, "save_figure", lambda fig, out, name: figs.append(fig))
+    casekit.hard_case("stiff100", rvtool.load_design("rd40"), True, str(tmp_path))
+    (fig,) = figs
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    ax = fig.axes
+    for left, right in zip(ax, ax[1:]):
+        assert right.yaxis.label.get_window_extent(r).x0 >= left.get_window_extent(r).x1
+    assert "stiff100" in fig.get_suptitle()
