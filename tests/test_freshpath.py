@@ -174,3 +174,29 @@ def test_hard_case_plot_labels_do_not_overlap_the_neighbouring_panel(tmp_path, m
     for left, right in zip(ax, ax[1:]):
         assert right.yaxis.label.get_window_extent(r).x0 >= left.get_window_extent(r).x1
     assert "stiff100" in fig.get_suptitle()
+
+
+def test_pressure_and_vibration_plots_say_what_they_show(tmp_path, monkeypatch):
+    """Before: the pressure plot's axis read ``x [um]`` and its title ``N = 513`` (neither said what
+    x or N is, nor which contact is drawn); the vibration plot's right panel had an unlabelled red
+    line and neither panel a title."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from rvtool.analysis import output
+    figs = {}
+
+    def keep(fig, out_dir, name):
+        figs[name] = [(a.get_xlabel(), a.get_ylabel(), a.get_title(),
+                       [t.get_text() for t in (a.get_legend().get_texts() if a.get_legend() else [])])
+                      for a in fig.axes]
+        plt.close(fig)
+        return str(tmp_path / f"{name}.png")
+    monkeypatch.setattr(output, "save_figure", keep)
+    rvtool.analyze("rv40e", "vibration,pressure", quick=True, out_dir=str(tmp_path))
+    ((xlabel, ylabel, title, _),) = figs["pressure"]
+    assert xlabel == "x, across the contact from its centre [\u00b5m]" and ylabel == "contact pressure [MPa]"
+    assert title.startswith("highest-pressure pin contact per wheel at 412") and title.endswith("panels)")
+    left, right = figs["vibration"]
+    assert left[2] and right[2]
+    assert "mesh" in right[3] and {"dynamic", "quasi-static"} <= set(right[3])

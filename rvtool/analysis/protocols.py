@@ -465,8 +465,10 @@ def run_vibration(ctx):
     ax[0].legend(fontsize=7)
     ax[1].semilogy(sp["orders"][1:], sp["order_spectrum"][1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8, label="dynamic")
     ax[1].semilogy(o_qs[1:], a_qs[1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8, label="quasi-static")
-    ax[1].axvline(mesh_order, color="r", ls="--", lw=0.8)
+    ax[1].axvline(mesh_order, color="r", ls="--", lw=0.8, label="mesh")
     ax[1].set(xlabel="input-shaft order [-]", ylabel="amplitude [arcsec]")
+    ax[0].set_title(f"driven run at {speed:g} rpm, {rated:g} N m", fontsize=10)
+    ax[1].set_title("order spectra, driven and quasi-static", fontsize=10)
     ax[1].legend(fontsize=7)
     out.plots.append(ctx.save(fig, "vibration"))
     return out
@@ -512,7 +514,8 @@ def run_pressure(ctx):
         out.data[member] = rec
         x, p = fields[-1]
         ax.plot(x * 1e6, p / 1e6, drawstyle="steps-mid", lw=0.8, label=f"{member}: {best.name}")
-    ax.set(xlabel="x [um]", ylabel="pressure [MPa]", title=f"pressure at {rated} N m, N = {ns[-1]}")
+    ax.set(xlabel="x, across the contact from its centre [\u00b5m]", ylabel="contact pressure [MPa]",
+           title=f"highest-pressure pin contact per wheel at {rated} N m ({ns[-1]} panels)")
     ax.legend(fontsize=7)
     out.plots.append(ctx.save(fig, "pressure"))
     out.settings = {"torque_Nm": rated, "input_angle_rad": 0.0, "panels": ns, "window_m": PRESSURE_WINDOW,
