@@ -200,3 +200,26 @@ def test_pressure_and_vibration_plots_say_what_they_show(tmp_path, monkeypatch):
     left, right = figs["vibration"]
     assert left[2] and right[2]
     assert "mesh" in right[3] and {"dynamic", "quasi-static"} <= set(right[3])
+
+
+def test_monte_carlo_plot_counts_whole_variants():
+    """Before: the Monte Carlo histograms of ``rvtool analyze rd40 --quick`` (4 variants) had the count
+    axis ticked 0.25, 0.5, 1.75 ... variants and said nowhere how many variants they hold.
+    (The p95 row's ``[11.917479595648889, None] (None: too few variants)`` is checked in
+    tests/test_monte_carlo_topologies.py, which runs the protocol.)"""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from rvtool.analysis.protocols import monte_carlo_histograms
+    records = [{"status": "ok", "te_pp_arcsec": te, "lost_motion_arcmin": lm}
+               for te, lm in ((8.4, 4.5), (11.1, 4.9), (12.0, 5.3), (12.3, 5.9))] + [{"status": "failed"}]
+    fig = monte_carlo_histograms(records)
+    try:
+        fig.canvas.draw()
+        for a in fig.axes:
+            lo, hi = a.get_ylim()
+            ticks = [t for t in a.get_yticks() if lo <= t <= hi]
+            assert len(ticks) >= 2 and all(float(t).is_integer() for t in ticks), ticks
+            assert a.get_title() == "4 of 5 variants" and a.get_ylabel() == "variants [-]"
+    finally:
+        plt.close(fig)

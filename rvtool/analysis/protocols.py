@@ -700,16 +700,25 @@ def run_monte_carlo(ctx):
         name = nm.rsplit("_", 1)[0]
         out.figures.append(Figure(f"{name}_mean", st["mean"], unit, f"mean of {nm} over {st['n']} variants", half, unit,
                                   "half-width of the 95 % Student-t confidence interval of the mean (sampling error)"))
+        ci = ", ".join("none (too few variants)" if b is None else f"{b:.4g}" for b in st["p95_ci"])
         out.figures.append(Figure(f"{name}_p95", st["p95"], unit, f"95th percentile of {nm}", None, unit,
-                                  f"95 % order-statistic interval {st['p95_ci']} (None: too few variants)"))
+                                  f"95 % order-statistic interval [{ci}] {unit}"))
     out.data = {"summary": s, "records": res["records"]}
     out.settings = settings
+    out.plots.append(ctx.save(monte_carlo_histograms(res["records"]), "monte_carlo"))
+    return out
+
+
+def monte_carlo_histograms(records):
+    """The Monte Carlo plot: histograms of TE p-p and lost motion over the variants of ``records``
+    (:func:`rvtool.variants.montecarlo.run_monte_carlo`'s, those with status "ok"); a matplotlib figure."""
     import matplotlib.pyplot as plt
-    ok = [r for r in res["records"] if r["status"] == "ok"]
+    from matplotlib.ticker import MaxNLocator
+    ok = [r for r in records if r["status"] == "ok"]
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.4))
     for a, nm, label in ((ax[0], "te_pp_arcsec", "TE p-p [arcsec]"), (ax[1], "lost_motion_arcmin", "lost motion [arcmin]")):
         x = [r[nm] for r in ok if r.get(nm) is not None]
         a.hist(x, bins=max(3, min(40, len(x) // 5)), color="0.6", edgecolor="k", lw=0.5)
-        a.set(xlabel=label, ylabel="variants")
-    out.plots.append(ctx.save(fig, "monte_carlo"))
-    return out
+        a.set(xlabel=label, ylabel="variants [-]", title=f"{len(x)} of {len(records)} variants")
+        a.yaxis.set_major_locator(MaxNLocator(integer=True))       # a count: no 0.5 variant
+    return fig
