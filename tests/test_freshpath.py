@@ -223,3 +223,29 @@ def test_monte_carlo_plot_counts_whole_variants():
             assert a.get_title() == "4 of 5 variants" and a.get_ylabel() == "variants [-]"
     finally:
         plt.close(fig)
+
+
+@pytest.mark.parametrize("topology, r_z", [("cycloid", "0.05"), ("rv2", "0.064")])
+def test_profile_offset_that_removes_the_pin_circle_names_the_key(topology, r_z, tmp_path):
+    """Before: ``profile.offset_mod = -0.05`` (= -R_z, "valid: any finite number" in the template)
+    was accepted; the profile's pin circle R_z + delta_off = 0 divided by zero (RuntimeWarnings, a NaN
+    profile). Now an error naming the key and (-R_z, inf), and the template says so."""
+    from rvtool.designs.format import key_table
+    table = tomllib.loads(template(topology, name="mine"))
+    table["profile"]["offset_mod"] = -float(r_z)
+    with pytest.raises(RvtoolInputError, match=rf"^profile\.offset_mod = -{r_z} is outside the valid range \(-{r_z}, inf\)"):
+        _load(tmp_path, table)
+    rows = {(sec, key): rng for sec, key, value, unit, rng, meaning, required in key_table(topology)}
+    assert rows[("profile", "offset_mod")] == f"(-{r_z}, inf)"
+
+
+def test_gear_shifts_without_a_working_pressure_angle_name_the_keys(tmp_path):
+    """Found by tests/test_design_fuzz.py's in-range template fuzz once the template's ranges grew:
+    ``crank_gear.profile_shift = -2.0`` (inside its own range [-2, 2]) stopped with
+    ``inv(alpha) = -0.0043 has no solution; valid range [0, inf)``, naming no key. The zero-backlash
+    pair bounds the sum of the two shifts; the error names both keys and that bound."""
+    table = tomllib.loads(template("rv2", name="mine"))
+    table["crank_gear"]["profile_shift"] = -2.0
+    with pytest.raises(RvtoolInputError, match=r"^sun_gear\.profile_shift \+ crank_gear\.profile_shift = -1\.9 is outside "
+                                               r"the valid range \(-1\.47418, inf\) for z = 18 and 54"):
+        _load(tmp_path, table)

@@ -22,7 +22,7 @@ from ...bearings.spec import AngularContactPair, BallBearing, NeedleBearing
 from ...bearings.tapered import TaperedPair, TaperedRollerBearing
 from ...errors import RvtoolInputError
 from ...units import angle_field
-from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
+from ...geometry.involute import BasicRack, FlankModification, InvoluteGear, InvolutePair
 from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
@@ -527,6 +527,19 @@ _OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input
 SET_BY_DESIGN = {g: ("name",) for g in ("sun_gear", "crank_gear", "input_pinion", "compound_gear")}
 
 
+def _checked_pair(a_key, gear_a, b_key, gear_b):
+    """Raise the zero-backlash pair's input errors of two design gears (e.g. no working pressure angle
+    for the profile shifts) in the design file's key paths, not the pair's gear_a / gear_b."""
+    try:
+        InvolutePair(gear_a=gear_a, gear_b=gear_b).a
+    except RvtoolInputError as exc:
+        msg = str(exc)
+        for old, new in (("gear_a's", f"{a_key}'s"), ("gear_b's", f"{b_key}'s"), ("gear_a.", f"{a_key}."),
+                         ("gear_b.", f"{b_key}.")):
+            msg = msg.replace(old, new)
+        raise RvtoolInputError(msg) from None
+
+
 def design_from_dict(d):
     """A validated :class:`RVDesign` from a design mapping (a parsed TOML file)."""
     from ..topologies import upgrade_table
@@ -540,6 +553,9 @@ def design_from_dict(d):
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
         kw[sec] = make(d.pop(sec))
     design = build_section(RVDesign, "design", {**d, **kw, "source": source})
+    _checked_pair("sun_gear", design.sun_gear, "crank_gear", design.crank_gear)
+    if design.input_pinion is not None and design.compound_gear is not None:
+        _checked_pair("input_pinion", design.input_pinion, "compound_gear", design.compound_gear)
     from .gear_graph import GearGraph
     graph = GearGraph.of(design)  # topology errors (spacing, crank count, declared ratio) at load
     from ..carrier import check_carrier
