@@ -365,6 +365,32 @@ def stacked_column(parts, ndtype, wdtype, device):
     return wp.array(np.concatenate(parts, axis=0, dtype=ndtype, casting="same_kind"), dtype=wdtype, device=device)
 
 
+def gathered_column(sources, wdtype, device):
+    """The device array of table columns that are rows of device arrays already: ``sources`` [(array
+    (T, n) or (T, n, 2) on ``device``, row t)], stacked along the samples by device copies (runs of
+    consecutive rows of one array in one copy), or None where a source is elsewhere or of another type
+    (the caller stacks host columns then)."""
+    dev = wp.get_device(device)
+    if not sources or any(x is None or x[0].device != dev or x[0].dtype != wdtype for x in sources):
+        return None
+    first = sources[0][0]
+    inner = first.shape[2] if first.ndim == 3 else 1
+    total = sum(a.shape[1] for a, _ in sources)
+    out = wp.empty((total, inner) if first.ndim == 3 else (total,), dtype=wdtype, device=device)
+    runs, dst = [], 0
+    for a, t in sources:
+        cnt = a.shape[1] * inner
+        src = int(t) * cnt
+        if runs and runs[-1][0] is a and runs[-1][1] + runs[-1][3] == src:
+            runs[-1][3] += cnt
+        else:
+            runs.append([a, src, dst, cnt])
+        dst += cnt
+    for a, src, at, cnt in runs:
+        wp.copy(out, a, dest_offset=at, src_offset=src, count=cnt)
+    return out
+
+
 class CycloidPinKernel(PairLaunch):
     """Device-resident evaluator of one cycloid--pin contact set (one launch per call)."""
 
@@ -379,14 +405,20 @@ class CycloidPinKernel(PairLaunch):
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
         self.n = len(fparams)
         dt = self.wdtype
-        lens = [len(tb[0]) for tb in tables]
+        # a table computed on this device (rvtool.contact.cycloid_set.ProfileTable.device_column) is copied
+        # there, not read back and stacked on the host
+        on_dev = all(callable(getattr(tb, "device_column", None)) for tb in tables)
+        lens = [tb.n_samples if on_dev else len(tb[0]) for tb in tables]
         offs = np.concatenate([[0], np.cumsum(lens)[:-1]]).astype(np.int32)
-        col = lambda i: stacked_column([tb[i] for tb in tables], self.ndtype, dt, d)
+
+        def col(i):
+            got = gathered_column([tb.device_column(i, d) for tb in tables], dt, d) if on_dev else None
+            return got if got is not None else stacked_column([tb[i] for tb in tables], self.ndtype, dt, d)
         model = [
             wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
             col(0), col(1), col(2), col(3),
             wp.array(offs, dtype=wp.int32, device=d), wp.array(np.array(lens, np.int32), dtype=wp.int32, device=d),
-            wp.array(np.array([tb[4] for tb in tables], self.ndtype), dtype=dt, device=d),
+            wp.array(np.array([tb.spacing if on_dev else tb[4] for tb in tables], self.ndtype), dtype=dt, device=d),
             col(5),
             wp.array(_analytic_rows(tables, analytic, self.ndtype), dtype=dt, device=d),
             int(window)]

@@ -64,6 +64,12 @@ class CycloidKinematics:
         self.z_g = design.pins.n_pins - 1
         self.n_wheels = design.n_wheels
 
+    @property
+    def crank_rate(self):
+        """omega_crank / omega_in: the eccentric orbit per input radian (1: the input shaft carries
+        the journals), the period 2 pi / |crank_rate| [rad of input] with which the contacts repeat."""
+        return 1.0
+
     def poses(self, input_angles):
         """(n, nb, 3) poses at input angles (n,) [rad]."""
         a = np.asarray(input_angles, float)

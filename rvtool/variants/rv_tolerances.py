@@ -79,6 +79,13 @@ def load_rv_tolerances(path):
 
 def sample_rv_design(spec, design, k, seed):
     """(design of variant k, its drawn deviations {field: value(s)})."""
+    changes, drawn = rv_design_changes(spec, design, k, seed)
+    return design.replace(**changes), drawn
+
+
+def rv_design_changes(spec, design, k, seed):
+    """(the file-form changes of variant k, {section: {key: value}}, as ``design.replace`` takes them, its
+    drawn deviations {field: value(s)}): what :func:`sample_rv_design` writes into ``design``."""
     if int(k) < 0 or int(seed) < 0:
         raise RvtoolInputError(f"variant index {k} and seed {seed}: valid range [0, inf) (integers)")
     rng = np.random.default_rng([int(seed), int(k)])
@@ -132,7 +139,7 @@ def sample_rv_design(spec, design, k, seed):
             v = float(d.sample(rng))
             changes.setdefault("profile", {})["offset_mod"] = design.profile.offset_mod + v
         drawn[nm] = v
-    return design.replace(**changes), drawn
+    return changes, drawn
 
 
 def pin_pitch_centre_errors(pins, single_pitch_deviations):
