@@ -261,6 +261,8 @@ def te_plot(te, out_dir):
     ax.set(xlabel="TE peak-to-peak [arcsec]", ylabel="variants",
            title=f"TE: {te['settings']['variants']} variants vs measured ({te['measured']['status']})")
     ax.legend(fontsize=6)
+    from matplotlib.ticker import MaxNLocator
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))           # a count: no 0.5 variant
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, "te_measured.png"), dpi=110)
     plt.close(fig)

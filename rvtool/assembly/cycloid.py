@@ -306,7 +306,6 @@ class CycloidModel(ReducerModel):
         for p in pin_centres(self.profiles[0]):
             ax.add_patch(plt.Circle(p, self.design.pins.pin_radius, fill=False, color="k", lw=0.6))
         super().draw_section(ax, q)
-        ax.legend(fontsize=8)
 
 
 def eccentric_drive_markers(design, speed_rpm, mesh_teeth):

@@ -36,7 +36,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_columns, file_key, is_angle
 
 _RANGE = re.compile(r"valid range\s*(?:is\s*)?([\[\(][^\]\)]*[\]\)])")
-_CHOICES = re.compile(r"valid(?: choices are|:)?\s*(\[[^\]]*\])")
+_CHOICES = re.compile(r"valid(?: choices(?: are)?|:)?\s*(\[[^\]]*\])")
 LEFT_OUT = "(left out: {})"
 """How a key's meaning ends when the key follows another key where the file leaves it out (a link);
 the template writes such a key commented out, so that it follows the key it names."""

@@ -67,6 +67,8 @@ class CycloidProfile:
         check_positive("generating_eccentricity", self.generating_eccentricity)
         for nm in ("equidistant_mod", "offset_mod", "rotation_mod"):
             check_finite(nm, getattr(self, nm))
+        # the profile's pin circle R = R_z + delta_off must stay a circle (R <= 0: a NaN profile)
+        check_range("offset_mod", self.offset_mod, -self.pin_circle_radius, low_open=True)
         K1 = self.K1
         if K1 >= 1.0:
             raise RvtoolInputError(f"eccentricity coefficient K1 = e_g z_b / R_z = {K1:.4g} must be < 1 "

@@ -55,7 +55,7 @@ import scipy.sparse as sp
 
 from ..errors import RvtoolInputError
 from ..units import angle_field
-from ..validation import check_nonnegative, check_positive
+from ..validation import check_choice, check_nonnegative, check_positive
 from .fe_model import ElasticMaterial, FEModel, fe_model_from_mesh
 
 
@@ -119,8 +119,7 @@ class WheelBodySpec:
 
     def __post_init__(self):
         check_positive("mesh_size", self.mesh_size)
-        if self.elasticity not in ELASTICITIES:
-            raise RvtoolInputError(f"elasticity = {self.elasticity!r}; valid: {', '.join(map(repr, ELASTICITIES))}")
+        check_choice("elasticity", self.elasticity, ELASTICITIES)    # the template lists the choices from it
         b = self.bore_ports
         if isinstance(b, bool) or not isinstance(b, int) or not (b == 0 or 4 <= b <= 64):
             raise RvtoolInputError(f"bore_ports = {b!r} is outside the valid range [0, 64] (integer: 0, the bore's "

@@ -494,7 +494,7 @@ class RvModel(ReducerModel):
             x = pose[self.layout.crank(k)]
             ax.add_patch(plt.Circle(x[:2], g.sun_pair.gear_b.reference_radius, fill=False, color="g", lw=0.5))
         ax.add_patch(plt.Circle(pose[self.layout.sun, :2], g.sun_pair.gear_a.reference_radius, fill=False, color="g",
-                                lw=0.5))
+                                lw=0.5, label="input stage, reference circles"))
         super().draw_section(ax, q)
 
 

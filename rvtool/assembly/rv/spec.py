@@ -19,10 +19,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...bearings.spec import AngularContactPair, BallBearing, NeedleBearing
-from ...bearings.tapered import TaperedPair
+from ...bearings.tapered import TaperedPair, TaperedRollerBearing
 from ...errors import RvtoolInputError
 from ...units import angle_field
-from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
+from ...geometry.involute import BasicRack, FlankModification, InvoluteGear, InvolutePair
 from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
@@ -470,10 +470,13 @@ def _main_bearing(data):
     """The AngularContactPair from ``[main_bearing]`` with its two rows as ``[[main_bearing.rows]]``
     tables (each a BallBearing spec), one ``[main_bearing.row]`` table for both, or the rows' keys
     in the pair's table (:func:`_flat_rows`)."""
-    data = _flat_rows(AngularContactPair, _table("main_bearing", data))
+    table = _table("main_bearing", data)
+    data = _flat_rows(AngularContactPair, table)
     if "row" in data:
-        table = data.pop("row")
-        data["rows"] = [table, table]
+        # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
+        name = "main_bearing" if "row" not in table else "main_bearing.row"
+        row = build_section(BallBearing, name, _table(name, data.pop("row")))
+        data["rows"] = (row, row)
     rows = data.get("rows")
     if not (isinstance(rows, (list, tuple)) and len(rows) == 2):
         raise RvtoolInputError(f"main_bearing.rows must hold 2 row tables (BallBearing specs); got {rows!r}")
@@ -486,9 +489,13 @@ def _main_bearing(data):
 def _crank_bearing(data):
     """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables,
     or the rows' keys in the pair's table (:func:`_flat_rows`)."""
-    data = _flat_rows(TaperedPair, _table("crank_bearing", data))
+    table = _table("crank_bearing", data)
+    data = _flat_rows(TaperedPair, table)
     if "row" in data:
-        data["row"] = _table("crank_bearing.row", data["row"])
+        # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
+        name = "crank_bearing" if "row" not in table else "crank_bearing.row"
+        row = TaperedRollerBearing.from_mapping(_table(name, data.pop("row")), name)
+        data["rows"] = (row, row)
     if isinstance(data.get("rows"), (list, tuple)):
         data["rows"] = [r if not isinstance(r, dict) else _table(f"crank_bearing.rows[{k}]", r)
                         for k, r in enumerate(data["rows"])]
@@ -521,6 +528,19 @@ _OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input
 SET_BY_DESIGN = {g: ("name",) for g in ("sun_gear", "crank_gear", "input_pinion", "compound_gear")}
 
 
+def _checked_pair(a_key, gear_a, b_key, gear_b):
+    """Raise the zero-backlash pair's input errors of two design gears (e.g. no working pressure angle
+    for the profile shifts) in the design file's key paths, not the pair's gear_a / gear_b."""
+    try:
+        InvolutePair(gear_a=gear_a, gear_b=gear_b).a
+    except RvtoolInputError as exc:
+        msg = str(exc)
+        for old, new in (("gear_a's", f"{a_key}'s"), ("gear_b's", f"{b_key}'s"), ("gear_a.", f"{a_key}."),
+                         ("gear_b.", f"{b_key}.")):
+            msg = msg.replace(old, new)
+        raise RvtoolInputError(msg) from None
+
+
 def design_from_dict(d):
     """A validated :class:`RVDesign` from a design mapping (a parsed TOML file)."""
     from ..topologies import upgrade_table
@@ -534,6 +554,9 @@ def design_from_dict(d):
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
         kw[sec] = make(d.pop(sec))
     design = build_section(RVDesign, "design", {**d, **kw, "source": source})
+    _checked_pair("sun_gear", design.sun_gear, "crank_gear", design.crank_gear)
+    if design.input_pinion is not None and design.compound_gear is not None:
+        _checked_pair("input_pinion", design.input_pinion, "compound_gear", design.compound_gear)
     from .gear_graph import GearGraph
     graph = GearGraph.of(design)  # topology errors (spacing, crank count, declared ratio) at load
     from ..carrier import check_carrier
