@@ -53,6 +53,14 @@ def one_design(name, samples):
     r["cpu_s"] = time.process_time() - c0
     r["wall_s"] = time.perf_counter() - t0
     r["cpu_s_per_b_over_a"] = r["cpu_s"] / (samples + 1)
+    cpu = [c for c in r["sample_cpu_s"] if c is not None]
+    r["cpu_s_per_sample"] = {"mean": float(np.mean(cpu)), "max": float(np.max(cpu))} if cpu else None
+    nets = [r["central"]["networks"]] + [n for n in r["sample_networks"] if n is not None]
+    # trial states of Exudyn's Newton where the joint network did not converge (answered as non-finite trials,
+    # which the static solver rejects; before: the cascading nested solve) and those its continuation reached
+    r["network_failures"] = int(sum(n["failures"] for n in nets))
+    r["network_continued"] = int(sum(n["continued"] for n in nets))
+    r["network_solves"] = int(sum(n["solves"] for n in nets))
     return r
 
 

@@ -286,6 +286,11 @@ class ElasticPinClosure:
         return F.ravel(), self._block_diagonal(G), None
 
     @property
+    def network(self):
+        """The :class:`JointNetwork` of a ``joint`` closure (None before its first solve or where not joint)."""
+        return self._network
+
+    @property
     def extension(self):
         """M (sparse, 3 (n_bodies + n_pins n_s) x (3 n_bodies + n_u)): the poses of the real and the
         station bodies the inner set is evaluated on, from [real poses; station deflections]."""

@@ -198,6 +198,22 @@ def contact_evaluations(evaluator):
     return chain[-1].inner_evaluations if chain else 0
 
 
+def network_counters(model):
+    """{"solves", "continued", "failures", "fallbacks"} summed over the joint networks of every element of
+    ``model`` whose evaluator is a closure (:class:`~rvtool.contact.pin_closure.JointNetwork`'s counters; the
+    closures' :attr:`~rvtool.contact.pin_closure.ElasticPinClosure.fallbacks`): how often the networks did
+    not converge at an outer solver's trial states."""
+    out = {"solves": 0, "continued": 0, "failures": 0, "fallbacks": 0}
+    for el in model.elements.values():
+        for c in chain_of(getattr(el, "evaluator", None))[0]:
+            out["fallbacks"] += c.fallbacks
+            net = c.network
+            if net is not None and net.chain[0] is c:
+                for k in ("solves", "continued", "failures"):
+                    out[k] += getattr(net, k)
+    return out
+
+
 def inner_pose(chain, depth, pose):
     """Poses of the bodies closure ``chain[depth]`` is evaluated on, from the top element's static
     poses ``pose``: every outer closure's extended pose at its solved deflections."""
