@@ -481,6 +481,11 @@ class JointNetwork:
         self.continued = 0
         self.failures = 0
 
+    @property
+    def stations(self):
+        """The station deflections [u_0; u_1; ...] (nx - 3 n_bodies,) of the last converged solve (the warm start)."""
+        return self._U.copy()
+
     def _reduced(self, pose, vel, U):
         """(leaf evaluation, Q (nx,), K (nx, nx), D (nx, nx) or None, the closures' station tangents
         [dF_k/du_k], the free stations: indices into U of the isolated laws' stations without contact
