@@ -14,8 +14,8 @@ meshes keep one sample near 40 CPU seconds (cases/benchmarks/bench_nested_wheels
 Modes: full, 64 samples per design (issue 28's number); --quick, the central value of rv40e only (no sample: a
 Latin-hypercube sample of rv40e, seed 0, took several CPU-minutes, its element falling back from the joint network to
 the nested solve at Exudyn's far trial states; see docs/validation/validate.md); ``--samples N`` sets the number
-explicitly (a SHORT band where N < 64, stated in the results as ``band_is_short``); ``--resume DIR`` keeps the
-designs a stopped run finished and computes the others (with this run's N: ``samples_per_design`` per design).
+explicitly (a SHORT band where N < 64, stated in the results as ``band_is_short``); ``--resume DIRS`` keeps the
+designs that stopped or separate runs finished and computes the others (with this run's N: ``samples_per_design`` per design).
 
 Criteria (``passed``): the central value and every sample finite, no failed sample (a failed sample is counted and
 reported, never dropped). NOT agreement with the catalogue (reported as it is).
@@ -41,10 +41,10 @@ def extra(parser):
     parser.add_argument("--samples", type=int, default=None, metavar="N",
                         help=f"Latin-hypercube samples per design (default {SAMPLES}; --quick: {QUICK['samples']})")
     parser.add_argument("--designs", default=None, metavar="LIST", help="comma-separated designs (default: both)")
-    parser.add_argument("--resume", default=None, metavar="DIR",
-                        help="keep the designs a stopped run in DIR finished (its results.json) and compute only the "
-                             "others, each with its own sample count (samples_per_design); the kept designs' commit "
-                             "and command are recorded under resumed_from")
+    parser.add_argument("--resume", default=None, metavar="DIRS",
+                        help="comma-separated run folders: keep the designs the runs there finished (their "
+                             "results.json) and compute only the others, each design with its own sample count "
+                             "(samples_per_design); the kept runs' command and date are recorded under resumed_from")
 
 
 def one_design(name, samples):
@@ -84,18 +84,18 @@ def main(argv=None):
     t0 = time.perf_counter()
     names = tuple(args.designs.split(",")) if args.designs else (QUICK["designs"] if args.quick else DESIGNS)
     samples = args.samples if args.samples is not None else (QUICK["samples"] if args.quick else SAMPLES)
-    per, out, counts, resumed = {}, None, {}, None
-    if args.resume:
+    per, out, counts, resumed = {}, None, {}, []
+    for run_dir in (args.resume.split(",") if args.resume else []):
         import json
-        with open(os.path.join(args.resume, "results.json")) as fh:
+        with open(os.path.join(run_dir, "results.json")) as fh:
             prev = json.load(fh)
-        kept = [n for n in prev["designs_done"] if n in names]
+        kept = [n for n in prev["designs_done"] if n in names and n not in per]
         prev_counts = prev["samples_per_design"]
         for n in kept:
             per[n] = prev["designs"][n]
             counts[n] = prev_counts[n] if isinstance(prev_counts, dict) else prev_counts
-        resumed = {"designs": kept, "command": prev["provenance"]["command"], "date": prev["provenance"]["date"],
-                   "wall_s_total": prev["provenance"]["wall_s_total"]}
+        resumed.append({"designs": kept, "command": prev["provenance"]["command"], "date": prev["provenance"]["date"],
+                        "wall_s_total": prev["provenance"]["wall_s_total"]})
     for name in names:
         if name not in per:
             per[name] = one_design(name, samples)
