@@ -11,9 +11,13 @@ Meshes: the quick meshes of ``rvtool validate --quick`` (validate_members.QUICK_
 profile ports per tooth, housing and carrier at 8 mm) in both modes: the band is over the assumed inputs, and these
 meshes keep one sample near 40 CPU seconds (cases/benchmarks/bench_nested_wheels.py).
 
-Modes: full, 64 samples per design (issue 28's number); --quick, the central value of rv40e only (no sample: a
-Latin-hypercube sample of rv40e, seed 0, took several CPU-minutes, its element falling back from the joint network to
-the nested solve at Exudyn's far trial states; see docs/validation/validate.md); ``--samples N`` sets the number
+Modes: full, 64 samples per design (issue 28's number); --quick, the central value of rv40e only (one b/a, about
+25 CPU-s with its build: a sample costs as much again, which the quick budget leaves out). Since the joint network
+is robust (rvtool.contact.pin_closure.JointNetwork: scaled Newton with a line search, unloaded groove stations at
+their exact zero, a continuation from the last converged state) a sample no longer falls back to the nested solve:
+the trial states it still cannot solve (Exudyn's Newton steps of radians and decimetres) are answered as
+non-finite and rejected by the static solver; each design reports how often (``network_failures``) and the CPU
+seconds per sample (``cpu_s_per_sample``); ``--samples N`` sets the number
 explicitly (a SHORT band where N < 64, stated in the results as ``band_is_short``); ``--resume DIRS`` keeps the
 designs that stopped or separate runs finished and computes the others (with this run's N: ``samples_per_design`` per design).
 
