@@ -106,6 +106,8 @@ def main(argv=None):
             counts[name] = samples
         # written after every design (a long run that stops keeps the designs it finished; ``designs_done``)
         done = {n: per[n] for n in names if n in per}
+        for d in done.values():
+            d["failed_samples"] = len(d["failures"])
         results = {"designs": done, "samples_per_design": {n: counts[n] for n in done},
                    "band_is_short": any(counts[n] < SAMPLES for n in done), "issue_samples": SAMPLES,
                    "designs_done": list(done), "designs_asked": list(names), "resumed_from": resumed}
