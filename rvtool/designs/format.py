@@ -283,6 +283,8 @@ def _section_rows(path, cls, obj, raw, links, set_by_design):
 def _field_rows(path, cls, fields, kw, raw, links, set_by_design):
     rows, subs = [], []
     for f in fields:
+        if f.metadata.get("file", True) is False:
+            continue                        # held for the code only (e.g. profile.lobe_rotations): not a file key
         value = kw.get(f.name)
         if f.name in set_by_design.get(path, ()):
             continue                        # the design sets it (e.g. a gear's name): not a file key

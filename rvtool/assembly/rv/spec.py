@@ -359,6 +359,7 @@ class RVDesign:
         if zg != self.pins.n_pins - 1:
             raise RvtoolInputError(f"wheels.n_teeth = {zg} with pins.n_pins = {self.pins.n_pins}: only Z_pins = "
                                    f"Z_wheel + 1 is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
+        self.wheels.check_lobes(zg)
         if self.ratio_target is not None:
             check_positive("ratio_target", abs(self.ratio_target))
         self.housing.check_pin_ring(self.pins)
@@ -538,6 +539,42 @@ def design_from_dict(d):
     from ..carrier import check_carrier
     check_carrier(design, graph)  # a ported carrier fits the cranks and the bearing rows
     return design
+
+
+#: sections :func:`light_replace` writes with their loader's builder (the ones a tolerance draw changes that
+#: no link of the file form reads: pins feed the profile only through n_pins, pin_circle_radius, pin_radius)
+_LIGHT = {"cranks": lambda d: build_section(Cranks, "cranks", d),
+          "eccentric_bearing": lambda d: build_section(NeedleBearing, "eccentric_bearing", d),
+          "sun_gear": lambda d: _gear("sun_gear", d),
+          "crank_gear": lambda d: _gear("crank_gear", d),
+          "pins": lambda d: build_section(Pins, "pins", d)}
+_LIGHT_PIN_KEYS = {"radius_error", "centre_errors"}
+
+
+def light_replace(design, **sections):
+    """``design.replace(**sections)`` without loading the whole file form again: each changed section built
+    from its merged table by the loader's own builder, the design by ``dataclasses.replace`` (its
+    validation runs), its ``source`` the replaced file form, and the loader's graph and carrier checks;
+    or None where a change is outside what this writes (another section, a top-level key, a pin key that
+    a link reads): then ``replace``. Equal to ``replace``'s design where no link follows the changed keys
+    (a caller checks that once per design, :func:`rvtool.variants.multi_device.variant_snapshot`)."""
+    from ..spec import _merge, replaced_source
+    src = getattr(design, "source", None)
+    if src is None or any(k not in _LIGHT or not isinstance(v, dict) for k, v in sections.items()):
+        return None
+    if "pins" in sections and not set(sections["pins"]) <= _LIGHT_PIN_KEYS:
+        return None
+    new = {}
+    for sec, changes in sections.items():
+        base = src.get(sec)
+        if not isinstance(base, dict):
+            return None
+        new[sec] = _LIGHT[sec](_merge(copy.deepcopy(base), changes))
+    out = dataclasses.replace(design, **new, source=replaced_source(design, **sections))
+    from ..carrier import check_carrier
+    from .gear_graph import GearGraph
+    check_carrier(out, GearGraph.of(out))
+    return out
 
 
 def load_design(path):
