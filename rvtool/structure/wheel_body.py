@@ -544,15 +544,16 @@ def profile_interpolation(wb: WheelBody, points):
     N = len(prof)
     seg = np.roll(prof, -1, axis=0) - prof
     l2 = np.einsum("ij,ij->i", seg, seg)
+    # every point against every segment at once (the same arithmetic per pair as one point at a time)
+    d = pts[:, None, :] - prof[None, :, :]                                          # (n, N, 2)
+    t = np.clip((d[..., 0] * seg[:, 0] + d[..., 1] * seg[:, 1]) / l2, 0.0, 1.0)     # (n, N)
+    e = prof[None] + t[..., None] * seg[None] - pts[:, None, :]
+    i = np.argmin(np.sqrt(e[..., 0] ** 2 + e[..., 1] ** 2), axis=1)
+    j = (i + 1) % N
+    ti = t[np.arange(len(pts)), i]
     W = np.zeros((2 * len(pts), 2 * N))
-    s = np.zeros(len(pts))
-    for k, p in enumerate(pts):
-        t = np.clip(np.einsum("ij,ij->i", p - prof, seg) / l2, 0.0, 1.0)
-        dist = np.linalg.norm(prof + t[:, None] * seg - p, axis=1)
-        i = int(np.argmin(dist))
-        j = (i + 1) % N
-        for c in range(2):
-            W[2 * k + c, 2 * i + c] += 1.0 - t[i]
-            W[2 * k + c, 2 * j + c] += t[i]
-        s[k] = wb.profile_arc[i] + t[i] * np.sqrt(l2[i])
-    return W, s
+    k = np.arange(len(pts))
+    for c in range(2):
+        np.add.at(W, (2 * k + c, 2 * i + c), 1.0 - ti)
+        np.add.at(W, (2 * k + c, 2 * j + c), ti)
+    return W, wb.profile_arc[i] + ti * np.sqrt(l2[i])
