@@ -199,7 +199,8 @@ def _plot_hard_case(out, name, arr):
     import matplotlib.pyplot as plt
 
     from .units import ARCSEC_PER_RAD
-    fig, ax = plt.subplots(1, 3, figsize=(12, 3))
+    fig, ax = plt.subplots(1, 3, figsize=(12, 3.2), layout="constrained")   # no y label over its neighbour
+    fig.suptitle(f"hard case {name}")
     ax[0].plot(arr["t"] * 1e3, arr["te"] * ARCSEC_PER_RAD)
     ax[0].set_ylabel("TE [arcsec]")
     ax[1].plot(arr["t"] * 1e3, arr["pin_sum_N"])

@@ -21,6 +21,7 @@ variable ``RVTOOL_CASES`` names another one.
 import argparse
 import ast
 import importlib.util
+import json
 import os
 import sys
 from pathlib import Path
@@ -187,6 +188,12 @@ def _cmd_run(args, parser):
         print(f"rvtool: error: case {name!r} finished but wrote no {results}", file=sys.stderr)
         return 1
     print(f"{name}: results written to {results}")
+    try:        # the case's own verdict (every case writes "passed" from its criteria), in one line
+        passed = json.loads(results.read_text()).get("passed")
+    except (OSError, ValueError, AttributeError):
+        passed = None
+    if passed is not None:
+        print(f"{name}: passed = {str(bool(passed)).lower()} (by its own criteria, in results.json)")
     return 0
 
 

@@ -34,10 +34,12 @@ def check_range(name, value, low=-math.inf, high=math.inf, low_open=False, high_
     if not (np.all(lo_ok) and np.all(hi_ok)):
         lb = "(" if (low_open or low == -math.inf) else "["
         hb = ")" if (high_open or high == math.inf) else "]"
-        bad = arr[~(lo_ok & hi_ok)] if arr.ndim else arr
-        raise RvtoolInputError(
-            f"{name} = {np.asarray(bad).ravel()[:4].tolist()}{'...' if np.size(bad) > 4 else ''} "
-            f"is outside the valid range {lb}{low}, {high}{hb}")
+        if arr.ndim:        # a list or array: its first values outside the range
+            bad = arr[~(lo_ok & hi_ok)]
+            shown = f"{bad[:4].tolist()}{'...' if bad.size > 4 else ''}"
+        else:               # a number: as the user wrote it (not a one-element list)
+            shown = repr(value if type(value) in (int, float) else arr.item())
+        raise RvtoolInputError(f"{name} = {shown} is outside the valid range {lb}{low}, {high}{hb}")
     return value
 
 

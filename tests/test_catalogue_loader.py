@@ -91,7 +91,7 @@ def test_good_catalogue_loads_in_si(tmp_path):
 
 
 @pytest.mark.parametrize("old, new, match", [
-    ("rated_torque = 400.0", "rated_torque = -1.0", r"test.rated_torque = \[-1.0\] is outside the valid range \(0.0"),
+    ("rated_torque = 400.0", "rated_torque = -1.0", r"test.rated_torque = -1.0 is outside the valid range \(0.0"),
     ("lost_motion_torque_fraction = 0.03", "lost_motion_torque_fraction = 1.5", "test.lost_motion_torque_fraction"),
     ("rigidity_torque_points = [0.5, 1.0]", "rigidity_torque_points = [0.5, 0.2]", r"rigidity_torque_points\[1\]"),
     ('unit = "N m/arcmin"', 'unit = "furlong"', r"figure\[0\].unit = 'furlong' is not a known unit"),

@@ -194,6 +194,6 @@ def test_an_angle_out_of_range_is_reported_in_the_file_key_and_degrees():
     table = _table("rv40e")
     rows = table["main_bearing"]["rows"]
     rows[0]["contact_angle_deg"] = 120.0
-    with pytest.raises(RvtoolInputError, match=r"main_bearing\.rows\[0\]\.contact_angle_deg = \[120\] is outside "
+    with pytest.raises(RvtoolInputError, match=r"main_bearing\.rows\[0\]\.contact_angle_deg = 120 is outside "
                                                r"the valid range \[0, 90\) deg"):
         topologies.design_from_table(table)

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import rvtool
+from _device_cases import DEVICES, FAMILY_CASES, case_design, skip_absent_device
 from rvtool.errors import RvtoolInputError
 from rvtool.protocols.precision import quasi_static_te
 from rvtool.solver.backends import DeviceBackend, EquilibriumBatch, choose
@@ -25,28 +26,9 @@ from rvtool.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
 
 TE_TOL = 1e-6           # arcsec
 EQ_TOL = 1e-9           # relative
-DEVICES = [pytest.param(d, id=d) for d in ("cpu", "cuda:0")]
-
-RING = {"model": "simply_supported", "ends": [-0.015, 0.015]}
-OUT = {"model": "cantilever", "ends": [-0.012, 0.012]}
-#: the family switched on -> (design, its edit); coarse housing meshes keep the reduction cheap
-CASES = {
-    "elastic_ring_and_output_pins": ("rd40", dict(pins={"support": RING}, output_pins={"support": OUT})),
-    "cycloid_ported_housing": ("rd40", dict(housing={"model": "ports", "structure": {"mesh_size": 0.008}})),
-    "crank_beam_and_torsion": ("rv40e", dict(cranks={"shaft": {"model": "simply_supported",
-                                                               "torsion": "elastic"}})),
-    "crank_torsion": ("rv40e", dict(cranks={"shaft": {"torsion": "elastic"}})),
-    "involute_ring_ported_housing": ("std_involute", dict(housing={"model": "ports",
-                                                                  "structure": {"inner_radius": 0.056,
-                                                                                "mesh_size": 0.012}})),
-}
+#: the families on the device row Newton: the shared rows and the crank torsion alone
+CASES = {**FAMILY_CASES, "crank_torsion": ("rv40e", dict(cranks={"shaft": {"torsion": "elastic"}}))}
 ANGLES = (0.0, 0.2, 0.45)
-
-
-def _skip_absent(device):
-    import warp as wp
-    if device.startswith("cuda") and wp.get_cuda_device_count() == 0:
-        pytest.skip(f"{device} not present")
 
 
 _BUILT = {}
@@ -55,11 +37,7 @@ _BUILT = {}
 def _built(name):
     """(design, model, Exudyn states at ANGLES under the rated torque), built once per module run."""
     if name not in _BUILT:
-        if name == "rv80e":
-            d = rvtool.load_design("rv80e")
-        else:
-            base, edit = CASES[name]
-            d = rvtool.load_design(base).replace(**edit)
+        d = rvtool.load_design("rv80e") if name == "rv80e" else case_design(CASES, name)
         m = rvtool.build(d)
         m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
         q = np.array([StaticSolver(m).solve(a) for a in ANGLES])
@@ -81,7 +59,7 @@ def _equal_states(q, q_ref, model):
 def test_each_elastic_family_on_the_device_equals_exudyn(name, device):
     """Each closure / structure family alone on the device row Newton: equilibria at three input
     angles under the rated torque, every point converged on the device (no Exudyn hand-over)."""
-    _skip_absent(device)
+    skip_absent_device(device)
     if "housing" in name:
         # the ported housing's reduction meshes with NGSolve, a declared dependency that the bare GPU
         # image lacks; the same StructureRows kernel runs on cuda in the crank-beam cases
@@ -101,7 +79,7 @@ def test_rv80e_equilibria_te_and_lost_motion_on_the_device_equal_exudyn(device):
     against Exudyn's, without a hand-over."""
     from rvtool.batched.device_rows_lost_motion import device_row_lost_motion
     from rvtool.protocols.lost_motion import lost_motion
-    _skip_absent(device)
+    skip_absent_device(device)
     pytest.importorskip("ngsolve", reason="rv80e's ported housing is reduced with NGSolve")
     d, m, q_ref = _built("rv80e")
     ext = row_extension(m)
@@ -238,7 +216,7 @@ def test_friction_anchors_on_the_device_torque_path_equal_exudyn(device):
     unloading differ at 0.5 T_R by more than the bound: the history matters and is carried).
     Equilibria (never committed, as Exudyn's static solver) likewise 1e-9."""
     from rvtool.solver.backends import ExudynBackend
-    _skip_absent(device)
+    skip_absent_device(device)
     d, an = _anchored_rv40e()
     T = d.rated_torque
     levels = [0.03 * T, 0.5 * T, T, 0.5 * T, 0.03 * T, -0.03 * T, -0.5 * T, -T, -0.5 * T, -0.03 * T, 0.03 * T]

@@ -38,3 +38,31 @@ def test_crank_phase_order_gives_the_te_in_fewer_iterations():
     assert abs(np.ptp(phase.te[0]) * ARCSEC_PER_RAD - ref["te_pp_arcsec"]) <= 1e-6
     with pytest.raises(RvtoolInputError, match="te_order"):
         device_rows_variants(models, torque=1.0, input_angles=angles, te_order="sorted")
+
+
+def test_rv_points_in_crank_phase_take_the_oracles_branch():
+    """RV-40E Monte Carlo variant 148 (cases/rv/monte_carlo_rv.py's seed) over one crank revolution at
+    37 points: the crank phase is the input angle times the kinematics' crank_rate (-0.322), so the
+    phase order is the order given (the input angle modulo 2 pi, the order before, interleaved the
+    points three ways). At point 18 the variant has two equilibria (the sun--crank 0 mesh's force
+    jumps 8 % where a contact passes from the flank to the rounded tip edge: two states 1.4e-6 rad of
+    crank 0 apart); the interleaved order landed on the other one, 2.3e-3 arcsec off the Exudyn
+    reference run (the GPU run of record at c4aad5b), which marches the points as given. TE equal to
+    the oracle's within 1e-6 arcsec at every point (issue 31; measured 2.9e-8)."""
+    from rvtool import build
+    from rvtool.batched.device_rows_variants import te_point_order
+    from rvtool.protocols.precision import quasi_static_te
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+    d = load_design(designs.path("rv40e"))
+    tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    seed, k = 20261124, 148                                   # cases/rv/monte_carlo_rv.py's seed
+    models = [s for _, s, _ in variant_snapshots([(d, tol, seed, k, {})])]
+    rate = models[0].kinematics.crank_rate
+    assert abs(rate + 0.3223140495867777) < 1e-12             # the cranks turn slower than the input
+    angles = np.arange(37) * 2 * np.pi / abs(rate) / 37
+    assert np.array_equal(te_point_order(models, angles), np.arange(37))
+    dev = device_rows_variants(models, torque=d.rated_torque, input_angles=angles, device="cpu")
+    assert dev.status == ["ok"] and dev.exudyn_points == 0
+    ref = quasi_static_te(build(sample_rv_design(tol, d, k, seed)[0]), torque=d.rated_torque, input_angles=angles,
+                          backend="exudyn")["te"]
+    assert np.max(np.abs(dev.te[0] - ref)) * ARCSEC_PER_RAD <= 1e-6

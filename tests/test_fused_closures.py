@@ -12,33 +12,19 @@ import numpy as np
 import pytest
 
 import rvtool
+from _device_cases import DEVICES, FAMILY_CASES, case_design, skip_absent_device
 from rvtool.protocols.precision import dynamic_te
 from rvtool.solver import RunSpec
 from rvtool.units import ARCSEC_PER_RAD
 
 TE_TOL = 1e-6           # arcsec, issue 31
-DEVICES = [pytest.param(d, id=d) for d in ("cpu", "cuda:0")]
-RING = {"model": "simply_supported", "ends": [-0.015, 0.015]}
-OUT = {"model": "cantilever", "ends": [-0.012, 0.012]}
-#: the family switched on -> (design, its edit); coarse housing meshes keep the reduction cheap
-#: (as tests/test_device_families.py)
-CASES = {
-    "elastic_ring_and_output_pins": ("rd40", dict(pins={"support": RING}, output_pins={"support": OUT})),
-    "cycloid_ported_housing": ("rd40", dict(housing={"model": "ports", "structure": {"mesh_size": 0.008}})),
-    "crank_beam_and_torsion": ("rv40e", dict(cranks={"shaft": {"model": "simply_supported",
-                                                               "torsion": "elastic"}})),
-    "involute_ring_ported_housing": ("std_involute", dict(housing={"model": "ports",
-                                                                  "structure": {"inner_radius": 0.056,
-                                                                                "mesh_size": 0.012}})),
-    "rv80e": ("rv80e", {}),
-}
+#: the families driven on the row stepper: the shared rows and rv80e with all of its own
+CASES = {**FAMILY_CASES, "rv80e": ("rv80e", {})}
 STEPS = 6
 
 
 def _skip_absent(device, name):
-    import warp as wp
-    if device.startswith("cuda") and wp.get_cuda_device_count() == 0:
-        pytest.skip(f"{device} not present")
+    skip_absent_device(device)
     if "housing" in name or name == "rv80e":
         # the ported housing's reduction meshes with NGSolve, a declared dependency that the bare GPU
         # image lacks (as tests/test_device_families.py)
@@ -46,9 +32,7 @@ def _skip_absent(device, name):
 
 
 def _design(name):
-    base, edit = CASES[name]
-    d = rvtool.load_design(base)
-    return d.replace(**edit) if edit else d
+    return case_design(CASES, name)
 
 
 @pytest.mark.parametrize("device", DEVICES)

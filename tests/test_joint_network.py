@@ -113,3 +113,70 @@ def test_groove_law_inversion_converges_without_restarts(monkeypatch):
     x = cp.psi_inverse(y)
     assert calls[0] <= 15
     assert np.all(np.abs(orig(x)[0] - y) <= 1e-12 * y)
+
+
+def _network_answer(top, pose, vel):
+    ev = top.evaluate(pose, vel)
+    assert ev.finite
+    return ev
+
+
+def test_network_continuation_reaches_a_far_trial_state():
+    """With every closure limited to 3 Newton iterations, the loaded state (forces ~12 N) is too far from the
+    converged near-contact state (1 um) for the direct Newton (measured: the former network, warm start then zero
+    start, did not converge and fell back to the nested solve; it needs 4 iterations); the continuation in the poses
+    from the last converged solve reaches it (counted in ``continued``, no fallback), and its answer equals the
+    nested solve at the default iterations within 1e-9 relative (both converge to the closures' tolerance)."""
+    vel = np.zeros((3, 3))
+    top = chain(True)
+    for c in (top, top.inner, top.inner.inner):
+        c.max_iterations = 3
+    _network_answer(top, loaded_pose(1e-6, 1e-6, 0.0), vel)
+    far = loaded_pose(2.5e-5, 4e-6, 1e-5)
+    ev = _network_answer(top, far, vel)
+    assert top.network.continued == 1 and top.network.failures == 0 and top.fallbacks == 0
+    ref = _network_answer(chain(False), far, vel)
+    assert np.abs(ref.Q).max() > 1.0
+    assert np.abs(ev.Q - ref.Q).max() <= 1e-9 * np.abs(ref.Q).max()
+    assert np.abs(ev.dQdq - ref.dQdq).max() <= 1e-9 * np.abs(ref.dQdq).max()
+
+
+def test_unloaded_groove_stations_rest_at_zero():
+    """From a state where both wheels press on the pin to one where wheel 2 is clear of it: the groove stations of the
+    unloaded wheel carry no contact force and rest at exactly zero deflection in the network (the isolated law's exact
+    solution; Newton alone approaches it by a factor ~ln(Delta R/|u|) per iteration and stops at ~1e-16 m within
+    the force tolerance), and the answer equals the nested solve's within 1e-9 relative."""
+    vel = np.zeros((3, 3))
+    top = chain(True)
+    _network_answer(top, loaded_pose(2.5e-5, 4e-6, 1e-5), vel)
+    clear = loaded_pose(2.5e-5, 4e-6, 1e-5)
+    clear[2] = (0.0, 0.0, 0.0)                     # wheel 2 centred: 10 um of clearance all round
+    ev = _network_answer(top, clear, vel)
+    net = top.network
+    ref = _network_answer(chain(False), clear, vel)
+    assert np.abs(ev.Q - ref.Q).max() <= 1e-9 * np.abs(ref.Q).max()
+    # the network's stations: [flange (x, y); support stations (2 x (x, y)); pin stations (2 x (x, y))], the
+    # support's second station (wheel 2's) at U[4:6]
+    U = net.stations
+    assert np.all(U[4:6] == 0.0)
+    assert np.all(U[2:4] != 0.0)
+    assert net.failures == 0
+
+
+@pytest.mark.parametrize("fallback", ["reject", "nested"])
+def test_network_failure_fallback(fallback):
+    """A network that does not converge (every closure limited to one Newton iteration, no converged state to
+    continue from) is counted in ``fallbacks``; ``"reject"`` answers the trial as non-finite (NaN forces, which the
+    outer solver rejects), ``"nested"`` with the nested solve's finite numbers (the former behaviour)."""
+    from rvtool.contact.pin_closure import ElasticPinClosure
+    top = chain(True)
+    closures = (top, top.inner, top.inner.inner)
+    for c in closures:
+        c.max_iterations = 1
+    top = ElasticPinClosure(top.inner, n_bodies=3, carrier=0, station_compliance=C_FLANGE, station=[[0]], joint=True,
+                            fallback=fallback, max_iterations=1)
+    ev = top.evaluate(loaded_pose(2.5e-5, 4e-6, 1e-5), np.zeros((3, 3)))
+    assert top.fallbacks == 1 and top.network.failures == 1
+    assert not ev.finite
+    assert np.all(np.isnan(ev.Q)) == (fallback == "reject")
+    assert np.all(np.isfinite(ev.Q)) == (fallback == "nested")

@@ -27,6 +27,9 @@ def test_monte_carlo_runs_for_the_topology(name, tmp_path):
     figs = {f: v["value"] for f, v in mc["figures"].items()}
     for f in ("te_pp_mean", "lost_motion_mean", "max_contact_force_mean"):
         assert math.isfinite(figs[f]) and figs[f] > 0, (f, figs)
+    # the p95 interval reads as numbers in the report (was "[11.917479595648889, None] (None: ...)")
+    statement = mc["figures"]["te_pp_p95"]["error_statement"]
+    assert "None" not in statement and "too few variants" in statement, statement
     # the nominal quick TE p-p of the te protocol lies inside the variants' spread or near it: the
     # deviations are micrometres, so the mean stays within a factor 3 of the nominal (a wrong unit in
     # a sampled deviation, e.g. arcmin read as rad, moves it by orders of magnitude)

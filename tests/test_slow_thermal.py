@@ -146,7 +146,7 @@ def test_expansion_maps_signs_and_first_order_cancellation():
 
 
 def test_bad_inputs_give_named_errors():
-    with pytest.raises(RvtoolInputError, match=r"thermal.links\[0\].conductance = \[-1.0\] is outside the valid range"):
+    with pytest.raises(RvtoolInputError, match=r"thermal.links\[0\].conductance = -1.0 is outside the valid range"):
         ThermalNetwork(nodes=("a", "b"), capacity=[1.0, 1.0], links=(("a", "b", -1.0),), ambient_conductance=[1.0, 0],
                        ambient_temperature=T_AMB)
     with pytest.raises(RvtoolInputError, match="thermal.ambient_conductance is 0 for every node of the group"):

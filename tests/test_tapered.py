@@ -355,7 +355,7 @@ def test_bad_inputs_name_the_parameter():
     # a design file's row table gives the angles in degrees (NAME_deg); the spec holds radians
     file_row = {**{k: v for k, v in ROW.items() if not k.endswith("_angle")}, "cup_angle_deg": 14.0,
                 "cone_angle_deg": 11.0}
-    with pytest.raises(RvtoolInputError, match=r"crank_bearing\.cup_angle_deg = \[95.0\] is outside the valid range"):
+    with pytest.raises(RvtoolInputError, match=r"crank_bearing\.cup_angle_deg = 95.0 is outside the valid range"):
         TaperedRollerBearing.from_mapping({**file_row, "cup_angle_deg": 95.0}, key="crank_bearing")
     with pytest.raises(RvtoolInputError, match=r"crank_bearing\.cup_angle: a design file gives this angle in degrees"):
         TaperedRollerBearing.from_mapping(ROW, key="crank_bearing")

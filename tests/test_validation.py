@@ -18,7 +18,7 @@ def test_nan_and_inf_are_rejected_with_the_name():
 
 
 def test_range_message_gives_bounds():
-    with pytest.raises(RvtoolInputError, match=r"rho = \[1.5\] is outside the valid range \[0.0, 1.0\]"):
+    with pytest.raises(RvtoolInputError, match=r"rho = 1.5 is outside the valid range \[0.0, 1.0\]"):
         check_range("rho", 1.5, 0.0, 1.0)
     with pytest.raises(RvtoolInputError, match=r"\(0.0, inf\)"):
         check_positive("k", np.array([1.0, -2.0]))

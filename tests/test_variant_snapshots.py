@@ -95,3 +95,25 @@ def test_stacked_cycloid_kinematics_equal_each_copys_bit_for_bit(rd40):
     assert len({float(m.kinematics.eccentricity) for m in models}) == 3
     other = CycloidKinematics(dataclasses.replace(d, wheels=dataclasses.replace(d.wheels, phases=(0.0, 3.0))))
     assert CycloidKinematics.stacked_poses([models[0].kinematics, other], a) is None
+
+
+def test_rv_variant_designs_written_in_equal_the_loaded():
+    """RV-40E Monte Carlo variants made by rvtool.assembly.rv.spec.light_replace (the changed sections
+    built by the loader's builders, the rest kept; multi_device.rv_variant_design after its once-per-design
+    check) equal sample_rv_design's loaded designs, source included; a change outside what it writes (the
+    profile, a linked pin key, a top-level key) is left to replace (None). Fails if a written-in section or
+    the source differs from the loaded one."""
+    from rvtool.assembly.rv.spec import light_replace
+    from rvtool.variants.multi_device import rv_variant_design
+    from rvtool.variants.rv_tolerances import load_rv_tolerances, rv_design_changes, sample_rv_design
+    d = load_design(designs.path("rv40e"))
+    tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
+    seed = 20261124                                                   # cases/rv/monte_carlo_rv.py
+    for k in (0, 1, 2):
+        loaded = sample_rv_design(tol, d, k, seed)[0]
+        light = light_replace(d, **rv_design_changes(tol, d, k, seed)[0])
+        assert light == loaded and light.source == loaded.source
+        assert rv_variant_design(tol, d, k, seed) == loaded
+    assert light_replace(d, profile={"offset_mod": 1e-6}) is None
+    assert light_replace(d, pins={"pin_radius": 0.004}) is None
+    assert light_replace(d, rated_torque=100.0) is None

@@ -12,7 +12,7 @@ import warp as wp
 
 from .anchor import anchor_funcs
 from .circle_pairs_ref import FRICTION_ANCHOR, FRICTION_REGULARIZED, N_OBS
-from .cycloid_pins_ref import (A_ANALYTIC, A_K1, A_R, A_RC, A_ROT, A_ZB, ANALYTIC_ITERATIONS, C_C, C_DR, C_E, C_K,
+from .cycloid_pins_ref import (A_ANALYTIC, A_K1, A_NLOBE, A_R, A_RC, A_ROT, A_ZB, ANALYTIC_ITERATIONS, LOBE_BLEND, C_C, C_DR, C_E, C_K,
                                C_MUK, C_MUS, C_P, C_RP, C_TX, C_TY, C_VREG, C_VS, C_XI_B, C_Z, J_BODY_A, J_BODY_B,
                                J_FRICTION, J_TABLE, N_ANALYTIC, N_FLOAT, N_INT)
 from .laws import law_funcs
@@ -70,6 +70,51 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
         return rot(rot_angle, pt), rot(rot_angle, n), kap, ds
 
     @wp.func
+    def analytic_point_turned(R: dtype, K1: dtype, zb: dtype, rc: dtype, rot_angle: dtype, d: dtype, dd: dtype,
+                              phi: dtype):
+        """The point turned by the extra rotation d(phi), the turned curve's normal and arc length per phi
+        (d' = dd), the unturned curvature (cycloid_pins_ref.analytic_point_turned)."""
+        s = wp.sin(phi)
+        c = wp.cos(phi)
+        S = wp.sin(zb * phi)
+        C = wp.cos(zb * phi)
+        E = R * vec2(s - K1 / zb * S, c - K1 / zb * C)
+        dE = R * vec2(c - K1 * C, -s + K1 * S)
+        ddE = R * vec2(-s + K1 * zb * S, -c + K1 * zb * C)
+        speed = wp.length(dE)
+        tau = dE / speed
+        kE = -(dE[0] * ddE[1] - dE[1] * ddE[0]) / (speed * speed * speed)
+        pt = E - rc * perp(tau)
+        kap = kE / (dtype(1.0) - rc * kE)
+        v = (speed * (dtype(1.0) - rc * kE)) * tau + dd * perp(pt)
+        ds = wp.length(v)
+        n = perp(v / ds)
+        return rot(rot_angle + d, pt), rot(rot_angle + d, n), kap, ds
+
+    @wp.func
+    def lobe_turn(tab_ana: wp.array2d(dtype=dtype), tb: int, nlobe: int, phi: dtype):
+        """(d, d') of the pitch units' rotations at generating angle phi (cycloid_pins_ref.lobe_turn)."""
+        two_pi = dtype(6.283185307179586)
+        nl = dtype(nlobe)
+        u = phi * nl / two_pi + dtype(0.5)
+        fl = wp.floor(u)
+        t = u - fl
+        j = ((int(fl) % nlobe) + nlobe) % nlobe
+        dj = tab_ana[tb, N_ANALYTIC + j]
+        b = dtype(LOBE_BLEND)
+        d = dj
+        dd = dtype(0.0)
+        if t < b:
+            prev = tab_ana[tb, N_ANALYTIC + (j + nlobe - 1) % nlobe]
+            d = dj + (prev - dj) * ((b - t) / (dtype(2.0) * b))
+            dd = (dj - prev) * (nl / (dtype(2.0) * two_pi * b))
+        elif t > dtype(1.0) - b:
+            nxt = tab_ana[tb, N_ANALYTIC + (j + 1) % nlobe]
+            d = dj + (nxt - dj) * ((t - dtype(1.0) + b) / (dtype(2.0) * b))
+            dd = (nxt - dj) * (nl / (dtype(2.0) * two_pi * b))
+        return d, dd
+
+    @wp.func
     def locate(pl: vec2, tb: int, tab_pts: wp.array2d(dtype=dtype), tab_nrm: wp.array2d(dtype=dtype),
                tab_kap: wp.array(dtype=dtype), tab_polar: wp.array(dtype=dtype), tab_offset: wp.array(dtype=wp.int32),
                tab_len: wp.array(dtype=wp.int32), tab_h: wp.array(dtype=dtype), tab_phi: wp.array(dtype=dtype),
@@ -120,12 +165,30 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
             arc = tab_ana[tb, A_RC]
             arot = tab_ana[tb, A_ROT]
             phi = tab_phi[off + best]
+            nlobe = int(tab_ana[tb, A_NLOBE])
             for it in range(ANALYTIC_ITERATIONS):
-                pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
+                pa = vec2(dtype(0.0), dtype(0.0))
+                na = vec2(dtype(0.0), dtype(0.0))
+                ka = dtype(0.0)
+                dsa = dtype(1.0)
+                if nlobe > 0:
+                    # lobe rotations: each iterate turned by its pitch unit's rotation (cycloid_pins_ref.lobe_turn)
+                    dl, ddl = lobe_turn(tab_ana, tb, nlobe, phi)
+                    pa, na, ka, dsa = analytic_point_turned(aR, aK1, azb, arc, arot, dl, ddl, phi)
+                else:
+                    pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
                 wa_ = pl - pa
                 dsn = wp.dot(wa_, -perp(na)) / (dtype(1.0) + ka * wp.dot(wa_, na))
                 phi = phi + dsn / dsa
-            pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
+            pa = vec2(dtype(0.0), dtype(0.0))
+            na = vec2(dtype(0.0), dtype(0.0))
+            ka = dtype(0.0)
+            dsa = dtype(1.0)
+            if nlobe > 0:
+                dl, ddl = lobe_turn(tab_ana, tb, nlobe, phi)
+                pa, na, ka, dsa = analytic_point_turned(aR, aK1, azb, arc, arot, dl, ddl, phi)
+            else:
+                pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
             cl = pa
             nl = na
             kap = ka
@@ -334,13 +397,19 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
 
 
 def _analytic_rows(tables, analytic, ndtype):
-    """One analytic row per profile table (columns A_* of cycloid_pins_ref); all zero for a
-    table searched on its samples."""
-    rows = np.zeros((len(tables), N_ANALYTIC), ndtype)
+    """One analytic row per profile table (columns A_* of cycloid_pins_ref, then the lobe rotations of
+    a profile that has them: the rows as wide as the most lobes); all zero for a table searched on its
+    samples."""
+    n_l = [len(a[5]) if a is not None and len(a) > 5 else 0
+           for a in (analytic if analytic is not None else [None] * len(tables))]
+    rows = np.zeros((len(tables), N_ANALYTIC + max(n_l, default=0)), ndtype)
     for k in range(len(tables)):
         if analytic is not None and analytic[k] is not None:
             rows[k, A_ANALYTIC] = 1.0
-            rows[k, A_R:A_ROT + 1] = analytic[k]
+            rows[k, A_R:A_ROT + 1] = analytic[k][:5]
+            if n_l[k]:
+                rows[k, A_NLOBE] = n_l[k]
+                rows[k, N_ANALYTIC:N_ANALYTIC + n_l[k]] = analytic[k][5]
     return rows
 
 
@@ -365,6 +434,32 @@ def stacked_column(parts, ndtype, wdtype, device):
     return wp.array(np.concatenate(parts, axis=0, dtype=ndtype, casting="same_kind"), dtype=wdtype, device=device)
 
 
+def gathered_column(sources, wdtype, device):
+    """The device array of table columns that are rows of device arrays already: ``sources`` [(array
+    (T, n) or (T, n, 2) on ``device``, row t)], stacked along the samples by device copies (runs of
+    consecutive rows of one array in one copy), or None where a source is elsewhere or of another type
+    (the caller stacks host columns then)."""
+    dev = wp.get_device(device)
+    if not sources or any(x is None or x[0].device != dev or x[0].dtype != wdtype for x in sources):
+        return None
+    first = sources[0][0]
+    inner = first.shape[2] if first.ndim == 3 else 1
+    total = sum(a.shape[1] for a, _ in sources)
+    out = wp.empty((total, inner) if first.ndim == 3 else (total,), dtype=wdtype, device=device)
+    runs, dst = [], 0
+    for a, t in sources:
+        cnt = a.shape[1] * inner
+        src = int(t) * cnt
+        if runs and runs[-1][0] is a and runs[-1][1] + runs[-1][3] == src:
+            runs[-1][3] += cnt
+        else:
+            runs.append([a, src, dst, cnt])
+        dst += cnt
+    for a, src, at, cnt in runs:
+        wp.copy(out, a, dest_offset=at, src_offset=src, count=cnt)
+    return out
+
+
 class CycloidPinKernel(PairLaunch):
     """Device-resident evaluator of one cycloid--pin contact set (one launch per call)."""
 
@@ -379,14 +474,20 @@ class CycloidPinKernel(PairLaunch):
         assert fparams.shape[1] == N_FLOAT and iparams.shape[1] == N_INT
         self.n = len(fparams)
         dt = self.wdtype
-        lens = [len(tb[0]) for tb in tables]
+        # a table computed on this device (rvtool.contact.cycloid_set.ProfileTable.device_column) is copied
+        # there, not read back and stacked on the host
+        on_dev = all(callable(getattr(tb, "device_column", None)) for tb in tables)
+        lens = [tb.n_samples if on_dev else len(tb[0]) for tb in tables]
         offs = np.concatenate([[0], np.cumsum(lens)[:-1]]).astype(np.int32)
-        col = lambda i: stacked_column([tb[i] for tb in tables], self.ndtype, dt, d)
+
+        def col(i):
+            got = gathered_column([tb.device_column(i, d) for tb in tables], dt, d) if on_dev else None
+            return got if got is not None else stacked_column([tb[i] for tb in tables], self.ndtype, dt, d)
         model = [
             wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
             col(0), col(1), col(2), col(3),
             wp.array(offs, dtype=wp.int32, device=d), wp.array(np.array(lens, np.int32), dtype=wp.int32, device=d),
-            wp.array(np.array([tb[4] for tb in tables], self.ndtype), dtype=dt, device=d),
+            wp.array(np.array([tb.spacing if on_dev else tb[4] for tb in tables], self.ndtype), dtype=dt, device=d),
             col(5),
             wp.array(_analytic_rows(tables, analytic, self.ndtype), dtype=dt, device=d),
             int(window)]

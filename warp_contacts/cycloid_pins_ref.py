@@ -59,10 +59,14 @@ J_BODY_B = 1        # pose row of the pin carrier (body B)
 J_FRICTION = 2      # friction mode (circle_pairs_ref.FRICTION_NONE or FRICTION_REGULARIZED)
 J_TABLE = 3         # index of the profile table
 N_INT = 4
-# columns of a profile table's analytic row (Warp kernel): a flag (1.0: analytic search) and
-# the profile parameters of :func:`analytic_point` in their order
-(A_ANALYTIC, A_R, A_K1, A_ZB, A_RC, A_ROT) = range(6)
-N_ANALYTIC = 6
+# columns of a profile table's analytic row (Warp kernel): a flag (1.0: analytic search), the
+# profile parameters of :func:`analytic_point` in their order, and the number n_l of lobe rotations
+# (0: none) whose angles [rad] follow in columns N_ANALYTIC .. N_ANALYTIC + n_l - 1 (:func:`lobe_turn`)
+(A_ANALYTIC, A_R, A_K1, A_ZB, A_RC, A_ROT, A_NLOBE) = range(7)
+N_ANALYTIC = 7
+LOBE_BLEND = 0.05
+"""Half width of the blend of two neighbouring pitch units' rotations about the tooth tip between them, as a
+fraction of the pitch 2 pi / z_g (:func:`lobe_turn`)."""
 
 
 ANALYTIC_ITERATIONS = 4
@@ -86,6 +90,51 @@ def analytic_point(params, phi):
     return rot(rot_angle, pt), rot(rot_angle, n), kap, dsdphi
 
 
+def lobe_turn(lobes, phi):
+    """Rotation d(phi) [rad] of the profile point of generating angle phi and its derivative d'(phi) from the
+    rotations d_j of the z_g pitch units (``lobes``). Unit j is the tooth space about the root at
+    phi = 2 pi j / z_g with its two flanks, from tip to tip (u = phi z_g / 2 pi + 1/2, j = floor(u) mod z_g,
+    t = u - floor(u) in [0, 1), the root at t = 1/2): the unit turns rigidly (d = d_j, d' = 0), and within
+    :data:`LOBE_BLEND` of a tip its rotation joins the neighbour's linearly (at the tip both units meet at
+    (d_j + d_j+1) / 2), so that the profile has no step where two units meet (a step would be a jump of the
+    contact geometry; at the tips the lever arm of a pin's force about the wheel centre is smallest). The rule
+    of :meth:`rvtool.geometry.cycloid.CycloidProfile.lobe_turn` and of the Warp kernel."""
+    d_l = np.asarray(lobes, float)
+    n = len(d_l)
+    u = np.asarray(phi, float) * n / (2 * np.pi) + 0.5
+    fl = np.floor(u)
+    t = u - fl
+    j = np.mod(fl.astype(np.int64), n)
+    dj, prev, nxt = d_l[j], d_l[(j - 1) % n], d_l[(j + 1) % n]
+    b = LOBE_BLEND
+    lo, hi = t < b, t > 1.0 - b
+    d = np.where(lo, dj + (prev - dj) * ((b - t) / (2 * b)), np.where(hi, dj + (nxt - dj) * ((t - 1.0 + b) / (2 * b)), dj))
+    dd = np.where(lo, (dj - prev) * (n / (4 * np.pi * b)), np.where(hi, (nxt - dj) * (n / (4 * np.pi * b)), 0.0))
+    return d, dd
+
+
+def analytic_point_turned(params, d, dd, phi):
+    """:func:`analytic_point` of a profile whose point of generating angle phi is turned about the wheel centre
+    by the profile rotation plus d(phi) (:func:`lobe_turn`): the point turned, the tangent of the turned curve
+    c' = R(d) (c_0' + d' J c_0) (J: the quarter turn), its normal, the unturned curvature (d'' = 0) and the arc
+    length per unit phi |c_0' + d' J c_0|."""
+    R, K1, zb, rc, rot_angle = params
+    s, c, S, C = np.sin(phi), np.cos(phi), np.sin(zb * phi), np.cos(zb * phi)
+    E = R * np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1)
+    dE = R * np.stack([c - K1 * C, -s + K1 * S], axis=-1)
+    ddE = R * np.stack([-s + K1 * zb * S, -c + K1 * zb * C], axis=-1)
+    speed = np.linalg.norm(dE, axis=-1)
+    tau = dE / speed[..., None]
+    kE = -(dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]) / speed ** 3
+    pt = E - rc * perp(tau)
+    kap = kE / (1.0 - rc * kE)
+    v = (speed * (1.0 - rc * kE))[..., None] * tau + np.asarray(dd)[..., None] * perp(pt)
+    ds = np.linalg.norm(v, axis=-1)
+    n = perp(v / ds[..., None])
+    a = rot_angle + d
+    return rot(a, pt), rot(a, n), kap, ds
+
+
 def search(table, pin_local, window, analytic=None):
     """Contact location for pins given in wheel coordinates.
 
@@ -93,7 +142,9 @@ def search(table, pin_local, window, analytic=None):
     osculating arc. Analytic path (``analytic`` = profile parameters, see
     :func:`analytic_point`): starting from the nearest sample, Newton iterations
     on (c - p) . c' = 0 with the osculating-circle step, so the contact point is
-    the exact closest point of the analytic profile (never clamped).
+    the exact closest point of the analytic profile (never clamped). With lobe
+    rotations (a sixth entry of ``analytic``) each Newton iterate's point is turned
+    by :func:`lobe_turn` of its generating angle (:func:`analytic_point_turned`).
     table: (points (n,2), normals (n,2), kappa (n,), polar (n,), spacing, phi (n,)).
     Returns (c (N,2), n (N,2), kappa (N,), clamped (N,) bool, sampled distance (N,)).
     """
@@ -107,13 +158,18 @@ def search(table, pin_local, window, analytic=None):
     ci, ni, ki = P[best], Nn[best], K[best]
     if analytic is not None:
         phi = table[5][best]
+        if len(analytic) > 5:
+            lobes, base = analytic[5], analytic[:5]
+            point = lambda ph: analytic_point_turned(base, *lobe_turn(lobes, ph), ph)
+        else:
+            point = lambda ph: analytic_point(analytic, ph)
         for _ in range(ANALYTIC_ITERATIONS):
-            c, nn, kk, ds = analytic_point(analytic, phi)
+            c, nn, kk, ds = point(phi)
             w = pin_local - c
             # the curve runs clockwise for increasing phi: the arc direction is -perp(n)
             dsn = dot(w, -perp(nn)) / (1.0 + kk * dot(w, nn))
             phi = phi + dsn / ds
-        c, nn, kk, _ = analytic_point(analytic, phi)
+        c, nn, kk, _ = point(phi)
         return c, nn, kk, np.zeros(len(phi), bool), np.linalg.norm(pin_local - ci, axis=1)
     ti = perp(ni)
     wi = pin_local - ci

@@ -40,7 +40,12 @@ Paths, on the same variants:
   (``build_cpu_ms_per_variant``, what the pool does) and with a table per variant
   (``build_cpu_ms_per_variant_own_tables``), a snapshot's pickled size (``snapshot_kb``), the
   profile tables the device holds (``profile_tables_largest_chunk``, ``profile_table_mb_largest_chunk``)
-  and, on CUDA, Warp's memory-pool high-water mark (``device_memory_high_mb``).
+  and, on CUDA, Warp's memory-pool high-water mark (``device_memory_high_mb``). --tables device: the
+  pool sends RD-40 variants' profiles instead of their tables (a drawn profile per variant: two
+  tables of ~262 kB each) and the device's process computes them (on a GPU in one batch inside the
+  device setup, rvtool.contact.cycloid_set.compute_profile_tables; on the cpu the host where read);
+  ``build_cpu_ms_per_variant_deferred_tables`` and ``snapshot_kb_deferred_tables`` are that build's
+  (reported either way; ``tables`` says which one ran).
 
 Reported per design: variants/s of both paths, the speed-ups, where the device's time goes
 (``split``: copying the families, kernel launches with their staging, the per-copy row sums,
@@ -215,13 +220,14 @@ def run_pool(name, quick, V, workers):
     return out, warm_s, wall_s
 
 
-def _snapshot_group(jobs):
+def _snapshot_group(jobs, defer_tables=False):
     """Build-pool task: [(k, ModelSnapshot or None, error or None)] of variant jobs (design, tolerances,
     seed, k, build options) sampled and built in this worker, a group per task (100,000 single-variant
     tasks would cost the submitting process ~0.1 ms each): rvtool.variants.multi_device.variant_snapshots
-    (cycloid variants written into the nominal snapshot, their pins on shared profile tables)."""
+    (cycloid variants written into the nominal snapshot, their pins on shared profile tables; defer_tables:
+    their tables left to the device's process, --tables device)."""
     from rvtool.variants.multi_device import variant_snapshots
-    return variant_snapshots(jobs)
+    return variant_snapshots(jobs, defer_tables=defer_tables)
 
 
 def merge_chunks(parts, V):
@@ -282,7 +288,7 @@ def device_memory_mb(device):
     return None
 
 
-def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=None):
+def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=None, tables="helpers", graph=True):
     """The device path of variants 0..V-1: built in ``workers`` processes as snapshots (shared profile
     tables) and run on the device row Newton, ``solve_chunk`` copies per device solve (None: all V
     in one solve, the run of record at 1,000; chunks: rvtool.variants.multi_device.chunk_schedule,
@@ -290,7 +296,14 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     current one (at most two chunks of builds queued: the snapshots of 100,000 RD-40 variants would
     not fit the host's memory at once), so ``wall_s`` is the whole device Monte Carlo, builds
     included; ``build_wait_s`` the time the device's process waited for builds (one chunk: the
-    whole build, the pool's transfer included, as ``build_s``)."""
+    whole build, the pool's transfer included, as ``build_s``). tables: "helpers" (the build pool computes
+    each variant's cycloid profile tables and sends them) or "device" (the pool sends the profiles; the
+    device row Newton computes the tables on a GPU inside its setup, on the cpu the host where read:
+    rvtool.contact.cycloid_set.compute_profile_tables). graph: on CUDA the row Newton's resident loop as a
+    captured CUDA graph (rvtool.solver.device_rows; False: the host loop)."""
+    from rvtool.solver.device_newton import DeviceNewtonSettings
+    settings = DeviceNewtonSettings(graph=bool(graph))
+    import functools
     from rvtool.variants.multi_device import chunk_schedule
     if name in RV_NAMES:
         design, tol, angles = _rv_setup(quick, name)
@@ -305,12 +318,16 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
         seed = RD_SEED
     sizes = chunk_schedule(V, solve_chunk or V, V if solve_chunk is None else first_chunk)
     starts = np.concatenate([[0], np.cumsum(sizes)])
-    probe = build(design, **kw)
+    warm = [build(design, **kw)]
+    if tables == "device" and name not in RV_NAMES:    # the profile-table kernels compiled before the timing too
+        from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
+        from rvtool.variants import Variant
+        warm = cycloid_variant_snapshots(design, [Variant()], kw, defer_tables=True)
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
-    device_rows_variants([probe], torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
-                         device=device)
+    device_rows_variants(warm, torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
+                         device=device, settings=settings)
     ctx = multiprocessing.get_context("spawn")
-    parts, waits, last_models = [], [], None
+    parts, waits = [], []
     table = {"profile_tables": 0, "profile_table_mb": 0.0}
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
         t = time.perf_counter()
@@ -322,7 +339,8 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
             ks = range(int(starts[i]), int(starts[i + 1]))
             g = max(1, min(64, len(ks) // (4 * workers)))
             jobs = [(design, tol, seed, k, kw) for k in ks]
-            return [ex.submit(_snapshot_group, jobs[j:j + g]) for j in range(0, len(jobs), g)]
+            task = functools.partial(_snapshot_group, defer_tables=tables == "device")
+            return [ex.submit(task, jobs[j:j + g]) for j in range(0, len(jobs), g)]
 
         t0, aside = time.perf_counter(), 0.0
         queued = {i: submit(i) for i in range(min(2, len(sizes)))}
@@ -334,51 +352,58 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
                 queued[i + 2] = submit(i + 2)
             models = [m for _, m, _ in got if m is not None]
             bad = [(k, e) for k, m, e in got if m is None]
+            part = device_rows_variants(models, torque=torque, input_angles=angles,
+                                        lost_motion_level=LM_FRACTION * design.rated_torque, device=device,
+                                        settings=settings) \
+                if models else None
             ta = time.perf_counter()
-            stats = table_stats(models)           # bookkeeping of the report: not timed
-            if stats["profile_table_mb"] >= table["profile_table_mb"]:
+            stats = table_stats(models)           # bookkeeping of the report (after the solve: deferred tables
+            if stats["profile_table_mb"] >= table["profile_table_mb"]:      # are computed by then): not timed
                 table = stats
             aside += time.perf_counter() - ta
-            part = device_rows_variants(models, torque=torque, input_angles=angles,
-                                        lost_motion_level=LM_FRACTION * design.rated_torque, device=device) \
-                if models else None
             if bad:                               # a variant that cannot be built is a failed variant of the study
                 part = with_failed_builds(part, [m is not None for _, m, _ in got], [e for _, _, e in bad], len(angles))
             parts.append(part)
-            last_models = models or last_models
         wall_s = time.perf_counter() - t0 - aside
     r = merge_chunks(parts, V)
     cost = dict(build_s=waits[0] if len(sizes) == 1 else sum(waits), build_pool_warm_s=warm_s,
                 build_wait_s=sum(waits), end_to_end_s=wall_s, solve_chunks=[int(x) for x in sizes],
                 device_memory_high_mb=device_memory_mb(device),
                 **{k + "_largest_chunk": v for k, v in table.items()})
-    cost.update(build_cost(design, tol, seed, kw, list(range(max(0, V - 16), V)), last_models))
+    cost.update(build_cost(design, tol, seed, kw, list(range(V, V + 25))))
+    cost["tables"] = tables
+    cost["graph"] = bool(graph)
     return r, cost, kw, design.rated_torque
 
 
-def build_cost(design, tol, seed, kw, ks, models, n=8):
-    """What one variant's build costs, after the timings, on the last variants ``ks`` (none built in
-    this process before): the CPU time in this process of sampling and building ``n`` of them as the
-    pool does (``build_cpu_ms_per_variant``: _snapshot_group; ``build_s`` above it is the pool's
-    transfer and scheduling) and as before shared tables (``build_cpu_ms_per_variant_own_tables``:
-    each variant's whole model built, a table per variant), and the pickled size of a snapshot the pool
-    sends back (``snapshot_kb``)."""
+def build_cost(design, tol, seed, kw, ks, n=8):
+    """What one variant's build costs, after the timings, on variants ``ks`` (3 n + 1 of them, none built in
+    this process before: the run's variants are 0..V-1, these V and beyond): the CPU time in this process of sampling and building ``n`` of them as the
+    pool does (``build_cpu_ms_per_variant``: _snapshot_group, the tables computed; ``build_s`` above it
+    is the pool's transfer and scheduling), the same with the tables deferred to the device
+    (``build_cpu_ms_per_variant_deferred_tables``, --tables device; RV: its tables are shared, the same
+    build) and as before shared tables (``build_cpu_ms_per_variant_own_tables``: each variant's whole
+    model built, a table per variant), and the pickled size of a snapshot the pool sends back both ways
+    (``snapshot_kb``, ``snapshot_kb_deferred_tables``; a shared table goes by its key once a process has
+    used it twice, a deferred one always)."""
     import pickle
     from rvtool.solver.model_snapshot import build_snapshot
-    # the pickled size first: a shared table goes by its key once this process has used it twice
-    out = {"snapshot_kb": len(pickle.dumps(models[-1])) / 1024.0}
-    n = max(1, min(n, len(ks) // 2))
+    n = max(1, min(n, (len(ks) - 1) // 3))
     vdesign = rv_variant_design if design.__class__.__name__ != "CycloidDesign" else rd_variant_design
     build_snapshot(design, kw, shared_tables=True)            # this process's nominal tables and snapshot: not timed
     if vdesign is rd_variant_design:
         from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
         from rvtool.variants import Variant
         cycloid_variant_snapshots(design, [Variant()], kw)
+    _snapshot_group([(design, tol, seed, ks[-1], kw)])          # the RV tables' second use here: then by key
+    out = {}
+    for label, defer, sel in (("", False, ks[:n]), ("_deferred_tables", True, ks[n:2 * n])):
+        t = time.process_time()
+        got = _snapshot_group([(design, tol, seed, k, kw) for k in sel], defer_tables=defer)
+        out["build_cpu_ms_per_variant" + label] = 1e3 * (time.process_time() - t) / n
+        out["snapshot_kb" + label] = len(pickle.dumps(got[-1][1])) / 1024.0
     t = time.process_time()
-    _snapshot_group([(design, tol, seed, k, kw) for k in ks[len(ks) - n:]])
-    out["build_cpu_ms_per_variant"] = 1e3 * (time.process_time() - t) / n
-    t = time.process_time()
-    for k in ks[-2 * n:len(ks) - n]:
+    for k in ks[2 * n:3 * n]:
         build_snapshot(vdesign(tol, design, k), kw)
     out["build_cpu_ms_per_variant_own_tables"] = 1e3 * (time.process_time() - t) / n
     return out
@@ -394,13 +419,14 @@ def table_stats(models):
             if isinstance(e.evaluator, CycloidPinSet):
                 for key, (tab, _, _) in e.evaluator.profile_tables().items():
                     key = tab.key if isinstance(tab, ProfileTable) else key
-                    if key not in seen:
-                        seen[key] = sum(np.asarray(a).size for a in tab) * 8
+                    if key not in seen:      # 7 columns per sample and the spacing (a device table not read back)
+                        seen[key] = (7 * (tab.n_samples if isinstance(tab, ProfileTable) else len(tab[0])) + 1) * 8
     return {"profile_tables": len(seen), "profile_table_mb": sum(seen.values()) / 1e6}
 
 
-def bench(name, quick, V, workers, device, solve_chunk=None, first_chunk=None, pool_variants=None):
-    r, cost, kw, rated = run_device(name, quick, V, device, workers, solve_chunk, first_chunk)
+def bench(name, quick, V, workers, device, solve_chunk=None, first_chunk=None, pool_variants=None, tables="helpers",
+          graph=True):
+    r, cost, kw, rated = run_device(name, quick, V, device, workers, solve_chunk, first_chunk, tables, graph)
     M = V if pool_variants is None else min(int(pool_variants), V)
     pool, warm_s, pool_s = run_pool(name, quick, M, workers)
     te_dev_pp = np.ptp(r.te[:M], axis=1) * ARCSEC_PER_RAD
@@ -480,7 +506,14 @@ def main(argv=None):
                        help="copies of the first device solve with --solve-chunk (default: solve-chunk / 8)"),
         p.add_argument("--pool-variants", type=int, default=None,
                        help="variants 0..N-1 run on the pool too (default: all; e.g. 1000 of a 100,000-variant run: "
-                            "the pool's rate and the agreement from those)")))
+                            "the pool's rate and the agreement from those)"),
+        p.add_argument("--tables", default="helpers", choices=("helpers", "device"),
+                       help="where RD-40 variants' cycloid profile tables are computed: the build helpers (default; "
+                            "each snapshot carries its tables) or the device's process (a GPU computes them in the "
+                            "device setup; the helpers send the profiles)"),
+        p.add_argument("--graph", default="on", choices=("on", "off"),
+                       help="on CUDA: the row Newton's resident loop as a captured CUDA graph (default on; off: "
+                            "the host loop)")))
     t_all = time.perf_counter()
     V = args.variants or (2 if args.quick else 1000)
     workers = args.workers or (2 if args.quick else os.cpu_count() or 1)
@@ -496,9 +529,9 @@ def main(argv=None):
             raise RvtoolInputError(f"--{nm.replace('_', '-')} = {v} is outside the valid range [1, inf)")
     results = {"settings_echo": {"variants": V, "workers": workers, "device": args.device, "quick": args.quick,
                                  "solve_chunk": args.solve_chunk, "first_chunk": args.first_chunk,
-                                 "pool_variants": args.pool_variants},
+                                 "pool_variants": args.pool_variants, "tables": args.tables, "graph": args.graph},
                "designs": {n: bench(n, args.quick, V, workers, args.device, args.solve_chunk, args.first_chunk,
-                                    args.pool_variants) for n in names}}
+                                    args.pool_variants, args.tables, args.graph == "on") for n in names}}
     results["wall_s"] = time.perf_counter() - t_all
     casekit.verdict(results, judge)
     return casekit.write_results(args.out, results, settings={"quick": args.quick, "variants": V, "workers": workers,

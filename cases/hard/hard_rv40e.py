@@ -60,7 +60,7 @@ def main(argv=None):
 
 def _plot(out, name, arr):
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(1, 2, figsize=(9, 3))
+    fig, ax = plt.subplots(1, 2, figsize=(9, 3), layout="constrained")
     ax[0].plot(arr["t"] * 1e3, arr["te"] * ARCSEC_PER_RAD)
     ax[0].set(xlabel="t [ms]", ylabel="TE [arcsec]", title=f"rv40e: {name}")
     ax[1].plot(arr["t"] * 1e3, arr["pin_sum_N"])

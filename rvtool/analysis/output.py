@@ -6,7 +6,7 @@ import math
 import os
 import platform
 import sys
-import tempfile
+import threading
 import time
 
 import numpy as np
@@ -76,8 +76,10 @@ def write_results(out_dir, results, settings=None, wall_s=None, precision="float
     }
     data = _jsonable(data)
     os.makedirs(out_dir, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=out_dir, prefix=".results", suffix=".json")
-    with os.fdopen(fd, "w") as fh:
+    # a temporary name of this process and thread, opened as any file (mode 0666 less the umask;
+    # tempfile.mkstemp's 0600 left results.json unreadable to the group and to a web server)
+    tmp = os.path.join(out_dir, f".results.{os.getpid()}.{threading.get_ident()}.json")
+    with open(tmp, "w") as fh:
         json.dump(data, fh, indent=1)
     os.replace(tmp, os.path.join(out_dir, "results.json"))
     return data

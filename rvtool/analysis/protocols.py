@@ -465,8 +465,10 @@ def run_vibration(ctx):
     ax[0].legend(fontsize=7)
     ax[1].semilogy(sp["orders"][1:], sp["order_spectrum"][1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8, label="dynamic")
     ax[1].semilogy(o_qs[1:], a_qs[1:] * ARCSEC_PER_RAD + 1e-12, lw=0.8, label="quasi-static")
-    ax[1].axvline(mesh_order, color="r", ls="--", lw=0.8)
+    ax[1].axvline(mesh_order, color="r", ls="--", lw=0.8, label="mesh")
     ax[1].set(xlabel="input-shaft order [-]", ylabel="amplitude [arcsec]")
+    ax[0].set_title(f"driven run at {speed:g} rpm, {rated:g} N m", fontsize=10)
+    ax[1].set_title("order spectra, driven and quasi-static", fontsize=10)
     ax[1].legend(fontsize=7)
     out.plots.append(ctx.save(fig, "vibration"))
     return out
@@ -512,7 +514,8 @@ def run_pressure(ctx):
         out.data[member] = rec
         x, p = fields[-1]
         ax.plot(x * 1e6, p / 1e6, drawstyle="steps-mid", lw=0.8, label=f"{member}: {best.name}")
-    ax.set(xlabel="x [um]", ylabel="pressure [MPa]", title=f"pressure at {rated} N m, N = {ns[-1]}")
+    ax.set(xlabel="x, across the contact from its centre [\u00b5m]", ylabel="contact pressure [MPa]",
+           title=f"highest-pressure pin contact per wheel at {rated} N m ({ns[-1]} panels)")
     ax.legend(fontsize=7)
     out.plots.append(ctx.save(fig, "pressure"))
     out.settings = {"torque_Nm": rated, "input_angle_rad": 0.0, "panels": ns, "window_m": PRESSURE_WINDOW,
@@ -697,16 +700,25 @@ def run_monte_carlo(ctx):
         name = nm.rsplit("_", 1)[0]
         out.figures.append(Figure(f"{name}_mean", st["mean"], unit, f"mean of {nm} over {st['n']} variants", half, unit,
                                   "half-width of the 95 % Student-t confidence interval of the mean (sampling error)"))
+        ci = ", ".join("none (too few variants)" if b is None else f"{b:.4g}" for b in st["p95_ci"])
         out.figures.append(Figure(f"{name}_p95", st["p95"], unit, f"95th percentile of {nm}", None, unit,
-                                  f"95 % order-statistic interval {st['p95_ci']} (None: too few variants)"))
+                                  f"95 % order-statistic interval [{ci}] {unit}"))
     out.data = {"summary": s, "records": res["records"]}
     out.settings = settings
+    out.plots.append(ctx.save(monte_carlo_histograms(res["records"]), "monte_carlo"))
+    return out
+
+
+def monte_carlo_histograms(records):
+    """The Monte Carlo plot: histograms of TE p-p and lost motion over the variants of ``records``
+    (:func:`rvtool.variants.montecarlo.run_monte_carlo`'s, those with status "ok"); a matplotlib figure."""
     import matplotlib.pyplot as plt
-    ok = [r for r in res["records"] if r["status"] == "ok"]
+    from matplotlib.ticker import MaxNLocator
+    ok = [r for r in records if r["status"] == "ok"]
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.4))
     for a, nm, label in ((ax[0], "te_pp_arcsec", "TE p-p [arcsec]"), (ax[1], "lost_motion_arcmin", "lost motion [arcmin]")):
         x = [r[nm] for r in ok if r.get(nm) is not None]
         a.hist(x, bins=max(3, min(40, len(x) // 5)), color="0.6", edgecolor="k", lw=0.5)
-        a.set(xlabel=label, ylabel="variants")
-    out.plots.append(ctx.save(fig, "monte_carlo"))
-    return out
+        a.set(xlabel=label, ylabel="variants [-]", title=f"{len(x)} of {len(records)} variants")
+        a.yaxis.set_major_locator(MaxNLocator(integer=True))       # a count: no 0.5 variant
+    return fig

@@ -120,6 +120,7 @@ def rigidity_ba(design, catalogue):
     """{"value": b/a [N m/arcmin] (mean of the loading branches), "per_branch", "angles_arcmin", "torques_Nm"}
     on the catalogue's points (module docstring)."""
     from ..assembly import build
+    from ..assembly.rv.wheel_path import network_counters
     from ..protocols import catalogue as C
     from .validate import rigidity_points
     check_frictionless(design)
@@ -127,19 +128,24 @@ def rigidity_ba(design, catalogue):
     T_R = catalogue.test.rated_torque
     t1, t2 = (p * T_R for p in pts)
     torques = np.array([t1, t2, -t1, -t2])
-    path = C.ContinuationPath(build(design))
+    model = build(design)
+    path = C.ContinuationPath(model)
     angles = np.array([path.go_to(float(t)) for t in torques])
     labels = ["pos_loading", "pos_loading", "neg_loading", "neg_loading"]
     r = C.torsional_rigidity(torques, angles, labels, torque_points=(t1, t2))
     return {"value": r.value * RAD_PER_ARCMIN, "per_branch": {k: v * RAD_PER_ARCMIN for k, v in r.per_branch.items()},
-            "torques_Nm": torques.tolist(), "angles_arcmin": (angles / RAD_PER_ARCMIN).tolist()}
+            "torques_Nm": torques.tolist(), "angles_arcmin": (angles / RAD_PER_ARCMIN).tolist(),
+            "networks": network_counters(model), "solver": path.stats()}
 
 
 def _sample(args):
     table, catalogue = args
     from ..assembly.topologies import design_from_table
+    c0 = time.process_time()
     try:
-        return rigidity_ba(design_from_table(table), catalogue), None
+        r = rigidity_ba(design_from_table(table), catalogue)
+        r["cpu_s"] = time.process_time() - c0          # build included (this process's CPU seconds)
+        return r, None
     except Exception as exc:       # a failed variant is counted and reported
         return None, f"{type(exc).__name__}: {exc}"
 
@@ -201,6 +207,8 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     for r in rows:
         r["figure"] = "torsional_rigidity_all_members_on"
     return {"rows": rows, "central": central, "band": band, "samples": n, "sample_values": values,
+            "sample_networks": [None if r is None else r["networks"] for r, _ in res[1:]],
+            "sample_cpu_s": [None if r is None else r["cpu_s"] for r, _ in res[1:]],
             "failures": failures, "keys": [a.key for a in inputs], "U": U.tolist(),
             "members_file": f"{name}.toml", "switches": switches, "derived": derived,
             "inputs_at_middle": mid, "assumptions_commit": recorded, "last_commit_touching_members": last,

@@ -216,8 +216,10 @@ def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, 
             f"{TE_TORQUE_FRACTION:g} T_R over {te_window(design)} input revolutions (every sun/crank-gear tooth "
             f"pairing; a lower bound of the output revolution's peak-to-peak), {ppm} points per mesh cycle; "
             f"nominal design {res['nominal_pp'] * ARCSEC_PER_RAD:.3g} arcsec. Error sources the tolerance file "
-            "does not carry (tooth-by-tooth cycloid profile and index errors, bore and seat form errors, the "
-            "output-disc pillar holes) are absent from the prediction")
+            "does not carry (the lobes' profile form beyond their pitch, the two wheels' profiles differing in "
+            "form, bore and seat form errors, gear runout) are absent from the prediction; the output side's hole "
+            "positions are the carrier's crank-bearing seats (the RV output is the carrier, reached through the "
+            "crank bearings only; the wheels' pillar holes carry no load)")
     return {"rows": te_rows(measured, dist, note), "distribution": dist,
             "nominal_pp_arcsec": res["nominal_pp"] * ARCSEC_PER_RAD,
             "records": [{**r, "te_pp_arcsec": None if r["te_pp_rad"] is None else r["te_pp_rad"] * ARCSEC_PER_RAD}
@@ -259,6 +261,8 @@ def te_plot(te, out_dir):
     ax.set(xlabel="TE peak-to-peak [arcsec]", ylabel="variants",
            title=f"TE: {te['settings']['variants']} variants vs measured ({te['measured']['status']})")
     ax.legend(fontsize=6)
+    from matplotlib.ticker import MaxNLocator
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))           # a count: no 0.5 variant
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, "te_measured.png"), dpi=110)
     plt.close(fig)

@@ -44,6 +44,7 @@ from ..contact.cycloid_set import (PALMGREN_EXPONENT, CycloidPinSet, WheelPinMes
                                      secant_line_stiffness)
 from ..bearings.influence import check_lumped
 from ..errors import RvtoolInputError
+from ..geometry.cycloid import lobe_pitch_rotations
 from ..geometry.eccentric import journal_centre, journal_velocity
 from ..output_pins.calibration import mindlin_tangential_ratio  # noqa: F401 (public here too)
 from ..model import BodyCoordinate, ClearanceVariant, Family, ReducerModel, SeriesBeam
@@ -63,6 +64,12 @@ class CycloidKinematics:
         self.phases = np.asarray(design.wheels.phases[:design.n_wheels], float)
         self.z_g = design.pins.n_pins - 1
         self.n_wheels = design.n_wheels
+
+    @property
+    def crank_rate(self):
+        """omega_crank / omega_in: the eccentric orbit per input radian (1: the input shaft carries
+        the journals), the period 2 pi / |crank_rate| [rad of input] with which the contacts repeat."""
+        return 1.0
 
     def poses(self, input_angles):
         """(n, nb, 3) poses at input angles (n,) [rad]."""
@@ -299,7 +306,6 @@ class CycloidModel(ReducerModel):
         for p in pin_centres(self.profiles[0]):
             ax.add_patch(plt.Circle(p, self.design.pins.pin_radius, fill=False, color="k", lw=0.6))
         super().draw_section(ax, q)
-        ax.legend(fontsize=8)
 
 
 def eccentric_drive_markers(design, speed_rpm, mesh_teeth):
@@ -430,12 +436,25 @@ def add_bodies(mbs, design, mg, *, rigid_supports=False, regularization=(100.0, 
             "reg_springs": reg_springs, "load": load}
 
 
+def wheel_profile(design, k):
+    """The profile of wheel k of a cycloid or RV design as its contact with the pins sees it: the design's
+    profile turned to the wheel's assembly phase (the conjugate tooth phase of a journal at phi_k: every wheel
+    starts in mesh) and, where ``wheels.lobe_pitch_deviations`` gives them, its lobes turned by their
+    accumulated pitch deviations (:func:`rvtool.geometry.cycloid.lobe_pitch_rotations`)."""
+    d = design
+    zg = d.pins.n_pins - 1
+    prof = dataclasses.replace(d.profile, rotation_mod=d.profile.rotation_mod - d.wheels.phases[k] / zg)
+    if d.wheels.lobe_pitch_deviations:
+        prof = dataclasses.replace(prof, lobe_rotations=lobe_pitch_rotations(prof, d.wheels.lobe_pitch_deviations[k]))
+    return prof
+
+
 def pin_meshes(design, *, offset=0, prefix=""):
     """(profiles, :class:`WheelPinMesh` per wheel) of one reducer whose bodies start at index
     ``offset`` (wheel k is body offset + 1 + k): the design's profile turned to wheel k's
-    assembly phase, pins on ground with the design's pin deviations; names ``prefix + "wheel{k}"``."""
+    assembly phase (:func:`wheel_profile`, lobe deviations included), pins on ground with the design's pin
+    deviations; names ``prefix + "wheel{k}"``."""
     d = design
-    zg = d.pins.n_pins - 1
     pc = d.pin_contact
     width = d.wheels.width
     if pc.law == "power":
@@ -449,8 +468,7 @@ def pin_meshes(design, *, offset=0, prefix=""):
     friction = pin_friction_law(design, law.stiffness)
     profiles, meshes = [], []
     for k in range(d.n_wheels):
-        # the conjugate tooth phase of a journal at phi_k: every wheel starts in mesh
-        prof = dataclasses.replace(d.profile, rotation_mod=d.profile.rotation_mod - d.wheels.phases[k] / zg)
+        prof = wheel_profile(d, k)
         profiles.append(prof)
         kw = dict(profile=prof, wheel_body=offset + 1 + k, pin_body=GROUND, face_width=width, n_slices=d.wheels.n_slices,
                   wheel_z=d.wheels.midplanes[k], clearance=d.wheels.clearance, normal=law, friction=friction,

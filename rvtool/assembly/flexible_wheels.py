@@ -97,6 +97,10 @@ def wheel_body_mesh(design, k=0, mesh_size=None):
     from ..structure.wheel_body import wheel_body
     d = design
     spec = wheel_spec(d, mesh_size)
+    if spec.elasticity != "solid":
+        raise RvtoolInputError(f"wheels.structure.elasticity = {spec.elasticity!r} with flexible wheels is not "
+                               "implemented (the floating frame needs the 3D solid); valid: "
+                               "wheels.structure.elasticity = 'solid'")
     wb = wheel_body(wheel_geometry(d, k, spec), spec, spec.material or d.material)
     ops = port_operators_from_rows(wb.fe, measure=wb.measure_matrix, load=wb.load_matrix,
                                    profile_rows=wb.rows("profile"), profile_points=wb.profile_points,

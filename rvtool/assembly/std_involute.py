@@ -134,15 +134,14 @@ class StdInvoluteModel(ReducerModel):
         contact forces."""
         t = np.linspace(0, 2 * np.pi, 721)
         ring = self.design.ring
-        for r in (ring.tip_radius, ring.root_radius):
-            ax.plot(r * np.cos(t), r * np.sin(t), "k", lw=0.6)
+        for r, label in ((ring.tip_radius, "ring, tip and root circles"), (ring.root_radius, None)):
+            ax.plot(r * np.cos(t), r * np.sin(t), "k", lw=0.6, label=label)
         wheel = self.design.wheel
-        for k in range(self.n_wheels):
+        for k in range(self.n_wheels):      # one colour per wheel for both of its circles
             c = self.reference[1 + k, :2] + q[[self.coordinate_index(1 + k, i) for i in range(2)]]
-            for r in (wheel.tip_radius, wheel.root_radius):
-                ax.plot(c[0] + r * np.cos(t), c[1] + r * np.sin(t), lw=0.6, label=f"wheel {k}" if r == wheel.tip_radius else None)
+            for r, label in ((wheel.tip_radius, f"wheel {k}, tip and root circles"), (wheel.root_radius, None)):
+                ax.plot(c[0] + r * np.cos(t), c[1] + r * np.sin(t), color=f"C{k}", lw=0.6, label=label)
         super().draw_section(ax, q)
-        ax.legend(fontsize=8)
 
 
 def wheel_mass(design):

@@ -205,7 +205,7 @@ _SHARED_SLACK = contextvars.ContextVar("rvtool_shared_profile_tables", default=N
 
 
 @contextlib.contextmanager
-def shared_profile_tables(slack=PIN_RADIUS_SLACK):
+def shared_profile_tables(slack=PIN_RADIUS_SLACK, *, defer=False):
     """Within this context a :class:`CycloidPinSet` takes its profile tables from one shared table per
     (profile, sampling) (:class:`ProfileTable`) instead of one per (profile, pin radius).
 
@@ -218,10 +218,15 @@ def shared_profile_tables(slack=PIN_RADIUS_SLACK):
     is the same: Monte Carlo variants that differ in pin radius, clearances, pin positions or
     eccentricity share their wheel's table (the device holds one table per distinct profile, a pickled
     snapshot carries its key; tests/test_shared_tables.py). Only the window grows (by a sample or two).
-    Builds outside the context are unchanged."""
+    Builds outside the context are unchanged.
+
+    defer: the sets built here do not compute their tables (nor their search windows): a table is computed
+    where it is first read, or for many at once on a Warp device by :func:`compute_profile_tables` (a
+    Monte Carlo's build helpers then send each variant's profile, not its tables: RD-40 ~8 of ~13 ms of a
+    variant's build and 524 of 548 kB of its snapshot). Default off (the tables computed here)."""
     if not (isinstance(slack, (int, float)) and 0.0 <= slack <= 0.1):
         raise RvtoolInputError(f"slack = {slack!r} is outside the valid range [0, 0.1] (fraction of the pin radius)")
-    token = _SHARED_SLACK.set(float(slack))
+    token = _SHARED_SLACK.set((float(slack), bool(defer)))
     try:
         yield
     finally:
@@ -266,23 +271,68 @@ class ProfileTable:
     the profile's generating radius, computed on first use once per process. ``key`` identifies it
     (equal keys: the same table). Pickled as its key where this process used it for more than one set
     (the receiving process computes it once), else with its arrays (a profile of one variant only, e.g.
-    RD-40's drawn profile modifications: computing it again would move the build into the receiver)."""
+    RD-40's drawn profile modifications: computing it again would move the build into the receiver). A table
+    not computed in this process (deferred: :func:`shared_profile_tables` ``defer``) is pickled as its key;
+    :meth:`provide` gives it arrays computed elsewhere (:func:`compute_profile_tables`)."""
 
-    __slots__ = ("key", "_entry", "_arrays")
+    __slots__ = ("key", "_entry", "_arrays", "_device")
     _uses = {}
 
     def __init__(self, profile, n_samples, search, band, slack, arrays=None):
         self.key = (profile, int(n_samples), str(search), float(band), float(slack))
         self._entry = None
         self._arrays = arrays
+        self._device = None             # (_DeviceTables, row, window, spacing): computed on a Warp device
         if len(ProfileTable._uses) > 65536:     # a process that saw 100,000 drawn profiles: forget the old ones
             ProfileTable._uses.clear()
         ProfileTable._uses[self.key] = ProfileTable._uses.get(self.key, 0) + 1
 
     @property
+    def computed(self):
+        """Whether this object holds its table (computed or provided), i.e. reading it costs nothing."""
+        return self._entry is not None or self._arrays is not None or self._device is not None
+
+    def provide(self, table, window):
+        """Give this table its arrays ``table`` (points, normals, curvature, key, spacing, phi: as
+        :func:`pin_curve_table`) and search ``window`` [samples] computed elsewhere (a no-op where it holds
+        them already)."""
+        if not self.computed:
+            self._arrays = (tuple(table), int(window))
+
+    def provide_device(self, batch, row, window, spacing):
+        """Give this table its columns as row ``row`` of a batch computed on a Warp device
+        (:func:`compute_profile_tables`): the device's kernels copy them there
+        (:meth:`device_column`); the host arrays are read back only where the host reads them."""
+        if not self.computed:
+            self._device = (batch, int(row), int(window), float(spacing))
+
+    @property
+    def n_samples(self):
+        """Samples of the table (its key's count: every table of the key has that many)."""
+        return self.key[1]
+
+    @property
+    def spacing(self):
+        """The table's sample spacing [m] (without reading a device table back)."""
+        if self._entry is None and self._arrays is None and self._device is not None:
+            return self._device[3]
+        return self.entry[0][4]
+
+    def device_column(self, i, device):
+        """(device array (T, n[, 2]), row) holding column ``i`` (0 points, 1 normals, 2 curvature, 3 key,
+        5 phi) of this table on Warp ``device``, or None (not computed there)."""
+        if self._device is None or i not in _DEVICE_COLUMN:
+            return None
+        return self._device[0].columns[_DEVICE_COLUMN[i]], self._device[1]
+
+    @property
     def entry(self):
         """(table, analytic parameters or None, search window)."""
         if self._entry is None:
+            if self._arrays is None and self._device is not None:
+                batch, t, window, h = self._device
+                pts, nrm, kap, key, phi = batch.host()
+                self._arrays = ((pts[t], nrm[t], kap[t], key[t], h, phi[t]), window)
             if self._arrays is not None:
                 prof, n, search, band, slack = self.key
                 self._entry = (self._arrays[0], prof.analytic_parameters() if search == "analytic" else None,
@@ -293,6 +343,8 @@ class ProfileTable:
 
     @property
     def window(self):
+        if self._entry is None and self._arrays is None and self._device is not None:
+            return self._device[2]
         return self.entry[2]
 
     def __getitem__(self, i):
@@ -312,7 +364,7 @@ class ProfileTable:
         return hash(self.key)
 
     def __reduce__(self):
-        if ProfileTable._uses.get(self.key, 0) > 1:
+        if ProfileTable._uses.get(self.key, 0) > 1 or not self.computed:
             return ProfileTable, self.key
         return ProfileTable, self.key + ((self.entry[0], self.entry[2]),)
 
@@ -320,15 +372,90 @@ class ProfileTable:
 def _shared_table(prof, rp, samples_per_tooth, search, band):
     """(ProfileTable, analytic parameters or None, window) of a mesh of pin radius ``rp`` inside
     :func:`shared_profile_tables`, or None (outside it, or ``rp`` beyond the slack: a table of its own)."""
-    slack = _SHARED_SLACK.get()
-    if slack is None or abs(rp - prof.pin_radius) > slack * prof.pin_radius:
+    mode = _SHARED_SLACK.get()
+    if mode is None:
+        return None
+    slack, defer = mode
+    if abs(rp - prof.pin_radius) > slack * prof.pin_radius:
         return None
     try:
         hash(prof)
     except TypeError:
         return None
     t = ProfileTable(prof, samples_per_tooth * prof.n_teeth, search, band, slack)
+    if defer:                       # the window comes with the table (CycloidPinSet.window)
+        return t, prof.analytic_parameters() if search == "analytic" else None, None
     return t, t.entry[1], t.window
+
+
+_DEVICE_COLUMN = {0: 0, 1: 1, 2: 2, 3: 3, 5: 4}
+"""Table column -> column of a device batch (the spacing, column 4, is a host number)."""
+
+
+class _DeviceTables:
+    """The columns (points, normals, curvature, key, phi) of a batch of profile tables on a Warp device,
+    read back (once, read-only) only where the host reads a table of it."""
+
+    __slots__ = ("columns", "_host")
+
+    def __init__(self, columns):
+        self.columns, self._host = tuple(columns), None
+
+    def host(self):
+        if self._host is None:
+            host = tuple(c.numpy() for c in self.columns)
+            for a in host:
+                a.flags.writeable = False
+            self._host = host
+        return self._host
+
+
+DEVICE_TABLE_GROUP = {"cpu": 256, "cuda": 2048}
+"""Profile tables per launch of :func:`compute_profile_tables` by device kind (its dense arc lengths: 16 x 8
+bytes per sample and table, ~150 MB for 256 RD-40 tables; on a GPU the serial arc-length pass of a launch
+takes as long for 2,048 tables as for 256, so fewer, larger launches)."""
+
+
+def compute_profile_tables(tables, device="cpu", group=None):
+    """Compute the deferred :class:`ProfileTable` objects among ``tables`` (:func:`shared_profile_tables`
+    ``defer``) on Warp ``device``, each distinct key once, ``group`` tables per launch (None:
+    :data:`DEVICE_TABLE_GROUP` of the device kind)
+    (:func:`warp_contacts.profile_tables.profile_tables`: the host's operations, equal to its tables to
+    rounding: on the cpu bit for bit but for ~1 ulp of the curvature and the key; the device's own sine
+    and cosine on a GPU), and give them to every object of that key (:meth:`ProfileTable.provide`).
+    Profiles with a tabulated radial modification or lobe rotations (the device kernels compute neither), and a
+    table whose polar angle or key is not monotone (checked on the device), are left to the host (computed where first read). The columns stay on the
+    device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there copies them, nothing is read
+    back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
+    computed on the device."""
+    from warp_contacts.profile_tables import profile_tables
+    todo = {}
+    for t in tables:
+        if isinstance(t, ProfileTable) and not t.computed:
+            todo.setdefault(t.key, []).append(t)
+    batches = {}
+    for key in todo:
+        prof, n, _, band, slack = key
+        if prof.radial_mod_table is None and prof.lobe_rotations is None:
+            batches.setdefault((n, band + slack * (1.0 + band)), []).append(key)
+    if group is None:
+        group = DEVICE_TABLE_GROUP["cpu" if str(device).startswith("cpu") else "cuda"]
+    done = 0
+    for (n, band), keys in batches.items():
+        for g in range(0, len(keys), int(group)):
+            chunk = keys[g:g + int(group)]
+            profs = [k[0] for k in chunk]
+            params = [(p.R, p.K1, float(p.n_pins), p.pin_radius + p.equidistant_mod, p.rotation_mod) for p in profs]
+            pts, nrm, kap, key, h, phi, window, ok = profile_tables(
+                params, [p.n_pins for p in profs], [p.pin_radius for p in profs], n, 16 * n, band, device=device,
+                as_numpy=False)
+            batch = _DeviceTables((pts, nrm, kap, key, phi))      # left on the device (CycloidPinKernel copies)
+            for i, k in enumerate(chunk):
+                if ok[i]:
+                    for t in todo[k]:
+                        t.provide_device(batch, i, window[i], h[i])
+                    done += 1
+    return done
 
 
 class CycloidPinSet(PairFamilySet):
@@ -402,7 +529,7 @@ class CycloidPinSet(PairFamilySet):
                 self.table_windows.append(win)
                 if ana is not None:
                     self.analytic.append(ana)
-                window = max(window, win)
+                window = None if (window is None or win is None) else max(window, win)
             tb = table_of[key]
             pins = pin_centres(prof, m.pin_centre_errors)
             dev = np.zeros(prof.n_pins) if m.normal_deviation is None else np.asarray(m.normal_deviation, float)
@@ -484,7 +611,7 @@ class CycloidPinSet(PairFamilySet):
                 if key not in table_of:
                     table_of[key] = len(self.tables)
                     self.tables.append(sc.tables[t])
-                    self.table_windows.append(sc.table_windows[t])
+                    self.table_windows.append(sc.table_window(t))
                     if self.analytic is not None:
                         self.analytic.append(sc.analytic[t])
                 local[t] = table_of[key]
@@ -506,6 +633,25 @@ class CycloidPinSet(PairFamilySet):
                      precision, device)
         return self
 
+    @property
+    def window(self):
+        """The search half-window [samples] of every row: the largest of the tables' (a set built on
+        deferred tables, :func:`shared_profile_tables`, reads them here: computed where not provided)."""
+        if self._window is None:
+            self._window = max(self.table_window(t) for t in range(len(self.tables)))
+        return self._window
+
+    @window.setter
+    def window(self, value):
+        self._window = value
+
+    def table_window(self, t):
+        """The search window [samples] of table ``t`` (a deferred table's once it is computed or provided)."""
+        w = self.table_windows[t]
+        if w is None:
+            w = self.table_windows[t] = int(self.tables[t].window)
+        return w
+
     def _finish(self, window, fparams, iparams, ids, mesh_of, pin_of, anchor_params, n_bodies, backend, precision,
                 device):
         self.window = window
@@ -521,7 +667,7 @@ class CycloidPinSet(PairFamilySet):
                              anchor_params=anchor_params if anchor else None)
         if backend == "warp":
             from warp_contacts.cycloid_pins import CycloidPinKernel
-            self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, window, n_bodies, precision, device,
+            self._kernel = CycloidPinKernel(self.fparams, self.iparams, self.tables, self.window, n_bodies, precision, device,
                                             analytic=self.analytic, anchor_params=self.anchor_params)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
@@ -535,7 +681,7 @@ class CycloidPinSet(PairFamilySet):
             rp = m.profile.pin_radius if m.pin_radius is None else m.pin_radius
             t = int(self.iparams[np.flatnonzero(self.mesh_of == m_i)[0], ref.J_TABLE])
             out[(m.profile, float(rp))] = (self.tables[t], None if self.analytic is None else self.analytic[t],
-                                           self.table_windows[t])
+                                           self.table_window(t))
         return out
 
     def reference(self, pose, vel, anchor=None):

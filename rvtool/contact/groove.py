@@ -93,6 +93,13 @@ class GrooveSupport:
     :class:`~rvtool.contact.pin_closure.ElasticPinClosure` (``support=``): every station obeys
     ``law`` isotropically (module docstring)."""
 
+    #: every station's force depends on its own deflection only and vanishes only at zero deflection
+    #: (isotropic, s(u) = F(|u|) u/|u|, F(0) = 0): a station that carries no contact force rests at u = 0
+    #: exactly, which the joint network uses (:class:`rvtool.contact.pin_closure.JointNetwork`: Newton
+    #: reaches that zero only linearly, by a factor ~ ln(Delta R / |u|) per iteration, on the
+    #: logarithmic law near zero load)
+    isolated_stations = True
+
     def __init__(self, law: GrooveLaw):
         self.law = law
         self.zero_load_stiffness = law.zero_load_stiffness

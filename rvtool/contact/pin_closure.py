@@ -47,6 +47,9 @@ from .evaluator import Evaluation, all_finite, check_finite_state
 
 GROUND = -1
 
+FALLBACKS = ("nested", "reject")
+"""What a ``joint`` closure does where its network does not converge (:meth:`ElasticPinClosure.solve`)."""
+
 RELATIVE_TOLERANCE = 1e-13
 """Station residual accepted relative to the largest contact force (about 500 machine epsilons: the
 round-off of a sum of a few contact forces of that size)."""
@@ -72,8 +75,11 @@ class ElasticPinClosure:
     """
 
     def __init__(self, inner, *, n_bodies, carrier, station_compliance, station, tolerance=1e-8,
-                 max_iterations=40, dofs=(0, 1), support=None, coupled=False, joint=False):
+                 max_iterations=40, dofs=(0, 1), support=None, coupled=False, joint=False,
+                 fallback="nested"):
         dofs = tuple(int(c) for c in dofs)
+        if fallback not in FALLBACKS:
+            raise RvtoolInputError(f"fallback = {fallback!r}; valid: {list(FALLBACKS)}")
         if not dofs or len(set(dofs)) != len(dofs) or any(c not in (0, 1, 2) for c in dofs):
             raise RvtoolInputError(f"dofs = {dofs!r}; valid: distinct station coordinates among (0, 1, 2) = (x, y, theta)")
         station = np.asarray(station, int)
@@ -146,10 +152,14 @@ class ElasticPinClosure:
         self.coupled = bool(coupled)
         self._condense_factor = 1.0
         self.joint = bool(joint)
+        self.fallback = fallback
         self._network = None          # the JointNetwork of a joint closure, built on its first solve
         #: evaluations of the inner set made by this closure's solves (of the leaf contact set where this is the
         #: innermost closure, by a joint network above it included): the cost counter of the nesting
         self.inner_evaluations = 0
+        #: solves of a ``joint`` closure whose network did not converge and that fell back to the nested solve
+        #: (:meth:`solve`; each costs the nested solve's product of the levels' iterations)
+        self.fallbacks = 0
 
     def __getattr__(self, name):
         # row attributes of the inner set (mesh_of, pin_of, meshes, pin_forces, ...); only reached
@@ -192,8 +202,14 @@ class ElasticPinClosure:
 
         ``joint`` (and the inner set another closure): one Newton over the stations of every closure
         nested below (:class:`JointNetwork`), the inner closures' stations condensed out of the
-        reduced system; where it does not converge, the nested solve below (each inner closure
-        solved for every evaluation of this one)."""
+        reduced system; where it does not converge (counted in :attr:`fallbacks`), by ``fallback``:
+        ``"nested"``, the nested solve below (each inner closure solved for every evaluation of this
+        one; at a far trial state of an outer solver the inner closures' own networks fail as well and
+        the nested solves cascade: minutes of CPU for one evaluation, measured on rv40e), or
+        ``"reject"``, the reduced system NaN: the trial state is answered as non-finite, which the
+        outer solver rejects (the element's answer to a diverged trial,
+        :meth:`exudyn_user_elements.contact_element.ContactElement.evaluate`), as it would any
+        evaluation without a converged station equilibrium."""
         if self.joint and isinstance(self.inner, ElasticPinClosure):
             if self._network is None or self._network.chain[0] is not self:
                 # (built on the first solve; rebuilt for a copy of the closure, e.g. a model snapshot's, whose
@@ -202,6 +218,10 @@ class ElasticPinClosure:
             out = self._network.solve(pose, vel, u0)
             if out[3]:
                 return out
+            self.fallbacks += 1
+            if self.fallback == "reject":
+                u, ev, red, _ = out
+                return u, ev, tuple(None if a is None else np.full_like(a, np.nan) for a in red), False
         return self.nested_solve(pose, vel, u0)
 
     def nested_solve(self, pose, vel, u0=None):
@@ -264,6 +284,11 @@ class ElasticPinClosure:
             return self._Kb @ u, self._Kb, None
         F, G = self.support.forces(u.reshape(self.n_pins, self.n_stations, len(self.dofs)))
         return F.ravel(), self._block_diagonal(G), None
+
+    @property
+    def network(self):
+        """The :class:`JointNetwork` of a ``joint`` closure (None before its first solve or where not joint)."""
+        return self._network
 
     @property
     def extension(self):
@@ -365,6 +390,28 @@ class ElasticPinClosure:
         return u[self._u_index]
 
 
+LINE_SEARCH_HALVINGS = 8
+"""Step halvings of one Newton iteration's line search (a step of 1/256 of the Newton step is the shortest
+tried); where none decreases the merit the attempt stops (an increase is never accepted) and the next start
+(zero deflections, the continuation) is tried."""
+
+ARMIJO = 1e-4
+"""Sufficient decrease of the merit per unit step (Armijo's constant; the usual 1e-4)."""
+
+CONTINUATION_ITERATIONS = 8
+"""Newton iterations of one continuation step of :meth:`JointNetwork.solve` (a step the predictor brought
+near its solution converges in 2-5; more means the step is too long and it is shortened)."""
+
+CONTINUATION_EVALUATIONS = 60
+"""Contact evaluations one continuation may spend (about six ordinary network solves; a trial state it cannot
+reach within that is left to the fallback: at rv40e's far trial states of Exudyn's Newton, turns of 1.5-12 rad
+and 0.3 m from the last converged state, the continuation stalls below 1e-3 of the way, and 240 evaluations
+there were 40 % of one b/a's evaluations)."""
+
+SHORTEST_CONTINUATION_STEP = 1.0 / 1024
+"""Shortest continuation step [-] (a fraction of the pose change from the last converged state)."""
+
+
 class JointNetwork:
     """The closures nested in a ``joint`` :class:`ElasticPinClosure` (``top``; each inner set another
     closure down to a contact set, the *leaf*) solved as one series network: one Newton over the
@@ -383,7 +430,31 @@ class JointNetwork:
     :attr:`~ElasticPinClosure.condense_factor`, as its own condensation would), which leaves the
     top's reduced system (Q, K, D) over [q; u_0]: the Schur complements of a nested condensation
     compose to the one of the whole network. D's station columns (unused by the condensation) are
-    zero."""
+    zero.
+
+    **The Newton** (:meth:`solve`; the equations and the tolerance are the closures', so a converged
+    answer is the same whichever way it was reached):
+
+    * the step solves the station tangent scaled by its diagonal (the levels mix N/m and N m/rad and
+      stiffnesses 1e5-1e10: the scaling keeps the direction accurate at the far, badly conditioned
+      trial states of an outer solver);
+    * a backtracking line search on the merit |D^-1 R|^2 (D the square root of the tangent's diagonal,
+      R the station residual) with Armijo's condition (:data:`ARMIJO`, :data:`LINE_SEARCH_HALVINGS`);
+      a step that does not decrease it is never taken: the attempt stops;
+    * stations of a closure whose law is *isolated* (``support.isolated_stations``: each station's
+      force its own and zero only at zero deflection, the pins' grooves) that carry no contact force
+      and no contact tangent (an open contact) are set to zero deflection, their exact solution (Newton
+      approaches it only linearly on the groove's logarithmic law: 4-8 iterations of every solve were
+      spent so); the line search guards the step, and a contact that closes again at zero is back in
+      the Newton at the next iterate;
+    * from the warm start (the last converged solve), else from zero deflections, else by a
+      continuation in the poses from the last converged solve to the trial state (Euler predictor
+      along the exact tangent dU/dlambda = -K_uu^-1 K_uq dq, steps halved on failure and doubled on
+      success, :data:`CONTINUATION_ITERATIONS`, :data:`CONTINUATION_EVALUATIONS`,
+      :data:`SHORTEST_CONTINUATION_STEP`).
+
+    Counters: ``solves``, ``continued`` (solves the continuation converged), ``failures`` (solves that
+    did not converge: the closure then falls back to its nested solve, :attr:`ElasticPinClosure.fallbacks`)."""
 
     def __init__(self, top):
         chain = [top]
@@ -403,12 +474,25 @@ class JointNetwork:
             E = sp.identity(nx, format="csr")[self.offsets[k]:self.offsets[k + 1]]
             P = (c.extension @ sp.vstack([P, E])).tocsr()
         self.P, self.PT = P, P.T.tocsr()
+        self._isolated = [c.support is not None and bool(getattr(c.support, "isolated_stations", False))
+                          for c in chain]
         self._U = np.zeros(nx - nr)
+        self._last = None            # (pose, vel, U, K) of the last converged solve: the continuation's start
         self.last_iterations = 0
+        #: network solves, solves converged by the continuation, solves that did not converge (class docstring)
+        self.solves = 0
+        self.continued = 0
+        self.failures = 0
+
+    @property
+    def stations(self):
+        """The station deflections [u_0; u_1; ...] (nx - 3 n_bodies,) of the last converged solve (the warm start)."""
+        return self._U.copy()
 
     def _reduced(self, pose, vel, U):
         """(leaf evaluation, Q (nx,), K (nx, nx), D (nx, nx) or None, the closures' station tangents
-        [dF_k/du_k]) at stations U."""
+        [dF_k/du_k], the free stations: indices into U of the isolated laws' stations without contact
+        force or tangent) at stations U."""
         x = np.concatenate([np.asarray(pose, float).ravel(), U])
         v = np.concatenate([np.asarray(vel, float).ravel(), np.zeros_like(U)])
         ev = self.leaf.evaluate((self.P @ x).reshape(-1, 3), (self.P @ v).reshape(-1, 3), check=False)
@@ -416,54 +500,122 @@ class JointNetwork:
         Q = self.PT @ ev.Q
         K = np.ascontiguousarray((self.PT @ (self.PT @ np.asarray(ev.dQdq)).T).T)
         D = None if ev.dQdv is None else np.ascontiguousarray((self.PT @ (self.PT @ np.asarray(ev.dQdv)).T).T)
-        Gs = []
+        Gs, free = [], []
         for k, c in enumerate(self.chain):
             sl = slice(self.offsets[k], self.offsets[k + 1])
+            if self._isolated[k]:
+                nd = len(c.dofs)
+                z = (Q[sl] == 0.0) & ~np.any(K[sl] != 0.0, axis=1)
+                free.append(np.flatnonzero(np.repeat(z.reshape(-1, nd).all(axis=1), nd)) + (sl.start - self.nr))
             F, G, Gq = c.station_forces((self.maps[k] @ x).reshape(-1, 3), U[sl.start - self.nr:sl.stop - self.nr])
             Q[sl] -= F
             K[sl, sl] -= G
             if Gq is not None:
                 K[sl] -= (self.maps[k].T @ Gq.T).T
             Gs.append(G)
-        return ev, Q, K, D, Gs
+        return ev, Q, K, D, Gs, (np.concatenate(free) if free else np.zeros(0, int))
 
     def _accepted(self, r, ev):
         tol = min(c.tolerance for c in self.chain)
         return r <= tol or r <= RELATIVE_TOLERANCE * np.abs(ev.Q).max(initial=0.0)
 
+    @staticmethod
+    def _scaled_solve(Kuu, rhs):
+        """Kuu^-1 rhs with Kuu scaled by the square root of its diagonal on both sides (class docstring);
+        raises numpy.linalg.LinAlgError where singular."""
+        d = np.sqrt(np.abs(np.diag(Kuu)))
+        d[~(np.isfinite(d) & (d > 0))] = 1.0
+        return np.linalg.solve(Kuu / d[:, None] / d[None, :], (rhs.T / d).T) / (d if np.ndim(rhs) == 1 else d[:, None])
+
+    def _newton(self, pose, vel, U, max_iterations):
+        """(converged, iterations, (U, ev, Q, K, D, G)): Newton from stations U at the poses (class docstring)."""
+        nr = self.nr
+        ev, Q, K, D, G, free = self._reduced(pose, vel, U)
+        state = (U, ev, Q, K, D, G)
+        for it in range(max_iterations):
+            R = Q[nr:]
+            r = np.abs(R).max(initial=0.0)
+            if self._accepted(r, ev):
+                return True, it, state
+            if not np.isfinite(r):
+                return False, it, state
+            Kuu = K[nr:, nr:]
+            d = np.sqrt(np.abs(np.diag(Kuu)))
+            d[~(np.isfinite(d) & (d > 0))] = 1.0
+            try:
+                dU = -self._scaled_solve(Kuu, R)
+            except np.linalg.LinAlgError:
+                return False, it, state
+            if not np.all(np.isfinite(dU)):
+                return False, it, state
+            dU[free] = -U[free]
+            m0 = float(np.sum((R / d) ** 2))
+            step = 1.0
+            for _ in range(LINE_SEARCH_HALVINGS + 1):
+                Un = U + step * dU
+                evn, Qn, Kn, Dn, Gn, fn = self._reduced(pose, vel, Un)
+                Rn = Qn[nr:]
+                mn = float(np.sum((Rn / d) ** 2))
+                if self._accepted(np.abs(Rn).max(initial=0.0), evn) or mn <= (1.0 - ARMIJO * step) * m0:
+                    break
+                step *= 0.5
+            else:
+                return False, it, state
+            U, ev, Q, K, D, G, free = Un, evn, Qn, Kn, Dn, Gn, fn
+            state = (U, ev, Q, K, D, G)
+            self.last_iterations = it + 1
+        return self._accepted(np.abs(Q[nr:]).max(initial=0.0), ev), max_iterations, state
+
+    def _continuation(self, pose, vel):
+        """(converged, state) by a continuation in the poses from the last converged solve (class docstring)."""
+        nr = self.nr
+        p0, v0, U, K = self._last
+        p1, v1 = np.asarray(pose, float), np.asarray(vel, float)
+        dq = (p1 - p0).ravel()
+        e0 = self.chain[-1].inner_evaluations
+        lam, h, state = 0.0, 1.0, None
+        while lam < 1.0:
+            lt = min(1.0, lam + h)
+            try:
+                dU = -self._scaled_solve(K[nr:, nr:], K[nr:, :nr] @ dq)
+            except np.linalg.LinAlgError:
+                return False, state
+            ok, _, st = self._newton(p0 + lt * (p1 - p0), v0 + lt * (v1 - v0), U + (lt - lam) * dU,
+                                     CONTINUATION_ITERATIONS)
+            if ok:
+                lam, U, K, state = lt, st[0], st[3], st
+                h = min(2.0 * h, 1.0)
+            else:
+                h *= 0.5
+                if h < SHORTEST_CONTINUATION_STEP or self.chain[-1].inner_evaluations - e0 > CONTINUATION_EVALUATIONS:
+                    return False, state
+        return True, state
+
     def solve(self, pose, vel, u0=None):
         """As :meth:`ElasticPinClosure.solve` of the top (its stations u_0, the leaf evaluation, the
-        top's reduced system with the inner stations condensed, converged)."""
+        top's reduced system with the inner stations condensed, converged); class docstring."""
         nr, n0 = self.nr, self.chain[0].n_u
+        self.solves += 1
         U = self._U.copy()
         if u0 is not None:
             U[:n0] = u0
-        for restart in (False, True):
-            if restart:
-                U = np.zeros_like(U)
-            ev, Q, K, D, G = self._reduced(pose, vel, U)
-            r = np.abs(Q[nr:]).max(initial=0.0)
-            for it in range(max(c.max_iterations for c in self.chain)):
-                if self._accepted(r, ev) or not np.isfinite(r):
-                    break
-                try:
-                    dU = -np.linalg.solve(K[nr:, nr:], Q[nr:])
-                except np.linalg.LinAlgError:
-                    break
-                step = 1.0
-                for _ in range(12):
-                    Un = U + step * dU
-                    evn, Qn, Kn, Dn, Gn = self._reduced(pose, vel, Un)
-                    rn = np.abs(Qn[nr:]).max(initial=0.0)
-                    if rn < r or self._accepted(rn, evn):
-                        break
-                    step *= 0.5
-                U, ev, Q, K, D, G, r = Un, evn, Qn, Kn, Dn, Gn, rn
-                self.last_iterations = it + 1
-            if self._accepted(r, ev):
-                self._U = U.copy()
-                return U[:n0].copy(), ev, self._condensed(Q, K, D, G), True
-        return U[:n0].copy(), ev, self._condensed(Q, K, D, G), False
+        n_it = max(c.max_iterations for c in self.chain)
+        ok, _, state = self._newton(pose, vel, U, n_it)
+        if not ok and np.any(U != 0.0):
+            ok, _, state0 = self._newton(pose, vel, np.zeros_like(U), n_it)
+            state = state0 if ok else state
+        if not ok and self._last is not None:
+            ok, cstate = self._continuation(pose, vel)
+            if ok:
+                self.continued += 1
+                state = cstate
+        U, ev, Q, K, D, G = state
+        if ok:
+            self._U = U.copy()
+            self._last = (np.array(pose, float), np.array(vel, float), self._U, K)
+        else:
+            self.failures += 1
+        return U[:n0].copy(), ev, self._condensed(Q, K, D, G), ok
 
     def _condensed(self, Q, K, D, G):
         """The top's reduced (Q, K, D) over [q; u_0]: the inner stations condensed (class docstring)."""

@@ -36,7 +36,7 @@ from ..errors import RvtoolInputError
 from ..units import angle_columns, file_key, is_angle
 
 _RANGE = re.compile(r"valid range\s*(?:is\s*)?([\[\(][^\]\)]*[\]\)])")
-_CHOICES = re.compile(r"valid(?: choices are|:)?\s*(\[[^\]]*\])")
+_CHOICES = re.compile(r"valid(?: choices(?: are)?|:)?\s*(\[[^\]]*\])")
 LEFT_OUT = "(left out: {})"
 """How a key's meaning ends when the key follows another key where the file leaves it out (a link);
 the template writes such a key commented out, so that it follows the key it names."""
@@ -283,6 +283,8 @@ def _section_rows(path, cls, obj, raw, links, set_by_design):
 def _field_rows(path, cls, fields, kw, raw, links, set_by_design):
     rows, subs = [], []
     for f in fields:
+        if f.metadata.get("file", True) is False:
+            continue                        # held for the code only (e.g. profile.lobe_rotations): not a file key
         value = kw.get(f.name)
         if f.name in set_by_design.get(path, ()):
             continue                        # the design sets it (e.g. a gear's name): not a file key

@@ -24,6 +24,9 @@ RV_TOLERANCE_KEYS = {
                                   "(positive removes material)", "profile.equidistant_mod (added)"),
     "profile_offset_error": ("m", "offset deviation of the ground wheel profile, one value per reducer",
                              "profile.offset_mod (added)"),
+    "wheel_lobe_pitch_deviation": ("m", "single pitch deviation of each lobe of each cycloid wheel (per wheel, minus "
+                                   "its mean) on the wheel's reference circle R_z z_g / z_b; lobe j turns by the "
+                                   "accumulated pitch", "wheels.lobe_pitch_deviations"),
 }
 """The keys of an RV tolerance file in the order a variant draws them (:data:`rvtool.variants.rv_tolerances.RV_FIELDS`
 is this order): (unit of the drawn value, meaning, the design key it writes), for the format documentation

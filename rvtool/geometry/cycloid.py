@@ -12,14 +12,19 @@ with R_z the pin-circle radius, K1 = e_g z_b / R_z the eccentricity
 coefficient (e_g the nominal generating eccentricity), z_b = z_g + 1 the pin
 count and r_c the generating radius. Modifications (all lengths in m):
 equidistant (r_c = r_p + delta_eq), offset (R_z -> R_z + delta_off),
-rotation (the profile turned by delta_rot [rad]) and a tabulated radial
-modification r_c(phi) = r_c + table(phi). The nominal generating
-eccentricity and the assembly eccentricity are separate inputs.
+rotation (the profile turned by delta_rot [rad]), a tabulated radial
+modification r_c(phi) = r_c + table(phi), and lobe-by-lobe rotations (pitch
+unit j, the tooth space about the root at phi = 2 pi j / z_g from tip to tip,
+turned about the wheel centre by its own angle: the wheel's accumulated pitch
+deviations, issue 30). The nominal generating eccentricity and the assembly eccentricity
+are separate inputs.
 """
 import functools
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
+
+from warp_contacts.cycloid_pins_ref import lobe_turn
 
 from ..errors import RvtoolInputError
 from ..units import angle_field, angle_table_field
@@ -37,6 +42,12 @@ class CycloidProfile:
     rotation_mod: delta_rot [rad], profile rotation about the wheel centre.
     radial_mod_table: optional (phi [rad], delta_r [m]) pairs of a tabulated
     generating-radius modification, periodic over one tooth (2 pi / z_g).
+    lobe_rotations: optional rotation [rad] of each pitch unit about the wheel centre, z_g entries (unit j: the
+    tooth space about the root at phi = 2 pi j / z_g with its two flanks, from tip to tip, as an indexed grinding
+    pass places it; two units blend within 5 % of the pitch about the tip between them, :meth:`lobe_turn`): the
+    accumulated pitch deviation of each unit as an angle. Not a design-file key (the
+    design gives ``wheels.lobe_pitch_deviations`` per wheel, :func:`lobe_pitch_rotations`); None: every lobe at
+    its nominal place (the profile as before, bit for bit).
     """
     pin_circle_radius: float
     pin_radius: float
@@ -46,6 +57,7 @@ class CycloidProfile:
     offset_mod: float = 0.0
     rotation_mod: float = angle_field(0.0)
     radial_mod_table: tuple | None = angle_table_field()  # (phi [rad], delta_r [m]) pairs; file: radial_mod_table_deg
+    lobe_rotations: tuple | None = field(default=None, metadata={"file": False, "unit": "rad"})
 
     def __post_init__(self):
         check_positive("pin_circle_radius", self.pin_circle_radius)
@@ -55,6 +67,8 @@ class CycloidProfile:
         check_positive("generating_eccentricity", self.generating_eccentricity)
         for nm in ("equidistant_mod", "offset_mod", "rotation_mod"):
             check_finite(nm, getattr(self, nm))
+        # the profile's pin circle R = R_z + delta_off must stay a circle (R <= 0: a NaN profile)
+        check_range("offset_mod", self.offset_mod, -self.pin_circle_radius, low_open=True)
         K1 = self.K1
         if K1 >= 1.0:
             raise RvtoolInputError(f"eccentricity coefficient K1 = e_g z_b / R_z = {K1:.4g} must be < 1 "
@@ -71,6 +85,17 @@ class CycloidProfile:
             check_finite("radial_mod_table", t)
             if np.any(np.diff(t[:, 0]) <= 0):
                 raise RvtoolInputError("radial_mod_table angles must increase strictly (valid: sorted phi in [0, 2 pi / z_g])")
+        if self.lobe_rotations is not None:
+            r = np.asarray(self.lobe_rotations, dtype=float)
+            if r.shape != (self.n_teeth,):
+                raise RvtoolInputError(f"lobe_rotations must have shape ({self.n_teeth},) (one angle per lobe); "
+                                       f"got {r.shape}")
+            check_finite("lobe_rotations", r)
+            # a pitch deviation is micro-radians; a lobe turned by a tenth of its pitch is no longer a deviation
+            lim = 0.1 * 2 * np.pi / self.n_teeth
+            if np.max(np.abs(r)) > lim:
+                raise RvtoolInputError(f"lobe_rotations = {np.max(np.abs(r)):.4g} rad is outside the valid range "
+                                       f"[-{lim:.4g}, {lim:.4g}] rad (a tenth of the lobe pitch 2 pi / z_g)")
         _checked_undercut(self)
 
     @property
@@ -110,9 +135,42 @@ class CycloidProfile:
         return E, dE, ddE
 
     def points(self, phi):
-        """Profile points c(phi) of Eq. (cycloid_geometry), turned by the rotation modification."""
+        """Profile points c(phi) of Eq. (cycloid_geometry), turned by the rotation modification (and each
+        lobe by its lobe rotation)."""
         phi = np.asarray(phi, float)
-        return self._rotate(self._unrotated_points(phi, _trig(phi, self.n_pins)))
+        return self._turn_lobes(phi, self._rotate(self._unrotated_points(phi, _trig(phi, self.n_pins))))
+
+    def lobe_turn(self, phi):
+        """(d(phi), d'(phi)) [rad, rad/rad]: the lobe rotation of the profile point of generating angle phi and
+        its derivative (:func:`warp_contacts.cycloid_pins_ref.lobe_turn`: pitch unit j, the tooth space about the
+        root at phi = 2 pi j / z_g from tip to tip, turns by ``lobe_rotations[j]``; two units blend linearly within
+        5 % of the pitch about the tip between them); zeros without lobe rotations."""
+        if self.lobe_rotations is None:
+            z = np.zeros_like(np.asarray(phi, float))
+            return z, z
+        return lobe_turn(self.lobe_rotations, phi)
+
+    def _turn_lobes(self, phi, xy):
+        """``xy`` (points or vectors of generating angles phi) turned by their lobe rotation d(phi); unchanged (the
+        same array) without lobe rotations."""
+        if self.lobe_rotations is None:
+            return xy
+        a = self.lobe_turn(phi)[0]
+        c, s = np.cos(a), np.sin(a)
+        return np.stack([c * xy[..., 0] - s * xy[..., 1], s * xy[..., 0] + c * xy[..., 1]], axis=-1)
+
+    def _turned_tangents(self, phi, pts, dE, ddE):
+        """Unit tangents of the lobe-turned curve at generating angles phi from the unturned points ``pts`` and
+        the epitrochoid's derivatives: R(d) (c_0' + d' J c_0) normalised (c_0' = ds/dphi dE/|dE|), turned by the
+        profile rotation and d; where d' = 0 the unturned tangent turned (as without the blend)."""
+        speed = _length(dE)
+        tau = dE / speed[..., None]
+        kE = -(dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]) / speed ** 3
+        ds = speed * (1.0 - self.generating_radius(phi) * kE)
+        d, dd = self.lobe_turn(phi)
+        v = ds[..., None] * tau + dd[..., None] * np.stack([-pts[..., 1], pts[..., 0]], axis=-1)
+        t = np.where((dd != 0.0)[..., None], v / _length(v)[..., None], tau)
+        return self._turn_lobes(phi, self._rotate(t))
 
     def _unrotated_points(self, phi, trig, epi=None):
         """:meth:`points` before the rotation, from the angles' :func:`_trig` (the same operations;
@@ -186,9 +244,13 @@ class CycloidProfile:
         # operations as points(), epitrochoid() and curvature_of_points())
         trig = _trig(phi, self.n_pins)
         epi = self._epitrochoid(trig)
-        pts = self._rotate(self._unrotated_points(phi, trig, epi))
+        unturned = self._unrotated_points(phi, trig, epi)
+        pts = self._turn_lobes(phi, self._rotate(unturned))
         _, dE, ddE = epi
-        tang = self._rotate(dE / _length(dE)[..., None])
+        if self.lobe_rotations is None:
+            tang = self._rotate(dE / _length(dE)[..., None])
+        else:
+            tang = self._turned_tangents(phi, unturned, dE, ddE)
         # outward normal: the curve runs clockwise, so the outward normal is the tangent turned by +90 deg
         nrm = np.stack([-tang[..., 1], tang[..., 0]], axis=-1)
         kap = self._curvature(phi, dE, ddE)
@@ -198,11 +260,15 @@ class CycloidProfile:
 
     def analytic_parameters(self):
         """(R, K1, z_b, r_c, rotation) for the analytic closest-point path, which supports the
-        equidistant, offset and rotation modifications but not a tabulated r_c(phi)."""
+        equidistant, offset and rotation modifications and the lobe rotations (then a sixth entry, the
+        tuple of z_g lobe rotations [rad]) but not a tabulated r_c(phi)."""
         if self.radial_mod_table is not None:
             raise RvtoolInputError("search = 'analytic' does not support radial_mod_table; valid: search = 'discrete' "
                                    "for a tabulated generating-radius modification")
-        return (self.R, self.K1, float(self.n_pins), self.pin_radius + self.equidistant_mod, self.rotation_mod)
+        base = (self.R, self.K1, float(self.n_pins), self.pin_radius + self.equidistant_mod, self.rotation_mod)
+        if self.lobe_rotations is None:
+            return base
+        return base + (tuple(float(x) for x in self.lobe_rotations),)
 
 
 def _length(v):
@@ -221,14 +287,18 @@ def _trig(phi, n_pins):
 
 
 _UNDERCUT_CHECKED = {}
-"""Profiles (their fields but the rotation) whose undercut check passed, per process."""
+"""Profiles (their fields but the rotations) whose undercut check passed, per process."""
+
+_TURNS = ("rotation_mod", "lobe_rotations")
+"""The profile's rigid turns (of the whole profile, of each lobe): they change neither its curvature nor its
+unturned points, so the process caches key a profile without them."""
 
 
 def _checked_undercut(profile):
     """:meth:`CycloidProfile._check_undercut`, once per profile up to its rotation (which does not change
     the curvature: the wheels of one reducer, turned to their phases, and the profile rebuilt for the
     dense points check it once)."""
-    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name != "rotation_mod")
+    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name not in _TURNS)
     try:
         if key in _UNDERCUT_CHECKED:
             return
@@ -286,18 +356,34 @@ def _dense_units(K1, n_pins, n_dense):
 
 
 def _dense_points(profile, n_dense):
-    """(dense grid, the profile's points on it) of :meth:`CycloidProfile.table`: bit for bit what
-    ``profile.points(np.linspace(0, 2 pi, n_dense, endpoint=False))`` gives (the same operations
+    """(dense grid, the profile's points on it, its lobes unturned) of :meth:`CycloidProfile.table`: bit for bit
+    what ``profile.points(np.linspace(0, 2 pi, n_dense, endpoint=False))`` gives without lobe rotations (the same operations
     on the same numbers; tests/test_cycloid_table.py), the grid's trigonometry and the unrotated
     points kept between calls (:func:`_dense_trig`, :func:`_dense_unrotated`; ~2/3 of a table's
     time on RD-40 variants, whose profiles differ per variant and per wheel)."""
-    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name != "rotation_mod")
+    key = tuple((f.name, getattr(profile, f.name)) for f in fields(profile) if f.name not in _TURNS)
     try:
         hash(key)
     except TypeError:                     # an unhashable member (a list table): computed here
         dense = np.linspace(0, 2 * np.pi, n_dense, endpoint=False)
-        return dense, profile.points(dense)
+        return dense, profile._rotate(profile._unrotated_points(dense, _trig(dense, profile.n_pins)))
     return _dense_trig(n_dense, profile.n_pins)[0], profile._rotate(_dense_unrotated(key, n_dense))
+
+
+def lobe_pitch_rotations(profile: CycloidProfile, single_pitch_deviations):
+    """Lobe rotations [rad] (``CycloidProfile.lobe_rotations``) of a wheel whose lobes carry the single pitch
+    deviations f_j [m] (f_j between lobe j-1 and lobe j, z_g entries summing to zero) on the reference circle of
+    radius r = R_z z_g / z_b (the wheel as a gear of the pin ring's module 2 R_z / z_b): lobe j sits off its
+    nominal place by the accumulated pitch deviation s_j = f_0 + ... + f_j minus the mean of s (no rigid turn of
+    the wheel), along the direction of increasing lobe index (clockwise: the profile runs clockwise for
+    increasing phi), i.e. turned by -s_j / r."""
+    f = np.asarray(single_pitch_deviations, float)
+    if f.shape != (profile.n_teeth,):
+        raise RvtoolInputError(f"lobe single pitch deviations must have shape ({profile.n_teeth},); got {f.shape}")
+    s = np.cumsum(f)
+    s = s - s.mean()
+    r = profile.pin_circle_radius * profile.n_teeth / profile.n_pins
+    return tuple(float(x) for x in -s / r)
 
 
 def pin_centres(profile: CycloidProfile, pin_centre_errors=None):

@@ -487,8 +487,17 @@ class InvolutePair:
         this is ISO's formula with z_2 < 0 and its profile shift x_2 = x_B)."""
         A, B = self.gear_a, self.gear_b
         a = A.alpha
-        return inv_inverse(float(inv(a)) + 2 * math.tan(a) * self.eps * (A.profile_shift + B.profile_shift)
-                           / (B.n_teeth + self.eps * A.n_teeth))
+        shift = A.profile_shift + B.profile_shift
+        value = float(inv(a)) + 2 * math.tan(a) * self.eps * shift / (B.n_teeth + self.eps * A.n_teeth)
+        if not value > 0.0:
+            # inv alpha_w > 0: eps (x_A + x_B) > -inv(alpha) (z_B + eps z_A) / (2 tan alpha), a lower bound on the
+            # shift sum of an external pair and an upper one of an internal pair (z_B + eps z_A > 0 both ways)
+            bound = float(inv(a)) * (B.n_teeth + self.eps * A.n_teeth) / (2 * math.tan(a))
+            rng = f"({-bound:.6g}, inf)" if self.eps > 0 else f"(-inf, {bound:.6g})"
+            raise RvtoolInputError(f"gear_a.profile_shift + gear_b.profile_shift = {shift:.6g} is outside the valid "
+                                   f"range {rng} for z = {A.n_teeth} and {B.n_teeth}: the zero-backlash mesh has no "
+                                   "working pressure angle")
+        return inv_inverse(value)
 
     @property
     def a(self):

@@ -515,16 +515,28 @@ class ReducerModel:
 
     def draw_section(self, ax, q):
         """Transverse section at state q: the contact forces of every family (arrows along the
-        normals at the contact points). Topologies add their outlines."""
-        scale = 0.01 / max(max(self.family_peaks(q).values()), 1e-9)
+        normals at the contact points, the largest 10 mm long; its force is the arrow key's) and
+        the legend. Topologies draw (and label) their outlines first."""
+        peak = max(max(self.family_peaks(q).values()), 1e-9)
+        length = 0.01           # [m] drawn length of the largest force
+        scale = length / peak
+        labels = {True: "contact force, main mesh", False: "contact force, other contacts"}
+        arrows = None
         for fam in self.families:
             ob = self.observe(q, fam)
             on = ob.normal_force > 0
             f = ob.normal_force[on, None] * ob.normal[on]
-            ax.quiver(ob.position[on, 0], ob.position[on, 1], -f[:, 0] * scale, -f[:, 1] * scale, angles="xy",
-                      scale_units="xy", scale=1, width=0.003, color="r" if fam == self.main_mesh else "b")
+            main = fam == self.main_mesh
+            arrows = ax.quiver(ob.position[on, 0], ob.position[on, 1], -f[:, 0] * scale, -f[:, 1] * scale,
+                               angles="xy", scale_units="xy", scale=1, width=0.003, color="r" if main else "b",
+                               label=labels.pop(main, None))
+        if arrows is not None:  # the arrows' scale, in the empty corner outside the section's circle
+            ax.quiverkey(arrows, 0.04, 0.96, length, f"{peak:.4g} N", labelpos="E", coordinates="axes",
+                         color="k", fontproperties={"size": 8})
         ax.set_aspect("equal")
         ax.set(xlabel="x [m]", ylabel="y [m]")
+        # outlines (labelled by the topology) and arrows, below the section where they hide nothing
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, frameon=False)
 
     def family_spec(self, family):
         """The component spec the contacts of ``family`` were built from (per topology: e.g. the

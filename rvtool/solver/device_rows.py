@@ -248,6 +248,19 @@ class _Blocks:
     dQdq: np.ndarray
 
 
+def provide_profile_tables(models, device):
+    """Compute the deferred cycloid profile tables of ``models`` (snapshots built with
+    ``defer_tables``, :func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`) on Warp
+    ``device``, each distinct table once (:func:`rvtool.contact.cycloid_set.compute_profile_tables`).
+    :class:`DeviceRowNewton` does this on a GPU (inside its ``setup_s``); on the cpu a deferred table is
+    computed by the host where it is first read (the Warp kernels' serial parts are slower there than
+    NumPy). Returns the number of tables computed."""
+    from ..contact.cycloid_set import ProfileTable, compute_profile_tables
+    tables = [t for m in models for e in m.contact_elements()
+              for t in (getattr(e.evaluator, "tables", None) or ()) if isinstance(t, ProfileTable) and not t.computed]
+    return compute_profile_tables(tables, device) if tables else 0
+
+
 class DeviceRowNewton:
     """Batched static Newton of B copies of ``model`` from its families' rows (module docstring).
 
@@ -290,6 +303,9 @@ class DeviceRowNewton:
         if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
             raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer)")
         t0 = time.perf_counter()
+        if self.models is not None and not str(device).startswith("cpu"):
+            # variant profile tables left to this process (deferred by the build helpers): on the GPU, all at once
+            provide_profile_tables(self.models, device)
         self.model, self.B, self.device = model, int(copies), device
         self.settings = settings or DeviceNewtonSettings()
         self.nb = nb = len(model.body_names)
@@ -336,6 +352,9 @@ class DeviceRowNewton:
         self._kin_cache = {}            # angle -> (B, n) kinematic states of the variant copies
         self._reference_d = None        # the copies' reference poses on the device (resident loop)
         self._gather_d = {}             # family -> its pose map on the device (extended families)
+        self._graphs = {}               # stepper -> its captured resident loop (CUDA), or None where capture failed
+        #: how the last resident loop ran: "cuda_graph" (captured, replayed), "host_loop" or None (not resident)
+        self.loop_path = None
         if sync_every is None:
             sync_every = 1 if str(device).startswith("cpu") else 4
         if isinstance(sync_every, bool) or not isinstance(sync_every, (int, np.integer)) or sync_every < 1:
@@ -630,7 +649,12 @@ class DeviceRowNewton:
     def _resident_loop(self, stp, slots, q, st, timing, m):
         """The device-resident iterations of :meth:`_chunk_device` (class docstring): poses written
         on the device, the families launched, summed and stepped; the active count read every
-        ``sync_every`` sweeps."""
+        ``sync_every`` sweeps. On a CUDA device with ``settings.graph`` the loop is captured once per
+        stepper (after its first run, which loads every module) as a conditional CUDA graph
+        (``wp.capture_while`` on the active count, a sweep gate at the same cap, as
+        :mod:`rvtool.solver.device_newton`) and replayed: no host round trip per iteration; the
+        states are those of the host loop (its extra sweeps after the last copy ends leave every copy as
+        it is), the time all in ``solve`` (step_s). On the cpu the host loop as before."""
         import warp as wp
         ev = self.evaluator
         if self._reference_d is None:
@@ -642,6 +666,28 @@ class DeviceRowNewton:
                 vel.zero_()                             # static: zero velocities (the ground row too)
         # every copy ends within the stages' iteration budget; the cap only guards the loop
         cap = (len(m.stiffening) + 2) * m.max_iterations + self.sync_every
+
+        def sweep():
+            for f, (pose, _) in zip(self.families, bufs):
+                if f.pose_map is None:
+                    stp.write_poses(self._reference_d, pose)
+                else:
+                    stp.write_poses_gathered(self._reference_d, pose, self._gather_index(f))
+            Q, K = ev.launch_device()
+            stp.step(Q, K)
+
+        graph = self._graph(stp, sweep, cap) if self._captures(stp) else None
+        if graph is not None:
+            t0 = time.perf_counter()
+            counter, gr = graph
+            counter.zero_()
+            stp.active.fill_(1)
+            wp.capture_launch(gr)
+            sweeps = int(counter.numpy()[0])
+            timing["solve"] += time.perf_counter() - t0
+            self.loop_path = "cuda_graph"
+            return self._resident_read(stp, slots, q, st, sweeps)
+        self.loop_path = "host_loop"
         sweeps = 0
         while sweeps < cap:
             k0, s0 = ev.timing["kernels"], ev.timing["scatter"]
@@ -664,11 +710,49 @@ class DeviceRowNewton:
             timing["solve"] += time.perf_counter() - t0
             if done:
                 break
+        if self._captures(stp) and id(stp) not in self._graphs:
+            self._graphs[id(stp)] = "warm"          # its modules are loaded: the next loop captures
+        return self._resident_read(stp, slots, q, st, sweeps)
+
+    @staticmethod
+    def _resident_read(stp, slots, q, st, sweeps):
         qB, status, stage, iters, total, res = stp.read("q", "status", "stage", "iters", "total", "residual")
         q[...] = qB[slots]
         for nm, v in (("status", status), ("stage", stage), ("iters", iters), ("total", total), ("residual", res)):
             st[nm][...] = v[slots]
         return sweeps
 
+    def _captures(self, stp):
+        """Whether the resident loop of stepper ``stp`` runs as a captured CUDA graph (CUDA device,
+        ``settings.graph``, capture not failed before)."""
+        import warp as wp
+        return (not wp.get_device(self.device).is_cpu and bool(getattr(self.settings, "graph", False))
+                and self._graphs.get(id(stp), "") is not None)
 
-__all__ = ["DeviceRowNewton", "RowSolve", "needs_extension", "row_reasons"]
+    def _graph(self, stp, sweep, cap):
+        """(sweep counter, graph) of stepper ``stp``'s resident loop, captured on its second use (the first
+        ran the host loop: every module loaded, every recorded launch made); None before that or where
+        capture fails (conditional graph nodes need CUDA >= 12.4 drivers: the host loop then)."""
+        import warp as wp
+        from warp_contacts.batched_newton import kernels
+        hit = self._graphs.get(id(stp))
+        if hit is None or hit == "warm":
+            if hit is None:
+                return None
+            gate = kernels(wp.float64)[2]
+            counter = wp.zeros(1, dtype=wp.int32, device=self.device)
+
+            def body():
+                sweep()
+                wp.launch(gate, dim=1, inputs=[int(cap)], outputs=[counter, stp.active], device=self.device)
+            try:
+                with wp.ScopedCapture(device=self.device) as capture:
+                    wp.capture_while(stp.active, body)
+                hit = self._graphs[id(stp)] = (counter, capture.graph)
+            except Exception:  # no conditional nodes (older driver): the host loop from now on
+                self._graphs[id(stp)] = None
+                return None
+        return hit
+
+
+__all__ = ["DeviceRowNewton", "RowSolve", "needs_extension", "provide_profile_tables", "row_reasons"]

@@ -87,14 +87,15 @@ def _nominal(design, kw):
     return hit
 
 
-def _pin_set(nominal, d, backend):
+def _pin_set(nominal, d, backend, defer=False):
     """The cycloid pin set of variant design ``d`` as the builder makes it (its meshes, rows and shared
-    profile tables) and as a snapshot holds it (no device objects, the build's ``backend``)."""
+    profile tables; ``defer``: the tables not computed, :func:`rvtool.contact.cycloid_set.shared_profile_tables`)
+    and as a snapshot holds it (no device objects, the build's ``backend``)."""
     from ..assembly.cycloid import pin_meshes
     from ..contact.cycloid_set import CycloidPinSet, shared_profile_tables
     from .model_snapshot import snapshot_set
     _, meshes = pin_meshes(d)
-    with shared_profile_tables():
+    with shared_profile_tables(defer=defer):
         s = CycloidPinSet(meshes, nominal.n_bodies, samples_per_tooth=d.wheels.samples_per_tooth, backend="numpy",
                           precision=nominal.precision, name=nominal.name, search=d.wheels.search)
     return snapshot_set(s, backend)
@@ -144,7 +145,7 @@ def light_design(design, variant):
     return dataclasses.replace(design, **changes, source=replaced_source(design, **sections))
 
 
-def _variant_snapshot(nominal, d):
+def _variant_snapshot(nominal, d, defer=False):
     """The snapshot of variant design ``d`` written into ``nominal`` (module docstring)."""
     from ..assembly.cycloid import CycloidKinematics
     from ..geometry.eccentric import journal_centre
@@ -167,17 +168,20 @@ def _variant_snapshot(nominal, d):
     op_set.__dict__.update(vars(op.evaluator))
     op_set.history = copy.deepcopy(op.evaluator.history)
     backend = nominal.build_kw.get("backend", "warp")
-    out._elements = (SnapshotElement(_pin_set(pins.evaluator, d, backend), pins.ids), SnapshotElement(op_set, op.ids),
+    out._elements = (SnapshotElement(_pin_set(pins.evaluator, d, backend, defer), pins.ids), SnapshotElement(op_set, op.ids),
                      SnapshotElement(_bearings(brg.evaluator, d), brg.ids))
     return out
 
 
-def cycloid_variant_snapshots(design, variants, build_kw=None):
+def cycloid_variant_snapshots(design, variants, build_kw=None, *, defer_tables=False):
     """[:class:`~rvtool.solver.model_snapshot.ModelSnapshot`] of ``variants`` (:class:`rvtool.variants.Variant`)
     of cycloid ``design`` built with ``build_kw``: the nominal snapshot with each variant's pin set,
     bearings, reference poses and kinematics written in (module docstring), or, where
     :func:`patchable` names a reason, each variant built in full (``build_snapshot(...,
-    shared_tables=True)``). Equal to the full builds' snapshots either way."""
+    shared_tables=True)``). Equal to the full builds' snapshots either way. defer_tables: the written-in
+    pin sets' profile tables are not computed here (:func:`rvtool.contact.cycloid_set.shared_profile_tables`
+    ``defer``; pickled as their profiles, computed by the receiver, e.g. on its Warp device by
+    :func:`rvtool.contact.cycloid_set.compute_profile_tables`); default off."""
     variants = list(variants)
     kw = dict(build_kw or {})
     entry = [None, False, None] if patchable(design, kw) else _nominal(design, kw)
@@ -189,7 +193,8 @@ def cycloid_variant_snapshots(design, variants, build_kw=None):
             entry[2] = bool(light == loaded and light.source == loaded.source)
         except (TypeError, ValueError):   # members that do not compare (arrays): load every variant
             entry[2] = False
-    return [_variant_snapshot(entry[0], light_design(design, v) if entry[2] else v.apply(design)) for v in variants]
+    return [_variant_snapshot(entry[0], light_design(design, v) if entry[2] else v.apply(design), defer_tables)
+            for v in variants]
 
 
 __all__ = ["ELEMENTS", "cycloid_variant_snapshots", "light_design", "patchable"]

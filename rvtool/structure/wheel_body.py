@@ -55,7 +55,7 @@ import scipy.sparse as sp
 
 from ..errors import RvtoolInputError
 from ..units import angle_field
-from ..validation import check_nonnegative, check_positive
+from ..validation import check_choice, check_nonnegative, check_positive
 from .fe_model import ElasticMaterial, FEModel, fe_model_from_mesh
 
 
@@ -83,6 +83,10 @@ class HoleSet:
         return np.stack([self.circle_radius * np.cos(a), self.circle_radius * np.sin(a)], axis=-1)
 
 
+ELASTICITIES = ("solid", "plane_stress")
+"""The wheel body's elasticity (``wheels.structure.elasticity``): 3D tetrahedra or plane-stress triangles."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class WheelBodySpec:
     """The wheel body's mesh and ports (design file: ``[wheels.structure]``).
@@ -98,6 +102,10 @@ class WheelBodySpec:
     crank bore [-] (0, the default: the bore's mean motion follows its journal, a bilateral tie; 4
     to 64: N compression-only patches around each bore, which the journal's needle row loads on its
     loaded arc only, so the bore ovalises; at most the vertices the bore's mesh carries).
+    elasticity: "solid" (the default: the plane mesh extruded into ``layers`` layers of 3D
+    tetrahedra) or "plane_stress" (the same plane mesh as first-order plane-stress triangles of
+    the wheel's thickness, two coordinates per vertex; ``layers`` is not used; the ports are the
+    same; a static member only: the flexible wheels of dynamic runs need the solid).
     """
     mesh_size: float = 0.004
     layers: int = 2
@@ -107,9 +115,11 @@ class WheelBodySpec:
     lightening_holes: HoleSet = HoleSet()
     material: ElasticMaterial | None = None
     bore_ports: int = 0
+    elasticity: str = "solid"
 
     def __post_init__(self):
         check_positive("mesh_size", self.mesh_size)
+        check_choice("elasticity", self.elasticity, ELASTICITIES)    # the template lists the choices from it
         b = self.bore_ports
         if isinstance(b, bool) or not isinstance(b, int) or not (b == 0 or 4 <= b <= 64):
             raise RvtoolInputError(f"bore_ports = {b!r} is outside the valid range [0, 64] (integer: 0, the bore's "
@@ -209,6 +219,20 @@ class WheelBody:
         C = self.measure_matrix @ u
         return 0.5 * (C + C.T)
 
+    def station_compliance(self, W):
+        """(m, m) compliance [m/N] of m stations that combine the port rows, W C W^T with W (m, n_rows)
+        (e.g. contacts interpolated on the profile ports, :func:`profile_interpolation`): from
+        :attr:`static_compliance` when it is computed, else solved for W's m load vectors only,
+        sym(W P_m K^+ P_l^T W^T) (for many profile ports, where the full C would be large)."""
+        W = np.atleast_2d(np.asarray(W, float))
+        if W.shape[1] != self.load_matrix.shape[0]:
+            raise RvtoolInputError(f"W has {W.shape[1]} columns; valid: one per port row ({self.load_matrix.shape[0]})")
+        if "static_compliance" in self.__dict__:
+            return W @ self.static_compliance @ W.T
+        u = inertia_relief_solve(self.fe, np.asarray(self.load_matrix.T @ W.T))
+        A = W @ np.asarray(self.measure_matrix @ u)
+        return 0.5 * (A + A.T)
+
 
 def _polygon_area(p):
     x, y = p[:, 0], p[:, 1]
@@ -265,6 +289,54 @@ def _ngsolve_mesh(P, T):
     return ngs.Mesh(m)
 
 
+def plane_stress_model(pts, tris, thickness, material: ElasticMaterial, info=None) -> FEModel:
+    """Free plane-stress model of a plane mesh (points (n, 2) [m], triangles (m, 3)) of thickness
+    ``thickness`` [m]: first-order triangles (NGSolve VectorH1, order 1), generalised plane stress
+    (sigma_zz = 0, lambda* = 2 mu lambda / (lambda + 2 mu)), stiffness and mass per unit thickness
+    times the thickness. An :class:`FEModel` with vertices (n, 3) at z = 0, two coordinates per vertex
+    (x, y interleaved: ``dof_component`` 0 or 1), no tetrahedra."""
+    import ngsolve as ngs
+    from netgen.meshing import Element2D, FaceDescriptor, Mesh, MeshPoint, Pnt
+    tris = np.asarray(tris, int).copy()
+    v = pts[tris]
+    e1, e2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+    neg = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0         # counter-clockwise triangles
+    tris[neg, 1], tris[neg, 2] = tris[neg, 2].copy(), tris[neg, 1].copy()
+    m = Mesh(dim=2)
+    pid = [m.Add(MeshPoint(Pnt(float(x), float(y), 0.0))) for x, y in pts]
+    m.Add(FaceDescriptor(surfnr=1, domin=1, bc=1))
+    m.SetMaterial(1, "wheel")
+    for t in tris:
+        m.Add(Element2D(1, [pid[i] for i in t]))
+    mesh = ngs.Mesh(m)
+    fes = ngs.VectorH1(mesh, order=1)
+    nv = len(pts)
+    if fes.ndof != 2 * nv:
+        raise RvtoolInputError(f"first-order VectorH1 has {fes.ndof} coordinates for {nv} vertices in the plane")
+    mu, lam = material.lame()
+    lam_ps = 2 * mu * lam / (lam + 2 * mu)
+    u, w = fes.TnT()
+    eu, ew = ngs.Sym(ngs.Grad(u)), ngs.Sym(ngs.Grad(w))
+    a = ngs.BilinearForm(fes)
+    a += thickness * (2 * mu * ngs.InnerProduct(eu, ew) + lam_ps * ngs.Trace(eu) * ngs.Trace(ew)) * ngs.dx
+    mm = ngs.BilinearForm(fes)
+    mm += thickness * material.density * u * w * ngs.dx
+    a.Assemble()
+    mm.Assemble()
+    blocked = np.arange(2 * nv).reshape(2, nv).T.ravel()       # interleaved 2 i + c -> blocked c nv + i
+    K = sp.csr_matrix(a.mat.CSR())[blocked][:, blocked]
+    M = sp.csr_matrix(mm.mat.CSR())[blocked][:, blocked]
+    K = ((K + K.T) * 0.5).tocsr()
+    M = ((M + M.T) * 0.5).tocsr()
+    n = 2 * nv
+    return FEModel(vertices=np.column_stack([pts, np.zeros(nv)]), tetrahedra=np.zeros((0, 4), int),
+                   surface_triangles=tris, stiffness=K, elastic_stiffness=K, mass=M, damping=sp.csr_matrix((n, n)),
+                   dof_vertex=np.arange(n) // 2, dof_component=np.arange(n) % 2, ports=(),
+                   port_matrix=sp.csr_matrix((0, n)), spring_vertices=np.zeros(0, int),
+                   clamped_vertices=np.zeros(0, int), damping_coefficients=(0.0, 0.0), material=material,
+                   info={"thickness": float(thickness), **(info or {})})
+
+
 def _boundary_edges(tris):
     e = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1)
     u, cnt = np.unique(e, axis=0, return_counts=True)
@@ -306,13 +378,20 @@ def wheel_body(geometry: WheelGeometry, spec: WheelBodySpec, material: ElasticMa
     """Mesh, assemble and port one wheel (module docstring)."""
     check_positive("thickness", geometry.thickness)
     pts, tris, prof = plane_mesh(geometry, spec)
-    L = spec.layers
-    P3, T = _extrude(pts, tris, geometry.thickness, L)
-    fe = fe_model_from_mesh(_ngsolve_mesh(P3, T), material=material,
-                            info={"component": "cycloid wheel", "mesh_size": spec.mesh_size, "layers": L})
     n2 = len(pts)
+    if spec.elasticity == "plane_stress":
+        # one plane of vertices, two coordinates each (x, y interleaved): the ports' "layers" are that plane
+        L, nc = 0, 2
+        fe = plane_stress_model(pts, tris, geometry.thickness, material,
+                                info={"component": "cycloid wheel (plane stress)", "mesh_size": spec.mesh_size})
+        wz = np.ones(1)
+    else:
+        L, nc = spec.layers, 3
+        P3, T = _extrude(pts, tris, geometry.thickness, L)
+        fe = fe_model_from_mesh(_ngsolve_mesh(P3, T), material=material,
+                                info={"component": "cycloid wheel", "mesh_size": spec.mesh_size, "layers": L})
+        wz = _thickness_weights(L)
     ndof = fe.n_dofs
-    wz = _thickness_weights(L)
     edges = _boundary_edges(tris)
     bnd = np.zeros(n2, bool)
     bnd[edges.ravel()] = True
@@ -348,7 +427,7 @@ def wheel_body(geometry: WheelGeometry, spec: WheelBodySpec, material: ElasticMa
         for layer in range(L + 1):
             for c in range(2):
                 rows.extend([r + c] * len(vert2d))
-                cols.extend(3 * (vert2d + layer * n2) + c)
+                cols.extend(nc * (vert2d + layer * n2) + c)
                 vals_.extend(w * wz[layer])
 
     pv = np.flatnonzero(on_prof)
@@ -395,12 +474,13 @@ def wheel_body(geometry: WheelGeometry, spec: WheelBodySpec, material: ElasticMa
             for layer in range(L + 1):
                 for c in range(2):
                     rows_i.extend([r0 + i] * int(sel.sum()))
-                    cols_i.extend(3 * (vs[sel] + layer * n2) + c)
+                    cols_i.extend(nc * (vs[sel] + layer * n2) + c)
                     vals.extend(w * nv[sel, c] * wz[layer])
         groups[f"bore{k}_patches"] = np.arange(r0, r0 + nbp)
         r0 += nbp
     n_rows = r0
-    # the 3D dofs are node-interleaved over all vertices (no clamps): dof = 3 vertex + component
+    # the dofs are node-interleaved over all vertices (no clamps): dof = nc vertex + component (nc = 3, or 2 in
+    # plane stress)
     Pl = sp.csr_matrix((vals, (rows_i, cols_i)), shape=(n_rows, ndof))
     depth = geometry.port_depth
     if depth > 0:
@@ -429,6 +509,9 @@ def inertia_relief_solve(fe: FEModel, f):
     from .craig_bampton import factorize
     K, M = fe.elastic_stiffness, fe.mass
     R = fe.rigid_body_modes(centre=fe.vertices.mean(axis=0))
+    planar = int(fe.dof_component.max()) < 2
+    if planar:                                   # plane stress: x, y and the rotation about z
+        R = R[:, [0, 1, 5]]
     MR = np.asarray(M @ R)
     A = np.linalg.inv(R.T @ MR)
     f = np.asarray(f, float)
@@ -441,7 +524,10 @@ def inertia_relief_solve(fe: FEModel, f):
     off = np.linalg.norm(np.cross(V - V[a], ab), axis=1)
     c = int(np.argmax(off))
     ax = int(np.argmax(np.abs(ab)))
-    held = [3 * a, 3 * a + 1, 3 * a + 2] + [3 * b + j for j in range(3) if j != ax] + [3 * c + 2]
+    if planar:                                   # 2-1: vertex a both, b the coordinate across a-b
+        held = [2 * a, 2 * a + 1, 2 * b + (1 - ax)]
+    else:
+        held = [3 * a, 3 * a + 1, 3 * a + 2] + [3 * b + j for j in range(3) if j != ax] + [3 * c + 2]
     free = np.setdiff1d(np.arange(fe.n_dofs), held)
     lu = factorize(K[free][:, free], "K of the wheel on its 3-2-1 support")
     u = np.zeros_like(ft)
@@ -458,15 +544,16 @@ def profile_interpolation(wb: WheelBody, points):
     N = len(prof)
     seg = np.roll(prof, -1, axis=0) - prof
     l2 = np.einsum("ij,ij->i", seg, seg)
+    # every point against every segment at once (the same arithmetic per pair as one point at a time)
+    d = pts[:, None, :] - prof[None, :, :]                                          # (n, N, 2)
+    t = np.clip((d[..., 0] * seg[:, 0] + d[..., 1] * seg[:, 1]) / l2, 0.0, 1.0)     # (n, N)
+    e = prof[None] + t[..., None] * seg[None] - pts[:, None, :]
+    i = np.argmin(np.sqrt(e[..., 0] ** 2 + e[..., 1] ** 2), axis=1)
+    j = (i + 1) % N
+    ti = t[np.arange(len(pts)), i]
     W = np.zeros((2 * len(pts), 2 * N))
-    s = np.zeros(len(pts))
-    for k, p in enumerate(pts):
-        t = np.clip(np.einsum("ij,ij->i", p - prof, seg) / l2, 0.0, 1.0)
-        dist = np.linalg.norm(prof + t[:, None] * seg - p, axis=1)
-        i = int(np.argmin(dist))
-        j = (i + 1) % N
-        for c in range(2):
-            W[2 * k + c, 2 * i + c] += 1.0 - t[i]
-            W[2 * k + c, 2 * j + c] += t[i]
-        s[k] = wb.profile_arc[i] + t[i] * np.sqrt(l2[i])
-    return W, s
+    k = np.arange(len(pts))
+    for c in range(2):
+        np.add.at(W, (2 * k + c, 2 * i + c), 1.0 - ti)
+        np.add.at(W, (2 * k + c, 2 * j + c), ti)
+    return W, wb.profile_arc[i] + ti * np.sqrt(l2[i])

@@ -36,6 +36,11 @@ deviation (e.g. normal with std = t / 6, so that 99 % of the centres fall in the
   (both wheels ground alike), added to ``profile.equidistant_mod`` (positive removes material),
 * ``profile_offset_error`` [m]: the ground profile's offset (pin-circle radius) deviation, one value per
   reducer, added to ``profile.offset_mod``.
+* ``wheel_lobe_pitch_deviation`` [m]: single pitch deviations of the lobes of each cycloid wheel (one draw per
+  lobe and wheel, each wheel's minus its mean so that they close the circle; ``wheels.lobe_pitch_deviations``,
+  on the wheel's reference circle of radius R_z z_g / z_b): lobe j turns about the wheel centre by its
+  accumulated pitch deviation (:func:`rvtool.geometry.cycloid.lobe_pitch_rotations`). Drawn last (after
+  ``profile_offset_error``), so that adding it left the other fields' draws of a seed unchanged.
 
 Variant k draws from ``numpy.random.default_rng([seed, k])`` in the order of :data:`RV_FIELDS`.
 """
@@ -67,6 +72,7 @@ class RvToleranceSpec:
     carrier_bore_position_error: object = None
     profile_equidistant_error: object = None
     profile_offset_error: object = None
+    wheel_lobe_pitch_deviation: object = None
 
     def __post_init__(self):
         check_design_distributions(self, RV_FIELDS)
@@ -79,6 +85,13 @@ def load_rv_tolerances(path):
 
 def sample_rv_design(spec, design, k, seed):
     """(design of variant k, its drawn deviations {field: value(s)})."""
+    changes, drawn = rv_design_changes(spec, design, k, seed)
+    return design.replace(**changes), drawn
+
+
+def rv_design_changes(spec, design, k, seed):
+    """(the file-form changes of variant k, {section: {key: value}}, as ``design.replace`` takes them, its
+    drawn deviations {field: value(s)}): what :func:`sample_rv_design` writes into ``design``."""
     if int(k) < 0 or int(seed) < 0:
         raise RvtoolInputError(f"variant index {k} and seed {seed}: valid range [0, inf) (integers)")
     rng = np.random.default_rng([int(seed), int(k)])
@@ -128,11 +141,16 @@ def sample_rv_design(spec, design, k, seed):
         elif nm == "profile_equidistant_error":
             v = float(d.sample(rng))
             changes.setdefault("profile", {})["equidistant_mod"] = design.profile.equidistant_mod + v
-        else:
+        elif nm == "profile_offset_error":
             v = float(d.sample(rng))
             changes.setdefault("profile", {})["offset_mod"] = design.profile.offset_mod + v
+        else:
+            zg = design.pins.n_pins - 1
+            f = np.asarray(d.sample(rng, design.n_wheels * zg), float).reshape(design.n_wheels, zg)
+            v = tuple(tuple(float(x) for x in row - row.mean()) for row in f)
+            changes.setdefault("wheels", {})["lobe_pitch_deviations"] = v
         drawn[nm] = v
-    return design.replace(**changes), drawn
+    return changes, drawn
 
 
 def pin_pitch_centre_errors(pins, single_pitch_deviations):

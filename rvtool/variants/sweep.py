@@ -60,7 +60,7 @@ import itertools
 import json
 import os
 import sys
-import tempfile
+import threading
 import time
 import tomllib
 from dataclasses import dataclass, field
@@ -246,8 +246,10 @@ def write_table(rows, out_dir, name="results"):
     cols += [c for c in ROW_TAIL if any(c in r for r in rows)]
     paths = []
     for ext in ("csv", "json"):
-        fd, tmp = tempfile.mkstemp(dir=out_dir, prefix=f".{name}", suffix="." + ext)
-        with os.fdopen(fd, "w", newline="") as fh:
+        # a temporary name of this process and thread, opened as any file (mode 0666 less the umask,
+        # not tempfile.mkstemp's 0600: the table is the user's result)
+        tmp = os.path.join(out_dir, f".{name}.{os.getpid()}.{threading.get_ident()}.{ext}")
+        with open(tmp, "w", newline="") as fh:
             if ext == "csv":
                 w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
                 w.writeheader()

@@ -97,6 +97,12 @@ class RvKinematics:
         self.phases = np.asarray(design.wheels.phases, float)
         self.reference = reference_poses(design, graph, layout)
 
+    @property
+    def crank_rate(self):
+        """omega_crank / omega_in: the eccentric orbit per input radian (the gear graph's), the period
+        2 pi / |crank_rate| [rad of input] with which the wheels' contacts repeat."""
+        return float(self.g.crank_rate)
+
     def poses(self, input_angles):
         """(n, nb, 3) poses at input angles (n,) [rad]."""
         s = np.asarray(input_angles, float)
@@ -118,6 +124,43 @@ class RvKinematics:
             q[:, i, 0], q[:, i, 1] = journal_centre(self.e, self.phases[j], a)
             q[:, i, 2] = phi_c
         q[:, L.carrier, 2] = phi_c
+        return q
+
+    @staticmethod
+    def stacked_poses(kinematics, input_angles):
+        """(B, n, nb, 3) poses of B :class:`RvKinematics` at input angles (n,) [rad] in one evaluation
+        (Monte Carlo variants: their references, crank circles, eccentricities and phases may differ),
+        each equal to its :meth:`poses` bit for bit (the same operations per element), or None where
+        their layouts, stage rates or crank counts differ (then each is evaluated alone)."""
+        k0 = kinematics[0]
+        L = k0.L
+        lay = lambda x: (x.three_stage, x.n_cranks, x.n_bodies)
+        rates = lambda k: tuple(k.g.rates[nm] for nm in ("carrier", "crank", "sun"))
+        if any(not isinstance(k, RvKinematics) or lay(k.L) != lay(L) or rates(k) != rates(k0)
+               or len(k.g.crank_angles) != len(k0.g.crank_angles) or len(k.phases) != len(k0.phases)
+               for k in kinematics):
+            return None
+        s = np.asarray(input_angles, float)
+        r = k0.g.rates
+        phi_c = r["carrier"] * s
+        a = r["crank"] * s
+        q = np.repeat(np.array([k.reference for k in kinematics], float)[:, None], len(s), axis=1)
+        q[:, :, 0, 2] += s
+        if L.three_stage:
+            q[:, :, L.sun, 2] += r["sun"] * s
+        radius = np.array([k.g.crank_radius for k in kinematics], float)[:, None]
+        for j, i in enumerate(L.crank(k) for k in range(L.n_cranks)):
+            b = np.array([k.g.crank_angles[j] for k in kinematics], float)[:, None]
+            q[:, :, i, 0] = radius * np.cos(b + phi_c[None, :])
+            q[:, :, i, 1] = radius * np.sin(b + phi_c[None, :])
+            q[:, :, i, 2] += a
+        e = np.array([k.e for k in kinematics], float)[:, None]
+        for j in range(2):
+            i = L.wheel(j)
+            ph = np.array([k.phases[j] for k in kinematics], float)[:, None]
+            q[:, :, i, 0], q[:, :, i, 1] = journal_centre(e, ph, a[None, :])
+            q[:, :, i, 2] = phi_c
+        q[:, :, L.carrier, 2] = phi_c
         return q
 
     def velocities(self, input_angle, omega_in):
@@ -451,7 +494,7 @@ class RvModel(ReducerModel):
             x = pose[self.layout.crank(k)]
             ax.add_patch(plt.Circle(x[:2], g.sun_pair.gear_b.reference_radius, fill=False, color="g", lw=0.5))
         ax.add_patch(plt.Circle(pose[self.layout.sun, :2], g.sun_pair.gear_a.reference_radius, fill=False, color="g",
-                                lw=0.5))
+                                lw=0.5, label="input stage, reference circles"))
         super().draw_section(ax, q)
 
 

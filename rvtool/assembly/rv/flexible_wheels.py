@@ -41,6 +41,10 @@ def wheel_mesh(design, j):
         raise RvtoolInputError(f"wheels.structure.bore_ports = {spec.bore_ports} with wheels.dynamics.model = "
                                "'flexible' is not implemented (the floating wheel's crank bores are mean-motion hole "
                                "ports); valid: wheels.structure.bore_ports = 0 for flexible wheels")
+    if spec.elasticity != "solid":
+        raise RvtoolInputError(f"wheels.structure.elasticity = {spec.elasticity!r} with wheels.dynamics.model = "
+                               "'flexible' is not implemented (the floating frame needs the 3D solid); valid: "
+                               "wheels.structure.elasticity = 'solid' for flexible wheels")
     wb = wheel_model(d, j)
     holes = [wb.rows(f"bore{k}") for k in range(d.cranks.count)]
     ops = port_operators_from_rows(wb.fe, measure=wb.measure_matrix, load=wb.load_matrix,

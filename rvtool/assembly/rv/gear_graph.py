@@ -76,6 +76,10 @@ def solve_rates(edges, members, given):
     return dict(zip(members, x))
 
 
+_GRAPHS = {}
+"""GearGraph.of's graphs by their inputs (at most 64, the oldest dropped)."""
+
+
 @dataclass(frozen=True)
 class GearGraph:
     """Derived RV gear graph (module docstring). Angles [rad], lengths [m]."""
@@ -106,6 +110,27 @@ class GearGraph:
 
     @classmethod
     def of(cls, design):
+        """The graph of ``design`` (its tooth counts, gears, crank count, topology and declared ratio), made
+        once per distinct set of those inputs in a process (a variant's design is checked at load and built
+        after: the same graph twice, ~2 ms each)."""
+        d = design
+        rv3 = d.topology == "rv3"
+        key = (cls, d.topology, d.cranks.count, d.sun_gear, d.crank_gear, d.pins.n_pins, d.ratio_target,
+               d.input_pinion if rv3 else None, d.compound_gear if rv3 else None,
+               d.input_stage.direction if rv3 else None)
+        try:
+            hit = _GRAPHS.get(key)
+        except TypeError:                 # an unhashable member: made each time
+            return cls._made(d)
+        if hit is None:
+            hit = cls._made(d)
+            if len(_GRAPHS) >= 64:
+                _GRAPHS.pop(next(iter(_GRAPHS)))
+            _GRAPHS[key] = hit
+        return hit
+
+    @classmethod
+    def _made(cls, design):
         d = design
         n = d.cranks.count
         sun_pair = InvolutePair(gear_a=d.sun_gear, gear_b=d.crank_gear)

@@ -19,10 +19,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...bearings.spec import AngularContactPair, BallBearing, NeedleBearing
-from ...bearings.tapered import TaperedPair
+from ...bearings.tapered import TaperedPair, TaperedRollerBearing
 from ...errors import RvtoolInputError
 from ...units import angle_field
-from ...geometry.involute import BasicRack, FlankModification, InvoluteGear
+from ...geometry.involute import BasicRack, FlankModification, InvoluteGear, InvolutePair
 from ...validation import check_finite, check_positive, check_range
 from ...geometry.cycloid import CycloidProfile
 from ...structure import ElasticMaterial
@@ -359,6 +359,7 @@ class RVDesign:
         if zg != self.pins.n_pins - 1:
             raise RvtoolInputError(f"wheels.n_teeth = {zg} with pins.n_pins = {self.pins.n_pins}: only Z_pins = "
                                    f"Z_wheel + 1 is supported (valid: wheels.n_teeth = {self.pins.n_pins - 1})")
+        self.wheels.check_lobes(zg)
         if self.ratio_target is not None:
             check_positive("ratio_target", abs(self.ratio_target))
         self.housing.check_pin_ring(self.pins)
@@ -469,10 +470,13 @@ def _main_bearing(data):
     """The AngularContactPair from ``[main_bearing]`` with its two rows as ``[[main_bearing.rows]]``
     tables (each a BallBearing spec), one ``[main_bearing.row]`` table for both, or the rows' keys
     in the pair's table (:func:`_flat_rows`)."""
-    data = _flat_rows(AngularContactPair, _table("main_bearing", data))
+    table = _table("main_bearing", data)
+    data = _flat_rows(AngularContactPair, table)
     if "row" in data:
-        table = data.pop("row")
-        data["rows"] = [table, table]
+        # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
+        name = "main_bearing" if "row" not in table else "main_bearing.row"
+        row = build_section(BallBearing, name, _table(name, data.pop("row")))
+        data["rows"] = (row, row)
     rows = data.get("rows")
     if not (isinstance(rows, (list, tuple)) and len(rows) == 2):
         raise RvtoolInputError(f"main_bearing.rows must hold 2 row tables (BallBearing specs); got {rows!r}")
@@ -485,9 +489,13 @@ def _main_bearing(data):
 def _crank_bearing(data):
     """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables,
     or the rows' keys in the pair's table (:func:`_flat_rows`)."""
-    data = _flat_rows(TaperedPair, _table("crank_bearing", data))
+    table = _table("crank_bearing", data)
+    data = _flat_rows(TaperedPair, table)
     if "row" in data:
-        data["row"] = _table("crank_bearing.row", data["row"])
+        # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
+        name = "crank_bearing" if "row" not in table else "crank_bearing.row"
+        row = TaperedRollerBearing.from_mapping(_table(name, data.pop("row")), name)
+        data["rows"] = (row, row)
     if isinstance(data.get("rows"), (list, tuple)):
         data["rows"] = [r if not isinstance(r, dict) else _table(f"crank_bearing.rows[{k}]", r)
                         for k, r in enumerate(data["rows"])]
@@ -520,6 +528,19 @@ _OPTIONAL = ("involute_stage", "bodies", "input_pinion", "compound_gear", "input
 SET_BY_DESIGN = {g: ("name",) for g in ("sun_gear", "crank_gear", "input_pinion", "compound_gear")}
 
 
+def _checked_pair(a_key, gear_a, b_key, gear_b):
+    """Raise the zero-backlash pair's input errors of two design gears (e.g. no working pressure angle
+    for the profile shifts) in the design file's key paths, not the pair's gear_a / gear_b."""
+    try:
+        InvolutePair(gear_a=gear_a, gear_b=gear_b).a
+    except RvtoolInputError as exc:
+        msg = str(exc)
+        for old, new in (("gear_a's", f"{a_key}'s"), ("gear_b's", f"{b_key}'s"), ("gear_a.", f"{a_key}."),
+                         ("gear_b.", f"{b_key}.")):
+            msg = msg.replace(old, new)
+        raise RvtoolInputError(msg) from None
+
+
 def design_from_dict(d):
     """A validated :class:`RVDesign` from a design mapping (a parsed TOML file)."""
     from ..topologies import upgrade_table
@@ -533,11 +554,50 @@ def design_from_dict(d):
             raise RvtoolInputError(f"section [{sec}] is missing from the design")
         kw[sec] = make(d.pop(sec))
     design = build_section(RVDesign, "design", {**d, **kw, "source": source})
+    _checked_pair("sun_gear", design.sun_gear, "crank_gear", design.crank_gear)
+    if design.input_pinion is not None and design.compound_gear is not None:
+        _checked_pair("input_pinion", design.input_pinion, "compound_gear", design.compound_gear)
     from .gear_graph import GearGraph
     graph = GearGraph.of(design)  # topology errors (spacing, crank count, declared ratio) at load
     from ..carrier import check_carrier
     check_carrier(design, graph)  # a ported carrier fits the cranks and the bearing rows
     return design
+
+
+#: sections :func:`light_replace` writes with their loader's builder (the ones a tolerance draw changes that
+#: no link of the file form reads: pins feed the profile only through n_pins, pin_circle_radius, pin_radius)
+_LIGHT = {"cranks": lambda d: build_section(Cranks, "cranks", d),
+          "eccentric_bearing": lambda d: build_section(NeedleBearing, "eccentric_bearing", d),
+          "sun_gear": lambda d: _gear("sun_gear", d),
+          "crank_gear": lambda d: _gear("crank_gear", d),
+          "pins": lambda d: build_section(Pins, "pins", d)}
+_LIGHT_PIN_KEYS = {"radius_error", "centre_errors"}
+
+
+def light_replace(design, **sections):
+    """``design.replace(**sections)`` without loading the whole file form again: each changed section built
+    from its merged table by the loader's own builder, the design by ``dataclasses.replace`` (its
+    validation runs), its ``source`` the replaced file form, and the loader's graph and carrier checks;
+    or None where a change is outside what this writes (another section, a top-level key, a pin key that
+    a link reads): then ``replace``. Equal to ``replace``'s design where no link follows the changed keys
+    (a caller checks that once per design, :func:`rvtool.variants.multi_device.variant_snapshot`)."""
+    from ..spec import _merge, replaced_source
+    src = getattr(design, "source", None)
+    if src is None or any(k not in _LIGHT or not isinstance(v, dict) for k, v in sections.items()):
+        return None
+    if "pins" in sections and not set(sections["pins"]) <= _LIGHT_PIN_KEYS:
+        return None
+    new = {}
+    for sec, changes in sections.items():
+        base = src.get(sec)
+        if not isinstance(base, dict):
+            return None
+        new[sec] = _LIGHT[sec](_merge(copy.deepcopy(base), changes))
+    out = dataclasses.replace(design, **new, source=replaced_source(design, **sections))
+    from ..carrier import check_carrier
+    from .gear_graph import GearGraph
+    check_carrier(out, GearGraph.of(out))
+    return out
 
 
 def load_design(path):

@@ -106,6 +106,10 @@ def wheel_path(design, graph, layout, meshes, opts, *, ports=None, crank=None, t
         return None
     refuse_unsupported(d)
     joint = nested_solve_mode() == "joint"
+    # a network that does not converge answers a non-finite trial (the outer solver rejects it) instead of
+    # the nested solve, whose inner networks fail at the same far trial state and cascade (minutes per
+    # evaluation, rv40e's Latin-hypercube samples): :meth:`ElasticPinClosure.solve`
+    fallback = "reject"
     nc, nw, zb = layout.n_cranks, d.n_wheels, d.pins.n_pins
     n_real = layout.n_bodies + (0 if ports is None else ports.n_virtual)
     n = n_real
@@ -150,22 +154,26 @@ def wheel_path(design, graph, layout, meshes, opts, *, ports=None, crank=None, t
     chain = []
     if groove is not None:
         closure = ElasticPinClosure(closure, n_bodies=n_wheel, carrier=wheel[:, :zb].T, station_compliance=None,
-                                    station=groove - n_wheel, support=GrooveSupport(law), joint=joint)
+                                    station=groove - n_wheel, support=GrooveSupport(law), joint=joint,
+                                    fallback=fallback)
         chain.append("pin_grooves")
     pin_carrier = GROUND if ports is None else [layout.n_bodies + p for p in range(zb)]
     centres = pin_centres(d.profile, None if d.pins.centre_errors is None else np.asarray(d.pins.centre_errors, float))
     closure = WheelBodyClosure(closure, n_bodies=n_twist, wheels=[layout.wheel(j) for j in range(nw)],
                                bodies=[wheel_model(d, j) for j in range(nw)], pin_centres=centres,
-                               station=wheel - n_twist, pin_carrier=pin_carrier, joint=joint)
+                               station=wheel - n_twist, pin_carrier=pin_carrier, joint=joint,
+                               fallback=fallback)
     chain.append("wheel_bodies")
     if twist is not None:
         carrier = bend[:, :nw] if bend is not None else [layout.crank(k) for k in range(nc)]
         closure = ElasticPinClosure(closure, n_bodies=n_bend, carrier=carrier, station_compliance=torsion,
-                                    station=twist - n_bend, dofs=(2,), coupled=True, joint=joint)
+                                    station=twist - n_bend, dofs=(2,), coupled=True, joint=joint,
+                                    fallback=fallback)
         chain.append("crank_torsion")
     if bend is not None:
         closure = ElasticPinClosure(closure, n_bodies=n_real, carrier=[layout.crank(k) for k in range(nc)],
-                                    station_compliance=crank, station=bend - n_real, coupled=True, joint=joint)
+                                    station_compliance=crank, station=bend - n_real, coupled=True, joint=joint,
+                                    fallback=fallback)
         chain.append("cranks")
     chain.reverse()
     return WheelPath(closure, {p: k for k, p in enumerate(chain)}, bend is not None)
@@ -188,6 +196,22 @@ def contact_evaluations(evaluator):
     counter of the nesting (cases/benchmarks/bench_nested_wheels.py)."""
     chain, _ = chain_of(evaluator)
     return chain[-1].inner_evaluations if chain else 0
+
+
+def network_counters(model):
+    """{"solves", "continued", "failures", "fallbacks"} summed over the joint networks of every element of
+    ``model`` whose evaluator is a closure (:class:`~rvtool.contact.pin_closure.JointNetwork`'s counters; the
+    closures' :attr:`~rvtool.contact.pin_closure.ElasticPinClosure.fallbacks`): how often the networks did
+    not converge at an outer solver's trial states."""
+    out = {"solves": 0, "continued": 0, "failures": 0, "fallbacks": 0}
+    for el in model.elements.values():
+        for c in chain_of(getattr(el, "evaluator", None))[0]:
+            out["fallbacks"] += c.fallbacks
+            net = c.network
+            if net is not None and net.chain[0] is c:
+                for k in ("solves", "continued", "failures"):
+                    out[k] += getattr(net, k)
+    return out
 
 
 def inner_pose(chain, depth, pose):
