@@ -115,6 +115,22 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
         return d, dd
 
     @wp.func
+    def profile_point(tab_ana: wp.array2d(dtype=dtype), tb: int, nlobe: int, R: dtype, K1: dtype, zb: dtype,
+                      rc: dtype, rot_angle: dtype, phi: dtype):
+        """Analytic point of generating angle phi, turned by its pitch unit's rotation where the profile has
+        lobe rotations (nlobe > 0: cycloid_pins_ref.analytic_point_turned, else analytic_point)."""
+        pa = vec2(dtype(0.0), dtype(0.0))
+        na = vec2(dtype(0.0), dtype(0.0))
+        ka = dtype(0.0)
+        dsa = dtype(1.0)
+        if nlobe > 0:
+            dl, ddl = lobe_turn(tab_ana, tb, nlobe, phi)
+            pa, na, ka, dsa = analytic_point_turned(R, K1, zb, rc, rot_angle, dl, ddl, phi)
+        else:
+            pa, na, ka, dsa = analytic_point(R, K1, zb, rc, rot_angle, phi)
+        return pa, na, ka, dsa
+
+    @wp.func
     def locate(pl: vec2, tb: int, tab_pts: wp.array2d(dtype=dtype), tab_nrm: wp.array2d(dtype=dtype),
                tab_kap: wp.array(dtype=dtype), tab_polar: wp.array(dtype=dtype), tab_offset: wp.array(dtype=wp.int32),
                tab_len: wp.array(dtype=wp.int32), tab_h: wp.array(dtype=dtype), tab_phi: wp.array(dtype=dtype),
@@ -167,28 +183,12 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
             phi = tab_phi[off + best]
             nlobe = int(tab_ana[tb, A_NLOBE])
             for it in range(ANALYTIC_ITERATIONS):
-                pa = vec2(dtype(0.0), dtype(0.0))
-                na = vec2(dtype(0.0), dtype(0.0))
-                ka = dtype(0.0)
-                dsa = dtype(1.0)
-                if nlobe > 0:
-                    # lobe rotations: each iterate turned by its pitch unit's rotation (cycloid_pins_ref.lobe_turn)
-                    dl, ddl = lobe_turn(tab_ana, tb, nlobe, phi)
-                    pa, na, ka, dsa = analytic_point_turned(aR, aK1, azb, arc, arot, dl, ddl, phi)
-                else:
-                    pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
+                # lobe rotations: each iterate turned by its pitch unit's rotation (cycloid_pins_ref.lobe_turn)
+                pa, na, ka, dsa = profile_point(tab_ana, tb, nlobe, aR, aK1, azb, arc, arot, phi)
                 wa_ = pl - pa
                 dsn = wp.dot(wa_, -perp(na)) / (dtype(1.0) + ka * wp.dot(wa_, na))
                 phi = phi + dsn / dsa
-            pa = vec2(dtype(0.0), dtype(0.0))
-            na = vec2(dtype(0.0), dtype(0.0))
-            ka = dtype(0.0)
-            dsa = dtype(1.0)
-            if nlobe > 0:
-                dl, ddl = lobe_turn(tab_ana, tb, nlobe, phi)
-                pa, na, ka, dsa = analytic_point_turned(aR, aK1, azb, arc, arot, dl, ddl, phi)
-            else:
-                pa, na, ka, dsa = analytic_point(aR, aK1, azb, arc, arot, phi)
+            pa, na, ka, dsa = profile_point(tab_ana, tb, nlobe, aR, aK1, azb, arc, arot, phi)
             cl = pa
             nl = na
             kap = ka

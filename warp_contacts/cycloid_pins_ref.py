@@ -72,18 +72,25 @@ fraction of the pitch 2 pi / z_g (:func:`lobe_turn`)."""
 ANALYTIC_ITERATIONS = 4
 
 
-def analytic_point(params, phi):
-    """Analytic profile point, outward normal and curvature at generating angle phi
-    (Eq. (cycloid_geometry) with equidistant, offset and rotation modifications)."""
-    R, K1, zb, rc, rot_angle = params
+def _epitrochoid(R, K1, zb, phi):
+    """The unmodified curve's point E, its unit tangent, speed |E'| and signed curvature at generating angle phi
+    (Eq. (cycloid_geometry)), shared by :func:`analytic_point` and :func:`analytic_point_turned`."""
     s, c, S, C = np.sin(phi), np.cos(phi), np.sin(zb * phi), np.cos(zb * phi)
     E = R * np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1)
     dE = R * np.stack([c - K1 * C, -s + K1 * S], axis=-1)
     ddE = R * np.stack([-s + K1 * zb * S, -c + K1 * zb * C], axis=-1)
     speed = np.linalg.norm(dE, axis=-1)
     tau = dE / speed[..., None]
-    n = perp(tau)
     kE = -(dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]) / speed ** 3
+    return E, tau, speed, kE
+
+
+def analytic_point(params, phi):
+    """Analytic profile point, outward normal and curvature at generating angle phi
+    (Eq. (cycloid_geometry) with equidistant, offset and rotation modifications)."""
+    R, K1, zb, rc, rot_angle = params
+    E, tau, speed, kE = _epitrochoid(R, K1, zb, phi)
+    n = perp(tau)
     pt = E - rc * n
     kap = kE / (1.0 - rc * kE)
     dsdphi = speed * (1.0 - rc * kE)     # arc length of the offset curve per unit phi
@@ -119,13 +126,7 @@ def analytic_point_turned(params, d, dd, phi):
     c' = R(d) (c_0' + d' J c_0) (J: the quarter turn), its normal, the unturned curvature (d'' = 0) and the arc
     length per unit phi |c_0' + d' J c_0|."""
     R, K1, zb, rc, rot_angle = params
-    s, c, S, C = np.sin(phi), np.cos(phi), np.sin(zb * phi), np.cos(zb * phi)
-    E = R * np.stack([s - K1 / zb * S, c - K1 / zb * C], axis=-1)
-    dE = R * np.stack([c - K1 * C, -s + K1 * S], axis=-1)
-    ddE = R * np.stack([-s + K1 * zb * S, -c + K1 * zb * C], axis=-1)
-    speed = np.linalg.norm(dE, axis=-1)
-    tau = dE / speed[..., None]
-    kE = -(dE[..., 0] * ddE[..., 1] - dE[..., 1] * ddE[..., 0]) / speed ** 3
+    E, tau, speed, kE = _epitrochoid(R, K1, zb, phi)
     pt = E - rc * perp(tau)
     kap = kE / (1.0 - rc * kE)
     v = (speed * (1.0 - rc * kE))[..., None] * tau + np.asarray(dd)[..., None] * perp(pt)

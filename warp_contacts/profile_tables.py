@@ -61,6 +61,14 @@ def _kernels():
         return wp.vec2d(cr * v[0] - sr * v[1], sr * v[0] + cr * v[1])
 
     @wp.func
+    def unwrap_step(st: f64):
+        # np.unwrap's step: a difference of two angles reduced to [-pi, pi)
+        st = wp.mod(st + f64(3.141592653589793), f64(TWO_PI))
+        if st < f64(0.0):
+            st = st + f64(TWO_PI)
+        return st - f64(3.141592653589793)
+
+    @wp.func
     def pmod(a: f64):
         # np.mod(a, 2 pi) for a in [-pi, pi] (atan2's range): fmod is a, a negative one moves up by 2 pi
         if a < f64(0.0):
@@ -184,12 +192,7 @@ def _kernels():
             if k == 0:
                 first = a
             else:
-                st = a - prev
-                # np.unwrap's step: reduced to [-pi, pi)
-                st = wp.mod(st + f64(3.141592653589793), f64(TWO_PI))
-                if st < f64(0.0):
-                    st = st + f64(TWO_PI)
-                st = st - f64(3.141592653589793)
+                st = unwrap_step(a - prev)
                 if st <= f64(0.0):
                     good = 0
                 total = total + st
@@ -198,11 +201,7 @@ def _kernels():
             if ka < kmin:
                 kmin = ka
                 k0 = k
-        st = first - prev
-        st = wp.mod(st + f64(3.141592653589793), f64(TWO_PI))
-        if st < f64(0.0):
-            st = st + f64(TWO_PI)
-        st = st - f64(3.141592653589793)
+        st = unwrap_step(first - prev)
         if st <= f64(0.0):
             good = 0
         total = total + st
