@@ -69,7 +69,7 @@ def test_film_parameter_and_mixed_friction_by_hand():
     assert law.mu(math.inf) == 0.02                                 # unloaded contact: no asperity load
     with pytest.raises(RvtoolInputError, match=r"lambda = -0.1 is outside the valid range"):
         law.mu(-0.1)
-    with pytest.raises(RvtoolInputError, match="lambda = \\[nan\\]"):
+    with pytest.raises(RvtoolInputError, match="lambda = nan is outside"):
         law.mu(math.nan)
     with pytest.raises(RvtoolInputError, match="sqrt"):
         film_parameter(1e-6, 0.0, 0.0)

@@ -211,7 +211,9 @@ class MixedFriction:
         lam = np.asarray(lam, dtype=np.float64)
         bad = np.isnan(lam) | (lam < 0.0)
         if np.any(bad):
-            raise RvtoolInputError(f"lambda = {np.atleast_1d(lam[bad])[:4].tolist()} is outside the valid range "
+            shown = np.atleast_1d(lam[bad])[:4].tolist()
+            # a number as written (the input messages' convention), the first few of an array as a list
+            raise RvtoolInputError(f"lambda = {shown[0] if lam.ndim == 0 else shown} is outside the valid range "
                                    "[0, inf]")
         return np.exp(-(lam / self.transition_lambda) ** self.sharpness)
 
