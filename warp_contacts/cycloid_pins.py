@@ -51,8 +51,9 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
     friction_coefficient = L.friction_coefficient
 
     @wp.func
-    def analytic_point(R: dtype, K1: dtype, zb: dtype, rc: dtype, rot_angle: dtype, phi: dtype):
-        """Profile point, outward normal, curvature and d(arc)/d(phi) (see the reference)."""
+    def epitrochoid(R: dtype, K1: dtype, zb: dtype, phi: dtype):
+        """The unmodified curve's point, unit tangent, speed |E'| and signed curvature at phi
+        (cycloid_pins_ref._epitrochoid), shared by analytic_point and analytic_point_turned."""
         s = wp.sin(phi)
         c = wp.cos(phi)
         S = wp.sin(zb * phi)
@@ -62,8 +63,14 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
         ddE = R * vec2(-s + K1 * zb * S, -c + K1 * zb * C)
         speed = wp.length(dE)
         tau = dE / speed
-        n = perp(tau)
         kE = -(dE[0] * ddE[1] - dE[1] * ddE[0]) / (speed * speed * speed)
+        return E, tau, speed, kE
+
+    @wp.func
+    def analytic_point(R: dtype, K1: dtype, zb: dtype, rc: dtype, rot_angle: dtype, phi: dtype):
+        """Profile point, outward normal, curvature and d(arc)/d(phi) (see the reference)."""
+        E, tau, speed, kE = epitrochoid(R, K1, zb, phi)
+        n = perp(tau)
         pt = E - rc * n
         kap = kE / (dtype(1.0) - rc * kE)
         ds = speed * (dtype(1.0) - rc * kE)
@@ -74,16 +81,7 @@ def _parts(dtype, velocity_tangent=True, anchor=False):
                               phi: dtype):
         """The point turned by the extra rotation d(phi), the turned curve's normal and arc length per phi
         (d' = dd), the unturned curvature (cycloid_pins_ref.analytic_point_turned)."""
-        s = wp.sin(phi)
-        c = wp.cos(phi)
-        S = wp.sin(zb * phi)
-        C = wp.cos(zb * phi)
-        E = R * vec2(s - K1 / zb * S, c - K1 / zb * C)
-        dE = R * vec2(c - K1 * C, -s + K1 * S)
-        ddE = R * vec2(-s + K1 * zb * S, -c + K1 * zb * C)
-        speed = wp.length(dE)
-        tau = dE / speed
-        kE = -(dE[0] * ddE[1] - dE[1] * ddE[0]) / (speed * speed * speed)
+        E, tau, speed, kE = epitrochoid(R, K1, zb, phi)
         pt = E - rc * perp(tau)
         kap = kE / (dtype(1.0) - rc * kE)
         v = (speed * (dtype(1.0) - rc * kE)) * tau + dd * perp(pt)
