@@ -19,7 +19,12 @@ the trial states it still cannot solve (Exudyn's Newton steps of radians and dec
 non-finite and rejected by the static solver; each design reports how often (``network_failures``) and the CPU
 seconds per sample (``cpu_s_per_sample``); ``--samples N`` sets the number
 explicitly (a SHORT band where N < 64, stated in the results as ``band_is_short``); ``--resume DIRS`` keeps the
-designs that stopped or separate runs finished and computes the others (with this run's N: ``samples_per_design`` per design).
+designs that stopped or separate runs finished with at least this run's N samples and computes the others (with
+this run's N: ``samples_per_design`` per design; a design whose kept band is shorter is recomputed).
+
+Draws: valid by construction (rvtool.analysis.validate_members.sample_table: the carrier plates follow the drawn
+wheels, the row spacings are placed inside the drawn plates); rv40e's draws are bit-identical to the independent
+sampler's (tests/test_validate_members.py), so its band computed before that change is kept by --resume.
 
 Criteria (``passed``): the central value and every sample finite, no failed sample (a failed sample is counted and
 reported, never dropped). NOT agreement with the catalogue (reported as it is).
@@ -93,11 +98,15 @@ def main(argv=None):
         import json
         with open(os.path.join(run_dir, "results.json")) as fh:
             prev = json.load(fh)
-        kept = [n for n in prev["designs_done"] if n in names and n not in per]
         prev_counts = prev["samples_per_design"]
+
+        def count(n):
+            return prev_counts[n] if isinstance(prev_counts, dict) else prev_counts
+        # a design is kept only where it has at least this run's samples (a short band is recomputed, not kept)
+        kept = [n for n in prev["designs_done"] if n in names and n not in per and count(n) >= samples]
         for n in kept:
             per[n] = prev["designs"][n]
-            counts[n] = prev_counts[n] if isinstance(prev_counts, dict) else prev_counts
+            counts[n] = count(n)
         resumed.append({"designs": kept, "command": prev["provenance"]["command"], "date": prev["provenance"]["date"],
                         "wall_s_total": prev["provenance"]["wall_s_total"]})
     for name in names:

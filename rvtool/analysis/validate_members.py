@@ -25,6 +25,24 @@ refused) the angle at a torque of one sign is the static equilibrium's, the same
 **Band.** A Latin hypercube (:mod:`scipy.stats.qmc`) over the design's own assumed ranges (``<design>_assumed.toml``
 or the ranges file ``validate`` was given) together with the members' ranges: ``SAMPLES`` (64) samples in the
 full run, ``QUICK_SAMPLES`` under quick; failed samples are counted and reported, never dropped silently.
+
+**Valid by construction** (:func:`sample_table`). The ranges are drawn independently, but with the carrier ported
+three quantities depend on others and a draw must be an assembly that exists:
+
+* the carrier plates' inner faces follow the drawn wheels: ``carrier.structure.inner_face_position`` is the
+  design's plus the drawn wheels' outer end (max |midplane| + width / 2) minus the design's, i.e. the design's
+  axial gap between wheel and plate is kept (before, a draw could put a wheel face inside a plate; nothing
+  checked it);
+* the tapered rows and the main-bearing rows, at +- ``row_spacing`` / 2, lie axially inside both carrier plates
+  (:meth:`rvtool.structure.carrier.CarrierStructure.check_layout`): ``row_spacing`` in
+  [2 h, 2 (h + min(flange, end plate))] with h the inner-face position. A row spacing that has an assumed range
+  is drawn at its Latin-hypercube fraction u of the part of its cited range [low, high] that this interval
+  leaves, [max(low, 2 h), min(high, 2 (h + t_min))], after the plates are drawn: where the cited range lies
+  inside the interval (every rv40e draw; every row of the central designs) the value is ``low + u (high - low)``
+  exactly as before; where it does not, it is the same fraction of the feasible part -- not a clamp (no mass
+  piles up at the bound) and not a re-draw (every sample is kept). Ranges that leave no feasible part are
+  refused naming both keys. Before this, 2 of rv80e's first 8 draws were impossible assemblies (a main row at
+  33.2 mm outside a 13 mm flange ending at 31.0 mm; cited ranges [50, 70] mm spacing and [13, 20] mm plates).
 """
 import copy
 import os
@@ -47,6 +65,9 @@ QUICK_NUMERICS = {"wheels": {"structure": {"mesh_size": 0.006, "samples_per_toot
 profile ports per tooth, housing and carrier at 8 mm."""
 
 DERIVED_KEYS = ("members.pillar_running_gap",)
+
+LAYOUT_KEYS = ("crank_bearing.row_spacing", "main_bearing.row_spacing")
+"""Row spacings placed inside the carrier plates when drawn (module docstring, :func:`sample_table`)."""
 
 
 def members_name(design):
@@ -104,6 +125,58 @@ def members_table(table, switches, derived, values, numerics=None):
                  "angle_deg": float(derived.get("pillar_hole_angle_deg", 0.0))}
         t = _merge(t, {"wheels": {"structure": {"pillar_holes": holes}}})
     return _merge(t, numerics or {})
+
+
+def _wheel_end(table):
+    """Axial outer end [m] of the wheels (max |midplane| + width / 2) of a design table."""
+    w = table["wheels"]
+    return max(abs(float(z)) for z in w["midplanes"]) + 0.5 * float(w["width"])
+
+
+def row_interval(table):
+    """(low, high) [m] of a row spacing whose rows at +- spacing / 2 lie inside both carrier plates of the design
+    ``table`` (:meth:`rvtool.structure.carrier.CarrierStructure.plates`)."""
+    cs = table["carrier"]["structure"]
+    h = float(cs["inner_face_position"])
+    return 2.0 * h, 2.0 * (h + min(float(cs["flange_thickness"]), float(cs["end_plate_thickness"])))
+
+
+def placed_value(a, u, interval):
+    """The value of the assumed input ``a`` at its fraction ``u`` of the part of [low, high] inside ``interval``
+    (module docstring): ``a.at(u)`` where the range lies inside; refused where nothing of it does."""
+    lo, hi = max(float(a.low), interval[0]), min(float(a.high), float(interval[1]))
+    if lo == float(a.low) and hi == float(a.high):
+        return a.at(u)
+    if not lo <= hi:
+        raise RvtoolInputError(f"assumed range of {a.key} [{a.low}, {a.high}] {a.unit} leaves no spacing whose rows "
+                               f"lie inside the drawn carrier plates (feasible [{interval[0]:.6g}, {interval[1]:.6g}] "
+                               "m): the cited ranges of the row spacing, carrier.structure.inner_face_position and "
+                               "the plate thicknesses cannot coexist")
+    return lo + float(u) * (hi - lo)
+
+
+def sample_table(table, base, members_inputs, u, switches, derived, numerics=None):
+    """The design table of one Latin-hypercube draw ``u`` (fractions: the design's ``base`` inputs, then the
+    members' ``members_inputs``), valid by construction (module docstring): the plates' inner faces follow the
+    drawn wheels and every drawn row spacing is placed inside the drawn plates."""
+    from ..designs.catalogue import set_key
+    t, deferred = table, []
+    for a, uj in zip(base, u[:len(base)]):
+        if a.key in LAYOUT_KEYS:
+            deferred.append((a, uj))
+        else:
+            t = set_key(t, a.key, a.at(uj))
+    vals = {a.key: a.at(uj) for a, uj in zip(members_inputs, u[len(base):])}
+    t = members_table(t, switches, derived, vals, numerics)
+    ported = t.get("carrier", {}).get("body") == "ported"
+    if ported:
+        shift = _wheel_end(t) - _wheel_end(table)
+        if shift != 0.0:
+            h = float(t["carrier"]["structure"]["inner_face_position"]) + shift
+            t = set_key(t, "carrier.structure.inner_face_position", h)
+    for a, uj in deferred:
+        t = set_key(t, a.key, placed_value(a, uj, row_interval(t)) if ported else a.at(uj))
+    return t
 
 
 def check_frictionless(design):
@@ -165,7 +238,6 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     (:func:`rigidity_ba` at the middles), ``band``, the samples and failures, the members file and its commit;
     None where the design has no members file."""
     from scipy.stats import qmc
-    from ..designs.catalogue import set_key
     from .validate import catalogue_rows, map_samples, rigidity_points
     name = members_name(design)
     if name is None:
@@ -181,11 +253,7 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     U = qmc.LatinHypercube(d=len(inputs), seed=seed).random(n) if n > 0 else np.zeros((0, len(inputs)))
 
     def table_of(u):
-        t = table
-        for a, uj in zip(inputs[:len(base)], u[:len(base)]):
-            t = set_key(t, a.key, a.at(uj))
-        vals = {a.key: a.at(uj) for a, uj in zip(inputs[len(base):], u[len(base):])}
-        return members_table(t, switches, derived, vals, numerics)
+        return sample_table(table, base, assumed.inputs, u, switches, derived, numerics)
     # the central design (every input at its middle) first, then the samples: one map (``workers`` processes)
     log(f"validate {design}: all members on ({name}), central b/a and {n} Latin-hypercube samples over "
         f"{len(inputs)} ranges ({workers} worker(s))")
