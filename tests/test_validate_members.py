@@ -116,7 +116,8 @@ def test_rv80e_band_draws_are_valid_assemblies(n):
     """Every Latin-hypercube draw of rv80e's all-members-on band (seed 0; 8: the short band whose draws 2 and 4
     failed with a main-bearing row outside the carrier plates; 64: the full band, 10 such draws and 21 with a
     wheel face inside a plate under the independent sampler) is an assembly that exists: the carrier accepts
-    the rows, the wheels end before the plates; every drawn row spacing lies in its cited range."""
+    the rows, the wheels end before the plates, the crank's stations are its rows; every drawn row spacing lies in its
+    cited range."""
     from rvtool.assembly.carrier import check_carrier
     table, switches, derived, base, members, U = _draws("rv80e", n)
     ranges = {a.key: a for a in base if a.key in VM.LAYOUT_KEYS}
@@ -133,6 +134,8 @@ def test_rv80e_band_draws_are_valid_assemblies(n):
             assert a.low <= v <= a.high, (k, v)
             j = base.index(a)
             moved += v != a.at(u[j])
+        half = t["crank_bearing"]["row_spacing"] / 2
+        assert t["cranks"]["shaft"]["supports"] == [-half, half]     # the crank's stations are its tapered rows
     assert moved > 0          # the placement acts on this design's draws (else the test would prove nothing)
 
 

@@ -27,7 +27,7 @@ or the ranges file ``validate`` was given) together with the members' ranges: ``
 full run, ``QUICK_SAMPLES`` under quick; failed samples are counted and reported, never dropped silently.
 
 **Valid by construction** (:func:`sample_table`). The ranges are drawn independently, but with the carrier ported
-three quantities depend on others and a draw must be an assembly that exists:
+some quantities depend on others, and every draw must be an assembly that exists:
 
 * the carrier plates' inner faces follow the drawn wheels: ``carrier.structure.inner_face_position`` is the
   design's plus the drawn wheels' outer end (max |midplane| + width / 2) minus the design's, i.e. the design's
@@ -38,11 +38,19 @@ three quantities depend on others and a draw must be an assembly that exists:
   [2 h, 2 (h + min(flange, end plate))] with h the inner-face position. A row spacing that has an assumed range
   is drawn at its Latin-hypercube fraction u of the part of its cited range [low, high] that this interval
   leaves, [max(low, 2 h), min(high, 2 (h + t_min))], after the plates are drawn: where the cited range lies
-  inside the interval (every rv40e draw; every row of the central designs) the value is ``low + u (high - low)``
+  inside the interval (every rv40e draw: its rows are not drawn) the value is ``low + u (high - low)``
   exactly as before; where it does not, it is the same fraction of the feasible part -- not a clamp (no mass
   piles up at the bound) and not a re-draw (every sample is kept). Ranges that leave no feasible part are
-  refused naming both keys. Before this, 2 of rv80e's first 8 draws were impossible assemblies (a main row at
-  33.2 mm outside a 13 mm flange ending at 31.0 mm; cited ranges [50, 70] mm spacing and [13, 20] mm plates).
+  refused naming both keys;
+* the crank's stations ``cranks.shaft.supports`` are its tapered rows, +- ``crank_bearing.row_spacing`` / 2 (the
+  relation rv40e.toml and rv80e.toml state, and rv80e_assumed.toml's source of the supports' range): where the
+  design draws both, the supports follow the placed row spacing and their own Latin-hypercube column is unused
+  (before, a draw put the crank's stations and the carrier's seats at independent, even asymmetric, positions:
+  an element-wise list range moves both ends by the same fraction).
+
+The central design takes every input at its middle (a feasible assembly; no placement). Before this, 2 of rv80e's
+first 8 draws failed (a main row at 33.2 mm outside a 13 mm flange ending at 31.0 mm; cited ranges [50, 70] mm
+spacing and [13, 20] mm plates) and 4 put a wheel face inside a plate unnoticed (64 draws: 10 and 21).
 """
 import copy
 import os
@@ -68,6 +76,9 @@ DERIVED_KEYS = ("members.pillar_running_gap",)
 
 LAYOUT_KEYS = ("crank_bearing.row_spacing", "main_bearing.row_spacing")
 """Row spacings placed inside the carrier plates when drawn (module docstring, :func:`sample_table`)."""
+
+SUPPORTS_KEY = "cranks.shaft.supports"
+"""The crank's stations, at its tapered rows: derived from the drawn row spacing (module docstring)."""
 
 
 def members_name(design):
@@ -176,6 +187,11 @@ def sample_table(table, base, members_inputs, u, switches, derived, numerics=Non
             t = set_key(t, "carrier.structure.inner_face_position", h)
     for a, uj in deferred:
         t = set_key(t, a.key, placed_value(a, uj, row_interval(t)) if ported else a.at(uj))
+    drawn = {a.key for a in base}
+    if ported and SUPPORTS_KEY in drawn:
+        # the crank's stations are its tapered rows: +- crank_bearing.row_spacing / 2 (the design files' relation)
+        half = 0.5 * float(t["crank_bearing"]["row_spacing"])
+        t = set_key(t, SUPPORTS_KEY, [-half, half])
     return t
 
 
