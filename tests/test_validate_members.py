@@ -161,3 +161,32 @@ def test_row_placement_fraction_of_feasible_part():
     assert VM.placed_value(a, 0.5, (0.036, 0.062)) == pytest.approx(0.056, rel=1e-15)
     with pytest.raises(RvtoolInputError, match=r"main_bearing\.row_spacing"):
         VM.placed_value(a, 0.5, (0.036, 0.048))
+
+
+def test_members_tornado_screens_and_places_valid_points(monkeypatch):
+    """The band's tornado (no FE: b/a replaced by a known function of two inputs) picks the input whose
+    fraction drives b/a, sets it to both ends of its range -- a row spacing to the ends of its FEASIBLE part
+    (rv80e's main rows at the middle plates: 50 mm and 69 mm, not the cited 70 mm, which would put a row outside
+    the plates) -- and leaves the crank supports (derived) out of the screening."""
+    from rvtool.assembly.carrier import check_carrier
+    from rvtool.designs.catalogue import load_assumed, load_catalogue
+    seen = []
+
+    def fake(design, catalogue):
+        check_carrier(design)
+        seen.append(design)
+        return {"value": 1e4 * design.main_bearing.row_spacing + 1e3 * design.carrier.structure.flange_thickness}
+    monkeypatch.setattr(VM, "rigidity_ba", fake)
+    base = load_assumed(designs.assumed_of("rv80e"))
+    b, m, _, _ = VM.band_inputs("rv80e", base)
+    keys = [a.key for a in b + m]
+    U = VM.band_fractions(len(keys), 64, 0)
+    values = [1e4 * (0.05 + 0.02 * u[keys.index("main_bearing.row_spacing")]) for u in U]
+    values[5] = None                                             # a failed sample is left out of the screening
+    r = VM.members_tornado("rv80e", read_table(designs.path("rv80e")), load_catalogue(designs.catalogue_of("rv80e")),
+                           base, values, keys=2, log=lambda *a: None)
+    assert len(seen) == 5 and list(r["tornado"])[0] == "main_bearing.row_spacing"
+    assert VM.SUPPORTS_KEY not in r["screening_spearman_rho"] and len(r["screening_spearman_rho"]) == len(keys) - 1
+    t = r["tornado"]["main_bearing.row_spacing"]
+    assert t["low"] == 0.05 and t["high"] == pytest.approx(2 * (0.018 + 0.0165), rel=1e-12)
+    assert t["at_low"] < r["baseline"] < t["at_high"] and not t["errors"]

@@ -26,8 +26,15 @@ Draws: valid by construction (rvtool.analysis.validate_members.sample_table: the
 wheels, the row spacings are placed inside the drawn plates); rv40e's draws are bit-identical to the independent
 sampler's (tests/test_validate_members.py), so its band computed before that change is kept by --resume.
 
+Tornado (issue 28: a tornado chart with the band): after the bands, per design, the one-at-a-time tornado of
+validate_members.members_tornado: the inputs screened by |Spearman rho| of their Latin-hypercube fraction with the
+samples' b/a (the band's own samples, no extra solve), the ``--tornado-keys K`` largest (default 4; 0 under
+--quick) each at both ends of its range with the others at their middle fractions, beside that baseline (2 K + 1
+b/a); ``tornado_<design>.png`` in the run folder. A design kept by --resume with its tornado keeps it; one without
+gets it (so a band run and its tornado may be separate runs, both recorded under ``resumed_from``).
+
 Criteria (``passed``): the central value and every sample finite, no failed sample (a failed sample is counted and
-reported, never dropped). NOT agreement with the catalogue (reported as it is).
+reported, never dropped), every tornado b/a solved. NOT agreement with the catalogue (reported as it is).
 """
 import os
 
@@ -38,12 +45,13 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from rvtool import casekit, designs  # noqa: E402
-from rvtool.analysis.validate_members import SAMPLES, members_rigidity  # noqa: E402
+from rvtool.analysis.validate_members import SAMPLES, members_rigidity, members_tornado  # noqa: E402
 from rvtool.assembly.topologies import read_table  # noqa: E402
 from rvtool.designs.catalogue import load_assumed, load_catalogue  # noqa: E402
 
 DESIGNS = ("rv40e", "rv80e")
 QUICK = {"designs": ("rv40e",), "samples": 0}
+TORNADO_KEYS = 4        # 2 K + 1 b/a per design (about 9 CPU-minutes for rv80e loaded)
 
 
 def extra(parser):
@@ -54,6 +62,9 @@ def extra(parser):
                         help="comma-separated run folders: keep the designs the runs there finished (their "
                              "results.json) and compute only the others, each design with its own sample count "
                              "(samples_per_design); the kept runs' command and date are recorded under resumed_from")
+    parser.add_argument("--tornado-keys", type=int, default=None, metavar="K",
+                        help=f"one-at-a-time tornado over the K inputs of largest |Spearman rho| (default "
+                             f"{TORNADO_KEYS}; --quick: 0); a design that has one (kept by --resume) keeps it")
 
 
 def one_design(name, samples):
@@ -78,6 +89,47 @@ def one_design(name, samples):
     return r
 
 
+def design_tornado(name, r, keys):
+    """validate_members.members_tornado on the design's finished band (its seed and samples)."""
+    catalogue = load_catalogue(designs.catalogue_of(name))
+    assumed_name = designs.assumed_of(name)
+    base = load_assumed(assumed_name) if assumed_name else None
+    t0, c0 = time.perf_counter(), time.process_time()
+    out = members_tornado(name, read_table(designs.path(name)), catalogue, base, r["sample_values"], keys=keys,
+                          seed=r["seed"], quick=True)
+    out["tornado_cpu_s"] = time.process_time() - c0
+    out["tornado_wall_s"] = time.perf_counter() - t0
+    return out
+
+
+def tornado_png(out_dir, name, r):
+    """tornado_<design>.png: each input's b/a at the low and high end of its range about the baseline."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    tor, c = r["tornado"], r["baseline"]
+    if c is None or not tor:
+        return
+    keys = list(tor)[::-1]
+    fig, ax = plt.subplots(figsize=(7.0, 0.5 * len(keys) + 1.4))
+    for j, k in enumerate(keys):
+        for end, colour in (("at_low", "tab:blue"), ("at_high", "tab:red")):
+            v = tor[k][end]
+            if v is not None:
+                ax.barh(j, v - c, left=c, color=colour, alpha=0.7, label=end if j == 0 else None)
+    ax.axvline(c, color="k", lw=0.8)
+    band = r.get("band")
+    if band:
+        ax.axvspan(band[0], band[1], color="0.85", zorder=0, label="band (LHS samples)")
+    ax.set_yticks(range(len(keys)), keys, fontsize=7)
+    ax.set_xlabel("all-members-on b/a [N m/arcmin]")
+    ax.set_title(f"{name}: one-at-a-time tornado (baseline: every input at the middle fraction)", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, f"tornado_{name}.png"), dpi=110)
+    plt.close(fig)
+
+
 def judge(r):
     out = {}
     for name, d in r["designs"].items():
@@ -85,6 +137,9 @@ def judge(r):
         out[f"{name}_finite"] = casekit.check(float(all(np.isfinite(vals))), 1.0, "==", "every b/a finite")
         out[f"{name}_failed_samples"] = casekit.check(len(d["failures"]), 0, "==",
                                                       "a failed sample is counted, never dropped")
+        if "tornado" in d:
+            errs = sum(len(v["errors"]) for v in d["tornado"].values()) + (d["baseline_error"] is not None)
+            out[f"{name}_tornado_failed"] = casekit.check(errs, 0, "==", "every tornado b/a solved")
     return out
 
 
@@ -108,9 +163,17 @@ def main(argv=None):
             per[n] = prev["designs"][n]
             counts[n] = count(n)
         resumed.append({"designs": kept, "command": prev["provenance"]["command"], "date": prev["provenance"]["date"],
-                        "wall_s_total": prev["provenance"]["wall_s_total"]})
-    for name in names:
-        if name not in per:
+                        "wall_s_total": prev["provenance"]["wall_s_total"],
+                        "resumed_from": prev.get("resumed_from", [])})      # the kept run's own kept runs
+    n_tor = args.tornado_keys if args.tornado_keys is not None else (0 if args.quick else TORNADO_KEYS)
+    for name in list(names) + [f"tornado:{n}" for n in names]:
+        if name.startswith("tornado:"):
+            name = name.split(":", 1)[1]
+            if n_tor <= 0 or "tornado" in per[name] or not per[name]["sample_values"]:
+                continue
+            per[name].update(design_tornado(name, per[name], n_tor))
+            tornado_png(args.out, name, per[name])
+        elif name not in per:
             per[name] = one_design(name, samples)
             counts[name] = samples
         # written after every design (a long run that stops keeps the designs it finished; ``designs_done``)

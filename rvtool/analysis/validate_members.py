@@ -248,12 +248,81 @@ def members_commit(name):
     return recorded, last, date
 
 
+def band_fractions(d, n, seed=0):
+    """The (n, d) Latin-hypercube fractions of the band (:mod:`scipy.stats.qmc`, ``seed``)."""
+    from scipy.stats import qmc
+    return qmc.LatinHypercube(d=d, seed=seed).random(n) if n > 0 else np.zeros((0, d))
+
+
+def band_inputs(design, base_assumed=None):
+    """(the design's assumed inputs, the members' inputs, switches, derived settings) of the band, in the order
+    of its Latin-hypercube columns."""
+    switches, derived, assumed, _ = load_members(members_name(design))
+    base = list(base_assumed.inputs) if base_assumed is not None else []
+    return base, list(assumed.inputs), switches, derived
+
+
+def members_tornado(design, table, catalogue, base_assumed, sample_values, *, keys=4, seed=0, quick=True,
+                    log=print):
+    """One-at-a-time tornado of the all-members-on b/a (as ``validate``'s): the band's samples (``sample_values``,
+    None where failed, drawn by :func:`band_fractions` with ``seed``) screen the inputs by |Spearman rho| of
+    each column's fraction against b/a; the ``keys`` largest are each set to the fraction 0 and 1 of its range,
+    every other input at 1/2, through :func:`sample_table` (valid by construction: a row spacing's fraction is
+    of its feasible part), beside that baseline (every fraction 1/2). The crank supports' column is not an
+    input (derived from the row spacing) and is left out of the screening."""
+    from scipy.stats import spearmanr
+    from ..assembly.topologies import design_from_table
+    from ..designs.catalogue import get_key
+    t0 = time.perf_counter()
+    base, members, switches, derived = band_inputs(design, base_assumed)
+    inputs = base + members
+    numerics = QUICK_NUMERICS if quick else None
+    U = band_fractions(len(inputs), len(sample_values), seed)
+    ok = [i for i, v in enumerate(sample_values) if v is not None]
+    y = np.array([sample_values[i] for i in ok])
+    screen = {}
+    for j, a in enumerate(inputs):
+        if a.key == SUPPORTS_KEY and any(b.key == "crank_bearing.row_spacing" for b in base):
+            continue
+        rho = spearmanr(U[ok, j], y).statistic if len(ok) >= 3 and np.ptp(y) > 0 else 0.0
+        screen[a.key] = float(np.nan_to_num(rho))
+    chosen = sorted(screen, key=lambda k: -abs(screen[k]))[:keys]
+    col = {a.key: j for j, a in enumerate(inputs)}
+
+    def point(x):
+        t = sample_table(table, base, members, x, switches, derived, numerics)
+        try:
+            return t, rigidity_ba(design_from_table(t), catalogue)["value"], None
+        except Exception as exc:        # counted and reported, as a band sample
+            return t, None, f"{type(exc).__name__}: {exc}"
+    log(f"validate {design}: all-members-on tornado over {len(chosen)} of {len(screen)} inputs "
+        f"({2 * len(chosen) + 1} b/a)")
+    _, baseline, base_err = point(np.full(len(inputs), 0.5))
+    tornado = {}
+    for k in chosen:
+        ends = []
+        for f in (0.0, 1.0):
+            x = np.full(len(inputs), 0.5)
+            x[col[k]] = f
+            ends.append(point(x))
+        (ta, va, ea), (tb, vb, eb) = ends
+        tornado[k] = {"low": get_key(ta, k), "high": get_key(tb, k), "at_low": va, "at_high": vb,
+                      "spearman_rho": screen[k], "errors": [e for e in (ea, eb) if e]}
+        log(f"  {k}: {va} .. {vb}")
+    return {"baseline": baseline, "baseline_error": base_err, "tornado": tornado, "tornado_keys": len(chosen),
+            "screening_spearman_rho": dict(sorted(screen.items(), key=lambda kv: -abs(kv[1]))),
+            "selection": (f"the {len(chosen)} inputs of largest |Spearman rank correlation| of their Latin-"
+                          f"hypercube fraction with b/a over the {len(ok)} finished samples (screening; |rho| "
+                          f"below about {2 / np.sqrt(max(len(ok) - 1, 1)):.2f} is within two standard errors of "
+                          "0); each at the fraction 0 and 1 of its range, the others at 1/2 (baseline)"),
+            "wall_s": time.perf_counter() - t0}
+
+
 def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False, samples=None, seed=0, workers=1,
                      log=print):
     """The all-members-on row (module docstring): a dict with ``rows`` (validate's table rows), ``central``
     (:func:`rigidity_ba` at the middles), ``band``, the samples and failures, the members file and its commit;
     None where the design has no members file."""
-    from scipy.stats import qmc
     from .validate import catalogue_rows, map_samples, rigidity_points
     name = members_name(design)
     if name is None:
@@ -266,7 +335,7 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     base = list(base_assumed.inputs) if base_assumed is not None else []
     inputs = base + list(assumed.inputs)
     n = samples if samples is not None else (QUICK_SAMPLES if quick else SAMPLES)
-    U = qmc.LatinHypercube(d=len(inputs), seed=seed).random(n) if n > 0 else np.zeros((0, len(inputs)))
+    U = band_fractions(len(inputs), n, seed)
 
     def table_of(u):
         return sample_table(table, base, assumed.inputs, u, switches, derived, numerics)
