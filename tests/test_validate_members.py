@@ -190,3 +190,23 @@ def test_members_tornado_screens_and_places_valid_points(monkeypatch):
     t = r["tornado"]["main_bearing.row_spacing"]
     assert t["low"] == 0.05 and t["high"] == pytest.approx(2 * (0.018 + 0.0165), rel=1e-12)
     assert t["at_low"] < r["baseline"] < t["at_high"] and not t["errors"]
+
+
+def test_sampled_tornado_recovers_a_linear_response():
+    """The tornado estimated from the band's samples: for b/a exactly linear in two inputs' fractions (swings
+    30 and -20 N m/arcmin about 200) the fit returns those swings and ends (1e-9), R^2 = 1, and ranks them first."""
+    from rvtool.designs.catalogue import load_assumed
+    base = load_assumed(designs.assumed_of("rv80e"))
+    b, m, _, _ = VM.band_inputs("rv80e", base)
+    keys = [a.key for a in b + m]
+    U = VM.band_fractions(len(keys), 64, 0)
+    i, j = keys.index("carrier.structure.pillar_radius"), keys.index("wheels.width")
+    values = [200.0 + 30.0 * (u[i] - 0.5) - 20.0 * (u[j] - 0.5) for u in U]
+    values[7] = None
+    r = VM.sampled_tornado("rv80e", base, values, keys=8)
+    assert list(r["tornado"])[:2] == ["carrier.structure.pillar_radius", "wheels.width"]
+    t = r["tornado"]["carrier.structure.pillar_radius"]
+    assert t["swing"] == pytest.approx(30.0, abs=1e-9) and t["at_high"] == pytest.approx(215.0, abs=1e-9)
+    assert r["tornado"]["wheels.width"]["at_low"] == pytest.approx(210.0, abs=1e-9)
+    assert r["baseline"] == pytest.approx(200.0, abs=1e-9) and r["r_squared"] == pytest.approx(1.0, abs=1e-12)
+    assert r["samples_used"] == 63 and r["tornado_keys"] == 8

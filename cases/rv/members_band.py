@@ -26,12 +26,14 @@ Draws: valid by construction (rvtool.analysis.validate_members.sample_table: the
 wheels, the row spacings are placed inside the drawn plates); rv40e's draws are bit-identical to the independent
 sampler's (tests/test_validate_members.py), so its band computed before that change is kept by --resume.
 
-Tornado (issue 28: a tornado chart with the band): after the bands, per design, the one-at-a-time tornado of
-validate_members.members_tornado: the inputs screened by |Spearman rho| of their Latin-hypercube fraction with the
-samples' b/a (the band's own samples, no extra solve), the ``--tornado-keys K`` largest (default 4; 0 under
---quick) each at both ends of its range with the others at their middle fractions, beside that baseline (2 K + 1
-b/a); ``tornado_<design>.png`` in the run folder. A design kept by --resume with its tornado keeps it; one without
-gets it (so a band run and its tornado may be separate runs, both recorded under ``resumed_from``).
+Tornado (issue 28: a tornado chart with the band), after the bands, per design: ``tornado_sampled``
+(validate_members.sampled_tornado), ESTIMATED from the band's own samples at no extra solve (a least-squares fit
+over the 8 inputs of largest |Spearman rho|, each swing with its standard error and the fit's R^2); and, with
+``--tornado-keys K`` (default 0: 2 K + 1 b/a, about 10 CPU-minutes for rv80e at K = 4), ``tornado``: the solved
+one-at-a-time tornado of validate_members.members_tornado (the K inputs of largest |rho| each at both ends of its
+range, the others at their middle fractions, beside that baseline). ``tornado_<sampled|solved>_<design>.png`` in
+the run folder. A design kept by --resume keeps the tornados it has and gets those it lacks (so a band run and
+its tornado may be separate runs, recorded under ``resumed_from``).
 
 Criteria (``passed``): the central value and every sample finite, no failed sample (a failed sample is counted and
 reported, never dropped), every tornado b/a solved. NOT agreement with the catalogue (reported as it is).
@@ -45,13 +47,15 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from rvtool import casekit, designs  # noqa: E402
-from rvtool.analysis.validate_members import SAMPLES, members_rigidity, members_tornado  # noqa: E402
+from rvtool.analysis.validate_members import (SAMPLES, members_rigidity, members_tornado,  # noqa: E402
+                                              sampled_tornado)
 from rvtool.assembly.topologies import read_table  # noqa: E402
 from rvtool.designs.catalogue import load_assumed, load_catalogue  # noqa: E402
 
 DESIGNS = ("rv40e", "rv80e")
 QUICK = {"designs": ("rv40e",), "samples": 0}
-TORNADO_KEYS = 4        # 2 K + 1 b/a per design (about 9 CPU-minutes for rv80e loaded)
+TORNADO_KEYS = 0        # solved tornado: 2 K + 1 b/a per design (K = 4: about 10 CPU-minutes for rv80e loaded)
+SAMPLED_KEYS = 8        # the tornado estimated from the band's samples (no extra solve)
 
 
 def extra(parser):
@@ -89,11 +93,16 @@ def one_design(name, samples):
     return r
 
 
+def assumed_of(name):
+    """The design's own assumed ranges (None: a class design without them)."""
+    assumed_name = designs.assumed_of(name)
+    return load_assumed(assumed_name) if assumed_name else None
+
+
 def design_tornado(name, r, keys):
     """validate_members.members_tornado on the design's finished band (its seed and samples)."""
     catalogue = load_catalogue(designs.catalogue_of(name))
-    assumed_name = designs.assumed_of(name)
-    base = load_assumed(assumed_name) if assumed_name else None
+    base = assumed_of(name)
     t0, c0 = time.perf_counter(), time.process_time()
     out = members_tornado(name, read_table(designs.path(name)), catalogue, base, r["sample_values"], keys=keys,
                           seed=r["seed"], quick=True)
@@ -102,8 +111,8 @@ def design_tornado(name, r, keys):
     return out
 
 
-def tornado_png(out_dir, name, r):
-    """tornado_<design>.png: each input's b/a at the low and high end of its range about the baseline."""
+def tornado_png(out_dir, name, r, band, kind):
+    """tornado_<kind>_<design>.png: each input's b/a at the low and high end of its range about the baseline."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -118,15 +127,14 @@ def tornado_png(out_dir, name, r):
             if v is not None:
                 ax.barh(j, v - c, left=c, color=colour, alpha=0.7, label=end if j == 0 else None)
     ax.axvline(c, color="k", lw=0.8)
-    band = r.get("band")
     if band:
         ax.axvspan(band[0], band[1], color="0.85", zorder=0, label="band (LHS samples)")
     ax.set_yticks(range(len(keys)), keys, fontsize=7)
     ax.set_xlabel("all-members-on b/a [N m/arcmin]")
-    ax.set_title(f"{name}: one-at-a-time tornado (baseline: every input at the middle fraction)", fontsize=9)
+    ax.set_title(f"{name}: tornado, {kind} (baseline: every input at its middle fraction)", fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, f"tornado_{name}.png"), dpi=110)
+    fig.savefig(os.path.join(out_dir, f"tornado_{kind}_{name}.png"), dpi=110)
     plt.close(fig)
 
 
@@ -169,10 +177,15 @@ def main(argv=None):
     for name in list(names) + [f"tornado:{n}" for n in names]:
         if name.startswith("tornado:"):
             name = name.split(":", 1)[1]
-            if n_tor <= 0 or "tornado" in per[name] or not per[name]["sample_values"]:
-                continue
-            per[name].update(design_tornado(name, per[name], n_tor))
-            tornado_png(args.out, name, per[name])
+            d = per[name]
+            if "tornado_sampled" not in d and d["sample_values"]:
+                d["tornado_sampled"] = sampled_tornado(name, assumed_of(name), d["sample_values"], keys=SAMPLED_KEYS,
+                                                       seed=d["seed"])
+                if d["tornado_sampled"]:
+                    tornado_png(args.out, name, d["tornado_sampled"], d.get("band"), "sampled")
+            if n_tor > 0 and "tornado" not in d and d["sample_values"]:
+                d.update(design_tornado(name, d, n_tor))
+                tornado_png(args.out, name, d, d.get("band"), "solved")
         elif name not in per:
             per[name] = one_design(name, samples)
             counts[name] = samples
