@@ -210,3 +210,24 @@ def test_sampled_tornado_recovers_a_linear_response():
     assert r["tornado"]["wheels.width"]["at_low"] == pytest.approx(210.0, abs=1e-9)
     assert r["baseline"] == pytest.approx(200.0, abs=1e-9) and r["r_squared"] == pytest.approx(1.0, abs=1e-12)
     assert r["samples_used"] == 63 and r["tornado_keys"] == 8
+
+
+def test_band_checkpoint_resumes_and_deadline_shortens(monkeypatch, tmp_path):
+    """members_rigidity with a checkpoint: a second call with the same draws solves nothing and returns the same
+    band; a deadline already past starts no sample (the caller gets a clear error, not an empty band)."""
+    from rvtool.designs.catalogue import load_catalogue
+    calls = []
+
+    def fake(design, catalogue):
+        calls.append(1)
+        return {"value": 1e4 * design.carrier.structure.pillar_radius, "networks": {}, "solver": {}}
+    monkeypatch.setattr(VM, "rigidity_ba", fake)
+    cat = load_catalogue(designs.catalogue_of("rv40e"))
+    table = read_table(designs.path("rv40e"))
+    ck = str(tmp_path / "ck.json")
+    a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=ck, log=lambda *x: None)
+    assert len(calls) == 4 and a["samples_done"] == 3
+    b = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=ck, log=lambda *x: None)
+    assert len(calls) == 4 and b["sample_values"] == a["sample_values"] and b["band"] == a["band"]
+    with pytest.raises(RvtoolInputError, match="deadline"):
+        VM.members_rigidity("rv40e", table, cat, samples=3, deadline=0.0, log=lambda *x: None)

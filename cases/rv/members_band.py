@@ -66,22 +66,26 @@ def extra(parser):
                         help="comma-separated run folders: keep the designs the runs there finished (their "
                              "results.json) and compute only the others, each design with its own sample count "
                              "(samples_per_design); the kept runs' command and date are recorded under resumed_from")
+    parser.add_argument("--deadline", default=None, metavar="HH:MM",
+                        help="UTC time of day after which no sample is started: the band is then the first draws "
+                             "done (samples_done of samples; band_is_short), the rest resumable from the run "
+                             "folder's checkpoint_<design>.json by the same command")
     parser.add_argument("--tornado-keys", type=int, default=None, metavar="K",
                         help=f"one-at-a-time tornado over the K inputs of largest |Spearman rho| (default "
                              f"{TORNADO_KEYS}; --quick: 0); a design that has one (kept by --resume) keeps it")
 
 
-def one_design(name, samples):
+def one_design(name, samples, out_dir, deadline):
     t0, c0 = time.perf_counter(), time.process_time()
     catalogue = load_catalogue(designs.catalogue_of(name))
-    assumed_name = designs.assumed_of(name)
-    base = load_assumed(assumed_name) if assumed_name else None
-    r = members_rigidity(name, read_table(designs.path(name)), catalogue, base, quick=True, samples=samples)
+    r = members_rigidity(name, read_table(designs.path(name)), catalogue, assumed_of(name), quick=True,
+                         samples=samples, checkpoint=os.path.join(out_dir, f"checkpoint_{name}.json"),
+                         deadline=deadline)
     r.pop("U", None)
-    r["band_is_short"] = samples < SAMPLES
+    r["band_is_short"] = r["samples_done"] < SAMPLES
+    # CPU and wall of THIS process (samples resumed from the checkpoint carry their own sample_cpu_s)
     r["cpu_s"] = time.process_time() - c0
     r["wall_s"] = time.perf_counter() - t0
-    r["cpu_s_per_b_over_a"] = r["cpu_s"] / (samples + 1)
     cpu = [c for c in r["sample_cpu_s"] if c is not None]
     r["cpu_s_per_sample"] = {"mean": float(np.mean(cpu)), "max": float(np.max(cpu))} if cpu else None
     nets = [r["central"]["networks"]] + [n for n in r["sample_networks"] if n is not None]
@@ -105,7 +109,7 @@ def design_tornado(name, r, keys):
     base = assumed_of(name)
     t0, c0 = time.perf_counter(), time.process_time()
     out = members_tornado(name, read_table(designs.path(name)), catalogue, base, r["sample_values"], keys=keys,
-                          seed=r["seed"], quick=True)
+                          seed=r["seed"], quick=True, planned=r["samples"])
     out["tornado_cpu_s"] = time.process_time() - c0
     out["tornado_wall_s"] = time.perf_counter() - t0
     return out
@@ -173,6 +177,12 @@ def main(argv=None):
         resumed.append({"designs": kept, "command": prev["provenance"]["command"], "date": prev["provenance"]["date"],
                         "wall_s_total": prev["provenance"]["wall_s_total"],
                         "resumed_from": prev.get("resumed_from", [])})      # the kept run's own kept runs
+    deadline = None
+    if args.deadline:
+        import datetime
+        hh, mm = (int(x) for x in args.deadline.split(":"))
+        now = datetime.datetime.now(datetime.timezone.utc)
+        deadline = now.replace(hour=hh, minute=mm, second=0, microsecond=0).timestamp()
     n_tor = args.tornado_keys if args.tornado_keys is not None else (0 if args.quick else TORNADO_KEYS)
     for name in list(names) + [f"tornado:{n}" for n in names]:
         if name.startswith("tornado:"):
@@ -180,20 +190,21 @@ def main(argv=None):
             d = per[name]
             if "tornado_sampled" not in d and d["sample_values"]:
                 d["tornado_sampled"] = sampled_tornado(name, assumed_of(name), d["sample_values"], keys=SAMPLED_KEYS,
-                                                       seed=d["seed"])
+                                                       seed=d["seed"], planned=d["samples"])
                 if d["tornado_sampled"]:
                     tornado_png(args.out, name, d["tornado_sampled"], d.get("band"), "sampled")
             if n_tor > 0 and "tornado" not in d and d["sample_values"]:
                 d.update(design_tornado(name, d, n_tor))
                 tornado_png(args.out, name, d, d.get("band"), "solved")
         elif name not in per:
-            per[name] = one_design(name, samples)
-            counts[name] = samples
+            per[name] = one_design(name, samples, args.out, deadline)
+            counts[name] = per[name]["samples_done"]
         # written after every design (a long run that stops keeps the designs it finished; ``designs_done``)
         done = {n: per[n] for n in names if n in per}
         for d in done.values():
             d["failed_samples"] = len(d["failures"])
         results = {"designs": done, "samples_per_design": {n: counts[n] for n in done},
+                   "samples_planned": {n: per[n]["samples"] for n in done},
                    "band_is_short": any(counts[n] < SAMPLES for n in done), "issue_samples": SAMPLES,
                    "designs_done": list(done), "designs_asked": list(names), "resumed_from": resumed}
         casekit.verdict(results, judge)

@@ -262,18 +262,18 @@ def band_inputs(design, base_assumed=None):
     return base, list(assumed.inputs), switches, derived
 
 
-def sampled_tornado(design, base_assumed, sample_values, *, keys=8, seed=0):
+def sampled_tornado(design, base_assumed, sample_values, *, keys=8, seed=0, planned=None):
     """The tornado of the all-members-on b/a ESTIMATED from the band's own samples (no extra solve): the inputs
     screened by |Spearman rho| of their Latin-hypercube fraction with b/a, then a least-squares fit
     b/a = c + sum_k beta_k (u_k - 1/2) over the ``keys`` largest (at most one per six finished samples); each
     input's ends are c -+ beta_k / 2 (its range's low and high end, the others at their middle fractions), with
     the fit's standard error of beta_k and R^2. A row spacing's fraction is of its feasible part
     (:func:`sample_table`); the crank supports (derived) are left out. None with fewer than 12 finished
-    samples."""
+    samples. ``planned``: the band's planned sample count where ``sample_values`` are its first draws only."""
     from scipy.stats import spearmanr
     base, members, _, _ = band_inputs(design, base_assumed)
     inputs = base + members
-    U = band_fractions(len(inputs), len(sample_values), seed)
+    U = band_fractions(len(inputs), planned or len(sample_values), seed)[:len(sample_values)]
     ok = [i for i, v in enumerate(sample_values) if v is not None]
     if len(ok) < 12:
         return None
@@ -309,7 +309,7 @@ def sampled_tornado(design, base_assumed, sample_values, *, keys=8, seed=0):
 
 
 def members_tornado(design, table, catalogue, base_assumed, sample_values, *, keys=4, seed=0, quick=True,
-                    log=print):
+                    log=print, planned=None):
     """One-at-a-time tornado of the all-members-on b/a (as ``validate``'s): the band's samples (``sample_values``,
     None where failed, drawn by :func:`band_fractions` with ``seed``) screen the inputs by |Spearman rho| of
     each column's fraction against b/a; the ``keys`` largest are each set to the fraction 0 and 1 of its range,
@@ -323,7 +323,7 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
     base, members, switches, derived = band_inputs(design, base_assumed)
     inputs = base + members
     numerics = QUICK_NUMERICS if quick else None
-    U = band_fractions(len(inputs), len(sample_values), seed)
+    U = band_fractions(len(inputs), planned or len(sample_values), seed)[:len(sample_values)]
     ok = [i for i, v in enumerate(sample_values) if v is not None]
     y = np.array([sample_values[i] for i in ok])
     screen = {}
@@ -364,11 +364,43 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
             "wall_s": time.perf_counter() - t0}
 
 
+def _run_resumable(items, log, checkpoint, key, deadline):
+    """:func:`_sample` over ``items`` in order in this process, the results so far rewritten to ``checkpoint``
+    (JSON) after each; an existing checkpoint of the same ``key`` (design, samples, seed, quick: the same
+    deterministic draws) is resumed; no item is started after the wall-clock time ``deadline`` (seconds since
+    the epoch; None: none), so the list may come back shorter (a short band, stated by the caller)."""
+    import json
+    out = []
+    if checkpoint is not None and os.path.exists(checkpoint):
+        with open(checkpoint) as fh:
+            prev = json.load(fh)
+        if prev.get("key") == key and prev.get("of") == len(items):
+            out = [tuple(r) for r in prev["results"]]
+            log(f"  resumed {len(out)}/{len(items)} from {checkpoint}")
+    t0 = time.perf_counter()
+    for k in range(len(out), len(items)):
+        if deadline is not None and time.time() > deadline:
+            log(f"  deadline reached: {k}/{len(items)} done, the rest not started")
+            break
+        out.append(_sample(items[k]))
+        err = "" if out[-1][1] is None else ": " + out[-1][1]
+        log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){err}")
+        if checkpoint is not None:
+            tmp = f"{checkpoint}.tmp"
+            with open(tmp, "w") as fh:
+                json.dump({"key": key, "of": len(items), "results": out}, fh,
+                          default=lambda o: o.tolist() if hasattr(o, "tolist") else float(o))
+            os.replace(tmp, checkpoint)
+    return out
+
+
 def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False, samples=None, seed=0, workers=1,
-                     log=print):
+                     log=print, checkpoint=None, deadline=None):
     """The all-members-on row (module docstring): a dict with ``rows`` (validate's table rows), ``central``
     (:func:`rigidity_ba` at the middles), ``band``, the samples and failures, the members file and its commit;
-    None where the design has no members file."""
+    None where the design has no members file. ``checkpoint`` (a JSON path) keeps the finished samples and
+    resumes them (one process); ``deadline`` (epoch seconds) starts no sample after it: ``samples_done`` then
+    says how many of the ``samples`` planned draws (the first ones) make the band."""
     from .validate import catalogue_rows, map_samples, rigidity_points
     name = members_name(design)
     if name is None:
@@ -388,8 +420,14 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     # the central design (every input at its middle) first, then the samples: one map (``workers`` processes)
     log(f"validate {design}: all members on ({name}), central b/a and {n} Latin-hypercube samples over "
         f"{len(inputs)} ranges ({workers} worker(s))")
-    res = map_samples(_sample, [(members_table(table, switches, derived, mid, numerics), catalogue)]
-                      + [(table_of(u), catalogue) for u in U], workers, log)
+    items = ([(members_table(table, switches, derived, mid, numerics), catalogue)]
+             + [(table_of(u), catalogue) for u in U])
+    if checkpoint is None and deadline is None:
+        res = map_samples(_sample, items, workers, log)
+    else:
+        res = _run_resumable(items, log, checkpoint, f"{design} samples={n} seed={seed} quick={quick}", deadline)
+    if not res:
+        raise RvtoolInputError(f"validate {design}: deadline reached before the all-members-on central design")
     central, err = res[0]
     if central is None:
         raise RvtoolInputError(f"validate {design}: the all-members-on central design failed: {err}")
@@ -405,7 +443,8 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
     rows = catalogue_rows("torsional_rigidity", central["value"], "N m/arcmin", catalogue, band, note)
     for r in rows:
         r["figure"] = "torsional_rigidity_all_members_on"
-    return {"rows": rows, "central": central, "band": band, "samples": n, "sample_values": values,
+    return {"rows": rows, "central": central, "band": band, "samples": n, "samples_done": len(values),
+            "sample_values": values,
             "sample_networks": [None if r is None else r["networks"] for r, _ in res[1:]],
             "sample_cpu_s": [None if r is None else r["cpu_s"] for r, _ in res[1:]],
             "failures": failures, "keys": [a.key for a in inputs], "U": U.tolist(),
