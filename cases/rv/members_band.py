@@ -173,6 +173,7 @@ def main(argv=None):
         kept = [n for n in prev["designs_done"] if n in names and n not in per and count(n) >= samples]
         for n in kept:
             per[n] = prev["designs"][n]
+            per[n].setdefault("samples_done", len(per[n]["sample_values"]))   # runs before the key existed
             counts[n] = count(n)
         resumed.append({"designs": kept, "command": prev["provenance"]["command"], "date": prev["provenance"]["date"],
                         "wall_s_total": prev["provenance"]["wall_s_total"],
