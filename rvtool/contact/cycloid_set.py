@@ -307,6 +307,13 @@ class ProfileTable:
             self._device = (batch, int(row), int(window), float(spacing))
 
     @property
+    def read_back(self):
+        """Whether this table's arrays were computed on a Warp device and copied to the host since (a
+        host reader asked for them: :attr:`entry`); False for a device table read in place only
+        (:meth:`device_column`) and for a table computed or provided on the host."""
+        return self._device is not None and self._device[0].read_back
+
+    @property
     def n_samples(self):
         """Samples of the table (its key's count: every table of the key has that many)."""
         return self.key[1]
@@ -400,6 +407,11 @@ class _DeviceTables:
 
     def __init__(self, columns):
         self.columns, self._host = tuple(columns), None
+
+    @property
+    def read_back(self):
+        """Whether the host has read this batch back (:meth:`host`)."""
+        return self._host is not None
 
     def host(self):
         if self._host is None:
@@ -671,6 +683,14 @@ class CycloidPinSet(PairFamilySet):
                                             analytic=self.analytic, anchor_params=self.anchor_params)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
+
+    @property
+    def table_source(self):
+        """Where the warp kernel reads its profile tables from: "device_batch_view" (the rows of one batch
+        computed on its device, read in place: :func:`compute_profile_tables`), "gathered" (device tables
+        of several batches copied together on the device), "host" (host arrays uploaded); None for the
+        numpy backend."""
+        return self._kernel.table_source if self.backend == "warp" else None
 
     def profile_tables(self):
         """{(profile, pin radius [m]): (table, analytic parameters or None, search window)} of this
