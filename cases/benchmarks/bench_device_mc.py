@@ -20,7 +20,8 @@ Paths, on the same variants:
 
 * pool: the reference per-variant Exudyn run in a ProcessPoolExecutor (spawn) over --workers
   processes (default: all cores), each worker warmed (imports, kernels, one nominal build and
-  two TE points) before the timing starts; a variant that raises is a failure;
+  two TE points; every worker exactly once: its warm-up task waits at a barrier of all workers,
+  warmed_pool) before the timing starts; a variant that raises is a failure;
 * device: rvtool.batched.device_rows_variants on --device (one copy per variant, the TE one batch
   solve of all copies per angle, the lost motion the device load continuation), with the Newton
   step, the per-copy sums and the tapered rows on the device (rvtool.solver.device_rows); every
@@ -29,7 +30,8 @@ Paths, on the same variants:
   processes that send back their snapshots (rvtool.variants.multi_device.variant_snapshot: rows,
   kinematics, constraints; the cycloid pins on shared profile tables, one table per distinct wheel
   profile: rvtool.contact.cycloid_set.shared_profile_tables), that pool warmed as the reference
-  pool (one nominal build per worker, ``build_pool_warm_s``, not timed). --solve-chunk N solves N
+  pool (the build task on the nominal design in every worker, which builds its nominal snapshot;
+  ``build_pool_warm_s``, not timed). --solve-chunk N solves N
   copies at a time (rvtool.variants.multi_device.chunk_schedule, --first-chunk first, doubling)
   while the pool builds the next chunk (at most two chunks of builds queued); default one solve of
   all variants. Reported both ways: ``variants_per_s/device`` the device's time only (the chunks'
@@ -69,6 +71,7 @@ Default 1,000 variants per design (--variants N); --quick: 2 per design, 2 worke
 --pool-variants M runs only variants 0..M-1 on the pool (the pool's rate and the agreement come
 from those; e.g. 1,000 of a 100,000-variant device run, whose pool run would take ~15 min).
 """
+import functools
 import multiprocessing
 import os
 import time
@@ -129,12 +132,53 @@ def rd_variant_design(tol, design, k):
 
 
 _WORKER = {}
+_WARM_BARRIER = None
+"""This worker's barrier of its pool's warm-up (:func:`warmed_pool`), set by the pool's initializer."""
+WARM_TIMEOUT_S = 600.0
+"""The longest a warm-up task waits at the barrier for the pool's other workers [s] (spawn and imports)."""
+
+
+def _init_worker(barrier):
+    global _WARM_BARRIER
+    _WARM_BARRIER = barrier
+
+
+def warmed_pool(workers, warm, jobs):
+    """(ProcessPoolExecutor of ``workers`` spawned processes, warm-up wall time [s]): every worker runs
+    exactly one of the warm-up ``jobs`` (``warm(job)``, one job per worker) before the timing starts. Each
+    warm-up task waits at a barrier of all ``workers`` after its work, so no worker takes a second one
+    while another starts (a pool warmed by mapping one job per worker can leave a slow-starting worker
+    cold: measured on cpu, 2 workers, both warm-up jobs ran in one process, and the other's first timed
+    task paid its imports' first use and nominal build, 0.25-0.4 s instead of 0.03 s)."""
+    ctx = multiprocessing.get_context("spawn")          # fresh interpreters: no forked Warp/Exudyn state
+    ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker,
+                             initargs=(ctx.Barrier(workers),))
+    t = time.perf_counter()
+    pids = list(ex.map(functools.partial(_warm_task, warm), jobs))
+    if len(set(pids)) != workers:
+        raise RuntimeError(f"the pool's warm-up reached {len(set(pids))} of {workers} workers")
+    return ex, time.perf_counter() - t
+
+
+def _warm_task(warm, job):
+    warm(job)
+    _WARM_BARRIER.wait(WARM_TIMEOUT_S)
+    return os.getpid()
 
 
 def _warm_build(job):
-    """Warm-up task of the device path's build pool: one build of the nominal design."""
-    design, kw = job
-    build(design, **kw)
+    """Warm-up task of the device path's build pool: the task the timing runs (one variant snapshot, its
+    tables deferred as the run's) on the nominal design (no variant of the run), which builds this process's
+    nominal snapshot (rvtool.solver.variant_snapshots: the variants are written into it) and loads every
+    module the builds use, as the reference pool's warm-up runs its task on the nominal design."""
+    design, kw, defer_tables = job
+    from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
+    from rvtool.variants import Variant
+    if design.__class__.__name__ == "CycloidDesign":
+        cycloid_variant_snapshots(design, [Variant()], kw, defer_tables=defer_tables)
+    else:
+        from rvtool.solver.model_snapshot import build_snapshot
+        build_snapshot(design, kw, shared_tables=True)
     return None
 
 
@@ -208,12 +252,9 @@ def recheck_lost_motion(name, quick, ks, kw, torque, device, workers):
 
 def run_pool(name, quick, V, workers):
     """The reference runs of variants 0..V-1 in a warmed pool: (results by k, warm_s, wall_s)."""
-    ctx = multiprocessing.get_context("spawn")          # fresh interpreters: no forked Warp/Exudyn state
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
-        t = time.perf_counter()
-        # warm every worker: one warm-up job each, submitted together (each worker takes one)
-        list(ex.map(_pool_task, [(name, quick, -1)] * workers))
-        warm_s = time.perf_counter() - t
+    # warm every worker: one warm-up job each (the nominal design), every worker exactly one (warmed_pool)
+    ex, warm_s = warmed_pool(workers, _pool_task, [(name, quick, -1)] * workers)
+    with ex:
         t = time.perf_counter()
         out = list(ex.map(_pool_task, [(name, quick, k) for k in range(V)], chunksize=1))
         wall_s = time.perf_counter() - t
@@ -303,7 +344,6 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     captured CUDA graph (rvtool.solver.device_rows; False: the host loop)."""
     from rvtool.solver.device_newton import DeviceNewtonSettings
     settings = DeviceNewtonSettings(graph=bool(graph))
-    import functools
     from rvtool.variants.multi_device import chunk_schedule
     if name in RV_NAMES:
         design, tol, angles = _rv_setup(quick, name)
@@ -326,14 +366,12 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
     device_rows_variants(warm, torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
                          device=device, settings=settings)
-    ctx = multiprocessing.get_context("spawn")
     parts, waits = [], []
     table = {"profile_tables": 0, "profile_table_mb": 0.0}
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
-        t = time.perf_counter()
-        # warmed like the reference pool: one nominal build per worker (imports, memos), not timed
-        list(ex.map(_warm_build, [(design, kw)] * workers))
-        warm_s = time.perf_counter() - t
+    # warmed like the reference pool: the timed task on the nominal design in every worker (imports, the
+    # nominal snapshot), not timed
+    ex, warm_s = warmed_pool(workers, _warm_build, [(design, kw, tables == "device")] * workers)
+    with ex:
 
         def submit(i):
             ks = range(int(starts[i]), int(starts[i + 1]))
