@@ -40,6 +40,28 @@ def test_slots_pin_one_gpu_per_worker():
             device_slots(bad)
 
 
+def test_the_collector_is_paused_while_snapshots_are_received_and_restored_after():
+    """paused_collector (rows_batch and bench_device_mc receive their snapshots inside it): the cyclic
+    collector is off inside, back on after (also when the block raises), and left off where it was off."""
+    import gc
+    from rvtool.variants.multi_device import paused_collector
+    assert gc.isenabled()
+    with paused_collector():
+        assert not gc.isenabled()
+    assert gc.isenabled()
+    with pytest.raises(ValueError):
+        with paused_collector():
+            raise ValueError("inside")
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        with paused_collector():
+            pass
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+
+
 def test_batches_cover_every_variant_once_in_order():
     for n, k in ((7, 2), (8192, 2), (3, 4), (1, 1)):
         b = split_indices(n, k)

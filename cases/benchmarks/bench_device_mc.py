@@ -252,9 +252,10 @@ def recheck_lost_motion(name, quick, ks, kw, torque, device, workers):
 
 def run_pool(name, quick, V, workers):
     """The reference runs of variants 0..V-1 in a warmed pool: (results by k, warm_s, wall_s)."""
+    from rvtool.variants.multi_device import paused_collector
     # warm every worker: one warm-up job each (the nominal design), every worker exactly one (warmed_pool)
     ex, warm_s = warmed_pool(workers, _pool_task, [(name, quick, -1)] * workers)
-    with ex:
+    with ex, paused_collector():                    # as the device path's process (receiving only here)
         t = time.perf_counter()
         out = list(ex.map(_pool_task, [(name, quick, k) for k in range(V)], chunksize=1))
         wall_s = time.perf_counter() - t
@@ -344,7 +345,7 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     captured CUDA graph (rvtool.solver.device_rows; False: the host loop)."""
     from rvtool.solver.device_newton import DeviceNewtonSettings
     settings = DeviceNewtonSettings(graph=bool(graph))
-    from rvtool.variants.multi_device import chunk_schedule
+    from rvtool.variants.multi_device import chunk_schedule, paused_collector
     if name in RV_NAMES:
         design, tol, angles = _rv_setup(quick, name)
         kw = {}
@@ -371,7 +372,9 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     # warmed like the reference pool: the timed task on the nominal design in every worker (imports, the
     # nominal snapshot), not timed
     ex, warm_s = warmed_pool(workers, _warm_build, [(design, kw, tables == "device")] * workers)
-    with ex:
+    # the collector paused while this process receives the snapshots and solves (paused_collector: its full
+    # passes over the growing heap cost about twice the unpickling)
+    with ex, paused_collector():
 
         def submit(i):
             ks = range(int(starts[i]), int(starts[i + 1]))
