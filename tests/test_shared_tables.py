@@ -254,7 +254,10 @@ def test_device_tables_are_read_in_place_with_the_figures_of_host_tables(device)
     jobs = [(d, tol, RD_SEED, k, RD_KW) for k in ((21, 22) if device == "cpu" else (23, 24))]
     blobs = [pickle.dumps(m) for _, m, _ in variant_snapshots(jobs, defer_tables=True)]
     on_dev, other, on_host = ([pickle.loads(b) for b in blobs] for _ in range(3))
-    assert provide_profile_tables(on_dev, device) == provide_profile_tables(other, device) == 4
+    stages = {}
+    assert provide_profile_tables(on_dev, device, timing=stages) == provide_profile_tables(other, device) == 4
+    assert set(stages) == {"upload", "dense_lengths", "arc_lengths", "resampled", "keyed", "window_offsets", "read"}
+    assert all(v >= 0.0 for v in stages.values())
     for a, b in zip((t for m in other for t in _pins(m).tables), (t for m in on_host for t in _pins(m).tables)):
         b.provide(tuple(a), a.window)                   # the same numbers, as host arrays (a read back)
     protocol = VariantProtocol(n_te_points=3)

@@ -25,6 +25,7 @@ A table that fails a check (``ok`` 0) is left to the host. NumPy reference: the 
 Float64 only.
 """
 import functools
+import time
 
 import numpy as np
 import warp as wp
@@ -242,7 +243,8 @@ def _kernels():
     return dense_lengths, arc_lengths, resampled, keyed, window_offsets
 
 
-def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5, as_numpy=True):
+def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5, as_numpy=True,
+                   timing=None):
     """Profile tables of T profiles on Warp ``device`` (module docstring).
 
     params (T, 5): per profile R (pin-circle radius plus offset modification) [m], K1 [-], z_b
@@ -252,8 +254,19 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     key (T, n), spacing (T,), phi (T, n), window (T,), ok (T,) bool), the five table columns as NumPy
     arrays (``as_numpy``) or as the Warp device arrays (left on the device), the rest NumPy: table t is
     (points[t], normals[t], curvature[t], key[t], spacing[t], phi[t]) of
-    ``pin_curve_table(profile.table(n_samples), rp)`` and its ``auto_window`` where ok[t]."""
+    ``pin_curve_table(profile.table(n_samples), rp)`` and its ``auto_window`` where ok[t].
+    timing: None, or a dict that receives the wall time [s] of each stage added to its entry ("upload",
+    "dense_lengths", "arc_lengths", "resampled", "keyed", "window_offsets", "read": the device synchronized
+    after each, so that each entry is its stage's own time; the tables are the same)."""
     dense_lengths, arc_lengths, resampled, keyed, window_offsets = _kernels()
+    clock = [time.perf_counter()]
+
+    def stage(name):
+        if timing is not None:
+            wp.synchronize_device(device)
+            now = time.perf_counter()
+            timing[name] = timing.get(name, 0.0) + now - clock[0]
+            clock[0] = now
     params = np.asarray(params, np.float64)
     T, n, nd = len(params), int(n_samples), int(n_dense)
     rot = params[:, 4]
@@ -265,24 +278,32 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     prm_d = wp.array(prm, dtype=wp.float64, device=d)
     nz_d = wp.array(np.asarray(n_pins, np.int32), dtype=wp.int32, device=d)
     rp_d = wp.array(np.asarray(rp, np.float64), dtype=wp.float64, device=d)
-    s = wp.zeros((T, nd + 1), dtype=wp.float64, device=d)
-    wp.launch(dense_lengths, dim=(T, nd), inputs=[prm_d, nz_d, nd, step, s], device=d)
+    s = wp.empty((T, nd + 1), dtype=wp.float64, device=d)      # every entry written (dense_lengths, arc_lengths)
     total_d = wp.zeros(T, dtype=wp.float64, device=d)
+    dist = wp.array(np.linspace(1.0 - band, 1.0 + band, 9), dtype=wp.float64, device=d)
+    stage("upload")
+    wp.launch(dense_lengths, dim=(T, nd), inputs=[prm_d, nz_d, nd, step, s], device=d)
+    stage("dense_lengths")
     wp.launch(arc_lengths, dim=T, inputs=[nd, s, total_d], device=d)
+    stage("arc_lengths")
     raw = [wp.empty((T, n, 2), dtype=wp.float64, device=d), wp.empty((T, n, 2), dtype=wp.float64, device=d)] + \
         [wp.empty((T, n), dtype=wp.float64, device=d) for _ in range(3)]
     wp.launch(resampled, dim=(T, n), inputs=[prm_d, nz_d, s, nd, step, n] + raw, device=d)
+    stage("resampled")
     out = [wp.empty((T, n, 2), dtype=wp.float64, device=d), wp.empty((T, n, 2), dtype=wp.float64, device=d)] + \
         [wp.empty((T, n), dtype=wp.float64, device=d) for _ in range(3)]
     ok = wp.zeros(T, dtype=wp.int32, device=d)
     wp.launch(keyed, dim=T, inputs=[n, rp_d] + raw + out + [ok], device=d)
-    dist = wp.array(np.linspace(1.0 - band, 1.0 + band, 9), dtype=wp.float64, device=d)
+    stage("keyed")
     off = wp.zeros(T, dtype=wp.int32, device=d)
     wp.launch(window_offsets, dim=(T, n, 9), inputs=[n, rp_d, dist, out[0], out[1], out[3], off], device=d)
+    stage("window_offsets")
     total = total_d.numpy()                         # (not the whole arc-length table back: ~1 GB a launch)
     pts, nrm, kap, key, phi = (a.numpy() for a in out) if as_numpy else out
     window = np.ceil(margin * off.numpy()).astype(int) + 2
-    return pts, nrm, kap, key, total / n, phi, window, ok.numpy() == 1
+    ok = ok.numpy() == 1
+    stage("read")
+    return pts, nrm, kap, key, total / n, phi, window, ok
 
 
 __all__ = ["profile_tables"]

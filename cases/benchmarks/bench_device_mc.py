@@ -284,7 +284,8 @@ def merge_chunks(parts, V):
         "sweeps": sum(p.stats["sweeps"] for p in parts),
         "newton_iterations": sum(p.stats["newton_iterations"] for p in parts),
         "device": parts[0].stats["device"], "device_sum": parts[0].stats["device_sum"],
-        "lost_motion": [p.stats["lost_motion"] for p in parts]}
+        "lost_motion": [p.stats["lost_motion"] for p in parts],
+        "setup_parts": [p.stats.get("setup_parts") for p in parts]}
     return RowVariants(te=cat("te"), theta_out=cat("theta_out"), lost_motion_rad=None if lm[0] is None
                        else np.concatenate(lm), status=sum((p.status for p in parts), []),
                        error=sum((p.error for p in parts), []),

@@ -428,7 +428,7 @@ bytes per sample and table, ~150 MB for 256 RD-40 tables; on a GPU the serial ar
 takes as long for 2,048 tables as for 256, so fewer, larger launches)."""
 
 
-def compute_profile_tables(tables, device="cpu", group=None):
+def compute_profile_tables(tables, device="cpu", group=None, timing=None):
     """Compute the deferred :class:`ProfileTable` objects among ``tables`` (:func:`shared_profile_tables`
     ``defer``) on Warp ``device``, each distinct key once, ``group`` tables per launch (None:
     :data:`DEVICE_TABLE_GROUP` of the device kind)
@@ -439,7 +439,8 @@ def compute_profile_tables(tables, device="cpu", group=None):
     table whose polar angle or key is not monotone (checked on the device), are left to the host (computed where first read). The columns stay on the
     device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there copies them, nothing is read
     back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
-    computed on the device."""
+    computed on the device. timing: None or a dict receiving the stages' wall times [s] (the ``timing`` of
+    :func:`warp_contacts.profile_tables.profile_tables`, summed over the launches)."""
     from warp_contacts.profile_tables import profile_tables
     todo = {}
     for t in tables:
@@ -460,7 +461,7 @@ def compute_profile_tables(tables, device="cpu", group=None):
             params = [(p.R, p.K1, float(p.n_pins), p.pin_radius + p.equidistant_mod, p.rotation_mod) for p in profs]
             pts, nrm, kap, key, h, phi, window, ok = profile_tables(
                 params, [p.n_pins for p in profs], [p.pin_radius for p in profs], n, 16 * n, band, device=device,
-                as_numpy=False)
+                as_numpy=False, timing=timing)
             batch = _DeviceTables((pts, nrm, kap, key, phi))      # left on the device (CycloidPinKernel copies)
             for i, k in enumerate(chunk):
                 if ok[i]:

@@ -248,17 +248,18 @@ class _Blocks:
     dQdq: np.ndarray
 
 
-def provide_profile_tables(models, device):
+def provide_profile_tables(models, device, timing=None):
     """Compute the deferred cycloid profile tables of ``models`` (snapshots built with
     ``defer_tables``, :func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`) on Warp
     ``device``, each distinct table once (:func:`rvtool.contact.cycloid_set.compute_profile_tables`).
     :class:`DeviceRowNewton` does this on a GPU (inside its ``setup_s``); on the cpu a deferred table is
     computed by the host where it is first read (the Warp kernels' serial parts are slower there than
-    NumPy). Returns the number of tables computed."""
+    NumPy). Returns the number of tables computed. timing: None or a dict receiving the table kernels' stage
+    times [s] (:func:`~rvtool.contact.cycloid_set.compute_profile_tables`)."""
     from ..contact.cycloid_set import ProfileTable, compute_profile_tables
     tables = [t for m in models for e in m.contact_elements()
               for t in (getattr(e.evaluator, "tables", None) or ()) if isinstance(t, ProfileTable) and not t.computed]
-    return compute_profile_tables(tables, device) if tables else 0
+    return compute_profile_tables(tables, device, timing=timing) if tables else 0
 
 
 class DeviceRowNewton:
@@ -303,9 +304,13 @@ class DeviceRowNewton:
         if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
             raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer)")
         t0 = time.perf_counter()
+        #: where the setup's time went [s]: "tables_s" (the deferred profile tables computed on the device, with
+        #: their kernels' stages in "table_stages"), "families_s" (the families copied), "rest_s"
+        self.setup_parts = {"tables_s": 0.0, "table_stages": {}, "families_s": 0.0, "rest_s": 0.0}
         if self.models is not None and not str(device).startswith("cpu"):
             # variant profile tables left to this process (deferred by the build helpers): on the GPU, all at once
-            provide_profile_tables(self.models, device)
+            provide_profile_tables(self.models, device, timing=self.setup_parts["table_stages"])
+        self.setup_parts["tables_s"] = time.perf_counter() - t0
         self.model, self.B, self.device = model, int(copies), device
         self.settings = settings or DeviceNewtonSettings()
         self.nb = nb = len(model.body_names)
@@ -316,6 +321,7 @@ class DeviceRowNewton:
         if device_sum is None:
             device_sum = not str(device).startswith("cpu")
         self.device_sum = bool(device_sum)
+        t_fam = time.perf_counter()
         if needs_extension(model):
             from .row_extension import copy_rows
             families, self.extension = copy_rows(self.models or model, self.B, device=device,
@@ -323,6 +329,7 @@ class DeviceRowNewton:
             self.n = n = self.extension.n
         else:
             families = copy_families(self.models or model, self.B, device=device)
+        self.setup_parts["families_s"] = time.perf_counter() - t_fam
         self.families = families
         #: the copied families with stick--slip anchors: their committed history is read by every
         #: evaluation and changed only by :meth:`commit` (a level of a torque path, as Exudyn's continuation)
@@ -365,6 +372,7 @@ class DeviceRowNewton:
         else:
             self.reference = self._extend(np.array([np.asarray(m.reference, float).reshape(-1) for m in self.models]))
         self.setup_s = time.perf_counter() - t0
+        self.setup_parts["rest_s"] = self.setup_s - self.setup_parts["tables_s"] - self.setup_parts["families_s"]
 
     def subset(self, copies):
         """A row Newton of the variant copies ``copies`` only (their models, this one's device and
