@@ -10,7 +10,8 @@ one for one (equal to rounding: the device's sine and cosine are its own):
 
 1. ``dense_lengths`` (a thread per table and dense angle): the profile point at the dense angles
    j 2 pi / N_d and at the next one (turned by the rotation modification), their distance;
-2. ``arc_lengths`` (a thread per table): the cumulative arc length in order (numpy's cumsum);
+2. ``arc_lengths`` (a thread per table): the cumulative arc length in order (numpy's cumsum, four loads in
+   flight);
 3. ``resampled`` (a thread per table and sample): the generating angle at equal arc length
    (numpy's interp: the bracketing dense interval by bisection, its slope), the point, outward
    normal, curvature and polar angle there;
@@ -100,9 +101,27 @@ def _kernels():
         t = wp.tid()
         acc = f64(0.0)
         s[t, 0] = acc
-        for j in range(n_dense):
+        # numpy's cumsum, in its order; four segment lengths loaded before they are summed in (the pass is
+        # one thread per table and waits on memory: four loads in flight instead of one)
+        j = int(0)
+        while j + 4 <= n_dense:
+            a0 = s[t, j + 1]
+            a1 = s[t, j + 2]
+            a2 = s[t, j + 3]
+            a3 = s[t, j + 4]
+            acc = acc + a0
+            s[t, j + 1] = acc
+            acc = acc + a1
+            s[t, j + 2] = acc
+            acc = acc + a2
+            s[t, j + 3] = acc
+            acc = acc + a3
+            s[t, j + 4] = acc
+            j = j + 4
+        while j < n_dense:
             acc = acc + s[t, j + 1]
             s[t, j + 1] = acc
+            j = j + 1
         total[t] = acc
 
     @wp.kernel
