@@ -56,6 +56,9 @@ from ..model.reducer import COORDINATES
 from .device_newton import DeviceNewtonSettings
 
 
+SUBSETS_KEPT = 8
+"""Row Newtons of variant-copy subsets :meth:`DeviceRowNewton.subset` keeps for a repeated request."""
+
 KINEMATICS_CACHE = 4096
 """Input angles whose variant copies' kinematic states :meth:`DeviceRowNewton.prime_kinematics` keeps."""
 
@@ -360,6 +363,7 @@ class DeviceRowNewton:
         self._reference_d = None        # the copies' reference poses on the device (resident loop)
         self._gather_d = {}             # family -> its pose map on the device (extended families)
         self._graphs = {}               # stepper -> its captured resident loop (CUDA), or None where capture failed
+        self._subsets = {}              # copies -> their row Newton (subset(); SUBSETS_KEPT, the most recent last)
         #: how the last resident loop ran: "cuda_graph" (captured, replayed), "host_loop" or None (not resident)
         self.loop_path = None
         if sync_every is None:
@@ -379,12 +383,21 @@ class DeviceRowNewton:
         settings): a solve of a few copies then launches the families over those copies instead of
         all B (a solve's sweeps cost the whole batch, active or not). The copies' rows are the
         same, so are their equilibria (bit for bit with host sums; with device sums up to the
-        order of the atomic additions)."""
+        order of the atomic additions). The last :data:`SUBSETS_KEPT` subsets are kept and given again for the
+        same copies (a lost motion's +f and -f starts compact the same few hard copies, and a start scale's
+        homotopy stage the copies its warm start failed, often the ones before)."""
         if self.models is None:
             raise RvtoolInputError("subset() takes copies of variant models; one model's copies are all alike")
         cp = self._copies(len(copies), copies)
-        return DeviceRowNewton([self.models[c] for c in cp], device=self.device, settings=self.settings,
-                               device_sum=self.device_sum, device_step=self.device_step, sync_every=self.sync_every)
+        key = tuple(int(c) for c in cp)
+        sub = self._subsets.pop(key, None)
+        if sub is None:
+            sub = DeviceRowNewton([self.models[c] for c in cp], device=self.device, settings=self.settings,
+                                  device_sum=self.device_sum, device_step=self.device_step, sync_every=self.sync_every)
+        self._subsets[key] = sub                    # the most recent last
+        while len(self._subsets) > SUBSETS_KEPT:
+            self._subsets.pop(next(iter(self._subsets)))
+        return sub
 
     def kinematic(self, angles, copies=None):
         """(P, 3 nb) kinematic displacement states at input angles (P,) [rad], with the values the
