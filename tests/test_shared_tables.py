@@ -239,9 +239,9 @@ def test_device_tables_are_read_in_place_with_the_figures_of_host_tables(device)
     """Deferred RD-40 tables computed on ``device`` in one batch (provide_profile_tables) are read by the
     row Newton's cycloid kernel where they lie: the copies' kernel and a compacted subset's (subset())
     address the batch's rows in place ("device_batch_view": no copy on the device, no read-back to the
-    host; a subset asked for again is the one kept), and TE, lost motion and a subset's equilibria are bit for bit those of the same numbers
-    uploaded from the host (a second batch of the same profiles read back and provided as host arrays:
-    the kernel's "host" path). Host sums on both (device_sum=False: the atomic order of device sums is
+    host; a subset asked for again is the one kept), and TE, lost motion and a subset's equilibria are bit for
+    bit those of the same numbers uploaded from the host (a second batch of the same profiles read back and
+    provided as host arrays: the kernel's "host" path). Host sums on both (device_sum=False: the atomic order of device sums is
     not part of the tables' path). Fails if a table were copied, read back, or read at another row."""
     if _cuda_absent(device):
         pytest.skip("no CUDA device")

@@ -347,11 +347,12 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     ``first_chunk`` first, doubling). The builds of the next chunk run while the device solves the
     current one (at most two chunks of builds queued: the snapshots of 100,000 RD-40 variants would
     not fit the host's memory at once), so ``wall_s`` is the whole device Monte Carlo, builds
-    included; ``build_wait_s`` the time the device's process waited for builds (one chunk: the
-    whole build, the pool's transfer included, as ``build_s``). tables: "helpers" (the build pool computes
-    each variant's cycloid profile tables and sends them) or "device" (the pool sends the profiles; the
-    device row Newton computes the tables on a GPU inside its setup, on the cpu the host where read:
-    rvtool.contact.cycloid_set.compute_profile_tables). graph: on CUDA the row Newton's resident loop as a
+    included; ``build_wait_s`` the time the device's process waited for builds (one chunk: the whole build,
+    the pool's transfer included, as ``build_s``; ``build_wait_cpu_s`` its CPU time meanwhile, the pool's
+    result thread unpickling the snapshots: near ``build_wait_s``, receiving bounds the wait). tables: "helpers"
+    (the build pool computes each variant's cycloid profile tables and sends them) or "device" (the pool sends
+    the profiles; the device row Newton computes the tables on a GPU inside its setup, on the cpu the host
+    where read: rvtool.contact.cycloid_set.compute_profile_tables). graph: on CUDA the row Newton's resident loop as a
     captured CUDA graph (rvtool.solver.device_rows; False: the host loop)."""
     from rvtool.solver.device_newton import DeviceNewtonSettings
     settings = DeviceNewtonSettings(graph=bool(graph))
@@ -377,7 +378,7 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
     device_rows_variants(warm, torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
                          device=device, settings=settings)
-    parts, waits = [], []
+    parts, waits, wait_cpu = [], [], []
     table = {"profile_tables": 0, "profile_table_mb": 0.0}
     # warmed like the reference pool: the timed task on the nominal design in every worker (imports, the
     # nominal snapshot), not timed
@@ -396,9 +397,10 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
         t0, aside = time.perf_counter(), 0.0
         queued = {i: submit(i) for i in range(min(2, len(sizes)))}
         for i in range(len(sizes)):
-            tw = time.perf_counter()
+            tw, cw = time.perf_counter(), time.process_time()
             got = [x for f in queued.pop(i) for x in f.result()]
             waits.append(time.perf_counter() - tw)
+            wait_cpu.append(time.process_time() - cw)      # this process (its result thread unpickles) meanwhile
             if i + 2 < len(sizes):
                 queued[i + 2] = submit(i + 2)
             models = [m for _, m, _ in got if m is not None]
@@ -418,7 +420,8 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
         wall_s = time.perf_counter() - t0 - aside
     r = merge_chunks(parts, V)
     cost = dict(build_s=waits[0] if len(sizes) == 1 else sum(waits), build_pool_warm_s=warm_s,
-                build_wait_s=sum(waits), end_to_end_s=wall_s, solve_chunks=[int(x) for x in sizes],
+                build_wait_s=sum(waits), build_wait_cpu_s=sum(wait_cpu), end_to_end_s=wall_s,
+                solve_chunks=[int(x) for x in sizes],
                 device_memory_high_mb=device_memory_mb(device),
                 **{k + "_largest_chunk": v for k, v in table.items()})
     cost.update(build_cost(design, tol, seed, kw, list(range(V, V + 25))))

@@ -573,6 +573,6 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
 
 __all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "batch_task", "chunk_schedule", "cycloid_batch",
            "default_build_kw", "default_host_workers", "default_protocol", "device_chunk", "device_cluster",
-           "device_slots", "helper_pool", "multi_device_monte_carlo", "paused_collector", "plan", "rows_batch", "run_batches",
-           "shutdown_helper_pools", "split_indices", "start_helper_pool", "variant_snapshot", "warm_helper_builds",
-           "warm_up", "worker_addresses"]
+           "device_slots", "helper_pool", "multi_device_monte_carlo", "paused_collector", "plan", "rows_batch",
+           "run_batches", "shutdown_helper_pools", "split_indices", "start_helper_pool", "variant_snapshot",
+           "warm_helper_builds", "warm_up", "worker_addresses"]
