@@ -241,8 +241,8 @@ def test_device_tables_are_read_in_place_with_the_figures_of_host_tables(device)
     address the batch's rows in place ("device_batch_view": no copy on the device, no read-back to the
     host; a subset asked for again is the one kept), and TE, lost motion and a subset's equilibria are bit for
     bit those of the same numbers uploaded from the host (a second batch of the same profiles read back and
-    provided as host arrays: the kernel's "host" path). Host sums on both (device_sum=False: the atomic order of device sums is
-    not part of the tables' path). Fails if a table were copied, read back, or read at another row."""
+    provided as host arrays: the kernel's "host" path). Host sums on both (device_sum=False: the atomic order
+    of device sums is not part of the tables' path). Fails if a table were copied, read back, or read at another row."""
     if _cuda_absent(device):
         pytest.skip("no CUDA device")
     from rvtool.solver.device_rows import provide_profile_tables
