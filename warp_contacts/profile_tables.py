@@ -19,8 +19,8 @@ one for one (equal to rounding: the device's sine and cosine are its own):
    its polar angle monotone along the samples: the order is a rotation of the sample order, checked),
    the search key (polar angle of the pin-centre curve P + r_p N, checked monotone over one turn)
    and the table turned to start at the key's smallest value;
-5. ``window_offsets`` (a thread per table, sample and probe distance): the index distance of each
-   probe's key bisection from its sample, the largest per table (atomic max).
+5. ``window_offsets`` (a thread per table and sample, looping over the probe distances): the index distance
+   of each probe's key bisection from its sample, the largest per table (one atomic max per sample).
 
 A table that fails a check (``ok`` 0) is left to the host. NumPy reference: the host functions above.
 Float64 only.
@@ -239,25 +239,30 @@ def _kernels():
             o_key[t, k] = pmod(wp.atan2(pts[t, i, 1] + r * nrm[t, i, 1], pts[t, i, 0] + r * nrm[t, i, 0]))
 
     @wp.kernel
-    def window_offsets(n: int, rp: wp.array(dtype=f64), dist: wp.array(dtype=f64), pts: wp.array3d(dtype=f64),
-                       nrm: wp.array3d(dtype=f64), key: wp.array2d(dtype=f64), off: wp.array(dtype=wp.int32)):
-        t, i, q = wp.tid()
-        r = rp[t] * dist[q]
-        beta = pmod(wp.atan2(pts[t, i, 1] + r * nrm[t, i, 1], pts[t, i, 0] + r * nrm[t, i, 0]))
-        # np.searchsorted(key, beta) (side left): the first index whose key is >= beta
-        lo = int(0)
-        hi = n
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if key[t, mid] < beta:
-                lo = mid + 1
-            else:
-                hi = mid
+    def window_offsets(n: int, n_dist: int, rp: wp.array(dtype=f64), dist: wp.array(dtype=f64),
+                       pts: wp.array3d(dtype=f64), nrm: wp.array3d(dtype=f64), key: wp.array2d(dtype=f64),
+                       off: wp.array(dtype=wp.int32)):
+        t, i = wp.tid()
         h = n // 2
-        x = ((lo - i) + h) % n
-        if x < 0:
-            x = x + n
-        wp.atomic_max(off, t, wp.abs(x - h))
+        worst = int(0)
+        for q in range(n_dist):
+            r = rp[t] * dist[q]
+            beta = pmod(wp.atan2(pts[t, i, 1] + r * nrm[t, i, 1], pts[t, i, 0] + r * nrm[t, i, 0]))
+            # np.searchsorted(key, beta) (side left): the first index whose key is >= beta
+            lo = int(0)
+            hi = n
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if key[t, mid] < beta:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            x = ((lo - i) + h) % n
+            if x < 0:
+                x = x + n
+            worst = wp.max(worst, wp.abs(x - h))
+        # one atomic per sample (its probes' largest offset) instead of one per probe: the table's maximum
+        wp.atomic_max(off, t, worst)
 
     return dense_lengths, arc_lengths, resampled, keyed, window_offsets
 
@@ -315,7 +320,7 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     wp.launch(keyed, dim=T, inputs=[n, rp_d] + raw + out + [ok], device=d)
     stage("keyed")
     off = wp.zeros(T, dtype=wp.int32, device=d)
-    wp.launch(window_offsets, dim=(T, n, 9), inputs=[n, rp_d, dist, out[0], out[1], out[3], off], device=d)
+    wp.launch(window_offsets, dim=(T, n), inputs=[n, 9, rp_d, dist, out[0], out[1], out[3], off], device=d)
     stage("window_offsets")
     total = total_d.numpy()                         # (not the whole arc-length table back: ~1 GB a launch)
     pts, nrm, kap, key, phi = (a.numpy() for a in out) if as_numpy else out
