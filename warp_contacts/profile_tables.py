@@ -15,10 +15,12 @@ one for one (equal to rounding: the device's sine and cosine are its own):
 3. ``resampled`` (a thread per table and sample): the generating angle at equal arc length
    (numpy's interp: the bracketing dense interval by bisection, its slope), the point, outward
    normal, curvature and polar angle there;
-4. ``keyed`` (a thread per table): the samples ordered by polar angle (the profile is star-shaped,
+4. ``probe_angles`` (a thread per table and sample): the polar angle of the pin-centre curve P + r_p N;
+   ``keyed`` (a thread per table): the samples ordered by polar angle (the profile is star-shaped,
    its polar angle monotone along the samples: the order is a rotation of the sample order, checked),
-   the search key (polar angle of the pin-centre curve P + r_p N, checked monotone over one turn)
-   and the table turned to start at the key's smallest value;
+   the search key (that angle, checked monotone over one turn) and where the table turned to start at
+   the key's smallest value begins; ``permuted`` (a thread per table and sample): the table in that
+   order (the serial pass reads one angle per sample, it no longer evaluates or copies);
 5. ``window_offsets`` (a thread per table and sample, looping over the probe distances): the index distance
    of each probe's key bisection from its sample, the largest per table (one atomic max per sample).
 
@@ -181,10 +183,16 @@ def _kernels():
         phi_out[t, i] = phi
 
     @wp.kernel
-    def keyed(n: int, rp: wp.array(dtype=f64), pts: wp.array3d(dtype=f64), nrm: wp.array3d(dtype=f64),
-              kap: wp.array2d(dtype=f64), polar: wp.array2d(dtype=f64), phi: wp.array2d(dtype=f64),
-              o_pts: wp.array3d(dtype=f64), o_nrm: wp.array3d(dtype=f64), o_kap: wp.array2d(dtype=f64),
-              o_key: wp.array2d(dtype=f64), o_phi: wp.array2d(dtype=f64), ok: wp.array(dtype=wp.int32)):
+    def probe_angles(rp: wp.array(dtype=f64), pts: wp.array3d(dtype=f64), nrm: wp.array3d(dtype=f64),
+                     ang: wp.array2d(dtype=f64)):
+        # the polar angle of the pin-centre curve P + r_p N at each sample (pin_curve_table's key before mod 2 pi)
+        t, i = wp.tid()
+        r = rp[t]
+        ang[t, i] = wp.atan2(pts[t, i, 1] + r * nrm[t, i, 1], pts[t, i, 0] + r * nrm[t, i, 0])
+
+    @wp.kernel
+    def keyed(n: int, polar: wp.array2d(dtype=f64), ang: wp.array2d(dtype=f64), order: wp.array2d(dtype=wp.int32),
+              ok: wp.array(dtype=wp.int32)):
         t = wp.tid()
         # the order of increasing polar angle: from the smallest, along the samples or against them
         m = int(0)
@@ -200,15 +208,13 @@ def _kernels():
                 good = 0
         # pin_curve_table: the key (polar angle of P + r_p N) monotone over one turn, the table turned to
         # start at its smallest value
-        r = rp[t]
         k0 = int(0)
         kmin = f64(1.0e30)
         total = f64(0.0)
         prev = f64(0.0)
         first = f64(0.0)
         for k in range(n):
-            i = (m + d * k) % n
-            a = wp.atan2(pts[t, i, 1] + r * nrm[t, i, 1], pts[t, i, 0] + r * nrm[t, i, 0])
+            a = ang[t, (m + d * k) % n]
             if k == 0:
                 first = a
             else:
@@ -228,15 +234,25 @@ def _kernels():
         if wp.abs(total - f64(TWO_PI)) >= f64(1.0e-9):
             good = 0
         ok[t] = good
-        for k in range(n):
-            i = (m + d * ((k + k0) % n)) % n
-            o_pts[t, k, 0] = pts[t, i, 0]
-            o_pts[t, k, 1] = pts[t, i, 1]
-            o_nrm[t, k, 0] = nrm[t, i, 0]
-            o_nrm[t, k, 1] = nrm[t, i, 1]
-            o_kap[t, k] = kap[t, i]
-            o_phi[t, k] = phi[t, i]
-            o_key[t, k] = pmod(wp.atan2(pts[t, i, 1] + r * nrm[t, i, 1], pts[t, i, 0] + r * nrm[t, i, 0]))
+        order[t, 0] = m
+        order[t, 1] = d
+        order[t, 2] = k0
+
+    @wp.kernel
+    def permuted(n: int, order: wp.array2d(dtype=wp.int32), pts: wp.array3d(dtype=f64), nrm: wp.array3d(dtype=f64),
+                 kap: wp.array2d(dtype=f64), ang: wp.array2d(dtype=f64), phi: wp.array2d(dtype=f64),
+                 o_pts: wp.array3d(dtype=f64), o_nrm: wp.array3d(dtype=f64), o_kap: wp.array2d(dtype=f64),
+                 o_key: wp.array2d(dtype=f64), o_phi: wp.array2d(dtype=f64)):
+        # the table in key order (keyed's order: sample k of the output is sample i of the resampled profile)
+        t, k = wp.tid()
+        i = (order[t, 0] + order[t, 1] * ((k + order[t, 2]) % n)) % n
+        o_pts[t, k, 0] = pts[t, i, 0]
+        o_pts[t, k, 1] = pts[t, i, 1]
+        o_nrm[t, k, 0] = nrm[t, i, 0]
+        o_nrm[t, k, 1] = nrm[t, i, 1]
+        o_kap[t, k] = kap[t, i]
+        o_phi[t, k] = phi[t, i]
+        o_key[t, k] = pmod(ang[t, i])
 
     @wp.kernel
     def window_offsets(n: int, n_dist: int, rp: wp.array(dtype=f64), dist: wp.array(dtype=f64),
@@ -264,7 +280,7 @@ def _kernels():
         # one atomic per sample (its probes' largest offset) instead of one per probe: the table's maximum
         wp.atomic_max(off, t, worst)
 
-    return dense_lengths, arc_lengths, resampled, keyed, window_offsets
+    return dense_lengths, arc_lengths, resampled, probe_angles, keyed, permuted, window_offsets
 
 
 def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5, as_numpy=True,
@@ -282,7 +298,7 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     timing: None, or a dict that receives the wall time [s] of each stage added to its entry ("upload",
     "dense_lengths", "arc_lengths", "resampled", "keyed", "window_offsets", "read": the device synchronized
     after each, so that each entry is its stage's own time; the tables are the same)."""
-    dense_lengths, arc_lengths, resampled, keyed, window_offsets = _kernels()
+    dense_lengths, arc_lengths, resampled, probe_angles, keyed, permuted, window_offsets = _kernels()
     clock = [time.perf_counter()]
 
     def stage(name):
@@ -317,7 +333,12 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     out = [wp.empty((T, n, 2), dtype=wp.float64, device=d), wp.empty((T, n, 2), dtype=wp.float64, device=d)] + \
         [wp.empty((T, n), dtype=wp.float64, device=d) for _ in range(3)]
     ok = wp.zeros(T, dtype=wp.int32, device=d)
-    wp.launch(keyed, dim=T, inputs=[n, rp_d] + raw + out + [ok], device=d)
+    ang = wp.empty((T, n), dtype=wp.float64, device=d)
+    order = wp.empty((T, 3), dtype=wp.int32, device=d)
+    pts_r, nrm_r, kap_r, polar_r, phi_r = raw
+    wp.launch(probe_angles, dim=(T, n), inputs=[rp_d, pts_r, nrm_r, ang], device=d)
+    wp.launch(keyed, dim=T, inputs=[n, polar_r, ang, order, ok], device=d)
+    wp.launch(permuted, dim=(T, n), inputs=[n, order, pts_r, nrm_r, kap_r, ang, phi_r] + out, device=d)
     stage("keyed")
     off = wp.zeros(T, dtype=wp.int32, device=d)
     wp.launch(window_offsets, dim=(T, n), inputs=[n, 9, rp_d, dist, out[0], out[1], out[3], off], device=d)
