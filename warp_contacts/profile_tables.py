@@ -283,30 +283,58 @@ def _kernels():
     return dense_lengths, arc_lengths, resampled, probe_angles, keyed, permuted, window_offsets
 
 
-def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5, as_numpy=True,
-                   timing=None):
-    """Profile tables of T profiles on Warp ``device`` (module docstring).
+STAGES = ("upload", "dense_lengths", "arc_lengths", "resampled", "keyed", "window_offsets")
+"""The stages of :func:`launch_profile_tables` whose times ``timing`` receives (and "read":
+:meth:`PendingTables.finish`)."""
 
-    params (T, 5): per profile R (pin-circle radius plus offset modification) [m], K1 [-], z_b
-    (float), r_c (generating radius) [m], rotation [rad]; n_pins (T,) z_b; rp (T,) the pin radius of
-    the key and window [m]; n_samples, n_dense (the host's 16 n_samples): counts; band: the window's
-    search band (fraction of r_p). Returns (points (T, n, 2), normals (T, n, 2), curvature (T, n),
-    key (T, n), spacing (T,), phi (T, n), window (T,), ok (T,) bool), the five table columns as NumPy
-    arrays (``as_numpy``) or as the Warp device arrays (left on the device), the rest NumPy: table t is
-    (points[t], normals[t], curvature[t], key[t], spacing[t], phi[t]) of
-    ``pin_curve_table(profile.table(n_samples), rp)`` and its ``auto_window`` where ok[t].
-    timing: None, or a dict that receives the wall time [s] of each stage added to its entry ("upload",
-    "dense_lengths", "arc_lengths", "resampled", "keyed", "window_offsets", "read": the device synchronized
-    after each, so that each entry is its stage's own time; the tables are the same)."""
+
+class PendingTables:
+    """The profile tables of one launch (:func:`launch_profile_tables`): ``columns`` (points (T, n, 2),
+    normals (T, n, 2), curvature (T, n), key (T, n), phi (T, n)) are Warp arrays on the device, written by
+    kernels that may still run; :meth:`finish` waits for them and reads the few host numbers (spacing,
+    window, ok) once."""
+
+    def __init__(self, columns, host_arrays, n, margin, device, timing, events):
+        self.columns, self._host_arrays, self._n, self._margin = tuple(columns), host_arrays, n, margin
+        self._device, self._timing, self._events, self._done = device, timing, events, None
+
+    def finish(self):
+        """(spacing (T,) [m], window (T,) [samples], ok (T,) bool) as NumPy (the device waited for once)."""
+        if self._done is None:
+            t0 = time.perf_counter()
+            total, off, ok = (a.numpy() for a in self._host_arrays)   # (not the arc-length table: ~1 GB a launch)
+            self._done = (total / self._n, np.ceil(self._margin * off).astype(int) + 2, ok == 1)
+            if self._timing is not None:
+                if self._events:                # CUDA: each stage's time from its events, read now (no waits before)
+                    for name, (a, b) in zip(STAGES, zip(self._events[:-1], self._events[1:])):
+                        self._timing[name] = self._timing.get(name, 0.0) + 1e-3 * wp.get_event_elapsed_time(a, b)
+                self._timing["read"] = self._timing.get("read", 0.0) + time.perf_counter() - t0
+            self._host_arrays = self._events = None
+        return self._done
+
+
+def launch_profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5, timing=None):
+    """Launch the kernels of :func:`profile_tables` on Warp ``device`` without waiting for them: a
+    :class:`PendingTables` (the caller's host work runs while the device computes; its ``finish`` waits).
+    timing: None, or a dict that receives each stage's time [s] added to its entry (:data:`STAGES`: on a
+    CUDA device from events recorded between the stages and read at ``finish``, nothing waited for before;
+    on the cpu, whose launches run as they are made, the wall time of each; "read": ``finish``'s wait and
+    read-back)."""
     dense_lengths, arc_lengths, resampled, probe_angles, keyed, permuted, window_offsets = _kernels()
-    clock = [time.perf_counter()]
+    d = device
+    cuda = timing is not None and not wp.get_device(d).is_cpu
+    events, clock = [], [time.perf_counter()]
 
     def stage(name):
-        if timing is not None:
-            wp.synchronize_device(device)
+        if timing is None:
+            return
+        if cuda:
+            events.append(wp.get_stream(d).record_event(wp.Event(d, enable_timing=True)))
+        elif name is not None:
             now = time.perf_counter()
             timing[name] = timing.get(name, 0.0) + now - clock[0]
             clock[0] = now
+    stage(None)
     params = np.asarray(params, np.float64)
     T, n, nd = len(params), int(n_samples), int(n_dense)
     rot = params[:, 4]
@@ -314,7 +342,6 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     prm[:, :4] = params[:, :4]
     prm[:, 4], prm[:, 5], prm[:, 6] = np.cos(rot), np.sin(rot), (rot != 0.0)
     step = (TWO_PI - 0.0) / nd                      # np.linspace(0, 2 pi, nd, endpoint=False)'s step
-    d = device
     prm_d = wp.array(prm, dtype=wp.float64, device=d)
     nz_d = wp.array(np.asarray(n_pins, np.int32), dtype=wp.int32, device=d)
     rp_d = wp.array(np.asarray(rp, np.float64), dtype=wp.float64, device=d)
@@ -343,12 +370,26 @@ def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", m
     off = wp.zeros(T, dtype=wp.int32, device=d)
     wp.launch(window_offsets, dim=(T, n), inputs=[n, 9, rp_d, dist, out[0], out[1], out[3], off], device=d)
     stage("window_offsets")
-    total = total_d.numpy()                         # (not the whole arc-length table back: ~1 GB a launch)
-    pts, nrm, kap, key, phi = (a.numpy() for a in out) if as_numpy else out
-    window = np.ceil(margin * off.numpy()).astype(int) + 2
-    ok = ok.numpy() == 1
-    stage("read")
-    return pts, nrm, kap, key, total / n, phi, window, ok
+    return PendingTables(out, (total_d, off, ok), n, margin, d, timing, events)
 
 
-__all__ = ["profile_tables"]
+def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5, as_numpy=True,
+                   timing=None):
+    """Profile tables of T profiles on Warp ``device`` (module docstring).
+
+    params (T, 5): per profile R (pin-circle radius plus offset modification) [m], K1 [-], z_b
+    (float), r_c (generating radius) [m], rotation [rad]; n_pins (T,) z_b; rp (T,) the pin radius of
+    the key and window [m]; n_samples, n_dense (the host's 16 n_samples): counts; band: the window's
+    search band (fraction of r_p). Returns (points (T, n, 2), normals (T, n, 2), curvature (T, n),
+    key (T, n), spacing (T,), phi (T, n), window (T,), ok (T,) bool), the five table columns as NumPy
+    arrays (``as_numpy``) or as the Warp device arrays (left on the device), the rest NumPy: table t is
+    (points[t], normals[t], curvature[t], key[t], spacing[t], phi[t]) of
+    ``pin_curve_table(profile.table(n_samples), rp)`` and its ``auto_window`` where ok[t].
+    timing: see :func:`launch_profile_tables` (this function waits for the launch)."""
+    pending = launch_profile_tables(params, n_pins, rp, n_samples, n_dense, band, device, margin, timing)
+    h, window, ok = pending.finish()
+    pts, nrm, kap, key, phi = (a.numpy() for a in pending.columns) if as_numpy else pending.columns
+    return pts, nrm, kap, key, h, phi, window, ok
+
+
+__all__ = ["PendingTables", "STAGES", "launch_profile_tables", "profile_tables"]

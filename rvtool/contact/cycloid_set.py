@@ -289,8 +289,20 @@ class ProfileTable:
 
     @property
     def computed(self):
-        """Whether this object holds its table (computed or provided), i.e. reading it costs nothing."""
+        """Whether this object holds its table (computed or provided, or being computed on a device:
+        :func:`compute_profile_tables` ``wait=False``), i.e. it is not to be computed again."""
         return self._entry is not None or self._arrays is not None or self._device is not None
+
+    def _settled(self):
+        """This table's device row once its launch finished: a table launched without waiting
+        (:func:`compute_profile_tables` ``wait=False``) reads its batch's host numbers at its first use
+        (the device waited for there, once per batch); one that failed the device's checks is then left
+        to the host (computed where read)."""
+        dev = self._device
+        if dev is not None and dev[2] is None:
+            h, window, ok = dev[0].finish()
+            self._device = (dev[0], dev[1], int(window[dev[1]]), float(h[dev[1]])) if ok[dev[1]] else None
+        return self._device
 
     def provide(self, table, window):
         """Give this table its arrays ``table`` (points, normals, curvature, key, spacing, phi: as
@@ -299,19 +311,21 @@ class ProfileTable:
         if not self.computed:
             self._arrays = (tuple(table), int(window))
 
-    def provide_device(self, batch, row, window, spacing):
+    def provide_device(self, batch, row, window=None, spacing=None):
         """Give this table its columns as row ``row`` of a batch computed on a Warp device
-        (:func:`compute_profile_tables`): the device's kernels copy them there
-        (:meth:`device_column`); the host arrays are read back only where the host reads them."""
+        (:func:`compute_profile_tables`): the device's kernels read them there (:meth:`device_column`);
+        the host arrays are read back only where the host reads them. window, spacing: None while the
+        batch's launch runs (read from it at this table's first use)."""
         if not self.computed:
-            self._device = (batch, int(row), int(window), float(spacing))
+            self._device = (batch, int(row), None if window is None else int(window),
+                            None if spacing is None else float(spacing))
 
     @property
     def read_back(self):
         """Whether this table's arrays were computed on a Warp device and copied to the host since (a
         host reader asked for them: :attr:`entry`); False for a device table read in place only
         (:meth:`device_column`) and for a table computed or provided on the host."""
-        return self._device is not None and self._device[0].read_back
+        return self._settled() is not None and self._device[0].read_back
 
     @property
     def n_samples(self):
@@ -321,14 +335,14 @@ class ProfileTable:
     @property
     def spacing(self):
         """The table's sample spacing [m] (without reading a device table back)."""
-        if self._entry is None and self._arrays is None and self._device is not None:
+        if self._entry is None and self._arrays is None and self._settled() is not None:
             return self._device[3]
         return self.entry[0][4]
 
     def device_column(self, i, device):
         """(device array (T, n[, 2]), row) holding column ``i`` (0 points, 1 normals, 2 curvature, 3 key,
         5 phi) of this table on Warp ``device``, or None (not computed there)."""
-        if self._device is None or i not in _DEVICE_COLUMN:
+        if self._settled() is None or i not in _DEVICE_COLUMN:
             return None
         return self._device[0].columns[_DEVICE_COLUMN[i]], self._device[1]
 
@@ -336,7 +350,7 @@ class ProfileTable:
     def entry(self):
         """(table, analytic parameters or None, search window)."""
         if self._entry is None:
-            if self._arrays is None and self._device is not None:
+            if self._arrays is None and self._settled() is not None:
                 batch, t, window, h = self._device
                 pts, nrm, kap, key, phi = batch.host()
                 self._arrays = ((pts[t], nrm[t], kap[t], key[t], h, phi[t]), window)
@@ -350,7 +364,7 @@ class ProfileTable:
 
     @property
     def window(self):
-        if self._entry is None and self._arrays is None and self._device is not None:
+        if self._entry is None and self._arrays is None and self._settled() is not None:
             return self._device[2]
         return self.entry[2]
 
@@ -400,13 +414,18 @@ _DEVICE_COLUMN = {0: 0, 1: 1, 2: 2, 3: 3, 5: 4}
 
 
 class _DeviceTables:
-    """The columns (points, normals, curvature, key, phi) of a batch of profile tables on a Warp device,
-    read back (once, read-only) only where the host reads a table of it."""
+    """The columns (points, normals, curvature, key, phi) of a batch of profile tables on a Warp device
+    (:class:`warp_contacts.profile_tables.PendingTables`), read back (once, read-only) only where the host
+    reads a table of it."""
 
-    __slots__ = ("columns", "_host")
+    __slots__ = ("columns", "_host", "_pending")
 
-    def __init__(self, columns):
-        self.columns, self._host = tuple(columns), None
+    def __init__(self, pending):
+        self.columns, self._host, self._pending = tuple(pending.columns), None, pending
+
+    def finish(self):
+        """(spacing, window, ok) per row, the launch waited for once (PendingTables.finish)."""
+        return self._pending.finish()
 
     @property
     def read_back(self):
@@ -428,7 +447,7 @@ bytes per sample and table, ~150 MB for 256 RD-40 tables; on a GPU the serial ar
 takes as long for 2,048 tables as for 256, so fewer, larger launches)."""
 
 
-def compute_profile_tables(tables, device="cpu", group=None, timing=None):
+def compute_profile_tables(tables, device="cpu", group=None, timing=None, wait=True):
     """Compute the deferred :class:`ProfileTable` objects among ``tables`` (:func:`shared_profile_tables`
     ``defer``) on Warp ``device``, each distinct key once, ``group`` tables per launch (None:
     :data:`DEVICE_TABLE_GROUP` of the device kind)
@@ -439,9 +458,13 @@ def compute_profile_tables(tables, device="cpu", group=None, timing=None):
     table whose polar angle or key is not monotone (checked on the device), are left to the host (computed where first read). The columns stay on the
     device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there copies them, nothing is read
     back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
-    computed on the device. timing: None or a dict receiving the stages' wall times [s] (the ``timing`` of
-    :func:`warp_contacts.profile_tables.profile_tables`, summed over the launches)."""
-    from warp_contacts.profile_tables import profile_tables
+    computed on the device. timing: None or a dict receiving the stages' times [s] (the ``timing`` of
+    :func:`warp_contacts.profile_tables.launch_profile_tables`, summed over the launches). wait: False
+    launches the kernels and returns at once (the count is then of the tables launched): each table reads
+    its batch's host numbers (window, spacing, whether it passed the device's checks) at its first use,
+    where the device is waited for, so that host work between the call and that use runs while the device
+    computes (:class:`rvtool.solver.device_rows.DeviceRowNewton`)."""
+    from warp_contacts.profile_tables import launch_profile_tables
     todo = {}
     for t in tables:
         if isinstance(t, ProfileTable) and not t.computed:
@@ -459,10 +482,16 @@ def compute_profile_tables(tables, device="cpu", group=None, timing=None):
             chunk = keys[g:g + int(group)]
             profs = [k[0] for k in chunk]
             params = [(p.R, p.K1, float(p.n_pins), p.pin_radius + p.equidistant_mod, p.rotation_mod) for p in profs]
-            pts, nrm, kap, key, h, phi, window, ok = profile_tables(
-                params, [p.n_pins for p in profs], [p.pin_radius for p in profs], n, 16 * n, band, device=device,
-                as_numpy=False, timing=timing)
-            batch = _DeviceTables((pts, nrm, kap, key, phi))      # left on the device (CycloidPinKernel copies)
+            pending = launch_profile_tables(params, [p.n_pins for p in profs], [p.pin_radius for p in profs], n,
+                                            16 * n, band, device=device, timing=timing)
+            batch = _DeviceTables(pending)      # left on the device (the cycloid pin kernel reads it there)
+            if not wait:
+                for i, k in enumerate(chunk):
+                    for t in todo[k]:
+                        t.provide_device(batch, i)
+                done += len(chunk)
+                continue
+            h, window, ok = batch.finish()
             for i, k in enumerate(chunk):
                 if ok[i]:
                     for t in todo[k]:

@@ -251,18 +251,19 @@ class _Blocks:
     dQdq: np.ndarray
 
 
-def provide_profile_tables(models, device, timing=None):
+def provide_profile_tables(models, device, timing=None, wait=True):
     """Compute the deferred cycloid profile tables of ``models`` (snapshots built with
     ``defer_tables``, :func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`) on Warp
     ``device``, each distinct table once (:func:`rvtool.contact.cycloid_set.compute_profile_tables`).
     :class:`DeviceRowNewton` does this on a GPU (inside its ``setup_s``); on the cpu a deferred table is
     computed by the host where it is first read (the Warp kernels' serial parts are slower there than
     NumPy). Returns the number of tables computed. timing: None or a dict receiving the table kernels' stage
-    times [s] (:func:`~rvtool.contact.cycloid_set.compute_profile_tables`)."""
+    times [s]; wait: False returns once the kernels are launched (the tables settle at their first use;
+    :func:`~rvtool.contact.cycloid_set.compute_profile_tables`)."""
     from ..contact.cycloid_set import ProfileTable, compute_profile_tables
     tables = [t for m in models for e in m.contact_elements()
               for t in (getattr(e.evaluator, "tables", None) or ()) if isinstance(t, ProfileTable) and not t.computed]
-    return compute_profile_tables(tables, device, timing=timing) if tables else 0
+    return compute_profile_tables(tables, device, timing=timing, wait=wait) if tables else 0
 
 
 class DeviceRowNewton:
@@ -307,12 +308,14 @@ class DeviceRowNewton:
         if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
             raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer)")
         t0 = time.perf_counter()
-        #: where the setup's time went [s]: "tables_s" (the deferred profile tables computed on the device, with
-        #: their kernels' stages in "table_stages"), "families_s" (the families copied), "rest_s"
+        #: where the setup's time went [s]: "tables_s" (launching the deferred profile tables' kernels on the
+        #: device; "table_stages": each kernel stage's device time and, in "read", the wait for them where the
+        #: copies first read a table), "families_s" (the families copied, that wait included), "rest_s"
         self.setup_parts = {"tables_s": 0.0, "table_stages": {}, "families_s": 0.0, "rest_s": 0.0}
         if self.models is not None and not str(device).startswith("cpu"):
-            # variant profile tables left to this process (deferred by the build helpers): on the GPU, all at once
-            provide_profile_tables(self.models, device, timing=self.setup_parts["table_stages"])
+            # variant profile tables left to this process (deferred by the build helpers): on the GPU, all at once,
+            # launched without waiting: the families without tables are copied while the device computes them
+            provide_profile_tables(self.models, device, timing=self.setup_parts["table_stages"], wait=False)
         self.setup_parts["tables_s"] = time.perf_counter() - t0
         self.model, self.B, self.device = model, int(copies), device
         self.settings = settings or DeviceNewtonSettings()
