@@ -294,9 +294,10 @@ class PendingTables:
     kernels that may still run; :meth:`finish` waits for them and reads the few host numbers (spacing,
     window, ok) once."""
 
-    def __init__(self, columns, host_arrays, n, margin, device, timing, events):
+    def __init__(self, columns, host_arrays, n, margin, device, timing, events, scratch):
         self.columns, self._host_arrays, self._n, self._margin = tuple(columns), host_arrays, n, margin
         self._device, self._timing, self._events, self._done = device, timing, events, None
+        self._scratch = scratch         # the kernels' inputs and intermediates, alive until they have run
 
     def finish(self):
         """(spacing (T,) [m], window (T,) [samples], ok (T,) bool) as NumPy (the device waited for once)."""
@@ -309,7 +310,7 @@ class PendingTables:
                     for name, (a, b) in zip(STAGES, zip(self._events[:-1], self._events[1:])):
                         self._timing[name] = self._timing.get(name, 0.0) + 1e-3 * wp.get_event_elapsed_time(a, b)
                 self._timing["read"] = self._timing.get("read", 0.0) + time.perf_counter() - t0
-            self._host_arrays = self._events = None
+            self._host_arrays = self._events = self._scratch = None
         return self._done
 
 
@@ -370,7 +371,8 @@ def launch_profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="
     off = wp.zeros(T, dtype=wp.int32, device=d)
     wp.launch(window_offsets, dim=(T, n), inputs=[n, 9, rp_d, dist, out[0], out[1], out[3], off], device=d)
     stage("window_offsets")
-    return PendingTables(out, (total_d, off, ok), n, margin, d, timing, events)
+    return PendingTables(out, (total_d, off, ok), n, margin, d, timing, events,
+                         (prm_d, nz_d, rp_d, s, dist, raw, ang, order))
 
 
 def profile_tables(params, n_pins, rp, n_samples, n_dense, band, device="cpu", margin=1.5, as_numpy=True,
