@@ -118,3 +118,26 @@ def test_iso_grades_of_the_template():
         iso1328_single_pitch(0.004, 0.0004, "sun_gear")
     with pytest.raises(RvtoolInputError, match=r"^pins\.pin_radius: nominal size 600 mm is outside"):
         iso286_it4(0.6, "pins.pin_radius")
+
+
+def test_tolerances_for_a_changed_design_follow_its_sizes(tmp_path, monkeypatch, capsys):
+    """`rvtool new --tolerances-for DESIGN` writes the tolerance file of an edited design from its own sizes:
+    RV pins made 10.02 mm in diameter move into ISO 286-1's "over 10 up to 18 mm" row (IT4 5 um, the
+    template's 7 mm pins: 4 um), so the h4 radius error runs down to -2.5 um; it overwrites nothing and
+    takes no --topology."""
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["new", "--topology", "rv2", "--name", "mine"]) == 0
+    assert 'pin_radius_error = { dist = "uniform", low = -2e-06, high = 0.0 }' in (tmp_path / "mine_tolerances.toml").read_text()
+    (tmp_path / "mine_tolerances.toml").unlink()
+    p = tmp_path / "mine.toml"
+    p.write_text(re.sub(r"(?m)^pin_radius = 0\.0035", "pin_radius = 0.00501", p.read_text(), count=1))
+    capsys.readouterr()
+    assert cli.main(["new", "--tolerances-for", "mine.toml"]) == 0
+    text = (tmp_path / "mine_tolerances.toml").read_text()
+    assert 'pin_radius_error = { dist = "uniform", low = -2.5e-06, high = 0.0 }' in text
+    assert "IT4 at the pin diameter 10.02 mm = 5 um" in " ".join(ln.lstrip("# ") for ln in text.splitlines())
+    assert cli.main(["new", "--tolerances-for", "mine.toml"]) == cli.EXIT_USAGE
+    assert "mine_tolerances.toml exists" in capsys.readouterr().err
+    assert cli.main(["new", "--tolerances-for", "mine.toml", "--topology", "rv2"]) == cli.EXIT_USAGE
+    assert cli.main(["new"]) == cli.EXIT_USAGE
+    assert "needs --topology" in capsys.readouterr().err

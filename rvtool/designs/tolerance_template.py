@@ -17,7 +17,7 @@ Size-dependent grades are computed from the design at writing time:
   5 to 10 um to 0.5 um, above 10 um to 1 um), within its scope 5 <= d <= 15000 mm, 0.5 <= m_n <= 70 mm.
 
 A design whose pin diameter or gears change should have its tolerance file written anew
-(:func:`tolerance_template` of the changed design).
+(``rvtool new --tolerances-for NAME.toml``: :func:`tolerance_template` of the changed design).
 """
 import math
 
@@ -72,7 +72,8 @@ BLANCHE_YANG = ("machining tolerances of cycloid drives are studied at 5-20 um (
                 "with machining tolerances', ASME J. Mech. Trans. Autom. Des. 111, as cited in rd40_tolerances.toml); "
                 "the tight end for a ground precision drive")
 CLEARANCE_RANGE = ("no fit of reducer needle sets is published; the shipped designs take 0-8 um "
-                   "(rv80e_assumed.toml: [0, 3] um from Nabtesco's 0.1-0.3 arcmin mechanical backlash; rd40: [3, 8] um)")
+                   "(rv80e_assumed.toml: [0, 3] um from Nabtesco's 0.1-0.3 arcmin mechanical backlash; "
+                   "rd40: [3, 8] um)")
 
 
 def _normal_pm(key, tol, why):
@@ -169,7 +170,8 @@ def tolerance_template(design, design_file=None):
     of = f" ({design_file})" if design_file else ""
     head = [f"Manufacturing tolerances of {design.name}{of} for the tolerance Monte Carlo of `rvtool analyze` "
             f"(protocol monte_carlo; format: {fmt}). Written by `rvtool new` from the design's own sizes: if "
-            "the pin diameter or a gear changes, write the file anew. Each key's comment says where its grade "
+            "the pin diameter or a gear changes, write the file anew (rvtool new --tolerances-for DESIGN.toml). "
+            "Each key's comment says where its grade "
             "comes from: 'source:' a standard's table or formula at this design's sizes, 'assumed:' a chosen "
             "value and the range it was chosen from. SI units (m) unless said. A normal's std is one third of "
             "the +- tolerance (3-sigma process capability). Distributions: normal (mean, std), uniform (low, high), "
