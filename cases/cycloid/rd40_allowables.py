@@ -64,7 +64,8 @@ def main(argv=None):
         "lost_motion_arcmin": lm["value"], "lost_motion_unit": lm["unit"], "lost_motion_definition": lm["description"],
         "hysteresis_loss_arcmin": hy["value"], "hysteresis_loss_unit": hy["unit"],
         "hysteresis_loss_definition": hy["description"],
-        "allowables": {"file": f"rvtool/designs/{DESIGN}_allowables.toml", "max_lost_motion_arcmin": allow.max_lost_motion,
+        "allowables": {"file": f"rvtool/designs/{DESIGN}_allowables.toml",
+                       "max_lost_motion_arcmin": allow.max_lost_motion,
                        "max_hysteresis_loss_arcmin": allow.max_hysteresis_loss,
                        "source": "declared in the file ('catalogue-class precision reducers'), no catalogue edition or "
                                  "page; the same 1 arcmin as the Nabtesco RV-E figures of rv40e_catalogue.toml "
@@ -75,7 +76,8 @@ def main(argv=None):
         "budget": budget,
         "free_play_closed_form_arcmin": free_play,
         "free_play_alone_exceeds_lost_motion_allowable": free_play > allow.max_lost_motion,
-        # the factor all clearances would have to shrink by for the lost motion to meet the allowable (elastic part kept)
+        # the factor all clearances would have to shrink by for the lost motion to meet the allowable
+        # (the elastic part kept)
         "clearance_factor_to_meet_lost_motion_allowable": (allow.max_lost_motion - budget["budget_arcmin"]["elastic"])
         / (budget["total_arcmin"] - budget["budget_arcmin"]["elastic"]),
         "wall_s": time.perf_counter() - t0,

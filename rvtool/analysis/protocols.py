@@ -677,9 +677,10 @@ def run_monte_carlo(ctx):
     from ..variants.montecarlo import MonteCarloSettings
     from ..variants.montecarlo import run_monte_carlo as mc
     if ctx.tolerances is None:
-        raise Unsupported("no tolerance file: pass --tolerances FILE or put NAME_tolerances.toml beside the design "
-                          "file NAME.toml ('rvtool new' writes one, 'rvtool new --tolerances-for NAME.toml' for a design "
-                          "file of one's own; a shipped design uses its <name>_tolerances.toml)")
+        raise Unsupported("no tolerance file: pass --tolerances FILE or put NAME_tolerances.toml beside the "
+                          "design file NAME.toml ('rvtool new' writes one, 'rvtool new --tolerances-for "
+                          "NAME.toml' for a design file of one's own; a shipped design uses its "
+                          "<name>_tolerances.toml)")
     from ..assembly.spec import CycloidDesign
     out = Outcome()
     sampler = _design_variant_sampler(ctx.design)
