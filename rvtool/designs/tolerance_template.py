@@ -73,7 +73,8 @@ BLANCHE_YANG = ("machining tolerances of cycloid drives are studied at 5-20 um (
                 "the tight end for a ground precision drive")
 CLEARANCE_RANGE = ("no fit of reducer needle sets is published; the shipped designs take 0-8 um "
                    "(rv80e_assumed.toml: [0, 3] um from Nabtesco's 0.1-0.3 arcmin mechanical backlash; "
-                   "rd40: [3, 8] um)")
+                   "rd40: [3, 8] um); ISO 492 tolerance classes are for bearing rings, and these needle sets run "
+                   "on the journal and in the wheel bore, so their clearance is a fit, not an ISO 492 class")
 
 
 def _normal_pm(key, tol, why):
