@@ -456,8 +456,8 @@ def compute_profile_tables(tables, device="cpu", group=None, timing=None, wait=T
     and cosine on a GPU), and give them to every object of that key (:meth:`ProfileTable.provide`).
     Profiles with a tabulated radial modification or lobe rotations (the device kernels compute neither), and a
     table whose polar angle or key is not monotone (checked on the device), are left to the host (computed where first read). The columns stay on the
-    device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there copies them, nothing is read
-    back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
+    device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there reads them in place, nothing is
+    read back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
     computed on the device. timing: None or a dict receiving the stages' times [s] (the ``timing`` of
     :func:`warp_contacts.profile_tables.launch_profile_tables`, summed over the launches). wait: False
     launches the kernels and returns at once (the count is then of the tables launched): each table reads
