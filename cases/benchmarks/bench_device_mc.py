@@ -155,7 +155,11 @@ def warmed_pool(workers, warm, jobs):
     ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker,
                              initargs=(ctx.Barrier(workers),))
     t = time.perf_counter()
-    pids = list(ex.map(functools.partial(_warm_task, warm), jobs))
+    try:
+        pids = list(ex.map(functools.partial(_warm_task, warm), jobs))
+    except BaseException:
+        ex.shutdown(wait=False, cancel_futures=True)
+        raise
     if len(set(pids)) != workers:
         import sys
         print(f"bench_device_mc: the pool's warm-up reached {len(set(pids))} of {workers} workers (barrier timed "
