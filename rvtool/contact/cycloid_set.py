@@ -653,7 +653,7 @@ class CycloidPinSet(PairFamilySet):
                 if key not in table_of:
                     table_of[key] = len(self.tables)
                     self.tables.append(sc.tables[t])
-                    self.table_windows.append(sc.table_window(t))
+                    self.table_windows.append(sc.table_windows[t])     # None: a deferred table's, read below
                     if self.analytic is not None:
                         self.analytic.append(sc.analytic[t])
                 local[t] = table_of[key]
@@ -669,7 +669,9 @@ class CycloidPinSet(PairFamilySet):
         # the built rows (slow-state gap offsets and friction of a built set are not copied, as a set built from
         # the meshes)
         built = [getattr(sc, "_built_fparams", sc.fparams) for sc in sets]
-        self._finish(max(self.table_windows), np.concatenate(built), np.concatenate(ip), ids,
+        # the window read after the loop over the sets: a table still computed on the device is waited for
+        # only here (None: the window property reads every table's)
+        self._finish(None, np.concatenate(built), np.concatenate(ip), ids,
                      np.concatenate(mesh_of), np.concatenate([sc.pin_of for sc in sets]),
                      np.zeros((sum(sc.n_contacts for sc in sets), anchor_ref.N_ANCHOR)), B * nb, s.backend,
                      precision, device)
