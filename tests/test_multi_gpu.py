@@ -12,7 +12,8 @@ from rvtool import designs
 from rvtool.errors import RvtoolInputError
 from rvtool.variants.multi_device import (RvVariantProtocol, batch_task, chunk_schedule, cycloid_batch,
                                           device_cluster, device_slots, multi_device_monte_carlo, plan, rows_batch,
-                                          shutdown_helper_pools, split_indices, start_helper_pool, warm_up)
+                                          shutdown_helper_pools, split_indices, start_helper_pool, warm_helper_builds,
+                                          warm_up)
 from rvtool.variants.rv_tolerances import load_rv_tolerances
 from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants.variant import VariantProtocol
@@ -117,9 +118,12 @@ def test_rows_batch_is_the_bench_device_mc_path(rd40_case):
     from rvtool.variants.tolerances import sample_variant
     rd40, tol, p, _ = rd40_case
     try:
-        recs = rows_batch(rd40, tol, p, 2026, [3, 4], "cpu", 1, build_kw=RD_BUILD, solve_chunk=1)
+        # the helpers warmed as warm_up does: each of the two runs the build task on the nominal design
+        # exactly once (a barrier of the pool), not one of them twice
+        assert start_helper_pool(2) == 2 and warm_helper_builds(rd40, RD_BUILD, 2) == 2
+        recs = rows_batch(rd40, tol, p, 2026, [3, 4], "cpu", 2, build_kw=RD_BUILD, solve_chunk=1)
     finally:
-        shutdown_helper_pools()                   # the helper process this test started
+        shutdown_helper_pools()                   # the helper processes this test started
     models = [rvtool.build(sample_variant(tol, rd40, k, 2026).apply(rd40), **RD_BUILD) for k in (3, 4)]
     r = device_rows_variants(models, torque=rd40.rated_torque, input_angles=p.input_angles(rd40),
                              lost_motion_level=0.03 * rd40.rated_torque, device="cpu")

@@ -112,7 +112,8 @@ def judge(r):
     }
     if r["settings_echo"]["judge_speedup"]:
         checks["speedup"] = casekit.check(r["speedup"], TARGET_SPEEDUP, ">=",
-                                          why="issue 31: 2 GPUs >= 1.8x one GPU (8,192 variants), both at the one-GPU run's fastest schedule")
+                                          why="issue 31: 2 GPUs >= 1.8x one GPU (8,192 variants), both at the "
+                                              "one-GPU run's fastest schedule")
     return checks
 
 
@@ -169,7 +170,8 @@ def split(res, wall):
                 start[w] = float(r["first_device_start_s"])      # the worker's first task's
     top = max(busy.values())
     return {"wall_s": wall, "variants_per_s": len(res["records"]) / wall, "failed": res["failed"],
-            "busy_s": busy, "device_s": dev, "device_busy": {w: dev[w] / busy[w] if busy[w] > 0 else None for w in busy},
+            "busy_s": busy, "device_s": dev,
+            "device_busy": {w: dev[w] / busy[w] if busy[w] > 0 else None for w in busy},
             "build_wait_s": wait, "first_device_start_s": start, "dask_s": wall - top,
             "imbalance": top / float(np.mean(list(busy.values()))), "tasks": len(res["batches"]),
             **fallbacks(res["records"])}

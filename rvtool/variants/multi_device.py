@@ -172,12 +172,26 @@ def _is_cycloid(design):
 
 
 _POOLS = {}
+_HELPER_BARRIER = None
+"""In a helper process of :func:`helper_pool`: the barrier of all its pool's helpers (set by the pool's
+initializer), at which a warm-up task waits so that every helper runs exactly one."""
+WARM_TIMEOUT_S = 600.0
+"""The longest a helper's warm-up task waits at the barrier for the pool's other helpers [s] (spawn and
+imports of a whole pool on a loaded host)."""
+
+
+def _init_pool_helper(barrier):
+    """Initializer of a :func:`helper_pool` process: one BLAS/OpenMP thread, the pool's warm-up barrier."""
+    global _HELPER_BARRIER
+    from .montecarlo import init_helper
+    init_helper()
+    _HELPER_BARRIER = barrier
 
 
 def helper_pool(host_workers):
     """This process's pool of ``host_workers`` spawned processes (one BLAS thread each) for the
-    device path's host work (per-copy parameters, Exudyn fallbacks), started on first use and kept
-    for the process's later tasks; None for 0."""
+    device path's host work (the variants' builds; per-copy parameters, Exudyn fallbacks), started
+    on first use and kept for the process's later tasks; None for 0."""
     if not host_workers:
         return None
     if host_workers not in _POOLS:
@@ -186,50 +200,79 @@ def helper_pool(host_workers):
         import multiprocessing
 
         from .cluster import single_thread_env
-        from .montecarlo import init_helper
+        ctx = multiprocessing.get_context("spawn")
         with single_thread_env():
-            pool = cf.ProcessPoolExecutor(max_workers=int(host_workers), initializer=init_helper,
-                                          mp_context=multiprocessing.get_context("spawn"))
+            pool = cf.ProcessPoolExecutor(max_workers=int(host_workers), initializer=_init_pool_helper,
+                                          initargs=(ctx.Barrier(int(host_workers)),), mp_context=ctx)
         atexit.register(pool.shutdown, wait=False, cancel_futures=True)
         _POOLS[host_workers] = pool
     return _POOLS[host_workers]
+
+
+def _on_every_helper(pool, host_workers, fn, job):
+    """``fn(job)`` run exactly once in every helper of ``pool`` (each waits at the pool's barrier after
+    it, so that no helper takes a second one while another has not started: a pool warmed by mapping
+    one job per process can leave a slow-starting one cold, whose first timed task then pays the
+    warm-up); returns the helpers' count."""
+    pids = set(pool.map(_warm_task, [(fn, job)] * int(host_workers)))
+    if len(pids) != int(host_workers):
+        raise RuntimeError(f"the helper pool's warm-up reached {len(pids)} of {host_workers} helpers")
+    return len(pids)
+
+
+def _warm_task(task):
+    import os
+    fn, job = task
+    fn(job)
+    _HELPER_BARRIER.wait(WARM_TIMEOUT_S)
+    return os.getpid()
 
 
 def _import_device_path(_):
     """A helper's warm-up: the modules of the host work (building, Exudyn fallbacks) imported."""
     from . import device  # noqa: F401
     from ..assembly import build  # noqa: F401
-    import os
-    return os.getpid()
 
 
 def start_helper_pool(host_workers):
     """Start this process's :func:`helper_pool` and every helper in it (each imports the host
-    work's modules), so that a timed study does not pay for them; returns the helpers' count."""
+    work's modules, every helper once), so that a timed study does not pay for them; returns the
+    helpers' count."""
     pool = helper_pool(host_workers)
     if pool is None:
         return 0
-    return len(set(pool.map(_import_device_path, range(4 * int(host_workers)))))
+    return _on_every_helper(pool, host_workers, _import_device_path, None)
 
 
-def _nominal_build(job):
-    """A helper's warm-up build: the nominal design with the study's options (imports, memos)."""
-    import os
+def nominal_snapshot(job):
+    """A helper's warm-up: the task a timed study runs (:func:`variant_snapshot`) on the nominal
+    ``design`` of job (design, build_kw, defer_tables): a cycloid design's nominal snapshot, into which
+    this process writes its variants
+    (:func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`), its profile tables shared or
+    deferred as the study's; an RV design's snapshot on shared tables. Every module the builds use is
+    loaded and every memo filled (as ``bench_device_mc`` warms its build pool)."""
+    design, build_kw, defer_tables = job
+    if _is_cycloid(design):
+        from ..solver.variant_snapshots import cycloid_variant_snapshots
+        from .variant import Variant
+        return cycloid_variant_snapshots(design, [Variant()], dict(build_kw), defer_tables=bool(defer_tables))[0]
+    from ..solver.model_snapshot import build_snapshot
+    return build_snapshot(design, dict(build_kw), shared_tables=True)
 
-    from ..assembly import build
-    design, build_kw = job
-    build(design, **build_kw)
-    return os.getpid()
+
+def _nominal_snapshot_only(job):
+    nominal_snapshot(job)
 
 
-def warm_helper_builds(design, build_kw, host_workers):
-    """One nominal build of ``design`` per helper of this process's :func:`helper_pool` (as
-    ``bench_device_mc`` warms its build pool), so that a timed study's builds find their imports
-    and memos; returns the helpers that built (0 without helpers)."""
+def warm_helper_builds(design, build_kw, host_workers, defer_tables=False):
+    """Every helper of this process's :func:`helper_pool` runs the study's build task once on the
+    nominal ``design`` (:func:`nominal_snapshot`; ``defer_tables`` as the study's ``tables="device"``),
+    exactly once each, so that a timed study's builds find their imports and memos; returns the
+    helpers that built (0 without helpers)."""
     pool = helper_pool(host_workers)
     if pool is None:
         return 0
-    return len(set(pool.map(_nominal_build, [(design, dict(build_kw))] * int(host_workers))))
+    return _on_every_helper(pool, host_workers, _nominal_snapshot_only, (design, dict(build_kw), bool(defer_tables)))
 
 
 def shutdown_helper_pools():
@@ -472,7 +515,8 @@ def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1
     every worker once (imports, Warp kernel compilation and module loading on its device: with
     ``tables="device"`` the profile-table kernels too, with ``graph`` the captured loop), untimed by
     the study, on ``path`` with ``build_kw``, ``tables`` and ``graph`` (as the study; "rows": every
-    helper first builds the nominal design once, :func:`warm_helper_builds`); returns the wall time [s]."""
+    helper first runs the build task on the nominal design once, :func:`warm_helper_builds`); returns the wall
+    time [s]."""
     t0 = time.perf_counter()
     protocol = protocol or default_protocol(design)
     hw = default_host_workers(slots) if host_workers is None else host_workers
@@ -481,8 +525,8 @@ def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1
                                  pure=False) for s in slots])
     if path == "rows":                            # every helper builds the nominal design once
         kw = default_build_kw(design, protocol) if build_kw is None else build_kw
-        client.gather([client.submit(warm_helper_builds, design, kw, hw, workers=[addr[s.name]],
-                                     allow_other_workers=False, pure=False) for s in slots])
+        client.gather([client.submit(warm_helper_builds, design, kw, hw, tables == "device",
+                                     workers=[addr[s.name]], allow_other_workers=False, pure=False) for s in slots])
     run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed, hw, path=path,
                 build_kw=build_kw, **({"tables": tables, "graph": graph} if path == "rows" else {}))
     return time.perf_counter() - t0
@@ -531,8 +575,8 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
             "host_workers": hw, "path": path}
 
 
-__all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "batch_task", "chunk_schedule", "cycloid_batch",
+__all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "TABLES", "batch_task", "chunk_schedule", "cycloid_batch",
            "default_build_kw", "default_host_workers", "default_protocol", "device_chunk", "device_cluster",
-           "device_slots", "helper_pool", "multi_device_monte_carlo", "plan", "rows_batch", "run_batches",
-           "shutdown_helper_pools", "split_indices", "start_helper_pool", "TABLES", "variant_snapshot", "warm_helper_builds",
-           "warm_up", "worker_addresses"]
+           "device_slots", "helper_pool", "multi_device_monte_carlo", "nominal_snapshot", "plan", "rows_batch",
+           "run_batches", "shutdown_helper_pools", "split_indices", "start_helper_pool", "variant_snapshot",
+           "warm_helper_builds", "warm_up", "worker_addresses"]
