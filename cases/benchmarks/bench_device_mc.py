@@ -32,7 +32,7 @@ Paths, on the same variants:
   profile: rvtool.contact.cycloid_set.shared_profile_tables), that pool warmed as the reference
   pool (the build task on the nominal design in every worker, which builds its nominal snapshot;
   ``build_pool_warm_s``, not timed). --solve-chunk N solves N
-  copies at a time (rvtool.variants.multi_device.chunk_schedule, --first-chunk first, doubling)
+  copies at a time (rvtool.variants.device_pipeline.chunk_schedule, --first-chunk first, doubling)
   while the pool builds the next chunk (at most two chunks of builds queued); default one solve of
   all variants. Reported both ways: ``variants_per_s/device`` the device's time only (the chunks'
   device_rows_variants), ``variants_per_s/device_with_build`` the whole device Monte Carlo
@@ -285,54 +285,6 @@ def _snapshot_group(jobs, defer_tables=False):
     return variant_snapshots(jobs, defer_tables=defer_tables)
 
 
-def merge_chunks(parts, V):
-    """One result of the device path from its chunks' RowVariants ``parts`` (in variant order)."""
-    from rvtool.batched.device_rows_variants import RowVariants
-    cat = lambda nm: np.concatenate([getattr(p, nm) for p in parts])
-    split = {k: sum(p.split[k] for p in parts) for k in parts[0].split}
-    lm = [p.lost_motion_rad for p in parts]
-    stats = parts[0].stats if len(parts) == 1 else {
-        "variants": V, "points": parts[0].stats["points"], "te_order": parts[0].stats.get("te_order"),
-        "chunks": len(parts),
-        "sweeps": sum(p.stats["sweeps"] for p in parts),
-        "newton_iterations": sum(p.stats["newton_iterations"] for p in parts),
-        "device": parts[0].stats["device"], "device_sum": parts[0].stats["device_sum"],
-        "lost_motion": [p.stats["lost_motion"] for p in parts],
-        "setup_parts": [p.stats.get("setup_parts") for p in parts]}
-    return RowVariants(te=cat("te"), theta_out=cat("theta_out"), lost_motion_rad=None if lm[0] is None
-                       else np.concatenate(lm), status=sum((p.status for p in parts), []),
-                       error=sum((p.error for p in parts), []),
-                       exudyn_points=sum(p.exudyn_points for p in parts),
-                       exudyn_copies=sum(p.exudyn_copies for p in parts), split=split,
-                       te_s=sum(p.te_s for p in parts), lost_motion_s=sum(p.lost_motion_s for p in parts),
-                       wall_s=sum(p.wall_s for p in parts), stats=stats)
-
-
-def with_failed_builds(part, built, errors, n_points):
-    """The RowVariants of a chunk whose variants ``built`` (bool per variant) were built and solved in
-    ``part`` (None: none was), the others failed with their build ``errors`` (figures NaN)."""
-    from rvtool.batched.device_rows_variants import RowVariants
-    built = np.asarray(built, bool)
-    n = len(built)
-    te, th, lm = np.full((n, n_points), np.nan), np.full((n, n_points), np.nan), np.full(n, np.nan)
-    status, error = ["failed"] * n, [None] * n
-    for i, e in zip(np.flatnonzero(~built), errors):
-        error[i] = f"build: {e}"
-    if part is None:
-        zero = {"setup_s": 0.0, "kernels_s": 0.0, "scatter_s": 0.0, "step_s": 0.0, "fallback_s": 0.0, "rest_s": 0.0}
-        return RowVariants(te=te, theta_out=th, lost_motion_rad=lm, status=status, error=error, exudyn_points=0,
-                           exudyn_copies=0, split=zero, te_s=0.0, lost_motion_s=0.0, wall_s=0.0,
-                           stats={"points": n_points, "te_order": None, "sweeps": 0, "newton_iterations": 0,
-                                  "device": None, "device_sum": None, "lost_motion": {}})
-    idx = np.flatnonzero(built)
-    te[idx], th[idx], lm[idx] = part.te, part.theta_out, part.lost_motion_rad
-    for j, i in enumerate(idx):
-        status[i], error[i] = part.status[j], part.error[j]
-    return RowVariants(te=te, theta_out=th, lost_motion_rad=lm, status=status, error=error,
-                       exudyn_points=part.exudyn_points, exudyn_copies=part.exudyn_copies, split=part.split,
-                       te_s=part.te_s, lost_motion_s=part.lost_motion_s, wall_s=part.wall_s, stats=part.stats)
-
-
 def device_memory_mb(device):
     """The Warp memory pool's high-water mark on a CUDA ``device`` [MB] (None on the cpu or without a pool)."""
     import warp as wp
@@ -347,7 +299,7 @@ def device_memory_mb(device):
 def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=None, tables="helpers", graph=True):
     """The device path of variants 0..V-1: built in ``workers`` processes as snapshots (shared profile
     tables) and run on the device row Newton, ``solve_chunk`` copies per device solve (None: all V
-    in one solve, the run of record at 1,000; chunks: rvtool.variants.multi_device.chunk_schedule,
+    in one solve, the run of record at 1,000; chunks: rvtool.variants.device_pipeline.chunk_schedule,
     ``first_chunk`` first, doubling). The builds of the next chunk run while the device solves the
     current one (at most two chunks of builds queued: the snapshots of 100,000 RD-40 variants would
     not fit the host's memory at once), so ``wall_s`` is the whole device Monte Carlo, builds
@@ -360,7 +312,7 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     captured CUDA graph (rvtool.solver.device_rows; False: the host loop)."""
     from rvtool.solver.device_newton import DeviceNewtonSettings
     settings = DeviceNewtonSettings(graph=bool(graph))
-    from rvtool.variants.multi_device import chunk_schedule, paused_collector
+    from rvtool.variants.device_pipeline import device_variants_pipelined
     if name in RV_NAMES:
         design, tol, angles = _rv_setup(quick, name)
         kw = {}
@@ -372,8 +324,6 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
         angles = protocol.input_angles(design)
         torque = protocol.te_torque_fraction * design.rated_torque
         seed = RD_SEED
-    sizes = chunk_schedule(V, solve_chunk or V, V if solve_chunk is None else first_chunk)
-    starts = np.concatenate([[0], np.cumsum(sizes)])
     warm = [build(design, **kw)]
     if tables == "device" and name not in RV_NAMES:    # the profile-table kernels compiled before the timing too
         from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
@@ -382,47 +332,28 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
     device_rows_variants(warm, torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
                          device=device, settings=settings)
-    parts, waits, wait_cpu = [], [], []
     table = {"profile_tables": 0, "profile_table_mb": 0.0}
+
+    def largest_tables(models, part):             # bookkeeping of the report (after the solve: deferred tables
+        nonlocal table                            # are computed by then): not timed
+        stats = table_stats(models)
+        if stats["profile_table_mb"] >= table["profile_table_mb"]:
+            table = stats
+
     # warmed like the reference pool: the timed task on the nominal design in every worker (imports, the
     # nominal snapshot), not timed
     ex, warm_s = warmed_pool(workers, _warm_build, [(design, kw, tables == "device")] * workers)
-    # the collector paused while this process receives the snapshots and solves (paused_collector: its full
-    # passes over the growing heap cost about twice the unpickling)
-    with ex, paused_collector():
-
-        def submit(i):
-            ks = range(int(starts[i]), int(starts[i + 1]))
-            g = max(1, min(64, len(ks) // (4 * workers)))
-            jobs = [(design, tol, seed, k, kw) for k in ks]
-            task = functools.partial(_snapshot_group, defer_tables=tables == "device")
-            return [ex.submit(task, jobs[j:j + g]) for j in range(0, len(jobs), g)]
-
-        t0, aside = time.perf_counter(), 0.0
-        queued = {i: submit(i) for i in range(min(2, len(sizes)))}
-        for i in range(len(sizes)):
-            tw, cw = time.perf_counter(), time.process_time()
-            got = [x for f in queued.pop(i) for x in f.result()]
-            waits.append(time.perf_counter() - tw)
-            wait_cpu.append(time.process_time() - cw)      # this process (its result thread unpickles) meanwhile
-            if i + 2 < len(sizes):
-                queued[i + 2] = submit(i + 2)
-            models = [m for _, m, _ in got if m is not None]
-            bad = [(k, e) for k, m, e in got if m is None]
-            part = device_rows_variants(models, torque=torque, input_angles=angles,
-                                        lost_motion_level=LM_FRACTION * design.rated_torque, device=device,
-                                        settings=settings) \
-                if models else None
-            ta = time.perf_counter()
-            stats = table_stats(models)           # bookkeeping of the report (after the solve: deferred tables
-            if stats["profile_table_mb"] >= table["profile_table_mb"]:      # are computed by then): not timed
-                table = stats
-            aside += time.perf_counter() - ta
-            if bad:                               # a variant that cannot be built is a failed variant of the study
-                part = with_failed_builds(part, [m is not None for _, m, _ in got], [e for _, _, e in bad], len(angles))
-            parts.append(part)
-        wall_s = time.perf_counter() - t0 - aside
-    r = merge_chunks(parts, V)
+    with ex:
+        # the library's pipeline (rvtool.variants.device_pipeline, also every worker of bench_multi_gpu):
+        # builds in groups on the pool, at most two chunks queued ahead, each chunk one device solve, the
+        # collector paused while this process receives the snapshots and solves (paused_collector)
+        run = device_variants_pipelined(design, tol, seed, range(V), build_kw=kw, torque=torque,
+                                        input_angles=angles, lost_motion_level=LM_FRACTION * design.rated_torque,
+                                        device=device, settings=settings, pool=ex, pool_workers=workers,
+                                        solve_chunk=solve_chunk, first_chunk=first_chunk,
+                                        defer_tables=tables == "device", after_chunk=largest_tables)
+    sizes, waits, wait_cpu, wall_s = run.sizes, list(run.build_wait_s), list(run.build_wait_cpu_s), run.wall_s
+    r = run.merged()
     cost = dict(build_s=waits[0] if len(sizes) == 1 else sum(waits), build_pool_warm_s=warm_s,
                 build_wait_s=sum(waits), build_wait_cpu_s=sum(wait_cpu), end_to_end_s=wall_s,
                 solve_chunks=[int(x) for x in sizes],
