@@ -1,7 +1,8 @@
 """Command line: ``rvtool analyze DESIGN [--protocols ...] [--quick] [--out DIR] [--device ...]
 [--backend ...] [--scheduler ADDRESS] [--quiet]`` (the protocols of :mod:`rvtool.analysis` on a design file or a shipped design),
 ``rvtool designs [--format-doc]``, ``rvtool new --topology T [--name NAME]`` (a commented
-design template), ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
+design template and its tolerance file; ``rvtool new --tolerances-for DESIGN``: the tolerance file of
+a design file), ``rvtool list``, ``rvtool run [CASE] [--quick] [--out DIR]``, ``rvtool version``,
 ``rvtool sweep SPEC [--scheduler ADDRESS] [--out DIR] [--quiet]`` (a parameter study or the
 tolerance Monte Carlo on a Dask cluster; SPEC format in :mod:`rvtool.variants.sweep`),
 ``rvtool validate [DESIGN] [--quick] [--samples N] [--workers W] [--out DIR]`` (a shipped design
@@ -267,22 +268,60 @@ def _cmd_designs(args):
     return 0
 
 
+def _new_tolerances(args):
+    """``rvtool new --tolerances-for DESIGN``: the tolerance file of a design file of one's own, its grades
+    computed from that design's sizes (after its pins or gears changed)."""
+    from rvtool.assembly import topologies
+    from rvtool.designs.tolerance_template import tolerance_path, tolerance_template
+    from rvtool.errors import RvtoolInputError
+    if args.topology is not None or args.name is not None:
+        return _input_error("--tolerances-for writes the tolerance file of an existing design: it takes no "
+                            "--topology or --name (the design file gives them)")
+    src = args.tolerances_for
+    try:
+        design = topologies.design_from_table(topologies.read_table(src))
+        text = tolerance_template(design, os.path.basename(src))
+    except RvtoolInputError as exc:
+        return _input_error(exc)
+    path = args.out or tolerance_path(src)
+    if os.path.exists(path):
+        return _input_error(f"{path} exists; move it aside or choose another --out (nothing was overwritten)")
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    print(f"tolerances of {src} written to {path}" + ("" if args.out else f"; rvtool analyze {src} reads it"))
+    return 0
+
+
 def _cmd_new(args):
     from rvtool.assembly import topologies
     from rvtool.errors import RvtoolInputError
+    if args.tolerances_for is not None:
+        return _new_tolerances(args)
+    if args.topology is None:
+        return _input_error("rvtool new needs --topology T (cycloid, rv2, rv3 or std-involute), or "
+                            "--tolerances-for DESIGN.toml")
     name = args.name or "mine"
     path = args.out or f"{name}.toml"
     try:
         topologies.get(args.topology)
+        import tomllib
+
         from rvtool.designs.format import template
+        from rvtool.designs.tolerance_template import tolerance_path, tolerance_template
         text = template(args.topology, name)
+        # the tolerance file of the design's Monte Carlo, from the template's own sizes (pins, gears)
+        tol_path = tolerance_path(path)
+        tol_text = tolerance_template(topologies.design_from_table(tomllib.loads(text)), os.path.basename(path))
     except RvtoolInputError as exc:
         return _input_error(exc)
-    if os.path.exists(path):
-        return _input_error(f"{path} exists; choose another --name or --out (nothing was overwritten)")
-    with open(path, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    print(f"{args.topology} design template written to {path}; check it with: rvtool analyze {path} --quick")
+    for p in (path, tol_path):
+        if os.path.exists(p):
+            return _input_error(f"{p} exists; choose another --name or --out (nothing was overwritten)")
+    for p, t in ((path, text), (tol_path, tol_text)):
+        with open(p, "w", encoding="utf-8") as fh:
+            fh.write(t)
+    print(f"{args.topology} design template written to {path}, its tolerances to {tol_path}; "
+          f"check it with: rvtool analyze {path} --quick")
     return 0
 
 
@@ -359,7 +398,8 @@ def build_parser():
                     help="Dask scheduler of the Monte Carlo's CPU pool (default: a LocalCluster started for it)")
     an.add_argument("--quiet", action="store_true", help="no progress output")
     an.add_argument("--tolerances", default=None, metavar="FILE",
-                    help="tolerance file of the Monte Carlo (default: a shipped design's <name>_tolerances.toml)")
+                    help="tolerance file of the Monte Carlo (default: <design>_tolerances.toml beside the design file, "
+                         "as 'rvtool new' writes it, or a shipped design's)")
     an.add_argument("--allowables", default=None, metavar="FILE",
                     help="design-review allowables the report's summary checks (default: <design>_allowables.toml "
                          "beside the design file, or a shipped design's)")
@@ -367,12 +407,18 @@ def build_parser():
                         description="List the shipped reference designs; --format-doc prints the design file "
                                     "format (every section and key, units, ranges) generated from the specs.")
     ds.add_argument("--format-doc", action="store_true", help="print the design file format documentation (Markdown)")
-    nw = sub.add_parser("new", help="write a commented design template",
+    nw = sub.add_parser("new", help="write a commented design template and its tolerance file",
                         description="Write NAME.toml: a design template of the topology with units and valid "
-                                    "ranges in comments, generated from the component specs.")
-    nw.add_argument("--topology", required=True, metavar="T", help="cycloid, rv2, rv3 or std-involute")
+                                    "ranges in comments, generated from the component specs; and NAME_tolerances.toml "
+                                    "beside it: the manufacturing tolerances of its Monte Carlo (each grade's source "
+                                    "or 'assumed' in its comment), which 'rvtool analyze NAME.toml' reads.")
+    nw.add_argument("--topology", default=None, metavar="T", help="cycloid, rv2, rv3 or std-involute")
     nw.add_argument("--name", default=None, help="design name and file stem (default: mine)")
-    nw.add_argument("--out", default=None, metavar="FILE", help="output file (default: NAME.toml)")
+    nw.add_argument("--out", default=None, metavar="FILE",
+                    help="output file (default: NAME.toml; with --tolerances-for: DESIGN_tolerances.toml)")
+    nw.add_argument("--tolerances-for", default=None, metavar="DESIGN",
+                    help="write only the tolerance file of the design file DESIGN, its grades from that design's "
+                         "sizes (after its pins or gears changed)")
     sub.add_parser("list", help="list the cases by folder (name and first docstring line)",
                    description="List the case scripts, grouped by their folder (cycloid, rv, std, "
                                "verification, benchmarks, hard, studies), with the first line of each one's docstring.")

@@ -12,7 +12,8 @@ from rvtool import designs
 from rvtool.errors import RvtoolInputError
 from rvtool.variants.multi_device import (RvVariantProtocol, batch_task, chunk_schedule, cycloid_batch,
                                           device_cluster, device_slots, multi_device_monte_carlo, plan, rows_batch,
-                                          shutdown_helper_pools, split_indices, start_helper_pool, warm_up)
+                                          shutdown_helper_pools, split_indices, start_helper_pool, warm_helper_builds,
+                                          warm_up)
 from rvtool.variants.rv_tolerances import load_rv_tolerances
 from rvtool.variants.tolerances import load_tolerances
 from rvtool.variants.variant import VariantProtocol
@@ -38,6 +39,28 @@ def test_slots_pin_one_gpu_per_worker():
     for bad in (0, [], "cuda:0", ["cuda:0", "cuda:0"], ["gpu1"], ["cuda:x"]):
         with pytest.raises(RvtoolInputError):
             device_slots(bad)
+
+
+def test_the_collector_is_paused_while_snapshots_are_received_and_restored_after():
+    """paused_collector (rows_batch and bench_device_mc receive their snapshots inside it): the cyclic
+    collector is off inside, back on after (also when the block raises), and left off where it was off."""
+    import gc
+    from rvtool.variants.multi_device import paused_collector
+    assert gc.isenabled()
+    with paused_collector():
+        assert not gc.isenabled()
+    assert gc.isenabled()
+    with pytest.raises(ValueError):
+        with paused_collector():
+            raise ValueError("inside")
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        with paused_collector():
+            pass
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
 
 
 def test_batches_cover_every_variant_once_in_order():
@@ -81,7 +104,9 @@ def test_two_cpu_workers_equal_one(rd40_case):
     those of one batch run here (built here); every worker starts with CUDA_VISIBLE_DEVICES set by
     its slot (cpu: "", no GPU visible)."""
     rd40, rd_tol, rd_p, _ = rd40_case
-    ref_rd = rows_batch(rd40, rd_tol, rd_p, 2026, range(2), "cpu", build_kw=RD_BUILD)
+    # RD-40 with its profile tables computed by the worker (the benchmarks' --tables device): the
+    # helper sends profiles, the worker's device computes the tables
+    ref_rd = rows_batch(rd40, rd_tol, rd_p, 2026, range(2), "cpu", build_kw=RD_BUILD, tables="device")
     rv40e = rvtool.load_design("rv40e")
     rv_tol = load_rv_tolerances(designs.path("rv40e_tolerances"))
     rv_p = RvVariantProtocol(n_te_points=3)
@@ -96,7 +121,7 @@ def test_two_cpu_workers_equal_one(rd40_case):
         addrs = list(env)
         assert client.gather([client.submit(start_helper_pool, 1, workers=[a], pure=False) for a in addrs]) == [1, 1]
         rd = multi_device_monte_carlo(rd40, rd_tol, 2, protocol=rd_p, seed=2026, client=client, slots=slots,
-                                      host_workers=1, build_kw=RD_BUILD)
+                                      host_workers=1, build_kw=RD_BUILD, tables="device", solve_chunk=None)
         rv = multi_device_monte_carlo(rv40e, rv_tol, 2, protocol=rv_p, seed=20261124, client=client, slots=slots)
     assert [b["worker"] for b in rd["batches"]] == ["device-0", "device-1"]
     assert rd["failed"] == sum(r["status"] != "ok" for r in ref_rd) and rd["host_workers"] == 1
@@ -115,9 +140,12 @@ def test_rows_batch_is_the_bench_device_mc_path(rd40_case):
     from rvtool.variants.tolerances import sample_variant
     rd40, tol, p, _ = rd40_case
     try:
-        recs = rows_batch(rd40, tol, p, 2026, [3, 4], "cpu", 1, build_kw=RD_BUILD, solve_chunk=1)
+        # the helpers warmed as warm_up does: each of the two runs the build task on the nominal design
+        # exactly once (a barrier of the pool), not one of them twice
+        assert start_helper_pool(2) == 2 and warm_helper_builds(rd40, RD_BUILD, 2) == 2
+        recs = rows_batch(rd40, tol, p, 2026, [3, 4], "cpu", 2, build_kw=RD_BUILD, solve_chunk=1)
     finally:
-        shutdown_helper_pools()                   # the helper process this test started
+        shutdown_helper_pools()                   # the helper processes this test started
     models = [rvtool.build(sample_variant(tol, rd40, k, 2026).apply(rd40), **RD_BUILD) for k in (3, 4)]
     r = device_rows_variants(models, torque=rd40.rated_torque, input_angles=p.input_angles(rd40),
                              lost_motion_level=0.03 * rd40.rated_torque, device="cpu")
@@ -201,11 +229,61 @@ def test_cuda_two_gpus_each_worker_sees_one():
         seen = client.run(_cuda_seen)
         assert all(len(v[0]) == 1 for v in seen.values()) and {v[1] for v in seen.values()} == {"0", "1"}
         assert len({v[0][0] for v in seen.values()}) == 2          # two different GPUs
-        warm_up(client, slots, rd40, tol, p, 2026, build_kw=RD_BUILD)
+        opts = {"build_kw": RD_BUILD, "tables": "device", "graph": True}     # bench_multi_gpu's defaults
+        warm_up(client, slots, rd40, tol, p, 2026, **opts)
         two = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots,
-                                       build_kw=RD_BUILD)
+                                       solve_chunk=2, first_chunk=1, **opts)
         one = multi_device_monte_carlo(rd40, tol, 8, protocol=p, seed=2026, client=client, slots=slots[:1],
-                                       build_kw=RD_BUILD)
+                                       solve_chunk=None, **opts)
     _same(two["records"], one["records"], EQUAL_CUDA)
     assert {r["te_path"] for r in two["records"] if r["status"] == "ok"} == {"device_rows:cuda:0"}
     assert np.isfinite([r["te_pp_arcsec"] for r in two["records"] if r["status"] == "ok"]).all()
+
+
+def test_failed_builds_are_failed_variants():
+    """A chunk whose variant could not be built: the built ones keep their solved figures and status in
+    place, the others are failed with their build error and NaN figures (never dropped); a chunk with
+    none built is all failed."""
+    from rvtool.batched.device_rows_variants import RowVariants
+    from rvtool.variants.device_pipeline import merge_chunks, with_failed_builds
+    split = {"setup_s": 1.0, "kernels_s": 0.0, "scatter_s": 0.0, "step_s": 2.0, "fallback_s": 0.0, "rest_s": 0.0}
+    part = RowVariants(te=np.array([[1.0, 2.0], [3.0, 4.0]]), theta_out=np.zeros((2, 2)),
+                       lost_motion_rad=np.array([5.0, 6.0]), status=["ok", "failed"], error=[None, "device"],
+                       exudyn_points=1, exudyn_copies=0, split=split, te_s=1.0, lost_motion_s=1.0, wall_s=3.0,
+                       stats={"points": 2, "te_order": "phase", "sweeps": 3, "newton_iterations": 4,
+                              "device": "cpu", "device_sum": False, "lost_motion": {}})
+    r = with_failed_builds(part, [True, False, True], ["ValueError: bad draw"], 2)
+    assert r.status == ["ok", "failed", "failed"] and r.error == [None, "build: ValueError: bad draw", "device"]
+    assert np.array_equal(r.te[[0, 2]], part.te) and np.isnan(r.te[1]).all() and np.isnan(r.lost_motion_rad[1])
+    none = with_failed_builds(None, [False], ["x"], 2)
+    assert none.status == ["failed"] and none.wall_s == 0.0 and np.isnan(none.te).all()
+    m = merge_chunks([r, none], 4)
+    assert m.status == ["ok", "failed", "failed", "failed"] and m.te.shape == (4, 2)
+    assert m.exudyn_points == 1 and m.split["step_s"] == 2.0 and m.stats["chunks"] == 2
+
+
+def _bench_multi_gpu():
+    import importlib.util
+    from pathlib import Path
+    path = Path(__file__).resolve().parents[1] / "cases" / "benchmarks" / "bench_multi_gpu.py"
+    spec = importlib.util.spec_from_file_location("bench_multi_gpu", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_judged_speedup_is_at_the_one_device_best():
+    """bench_multi_gpu's judgement: the speed-up is taken at the one-device run's fastest schedule, so a
+    schedule that handicaps the one-device run (here "ramp": 80 variants/s on one device, 190 on two,
+    2.4x) cannot pass the check; the best-vs-best figure is reported beside it."""
+    bench = _bench_multi_gpu()
+    one = {"flat": {"variants_per_s": 100.0}, "ramp": {"variants_per_s": 80.0}}
+    two = {"flat": {"variants_per_s": 170.0}, "ramp": {"variants_per_s": 190.0}}
+    f = bench.fair_speedup(one, two)
+    assert f["best_one_device_schedule"] == "flat" and f["speedup"] == pytest.approx(1.7)
+    assert f["speedup_by_schedule"]["ramp"] == pytest.approx(190.0 / 80.0)
+    assert f["speedup_best_vs_best"] == pytest.approx(1.9)
+    assert [bench.parse_schedule(x) for x in ("all", "1024", "1024/128")] == [(None, None), (1024, 1024), (1024, 128)]
+    for bad in ("", "0", "1024/0", "a/b", "1/2/3"):
+        with pytest.raises(RvtoolInputError, match="schedules"):
+            bench.parse_schedule(bad)

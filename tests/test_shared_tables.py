@@ -232,3 +232,57 @@ def test_deferred_tables_computed_on_the_device(device):
     if device == "cpu":
         host = run(lazy, "cpu")                   # nothing provided: the host computes them where read
         assert np.array_equal(host.te, ref.te) and np.array_equal(host.lost_motion_rad, ref.lost_motion_rad)
+
+
+@pytest.mark.parametrize("device", ["cpu", "cuda:0"])
+def test_device_tables_are_read_in_place_with_the_figures_of_host_tables(device):
+    """Deferred RD-40 tables computed on ``device`` in one batch (provide_profile_tables, launched without
+    waiting: each table settles at its first read, the stages' times reported then) are read by the
+    row Newton's cycloid kernel where they lie: the copies' kernel and a compacted subset's (subset())
+    address the batch's rows in place ("device_batch_view": no copy on the device, no read-back to the
+    host; a subset asked for again is the one kept), and TE, lost motion and a subset's equilibria are bit for
+    bit those of the same numbers uploaded from the host (a second batch of the same profiles read back and
+    provided as host arrays: the kernel's "host" path). Host sums on both (device_sum=False: the atomic order
+    of device sums is not part of the tables' path). Fails if a table were copied, read back, or read at another row."""
+    if _cuda_absent(device):
+        pytest.skip("no CUDA device")
+    from rvtool.solver.device_rows import provide_profile_tables
+    from rvtool.variants import VariantProtocol
+    from rvtool.variants.multi_device import variant_snapshots
+    from rvtool.variants.tolerances import load_tolerances
+    d = load_design(designs.path("rd40"))
+    tol = load_tolerances(designs.path("rd40_tolerances"))
+    jobs = [(d, tol, RD_SEED, k, RD_KW) for k in ((21, 22) if device == "cpu" else (23, 24))]
+    blobs = [pickle.dumps(m) for _, m, _ in variant_snapshots(jobs, defer_tables=True)]
+    on_dev, other, on_host = ([pickle.loads(b) for b in blobs] for _ in range(3))
+    stages = {}
+    # launched without waiting (as DeviceRowNewton does): the tables settle where first read
+    assert provide_profile_tables(on_dev, device, timing=stages, wait=False) == 4
+    assert provide_profile_tables(other, device) == 4
+    for a, b in zip((t for m in other for t in _pins(m).tables), (t for m in on_host for t in _pins(m).tables)):
+        b.provide(tuple(a), a.window)                   # the same numbers, as host arrays (a read back)
+    protocol = VariantProtocol(n_te_points=3)
+    angles, tq = protocol.input_angles(d), protocol.te_torque_fraction * d.rated_torque
+    newton = {nm: DeviceRowNewton(ms, device=device, device_sum=False) for nm, ms in (("dev", on_dev),
+                                                                                      ("host", on_host))}
+    assert _pins_of(newton["dev"]).table_source == "device_batch_view"
+    assert _pins_of(newton["host"]).table_source == "host"
+    assert set(stages) == {"upload", "dense_lengths", "arc_lengths", "resampled", "keyed", "window_offsets", "read"}
+    assert all(v >= 0.0 for v in stages.values())
+    got = {nm: device_rows_variants(ms, torque=tq, input_angles=angles, device=device, device_sum=False,
+                                    lost_motion_level=0.03 * d.rated_torque) for nm, ms in (("dev", on_dev),
+                                                                                           ("host", on_host))}
+    assert got["dev"].status == got["host"].status == ["ok", "ok"]
+    assert np.array_equal(got["dev"].te, got["host"].te)
+    assert np.array_equal(got["dev"].lost_motion_rad, got["host"].lost_motion_rad)
+    sub = {nm: nw.subset([1]) for nm, nw in newton.items()}
+    assert _pins_of(sub["dev"]).table_source == "device_batch_view"
+    r = {nm: s.solve(angles[1:2], [tq]) for nm, s in sub.items()}
+    assert np.array_equal(r["dev"].q, r["host"].q) and r["dev"].converged.all()
+    assert not any(t.read_back for m in on_dev for t in _pins(m).tables)   # nothing came back to the host
+    # a subset of the same copies is kept and given again (SUBSETS_KEPT), another is made anew
+    assert newton["dev"].subset([1]) is sub["dev"] and newton["dev"].subset([0]) is not sub["dev"]
+
+
+def _pins_of(newton):
+    return next(f.set for f in newton.families if isinstance(f.set, CycloidPinSet))

@@ -458,6 +458,24 @@ def gathered_column(sources, wdtype, device):
     return out
 
 
+def batch_view(sources, wdtype, device):
+    """(flat view, row offsets) of table columns that are all rows of ONE device array: ``sources``
+    [(array (T, n) or (T, n, 2) on ``device``, row t)] -> the array itself seen as (T n[, 2]) (no copy)
+    and each source's first sample in it (t n), or None where the sources are not all rows of one
+    array on ``device`` of ``wdtype`` (the caller gathers or stacks them then). The tables of a Monte
+    Carlo computed in one batch on the device (rvtool.contact.cycloid_set.compute_profile_tables) are
+    read where they are, for the whole batch and for any subset of its copies alike."""
+    if not sources or any(x is None for x in sources):
+        return None
+    first = sources[0][0]
+    if first.device != wp.get_device(device) or first.dtype != wdtype or not first.is_contiguous \
+            or any(a is not first for a, _ in sources):
+        return None
+    T, n = first.shape[0], first.shape[1]
+    flat = first.reshape((T * n, first.shape[2]) if first.ndim == 3 else (T * n,))
+    return flat, np.array([int(t) * n for _, t in sources], np.int32)
+
+
 class CycloidPinKernel(PairLaunch):
     """Device-resident evaluator of one cycloid--pin contact set (one launch per call)."""
 
@@ -477,10 +495,26 @@ class CycloidPinKernel(PairLaunch):
         on_dev = all(callable(getattr(tb, "device_column", None)) for tb in tables)
         lens = [tb.n_samples if on_dev else len(tb[0]) for tb in tables]
         offs = np.concatenate([[0], np.cumsum(lens)[:-1]]).astype(np.int32)
+        # tables that are rows of one device batch: the kernel reads the batch in place (no copy), each
+        # table at its row's offset; the same samples, so the same rows bit for bit
+        cols = {i: [tb.device_column(i, d) for tb in tables] for i in (0, 1, 2, 3, 5)} if on_dev else None
+        views = {i: batch_view(cols[i], dt, d) for i in cols} if on_dev else {}
+        if views and all(v is not None for v in views.values()) \
+                and len({v[1].tobytes() for v in views.values()}) == 1:
+            offs = views[0][1]
+            self.table_source = "device_batch_view"
+        else:
+            views = {}
+            self.table_source = "gathered" if on_dev else "host"
 
         def col(i):
-            got = gathered_column([tb.device_column(i, d) for tb in tables], dt, d) if on_dev else None
-            return got if got is not None else stacked_column([tb[i] for tb in tables], self.ndtype, dt, d)
+            if views:
+                return views[i][0]
+            got = gathered_column(cols[i], dt, d) if on_dev else None
+            if got is None:
+                self.table_source = "host"
+                return stacked_column([tb[i] for tb in tables], self.ndtype, dt, d)
+            return got
         model = [
             wp.array(fparams, dtype=dt, device=d), wp.array(iparams, dtype=wp.int32, device=d),
             col(0), col(1), col(2), col(3),

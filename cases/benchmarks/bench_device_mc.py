@@ -20,7 +20,8 @@ Paths, on the same variants:
 
 * pool: the reference per-variant Exudyn run in a ProcessPoolExecutor (spawn) over --workers
   processes (default: all cores), each worker warmed (imports, kernels, one nominal build and
-  two TE points) before the timing starts; a variant that raises is a failure;
+  two TE points; every worker exactly once: its warm-up task waits at a barrier of all workers,
+  warmed_pool) before the timing starts; a variant that raises is a failure;
 * device: rvtool.batched.device_rows_variants on --device (one copy per variant, the TE one batch
   solve of all copies per angle, the lost motion the device load continuation), with the Newton
   step, the per-copy sums and the tapered rows on the device (rvtool.solver.device_rows); every
@@ -29,8 +30,9 @@ Paths, on the same variants:
   processes that send back their snapshots (rvtool.variants.multi_device.variant_snapshot: rows,
   kinematics, constraints; the cycloid pins on shared profile tables, one table per distinct wheel
   profile: rvtool.contact.cycloid_set.shared_profile_tables), that pool warmed as the reference
-  pool (one nominal build per worker, ``build_pool_warm_s``, not timed). --solve-chunk N solves N
-  copies at a time (rvtool.variants.multi_device.chunk_schedule, --first-chunk first, doubling)
+  pool (the build task on the nominal design in every worker, which builds its nominal snapshot;
+  ``build_pool_warm_s``, not timed). --solve-chunk N solves N
+  copies at a time (rvtool.variants.device_pipeline.chunk_schedule, --first-chunk first, doubling)
   while the pool builds the next chunk (at most two chunks of builds queued); default one solve of
   all variants. Reported both ways: ``variants_per_s/device`` the device's time only (the chunks'
   device_rows_variants), ``variants_per_s/device_with_build`` the whole device Monte Carlo
@@ -69,6 +71,7 @@ Default 1,000 variants per design (--variants N); --quick: 2 per design, 2 worke
 --pool-variants M runs only variants 0..M-1 on the pool (the pool's rate and the agreement come
 from those; e.g. 1,000 of a 100,000-variant device run, whose pool run would take ~15 min).
 """
+import functools
 import multiprocessing
 import os
 import time
@@ -129,12 +132,66 @@ def rd_variant_design(tol, design, k):
 
 
 _WORKER = {}
+_WARM_BARRIER = None
+"""This worker's barrier of its pool's warm-up (:func:`warmed_pool`), set by the pool's initializer."""
+WARM_TIMEOUT_S = 120.0
+"""The longest a warm-up task waits at the barrier for the pool's other workers [s] (their spawn, imports and
+warm-up task: seconds); past it the warm-up goes on unsynchronized and says so (warmed_pool)."""
+
+
+def _init_worker(barrier):
+    global _WARM_BARRIER
+    _WARM_BARRIER = barrier
+
+
+def warmed_pool(workers, warm, jobs):
+    """(ProcessPoolExecutor of ``workers`` spawned processes, warm-up wall time [s]): every worker runs
+    exactly one of the warm-up ``jobs`` (``warm(job)``, one job per worker) before the timing starts. Each
+    warm-up task waits at a barrier of all ``workers`` after its work, so no worker takes a second one
+    while another starts (a pool warmed by mapping one job per worker can leave a slow-starting worker
+    cold: measured on cpu, 2 workers, both warm-up jobs ran in one process, and the other's first timed
+    task paid its imports' first use and nominal build, 0.25-0.4 s instead of 0.03 s)."""
+    ctx = multiprocessing.get_context("spawn")          # fresh interpreters: no forked Warp/Exudyn state
+    ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker,
+                             initargs=(ctx.Barrier(workers),))
+    t = time.perf_counter()
+    try:
+        pids = list(ex.map(functools.partial(_warm_task, warm), jobs))
+    except BaseException:
+        ex.shutdown(wait=False, cancel_futures=True)
+        raise
+    if len(set(pids)) != workers:
+        import sys
+        print(f"bench_device_mc: the pool's warm-up reached {len(set(pids))} of {workers} workers (barrier timed "
+              f"out after {WARM_TIMEOUT_S:g} s)", file=sys.stderr)
+    return ex, time.perf_counter() - t
+
+
+def _warm_task(warm, job):
+    import threading
+    try:
+        warm(job)
+    finally:                        # the barrier gets its party even where the warm-up raised
+        try:
+            _WARM_BARRIER.wait(WARM_TIMEOUT_S)
+        except threading.BrokenBarrierError:
+            pass                    # a worker that did not arrive: warmed_pool says so
+    return os.getpid()
 
 
 def _warm_build(job):
-    """Warm-up task of the device path's build pool: one build of the nominal design."""
-    design, kw = job
-    build(design, **kw)
+    """Warm-up task of the device path's build pool: the task the timing runs (one variant snapshot, its
+    tables deferred as the run's) on the nominal design (no variant of the run), which builds this process's
+    nominal snapshot (rvtool.solver.variant_snapshots: the variants are written into it) and loads every
+    module the builds use, as the reference pool's warm-up runs its task on the nominal design."""
+    design, kw, defer_tables = job
+    from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
+    from rvtool.variants import Variant
+    if design.__class__.__name__ == "CycloidDesign":
+        cycloid_variant_snapshots(design, [Variant()], kw, defer_tables=defer_tables)
+    else:
+        from rvtool.solver.model_snapshot import build_snapshot
+        build_snapshot(design, kw, shared_tables=True)
     return None
 
 
@@ -208,12 +265,10 @@ def recheck_lost_motion(name, quick, ks, kw, torque, device, workers):
 
 def run_pool(name, quick, V, workers):
     """The reference runs of variants 0..V-1 in a warmed pool: (results by k, warm_s, wall_s)."""
-    ctx = multiprocessing.get_context("spawn")          # fresh interpreters: no forked Warp/Exudyn state
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
-        t = time.perf_counter()
-        # warm every worker: one warm-up job each, submitted together (each worker takes one)
-        list(ex.map(_pool_task, [(name, quick, -1)] * workers))
-        warm_s = time.perf_counter() - t
+    from rvtool.variants.multi_device import paused_collector
+    # warm every worker: one warm-up job each (the nominal design), every worker exactly one (warmed_pool)
+    ex, warm_s = warmed_pool(workers, _pool_task, [(name, quick, -1)] * workers)
+    with ex, paused_collector():                    # as the device path's process (receiving only here)
         t = time.perf_counter()
         out = list(ex.map(_pool_task, [(name, quick, k) for k in range(V)], chunksize=1))
         wall_s = time.perf_counter() - t
@@ -230,53 +285,6 @@ def _snapshot_group(jobs, defer_tables=False):
     return variant_snapshots(jobs, defer_tables=defer_tables)
 
 
-def merge_chunks(parts, V):
-    """One result of the device path from its chunks' RowVariants ``parts`` (in variant order)."""
-    from rvtool.batched.device_rows_variants import RowVariants
-    cat = lambda nm: np.concatenate([getattr(p, nm) for p in parts])
-    split = {k: sum(p.split[k] for p in parts) for k in parts[0].split}
-    lm = [p.lost_motion_rad for p in parts]
-    stats = parts[0].stats if len(parts) == 1 else {
-        "variants": V, "points": parts[0].stats["points"], "te_order": parts[0].stats.get("te_order"),
-        "chunks": len(parts),
-        "sweeps": sum(p.stats["sweeps"] for p in parts),
-        "newton_iterations": sum(p.stats["newton_iterations"] for p in parts),
-        "device": parts[0].stats["device"], "device_sum": parts[0].stats["device_sum"],
-        "lost_motion": [p.stats["lost_motion"] for p in parts]}
-    return RowVariants(te=cat("te"), theta_out=cat("theta_out"), lost_motion_rad=None if lm[0] is None
-                       else np.concatenate(lm), status=sum((p.status for p in parts), []),
-                       error=sum((p.error for p in parts), []),
-                       exudyn_points=sum(p.exudyn_points for p in parts),
-                       exudyn_copies=sum(p.exudyn_copies for p in parts), split=split,
-                       te_s=sum(p.te_s for p in parts), lost_motion_s=sum(p.lost_motion_s for p in parts),
-                       wall_s=sum(p.wall_s for p in parts), stats=stats)
-
-
-def with_failed_builds(part, built, errors, n_points):
-    """The RowVariants of a chunk whose variants ``built`` (bool per variant) were built and solved in
-    ``part`` (None: none was), the others failed with their build ``errors`` (figures NaN)."""
-    from rvtool.batched.device_rows_variants import RowVariants
-    built = np.asarray(built, bool)
-    n = len(built)
-    te, th, lm = np.full((n, n_points), np.nan), np.full((n, n_points), np.nan), np.full(n, np.nan)
-    status, error = ["failed"] * n, [None] * n
-    for i, e in zip(np.flatnonzero(~built), errors):
-        error[i] = f"build: {e}"
-    if part is None:
-        zero = {"setup_s": 0.0, "kernels_s": 0.0, "scatter_s": 0.0, "step_s": 0.0, "fallback_s": 0.0, "rest_s": 0.0}
-        return RowVariants(te=te, theta_out=th, lost_motion_rad=lm, status=status, error=error, exudyn_points=0,
-                           exudyn_copies=0, split=zero, te_s=0.0, lost_motion_s=0.0, wall_s=0.0,
-                           stats={"points": n_points, "te_order": None, "sweeps": 0, "newton_iterations": 0,
-                                  "device": None, "device_sum": None, "lost_motion": {}})
-    idx = np.flatnonzero(built)
-    te[idx], th[idx], lm[idx] = part.te, part.theta_out, part.lost_motion_rad
-    for j, i in enumerate(idx):
-        status[i], error[i] = part.status[j], part.error[j]
-    return RowVariants(te=te, theta_out=th, lost_motion_rad=lm, status=status, error=error,
-                       exudyn_points=part.exudyn_points, exudyn_copies=part.exudyn_copies, split=part.split,
-                       te_s=part.te_s, lost_motion_s=part.lost_motion_s, wall_s=part.wall_s, stats=part.stats)
-
-
 def device_memory_mb(device):
     """The Warp memory pool's high-water mark on a CUDA ``device`` [MB] (None on the cpu or without a pool)."""
     import warp as wp
@@ -291,20 +299,20 @@ def device_memory_mb(device):
 def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=None, tables="helpers", graph=True):
     """The device path of variants 0..V-1: built in ``workers`` processes as snapshots (shared profile
     tables) and run on the device row Newton, ``solve_chunk`` copies per device solve (None: all V
-    in one solve, the run of record at 1,000; chunks: rvtool.variants.multi_device.chunk_schedule,
+    in one solve, the run of record at 1,000; chunks: rvtool.variants.device_pipeline.chunk_schedule,
     ``first_chunk`` first, doubling). The builds of the next chunk run while the device solves the
     current one (at most two chunks of builds queued: the snapshots of 100,000 RD-40 variants would
     not fit the host's memory at once), so ``wall_s`` is the whole device Monte Carlo, builds
-    included; ``build_wait_s`` the time the device's process waited for builds (one chunk: the
-    whole build, the pool's transfer included, as ``build_s``). tables: "helpers" (the build pool computes
-    each variant's cycloid profile tables and sends them) or "device" (the pool sends the profiles; the
-    device row Newton computes the tables on a GPU inside its setup, on the cpu the host where read:
-    rvtool.contact.cycloid_set.compute_profile_tables). graph: on CUDA the row Newton's resident loop as a
+    included; ``build_wait_s`` the time the device's process waited for builds (one chunk: the whole build,
+    the pool's transfer included, as ``build_s``; ``build_wait_cpu_s`` its CPU time meanwhile, the pool's
+    result thread unpickling the snapshots: near ``build_wait_s``, receiving bounds the wait). tables: "helpers"
+    (the build pool computes each variant's cycloid profile tables and sends them) or "device" (the pool sends
+    the profiles; the device row Newton computes the tables on a GPU inside its setup, on the cpu the host
+    where read: rvtool.contact.cycloid_set.compute_profile_tables). graph: on CUDA the row Newton's resident loop as a
     captured CUDA graph (rvtool.solver.device_rows; False: the host loop)."""
     from rvtool.solver.device_newton import DeviceNewtonSettings
     settings = DeviceNewtonSettings(graph=bool(graph))
-    import functools
-    from rvtool.variants.multi_device import chunk_schedule
+    from rvtool.variants.device_pipeline import device_variants_pipelined
     if name in RV_NAMES:
         design, tol, angles = _rv_setup(quick, name)
         kw = {}
@@ -316,8 +324,6 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
         angles = protocol.input_angles(design)
         torque = protocol.te_torque_fraction * design.rated_torque
         seed = RD_SEED
-    sizes = chunk_schedule(V, solve_chunk or V, V if solve_chunk is None else first_chunk)
-    starts = np.concatenate([[0], np.cumsum(sizes)])
     warm = [build(design, **kw)]
     if tables == "device" and name not in RV_NAMES:    # the profile-table kernels compiled before the timing too
         from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
@@ -326,48 +332,31 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     # warm the device path (imports, kernel compilation) on the nominal model: not timed
     device_rows_variants(warm, torque=torque, input_angles=angles[:2], lost_motion_level=LM_FRACTION * torque,
                          device=device, settings=settings)
-    ctx = multiprocessing.get_context("spawn")
-    parts, waits = [], []
     table = {"profile_tables": 0, "profile_table_mb": 0.0}
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
-        t = time.perf_counter()
-        # warmed like the reference pool: one nominal build per worker (imports, memos), not timed
-        list(ex.map(_warm_build, [(design, kw)] * workers))
-        warm_s = time.perf_counter() - t
 
-        def submit(i):
-            ks = range(int(starts[i]), int(starts[i + 1]))
-            g = max(1, min(64, len(ks) // (4 * workers)))
-            jobs = [(design, tol, seed, k, kw) for k in ks]
-            task = functools.partial(_snapshot_group, defer_tables=tables == "device")
-            return [ex.submit(task, jobs[j:j + g]) for j in range(0, len(jobs), g)]
+    def largest_tables(models, part):             # bookkeeping of the report (after the solve: deferred tables
+        nonlocal table                            # are computed by then): not timed
+        stats = table_stats(models)
+        if stats["profile_table_mb"] >= table["profile_table_mb"]:
+            table = stats
 
-        t0, aside = time.perf_counter(), 0.0
-        queued = {i: submit(i) for i in range(min(2, len(sizes)))}
-        for i in range(len(sizes)):
-            tw = time.perf_counter()
-            got = [x for f in queued.pop(i) for x in f.result()]
-            waits.append(time.perf_counter() - tw)
-            if i + 2 < len(sizes):
-                queued[i + 2] = submit(i + 2)
-            models = [m for _, m, _ in got if m is not None]
-            bad = [(k, e) for k, m, e in got if m is None]
-            part = device_rows_variants(models, torque=torque, input_angles=angles,
-                                        lost_motion_level=LM_FRACTION * design.rated_torque, device=device,
-                                        settings=settings) \
-                if models else None
-            ta = time.perf_counter()
-            stats = table_stats(models)           # bookkeeping of the report (after the solve: deferred tables
-            if stats["profile_table_mb"] >= table["profile_table_mb"]:      # are computed by then): not timed
-                table = stats
-            aside += time.perf_counter() - ta
-            if bad:                               # a variant that cannot be built is a failed variant of the study
-                part = with_failed_builds(part, [m is not None for _, m, _ in got], [e for _, _, e in bad], len(angles))
-            parts.append(part)
-        wall_s = time.perf_counter() - t0 - aside
-    r = merge_chunks(parts, V)
+    # warmed like the reference pool: the timed task on the nominal design in every worker (imports, the
+    # nominal snapshot), not timed
+    ex, warm_s = warmed_pool(workers, _warm_build, [(design, kw, tables == "device")] * workers)
+    with ex:
+        # the library's pipeline (rvtool.variants.device_pipeline, also every worker of bench_multi_gpu):
+        # builds in groups on the pool, at most two chunks queued ahead, each chunk one device solve, the
+        # collector paused while this process receives the snapshots and solves (paused_collector)
+        run = device_variants_pipelined(design, tol, seed, range(V), build_kw=kw, torque=torque,
+                                        input_angles=angles, lost_motion_level=LM_FRACTION * design.rated_torque,
+                                        device=device, settings=settings, pool=ex, pool_workers=workers,
+                                        solve_chunk=solve_chunk, first_chunk=first_chunk,
+                                        defer_tables=tables == "device", after_chunk=largest_tables)
+    sizes, waits, wait_cpu, wall_s = run.sizes, list(run.build_wait_s), list(run.build_wait_cpu_s), run.wall_s
+    r = run.merged()
     cost = dict(build_s=waits[0] if len(sizes) == 1 else sum(waits), build_pool_warm_s=warm_s,
-                build_wait_s=sum(waits), end_to_end_s=wall_s, solve_chunks=[int(x) for x in sizes],
+                build_wait_s=sum(waits), build_wait_cpu_s=sum(wait_cpu), end_to_end_s=wall_s,
+                solve_chunks=[int(x) for x in sizes],
                 device_memory_high_mb=device_memory_mb(device),
                 **{k + "_largest_chunk": v for k, v in table.items()})
     cost.update(build_cost(design, tol, seed, kw, list(range(V, V + 25))))

@@ -92,7 +92,10 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     returns an :class:`AnalysisResult`. Input errors (design, protocol names, device, a rated
     torque outside the design's admissible range, :mod:`rvtool.analysis.admissible`) raise
     :class:`~rvtool.errors.RvtoolInputError` before anything is written. ``tolerances``: the
-    Monte Carlo's tolerance file (default: a shipped design's ``<name>_tolerances``).
+    Monte Carlo's tolerance file (default: ``NAME_tolerances.toml`` beside a design file ``NAME.toml``, as
+    ``rvtool new`` writes it, or a shipped design's ``<name>_tolerances``); when the Monte Carlo is among
+    the protocols, a bad key or value in it raises :class:`~rvtool.errors.RvtoolInputError` naming the file
+    and the key before anything runs.
     ``allowables``: the design-review allowables file the report's summary checks the figures
     against (default: :func:`rvtool.analysis.summary.find_allowables`, ``<name>_allowables``).
     ``backend``: the solver backend (:data:`rvtool.solver.backends.CHOICES`): "auto" runs each
@@ -111,8 +114,16 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     from ..assembly import topologies
     if tolerances is None and shipped is not None and designs.tolerances_of(shipped):
         tolerances = designs.path(designs.tolerances_of(shipped))
+    elif tolerances is None and shipped is None and str(source).endswith(".toml"):
+        # a design file of one's own: NAME_tolerances.toml beside NAME.toml, as `rvtool new` writes it
+        from ..designs.tolerance_template import tolerance_path
+        if os.path.isfile(tolerance_path(source)):
+            tolerances = tolerance_path(source)
     if tolerances is not None and not os.path.isfile(tolerances):
         raise RvtoolInputError(f"tolerances file {str(tolerances)!r} not found")
+    if tolerances is not None and any(p.name == "monte_carlo" for p in chosen):
+        from .protocols import load_tolerance_spec
+        load_tolerance_spec(obj, tolerances)     # a bad key or value is an input error, raised before any work
     from .summary import allowables_record, find_allowables
     if allowables is None:
         allowables = find_allowables(source, shipped)

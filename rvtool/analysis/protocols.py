@@ -534,6 +534,8 @@ variants of RD-40 failed with the defaults)."""
 
 MC_SEED = 2026
 """Seed of the tolerance Monte Carlo (variant k draws from default_rng([MC_SEED, k]))."""
+MC_CYCLOID_VARIANTS = (4, 200)
+"""Variants of the cycloid Monte Carlo (one batched Exudyn system per chunk on a CPU) under --quick and in full."""
 MC_DESIGN_VARIANTS = (4, 40)
 """Variants of the design-variant Monte Carlo (RV, small-tooth-difference involute) under --quick and in
 full: each variant is a design built and solved on the CPU path (two solves), as cases/monte_carlo_rv.py."""
@@ -553,6 +555,34 @@ def _design_variant_sampler(design):
     return None
 
 
+def load_tolerance_spec(design, path):
+    """The tolerance spec of ``design``'s Monte Carlo from the tolerance file ``path``, by the loader of the
+    design's topology (cycloid: :func:`rvtool.variants.tolerances.load_tolerances` and its design check; RV:
+    :func:`rvtool.variants.rv_tolerances.load_rv_tolerances`; small-tooth-difference involute:
+    :func:`rvtool.variants.std_tolerances.load_std_tolerances`). A file that is not TOML, an unknown key, a
+    distribution without its parameters or a parameter out of range raises
+    :class:`~rvtool.errors.RvtoolInputError` naming the file, the key and the valid range."""
+    import tomllib
+
+    from ..assembly.spec import CycloidDesign
+    from ..variants.tolerances import load_tolerances
+    sampler = _design_variant_sampler(design)
+    try:
+        if sampler is not None:
+            return sampler[0](path)
+        if not isinstance(design, CycloidDesign):
+            raise RvtoolInputError(f"no tolerance Monte Carlo for {type(design).__name__}: its topology has no "
+                                   f"variant sampler")
+        spec = load_tolerances(path)
+        spec.check_design(design)
+        return spec
+    except RvtoolInputError as exc:
+        text = str(exc)
+        raise RvtoolInputError(text if text.startswith(str(path)) else f"{path}: {text}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise RvtoolInputError(f"{path}: not a valid TOML file: {exc}") from None
+
+
 def _design_variant_monte_carlo(ctx, sampler, out):
     """The tolerance Monte Carlo of a topology whose variants are designs: per variant the quick TE
     interval of the te protocol (one input revolution, 4 points per mesh cycle) at the rated torque
@@ -562,9 +592,9 @@ def _design_variant_monte_carlo(ctx, sampler, out):
     from ..protocols.lost_motion import lost_motion
     from ..protocols.precision import quasi_static_te
     from ..variants.montecarlo import summarize
-    load, sample = sampler
+    _, sample = sampler
     try:
-        spec = load(ctx.tolerances)
+        spec = load_tolerance_spec(ctx.design, ctx.tolerances)
     except RvtoolInputError as exc:
         raise Unsupported(f"the tolerances do not apply to this design: {exc}") from None
     rated = ctx.require("rated_torque")
@@ -646,10 +676,11 @@ def run_monte_carlo(ctx):
     from ..variants import VariantProtocol
     from ..variants.montecarlo import MonteCarloSettings
     from ..variants.montecarlo import run_monte_carlo as mc
-    from ..variants.tolerances import load_tolerances
     if ctx.tolerances is None:
-        raise Unsupported("no tolerance file: pass --tolerances FILE (a shipped design uses its "
-                          "<name>_tolerances.toml when there is one)")
+        raise Unsupported("no tolerance file: pass --tolerances FILE or put NAME_tolerances.toml beside the "
+                          "design file NAME.toml ('rvtool new' writes one, 'rvtool new --tolerances-for "
+                          "NAME.toml' for a design file of one's own; a shipped design uses its "
+                          "<name>_tolerances.toml)")
     from ..assembly.spec import CycloidDesign
     out = Outcome()
     sampler = _design_variant_sampler(ctx.design)
@@ -667,13 +698,12 @@ def run_monte_carlo(ctx):
     elif not isinstance(ctx.design, CycloidDesign):
         raise Unsupported(f"no tolerance Monte Carlo for {type(ctx.design).__name__}: its topology has no variant sampler")
     else:
-        tol = load_tolerances(ctx.tolerances)
         try:
-            tol.check_design(ctx.design)
+            tol = load_tolerance_spec(ctx.design, ctx.tolerances)
         except (RvtoolInputError, AttributeError) as exc:
             raise Unsupported(f"the tolerances do not apply to this design: {exc}") from None
         mode, choice = _mc_backend(ctx)
-        n = 4 if ctx.quick else 200
+        n = MC_CYCLOID_VARIANTS[0] if ctx.quick else MC_CYCLOID_VARIANTS[1]
         protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53)
         mc_settings = MonteCarloSettings(n_variants=n, seed=MC_SEED, chunk_size=n if ctx.quick else 10,
                                          mode=mode, workers=1 if ctx.quick else None, device=ctx.device,

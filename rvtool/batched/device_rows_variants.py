@@ -155,7 +155,8 @@ def device_rows_variants(models, *, torque, input_angles, lost_motion_level=None
                        exudyn_copies=exudyn_copies, split=split, te_s=te_s, lost_motion_s=lm_s, wall_s=wall,
                        stats={"variants": V, "points": N, "te_order": te_order, "sweeps": sweeps,
                               "newton_iterations": iterations,
-                              "device": str(device), "device_sum": newton.device_sum, "lost_motion": lm_stats})
+                              "device": str(device), "device_sum": newton.device_sum, "lost_motion": lm_stats,
+                              "setup_parts": newton.setup_parts})
 
 
 def te_point_order(models, angles, te_order="phase"):

@@ -289,8 +289,20 @@ class ProfileTable:
 
     @property
     def computed(self):
-        """Whether this object holds its table (computed or provided), i.e. reading it costs nothing."""
+        """Whether this object holds its table (computed or provided, or being computed on a device:
+        :func:`compute_profile_tables` ``wait=False``), i.e. it is not to be computed again."""
         return self._entry is not None or self._arrays is not None or self._device is not None
+
+    def _settled(self):
+        """This table's device row once its launch finished: a table launched without waiting
+        (:func:`compute_profile_tables` ``wait=False``) reads its batch's host numbers at its first use
+        (the device waited for there, once per batch); one that failed the device's checks is then left
+        to the host (computed where read)."""
+        dev = self._device
+        if dev is not None and dev[2] is None:
+            h, window, ok = dev[0].finish()
+            self._device = (dev[0], dev[1], int(window[dev[1]]), float(h[dev[1]])) if ok[dev[1]] else None
+        return self._device
 
     def provide(self, table, window):
         """Give this table its arrays ``table`` (points, normals, curvature, key, spacing, phi: as
@@ -299,12 +311,21 @@ class ProfileTable:
         if not self.computed:
             self._arrays = (tuple(table), int(window))
 
-    def provide_device(self, batch, row, window, spacing):
+    def provide_device(self, batch, row, window=None, spacing=None):
         """Give this table its columns as row ``row`` of a batch computed on a Warp device
-        (:func:`compute_profile_tables`): the device's kernels copy them there
-        (:meth:`device_column`); the host arrays are read back only where the host reads them."""
+        (:func:`compute_profile_tables`): the device's kernels read them there (:meth:`device_column`);
+        the host arrays are read back only where the host reads them. window, spacing: None while the
+        batch's launch runs (read from it at this table's first use)."""
         if not self.computed:
-            self._device = (batch, int(row), int(window), float(spacing))
+            self._device = (batch, int(row), None if window is None else int(window),
+                            None if spacing is None else float(spacing))
+
+    @property
+    def read_back(self):
+        """Whether this table's arrays were computed on a Warp device and copied to the host since (a
+        host reader asked for them: :attr:`entry`); False for a device table read in place only
+        (:meth:`device_column`) and for a table computed or provided on the host."""
+        return self._settled() is not None and self._device[0].read_back
 
     @property
     def n_samples(self):
@@ -314,14 +335,14 @@ class ProfileTable:
     @property
     def spacing(self):
         """The table's sample spacing [m] (without reading a device table back)."""
-        if self._entry is None and self._arrays is None and self._device is not None:
+        if self._entry is None and self._arrays is None and self._settled() is not None:
             return self._device[3]
         return self.entry[0][4]
 
     def device_column(self, i, device):
         """(device array (T, n[, 2]), row) holding column ``i`` (0 points, 1 normals, 2 curvature, 3 key,
         5 phi) of this table on Warp ``device``, or None (not computed there)."""
-        if self._device is None or i not in _DEVICE_COLUMN:
+        if self._settled() is None or i not in _DEVICE_COLUMN:
             return None
         return self._device[0].columns[_DEVICE_COLUMN[i]], self._device[1]
 
@@ -329,7 +350,7 @@ class ProfileTable:
     def entry(self):
         """(table, analytic parameters or None, search window)."""
         if self._entry is None:
-            if self._arrays is None and self._device is not None:
+            if self._arrays is None and self._settled() is not None:
                 batch, t, window, h = self._device
                 pts, nrm, kap, key, phi = batch.host()
                 self._arrays = ((pts[t], nrm[t], kap[t], key[t], h, phi[t]), window)
@@ -343,7 +364,7 @@ class ProfileTable:
 
     @property
     def window(self):
-        if self._entry is None and self._arrays is None and self._device is not None:
+        if self._entry is None and self._arrays is None and self._settled() is not None:
             return self._device[2]
         return self.entry[2]
 
@@ -393,13 +414,23 @@ _DEVICE_COLUMN = {0: 0, 1: 1, 2: 2, 3: 3, 5: 4}
 
 
 class _DeviceTables:
-    """The columns (points, normals, curvature, key, phi) of a batch of profile tables on a Warp device,
-    read back (once, read-only) only where the host reads a table of it."""
+    """The columns (points, normals, curvature, key, phi) of a batch of profile tables on a Warp device
+    (:class:`warp_contacts.profile_tables.PendingTables`), read back (once, read-only) only where the host
+    reads a table of it."""
 
-    __slots__ = ("columns", "_host")
+    __slots__ = ("columns", "_host", "_pending")
 
-    def __init__(self, columns):
-        self.columns, self._host = tuple(columns), None
+    def __init__(self, pending):
+        self.columns, self._host, self._pending = tuple(pending.columns), None, pending
+
+    def finish(self):
+        """(spacing, window, ok) per row, the launch waited for once (PendingTables.finish)."""
+        return self._pending.finish()
+
+    @property
+    def read_back(self):
+        """Whether the host has read this batch back (:meth:`host`)."""
+        return self._host is not None
 
     def host(self):
         if self._host is None:
@@ -416,7 +447,7 @@ bytes per sample and table, ~150 MB for 256 RD-40 tables; on a GPU the serial ar
 takes as long for 2,048 tables as for 256, so fewer, larger launches)."""
 
 
-def compute_profile_tables(tables, device="cpu", group=None):
+def compute_profile_tables(tables, device="cpu", group=None, timing=None, wait=True):
     """Compute the deferred :class:`ProfileTable` objects among ``tables`` (:func:`shared_profile_tables`
     ``defer``) on Warp ``device``, each distinct key once, ``group`` tables per launch (None:
     :data:`DEVICE_TABLE_GROUP` of the device kind)
@@ -425,10 +456,15 @@ def compute_profile_tables(tables, device="cpu", group=None):
     and cosine on a GPU), and give them to every object of that key (:meth:`ProfileTable.provide`).
     Profiles with a tabulated radial modification or lobe rotations (the device kernels compute neither), and a
     table whose polar angle or key is not monotone (checked on the device), are left to the host (computed where first read). The columns stay on the
-    device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there copies them, nothing is read
-    back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
-    computed on the device."""
-    from warp_contacts.profile_tables import profile_tables
+    device (:meth:`ProfileTable.device_column`: a cycloid pin kernel there reads them in place, nothing is
+    read back); the host reads a table back where it reads its arrays. Returns the number of distinct tables
+    computed on the device. timing: None or a dict receiving the stages' times [s] (the ``timing`` of
+    :func:`warp_contacts.profile_tables.launch_profile_tables`, summed over the launches). wait: False
+    launches the kernels and returns at once (the count is then of the tables launched): each table reads
+    its batch's host numbers (window, spacing, whether it passed the device's checks) at its first use,
+    where the device is waited for, so that host work between the call and that use runs while the device
+    computes (:class:`rvtool.solver.device_rows.DeviceRowNewton`)."""
+    from warp_contacts.profile_tables import launch_profile_tables
     todo = {}
     for t in tables:
         if isinstance(t, ProfileTable) and not t.computed:
@@ -446,10 +482,16 @@ def compute_profile_tables(tables, device="cpu", group=None):
             chunk = keys[g:g + int(group)]
             profs = [k[0] for k in chunk]
             params = [(p.R, p.K1, float(p.n_pins), p.pin_radius + p.equidistant_mod, p.rotation_mod) for p in profs]
-            pts, nrm, kap, key, h, phi, window, ok = profile_tables(
-                params, [p.n_pins for p in profs], [p.pin_radius for p in profs], n, 16 * n, band, device=device,
-                as_numpy=False)
-            batch = _DeviceTables((pts, nrm, kap, key, phi))      # left on the device (CycloidPinKernel copies)
+            pending = launch_profile_tables(params, [p.n_pins for p in profs], [p.pin_radius for p in profs], n,
+                                            16 * n, band, device=device, timing=timing)
+            batch = _DeviceTables(pending)      # left on the device (the cycloid pin kernel reads it there)
+            if not wait:
+                for i, k in enumerate(chunk):
+                    for t in todo[k]:
+                        t.provide_device(batch, i)
+                done += len(chunk)
+                continue
+            h, window, ok = batch.finish()
             for i, k in enumerate(chunk):
                 if ok[i]:
                     for t in todo[k]:
@@ -536,40 +578,40 @@ class CycloidPinSet(PairFamilySet):
             zs = m.slice_z
             crown = m.crowning * (2 * zs / m.face_width) ** 2
             ks = m.normal.stiffness / m.n_slices
-            for k in range(prof.n_pins):
-                for s_i, z in enumerate(zs):
-                    row = np.zeros(ref.N_FLOAT)
-                    row[ref.C_XI_B:ref.C_XI_B + 2] = pins[k]
-                    row[ref.C_RP] = rp
-                    row[ref.C_E] = m.clearance + dev[k] + crown[s_i] + z * np.tan(m.skew)
-                    row[ref.C_K], row[ref.C_P] = ks, m.normal.p
-                    row[ref.C_C], row[ref.C_DR] = m.normal.damping / m.n_slices, m.normal.ramp_depth
-                    f = m.friction
-                    row[ref.C_MUK], row[ref.C_MUS], row[ref.C_VS], row[ref.C_VREG] = (
-                        f.mu_kinetic, f.mu_s, f.stribeck_speed, f.regularization_speed)
-                    row[ref.C_Z], row[ref.C_TX], row[ref.C_TY] = z, m.tilt_x, m.tilt_y
-                    fp.append(row)
-                    g = n_bodies
-                    pb = pin_bodies[k]
-                    irow = np.zeros(ref.N_INT, np.int32)
-                    irow[ref.J_BODY_A] = g if m.wheel_body == GROUND else m.wheel_body
-                    irow[ref.J_BODY_B] = g if pb == GROUND else pb
-                    # mu = 0 under the anchor law is the frictionless contact (its code path, its figures)
-                    model = f.model if (f.model != FrictionModel.ANCHOR or m.anchors) else FrictionModel.NONE
-                    irow[ref.J_FRICTION], irow[ref.J_TABLE] = int(model), tb
-                    ip.append(irow)
-                    arow = np.zeros(anchor_ref.N_ANCHOR)
-                    if m.anchors:
-                        arow[anchor_ref.ANCHOR_KT] = f.tangential_stiffness / m.n_slices
-                        arow[anchor_ref.ANCHOR_MU] = f.mu_kinetic
-                        arow[anchor_ref.ANCHOR_RELEASE] = (0.1 * rp if m.anchor_release_distance is None
-                                                           else m.anchor_release_distance)
-                    ap.append(arow)
-                    ids.append(f"{m.name}/pin{k}/s{s_i}")
-                    mesh_of.append(m_i)
-                    pin_of.append(k)
-        self._finish(window, np.array(fp), np.array(ip, dtype=np.int32), ids, np.array(mesh_of), np.array(pin_of),
-                     np.array(ap), n_bodies, backend, precision, device)
+            # the mesh's rows (pin k, slice s) in pin-major order, one array operation per column (the
+            # same operations per element as a row at a time: the same rows bit for bit)
+            zb, ns, f = prof.n_pins, m.n_slices, m.friction
+            row = np.zeros((zb, ns, ref.N_FLOAT))
+            row[:, :, ref.C_XI_B:ref.C_XI_B + 2] = np.asarray(pins, float)[:, None, :]
+            row[:, :, ref.C_RP] = rp
+            row[:, :, ref.C_E] = m.clearance + dev[:, None] + crown[None, :] + (zs * np.tan(m.skew))[None, :]
+            row[:, :, ref.C_K], row[:, :, ref.C_P] = ks, m.normal.p
+            row[:, :, ref.C_C], row[:, :, ref.C_DR] = m.normal.damping / m.n_slices, m.normal.ramp_depth
+            row[:, :, ref.C_MUK], row[:, :, ref.C_MUS], row[:, :, ref.C_VS], row[:, :, ref.C_VREG] = (
+                f.mu_kinetic, f.mu_s, f.stribeck_speed, f.regularization_speed)
+            row[:, :, ref.C_Z] = zs[None, :]
+            row[:, :, ref.C_TX], row[:, :, ref.C_TY] = m.tilt_x, m.tilt_y
+            fp.append(row.reshape(zb * ns, ref.N_FLOAT))
+            g = n_bodies
+            irow = np.zeros((zb, ns, ref.N_INT), np.int32)
+            irow[:, :, ref.J_BODY_A] = g if m.wheel_body == GROUND else m.wheel_body
+            irow[:, :, ref.J_BODY_B] = np.array([g if pb == GROUND else pb for pb in pin_bodies], np.int32)[:, None]
+            # mu = 0 under the anchor law is the frictionless contact (its code path, its figures)
+            model = f.model if (f.model != FrictionModel.ANCHOR or m.anchors) else FrictionModel.NONE
+            irow[:, :, ref.J_FRICTION], irow[:, :, ref.J_TABLE] = int(model), tb
+            ip.append(irow.reshape(zb * ns, ref.N_INT))
+            arow = np.zeros((zb * ns, anchor_ref.N_ANCHOR))
+            if m.anchors:
+                arow[:, anchor_ref.ANCHOR_KT] = f.tangential_stiffness / m.n_slices
+                arow[:, anchor_ref.ANCHOR_MU] = f.mu_kinetic
+                arow[:, anchor_ref.ANCHOR_RELEASE] = (0.1 * rp if m.anchor_release_distance is None
+                                                      else m.anchor_release_distance)
+            ap.append(arow)
+            ids += [f"{m.name}/pin{k}/s{s_i}" for k in range(zb) for s_i in range(ns)]
+            mesh_of.append(np.full(zb * ns, m_i, dtype=np.int64))
+            pin_of.append(np.repeat(np.arange(zb, dtype=np.int64), ns))
+        self._finish(window, np.concatenate(fp), np.concatenate(ip), ids, np.concatenate(mesh_of),
+                     np.concatenate(pin_of), np.concatenate(ap), n_bodies, backend, precision, device)
 
     @classmethod
     def concatenated(cls, sets, nb, *, names=None, precision="float64", device="cpu"):
@@ -611,7 +653,7 @@ class CycloidPinSet(PairFamilySet):
                 if key not in table_of:
                     table_of[key] = len(self.tables)
                     self.tables.append(sc.tables[t])
-                    self.table_windows.append(sc.table_window(t))
+                    self.table_windows.append(sc.table_windows[t])     # None: a deferred table's, read below
                     if self.analytic is not None:
                         self.analytic.append(sc.analytic[t])
                 local[t] = table_of[key]
@@ -627,7 +669,9 @@ class CycloidPinSet(PairFamilySet):
         # the built rows (slow-state gap offsets and friction of a built set are not copied, as a set built from
         # the meshes)
         built = [getattr(sc, "_built_fparams", sc.fparams) for sc in sets]
-        self._finish(max(self.table_windows), np.concatenate(built), np.concatenate(ip), ids,
+        # the window read after the loop over the sets: a table still computed on the device is waited for
+        # only here (None: the window property reads every table's)
+        self._finish(None, np.concatenate(built), np.concatenate(ip), ids,
                      np.concatenate(mesh_of), np.concatenate([sc.pin_of for sc in sets]),
                      np.zeros((sum(sc.n_contacts for sc in sets), anchor_ref.N_ANCHOR)), B * nb, s.backend,
                      precision, device)
@@ -671,6 +715,14 @@ class CycloidPinSet(PairFamilySet):
                                             analytic=self.analytic, anchor_params=self.anchor_params)
         elif precision != "float64":
             raise RvtoolInputError(f"precision = {precision!r} is not available for backend 'numpy' (valid: 'float64')")
+
+    @property
+    def table_source(self):
+        """Where the warp kernel reads its profile tables from: "device_batch_view" (the rows of one batch
+        computed on its device, read in place: :func:`compute_profile_tables`), "gathered" (device tables
+        of several batches copied together on the device), "host" (host arrays uploaded); None for the
+        numpy backend."""
+        return self._kernel.table_source if self.backend == "warp" else None
 
     def profile_tables(self):
         """{(profile, pin radius [m]): (table, analytic parameters or None, search window)} of this

@@ -491,20 +491,33 @@ def format_doc():
             ex = "" if value is None else f"`{value}`"
             out.append(f"| `{key}` | {unit} | {rng} | {'yes' if required else 'no'} | {ex} | {sentence(meaning)} |")
         out.append("")
-    out += _rv_tolerance_doc()
+    out += _tolerance_doc()
     return "\n".join(out) + "\n"
 
 
-def _rv_tolerance_doc():
-    """The keys of an RV tolerance file (``<design>_tolerances.toml``, :mod:`rvtool.variants.rv_tolerances`)."""
-    from .tolerance_keys import RV_TOLERANCE_KEYS as K
-    out = ["## RV tolerance files (`<design>_tolerances.toml`)", "",
-           "A `[tolerances]` table; every key optional (absent: no deviation, the design as it is), each an inline "
-           "table `{ dist = \"normal\" | \"uniform\" | \"truncnormal\" | \"fixed\", ... }` of the drawn value "
-           "(normal: mean, std > 0; uniform: low < high; truncnormal: mean, std, low, high; fixed: value), any "
-           "finite values. Variant k draws from `default_rng([seed, k])` in the order below "
-           "(`rvtool/variants/rv_tolerances.py`). A position tolerance (ISO 1101) of diameter t is written as the "
-           "distribution of each deviation coordinate.", "",
-           "| key | unit | meaning | writes |", "|---|---|---|---|"]
-    out += [f"| `{k}` | {unit} | {sentence(meaning)} | `{writes}` |" for k, (unit, meaning, writes) in K.items()]
-    return out + [""]
+def _tolerance_doc():
+    """The keys of the tolerance files (``<design>_tolerances.toml``) of each topology's Monte Carlo
+    (:mod:`rvtool.designs.tolerance_keys`; samplers in :mod:`rvtool.variants`)."""
+    from .tolerance_keys import CYCLOID_TOLERANCE_KEYS, RV_TOLERANCE_KEYS, STD_TOLERANCE_KEYS
+    out = ["## Tolerance files (`<design>_tolerances.toml`)", "",
+           "The manufacturing tolerances of a design's Monte Carlo (`rvtool analyze --protocols monte_carlo`). "
+           "`rvtool new --name NAME` writes `NAME_tolerances.toml` beside `NAME.toml`, with grades computed from "
+           "the template's sizes (ISO 286-1 IT4 for the pins, ISO 1328-1:2013 f_pT for the gears) and the other "
+           "values marked `assumed` with their range (`rvtool/designs/tolerance_template.py`); `rvtool analyze "
+           "NAME.toml` reads it (or `--tolerances FILE`). A `[tolerances]` table; every key optional (absent: no "
+           "deviation, the design as it is), each an inline table `{ dist = \"normal\" | \"uniform\" | "
+           "\"truncnormal\" | \"fixed\", ... }` of the drawn value (normal: mean, std > 0; uniform: low < high; "
+           "truncnormal: mean, std, low, high; fixed: value), any finite values. A bad key or value stops `rvtool "
+           "analyze` with the file, the key and its valid range. Variant k draws from `default_rng([seed, k])` in "
+           "the order of the table of its topology. A position tolerance (ISO 1101) of diameter t is written as "
+           "the distribution of each deviation coordinate.", ""]
+    for title, keys, module, col in (
+            ("cycloid", CYCLOID_TOLERANCE_KEYS, "rvtool/variants/tolerances.py", "changes"),
+            ("rv2, rv3", RV_TOLERANCE_KEYS, "rvtool/variants/rv_tolerances.py", "writes"),
+            ("std-involute", STD_TOLERANCE_KEYS, "rvtool/variants/std_tolerances.py", "writes")):
+        out += [f"### Tolerance keys: {title} (`{module}`)", "",
+                f"| key | unit | meaning | {col} |", "|---|---|---|---|"]
+        out += [f"| `{k}` | {unit} | {sentence(meaning)} | " + (f"`{writes}`" if "." in writes.split(" ")[0] else writes)
+                + " |" for k, (unit, meaning, writes) in keys.items()]
+        out.append("")
+    return out

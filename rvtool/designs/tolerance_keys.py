@@ -1,5 +1,37 @@
-"""The keys of the RV tolerance files (``<design>_tolerances.toml``): units and meanings, in draw order
-(sampler: :mod:`rvtool.variants.rv_tolerances`)."""
+"""The keys of the tolerance files (``<design>_tolerances.toml``): units and meanings, in draw order, of the
+cycloid (:mod:`rvtool.variants.tolerances`), RV (:mod:`rvtool.variants.rv_tolerances`) and small-tooth-difference
+involute (:mod:`rvtool.variants.std_tolerances`) samplers."""
+
+CYCLOID_TOLERANCE_KEYS = {
+    "eccentricity_error": ("m", "added to the assembly eccentricity e (the profile keeps its own)",
+                           "the variant's eccentricity"),
+    "pin_centre_errors": ("m", "drawn independently for the x and the y of every ring-pin centre",
+                          "the variant's pin centres"),
+    "pin_radius_error": ("m", "actual minus nominal pin radius, one value per reducer (one ground batch)",
+                         "the variant's pin radius"),
+    "equidistant_mod": ("m", "profile grinding deviation added to the design's equidistant modification",
+                        "profile.equidistant_mod (added)"),
+    "offset_mod": ("m", "profile grinding deviation added to the design's offset modification",
+                   "profile.offset_mod (added)"),
+    "pin_clearance": ("m", "gap added at every pin contact", "the variant's pin contacts"),
+    "bearing_clearance": ("m", "radial clearance of the eccentric bearing, replacing the design's (support >= 0)",
+                          "eccentric_bearing.radial_clearance"),
+}
+"""The keys of a cycloid tolerance file in the order a variant draws them (:data:`rvtool.variants.tolerances.FIELDS`
+is this order): (unit, meaning, what it changes)."""
+
+STD_TOLERANCE_KEYS = {
+    "eccentricity_error": ("m", "added to the wheel-ring centre distance, one value per reducer",
+                           "wheels.eccentricity (added)"),
+    "needle_clearance": ("m", "radial clearance of the needle sets, one value per reducer (support >= 0)",
+                         "eccentric_bearing.radial_clearance"),
+    "wheel_pitch_deviation": ("m", "single pitch deviation of each wheel tooth (minus their mean)",
+                              "wheel.single_pitch_deviations"),
+    "ring_pitch_deviation": ("m", "single pitch deviation of each ring tooth (minus their mean)",
+                             "ring.single_pitch_deviations"),
+}
+"""The keys of a small-tooth-difference involute tolerance file in draw order
+(:data:`rvtool.variants.std_tolerances.STD_FIELDS` is this order): (unit, meaning, the design key it writes)."""
 
 RV_TOLERANCE_KEYS = {
     "crank_phase_error": ("arcmin", "eccentric phase error of each crank (one draw per crank)",

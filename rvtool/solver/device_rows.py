@@ -56,6 +56,9 @@ from ..model.reducer import COORDINATES
 from .device_newton import DeviceNewtonSettings
 
 
+SUBSETS_KEPT = 8
+"""Row Newtons of variant-copy subsets :meth:`DeviceRowNewton.subset` keeps for a repeated request."""
+
 KINEMATICS_CACHE = 4096
 """Input angles whose variant copies' kinematic states :meth:`DeviceRowNewton.prime_kinematics` keeps."""
 
@@ -248,17 +251,19 @@ class _Blocks:
     dQdq: np.ndarray
 
 
-def provide_profile_tables(models, device):
+def provide_profile_tables(models, device, timing=None, wait=True):
     """Compute the deferred cycloid profile tables of ``models`` (snapshots built with
     ``defer_tables``, :func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`) on Warp
     ``device``, each distinct table once (:func:`rvtool.contact.cycloid_set.compute_profile_tables`).
     :class:`DeviceRowNewton` does this on a GPU (inside its ``setup_s``); on the cpu a deferred table is
     computed by the host where it is first read (the Warp kernels' serial parts are slower there than
-    NumPy). Returns the number of tables computed."""
+    NumPy). Returns the number of tables computed. timing: None or a dict receiving the table kernels' stage
+    times [s]; wait: False returns once the kernels are launched (the tables settle at their first use;
+    :func:`~rvtool.contact.cycloid_set.compute_profile_tables`)."""
     from ..contact.cycloid_set import ProfileTable, compute_profile_tables
     tables = [t for m in models for e in m.contact_elements()
               for t in (getattr(e.evaluator, "tables", None) or ()) if isinstance(t, ProfileTable) and not t.computed]
-    return compute_profile_tables(tables, device) if tables else 0
+    return compute_profile_tables(tables, device, timing=timing, wait=wait) if tables else 0
 
 
 class DeviceRowNewton:
@@ -303,9 +308,15 @@ class DeviceRowNewton:
         if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
             raise RvtoolInputError(f"copies = {copies!r} is outside the valid range [1, inf) (integer)")
         t0 = time.perf_counter()
+        #: where the setup's time went [s]: "tables_s" (launching the deferred profile tables' kernels on the
+        #: device; "table_stages": each kernel stage's device time and, in "read", the wait for them where the
+        #: copies first read a table), "families_s" (the families copied, that wait included), "rest_s"
+        self.setup_parts = {"tables_s": 0.0, "table_stages": {}, "families_s": 0.0, "rest_s": 0.0}
         if self.models is not None and not str(device).startswith("cpu"):
-            # variant profile tables left to this process (deferred by the build helpers): on the GPU, all at once
-            provide_profile_tables(self.models, device)
+            # variant profile tables left to this process (deferred by the build helpers): on the GPU, all at once,
+            # launched without waiting: the families without tables are copied while the device computes them
+            provide_profile_tables(self.models, device, timing=self.setup_parts["table_stages"], wait=False)
+        self.setup_parts["tables_s"] = time.perf_counter() - t0
         self.model, self.B, self.device = model, int(copies), device
         self.settings = settings or DeviceNewtonSettings()
         self.nb = nb = len(model.body_names)
@@ -316,6 +327,7 @@ class DeviceRowNewton:
         if device_sum is None:
             device_sum = not str(device).startswith("cpu")
         self.device_sum = bool(device_sum)
+        t_fam = time.perf_counter()
         if needs_extension(model):
             from .row_extension import copy_rows
             families, self.extension = copy_rows(self.models or model, self.B, device=device,
@@ -323,6 +335,7 @@ class DeviceRowNewton:
             self.n = n = self.extension.n
         else:
             families = copy_families(self.models or model, self.B, device=device)
+        self.setup_parts["families_s"] = time.perf_counter() - t_fam
         self.families = families
         #: the copied families with stick--slip anchors: their committed history is read by every
         #: evaluation and changed only by :meth:`commit` (a level of a torque path, as Exudyn's continuation)
@@ -353,6 +366,7 @@ class DeviceRowNewton:
         self._reference_d = None        # the copies' reference poses on the device (resident loop)
         self._gather_d = {}             # family -> its pose map on the device (extended families)
         self._graphs = {}               # stepper -> its captured resident loop (CUDA), or None where capture failed
+        self._subsets = {}              # copies -> their row Newton (subset(); SUBSETS_KEPT, the most recent last)
         #: how the last resident loop ran: "cuda_graph" (captured, replayed), "host_loop" or None (not resident)
         self.loop_path = None
         if sync_every is None:
@@ -365,18 +379,28 @@ class DeviceRowNewton:
         else:
             self.reference = self._extend(np.array([np.asarray(m.reference, float).reshape(-1) for m in self.models]))
         self.setup_s = time.perf_counter() - t0
+        self.setup_parts["rest_s"] = self.setup_s - self.setup_parts["tables_s"] - self.setup_parts["families_s"]
 
     def subset(self, copies):
         """A row Newton of the variant copies ``copies`` only (their models, this one's device and
         settings): a solve of a few copies then launches the families over those copies instead of
         all B (a solve's sweeps cost the whole batch, active or not). The copies' rows are the
         same, so are their equilibria (bit for bit with host sums; with device sums up to the
-        order of the atomic additions)."""
+        order of the atomic additions). The last :data:`SUBSETS_KEPT` subsets are kept and given again for the
+        same copies (a lost motion's +f and -f starts compact the same few hard copies, and a start scale's
+        homotopy stage the copies its warm start failed, often the ones before)."""
         if self.models is None:
             raise RvtoolInputError("subset() takes copies of variant models; one model's copies are all alike")
         cp = self._copies(len(copies), copies)
-        return DeviceRowNewton([self.models[c] for c in cp], device=self.device, settings=self.settings,
-                               device_sum=self.device_sum, device_step=self.device_step, sync_every=self.sync_every)
+        key = tuple(int(c) for c in cp)
+        sub = self._subsets.pop(key, None)
+        if sub is None:
+            sub = DeviceRowNewton([self.models[c] for c in cp], device=self.device, settings=self.settings,
+                                  device_sum=self.device_sum, device_step=self.device_step, sync_every=self.sync_every)
+        self._subsets[key] = sub                    # the most recent last
+        while len(self._subsets) > SUBSETS_KEPT:
+            self._subsets.pop(next(iter(self._subsets)))
+        return sub
 
     def kinematic(self, angles, copies=None):
         """(P, 3 nb) kinematic displacement states at input angles (P,) [rad], with the values the

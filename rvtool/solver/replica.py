@@ -412,12 +412,14 @@ def copy_families(model, copies, *, precision="float64", device="cpu"):
                 or [len(e.ids) for e in els] != [len(e.ids) for e in first]:
             raise RvtoolInputError(f"model {i} differs in bodies, contact elements or their rows from model 0; the "
                                    "copies must be models of one topology")
-    families = []
-    for j, el in enumerate(first):
-        s = el.evaluator
+    families = [None] * len(first)
+    # the cycloid pin sets last: their profile tables may still be computed on the device (launched without
+    # waiting, rvtool.solver.device_rows.provide_profile_tables), the other families are copied meanwhile
+    for j in sorted(range(len(first)), key=lambda j: isinstance(first[j].evaluator, CycloidPinSet)):
+        s = first[j].evaluator
         cs = COPIERS[type(s)]([els[j].evaluator for els in per_model], nb, precision, device)
-        families.append(FamilyCopies(name=s.name, set=cs, scatter=CopyBlockAssembler(cs.assembler.bodies, nb, B),
-                                     obs_rows=len(el.ids)))
+        families[j] = FamilyCopies(name=s.name, set=cs, scatter=CopyBlockAssembler(cs.assembler.bodies, nb, B),
+                                   obs_rows=len(first[j].ids))
     return families
 
 

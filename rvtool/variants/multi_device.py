@@ -14,11 +14,14 @@ batch of variants (scale-out delegated to Dask, :mod:`rvtool.variants.cluster`).
   batches are sized for equal devices; a batch may be cut into chunks run one after another there)
   and gathers the records in variant order. The per-batch task (``path``, :func:`batch_task`) is
   by default :func:`rows_batch` for every topology (RD-40 and rv40e alike), the path of
-  ``cases/benchmarks/bench_device_mc.py``: the worker's helpers sample and build its variants as
-  :class:`~rvtool.solver.model_snapshot.ModelSnapshot`, the worker runs TE and lost motion of
-  them on the device row Newton (:func:`rvtool.batched.device_rows_variants.device_rows_variants`,
-  the lost motion on the device torque path), points and copies the device does not converge on
-  Exudyn, counted. ``path="device_newton"`` (cycloid designs) runs the Monte Carlo's older device
+  ``cases/benchmarks/bench_device_mc.py``, one code path for both
+  (:func:`rvtool.variants.device_pipeline.device_variants_pipelined`): the worker's helpers sample
+  and build its variants as :class:`~rvtool.solver.model_snapshot.ModelSnapshot` (in groups, the
+  next chunks while the device solves this one; ``tables="device"``: cycloid profile tables computed
+  on the worker's device), the worker runs TE and lost motion of them on the device row Newton
+  (:func:`rvtool.batched.device_rows_variants.device_rows_variants`, the lost motion on the device
+  torque path; ``graph``: the captured resident loop), points and copies the device does not
+  converge on Exudyn, counted. ``path="device_newton"`` (cycloid designs) runs the Monte Carlo's older device
   mode (:func:`cycloid_batch`: :func:`rvtool.variants.montecarlo.run_batch`, mode "device", its
   lost motion on per-copy Exudyn fallbacks). A variant whose run fails, and every variant of a
   batch whose task dies (a lost worker), is recorded ``status = "failed"`` with its error and
@@ -42,6 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RvtoolInputError
+from .device_pipeline import chunk_schedule, paused_collector  # noqa: F401  (re-exported: the solves' schedule)
 
 
 @dataclass(frozen=True)
@@ -168,12 +172,26 @@ def _is_cycloid(design):
 
 
 _POOLS = {}
+_HELPER_BARRIER = None
+"""In a helper process of :func:`helper_pool`: the barrier of all its pool's helpers (set by the pool's
+initializer), at which a warm-up task waits so that every helper runs exactly one."""
+WARM_TIMEOUT_S = 600.0
+"""The longest a helper's warm-up task waits at the barrier for the pool's other helpers [s] (spawn and
+imports of a whole pool on a loaded host)."""
+
+
+def _init_pool_helper(barrier):
+    """Initializer of a :func:`helper_pool` process: one BLAS/OpenMP thread, the pool's warm-up barrier."""
+    global _HELPER_BARRIER
+    from .montecarlo import init_helper
+    init_helper()
+    _HELPER_BARRIER = barrier
 
 
 def helper_pool(host_workers):
     """This process's pool of ``host_workers`` spawned processes (one BLAS thread each) for the
-    device path's host work (per-copy parameters, Exudyn fallbacks), started on first use and kept
-    for the process's later tasks; None for 0."""
+    device path's host work (the variants' builds; per-copy parameters, Exudyn fallbacks), started
+    on first use and kept for the process's later tasks; None for 0."""
     if not host_workers:
         return None
     if host_workers not in _POOLS:
@@ -182,50 +200,79 @@ def helper_pool(host_workers):
         import multiprocessing
 
         from .cluster import single_thread_env
-        from .montecarlo import init_helper
+        ctx = multiprocessing.get_context("spawn")
         with single_thread_env():
-            pool = cf.ProcessPoolExecutor(max_workers=int(host_workers), initializer=init_helper,
-                                          mp_context=multiprocessing.get_context("spawn"))
+            pool = cf.ProcessPoolExecutor(max_workers=int(host_workers), initializer=_init_pool_helper,
+                                          initargs=(ctx.Barrier(int(host_workers)),), mp_context=ctx)
         atexit.register(pool.shutdown, wait=False, cancel_futures=True)
         _POOLS[host_workers] = pool
     return _POOLS[host_workers]
+
+
+def _on_every_helper(pool, host_workers, fn, job):
+    """``fn(job)`` run exactly once in every helper of ``pool`` (each waits at the pool's barrier after
+    it, so that no helper takes a second one while another has not started: a pool warmed by mapping
+    one job per process can leave a slow-starting one cold, whose first timed task then pays the
+    warm-up); returns the helpers' count."""
+    pids = set(pool.map(_warm_task, [(fn, job)] * int(host_workers)))
+    if len(pids) != int(host_workers):
+        raise RuntimeError(f"the helper pool's warm-up reached {len(pids)} of {host_workers} helpers")
+    return len(pids)
+
+
+def _warm_task(task):
+    import os
+    fn, job = task
+    fn(job)
+    _HELPER_BARRIER.wait(WARM_TIMEOUT_S)
+    return os.getpid()
 
 
 def _import_device_path(_):
     """A helper's warm-up: the modules of the host work (building, Exudyn fallbacks) imported."""
     from . import device  # noqa: F401
     from ..assembly import build  # noqa: F401
-    import os
-    return os.getpid()
 
 
 def start_helper_pool(host_workers):
     """Start this process's :func:`helper_pool` and every helper in it (each imports the host
-    work's modules), so that a timed study does not pay for them; returns the helpers' count."""
+    work's modules, every helper once), so that a timed study does not pay for them; returns the
+    helpers' count."""
     pool = helper_pool(host_workers)
     if pool is None:
         return 0
-    return len(set(pool.map(_import_device_path, range(4 * int(host_workers)))))
+    return _on_every_helper(pool, host_workers, _import_device_path, None)
 
 
-def _nominal_build(job):
-    """A helper's warm-up build: the nominal design with the study's options (imports, memos)."""
-    import os
+def nominal_snapshot(job):
+    """A helper's warm-up: the task a timed study runs (:func:`variant_snapshot`) on the nominal
+    ``design`` of job (design, build_kw, defer_tables): a cycloid design's nominal snapshot, into which
+    this process writes its variants
+    (:func:`rvtool.solver.variant_snapshots.cycloid_variant_snapshots`), its profile tables shared or
+    deferred as the study's; an RV design's snapshot on shared tables. Every module the builds use is
+    loaded and every memo filled (as ``bench_device_mc`` warms its build pool)."""
+    design, build_kw, defer_tables = job
+    if _is_cycloid(design):
+        from ..solver.variant_snapshots import cycloid_variant_snapshots
+        from .variant import Variant
+        return cycloid_variant_snapshots(design, [Variant()], dict(build_kw), defer_tables=bool(defer_tables))[0]
+    from ..solver.model_snapshot import build_snapshot
+    return build_snapshot(design, dict(build_kw), shared_tables=True)
 
-    from ..assembly import build
-    design, build_kw = job
-    build(design, **build_kw)
-    return os.getpid()
+
+def _nominal_snapshot_only(job):
+    nominal_snapshot(job)
 
 
-def warm_helper_builds(design, build_kw, host_workers):
-    """One nominal build of ``design`` per helper of this process's :func:`helper_pool` (as
-    ``bench_device_mc`` warms its build pool), so that a timed study's builds find their imports
-    and memos; returns the helpers that built (0 without helpers)."""
+def warm_helper_builds(design, build_kw, host_workers, defer_tables=False):
+    """Every helper of this process's :func:`helper_pool` runs the study's build task once on the
+    nominal ``design`` (:func:`nominal_snapshot`; ``defer_tables`` as the study's ``tables="device"``),
+    exactly once each, so that a timed study's builds find their imports and memos; returns the
+    helpers that built (0 without helpers)."""
     pool = helper_pool(host_workers)
     if pool is None:
         return 0
-    return len(set(pool.map(_nominal_build, [(design, dict(build_kw))] * int(host_workers))))
+    return _on_every_helper(pool, host_workers, _nominal_snapshot_only, (design, dict(build_kw), bool(defer_tables)))
 
 
 def shutdown_helper_pools():
@@ -311,100 +358,70 @@ def default_build_kw(design, protocol):
     return {"bearing_model": protocol.bearing_model} if _is_cycloid(design) else {}
 
 
-def chunk_schedule(n, solve_chunk, first_chunk=None):
-    """Sizes of the device solves of ``n`` copies (:func:`rows_batch`): ``first_chunk`` copies first
-    (None: ``solve_chunk // 8``, at least 1), each next solve twice the last, up to ``solve_chunk``;
-    so that the device starts after a few builds instead of a whole ``solve_chunk`` of them, and
-    the helpers build the next (larger) chunk while it solves. The sizes sum to ``n``; equal to
-    ``solve_chunk`` throughout for ``first_chunk = solve_chunk``."""
-    for name, v in (("solve_chunk", solve_chunk), ("first_chunk", first_chunk)):
-        if v is None and name == "first_chunk":
-            continue
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-            raise RvtoolInputError(f"{name} = {v!r} is outside the valid range [1, inf) (integer)")
-    solve_chunk = int(solve_chunk)
-    size = max(1, solve_chunk // 8) if first_chunk is None else min(int(first_chunk), solve_chunk)
-    sizes, left = [], int(n)
-    while left > 0:
-        sizes.append(min(size, left))
-        left -= sizes[-1]
-        size = min(2 * size, solve_chunk)
-    return sizes
+TABLES = ("helpers", "device")
+"""Where cycloid variants' profile tables are computed on the "rows" path: by the build helpers (each
+snapshot carries its tables) or by the device's process (the helpers send profiles; a GPU computes a
+chunk's tables in one batch inside the device setup: ``bench_device_mc --tables device``)."""
 
 
 def rows_batch(design, tolerances, protocol, seed, indices, device, host_workers=0, *, build_kw=None,
-               solve_chunk=1024, first_chunk=None):
-    """Records of the variants ``indices`` (sampled with ``seed``) on the device row Newton, the path
-    of ``cases/benchmarks/bench_device_mc.py``: every variant sampled and built as a
-    :class:`~rvtool.solver.model_snapshot.ModelSnapshot` on this process's :func:`helper_pool` of
-    ``host_workers`` processes (0: here), then TE and lost motion of up to ``solve_chunk`` copies at
-    a time on ``device`` (:func:`rvtool.batched.device_rows_variants.device_rows_variants`; points
-    and copies the device does not converge on Exudyn, counted), the first solve of ``first_chunk``
-    copies and the next ones doubling up to ``solve_chunk`` (:func:`chunk_schedule`). All builds are queued at once, so
-    the helpers build the next copies while the device solves the current ones. The TE at
-    ``te_torque_fraction`` x T_rated over ``protocol.input_angles`` (RV: of the nominal model), the
-    lost motion at +-``lost_motion_fraction`` x T_rated. A variant that cannot be built, or whose
-    device and Exudyn runs fail, is failed with its error; every record carries index, figures,
-    status, error and paths; the first record of each solved chunk its chunk's ``exudyn_points``,
-    ``exudyn_copies``, ``device_s`` (the device path's wall time) and ``build_wait_s`` (time spent
-    waiting for the helpers' builds); the first record ``first_device_start_s`` (from the call to
-    the first device solve). A snapshot reaches this process through the helper pool's own
-    result thread (``concurrent.futures``: it receives and unpickles every result as it comes), so
-    receiving overlaps the device solves already. The records do not depend on the chunks (the
-    copies are independent: equal bit for bit on cpu, tests/test_multi_gpu.py)."""
+               solve_chunk=1024, first_chunk=None, tables="helpers", graph=True):
+    """Records of the variants ``indices`` (sampled with ``seed``) on the device row Newton by the one
+    path of ``cases/benchmarks/bench_device_mc.py``,
+    :func:`rvtool.variants.device_pipeline.device_variants_pipelined`: the variants sampled and built
+    as :class:`~rvtool.solver.model_snapshot.ModelSnapshot` on this process's :func:`helper_pool` of
+    ``host_workers`` processes (0: here), in groups, at most two chunks of builds queued ahead of the
+    device; TE and lost motion of up to ``solve_chunk`` copies at a time (None: all in one solve) on
+    ``device`` (points and copies the device does not converge on Exudyn, counted), the first solve
+    of ``first_chunk`` copies and the next ones doubling up to ``solve_chunk``
+    (:func:`~rvtool.variants.device_pipeline.chunk_schedule`). tables: :data:`TABLES`; graph: on CUDA
+    the row Newton's resident loop as a captured CUDA graph
+    (:class:`~rvtool.solver.device_newton.DeviceNewtonSettings`). The TE at ``te_torque_fraction`` x
+    T_rated over ``protocol.input_angles`` (RV: of the nominal model), the lost motion at
+    +-``lost_motion_fraction`` x T_rated. A variant that cannot be built, or whose device and Exudyn
+    runs fail, is failed with its error; every record carries index, figures, status, error and
+    paths (None where failed); the first record of each solve its ``exudyn_points``, ``exudyn_copies``, ``device_s``
+    (the device path's wall time) and ``build_wait_s`` (time spent waiting for that chunk's builds);
+    the first record ``first_device_start_s`` (from the call to the first device solve). The records
+    do not depend on the chunks (the copies are independent: equal bit for bit on cpu,
+    tests/test_multi_gpu.py)."""
     from ..assembly import build
-    from ..batched.device_rows_variants import device_rows_variants
+    from ..solver.device_newton import DeviceNewtonSettings
     from ..units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
-    sizes = chunk_schedule(len(indices), solve_chunk, first_chunk)
+    from .device_pipeline import device_variants_pipelined
+    if tables not in TABLES:
+        raise RvtoolInputError(f"tables = {tables!r}; valid: {list(TABLES)}")
     t0 = time.perf_counter()
     kw = default_build_kw(design, protocol) if build_kw is None else dict(build_kw)
     angles = protocol.input_angles(design if _is_cycloid(design) else build(design, **kw))
-    torque = protocol.te_torque_fraction * design.rated_torque
-    level = protocol.lost_motion_fraction * design.rated_torque
-    jobs = [(design, tolerances, seed, int(k), kw) for k in indices]
-    pool = helper_pool(host_workers)
-    if pool is None:
-        results = map(variant_snapshot, jobs)      # built here, each when its chunk is taken
-    else:
-        futures = [pool.submit(variant_snapshot, j) for j in jobs]     # all queued: builds overlap the solves
-        results = (f.result() for f in futures)
+    t_run = time.perf_counter()
+    run = device_variants_pipelined(
+        design, tolerances, seed, indices, build_kw=kw, torque=protocol.te_torque_fraction * design.rated_torque,
+        input_angles=angles, lost_motion_level=protocol.lost_motion_fraction * design.rated_torque, device=device,
+        settings=DeviceNewtonSettings(graph=bool(graph)), pool=helper_pool(host_workers), pool_workers=host_workers,
+        solve_chunk=solve_chunk, first_chunk=first_chunk, defer_tables=tables == "device")
     path = f"device_rows:{device}"
-    recs, first_start = [], None
-    for size in sizes:
-        tw = time.perf_counter()
-        got = [next(results) for _ in range(size)]
-        wait = time.perf_counter() - tw
-        chunk, models, slot = [], [], []
-        for k, snap, err in got:
-            rec = {"index": k, "te_pp_arcsec": None, "te_rms_arcsec": None, "lost_motion_arcmin": None,
-                   "status": "ok" if err is None else "failed", "error": err, "te_path": None,
-                   "lost_motion_path": None}
-            if snap is not None:
-                models.append(snap)
-                slot.append(len(chunk))
-            chunk.append(rec)
-        chunk[0].update(build_wait_s=wait, exudyn_points=0, exudyn_copies=0, device_s=0.0)
-        if models:
-            if first_start is None:
-                first_start = time.perf_counter() - t0
-            r = device_rows_variants(models, torque=torque, input_angles=angles, lost_motion_level=level,
-                                     device=device)
-            for c, i in enumerate(slot):
-                te = r.te[c] - np.mean(r.te[c])
-                chunk[i].update(te_pp_arcsec=float(np.ptp(r.te[c]) * ARCSEC_PER_RAD),
-                                te_rms_arcsec=float(np.sqrt(np.mean(te ** 2)) * ARCSEC_PER_RAD),
-                                lost_motion_arcmin=float(r.lost_motion_rad[c] * ARCMIN_PER_RAD),
-                                status=r.status[c], error=r.error[c], te_path=path, lost_motion_path=path)
-                if r.status[c] != "ok":
-                    chunk[i].update(te_pp_arcsec=None, te_rms_arcsec=None, lost_motion_arcmin=None)
-            chunk[0].update(exudyn_points=int(r.exudyn_points), exudyn_copies=int(r.exudyn_copies),
-                            device_s=float(r.wall_s))
+    recs = []
+    for ks, r, wait in zip(run.indices, run.parts, run.build_wait_s):
+        chunk = []
+        for c, k in enumerate(ks):
+            ok = r.status[c] == "ok"
+            te = r.te[c] - np.mean(r.te[c]) if ok else None
+            chunk.append({"index": int(k),
+                          "te_pp_arcsec": float(np.ptp(r.te[c]) * ARCSEC_PER_RAD) if ok else None,
+                          "te_rms_arcsec": float(np.sqrt(np.mean(te ** 2)) * ARCSEC_PER_RAD) if ok else None,
+                          "lost_motion_arcmin": float(r.lost_motion_rad[c] * ARCMIN_PER_RAD) if ok else None,
+                          "status": r.status[c], "error": r.error[c],
+                          "te_path": path if ok else None, "lost_motion_path": path if ok else None})
+        chunk[0].update(build_wait_s=wait, exudyn_points=int(r.exudyn_points), exudyn_copies=int(r.exudyn_copies),
+                        device_s=float(r.wall_s))
         recs.extend(chunk)
     wall = time.perf_counter() - t0
     for rec in recs:
         rec["wall_s"] = wall / len(recs)
     if recs:
-        recs[0]["first_device_start_s"] = first_start
+        recs[0]["first_device_start_s"] = None if run.first_device_start_s is None \
+            else run.first_device_start_s + (t_run - t0)
     return recs
 
 
@@ -450,17 +467,18 @@ def plan(n_variants, slots, chunk=None):
 
 
 def run_batches(client, tasks, design, tolerances, protocol, seed, host_workers=0, *, path="rows", build_kw=None,
-                solve_chunk=1024, first_chunk=None):
+                solve_chunk=1024, first_chunk=None, tables="helpers", graph=True):
     """Records of ``tasks`` ([(slot, indices)], e.g. :func:`plan`), each on its slot's worker with
     that slot's device, gathered in task order; a task that raises has all its variants failed with
     that error; host_workers: each worker's helper pool (:func:`helper_pool`); path, build_kw,
-    solve_chunk, first_chunk: see :func:`batch_task` and :func:`rows_batch` (build_kw, solve_chunk,
-    first_chunk: "rows" only).
+    solve_chunk, first_chunk, tables, graph: see :func:`batch_task` and :func:`rows_batch` (all but
+    path: "rows" only).
     Returns (records, per-task {worker, device, variants, wall_s (of the task, as the worker
     measured it)})."""
     addr = worker_addresses(client, list({s.name: s for s, _ in tasks}.values()))
     fn = batch_task(design, path)
-    kw = {"build_kw": build_kw, "solve_chunk": solve_chunk, "first_chunk": first_chunk} if fn is rows_batch else {}
+    kw = {"build_kw": build_kw, "solve_chunk": solve_chunk, "first_chunk": first_chunk, "tables": tables,
+          "graph": graph} if fn is rows_batch else {}
     futures = [(s, b, client.submit(_timed, fn, design, tolerances, protocol, seed, list(b), s.device, host_workers,
                                     workers=[addr[s.name]], allow_other_workers=False, pure=False, **kw))
                for s, b in tasks]
@@ -492,11 +510,13 @@ def default_host_workers(slots):
 
 
 def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1, host_workers=None, *,
-            path="rows", build_kw=None):
+            path="rows", build_kw=None, tables="helpers", graph=True):
     """Start every worker's helper pool (:func:`start_helper_pool`) and run ``variants`` variants on
-    every worker once (imports, Warp kernel compilation and module loading on its device), untimed
-    by the study, on ``path`` with ``build_kw`` (as the study; "rows": every helper first builds
-    the nominal design once, :func:`warm_helper_builds`); returns the wall time [s]."""
+    every worker once (imports, Warp kernel compilation and module loading on its device: with
+    ``tables="device"`` the profile-table kernels too, with ``graph`` the captured loop), untimed by
+    the study, on ``path`` with ``build_kw``, ``tables`` and ``graph`` (as the study; "rows": every
+    helper first runs the build task on the nominal design once, :func:`warm_helper_builds`); returns the wall
+    time [s]."""
     t0 = time.perf_counter()
     protocol = protocol or default_protocol(design)
     hw = default_host_workers(slots) if host_workers is None else host_workers
@@ -505,16 +525,16 @@ def warm_up(client, slots, design, tolerances, protocol=None, seed=0, variants=1
                                  pure=False) for s in slots])
     if path == "rows":                            # every helper builds the nominal design once
         kw = default_build_kw(design, protocol) if build_kw is None else build_kw
-        client.gather([client.submit(warm_helper_builds, design, kw, hw, workers=[addr[s.name]],
-                                     allow_other_workers=False, pure=False) for s in slots])
+        client.gather([client.submit(warm_helper_builds, design, kw, hw, tables == "device",
+                                     workers=[addr[s.name]], allow_other_workers=False, pure=False) for s in slots])
     run_batches(client, [(s, range(variants)) for s in slots], design, tolerances, protocol, seed, hw, path=path,
-                build_kw=build_kw)
+                build_kw=build_kw, **({"tables": tables, "graph": graph} if path == "rows" else {}))
     return time.perf_counter() - t0
 
 
 def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, protocol=None, seed=0, client=None,
                              slots=None, chunk=None, host_workers=None, path="rows", build_kw=None,
-                             solve_chunk=1024, first_chunk=None):
+                             solve_chunk=1024, first_chunk=None, tables="helpers", graph=True):
     """The device Monte Carlo of variants 0..n_variants-1 of ``design`` over several devices
     (module docstring), each device's batch in chunks of at most ``chunk`` variants (:func:`plan`).
     Either ``devices`` (a cluster is started for the study and closed after it:
@@ -527,7 +547,10 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
     path: "rows" (default, every topology: :func:`rows_batch`, the device row Newton with the
     variants' builds on the helper pools) or "device_newton" (cycloid designs: :func:`cycloid_batch`);
     build_kw: the variants' build options (None: :func:`default_build_kw`); solve_chunk: copies per
-    device solve, first_chunk: copies of the first solve ("rows": :func:`chunk_schedule`)."""
+    device solve (None: a task's variants in one solve), first_chunk: copies of the first solve ("rows":
+    :func:`chunk_schedule`); tables: :data:`TABLES` ("rows"); graph: on CUDA the captured resident loop
+    ("rows"). One device and N devices run the same per-device path
+    (:func:`rvtool.variants.device_pipeline.device_variants_pipelined`) with the same options."""
     if (client is None) == (devices is None):
         raise RvtoolInputError("give either devices (a cluster for this study) or client and slots (a running one)")
     if client is not None and not slots:
@@ -540,19 +563,20 @@ def multi_device_monte_carlo(design, tolerances, n_variants, *, devices=None, pr
             return multi_device_monte_carlo(design, tolerances, n_variants, protocol=protocol, seed=seed,
                                             client=client, slots=slots, chunk=chunk, host_workers=host_workers,
                                             path=path, build_kw=build_kw, solve_chunk=solve_chunk,
-                                            first_chunk=first_chunk)
+                                            first_chunk=first_chunk, tables=tables, graph=graph)
     t0 = time.perf_counter()
     hw = default_host_workers(slots) if host_workers is None else int(host_workers)
     batch_task(design, path)                      # a path the design cannot run is refused before any task
     records, info = run_batches(client, plan(n_variants, slots, chunk), design, tolerances, protocol, seed, hw,
-                                path=path, build_kw=build_kw, solve_chunk=solve_chunk, first_chunk=first_chunk)
+                                path=path, build_kw=build_kw, solve_chunk=solve_chunk, first_chunk=first_chunk,
+                                **({"tables": tables, "graph": graph} if path == "rows" else {}))
     return {"records": records, "failed": sum(r["status"] != "ok" for r in records),
             "wall_s": time.perf_counter() - t0, "batches": info, "devices": [s.device for s in slots],
             "host_workers": hw, "path": path}
 
 
-__all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "batch_task", "chunk_schedule", "cycloid_batch",
+__all__ = ["DeviceSlot", "PATHS", "RvVariantProtocol", "TABLES", "batch_task", "chunk_schedule", "cycloid_batch",
            "default_build_kw", "default_host_workers", "default_protocol", "device_chunk", "device_cluster",
-           "device_slots", "helper_pool", "multi_device_monte_carlo", "plan", "rows_batch", "run_batches",
-           "shutdown_helper_pools", "split_indices", "start_helper_pool", "variant_snapshot", "warm_helper_builds",
-           "warm_up", "worker_addresses"]
+           "device_slots", "helper_pool", "multi_device_monte_carlo", "nominal_snapshot", "paused_collector", "plan", "rows_batch",
+           "run_batches", "shutdown_helper_pools", "split_indices", "start_helper_pool", "variant_snapshot",
+           "warm_helper_builds", "warm_up", "worker_addresses"]

@@ -20,10 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..designs.tolerance_keys import STD_TOLERANCE_KEYS
 from ..errors import RvtoolInputError
 from .tolerances import check_design_distributions, load_design_tolerances
 
-STD_FIELDS = ("eccentricity_error", "needle_clearance", "wheel_pitch_deviation", "ring_pitch_deviation")
+STD_FIELDS = tuple(STD_TOLERANCE_KEYS)
+"""The fields in draw order (the keys of :data:`rvtool.designs.tolerance_keys.STD_TOLERANCE_KEYS`)."""
 
 
 @dataclass(frozen=True, kw_only=True)

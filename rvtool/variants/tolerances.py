@@ -31,17 +31,18 @@ the same whether it is drawn in a batch of 20, of 1000, or by a resumed study.
 """
 import math
 import tomllib
-from dataclasses import dataclass, fields
+from dataclasses import MISSING, dataclass, fields
 
 import numpy as np
 from scipy.special import ndtr, ndtri
 
+from ..designs.tolerance_keys import CYCLOID_TOLERANCE_KEYS
 from ..errors import RvtoolInputError
 from ..validation import check_finite, check_range
 
-FIELDS = ("eccentricity_error", "pin_centre_errors", "pin_radius_error", "equidistant_mod", "offset_mod",
-          "pin_clearance", "bearing_clearance")
-"""Variant fields that can carry a tolerance, in the fixed order in which a variant draws them."""
+FIELDS = tuple(CYCLOID_TOLERANCE_KEYS)
+"""Variant fields that can carry a tolerance, in the fixed order in which a variant draws them (the keys of
+:data:`rvtool.designs.tolerance_keys.CYCLOID_TOLERANCE_KEYS`, which documents each for the format doc)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -218,6 +219,15 @@ def distribution_from_dict(name, table):
     if unknown:
         raise RvtoolInputError(f"tolerances.{name} ({kind}) has unknown keys {sorted(unknown)}; valid keys are "
                                f"{sorted(valid | {'dist'})}")
+    required = sorted(f.name for f in fields(cls) if f.default is MISSING)
+    missing = [k for k in required if k not in table]
+    if missing:
+        optional = sorted(valid - set(required))
+        raise RvtoolInputError(f"tolerances.{name} ({kind}) is missing {missing}; required keys are {required}"
+                               + (f", optional {optional}" if optional else ""))
+    for k, v in table.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise RvtoolInputError(f"tolerances.{name}.{k} = {v!r} is not a number; valid: a finite number")
     try:
         return cls(**{k: float(v) for k, v in table.items()})
     except RvtoolInputError as exc:
