@@ -23,8 +23,11 @@ designs that stopped or separate runs finished with at least this run's N sample
 this run's N: ``samples_per_design`` per design; a design whose kept band is shorter is recomputed).
 
 Draws: valid by construction (rvtool.analysis.validate_members.sample_table: the carrier plates follow the drawn
-wheels, the row spacings are placed inside the drawn plates); rv40e's draws are bit-identical to the independent
-sampler's (tests/test_validate_members.py), so its band computed before that change is kept by --resume.
+wheels, the row spacings are placed inside the drawn plates, the wheels' port depth clear of the drawn crank
+bores); rv40e's draws are bit-identical to the independent sampler's (tests/test_validate_members.py), so its band
+computed before that change is kept by --resume. ``--redo LIST`` runs those designs again although a --resume
+folder has them: their checkpoint (in --out) keeps every sample whose drawn design table is unchanged (draw
+digests) and solves only the changed draws.
 
 Tornado (issue 28: a tornado chart with the band), after the bands, per design: ``tornado_sampled``
 (validate_members.sampled_tornado), ESTIMATED from the band's own samples at no extra solve (a least-squares fit
@@ -66,6 +69,10 @@ def extra(parser):
                         help="comma-separated run folders: keep the designs the runs there finished (their "
                              "results.json) and compute only the others, each design with its own sample count "
                              "(samples_per_design); the kept runs' command and date are recorded under resumed_from")
+    parser.add_argument("--redo", default=None, metavar="LIST",
+                        help="comma-separated designs NOT kept from the --resume folders but run again through the "
+                             "out folder's checkpoint_<design>.json, which re-solves only the draws whose design "
+                             "table changed (a sampler change; the checkpoint's draw digests)")
     parser.add_argument("--deadline", default=None, metavar="HH:MM",
                         help="UTC time of day after which no sample is started: the band is then the first draws "
                              "done (samples_done of samples; band_is_short), the rest resumable from the run "
@@ -170,7 +177,9 @@ def main(argv=None):
         def count(n):
             return prev_counts[n] if isinstance(prev_counts, dict) else prev_counts
         # a design is kept only where it has at least this run's samples (a short band is recomputed, not kept)
-        kept = [n for n in prev["designs_done"] if n in names and n not in per and count(n) >= samples]
+        redo = args.redo.split(",") if args.redo else []
+        kept = [n for n in prev["designs_done"] if n in names and n not in per and n not in redo
+                and count(n) >= samples]
         for n in kept:
             per[n] = prev["designs"][n]
             per[n].setdefault("samples_done", len(per[n]["sample_values"]))   # runs before the key existed

@@ -77,6 +77,9 @@ DERIVED_KEYS = ("members.pillar_running_gap",)
 LAYOUT_KEYS = ("crank_bearing.row_spacing", "main_bearing.row_spacing")
 """Row spacings placed inside the carrier plates when drawn (module docstring, :func:`sample_table`)."""
 
+PORT_DEPTH_KEY = "wheels.structure.port_depth"
+"""The wheels' port depth, placed clear of the drawn crank bores when drawn (module docstring, :func:`sample_table`)."""
+
 SUPPORTS_KEY = "cranks.shaft.supports"
 """The crank's stations, at its tapered rows: derived from the drawn row spacing (module docstring)."""
 
@@ -152,18 +155,35 @@ def row_interval(table):
     return 2.0 * h, 2.0 * (h + min(float(cs["flange_thickness"]), float(cs["end_plate_thickness"])))
 
 
-def placed_value(a, u, interval):
+_ROWS_CLASH = ("leaves no spacing whose rows lie inside the drawn carrier plates", "the cited ranges of the row "
+               "spacing, carrier.structure.inner_face_position and the plate thicknesses cannot coexist")
+
+
+def placed_value(a, u, interval, clash=_ROWS_CLASH, open_high=False):
     """The value of the assumed input ``a`` at its fraction ``u`` of the part of [low, high] inside ``interval``
-    (module docstring): ``a.at(u)`` where the range lies inside; refused where nothing of it does."""
+    (module docstring): ``a.at(u)`` where the range lies inside; refused where nothing of it does (``clash``: what
+    is missing, which ranges cannot coexist; ``open_high``: the interval's upper end is excluded)."""
     lo, hi = max(float(a.low), interval[0]), min(float(a.high), float(interval[1]))
     if lo == float(a.low) and hi == float(a.high):
         return a.at(u)
-    if not lo <= hi:
-        raise RvtoolInputError(f"assumed range of {a.key} [{a.low}, {a.high}] {a.unit} leaves no spacing whose rows "
-                               f"lie inside the drawn carrier plates (feasible [{interval[0]:.6g}, {interval[1]:.6g}] "
-                               "m): the cited ranges of the row spacing, carrier.structure.inner_face_position and "
-                               "the plate thicknesses cannot coexist")
+    if not (lo < hi if open_high else lo <= hi):
+        raise RvtoolInputError(f"assumed range of {a.key} [{a.low}, {a.high}] {a.unit} {clash[0]} (feasible "
+                               f"[{interval[0]:.6g}, {interval[1]:.6g}] m): {clash[1]}")
     return lo + float(u) * (hi - lo)
+
+
+_PORT_CLASH = ("leaves no port depth clear of the drawn crank bores and holes", "the cited ranges of the port depth, "
+               "the eccentric bearing (inner radius + roller diameter = crank bore), the pins, the eccentricity, the "
+               "crank radius's gears and the pillar holes cannot coexist")
+
+
+def port_depth_interval(t):
+    """(0, limit) [m]: the port depths :func:`rvtool.assembly.wheel_body.wheel_geometry` accepts for the design
+    table ``t`` (below half the ligament between root circle and crank bore, holes inside root less depth; the
+    limit itself excluded: a fraction u < 1 of the Latin hypercube never reaches it)."""
+    from ..assembly.topologies import design_from_table
+    from ..assembly.wheel_body import port_depth_limit
+    return 0.0, min(port_depth_limit(design_from_table(t)))
 
 
 def sample_table(table, base, members_inputs, u, switches, derived, numerics=None):
@@ -179,6 +199,7 @@ def sample_table(table, base, members_inputs, u, switches, derived, numerics=Non
             t = set_key(t, a.key, a.at(uj))
     vals = {a.key: a.at(uj) for a, uj in zip(members_inputs, u[len(base):])}
     t = members_table(t, switches, derived, vals, numerics)
+    port = [(a, uj) for a, uj in zip(members_inputs, u[len(base):]) if a.key == PORT_DEPTH_KEY]
     ported = t.get("carrier", {}).get("body") == "ported"
     if ported:
         shift = _wheel_end(t) - _wheel_end(table)
@@ -192,6 +213,10 @@ def sample_table(table, base, members_inputs, u, switches, derived, numerics=Non
         # the crank's stations are its tapered rows: +- crank_bearing.row_spacing / 2 (the design files' relation)
         half = 0.5 * float(t["crank_bearing"]["row_spacing"])
         t = set_key(t, SUPPORTS_KEY, [-half, half])
+    if t.get("wheels", {}).get("body") == "ported":
+        # the wheel's port depth clear of the drawn crank bores (after every other input: the bores, pins, gears)
+        for a, uj in port:
+            t = set_key(t, a.key, placed_value(a, uj, port_depth_interval(t), _PORT_CLASH, open_high=True))
     return t
 
 
@@ -364,34 +389,55 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
             "wall_s": time.perf_counter() - t0}
 
 
+def table_digest(table):
+    """SHA-256 (hex) of a design table (JSON, sorted keys; floats by their shortest repr): the identity of a draw
+    in a band's checkpoint."""
+    import hashlib
+    import json
+    text = json.dumps(table, sort_keys=True, default=lambda o: o.tolist() if hasattr(o, "tolist") else float(o))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
 def _run_resumable(items, log, checkpoint, key, deadline):
     """:func:`_sample` over ``items`` in order in this process, the results so far rewritten to ``checkpoint``
-    (JSON) after each; an existing checkpoint of the same ``key`` (design, samples, seed, quick: the same
-    deterministic draws) is resumed; no item is started after the wall-clock time ``deadline`` (seconds since
-    the epoch; None: none), so the list may come back shorter (a short band, stated by the caller)."""
+    (JSON) after each, with the :func:`table_digest` of each item's table. An existing checkpoint of the same
+    ``key`` (design, samples, seed, quick) is resumed item by item: a finished result is kept where its digest
+    equals this item's (the same draw), every other item is solved (a sampler change re-solves only the draws it
+    changed); a checkpoint without digests is not resumed. No item is started after the wall-clock time
+    ``deadline`` (seconds since the epoch; None: none): the list returned is the finished items up to the first
+    unfinished one (the first draws; a short band, stated by the caller), the checkpoint keeps every finished one."""
     import json
-    out = []
+    digests = [table_digest(it[0]) for it in items]
+    out = [None] * len(items)
     if checkpoint is not None and os.path.exists(checkpoint):
         with open(checkpoint) as fh:
             prev = json.load(fh)
-        if prev.get("key") == key and prev.get("of") == len(items):
-            out = [tuple(r) for r in prev["results"]]
-            log(f"  resumed {len(out)}/{len(items)} from {checkpoint}")
+        old = prev.get("digests")
+        if prev.get("key") == key and prev.get("of") == len(items) and old is not None:
+            out = [tuple(r) if r is not None and d == dk else None for r, d, dk in zip(prev["results"], old, digests)]
+            kept = sum(r is not None for r in out)
+            log(f"  resumed {kept}/{len(items)} from {checkpoint} (the same draws); "
+                f"{len(items) - kept} to solve")
+        else:
+            log(f"  {checkpoint}: not resumed (another key or count, or no draw digests)")
     t0 = time.perf_counter()
-    for k in range(len(out), len(items)):
+    for k in range(len(items)):
+        if out[k] is not None:
+            continue
         if deadline is not None and time.time() > deadline:
-            log(f"  deadline reached: {k}/{len(items)} done, the rest not started")
+            log(f"  deadline reached: {sum(r is not None for r in out)}/{len(items)} done, the rest not started")
             break
-        out.append(_sample(items[k]))
-        err = "" if out[-1][1] is None else ": " + out[-1][1]
+        out[k] = _sample(items[k])
+        err = "" if out[k][1] is None else ": " + out[k][1]
         log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){err}")
         if checkpoint is not None:
             tmp = f"{checkpoint}.tmp"
             with open(tmp, "w") as fh:
-                json.dump({"key": key, "of": len(items), "results": out}, fh,
+                json.dump({"key": key, "of": len(items), "results": out, "digests": digests}, fh,
                           default=lambda o: o.tolist() if hasattr(o, "tolist") else float(o))
             os.replace(tmp, checkpoint)
-    return out
+    n = next((k for k, r in enumerate(out) if r is None), len(out))
+    return out[:n]
 
 
 def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False, samples=None, seed=0, workers=1,

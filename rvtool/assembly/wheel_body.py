@@ -35,6 +35,23 @@ def circles(hs):
     return tuple((float(x), float(y), hs.radius) for x, y in hs.centres())
 
 
+def port_depth_limit(design, spec=None):
+    """(crank-bore limit, rim limit) [m] of ``wheels.structure.port_depth`` for the design's geometry (the checks of
+    :func:`wheel_geometry`): a depth must lie below half the ligament between root circle and crank bore (strictly)
+    and leave the pillar and lightening holes inside root radius less depth (up to 1e-9 m). Both follow from the
+    drawn pins, eccentricity, crank radius and eccentric bearing (inner radius + roller diameter = bore radius)."""
+    from .rv.gear_graph import GearGraph
+    spec = wheel_spec(design) if spec is None else spec
+    g = GearGraph.of(design)
+    rb = design.eccentric_bearing.inner_radius + design.eccentric_bearing.roller_diameter
+    root = design.pins.pin_circle_radius - design.pins.pin_radius - design.wheels.eccentricity
+    rim = math.inf
+    for hs in (spec.pillar_holes, spec.lightening_holes):
+        for x, y, r in circles(hs):
+            rim = min(rim, root - math.hypot(x, y) - r - 1e-9)
+    return 0.5 * (root - g.crank_radius - rb), rim
+
+
 def wheel_geometry(design, wheel=0, spec=None):
     """:class:`WheelGeometry` of wheel ``wheel`` of an RV design (module docstring)."""
     from .rv.gear_graph import GearGraph
@@ -47,7 +64,7 @@ def wheel_geometry(design, wheel=0, spec=None):
 
     depth = design.pins.pin_radius if spec.port_depth is None else spec.port_depth
     root = design.pins.pin_circle_radius - design.pins.pin_radius - design.wheels.eccentricity
-    if depth >= 0.5 * (root - g.crank_radius - rb):
+    if depth >= port_depth_limit(design, spec)[0]:
         raise RvtoolInputError(f"wheels.structure.port_depth = {depth} m reaches the crank bores; valid range [0, "
                                f"{0.5 * (root - g.crank_radius - rb):.4g}) m")
     circles_all = list(bores)
