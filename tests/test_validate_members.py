@@ -231,3 +231,61 @@ def test_band_checkpoint_resumes_and_deadline_shortens(monkeypatch, tmp_path):
     assert len(calls) == 4 and b["sample_values"] == a["sample_values"] and b["band"] == a["band"]
     with pytest.raises(RvtoolInputError, match="deadline"):
         VM.members_rigidity("rv40e", table, cat, samples=3, deadline=0.0, log=lambda *x: None)
+
+
+def test_rv80e_port_depth_clear_of_the_drawn_crank_bores():
+    """rv80e's wheel port depth (members range 2-5 mm, cut against the design's own ligament between root circle and
+    crank bore) is placed at its Latin-hypercube fraction of the part of that range the drawn crank bores leave:
+    draws 21 and 40 of the 64, which failed in the band with the depth in the crank bores (the independent value
+    a.at(u) at or beyond the limit), now build their wheel geometry; every depth lies in its cited range and below
+    the limit; where the whole range fits, the value is exactly a.at(u); the placement is monotone in u."""
+    from rvtool.assembly.wheel_body import port_depth_limit, wheel_geometry
+    table, switches, derived, base, members, U = _draws("rv80e", 64)
+    keys = [a.key for a in members]
+    a = members[keys.index(VM.PORT_DEPTH_KEY)]
+    j = len(base) + keys.index(VM.PORT_DEPTH_KEY)
+    moved, old_fail = [], []
+    for i, u in enumerate(U):
+        t = VM.sample_table(table, base, members, u, switches, derived, VM.QUICK_NUMERICS)
+        d = design_from_table(t)
+        depth, limit = t["wheels"]["structure"]["port_depth"], min(port_depth_limit(d))
+        assert a.low <= depth < limit and depth <= a.high, (i, depth, limit)
+        if limit >= a.high:
+            assert depth == a.at(u[j]), i              # the whole cited range fits: the independent value, bit for bit
+        else:
+            assert depth == pytest.approx(a.low + u[j] * (limit - a.low), rel=1e-12), i   # the fraction of the part
+        if depth != a.at(u[j]):
+            moved.append(i)
+        if a.at(u[j]) >= limit:
+            old_fail.append(i)
+            wheel_geometry(d)                             # raised "reaches the crank bores" under the old sampler
+    assert old_fail == [21, 40]
+    assert len(moved) == 27                               # the draws whose ligament is thinner than the cited range
+
+
+def test_band_checkpoint_resolves_only_changed_draws(monkeypatch, tmp_path):
+    """The checkpoint resumes draw by draw (table digests): a draw whose table changed (here: its recorded digest
+    altered) is solved again, the others are kept; a checkpoint without digests is not resumed."""
+    import json
+    from rvtool.designs.catalogue import load_catalogue
+    calls = []
+
+    def fake(design, catalogue):
+        calls.append(1)
+        return {"value": 1e4 * design.carrier.structure.pillar_radius, "networks": {}, "solver": {}}
+    monkeypatch.setattr(VM, "rigidity_ba", fake)
+    cat = load_catalogue(designs.catalogue_of("rv40e"))
+    table = read_table(designs.path("rv40e"))
+    ck = tmp_path / "ck.json"
+    a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), log=lambda *x: None)
+    assert len(calls) == 4
+    c = json.loads(ck.read_text())
+    c["digests"][2] = "changed"
+    ck.write_text(json.dumps(c))
+    b = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), log=lambda *x: None)
+    assert len(calls) == 5 and b["sample_values"] == a["sample_values"]
+    c = json.loads(ck.read_text())
+    del c["digests"]
+    ck.write_text(json.dumps(c))
+    VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), log=lambda *x: None)
+    assert len(calls) == 9
