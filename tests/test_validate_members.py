@@ -212,9 +212,9 @@ def test_sampled_tornado_recovers_a_linear_response():
     assert r["samples_used"] == 63 and r["tornado_keys"] == 8
 
 
-def test_band_checkpoint_resumes_and_deadline_shortens(monkeypatch, tmp_path):
-    """members_rigidity with a checkpoint: a second call with the same draws solves nothing and returns the same
-    band; a deadline already past starts no sample (the caller gets a clear error, not an empty band)."""
+def _stand_in_rigidity(monkeypatch):
+    """(calls, rv40e catalogue, rv40e table) with ``rigidity_ba`` replaced by a stand-in b/a (1e4 x the drawn
+    pillar radius, no FE) that counts its calls: the checkpoint tests count solves, not stiffness."""
     from rvtool.designs.catalogue import load_catalogue
     calls = []
 
@@ -222,8 +222,13 @@ def test_band_checkpoint_resumes_and_deadline_shortens(monkeypatch, tmp_path):
         calls.append(1)
         return {"value": 1e4 * design.carrier.structure.pillar_radius, "networks": {}, "solver": {}}
     monkeypatch.setattr(VM, "rigidity_ba", fake)
-    cat = load_catalogue(designs.catalogue_of("rv40e"))
-    table = read_table(designs.path("rv40e"))
+    return calls, load_catalogue(designs.catalogue_of("rv40e")), read_table(designs.path("rv40e"))
+
+
+def test_band_checkpoint_resumes_and_deadline_shortens(monkeypatch, tmp_path):
+    """members_rigidity with a checkpoint: a second call with the same draws solves nothing and returns the same
+    band; a deadline already past starts no sample (the caller gets a clear error, not an empty band)."""
+    calls, cat, table = _stand_in_rigidity(monkeypatch)
     ck = str(tmp_path / "ck.json")
     a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=ck, log=lambda *x: None)
     assert len(calls) == 4 and a["samples_done"] == 3
@@ -267,15 +272,7 @@ def test_band_checkpoint_resolves_only_changed_draws(monkeypatch, tmp_path):
     """The checkpoint resumes draw by draw (table digests): a draw whose table changed (here: its recorded digest
     altered) is solved again, the others are kept; a checkpoint without digests is not resumed."""
     import json
-    from rvtool.designs.catalogue import load_catalogue
-    calls = []
-
-    def fake(design, catalogue):
-        calls.append(1)
-        return {"value": 1e4 * design.carrier.structure.pillar_radius, "networks": {}, "solver": {}}
-    monkeypatch.setattr(VM, "rigidity_ba", fake)
-    cat = load_catalogue(designs.catalogue_of("rv40e"))
-    table = read_table(designs.path("rv40e"))
+    calls, cat, table = _stand_in_rigidity(monkeypatch)
     ck = tmp_path / "ck.json"
     a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), log=lambda *x: None)
     assert len(calls) == 4
