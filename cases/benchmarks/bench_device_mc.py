@@ -179,22 +179,6 @@ def _warm_task(warm, job):
     return os.getpid()
 
 
-def _warm_build(job):
-    """Warm-up task of the device path's build pool: the task the timing runs (one variant snapshot, its
-    tables deferred as the run's) on the nominal design (no variant of the run), which builds this process's
-    nominal snapshot (rvtool.solver.variant_snapshots: the variants are written into it) and loads every
-    module the builds use, as the reference pool's warm-up runs its task on the nominal design."""
-    design, kw, defer_tables = job
-    from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
-    from rvtool.variants import Variant
-    if design.__class__.__name__ == "CycloidDesign":
-        cycloid_variant_snapshots(design, [Variant()], kw, defer_tables=defer_tables)
-    else:
-        from rvtool.solver.model_snapshot import build_snapshot
-        build_snapshot(design, kw, shared_tables=True)
-    return None
-
-
 def _pool_task(job):
     """One variant's Exudyn reference run in a pool worker: (k, te (N,) [rad] or None, te_pp
     [arcsec], lost motion [rad], error or None)."""
@@ -313,6 +297,7 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
     from rvtool.solver.device_newton import DeviceNewtonSettings
     settings = DeviceNewtonSettings(graph=bool(graph))
     from rvtool.variants.device_pipeline import device_variants_pipelined
+    from rvtool.variants.multi_device import nominal_snapshot
     if name in RV_NAMES:
         design, tol, angles = _rv_setup(quick, name)
         kw = {}
@@ -342,7 +327,7 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
 
     # warmed like the reference pool: the timed task on the nominal design in every worker (imports, the
     # nominal snapshot), not timed
-    ex, warm_s = warmed_pool(workers, _warm_build, [(design, kw, tables == "device")] * workers)
+    ex, warm_s = warmed_pool(workers, nominal_snapshot, [(design, kw, tables == "device")] * workers)
     with ex:
         # the library's pipeline (rvtool.variants.device_pipeline, also every worker of bench_multi_gpu):
         # builds in groups on the pool, at most two chunks queued ahead, each chunk one device solve, the
