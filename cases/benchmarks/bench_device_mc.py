@@ -259,16 +259,6 @@ def run_pool(name, quick, V, workers):
     return out, warm_s, wall_s
 
 
-def _snapshot_group(jobs, defer_tables=False):
-    """Build-pool task: [(k, ModelSnapshot or None, error or None)] of variant jobs (design, tolerances,
-    seed, k, build options) sampled and built in this worker, a group per task (100,000 single-variant
-    tasks would cost the submitting process ~0.1 ms each): rvtool.variants.multi_device.variant_snapshots
-    (cycloid variants written into the nominal snapshot, their pins on shared profile tables; defer_tables:
-    their tables left to the device's process, --tables device)."""
-    from rvtool.variants.multi_device import variant_snapshots
-    return variant_snapshots(jobs, defer_tables=defer_tables)
-
-
 def device_memory_mb(device):
     """The Warp memory pool's high-water mark on a CUDA ``device`` [MB] (None on the cpu or without a pool)."""
     import warp as wp
@@ -353,7 +343,8 @@ def run_device(name, quick, V, device, workers, solve_chunk=None, first_chunk=No
 def build_cost(design, tol, seed, kw, ks, n=8):
     """What one variant's build costs, after the timings, on variants ``ks`` (3 n + 1 of them, none built in
     this process before: the run's variants are 0..V-1, these V and beyond): the CPU time in this process of sampling and building ``n`` of them as the
-    pool does (``build_cpu_ms_per_variant``: _snapshot_group, the tables computed; ``build_s`` above it
+    pool does (``build_cpu_ms_per_variant``: rvtool.variants.multi_device.variant_snapshots, the pipeline's
+    build task, the tables computed; ``build_s`` above it
     is the pool's transfer and scheduling), the same with the tables deferred to the device
     (``build_cpu_ms_per_variant_deferred_tables``, --tables device; RV: its tables are shared, the same
     build) and as before shared tables (``build_cpu_ms_per_variant_own_tables``: each variant's whole
@@ -362,6 +353,7 @@ def build_cost(design, tol, seed, kw, ks, n=8):
     used it twice, a deferred one always)."""
     import pickle
     from rvtool.solver.model_snapshot import build_snapshot
+    from rvtool.variants.multi_device import variant_snapshots
     n = max(1, min(n, (len(ks) - 1) // 3))
     vdesign = rv_variant_design if design.__class__.__name__ != "CycloidDesign" else rd_variant_design
     build_snapshot(design, kw, shared_tables=True)            # this process's nominal tables and snapshot: not timed
@@ -369,11 +361,11 @@ def build_cost(design, tol, seed, kw, ks, n=8):
         from rvtool.solver.variant_snapshots import cycloid_variant_snapshots
         from rvtool.variants import Variant
         cycloid_variant_snapshots(design, [Variant()], kw)
-    _snapshot_group([(design, tol, seed, ks[-1], kw)])          # the RV tables' second use here: then by key
+    variant_snapshots([(design, tol, seed, ks[-1], kw)])          # the RV tables' second use here: then by key
     out = {}
     for label, defer, sel in (("", False, ks[:n]), ("_deferred_tables", True, ks[n:2 * n])):
         t = time.process_time()
-        got = _snapshot_group([(design, tol, seed, k, kw) for k in sel], defer_tables=defer)
+        got = variant_snapshots([(design, tol, seed, k, kw) for k in sel], defer_tables=defer)
         out["build_cpu_ms_per_variant" + label] = 1e3 * (time.process_time() - t) / n
         out["snapshot_kb" + label] = len(pickle.dumps(got[-1][1])) / 1024.0
     t = time.process_time()
