@@ -191,6 +191,17 @@ def te_rows(measured, dist, note):
     return rows
 
 
+def measured_summary(measured):
+    """The measurement file's figures for results.json: source, reading status and each specimen's range [arcsec]."""
+    return {"source": measured.source.citation(), "status": measured.source.status,
+            "specimens": [{"specimen": m.specimen, "low_arcsec": m.low * ARCSEC_PER_RAD,
+                           "high_arcsec": m.high * ARCSEC_PER_RAD,
+                           "peak_to_peak_arcsec": m.peak_to_peak * ARCSEC_PER_RAD,
+                           "paper_model_pp_arcsec": None if m.model_low is None else
+                           (m.model_high - m.model_low) * ARCSEC_PER_RAD, "conditions": m.conditions}
+                          for m in measured.transmission_error]}
+
+
 def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, variants=None):
     """The TE comparison of a shipped design, or None where it has no measurement or tolerance file: a dict
     with ``rows`` (for the validate table), ``distribution``, ``nominal_pp_arcsec``, ``records``,
@@ -230,13 +241,7 @@ def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, 
                          "seed": SEED, "torque_fraction": TE_TORQUE_FRACTION, "torque_Nm": torque,
                          "window_input_revolutions": te_window(design), "points_per_mesh": ppm,
                          "n_points": res["n_points"]},
-            "measured": {"source": measured.source.citation(), "status": measured.source.status,
-                         "specimens": [{"specimen": m.specimen, "low_arcsec": m.low * ARCSEC_PER_RAD,
-                                        "high_arcsec": m.high * ARCSEC_PER_RAD,
-                                        "peak_to_peak_arcsec": m.peak_to_peak * ARCSEC_PER_RAD,
-                                        "paper_model_pp_arcsec": None if m.model_low is None else
-                                        (m.model_high - m.model_low) * ARCSEC_PER_RAD, "conditions": m.conditions}
-                                       for m in measured.transmission_error]},
+            "measured": measured_summary(measured),
             "wall_s": time.perf_counter() - t0}
 
 
@@ -250,9 +255,16 @@ def te_plot(te, out_dir):
     import matplotlib.pyplot as plt
     x = [r["te_pp_arcsec"] for r in te["records"] if r["te_pp_arcsec"] is not None]
     fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    w = [r["window_pp_arcsec"] for r in te["records"] if r.get("window_pp_arcsec") is not None]
+    bins = np.histogram_bin_edges(x + w, bins=max(3, min(20, len(x) // 2))) if x else None
+    if w:           # the output-revolution run: its variants' first 19-revolution window beside it
+        ax.hist(w, bins=bins, color="none", edgecolor="C0", hatch="//", lw=0.8,
+                label=f"tolerance variants, {te['settings']['window_input_revolutions']}-revolution window")
     if x:
-        ax.hist(x, bins=max(3, min(20, len(x) // 2)), color="0.6", edgecolor="k", lw=0.5, label="tolerance variants")
-    ax.axvline(te["nominal_pp_arcsec"], color="k", ls=":", lw=1, label="nominal design")
+        ax.hist(x, bins=bins, color="0.6", edgecolor="k", lw=0.5, alpha=0.8,
+                label="tolerance variants" + (", output revolution" if w else ""))
+    if te["nominal_pp_arcsec"] is not None:
+        ax.axvline(te["nominal_pp_arcsec"], color="k", ls=":", lw=1, label="nominal design")
     for k, m in enumerate(te["measured"]["specimens"]):
         ax.axvline(m["peak_to_peak_arcsec"], color=f"C{k + 1}", lw=1.5, label=f"measured, {m['specimen']}")
         if m["paper_model_pp_arcsec"] is not None:

@@ -1,0 +1,472 @@
+"""TE over the measurement's own window, the output revolution (issue 30, Deliver 3): resumable units of
+quasi-static TE spread over a process pool.
+
+Yang et al. (Mech. Mach. Theory 163 (2021) 104384, Eq. (38)) measure the rotational TE over one revolution of the
+output. The long-period errors (the accumulated pitch of the housing's pins and of the wheels' lobes, the bore
+positions) have periods of up to one output revolution, so the sun/crank-gear window of
+:func:`rvtool.analysis.validate_te.te_window` (19 of rv80e's 153 input revolutions) gives a lower bound only. Here
+each TE run ("job": the nominal design, tolerance variant k, field f's one-at-a-time draw k, at a resolution of
+``points_per_mesh``) is cut into chunks of about :data:`CHUNK_POINTS` consecutive points of one angle grid
+(``i * mesh_period / points_per_mesh``); a chunk ("unit") is solved on its own (its first point by the static
+solver's cold start, the rest warm-started), and a job's TE is formed from the concatenated input and output
+angles, exactly as one run would (:func:`rvtool.observe.transmission.transmission_error`: the equilibrium is unique
+under the load, a cold start meets the warm-started sequence to solver tolerance; tests/test_te_revolution.py).
+
+A unit is keyed by the SHA-256 of its inputs: the drawn design (every field of the design dataclass), the torque,
+the angle step and the chunk's index range, so that a result kept in a folder serves any later run that asks for
+the same unit (``resume``), whatever its position in that run. A finished unit is written at once
+(``<store>/units/<key>.json``); no unit is started after a deadline less the longest unit seen so far.
+"""
+import dataclasses
+import hashlib
+import json
+import math
+import os
+import shutil
+import time
+
+import numpy as np
+
+from ..errors import RvtoolInputError, SolverFailure
+from ..units import ARCSEC_PER_RAD
+
+CHUNK_POINTS = 800
+"""Largest number of TE points of one unit: about 20 s of one core unloaded (measured 0.023 s per warm-started
+point of rv80e, 2 points per mesh, plus 3 s to build the variant and a cold start), so that 16 workers share a few
+hundred units evenly and a resumed run loses at most one unit per worker."""
+
+PRIOR_UNIT_S = 60.0
+"""Time a unit is assumed to take before the first one finishes (deadline planning only): about 3x the unloaded
+figure above, for a loaded host."""
+
+
+def design_digest(design, *, torque, step):
+    """SHA-256 (hex) of what a TE job solves: every field of the design dataclass (JSON, sorted keys, floats by
+    their shortest repr, arrays as lists), the output torque [N m] and the angle step [rad]."""
+    table = dataclasses.asdict(design)
+    text = json.dumps({"design": table, "torque": float(torque), "step": float(step), "protocol": "quasi_static_te"},
+                      sort_keys=True, default=lambda o: o.tolist() if hasattr(o, "tolist") else repr(o))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def unit_key(job_digest, i0, i1):
+    """Key of the unit of points [i0, i1) of a job."""
+    return hashlib.sha256(f"{job_digest}:{int(i0)}:{int(i1)}".encode()).hexdigest()
+
+
+def chunks(n, size=CHUNK_POINTS):
+    """[(i0, i1)] splitting range(n) into ceil(n / size) nearly equal consecutive parts."""
+    k = max(1, math.ceil(n / size))
+    edges = np.linspace(0, n, k + 1).round().astype(int)
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+
+
+def grid_points(input_revolutions, mesh_period, points_per_mesh):
+    """Number of grid points of ``input_revolutions`` at ``points_per_mesh`` points per mesh cycle."""
+    return int(round(input_revolutions * 2 * np.pi / mesh_period * points_per_mesh))
+
+
+def make_job(name, design, *, torque, mesh_period, points_per_mesh, input_revolutions, meta=None,
+             chunk_points=CHUNK_POINTS):
+    """A TE job: ``{"name", "digest", "design", "torque", "step", "n", "units": [(key, i0, i1)], "meta"}``."""
+    step = float(mesh_period) / points_per_mesh
+    n = grid_points(input_revolutions, mesh_period, points_per_mesh)
+    dg = design_digest(design, torque=torque, step=step)
+    return {"name": name, "digest": dg, "design": design, "torque": float(torque), "step": step, "n": n,
+            "points_per_mesh": points_per_mesh, "input_revolutions": float(input_revolutions),
+            "units": [(unit_key(dg, a, b), a, b) for a, b in chunks(n, chunk_points)], "meta": dict(meta or {})}
+
+
+def solve_unit(task):
+    """One unit (a spawn-pool task; ``task`` = (key, design, torque, step, i0, i1)): the quasi-static TE's input
+    and output angles at grid points i0 .. i1-1; a solver failure or bad input is recorded, never raised."""
+    key, design, torque, step, i0, i1 = task
+    from ..assembly import build
+    from ..protocols.precision import quasi_static_te
+    t0 = time.perf_counter()
+    out = {"key": key, "i0": i0, "i1": i1, "status": "ok", "error": None, "theta_in": None, "theta_out": None}
+    try:
+        model = build(design)
+        out["build_s"] = time.perf_counter() - t0
+        qs = quasi_static_te(model, torque=torque, input_angles=np.arange(i0, i1) * step)
+        th_in, th_out = np.asarray(qs["theta_in"], float), np.asarray(qs["theta_out"], float)
+        if not (np.all(np.isfinite(th_in)) and np.all(np.isfinite(th_out))):
+            raise RvtoolInputError("TE angles are not finite")
+        out.update(theta_in=th_in.tolist(), theta_out=th_out.tolist(), ratio=float(model.ratio),
+                   stats={k: v for k, v in qs["stats"].items() if isinstance(v, (int, float))})
+    except (SolverFailure, RvtoolInputError) as exc:        # recorded, never dropped silently
+        out.update(status="failed", error=f"{type(exc).__name__}: {exc}")
+    out["wall_s"] = time.perf_counter() - t0
+    out["pid"] = os.getpid()
+    return out
+
+
+class UnitStore:
+    """Finished units in ``<out>/units/<key>.json``; ``resume`` folders (their ``units/``) are read too, and a
+    unit found there is copied into ``out`` so that every stop leaves a folder complete in itself."""
+
+    def __init__(self, out_dir, resume=()):
+        self.dir = os.path.join(out_dir, "units")
+        os.makedirs(self.dir, exist_ok=True)
+        self.resume = [os.path.join(r, "units") for r in resume if r]
+        self.resumed = 0
+
+    def path(self, key):
+        return os.path.join(self.dir, f"{key}.json")
+
+    def get(self, key):
+        p = self.path(key)
+        if not os.path.exists(p):
+            for r in self.resume:
+                q = os.path.join(r, f"{key}.json")
+                if os.path.exists(q) and os.path.abspath(q) != os.path.abspath(p):
+                    shutil.copyfile(q, p)
+                    self.resumed += 1
+                    break
+            else:
+                return None
+        with open(p) as fh:
+            return json.load(fh)
+
+    def put(self, res):
+        tmp = self.path(res["key"]) + f".{os.getpid()}.tmp"
+        with open(tmp, "w") as fh:
+            json.dump(res, fh)
+        os.replace(tmp, self.path(res["key"]))
+
+
+def deadline_from(deadline_hhmm=None, budget_s=None, *, now=None):
+    """Wall-clock stop time [s since the epoch] from ``HH:MM`` (UTC, today; a time more than 12 h in the past is
+    tomorrow's) and/or a budget [s] from now: the earlier of the two, None for neither. A malformed HH:MM is an
+    RvtoolInputError naming the option."""
+    import datetime
+    now = time.time() if now is None else now
+    ends = []
+    if budget_s is not None:
+        if not budget_s > 0:
+            raise RvtoolInputError(f"--budget-s must be > 0 seconds; got {budget_s}")
+        ends.append(now + float(budget_s))
+    if deadline_hhmm:
+        try:
+            hh, mm = (int(x) for x in str(deadline_hhmm).split(":"))
+            if not (0 <= hh < 24 and 0 <= mm < 60):
+                raise ValueError
+        except ValueError:
+            raise RvtoolInputError(f"--deadline must be HH:MM (UTC, 00:00 .. 23:59); got {deadline_hhmm!r}") from None
+        t = datetime.datetime.fromtimestamp(now, datetime.timezone.utc).replace(hour=hh, minute=mm, second=0,
+                                                                                microsecond=0).timestamp()
+        if t < now - 12 * 3600:
+            t += 24 * 3600
+        ends.append(t)
+    return min(ends) if ends else None
+
+
+def run_units(jobs, store, *, workers=1, deadline=None, log=print, on_progress=None, progress_every_s=30.0):
+    """Solve every unit of ``jobs`` not already in ``store``, on ``workers`` spawn processes (one BLAS thread each;
+    1: in this process), the longest jobs' units first. No unit is started once the time left before ``deadline``
+    is below the longest unit seen so far (:data:`PRIOR_UNIT_S` before the first). ``on_progress()`` is called
+    at most every ``progress_every_s`` while units finish. Returns ``{"total", "kept", "solved", "failed",
+    "not_started", "unit_wall_s": [...], "stopped_by_deadline"}``."""
+    todo, kept = [], 0
+    for j in sorted(jobs, key=lambda j: -j["n"]):
+        for key, i0, i1 in j["units"]:
+            if store.get(key) is not None:
+                kept += 1
+            else:
+                todo.append((key, j["design"], j["torque"], j["step"], i0, i1))
+    total = kept + len(todo)
+    stats = {"total": total, "kept": kept, "solved": 0, "failed": 0, "not_started": 0, "unit_wall_s": [],
+             "stopped_by_deadline": False}
+    log(f"TE units: {total} ({kept} kept from earlier runs, {len(todo)} to solve on {workers} worker(s))")
+    longest = [PRIOR_UNIT_S]
+    last = [time.time()]
+
+    def may_start():
+        if deadline is None:
+            return True
+        return time.time() + max(longest) < deadline
+
+    def done(res):
+        store.put(res)
+        stats["solved"] += 1
+        stats["failed"] += res["status"] != "ok"
+        stats["unit_wall_s"].append(res["wall_s"])
+        if len(stats["unit_wall_s"]) == 1:
+            longest.clear()
+        longest.append(res["wall_s"])
+        log(f"  unit {stats['solved'] + kept}/{total}: {res['i1'] - res['i0']} points, {res['wall_s']:.1f} s"
+            + ("" if res["status"] == "ok" else f", {res['error']}"))
+        if on_progress is not None and time.time() - last[0] > progress_every_s:
+            last[0] = time.time()
+            on_progress()
+
+    if workers <= 1:
+        for i, t in enumerate(todo):
+            if not may_start():
+                stats["not_started"] = len(todo) - i
+                stats["stopped_by_deadline"] = True
+                break
+            done(solve_unit(t))
+    else:
+        import multiprocessing
+        from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+        from ..variants.cluster import single_thread_env
+        ctx = multiprocessing.get_context("spawn")       # a fresh interpreter: no forked Warp/Exudyn state
+        queue = list(reversed(todo))
+        with single_thread_env():                       # inherited by the spawned workers
+            ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+        try:
+            running = set()
+            while queue or running:
+                while queue and len(running) < workers and may_start():
+                    running.add(ex.submit(solve_unit, queue.pop()))
+                if not running:
+                    break
+                fin, running = wait(running, return_when=FIRST_COMPLETED)
+                for f in fin:
+                    done(f.result())
+            if queue:
+                stats["not_started"] = len(queue)
+                stats["stopped_by_deadline"] = True
+        finally:
+            ex.shutdown(wait=True, cancel_futures=True)
+    if stats["stopped_by_deadline"]:
+        log(f"deadline: {stats['not_started']} unit(s) not started (resume with --resume on this --out)")
+    return stats
+
+
+def job_te(job, store):
+    """A job's TE from its stored units: ``{"status": "ok"|"failed"|"missing", "error", "te_arcsec" (array over
+    the job's grid, zero at its first point), "pp_arcsec", "wall_s"}``."""
+    from ..observe.transmission import transmission_error
+    parts, errors, wall = [], [], 0.0
+    for key, _i0, _i1 in job["units"]:
+        r = store.get(key)
+        if r is None:
+            return {"status": "missing", "error": None, "te_arcsec": None, "pp_arcsec": None, "wall_s": None}
+        wall += r["wall_s"]
+        if r["status"] != "ok":
+            errors.append(f"points {r['i0']}..{r['i1'] - 1}: {r['error']}")
+        parts.append(r)
+    if errors:
+        return {"status": "failed", "error": "; ".join(errors), "te_arcsec": None, "pp_arcsec": None, "wall_s": wall}
+    th_in = np.concatenate([p["theta_in"] for p in parts])
+    th_out = np.concatenate([p["theta_out"] for p in parts])
+    te = transmission_error(th_in, th_out, parts[0]["ratio"], unwrap=False) * ARCSEC_PER_RAD
+    return {"status": "ok", "error": None, "te_arcsec": te, "pp_arcsec": float(np.ptp(te)), "wall_s": wall}
+
+
+def window_pps(te_arcsec, n_window):
+    """Peak-to-peak [arcsec] of each consecutive whole window of ``n_window`` points."""
+    te = np.asarray(te_arcsec)
+    return [float(np.ptp(te[i:i + n_window])) for i in range(0, len(te) - n_window + 1, n_window)]
+
+
+# -- the TE comparison over the output revolution (the full mode of cases/rv/te_measured_rv80e.py) -----------------
+
+RESOLUTION_PPM = (2, 4)
+"""Points per mesh cycle of the principal runs and of the resolution check (variant 0 again at the second)."""
+
+
+def _dist(values):
+    x = np.sort([v for v in values if v is not None])
+    if not len(x):
+        return None
+    return {"n": int(len(x)), "min": float(x[0]), "p5": float(np.percentile(x, 5)), "median": float(np.median(x)),
+            "p95": float(np.percentile(x, 95)), "max": float(x[-1])}
+
+
+def plan_revolution(design_name, design, rated_torque, *, variants=16, draws=1, resolution=True,
+                    chunk_points=CHUNK_POINTS, input_revolutions=None):
+    """The jobs of the comparison over one output revolution (|ratio| input revolutions): the nominal design,
+    tolerance variants 0 .. variants-1 (``sample_rv_design`` of the design's tolerance file, seed
+    :data:`rvtool.analysis.validate_te.SEED`), each field of the tolerance file alone for ``draws`` draws (the
+    one-at-a-time sensitivity), all at :data:`RESOLUTION_PPM` [0] points per mesh cycle, and variant 0 again at
+    :data:`RESOLUTION_PPM` [1] (``resolution``). ``input_revolutions`` (None: the output revolution) shortens the
+    runs for a smoke test only. Returns ``{"jobs", "settings", ...}`` for :func:`assemble`."""
+    from dataclasses import fields as dc_fields
+
+    from .. import designs
+    from ..assembly import build
+    from ..variants.rv_tolerances import RvToleranceSpec, load_rv_tolerances, sample_rv_design
+    from . import validate_te as VT
+    tol_name = designs.tolerances_of(design_name)
+    if tol_name is None:
+        raise RvtoolInputError(f"design {design_name!r} ships no tolerance file (<design>_tolerances.toml)")
+    spec = load_rv_tolerances(designs.path(tol_name))
+    model = build(design)
+    mesh, revs = float(model.mesh_period), abs(float(model.ratio))
+    revs = float(round(revs)) if abs(revs - round(revs)) < 1e-6 else revs
+    if input_revolutions is not None:
+        revs = float(input_revolutions)
+    torque = VT.TE_TORQUE_FRACTION * rated_torque
+    ppm, ppm_fine = RESOLUTION_PPM
+    kw = dict(torque=torque, mesh_period=mesh, input_revolutions=revs, chunk_points=chunk_points)
+    jobs = [make_job("nominal", design, points_per_mesh=ppm, meta={"group": "nominal"}, **kw)]
+    for k in range(int(variants)):
+        dv, drawn = sample_rv_design(spec, design, k, VT.SEED)
+        dev = {f: float(np.max(np.abs(np.asarray(v, float)))) for f, v in drawn.items()}
+        jobs.append(make_job(f"variant {k}", dv, points_per_mesh=ppm,
+                             meta={"group": "variants", "index": k, "deviations": dev}, **kw))
+        if k == 0 and resolution:
+            jobs.append(make_job(f"variant {k} at {ppm_fine} points per mesh", dv, points_per_mesh=ppm_fine,
+                                 meta={"group": "resolution", "index": k}, **kw))
+    for f in dc_fields(spec):
+        dist = getattr(spec, f.name)
+        if dist is None:
+            continue
+        one = RvToleranceSpec(**{f.name: dist})
+        for k in range(int(draws)):
+            dv, drawn = sample_rv_design(one, design, k, VT.SEED)
+            jobs.append(make_job(f"{f.name} draw {k}", dv, points_per_mesh=ppm,
+                                 meta={"group": "sensitivity", "field": f.name, "index": k,
+                                       "deviation": float(np.max(np.abs(np.asarray(drawn[f.name], float))))}, **kw))
+    n_win = grid_points(VT.te_window(design), mesh, ppm)
+    settings = {"tolerances": f"{tol_name}.toml", "variants": int(variants), "sensitivity_draws": int(draws),
+                "seed": VT.SEED, "torque_fraction": VT.TE_TORQUE_FRACTION, "torque_Nm": torque,
+                "input_revolutions": revs, "window_input_revolutions": VT.te_window(design),
+                "points_per_mesh": ppm, "resolution_points_per_mesh": ppm_fine if resolution else None,
+                "n_points": grid_points(revs, mesh, ppm), "window_points": n_win, "chunk_points": chunk_points,
+                "jobs": len(jobs), "units": sum(len(j["units"]) for j in jobs)}
+    return {"design_name": design_name, "jobs": jobs, "settings": settings, "mesh_period": mesh}
+
+
+def assemble(plan, store, measured_name=None):
+    """The results of a (possibly partial) run: ``rows`` (validate's table, over the output revolution),
+    ``distribution`` (the variants' output-revolution peak-to-peak), ``distribution_window`` (their first
+    19-revolution window, the quick mode's figure on the same grid), ``records``, ``nominal_pp_arcsec``,
+    ``resolution``, ``sensitivity`` (one at a time, over the revolution and the window), ``complete`` and
+    ``jobs_done`` / ``jobs_total``; the TE curves of the nominal design and variant 0 under ``curves``."""
+    from .. import designs
+    from ..designs.measured import load_measured
+    from . import validate_te as VT
+    te = {j["name"]: job_te(j, store) for j in plan["jobs"]}
+    for j in plan["jobs"]:
+        r = te[j["name"]]
+        nw = grid_points(plan["settings"]["window_input_revolutions"], plan["mesh_period"], j["points_per_mesh"])
+        r["windows_pp_arcsec"] = None if r["te_arcsec"] is None else window_pps(r["te_arcsec"], nw)
+    nom = te["nominal"]
+    nominal_pp = nom["pp_arcsec"]
+    records = []
+    for j in plan["jobs"]:
+        if j["meta"]["group"] != "variants":
+            continue
+        r = te[j["name"]]
+        w = r["windows_pp_arcsec"]
+        records.append({"index": j["meta"]["index"], "status": r["status"], "error": r["error"],
+                        "te_pp_arcsec": r["pp_arcsec"], "window_pp_arcsec": w[0] if w else None,
+                        "windows_pp_arcsec": w, "window_to_revolution_max": (max(w) / r["pp_arcsec"]) if w else None,
+                        "deviations": j["meta"]["deviations"], "wall_s": r["wall_s"]})
+    dist = _dist([r["te_pp_arcsec"] for r in records])
+    out = {"mode": "output_revolution", "distribution": dist,
+           "distribution_window": _dist([r["window_pp_arcsec"] for r in records]),
+           "nominal_pp_arcsec": nominal_pp, "records": records,
+           "n_failed": sum(r["status"] == "failed" for r in records),
+           "n_missing": sum(r["status"] == "missing" for r in records)}
+    # resolution: variant 0 at the two resolutions
+    res = [j for j in plan["jobs"] if j["meta"]["group"] == "resolution"]
+    if res:
+        fine, coarse = te[res[0]["name"]], te["variant 0"]
+        err = None if fine["pp_arcsec"] is None or coarse["pp_arcsec"] is None else fine["pp_arcsec"] - coarse[
+            "pp_arcsec"]
+        out["resolution"] = {"variant": 0, "points_per_mesh": list(RESOLUTION_PPM),
+                             "pp_arcsec": [coarse["pp_arcsec"], fine["pp_arcsec"]], "resolution_error_arcsec": err,
+                             "resolution_error_relative": None if err is None else err / fine["pp_arcsec"],
+                             "status": fine["status"], "error": fine["error"]}
+    # one at a time
+    fields = {}
+    for j in plan["jobs"]:
+        if j["meta"]["group"] != "sensitivity":
+            continue
+        f = fields.setdefault(j["meta"]["field"], {"te_pp_arcsec": [], "window_pp_arcsec": [], "errors": [],
+                                                   "deviation": 0.0})
+        r = te[j["name"]]
+        f["te_pp_arcsec"].append(r["pp_arcsec"])
+        f["window_pp_arcsec"].append(r["windows_pp_arcsec"][0] if r["windows_pp_arcsec"] else None)
+        f["errors"].append(r["error"] if r["status"] != "missing" else "not run (deadline)")
+        f["deviation"] = max(f["deviation"], j["meta"]["deviation"])
+    nom_win = nom["windows_pp_arcsec"][0] if nom["windows_pp_arcsec"] else None
+    for f in fields.values():
+        ok = [x for x in f["te_pp_arcsec"] if x is not None]
+        okw = [x for x in f["window_pp_arcsec"] if x is not None]
+        f["median_arcsec"] = float(np.median(ok)) if ok else None
+        f["excess_arcsec"] = None if not ok or nominal_pp is None else f["median_arcsec"] - nominal_pp
+        f["window_median_arcsec"] = float(np.median(okw)) if okw else None
+        f["window_excess_arcsec"] = None if not okw or nom_win is None else f["window_median_arcsec"] - nom_win
+    if fields:
+        def rank(key):
+            r = sorted(((v[key], k) for k, v in fields.items() if v[key] is not None), reverse=True)
+            return [k for _, k in r]
+        out["sensitivity"] = {"nominal_pp_arcsec": nominal_pp, "nominal_window_pp_arcsec": nom_win,
+                              "draws": plan["settings"]["sensitivity_draws"],
+                              "points_per_mesh": RESOLUTION_PPM[0], "over": "output revolution", "fields": fields,
+                              "ranking": rank("excess_arcsec"), "ranking_window": rank("window_excess_arcsec")}
+        out["sensitivity"]["dominant"] = (out["sensitivity"]["ranking"] or [None])[0]
+        out["sensitivity"]["dominant_window"] = (out["sensitivity"]["ranking_window"] or [None])[0]
+    # the comparison rows (the same schema as the quick mode's, over the output revolution)
+    meas_name = measured_name or designs.measured_of(plan["design_name"])
+    measured = load_measured(meas_name)
+    s = plan["settings"]
+    note = (f"{len(records)} variants ({s['tolerances']}), seed {s['seed']}; quasi-static TE at "
+            f"{s['torque_fraction']:g} T_R over one output revolution ({s['input_revolutions']:g} input revolutions, "
+            f"the measured definition, Yang et al. Eq. (38)), {s['points_per_mesh']} points per mesh cycle"
+            + ("" if dist is None or dist["n"] == len(records) else
+               f"; {len(records) - dist['n']} variant(s) not finished or failed"))
+    recs_rad = [{"te_pp_rad": None if r["te_pp_arcsec"] is None else r["te_pp_arcsec"] / ARCSEC_PER_RAD}
+                for r in records]
+    out["rows"] = VT.te_rows(measured, VT.te_distribution(recs_rad), note)
+    out["measured"] = VT.measured_summary(measured)
+    jobs_done = sum(te[j["name"]]["status"] != "missing" for j in plan["jobs"])
+    out.update(complete=jobs_done == len(plan["jobs"]), jobs_done=jobs_done, jobs_total=len(plan["jobs"]))
+    out["settings"] = {**s, "measured": f"{meas_name}.toml", "tolerances_commit": measured.tolerances_commit}
+    # curves for the plot (not in results.json: large)
+    out["curves"] = {"nominal": nom["te_arcsec"], "variant 0": te["variant 0"]["te_arcsec"] if records else None,
+                     "fine": te[res[0]["name"]]["te_arcsec"] if res else None}
+    return out
+
+
+def revolution_plots(r, out_dir):
+    """te_revolution.png (the nominal design's and variant 0's TE over the output revolution, variant 0 at both
+    resolutions) and te_sensitivity.png (each field's excess over the window and over the revolution); returns the
+    file names written."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    names = []
+    c = r.get("curves") or {}
+    if any(v is not None for v in c.values()):
+        fig, ax = plt.subplots(figsize=(7, 3.6))
+        for key, style in (("variant 0", dict(color="C0", lw=0.8)), ("fine", dict(color="C3", lw=0.5, ls="--")),
+                           ("nominal", dict(color="k", lw=0.8))):
+            y = c.get(key)
+            if y is None:
+                continue
+            y = np.asarray(y)
+            lab = {"variant 0": f"variant 0, {RESOLUTION_PPM[0]} points/mesh",
+                   "fine": f"variant 0, {RESOLUTION_PPM[1]} points/mesh", "nominal": "nominal design"}[key]
+            ax.plot(np.linspace(0, 360, len(y), endpoint=False), y - y.mean(), label=lab, **style)
+        ax.set(xlabel="output angle [deg]", ylabel="TE minus its mean [arcsec]",
+               title="quasi-static TE over one output revolution")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(os.path.join(out_dir, "te_revolution.png"), dpi=110)
+        plt.close(fig)
+        names.append("te_revolution.png")
+    s = r.get("sensitivity")
+    if s:
+        keys = list(s["fields"])
+        rev = [s["fields"][k]["excess_arcsec"] or 0.0 for k in keys]
+        win = [s["fields"][k]["window_excess_arcsec"] or 0.0 for k in keys]
+        fig, ax = plt.subplots(figsize=(7, 4))
+        yy = np.arange(len(keys))
+        ax.barh(yy - 0.2, win, height=0.4, color="0.6", label="19-revolution window")
+        ax.barh(yy + 0.2, rev, height=0.4, color="C0", label="output revolution")
+        ax.set_yticks(yy, keys, fontsize=7)
+        ax.set(xlabel="median TE peak-to-peak minus the nominal design's [arcsec]", title="one source at a time")
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(os.path.join(out_dir, "te_sensitivity.png"), dpi=110)
+        plt.close(fig)
+        names.append("te_sensitivity.png")
+    return names

@@ -1,0 +1,81 @@
+"""TE over the output revolution in resumable units (issue 30, Deliver 3; rvtool.analysis.te_revolution): the
+chunked TE equals one warm-started run, units are keyed by their inputs, resume keeps them, a deadline stops new
+ones."""
+import time
+
+import numpy as np
+import pytest
+
+import rvtool
+from rvtool import designs
+from rvtool.analysis import te_revolution as TR
+from rvtool.analysis import validate_te as VT
+from rvtool.errors import RvtoolInputError
+from rvtool.protocols.precision import quasi_static_te
+from rvtool.units import ARCSEC_PER_RAD
+from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
+
+
+def test_chunks_cover_the_grid_in_order():
+    assert TR.chunks(3120, 800) == [(0, 780), (780, 1560), (1560, 2340), (2340, 3120)]
+    assert TR.chunks(5, 800) == [(0, 5)]
+    c = TR.chunks(1001, 100)
+    assert c[0][0] == 0 and c[-1][1] == 1001 and all(a[1] == b[0] for a, b in zip(c, c[1:]))
+    assert max(b - a for a, b in c) <= 100
+
+
+def test_deadline_from_budget_and_utc_time():
+    now = 1_800_000_000.0                   # 2027-01-15 08:00 UTC
+    assert TR.deadline_from(None, None, now=now) is None
+    assert TR.deadline_from(None, 540, now=now) == now + 540
+    assert TR.deadline_from("09:30", None, now=now) == now + 5400
+    assert TR.deadline_from("09:30", 60, now=now) == now + 60           # the earlier of the two
+    assert TR.deadline_from("07:00", None, now=now) == now - 3600       # an hour ago: already past
+    late = now + 15 * 3600                  # 23:00 UTC
+    assert TR.deadline_from("01:00", None, now=late) == late + 2 * 3600  # 22 h ago: tomorrow's
+    for bad in ("9h30", "25:00", "12:61"):
+        with pytest.raises(RvtoolInputError, match="--deadline"):
+            TR.deadline_from(bad, None, now=now)
+    with pytest.raises(RvtoolInputError, match="--budget-s"):
+        TR.deadline_from(None, 0, now=now)
+
+
+def test_unit_keys_follow_the_inputs_not_the_position():
+    d = rvtool.load_design("rv80e")
+    spec = load_rv_tolerances(designs.path("rv80e_tolerances"))
+    a, _ = sample_rv_design(spec, d, 0, VT.SEED)
+    b, _ = sample_rv_design(spec, d, 0, VT.SEED)         # the same draw again
+    c, _ = sample_rv_design(spec, d, 1, VT.SEED)
+    k = TR.design_digest(a, torque=78.4, step=0.3)
+    assert TR.design_digest(b, torque=78.4, step=0.3) == k
+    assert len({k, TR.design_digest(c, torque=78.4, step=0.3), TR.design_digest(a, torque=78.5, step=0.3),
+                TR.design_digest(a, torque=78.4, step=0.31), TR.design_digest(d, torque=78.4, step=0.3)}) == 5
+    assert TR.unit_key(k, 0, 10) != TR.unit_key(k, 10, 20)
+
+
+def test_chunked_te_equals_one_run_and_resumes(tmp_path):
+    """rv80e variant 0 over one input revolution at 2 points per mesh (20 points) in 3 units, each started cold:
+    the TE formed from the units equals one warm-started run (the equilibrium is unique under the load; 1e-4
+    arcsec is 5e-10 rad, the static solver's tolerance scale); a second store resumes every unit, and a deadline
+    already past starts none."""
+    d = rvtool.load_design("rv80e")
+    dv, _ = sample_rv_design(load_rv_tolerances(designs.path("rv80e_tolerances")), d, 0, VT.SEED)
+    model = rvtool.build(dv)
+    torque = VT.TE_TORQUE_FRACTION * d.rated_torque
+    job = TR.make_job("v0", dv, torque=torque, mesh_period=model.mesh_period, points_per_mesh=2, input_revolutions=1,
+                      chunk_points=7)
+    assert job["n"] == 20 and len(job["units"]) == 3
+    store = TR.UnitStore(str(tmp_path / "a"))
+    st = TR.run_units([job], store, log=lambda *_: None)
+    assert st["solved"] == 3 and st["failed"] == 0 and not st["stopped_by_deadline"]
+    te = TR.job_te(job, store)
+    ref = quasi_static_te(model, torque=torque, input_angles=np.arange(20) * job["step"])["te"] * ARCSEC_PER_RAD
+    assert te["status"] == "ok" and np.max(np.abs(te["te_arcsec"] - ref)) < 1e-4
+    assert te["pp_arcsec"] > 0.1      # a variant's TE, not a constant
+    again = TR.UnitStore(str(tmp_path / "b"), resume=[str(tmp_path / "a")])
+    st = TR.run_units([job], again, log=lambda *_: None)
+    assert st["kept"] == 3 and st["solved"] == 0 and again.resumed == 3
+    assert TR.job_te(job, again)["pp_arcsec"] == te["pp_arcsec"]
+    late = TR.UnitStore(str(tmp_path / "c"))
+    st = TR.run_units([job], late, deadline=time.time() - 1, log=lambda *_: None)
+    assert st["not_started"] == 3 and st["stopped_by_deadline"] and TR.job_te(job, late)["status"] == "missing"
