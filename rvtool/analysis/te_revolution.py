@@ -17,6 +17,7 @@ the angle step and the chunk's index range, so that a result kept in a folder se
 the same unit (``resume``), whatever its position in that run. A finished unit is written at once
 (``<store>/units/<key>.json``); no unit is started after a deadline less the longest unit seen so far.
 """
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -161,12 +162,27 @@ def deadline_from(deadline_hhmm=None, budget_s=None, *, now=None):
     return min(ends) if ends else None
 
 
+@contextlib.contextmanager
+def _env(**values):
+    saved = {k: os.environ.get(k) for k in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
 def run_units(jobs, store, *, workers=1, deadline=None, log=print, on_progress=None, progress_every_s=30.0):
     """Solve every unit of ``jobs`` not already in ``store``, on ``workers`` spawn processes (one BLAS thread each;
     1: in this process), the longest jobs' units first. No unit is started once the time left before ``deadline``
     is below the longest unit seen so far (:data:`PRIOR_UNIT_S` before the first). ``on_progress()`` is called
     at most every ``progress_every_s`` while units finish. Returns ``{"total", "kept", "solved", "failed",
-    "not_started", "unit_wall_s": [...], "stopped_by_deadline"}``."""
+    "not_started", "unit_wall_s": [...], "stopped_by_deadline", "crashed": [errors]}`` (a crashed worker's unit
+    is not stored: its job stays missing, the run incomplete, a resume retries it)."""
     todo, kept = [], 0
     for j in sorted(jobs, key=lambda j: -j["n"]):
         for key, i0, i1 in j["units"]:
@@ -176,7 +192,7 @@ def run_units(jobs, store, *, workers=1, deadline=None, log=print, on_progress=N
                 todo.append((key, j["design"], j["torque"], j["step"], i0, i1))
     total = kept + len(todo)
     stats = {"total": total, "kept": kept, "solved": 0, "failed": 0, "not_started": 0, "unit_wall_s": [],
-             "stopped_by_deadline": False}
+             "stopped_by_deadline": False, "crashed": []}
     log(f"TE units: {total} ({kept} kept from earlier runs, {len(todo)} to solve on {workers} worker(s))")
     longest = [PRIOR_UNIT_S]
     last = [time.time()]
@@ -214,9 +230,10 @@ def run_units(jobs, store, *, workers=1, deadline=None, log=print, on_progress=N
         from ..variants.cluster import single_thread_env
         ctx = multiprocessing.get_context("spawn")       # a fresh interpreter: no forked Warp/Exudyn state
         queue = list(reversed(todo))
-        with single_thread_env():                       # inherited by the spawned workers
-            ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
-        try:
+        # the workers are spawned at submit time: the whole pool runs inside the environment they inherit (one
+        # BLAS thread each; no CUDA device, the units run on the CPU and need no context per worker)
+        with single_thread_env(), _env(CUDA_VISIBLE_DEVICES=""), \
+                ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
             running = set()
             while queue or running:
                 while queue and len(running) < workers and may_start():
@@ -225,12 +242,16 @@ def run_units(jobs, store, *, workers=1, deadline=None, log=print, on_progress=N
                     break
                 fin, running = wait(running, return_when=FIRST_COMPLETED)
                 for f in fin:
-                    done(f.result())
-            if queue:
-                stats["not_started"] = len(queue)
-                stats["stopped_by_deadline"] = True
-        finally:
-            ex.shutdown(wait=True, cancel_futures=True)
+                    try:
+                        res = f.result()
+                    except Exception as exc:   # a crashed worker: logged, the unit not stored (a resume retries it)
+                        stats["crashed"].append(f"{type(exc).__name__}: {exc}")
+                        log(f"  a unit crashed: {type(exc).__name__}: {exc}")
+                        continue
+                    done(res)
+        if queue:
+            stats["not_started"] = len(queue)
+            stats["stopped_by_deadline"] = True
     if stats["stopped_by_deadline"]:
         log(f"deadline: {stats['not_started']} unit(s) not started (resume with --resume on this --out)")
     return stats
