@@ -316,7 +316,11 @@ def plan_revolution(design_name, design, rated_torque, *, variants=16, draws=1, 
     if tol_name is None:
         raise RvtoolInputError(f"design {design_name!r} ships no tolerance file (<design>_tolerances.toml)")
     spec = load_rv_tolerances(designs.path(tol_name))
+    from ..protocols.precision import quasi_static_te
     model = build(design)
+    # one point here compiles the Warp kernels into the on-disk cache once, before the pool's workers would each
+    # compile them at the same time on a fresh host
+    quasi_static_te(model, torque=VT.TE_TORQUE_FRACTION * rated_torque, input_angles=[0.0])
     mesh, revs = float(model.mesh_period), abs(float(model.ratio))
     revs = float(round(revs)) if abs(revs - round(revs)) < 1e-6 else revs
     if input_revolutions is not None:
