@@ -212,5 +212,14 @@ def test_audit_relative_speeds_are_the_closed_form_and_skf_changes_only_the_bear
             assert pal[k] == pytest.approx(sum(r["palmgren_loss_W"] for r in rows if r["element"] == k), rel=1e-12)
         else:
             assert skf[k] == pal[k], k          # seals, churning (on Palmgren's M0), sliding: unchanged
+    # a constants override reaches only its own kind: the tapered rows' mu_EHL lowers the crank rows' sliding part
+    from rvtool.bearings.skf_friction import CONSTANTS
+    alt = L.rolling_audit(m, d, fs, q, v, skf_constants={
+        "tapered_roller_302": replace(CONSTANTS["tapered_roller_302"], mu_ehl=0.002)})
+    for a, r in zip(alt, rows):
+        if r["element"] == "crank_bearings":
+            assert a["skf_loss_W"] < r["skf_loss_W"]
+        else:
+            assert a["skf_loss_W"] == r["skf_loss_W"]
     with pytest.raises(RvtoolInputError, match="bearing_model"):
         L.efficiency_map(m, d, fs, bearing_model="harris")

@@ -20,6 +20,9 @@ Reported per design:
 - the catalogue's loss budget at each speed: the loss its efficiency implies, P_out (1/eta - 1), against the
   model's, and the excess;
 - the no-load running torque with each model (input 1500 r/min);
+- the SKF reference's uncertain constants at their other values (the needle set's R1 over the caged cylindrical
+  series, the tapered rows' mu_EHL at 0.002): the bearing loss at the audit state and the efficiency at the top
+  speed with that change;
 - the main bearing's P1 with Palmgren's definition for an angular-contact ball row, P1 = max(0.9 F_a cot(alpha) -
   0.1 F_r, F_r) (Harris & Kotzalas; the loss accounting takes the radial resultant): the loss it adds at 60 r/min.
 
@@ -75,18 +78,34 @@ def _audit_rows(m, d, fs):
         rows_pd.append(max(0.9 * row.axial_preload / math.tan(row.contact_angle) - 0.1 * fr, fr))
     dm = main["pitch_diameter_m"]
     added = (main["palmgren_f1"] * dm * (sum(rows_pd) - main["P1_N"])) * main["omega_rel_rad_s"]
+    skf_sens = {}
+    base = sum(r["skf_loss_W"] for r in rows)
+    for key, consts in _skf_variants().items():
+        tot = sum(r["skf_loss_W"] for r in L.rolling_audit(m, d, fs, q, v, skf_constants=consts))
+        skf_sens[key] = {"bearing_loss_W": tot, "delta_W": tot - base}
     sums = {e: sum(r["palmgren_loss_W"] for r in rows if r["element"] == e) for e in L.ROLLING_ELEMENTS}
     pl = L.part_losses(m, d, fs, q, v)
     consistency = max(abs(pl[e] - sums[e]) / pl[e] for e in L.ROLLING_ELEMENTS)
     return rows, kin, cf, {"P1_radial_N": main["P1_N"], "P1_palmgren_ball_rows_N": rows_pd,
-                           "loss_added_W": added}, consistency
+                           "loss_added_W": added}, consistency, skf_sens
+
+
+def _skf_variants():
+    """The SKF reference's `assumed` or uncertain constants at their other values: the needle set's R1 at
+    either end of the caged cylindrical-roller series (0.96e-6, 1.48e-6) and the tapered rows' mu_EHL at
+    0.002 (the value a public implementation of the 2018 catalogue uses)."""
+    from dataclasses import replace
+    from rvtool.bearings.skf_friction import CONSTANTS as C
+    return {"needle_R1_low": {"needle_roller": replace(C["needle_roller"], R1=0.96e-6)},
+            "needle_R1_high": {"needle_roller": replace(C["needle_roller"], R1=1.48e-6)},
+            "tapered_mu_ehl_0.002": {"tapered_roller_302": replace(C["tapered_roller_302"], mu_ehl=0.002)}}
 
 
 def run_design(name, loaded, cat, speeds, n_ang):
     d, note = L.loss_design(rvtool.load_design(designs.path(name)))
     m = rvtool.build(d)
     fs = loaded.central
-    rows, kin, cf, main_p1, consistency = _audit_rows(m, d, fs)
+    rows, kin, cf, main_p1, consistency, skf_sens = _audit_rows(m, d, fs)
     angles = tuple(float(a) for a in np.arange(n_ang) * m.mesh_period / n_ang)
     maps = {mod: L.efficiency_map(m, d, fs, output_speeds_rpm=speeds, input_angles=angles, bearing_model=mod)
             for mod in MODELS}
@@ -115,12 +134,18 @@ def run_design(name, loaded, cat, speeds, n_ang):
                         "excess_loss_skf_W": row["total_loss_skf_W"] - implied,
                         "churning_W": row["loss_palmgren_W"]["churning"]})
         by_speed.append(row)
+    top = by_speed[-1]
+    for v in skf_sens.values():
+        # the variant's change at the audit state applied to the angle-averaged loss at the top speed (the
+        # bearing loads move little over the mesh period)
+        v["eta_skf_top_speed_pct"] = 100 * top["P_out_W"] / (top["P_out_W"] + top["total_loss_skf_W"] + v["delta_W"])
     fig = cat.no_load[name]
     no_load = {mod: L.no_load_torque(m, d, fs, fig.input_speed_rpm, input_angles=angles, bearing_model=mod)
                for mod in MODELS}
     return {"variant": note, "ratio": abs(float(m.ratio)), "viscosity_at_case_temperature_m2_s": fs.viscosity,
             "kinematics_60rpm": kin, "closed_form_60rpm": cf, "audit_rows_60rpm": rows, "by_speed": by_speed,
             "main_bearing_P1": main_p1, "palmgren_rows_consistency_rel": consistency,
+            "skf_sensitivity_60rpm": skf_sens,
             "no_load": {"input_speed_rpm": fig.input_speed_rpm, "catalogue_Nm": fig.torque,
                         "palmgren_Nm": no_load["palmgren"]["total_Nm"], "skf_Nm": no_load["skf"]["total_Nm"],
                         "palmgren_by_part_Nm": no_load["palmgren"]["by_part_Nm"],

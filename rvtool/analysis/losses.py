@@ -258,10 +258,12 @@ def sun_mesh_geometry(design):
     return rw1, aw, r1 * r2 / (r1 + r2), min(design.sun_gear.face_width, design.crank_gear.face_width)
 
 
-def _skf_rows(bearing, fs, omega, load):
+def _skf_rows(bearing, fs, omega, load, constants=None):
     """[(row label, SkfConstants key, skf_moment dict)] of one mounting's rows at |omega| [rad/s] and the
-    mounting's radial resultant ``load`` [N] (rvtool.bearings.skf_friction; the loads per row below)."""
+    mounting's radial resultant ``load`` [N] (rvtool.bearings.skf_friction; the loads per row below).
+    ``constants``: {key: SkfConstants} replacing entries of ``skf_friction.CONSTANTS`` (a sensitivity)."""
     from ..bearings import skf_friction as S
+    C = {**S.CONSTANTS, **(constants or {})}
     from ..bearings.spec import AngularContactPair, CylindricalRollerBearing
     from ..bearings.tapered import TaperedPair
     nu = fs.viscosity
@@ -270,7 +272,7 @@ def _skf_rows(bearing, fs, omega, load):
         # d, D the raceway diameters; one row carries the mounting's radial resultant
         d = 2.0 * bearing.inner_radius
         D = d + 2.0 * bearing.roller_diameter
-        c = S.CONSTANTS["needle_roller"]
+        c = C["needle_roller"]
         return [("row", "needle_roller", S.skf_moment(c, speed=omega, pitch_diameter=0.5 * (d + D), bore=d, outside=D,
                                                       viscosity=nu, radial_load=load))]
     if isinstance(bearing, TaperedPair):
@@ -283,7 +285,7 @@ def _skf_rows(bearing, fs, omega, load):
             fr = 0.5 * load
             fa = max(bearing.axial_preload, 0.5 * fr / Y)
             out.append((f"row{k} ({size})", "tapered_roller_302",
-                        S.skf_moment(S.CONSTANTS["tapered_roller_302"], speed=omega, pitch_diameter=row.pitch_diameter,
+                        S.skf_moment(C["tapered_roller_302"], speed=omega, pitch_diameter=row.pitch_diameter,
                                      bore=d, outside=D, viscosity=nu, radial_load=fr, axial_load=fa, axial_factor=Y)))
         return out
     if isinstance(bearing, AngularContactPair):
@@ -292,7 +294,7 @@ def _skf_rows(bearing, fs, omega, load):
         for k, row in enumerate(bearing.rows):
             h = 0.5 * S.BALL_SECTION_OVER_DW * row.ball_diameter
             out.append((f"row{k}", "angular_contact_72B",
-                        S.skf_moment(S.CONSTANTS["angular_contact_72B"], speed=omega, pitch_diameter=row.pitch_diameter,
+                        S.skf_moment(C["angular_contact_72B"], speed=omega, pitch_diameter=row.pitch_diameter,
                                      bore=row.pitch_diameter - h, outside=row.pitch_diameter + h, viscosity=nu,
                                      radial_load=0.5 * load, axial_load=row.axial_preload)))
         return out
@@ -300,11 +302,12 @@ def _skf_rows(bearing, fs, omega, load):
                            "roller set, tapered pair, angular-contact pair")
 
 
-def rolling_audit(model, design, fs: FrictionSet, q, v, *, skf=True):
+def rolling_audit(model, design, fs: FrictionSet, q, v, *, skf=True, skf_constants=None):
     """One row per bearing mounting at the static state q moving at v: the element and mounting, the
     bearing type and rows, d_m [m], the rings' relative speed [rad/s and r/min], P1 [N], Palmgren's f0
     (summed over the rows), f1, M0, M1 [N m] and loss [W] (the friction set's accounting), and with
-    ``skf`` the SKF 2004 reference (rvtool.bearings.skf_friction) per row and in total [W]."""
+    ``skf`` the SKF 2004 reference (rvtool.bearings.skf_friction) per row and in total [W];
+    ``skf_constants`` replaces entries of its constants (:func:`_skf_rows`)."""
     from ..bearings.friction_element import ElementResultantLoads
     nu = fs.viscosity
     rows = []
@@ -324,7 +327,7 @@ def rolling_audit(model, design, fs: FrictionSet, q, v, *, skf=True):
                    "palmgren_f0": f0, "palmgren_f1": f1, "viscosity_m2_s": nu, "palmgren_M0_Nm": m0,
                    "palmgren_M1_Nm": m1, "palmgren_loss_W": (m0 + m1) * w}
             if skf:
-                parts = _skf_rows(m.bearing, fs, w, float(p)) if w > 0 else []
+                parts = _skf_rows(m.bearing, fs, w, float(p), skf_constants) if w > 0 else []
                 row["skf_rows"] = [{"row": lab, "constants": key, **r} for lab, key, r in parts]
                 row["skf_M_Nm"] = float(sum(r["M"] for _, _, r in parts))
                 row["skf_loss_W"] = row["skf_M_Nm"] * w
