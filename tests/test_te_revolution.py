@@ -79,3 +79,24 @@ def test_chunked_te_equals_one_run_and_resumes(tmp_path):
     late = TR.UnitStore(str(tmp_path / "c"))
     st = TR.run_units([job], late, deadline=time.time() - 1, log=lambda *_: None)
     assert st["not_started"] == 3 and st["stopped_by_deadline"] and TR.job_te(job, late)["status"] == "missing"
+
+
+def test_case_full_mode_writes_a_judged_result(tmp_path):
+    """The full mode of te_measured_rv80e end to end on a shortened grid (0.2 input revolutions: 4 points per job;
+    the nominal design, variant 0 and variant 0 at 4 points per mesh): rows, resolution, complete and the plots;
+    a resumed second call solves nothing."""
+    import json
+
+    from rvtool import casekit
+    case = casekit.import_case("rv/te_measured_rv80e")
+    argv = ["--variants", "1", "--sensitivity", "0", "--input-revolutions", "0.2"]
+    r = case.main(argv + ["--out", str(tmp_path / "a")])
+    assert r["complete"] and r["jobs_total"] == 3 and r["n_failed"] == 0
+    assert r["records"][0]["te_pp_arcsec"] > r["nominal_pp_arcsec"] > 0
+    assert r["resolution"]["pp_arcsec"][0] == r["records"][0]["te_pp_arcsec"]
+    assert {"complete", "resolution_error", "no_failed_variant"} <= set(r["checks"])
+    assert all((tmp_path / "a" / p).is_file() for p in r["plots"]) and "te_revolution.png" in r["plots"]
+    again = case.main(argv + ["--resume", str(tmp_path / "a"), "--out", str(tmp_path / "b")])
+    saved = json.loads((tmp_path / "b" / "results.json").read_text())
+    assert again["units"]["solved"] == 0 and again["units"]["kept"] == 3 and saved["complete"] is True
+    assert saved["records"][0]["te_pp_arcsec"] == r["records"][0]["te_pp_arcsec"]

@@ -178,13 +178,13 @@ def _env(**values):
 
 def run_units(jobs, store, *, workers=1, deadline=None, log=print, on_progress=None, progress_every_s=30.0):
     """Solve every unit of ``jobs`` not already in ``store``, on ``workers`` spawn processes (one BLAS thread each;
-    1: in this process), the longest jobs' units first. No unit is started once the time left before ``deadline``
+    1: in this process), in the order of ``jobs``. No unit is started once the time left before ``deadline``
     is below the longest unit seen so far (:data:`PRIOR_UNIT_S` before the first). ``on_progress()`` is called
     at most every ``progress_every_s`` while units finish. Returns ``{"total", "kept", "solved", "failed",
     "not_started", "unit_wall_s": [...], "stopped_by_deadline", "crashed": [errors]}`` (a crashed worker's unit
     is not stored: its job stays missing, the run incomplete, a resume retries it)."""
     todo, kept = [], 0
-    for j in sorted(jobs, key=lambda j: -j["n"]):
+    for j in jobs:          # in the plan's order: the principal comparison first where a deadline cuts the run
         for key, i0, i1 in j["units"]:
             if store.get(key) is not None:
                 kept += 1
@@ -328,15 +328,20 @@ def plan_revolution(design_name, design, rated_torque, *, variants=16, draws=1, 
     torque = VT.TE_TORQUE_FRACTION * rated_torque
     ppm, ppm_fine = RESOLUTION_PPM
     kw = dict(torque=torque, mesh_period=mesh, input_revolutions=revs, chunk_points=chunk_points)
+    # in the order of priority (a deadline cuts the run at the end): the principal comparison, the resolution, the
+    # one-at-a-time sensitivity
     jobs = [make_job("nominal", design, points_per_mesh=ppm, meta={"group": "nominal"}, **kw)]
+    fine = None
     for k in range(int(variants)):
         dv, drawn = sample_rv_design(spec, design, k, VT.SEED)
         dev = {f: float(np.max(np.abs(np.asarray(v, float)))) for f, v in drawn.items()}
         jobs.append(make_job(f"variant {k}", dv, points_per_mesh=ppm,
                              meta={"group": "variants", "index": k, "deviations": dev}, **kw))
         if k == 0 and resolution:
-            jobs.append(make_job(f"variant {k} at {ppm_fine} points per mesh", dv, points_per_mesh=ppm_fine,
-                                 meta={"group": "resolution", "index": k}, **kw))
+            fine = make_job(f"variant {k} at {ppm_fine} points per mesh", dv, points_per_mesh=ppm_fine,
+                            meta={"group": "resolution", "index": k}, **kw)
+    if fine is not None:
+        jobs.append(fine)
     for f in dc_fields(spec):
         dist = getattr(spec, f.name)
         if dist is None:
