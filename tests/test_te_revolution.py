@@ -16,6 +16,14 @@ from rvtool.units import ARCSEC_PER_RAD
 from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
 
 
+def test_orders_pick_the_harmonics_of_one_period():
+    """A curve of orders 1 and 40 (amplitudes 0.5 and 3 arcsec) over one period of 3120 points."""
+    x = np.arange(3120) / 3120 * 2 * np.pi
+    o = TR.orders(0.5 * np.sin(x + 0.3) + 3.0 * np.cos(40 * x) + 7.0, top=2)
+    assert o["order1_arcsec"] == pytest.approx(0.5, rel=1e-9)
+    assert [k for k, _ in o["top_orders"]] == [40, 1] and o["top_orders"][0][1] == pytest.approx(3.0, rel=1e-9)
+
+
 def test_chunks_cover_the_grid_in_order():
     assert TR.chunks(3120, 800) == [(0, 780), (780, 1560), (1560, 2340), (2340, 3120)]
     assert TR.chunks(5, 800) == [(0, 5)]
@@ -95,6 +103,7 @@ def test_case_full_mode_writes_a_judged_result(tmp_path):
     assert r["records"][0]["te_pp_arcsec"] > r["nominal_pp_arcsec"] > 0
     assert r["resolution"]["pp_arcsec"][0] == r["records"][0]["te_pp_arcsec"]
     assert {"complete", "resolution_error", "no_failed_variant"} <= set(r["checks"])
+    assert r["orders_per"] == "run of 0.2 input revolutions" and r["records"][0]["order1_arcsec"] >= 0
     assert all((tmp_path / "a" / p).is_file() for p in r["plots"]) and "te_revolution.png" in r["plots"]
     again = case.main(argv + ["--resume", str(tmp_path / "a"), "--out", str(tmp_path / "b")])
     saved = json.loads((tmp_path / "b" / "results.json").read_text())

@@ -278,6 +278,17 @@ def job_te(job, store):
     return {"status": "ok", "error": None, "te_arcsec": te, "pp_arcsec": float(np.ptp(te)), "wall_s": wall}
 
 
+def orders(te_arcsec, top=4):
+    """Harmonic content of a TE curve sampled evenly over one period (the output revolution): the amplitude
+    [arcsec] of order 1 (once per period) and the ``top`` orders of largest amplitude, [[order, amplitude]]."""
+    x = np.asarray(te_arcsec, float)
+    amp = 2.0 * np.abs(np.fft.rfft(x - x.mean())) / len(x)
+    amp[0] = 0.0
+    best = np.argsort(amp)[::-1][:top]
+    return {"order1_arcsec": float(amp[1]) if len(amp) > 1 else None,
+            "top_orders": [[int(k), float(amp[k])] for k in best]}
+
+
 def window_pps(te_arcsec, n_window):
     """Peak-to-peak [arcsec] of each consecutive whole window of ``n_window`` points."""
     te = np.asarray(te_arcsec)
@@ -323,6 +334,7 @@ def plan_revolution(design_name, design, rated_torque, *, variants=16, draws=1, 
     quasi_static_te(model, torque=VT.TE_TORQUE_FRACTION * rated_torque, input_angles=[0.0])
     mesh, revs = float(model.mesh_period), abs(float(model.ratio))
     revs = float(round(revs)) if abs(revs - round(revs)) < 1e-6 else revs
+    out_rev = revs                  # input revolutions of one output revolution
     if input_revolutions is not None:
         revs = float(input_revolutions)
     torque = VT.TE_TORQUE_FRACTION * rated_torque
@@ -359,7 +371,8 @@ def plan_revolution(design_name, design, rated_torque, *, variants=16, draws=1, 
                 "points_per_mesh": ppm, "resolution_points_per_mesh": ppm_fine if resolution else None,
                 "n_points": grid_points(revs, mesh, ppm), "window_points": n_win, "chunk_points": chunk_points,
                 "jobs": len(jobs), "units": sum(len(j["units"]) for j in jobs)}
-    return {"design_name": design_name, "jobs": jobs, "settings": settings, "mesh_period": mesh}
+    return {"design_name": design_name, "jobs": jobs, "settings": settings, "mesh_period": mesh,
+            "ratio": out_rev}
 
 
 def assemble(plan, store, measured_name=None):
@@ -387,9 +400,16 @@ def assemble(plan, store, measured_name=None):
         records.append({"index": j["meta"]["index"], "status": r["status"], "error": r["error"],
                         "te_pp_arcsec": r["pp_arcsec"], "window_pp_arcsec": w[0] if w else None,
                         "windows_pp_arcsec": w, "window_to_revolution_max": (max(w) / r["pp_arcsec"]) if w else None,
+                        **(orders(r["te_arcsec"]) if r["te_arcsec"] is not None else
+                           {"order1_arcsec": None, "top_orders": None}),
                         "deviations": j["meta"]["deviations"], "wall_s": r["wall_s"]})
     dist = _dist([r["te_pp_arcsec"] for r in records])
-    out = {"mode": "output_revolution", "distribution": dist,
+    # orders are per output revolution where the runs cover it (a shortened smoke run: per run length)
+    out = {"mode": "output_revolution", "distribution": dist, "orders_per": (
+               "output revolution" if abs(plan["settings"]["input_revolutions"] - plan["ratio"]) < 1e-9 else
+               f"run of {plan['settings']['input_revolutions']:g} input revolutions"),
+           "order1_distribution": _dist([r["order1_arcsec"] for r in records]),
+           "nominal_orders": orders(nom["te_arcsec"]) if nom["te_arcsec"] is not None else None,
            "distribution_window": _dist([r["window_pp_arcsec"] for r in records]),
            "nominal_pp_arcsec": nominal_pp, "records": records,
            "n_failed": sum(r["status"] == "failed" for r in records),
