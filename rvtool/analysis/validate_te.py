@@ -14,7 +14,9 @@ lcm(z_sun, z_crank) / z_sun input revolutions (19 for the RV-80E-153: 10 and 38 
 revolutions), during which the eccentric direction sweeps the pin ring several times (the crank
 revolutions plus the carrier's rotation). A full output revolution (153 input revolutions) costs
 8x more; the window's peak-to-peak is a lower bound of the output revolution's (the carrier's slow
-drift against the pin ring is left out), stated with every result.
+drift against the pin ring is left out), stated with every result. The comparison over the output
+revolution, the measured definition, is :mod:`rvtool.analysis.te_revolution` (the full mode of
+cases/rv/te_measured_rv80e.py), which reads every window off the same curves.
 """
 import math
 import time
@@ -132,27 +134,6 @@ def te_sensitivity(design, tolerances, *, points_per_mesh, torque, draws=1, seed
     return {"nominal_pp_arcsec": nominal, "draws": int(draws), "points_per_mesh": points_per_mesh,
             "fields": out, "dominant": ranked[-1][1] if ranked else None,
             "ranking": [k for _, k in reversed(ranked)]}
-
-
-def window_check(design, tolerances, *, k=0, points_per_mesh=2, torque, seed=SEED):
-    """How far the window's peak-to-peak falls below the output revolution's: variant k's TE over one output
-    revolution (|ratio| input revolutions); returns its peak-to-peak and that of each consecutive window [arcsec]."""
-    from ..assembly import build
-    from ..protocols.precision import quasi_static_te
-    from ..variants.rv_tolerances import load_rv_tolerances, sample_rv_design
-    dv, _ = sample_rv_design(load_rv_tolerances(tolerances), design, k, seed)
-    model = build(dv)
-    mesh = float(model.mesh_period)
-    per_rev = 2 * np.pi / mesh * points_per_mesh
-    n_win = int(round(te_window(design) * per_rev))
-    n = int(round(abs(model.ratio) * per_rev))
-    te = np.asarray(quasi_static_te(model, torque=torque, input_angles=np.arange(n) * mesh / points_per_mesh)["te"])
-    te = te * ARCSEC_PER_RAD
-    windows = [float(np.ptp(te[i:i + n_win])) for i in range(0, n - n_win + 1, n_win)]
-    return {"variant": k, "points_per_mesh": points_per_mesh, "input_revolutions": float(abs(model.ratio)),
-            "output_revolution_pp_arcsec": float(np.ptp(te)), "window_pp_arcsec": windows,
-            "window_to_revolution_min": min(windows) / float(np.ptp(te)),
-            "window_to_revolution_max": max(windows) / float(np.ptp(te))}
 
 
 def te_distribution(records):
