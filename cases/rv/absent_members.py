@@ -44,13 +44,16 @@ From the full run's budget (``stiffness_budget`` of the all-on state; --quick le
   raises those members' compliance by (1 - eps)^-0.8 - 1. Reported per EFFECTIVE_LENGTH_EPS, a sensitivity: the
   rollers' effective lengths are not in any read source.
 
-A break-even, not an estimate (the input is not in any read source):
+A break-even and a cited estimate:
 
 * ``carrier_joint``: the real carrier's end plate is bolted and pinned to the pillars; the model's carrier is one
   body. A joint in series at every pillar carries the end plate's half of the crank seats' load, as the pillar bound
   of ``rigidity_gap``: C_joint = (1/2)^2 / (n_p k_j R_p^2). Reported: the joint stiffness k_j* at which it adds
   JOINT_SHARE of the all-on compliance, as a multiple of the pillar's own fixed-guided stiffness k_p and as a
-  tangential stiffness per unit area of the pillar's face (k_j* / (pi r_p^2)).
+  tangential stiffness per unit area of the pillar's face (k_j* / (pi r_p^2)); and the joint's share with the
+  measured unit tangential contact stiffness of steel interfaces (UNIT_NORMAL_CONTACT_STIFFNESS x
+  TANGENTIAL_TO_NORMAL, Kono et al. 2012) over the pillar's face, the joint not slipping. Whether it slips depends on
+  the bolts' clamp, which no read source gives; the shear each pillar's joint carries at T_R is reported.
 
 Checks: the slice law reproduces the unsliced Palmgren law at gamma = 0 (SLICE_TOL) and its closed form matches
 quadrature in partial contact (QUAD_TOL); the central-difference K_t matches the budget's tangent in the full run
@@ -91,6 +94,16 @@ EFFECTIVE_LENGTH_EPS = 0.1
 """A 10 % shorter effective contact length: the sensitivity's step (no read source gives the rollers' chamfers)."""
 JOINT_SHARE = 0.05
 """Issue 30's skip threshold: a member under 5 % of the compliance may be skipped."""
+UNIT_NORMAL_CONTACT_STIFFNESS = (1e6 * 1e9, 2e6 * 1e9)
+"""N/m^3: measured unit normal contact stiffness of steel and cast-iron interfaces, "1-2 x 10^6 N/mm/mm^2" (Kono,
+Inagaki, Matsubara, Yamaji, Measurement of Contact Stiffness for Stiffness Estimation of Machine Tool Supports, Key
+Engineering Materials 523-524 (2012) 457-462, abstract as stored at scientific.net). The laboratory's own abstract
+page (mmc.me.kyoto-u.ac.jp) prints the figure with its exponent's superscript lost ("1-2107", 10^7 if so read): the
+lower reading is taken, the softer joint. Measured on machine-tool supports, not on a bolted carrier; the pressure
+is not in the abstract (contact stiffness rises with pressure; a bolt's clamp is a high one)."""
+TANGENTIAL_TO_NORMAL = (0.1, 0.2)
+"""The unit tangential contact stiffness is "1/10-1/5 of the unit normal contact stiffness" (Kono et al. 2012, as
+above)."""
 SLICE_TOL = 1e-12
 """The slice law at gamma = 0 against the unsliced law: both closed forms, round-off only."""
 QUAD_TOL = 1e-8
@@ -257,10 +270,18 @@ def carrier_joint(st):
     n_p, R_p, r_p = d.cranks.count, cs.pillar_circle_radius, cs.pillar_radius
     k_p = rg.pillar_stiffness(d)
     k_star = 0.25 / (n_p * R_p ** 2 * JOINT_SHARE * st.C)
+    area = math.pi * r_p ** 2
+    cited = sorted(kn * rt for kn in UNIT_NORMAL_CONTACT_STIFFNESS for rt in TANGENTIAL_TO_NORMAL)
+    share = [0.25 / (n_p * (kt * area) * R_p ** 2) / st.C for kt in (cited[0], cited[-1])]
     return {"k_joint_break_even_N_per_m": k_star, "over_pillar_stiffness": k_star / k_p,
-            "per_area_break_even_N_per_m3": k_star / (math.pi * r_p ** 2), "pillar_k_N_per_m": k_p,
+            "per_area_break_even_N_per_m3": k_star / area, "pillar_k_N_per_m": k_p,
             "pillar_shape": cs.pillar_shape, "share": JOINT_SHARE,
-            "formula": "C_joint = (1/2)^2 / (n_p k_j R_p^2) (the end plate's half of the seat loads through the pillars)"}
+            "cited_tangential_per_area_N_per_m3": [cited[0], cited[-1]],
+            "share_at_cited_softest": share[0], "share_at_cited_stiffest": share[1],
+            "cited_over_break_even": cited[0] / (k_star / area),
+            "shear_per_pillar_at_T_R_N": 0.5 * st.T / (n_p * R_p),
+            "formula": "C_joint = (1/2)^2 / (n_p k_j R_p^2) (the end plate's half of the seat loads through the pillars), "
+                       "k_j = k_t'' pi r_p^2 over the pillar's face, no slip"}
 
 
 def study(name, quick):
