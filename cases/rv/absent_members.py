@@ -44,6 +44,14 @@ From the full run's budget (``stiffness_budget`` of the all-on state; --quick le
   raises those members' compliance by (1 - eps)^-0.8 - 1. Reported per EFFECTIVE_LENGTH_EPS, a sensitivity: the
   rollers' effective lengths are not in any read source.
 
+Measured on the class design without the FE members:
+
+* ``friction_sign``: the validation designs are frictionless. Whether friction at the loaded contacts lowers a
+  loading branch's b/a is measured on rv40e as ``cases/cycloid/hysteresis_friction.py`` runs it (anchor friction
+  MU_FRICTION on the pin mesh and the involute stage, path (b), the catalogue sequence at 12.5 % steps; anchors are
+  refused beside the ported wheels, so the design is rv40e as shipped, its FE members off): the four branch fits
+  over 50-100 % T_R at MU_FRICTION against the same protocol at mu = 0.
+
 A break-even and a cited estimate:
 
 * ``carrier_joint``: the real carrier's end plate is bolted and pinned to the pillars; the model's carrier is one
@@ -57,7 +65,8 @@ A break-even and a cited estimate:
 
 Checks: the slice law reproduces the unsliced Palmgren law at gamma = 0 (SLICE_TOL) and its closed form matches
 quadrature in partial contact (QUAD_TOL); the central-difference K_t matches the budget's tangent in the full run
-(KT_TOL); every figure finite; the needle estimate's sign (e_i <= 0 for every roller, the convexity argument).
+(KT_TOL); every figure finite; the needle estimate's sign (e_i <= 0 for every roller, the convexity argument); the
+friction sign the page reads (both loading branches' fits with friction at least the frictionless ones).
 """
 import copy
 import math
@@ -110,6 +119,8 @@ QUAD_TOL = 1e-8
 """The slice law's closed form against adaptive quadrature in partial contact (quadrature's own tolerance 1e-12)."""
 KT_TOL = 2e-3
 """Central-difference K_t (truncation O(h^2) ~ 1e-4 of a smooth power law) against the budget's condensed tangent."""
+MU_FRICTION = 0.05
+"""Anchor friction of ``hysteresis_friction`` (its MU): the sign test's coefficient."""
 PATHS_OF_LENGTH = ("pins", "eccentric_bearings", "crank_bearings")
 """Budget paths whose law scales as Palmgren's l^-0.8 (pins: Palmgren or its ``line`` secant)."""
 
@@ -315,6 +326,19 @@ def study(name, quick):
     return out
 
 
+def friction_sign():
+    """Branch fits of rv40e's catalogue loop with anchor friction MU_FRICTION and without (module docstring)."""
+    hf = casekit.import_case("cycloid/hysteresis_friction")
+    t0 = time.perf_counter()
+    fits = {mu: hf.rv_quasi_static(mu, True)["figures"].branch_fits for mu in (0.0, MU_FRICTION)}
+    K = {mu: {b: float(f["K_Nm_per_arcmin"]) for b, f in fits[mu].items()} for mu in fits}
+    return {"mu": MU_FRICTION, "K_fit_frictionless_Nm_per_arcmin": K[0.0],
+            "K_fit_friction_Nm_per_arcmin": K[MU_FRICTION],
+            "ratio_to_frictionless": {b: K[MU_FRICTION][b] / K[0.0][b] for b in K[0.0]},
+            "fit_range": "50-100 % T_R, least squares per branch (hysteresis_friction's branch_fits)",
+            "wall_s": time.perf_counter() - t0}
+
+
 def slice_checks():
     l, Q, c = 0.010, 800.0, palmgren_c(0.010)
     flat = c * Q ** 0.9
@@ -331,6 +355,10 @@ def judge(r):
                                                   "the sliced law with a uniform approach is the unsliced Palmgren law"),
          "slice_law_quadrature": casekit.check(r["slice_checks"]["quadrature_rel_err"], QUAD_TOL, "<=",
                                                "closed form of the slice integral vs adaptive quadrature")}
+    fs = r["friction_sign"]["ratio_to_frictionless"]
+    c["friction_does_not_lower_loading"] = casekit.check(
+        min(fs["pos_loading"], fs["neg_loading"]), 1.0, ">=",
+        "the page's reading: anchor friction at the loaded contacts does not lower the loading branches' fit")
     for name, a in r["designs"].items():
         c[f"{name}_needle_sign"] = casekit.check(a["needle_misalignment"]["max_e_at_T_R_m"], 0.0, "<=",
                                                  "convexity: the mid-plane approach that carries a roller's load under "
@@ -348,6 +376,7 @@ def main(argv=None):
     names = DESIGNS_QUICK if args.quick else DESIGNS_FULL
     results = {"slice_checks": {"at_zero_tilt_rel_err": at0, "quadrature_rel_err": qerr},
                "designs": {n: study(n, args.quick) for n in names}}
+    results["friction_sign"] = friction_sign()
     casekit.verdict(results, judge)
     settings = {"quick": args.quick, "deriv_step": DERIV_STEP, "bore_ports": BORE_PORTS_QUICK if args.quick else BORE_PORTS,
                 "effective_length_eps": EFFECTIVE_LENGTH_EPS, "joint_share": JOINT_SHARE, "designs": list(names),
