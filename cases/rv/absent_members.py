@@ -73,6 +73,10 @@ A break-even and a cited estimate:
   TANGENTIAL_TO_NORMAL, Kono et al. 2012) over the pillar's face, the joint not slipping. Whether it slips depends on
   the bolts' clamp, which no read source gives; the shear each pillar's joint carries at T_R is reported.
 
+--quick: rv40e only (no budget), bore patches at BORE_PORTS_QUICK, the friction sign, 2 shipped tolerance variants
+(under a minute); full: rv40e and rv80e, BORE_PORTS, the budget's items, 32 shipped and 16 all-members-on tolerance
+variants (about 6 minutes on the loaded 2-core box).
+
 Checks: the slice law reproduces the unsliced Palmgren law at gamma = 0 (SLICE_TOL) and its closed form matches
 quadrature in partial contact (QUAD_TOL); the central-difference K_t matches the budget's tangent in the full run
 (KT_TOL); every figure finite; the needle estimate's sign (e_i <= 0 for every roller, the convexity argument); the
