@@ -75,7 +75,8 @@ A break-even and a cited estimate:
 
 --quick: rv40e only (no budget), bore patches at BORE_PORTS_QUICK, the friction sign, 2 shipped tolerance variants
 (under a minute); full: rv40e and rv80e, BORE_PORTS, the budget's items, 32 shipped and 16 all-members-on tolerance
-variants (about 6 minutes on the loaded 2-core box).
+variants, and the absent effects summed beside the compliance the catalogue's rigidity would need (``absent_sum``;
+about 7 minutes on the loaded 2-core box).
 
 Checks: the slice law reproduces the unsliced Palmgren law at gamma = 0 (SLICE_TOL) and its closed form matches
 quadrature in partial contact (QUAD_TOL); the central-difference K_t matches the budget's tangent in the full run
@@ -398,6 +399,29 @@ def tolerance_variants(quick):
     return out
 
 
+def absent_sum(name, a, tol):
+    """The measured and estimated absent effects of ``name`` summed as series compliances (first order) beside the
+    compliance the catalogue's rigidity would need: b/a (validate's all-on row) / catalogue - 1. The catalogue figure
+    carries its reading status."""
+    from rvtool.analysis.validate_members import rigidity_ba
+    from rvtool.designs.catalogue import load_catalogue
+    cat = load_catalogue(designs.catalogue_of(name))
+    fig = cat.figure("torsional_rigidity")
+    ba = rigidity_ba(all_on(name), cat)["value"]
+    parts = {"bore_patches": a["bore_patches"]["share_of_all_on"],
+             "needle_misalignment": a["needle_misalignment"]["share_of_all_on"],
+             "carrier_joint_no_slip_cited_softest": a["carrier_joint"]["share_at_cited_softest"]}
+    if "share_of_all_on" in a["crank_pair_tilt"]:
+        parts["crank_pair_tilt"] = a["crank_pair_tilt"]["share_of_all_on"]
+    if name == tol.get("design") and "all_on" in tol:
+        parts["manufacturing_errors_mean"] = 1.0 / tol["all_on"]["mean_ratio"] - 1.0
+    return {"parts": parts, "sum": float(sum(parts.values())), "ba_all_on_Nm_per_arcmin": ba,
+            "catalogue_Nm_per_arcmin": fig.value, "catalogue_status": fig.status,
+            "compliance_needed_for_catalogue": ba / fig.value - 1.0,
+            "left_out": "effective contact length (a sensitivity, no source), a slipping carrier joint and the cups' "
+                        "fit (no source), the test fixture"}
+
+
 def slice_checks():
     l, Q, c = 0.010, 800.0, palmgren_c(0.010)
     flat = c * Q ** 0.9
@@ -441,6 +465,9 @@ def main(argv=None):
                "designs": {n: study(n, args.quick) for n in names}}
     results["friction_sign"] = friction_sign()
     results["tolerance_variants"] = tolerance_variants(args.quick)
+    if not args.quick:
+        for n in names:
+            results["designs"][n]["absent_sum"] = absent_sum(n, results["designs"][n], results["tolerance_variants"])
     casekit.verdict(results, judge)
     settings = {"quick": args.quick, "deriv_step": DERIV_STEP, "bore_ports": BORE_PORTS_QUICK if args.quick else BORE_PORTS,
                 "effective_length_eps": EFFECTIVE_LENGTH_EPS, "joint_share": JOINT_SHARE, "designs": list(names),
