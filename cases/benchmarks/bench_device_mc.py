@@ -81,8 +81,8 @@ import numpy as np
 from rvtool import build, casekit, designs, load_design
 from rvtool.batched.device_rows_variants import device_rows_variants
 from rvtool.errors import SolverFailure
-from rvtool.variants.barrier_pool import warmed_pool as barrier_warmed_pool
 from rvtool.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
+from rvtool.variants.barrier_pool import warmed_pool as barrier_warmed_pool
 
 TE_TOL_ARCSEC = 1e-6            # issue 31: TE equal to 1e-6 arcsec
 LM_TOL_ARCMIN = 1e-6            # tests/test_backends_golden.py's lost-motion bound
