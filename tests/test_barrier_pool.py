@@ -61,3 +61,18 @@ def test_warn_mode_reports_a_missed_worker(tmp_path, capsys):
         Path(flag).touch()
         ex.shutdown(wait=True)
     busy.result()
+
+
+@pytest.mark.parametrize("one_blas_thread", [True, False])
+def test_one_blas_thread_pool_workers_start_with_one_thread(monkeypatch, one_blas_thread):
+    """A worker's OpenBLAS takes its thread count from the environment its interpreter starts with (numpy loads
+    before any initializer): a one-thread pool's workers start inside single_thread_env (session 6's started at
+    the first submit, after it had closed, with the parent's setting); the other mode keeps the parent's."""
+    from rvtool.variants import barrier_pool as BP
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "3")
+    pool = BP.barrier_pool(2, one_blas_thread=one_blas_thread, start_timeout_s=60.0)
+    try:
+        seen = set(pool.map(BP.env_at_start, [None] * 4))
+    finally:
+        pool.shutdown()
+    assert seen == ({"1"} if one_blas_thread else {"3"})

@@ -22,13 +22,16 @@ caller behaves as when it was measured:
   :func:`rvtool.variants.cluster.single_thread_env` and each helper runs
   :func:`rvtool.variants.montecarlo.init_helper`); False for ``bench_device_mc``'s pools (the
   Exudyn reference pool and the build pool keep the default BLAS threads of a plain
-  ProcessPoolExecutor, the baseline its speed-ups were measured against). What True does in fact
-  (probed on the 2-core CPU box, Python 3.11.7, numpy's scipy-openblas 0.3.31, through ctypes'
-  ``scipy_openblas_get_num_threads64_``): a spawn pool starts its processes at the first submit,
-  after :func:`~rvtool.variants.cluster.single_thread_env` has closed, and the initializer's module
-  imports numpy before ``init_helper`` sets the variables, so a helper's OpenBLAS keeps its
-  default thread count (2 there; 1 in a pool first submitted to inside ``single_thread_env``);
-  only what reads the variables later sees 1. Kept so, as the figures of record were measured.
+  ProcessPoolExecutor, the baseline its speed-ups were measured against). A spawn pool starts its
+  processes at submits, and a worker's OpenBLAS takes its thread count from the environment its
+  interpreter started with (numpy loads before any initializer runs). Session 6's pool was made
+  inside :func:`~rvtool.variants.cluster.single_thread_env` but first submitted to after it closed,
+  so its helpers kept the default OpenBLAS threads (probed on the 2-core CPU box through ctypes'
+  ``scipy_openblas_get_num_threads64_``: 2, against 1 for a pool first submitted to inside the
+  environment). True now starts every worker inside the environment at once (a start round at the
+  barrier), which is what the helpers were meant to have: on a 16-core GPU host, 16 helpers of 16
+  OpenBLAS threads each contended for the cores while they built the variants. The device figures of
+  record (``bench_device_mc``, ``bench_multi_gpu``, session 6) were measured before this fix.
 * ``timeout_s`` -- how long a warm-up task waits at the barrier for the others:
   ``multi_device.WARM_TIMEOUT_S`` (600 s: a whole pool's spawn and imports on a loaded GPU host)
   and ``bench_device_mc.WARM_TIMEOUT_S`` (120 s).
@@ -54,6 +57,10 @@ from concurrent.futures import ProcessPoolExecutor
 ON_MISSED = ("raise", "warn")
 """What :func:`warm_every_worker` does where the warm-up did not reach every worker (module docstring)."""
 
+_ENV_AT_START = os.environ.get("OPENBLAS_NUM_THREADS")
+"""In a worker of :func:`barrier_pool`: OPENBLAS_NUM_THREADS as the worker's interpreter started (before any
+initializer), which sets its OpenBLAS thread count (:func:`env_at_start`)."""
+
 _BARRIER = None
 """In a worker of :func:`barrier_pool`: the barrier of all the pool's workers (set by the pool's
 initializer), at which a warm-up task waits so that every worker runs exactly one."""
@@ -68,11 +75,14 @@ def _init_worker(barrier, one_blas_thread):
     _BARRIER = barrier
 
 
-def barrier_pool(workers, *, one_blas_thread):
+def barrier_pool(workers, *, one_blas_thread, start_timeout_s=600.0):
     """A ProcessPoolExecutor of ``workers`` spawned processes holding one barrier of all of them, for
     :func:`warm_every_worker`; ``one_blas_thread``: started in
     :func:`rvtool.variants.cluster.single_thread_env`, each worker running
-    :func:`rvtool.variants.montecarlo.init_helper` (else the default BLAS threads)."""
+    :func:`rvtool.variants.montecarlo.init_helper` (else the default BLAS threads); with
+    ``one_blas_thread`` every worker is started at once inside that environment (a round at the barrier,
+    each waiting at most ``start_timeout_s`` [s]; fewer started raises), so that none starts later
+    outside it."""
     from ..errors import RvtoolInputError
     if isinstance(workers, bool) or not isinstance(workers, numbers.Integral) or workers < 1:
         raise RvtoolInputError(f"workers = {workers!r} is outside the valid range [1, inf) (integer)")
@@ -84,7 +94,28 @@ def barrier_pool(workers, *, one_blas_thread):
         return ProcessPoolExecutor(**kw)
     from .cluster import single_thread_env
     with single_thread_env():
-        return ProcessPoolExecutor(**kw)
+        pool = ProcessPoolExecutor(**kw)
+        try:
+            # the processes spawn at these submits, inside the environment: one OpenBLAS thread each
+            started = len(set(pool.map(_start_task, [float(start_timeout_s)] * workers)))
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+    if started != workers:
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise RuntimeError(f"barrier_pool: {started} of {workers} workers started within {start_timeout_s:g} s")
+    return pool
+
+
+def _start_task(timeout_s):
+    """A worker's start round (:func:`barrier_pool`): wait for every worker to have started; its pid."""
+    _BARRIER.wait(timeout_s)
+    return os.getpid()
+
+
+def env_at_start(_=None):
+    """OPENBLAS_NUM_THREADS as this worker's interpreter started (None: unset)."""
+    return _ENV_AT_START
 
 
 def warm_every_worker(pool, workers, warm, jobs, *, timeout_s, on_missed):

@@ -189,7 +189,7 @@ def helper_pool(host_workers):
         import atexit
 
         from .barrier_pool import barrier_pool
-        pool = barrier_pool(int(host_workers), one_blas_thread=True)
+        pool = barrier_pool(int(host_workers), one_blas_thread=True, start_timeout_s=WARM_TIMEOUT_S)
         atexit.register(pool.shutdown, wait=False, cancel_futures=True)
         _POOLS[host_workers] = pool
     return _POOLS[host_workers]
