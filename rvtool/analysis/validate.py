@@ -374,7 +374,8 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             assumed=None, band=True, variant=True, te=True, members=True, members_samples=None, members_workers=None, log=print):
+             assumed=None, band=True, variant=True, te=True, members=True, members_samples=None, members_workers=None,
+             log=print, runner=None, members_checkpoint=None, members_quick_numerics=None, te_reuse=None):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
@@ -387,16 +388,93 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     ships a ``<design>_measured.toml`` and a tolerance file); members: False skips the all-members-on
     rigidity row (:mod:`rvtool.analysis.validate_members`; it runs where the design ships a
     ``<design>_members.toml``), members_samples its Latin-hypercube size (None: that module's default),
-    members_workers its processes (None: ``workers``)."""
+    members_workers its processes (None: ``workers``).
+
+    runner: a :class:`rvtool.analysis.workunits.UnitRunner` through which every costly, independent part runs as a
+    unit keyed by the digest of its inputs (the central loop, the rated state, the carrier's and the moment's side
+    figures, the ratio variant, each Latin-hypercube and tornado loop, each all-members-on b/a, each TE variant,
+    the efficiency curve): the full run spreads them over a process pool, stops starting them at a deadline and
+    resumes them (cases/rv/validate_rv.py); all of one design's units are submitted before any is waited for,
+    except the tornado's, which follow the band's screening. None: a runner of ``workers`` processes (today's
+    serial path for 1). A unit not started before the runner's deadline raises
+    :class:`~rvtool.analysis.workunits.DeadlineReached` out of this function (the finished units are stored).
+    members_checkpoint: a checkpoint of cases/rv/members_band.py whose samples the all-members-on row takes where
+    the draw digests match (:func:`rvtool.analysis.validate_members.members_rigidity`); members_quick_numerics:
+    the all-members-on row on the quick meshes (None: as ``quick``; the full run of the case passes True, the
+    meshes of members_band's band); te_reuse: results.json files of te_measured_rv80e whose TE comparison is taken
+    where its inputs digest equals this one's (:func:`rvtool.analysis.validate_te.te_comparison`)."""
+    from .workunits import UnitRunner, digest, file_digest
+    own_runner = runner is None
+    if own_runner:
+        runner = UnitRunner(workers=workers, log=log)
+    try:
+        return _validate(design, quick=quick, out_dir=out_dir, samples=samples, workers=workers, seed=seed,
+                         tornado_keys=tornado_keys, assumed=assumed, band=band, variant=variant, te=te,
+                         members=members, members_samples=members_samples, members_workers=members_workers, log=log,
+                         runner=runner, members_checkpoint=members_checkpoint,
+                         members_quick_numerics=members_quick_numerics, te_reuse=te_reuse, digest=digest,
+                         file_digest=file_digest)
+    finally:
+        if own_runner:
+            runner.close()
+
+
+def _central_unit(table, catalogue, step):
+    """The central loop (two cycles, repeatability checked) of a design table: a unit."""
+    from ..assembly.topologies import design_from_table
+    return _loop(design_from_table(table), catalogue, step)
+
+
+def _rated_unit(table, catalogue, quick):
+    """The rated state of a design table (output torque -T_R sign(ratio), input angle 0): its compliance budget,
+    Hertz peaks, the bearings' lives over a crank revolution and the model's ratio: a unit."""
+    from ..assembly import build
+    from ..assembly.topologies import design_from_table
+    from ..protocols.budget import stiffness_budget
+    from ..solver.static import StaticSolver
+    d = design_from_table(table)
+    model = build(d)
+    model.set_output_torque(-np.sign(model.ratio) * catalogue.test.rated_torque)
+    solver = StaticSolver(model)
+    q = solver.solve(0.0)
+    budget = stiffness_budget(model, q)
+    peaks = contact_pressures(d, model, q)
+    # the bearings' mean load over a crank revolution (after the budget and pressures of q: the model's
+    # input angle moves)
+    n_life = QUICK_LIFE_STATES if quick else LIFE_STATES
+    span = crank_revolution_input_angle(d, model)
+    life_angles = [k * span / n_life for k in range(n_life)]
+    life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
+    lives = bearing_lives(d, model, life_states, catalogue)
+    return {"budget": budget, "peaks": peaks, "lives": lives, "ratio": float(model.ratio), "n_life": n_life}
+
+
+def _carrier_unit(table, T_R, quick):
+    from ..assembly.topologies import design_from_table
+    from .budget import carrier_share_figure
+    return carrier_share_figure(design_from_table(table), T_R, quick=quick)
+
+
+def _moment_unit(table, catalogue, assumed, quick):
+    from ..assembly.topologies import design_from_table
+    return moment_rigidity_figure(design_from_table(table), catalogue, assumed, quick=quick)
+
+
+def _efficiency_unit(name, table, quick):
+    from ..assembly.topologies import design_from_table
+    from .losses import validate_efficiency
+    return validate_efficiency(name, design_from_table(table), quick=quick)
+
+
+def _validate(design, *, quick, out_dir, samples, workers, seed, tornado_keys, assumed, band, variant, te, members,
+              members_samples, members_workers, log, runner, members_checkpoint, members_quick_numerics, te_reuse,
+              digest, file_digest):
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
     want_band, want_variant = bool(band), bool(variant)
     from .. import designs
-    from ..assembly import build
     from ..assembly.topologies import design_from_table, read_table
     from ..designs.catalogue import check_assumed_middle, load_assumed, load_catalogue, set_key
-    from ..protocols.budget import stiffness_budget
-    from ..solver.static import StaticSolver
     t0 = time.perf_counter()
     cat_name = designs.catalogue_of(design)
     if cat_name is None:
@@ -420,44 +498,35 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         log(f"note: the design's rated_torque {d.rated_torque} differs from the catalogue's T_R {T_R}; the "
             "catalogue's is used")
     n_samples = samples if samples is not None else (QUICK_SAMPLES if quick else SAMPLES)
-    log(f"validate {design}: central loop")
-    central = _loop(d, catalogue, QUICK_STEP if quick else FULL_STEP)
-    fig_c = _figures(central)
-    rep = central["repeatability"]
-    hl_err = central["metrics"].hysteresis_loss.error
-    # rated state: lives, pressures, budget
-    model = build(d)
-    model.set_output_torque(-np.sign(model.ratio) * T_R)
-    solver = StaticSolver(model)
-    q = solver.solve(0.0)
-    budget = stiffness_budget(model, q)
-    peaks = contact_pressures(d, model, q)
-    # the bearings' mean load over a crank revolution (after the budget and pressures of q: the model's
-    # input angle moves)
-    n_life = QUICK_LIFE_STATES if quick else LIFE_STATES
-    span = crank_revolution_input_angle(d, model)
-    life_angles = [k * span / n_life for k in range(n_life)]
-    life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
-    lives = bearing_lives(d, model, life_states, catalogue)
-    from .budget import carrier_share_figure
-    carrier_side = carrier_share_figure(d, T_R, quick=quick)
-    log(f"validate {design}: moment rigidity (spatial carrier)")
-    moment = moment_rigidity_figure(d, catalogue, assumed, quick=quick)
-    # ratio variant
-    log(f"validate {design}: ratio variant" + ("" if want_variant else " skipped"))
-    try:
-        if not want_variant:
-            raise RuntimeError("skipped (variant=False: --quick of the case for a costly design)")
+    # every independent unit of this design is submitted first (a pool runs them together), then waited for
+    cat_id = file_digest(catalogue.path)
+    assumed_id = None if assumed is None else file_digest(assumed.path)
+
+    def loop_key(t, step, repeat):
+        return digest("validate.loop", {"table": t, "catalogue": cat_id, "step": step, "repeat": repeat})
+    log(f"validate {design}: central loop, rated state, side figures")
+    step_c = QUICK_STEP if quick else FULL_STEP
+    f_central = runner.submit(_central_unit, table, catalogue, step_c, key=loop_key(table, step_c, True),
+                              kind="central_loop")
+    f_rated = runner.submit(_rated_unit, table, catalogue, quick, kind="rated_state",
+                            key=digest("validate.rated", {"table": table, "catalogue": cat_id, "quick": quick}))
+    f_carrier = runner.submit(_carrier_unit, table, T_R, quick, kind="carrier_share",
+                              key=digest("validate.carrier", {"table": table, "T_R": T_R, "quick": quick}))
+    f_moment = runner.submit(_moment_unit, table, catalogue, assumed, quick, kind="moment_rigidity",
+                             key=digest("validate.moment", {"table": table, "catalogue": cat_id,
+                                                            "assumed": assumed_id, "quick": quick}))
+    f_variant = None
+    if want_variant:
         vt, v_ratio = ratio_variant(table)
-        v_fig = _figures(_loop(design_from_table(vt), catalogue, SAMPLE_STEP, repeat=False))
-        variant = {"ratio": v_ratio, "ratio_central": float(model.ratio), "rigidity": v_fig["torsional_rigidity"],
-                   "rel_diff": v_fig["torsional_rigidity"] / fig_c["torsional_rigidity"] - 1.0,
-                   "first_stage": {"sun_gear.n_teeth": vt["sun_gear"]["n_teeth"],
-                                   "crank_gear.n_teeth": vt["crank_gear"]["n_teeth"]}}
-    except Exception as exc:     # reported in the table, not fatal: the variant is a side check
-        variant = {"error": f"{type(exc).__name__}: {exc}"}
-    # Latin hypercube + tornado over the assumed ranges
-    unc = None
+        f_variant = runner.submit(_sample, (vt, catalogue), key=loop_key(vt, SAMPLE_STEP, False), kind="loop")
+    from .losses import load_efficiency_catalogue, load_friction_set
+    f_eff = runner.submit(_efficiency_unit, design, table, quick, kind="efficiency",
+                          key=digest("validate.efficiency", {
+                              "design": design, "table": table, "quick": quick,
+                              "efficiency_catalogue": file_digest(load_efficiency_catalogue().path),
+                              "friction_set": file_digest(load_friction_set().path)}))
+    # Latin hypercube over the assumed ranges (the tornado follows the band's screening)
+    f_lhs = None
     if assumed is not None:
         from scipy.stats import qmc
         keys = [a.key for a in assumed.inputs]
@@ -468,9 +537,53 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
             for a, uj in zip(assumed.inputs, u):
                 t = set_key(t, a.key, a.at(uj))
             return t
-
-        log(f"validate {design}: {n_samples} Latin-hypercube samples ({workers} worker(s))")
+        log(f"validate {design}: {n_samples} Latin-hypercube samples ({runner.workers} worker(s))")
         ts = time.perf_counter()
+        f_lhs = [runner.submit(_sample, (t, catalogue), key=loop_key(t, SAMPLE_STEP, False), kind="loop")
+                 for t in (table_of(u) for u in U)]
+    members_row = None
+    if members:
+        from .validate_members import members_rigidity
+        from ..designs.catalogue import load_assumed as _load_assumed
+        # the members' band is over the design's OWN assumed ranges (as cases/rv/members_band.py draws it), not
+        # over a ranges file given for the base band (rv40e's needle-clearance range)
+        own = designs.assumed_of(design)
+        base = _load_assumed(own) if own else None
+        m_quick = quick if members_quick_numerics is None else bool(members_quick_numerics)
+        f_members = members_rigidity(design, table, catalogue, base, quick=m_quick, samples=members_samples,
+                                     seed=seed, workers=members_workers or workers, log=log, runner=runner,
+                                     checkpoint=members_checkpoint, defer=True)
+    f_te = _te_measured(design, d, T_R, quick=quick, want=te, log=log, runner=runner, reuse=te_reuse)
+    # waited for in the order they were submitted
+    central = f_central.result()
+    fig_c = _figures(central)
+    rep = central["repeatability"]
+    hl_err = central["metrics"].hysteresis_loss.error
+    rated = f_rated.result()
+    budget, peaks, lives, n_life = rated["budget"], rated["peaks"], rated["lives"], rated["n_life"]
+    carrier_side = f_carrier.result()
+    log(f"validate {design}: moment rigidity (spatial carrier)")
+    moment = f_moment.result()
+    # ratio variant
+    log(f"validate {design}: ratio variant" + ("" if want_variant else " skipped"))
+    try:
+        if not want_variant:
+            raise RuntimeError("skipped (variant=False: --quick of the case for a costly design)")
+        v_res, v_err = f_variant.result()
+        if v_res is None:
+            raise RuntimeError(v_err)
+        v_fig = v_res
+        variant = {"ratio": v_ratio, "ratio_central": rated["ratio"], "rigidity": v_fig["torsional_rigidity"],
+                   "rel_diff": v_fig["torsional_rigidity"] / fig_c["torsional_rigidity"] - 1.0,
+                   "first_stage": {"sun_gear.n_teeth": vt["sun_gear"]["n_teeth"],
+                                   "crank_gear.n_teeth": vt["crank_gear"]["n_teeth"]}}
+    except Exception as exc:     # reported in the table, not fatal: the variant is a side check
+        if type(exc).__name__ == "DeadlineReached":
+            raise
+        variant = {"error": f"{type(exc).__name__}: {exc}"}
+    # Latin hypercube + tornado over the assumed ranges
+    unc = None
+    if assumed is not None:
         ck = None
         if out_dir is not None:
             os.makedirs(out_dir, exist_ok=True)
@@ -480,7 +593,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                                      "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"], "pressures_Pa": peaks,
                                      "ratio_variant": variant, "U": U, "keys": keys}), fh, indent=1)
             ck = os.path.join(out_dir, "samples_partial.json")
-        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log, ck)
+        lhs = _gather(f_lhs, log, ck)
         wall_lhs = time.perf_counter() - ts
         order, screen = screening(keys, U, lhs)
         n_tor = len(keys) if tornado_keys is None else min(len(keys), int(tornado_keys))
@@ -492,8 +605,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                 x[j] = v
                 tornado_pts.append(x)
         log(f"validate {design}: tornado over {n_tor} of {len(keys)} keys ({len(tornado_pts)} loops)")
-        tor = _map(_sample, [(table_of(x), catalogue) for x in tornado_pts], workers, log,
-                   None if ck is None else os.path.join(out_dir, "tornado_partial.json"))
+        tor = _gather([runner.submit(_sample, (t, catalogue), key=loop_key(t, SAMPLE_STEP, False), kind="loop")
+                       for t in (table_of(x) for x in tornado_pts)], log,
+                      None if ck is None else os.path.join(out_dir, "tornado_partial.json"))
         wall_samples = time.perf_counter() - ts
         res = lhs + tor
         failures = [e for f, e in lhs if f is None]
@@ -517,7 +631,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                                      f"motion over the {n_samples} Latin-hypercube samples (screening)"),
                "failures": failures, "band": band, "tornado": tornado, "seed": seed,
                "fraction_within_lost_motion_max": frac, "wall_s": wall_samples,
-               "per_sample_s": wall_samples / max(1, len(res)) * workers}
+               "per_sample_s": wall_samples / max(1, len(res)) * runner.workers}
     band = (unc or {}).get("band") or {}
     pts, pts_source = rigidity_points(catalogue)
     rows = (
@@ -529,21 +643,15 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         + _rows("hysteresis_loss", fig_c["hysteresis_loss"], "arcmin", catalogue, band.get("hysteresis_loss"),
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
-    members_row = None
     if members:
-        from .validate_members import members_rigidity
-        from ..designs.catalogue import load_assumed as _load_assumed
-        base = assumed if assumed is not None else (_load_assumed(assumed_name) if assumed_name else None)
-        members_row = members_rigidity(design, table, catalogue, base, quick=quick, samples=members_samples,
-                                       seed=seed, workers=members_workers or workers, log=log)
+        members_row = f_members()
     at = sum(r["figure"] == "torsional_rigidity" for r in rows)               # beside the file's rigidity rows
     rows[at:at] = [] if members_row is None else members_row.pop("rows")
     rows += moment["rows"]
-    te_measured = _te_measured(design, d, T_R, quick=quick, want=te, log=log)
+    te_measured = None if f_te is None else f_te()
     rows += (te_measured or {}).get("rows", [])
     log(f"validate {design}: efficiency and no-load running torque (rvtool.analysis.losses)")
-    from .losses import validate_efficiency
-    efficiency = validate_efficiency(design, d, quick=quick)
+    efficiency = dict(f_eff.result())
     rows += efficiency.pop("rows")
     for fam in ("eccentric_bearings", "crank_bearings"):
         vals = [v["L10_h"] for k, v in lives.items() if v["family"] == fam and v["L10_h"] is not None]
@@ -601,7 +709,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                                                 if d.housing else None}},
         "ratio_variant": variant, "uncertainty": unc, "te_measured": te_measured, "efficiency": efficiency,
         "all_members_on": members_row,
-        "settings": {"quick": quick, "samples": n_samples, "workers": workers,
+        "settings": {"quick": quick, "samples": n_samples, "workers": runner.workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
                      "rigidity_points": list(rigidity_points(catalogue)[0]),
                      "rigidity_points_source": rigidity_points(catalogue)[1],
@@ -620,13 +728,30 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     return out
 
 
-def _te_measured(design, d, rated_torque, *, quick, want, log):
-    """The TE comparison with a published measurement (:func:`rvtool.analysis.validate_te.te_comparison`), None
-    where the design has no measurement or tolerance file or ``want`` is False."""
+def _te_measured(design, d, rated_torque, *, quick, want, log, runner=None, reuse=None):
+    """The TE comparison with a published measurement (:func:`rvtool.analysis.validate_te.te_comparison`) as a
+    callable returning it (its variants submitted to ``runner`` now), None where ``want`` is False."""
     if not want:
         return None
     from .validate_te import te_comparison
-    return te_comparison(design, d, rated_torque, quick=quick, log=log)
+    return te_comparison(design, d, rated_torque, quick=quick, log=log, runner=runner, defer=True, reuse=reuse)
+
+
+def _gather(futures, log=None, checkpoint=None):
+    """The results of ``futures`` in order (as :func:`_map`: a line per item, the checkpoint rewritten)."""
+    out = []
+    t0 = time.perf_counter()
+    for k, f in enumerate(futures):
+        r = f.result()
+        out.append(r)
+        if log is not None:
+            err = "" if r[1] is None else ": " + r[1]
+            log(f"  {k + 1}/{len(futures)} done ({time.perf_counter() - t0:.0f} s){err}")
+        if checkpoint is not None:
+            with open(checkpoint, "w") as fh:
+                json.dump(_jsonable({"done": len(out), "of": len(futures), "results": out,
+                                     "wall_s": time.perf_counter() - t0}), fh)
+    return out
 
 
 def checks(out):
