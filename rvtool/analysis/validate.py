@@ -553,6 +553,11 @@ def _validate(design, *, quick, out_dir, samples, workers, seed, tornado_keys, a
         f_members = members_rigidity(design, table, catalogue, base, quick=m_quick, samples=members_samples,
                                      seed=seed, workers=members_workers or workers, log=log, runner=runner,
                                      checkpoint=members_checkpoint, defer=True)
+        from .validate_members import central_table, members_budget
+        m_table = central_table(design, table, m_quick)
+        f_mbudget = None if m_table is None else runner.submit(
+            members_budget, m_table, T_R, kind="members_budget",
+            key=digest("validate.members_budget", {"table": m_table, "T_R": T_R}))
     f_te = _te_measured(design, d, T_R, quick=quick, want=te, log=log, runner=runner, reuse=te_reuse)
     # waited for in the order they were submitted
     central = f_central.result()
@@ -643,8 +648,15 @@ def _validate(design, *, quick, out_dir, samples, workers, seed, tornado_keys, a
         + _rows("hysteresis_loss", fig_c["hysteresis_loss"], "arcmin", catalogue, band.get("hysteresis_loss"),
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
+    members_budget_row = None
     if members:
         members_row = f_members()
+        if f_mbudget is not None:
+            members_budget_row = {**f_mbudget.result(), "members_file": (members_row or {}).get("members_file"),
+                                  "quick_meshes": bool(m_quick),
+                                  "note": "every member of the torque path on (the all-members-on row's central "
+                                          "design: its members at the middles of their ranges); energy shares of "
+                                          "the output compliance at T_R, input angle 0 (tangent K_t, not b/a)"}
     at = sum(r["figure"] == "torsional_rigidity" for r in rows)               # beside the file's rigidity rows
     rows[at:at] = [] if members_row is None else members_row.pop("rows")
     rows += moment["rows"]
@@ -719,6 +731,7 @@ def _validate(design, *, quick, out_dir, samples, workers, seed, tornado_keys, a
     # issue 30: the carrier's switch and the ported carrier's share beside the budget of the file's switches
     out["compliance_budget"]["configuration"]["carrier.body"] = getattr(getattr(d, "carrier", None), "body", None)
     out["compliance_budget"]["with_ported_carrier"] = carrier_side
+    out["compliance_budget"]["all_members_on"] = members_budget_row
     out["loop"] = {"torque_Nm": central["cycles"][-1]["torque_Nm"].tolist(),
                    "angle_arcmin": (central["cycles"][-1]["angle_rad"] / RAD_PER_ARCMIN).tolist(),
                    "labels": central["cycles"][-1]["labels"],
@@ -835,8 +848,51 @@ def write(out, out_dir, catalogue):
         plots.append(te_plot(out["te_measured"], out_dir))
     from .losses import efficiency_plot
     plots += efficiency_plot(out, out_dir)
+    plots += budget_plot(out, out_dir)
     with open(os.path.join(out_dir, "report.html"), "w") as fh:
         fh.write(report_html(out, out_dir, plots))
+
+
+def budget_columns(out):
+    """{column title: {path: energy share}} of a validate result: the design as its file has it, with the ported
+    carrier (side figure) and with every member on, where each was computed."""
+    cb = out.get("compliance_budget") or {}
+    cols = {}
+    if cb.get("shares"):
+        cols[f"as the file has it (K_t {cb['K_t_Nm_per_arcmin']:.4g} N m/arcmin)"] = cb["shares"]
+    pc = cb.get("with_ported_carrier") or {}
+    if pc.get("shares"):
+        cols[f"with the ported carrier (K_t {pc['K_t_Nm_per_arcmin']:.4g})"] = pc["shares"]
+    am = cb.get("all_members_on") or {}
+    if am.get("shares"):
+        cols[f"every member on (K_t {am['K_t_Nm_per_arcmin']:.4g})"] = am["shares"]
+    return cols
+
+
+def budget_plot(out, out_dir):
+    """budget.png: each path's share of the output compliance at T_R in every budget of the result (the design's
+    file, the ported carrier, every member on); returns the file names written."""
+    cols = budget_columns(out)
+    if not cols:
+        return []
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    paths = sorted({p for c in cols.values() for p in c}, key=lambda p: -max(c.get(p, 0.0) for c in cols.values()))
+    fig, ax = plt.subplots(figsize=(7.5, 0.3 * len(paths) + 1.8))
+    h = 0.8 / len(cols)
+    for i, (title, sh) in enumerate(cols.items()):
+        ax.barh([j + i * h for j in range(len(paths))], [100 * sh.get(p, 0.0) for p in paths], height=h,
+                label=title)
+    ax.set_yticks([j + 0.4 - h / 2 for j in range(len(paths))], paths, fontsize=7)
+    ax.invert_yaxis()
+    ax.axvline(5.0, color="gray", lw=0.6, ls=":", label="5 % (issue 30: a member below may be skipped)")
+    ax.set(xlabel="share of the output compliance at T_R [%]", title=f"{out['design']}: compliance budget")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "budget.png"), dpi=110)
+    plt.close(fig)
+    return ["budget.png"]
 
 
 def _jsonable(o):
@@ -873,6 +929,11 @@ def table_text(out):
     if pc and "carrier_share" in pc:
         lines.append(f"  with the ported carrier: K_t {pc['K_t_Nm_per_arcmin']:.4g} N m/arcmin at T_R, carrier share "
                      f"{100 * pc['carrier_share']:.1f} % (tangent budget; the file keeps carrier.body = 'rigid')")
+    am = out.get("compliance_budget", {}).get("all_members_on")
+    if am and am.get("shares"):
+        top = sorted(am["shares"].items(), key=lambda kv: -kv[1])
+        lines.append(f"  every member on: K_t {am['K_t_Nm_per_arcmin']:.4g} N m/arcmin at T_R; shares "
+                     + ", ".join(f"{k} {100 * v:.1f} %" for k, v in top))
     u = out["uncertainty"]
     if u is not None and u["fraction_within_lost_motion_max"] is not None:
         lines.append(f"  {u['samples']} LHS samples: fraction within the catalogue's lost-motion maximum "
@@ -894,6 +955,16 @@ def report_html(out, out_dir, plots):
         with open(os.path.join(out_dir, p), "rb") as fh:
             imgs += f'<img style="max-width:100%" alt="{e(p)}" src="data:image/png;base64,' \
                     f'{base64.b64encode(fh.read()).decode()}">'
+    cols = budget_columns(out)
+    budget = ""
+    if cols:
+        paths = sorted({p for c in cols.values() for p in c}, key=lambda p: -max(c.get(p, 0.0) for c in cols.values()))
+        budget = ("<h2>Compliance budget at T_R (energy share of the output compliance, %)</h2>"
+                  "<table border=1 cellpadding=3 style='border-collapse:collapse'><tr><th>path</th>"
+                  + "".join(f"<th>{e(t)}</th>" for t in cols) + "</tr>"
+                  + "".join(f"<tr><td>{e(p)}</td>" + "".join(
+                      f"<td>{'-' if p not in c else f'{100 * c[p]:.2f}'}</td>" for c in cols.values()) + "</tr>"
+                      for p in paths) + "</table>")
     extra = {k: out[k] for k in ("central", "bearing_lives", "pressures", "compliance_budget", "ratio_variant",
                                  "assumptions_commit", "settings")}
     if out.get("te_measured") is not None:
@@ -906,7 +977,7 @@ def report_html(out, out_dir, plots):
             f"<p>{e(out['catalogue']['edition'])}; assumptions_commit {e(str(out['assumptions_commit']))}</p>"
             "<table border=1 cellpadding=3 style='border-collapse:collapse'><tr><th>figure</th><th>predicted</th>"
             "<th>band (LHS)</th><th>catalogue</th><th>verdict</th><th>source</th><th>test conditions</th>"
-            f"<th>note</th></tr>{rows}</table>{imgs}"
+            f"<th>note</th></tr>{rows}</table>{budget}{imgs}"
             f"<pre>{e(json.dumps(_jsonable(extra), indent=1))}</pre></body></html>")
 
 

@@ -440,6 +440,34 @@ def _run_resumable(items, log, checkpoint, key, deadline):
     return out[:n]
 
 
+def central_table(design, table, quick):
+    """The all-members-on design table at the middles of every members range (the row's central design), on the
+    quick meshes where ``quick``; None where the design has no members file."""
+    name = members_name(design)
+    if name is None:
+        return None
+    switches, derived, assumed, _ = load_members(name)
+    return members_table(table, switches, derived, {a.key: a.middle for a in assumed.inputs},
+                         QUICK_NUMERICS if quick else None)
+
+
+def members_budget(table, rated_torque):
+    """The compliance budget at T_R (input angle 0) of an all-members-on design table
+    (:func:`rvtool.protocols.budget.stiffness_budget`: each path's strain-energy share of the output compliance,
+    the rigid-switch shares, the tangent K_t [N m/arcmin]): every member's share, the column of issue 30's
+    "validate shows every member's share" (cases/rv/compliance_budget.py checks these shares against switching
+    each member on alone)."""
+    from ..assembly import build
+    from ..assembly.topologies import design_from_table
+    from ..protocols.budget import stiffness_budget
+    from ..solver.static import StaticSolver
+    model = build(design_from_table(table))
+    model.set_output_torque(-np.sign(model.ratio) * rated_torque)
+    b = stiffness_budget(model, StaticSolver(model).solve(0.0))
+    return {"K_t_Nm_per_arcmin": float(b["K_t_Nm_per_arcmin"]), "shares": b["shares"],
+            "rigid_shares": b["rigid_shares"]}
+
+
 def checkpoint_key(design, samples, seed, quick):
     """The key of a band's checkpoint (cases/rv/members_band.py): the design, the planned draws and the meshes."""
     return f"{design} samples={samples} seed={seed} quick={quick}"
