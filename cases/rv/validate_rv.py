@@ -120,6 +120,10 @@ def one_design(name, quick, out, runner, members_from, te_from, log):
         res = V.validate(name, quick=quick, out_dir=None, runner=runner, log=lambda m: log(f"[{name}] {m}"), **kw)
     except DeadlineReached as exc:
         return name, None, str(exc)
+    except Exception as exc:       # a design that fails is reported (complete: false), the other still written
+        import traceback
+        traceback.print_exc()
+        return name, None, f"failed: {type(exc).__name__}: {exc}"
     return name, res, None
 
 
@@ -186,7 +190,7 @@ def main(argv=None):
     per_design, passed, missing = {}, True, {}
     for name, res, why in done:
         if res is None:
-            per_design[name] = {"complete": False, "not_started": why}
+            per_design[name] = {"complete": False, "stopped": why}
             missing[name] = why
             continue
         V.write(res, os.path.join(args.out, name), load_catalogue(designs.catalogue_of(name)))
