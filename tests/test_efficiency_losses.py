@@ -185,3 +185,41 @@ def test_teeth_loss_uses_the_mesh_load_of_iso_tr_14179(rv40e, loaded):
         hand += mu * np.sum(fn[rows] * vt[rows])
     assert np.count_nonzero(fn) >= 4                 # two pairs in some mesh: per-row loads would differ
     assert L.part_losses(m, d, fs, q, v)["teeth"] == pytest.approx(hand, rel=1e-9)
+
+
+def test_audit_relative_speeds_are_the_closed_form_and_skf_changes_only_the_bearings(rv40e, loaded):
+    # issue 30 audit: every rolling set turns at the speed the RV kinematics give from the tooth numbers alone
+    # (needles and crank rows Z_p n_out = 2400 r/min at 60 r/min output, the main pair n_out)
+    d, m = rv40e
+    fs = loaded.central
+    m.set_output_torque(-np.sign(m.ratio) * d.rated_torque)
+    from rvtool.solver.static import StaticSolver
+    q = StaticSolver(m).solve(0.0)
+    cf = L.closed_form_relative_speeds(d, 60.0)
+    assert cf["eccentric_bearings"] == pytest.approx(40 * 60.0) and cf["wheel_rpm"] == pytest.approx(60.0)
+    v = kinematic_velocity(m, 0.0, cf["input_rpm"] * 2 * math.pi / 60)
+    rows = L.rolling_audit(m, d, fs, q, v)
+    assert {r["element"] for r in rows} == set(L.ROLLING_ELEMENTS)
+    for r in rows:
+        assert r["n_rel_rpm"] == pytest.approx(cf[r["element"]], rel=1e-9), r["mounting"]
+        assert r["skf_loss_W"] > 0 and r["palmgren_loss_W"] > 0
+    pal = L.part_losses(m, d, fs, q, v)
+    assert pal == L.part_losses(m, d, fs, q, v, bearing_model="palmgren")
+    skf = L.part_losses(m, d, fs, q, v, bearing_model="skf")
+    for k in pal:
+        if k in L.ROLLING_ELEMENTS:
+            assert skf[k] == pytest.approx(sum(r["skf_loss_W"] for r in rows if r["element"] == k), rel=1e-12)
+            assert pal[k] == pytest.approx(sum(r["palmgren_loss_W"] for r in rows if r["element"] == k), rel=1e-12)
+        else:
+            assert skf[k] == pal[k], k          # seals, churning (on Palmgren's M0), sliding: unchanged
+    # a constants override reaches only its own kind: the tapered rows' mu_EHL lowers the crank rows' sliding part
+    from rvtool.bearings.skf_friction import CONSTANTS
+    alt = L.rolling_audit(m, d, fs, q, v, skf_constants={
+        "tapered_roller_302": replace(CONSTANTS["tapered_roller_302"], mu_ehl=0.002)})
+    for a, r in zip(alt, rows):
+        if r["element"] == "crank_bearings":
+            assert a["skf_loss_W"] < r["skf_loss_W"]
+        else:
+            assert a["skf_loss_W"] == r["skf_loss_W"]
+    with pytest.raises(RvtoolInputError, match="bearing_model"):
+        L.efficiency_map(m, d, fs, bearing_model="harris")

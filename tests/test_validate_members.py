@@ -191,6 +191,10 @@ def test_members_tornado_screens_and_places_valid_points(monkeypatch):
     assert t["low"] == 0.05 and t["high"] == pytest.approx(2 * (0.018 + 0.0165), rel=1e-12)
     assert t["at_low"] < r["baseline"] < t["at_high"] and not t["errors"]
 
+    # the same points in two processes (forked: the stand-in b/a travels with them) give the same tornado
+    r2 = VM.members_tornado("rv80e", read_table(designs.path("rv80e")), load_catalogue(designs.catalogue_of("rv80e")),
+                            base, values, keys=2, log=lambda *a: None, workers=2)
+    assert r2["baseline"] == r["baseline"] and r2["tornado"] == r["tornado"]
 
 def test_sampled_tornado_recovers_a_linear_response():
     """The tornado estimated from the band's samples: for b/a exactly linear in two inputs' fractions (swings

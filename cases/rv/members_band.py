@@ -84,6 +84,8 @@ def extra(parser):
     parser.add_argument("--tornado-keys", type=int, default=None, metavar="K",
                         help=f"one-at-a-time tornado over the K inputs of largest |Spearman rho| (default "
                              f"{TORNADO_KEYS}; --quick: 0); a design that has one (kept by --resume) keeps it")
+    parser.add_argument("--workers", type=int, default=1, metavar="N",
+                        help="processes for the solved tornado's 2 K + 1 independent b/a (default 1)")
 
 
 def one_design(name, samples, out_dir, deadline):
@@ -114,13 +116,14 @@ def assumed_of(name):
     return load_assumed(assumed_name) if assumed_name else None
 
 
-def design_tornado(name, r, keys):
+def design_tornado(name, r, keys, workers=1):
     """validate_members.members_tornado on the design's finished band (its seed and samples)."""
     catalogue = load_catalogue(designs.catalogue_of(name))
     base = assumed_of(name)
     t0, c0 = time.perf_counter(), time.process_time()
     out = members_tornado(name, read_table(designs.path(name)), catalogue, base, r["sample_values"], keys=keys,
-                          seed=r["seed"], quick=True, planned=r["samples"])
+                          seed=r["seed"], quick=True, planned=r["samples"],
+                          workers=workers)
     out["tornado_cpu_s"] = time.process_time() - c0
     out["tornado_wall_s"] = time.perf_counter() - t0
     return out
@@ -208,7 +211,7 @@ def main(argv=None):
                 if d["tornado_sampled"]:
                     tornado_png(args.out, name, d["tornado_sampled"], d.get("band"), "sampled")
             if n_tor > 0 and "tornado" not in d and d["sample_values"]:
-                d.update(design_tornado(name, d, n_tor))
+                d.update(design_tornado(name, d, n_tor, args.workers))
                 tornado_png(args.out, name, d, d.get("band"), "solved")
         elif name not in per:
             per[name] = one_design(name, samples, args.out, deadline)

@@ -44,6 +44,9 @@ MM_PER_M = 1e3
 RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
 ROLLING_ELEMENTS = ("eccentric_bearings", "crank_bearings", "main_bearings")
 PARTS = ("pins", "teeth") + ROLLING_ELEMENTS + ("seals", "churning")
+#: rolling-bearing friction models of the loss accounting: the friction set's (Palmgren) and SKF's 2004
+#: model as the reference of the model-form spread
+BEARING_MODELS = ("palmgren", "skf")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -208,6 +211,11 @@ def _mounting_factors(bearing, fs):
                            "cylindrical roller, ball, angular-contact pair, tapered row or pair")
 
 
+def _check_bearing_model(bearing_model):
+    if bearing_model not in BEARING_MODELS:
+        raise RvtoolInputError(f"bearing_model = {bearing_model!r}; valid choices are {list(BEARING_MODELS)}")
+
+
 def _check_rv2(model, design):
     from ..bearings.set import BearingSet
     from ..bearings.tapered_set import TaperedBearingSet
@@ -250,11 +258,106 @@ def sun_mesh_geometry(design):
     return rw1, aw, r1 * r2 / (r1 + r2), min(design.sun_gear.face_width, design.crank_gear.face_width)
 
 
-def part_losses(model, design, fs: FrictionSet, q, v):
-    """{part: loss [W]} at the static state q moving at the kinematic velocities v (module docstring),
-    with ``m0_W`` (the rolling sets' load-independent M0 losses) and ``teeth_mu`` (the ISO/TR 14179-2
-    coefficient) as extra keys."""
+def _skf_rows(bearing, fs, omega, load, constants=None):
+    """[(row label, SkfConstants key, skf_moment dict)] of one mounting's rows at |omega| [rad/s] and the
+    mounting's radial resultant ``load`` [N] (rvtool.bearings.skf_friction; the loads per row below).
+    ``constants``: {key: SkfConstants} replacing entries of ``skf_friction.CONSTANTS`` (a sensitivity)."""
+    from ..bearings import skf_friction as S
+    C = {**S.CONSTANTS, **(constants or {})}
+    from ..bearings.spec import AngularContactPair, CylindricalRollerBearing
+    from ..bearings.tapered import TaperedPair
+    nu = fs.viscosity
+    if isinstance(bearing, CylindricalRollerBearing):
+        # a caged roller set on its raceways (the RV's eccentric needles: journal and wheel bore, no rings):
+        # d, D the raceway diameters; one row carries the mounting's radial resultant
+        d = 2.0 * bearing.inner_radius
+        D = d + 2.0 * bearing.roller_diameter
+        c = C["needle_roller"]
+        return [("row", "needle_roller", S.skf_moment(c, speed=omega, pitch_diameter=0.5 * (d + D), bore=d, outside=D,
+                                                      viscosity=nu, radial_load=load))]
+    if isinstance(bearing, TaperedPair):
+        # each row half the pair's radial resultant; F_a per row the larger of the preload and the induced
+        # axial force 0.5 F_r / Y of a row under F_r (the usual rule for a paired tapered arrangement)
+        out = []
+        for k, row in enumerate(bearing.rows):
+            d, D, size = S.tapered_ring_diameters(row.pitch_diameter)
+            Y = S.tapered_axial_factor(row.cup_angle)
+            fr = 0.5 * load
+            fa = max(bearing.axial_preload, 0.5 * fr / Y)
+            out.append((f"row{k} ({size})", "tapered_roller_302",
+                        S.skf_moment(C["tapered_roller_302"], speed=omega, pitch_diameter=row.pitch_diameter,
+                                     bore=d, outside=D, viscosity=nu, radial_load=fr, axial_load=fa, axial_factor=Y)))
+        return out
+    if isinstance(bearing, AngularContactPair):
+        # each row half the pair's radial resultant and its own axial preload
+        out = []
+        for k, row in enumerate(bearing.rows):
+            h = 0.5 * S.BALL_SECTION_OVER_DW * row.ball_diameter
+            out.append((f"row{k}", "angular_contact_72B",
+                        S.skf_moment(C["angular_contact_72B"], speed=omega, pitch_diameter=row.pitch_diameter,
+                                     bore=row.pitch_diameter - h, outside=row.pitch_diameter + h, viscosity=nu,
+                                     radial_load=0.5 * load, axial_load=row.axial_preload)))
+        return out
+    raise RvtoolInputError(f"bearing type {type(bearing).__name__} has no SKF reference rows; valid: needle/cylindrical "
+                           "roller set, tapered pair, angular-contact pair")
+
+
+def rolling_audit(model, design, fs: FrictionSet, q, v, *, skf=True, skf_constants=None):
+    """One row per bearing mounting at the static state q moving at v: the element and mounting, the
+    bearing type and rows, d_m [m], the rings' relative speed [rad/s and r/min], P1 [N], Palmgren's f0
+    (summed over the rows), f1, M0, M1 [N m] and loss [W] (the friction set's accounting), and with
+    ``skf`` the SKF 2004 reference (rvtool.bearings.skf_friction) per row and in total [W];
+    ``skf_constants`` replaces entries of its constants (:func:`_skf_rows`)."""
     from ..bearings.friction_element import ElementResultantLoads
+    nu = fs.viscosity
+    rows = []
+    for name in ROLLING_ELEMENTS:
+        bset = model.elements[name].evaluator
+        pose, vel = _element_state(model.elements[name], q, v)
+        P1 = ElementResultantLoads(bset, [m.name for m in bset.mountings])(pose, vel)
+        for m, p in zip(bset.mountings, P1):
+            f0, f1, dm, n_rows = _mounting_factors(m.bearing, fs)
+            wa = vel[m.inner, 2] if m.inner >= 0 else 0.0
+            wb = vel[m.outer, 2] if m.outer >= 0 else 0.0
+            w = abs(wa - wb)
+            m0, m1 = _palmgren(f0, f1, dm, nu, w, p)
+            w = float(w)
+            row = {"element": name, "mounting": m.name, "bearing_type": type(m.bearing).__name__, "rows": n_rows,
+                   "pitch_diameter_m": dm, "omega_rel_rad_s": w, "n_rel_rpm": w * RPM_PER_RAD_S, "P1_N": float(p),
+                   "palmgren_f0": f0, "palmgren_f1": f1, "viscosity_m2_s": nu, "palmgren_M0_Nm": m0,
+                   "palmgren_M1_Nm": m1, "palmgren_loss_W": (m0 + m1) * w}
+            if skf:
+                parts = _skf_rows(m.bearing, fs, w, float(p), skf_constants) if w > 0 else []
+                row["skf_rows"] = [{"row": lab, "constants": key, **r} for lab, key, r in parts]
+                row["skf_M_Nm"] = float(sum(r["M"] for _, _, r in parts))
+                row["skf_loss_W"] = row["skf_M_Nm"] * w
+            rows.append(row)
+    return rows
+
+
+def closed_form_relative_speeds(design, output_speed_rpm):
+    """The rings' relative speeds [r/min] of the rv2 rolling sets from the gear numbers alone (ring pins
+    fixed, the carrier the output at n_out): input n_in = n_out (1 + (z_crank/z_sun) Z_p); each crank
+    turns in the carrier at n_c = (z_sun/z_crank)(n_in - n_out) = Z_p n_out; the eccentric turns in the
+    fixed frame at n_e = n_out - n_c and the wheel (Z_p - 1 lobes on Z_p pins) at n_w = -n_e / (Z_p - 1)
+    = n_out, so the needles turn at |n_e - n_w| = Z_p n_out; the main bearing at n_out."""
+    zs, zc, zp = design.sun_gear.n_teeth, design.crank_gear.n_teeth, design.pins.n_pins
+    n_out = float(output_speed_rpm)
+    n_in = n_out * (1.0 + zc / zs * zp)
+    n_c = zs / zc * (n_in - n_out)
+    n_e = n_out - n_c
+    n_w = -n_e / (zp - 1)
+    return {"input_rpm": n_in, "eccentric_bearings": abs(n_e - n_w), "crank_bearings": abs(n_c),
+            "main_bearings": abs(n_out), "wheel_rpm": n_w}
+
+
+def part_losses(model, design, fs: FrictionSet, q, v, *, bearing_model="palmgren"):
+    """{part: loss [W]} at the static state q moving at the kinematic velocities v (module docstring),
+    with ``m0_W`` (the rolling sets' load-independent Palmgren M0 losses) and ``teeth_mu`` (the ISO/TR
+    14179-2 coefficient) as extra keys. ``bearing_model``: "palmgren" (the friction set's) or "skf" (the
+    reference model :mod:`rvtool.bearings.skf_friction` on the rolling sets only; every other part, the
+    churning share of the Palmgren M0 included, unchanged: the model-form spread of the bearings)."""
+    _check_bearing_model(bearing_model)
     nu = fs.viscosity
     out = {}
     fn, vt = _rows(model.elements["pins"], q, v)
@@ -276,21 +379,13 @@ def part_losses(model, design, fs: FrictionSet, q, v):
     out["teeth_mu"] = float(np.sum(mu[loaded] * fn[loaded]) / np.sum(fn[loaded])) if loaded.any() else 0.0
     m0_total, main_dm = 0.0, None
     for name in ROLLING_ELEMENTS:
-        bset = model.elements[name].evaluator
-        pose, vel = _element_state(model.elements[name], q, v)
-        P1 = ElementResultantLoads(bset, [m.name for m in bset.mountings])(pose, vel)
-        total = 0.0
-        for m, p in zip(bset.mountings, P1):
-            f0, f1, dm, _ = _mounting_factors(m.bearing, fs)
-            wa = vel[m.inner, 2] if m.inner >= 0 else 0.0
-            wb = vel[m.outer, 2] if m.outer >= 0 else 0.0
-            w = abs(wa - wb)
-            m0, m1 = _palmgren(f0, f1, dm, nu, w, p)
-            total += (m0 + m1) * w
-            m0_total += m0 * w
-            if name == "main_bearings":
-                main_dm = dm
-        out[name] = total
+        out[name] = 0.0
+    for row in rolling_audit(model, design, fs, q, v, skf=bearing_model == "skf"):
+        name = row["element"]
+        out[name] = out.get(name, 0.0) + (row["skf_loss_W"] if bearing_model == "skf" else row["palmgren_loss_W"])
+        m0_total += row["palmgren_M0_Nm"] * row["omega_rel_rad_s"]
+        if name == "main_bearings":
+            main_dm = row["pitch_diameter_m"]
     n_out = abs(v[model.output_index]) * RPM_PER_RAD_S
     d_seal = fs.seal_diameter_ratio * main_dm * MM_PER_M
     out["seals"] = fs.seal_coefficient * d_seal ** 2 * n_out
@@ -311,11 +406,11 @@ def _states(model, torque, input_angles):
     return out
 
 
-def _average(model, design, fs, states, w_in):
+def _average(model, design, fs, states, w_in, bearing_model="palmgren"):
     acc, p_out, imbalance = {}, 0.0, 0.0
     for a, q in states:
         v = kinematic_velocity(model, a, w_in)
-        for k, val in part_losses(model, design, fs, q, v).items():
+        for k, val in part_losses(model, design, fs, q, v, bearing_model=bearing_model).items():
             acc[k] = acc.get(k, 0.0) + val / len(states)
         if np.any(q):
             _, P_in, P_out = power_balance_error(model, q, v)
@@ -325,11 +420,13 @@ def _average(model, design, fs, states, w_in):
 
 
 def efficiency_map(model, design, fs: FrictionSet, *, torque_ratios=(1.0,), output_speeds_rpm=(15.0,),
-                   input_angles=(0.0,)):
+                   input_angles=(0.0,), bearing_model="palmgren"):
     """Efficiency at output torques ``torque_ratios`` x T_R and output speeds [r/min], averaged over
     ``input_angles`` [rad] (static states solved once per torque and angle). One row per (ratio, speed):
-    efficiency, P_out, P_loss [W], loss_by_part [W], teeth_mu, the frictionless power balance."""
+    efficiency, P_out, P_loss [W], loss_by_part [W], teeth_mu, the frictionless power balance.
+    ``bearing_model``: :data:`BEARING_MODELS` (:func:`part_losses`)."""
     _check_rv2(model, design)
+    _check_bearing_model(bearing_model)
     ratio = abs(float(model.ratio))
     for r in torque_ratios:
         check_range("torque_ratio", r, 0.0, 10.0, low_open=True)
@@ -340,7 +437,7 @@ def efficiency_map(model, design, fs: FrictionSet, *, torque_ratios=(1.0,), outp
         states = _states(model, r * design.rated_torque, input_angles)
         for n_out in output_speeds_rpm:
             w_in = n_out * ratio * 2.0 * math.pi / 60.0
-            acc, p_out, imbalance = _average(model, design, fs, states, w_in)
+            acc, p_out, imbalance = _average(model, design, fs, states, w_in, bearing_model)
             parts = {k: acc[k] for k in PARTS}
             loss = sum(parts.values())
             rows.append({"torque_ratio": float(r), "output_torque_Nm": float(r * design.rated_torque),
@@ -352,15 +449,16 @@ def efficiency_map(model, design, fs: FrictionSet, *, torque_ratios=(1.0,), outp
             "input_angles_rad": [float(a) for a in input_angles], "points": rows}
 
 
-def no_load_torque(model, design, fs: FrictionSet, input_speed_rpm, *, input_angles=(0.0,)):
+def no_load_torque(model, design, fs: FrictionSet, input_speed_rpm, *, input_angles=(0.0,), bearing_model="palmgren"):
     """Input-side running torque [N m] at zero output torque and ``input_speed_rpm``, by part: each
     part's loss over omega_in (the bearings' M0 and their M1 at the unloaded state, seals, churning;
     the sliding contacts carry no load). Returns {"by_part_Nm": {...}, "total_Nm": ...}."""
     _check_rv2(model, design)
+    _check_bearing_model(bearing_model)
     check_positive("input_speed_rpm", input_speed_rpm)
     states = _states(model, 0.0, input_angles)
     w_in = input_speed_rpm * 2.0 * math.pi / 60.0
-    acc, _, _ = _average(model, design, fs, states, w_in)
+    acc, _, _ = _average(model, design, fs, states, w_in, bearing_model)
     by_part = {k: acc[k] / w_in for k in PARTS}
     return {"input_speed_rpm": float(input_speed_rpm), "by_part_Nm": by_part, "total_Nm": sum(by_part.values()),
             "rolling_M0_Nm": acc["m0_W"] / w_in}

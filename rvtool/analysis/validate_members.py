@@ -334,13 +334,14 @@ def sampled_tornado(design, base_assumed, sample_values, *, keys=8, seed=0, plan
 
 
 def members_tornado(design, table, catalogue, base_assumed, sample_values, *, keys=4, seed=0, quick=True,
-                    log=print, planned=None):
+                    log=print, planned=None, workers=1):
     """One-at-a-time tornado of the all-members-on b/a (as ``validate``'s): the band's samples (``sample_values``,
     None where failed, drawn by :func:`band_fractions` with ``seed``) screen the inputs by |Spearman rho| of
     each column's fraction against b/a; the ``keys`` largest are each set to the fraction 0 and 1 of its range,
     every other input at 1/2, through :func:`sample_table` (valid by construction: a row spacing's fraction is
     of its feasible part), beside that baseline (every fraction 1/2). The crank supports' column is not an
-    input (derived from the row spacing) and is left out of the screening."""
+    input (derived from the row spacing) and is left out of the screening. ``workers``: processes over the
+    2 keys + 1 independent b/a (validate.map_samples; one process: in order, as before)."""
     from scipy.stats import spearmanr
     from ..assembly.topologies import design_from_table
     from ..designs.catalogue import get_key
@@ -360,25 +361,27 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
     chosen = sorted(screen, key=lambda k: -abs(screen[k]))[:keys]
     col = {a.key: j for j, a in enumerate(inputs)}
 
-    def point(x):
-        t = sample_table(table, base, members, x, switches, derived, numerics)
-        try:
-            return t, rigidity_ba(design_from_table(t), catalogue)["value"], None
-        except Exception as exc:        # counted and reported, as a band sample
-            return t, None, f"{type(exc).__name__}: {exc}"
-    log(f"validate {design}: all-members-on tornado over {len(chosen)} of {len(screen)} inputs "
-        f"({2 * len(chosen) + 1} b/a)")
-    _, baseline, base_err = point(np.full(len(inputs), 0.5))
-    tornado = {}
-    for k in chosen:
-        ends = []
-        for f in (0.0, 1.0):
-            x = np.full(len(inputs), 0.5)
+    from .validate import map_samples
+
+    def table_at(k=None, f=0.5):
+        x = np.full(len(inputs), 0.5)
+        if k is not None:
             x[col[k]] = f
-            ends.append(point(x))
-        (ta, va, ea), (tb, vb, eb) = ends
+        return sample_table(table, base, members, x, switches, derived, numerics)
+    log(f"validate {design}: all-members-on tornado over {len(chosen)} of {len(screen)} inputs "
+        f"({2 * len(chosen) + 1} b/a, {workers} worker(s))")
+    # the baseline, then each chosen input at the fraction 0 and 1: independent b/a (failures counted, as samples)
+    tables = [table_at()] + [table_at(k, f) for k in chosen for f in (0.0, 1.0)]
+    res = map_samples(_sample, [(t, catalogue) for t in tables], workers, log)
+    vals = [None if r is None else r["value"] for r, _ in res]
+    errs = [e for _, e in res]
+    baseline, base_err = vals[0], errs[0]
+    tornado = {}
+    for i, k in enumerate(chosen):
+        ta, tb = tables[1 + 2 * i], tables[2 + 2 * i]
+        va, vb = vals[1 + 2 * i], vals[2 + 2 * i]
         tornado[k] = {"low": get_key(ta, k), "high": get_key(tb, k), "at_low": va, "at_high": vb,
-                      "spearman_rho": screen[k], "errors": [e for e in (ea, eb) if e]}
+                      "spearman_rho": screen[k], "errors": [e for e in errs[1 + 2 * i:3 + 2 * i] if e]}
         log(f"  {k}: {va} .. {vb}")
     return {"baseline": baseline, "baseline_error": base_err, "tornado": tornado, "tornado_keys": len(chosen),
             "screening_spearman_rho": dict(sorted(screen.items(), key=lambda kv: -abs(kv[1]))),
