@@ -38,6 +38,7 @@ passed (stated criteria, NOT agreement with the catalogue, which is reported as 
 (no failed sample), no NaN, the two loops repeat within 1e-4 arcmin, the band contains the central value
 (where a band ran).
 """
+import json
 import os
 import time
 
@@ -98,6 +99,36 @@ def design_kwargs(name, quick, out, members_from, te_from):
     kw["members_checkpoint"] = os.path.join(members_from, f"checkpoint_{name}.json") if members_from else None
     kw["te_reuse"] = [te_from] if te_from else None
     return kw
+
+
+QUICK_FROM = os.path.join(os.path.dirname(__file__), "..", "..", "docs", "case_results", "rv", "validate_rv",
+                          "results.json")
+"""The committed --quick results the full run's rows are set against (``moved_against_quick``)."""
+
+
+def moved_against_quick(entry, quick_entry):
+    """{row label: {"quick", "full", "rel_change", "band_full"}} for every table row with a predicted value in both
+    (label: figure, and the catalogue figure's kind where a figure has several rows), plus the all-members-on
+    band, which the quick run does not compute: what the full run moved against the committed quick rows."""
+    def rows(e):
+        out = {}
+        for r in e.get("table", []):
+            if r.get("predicted") is None:
+                continue
+            label = r["figure"] if r.get("kind") in (None, "typical") else f"{r['figure']} ({r['kind']})"
+            if r["figure"] == "rated_life":          # one row per bearing family: the note names it
+                label += f" ({(r.get('note') or '').split(':')[0]})"
+            out.setdefault(label, r)
+        return out
+    q, f = rows(quick_entry), rows(entry)
+    moved = {}
+    for label, r in f.items():
+        if label not in q:
+            continue
+        a, b = q[label]["predicted"], r["predicted"]
+        moved[label] = {"quick": a, "full": b, "rel_change": None if not a else b / a - 1.0,
+                        "band_quick": q[label].get("band"), "band_full": r.get("band"), "unit": r.get("unit")}
+    return moved
 
 
 def entry_of(name, res):
@@ -195,6 +226,11 @@ def main(argv=None):
             continue
         V.write(res, os.path.join(args.out, name), load_catalogue(designs.catalogue_of(name)))
         entry = entry_of(name, res)
+        if not args.quick and os.path.exists(QUICK_FROM):
+            with open(QUICK_FROM) as fh:
+                quick_entry = json.load(fh)["designs"].get(name)
+            if quick_entry:
+                entry["moved_against_quick"] = moved_against_quick(entry, quick_entry)
         passed = passed and all(entry["checks"].values())
         print(V.table_text(res))
         per_design[name] = entry
