@@ -46,3 +46,13 @@ def test_pool_runs_units_and_refuses_those_pending_at_the_deadline(tmp_path):
             f3.result(timeout=120)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["p1.pkl", "p2.pkl"]
     assert r.summary()["run"] == 2 and r.summary()["not_started"] == 1
+
+
+def test_no_unit_starts_when_its_kind_would_overrun_the_deadline():
+    """A unit is not started once the time left is shorter than the longest unit of its kind so far: the run
+    ends near the deadline, not one long unit after it."""
+    r = UnitRunner(deadline=time.time() + 0.5)
+    assert r.submit(time.sleep, 0.3, kind="slow").result() is None
+    with pytest.raises(DeadlineReached):
+        r.submit(time.sleep, 0.3, kind="slow").result()
+    assert r.counts == {"run": 1, "reused": 0, "not_started": 1, "failed": 0}

@@ -29,7 +29,8 @@ efficiency curve against the catalogue's.
 
 Work is split into independent units (rvtool.analysis.workunits) run on ``--workers N`` spawn processes (one
 BLAS thread each), every finished unit stored in ``OUT/units`` under the digest of its inputs; ``--deadline
-HH:MM`` (UTC) or ``--budget-s S`` starts no unit after it (the running ones finish), ``--resume DIR[,DIR]``
+HH:MM`` (UTC) or ``--budget-s S`` starts no unit once the time left is shorter than the longest unit of its kind
+seen so far (so the run ends near the deadline; the running ones finish), ``--resume DIR[,DIR]``
 takes the units finished in earlier run folders (by digest, never by position). results.json is written at
 every stop with ``complete`` true|false; a design whose units are not all done is listed with what is missing
 (rerun the same command with ``--resume`` the previous --out).
@@ -206,7 +207,9 @@ def main(argv=None):
     members_from = None if (args.members_from or "").lower() == "none" else (args.members_from or MEMBERS_FROM)
     te_from = None if (args.te_from or "").lower() == "none" else (args.te_from or TE_FROM)
     resume = [os.path.join(d, "units") for d in args.resume.split(",")] if args.resume else []
-    runner = UnitRunner(workers=workers, deadline=deadline, store=os.path.join(args.out, "units"), resume=resume)
+    # CPU-only units: the workers see no GPU (a device host's CUDA context per worker would be wasted)
+    runner = UnitRunner(workers=workers, deadline=deadline, store=os.path.join(args.out, "units"), resume=resume,
+                        worker_env={"CUDA_VISIBLE_DEVICES": ""})
     jobs = [(n, args.quick, args.out, runner, members_from, te_from, print) for n in names]
     try:
         if workers > 1:

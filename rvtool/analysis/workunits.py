@@ -9,7 +9,9 @@ pickled to ``<store>/<key>.pkl`` as soon as it finishes; :class:`UnitRunner` loo
 the ``resume`` folders before running it (a hit in a resume folder is copied to the store, so the latest run
 folder always holds every finished unit and the next call needs only that folder).
 
-No unit is started after the ``deadline`` (seconds since the epoch): its future then raises
+No unit is started after the ``deadline`` (seconds since the epoch), nor once the time left before it is
+shorter than the longest unit of its kind seen so far in this run (the longest of any kind before one of its
+own has finished), so the run ends near the deadline rather than one long unit after it: its future then raises
 :class:`DeadlineReached`; the units already running finish and are stored. With ``workers`` > 1 the units run in a
 ``spawn`` process pool of that many processes, each with one BLAS thread (the solves are small dense systems;
 cases/benchmarks/bench_nested_wheels.py measured a second OpenBLAS thread spinning on a shared machine), handed
@@ -63,7 +65,7 @@ class UnitRunner:
     """Runs units (module docstring). ``store``: folder of this run's finished units (None: nothing stored);
     ``resume``: folders of earlier runs' units; ``deadline``: epoch seconds (None: none)."""
 
-    def __init__(self, workers=1, deadline=None, store=None, resume=(), log=print):
+    def __init__(self, workers=1, deadline=None, store=None, resume=(), log=print, worker_env=None):
         self.workers, self.deadline, self.store, self.log = int(workers), deadline, store, log
         self.resume = [r for r in resume if r]
         if store is not None:
@@ -81,6 +83,7 @@ class UnitRunner:
             from concurrent.futures import ProcessPoolExecutor
             for v in BLAS_THREAD_VARIABLES:       # inherited by the spawned workers (set before they start)
                 os.environ[v] = "1"
+            os.environ.update(worker_env or {})   # e.g. CUDA_VISIBLE_DEVICES="" for CPU-only units
             self._pool = ProcessPoolExecutor(max_workers=self.workers,
                                              mp_context=multiprocessing.get_context("spawn"))
             self._thread = threading.Thread(target=self._dispatch, daemon=True)
@@ -112,8 +115,13 @@ class UnitRunner:
             pickle.dump(result, fh)
         os.replace(tmp, self._path(self.store, key))
 
-    def past_deadline(self):
-        return self.deadline is not None and time.time() > self.deadline
+    def past_deadline(self, kind=None):
+        """Whether a unit of ``kind`` may no longer start (module docstring)."""
+        if self.deadline is None:
+            return False
+        longest = [w for w, _ in self.unit_seconds.get(kind, ())] or \
+            [w for v in self.unit_seconds.values() for w, _ in v] or [0.0]
+        return time.time() + max(longest) > self.deadline
 
     # --- running -----------------------------------------------------------------------------------------------
     def submit(self, fn, *args, key=None, kind=None, **kwargs):
@@ -127,7 +135,7 @@ class UnitRunner:
             return fut
         kind = kind or getattr(fn, "__name__", "unit")
         if self._pool is None:
-            if self.past_deadline():
+            if self.past_deadline(kind):
                 self.counts["not_started"] += 1
                 fut.set_exception(DeadlineReached(f"{kind}: not started, the deadline had passed"))
                 return fut
@@ -154,11 +162,10 @@ class UnitRunner:
         while True:
             with self._lock:
                 while True:
-                    if self._pending and self.past_deadline():
-                        while self._pending:
-                            fut, *_, kind = self._pending.popleft()
-                            self.counts["not_started"] += 1
-                            fut.set_exception(DeadlineReached(f"{kind}: not started, the deadline had passed"))
+                    while self._pending and self.past_deadline(self._pending[0][-1]):
+                        fut, *_, kind = self._pending.popleft()
+                        self.counts["not_started"] += 1
+                        fut.set_exception(DeadlineReached(f"{kind}: not started, the deadline was too near"))
                     if self._pending and self._inflight < self.workers:
                         fut, fn, args, kwargs, key, kind = self._pending.popleft()
                         self._inflight += 1
