@@ -56,3 +56,12 @@ def test_no_unit_starts_when_its_kind_would_overrun_the_deadline():
     with pytest.raises(DeadlineReached):
         r.submit(time.sleep, 0.3, kind="slow").result()
     assert r.counts == {"run": 1, "reused": 0, "not_started": 1, "failed": 0}
+
+
+def test_file_digest_follows_values_not_comments(tmp_path):
+    from rvtool.analysis.workunits import file_digest
+    a, b, c = (tmp_path / f"{n}.toml" for n in "abc")
+    a.write_text("[test]\nrated_torque = 412.0   # N m\n")
+    b.write_text("# searched again: unchanged\n[test]\nrated_torque = 412.0\n")
+    c.write_text("[test]\nrated_torque = 413.0\n")
+    assert file_digest(a) == file_digest(b) != file_digest(c)

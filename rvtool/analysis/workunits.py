@@ -50,9 +50,15 @@ def digest(kind, payload):
 
 
 def file_digest(path):
-    """SHA-256 (hex) of a file's bytes (a catalogue, tolerance or assumed file as an input of a unit)."""
+    """SHA-256 (hex) of a data file as an input of a unit (a catalogue, tolerance, assumed or friction file): of
+    its parsed content for TOML (a comment or the layout does not change a result, a value does), else of its
+    bytes."""
     with open(path, "rb") as fh:
-        return hashlib.sha256(fh.read()).hexdigest()
+        raw = fh.read()
+    if str(path).endswith(".toml"):
+        import tomllib
+        return digest("toml", tomllib.loads(raw.decode()))
+    return hashlib.sha256(raw).hexdigest()
 
 
 def _call(fn, args, kwargs):
