@@ -7,6 +7,7 @@ import os
 
 import pytest
 
+import rvtool
 from rvtool import designs
 from rvtool.analysis import validate as V
 from rvtool.assembly.topologies import read_table
@@ -109,3 +110,37 @@ def test_band_tornado_and_fraction_on_rv40e_with_test_ranges(tmp_path, monkeypat
     assert 0.0 <= u["fraction_within_lost_motion_max"] <= 1.0
     lo, hi = u["band"]["lost_motion"]
     assert lo < out["central"]["lost_motion"] < hi
+
+
+def test_budget_columns_show_every_member(tmp_path):
+    """report.html / budget.png carry every budget the result has: the file's, the ported carrier's and the one
+    with every member on (issue 30: validate shows every member's share)."""
+    out = {"design": "x", "compliance_budget": {
+        "shares": {"pins": 0.6, "eccentric_bearings": 0.4}, "K_t_Nm_per_arcmin": 500.0,
+        "with_ported_carrier": {"shares": {"carrier": 0.5, "pins": 0.5}, "K_t_Nm_per_arcmin": 300.0},
+        "all_members_on": {"shares": {"carrier": 0.4, "wheel_bodies": 0.1, "pin_grooves": 0.5},
+                           "K_t_Nm_per_arcmin": 200.0}}}
+    cols = V.budget_columns(out)
+    assert len(cols) == 3 and list(cols.values())[2]["wheel_bodies"] == 0.1
+    assert V.budget_plot(out, str(tmp_path)) == ["budget.png"] and (tmp_path / "budget.png").stat().st_size > 0
+    out["compliance_budget"]["all_members_on"] = None
+    assert len(V.budget_columns(out)) == 2
+
+
+def test_te_comparison_reused_only_by_inputs_digest(tmp_path):
+    """A te_measured results.json is taken only where its inputs digest equals this comparison's (the design,
+    tolerance and measurement files, variants, resolution, torque, seed); any other digest is passed over."""
+    from rvtool.analysis import validate_te as VT
+    d = rvtool.load_design("rv80e")
+    dg = VT.te_inputs_digest(d, designs.path("rv80e_tolerances"), designs.path("rv80e_measured"),
+                             n=VT.VARIANTS[1], points_per_mesh=VT.POINTS_PER_MESH[1],
+                             torque=VT.TE_TORQUE_FRACTION * d.rated_torque)
+    good, bad = tmp_path / "good.json", tmp_path / "bad.json"
+    good.write_text(json.dumps({"rows": ["row"], "settings": {"inputs_digest": dg}, "n_failed": 0}))
+    bad.write_text(json.dumps({"rows": ["other"], "settings": {"inputs_digest": "0" * 64}}))
+    te = VT.te_comparison("rv80e", d, d.rated_torque, quick=False, reuse=[str(tmp_path / "missing.json"), str(bad),
+                                                                          str(good)], log=lambda *a: None)
+    assert te["rows"] == ["row"] and te["reused_from"]["path"] == str(good)
+    assert dg != VT.te_inputs_digest(d, designs.path("rv80e_tolerances"), designs.path("rv80e_measured"),
+                                     n=VT.VARIANTS[0], points_per_mesh=VT.POINTS_PER_MESH[1],
+                                     torque=VT.TE_TORQUE_FRACTION * d.rated_torque)

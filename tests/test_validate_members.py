@@ -290,3 +290,29 @@ def test_band_checkpoint_resolves_only_changed_draws(monkeypatch, tmp_path):
     ck.write_text(json.dumps(c))
     VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), log=lambda *x: None)
     assert len(calls) == 9
+
+
+def test_runner_takes_the_band_checkpoint_by_draw_digest(monkeypatch, tmp_path):
+    """validate's full run (a UnitRunner) takes members_band's checkpoint by draw digest: the same draws are not
+    solved again and give the same band; a draw whose digest differs is solved as a unit; another key (sample
+    count) takes nothing."""
+    import json
+    from rvtool.analysis.workunits import UnitRunner
+    calls, cat, table = _stand_in_rigidity(monkeypatch)
+    ck = tmp_path / "checkpoint_rv40e.json"
+    a = VM.members_rigidity("rv40e", table, cat, samples=3, quick=True, checkpoint=str(ck), log=lambda *x: None)
+    assert len(calls) == 4
+    r = UnitRunner(store=str(tmp_path / "units"))
+    b = VM.members_rigidity("rv40e", table, cat, samples=3, quick=True, checkpoint=str(ck), runner=r,
+                            log=lambda *x: None)
+    assert len(calls) == 4 and b["sample_values"] == a["sample_values"] and b["reused_from_checkpoint"] == 4
+    c = json.loads(ck.read_text())
+    c["digests"][1] = "changed"
+    ck.write_text(json.dumps(c))
+    pending = VM.members_rigidity("rv40e", table, cat, samples=3, quick=True, checkpoint=str(ck), runner=r,
+                                  defer=True, log=lambda *x: None)
+    assert len(calls) == 5                               # submitted (and, serially, run) before the row is asked for
+    assert pending()["sample_values"] == a["sample_values"]
+    VM.members_rigidity("rv40e", table, cat, samples=2, quick=True, checkpoint=str(ck), runner=r,
+                        log=lambda *x: None)
+    assert len(calls) == 8                               # samples=2: another key, another LHS: nothing taken

@@ -71,7 +71,6 @@ Default 1,000 variants per design (--variants N); --quick: 2 per design, 2 worke
 --pool-variants M runs only variants 0..M-1 on the pool (the pool's rate and the agreement come
 from those; e.g. 1,000 of a 100,000-variant device run, whose pool run would take ~15 min).
 """
-import functools
 import multiprocessing
 import os
 import time
@@ -83,6 +82,7 @@ from rvtool import build, casekit, designs, load_design
 from rvtool.batched.device_rows_variants import device_rows_variants
 from rvtool.errors import SolverFailure
 from rvtool.units import ARCMIN_PER_RAD, ARCSEC_PER_RAD
+from rvtool.variants.barrier_pool import warmed_pool as barrier_warmed_pool
 
 TE_TOL_ARCSEC = 1e-6            # issue 31: TE equal to 1e-6 arcsec
 LM_TOL_ARCMIN = 1e-6            # tests/test_backends_golden.py's lost-motion bound
@@ -132,51 +132,21 @@ def rd_variant_design(tol, design, k):
 
 
 _WORKER = {}
-_WARM_BARRIER = None
-"""This worker's barrier of its pool's warm-up (:func:`warmed_pool`), set by the pool's initializer."""
 WARM_TIMEOUT_S = 120.0
 """The longest a warm-up task waits at the barrier for the pool's other workers [s] (their spawn, imports and
 warm-up task: seconds); past it the warm-up goes on unsynchronized and says so (warmed_pool)."""
 
 
-def _init_worker(barrier):
-    global _WARM_BARRIER
-    _WARM_BARRIER = barrier
-
-
 def warmed_pool(workers, warm, jobs):
     """(ProcessPoolExecutor of ``workers`` spawned processes, warm-up wall time [s]): every worker runs
-    exactly one of the warm-up ``jobs`` (``warm(job)``, one job per worker) before the timing starts. Each
-    warm-up task waits at a barrier of all ``workers`` after its work, so no worker takes a second one
-    while another starts (a pool warmed by mapping one job per worker can leave a slow-starting worker
-    cold: measured on cpu, 2 workers, both warm-up jobs ran in one process, and the other's first timed
-    task paid its imports' first use and nominal build, 0.25-0.4 s instead of 0.03 s)."""
-    ctx = multiprocessing.get_context("spawn")          # fresh interpreters: no forked Warp/Exudyn state
-    ex = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_init_worker,
-                             initargs=(ctx.Barrier(workers),))
-    t = time.perf_counter()
-    try:
-        pids = list(ex.map(functools.partial(_warm_task, warm), jobs))
-    except BaseException:
-        ex.shutdown(wait=False, cancel_futures=True)
-        raise
-    if len(set(pids)) != workers:
-        import sys
-        print(f"bench_device_mc: the pool's warm-up reached {len(set(pids))} of {workers} workers (barrier timed "
-              f"out after {WARM_TIMEOUT_S:g} s)", file=sys.stderr)
-    return ex, time.perf_counter() - t
-
-
-def _warm_task(warm, job):
-    import threading
-    try:
-        warm(job)
-    finally:                        # the barrier gets its party even where the warm-up raised
-        try:
-            _WARM_BARRIER.wait(WARM_TIMEOUT_S)
-        except threading.BrokenBarrierError:
-            pass                    # a worker that did not arrive: warmed_pool says so
-    return os.getpid()
+    exactly one of the warm-up ``jobs`` (``warm(job)``, one job per worker) before the timing starts
+    (rvtool.variants.barrier_pool.warmed_pool: each warm-up task waits at a barrier of all ``workers``
+    after its work, so no worker takes a second one while another starts; the module docstring there
+    says what an unsynchronized warm-up cost). As this benchmark's figures of record were measured: the
+    workers keep the default BLAS threads, a barrier that times out (WARM_TIMEOUT_S) is reported on
+    stderr and the pool used."""
+    return barrier_warmed_pool(workers, warm, jobs, one_blas_thread=False, timeout_s=WARM_TIMEOUT_S,
+                               on_missed="warn")
 
 
 def _pool_task(job):

@@ -29,6 +29,10 @@ computed before that change is kept by --resume. ``--redo LIST`` runs those desi
 folder has them: their checkpoint (in --out) keeps every sample whose drawn design table is unchanged (draw
 digests) and solves only the changed draws.
 
+The checkpoint of the committed band (docs/case_results/rv/members_band/checkpoint_<design>.json, copied from the
+run folder beside its results.json) is what ``rvtool validate``'s full run (cases/rv/validate_rv.py) takes the
+all-members-on b/a from, draw by draw where the digests match (validate_members.checkpoint_results).
+
 Tornado (issue 28: a tornado chart with the band), after the bands, per design: ``tornado_sampled``
 (validate_members.sampled_tornado), ESTIMATED from the band's own samples at no extra solve (a least-squares fit
 over the 8 inputs of largest |Spearman rho|, each swing with its standard error and the fit's R^2); and, with

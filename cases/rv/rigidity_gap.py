@@ -329,15 +329,23 @@ def crank_beam(s):
             "supports_m": list(supports), "radius_m": sh.radius}
 
 
-def carrier_pillars(s):
-    d = s.design
+def pillar_stiffness(d):
+    """Shear stiffness [N/m] of one carrier pillar as a fixed-guided Timoshenko beam of a solid circle between the
+    plates' inner faces (the stiffest hold its plates can give it)."""
     cs = d.carrier.structure
     E, nu = d.material.youngs_modulus, d.material.poisson_ratio
     L = 2 * cs.inner_face_position
     r = cs.pillar_radius
     I, A, G = math.pi * r ** 4 / 4, math.pi * r ** 2, E / (2 * (1 + nu))
     kappa = 6 * (1 + nu) / (7 + 6 * nu)
-    k_p = 1.0 / (L ** 3 / (12 * E * I) + L / (kappa * G * A))
+    return 1.0 / (L ** 3 / (12 * E * I) + L / (kappa * G * A))
+
+
+def carrier_pillars(s):
+    d = s.design
+    cs = d.carrier.structure
+    L = 2 * cs.inner_face_position
+    k_p = pillar_stiffness(d)
     n_p = d.cranks.count
     c_bound = arcmin_per_Nm(0.25 / (n_p * k_p * cs.pillar_circle_radius ** 2))
     model = s.member_compliance("carrier")

@@ -374,7 +374,8 @@ def screening(keys, U, results):
 
 
 def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers=1, seed=0, tornado_keys=None,
-             assumed=None, band=True, variant=True, te=True, members=True, members_samples=None, members_workers=None, log=print):
+             assumed=None, band=True, variant=True, te=True, members=True, members_samples=None, members_workers=None,
+             log=print, runner=None, members_checkpoint=None, members_quick_numerics=None, te_reuse=None):
     """Validate one shipped design against its catalogue; returns the results dict (and writes
     results.json, report.html and the PNGs to ``out_dir`` when given). samples: Latin-hypercube
     size (default :data:`SAMPLES`, :data:`QUICK_SAMPLES` under quick); workers: processes for the
@@ -387,16 +388,93 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     ships a ``<design>_measured.toml`` and a tolerance file); members: False skips the all-members-on
     rigidity row (:mod:`rvtool.analysis.validate_members`; it runs where the design ships a
     ``<design>_members.toml``), members_samples its Latin-hypercube size (None: that module's default),
-    members_workers its processes (None: ``workers``)."""
+    members_workers its processes (None: ``workers``).
+
+    runner: a :class:`rvtool.analysis.workunits.UnitRunner` through which every costly, independent part runs as a
+    unit keyed by the digest of its inputs (the central loop, the rated state, the carrier's and the moment's side
+    figures, the ratio variant, each Latin-hypercube and tornado loop, each all-members-on b/a, each TE variant,
+    the efficiency curve): the full run spreads them over a process pool, stops starting them at a deadline and
+    resumes them (cases/rv/validate_rv.py); all of one design's units are submitted before any is waited for,
+    except the tornado's, which follow the band's screening. None: a runner of ``workers`` processes (today's
+    serial path for 1). A unit not started before the runner's deadline raises
+    :class:`~rvtool.analysis.workunits.DeadlineReached` out of this function (the finished units are stored).
+    members_checkpoint: a checkpoint of cases/rv/members_band.py whose samples the all-members-on row takes where
+    the draw digests match (:func:`rvtool.analysis.validate_members.members_rigidity`); members_quick_numerics:
+    the all-members-on row on the quick meshes (None: as ``quick``; the full run of the case passes True, the
+    meshes of members_band's band); te_reuse: results.json files of te_measured_rv80e whose TE comparison is taken
+    where its inputs digest equals this one's (:func:`rvtool.analysis.validate_te.te_comparison`)."""
+    from .workunits import UnitRunner, digest, file_digest
+    own_runner = runner is None
+    if own_runner:
+        runner = UnitRunner(workers=workers, log=log)
+    try:
+        return _validate(design, quick=quick, out_dir=out_dir, samples=samples, workers=workers, seed=seed,
+                         tornado_keys=tornado_keys, assumed=assumed, band=band, variant=variant, te=te,
+                         members=members, members_samples=members_samples, members_workers=members_workers, log=log,
+                         runner=runner, members_checkpoint=members_checkpoint,
+                         members_quick_numerics=members_quick_numerics, te_reuse=te_reuse, digest=digest,
+                         file_digest=file_digest)
+    finally:
+        if own_runner:
+            runner.close()
+
+
+def _central_unit(table, catalogue, step):
+    """The central loop (two cycles, repeatability checked) of a design table: a unit."""
+    from ..assembly.topologies import design_from_table
+    return _loop(design_from_table(table), catalogue, step)
+
+
+def _rated_unit(table, catalogue, quick):
+    """The rated state of a design table (output torque -T_R sign(ratio), input angle 0): its compliance budget,
+    Hertz peaks, the bearings' lives over a crank revolution and the model's ratio: a unit."""
+    from ..assembly import build
+    from ..assembly.topologies import design_from_table
+    from ..protocols.budget import stiffness_budget
+    from ..solver.static import StaticSolver
+    d = design_from_table(table)
+    model = build(d)
+    model.set_output_torque(-np.sign(model.ratio) * catalogue.test.rated_torque)
+    solver = StaticSolver(model)
+    q = solver.solve(0.0)
+    budget = stiffness_budget(model, q)
+    peaks = contact_pressures(d, model, q)
+    # the bearings' mean load over a crank revolution (after the budget and pressures of q: the model's
+    # input angle moves)
+    n_life = QUICK_LIFE_STATES if quick else LIFE_STATES
+    span = crank_revolution_input_angle(d, model)
+    life_angles = [k * span / n_life for k in range(n_life)]
+    life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
+    lives = bearing_lives(d, model, life_states, catalogue)
+    return {"budget": budget, "peaks": peaks, "lives": lives, "ratio": float(model.ratio), "n_life": n_life}
+
+
+def _carrier_unit(table, T_R, quick):
+    from ..assembly.topologies import design_from_table
+    from .budget import carrier_share_figure
+    return carrier_share_figure(design_from_table(table), T_R, quick=quick)
+
+
+def _moment_unit(table, catalogue, assumed, quick):
+    from ..assembly.topologies import design_from_table
+    return moment_rigidity_figure(design_from_table(table), catalogue, assumed, quick=quick)
+
+
+def _efficiency_unit(name, table, quick):
+    from ..assembly.topologies import design_from_table
+    from .losses import validate_efficiency
+    return validate_efficiency(name, design_from_table(table), quick=quick)
+
+
+def _validate(design, *, quick, out_dir, samples, workers, seed, tornado_keys, assumed, band, variant, te, members,
+              members_samples, members_workers, log, runner, members_checkpoint, members_quick_numerics, te_reuse,
+              digest, file_digest):
     if tornado_keys is None and quick:
         tornado_keys = QUICK_TORNADO_KEYS
     want_band, want_variant = bool(band), bool(variant)
     from .. import designs
-    from ..assembly import build
     from ..assembly.topologies import design_from_table, read_table
     from ..designs.catalogue import check_assumed_middle, load_assumed, load_catalogue, set_key
-    from ..protocols.budget import stiffness_budget
-    from ..solver.static import StaticSolver
     t0 = time.perf_counter()
     cat_name = designs.catalogue_of(design)
     if cat_name is None:
@@ -420,44 +498,35 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         log(f"note: the design's rated_torque {d.rated_torque} differs from the catalogue's T_R {T_R}; the "
             "catalogue's is used")
     n_samples = samples if samples is not None else (QUICK_SAMPLES if quick else SAMPLES)
-    log(f"validate {design}: central loop")
-    central = _loop(d, catalogue, QUICK_STEP if quick else FULL_STEP)
-    fig_c = _figures(central)
-    rep = central["repeatability"]
-    hl_err = central["metrics"].hysteresis_loss.error
-    # rated state: lives, pressures, budget
-    model = build(d)
-    model.set_output_torque(-np.sign(model.ratio) * T_R)
-    solver = StaticSolver(model)
-    q = solver.solve(0.0)
-    budget = stiffness_budget(model, q)
-    peaks = contact_pressures(d, model, q)
-    # the bearings' mean load over a crank revolution (after the budget and pressures of q: the model's
-    # input angle moves)
-    n_life = QUICK_LIFE_STATES if quick else LIFE_STATES
-    span = crank_revolution_input_angle(d, model)
-    life_angles = [k * span / n_life for k in range(n_life)]
-    life_states = [q] + [solver.solve(a) for a in life_angles[1:]]
-    lives = bearing_lives(d, model, life_states, catalogue)
-    from .budget import carrier_share_figure
-    carrier_side = carrier_share_figure(d, T_R, quick=quick)
-    log(f"validate {design}: moment rigidity (spatial carrier)")
-    moment = moment_rigidity_figure(d, catalogue, assumed, quick=quick)
-    # ratio variant
-    log(f"validate {design}: ratio variant" + ("" if want_variant else " skipped"))
-    try:
-        if not want_variant:
-            raise RuntimeError("skipped (variant=False: --quick of the case for a costly design)")
+    # every independent unit of this design is submitted first (a pool runs them together), then waited for
+    cat_id = file_digest(catalogue.path)
+    assumed_id = None if assumed is None else file_digest(assumed.path)
+
+    def loop_key(t, step, repeat):
+        return digest("validate.loop", {"table": t, "catalogue": cat_id, "step": step, "repeat": repeat})
+    log(f"validate {design}: central loop, rated state, side figures")
+    step_c = QUICK_STEP if quick else FULL_STEP
+    f_central = runner.submit(_central_unit, table, catalogue, step_c, key=loop_key(table, step_c, True),
+                              kind="central_loop")
+    f_rated = runner.submit(_rated_unit, table, catalogue, quick, kind="rated_state",
+                            key=digest("validate.rated", {"table": table, "catalogue": cat_id, "quick": quick}))
+    f_carrier = runner.submit(_carrier_unit, table, T_R, quick, kind="carrier_share",
+                              key=digest("validate.carrier", {"table": table, "T_R": T_R, "quick": quick}))
+    f_moment = runner.submit(_moment_unit, table, catalogue, assumed, quick, kind="moment_rigidity",
+                             key=digest("validate.moment", {"table": table, "catalogue": cat_id,
+                                                            "assumed": assumed_id, "quick": quick}))
+    f_variant = None
+    if want_variant:
         vt, v_ratio = ratio_variant(table)
-        v_fig = _figures(_loop(design_from_table(vt), catalogue, SAMPLE_STEP, repeat=False))
-        variant = {"ratio": v_ratio, "ratio_central": float(model.ratio), "rigidity": v_fig["torsional_rigidity"],
-                   "rel_diff": v_fig["torsional_rigidity"] / fig_c["torsional_rigidity"] - 1.0,
-                   "first_stage": {"sun_gear.n_teeth": vt["sun_gear"]["n_teeth"],
-                                   "crank_gear.n_teeth": vt["crank_gear"]["n_teeth"]}}
-    except Exception as exc:     # reported in the table, not fatal: the variant is a side check
-        variant = {"error": f"{type(exc).__name__}: {exc}"}
-    # Latin hypercube + tornado over the assumed ranges
-    unc = None
+        f_variant = runner.submit(_sample, (vt, catalogue), key=loop_key(vt, SAMPLE_STEP, False), kind="loop")
+    from .losses import load_efficiency_catalogue, load_friction_set
+    f_eff = runner.submit(_efficiency_unit, design, table, quick, kind="efficiency",
+                          key=digest("validate.efficiency", {
+                              "design": design, "table": table, "quick": quick,
+                              "efficiency_catalogue": file_digest(load_efficiency_catalogue().path),
+                              "friction_set": file_digest(load_friction_set().path)}))
+    # Latin hypercube over the assumed ranges (the tornado follows the band's screening)
+    f_lhs = None
     if assumed is not None:
         from scipy.stats import qmc
         keys = [a.key for a in assumed.inputs]
@@ -468,9 +537,58 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
             for a, uj in zip(assumed.inputs, u):
                 t = set_key(t, a.key, a.at(uj))
             return t
-
-        log(f"validate {design}: {n_samples} Latin-hypercube samples ({workers} worker(s))")
+        log(f"validate {design}: {n_samples} Latin-hypercube samples ({runner.workers} worker(s))")
         ts = time.perf_counter()
+        f_lhs = [runner.submit(_sample, (t, catalogue), key=loop_key(t, SAMPLE_STEP, False), kind="loop")
+                 for t in (table_of(u) for u in U)]
+    members_row = None
+    if members:
+        from .validate_members import members_rigidity
+        from ..designs.catalogue import load_assumed as _load_assumed
+        # the members' band is over the design's OWN assumed ranges (as cases/rv/members_band.py draws it), not
+        # over a ranges file given for the base band (rv40e's needle-clearance range)
+        own = designs.assumed_of(design)
+        base = _load_assumed(own) if own else None
+        m_quick = quick if members_quick_numerics is None else bool(members_quick_numerics)
+        f_members = members_rigidity(design, table, catalogue, base, quick=m_quick, samples=members_samples,
+                                     seed=seed, workers=members_workers or workers, log=log, runner=runner,
+                                     checkpoint=members_checkpoint, defer=True)
+        from .validate_members import central_table, members_budget
+        m_table = central_table(design, table, m_quick)
+        f_mbudget = None if m_table is None else runner.submit(
+            members_budget, m_table, T_R, kind="members_budget",
+            key=digest("validate.members_budget", {"table": m_table, "T_R": T_R}))
+    f_te = _te_measured(design, d, T_R, quick=quick, want=te, log=log, runner=runner, reuse=te_reuse)
+    # waited for in the order they were submitted
+    central = f_central.result()
+    fig_c = _figures(central)
+    rep = central["repeatability"]
+    hl_err = central["metrics"].hysteresis_loss.error
+    rated = f_rated.result()
+    budget, peaks, lives, n_life = rated["budget"], rated["peaks"], rated["lives"], rated["n_life"]
+    carrier_side = f_carrier.result()
+    log(f"validate {design}: moment rigidity (spatial carrier)")
+    moment = f_moment.result()
+    # ratio variant
+    log(f"validate {design}: ratio variant" + ("" if want_variant else " skipped"))
+    try:
+        if not want_variant:
+            raise RuntimeError("skipped (variant=False: --quick of the case for a costly design)")
+        v_res, v_err = f_variant.result()
+        if v_res is None:
+            raise RuntimeError(v_err)
+        v_fig = v_res
+        variant = {"ratio": v_ratio, "ratio_central": rated["ratio"], "rigidity": v_fig["torsional_rigidity"],
+                   "rel_diff": v_fig["torsional_rigidity"] / fig_c["torsional_rigidity"] - 1.0,
+                   "first_stage": {"sun_gear.n_teeth": vt["sun_gear"]["n_teeth"],
+                                   "crank_gear.n_teeth": vt["crank_gear"]["n_teeth"]}}
+    except Exception as exc:     # reported in the table, not fatal: the variant is a side check
+        if type(exc).__name__ == "DeadlineReached":
+            raise
+        variant = {"error": f"{type(exc).__name__}: {exc}"}
+    # Latin hypercube + tornado over the assumed ranges
+    unc = None
+    if assumed is not None:
         ck = None
         if out_dir is not None:
             os.makedirs(out_dir, exist_ok=True)
@@ -480,7 +598,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                                      "K_t_Nm_per_arcmin": budget["K_t_Nm_per_arcmin"], "pressures_Pa": peaks,
                                      "ratio_variant": variant, "U": U, "keys": keys}), fh, indent=1)
             ck = os.path.join(out_dir, "samples_partial.json")
-        lhs = _map(_sample, [(table_of(u), catalogue) for u in U], workers, log, ck)
+        lhs = _gather(f_lhs, log, ck)
         wall_lhs = time.perf_counter() - ts
         order, screen = screening(keys, U, lhs)
         n_tor = len(keys) if tornado_keys is None else min(len(keys), int(tornado_keys))
@@ -492,8 +610,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                 x[j] = v
                 tornado_pts.append(x)
         log(f"validate {design}: tornado over {n_tor} of {len(keys)} keys ({len(tornado_pts)} loops)")
-        tor = _map(_sample, [(table_of(x), catalogue) for x in tornado_pts], workers, log,
-                   None if ck is None else os.path.join(out_dir, "tornado_partial.json"))
+        tor = _gather([runner.submit(_sample, (t, catalogue), key=loop_key(t, SAMPLE_STEP, False), kind="loop")
+                       for t in (table_of(x) for x in tornado_pts)], log,
+                      None if ck is None else os.path.join(out_dir, "tornado_partial.json"))
         wall_samples = time.perf_counter() - ts
         res = lhs + tor
         failures = [e for f, e in lhs if f is None]
@@ -517,7 +636,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                                      f"motion over the {n_samples} Latin-hypercube samples (screening)"),
                "failures": failures, "band": band, "tornado": tornado, "seed": seed,
                "fraction_within_lost_motion_max": frac, "wall_s": wall_samples,
-               "per_sample_s": wall_samples / max(1, len(res)) * workers}
+               "per_sample_s": wall_samples / max(1, len(res)) * runner.workers}
     band = (unc or {}).get("band") or {}
     pts, pts_source = rigidity_points(catalogue)
     rows = (
@@ -529,21 +648,22 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
         + _rows("hysteresis_loss", fig_c["hysteresis_loss"], "arcmin", catalogue, band.get("hysteresis_loss"),
                 f"zero-torque width along the unloading branches (extrapolation error "
                 f"{(hl_err or 0) / RAD_PER_ARCMIN:.2g} arcmin)"))
-    members_row = None
+    members_budget_row = None
     if members:
-        from .validate_members import members_rigidity
-        from ..designs.catalogue import load_assumed as _load_assumed
-        base = assumed if assumed is not None else (_load_assumed(assumed_name) if assumed_name else None)
-        members_row = members_rigidity(design, table, catalogue, base, quick=quick, samples=members_samples,
-                                       seed=seed, workers=members_workers or workers, log=log)
+        members_row = f_members()
+        if f_mbudget is not None:
+            members_budget_row = {**f_mbudget.result(), "members_file": (members_row or {}).get("members_file"),
+                                  "quick_meshes": bool(m_quick),
+                                  "note": "every member of the torque path on (the all-members-on row's central "
+                                          "design: its members at the middles of their ranges); energy shares of "
+                                          "the output compliance at T_R, input angle 0 (tangent K_t, not b/a)"}
     at = sum(r["figure"] == "torsional_rigidity" for r in rows)               # beside the file's rigidity rows
     rows[at:at] = [] if members_row is None else members_row.pop("rows")
     rows += moment["rows"]
-    te_measured = _te_measured(design, d, T_R, quick=quick, want=te, log=log)
+    te_measured = None if f_te is None else f_te()
     rows += (te_measured or {}).get("rows", [])
     log(f"validate {design}: efficiency and no-load running torque (rvtool.analysis.losses)")
-    from .losses import validate_efficiency
-    efficiency = validate_efficiency(design, d, quick=quick)
+    efficiency = dict(f_eff.result())
     rows += efficiency.pop("rows")
     for fam in ("eccentric_bearings", "crank_bearings"):
         vals = [v["L10_h"] for k, v in lives.items() if v["family"] == fam and v["L10_h"] is not None]
@@ -601,7 +721,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
                                                 if d.housing else None}},
         "ratio_variant": variant, "uncertainty": unc, "te_measured": te_measured, "efficiency": efficiency,
         "all_members_on": members_row,
-        "settings": {"quick": quick, "samples": n_samples, "workers": workers,
+        "settings": {"quick": quick, "samples": n_samples, "workers": runner.workers,
                      "central_step": QUICK_STEP if quick else FULL_STEP, "sample_step": SAMPLE_STEP,
                      "rigidity_points": list(rigidity_points(catalogue)[0]),
                      "rigidity_points_source": rigidity_points(catalogue)[1],
@@ -611,6 +731,7 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     # issue 30: the carrier's switch and the ported carrier's share beside the budget of the file's switches
     out["compliance_budget"]["configuration"]["carrier.body"] = getattr(getattr(d, "carrier", None), "body", None)
     out["compliance_budget"]["with_ported_carrier"] = carrier_side
+    out["compliance_budget"]["all_members_on"] = members_budget_row
     out["loop"] = {"torque_Nm": central["cycles"][-1]["torque_Nm"].tolist(),
                    "angle_arcmin": (central["cycles"][-1]["angle_rad"] / RAD_PER_ARCMIN).tolist(),
                    "labels": central["cycles"][-1]["labels"],
@@ -620,13 +741,30 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     return out
 
 
-def _te_measured(design, d, rated_torque, *, quick, want, log):
-    """The TE comparison with a published measurement (:func:`rvtool.analysis.validate_te.te_comparison`), None
-    where the design has no measurement or tolerance file or ``want`` is False."""
+def _te_measured(design, d, rated_torque, *, quick, want, log, runner=None, reuse=None):
+    """The TE comparison with a published measurement (:func:`rvtool.analysis.validate_te.te_comparison`) as a
+    callable returning it (its variants submitted to ``runner`` now), None where ``want`` is False."""
     if not want:
         return None
     from .validate_te import te_comparison
-    return te_comparison(design, d, rated_torque, quick=quick, log=log)
+    return te_comparison(design, d, rated_torque, quick=quick, log=log, runner=runner, defer=True, reuse=reuse)
+
+
+def _gather(futures, log=None, checkpoint=None):
+    """The results of ``futures`` in order (as :func:`_map`: a line per item, the checkpoint rewritten)."""
+    out = []
+    t0 = time.perf_counter()
+    for k, f in enumerate(futures):
+        r = f.result()
+        out.append(r)
+        if log is not None:
+            err = "" if r[1] is None else ": " + r[1]
+            log(f"  {k + 1}/{len(futures)} done ({time.perf_counter() - t0:.0f} s){err}")
+        if checkpoint is not None:
+            with open(checkpoint, "w") as fh:
+                json.dump(_jsonable({"done": len(out), "of": len(futures), "results": out,
+                                     "wall_s": time.perf_counter() - t0}), fh)
+    return out
 
 
 def checks(out):
@@ -710,8 +848,51 @@ def write(out, out_dir, catalogue):
         plots.append(te_plot(out["te_measured"], out_dir))
     from .losses import efficiency_plot
     plots += efficiency_plot(out, out_dir)
+    plots += budget_plot(out, out_dir)
     with open(os.path.join(out_dir, "report.html"), "w") as fh:
         fh.write(report_html(out, out_dir, plots))
+
+
+def budget_columns(out):
+    """{column title: {path: energy share}} of a validate result: the design as its file has it, with the ported
+    carrier (side figure) and with every member on, where each was computed."""
+    cb = out.get("compliance_budget") or {}
+    cols = {}
+    if cb.get("shares"):
+        cols[f"as the file has it (K_t {cb['K_t_Nm_per_arcmin']:.4g} N m/arcmin)"] = cb["shares"]
+    pc = cb.get("with_ported_carrier") or {}
+    if pc.get("shares"):
+        cols[f"with the ported carrier (K_t {pc['K_t_Nm_per_arcmin']:.4g})"] = pc["shares"]
+    am = cb.get("all_members_on") or {}
+    if am.get("shares"):
+        cols[f"every member on (K_t {am['K_t_Nm_per_arcmin']:.4g})"] = am["shares"]
+    return cols
+
+
+def budget_plot(out, out_dir):
+    """budget.png: each path's share of the output compliance at T_R in every budget of the result (the design's
+    file, the ported carrier, every member on); returns the file names written."""
+    cols = budget_columns(out)
+    if not cols:
+        return []
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    paths = sorted({p for c in cols.values() for p in c}, key=lambda p: -max(c.get(p, 0.0) for c in cols.values()))
+    fig, ax = plt.subplots(figsize=(7.5, 0.3 * len(paths) + 1.8))
+    h = 0.8 / len(cols)
+    for i, (title, sh) in enumerate(cols.items()):
+        ax.barh([j + i * h for j in range(len(paths))], [100 * sh.get(p, 0.0) for p in paths], height=h,
+                label=title)
+    ax.set_yticks([j + 0.4 - h / 2 for j in range(len(paths))], paths, fontsize=7)
+    ax.invert_yaxis()
+    ax.axvline(5.0, color="gray", lw=0.6, ls=":", label="5 % (issue 30: a member below may be skipped)")
+    ax.set(xlabel="share of the output compliance at T_R [%]", title=f"{out['design']}: compliance budget")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "budget.png"), dpi=110)
+    plt.close(fig)
+    return ["budget.png"]
 
 
 def _jsonable(o):
@@ -748,6 +929,11 @@ def table_text(out):
     if pc and "carrier_share" in pc:
         lines.append(f"  with the ported carrier: K_t {pc['K_t_Nm_per_arcmin']:.4g} N m/arcmin at T_R, carrier share "
                      f"{100 * pc['carrier_share']:.1f} % (tangent budget; the file keeps carrier.body = 'rigid')")
+    am = out.get("compliance_budget", {}).get("all_members_on")
+    if am and am.get("shares"):
+        top = sorted(am["shares"].items(), key=lambda kv: -kv[1])
+        lines.append(f"  every member on: K_t {am['K_t_Nm_per_arcmin']:.4g} N m/arcmin at T_R; shares "
+                     + ", ".join(f"{k} {100 * v:.1f} %" for k, v in top))
     u = out["uncertainty"]
     if u is not None and u["fraction_within_lost_motion_max"] is not None:
         lines.append(f"  {u['samples']} LHS samples: fraction within the catalogue's lost-motion maximum "
@@ -769,6 +955,16 @@ def report_html(out, out_dir, plots):
         with open(os.path.join(out_dir, p), "rb") as fh:
             imgs += f'<img style="max-width:100%" alt="{e(p)}" src="data:image/png;base64,' \
                     f'{base64.b64encode(fh.read()).decode()}">'
+    cols = budget_columns(out)
+    budget = ""
+    if cols:
+        paths = sorted({p for c in cols.values() for p in c}, key=lambda p: -max(c.get(p, 0.0) for c in cols.values()))
+        budget = ("<h2>Compliance budget at T_R (energy share of the output compliance, %)</h2>"
+                  "<table border=1 cellpadding=3 style='border-collapse:collapse'><tr><th>path</th>"
+                  + "".join(f"<th>{e(t)}</th>" for t in cols) + "</tr>"
+                  + "".join(f"<tr><td>{e(p)}</td>" + "".join(
+                      f"<td>{'-' if p not in c else f'{100 * c[p]:.2f}'}</td>" for c in cols.values()) + "</tr>"
+                      for p in paths) + "</table>")
     extra = {k: out[k] for k in ("central", "bearing_lives", "pressures", "compliance_budget", "ratio_variant",
                                  "assumptions_commit", "settings")}
     if out.get("te_measured") is not None:
@@ -781,7 +977,7 @@ def report_html(out, out_dir, plots):
             f"<p>{e(out['catalogue']['edition'])}; assumptions_commit {e(str(out['assumptions_commit']))}</p>"
             "<table border=1 cellpadding=3 style='border-collapse:collapse'><tr><th>figure</th><th>predicted</th>"
             "<th>band (LHS)</th><th>catalogue</th><th>verdict</th><th>source</th><th>test conditions</th>"
-            f"<th>note</th></tr>{rows}</table>{imgs}"
+            f"<th>note</th></tr>{rows}</table>{budget}{imgs}"
             f"<pre>{e(json.dumps(_jsonable(extra), indent=1))}</pre></body></html>")
 
 

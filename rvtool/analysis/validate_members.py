@@ -443,17 +443,71 @@ def _run_resumable(items, log, checkpoint, key, deadline):
     return out[:n]
 
 
+def central_table(design, table, quick):
+    """The all-members-on design table at the middles of every members range (the row's central design), on the
+    quick meshes where ``quick``; None where the design has no members file."""
+    name = members_name(design)
+    if name is None:
+        return None
+    switches, derived, assumed, _ = load_members(name)
+    return members_table(table, switches, derived, {a.key: a.middle for a in assumed.inputs},
+                         QUICK_NUMERICS if quick else None)
+
+
+def members_budget(table, rated_torque):
+    """The compliance budget at T_R (input angle 0) of an all-members-on design table
+    (:func:`rvtool.protocols.budget.stiffness_budget`: each path's strain-energy share of the output compliance,
+    the rigid-switch shares, the tangent K_t [N m/arcmin]): every member's share, the column of issue 30's
+    "validate shows every member's share" (cases/rv/compliance_budget.py checks these shares against switching
+    each member on alone)."""
+    from ..assembly import build
+    from ..assembly.topologies import design_from_table
+    from ..protocols.budget import stiffness_budget
+    from ..solver.static import StaticSolver
+    model = build(design_from_table(table))
+    model.set_output_torque(-np.sign(model.ratio) * rated_torque)
+    b = stiffness_budget(model, StaticSolver(model).solve(0.0))
+    return {"K_t_Nm_per_arcmin": float(b["K_t_Nm_per_arcmin"]), "shares": b["shares"],
+            "rigid_shares": b["rigid_shares"]}
+
+
+def checkpoint_key(design, samples, seed, quick):
+    """The key of a band's checkpoint (cases/rv/members_band.py): the design, the planned draws and the meshes."""
+    return f"{design} samples={samples} seed={seed} quick={quick}"
+
+
+def checkpoint_results(path, key):
+    """{draw digest: finished result} of a band checkpoint written by :func:`_run_resumable` under ``key`` (empty
+    where the file is missing, has another key or no digests): the draws a later run takes instead of solving
+    them, matched by the digest of their design table, never by position."""
+    import json
+    if path is None or not os.path.exists(path):
+        return {}
+    with open(path) as fh:
+        prev = json.load(fh)
+    if prev.get("key") != key or prev.get("digests") is None:
+        return {}
+    return {d: tuple(r) for d, r in zip(prev["digests"], prev["results"]) if r is not None and r[0] is not None}
+
+
 def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False, samples=None, seed=0, workers=1,
-                     log=print, checkpoint=None, deadline=None):
+                     log=print, checkpoint=None, deadline=None, runner=None, defer=False):
     """The all-members-on row (module docstring): a dict with ``rows`` (validate's table rows), ``central``
     (:func:`rigidity_ba` at the middles), ``band``, the samples and failures, the members file and its commit;
     None where the design has no members file. ``checkpoint`` (a JSON path) keeps the finished samples and
     resumes them (one process); ``deadline`` (epoch seconds) starts no sample after it: ``samples_done`` then
-    says how many of the ``samples`` planned draws (the first ones) make the band."""
-    from .validate import catalogue_rows, map_samples, rigidity_points
+    says how many of the ``samples`` planned draws (the first ones) make the band.
+
+    runner (a :class:`rvtool.analysis.workunits.UnitRunner`): every b/a is a unit of it, keyed by the digest of
+    its draw's design table and the catalogue file; ``checkpoint`` is then READ only, a band checkpoint of
+    cases/rv/members_band.py (:func:`checkpoint_results`): a draw whose digest is there is taken from it (the same
+    sampler, :func:`sample_table`, the same draws), the others are solved (``reused_from_checkpoint`` counts
+    them); ``defer``: return a callable that waits for the units and returns the row (the units are submitted
+    now), so the caller can submit its other units first."""
+    from .validate import map_samples
     name = members_name(design)
     if name is None:
-        return None
+        return (lambda: None) if defer else None
     t0 = time.perf_counter()
     switches, derived, assumed, _ = load_members(name)
     recorded, last, date = members_commit(name)
@@ -471,10 +525,41 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
         f"{len(inputs)} ranges ({workers} worker(s))")
     items = ([(members_table(table, switches, derived, mid, numerics), catalogue)]
              + [(table_of(u), catalogue) for u in U])
+    reused = None
+    if runner is not None:
+        from .workunits import digest, file_digest
+        prior = checkpoint_results(checkpoint, checkpoint_key(design, n, seed, quick))
+        cat_id = file_digest(catalogue.path)
+        futures = []
+        reused = 0
+        for it in items:
+            dg = table_digest(it[0])
+            if dg in prior:
+                reused += 1
+                futures.append(prior[dg])
+            else:
+                futures.append(runner.submit(_sample, it, key=digest("members.ba", {"table": dg, "catalogue": cat_id}),
+                                             kind="members_ba"))
+        if checkpoint is not None:
+            log(f"  {reused}/{len(items)} b/a taken from {checkpoint} (the same draws by digest)")
+
+        def finish():
+            res = [f if isinstance(f, tuple) else f.result() for f in futures]
+            return _members_row(design, name, catalogue, res, n, base, assumed, switches, derived, recorded, last,
+                                date, numerics, mid, inputs, U, seed, quick, t0, reused)
+        return finish if defer else finish()
     if checkpoint is None and deadline is None:
         res = map_samples(_sample, items, workers, log)
     else:
-        res = _run_resumable(items, log, checkpoint, f"{design} samples={n} seed={seed} quick={quick}", deadline)
+        res = _run_resumable(items, log, checkpoint, checkpoint_key(design, n, seed, quick), deadline)
+    out = _members_row(design, name, catalogue, res, n, base, assumed, switches, derived, recorded, last, date,
+                       numerics, mid, inputs, U, seed, quick, t0, reused)
+    return (lambda: out) if defer else out
+
+
+def _members_row(design, name, catalogue, res, n, base, assumed, switches, derived, recorded, last, date, numerics,
+                 mid, inputs, U, seed, quick, t0, reused):
+    from .validate import catalogue_rows, rigidity_points
     if not res:
         raise RvtoolInputError(f"validate {design}: deadline reached before the all-members-on central design")
     central, err = res[0]
@@ -499,4 +584,5 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
             "failures": failures, "keys": [a.key for a in inputs], "U": U.tolist(),
             "members_file": f"{name}.toml", "switches": switches, "derived": derived,
             "inputs_at_middle": mid, "assumptions_commit": recorded, "last_commit_touching_members": last,
-            "last_commit_date": date, "quick_numerics": numerics, "seed": seed, "wall_s": time.perf_counter() - t0}
+            "last_commit_date": date, "quick_numerics": numerics, "seed": seed, "wall_s": time.perf_counter() - t0,
+            "reused_from_checkpoint": reused}

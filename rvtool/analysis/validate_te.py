@@ -51,38 +51,85 @@ def te_window(design):
     return math.lcm(z1, z2) // z1
 
 
-def te_variants(design, tolerances, *, n, points_per_mesh, torque, seed=SEED, log=None):
-    """Peak-to-peak TE [rad] of n tolerance variants (and of the nominal design): a dict with ``nominal_pp``,
-    ``records`` (index, status, te_pp_rad, error, deviations: largest |draw| per field, wall_s) and ``angles``."""
+def te_angles(design, points_per_mesh):
+    """(input angles [rad] of the TE window at ``points_per_mesh`` per first-stage mesh cycle, the model's mesh
+    period [rad])."""
+    from ..assembly import build
+    mesh = float(build(design).mesh_period)
+    n_pts = int(round(te_window(design) * 2 * np.pi / mesh * points_per_mesh))
+    return np.arange(n_pts) * mesh / points_per_mesh
+
+
+def te_nominal(design, *, angles, torque):
+    """Peak-to-peak TE [rad] of the nominal design over ``angles`` (a unit of the full run)."""
+    from ..assembly import build
+    from ..protocols.precision import quasi_static_te
+    return float(np.ptp(quasi_static_te(build(design), torque=torque, input_angles=angles)["te"]))
+
+
+def te_variant(design, tolerances, k, *, angles, torque, seed=SEED):
+    """The record of tolerance variant ``k`` (index, status, te_pp_rad, error, deviations: largest |draw| per
+    field, wall_s): a failed variant is recorded, never dropped (a unit of the full run)."""
     from ..assembly import build
     from ..protocols.precision import quasi_static_te
     from ..variants.rv_tolerances import load_rv_tolerances, sample_rv_design
     spec = load_rv_tolerances(tolerances)
-    model = build(design)
-    mesh = float(model.mesh_period)
-    n_pts = int(round(te_window(design) * 2 * np.pi / mesh * points_per_mesh))
-    angles = np.arange(n_pts) * mesh / points_per_mesh
-    nominal = quasi_static_te(model, torque=torque, input_angles=angles)
-    records = []
-    for k in range(n):
-        t0 = time.perf_counter()
-        rec = {"index": k, "status": "ok", "error": None, "te_pp_rad": None, "deviations": {}}
-        try:
-            dv, drawn = sample_rv_design(spec, design, k, seed)
-            rec["deviations"] = {f: float(np.max(np.abs(np.asarray(v, float)))) for f, v in drawn.items()}
-            qs = quasi_static_te(build(dv), torque=torque, input_angles=angles)
-            rec["te_pp_rad"] = float(np.ptp(qs["te"]))
-            if not np.isfinite(rec["te_pp_rad"]):
-                raise RvtoolInputError("TE is not finite")
-        except (SolverFailure, RvtoolInputError) as exc:       # recorded, never dropped silently
-            rec.update(status="failed", error=f"{type(exc).__name__}: {exc}", te_pp_rad=None)
-        rec["wall_s"] = time.perf_counter() - t0
-        records.append(rec)
-        if log:
-            pp = "failed" if rec["te_pp_rad"] is None else f"{rec['te_pp_rad'] * ARCSEC_PER_RAD:.3f} arcsec"
-            log(f"  TE variant {k + 1}/{n}: {pp} ({rec['wall_s']:.1f} s)")
-    return {"nominal_pp": float(np.ptp(nominal["te"])), "records": records, "n_points": n_pts,
-            "angles": angles}
+    t0 = time.perf_counter()
+    rec = {"index": k, "status": "ok", "error": None, "te_pp_rad": None, "deviations": {}}
+    try:
+        dv, drawn = sample_rv_design(spec, design, k, seed)
+        rec["deviations"] = {f: float(np.max(np.abs(np.asarray(v, float)))) for f, v in drawn.items()}
+        qs = quasi_static_te(build(dv), torque=torque, input_angles=angles)
+        rec["te_pp_rad"] = float(np.ptp(qs["te"]))
+        if not np.isfinite(rec["te_pp_rad"]):
+            raise RvtoolInputError("TE is not finite")
+    except (SolverFailure, RvtoolInputError) as exc:       # recorded, never dropped silently
+        rec.update(status="failed", error=f"{type(exc).__name__}: {exc}", te_pp_rad=None)
+    rec["wall_s"] = time.perf_counter() - t0
+    return rec
+
+
+def te_inputs_digest(design, tolerances, measured_path, *, n, points_per_mesh, torque, seed=SEED):
+    """SHA-256 of everything a TE comparison depends on (the design's data, the tolerance and measurement files'
+    bytes, the variant count, resolution, torque and seed): a run whose results carry the same digest computed
+    the same figures (``rvtool validate`` takes them from the committed te_measured_rv80e results)."""
+    import dataclasses
+    from .workunits import digest, file_digest
+    return digest("te.comparison", {"design": dataclasses.asdict(design), "tolerances": file_digest(tolerances),
+                                    "measured": file_digest(measured_path), "n": int(n),
+                                    "points_per_mesh": points_per_mesh, "torque": float(torque), "seed": seed})
+
+
+def te_variants(design, tolerances, *, n, points_per_mesh, torque, seed=SEED, log=None, runner=None, defer=False):
+    """Peak-to-peak TE [rad] of n tolerance variants (and of the nominal design): a dict with ``nominal_pp``,
+    ``records`` (:func:`te_variant`) and ``angles``. ``runner`` (a :class:`rvtool.analysis.workunits.UnitRunner`):
+    the nominal TE and each variant are units of it, keyed by the digest of their inputs; ``defer``: return a
+    callable that waits for them (they are submitted now)."""
+    import dataclasses
+    from .workunits import UnitRunner, digest, file_digest
+    angles = te_angles(design, points_per_mesh)
+    own = runner is None
+    if own:
+        runner = UnitRunner(workers=1, log=log)
+    base = {"design": dataclasses.asdict(design), "tolerances": file_digest(tolerances), "angles": angles,
+            "torque": float(torque), "seed": seed}
+    f_nom = runner.submit(te_nominal, design, angles=angles, torque=torque, kind="te_nominal",
+                          key=digest("te.nominal", {k: v for k, v in base.items() if k not in ("tolerances", "seed")}))
+    f_var = [runner.submit(te_variant, design, tolerances, k, angles=angles, torque=torque, seed=seed,
+                           kind="te_variant", key=digest("te.variant", {**base, "k": k})) for k in range(n)]
+
+    def finish():
+        records = []
+        for f in f_var:
+            rec = f.result()
+            records.append(rec)
+            if log:
+                pp = "failed" if rec["te_pp_rad"] is None else f"{rec['te_pp_rad'] * ARCSEC_PER_RAD:.3f} arcsec"
+                log(f"  TE variant {rec['index'] + 1}/{n}: {pp} ({rec['wall_s']:.1f} s)")
+        return {"nominal_pp": f_nom.result(), "records": records, "n_points": len(angles), "angles": angles}
+    if own:
+        runner.close()
+    return finish if defer else finish()
 
 
 def te_sensitivity(design, tolerances, *, points_per_mesh, torque, draws=1, seed=SEED, log=None):
@@ -183,25 +230,52 @@ def measured_summary(measured):
                           for m in measured.transmission_error]}
 
 
-def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, variants=None):
+def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, variants=None, runner=None,
+                  defer=False, reuse=None):
     """The TE comparison of a shipped design, or None where it has no measurement or tolerance file: a dict
     with ``rows`` (for the validate table), ``distribution``, ``nominal_pp_arcsec``, ``records``,
-    ``settings`` and ``measured`` (the file's figures)."""
+    ``settings`` (with ``inputs_digest``, :func:`te_inputs_digest`) and ``measured`` (the file's figures).
+    runner / defer: as :func:`te_variants`. reuse: paths of results.json files of earlier comparisons (the
+    committed te_measured_rv80e results): the first whose ``settings.inputs_digest`` equals this comparison's is
+    returned instead of computing (``reused_from`` names it); a file that is missing or differs is passed over."""
     from .. import designs
     from ..designs.measured import load_measured
     meas_name, tol_name = designs.measured_of(design_name), designs.tolerances_of(design_name)
     if meas_name is None or tol_name is None:
-        return None
+        return (lambda: None) if defer else None
     measured = load_measured(meas_name)
     if not measured.transmission_error:
-        return None
+        return (lambda: None) if defer else None
     n = variants if variants is not None else VARIANTS[0 if quick else 1]
     ppm = POINTS_PER_MESH[0 if quick else 1]
     torque = TE_TORQUE_FRACTION * rated_torque
+    inputs_digest = te_inputs_digest(design, designs.path(tol_name), designs.path(meas_name), n=n,
+                                     points_per_mesh=ppm, torque=torque)
+    for path in reuse or ():
+        import json
+        import os
+        if not os.path.exists(path):
+            continue
+        with open(path) as fh:
+            prev = json.load(fh)
+        if prev.get("settings", {}).get("inputs_digest") == inputs_digest and "rows" in prev:
+            log(f"validate {design_name}: TE comparison taken from {path} (the same inputs digest)")
+            keep = {k: prev[k] for k in ("rows", "distribution", "nominal_pp_arcsec", "records", "n_failed",
+                                         "settings", "measured", "wall_s") if k in prev}
+            out = {**keep, "reused_from": {"path": path, "provenance": prev.get("provenance")}}
+            return (lambda: out) if defer else out
     log(f"validate {design_name}: TE of {n} tolerance variants over {te_window(design)} input revolutions "
         f"({tol_name}.toml) against {meas_name}.toml")
     t0 = time.perf_counter()
-    res = te_variants(design, designs.path(tol_name), n=n, points_per_mesh=ppm, torque=torque, log=log)
+    pending = te_variants(design, designs.path(tol_name), n=n, points_per_mesh=ppm, torque=torque, log=log,
+                          runner=runner, defer=True)
+
+    def finish():
+        return _te_result(pending(), n, ppm, torque, tol_name, meas_name, measured, design, inputs_digest, t0)
+    return finish if defer else finish()
+
+
+def _te_result(res, n, ppm, torque, tol_name, meas_name, measured, design, inputs_digest, t0):
     dist = te_distribution(res["records"])
     fields = sorted({f for r in res["records"] for f in r["deviations"]})
     note = (f"{n} variants ({tol_name}.toml: {', '.join(fields)}), seed {SEED}; quasi-static TE at "
@@ -221,7 +295,7 @@ def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, 
                          "tolerances_commit": measured.tolerances_commit,
                          "seed": SEED, "torque_fraction": TE_TORQUE_FRACTION, "torque_Nm": torque,
                          "window_input_revolutions": te_window(design), "points_per_mesh": ppm,
-                         "n_points": res["n_points"]},
+                         "n_points": res["n_points"], "inputs_digest": inputs_digest},
             "measured": measured_summary(measured),
             "wall_s": time.perf_counter() - t0}
 

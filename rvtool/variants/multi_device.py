@@ -172,60 +172,37 @@ def _is_cycloid(design):
 
 
 _POOLS = {}
-_HELPER_BARRIER = None
-"""In a helper process of :func:`helper_pool`: the barrier of all its pool's helpers (set by the pool's
-initializer), at which a warm-up task waits so that every helper runs exactly one."""
 WARM_TIMEOUT_S = 600.0
 """The longest a helper's warm-up task waits at the barrier for the pool's other helpers [s] (spawn and
 imports of a whole pool on a loaded host)."""
 
 
-def _init_pool_helper(barrier):
-    """Initializer of a :func:`helper_pool` process: one BLAS/OpenMP thread, the pool's warm-up barrier."""
-    global _HELPER_BARRIER
-    from .montecarlo import init_helper
-    init_helper()
-    _HELPER_BARRIER = barrier
-
-
 def helper_pool(host_workers):
     """This process's pool of ``host_workers`` spawned processes (one BLAS thread each) for the
     device path's host work (the variants' builds; per-copy parameters, Exudyn fallbacks), started
-    on first use and kept for the process's later tasks; None for 0."""
+    on first use and kept for the process's later tasks; None for 0. A
+    :func:`rvtool.variants.barrier_pool.barrier_pool`, so that :func:`_on_every_helper` warms every
+    helper exactly once."""
     if not host_workers:
         return None
     if host_workers not in _POOLS:
         import atexit
-        import concurrent.futures as cf
-        import multiprocessing
 
-        from .cluster import single_thread_env
-        ctx = multiprocessing.get_context("spawn")
-        with single_thread_env():
-            pool = cf.ProcessPoolExecutor(max_workers=int(host_workers), initializer=_init_pool_helper,
-                                          initargs=(ctx.Barrier(int(host_workers)),), mp_context=ctx)
+        from .barrier_pool import barrier_pool
+        pool = barrier_pool(int(host_workers), one_blas_thread=True, start_timeout_s=WARM_TIMEOUT_S)
         atexit.register(pool.shutdown, wait=False, cancel_futures=True)
         _POOLS[host_workers] = pool
     return _POOLS[host_workers]
 
 
 def _on_every_helper(pool, host_workers, fn, job):
-    """``fn(job)`` run exactly once in every helper of ``pool`` (each waits at the pool's barrier after
-    it, so that no helper takes a second one while another has not started: a pool warmed by mapping
-    one job per process can leave a slow-starting one cold, whose first timed task then pays the
-    warm-up); returns the helpers' count."""
-    pids = set(pool.map(_warm_task, [(fn, job)] * int(host_workers)))
-    if len(pids) != int(host_workers):
-        raise RuntimeError(f"the helper pool's warm-up reached {len(pids)} of {host_workers} helpers")
-    return len(pids)
-
-
-def _warm_task(task):
-    import os
-    fn, job = task
-    fn(job)
-    _HELPER_BARRIER.wait(WARM_TIMEOUT_S)
-    return os.getpid()
+    """``fn(job)`` run exactly once in every helper of ``pool``
+    (:func:`rvtool.variants.barrier_pool.warm_every_worker`: each waits at the pool's barrier after
+    it, so that no helper takes a second one while another has not started; a warm-up that does not
+    reach every helper within :data:`WARM_TIMEOUT_S` raises); returns the helpers' count."""
+    from .barrier_pool import warm_every_worker
+    return warm_every_worker(pool, int(host_workers), fn, [job] * int(host_workers),
+                             timeout_s=WARM_TIMEOUT_S, on_missed="raise")
 
 
 def _import_device_path(_):
