@@ -17,8 +17,8 @@ revolution (153 input revolutions, 3120 points at 2 points per mesh), the nomina
 points per mesh (the resolution error: the difference of the two peak-to-peaks), and the one-at-a-time sensitivity
 of each tolerance field over the output revolution (--sensitivity draws each, default 1); each variant's 19-revolution
 windows are read off the same curves. The work is cut into units of <= 800 points keyed by the SHA-256 of their
-inputs (drawn design, torque, angle step, point range): --workers N spreads them over a spawn pool (one BLAS thread
-each); --deadline HH:MM (UTC) / --budget-s S stop starting units before that time; --resume DIR[,DIR] keeps every
+inputs (drawn design, torque, angle step, point range) and run by rvtool.analysis.workunits.UnitRunner: --workers N
+spreads them over a spawn pool (one BLAS thread each); --deadline HH:MM (UTC) / --budget-s S stop starting units before that time; --resume DIR[,DIR] keeps every
 unit already in DIR/units; results.json (with "complete") and the plots are written into --out at every stop (and
 results.json every 30 s meanwhile), so two or three calls complete one run.
 passed (stated criteria, NOT agreement with the measurement, which is reported as it is): no failed variant, no
@@ -64,8 +64,9 @@ def full(args, d, t0):
     draws = args.sensitivity if args.sensitivity is not None else 1
     plan = TR.plan_revolution("rv80e", d, d.rated_torque, variants=n, draws=draws,
                               input_revolutions=args.input_revolutions)
-    store = TR.UnitStore(args.out, resume=args.resume.split(",") if args.resume else ())
     deadline = TR.deadline_from(args.deadline, args.budget_s)
+    store = TR.unit_runner(args.out, workers=args.workers, deadline=deadline,
+                           resume=args.resume.split(",") if args.resume else ())
     s = plan["settings"]
     print(f"TE over one output revolution: {s['jobs']} jobs ({n} variants, {draws} draw(s) per field, nominal, "
           f"resolution), {s['units']} units of <= {s['chunk_points']} points")
@@ -85,9 +86,10 @@ def full(args, d, t0):
                               wall_s=time.perf_counter() - t0)
         return results
 
-    stats = TR.run_units(plan["jobs"], store, workers=args.workers, deadline=deadline, on_progress=write)
+    with store:
+        stats = TR.run_units(plan["jobs"], store, on_progress=write)
     w = stats.pop("unit_wall_s")
-    state["units"] = {**stats, "resumed_files": store.resumed,
+    state["units"] = {**stats, "workers": args.workers,
                       "unit_wall_s_mean": sum(w) / len(w) if w else None, "unit_wall_s_max": max(w) if w else None}
     return write(final=True)
 

@@ -14,16 +14,16 @@ under the load, a cold start meets the warm-started sequence to solver tolerance
 
 A unit is keyed by the SHA-256 of its inputs: the drawn design (every field of the design dataclass), the torque,
 the angle step and the chunk's index range, so that a result kept in a folder serves any later run that asks for
-the same unit (``resume``), whatever its position in that run. A finished unit is written at once
-(``<store>/units/<key>.json``); no unit is started after a deadline less the longest unit seen so far.
+the same unit (``resume``), whatever its position in that run. The units run through
+:class:`rvtool.analysis.workunits.UnitRunner` (the process pool, the store ``<out>/units/<key>.pkl`` written as each
+unit finishes, the resume folders, and the deadline: no unit is started once the time left is below the longest
+unit seen so far).
 """
-import contextlib
 import dataclasses
 import hashlib
 import json
 import math
 import os
-import shutil
 import time
 
 import numpy as np
@@ -35,11 +35,6 @@ CHUNK_POINTS = 800
 """Largest number of TE points of one unit: about 20 s of one core unloaded (measured 0.023 s per warm-started
 point of rv80e, 2 points per mesh, plus 3 s to build the variant and a cold start), so that 16 workers share a few
 hundred units evenly and a resumed run loses at most one unit per worker."""
-
-PRIOR_UNIT_S = 60.0
-"""Time a unit is assumed to take before the first one finishes (deadline planning only): about 3x the unloaded
-figure above, for a loaded host."""
-
 
 def design_digest(design, *, torque, step):
     """SHA-256 (hex) of what a TE job solves: every field of the design dataclass (JSON, sorted keys, floats by
@@ -102,40 +97,6 @@ def solve_unit(task):
     return out
 
 
-class UnitStore:
-    """Finished units in ``<out>/units/<key>.json``; ``resume`` folders (their ``units/``) are read too, and a
-    unit found there is copied into ``out`` so that every stop leaves a folder complete in itself."""
-
-    def __init__(self, out_dir, resume=()):
-        self.dir = os.path.join(out_dir, "units")
-        os.makedirs(self.dir, exist_ok=True)
-        self.resume = [os.path.join(r, "units") for r in resume if r]
-        self.resumed = 0
-
-    def path(self, key):
-        return os.path.join(self.dir, f"{key}.json")
-
-    def get(self, key):
-        p = self.path(key)
-        if not os.path.exists(p):
-            for r in self.resume:
-                q = os.path.join(r, f"{key}.json")
-                if os.path.exists(q) and os.path.abspath(q) != os.path.abspath(p):
-                    shutil.copyfile(q, p)
-                    self.resumed += 1
-                    break
-            else:
-                return None
-        with open(p) as fh:
-            return json.load(fh)
-
-    def put(self, res):
-        tmp = self.path(res["key"]) + f".{os.getpid()}.tmp"
-        with open(tmp, "w") as fh:
-            json.dump(res, fh)
-        os.replace(tmp, self.path(res["key"]))
-
-
 def deadline_from(deadline_hhmm=None, budget_s=None, *, now=None):
     """Wall-clock stop time [s since the epoch] from ``HH:MM`` (UTC, today; a time more than 12 h in the past is
     tomorrow's) and/or a budget [s] from now: the earlier of the two, None for neither. A malformed HH:MM is an
@@ -162,108 +123,89 @@ def deadline_from(deadline_hhmm=None, budget_s=None, *, now=None):
     return min(ends) if ends else None
 
 
-@contextlib.contextmanager
-def _env(**values):
-    saved = {k: os.environ.get(k) for k in values}
-    os.environ.update(values)
-    try:
-        yield
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
+def unit_runner(out_dir, *, workers=1, deadline=None, resume=(), log=print):
+    """The :class:`rvtool.analysis.workunits.UnitRunner` of a TE run: finished units in ``<out_dir>/units``, the
+    ``units`` folders of the ``resume`` run folders read too (a hit is copied into ``out_dir``, so every stop
+    leaves a folder complete in itself); ``workers`` > 1: a spawn pool of one BLAS thread per worker and no CUDA
+    device (the units run on the CPU and need no context per worker)."""
+    from .workunits import UnitRunner
+    return UnitRunner(workers=workers, deadline=deadline, store=os.path.join(out_dir, "units"),
+                      resume=[os.path.join(r, "units") for r in resume if r], log=log,
+                      worker_env={"CUDA_VISIBLE_DEVICES": ""})
 
 
-def run_units(jobs, store, *, workers=1, deadline=None, log=print, on_progress=None, progress_every_s=30.0):
-    """Solve every unit of ``jobs`` not already in ``store``, on ``workers`` spawn processes (one BLAS thread each;
-    1: in this process), in the order of ``jobs``. No unit is started once the time left before ``deadline``
-    is below the longest unit seen so far (:data:`PRIOR_UNIT_S` before the first). ``on_progress()`` is called
-    at most every ``progress_every_s`` while units finish. Returns ``{"total", "kept", "solved", "failed",
-    "not_started", "unit_wall_s": [...], "stopped_by_deadline", "crashed": [errors]}`` (a crashed worker's unit
-    is not stored: its job stays missing, the run incomplete, a resume retries it)."""
-    todo, kept = [], 0
-    for j in jobs:          # in the plan's order: the principal comparison first where a deadline cuts the run
-        for key, i0, i1 in j["units"]:
-            if store.get(key) is not None:
-                kept += 1
-            else:
-                todo.append((key, j["design"], j["torque"], j["step"], i0, i1))
-    total = kept + len(todo)
-    stats = {"total": total, "kept": kept, "solved": 0, "failed": 0, "not_started": 0, "unit_wall_s": [],
+def stored(runner, key):
+    """A finished unit's result from the runner's store or resume folders, else None."""
+    hit, res = runner.lookup(key)
+    return res if hit else None
+
+
+def run_units(jobs, runner, *, log=print, on_progress=None, progress_every_s=30.0):
+    """Solve every unit of ``jobs`` through ``runner`` (:func:`unit_runner`; a unit already stored is kept), in
+    the order of ``jobs`` (the plan's order of priority); the runner starts no unit once the time left before its
+    deadline is below the longest unit seen so far. ``on_progress()`` is called at most every ``progress_every_s``
+    while units finish. Returns ``{"total", "kept", "solved", "failed", "not_started", "unit_wall_s": [...],
+    "stopped_by_deadline", "crashed": [errors]}`` (a crashed unit is not stored: its job stays missing, the run
+    incomplete, a resume retries it)."""
+    from concurrent.futures import as_completed
+
+    from .workunits import DeadlineReached
+    stats = {"total": 0, "kept": 0, "solved": 0, "failed": 0, "not_started": 0, "unit_wall_s": [],
              "stopped_by_deadline": False, "crashed": []}
-    log(f"TE units: {total} ({kept} kept from earlier runs, {len(todo)} to solve on {workers} worker(s))")
-    longest = [PRIOR_UNIT_S]
     last = [time.time()]
 
-    def may_start():
-        if deadline is None:
-            return True
-        return time.time() + max(longest) < deadline
-
-    def done(res):
-        store.put(res)
-        stats["solved"] += 1
-        stats["failed"] += res["status"] != "ok"
-        stats["unit_wall_s"].append(res["wall_s"])
-        if len(stats["unit_wall_s"]) == 1:
-            longest.clear()
-        longest.append(res["wall_s"])
-        log(f"  unit {stats['solved'] + kept}/{total}: {res['i1'] - res['i0']} points, {res['wall_s']:.1f} s"
-            + ("" if res["status"] == "ok" else f", {res['error']}"))
+    def progress():
         if on_progress is not None and time.time() - last[0] > progress_every_s:
             last[0] = time.time()
             on_progress()
 
-    if workers <= 1:
-        for i, t in enumerate(todo):
-            if not may_start():
-                stats["not_started"] = len(todo) - i
-                stats["stopped_by_deadline"] = True
-                break
-            done(solve_unit(t))
-    else:
-        import multiprocessing
-        from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-
-        from ..variants.cluster import single_thread_env
-        ctx = multiprocessing.get_context("spawn")       # a fresh interpreter: no forked Warp/Exudyn state
-        queue = list(reversed(todo))
-        # the workers are spawned at submit time: the whole pool runs inside the environment they inherit (one
-        # BLAS thread each; no CUDA device, the units run on the CPU and need no context per worker)
-        with single_thread_env(), _env(CUDA_VISIBLE_DEVICES=""), \
-                ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as ex:
-            running = set()
-            while queue or running:
-                while queue and len(running) < workers and may_start():
-                    running.add(ex.submit(solve_unit, queue.pop()))
-                if not running:
-                    break
-                fin, running = wait(running, return_when=FIRST_COMPLETED)
-                for f in fin:
-                    try:
-                        res = f.result()
-                    except Exception as exc:   # a crashed worker: logged, the unit not stored (a resume retries it)
-                        stats["crashed"].append(f"{type(exc).__name__}: {exc}")
-                        log(f"  a unit crashed: {type(exc).__name__}: {exc}")
-                        continue
-                    done(res)
-        if queue:
-            stats["not_started"] = len(queue)
+    def finished(fut, kept):
+        try:
+            res = fut.result()
+        except DeadlineReached:
+            stats["not_started"] += 1
             stats["stopped_by_deadline"] = True
+            return
+        except Exception as exc:       # a crashed worker: logged, the unit not stored (a resume retries it)
+            stats["crashed"].append(f"{type(exc).__name__}: {exc}")
+            log(f"  a unit crashed: {type(exc).__name__}: {exc}")
+            return
+        if kept:
+            stats["kept"] += 1
+            return
+        stats["solved"] += 1
+        stats["failed"] += res["status"] != "ok"
+        stats["unit_wall_s"].append(res["wall_s"])
+        log(f"  unit {stats['solved'] + stats['kept']}/{stats['total']}: {res['i1'] - res['i0']} points, "
+            f"{res['wall_s']:.1f} s" + ("" if res["status"] == "ok" else f", {res['error']}"))
+        progress()
+
+    units = [(key, (key, j["design"], j["torque"], j["step"], i0, i1)) for j in jobs for key, i0, i1 in j["units"]]
+    stats["total"] = len(units)
+    kept = {key for key, _ in units if stored(runner, key) is not None}
+    log(f"TE units: {len(units)} ({len(kept)} kept from earlier runs, {len(units) - len(kept)} to solve on "
+        f"{runner.workers} worker(s))")
+    futures = {}
+    for key, task in units:
+        fut = runner.submit(solve_unit, task, key=key, kind="te_unit")
+        if runner.workers <= 1:       # the serial runner has solved it at submission
+            finished(fut, key in kept)
+        else:
+            futures[fut] = key
+    for fut in as_completed(futures):
+        finished(fut, futures[fut] in kept)
     if stats["stopped_by_deadline"]:
         log(f"deadline: {stats['not_started']} unit(s) not started (resume with --resume on this --out)")
     return stats
 
 
 def job_te(job, store):
-    """A job's TE from its stored units: ``{"status": "ok"|"failed"|"missing", "error", "te_arcsec" (array over
+    """A job's TE from its units stored in ``store`` (a :func:`unit_runner`): ``{"status": "ok"|"failed"|"missing", "error", "te_arcsec" (array over
     the job's grid, zero at its first point), "pp_arcsec", "wall_s"}``."""
     from ..observe.transmission import transmission_error
     parts, errors, wall = [], [], 0.0
     for key, _i0, _i1 in job["units"]:
-        r = store.get(key)
+        r = stored(store, key)
         if r is None:
             return {"status": "missing", "error": None, "te_arcsec": None, "pp_arcsec": None, "wall_s": None}
         wall += r["wall_s"]
