@@ -316,3 +316,21 @@ def test_runner_takes_the_band_checkpoint_by_draw_digest(monkeypatch, tmp_path):
     VM.members_rigidity("rv40e", table, cat, samples=2, quick=True, checkpoint=str(ck), runner=r,
                         log=lambda *x: None)
     assert len(calls) == 8                               # samples=2: another key, another LHS: nothing taken
+
+
+def test_members_tornado_reports_a_derivation_input_by_its_range(monkeypatch):
+    """An input of the members' derivation (members.pillar_running_gap: it sets the wheels' pillar holes, it is no
+    key of the design table) is reported at the ends of its own range when the screening picks it (session 7: the
+    solved tornado of rv40e stopped at it on the GPU host's run)."""
+    from rvtool.designs.catalogue import load_assumed, load_catalogue
+    gap = "members.pillar_running_gap"
+    monkeypatch.setattr(VM, "rigidity_ba", lambda design, catalogue: {"value": 1.0})
+    base = load_assumed(designs.assumed_of("rv80e"))
+    b, m, _, _ = VM.band_inputs("rv80e", base)
+    keys = [a.key for a in b + m]
+    U = VM.band_fractions(len(keys), 64, 0)
+    values = [100.0 - u[keys.index(gap)] for u in U]
+    r = VM.members_tornado("rv80e", read_table(designs.path("rv80e")), load_catalogue(designs.catalogue_of("rv80e")),
+                           base, values, keys=1, log=lambda *a: None)
+    a = next(x for x in m if x.key == gap)
+    assert list(r["tornado"]) == [gap] and (r["tornado"][gap]["low"], r["tornado"][gap]["high"]) == (a.at(0.0), a.at(1.0))

@@ -372,6 +372,7 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
         f"({2 * len(chosen) + 1} b/a, {workers} worker(s))")
     # the baseline, then each chosen input at the fraction 0 and 1: independent b/a (failures counted, as samples)
     tables = [table_at()] + [table_at(k, f) for k in chosen for f in (0.0, 1.0)]
+    a_of = {a.key: a for a in inputs}
     res = map_samples(_sample, [(t, catalogue) for t in tables], workers, log)
     vals = [None if r is None else r["value"] for r, _ in res]
     errs = [e for _, e in res]
@@ -380,7 +381,11 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
     for i, k in enumerate(chosen):
         ta, tb = tables[1 + 2 * i], tables[2 + 2 * i]
         va, vb = vals[1 + 2 * i], vals[2 + 2 * i]
-        tornado[k] = {"low": get_key(ta, k), "high": get_key(tb, k), "at_low": va, "at_high": vb,
+        if k in DERIVED_KEYS:       # an input of the derivation (members.*), not a key of the design table
+            lo, hi = a_of[k].at(0.0), a_of[k].at(1.0)
+        else:                       # the table's value: a row spacing is placed in its feasible part
+            lo, hi = get_key(ta, k), get_key(tb, k)
+        tornado[k] = {"low": lo, "high": hi, "at_low": va, "at_high": vb,
                       "spearman_rho": screen[k], "errors": [e for e in errs[1 + 2 * i:3 + 2 * i] if e]}
         log(f"  {k}: {va} .. {vb}")
     return {"baseline": baseline, "baseline_error": base_err, "tornado": tornado, "tornado_keys": len(chosen),
