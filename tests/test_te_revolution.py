@@ -109,3 +109,18 @@ def test_case_full_mode_writes_a_judged_result(tmp_path):
     saved = json.loads((tmp_path / "b" / "results.json").read_text())
     assert again["units"]["solved"] == 0 and again["units"]["kept"] == 3 and saved["complete"] is True
     assert saved["records"][0]["te_pp_arcsec"] == r["records"][0]["te_pp_arcsec"]
+    # validate's TE row (issue 30, Deliver 4): its full mode takes the case's results where the inputs digest
+    # matches, else solves the same units (the same keys: the case's units folder serves it, nothing is solved)
+    from rvtool.analysis.workunits import UnitRunner
+    d = rvtool.load_design("rv80e")
+    dg = TR.revolution_inputs_digest("rv80e", d, d.rated_torque, variants=1, input_revolutions=0.2)
+    assert saved["settings"]["inputs_digest"] == dg
+    assert dg != TR.revolution_inputs_digest("rv80e", d, d.rated_torque, variants=2, input_revolutions=0.2)
+    kw = dict(variants=1, input_revolutions=0.2, log=lambda *_: None)
+    hit = VT.te_comparison("rv80e", d, d.rated_torque, reuse=[str(tmp_path / "b" / "results.json")], **kw)
+    assert hit["reused_from"]["path"].endswith("results.json") and hit["rows"] == saved["rows"]
+    runner = UnitRunner(resume=[str(tmp_path / "a" / "units")], log=lambda *_: None)
+    own = VT.te_comparison("rv80e", d, d.rated_torque, runner=runner, reuse=[str(tmp_path / "none.json")], **kw)
+    assert runner.counts["reused"] == 2 and runner.counts["run"] == 0 and "reused_from" not in own
+    assert own["rows"][0]["predicted"] == saved["rows"][0]["predicted"] and own["settings"]["inputs_digest"] == dg
+    assert "model TE over 0.2 input revolutions" in own["rows"][0]["conditions"]

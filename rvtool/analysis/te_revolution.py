@@ -135,9 +135,54 @@ def unit_runner(out_dir, *, workers=1, deadline=None, resume=(), log=print):
 
 
 def stored(runner, key):
-    """A finished unit's result from the runner's store or resume folders, else None."""
+    """A finished unit's result from the runner's store or resume folders (or from a dict {key: result}, the
+    results :func:`submit_units` waited for), else None."""
+    if isinstance(runner, dict):
+        return runner.get(key)
     hit, res = runner.lookup(key)
     return res if hit else None
+
+
+def submit_units(jobs, runner):
+    """Submit every unit of ``jobs`` to ``runner`` (a :class:`rvtool.analysis.workunits.UnitRunner` shared with
+    other work, as ``rvtool validate``'s; a unit already stored is taken from there) and return a callable that
+    waits for them and returns ``{key: result}`` for :func:`assemble`. A unit refused by the runner's deadline
+    raises :class:`rvtool.analysis.workunits.DeadlineReached` out of the callable (the finished units are stored,
+    a ``--resume`` completes the run)."""
+    futures = {}
+    for j in jobs:
+        for key, i0, i1 in j["units"]:
+            if key not in futures:
+                futures[key] = runner.submit(solve_unit, (key, j["design"], j["torque"], j["step"], i0, i1),
+                                             key=key, kind="te_unit")
+
+    def finish():
+        return {key: f.result() for key, f in futures.items()}
+    return finish
+
+
+def output_revolutions(model):
+    """Input revolutions of one output revolution: |ratio| (rounded where it is an integer to 1e-6)."""
+    revs = abs(float(model.ratio))
+    return float(round(revs)) if abs(revs - round(revs)) < 1e-6 else revs
+
+
+def revolution_inputs_digest(design_name, design, rated_torque, *, variants, input_revolutions=None, model=None):
+    """The inputs digest (:func:`rvtool.analysis.validate_te.te_inputs_digest`) of the TE comparison over the
+    output revolution (or over ``input_revolutions``, a smoke run's shortened grid) with ``variants`` tolerance
+    variants at :data:`RESOLUTION_PPM` [0]: recorded in te_measured_rv80e's full results and checked by
+    ``rvtool validate`` before it takes them (the resolution check and the sensitivity do not enter its rows)."""
+    from .. import designs
+    from ..assembly import build
+    from . import validate_te as VT
+    tol_name, meas_name = designs.tolerances_of(design_name), designs.measured_of(design_name)
+    if tol_name is None:
+        raise RvtoolInputError(f"design {design_name!r} ships no tolerance file (<design>_tolerances.toml)")
+    revs = output_revolutions(model if model is not None else build(design))
+    revs = revs if input_revolutions is None else float(input_revolutions)
+    return VT.te_inputs_digest(design, designs.path(tol_name), None if meas_name is None else designs.path(meas_name),
+                               n=variants, points_per_mesh=RESOLUTION_PPM[0],
+                               torque=VT.TE_TORQUE_FRACTION * rated_torque, input_revolutions=revs)
 
 
 def run_units(jobs, runner, *, log=print, on_progress=None, progress_every_s=30.0):
@@ -274,9 +319,8 @@ def plan_revolution(design_name, design, rated_torque, *, variants=16, draws=1, 
     # one point here compiles the Warp kernels into the on-disk cache once, before the pool's workers would each
     # compile them at the same time on a fresh host
     quasi_static_te(model, torque=VT.TE_TORQUE_FRACTION * rated_torque, input_angles=[0.0])
-    mesh, revs = float(model.mesh_period), abs(float(model.ratio))
-    revs = float(round(revs)) if abs(revs - round(revs)) < 1e-6 else revs
-    out_rev = revs                  # input revolutions of one output revolution
+    mesh = float(model.mesh_period)
+    revs = out_rev = output_revolutions(model)       # input revolutions of one output revolution                  # input revolutions of one output revolution
     if input_revolutions is not None:
         revs = float(input_revolutions)
     torque = VT.TE_TORQUE_FRACTION * rated_torque
@@ -312,7 +356,9 @@ def plan_revolution(design_name, design, rated_torque, *, variants=16, draws=1, 
                 "input_revolutions": revs, "window_input_revolutions": VT.te_window(design),
                 "points_per_mesh": ppm, "resolution_points_per_mesh": ppm_fine if resolution else None,
                 "n_points": grid_points(revs, mesh, ppm), "window_points": n_win, "chunk_points": chunk_points,
-                "jobs": len(jobs), "units": sum(len(j["units"]) for j in jobs)}
+                "jobs": len(jobs), "units": sum(len(j["units"]) for j in jobs),
+                "inputs_digest": revolution_inputs_digest(design_name, design, rated_torque, variants=variants,
+                                                          input_revolutions=revs, model=model)}
     return {"design_name": design_name, "jobs": jobs, "settings": settings, "mesh_period": mesh,
             "ratio": out_rev}
 
@@ -407,7 +453,9 @@ def assemble(plan, store, measured_name=None):
                f"; {len(records) - dist['n']} variant(s) not finished or failed"))
     recs_rad = [{"te_pp_rad": None if r["te_pp_arcsec"] is None else r["te_pp_arcsec"] / ARCSEC_PER_RAD}
                 for r in records]
-    out["rows"] = VT.te_rows(measured, VT.te_distribution(recs_rad), note)
+    over = ("one output revolution, the measured definition" if out["orders_per"] == "output revolution" else
+            f"{s['input_revolutions']:g} input revolutions (a shortened smoke run)")
+    out["rows"] = VT.te_rows(measured, VT.te_distribution(recs_rad), note, over=over)
     out["measured"] = VT.measured_summary(measured)
     jobs_done = sum(te[j["name"]]["status"] != "missing" for j in plan["jobs"])
     out.update(complete=jobs_done == len(plan["jobs"]), jobs_done=jobs_done, jobs_total=len(plan["jobs"]))

@@ -89,15 +89,26 @@ def te_variant(design, tolerances, k, *, angles, torque, seed=SEED):
     return rec
 
 
-def te_inputs_digest(design, tolerances, measured_path, *, n, points_per_mesh, torque, seed=SEED):
+def te_inputs_digest(design, tolerances, measured_path, *, n, points_per_mesh, torque, seed=SEED,
+                     input_revolutions=None):
     """SHA-256 of everything a TE comparison depends on (the design's data, the tolerance and measurement files'
-    bytes, the variant count, resolution, torque and seed): a run whose results carry the same digest computed
-    the same figures (``rvtool validate`` takes them from the committed te_measured_rv80e results)."""
+    bytes, the variant count, resolution, torque and seed, and the run length: None, the window of
+    :func:`te_window`; else the input revolutions of :mod:`rvtool.analysis.te_revolution`'s runs): a run whose
+    results carry the same digest computed the same figures (``rvtool validate`` takes them from the committed
+    te_measured_rv80e results)."""
     import dataclasses
     from .workunits import digest, file_digest
-    return digest("te.comparison", {"design": dataclasses.asdict(design), "tolerances": file_digest(tolerances),
-                                    "measured": file_digest(measured_path), "n": int(n),
-                                    "points_per_mesh": points_per_mesh, "torque": float(torque), "seed": seed})
+    payload = {"design": dataclasses.asdict(design), "tolerances": file_digest(tolerances),
+               "measured": None if measured_path is None else file_digest(measured_path), "n": int(n),
+               "points_per_mesh": points_per_mesh, "torque": float(torque), "seed": seed}
+    if input_revolutions is not None:        # the output revolution (the window's digest is unchanged)
+        payload.update(over="output revolution", input_revolutions=float(input_revolutions))
+    return digest("te.comparison", payload)
+
+
+WINDOW_TEXT = ("the {n}-input-revolution sun/crank-gear window (--quick: a lower bound of the measured output "
+               "revolution's peak-to-peak)")
+"""How the quick rows name their window (the full rows: one output revolution, the measured definition)."""
 
 
 def te_variants(design, tolerances, *, n, points_per_mesh, torque, seed=SEED, log=None, runner=None, defer=False):
@@ -192,9 +203,10 @@ def te_distribution(records):
             "p95": float(np.percentile(x, 95)), "max": float(x[-1])}
 
 
-def te_rows(measured, dist, note):
+def te_rows(measured, dist, note, over=None):
     """One validate-table row per measured specimen: the predicted median peak-to-peak with the variants' range
-    as band, against the specimen's measured peak-to-peak."""
+    as band, against the specimen's measured peak-to-peak; ``over``: the model's TE window, named in the row's
+    conditions."""
     rows = []
     for m in measured.transmission_error:
         meas = m.peak_to_peak * ARCSEC_PER_RAD
@@ -202,7 +214,8 @@ def te_rows(measured, dist, note):
              "unit": "arcsec", "band": None if dist is None else [dist["min"], dist["max"]], "catalogue": meas,
              "catalogue_unit": "arcsec", "kind": "measured", "status": measured.source.status,
              "source": measured.source.citation(),
-             "conditions": f"measured range [{m.low_printed:g}, {m.high_printed:g}] {m.unit}; {m.conditions}",
+             "conditions": f"measured range [{m.low_printed:g}, {m.high_printed:g}] {m.unit}; {m.conditions}"
+                           + ("" if over is None else f"; model TE over {over}"),
              "note": note}
         if m.model_low is not None:
             r["paper_model_pp"] = (m.model_high - m.model_low) * ARCSEC_PER_RAD
@@ -231,13 +244,18 @@ def measured_summary(measured):
 
 
 def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, variants=None, runner=None,
-                  defer=False, reuse=None):
+                  defer=False, reuse=None, input_revolutions=None):
     """The TE comparison of a shipped design, or None where it has no measurement or tolerance file: a dict
     with ``rows`` (for the validate table), ``distribution``, ``nominal_pp_arcsec``, ``records``,
     ``settings`` (with ``inputs_digest``, :func:`te_inputs_digest`) and ``measured`` (the file's figures).
+    quick: over the window of :func:`te_window` (a lower bound, said in the rows' conditions); else over one
+    output revolution, the measured definition, through :mod:`rvtool.analysis.te_revolution`'s units (the nominal
+    design and the variants of te_measured_rv80e's full mode, the same unit keys: a ``--resume`` folder of either
+    case serves both; ``input_revolutions`` shortens the runs for a smoke test only).
     runner / defer: as :func:`te_variants`. reuse: paths of results.json files of earlier comparisons (the
     committed te_measured_rv80e results): the first whose ``settings.inputs_digest`` equals this comparison's is
-    returned instead of computing (``reused_from`` names it); a file that is missing or differs is passed over."""
+    returned instead of computing (``reused_from`` names it); a file that is missing, differs or is not complete
+    is passed over."""
     from .. import designs
     from ..designs.measured import load_measured
     meas_name, tol_name = designs.measured_of(design_name), designs.tolerances_of(design_name)
@@ -249,8 +267,13 @@ def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, 
     n = variants if variants is not None else VARIANTS[0 if quick else 1]
     ppm = POINTS_PER_MESH[0 if quick else 1]
     torque = TE_TORQUE_FRACTION * rated_torque
-    inputs_digest = te_inputs_digest(design, designs.path(tol_name), designs.path(meas_name), n=n,
-                                     points_per_mesh=ppm, torque=torque)
+    if quick:
+        inputs_digest = te_inputs_digest(design, designs.path(tol_name), designs.path(meas_name), n=n,
+                                         points_per_mesh=ppm, torque=torque)
+    else:
+        from . import te_revolution as TR
+        inputs_digest = TR.revolution_inputs_digest(design_name, design, rated_torque, variants=n,
+                                                    input_revolutions=input_revolutions)
     for path in reuse or ():
         import json
         import os
@@ -258,20 +281,52 @@ def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, 
             continue
         with open(path) as fh:
             prev = json.load(fh)
-        if prev.get("settings", {}).get("inputs_digest") == inputs_digest and "rows" in prev:
+        if (prev.get("settings", {}).get("inputs_digest") == inputs_digest and "rows" in prev
+                and prev.get("complete", True)):
             log(f"validate {design_name}: TE comparison taken from {path} (the same inputs digest)")
             keep = {k: prev[k] for k in ("rows", "distribution", "nominal_pp_arcsec", "records", "n_failed",
-                                         "settings", "measured", "wall_s") if k in prev}
+                                         "settings", "measured", "wall_s", "mode", "distribution_window",
+                                         "complete") if k in prev}
             out = {**keep, "reused_from": {"path": path, "provenance": prev.get("provenance")}}
             return (lambda: out) if defer else out
+    t0 = time.perf_counter()
+    if not quick:
+        return _revolution(design_name, design, rated_torque, n=n, runner=runner, defer=defer, log=log,
+                           input_revolutions=input_revolutions, inputs_digest=inputs_digest, t0=t0)
     log(f"validate {design_name}: TE of {n} tolerance variants over {te_window(design)} input revolutions "
         f"({tol_name}.toml) against {meas_name}.toml")
-    t0 = time.perf_counter()
     pending = te_variants(design, designs.path(tol_name), n=n, points_per_mesh=ppm, torque=torque, log=log,
                           runner=runner, defer=True)
 
     def finish():
         return _te_result(pending(), n, ppm, torque, tol_name, meas_name, measured, design, inputs_digest, t0)
+    return finish if defer else finish()
+
+
+def _revolution(design_name, design, rated_torque, *, n, runner, defer, log, input_revolutions, inputs_digest, t0):
+    """The full mode of :func:`te_comparison`: the nominal design and ``n`` variants over the output revolution as
+    units of :mod:`rvtool.analysis.te_revolution` on ``runner`` (one of its own where None), assembled as
+    te_measured_rv80e's full mode assembles them (its resolution check and sensitivity are that case's)."""
+    from . import te_revolution as TR
+    from .workunits import UnitRunner
+    plan = TR.plan_revolution(design_name, design, rated_torque, variants=n, draws=0, resolution=False,
+                              input_revolutions=input_revolutions)
+    if plan["settings"]["inputs_digest"] != inputs_digest:      # one definition of the digest: never reached
+        raise RuntimeError("te_revolution's plan and validate's TE row disagree on the inputs digest")
+    s = plan["settings"]
+    log(f"validate {design_name}: TE of {n} tolerance variants over {s['input_revolutions']:g} input revolutions "
+        f"(the output revolution: {s['units']} units of te_revolution) against {s['tolerances']}")
+    own = runner is None
+    if own:
+        runner = UnitRunner(workers=1, log=log)
+    pending = TR.submit_units(plan["jobs"], runner)
+    if own:
+        runner.close()
+
+    def finish():
+        r = TR.assemble(plan, pending())
+        r.pop("curves", None)
+        return {**r, "wall_s": time.perf_counter() - t0}
     return finish if defer else finish()
 
 
@@ -286,7 +341,8 @@ def _te_result(res, n, ppm, torque, tol_name, meas_name, measured, design, input
             "form, bore and seat form errors, gear runout) are absent from the prediction; the output side's hole "
             "positions are the carrier's crank-bearing seats (the RV output is the carrier, reached through the "
             "crank bearings only; the wheels' pillar holes carry no load)")
-    return {"rows": te_rows(measured, dist, note), "distribution": dist,
+    return {"rows": te_rows(measured, dist, note, over=WINDOW_TEXT.format(n=te_window(design))),
+            "mode": "window", "distribution": dist,
             "nominal_pp_arcsec": res["nominal_pp"] * ARCSEC_PER_RAD,
             "records": [{**r, "te_pp_arcsec": None if r["te_pp_rad"] is None else r["te_pp_rad"] * ARCSEC_PER_RAD}
                         for r in res["records"]],
