@@ -189,13 +189,16 @@ def run_units(jobs, runner, *, log=print, on_progress=None, progress_every_s=30.
     """Solve every unit of ``jobs`` through ``runner`` (:func:`unit_runner`; a unit already stored is kept), in
     the order of ``jobs`` (the plan's order of priority); the runner starts no unit once the time left before its
     deadline is below the longest unit seen so far. ``on_progress()`` is called at most every ``progress_every_s``
-    while units finish. Returns ``{"total", "kept", "solved", "failed", "not_started", "unit_wall_s": [...],
+    while units finish. Returns ``{"total", "kept", "solved", "failed", "not_started", "unit_wall_s": [...] (the
+    units solved here), "all_unit_wall_s": [...] (every finished unit, kept ones at the wall time of the call that
+    solved them),
     "stopped_by_deadline", "crashed": [errors]}`` (a crashed unit is not stored: its job stays missing, the run
     incomplete, a resume retries it)."""
     from concurrent.futures import as_completed
 
     from .workunits import DeadlineReached
     stats = {"total": 0, "kept": 0, "solved": 0, "failed": 0, "not_started": 0, "unit_wall_s": [],
+             "all_unit_wall_s": [],
              "stopped_by_deadline": False, "crashed": []}
     last = [time.time()]
 
@@ -215,6 +218,7 @@ def run_units(jobs, runner, *, log=print, on_progress=None, progress_every_s=30.
             stats["crashed"].append(f"{type(exc).__name__}: {exc}")
             log(f"  a unit crashed: {type(exc).__name__}: {exc}")
             return
+        stats["all_unit_wall_s"].append(res["wall_s"])
         if kept:
             stats["kept"] += 1
             return
@@ -320,7 +324,7 @@ def plan_revolution(design_name, design, rated_torque, *, variants=16, draws=1, 
     # compile them at the same time on a fresh host
     quasi_static_te(model, torque=VT.TE_TORQUE_FRACTION * rated_torque, input_angles=[0.0])
     mesh = float(model.mesh_period)
-    revs = out_rev = output_revolutions(model)       # input revolutions of one output revolution                  # input revolutions of one output revolution
+    revs = out_rev = output_revolutions(model)       # input revolutions of one output revolution
     if input_revolutions is not None:
         revs = float(input_revolutions)
     torque = VT.TE_TORQUE_FRACTION * rated_torque
