@@ -148,6 +148,9 @@ def test_te_row_verdict(band, where):
     assert r["ratio"] == pytest.approx(sum(band) / 2 / 60.0)
     (t,) = VT.te_rows(_Measured("transcribed"), dist, "note")
     assert "transcription" in t["verdict"]
+    (w,) = VT.te_rows(_Measured(), dist, "note", over=VT.WINDOW_TEXT.format(n=19))      # the row names its window
+    assert w["conditions"].startswith(r["conditions"]) and w["conditions"].endswith("revolution's peak-to-peak)")
+    assert "19-input-revolution" in w["conditions"] and "19-input" not in r["conditions"]
     (n,) = VT.te_rows(_Measured(), None, "note")
     assert n["predicted"] is None and "not computed" in n["verdict"]
 

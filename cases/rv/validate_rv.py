@@ -23,8 +23,10 @@ switch the file has and the ported carrier's share), the moment rigidity with it
 variant, the base band (64 Latin-hypercube samples over the assumed ranges: rv80e's 41 cited ranges, rv40e's
 needle clearance from its tolerance file) with a one-at-a-time tornado over every assumed key, the all-members-on
 row with its 64-sample band on members_band's meshes (its b/a taken from cases/rv/members_band.py's checkpoint
-where the draw digests match: ``--members-from``), the TE comparison at full resolution (taken from a
-te_measured_rv80e results.json whose inputs digest matches: ``--te-from``, else its 16 variants run), the
+where the draw digests match: ``--members-from``), the TE comparison over one output revolution, the measured
+definition (taken from a te_measured_rv80e results.json whose inputs digest matches: ``--te-from``, else the
+nominal design and its 16 variants run as rvtool.analysis.te_revolution's units, the same keys as that case's
+full mode, so a --resume folder of either case serves both), the
 efficiency curve against the catalogue's.
 
 Work is split into independent units (rvtool.analysis.workunits) run on ``--workers N`` spawn processes (one

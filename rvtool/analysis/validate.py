@@ -385,7 +385,9 @@ def validate(design="rv40e", *, quick=False, out_dir=None, samples=None, workers
     ``<design>_assumed.toml`` (its values must be the design's middles too); band, variant: False
     skips the uncertainty band or the ratio variant (said so in the results); te: False skips the TE
     comparison with a published measurement (:mod:`rvtool.analysis.validate_te`; it runs where the design
-    ships a ``<design>_measured.toml`` and a tolerance file); members: False skips the all-members-on
+    ships a ``<design>_measured.toml`` and a tolerance file; over one output revolution, the measured definition,
+    through :mod:`rvtool.analysis.te_revolution`'s units on ``runner``, or under ``quick`` over the
+    sun/crank-gear window, a lower bound); members: False skips the all-members-on
     rigidity row (:mod:`rvtool.analysis.validate_members`; it runs where the design ships a
     ``<design>_members.toml``), members_samples its Latin-hypercube size (None: that module's default),
     members_workers its processes (None: ``workers``).
