@@ -349,6 +349,7 @@ def _cmd_sweep(args, parser):
 
 def _cmd_validate(args):
     from rvtool.analysis.validate import table_text, validate, validated_designs
+    from rvtool.analysis.validate_te import COMMITTED_RESULTS
     from rvtool.errors import RvtoolInputError
     names = [args.design] if args.design else validated_designs()
     if args.samples is not None and args.samples < 2:
@@ -360,7 +361,8 @@ def _cmd_validate(args):
         out_dir = os.path.join(args.out, name) if args.out else os.path.join("results", f"validate_{name}")
         try:
             out = validate(name, quick=args.quick, out_dir=out_dir, samples=args.samples, workers=args.workers,
-                           tornado_keys=args.tornado_keys, log=log)
+                           tornado_keys=args.tornado_keys, log=log,
+                           te_reuse=None if args.quick else [COMMITTED_RESULTS])   # where its digest matches
         except RvtoolInputError as exc:
             return _input_error(exc)
         print(table_text(out))

@@ -129,18 +129,23 @@ def test_budget_columns_show_every_member(tmp_path):
 
 def test_te_comparison_reused_only_by_inputs_digest(tmp_path):
     """A te_measured results.json is taken only where its inputs digest equals this comparison's (the design,
-    tolerance and measurement files, variants, resolution, torque, seed); any other digest is passed over."""
+    tolerance and measurement files, variants, resolution, torque, seed, run length) and its run is complete; any
+    other is passed over. (On a shortened grid, 0.2 input revolutions and one variant, so that a miss would cost
+    seconds, not the output revolution.)"""
+    from rvtool.analysis import te_revolution as TR
     from rvtool.analysis import validate_te as VT
     d = rvtool.load_design("rv80e")
-    dg = VT.te_inputs_digest(d, designs.path("rv80e_tolerances"), designs.path("rv80e_measured"),
-                             n=VT.VARIANTS[1], points_per_mesh=VT.POINTS_PER_MESH[1],
-                             torque=VT.TE_TORQUE_FRACTION * d.rated_torque)
-    good, bad = tmp_path / "good.json", tmp_path / "bad.json"
-    good.write_text(json.dumps({"rows": ["row"], "settings": {"inputs_digest": dg}, "n_failed": 0}))
+    dg = TR.revolution_inputs_digest("rv80e", d, d.rated_torque, variants=1, input_revolutions=0.2)
+    good, bad, partial = tmp_path / "good.json", tmp_path / "bad.json", tmp_path / "partial.json"
+    good.write_text(json.dumps({"rows": ["row"], "settings": {"inputs_digest": dg}, "n_failed": 0,
+                                "complete": True}))
     bad.write_text(json.dumps({"rows": ["other"], "settings": {"inputs_digest": "0" * 64}}))
-    te = VT.te_comparison("rv80e", d, d.rated_torque, quick=False, reuse=[str(tmp_path / "missing.json"), str(bad),
-                                                                          str(good)], log=lambda *a: None)
+    partial.write_text(json.dumps({"rows": ["partial"], "settings": {"inputs_digest": dg}, "complete": False}))
+    te = VT.te_comparison("rv80e", d, d.rated_torque, quick=False, variants=1, input_revolutions=0.2,
+                          reuse=[str(tmp_path / "missing.json"), str(bad), str(partial), str(good)],
+                          log=lambda *a: None)
     assert te["rows"] == ["row"] and te["reused_from"]["path"] == str(good)
-    assert dg != VT.te_inputs_digest(d, designs.path("rv80e_tolerances"), designs.path("rv80e_measured"),
-                                     n=VT.VARIANTS[0], points_per_mesh=VT.POINTS_PER_MESH[1],
-                                     torque=VT.TE_TORQUE_FRACTION * d.rated_torque)
+    window = VT.te_inputs_digest(d, designs.path("rv80e_tolerances"), designs.path("rv80e_measured"), n=1,
+                                 points_per_mesh=TR.RESOLUTION_PPM[0], torque=VT.TE_TORQUE_FRACTION * d.rated_torque)
+    assert len({dg, window, TR.revolution_inputs_digest("rv80e", d, d.rated_torque, variants=1),
+                TR.revolution_inputs_digest("rv80e", d, d.rated_torque, variants=2, input_revolutions=0.2)}) == 4

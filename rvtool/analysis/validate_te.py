@@ -19,12 +19,18 @@ revolution, the measured definition, is :mod:`rvtool.analysis.te_revolution` (th
 cases/rv/te_measured_rv80e.py), which reads every window off the same curves.
 """
 import math
+import os
 import time
 
 import numpy as np
 
 from ..errors import RvtoolInputError, SolverFailure
 from ..units import ARCSEC_PER_RAD
+
+COMMITTED_RESULTS = os.path.join(os.path.dirname(__file__), "..", "..", "docs", "case_results", "rv",
+                                 "te_measured_rv80e", "results.json")
+"""The committed full results of cases/rv/te_measured_rv80e.py in a checkout (absent from an installed package: then
+passed over): ``rvtool validate`` (full) takes its TE rows from them where the inputs digest matches."""
 
 SEED = 2026
 """Seed of the variants (the tolerance Monte Carlo of ``rvtool analyze``, ``MC_SEED``)."""
