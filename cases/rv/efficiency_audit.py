@@ -39,8 +39,6 @@ from rvtool import casekit, designs
 from rvtool.analysis import losses as L
 from rvtool.protocols.efficiency import kinematic_velocity
 
-QUICK_SPEEDS = (5.0, 15.0, 30.0, 60.0)
-FULL_SPEEDS = (5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0)
 AUDIT_SPEED_RPM = 60.0
 DESIGNS = ("rv40e", "rv80e")
 MODELS = ("palmgren", "skf")
@@ -106,7 +104,7 @@ def run_design(name, loaded, cat, speeds, n_ang):
     m = rvtool.build(d)
     fs = loaded.central
     rows, kin, cf, main_p1, consistency, skf_sens = _audit_rows(m, d, fs)
-    angles = tuple(float(a) for a in np.arange(n_ang) * m.mesh_period / n_ang)
+    angles = L.mesh_angles(m, n_ang)
     maps = {mod: L.efficiency_map(m, d, fs, output_speeds_rpm=speeds, input_angles=angles, bearing_model=mod)
             for mod in MODELS}
     ends = {(mod, end): L.efficiency_map(m, d, loaded.at("churning_fraction", end), output_speeds_rpm=speeds,
@@ -176,10 +174,7 @@ def judge(r):
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t0 = time.perf_counter()
-    loaded = L.load_friction_set()
-    cat = L.load_efficiency_catalogue()
-    speeds = QUICK_SPEEDS if args.quick else FULL_SPEEDS
-    n_ang = 8 if args.quick else 16
+    loaded, cat, speeds, n_ang = L.chart_inputs(args.quick)
     results = {"friction_set": "rvtool/designs/friction_set.toml (central values; churning ends from its range)",
                "skf_model": "rvtool/bearings/skf_friction.py (SKF General Catalogue 6000 EN friction model, "
                             "constants not_reread)",

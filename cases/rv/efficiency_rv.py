@@ -40,8 +40,6 @@ import rvtool
 from rvtool import casekit, designs
 from rvtool.analysis import losses as L
 
-QUICK_SPEEDS = (5.0, 15.0, 30.0, 60.0)
-FULL_SPEEDS = (5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0)
 RATIOS = (0.1, 0.2, 0.3, 0.5, 0.7, 1.0)
 LOAD_SPEED_RPM = 15.0               # the catalogue's rated output speed (rv40e_catalogue.toml [test])
 DESIGNS = ("rv40e", "rv80e")
@@ -81,7 +79,7 @@ def one_at_a_time(m, d, loaded, angles):
 def run_design(name, loaded, cat, speeds, n_ang):
     d, note = design_for_losses(name)
     m = rvtool.build(d)
-    angles = tuple(float(a) for a in np.arange(n_ang) * m.mesh_period / n_ang)
+    angles = L.mesh_angles(m, n_ang)
     fs = loaded.central
     sensitivity = one_at_a_time(m, d, loaded, angles)
     rated = L.efficiency_map(m, d, fs, torque_ratios=(1.0,), output_speeds_rpm=speeds, input_angles=angles)
@@ -173,10 +171,7 @@ def judge(r):
 def main(argv=None):
     args = casekit.parse_args(argv, __doc__)
     t0 = time.perf_counter()
-    loaded = L.load_friction_set()
-    cat = L.load_efficiency_catalogue()
-    speeds = QUICK_SPEEDS if args.quick else FULL_SPEEDS
-    n_ang = 8 if args.quick else 16
+    loaded, cat, speeds, n_ang = L.chart_inputs(args.quick)
     results = {"friction_set": {"path": "rvtool/designs/friction_set.toml", "central": asdict(loaded.central),
                                 "assumed_ranges": {k: list(v) for k, v in loaded.ranges.items()}},
                "catalogue": {"citation": cat.citation(), "conditions": cat.conditions,

@@ -608,6 +608,25 @@ def hysteresis_split(design, *, pins_mu, teeth_mu, step=0.125, fine_levels=(0.00
 #: mean converges with them (rv40e 4.4e-5 at 8); the losses move by < 0.1 point between 4 and 8.
 VALIDATE_ANGLES = (4, 8)
 
+CHART_SPEEDS_RPM = ((5.0, 15.0, 30.0, 60.0), (5.0, 10.0, 15.0, 20.0, 30.0, 40.0, 50.0, 60.0))
+"""Output speeds [rpm] of the efficiency cases' chart (quick, full): the catalogue chart's span, 5-60 rpm."""
+
+CHART_ANGLES = (8, 16)
+"""Input angles per mesh period the efficiency cases average over (quick, full)."""
+
+
+def chart_inputs(quick):
+    """(friction set, efficiency catalogue, output speeds [rpm], input angles per mesh period) of the efficiency
+    cases (cases/rv/efficiency_rv.py, efficiency_audit.py): the shipped files, the chart's grid of
+    :data:`CHART_SPEEDS_RPM` and :data:`CHART_ANGLES` (quick or full)."""
+    k = 0 if quick else 1
+    return load_friction_set(), load_efficiency_catalogue(), CHART_SPEEDS_RPM[k], CHART_ANGLES[k]
+
+
+def mesh_angles(model, n):
+    """``n`` input angles [rad] evenly over one mesh period of ``model`` (the averaging of the loss accounting)."""
+    return tuple(float(a) for a in np.arange(n) * model.mesh_period / n)
+
 
 def loss_design(design):
     """(design, note): the design the loss accounting runs on. A design with elastic crank bending or
@@ -633,8 +652,7 @@ def validate_efficiency(name, design, *, quick=False):
     d, note = loss_design(design)
     from ..assembly import build
     model = build(d)
-    n_ang = VALIDATE_ANGLES[0 if quick else 1]
-    angles = tuple(float(a) for a in np.arange(n_ang) * model.mesh_period / n_ang)
+    angles = mesh_angles(model, VALIDATE_ANGLES[0 if quick else 1])
     curve, fig = cat.curves[name], cat.no_load.get(name)
     r = efficiency_map(model, d, fs, output_speeds_rpm=curve.output_speed_rpm, input_angles=angles)
     base = {"unit": "%", "band": None, "catalogue_unit": "%", "kind": curve.kind, "status": curve.status,

@@ -128,7 +128,6 @@ def _map(fn, items, workers, log=None, checkpoint=None):
     """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item;
     ``checkpoint``: a JSON file rewritten with the results so far after each item (a long run that
     is stopped keeps what it computed)."""
-    out = []
     if workers <= 1 or len(items) < 2:
         it = (fn(i) for i in items)
         pool = None
@@ -136,20 +135,27 @@ def _map(fn, items, workers, log=None, checkpoint=None):
         from concurrent.futures import ProcessPoolExecutor
         pool = ProcessPoolExecutor(max_workers=workers)
         it = pool.map(fn, items)
-    t0 = time.perf_counter()
     try:
-        for k, r in enumerate(it):
-            out.append(r)
-            if log is not None:
-                err = "" if r[1] is None else ": " + r[1]
-                log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){err}")
-            if checkpoint is not None:
-                with open(checkpoint, "w") as fh:
-                    json.dump(_jsonable({"done": len(out), "of": len(items), "results": out,
-                                         "wall_s": time.perf_counter() - t0}), fh)
+        return _collect(it, len(items), log, checkpoint)
     finally:
         if pool is not None:
             pool.shutdown()
+
+
+def _collect(results, n, log=None, checkpoint=None):
+    """``results`` (an iterable of (figures, error) of ``n`` items, in order) as a list: a line per finished item
+    to ``log``, ``checkpoint`` (JSON) rewritten with the results so far after each (:func:`_map`, :func:`_gather`)."""
+    out = []
+    t0 = time.perf_counter()
+    for k, r in enumerate(results):
+        out.append(r)
+        if log is not None:
+            err = "" if r[1] is None else ": " + r[1]
+            log(f"  {k + 1}/{n} done ({time.perf_counter() - t0:.0f} s){err}")
+        if checkpoint is not None:
+            with open(checkpoint, "w") as fh:
+                json.dump(_jsonable({"done": len(out), "of": n, "results": out,
+                                     "wall_s": time.perf_counter() - t0}), fh)
     return out
 
 
@@ -754,19 +760,7 @@ def _te_measured(design, d, rated_torque, *, quick, want, log, runner=None, reus
 
 def _gather(futures, log=None, checkpoint=None):
     """The results of ``futures`` in order (as :func:`_map`: a line per item, the checkpoint rewritten)."""
-    out = []
-    t0 = time.perf_counter()
-    for k, f in enumerate(futures):
-        r = f.result()
-        out.append(r)
-        if log is not None:
-            err = "" if r[1] is None else ": " + r[1]
-            log(f"  {k + 1}/{len(futures)} done ({time.perf_counter() - t0:.0f} s){err}")
-        if checkpoint is not None:
-            with open(checkpoint, "w") as fh:
-                json.dump(_jsonable({"done": len(out), "of": len(futures), "results": out,
-                                     "wall_s": time.perf_counter() - t0}), fh)
-    return out
+    return _collect((f.result() for f in futures), len(futures), log, checkpoint)
 
 
 def checks(out):
