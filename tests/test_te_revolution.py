@@ -10,7 +10,6 @@ import rvtool
 from rvtool import designs
 from rvtool.analysis import te_revolution as TR
 from rvtool.analysis import validate_te as VT
-from rvtool.errors import RvtoolInputError
 from rvtool.protocols.precision import quasi_static_te
 from rvtool.units import ARCSEC_PER_RAD
 from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
@@ -30,22 +29,6 @@ def test_chunks_cover_the_grid_in_order():
     c = TR.chunks(1001, 100)
     assert c[0][0] == 0 and c[-1][1] == 1001 and all(a[1] == b[0] for a, b in zip(c, c[1:]))
     assert max(b - a for a, b in c) <= 100
-
-
-def test_deadline_from_budget_and_utc_time():
-    now = 1_800_000_000.0                   # 2027-01-15 08:00 UTC
-    assert TR.deadline_from(None, None, now=now) is None
-    assert TR.deadline_from(None, 540, now=now) == now + 540
-    assert TR.deadline_from("09:30", None, now=now) == now + 5400
-    assert TR.deadline_from("09:30", 60, now=now) == now + 60           # the earlier of the two
-    assert TR.deadline_from("07:00", None, now=now) == now - 3600       # an hour ago: already past
-    late = now + 15 * 3600                  # 23:00 UTC
-    assert TR.deadline_from("01:00", None, now=late) == late + 2 * 3600  # 22 h ago: tomorrow's
-    for bad in ("9h30", "25:00", "12:61"):
-        with pytest.raises(RvtoolInputError, match="--deadline"):
-            TR.deadline_from(bad, None, now=now)
-    with pytest.raises(RvtoolInputError, match="--budget-s"):
-        TR.deadline_from(None, 0, now=now)
 
 
 def test_unit_keys_follow_the_inputs_not_the_position():

@@ -5,7 +5,8 @@ import time
 
 import pytest
 
-from rvtool.analysis.workunits import DeadlineReached, UnitRunner, digest
+from rvtool.analysis.workunits import DeadlineReached, UnitRunner, deadline_from, digest
+from rvtool.errors import RvtoolInputError
 
 
 def test_digest_names_the_inputs_not_their_order():
@@ -65,3 +66,19 @@ def test_file_digest_follows_values_not_comments(tmp_path):
     b.write_text("# searched again: unchanged\n[test]\nrated_torque = 412.0\n")
     c.write_text("[test]\nrated_torque = 413.0\n")
     assert file_digest(a) == file_digest(b) != file_digest(c)
+
+
+def test_deadline_from_budget_and_utc_time():
+    now = 1_800_000_000.0                   # 2027-01-15 08:00 UTC
+    assert deadline_from(None, None, now=now) is None
+    assert deadline_from(None, 540, now=now) == now + 540
+    assert deadline_from("09:30", None, now=now) == now + 5400
+    assert deadline_from("09:30", 60, now=now) == now + 60           # the earlier of the two
+    assert deadline_from("07:00", None, now=now) == now - 3600       # an hour ago: already past
+    late = now + 15 * 3600                  # 23:00 UTC
+    assert deadline_from("01:00", None, now=late) == late + 2 * 3600  # 22 h ago: tomorrow's
+    for bad in ("9h30", "25:00", "12:61"):
+        with pytest.raises(RvtoolInputError, match="--deadline"):
+            deadline_from(bad, None, now=now)
+    with pytest.raises(RvtoolInputError, match="--budget-s"):
+        deadline_from(None, 0, now=now)

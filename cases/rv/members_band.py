@@ -54,6 +54,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from rvtool import casekit, designs  # noqa: E402
+from rvtool.analysis.workunits import deadline_from  # noqa: E402
 from rvtool.analysis.validate_members import (SAMPLES, members_rigidity, members_tornado,  # noqa: E402
                                               sampled_tornado)
 from rvtool.assembly.topologies import read_table  # noqa: E402
@@ -194,12 +195,7 @@ def main(argv=None):
         resumed.append({"designs": kept, "command": prev["provenance"]["command"], "date": prev["provenance"]["date"],
                         "wall_s_total": prev["provenance"]["wall_s_total"],
                         "resumed_from": prev.get("resumed_from", [])})      # the kept run's own kept runs
-    deadline = None
-    if args.deadline:
-        import datetime
-        hh, mm = (int(x) for x in args.deadline.split(":"))
-        now = datetime.datetime.now(datetime.timezone.utc)
-        deadline = now.replace(hour=hh, minute=mm, second=0, microsecond=0).timestamp()
+    deadline = deadline_from(args.deadline)
     n_tor = args.tornado_keys if args.tornado_keys is not None else (0 if args.quick else TORNADO_KEYS)
     for name in list(names) + [f"tornado:{n}" for n in names]:
         if name.startswith("tornado:"):

@@ -181,19 +181,11 @@ def extra(parser):
 
 
 def deadline_of(args, t_start):
-    """Epoch seconds of --deadline (today, UTC; an HH:MM already past today is refused) or --budget-s."""
-    import datetime
+    """Epoch seconds of --deadline (UTC, workunits.deadline_from) or --budget-s from ``t_start``; one of them."""
+    from rvtool.analysis.workunits import deadline_from
     if args.deadline and args.budget_s is not None:
         raise SystemExit("--deadline and --budget-s: give one")
-    if args.budget_s is not None:
-        if args.budget_s <= 0:
-            raise SystemExit(f"--budget-s = {args.budget_s} is outside the valid range (0, inf)")
-        return t_start + args.budget_s
-    if args.deadline:
-        hh, mm = (int(x) for x in args.deadline.split(":"))
-        now = datetime.datetime.now(datetime.timezone.utc)
-        return now.replace(hour=hh, minute=mm, second=0, microsecond=0).timestamp()
-    return None
+    return deadline_from(args.deadline, args.budget_s, now=t_start)
 
 
 def main(argv=None):

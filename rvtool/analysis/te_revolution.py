@@ -97,32 +97,6 @@ def solve_unit(task):
     return out
 
 
-def deadline_from(deadline_hhmm=None, budget_s=None, *, now=None):
-    """Wall-clock stop time [s since the epoch] from ``HH:MM`` (UTC, today; a time more than 12 h in the past is
-    tomorrow's) and/or a budget [s] from now: the earlier of the two, None for neither. A malformed HH:MM is an
-    RvtoolInputError naming the option."""
-    import datetime
-    now = time.time() if now is None else now
-    ends = []
-    if budget_s is not None:
-        if not budget_s > 0:
-            raise RvtoolInputError(f"--budget-s must be > 0 seconds; got {budget_s}")
-        ends.append(now + float(budget_s))
-    if deadline_hhmm:
-        try:
-            hh, mm = (int(x) for x in str(deadline_hhmm).split(":"))
-            if not (0 <= hh < 24 and 0 <= mm < 60):
-                raise ValueError
-        except ValueError:
-            raise RvtoolInputError(f"--deadline must be HH:MM (UTC, 00:00 .. 23:59); got {deadline_hhmm!r}") from None
-        t = datetime.datetime.fromtimestamp(now, datetime.timezone.utc).replace(hour=hh, minute=mm, second=0,
-                                                                                microsecond=0).timestamp()
-        if t < now - 12 * 3600:
-            t += 24 * 3600
-        ends.append(t)
-    return min(ends) if ends else None
-
-
 def unit_runner(out_dir, *, workers=1, deadline=None, resume=(), log=print):
     """The :class:`rvtool.analysis.workunits.UnitRunner` of a TE run: finished units in ``<out_dir>/units``, the
     ``units`` folders of the ``resume`` run folders read too (a hit is copied into ``out_dir``, so every stop
