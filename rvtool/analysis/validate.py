@@ -124,10 +124,8 @@ def _sample(args):
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def _map(fn, items, workers, log=None, checkpoint=None):
-    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item;
-    ``checkpoint``: a JSON file rewritten with the results so far after each item (a long run that
-    is stopped keeps what it computed)."""
+def _map(fn, items, workers, log=None):
+    """fn over items (in order), in ``workers`` processes; ``log`` gets a line per finished item."""
     if workers <= 1 or len(items) < 2:
         it = (fn(i) for i in items)
         pool = None
@@ -136,7 +134,7 @@ def _map(fn, items, workers, log=None, checkpoint=None):
         pool = ProcessPoolExecutor(max_workers=workers)
         it = pool.map(fn, items)
     try:
-        return _collect(it, len(items), log, checkpoint)
+        return _collect(it, len(items), log)
     finally:
         if pool is not None:
             pool.shutdown()
