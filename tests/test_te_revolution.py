@@ -10,6 +10,7 @@ import rvtool
 from rvtool import designs
 from rvtool.analysis import te_revolution as TR
 from rvtool.analysis import validate_te as VT
+from rvtool.analysis.workunits import folder_runner
 from rvtool.protocols.precision import quasi_static_te
 from rvtool.units import ARCSEC_PER_RAD
 from rvtool.variants.rv_tolerances import load_rv_tolerances, sample_rv_design
@@ -56,18 +57,18 @@ def test_chunked_te_equals_one_run_and_resumes(tmp_path):
     job = TR.make_job("v0", dv, torque=torque, mesh_period=model.mesh_period, points_per_mesh=2, input_revolutions=1,
                       chunk_points=7)
     assert job["n"] == 20 and len(job["units"]) == 3
-    with TR.unit_runner(str(tmp_path / "a")) as store:
+    with folder_runner(str(tmp_path / "a")) as store:
         st = TR.run_units([job], store, log=lambda *_: None)
     assert st["solved"] == 3 and st["failed"] == 0 and not st["stopped_by_deadline"]
     te = TR.job_te(job, store)
     ref = quasi_static_te(model, torque=torque, input_angles=np.arange(20) * job["step"])["te"] * ARCSEC_PER_RAD
     assert te["status"] == "ok" and np.max(np.abs(te["te_arcsec"] - ref)) < 1e-4
     assert te["pp_arcsec"] > 0.1      # a variant's TE, not a constant
-    again = TR.unit_runner(str(tmp_path / "b"), resume=[str(tmp_path / "a")])
+    again = folder_runner(str(tmp_path / "b"), resume=[str(tmp_path / "a")])
     st = TR.run_units([job], again, log=lambda *_: None)
     assert st["kept"] == 3 and st["solved"] == 0 and len(list((tmp_path / "b" / "units").iterdir())) == 3
     assert TR.job_te(job, again)["pp_arcsec"] == te["pp_arcsec"]
-    late = TR.unit_runner(str(tmp_path / "c"), deadline=time.time() - 1)
+    late = folder_runner(str(tmp_path / "c"), deadline=time.time() - 1)
     st = TR.run_units([job], late, log=lambda *_: None)
     assert st["not_started"] == 3 and st["stopped_by_deadline"] and TR.job_te(job, late)["status"] == "missing"
 

@@ -34,7 +34,7 @@ import rvtool  # noqa: E402
 from rvtool import casekit  # noqa: E402
 from rvtool.analysis import te_revolution as TR  # noqa: E402
 from rvtool.analysis import validate_te as VT  # noqa: E402
-from rvtool.analysis.workunits import deadline_from  # noqa: E402
+from rvtool.analysis.workunits import deadline_from, folder_runner  # noqa: E402
 
 RESOLUTION_MAX = 0.10
 """Largest |resolution error| / variant 0's peak-to-peak at 4 points per mesh: beyond it the 2-point curves would
@@ -66,8 +66,8 @@ def full(args, d, t0):
     plan = TR.plan_revolution("rv80e", d, d.rated_torque, variants=n, draws=draws,
                               input_revolutions=args.input_revolutions)
     deadline = deadline_from(args.deadline, args.budget_s)
-    store = TR.unit_runner(args.out, workers=args.workers, deadline=deadline,
-                           resume=args.resume.split(",") if args.resume else ())
+    store = folder_runner(args.out, workers=args.workers, deadline=deadline,
+                          resume=args.resume.split(",") if args.resume else ())
     s = plan["settings"]
     print(f"TE over one output revolution: {s['jobs']} jobs ({n} variants, {draws} draw(s) per field, nominal, "
           f"resolution), {s['units']} units of <= {s['chunk_points']} points")

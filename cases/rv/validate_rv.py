@@ -189,7 +189,7 @@ def deadline_of(args, t_start):
 
 
 def main(argv=None):
-    from rvtool.analysis.workunits import UnitRunner
+    from rvtool.analysis.workunits import folder_runner
     args = casekit.parse_args(argv, description=__doc__.splitlines()[0], extra=extra)
     t0, t_start = time.perf_counter(), time.time()
     deadline = deadline_of(args, t_start)
@@ -200,10 +200,8 @@ def main(argv=None):
     os.makedirs(args.out, exist_ok=True)
     members_from = None if (args.members_from or "").lower() == "none" else (args.members_from or MEMBERS_FROM)
     te_from = None if (args.te_from or "").lower() == "none" else (args.te_from or TE_FROM)
-    resume = [os.path.join(d, "units") for d in args.resume.split(",")] if args.resume else []
-    # CPU-only units: the workers see no GPU (a device host's CUDA context per worker would be wasted)
-    runner = UnitRunner(workers=workers, deadline=deadline, store=os.path.join(args.out, "units"), resume=resume,
-                        worker_env={"CUDA_VISIBLE_DEVICES": ""})
+    runner = folder_runner(args.out, workers=workers, deadline=deadline,
+                           resume=args.resume.split(",") if args.resume else ())
     jobs = [(n, args.quick, args.out, runner, members_from, te_from, print) for n in names]
     try:
         if workers > 1:

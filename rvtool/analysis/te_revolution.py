@@ -97,17 +97,6 @@ def solve_unit(task):
     return out
 
 
-def unit_runner(out_dir, *, workers=1, deadline=None, resume=(), log=print):
-    """The :class:`rvtool.analysis.workunits.UnitRunner` of a TE run: finished units in ``<out_dir>/units``, the
-    ``units`` folders of the ``resume`` run folders read too (a hit is copied into ``out_dir``, so every stop
-    leaves a folder complete in itself); ``workers`` > 1: a spawn pool of one BLAS thread per worker and no CUDA
-    device (the units run on the CPU and need no context per worker)."""
-    from .workunits import UnitRunner
-    return UnitRunner(workers=workers, deadline=deadline, store=os.path.join(out_dir, "units"),
-                      resume=[os.path.join(r, "units") for r in resume if r], log=log,
-                      worker_env={"CUDA_VISIBLE_DEVICES": ""})
-
-
 def stored(runner, key):
     """A finished unit's result from the runner's store or resume folders (or from a dict {key: result}, the
     results :func:`submit_units` waited for), else None."""
@@ -160,7 +149,7 @@ def revolution_inputs_digest(design_name, design, rated_torque, *, variants, inp
 
 
 def run_units(jobs, runner, *, log=print, on_progress=None, progress_every_s=30.0):
-    """Solve every unit of ``jobs`` through ``runner`` (:func:`unit_runner`; a unit already stored is kept), in
+    """Solve every unit of ``jobs`` through ``runner`` (:func:`rvtool.analysis.workunits.folder_runner`; a unit already stored is kept), in
     the order of ``jobs`` (the plan's order of priority); the runner starts no unit once the time left before its
     deadline is below the longest unit seen so far. ``on_progress()`` is called at most every ``progress_every_s``
     while units finish. Returns ``{"total", "kept", "solved", "failed", "not_started", "unit_wall_s": [...] (the
@@ -223,7 +212,7 @@ def run_units(jobs, runner, *, log=print, on_progress=None, progress_every_s=30.
 
 
 def job_te(job, store):
-    """A job's TE from its units stored in ``store`` (a :func:`unit_runner`): ``{"status": "ok"|"failed"|"missing", "error", "te_arcsec" (array over
+    """A job's TE from its units stored in ``store`` (a :func:`rvtool.analysis.workunits.folder_runner`): ``{"status": "ok"|"failed"|"missing", "error", "te_arcsec" (array over
     the job's grid, zero at its first point), "pp_arcsec", "wall_s"}``."""
     from ..observe.transmission import transmission_error
     parts, errors, wall = [], [], 0.0

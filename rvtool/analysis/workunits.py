@@ -250,3 +250,14 @@ class UnitRunner:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def folder_runner(out_dir, *, workers=1, deadline=None, resume=(), log=print):
+    """The :class:`UnitRunner` of a run folder (``te_measured_rv80e``, ``validate_rv``): finished units in
+    ``<out_dir>/units``, the ``units`` folders of the ``resume`` run folders read too (a hit is copied into
+    ``out_dir``, so every stop leaves a folder complete in itself); ``workers`` > 1: a spawn pool of one BLAS
+    thread per worker and no CUDA device (the units run on the CPU: a device host's CUDA context per worker
+    would be wasted)."""
+    return UnitRunner(workers=workers, deadline=deadline, store=os.path.join(out_dir, "units"),
+                      resume=[os.path.join(r, "units") for r in resume if r], log=log,
+                      worker_env={"CUDA_VISIBLE_DEVICES": ""})
