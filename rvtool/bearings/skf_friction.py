@@ -37,11 +37,9 @@ import numpy as np
 
 from ..errors import RvtoolInputError
 from ..validation import check_nonnegative, check_positive
+# the catalogue's units (mm, mm^2/s, r/min, N mm): the same conversions as Palmgren's model
+from .friction_torque import MM2_S_PER_M2_S, MM_PER_M, NM_PER_NMM, RPM_PER_RAD_S
 
-MM_PER_M = 1e3
-MM2_S_PER_M2_S = 1e6
-RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
-NM_PER_NMM = 1e-3
 #: phi_ish = 1 / (1 + ISH_C (n d_m)^ISH_A nu^ISH_B) [SKF04]
 ISH_C, ISH_A, ISH_B = 1.84e-9, 1.28, 0.64
 #: K_rs [SKF04]: grease and oil-air; low-level oil bath and oil jet
