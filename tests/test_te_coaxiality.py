@@ -1,0 +1,139 @@
+"""The two error sources of Yang et al. (2021) the RV tolerance Monte Carlo lacked (issue 30, Deliver 3, helper
+tecoax): the pin circle off the main-bearing (carrier) axis (``pin_circle_coaxiality_error``: one translation of
+every ring-pin seat, fixed in the housing) and the runout of the sun and of each crank gear (``sun_runout``,
+``crank_gear_runout``: a once-around accumulated pitch written as single pitch deviations). Each moves the
+variant's geometry by exactly the drawn amount, is drawn after every earlier field (their draws and a tolerance
+file without the new keys unchanged bit for bit), and its grade follows the cited formula."""
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+import rvtool
+from rvtool import designs
+from rvtool.errors import RvtoolInputError
+from rvtool.variants.rv_tolerances import (RV_FIELDS, RvToleranceSpec, coaxial_centre_errors, load_rv_tolerances,
+                                           runout_pitch_deviations, sample_rv_design)
+from rvtool.variants.tolerances import Normal
+
+NEW = ("pin_circle_coaxiality_error", "sun_runout", "crank_gear_runout")
+
+
+@pytest.fixture(scope="module")
+def d():
+    return rvtool.load_design("rv80e")
+
+
+@pytest.fixture(scope="module")
+def spec():
+    return load_rv_tolerances(designs.path("rv80e_tolerances"))
+
+
+def test_new_fields_are_drawn_last_and_leave_every_earlier_draw(d, spec):
+    assert RV_FIELDS[-len(NEW):] == NEW
+    assert all(getattr(spec, f) is not None for f in RV_FIELDS)
+    old = RvToleranceSpec(**{f: getattr(spec, f) for f in RV_FIELDS[:-len(NEW)]})
+    for k in (0, 7):
+        dv, drawn = sample_rv_design(spec, d, k, 2026)
+        do, drawn_o = sample_rv_design(old, d, k, 2026)
+        for f in RV_FIELDS[:-len(NEW)]:
+            assert np.array_equal(np.asarray(drawn[f], float), np.asarray(drawn_o[f], float)), f
+        # what the new fields do not write is the same design, bit for bit
+        for sec in ("cranks", "wheels", "profile", "eccentric_bearing"):
+            a, b = getattr(dv, sec), getattr(do, sec)
+            if sec == "cranks":
+                a = a.__class__(**{**a.__dict__, "gear_pitch_deviations": b.gear_pitch_deviations})
+            assert a == b, sec
+        assert dv.pins.radius_error == do.pins.radius_error
+
+
+def test_a_file_without_the_new_keys_gives_todays_variants(d, tmp_path):
+    """The committed tolerance file with the new keys removed draws exactly the variants of the spec of the earlier
+    fields (what every run before this change drew): the same design dataclass, the same TE unit digest."""
+    from rvtool.analysis.te_revolution import design_digest
+    text = open(designs.path("rv80e_tolerances")).read()
+    kept = "\n".join(ln for ln in text.splitlines() if not ln.startswith(NEW))
+    p = tmp_path / "t.toml"
+    p.write_text(kept)
+    stripped = load_rv_tolerances(p)
+    assert all(getattr(stripped, f) is None for f in NEW)
+    full = load_rv_tolerances(designs.path("rv80e_tolerances"))
+    old = RvToleranceSpec(**{f: getattr(full, f) for f in RV_FIELDS[:-len(NEW)]})
+    a, _ = sample_rv_design(stripped, d, 2, 2026)
+    b, _ = sample_rv_design(old, d, 2, 2026)
+    assert design_digest(a, torque=1.0, step=0.1) == design_digest(b, torque=1.0, step=0.1)
+    c, _ = sample_rv_design(full, d, 2, 2026)
+    assert design_digest(c, torque=1.0, step=0.1) != design_digest(b, torque=1.0, step=0.1)
+
+
+def test_coaxiality_moves_every_pin_by_the_same_offset(d, spec):
+    base = RvToleranceSpec(pin_pitch_deviation=spec.pin_pitch_deviation,
+                           pin_radial_position_error=spec.pin_radial_position_error)
+    both = RvToleranceSpec(**{**base.__dict__, "pin_circle_coaxiality_error": spec.pin_circle_coaxiality_error})
+    dv, drawn = sample_rv_design(both, d, 4, 2026)
+    db, _ = sample_rv_design(base, d, 4, 2026)
+    o = np.asarray(drawn["pin_circle_coaxiality_error"])
+    assert o.shape == (2,) and np.all(o != 0)
+    diff = np.asarray(dv.pins.centre_errors) - np.asarray(db.pins.centre_errors)
+    np.testing.assert_allclose(diff, np.broadcast_to(o, diff.shape), rtol=0, atol=1e-20)
+    alone, drawn1 = sample_rv_design(RvToleranceSpec(pin_circle_coaxiality_error=Normal(std=3e-6)), d, 4, 2026)
+    assert np.array_equal(np.asarray(alone.pins.centre_errors), np.tile(drawn1["pin_circle_coaxiality_error"],
+                                                                        (d.pins.n_pins, 1)))
+    with pytest.raises(RvtoolInputError, match="shape"):
+        coaxial_centre_errors(d.pins, (1e-6, 0.0, 0.0))
+
+
+@pytest.mark.parametrize("z", [10, 38])
+def test_runout_gives_a_once_around_accumulated_pitch(z):
+    """f_k = s_k - s_(k-1) of s_k = e_x cos(2 pi k / z) + e_y sin(2 pi k / z): the accumulated pitch from tooth 0
+    is s_k - s_0, a sinusoid of amplitude |e| (its first harmonic over the teeth is exactly |e|)."""
+    e = np.array([2.0e-6, -1.5e-6])
+    f = runout_pitch_deviations(z, e)
+    assert abs(f.sum()) < 1e-20
+    F = np.concatenate([[0.0], np.cumsum(f[1:])])
+    a = 2 * np.pi * np.arange(z) / z
+    s = e[0] * np.cos(a) + e[1] * np.sin(a)
+    np.testing.assert_allclose(F, s - s[0], rtol=0, atol=1e-18)
+    h = 2 * np.abs(np.fft.rfft(F)[1]) / z
+    assert abs(h - math.hypot(*e)) < 1e-15
+    with pytest.raises(RvtoolInputError, match="shape"):
+        runout_pitch_deviations(z, (1e-6,))
+
+
+def test_runout_adds_to_the_pitch_fields_and_turns_each_tooth_by_it(d, spec):
+    base = RvToleranceSpec(sun_pitch_deviation=spec.sun_pitch_deviation,
+                           crank_gear_pitch_deviation=spec.crank_gear_pitch_deviation)
+    both = RvToleranceSpec(**{**base.__dict__, "sun_runout": spec.sun_runout,
+                              "crank_gear_runout": spec.crank_gear_runout})
+    dv, drawn = sample_rv_design(both, d, 5, 2026)
+    db, _ = sample_rv_design(base, d, 5, 2026)
+    es, ec = np.asarray(drawn["sun_runout"]), np.asarray(drawn["crank_gear_runout"])
+    assert es.shape == (2,) and ec.shape == (d.cranks.count, 2) and len({tuple(x) for x in ec}) == d.cranks.count
+    np.testing.assert_allclose(np.subtract(dv.sun_gear.single_pitch_deviations, db.sun_gear.single_pitch_deviations),
+                               runout_pitch_deviations(d.sun_gear.n_teeth, es), rtol=0, atol=1e-20)
+    for k in range(d.cranks.count):
+        np.testing.assert_allclose(np.subtract(dv.cranks.gear_pitch_deviations[k], db.cranks.gear_pitch_deviations[k]),
+                                   runout_pitch_deviations(d.crank_gear.n_teeth, ec[k]), rtol=0, atol=1e-20)
+    # alone on a design without pitch deviations: the gear the model builds turns tooth k by (s_k - s_0) / r_b
+    alone, dr = sample_rv_design(RvToleranceSpec(crank_gear_runout=Normal(std=2.667e-6)), d, 5, 2026)
+    g = alone.crank_gear_of(1)
+    a = 2 * np.pi * np.arange(g.n_teeth) / g.n_teeth
+    e = np.asarray(dr["crank_gear_runout"][1])
+    s = e[0] * np.cos(a) + e[1] * np.sin(a)
+    np.testing.assert_allclose(g.pitch_deviation_angles() * g.base_radius, s - s[0], rtol=0, atol=1e-18)
+
+
+def test_grades_follow_the_cited_formulas(d):
+    """rv80e_tolerances.toml: coaxiality t = IT5 of the 155 mm pin circle = 18 um (ISO 286-1 Table 1), std t / 6;
+    runout F_rT = 0.9 F_pT, F_pT = 0.002 d + 0.55 sqrt(d) + 0.7 m_n + 12 (ISO 1328-1:2013 class 5, recalled),
+    rounded to 1 um, the eccentricity's coordinates std F_rT / 6."""
+    with open(designs.path("rv80e_tolerances"), "rb") as fh:
+        t = tomllib.load(fh)["tolerances"]
+    assert 120.0 < 2e3 * d.pins.pin_circle_radius <= 180.0
+    assert t["pin_circle_coaxiality_error"] == {"dist": "normal", "mean": 0.0, "std": 3.0e-6}
+    for key, gear in (("sun_runout", d.sun_gear), ("crank_gear_runout", d.crank_gear)):
+        dm, m = 1e3 * gear.module * gear.n_teeth, 1e3 * gear.module
+        f_rt = round(0.9 * (0.002 * dm + 0.55 * math.sqrt(dm) + 0.7 * m + 12.0))
+        assert t[key]["dist"] == "normal" and t[key]["mean"] == 0.0
+        assert abs(t[key]["std"] - f_rt * 1e-6 / 6) < 5e-10, key
