@@ -3,7 +3,8 @@
 The tolerance Monte Carlo of rvtool/designs/rv80e_tolerances.toml (grades chosen, their tolerances read from
 ISO 1328-1:2013 and ISO 286-1, cited per line there: crank phase and eccentricity, pin radius, needle clearance,
 sun and crank-gear single pitch, pin-seat pitch and radial position, crank-bore positions in the wheels and the
-carrier, profile equidistant and offset, the wheels' lobe-by-lobe pitch) runs the quasi-static TE of each variant at
+carrier, profile equidistant and offset, the wheels' lobe-by-lobe pitch, the pin circle off the main-bearing axis,
+sun and crank-gear runout) runs the quasi-static TE of each variant at
 10 % T_R, and the distribution of the peak-to-peak TE is set against the measured TE of the two prototypes of Yang
 et al., Mech. Mach. Theory 163 (2021) 104384 (rvtool/designs/rv80e_measured.toml: range -29.68 .. 30.39 and
 -31.51 .. 33.13 arcsec, read through a public transcription), measured over one OUTPUT revolution (their Eq. (38)).

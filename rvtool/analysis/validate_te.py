@@ -350,7 +350,7 @@ def _te_result(res, n, ppm, torque, tol_name, meas_name, measured, design, input
             f"pairing; a lower bound of the output revolution's peak-to-peak), {ppm} points per mesh cycle; "
             f"nominal design {res['nominal_pp'] * ARCSEC_PER_RAD:.3g} arcsec. Error sources the tolerance file "
             "does not carry (the lobes' profile form beyond their pitch, the two wheels' profiles differing in "
-            "form, bore and seat form errors, gear runout) are absent from the prediction; the output side's hole "
+            "form, bore and seat form errors) are absent from the prediction; the output side's hole "
             "positions are the carrier's crank-bearing seats (the RV output is the carrier, reached through the "
             "crank bearings only; the wheels' pillar holes carry no load)")
     return {"rows": te_rows(measured, dist, note, over=WINDOW_TEXT.format(n=te_window(design))),
