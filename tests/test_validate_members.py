@@ -334,3 +334,23 @@ def test_members_tornado_reports_a_derivation_input_by_its_range(monkeypatch):
                            base, values, keys=1, log=lambda *a: None)
     a = next(x for x in m if x.key == gap)
     assert list(r["tornado"]) == [gap] and (r["tornado"][gap]["low"], r["tornado"][gap]["high"]) == (a.at(0.0), a.at(1.0))
+
+
+def test_committed_rv80e_band_is_taken_whole_by_its_draw_digests(monkeypatch):
+    """The committed band checkpoint (docs/case_results/rv/members_band/checkpoint_rv80e.json) serves
+    validate's full run draw by draw: today's sampler and digest (workunits.json_sha256, through table_digest)
+    give its 65 recorded draw digests (central + 64), so members_rigidity on a runner solves none of them and
+    gives the committed band and central value (a changed digest or sampler would solve the draw here)."""
+    import json
+    from rvtool.analysis.workunits import UnitRunner
+    from rvtool.designs.catalogue import load_assumed, load_catalogue
+    folder = Path(__file__).resolve().parents[1] / "docs" / "case_results" / "rv" / "members_band"
+    committed = json.loads((folder / "results.json").read_text())["designs"]["rv80e"]
+    calls, _, _ = _stand_in_rigidity(monkeypatch)
+    r = VM.members_rigidity("rv80e", read_table(designs.path("rv80e")), load_catalogue(designs.catalogue_of("rv80e")),
+                            load_assumed(designs.assumed_of("rv80e")), quick=True, samples=VM.SAMPLES,
+                            checkpoint=str(folder / "checkpoint_rv80e.json"), runner=UnitRunner(),
+                            log=lambda *x: None)
+    assert not calls and r["reused_from_checkpoint"] == VM.SAMPLES + 1
+    assert r["band"] == committed["band"] and r["central"]["value"] == committed["central"]["value"]
+    assert r["sample_values"] == committed["sample_values"]

@@ -398,12 +398,10 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
 
 
 def table_digest(table):
-    """SHA-256 (hex) of a design table (JSON, sorted keys; floats by their shortest repr): the identity of a draw
+    """SHA-256 (hex) of a design table (:func:`rvtool.analysis.workunits.json_sha256`): the identity of a draw
     in a band's checkpoint."""
-    import hashlib
-    import json
-    text = json.dumps(table, sort_keys=True, default=lambda o: o.tolist() if hasattr(o, "tolist") else float(o))
-    return hashlib.sha256(text.encode()).hexdigest()
+    from .workunits import json_sha256
+    return json_sha256(table)
 
 
 def _run_resumable(items, log, checkpoint, key, deadline):
@@ -477,7 +475,9 @@ def members_budget(table, rated_torque):
 
 
 def checkpoint_key(design, samples, seed, quick):
-    """The key of a band's checkpoint (cases/rv/members_band.py): the design, the planned draws and the meshes."""
+    """The key of a band's checkpoint (cases/rv/members_band.py): the design, the planned draws and the meshes, as
+    readable text (the committed checkpoint_rv80e.json records ``"rv80e samples=64 seed=0 quick=True"``); not a
+    digest: each draw in it is identified by its :func:`table_digest`."""
     return f"{design} samples={samples} seed={seed} quick={quick}"
 
 
