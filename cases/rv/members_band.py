@@ -113,7 +113,8 @@ def one_design(name, samples, out_dir, runner, resume=()):
                          checkpoint_out=os.path.join(out_dir, ck), runner=runner, short_band=True)
     r.pop("U", None)
     r["band_is_short"] = r["samples_done"] < SAMPLES
-    # CPU and wall of THIS process (samples resumed from the checkpoint carry their own sample_cpu_s)
+    # CPU and wall of THIS process (b/a solved in pool workers, or taken from units or checkpoints, carry their own
+    # sample_cpu_s)
     r["cpu_s"] = time.process_time() - c0
     r["wall_s"] = time.perf_counter() - t0
     cpu = [c for c in r["sample_cpu_s"] if c is not None]
