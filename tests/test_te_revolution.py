@@ -45,6 +45,27 @@ def test_unit_keys_follow_the_inputs_not_the_position():
     assert TR.unit_key(k, 0, 10) != TR.unit_key(k, 10, 20)
 
 
+def test_committed_run_keeps_its_128_unit_keys():
+    """The plan of te_measured_rv80e's full mode (the output revolution, 16 variants, one draw per field, the
+    resolution job) gives the 128 unit keys of the committed run's units (d4dc265, re-assembled at ded4ee3: the
+    SHA-256 below is of their sorted file names, <key>.pkl, joined by newlines) and the inputs digest recorded in
+    its committed results.json, which the full `rvtool validate` checks before it takes the TE rows from there:
+    a change of the digest (workunits.json_sha256), of the job list or of the chunking makes them unreachable."""
+    import hashlib
+    import json
+    from pathlib import Path
+    committed = json.loads((Path(__file__).resolve().parents[1] / "docs" / "case_results" / "rv" /
+                            "te_measured_rv80e" / "results.json").read_text())["settings"]
+    d = rvtool.load_design("rv80e")
+    plan = TR.plan_revolution("rv80e", d, d.rated_torque, variants=committed["variants"],
+                              draws=committed["sensitivity_draws"])
+    keys = sorted(key for j in plan["jobs"] for key, _, _ in j["units"])
+    assert len(keys) == committed["units"] == 128 and len(plan["jobs"]) == committed["jobs"]
+    assert hashlib.sha256("\n".join(keys).encode()).hexdigest() == \
+        "272e0fdfa38c1fc785c9c5472a0b618727aada6304349838e8c2b47c60fa8125"
+    assert plan["settings"]["inputs_digest"] == committed["inputs_digest"]
+
+
 def test_chunked_te_equals_one_run_and_resumes(tmp_path):
     """rv80e variant 0 over one input revolution at 2 points per mesh (20 points) in 3 units, each started cold:
     the TE formed from the units equals one warm-started run (the equilibrium is unique under the load; 1e-4
