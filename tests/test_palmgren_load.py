@@ -48,6 +48,10 @@ def test_each_type_against_a_hand_value(rv40e):
     rows = row_loads(crank, 10000.0)
     assert [r[1] for r in rows] == [5000.0, 5000.0]
     assert rows[0][2] == pytest.approx(0.5 * 5000.0 / Y14, rel=1e-14)          # F_a: the induced force
+    # a pair preloaded by interference: each row's F_a is its axial force at the approach interference / 2
+    clamped = replace(main, rows=tuple(replace(r, axial_preload=0.0) for r in main.rows), interference=2e-6)
+    (lab, fr, fa, p1), _ = row_loads(clamped, 100.0)
+    assert fa == main.rows[0].axial_force_at(1e-6) > 0 and p1 == pytest.approx(0.9 * fa * cot - 5.0, rel=1e-14)
     # the radial form is the radial resultant itself
     for b in (main, crank, ecc):
         assert palmgren_load(b, 777.0, "radial") == 777.0
