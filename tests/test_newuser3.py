@@ -156,3 +156,17 @@ def test_cli_option_values_are_refused_by_name(argv, expect, tmp_path, monkeypat
     assert _cli(argv, tmp_path, monkeypatch) == 2
     assert expect in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_mesh_that_never_engages_is_a_geometry_error(tmp_path):
+    """Before: the cycloid template with ``wheels.clearance = 0.01`` (10 mm: the wheel never reaches the
+    pins) said ``valid range: 0 < rated_torque <= 0.005904 N m (the largest torque shown to
+    equilibrate)``, a torque the solver's regularization springs carried with the pins unloaded. No
+    rated torque is admissible for that geometry; the error says so and names the clearance."""
+    from rvtool.analysis.admissible import check_rated_state
+    table = _template_table("cycloid")
+    table["wheels"]["clearance"] = 0.01
+    design = _load(tmp_path, table)
+    with pytest.raises(RvtoolInputError, match=r"the main mesh \(pins\) carries no load at .* no rated_torque is "
+                                               r"admissible.*wheels\.clearance = 0\.01 m"):
+        check_rated_state(design, lambda: rvtool.build(design))
