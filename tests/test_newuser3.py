@@ -170,3 +170,13 @@ def test_a_mesh_that_never_engages_is_a_geometry_error(tmp_path):
     with pytest.raises(RvtoolInputError, match=r"the main mesh \(pins\) carries no load at .* no rated_torque is "
                                                r"admissible.*wheels\.clearance = 0\.01 m"):
         check_rated_state(design, lambda: rvtool.build(design))
+
+
+def test_pointed_tip_names_the_thickness_allowance(tmp_path):
+    """Before: ``sun_gear.thickness_allowance = 0.01`` (10 mm on a 1 mm module) said ``... gives a pointed
+    tip ...; valid: tip thickness > 0.0 m (reduce profile_shift = 0.1 or the tip diameter)``: the key
+    that made the tip pointed was not named."""
+    table = _template_table("rv2")
+    table["sun_gear"]["thickness_allowance"] = 0.01
+    with pytest.raises(RvtoolInputError, match=r"pointed tip .*sun_gear\.thickness_allowance = 0\.01 m"):
+        _load(tmp_path, table)
