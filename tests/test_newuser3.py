@@ -180,3 +180,13 @@ def test_pointed_tip_names_the_thickness_allowance(tmp_path):
     table["sun_gear"]["thickness_allowance"] = 0.01
     with pytest.raises(RvtoolInputError, match=r"pointed tip .*sun_gear\.thickness_allowance = 0\.01 m"):
         _load(tmp_path, table)
+
+
+def test_sweep_protocol_value_names_its_table(tmp_path):
+    """Before: ``n_te_points = -1 is outside the valid range [3, inf) (integer)`` for a key of the sweep
+    spec's ``[protocol]`` table (``cluster.n_workers`` already named its table)."""
+    from rvtool.variants.sweep import load_sweep_spec
+    p = tmp_path / "s.toml"
+    p.write_text('design = "d.toml"\n[protocol]\nn_te_points = -1\n[parameters]\npin_clearance = [0.0]\n')
+    with pytest.raises(RvtoolInputError, match=r"^protocol\.n_te_points = -1 is outside the valid range \[3, inf\)"):
+        load_sweep_spec(str(p))
