@@ -190,3 +190,15 @@ def test_sweep_protocol_value_names_its_table(tmp_path):
     p.write_text('design = "d.toml"\n[protocol]\nn_te_points = -1\n[parameters]\npin_clearance = [0.0]\n')
     with pytest.raises(RvtoolInputError, match=r"^protocol\.n_te_points = -1 is outside the valid range \[3, inf\)"):
         load_sweep_spec(str(p))
+
+
+def test_te_error_statement_quotes_the_refined_resolution(tmp_path):
+    """Before: the TE figures' error statement read "reference: the topology's refined resolution
+    ({'mesh_window_teeth': 4, 'mesh_n_slices': 1})": the run's own resolution, not the refined one it
+    was measured against (window + 2 teeth, twice the slices for the std-involute drive)."""
+    res = rvtool.analyze(rvtool.load_design("std_involute"), "te", quick=True, out_dir=str(tmp_path))
+    model = rvtool.build(rvtool.load_design("std_involute"))
+    fine = rvtool.build(model.refined_design()).resolution_settings()
+    assert fine != model.resolution_settings()
+    statement = res["te"].figure("te_pp").error_statement
+    assert f"refined resolution ({fine})" in statement, statement
