@@ -194,9 +194,11 @@ def test_the_linear_rows_and_the_pose_gather_kernels_equal_their_references():
     q, ref = rng.normal(size=(B, n)), rng.normal(size=(B, n))
     stp.load(q=q)
     index = np.array([[0, 5, -1], [9, 23, 2], [-1, -1, 17]])
-    pose = wp.zeros((4, 3), dtype=wp.float64)
-    stp.write_poses_gathered(wp.array(ref, dtype=wp.float64), pose,
-                             wp.array(index.reshape(-1).astype(np.int64), dtype=wp.int64))
+    # every array on the step's device: warp's default device is cuda:0 where a GPU exists, and a cpu launch
+    # of a recorded command would read a device pointer (it segfaulted on the GPU host)
+    pose = wp.zeros((4, 3), dtype=wp.float64, device="cpu")
+    stp.write_poses_gathered(wp.array(ref, dtype=wp.float64, device="cpu"), pose,
+                             wp.array(index.reshape(-1).astype(np.int64), dtype=wp.int64, device="cpu"))
     assert np.array_equal(pose.numpy()[:3], gather_poses(ref + q, index))
 
 
@@ -265,3 +267,22 @@ def test_hysteresis_with_friction_anchors_on_the_device_equals_exudyn():
     fa, fb = ({f.name: f.value for f in r.figures} for r in (a, b))
     for name in ("torsional_rigidity_b_over_a", "lost_motion_catalogue", "hysteresis_loss"):
         assert fa[name] == pytest.approx(fb[name], rel=1e-9)
+
+
+def test_the_block_step_refuses_arrays_of_another_device():
+    """A recorded cpu launch does not check its arrays' device: the step refuses them by name before
+    recording (a CUDA array on the cpu step would be read as a host pointer)."""
+    import warp as wp
+    from warp_contacts.block_newton import BlockNewtonStep
+    from warp_contacts.block_newton_ref import StepModel
+    if not wp.is_cuda_available():
+        pytest.skip("needs a CUDA device beside the cpu")
+    n = 8
+    m = StepModel(spring_k=np.zeros(n), free=np.ones(n, bool), rot=np.zeros(n, bool), out_index=0,
+                  stiffening=np.ones(1), abs_tol=1e-6, max_iterations=5, max_step_translation=1.0,
+                  max_step_rotation=1.0, bound_translation=1.0, bound_rotation=1.0, homotopy=False)
+    stp = BlockNewtonStep(m, 2, n, "cpu")
+    with pytest.raises(ValueError, match="'reference' is on cuda"):
+        stp.write_poses_gathered(wp.zeros((2, n), dtype=wp.float64, device="cuda:0"),
+                                 wp.zeros((4, 3), dtype=wp.float64, device="cpu"),
+                                 wp.zeros(6, dtype=wp.int64, device="cpu"))

@@ -234,9 +234,9 @@ def test_band_checkpoint_resumes_and_deadline_shortens(monkeypatch, tmp_path):
     band; a deadline already past starts no sample (the caller gets a clear error, not an empty band)."""
     calls, cat, table = _stand_in_rigidity(monkeypatch)
     ck = str(tmp_path / "ck.json")
-    a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=ck, log=lambda *x: None)
+    a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=ck, checkpoint_out=ck, log=lambda *x: None)
     assert len(calls) == 4 and a["samples_done"] == 3
-    b = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=ck, log=lambda *x: None)
+    b = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=ck, checkpoint_out=ck, log=lambda *x: None)
     assert len(calls) == 4 and b["sample_values"] == a["sample_values"] and b["band"] == a["band"]
     with pytest.raises(RvtoolInputError, match="deadline"):
         VM.members_rigidity("rv40e", table, cat, samples=3, deadline=0.0, log=lambda *x: None)
@@ -278,12 +278,14 @@ def test_band_checkpoint_resolves_only_changed_draws(monkeypatch, tmp_path):
     import json
     calls, cat, table = _stand_in_rigidity(monkeypatch)
     ck = tmp_path / "ck.json"
-    a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), log=lambda *x: None)
+    a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), checkpoint_out=str(ck),
+                            log=lambda *x: None)
     assert len(calls) == 4
     c = json.loads(ck.read_text())
     c["digests"][2] = "changed"
     ck.write_text(json.dumps(c))
-    b = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), log=lambda *x: None)
+    b = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), checkpoint_out=str(ck),
+                            log=lambda *x: None)
     assert len(calls) == 5 and b["sample_values"] == a["sample_values"]
     c = json.loads(ck.read_text())
     del c["digests"]
@@ -300,7 +302,7 @@ def test_runner_takes_the_band_checkpoint_by_draw_digest(monkeypatch, tmp_path):
     from rvtool.analysis.workunits import UnitRunner
     calls, cat, table = _stand_in_rigidity(monkeypatch)
     ck = tmp_path / "checkpoint_rv40e.json"
-    a = VM.members_rigidity("rv40e", table, cat, samples=3, quick=True, checkpoint=str(ck), log=lambda *x: None)
+    a = VM.members_rigidity("rv40e", table, cat, samples=3, quick=True, checkpoint_out=str(ck), log=lambda *x: None)
     assert len(calls) == 4
     r = UnitRunner(store=str(tmp_path / "units"))
     b = VM.members_rigidity("rv40e", table, cat, samples=3, quick=True, checkpoint=str(ck), runner=r,
@@ -334,3 +336,72 @@ def test_members_tornado_reports_a_derivation_input_by_its_range(monkeypatch):
                            base, values, keys=1, log=lambda *a: None)
     a = next(x for x in m if x.key == gap)
     assert list(r["tornado"]) == [gap] and (r["tornado"][gap]["low"], r["tornado"][gap]["high"]) == (a.at(0.0), a.at(1.0))
+
+
+def test_committed_rv80e_band_is_taken_whole_by_its_draw_digests(monkeypatch):
+    """The committed band checkpoint (docs/case_results/rv/members_band/checkpoint_rv80e.json) serves
+    validate's full run draw by draw: today's sampler and digest (workunits.json_sha256, through table_digest)
+    give its 65 recorded draw digests (central + 64), so members_rigidity on a runner solves none of them and
+    gives the committed band and central value (a changed digest or sampler would solve the draw here)."""
+    import json
+    from rvtool.analysis.workunits import UnitRunner
+    from rvtool.designs.catalogue import load_assumed, load_catalogue
+    folder = Path(__file__).resolve().parents[1] / "docs" / "case_results" / "rv" / "members_band"
+    committed = json.loads((folder / "results.json").read_text())["designs"]["rv80e"]
+    calls, _, _ = _stand_in_rigidity(monkeypatch)
+    r = VM.members_rigidity("rv80e", read_table(designs.path("rv80e")), load_catalogue(designs.catalogue_of("rv80e")),
+                            load_assumed(designs.assumed_of("rv80e")), quick=True, samples=VM.SAMPLES,
+                            checkpoint=str(folder / "checkpoint_rv80e.json"), runner=UnitRunner(),
+                            log=lambda *x: None)
+    assert not calls and r["reused_from_checkpoint"] == VM.SAMPLES + 1
+    assert r["band"] == committed["band"] and r["central"]["value"] == committed["central"]["value"]
+    assert r["sample_values"] == committed["sample_values"]
+
+
+def test_band_on_units_stops_short_at_the_deadline_and_resumes(monkeypatch, tmp_path):
+    """The band runs as units (members_band's path): the deadline passes after two b/a (the stand-in moves the
+    runner's deadline into the past), so the band is the draws before the first one not started (short_band)
+    and the checkpoint written holds the two finished draws; validate's path (short_band False) raises
+    DeadlineReached instead; the same store resumed solves only the two draws left and gives the full band."""
+    import json
+    from rvtool.analysis.workunits import DeadlineReached, UnitRunner
+    calls, cat, table = _stand_in_rigidity(monkeypatch)
+    first = UnitRunner(store=str(tmp_path / "units"))
+    stand_in = VM.rigidity_ba
+
+    def stops_after_two(design, catalogue):
+        out = stand_in(design, catalogue)
+        if len(calls) == 2:
+            first.deadline = 0.0
+        return out
+    monkeypatch.setattr(VM, "rigidity_ba", stops_after_two)
+    ck = tmp_path / "checkpoint_rv40e.json"
+    a = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint=str(ck), checkpoint_out=str(ck),
+                            runner=first, short_band=True, log=lambda *x: None)
+    assert len(calls) == 2 and a["samples_done"] == 1 and first.counts["not_started"] == 2
+    saved = json.loads(ck.read_text())
+    assert saved["of"] == 4 and [r is not None for r in saved["results"]] == [True, True, False, False]
+    with pytest.raises(DeadlineReached):
+        VM.members_rigidity("rv40e", table, cat, samples=3, runner=first, log=lambda *x: None)
+    again = UnitRunner(store=str(tmp_path / "units2"), resume=[str(tmp_path / "units")])
+    b = VM.members_rigidity("rv40e", table, cat, samples=3, checkpoint_out=str(ck), runner=again, short_band=True,
+                            log=lambda *x: None)
+    assert len(calls) == 4 and again.counts == {"run": 2, "reused": 2, "not_started": 0, "failed": 0}
+    assert b["samples_done"] == 3 and b["sample_values"][0] == a["sample_values"][0]
+    assert all(r is not None for r in json.loads(ck.read_text())["results"])
+
+
+def test_members_band_redo_takes_the_committed_band_and_writes_it_again(monkeypatch, tmp_path):
+    """cases/rv/members_band.py on units with the committed band folder as --resume and rv80e redone: all 65 b/a
+    are taken from the committed checkpoint by draw digest (nothing solved), the band is the committed one, and
+    the run folder's checkpoint is byte for byte the committed file (the format validate reads is unchanged)."""
+    from rvtool import casekit
+    folder = Path(__file__).resolve().parents[1] / "docs" / "case_results" / "rv" / "members_band"
+    calls, _, _ = _stand_in_rigidity(monkeypatch)
+    case = casekit.import_case("rv/members_band")
+    r = case.main(["--designs", "rv80e", "--resume", str(folder), "--redo", "rv80e", "--out", str(tmp_path)])
+    import json
+    committed = json.loads((folder / "results.json").read_text())["designs"]["rv80e"]
+    assert not calls and r["designs"]["rv80e"]["reused_from_checkpoint"] == VM.SAMPLES + 1
+    assert r["designs"]["rv80e"]["band"] == committed["band"] and r["units"]["run"] == 0
+    assert (tmp_path / "checkpoint_rv80e.json").read_bytes() == (folder / "checkpoint_rv80e.json").read_bytes()

@@ -5,7 +5,7 @@ import time
 
 import pytest
 
-from rvtool.analysis.workunits import DeadlineReached, UnitRunner, deadline_from, digest
+from rvtool.analysis.workunits import DeadlineReached, UnitRunner, deadline_from, digest, json_sha256
 from rvtool.errors import RvtoolInputError
 
 
@@ -13,6 +13,29 @@ def test_digest_names_the_inputs_not_their_order():
     assert digest("k", {"a": 1.0, "b": [1, 2]}) == digest("k", {"b": [1, 2], "a": 1.0})
     assert digest("k", {"a": 1.0}) != digest("k", {"a": 1.0 + 1e-15})      # shortest repr: every bit counts
     assert digest("k", {"a": 1}) != digest("other", {"a": 1})
+
+
+def test_one_digest_keeps_every_key_of_the_three_it_replaced():
+    """json_sha256 is the one digest behind a unit's key (digest), a TE job's design (te_revolution.design_digest)
+    and a band draw's table (validate_members.table_digest). The hex strings below were computed by the three
+    separate functions before they were merged (main at 969cb7a) on a payload with every JSON-able kind a table
+    or design holds (nested tables, ints, tiny floats, None, bools, tuples, arrays, NumPy scalars): any change of
+    serialisation moves them, and a moved key makes every committed unit and draw unreachable."""
+    import dataclasses
+
+    import numpy as np
+
+    from rvtool.analysis.te_revolution import design_digest
+    from rvtool.analysis.validate_members import table_digest
+    payload = {"table": {"pins": {"n_pins": 40, "radius": 0.0035}, "w": [0.1, 1e-15]}, "step": 0.3,
+               "a": np.array([1.5, 2.0]), "t": (1, 2), "n": None, "b": True, "f32": np.float32(0.1),
+               "i64": np.int64(7), "f64": np.float64(0.1)}
+    assert digest("validate.loop", payload) == "2f83bf88f20ae06e13b9c8aeb51f1f10d83440c152084a5a066d7d02a5525883"
+    assert table_digest(payload) == "21169eada979ff2bad553845e64b49a93c1cd53b6bf76a79e916a5356fb2984e"
+    assert json_sha256(payload) == table_digest(payload)
+    Design = dataclasses.make_dataclass("Design", list(payload))
+    assert design_digest(Design(**payload), torque=78.4, step=0.3) == \
+        "609ba2dccc49d6f1215f4795a2696d917997b4c3428dc90bd4b518bd673b9adb"
 
 
 def test_serial_units_are_stored_and_resumed_by_key(tmp_path):

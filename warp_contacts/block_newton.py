@@ -260,11 +260,20 @@ class BlockNewtonStep:
         """Host copies of the named device arrays."""
         return tuple(getattr(self, k).numpy() for k in names)
 
+    def _check_device(self, **arrays):
+        """Refuse arrays on another device than the step's before a launch is recorded: a recorded cpu
+        launch does not check, and would read a CUDA pointer (a segfault, not an error)."""
+        want = wp.get_device(self.device)
+        for name, a in arrays.items():
+            if a.device != want:
+                raise ValueError(f"BlockNewtonStep on {want}: array {name!r} is on {a.device}")
+
     def write_poses(self, reference, pose):
         """Absolute poses reference + q of every copy into ``pose`` ((B nb + 1, 3) device array)."""
         key = ("poses", reference.ptr, pose.ptr)
         hit = self._cmds.get(key)
         if hit is None:
+            self._check_device(reference=reference, pose=pose)
             # the arrays are kept with the launch: their addresses stay theirs while it is cached
             hit = self._cmds[key] = (wp.launch(pose_kernel(self.dtype), dim=(self.B, self.n), device=self.device,
                                                inputs=[reference, self.q, self.n // 3], outputs=[pose],
@@ -278,6 +287,7 @@ class BlockNewtonStep:
         key = ("gather", reference.ptr, pose.ptr, index.ptr)
         hit = self._cmds.get(key)
         if hit is None:
+            self._check_device(reference=reference, pose=pose, index=index)
             hit = self._cmds[key] = (wp.launch(gather_pose_kernel(self.dtype), dim=index.shape[0], device=self.device,
                                                inputs=[reference, self.q, index], outputs=[pose], record_cmd=True),
                                      (reference, pose, index))
@@ -289,6 +299,7 @@ class BlockNewtonStep:
         key = ("step", Q.ptr, K.ptr)
         hit = self._cmds.get(key)
         if hit is None:
+            self._check_device(Q=Q, K=K)
             m = self.model
             d = self.dtype
             pre, held = None, (Q, K)            # the arrays kept with the launches (their addresses)

@@ -20,18 +20,30 @@ non-finite and rejected by the static solver; each design reports how often (``n
 seconds per sample (``cpu_s_per_sample``); ``--samples N`` sets the number
 explicitly (a SHORT band where N < 64, stated in the results as ``band_is_short``); ``--resume DIRS`` keeps the
 designs that stopped or separate runs finished with at least this run's N samples and computes the others (with
-this run's N: ``samples_per_design`` per design; a design whose kept band is shorter is recomputed).
+this run's N: ``samples_per_design`` per design; a design whose kept band is shorter is recomputed), taking every
+b/a those folders hold (their ``units`` and ``checkpoint_<design>.json``, by draw digest).
+
+Units (rvtool.analysis.workunits, as ``rvtool validate``'s full run): every b/a is a unit keyed by the digest of
+its draw's design table and the catalogue (the ``members.ba`` units of validate: a folder of either case serves
+the other's ``--resume``), run on ``--workers N`` spawn processes (one BLAS thread each) and stored in
+``OUT/units`` as it finishes; ``--deadline HH:MM`` (UTC) starts no unit once the time left is shorter than the
+longest b/a seen so far: the band is then its first draws done (``samples_done`` of ``samples``;
+``band_is_short``), and the same command again (the same --out) takes the stored units and solves the rest.
 
 Draws: valid by construction (rvtool.analysis.validate_members.sample_table: the carrier plates follow the drawn
 wheels, the row spacings are placed inside the drawn plates, the wheels' port depth clear of the drawn crank
 bores); rv40e's draws are bit-identical to the independent sampler's (tests/test_validate_members.py), so its band
 computed before that change is kept by --resume. ``--redo LIST`` runs those designs again although a --resume
-folder has them: their checkpoint (in --out) keeps every sample whose drawn design table is unchanged (draw
-digests) and solves only the changed draws.
+folder has them: every b/a whose drawn design table is unchanged (draw digests) is taken from the --out and
+--resume folders' units and checkpoints, only the changed draws are solved (``--resume
+docs/case_results/rv/members_band --redo rv80e`` takes all 65 of the committed band).
 
-The checkpoint of the committed band (docs/case_results/rv/members_band/checkpoint_<design>.json, copied from the
-run folder beside its results.json) is what ``rvtool validate``'s full run (cases/rv/validate_rv.py) takes the
-all-members-on b/a from, draw by draw where the digests match (validate_members.checkpoint_results).
+The run folder's ``checkpoint_<design>.json`` (validate_members.write_checkpoint, written when the design's units
+are gathered, every finished b/a with its draw digest; the format of the checkpoints before the band ran on
+units, which are read the same way) is what gets committed beside results.json
+(docs/case_results/rv/members_band/checkpoint_<design>.json): ``rvtool validate``'s full run
+(cases/rv/validate_rv.py) takes the all-members-on b/a from it, draw by draw where the digests match
+(validate_members.checkpoint_results); the pickled units are not committed.
 
 Tornado (issue 28: a tornado chart with the band), after the bands, per design: ``tornado_sampled``
 (validate_members.sampled_tornado), ESTIMATED from the band's own samples at no extra solve (a least-squares fit
@@ -54,7 +66,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 
 from rvtool import casekit, designs  # noqa: E402
-from rvtool.analysis.workunits import deadline_from  # noqa: E402
+from rvtool.analysis.workunits import deadline_from, folder_runner  # noqa: E402
 from rvtool.analysis.validate_members import (SAMPLES, members_rigidity, members_tornado,  # noqa: E402
                                               sampled_tornado)
 from rvtool.assembly.topologies import read_table  # noqa: E402
@@ -73,31 +85,36 @@ def extra(parser):
     parser.add_argument("--resume", default=None, metavar="DIRS",
                         help="comma-separated run folders: keep the designs the runs there finished (their "
                              "results.json) and compute only the others, each design with its own sample count "
-                             "(samples_per_design); the kept runs' command and date are recorded under resumed_from")
+                             "(samples_per_design), taking the b/a those folders hold (units/, checkpoint_<design>"
+                             ".json) by draw digest; the kept runs' command and date are recorded under resumed_from")
     parser.add_argument("--redo", default=None, metavar="LIST",
-                        help="comma-separated designs NOT kept from the --resume folders but run again through the "
-                             "out folder's checkpoint_<design>.json, which re-solves only the draws whose design "
-                             "table changed (a sampler change; the checkpoint's draw digests)")
+                        help="comma-separated designs NOT kept from the --resume folders but run again: the b/a "
+                             "of unchanged draws are taken from the out and --resume folders (units, checkpoints; "
+                             "draw digests), only the draws whose design table changed are solved")
     parser.add_argument("--deadline", default=None, metavar="HH:MM",
-                        help="UTC time of day after which no sample is started: the band is then the first draws "
-                             "done (samples_done of samples; band_is_short), the rest resumable from the run "
-                             "folder's checkpoint_<design>.json by the same command")
+                        help="UTC time of day after which no b/a is started (nor once the time left is below the "
+                             "longest b/a so far): the band is then the first draws done (samples_done of "
+                             "samples; band_is_short), the rest resumable from the run folder's units by the same "
+                             "command")
     parser.add_argument("--tornado-keys", type=int, default=None, metavar="K",
                         help=f"one-at-a-time tornado over the K inputs of largest |Spearman rho| (default "
                              f"{TORNADO_KEYS}; --quick: 0); a design that has one (kept by --resume) keeps it")
     parser.add_argument("--workers", type=int, default=1, metavar="N",
-                        help="processes for the solved tornado's 2 K + 1 independent b/a (default 1)")
+                        help="processes for the band's b/a (spawn pool, one BLAS thread each) and the solved "
+                             "tornado's 2 K + 1 independent b/a (default 1)")
 
 
-def one_design(name, samples, out_dir, deadline):
+def one_design(name, samples, out_dir, runner, resume=()):
     t0, c0 = time.perf_counter(), time.process_time()
     catalogue = load_catalogue(designs.catalogue_of(name))
+    ck = f"checkpoint_{name}.json"
     r = members_rigidity(name, read_table(designs.path(name)), catalogue, assumed_of(name), quick=True,
-                         samples=samples, checkpoint=os.path.join(out_dir, f"checkpoint_{name}.json"),
-                         deadline=deadline)
+                         samples=samples, checkpoint=[os.path.join(d, ck) for d in (out_dir, *resume)],
+                         checkpoint_out=os.path.join(out_dir, ck), runner=runner, short_band=True)
     r.pop("U", None)
     r["band_is_short"] = r["samples_done"] < SAMPLES
-    # CPU and wall of THIS process (samples resumed from the checkpoint carry their own sample_cpu_s)
+    # CPU and wall of THIS process (b/a solved in pool workers, or taken from units or checkpoints, carry their own
+    # sample_cpu_s)
     r["cpu_s"] = time.process_time() - c0
     r["wall_s"] = time.perf_counter() - t0
     cpu = [c for c in r["sample_cpu_s"] if c is not None]
@@ -175,8 +192,9 @@ def main(argv=None):
     t0 = time.perf_counter()
     names = tuple(args.designs.split(",")) if args.designs else (QUICK["designs"] if args.quick else DESIGNS)
     samples = args.samples if args.samples is not None else (QUICK["samples"] if args.quick else SAMPLES)
-    per, out, counts, resumed = {}, None, {}, []
-    for run_dir in (args.resume.split(",") if args.resume else []):
+    per, counts, resumed = {}, {}, []
+    resume_dirs = args.resume.split(",") if args.resume else []
+    for run_dir in resume_dirs:
         import json
         with open(os.path.join(run_dir, "results.json")) as fh:
             prev = json.load(fh)
@@ -195,10 +213,20 @@ def main(argv=None):
         resumed.append({"designs": kept, "command": prev["provenance"]["command"], "date": prev["provenance"]["date"],
                         "wall_s_total": prev["provenance"]["wall_s_total"],
                         "resumed_from": prev.get("resumed_from", [])})      # the kept run's own kept runs
-    deadline = deadline_from(args.deadline)
+    runner = folder_runner(args.out, workers=args.workers, deadline=deadline_from(args.deadline), resume=resume_dirs)
+    try:
+        return run(args, names, samples, per, counts, resumed, runner, resume_dirs, t0)
+    finally:
+        runner.close()
+
+
+def run(args, names, samples, per, counts, resumed, runner, resume_dirs, t0):
+    """The bands (units of ``runner``), then the tornados; results.json written after each design."""
+    out = None
     n_tor = args.tornado_keys if args.tornado_keys is not None else (0 if args.quick else TORNADO_KEYS)
     for name in list(names) + [f"tornado:{n}" for n in names]:
         if name.startswith("tornado:"):
+            runner.close()          # the band's pool (idempotent); the solved tornado has its own processes
             name = name.split(":", 1)[1]
             d = per[name]
             if "tornado_sampled" not in d and d["sample_values"]:
@@ -210,7 +238,7 @@ def main(argv=None):
                 d.update(design_tornado(name, d, n_tor, args.workers))
                 tornado_png(args.out, name, d, d.get("band"), "solved")
         elif name not in per:
-            per[name] = one_design(name, samples, args.out, deadline)
+            per[name] = one_design(name, samples, args.out, runner, resume_dirs)
             counts[name] = per[name]["samples_done"]
         # written after every design (a long run that stops keeps the designs it finished; ``designs_done``)
         done = {n: per[n] for n in names if n in per}
@@ -219,7 +247,8 @@ def main(argv=None):
         results = {"designs": done, "samples_per_design": {n: counts[n] for n in done},
                    "samples_planned": {n: per[n]["samples"] for n in done},
                    "band_is_short": any(counts[n] < SAMPLES for n in done), "issue_samples": SAMPLES,
-                   "designs_done": list(done), "designs_asked": list(names), "resumed_from": resumed}
+                   "designs_done": list(done), "designs_asked": list(names), "resumed_from": resumed,
+                   "units": runner.summary()}
         casekit.verdict(results, judge)
         out = casekit.write_results(args.out, results, settings={"quick": args.quick, "samples": samples,
                                                                  "designs": list(names), "seed": 0},

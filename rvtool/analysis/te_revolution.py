@@ -21,7 +21,6 @@ unit seen so far).
 """
 import dataclasses
 import hashlib
-import json
 import math
 import os
 import time
@@ -37,16 +36,17 @@ point of rv80e, 2 points per mesh, plus 3 s to build the variant and a cold star
 hundred units evenly and a resumed run loses at most one unit per worker."""
 
 def design_digest(design, *, torque, step):
-    """SHA-256 (hex) of what a TE job solves: every field of the design dataclass (JSON, sorted keys, floats by
-    their shortest repr, arrays as lists), the output torque [N m] and the angle step [rad]."""
-    table = dataclasses.asdict(design)
-    text = json.dumps({"design": table, "torque": float(torque), "step": float(step), "protocol": "quasi_static_te"},
-                      sort_keys=True, default=lambda o: o.tolist() if hasattr(o, "tolist") else repr(o))
-    return hashlib.sha256(text.encode()).hexdigest()
+    """SHA-256 (hex) of what a TE job solves (:func:`rvtool.analysis.workunits.json_sha256`): every field of the
+    design dataclass, the output torque [N m] and the angle step [rad]."""
+    from .workunits import json_sha256
+    return json_sha256({"design": dataclasses.asdict(design), "torque": float(torque), "step": float(step),
+                        "protocol": "quasi_static_te"})
 
 
 def unit_key(job_digest, i0, i1):
-    """Key of the unit of points [i0, i1) of a job."""
+    """Key of the unit of points [i0, i1) of a job: the SHA-256 of the text ``"<job digest>:<i0>:<i1>"``. Not
+    :func:`~rvtool.analysis.workunits.json_sha256` (the JSON of that text is quoted, another hash): the 128
+    committed unit keys of te_measured_rv80e are of this text (tests/test_te_revolution.py)."""
     return hashlib.sha256(f"{job_digest}:{int(i0)}:{int(i1)}".encode()).hexdigest()
 
 

@@ -51,6 +51,17 @@ some quantities depend on others, and every draw must be an assembly that exists
 The central design takes every input at its middle (a feasible assembly; no placement). Before this, 2 of rv80e's
 first 8 draws failed (a main row at 33.2 mm outside a 13 mm flange ending at 31.0 mm; cited ranges [50, 70] mm
 spacing and [13, 20] mm plates) and 4 put a wheel face inside a plate unnoticed (64 draws: 10 and 21).
+
+**Units, resume and the checkpoint** (:func:`members_rigidity`). Every b/a is a unit of
+:class:`rvtool.analysis.workunits.UnitRunner` keyed by the digest of its draw's design table and the catalogue:
+``rvtool validate``'s full run and cases/rv/members_band.py run the band on the same runner (a spawn pool of
+``--workers``, the store ``<out>/units``, resume folders, the deadline) and share its units. Until session 8
+members_band ran the band through a second mechanism of its own, an in-process loop that rewrote a checkpoint JSON
+after each draw and checked a deadline before each: the same job (resume by draw digest, stop at a deadline) on one
+core. What is left of it is the checkpoint file, now an export: :func:`write_checkpoint` writes the band's finished
+draws with their digests (the format of the committed ``checkpoint_<design>.json``, unchanged), and
+:func:`checkpoint_results` reads such files, old or new, as draws already solved. The checkpoint stays because it
+is what gets committed (the units are pickles of a run folder): validate takes the committed band from it.
 """
 import copy
 import os
@@ -398,54 +409,10 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
 
 
 def table_digest(table):
-    """SHA-256 (hex) of a design table (JSON, sorted keys; floats by their shortest repr): the identity of a draw
+    """SHA-256 (hex) of a design table (:func:`rvtool.analysis.workunits.json_sha256`): the identity of a draw
     in a band's checkpoint."""
-    import hashlib
-    import json
-    text = json.dumps(table, sort_keys=True, default=lambda o: o.tolist() if hasattr(o, "tolist") else float(o))
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
-def _run_resumable(items, log, checkpoint, key, deadline):
-    """:func:`_sample` over ``items`` in order in this process, the results so far rewritten to ``checkpoint``
-    (JSON) after each, with the :func:`table_digest` of each item's table. An existing checkpoint of the same
-    ``key`` (design, samples, seed, quick) is resumed item by item: a finished result is kept where its digest
-    equals this item's (the same draw), every other item is solved (a sampler change re-solves only the draws it
-    changed); a checkpoint without digests is not resumed. No item is started after the wall-clock time
-    ``deadline`` (seconds since the epoch; None: none): the list returned is the finished items up to the first
-    unfinished one (the first draws; a short band, stated by the caller), the checkpoint keeps every finished one."""
-    import json
-    digests = [table_digest(it[0]) for it in items]
-    out = [None] * len(items)
-    if checkpoint is not None and os.path.exists(checkpoint):
-        with open(checkpoint) as fh:
-            prev = json.load(fh)
-        old = prev.get("digests")
-        if prev.get("key") == key and prev.get("of") == len(items) and old is not None:
-            out = [tuple(r) if r is not None and d == dk else None for r, d, dk in zip(prev["results"], old, digests)]
-            kept = sum(r is not None for r in out)
-            log(f"  resumed {kept}/{len(items)} from {checkpoint} (the same draws); "
-                f"{len(items) - kept} to solve")
-        else:
-            log(f"  {checkpoint}: not resumed (another key or count, or no draw digests)")
-    t0 = time.perf_counter()
-    for k in range(len(items)):
-        if out[k] is not None:
-            continue
-        if deadline is not None and time.time() > deadline:
-            log(f"  deadline reached: {sum(r is not None for r in out)}/{len(items)} done, the rest not started")
-            break
-        out[k] = _sample(items[k])
-        err = "" if out[k][1] is None else ": " + out[k][1]
-        log(f"  {k + 1}/{len(items)} done ({time.perf_counter() - t0:.0f} s){err}")
-        if checkpoint is not None:
-            tmp = f"{checkpoint}.tmp"
-            with open(tmp, "w") as fh:
-                json.dump({"key": key, "of": len(items), "results": out, "digests": digests}, fh,
-                          default=lambda o: o.tolist() if hasattr(o, "tolist") else float(o))
-            os.replace(tmp, checkpoint)
-    n = next((k for k, r in enumerate(out) if r is None), len(out))
-    return out[:n]
+    from .workunits import json_sha256
+    return json_sha256(table)
 
 
 def central_table(design, table, quick):
@@ -477,16 +444,26 @@ def members_budget(table, rated_torque):
 
 
 def checkpoint_key(design, samples, seed, quick):
-    """The key of a band's checkpoint (cases/rv/members_band.py): the design, the planned draws and the meshes."""
+    """The key of a band's checkpoint (cases/rv/members_band.py): the design, the planned draws and the meshes, as
+    readable text (the committed checkpoint_rv80e.json records ``"rv80e samples=64 seed=0 quick=True"``); not a
+    digest: each draw in it is identified by its :func:`table_digest`."""
     return f"{design} samples={samples} seed={seed} quick={quick}"
 
 
 def checkpoint_results(path, key):
-    """{draw digest: finished result} of a band checkpoint written by :func:`_run_resumable` under ``key`` (empty
-    where the file is missing, has another key or no digests): the draws a later run takes instead of solving
-    them, matched by the digest of their design table, never by position."""
+    """{draw digest: finished result} of a band checkpoint (:func:`write_checkpoint`) under ``key`` (empty where
+    the file is missing, has another key or no digests): the draws a later run takes instead of solving them,
+    matched by the digest of their design table, never by position. ``path``: a path, None, or a list of them
+    (the first file that has a draw gives it)."""
     import json
-    if path is None or not os.path.exists(path):
+    if path is None:
+        return {}
+    if not isinstance(path, (str, os.PathLike)):
+        out = {}
+        for p in reversed(list(path)):
+            out.update(checkpoint_results(p, key))
+        return out
+    if not os.path.exists(path):
         return {}
     with open(path) as fh:
         prev = json.load(fh)
@@ -495,21 +472,40 @@ def checkpoint_results(path, key):
     return {d: tuple(r) for d, r in zip(prev["digests"], prev["results"]) if r is not None and r[0] is not None}
 
 
+def write_checkpoint(path, key, digests, results):
+    """A band checkpoint: JSON ``{"key", "of", "results", "digests"}``, ``results[k]`` the (result, error) of the
+    draw of digest ``digests[k]`` or None where it did not finish (the format of the committed
+    docs/case_results/rv/members_band/checkpoint_<design>.json, read by :func:`checkpoint_results`). Written to a
+    temporary file and renamed, so a stop never leaves half a file."""
+    import json
+    tmp = f"{path}.tmp"
+    with open(tmp, "w") as fh:
+        json.dump({"key": key, "of": len(digests), "results": list(results), "digests": list(digests)}, fh,
+                  default=lambda o: o.tolist() if hasattr(o, "tolist") else float(o))
+    os.replace(tmp, path)
+
+
 def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False, samples=None, seed=0, workers=1,
-                     log=print, checkpoint=None, deadline=None, runner=None, defer=False):
+                     log=print, checkpoint=None, checkpoint_out=None, deadline=None, runner=None, short_band=None,
+                     defer=False):
     """The all-members-on row (module docstring): a dict with ``rows`` (validate's table rows), ``central``
     (:func:`rigidity_ba` at the middles), ``band``, the samples and failures, the members file and its commit;
-    None where the design has no members file. ``checkpoint`` (a JSON path) keeps the finished samples and
-    resumes them (one process); ``deadline`` (epoch seconds) starts no sample after it: ``samples_done`` then
-    says how many of the ``samples`` planned draws (the first ones) make the band.
+    None where the design has no members file.
 
-    runner (a :class:`rvtool.analysis.workunits.UnitRunner`): every b/a is a unit of it, keyed by the digest of
-    its draw's design table and the catalogue file; ``checkpoint`` is then READ only, a band checkpoint of
-    cases/rv/members_band.py (:func:`checkpoint_results`): a draw whose digest is there is taken from it (the same
-    sampler, :func:`sample_table`, the same draws), the others are solved (``reused_from_checkpoint`` counts
-    them); ``defer``: return a callable that waits for the units and returns the row (the units are submitted
-    now), so the caller can submit its other units first."""
-    from .validate import map_samples
+    Every b/a (the central design's and each draw's) is a unit of ``runner`` (a
+    :class:`rvtool.analysis.workunits.UnitRunner`; None: one of ``workers`` processes with ``deadline``, epoch
+    seconds, storing nothing), keyed by the digest of its draw's design table and the catalogue file (``members.ba``
+    units: ``rvtool validate``'s full run and cases/rv/members_band.py share them). ``checkpoint`` (a path or a
+    list of paths) is READ: band checkpoints (:func:`write_checkpoint`; the committed one of members_band) whose
+    draws are taken where their digest matches (:func:`checkpoint_results`; the same sampler,
+    :func:`sample_table`, the same draws), the others are solved (``reused_from_checkpoint`` counts the draws
+    taken). ``checkpoint_out``: the band's checkpoint written there once its units are gathered (every finished
+    draw, taken or solved). A unit not started before the runner's deadline: with ``short_band`` (default: where
+    this function owns its runner) the band ends at the draws before it (``samples_done`` of ``samples``: the
+    first draws), else :class:`~rvtool.analysis.workunits.DeadlineReached` is raised (validate lists the design as
+    incomplete). ``defer``: return a callable that waits for the units and returns the row (the units are
+    submitted now), so the caller can submit its other units first."""
+    from .workunits import DeadlineReached, UnitRunner, digest, file_digest
     name = members_name(design)
     if name is None:
         return (lambda: None) if defer else None
@@ -525,41 +521,67 @@ def members_rigidity(design, table, catalogue, base_assumed=None, *, quick=False
 
     def table_of(u):
         return sample_table(table, base, assumed.inputs, u, switches, derived, numerics)
-    # the central design (every input at its middle) first, then the samples: one map (``workers`` processes)
+    own = runner is None
+    if own:
+        runner = UnitRunner(workers=workers, deadline=deadline, log=log)
+    short = own if short_band is None else bool(short_band)
+    # the central design (every input at its middle) first, then the samples
     log(f"validate {design}: all members on ({name}), central b/a and {n} Latin-hypercube samples over "
-        f"{len(inputs)} ranges ({workers} worker(s))")
+        f"{len(inputs)} ranges ({runner.workers} worker(s))")
     items = ([(members_table(table, switches, derived, mid, numerics), catalogue)]
              + [(table_of(u), catalogue) for u in U])
-    reused = None
-    if runner is not None:
-        from .workunits import digest, file_digest
-        prior = checkpoint_results(checkpoint, checkpoint_key(design, n, seed, quick))
-        cat_id = file_digest(catalogue.path)
-        futures = []
-        reused = 0
-        for it in items:
-            dg = table_digest(it[0])
+    key = checkpoint_key(design, n, seed, quick)
+    prior = checkpoint_results(checkpoint, key)
+    cat_id = file_digest(catalogue.path)
+    digests = [table_digest(it[0]) for it in items]
+    futures, done = [], [0]
+    reused = sum(dg in prior for dg in digests)
+    if checkpoint is not None:
+        paths = [checkpoint] if isinstance(checkpoint, (str, os.PathLike)) else list(checkpoint)
+        log(f"  {reused}/{len(items)} b/a taken from {', '.join(map(str, paths))} (the same draws by digest)")
+    tw = time.perf_counter()
+
+    def progress(f):          # a line as a b/a solved here finishes (not one taken from the store)
+        if f.exception() is None and runner.counts["run"] > done[0]:
+            done[0] = runner.counts["run"]
+            err = f.result()[1]
+            log(f"  {done[0]} b/a solved ({time.perf_counter() - tw:.0f} s)" + (f": {err}" if err else ""))
+    try:
+        for it, dg in zip(items, digests):
             if dg in prior:
-                reused += 1
                 futures.append(prior[dg])
             else:
-                futures.append(runner.submit(_sample, it, key=digest("members.ba", {"table": dg, "catalogue": cat_id}),
-                                             kind="members_ba"))
-        if checkpoint is not None:
-            log(f"  {reused}/{len(items)} b/a taken from {checkpoint} (the same draws by digest)")
+                f = runner.submit(_sample, it, key=digest("members.ba", {"table": dg, "catalogue": cat_id}),
+                                  kind="members_ba")
+                f.add_done_callback(progress)
+                futures.append(f)
+    except BaseException:
+        if own:
+            runner.close()
+        raise
 
-        def finish():
-            res = [f if isinstance(f, tuple) else f.result() for f in futures]
-            return _members_row(design, name, catalogue, res, n, base, assumed, switches, derived, recorded, last,
-                                date, numerics, mid, inputs, U, seed, quick, t0, reused)
-        return finish if defer else finish()
-    if checkpoint is None and deadline is None:
-        res = map_samples(_sample, items, workers, log)
-    else:
-        res = _run_resumable(items, log, checkpoint, checkpoint_key(design, n, seed, quick), deadline)
-    out = _members_row(design, name, catalogue, res, n, base, assumed, switches, derived, recorded, last, date,
-                       numerics, mid, inputs, U, seed, quick, t0, reused)
-    return (lambda: out) if defer else out
+    def finish():
+        try:
+            got = []
+            for f in futures:
+                try:
+                    got.append(f if isinstance(f, tuple) else f.result())
+                except DeadlineReached:
+                    got.append(None)
+        finally:
+            if own:
+                runner.close()
+        if checkpoint_out is not None:
+            write_checkpoint(checkpoint_out, key, digests, got)
+        if None in got:
+            if not short:
+                raise DeadlineReached(f"validate {design}: {got.count(None)} of {len(got)} all-members-on b/a not "
+                                      "started before the deadline")
+            log(f"  deadline reached: {len(got) - got.count(None)}/{len(got)} b/a done, the rest not started")
+        res = got[:got.index(None)] if None in got else got
+        return _members_row(design, name, catalogue, res, n, base, assumed, switches, derived, recorded, last, date,
+                            numerics, mid, inputs, U, seed, quick, t0, reused)
+    return finish if defer else finish()
 
 
 def _members_row(design, name, catalogue, res, n, base, assumed, switches, derived, recorded, last, date, numerics,

@@ -149,13 +149,14 @@ def te_variants(design, tolerances, *, n, points_per_mesh, torque, seed=SEED, lo
     return finish if defer else finish()
 
 
-def te_sensitivity(design, tolerances, *, points_per_mesh, torque, draws=1, seed=SEED, log=None):
+def te_sensitivity(design, tolerances, *, points_per_mesh, torque, draws=1, seed=SEED, log=None, fields=None):
     """One-at-a-time sensitivity of the TE peak-to-peak to each error source at its tolerance: for every field
     of the tolerance file, ``draws`` variants carrying that field alone (``sample_rv_design`` of a spec with only
     that field, variants 0 .. draws-1 of the same seed), the TE over the same window. Returns ``{"nominal_pp_arcsec",
     "fields": {field: {"te_pp_arcsec": [...], "median_arcsec", "excess_arcsec" (median minus nominal),
     "deviation": largest |draw|}}, "dominant"}`` (the field of the largest median excess); a variant that fails is
-    recorded as None with its error."""
+    recorded as None with its error. ``fields``: the names of the fields to run (None: every field of the file;
+    a name the file does not carry is an error)."""
     from dataclasses import fields as dc_fields
 
     from ..assembly import build
@@ -168,9 +169,14 @@ def te_sensitivity(design, tolerances, *, points_per_mesh, torque, draws=1, seed
     angles = np.arange(n_pts) * mesh / points_per_mesh
     nominal = float(np.ptp(quasi_static_te(model, torque=torque, input_angles=angles)["te"])) * ARCSEC_PER_RAD
     out = {}
+    if fields is not None:
+        missing = [f for f in fields if getattr(spec, f, None) is None]
+        if missing:
+            raise RvtoolInputError(f"sensitivity fields {missing} are not in {tolerances}; valid: "
+                                   f"{[f.name for f in dc_fields(spec) if getattr(spec, f.name) is not None]}")
     for f in dc_fields(spec):
         dist = getattr(spec, f.name)
-        if dist is None:
+        if dist is None or (fields is not None and f.name not in fields):
             continue
         one = RvToleranceSpec(**{f.name: dist})
         pps, errs, dev = [], [], 0.0
@@ -344,7 +350,7 @@ def _te_result(res, n, ppm, torque, tol_name, meas_name, measured, design, input
             f"pairing; a lower bound of the output revolution's peak-to-peak), {ppm} points per mesh cycle; "
             f"nominal design {res['nominal_pp'] * ARCSEC_PER_RAD:.3g} arcsec. Error sources the tolerance file "
             "does not carry (the lobes' profile form beyond their pitch, the two wheels' profiles differing in "
-            "form, bore and seat form errors, gear runout) are absent from the prediction; the output side's hole "
+            "form, bore and seat form errors) are absent from the prediction; the output side's hole "
             "positions are the carrier's crank-bearing seats (the RV output is the carrier, reached through the "
             "crank bearings only; the wheels' pillar holes carry no load)")
     return {"rows": te_rows(measured, dist, note, over=WINDOW_TEXT.format(n=te_window(design))),

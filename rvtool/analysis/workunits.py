@@ -2,9 +2,10 @@
 their inputs (the full run of ``rvtool validate``, cases/rv/validate_rv.py).
 
 A unit is a module-level function and its arguments whose result does not depend on any other unit's. Each
-unit is named by a *key*, the SHA-256 of a JSON description of its inputs (:func:`digest`: the design table, the
-catalogue file's bytes, the settings), never by its position, so a run that stopped, or a run with other
-designs or other unit counts, reuses exactly the units whose inputs are the same. A finished unit's result is
+unit is named by a *key*, the SHA-256 of a JSON description of its inputs (:func:`digest`, through the
+library's one digest :func:`json_sha256`: the design table, the catalogue file's bytes, the settings), never by
+its position, so a run that stopped, or a run with other designs or other unit counts, reuses exactly the units
+whose inputs are the same. A finished unit's result is
 pickled to ``<store>/<key>.pkl`` as soon as it finishes; :class:`UnitRunner` looks a key up in its store and in
 the ``resume`` folders before running it (a hit in a resume folder is copied to the store, so the latest run
 folder always holds every finished unit and the next call needs only that folder).
@@ -43,10 +44,27 @@ def _plain(o):
     return str(o)
 
 
-def digest(kind, payload):
-    """SHA-256 (hex) of ``kind`` and a JSON-able ``payload`` (sorted keys; arrays as lists): a unit's key."""
-    text = json.dumps([kind, payload], sort_keys=True, default=_plain)
+def json_sha256(obj):
+    """SHA-256 (hex) of the JSON text of ``obj``: sorted keys, floats (NumPy's too) by their shortest repr,
+    tuples as lists, arrays and NumPy scalars by ``tolist()``, any other object by ``str()``. The one digest of
+    the library: a unit's key (:func:`digest`), a TE job's design
+    (:func:`rvtool.analysis.te_revolution.design_digest`) and a band draw's table
+    (:func:`rvtool.analysis.validate_members.table_digest`).
+
+    Those three were separate functions until session 8 and differed only in the fallback for an object JSON
+    cannot write (``str``, ``repr``, ``float``); no committed input reaches a fallback (design tables and design
+    dataclasses hold numbers, strings, lists and arrays only), so every committed key is unchanged:
+    tests/test_validate_members.py recomputes the 65 draw digests of the committed
+    ``checkpoint_rv80e.json``, tests/test_te_revolution.py the 128 unit keys of the committed te_measured_rv80e
+    run, tests/test_workunits.py pins a key of each kind."""
+    text = json.dumps(obj, sort_keys=True, default=_plain)
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def digest(kind, payload):
+    """SHA-256 (hex) of ``kind`` and a JSON-able ``payload`` (:func:`json_sha256` of ``[kind, payload]``): a
+    unit's key."""
+    return json_sha256([kind, payload])
 
 
 def file_digest(path):

@@ -59,6 +59,14 @@ RV_TOLERANCE_KEYS = {
     "wheel_lobe_pitch_deviation": ("m", "single pitch deviation of each lobe of each cycloid wheel (per wheel, minus "
                                    "its mean) on the wheel's reference circle R_z z_g / z_b; lobe j turns by the "
                                    "accumulated pitch", "wheels.lobe_pitch_deviations"),
+    "pin_circle_coaxiality_error": ("m", "x and y of the pin circle's centre off the main-bearing (carrier) axis: "
+                                    "one translation per reducer, common to every ring-pin seat and fixed in the "
+                                    "housing frame", "pins.centre_errors (added)"),
+    "sun_runout": ("m", "x and y of the sun's pitch-circle eccentricity (runout), one per reducer: tooth k's flank "
+                   "moves along the line of action by e_x cos(2 pi k / z) + e_y sin(2 pi k / z), written as its "
+                   "first differences", "sun_gear.single_pitch_deviations (added)"),
+    "crank_gear_runout": ("m", "x and y of each crank gear's pitch-circle eccentricity (one per crank), written as "
+                          "the sun's", "cranks.gear_pitch_deviations (added)"),
 }
 """The keys of an RV tolerance file in the order a variant draws them (:data:`rvtool.variants.rv_tolerances.RV_FIELDS`
 is this order): (unit of the drawn value, meaning, the design key it writes), for the format documentation

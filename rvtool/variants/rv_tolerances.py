@@ -42,6 +42,18 @@ deviation (e.g. normal with std = t / 6, so that 99 % of the centres fall in the
   accumulated pitch deviation (:func:`rvtool.geometry.cycloid.lobe_pitch_rotations`). Drawn last (after
   ``profile_offset_error``), so that adding it left the other fields' draws of a seed unchanged.
 
+The two sources of Yang et al.'s (2021) list the fields above lacked (issue 30, Deliver 3, helper tecoax), drawn
+last in this order, so that adding them left every field above drawn the same for a seed:
+
+* ``pin_circle_coaxiality_error`` [m]: the x and y of the pin circle's centre off the main-bearing (carrier) axis
+  (one draw per coordinate and reducer): one translation common to every ring-pin seat, fixed in the housing
+  frame, added to ``pins.centre_errors`` (:func:`coaxial_centre_errors`),
+* ``sun_runout`` [m]: the x and y of the sun's pitch-circle eccentricity (one draw per coordinate and reducer),
+  written onto ``sun_gear.single_pitch_deviations`` (added) as the first differences of the once-around
+  accumulated pitch it gives (:func:`runout_pitch_deviations`),
+* ``crank_gear_runout`` [m]: the same for each crank's spur gear (one draw per coordinate and crank), added to
+  ``cranks.gear_pitch_deviations``.
+
 Variant k draws from ``numpy.random.default_rng([seed, k])`` in the order of :data:`RV_FIELDS`.
 """
 from dataclasses import dataclass
@@ -73,6 +85,9 @@ class RvToleranceSpec:
     profile_equidistant_error: object = None
     profile_offset_error: object = None
     wheel_lobe_pitch_deviation: object = None
+    pin_circle_coaxiality_error: object = None
+    sun_runout: object = None
+    crank_gear_runout: object = None
 
     def __post_init__(self):
         check_design_distributions(self, RV_FIELDS)
@@ -144,11 +159,32 @@ def rv_design_changes(spec, design, k, seed):
         elif nm == "profile_offset_error":
             v = float(d.sample(rng))
             changes.setdefault("profile", {})["offset_mod"] = design.profile.offset_mod + v
-        else:
+        elif nm == "wheel_lobe_pitch_deviation":
             zg = design.pins.n_pins - 1
             f = np.asarray(d.sample(rng, design.n_wheels * zg), float).reshape(design.n_wheels, zg)
             v = tuple(tuple(float(x) for x in row - row.mean()) for row in f)
             changes.setdefault("wheels", {})["lobe_pitch_deviations"] = v
+        elif nm == "pin_circle_coaxiality_error":
+            v = tuple(float(x) for x in d.sample(rng, 2))
+            base = changes.get("pins", {}).get("centre_errors", design.pins.centre_errors)
+            changes.setdefault("pins", {})["centre_errors"] = coaxial_centre_errors(design.pins, v, base)
+        elif nm == "sun_runout":
+            v = tuple(float(x) for x in d.sample(rng, 2))
+            z = design.sun_gear.n_teeth
+            base = changes.get("sun_gear", {}).get("single_pitch_deviations",
+                                                   design.sun_gear.single_pitch_deviations)
+            f = runout_pitch_deviations(z, v) + (0.0 if base is None else np.asarray(base, float))
+            changes.setdefault("sun_gear", {})["single_pitch_deviations"] = tuple(float(x) for x in f)
+        elif nm == "crank_gear_runout":
+            e = np.asarray(d.sample(rng, (n, 2)), float)
+            v = tuple(tuple(float(x) for x in xy) for xy in e)
+            z = design.crank_gear.n_teeth
+            base = changes.get("cranks", {}).get("gear_pitch_deviations", design.cranks.gear_pitch_deviations)
+            base = np.zeros((n, z)) if not len(base) else np.asarray(base, float)
+            changes.setdefault("cranks", {})["gear_pitch_deviations"] = tuple(
+                tuple(float(x) for x in runout_pitch_deviations(z, e[k]) + base[k]) for k in range(n))
+        else:                               # never reached: RV_FIELDS and the branches above name the same fields
+            raise RvtoolInputError(f"tolerance field {nm!r} has no sampler")
         drawn[nm] = v
     return changes, drawn
 
@@ -183,3 +219,40 @@ def pin_radial_centre_errors(pins, radial, base=None):
     if base is not None:
         e = e + np.asarray(base, float)
     return tuple(tuple(float(x) for x in row) for row in e)
+
+
+def coaxial_centre_errors(pins, offset, base=None):
+    """Pin-centre errors (z_b, 2) [m] of a pin circle whose centre lies off the main-bearing (carrier) axis by
+    ``offset`` = (x, y) [m]: the same translation for every ring-pin seat, fixed in the housing frame (the frame of
+    ``pins.centre_errors``), added to ``base`` ((z_b, 2) or None)."""
+    o = np.asarray(offset, float)
+    if o.shape != (2,):
+        raise RvtoolInputError(f"pin circle coaxiality offset must have shape (2,); got {o.shape}")
+    e = np.zeros((pins.n_pins, 2)) + o
+    if base is not None:
+        e = e + np.asarray(base, float)
+    return tuple(tuple(float(x) for x in row) for row in e)
+
+
+def runout_pitch_deviations(n_teeth, eccentricity):
+    """Single pitch deviations f_k [m] (k = 0 .. z-1, f_k between tooth k-1 and k, summing to zero) of a gear
+    whose pitch circle is eccentric to its axis by ``eccentricity`` = (e_x, e_y) [m] (runout).
+
+    Geometry: the teeth of an eccentric gear are its nominal teeth translated by e. An involute flank's normal at
+    every point is tangent to the base circle, so tooth k's flank (its normal n_k at the angle 2 pi k / z of the
+    tooth in the gear frame, less the pressure angle, a common phase) moves along the line of action by
+    s_k = e . n_k = e_x cos(2 pi k / z) + e_y sin(2 pi k / z) = e_r sin(2 pi k / z + phi), of amplitude
+    e_r = |e| (the tangential component of e enters with cos(alpha), the radial one with sin(alpha): together
+    e_r, whatever the pressure angle); the radial part perpendicular to the line of action changes only the
+    centre distance, which an involute pair transmits without TE to first order. The model turns tooth k by its
+    accumulated pitch F_k / r_b with F_k = f_1 + ... + f_k, F_0 = 0
+    (:meth:`rvtool.geometry.involute.InvoluteGear.pitch_deviation_angles`), i.e. moves its flanks along the line
+    of action by F_k: the first differences f_k = s_k - s_{k-1} (cyclic) give F_k = s_k - s_0, the sinusoid less
+    tooth 0's value (tooth 0 the angular reference of the gear, as for the single-pitch fields). The phase of
+    the loaded flank is the sampled phase; the other flank's differs by 2 alpha (both flanks turn alike here)."""
+    e = np.asarray(eccentricity, float)
+    if e.shape != (2,):
+        raise RvtoolInputError(f"gear runout eccentricity must have shape (2,); got {e.shape}")
+    a = 2 * np.pi * np.arange(int(n_teeth)) / int(n_teeth)
+    s = e[0] * np.cos(a) + e[1] * np.sin(a)
+    return s - np.roll(s, 1)
