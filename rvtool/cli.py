@@ -300,8 +300,16 @@ def _cmd_new(args):
     if args.topology is None:
         return _input_error("rvtool new needs --topology T (cycloid, rv2, rv3 or std-involute), or "
                             "--tolerances-for DESIGN.toml")
-    name = args.name or "mine"
+    name = "mine" if args.name is None else args.name
+    if not name.strip() or os.sep in name or (os.altsep and os.altsep in name):
+        # '' used to write mine.toml silently, 'a/b' ended in a FileNotFoundError traceback
+        return _input_error(f"--name = {name!r}; valid: a non-empty design name without a path separator, "
+                            "the file stem (--out DIR/FILE.toml writes elsewhere)")
     path = args.out or f"{name}.toml"
+    folder = os.path.dirname(path)
+    if folder and not os.path.isdir(folder):
+        return _input_error(f"--out = {path!r}: the folder {folder!r} does not exist; valid: a file in an existing "
+                            "folder")
     try:
         topologies.get(args.topology)
         import tomllib
@@ -356,6 +364,9 @@ def _cmd_validate(args):
         return _input_error(f"--samples = {args.samples} is outside the valid range [2, inf)")
     if args.workers < 1:
         return _input_error(f"--workers = {args.workers} is outside the valid range [1, inf)")
+    if args.tornado_keys is not None and args.tornado_keys < 0:     # a negative K dropped keys from the end
+        return _input_error(f"--tornado-keys = {args.tornado_keys} is outside the valid range [0, inf) "
+                            "(0: no tornado)")
     log = (lambda *a, **k: None) if args.quiet else (lambda *a, **k: print(*a, file=sys.stderr, **k))
     for name in names:
         out_dir = os.path.join(args.out, name) if args.out else os.path.join("results", f"validate_{name}")
@@ -458,7 +469,20 @@ def build_parser():
 
 
 def main(argv=None):
-    """Entry point of the ``rvtool`` console script; returns the exit status."""
+    """Entry point of the ``rvtool`` console script; returns the exit status. A reader that closes
+    the output early (``rvtool list | head``) ends the command quietly, as other command-line tools
+    do (it was a ``BrokenPipeError`` traceback)."""
+    try:
+        return _main(argv)
+    except BrokenPipeError:
+        # Python's documented recipe (library/signal, "Note on SIGPIPE"): send the rest to /dev/null so
+        # that the interpreter's final flush of stdout does not raise again, and exit with 1
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
+
+
+def _main(argv):
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "analyze":

@@ -111,6 +111,27 @@ def _check_preload(design, build, rated, family):
             f"{_eccentricity_hint(design)}")
 
 
+def _check_engagement(design, model, q, torque):
+    """Raise :class:`RvtoolInputError` naming the geometry where the main mesh carries no load at the
+    state q of the largest torque that equilibrates: that torque is held by the solver's
+    regularization springs alone, not by the reducer, so it is no admissible rated torque (a
+    ``wheels.clearance`` of 10 mm, larger than the mesh can close, said "valid range: 0 < rated_torque
+    <= 0.005904 N m")."""
+    fam = getattr(model, "main_mesh", None)
+    if fam is None or np.any(model.observe(q, fam).normal_force > 0):
+        return
+    hint = ""
+    for sec in ("wheels", "mesh"):      # the uniform mesh clearance of a cycloid / RV or std-involute design
+        c = getattr(getattr(design, sec, None), "clearance", None)
+        if isinstance(c, (int, float)) and c > 0:
+            hint = f"; e.g. {sec}.clearance = {_fmt(c)} m"
+    raise RvtoolInputError(
+        f"rated_torque = {_fmt(design.rated_torque)} N m: no static equilibrium at the rated state (input angle 0), "
+        f"and the main mesh ({getattr(fam, 'value', fam)}) carries no load at {_fmt(torque)} N m, the largest torque "
+        "that equilibrates (only the solver's regularization holds it): the geometry does not engage, so no "
+        f"rated_torque is admissible; check the clearances and radii against 'rvtool designs --format-doc'{hint}")
+
+
 def check_rated_state(design, build):
     """Solve ``design``'s rated state with models from ``build()``; returns (model, q) for reuse, or
     raises :class:`RvtoolInputError` naming ``rated_torque`` and its admissible range (see the
@@ -140,6 +161,7 @@ def check_rated_state(design, build):
                 ok, at_ok = mid, (m, qm)
             else:
                 bad = mid
+        _check_engagement(design, *at_ok, ok)
         limit, why = ok, "the largest torque shown to equilibrate"
         hz = _hertz_bound(design, *at_ok, ok)
         if hz is not None and hz[0] < ok:

@@ -155,7 +155,7 @@ def run_te(ctx):
         fine_run = quasi_static_te(fine_model, torque=rated, input_angles=window, backend=ref_backend)
         err = float(np.max(np.abs(coarse["te"] - fine_run["te"][::2]))) * ARCSEC_PER_RAD
         err_note = ("max |TE - TE_refined| over one mesh cycle; reference: the topology's refined resolution "
-                    f"({model.resolution_settings()}) at twice the points (backend {ref_choice['ran']!r})")
+                    f"({fine_model.resolution_settings()}) at twice the points (backend {ref_choice['ran']!r})")
     _solver_warnings(out, qs["stats"], "quasi-static TE")
     _regularization_warning(out, qs["regularization_max"], rated)
     te_as = qs["te"] * ARCSEC_PER_RAD

@@ -637,16 +637,46 @@ def build_section(cls, section, data):
         if isinstance(v, dict) and sub is not None:
             kw[k] = build_section(sub, f"{section}.{k}", v)
             continue
-        _check_type(k if section == "design" else f"{section}.{k}", v, hints.get(k))
+        key = file_key(fields[k])      # the file's name of the key (an angle's NAME_deg), not the field's
+        _check_type(key if section == "design" else f"{section}.{key}", v, hints.get(k))
         kw[k] = tuple(tuple(e) if isinstance(e, list) else e for e in v) if isinstance(v, list) else v
     try:
         return cls(**kw)
     except TypeError as exc:
-        raise RvtoolInputError(f"[{section}]: {exc}") from None
+        raise RvtoolInputError(_missing_keys_message(cls, section, kw, exc)) from None
     except RvtoolInputError as exc:
-        # a component spec validates its own fields; the design file's key path names the section
-        msg = _file_angle_message(str(exc), cls)
+        # a component spec validates its own fields; the design file's key path names the section. A spec
+        # that names its own table (the rack's "rack.pressure_angle") is read in [sun_gear.rack] as
+        # "sun_gear.rack.pressure_angle", not "sun_gear.rack.rack.pressure_angle"
+        msg, own = str(exc), section.rpartition(".")[2] + "."
+        if section != "design" and msg.startswith(own) and not msg.startswith(section + "."):
+            msg = msg[len(own):]
+        msg = _file_angle_message(msg, cls)
         raise RvtoolInputError(msg if msg.startswith(section + ".") or section == "design" else f"{section}.{msg}") from None
+
+
+def _missing_keys_message(cls, section, kw, exc):
+    """The message of a section that leaves out a required key: the key path in the file's terms and,
+    where one key is missing, its valid range (as the template states it); ``exc``: the constructor's
+    TypeError (said as it is where no required key is missing)."""
+    missing = [f for f in dataclasses.fields(cls) if f.init and f.name not in kw
+               and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+    if not missing:
+        return f"[{section}]: {exc}"
+    where, keys = ("the top level", "") if section == "design" else (f"[{section}]", f"{section}.")
+    rng = ""
+    sample = {int: 1, float: 1.0}.get(_field_types(cls).get(missing[0].name))
+    if len(missing) == 1 and sample is not None:
+        from ..designs.format import angle_range, valid_range   # the template's own range probe
+        try:
+            probe = angle_range if is_angle(missing[0]) else valid_range
+            rng = probe(cls, {**kw, missing[0].name: sample}, missing[0].name)
+        except Exception:       # a range that cannot be probed here: the key is still named
+            rng = ""
+        rng = f" (valid: {rng}{' deg' if is_angle(missing[0]) else ''})" if rng and "constrained" not in rng else ""
+    names = ", ".join(keys + file_key(f) for f in missing)
+    return (f"{where} is missing the required key{'s' if len(missing) > 1 else ''} {names}{rng}; 'rvtool new' "
+            "writes every key with its unit and valid range")
 
 
 _RANGE_MESSAGE = re.compile(r"^(\w+) = (.+?) is outside the valid range ([\[(])([^,]+), ([^\])]+)([\])])(.*)$", re.S)

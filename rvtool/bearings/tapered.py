@@ -44,7 +44,7 @@ RV crank support (chosen, plausible for a 30204-class bearing)::
 """
 import math
 import sys
-from dataclasses import dataclass, fields
+from dataclasses import MISSING, dataclass, fields
 from functools import cached_property, lru_cache
 
 import numpy as np
@@ -52,7 +52,7 @@ import numpy as np
 from warp_contacts import tapered_rollers_ref as ref
 
 from ..errors import RvtoolInputError
-from ..units import angle_field, is_angle
+from ..units import angle_field, file_key, is_angle
 from ..validation import check_finite, check_integer, check_nonnegative, check_positive, check_range
 from .hertz import effective_modulus, roller_stiffness
 from .influence import HalfWidth, SliceLaw, set_choice, slice_mean_crowning
@@ -454,12 +454,19 @@ def _keyed(cls, data, key):
     """cls(**data), every input error prefixed with ``key.``; unknown fields named with the valid ones."""
     names = {f.name for f in fields(cls)}
     unknown = sorted(set(data) - names)
-    if unknown:
-        raise RvtoolInputError(f"{key}.{unknown[0]} is not a parameter of {cls.__name__}; valid: {sorted(names)}")
+    if unknown:     # the valid keys as the design file writes them (an angle as NAME_deg)
+        raise RvtoolInputError(f"{key}.{unknown[0]} is not a parameter of {cls.__name__}; valid: "
+                               f"{sorted(file_key(f) for f in fields(cls))}")
     try:
         return cls(**data)
-    except TypeError as exc:            # a missing required field
-        raise RvtoolInputError(f"{key}: {exc}") from None
+    except TypeError as exc:            # a missing required field, named as the file writes it
+        missing = [file_key(f) for f in fields(cls) if f.init and f.name not in data
+                   and f.default is MISSING and f.default_factory is MISSING]
+        if not missing:
+            raise RvtoolInputError(f"{key}: {exc}") from None
+        raise RvtoolInputError(f"[{key}] is missing the required key{'s' if len(missing) > 1 else ''} "
+                               f"{', '.join(f'{key}.{m}' for m in missing)}; 'rvtool new' writes every key with its "
+                               "unit and valid range") from None
     except RvtoolInputError as exc:
         msg = str(exc)
         raise RvtoolInputError(msg if msg.startswith(key) else f"{key}.{msg}") from None

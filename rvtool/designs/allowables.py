@@ -63,4 +63,8 @@ class Allowables:
 def load_allowables(path):
     """:class:`Allowables` from a TOML file with an ``[allowables]`` table (errors name ``allowables.<key>``)."""
     with open(path, "rb") as fh:
-        return build_section(Allowables, "allowables", tomllib.load(fh).get("allowables", {}))
+        table = tomllib.load(fh)
+    if not isinstance(table.get("allowables"), dict):
+        raise RvtoolInputError(f"{path} has no [allowables] table; valid: an allowables file with the keys of "
+                               "rvtool/designs/rd40_allowables.toml")
+    return build_section(Allowables, "allowables", table["allowables"])

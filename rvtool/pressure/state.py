@@ -304,7 +304,7 @@ def candidates(model, q, family, wheel, race="journal"):
         pins = sorted(int(p.removeprefix("pin")) for _, p, w in (n.split("/") for n in loaded) if w == f"wheel{wheel}")
         return [output_pin_contact(model, q, wheel, p, obs=ob) for p in pins]
     name = f"eccentric_bearing{wheel}"
-    if not any(cid.startswith(name + "/roller") for cid in ob.ids):
-        return [needle_contact(model, q, wheel, None, race, obs=ob)]
+    if not any(cid.startswith(name + "/roller") for cid in ob.ids):   # lumped: one contact, if it is loaded
+        return [needle_contact(model, q, wheel, None, race, obs=ob)] if name in loaded else []
     rollers = sorted(int(n.split("/")[1].removeprefix("roller")) for n in loaded if n.startswith(name + "/roller"))
     return [needle_contact(model, q, wheel, j, race, obs=ob) for j in rollers]

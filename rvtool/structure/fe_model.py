@@ -114,7 +114,8 @@ class RayleighDamping:
         f = check_shape("calibration_frequencies", self.calibration_frequencies, (2,)).astype(float)
         check_positive("calibration_frequencies", f)
         if not f[0] < f[1]:
-            raise RvtoolInputError(f"calibration_frequencies = {tuple(f)} must be increasing (f_a < f_b)")
+            raise RvtoolInputError(f"calibration_frequencies = {[float(x) for x in f]} [Hz] must be increasing "
+                                   "(valid: f_a < f_b, both > 0)")
 
     def coefficients(self):
         """(alpha [1/s], beta [s]) from zeta = alpha/(2 w) + beta w / 2 at both calibration frequencies."""

@@ -159,9 +159,15 @@ def load_sweep_spec(path):
         raise RvtoolInputError(f"sweep spec {path} has no 'design' (path of the design TOML file)")
     try:
         protocol = VariantProtocol(**data.get("protocol", {}))
+    except RvtoolInputError as exc:     # the spec's key path: a value of [protocol] is protocol.NAME
+        msg = str(exc)
+        raise RvtoolInputError(msg if msg.startswith("protocol.") else f"protocol.{msg}") from None
+    except TypeError as exc:
+        raise RvtoolInputError(f"sweep spec [protocol]: {exc}") from None
+    try:
         cluster = ClusterSettings(**data.get("cluster", {}))
     except TypeError as exc:
-        raise RvtoolInputError(f"sweep spec [protocol]/[cluster]: {exc}") from None
+        raise RvtoolInputError(f"sweep spec [cluster]: {exc}") from None
     build = {k: tuple(v) if isinstance(v, list) else v for k, v in data.get("build", {}).items()}
     mc = dict(data.get("monte_carlo", {}))
     mc_valid = {"tolerances", "n_variants", "seed", "chunk_size", "batched", "device", "mode"}

@@ -74,11 +74,11 @@ class Cranks:
                                    "an RV stage carries 2 or 3 floating crankshafts")
         check_positive("cranks.mass", self.mass)
         check_positive("cranks.inertia", self.inertia)
-        for nm in ("phase_errors", "eccentricity_errors"):
-            v = getattr(self, nm)
+        for nm, key in (("phase_errors", "phase_errors_deg"), ("eccentricity_errors", "eccentricity_errors")):
+            v = getattr(self, nm)     # key: the design file's name (the phase errors are given in degrees)
             if len(v) not in (0, self.count):
-                raise RvtoolInputError(f"cranks.{nm} has {len(v)} entries; valid: 0 or cranks.count = {self.count}")
-            check_finite(f"cranks.{nm}", v)
+                raise RvtoolInputError(f"cranks.{key} has {len(v)} entries; valid: 0 or cranks.count = {self.count}")
+            check_finite(f"cranks.{key}", v)
         if len(self.gear_pitch_deviations) not in (0, self.count):
             raise RvtoolInputError(f"cranks.gear_pitch_deviations has {len(self.gear_pitch_deviations)} entries; "
                                    f"valid: 0 or cranks.count = {self.count} (one list of pitch deviations per crank)")

@@ -1,0 +1,204 @@
+"""A new user's session (helper "newuser3"): a fresh install, `rvtool new` for every topology, the
+quick protocols, the docs' commands and one bad value per design section. Each test failed before
+its fix (the output or message quoted in its docstring)."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+import rvtool
+from rvtool.errors import RvtoolInputError
+
+
+def test_list_into_a_closed_pipe_is_quiet():
+    """Before: ``rvtool list | head`` ended in a ``BrokenPipeError`` traceback once ``head`` had read
+    its lines. The reader here closes the pipe before the command writes anything."""
+    r, w = os.pipe()
+    os.close(r)
+    p = subprocess.run([sys.executable, "-c", "import sys; from rvtool.cli import main; sys.exit(main(['list']))"],
+                       stdout=w, stderr=subprocess.PIPE, text=True, timeout=120)
+    os.close(w)
+    assert "Traceback" not in p.stderr and "BrokenPipeError" not in p.stderr, p.stderr
+    assert p.returncode == 1
+
+
+def _template_table(topology):
+    import tomllib
+
+    from rvtool.designs.format import template
+    return tomllib.loads(template(topology, name="mine"))
+
+
+def _load(tmp_path, table):
+    import tomlkit
+    p = tmp_path / "mine.toml"
+    p.write_text(tomlkit.dumps(table))
+    return rvtool.load_design(str(p))
+
+
+@pytest.mark.parametrize("topology,gear", [("rv2", "sun_gear"), ("std-involute", "wheel")])
+def test_gear_sub_table_errors_name_the_file_key_once(topology, gear, tmp_path):
+    """Before: ``sun_gear.rack.rack.pressure_angle = 0.8726646259971648 is outside the valid range (0.0,
+    0.7853981633974483)`` (the rack's own prefix doubled, the field in radians instead of the file's
+    ``pressure_angle_deg`` in degrees), and ``sun_gear.modification.modification.tip_relief``."""
+    table = _template_table(topology)
+    table[gear]["rack"]["pressure_angle_deg"] = 50.0
+    with pytest.raises(RvtoolInputError) as e:
+        _load(tmp_path, table)
+    assert str(e.value) == f"{gear}.rack.pressure_angle_deg = 50 is outside the valid range (0, 45) deg"
+    table = _template_table(topology)
+    table[gear]["modification"]["tip_relief"] = -1e-6
+    with pytest.raises(RvtoolInputError) as e:
+        _load(tmp_path, table)
+    assert str(e.value).startswith(f"{gear}.modification.tip_relief = -1e-06 is outside the valid range [0.0, inf)")
+
+
+@pytest.mark.parametrize("topology,section,key,value", [
+    ("cycloid", "profile", "rotation_mod_deg", float("inf")),
+    ("rv2", "cranks", "phase_errors_deg", [0.0, 0.0, float("nan")]),
+])
+def test_non_finite_angle_names_the_deg_key(topology, section, key, value, tmp_path):
+    """Before: ``profile.rotation_mod = inf must be finite``: the spec's field, not the file's key."""
+    table = _template_table(topology)
+    table[section][key] = value
+    with pytest.raises(RvtoolInputError, match=rf"^{section}\.{key} = (inf|nan) must be finite"):
+        _load(tmp_path, table)
+
+
+def test_crank_phase_error_count_names_the_deg_key(tmp_path):
+    """Before: ``cranks.phase_errors has 1 entries`` (the file key is ``phase_errors_deg``)."""
+    table = _template_table("rv2")
+    table["cranks"]["phase_errors_deg"] = [1.0]
+    with pytest.raises(RvtoolInputError, match=r"^cranks\.phase_errors_deg has 1 entries; valid: 0 or cranks\.count"):
+        _load(tmp_path, table)
+
+
+@pytest.mark.parametrize("topology,section,key,expect", [
+    ("cycloid", "pins", "n_pins", r"\[pins\] is missing the required key pins\.n_pins \(valid: \[3, inf\) \(integer\)\)"),
+    ("cycloid", None, "rated_torque", r"the top level is missing the required key rated_torque \(valid: \(0\.0, inf\)\)"),
+    ("rv2", "crank_bearing", "n_rollers", r"\[crank_bearing\] is missing the required key crank_bearing\.n_rollers"),
+    ("rv2", "crank_bearing", "cup_angle_deg", r"\[crank_bearing\] is missing the required key crank_bearing\.cup_angle_deg"),
+])
+def test_missing_required_key_is_named_as_the_file_writes_it(topology, section, key, expect, tmp_path):
+    """Before: ``[pins]: Pins.__init__() missing 1 required keyword-only argument: 'n_pins'``, ``[design]:
+    CycloidDesign.__init__() ...`` (no such section) and ``crank_bearing: TaperedRollerBearing.__init__()
+    missing 1 required keyword-only argument: 'cup_angle'`` (the file key is cup_angle_deg)."""
+    table = _template_table(topology)
+    del (table if section is None else table[section])[key]
+    with pytest.raises(RvtoolInputError, match="^" + expect):
+        _load(tmp_path, table)
+
+
+def test_tapered_unknown_key_lists_the_deg_keys(tmp_path):
+    """Before: ``crank_bearing.foo is not a parameter of TaperedRollerBearing; valid: ['cone_angle', ...,
+    'cup_angle', ...]``: writing 'cup_angle' is itself refused (degrees as cup_angle_deg)."""
+    table = _template_table("rv2")
+    table["crank_bearing"]["foo"] = 1.0
+    with pytest.raises(RvtoolInputError) as e:
+        _load(tmp_path, table)
+    assert "'cup_angle_deg'" in str(e.value) and "'cup_angle'" not in str(e.value)
+
+
+def test_calibration_frequencies_message_is_plain_numbers(tmp_path):
+    """Before: ``calibration_frequencies = (np.float64(5000.0), np.float64(500.0)) must be increasing``."""
+    table = _template_table("cycloid")
+    table["housing"]["structure"]["damping"]["calibration_frequencies"] = [5000.0, 500.0]
+    with pytest.raises(RvtoolInputError) as e:
+        _load(tmp_path, table)
+    assert "np.float64" not in str(e.value)
+    assert str(e.value).startswith("housing.structure.damping.calibration_frequencies = [5000.0, 500.0] [Hz] must be "
+                                   "increasing (valid: f_a < f_b")
+
+
+def test_allowables_file_without_its_table(tmp_path):
+    """Before (``--allowables mydrive.toml``, the design file given by mistake): ``[allowables]:
+    Allowables.__init__() missing 6 required keyword-only arguments: ...``."""
+    from rvtool.designs.allowables import load_allowables
+    p = tmp_path / "mine.toml"
+    p.write_text('topology = "cycloid"\n[pins]\nn_pins = 40\n')
+    with pytest.raises(RvtoolInputError, match=r"has no \[allowables\] table; valid: an allowables file"):
+        load_allowables(str(p))
+
+
+def test_lumped_needles_without_load_have_no_hertz_peak():
+    """Before: a cycloid design with ``rated_torque = 1e-9`` was refused by the rated-state check with
+    ``eccentric_bearing0/stribeck_max: the needle carries no load at this state`` (the lumped bearing's
+    contact was listed as a loaded candidate whatever its force). At the unloaded built state the
+    lumped needles carry nothing: no candidate, no error."""
+    import numpy as np
+
+    from rvtool.pressure.state import candidates
+    model = rvtool.build(rvtool.load_design("rd40"))
+    q = model.body_vector(np.zeros_like(model.reference))      # every body at its reference pose
+    names, forces = model.observe(q, "eccentric_bearings").per_contact()
+    assert not np.any(forces > 0), "the test needs an unloaded lumped needle bearing"
+    assert candidates(model, q, "needles", 0) == []
+    assert "needles" not in model.hertz_peaks(q)      # raised before
+
+
+def _cli(argv, tmp_path, monkeypatch):
+    from rvtool import cli
+    monkeypatch.chdir(tmp_path)
+    return cli.main(argv)
+
+
+@pytest.mark.parametrize("argv,expect", [
+    (["new", "--topology", "cycloid", "--name", ""], "--name = ''; valid: a non-empty design name"),
+    (["new", "--topology", "cycloid", "--name", "a/b"], "--name = 'a/b'; valid: a non-empty design name"),
+    (["new", "--topology", "cycloid", "--out", "nodir/x.toml"], "the folder 'nodir' does not exist"),
+    (["validate", "rv40e", "--tornado-keys", "-1"], "--tornado-keys = -1 is outside the valid range [0, inf)"),
+])
+def test_cli_option_values_are_refused_by_name(argv, expect, tmp_path, monkeypatch, capsys):
+    """Before: ``--name ''`` wrote mine.toml without a word, ``--name a/b`` (or ``--out`` into a missing
+    folder) ended in a FileNotFoundError traceback, and ``validate --tornado-keys -1`` ran (the tornado
+    then dropped the last key: ``order[:-1]``)."""
+    assert _cli(argv, tmp_path, monkeypatch) == 2
+    assert expect in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_mesh_that_never_engages_is_a_geometry_error(tmp_path):
+    """Before: the cycloid template with ``wheels.clearance = 0.01`` (10 mm: the wheel never reaches the
+    pins) said ``valid range: 0 < rated_torque <= 0.005904 N m (the largest torque shown to
+    equilibrate)``, a torque the solver's regularization springs carried with the pins unloaded. No
+    rated torque is admissible for that geometry; the error says so and names the clearance."""
+    from rvtool.analysis.admissible import check_rated_state
+    table = _template_table("cycloid")
+    table["wheels"]["clearance"] = 0.01
+    design = _load(tmp_path, table)
+    with pytest.raises(RvtoolInputError, match=r"the main mesh \(pins\) carries no load at .* no rated_torque is "
+                                               r"admissible.*wheels\.clearance = 0\.01 m"):
+        check_rated_state(design, lambda: rvtool.build(design))
+
+
+def test_pointed_tip_names_the_thickness_allowance(tmp_path):
+    """Before: ``sun_gear.thickness_allowance = 0.01`` (10 mm on a 1 mm module) said ``... gives a pointed
+    tip ...; valid: tip thickness > 0.0 m (reduce profile_shift = 0.1 or the tip diameter)``: the key
+    that made the tip pointed was not named."""
+    table = _template_table("rv2")
+    table["sun_gear"]["thickness_allowance"] = 0.01
+    with pytest.raises(RvtoolInputError, match=r"pointed tip .*sun_gear\.thickness_allowance = 0\.01 m"):
+        _load(tmp_path, table)
+
+
+def test_sweep_protocol_value_names_its_table(tmp_path):
+    """Before: ``n_te_points = -1 is outside the valid range [3, inf) (integer)`` for a key of the sweep
+    spec's ``[protocol]`` table (``cluster.n_workers`` already named its table)."""
+    from rvtool.variants.sweep import load_sweep_spec
+    p = tmp_path / "s.toml"
+    p.write_text('design = "d.toml"\n[protocol]\nn_te_points = -1\n[parameters]\npin_clearance = [0.0]\n')
+    with pytest.raises(RvtoolInputError, match=r"^protocol\.n_te_points = -1 is outside the valid range \[3, inf\)"):
+        load_sweep_spec(str(p))
+
+
+def test_te_error_statement_quotes_the_refined_resolution(tmp_path):
+    """Before: the TE figures' error statement read "reference: the topology's refined resolution
+    ({'mesh_window_teeth': 4, 'mesh_n_slices': 1})": the run's own resolution, not the refined one it
+    was measured against (window + 2 teeth, twice the slices for the std-involute drive)."""
+    res = rvtool.analyze(rvtool.load_design("std_involute"), "te", quick=True, out_dir=str(tmp_path))
+    model = rvtool.build(rvtool.load_design("std_involute"))
+    fine = rvtool.build(model.refined_design()).resolution_settings()
+    assert fine != model.resolution_settings()
+    statement = res["te"].figure("te_pp").error_statement
+    assert f"refined resolution ({fine})" in statement, statement
