@@ -16,9 +16,13 @@ CYCLOID_TOLERANCE_KEYS = {
     "pin_clearance": ("m", "gap added at every pin contact", "the variant's pin contacts"),
     "bearing_clearance": ("m", "radial clearance of the eccentric bearing, replacing the design's (support >= 0)",
                           "eccentric_bearing.radial_clearance"),
+    "pin_circle_coaxiality_error": ("m", "x and y of the pin circle's centre off the output (main-bearing) axis: one "
+                                    "translation per reducer, common to every ring-pin centre and fixed in the "
+                                    "housing frame", "the variant's pin centres (added)"),
 }
 """The keys of a cycloid tolerance file in the order a variant draws them (:data:`rvtool.variants.tolerances.FIELDS`
-is this order): (unit, meaning, what it changes)."""
+is this order): (unit, meaning, what it changes). A new key goes at the end, so that the earlier keys' draws of a
+seed stay as they were."""
 
 STD_TOLERANCE_KEYS = {
     "eccentricity_error": ("m", "added to the wheel-ring centre distance, one value per reducer",

@@ -12,6 +12,8 @@ Size-dependent grades are computed from the design at writing time:
 
 * ISO 286-1:2010, Table 1, standard tolerance grade IT4 (:data:`ISO286_IT4_UM`) for the ground ring pins
   (h4: upper deviation 0, lower deviation -IT4 on the diameter, ISO 286-2),
+* ISO 286-1:2010, Table 1, IT5 (:data:`ISO286_IT5_UM`) of the pin circle diameter as the coaxiality tolerance
+  of a cycloid drive's pin circle to the output axis (the [POS] rule of rv80e_tolerances.toml),
 * ISO 1328-1:2013, eq. (5), the single pitch tolerance f_pT = (0.001 d + 0.4 m_n + 5) sqrt(2)^(A - 5) um
   (d, m_n in mm; A the flank tolerance class), rounded by the standard's 5.2.3 rule (below 5 um to 0.1 um,
   5 to 10 um to 0.5 um, above 10 um to 1 um), within its scope 5 <= d <= 15000 mm, 0.5 <= m_n <= 70 mm.
@@ -28,6 +30,10 @@ ISO286_IT4_UM = ((3.0, 3.0), (6.0, 4.0), (10.0, 4.0), (18.0, 5.0), (30.0, 6.0), 
 """ISO 286-1:2010, Table 1: standard tolerance IT4 [um] of nominal sizes above the previous row's bound up
 to and including this row's [mm] (the first row: up to 3 mm)."""
 
+ISO286_IT5_UM = ((3.0, 4.0), (6.0, 5.0), (10.0, 6.0), (18.0, 8.0), (30.0, 9.0), (50.0, 11.0), (80.0, 13.0),
+                 (120.0, 15.0), (180.0, 18.0), (250.0, 20.0), (315.0, 23.0), (400.0, 25.0), (500.0, 27.0))
+"""ISO 286-1:2010, Table 1: standard tolerance IT5 [um], rows as :data:`ISO286_IT4_UM`."""
+
 FLANK_CLASS = 5
 """ISO 1328-1:2013 flank tolerance class of the template's gears (chosen: ground gears of a precision
 reducer; the shipped rv40e_tolerances.toml takes grade 5 too)."""
@@ -35,8 +41,17 @@ reducer; the shipped rv40e_tolerances.toml takes grade 5 too)."""
 
 def iso286_it4(size, key):
     """IT4 [m] of nominal size ``size`` [m] (ISO 286-1:2010 Table 1); ``key`` names the design key."""
+    return _iso286(size, key, ISO286_IT4_UM)
+
+
+def iso286_it5(size, key):
+    """IT5 [m] of nominal size ``size`` [m] (ISO 286-1:2010 Table 1); ``key`` names the design key."""
+    return _iso286(size, key, ISO286_IT5_UM)
+
+
+def _iso286(size, key, table):
     mm = size * 1e3
-    for upper, it in ISO286_IT4_UM:
+    for upper, it in table:
         if 0.0 < mm <= upper:
             return it * 1e-6
     raise RvtoolInputError(f"{key}: nominal size {mm:.6g} mm is outside the ISO 286-1 table of this template "
@@ -120,7 +135,19 @@ def _cycloid_rows(design):
          "assumed: assembly clearance at the pins set by selective assembly of pin/wheel groups, mean 5 um in a "
          "[1, 10] um window (as rd40_tolerances.toml; a nominal reducer is not preloaded)"),
         _needle_clearance("bearing_clearance", design.eccentric_bearing.radial_clearance, "eccentric_bearing"),
+        _coaxiality("pin_circle_coaxiality_error", design.pins, "output (main-bearing)"),
     ], []
+
+
+def _coaxiality(key, pins, axis):
+    """The pin circle off the ``axis``: coaxiality t = IT5 of the pin circle diameter, each coordinate std t / 6."""
+    t = iso286_it5(2.0 * pins.pin_circle_radius, "pins.pin_circle_radius")
+    return key, _dist(dist="normal", mean=0.0, std=t / 6.0), (
+        f"source: ISO 286-1:2010 Table 1, IT5 at the pin circle diameter {2e3 * pins.pin_circle_radius:.4g} mm = "
+        f"{_um(t)}, taken as the coaxiality tolerance t (ISO 1101, a zone of diameter t) of the pin circle to the "
+        f"{axis} axis; x and y of the offset, one translation of every pin per reducer (unit m), each normal "
+        f"with std t / 6. Grade IT5 assumed (range IT4..IT6; the rule of rd40_tolerances.toml and "
+        f"rv80e_tolerances.toml)")
 
 
 def _rv_rows(design):

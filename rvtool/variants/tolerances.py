@@ -13,7 +13,13 @@ deviation field of :class:`~rvtool.variants.Variant`; all values in SI units [m]
   design's modifications,
 * ``pin_clearance``: uniform gap added at every pin contact,
 * ``bearing_clearance``: eccentric-bearing radial clearance (replaces the design's);
-  its support must be non-negative.
+  its support must be non-negative,
+* ``pin_circle_coaxiality_error``: the x and y of the pin circle's centre off the output
+  (main-bearing) axis, one draw per coordinate and reducer: one translation common to every
+  ring-pin centre, fixed in the housing frame, added to the variant's ``pin_centre_errors``
+  (zero where the file has no ``pin_centre_errors``). Drawn last, so that adding it left
+  every other field's draws of a seed unchanged (a file without it draws what it drew
+  before, bit for bit).
 
 Distributions (frozen dataclasses): :class:`Normal` (mean, std), :class:`Uniform`
 (low, high), :class:`TruncatedNormal` (mean, std of the parent normal, low, high) and
@@ -41,7 +47,8 @@ from ..errors import RvtoolInputError
 from ..validation import check_finite, check_range
 
 FIELDS = tuple(CYCLOID_TOLERANCE_KEYS)
-"""Variant fields that can carry a tolerance, in the fixed order in which a variant draws them (the keys of
+"""Tolerance fields (each a Variant field, or, for ``pin_circle_coaxiality_error``, added to one), in the fixed
+order in which a variant draws them (the keys of
 :data:`rvtool.designs.tolerance_keys.CYCLOID_TOLERANCE_KEYS`, which documents each for the format doc)."""
 
 
@@ -159,7 +166,7 @@ DISTRIBUTIONS = {"normal": Normal, "uniform": Uniform, "truncnormal": TruncatedN
 
 @dataclass(frozen=True, kw_only=True)
 class ToleranceSpec:
-    """One distribution (or None: no deviation) per Variant field (module docstring)."""
+    """One distribution (or None: no deviation) per tolerance field of :data:`FIELDS` (module docstring)."""
     eccentricity_error: object = None
     pin_centre_errors: object = None
     pin_radius_error: object = None
@@ -167,6 +174,7 @@ class ToleranceSpec:
     offset_mod: object = None
     pin_clearance: object = None
     bearing_clearance: object = None
+    pin_circle_coaxiality_error: object = None
 
     def __post_init__(self):
         for nm in FIELDS:
@@ -287,7 +295,8 @@ def load_tolerances(path):
 
 def sample_variant(spec, design, k, seed):
     """Variant with index k: every field drawn from ``default_rng([seed, k])`` in the order of
-    FIELDS (a field without a distribution draws nothing)."""
+    FIELDS (a field without a distribution draws nothing). ``pin_circle_coaxiality_error`` has no
+    Variant field of its own: its offset is added to every row of ``pin_centre_errors``."""
     from .variant import Variant
     if int(k) < 0 or int(seed) < 0:
         raise RvtoolInputError(f"variant index {k} and seed {seed}: valid range [0, inf) (integers)")
@@ -299,6 +308,10 @@ def sample_variant(spec, design, k, seed):
             continue
         if nm == "pin_centre_errors":
             kw[nm] = np.asarray(d.sample(rng, (design.pins.n_pins, 2)), float)
+        elif nm == "pin_circle_coaxiality_error":
+            offset = np.asarray(d.sample(rng, 2), float)
+            base = kw.get("pin_centre_errors", np.zeros((design.pins.n_pins, 2)))
+            kw["pin_centre_errors"] = base + offset
         else:
             kw[nm] = float(d.sample(rng))
     return Variant(index=int(k), **kw)
