@@ -87,3 +87,97 @@ def test_grade_is_it5_of_the_pin_circle_in_the_file_and_the_template(rd40):
     assert tmpl[KEY] == t
     big = rd40.replace(pins={"pin_circle_radius": 0.080})          # 160 mm: over 120 up to 180 mm, IT5 = 18 um
     assert tomllib.loads(tolerance_template(big))["tolerances"][KEY]["std"] == 3e-6
+
+
+# -- closed form (tests/test_te_coaxiality.py (a)) on a one-wheel cycloid drive -----------------------------------
+
+RD_KW = {"bearing_model": "lumped", "regularization": (1.0e4, 100.0)}   # cases/cycloid/monte_carlo_te.py's build
+
+
+def _te_of_offset(one, pin_centre_errors, angles, **kw):
+    """TE [rad] of the one-wheel design with the variant's pin centres (and with their negatives: the difference
+    over two keeps the first order in the offset and drops the nominal ripple and the even orders)."""
+    from rvtool import build
+    from rvtool.protocols.precision import quasi_static_te
+    from rvtool.variants import Variant
+    out = []
+    for sign in (1.0, -1.0):
+        dv = Variant(pin_centre_errors=sign * np.asarray(pin_centre_errors)).apply(one)
+        r = quasi_static_te(build(dv, **kw), torque=0.5 * one.rated_torque, input_angles=angles)
+        out.append(np.asarray(r["te"]))
+    return (out[0] - out[1]) / 2
+
+
+def _fit(chis, y, eps):
+    """(c_t, c_r, residual / signal): y ~ c_t (eps . u_t) + c_r (eps . u) + c_0, u = (-sin chi, cos chi) the
+    eccentric's direction at input angle chi (rvtool.geometry.eccentric.journal_centre), u_t = (cos chi, sin chi)."""
+    u = np.column_stack([-np.sin(chis), np.cos(chis)])
+    ut = np.column_stack([np.cos(chis), np.sin(chis)])
+    A = np.column_stack([ut @ eps, u @ eps, np.ones_like(chis)])
+    c = np.linalg.lstsq(A, y, rcond=None)[0]
+    return c[0], c[1], float(np.std(y - A @ c) / np.std(y))
+
+
+def test_one_wheel_te_of_a_coaxiality_variant_is_the_closed_form(rd40):
+    """Variant 3 drawn with only ``pin_circle_coaxiality_error`` (std 2.5 um, rd40's grade; this draw |eps| =
+    0.35 um) on RD-40 with one wheel, TE at half the rated torque at 16 input angles over one input revolution.
+    With the wheel held on its journal and the shaft and flange on the axis (``rigid_supports``: the rigid-body
+    idealisation of the closed form) the TE's first harmonic is tests/test_te_coaxiality.py's closed form (a): the
+    tangential part eps . u_t turns the wheel by (eps . u_t) / (e z_w), exact at first order (bound 1 %; measured
+    1.0009), the radial part by C_r (eps . u) / (e z_w), C_r the continuum's lever-arm-weighted radial coefficient
+    with every pin of positive lever arm loaded (bound 10 %: 40 discrete pins against the continuum; measured 0.280
+    against 0.299 at rd40's K1 = 0.64), so the amplitude is |eps| / (e z_w) sqrt(1 + C_r^2) (bound 2 %; 2.33 arcsec
+    x 1.044, measured 2.43 arcsec). The radial part's C_r is a small-offset figure: at variant 11's |eps| = 3.3 um
+    the shift changes the set of loaded pins and the measured coefficient is 0.10 (the tangential one still 1.0004).
+
+    On the Monte Carlo's build (compliant eccentric, shaft and flange bearings) the pins centre the wheel instead:
+    it follows the radial part (measured 0.97 of it at two crank angles), and the output-pin mechanism, whose
+    hole-pin offset grows by that much along the pins' common contact normal, turns the flange by (eps . u) / R_w
+    times sum(s) / sum(s^2) over the loaded output pins' lever-arm sines s (1 for one pin at full lever arm,
+    1.21 .. 1.31 for 8 pins with half of them loaded; R_w = 32 mm against e z_w = 31.2 mm): a radial coefficient
+    of about 1 instead of C_r. Measured: tangential 1.05 (the loaded wheel sits 28 um off its journal, so that the
+    fit's u_t is not quite the loaded crank direction), radial / tangential 0.91, amplitude 1.42 times
+    |eps| / (e z_w) (3.31 arcsec here; 1.42 at variant 11 too). Asserted: 1.3 .. 1.7 times |eps| / (e z_w), a
+    radial coefficient of 0.83 .. 1.37 (0.975 x [0.97 .. 1.31] less the wheel's own turn, measured 0.035): fails
+    if the radial part stopped reaching the flange or the tangential part were lost."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_te_coaxiality import radial_coefficient
+    one = rd40.replace(n_wheels=1, wheels={"midplanes": (0.0,), "phases_deg": (0.0,)})
+    v = sample_variant(ToleranceSpec(**{KEY: Normal(std=2.5e-6)}), one, 3, SEED)
+    eps = np.asarray(v.pin_centre_errors)[0]
+    e, zw = one.wheels.eccentricity, one.pins.n_pins - 1
+    cr_closed = radial_coefficient(e * one.pins.n_pins / one.pins.pin_circle_radius)
+    chis = 2 * np.pi * np.arange(16) / 16
+
+    ct, cr, res = _fit(chis, _te_of_offset(one, v.pin_centre_errors, chis, rigid_supports=True, **RD_KW), eps)
+    assert abs(abs(ct) * e * zw - 1.0) < 0.01, ct * e * zw
+    assert abs(abs(cr / ct) / cr_closed - 1.0) < 0.10, (cr / ct, cr_closed)
+    assert abs(math.hypot(ct, cr) * e * zw / math.hypot(1.0, cr_closed) - 1.0) < 0.02
+    assert res < 0.02, res
+
+    ct, cr, res = _fit(chis, _te_of_offset(one, v.pin_centre_errors, chis, **RD_KW), eps)
+    assert 1.3 < math.hypot(ct, cr) * e * zw < 1.7, (ct * e * zw, cr * e * zw)
+    assert res < 0.05, res
+
+
+def test_device_rows_take_a_coaxiality_variant(rd40):
+    """The device Monte Carlo's path (rvtool.variants.multi_device.variant_snapshots, the row Newton of
+    rvtool.batched.device_rows_variants on cpu) takes a variant of the rd40 file (the offset inside its pin-centre
+    errors) and a coaxiality-only variant: TE equal to the Exudyn run of the variant's full build within 1e-6
+    arcsec at 5 points (both solve the same equilibria to the Newton tolerance; test_device_te_order's bound)."""
+    from rvtool import build
+    from rvtool.batched.device_rows_variants import device_rows_variants
+    from rvtool.protocols.precision import quasi_static_te
+    from rvtool.units import ARCSEC_PER_RAD
+    from rvtool.variants.multi_device import variant_snapshots
+    full = load_tolerances(designs.path("rd40_tolerances"))
+    alone = ToleranceSpec(**{KEY: getattr(full, KEY)})
+    jobs = [(rd40, full, SEED, 2, RD_KW), (rd40, alone, SEED, 2, RD_KW)]
+    models = [s for _, s, _ in variant_snapshots(jobs)]
+    angles = 2 * np.pi * abs(rd40.ratio) * np.arange(5) / 23
+    dev = device_rows_variants(models, torque=rd40.rated_torque, input_angles=angles, device="cpu")
+    assert dev.status == ["ok", "ok"]
+    for i, (d, spec, seed, k, kw) in enumerate(jobs):
+        ref = quasi_static_te(build(sample_variant(spec, d, k, seed).apply(d), **kw), torque=d.rated_torque,
+                              input_angles=angles)["te"]
+        assert np.max(np.abs(dev.te[i] - ref)) * ARCSEC_PER_RAD <= 1e-6, i
