@@ -8,6 +8,7 @@ spring control succeeds; 30: the sequential load continuation succeeds, the devi
 finds its loaded start only at 2.5 f (the start ladder); 0: the sequential load continuation
 stalls where the torque--angle curve folds (spring control passes the fold with a stiffer spring),
 and the device continuation stalls where the sequential one does."""
+import dataclasses
 import numpy as np
 import pytest
 import warp as wp
@@ -38,7 +39,9 @@ def design():
 
 @pytest.fixture(scope="module")
 def samples(design):
-    tol = load_tolerances(designs.path("rd40_tolerances"))
+    # the variants chosen below for their edge cases were drawn before pin_circle_coaxiality_error joined the
+    # file; that field is drawn last, so leaving it out draws them as they were (tests/test_cycloid_coaxiality.py)
+    tol = dataclasses.replace(load_tolerances(designs.path("rd40_tolerances")), pin_circle_coaxiality_error=None)
     return {k: sample_variant(tol, design, k, SEED) for k in (0, 1, 2, 3, 30)}
 
 

@@ -2,6 +2,7 @@
 or by the load continuation through the free play (rvtool.batched.device_rows_lost_motion): the
 same figures, and the direct levels against the Exudyn oracle on the RD-40 Monte Carlo variants
 whose continuation stalled in the free play."""
+import dataclasses
 import numpy as np
 import pytest
 
@@ -31,7 +32,9 @@ def _cuda_absent(device):
 def rd40():
     from rvtool.variants.tolerances import load_tolerances, sample_variant
     d = load_design(designs.path("rd40"))
-    tol = load_tolerances(designs.path("rd40_tolerances"))
+    # the variants chosen below for their edge cases were drawn before pin_circle_coaxiality_error joined the
+    # file; that field is drawn last, so leaving it out draws them as they were (tests/test_cycloid_coaxiality.py)
+    tol = dataclasses.replace(load_tolerances(designs.path("rd40_tolerances")), pin_circle_coaxiality_error=None)
     return d, lambda k: sample_variant(tol, d, k, RD_SEED).apply(d)
 
 

@@ -7,6 +7,7 @@ succeeds; 2 and 67: load control fails (no loaded start at +f; stall in the free
 spring control succeeds; 0: load control stalls where the torque--angle curve folds, and
 spring control at its default k_s meets the fold as a snap-through and passes it with a
 stiffer spring (it failed before: the failed variant of `rvtool analyze rd40 --quick`)."""
+import dataclasses
 import os
 
 import numpy as np
@@ -37,7 +38,10 @@ def design():
 
 @pytest.fixture(scope="module")
 def tol():
-    return load_tolerances(os.path.join(DESIGNS, "rd40_tolerances.toml"))
+    # the variants chosen below for their edge cases were drawn before pin_circle_coaxiality_error joined the
+    # file; that field is drawn last, so leaving it out draws them as they were (tests/test_cycloid_coaxiality.py)
+    return dataclasses.replace(load_tolerances(os.path.join(DESIGNS, "rd40_tolerances.toml")),
+                               pin_circle_coaxiality_error=None)
 
 
 def _model(design, tol, k, reg=REG):
