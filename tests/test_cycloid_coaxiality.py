@@ -37,17 +37,23 @@ def _same_variant(a, b):
     assert np.array_equal(np.asarray(a.pin_centre_errors), np.asarray(b.pin_centre_errors))
 
 
+def _activated(tmp_path):
+    """rd40_tolerances.toml with its commented-out coaxiality line active (the grade it states)."""
+    text = open(designs.path("rd40_tolerances")).read()
+    assert text.count(f"# {KEY} = ") == 1
+    p = tmp_path / "rd40_tolerances_coaxiality.toml"
+    p.write_text(text.replace(f"# {KEY} = ", f"{KEY} = "))
+    return p
+
+
 def test_the_field_is_drawn_last_and_a_file_without_it_draws_todays_variants(rd40, tmp_path):
     """The key is the last of the draw order; the committed rd40 file with the key's lines removed loads to the spec
     of the earlier fields, whose variants are those of the full file less the offset: every other field equal bit
     for bit, and the pin-centre errors differing by one (x, y) offset common to every pin."""
     assert FIELDS[-1] == KEY and tuple(CYCLOID_TOLERANCE_KEYS)[-1] == KEY
-    full = load_tolerances(designs.path("rd40_tolerances"))
+    stripped = load_tolerances(designs.path("rd40_tolerances"))      # shipped: the key's line commented out
+    full = load_tolerances(_activated(tmp_path))
     assert getattr(full, KEY) is not None and all(getattr(full, f) is not None for f in FIELDS)
-    text = open(designs.path("rd40_tolerances")).read()
-    p = tmp_path / "t.toml"
-    p.write_text("\n".join(ln for ln in text.splitlines() if not ln.startswith(KEY)))
-    stripped = load_tolerances(p)
     assert getattr(stripped, KEY) is None and stripped == _without(full)
     offsets = []
     for k in (0, 7, 123):
@@ -75,10 +81,12 @@ def test_alone_it_translates_every_pin_by_its_two_draws(rd40):
     assert np.array_equal(np.asarray(sample_variant(spec, rd40, 3, SEED).pin_centre_errors), e)
 
 
-def test_grade_is_it5_of_the_pin_circle_in_the_file_and_the_template(rd40):
+def test_grade_is_it5_of_the_pin_circle_in_the_file_and_the_template(rd40, tmp_path):
     """rd40_tolerances.toml and `rvtool new`'s template: t = IT5 of the pin circle diameter (100 mm: 15 um, ISO
     286-1:2010 Table 1, over 80 up to 120 mm), each coordinate normal with std t / 6."""
     with open(designs.path("rd40_tolerances"), "rb") as fh:
+        assert KEY not in tomllib.load(fh)["tolerances"]             # shipped inactive (the file says why)
+    with open(_activated(tmp_path), "rb") as fh:
         t = tomllib.load(fh)["tolerances"][KEY]
     assert 80.0 < 2e3 * rd40.pins.pin_circle_radius <= 120.0
     assert math.isclose(iso286_it5(2 * rd40.pins.pin_circle_radius, "pins.pin_circle_radius"), 15e-6, rel_tol=1e-12)
