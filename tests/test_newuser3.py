@@ -202,3 +202,16 @@ def test_te_error_statement_quotes_the_refined_resolution(tmp_path):
     assert fine != model.resolution_settings()
     statement = res["te"].figure("te_pp").error_statement
     assert f"refined resolution ({fine})" in statement, statement
+
+
+def test_crank_eccentricity_error_keeps_the_eccentric_off_the_axis(tmp_path):
+    """Before: ``cranks.eccentricity_errors = [-0.0013, 0, 0]`` on a 1.2 mm eccentricity (crank 0's
+    eccentric across its axis) was accepted and reported by the rated-state check as "the geometry,
+    not the load, is inadmissible: check the clearances and radii", naming no key."""
+    table = _template_table("rv2")
+    table["cranks"]["eccentricity_errors"] = [-0.0013, 0.0, 0.0]
+    with pytest.raises(RvtoolInputError, match=r"^cranks\.eccentricity_errors\[0\] = -0\.0013 m .* valid range "
+                                               r"\(-0\.0012, inf\) m"):
+        _load(tmp_path, table)
+    table["cranks"]["eccentricity_errors"] = [2e-6, 0.0, -1e-6]      # a tolerance's size: accepted
+    _load(tmp_path, table)

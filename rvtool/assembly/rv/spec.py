@@ -378,6 +378,12 @@ class RVDesign:
                 raise RvtoolInputError("cranks.wheel_bore_errors with wheels.body = 'ported' is not implemented (the "
                                        "ported wheel's FE bores sit at their true positions); valid: wheels.body = "
                                        "'rigid' or no cranks.wheel_bore_errors")
+        e = self.wheels.eccentricity
+        for k, de in enumerate(self.cranks.eccentricity_errors):
+            if not e + de > 0:      # crank k's eccentric would sit on (or across) its axis
+                raise RvtoolInputError(f"cranks.eccentricity_errors[{k}] = {de:.6g} m leaves crank {k} the eccentricity "
+                                       f"{e + de:.6g} m; valid range ({-e:.6g}, inf) m (-wheels.eccentricity: e_k = e + "
+                                       "error > 0)")
         z = self.crank_gear.n_teeth
         for k, f in enumerate(self.cranks.gear_pitch_deviations):
             f = tuple(float(x) for x in f)
