@@ -215,3 +215,15 @@ def test_crank_eccentricity_error_keeps_the_eccentric_off_the_axis(tmp_path):
         _load(tmp_path, table)
     table["cranks"]["eccentricity_errors"] = [2e-6, 0.0, -1e-6]      # a tolerance's size: accepted
     _load(tmp_path, table)
+
+
+@pytest.mark.parametrize("out", ["taken.txt", "taken.txt/sub"])
+def test_out_into_a_file_is_an_input_error_before_any_work(out, tmp_path, monkeypatch, capsys):
+    """Before: ``rvtool analyze mydrive.toml --out mydrive.toml`` (or a path under a file) solved the
+    rated state and then ended in a ``FileExistsError`` / ``NotADirectoryError`` traceback."""
+    (tmp_path / "taken.txt").write_text("x")
+    assert _cli(["analyze", "rd40", "--quick", "--protocols", "lost_motion", "--out", out, "--quiet"],
+                tmp_path, monkeypatch) == 2
+    err = capsys.readouterr().err
+    assert f"--out / out_dir = '{out}'" in err and "Traceback" not in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.txt"]
