@@ -227,3 +227,18 @@ def test_out_into_a_file_is_an_input_error_before_any_work(out, tmp_path, monkey
     err = capsys.readouterr().err
     assert f"--out / out_dir = '{out}'" in err and "Traceback" not in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.txt"]
+
+
+@pytest.mark.parametrize("argv", [
+    ["run", "hard_rd40", "--quick", "--out", "taken.txt"],
+    ["sweep", "spec.toml", "--out", "taken.txt", "--quiet"],
+    ["validate", "rv40e", "--quick", "--out", "taken.txt", "--quiet"],
+])
+def test_other_commands_refuse_an_out_that_is_a_file(argv, tmp_path, monkeypatch, capsys):
+    """Before: ``rvtool run CASE --out FILE`` and ``rvtool sweep SPEC --out FILE`` ended in a
+    ``FileExistsError`` traceback, ``rvtool validate --out FILE`` in a ``NotADirectoryError``."""
+    (tmp_path / "taken.txt").write_text("x")
+    (tmp_path / "spec.toml").write_text('design = "d.toml"\n[parameters]\npin_clearance = [0.0]\n')
+    assert _cli(argv, tmp_path, monkeypatch) == 2
+    err = capsys.readouterr().err
+    assert "--out = 'taken.txt' is an existing file" in err and "Traceback" not in err, err

@@ -131,7 +131,8 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
         raise RvtoolInputError(f"allowables file {str(allowables)!r} not found")
     allowed = allowables_record(allowables)      # a bad file is an input error, raised before any work
     if out_dir is not None:
-        _check_out_dir(out_dir)                  # likewise a folder that cannot be made
+        from ..validation import check_out_dir
+        check_out_dir(out_dir)                   # likewise a folder that cannot be made
     ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances, backend=backend,
                   scheduler=scheduler)
     # a valid but unsolvable load is an input error: raised here, before anything is written
@@ -148,22 +149,6 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     if out_dir is not None:
         write(res, allowed)
     return res
-
-
-def _check_out_dir(out_dir):
-    """Raise :class:`RvtoolInputError` where ``out_dir`` cannot become the output folder: an existing
-    file, or a path under one (before: a FileExistsError / NotADirectoryError traceback after the
-    rated state had been solved)."""
-    path = os.path.abspath(str(out_dir))
-    if os.path.exists(path) and not os.path.isdir(path):
-        raise RvtoolInputError(f"--out / out_dir = {str(out_dir)!r} is an existing file; valid: a folder (made if "
-                               "missing)")
-    parent = os.path.dirname(path)
-    while parent and not os.path.exists(parent) and parent != os.path.dirname(parent):
-        parent = os.path.dirname(parent)
-    if not os.path.isdir(parent):
-        raise RvtoolInputError(f"--out / out_dir = {str(out_dir)!r} lies under the file {parent!r}; valid: a folder "
-                               "path in a writable place")
 
 
 def write(res, allowables=None):
