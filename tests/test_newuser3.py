@@ -119,6 +119,10 @@ def test_allowables_file_without_its_table(tmp_path):
     p.write_text('topology = "cycloid"\n[pins]\nn_pins = 40\n')
     with pytest.raises(RvtoolInputError, match=r"has no \[allowables\] table; valid: an allowables file"):
         load_allowables(str(p))
+    p.write_text("[allowables]\nmin_torsional_stiffness = 100.0\n")     # not a design file: no template's hint
+    with pytest.raises(RvtoolInputError, match=r"^\[allowables\] is missing the required keys allowables\.max_lost_motion"
+                                               r", .*; rvtool/designs/rd40_allowables\.toml gives every key"):
+        load_allowables(str(p))
 
 
 def test_lumped_needles_without_load_have_no_hertz_peak():

@@ -668,8 +668,12 @@ def _missing_keys_message(cls, section, kw, exc):
             rng = ""
         rng = f" (valid: {rng}{' deg' if is_angle(missing[0]) else ''})" if rng and "constrained" not in rng else ""
     names = ", ".join(keys + file_key(f) for f in missing)
-    return (f"{where} is missing the required key{'s' if len(missing) > 1 else ''} {names}{rng}; 'rvtool new' "
-            "writes every key with its unit and valid range")
+    hint = _MISSING_HINTS.get(section.partition(".")[0], "'rvtool new' writes every key with its unit and valid range")
+    return f"{where} is missing the required key{'s' if len(missing) > 1 else ''} {names}{rng}; {hint}"
+
+
+_MISSING_HINTS = {"allowables": "rvtool/designs/rd40_allowables.toml gives every key with its unit and source"}
+"""Where the keys of a table that is not a design file's are listed (the design file's: its template)."""
 
 
 _RANGE_MESSAGE = re.compile(r"^(\w+) = (.+?) is outside the valid range ([\[(])([^,]+), ([^\])]+)([\])])(.*)$", re.S)
