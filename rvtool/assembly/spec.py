@@ -664,7 +664,7 @@ def _missing_keys_message(cls, section, kw, exc):
         try:
             probe = angle_range if is_angle(missing[0]) else valid_range
             rng = probe(cls, {**kw, missing[0].name: sample}, missing[0].name)
-        except Exception:       # a range that cannot be probed here: the key is still named
+        except (TypeError, ValueError, AttributeError):     # a range not probed here: the key is still named
             rng = ""
         rng = f" (valid: {rng}{' deg' if is_angle(missing[0]) else ''})" if rng and "constrained" not in rng else ""
     names = ", ".join(keys + file_key(f) for f in missing)

@@ -43,9 +43,10 @@ class Cranks:
     of each crank [kg m^2].
     phase_errors: the eccentric phase of crank k off its nominal by this angle [rad], one per crank,
     on both journals (an empty list: none) (file: ``phase_errors_deg``); eccentricity_errors: e_k - e
-    [m] per crank, each greater than -wheels.eccentricity (an empty list: none); gear_pitch_deviations: per crank, the single pitch deviations
-    f_pt,j [m] of its spur gear (``crank_gear.n_teeth`` entries summing to zero, as
-    ``InvoluteGear.single_pitch_deviations``; an empty list: every crank gear as ``crank_gear``).
+    [m] per crank, each greater than -wheels.eccentricity (an empty list: none);
+    gear_pitch_deviations: per crank, the single pitch deviations f_pt,j [m] of its spur gear
+    (``crank_gear.n_teeth`` entries summing to zero, as ``InvoluteGear.single_pitch_deviations``; an
+    empty list: every crank gear as ``crank_gear``).
     wheel_bore_errors: per crank k, per wheel j, the (x, y) position error [m] of crank k's bore in
     wheel j (the needle row's outer ring centre), in the wheel's frame, off the crank circle (an
     empty list: every bore at its true position; a position tolerance of ISO 1101).
