@@ -246,3 +246,18 @@ def test_other_commands_refuse_an_out_that_is_a_file(argv, tmp_path, monkeypatch
     assert _cli(argv, tmp_path, monkeypatch) == 2
     err = capsys.readouterr().err
     assert "--out = 'taken.txt' is an existing file" in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("topology,section", [("rv2", "crank_bearing"), ("rv2", "main_bearing"),
+                                              ("cycloid", "main_bearing")])
+def test_misspelt_pair_key_is_answered_with_the_pairs_keys(topology, section, tmp_path):
+    """Before: ``rowspacing`` in ``[main_bearing]`` was answered with the ball row's keys alone, without
+    ``row_spacing`` and without a "did you mean" (``crank_bearing.rowspacing is not a parameter of
+    TaperedRollerBearing; valid: [...]``): the pair's own keys share the table with its rows'."""
+    table = _template_table(topology)
+    table[section]["rowspacing"] = table[section].pop("row_spacing")
+    with pytest.raises(RvtoolInputError) as e:
+        _load(tmp_path, table)
+    msg = str(e.value)
+    assert msg.startswith(f"[{section}] has unknown keys ['rowspacing']; valid keys are ["), msg
+    assert "'row_spacing'" in msg and "'arrangement'" in msg and "did you mean 'rowspacing' -> 'row_spacing'" in msg

@@ -696,6 +696,17 @@ def _file_angle_message(msg, cls):
     return f"{name}_deg = {value_deg} is outside the valid range {lb}{low_deg}, {high_deg}{hb} deg{rest}"
 
 
+def check_pair_keys(section, data, pair_cls, row_cls, extra=()):
+    """An unknown key of a bearing pair's table, whose file gives the pair's own keys and its identical
+    rows' keys in one table, named with both sets and a "did you mean" (the row spec alone listed the
+    row's keys: ``rowspacing`` was not answered with ``row_spacing``); ``extra``: sub-table keys."""
+    valid = sorted((set(file_keys(pair_cls)) - {"rows"}) | set(file_keys(row_cls)) | set(extra))
+    unknown = sorted(set(data) - set(valid))
+    if unknown:
+        raise RvtoolInputError(f"[{section}] has unknown keys {unknown}; valid keys are {valid}"
+                               f"{_did_you_mean(unknown, valid)}")
+
+
 def _bearing_kind(section, data, kinds=BEARING_KINDS):
     """The ``kind`` key of a bearing section (default "deep_groove"), checked against ``kinds``."""
     kind = data.get("kind", "deep_groove")
@@ -720,6 +731,7 @@ def _bearing_section(section, data, kinds=BEARING_KINDS):
         raise RvtoolInputError(f"{section}.contact_angle_deg = {angle!r} rad; valid range (0, 90) deg for "
                                "kind = 'angular_contact'")
     if cls is AngularContactPair:
+        check_pair_keys(section, data, AngularContactPair, BallBearing)
         own = {f.name for f in dataclasses.fields(AngularContactPair)} - {"rows"}
         row = build_section(BallBearing, section, {k: v for k, v in data.items() if k not in own})
         return build_section(AngularContactPair, section, {**{k: v for k, v in data.items() if k in own},

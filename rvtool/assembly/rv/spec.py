@@ -29,7 +29,8 @@ from ...structure import ElasticMaterial
 from ...structure.carrier import CarrierStructure
 from ...structure.crank_beam import CrankShaft
 from ...structure.floating_ports import FloatingDynamics
-from ..spec import LINKS, BearingFriction, Housing, PinContact, Pins, Wheels, build_section, load_sections
+from ..spec import (LINKS, BearingFriction, Housing, PinContact, Pins, Wheels, build_section, check_pair_keys,
+                    load_sections)
 
 TOPOLOGIES = ("rv2", "rv3")
 
@@ -478,6 +479,7 @@ def _main_bearing(data):
     tables (each a BallBearing spec), one ``[main_bearing.row]`` table for both, or the rows' keys
     in the pair's table (:func:`_flat_rows`)."""
     table = _table("main_bearing", data)
+    check_pair_keys("main_bearing", table, AngularContactPair, BallBearing, extra=("row", "rows"))
     data = _flat_rows(AngularContactPair, table)
     if "row" in data:
         # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
@@ -497,6 +499,7 @@ def _crank_bearing(data):
     """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables,
     or the rows' keys in the pair's table (:func:`_flat_rows`)."""
     table = _table("crank_bearing", data)
+    check_pair_keys("crank_bearing", table, TaperedPair, TaperedRollerBearing, extra=("row", "rows"))
     data = _flat_rows(TaperedPair, table)
     if "row" in data:
         # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
