@@ -261,3 +261,13 @@ def test_misspelt_pair_key_is_answered_with_the_pairs_keys(topology, section, tm
     msg = str(e.value)
     assert msg.startswith(f"[{section}] has unknown keys ['rowspacing']; valid keys are ["), msg
     assert "'row_spacing'" in msg and "'arrangement'" in msg and "did you mean 'rowspacing' -> 'row_spacing'" in msg
+
+
+def test_design_file_with_a_byte_order_mark_says_so(tmp_path):
+    """Before: a design file saved with a UTF-8 byte-order mark (Windows Notepad) was refused as
+    ``is not valid TOML: Invalid statement (at line 1, column 1)``, pointing at nothing visible."""
+    from rvtool.designs.format import template
+    p = tmp_path / "mine.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + template("cycloid", "mine").encode())
+    with pytest.raises(RvtoolInputError, match=r"starts with a UTF-8 byte-order mark"):
+        rvtool.load_design(str(p))
