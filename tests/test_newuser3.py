@@ -271,3 +271,12 @@ def test_design_file_with_a_byte_order_mark_says_so(tmp_path):
     p.write_bytes(b"\xef\xbb\xbf" + template("cycloid", "mine").encode())
     with pytest.raises(RvtoolInputError, match=r"starts with a UTF-8 byte-order mark"):
         rvtool.load_design(str(p))
+
+
+def test_an_unused_scheduler_is_said(tmp_path):
+    """Before: ``rvtool analyze mydrive.toml --quick --protocols monte_carlo --scheduler HOST:PORT`` ran
+    the variants in this process and said nothing (an address nobody listens on passed unnoticed)."""
+    res = rvtool.analyze("rd40", "monte_carlo", quick=True, scheduler="tcp://nohost:1")     # its tolerance file
+    mc = res["monte_carlo"]
+    assert mc.status == "ok"
+    assert any("--scheduler tcp://nohost:1 was not used" in w for w in mc.warnings), mc.warnings
