@@ -280,3 +280,29 @@ def test_an_unused_scheduler_is_said(tmp_path):
     mc = res["monte_carlo"]
     assert mc.status == "ok"
     assert any("--scheduler tcp://nohost:1 was not used" in w for w in mc.warnings), mc.warnings
+
+
+def test_shared_output_pins_name_the_table_they_need(tmp_path):
+    """Before: ``output_pins.mode = "shared"`` (a choice the template offers) was refused with
+    ``output_pins.compliance = None must be a SharedPinCompliance in shared mode``: no key of that name
+    in the template, and the format doc said "compliance [m/N] (None: rigid)"."""
+    table = _template_table("cycloid")
+    table["output_pins"]["mode"] = "shared"
+    with pytest.raises(RvtoolInputError, match=r"output_pins\.mode = 'shared' needs .*\[output_pins\.compliance\] "
+                                               r"\(self_compliance_0, self_compliance_1"):
+        _load(tmp_path, table)
+    table["output_pins"]["compliance"] = {"self_compliance_0": 1e-9, "self_compliance_1": 1e-9}
+    assert _load(tmp_path, table).output_pins.mode.value == "shared"
+
+
+@pytest.mark.parametrize("section,key,value", [("bodies", "flange_coordinates", "spatial"),
+                                               ("eccentric_bearing", "slices", "influence")])
+def test_a_rolling_bearing_only_choice_says_rvtool_analyze_cannot_run_it(section, key, value, tmp_path):
+    """Before: a cycloid design file with ``bodies.flange_coordinates = "spatial"`` was refused under
+    `rvtool analyze` with "valid: build(..., bearing_model='rolling')", a keyword the command line has
+    no option for (it builds the lumped bearings)."""
+    table = _template_table("cycloid")
+    table[section][key] = value
+    design = _load(tmp_path, table)
+    with pytest.raises(RvtoolInputError, match=r"`rvtool analyze` builds the cycloid .* with lumped bearings"):
+        rvtool.build(design)
