@@ -306,3 +306,12 @@ def test_a_rolling_bearing_only_choice_says_rvtool_analyze_cannot_run_it(section
     design = _load(tmp_path, table)
     with pytest.raises(RvtoolInputError, match=r"`rvtool analyze` builds the cycloid .* with lumped bearings"):
         rvtool.build(design)
+
+
+def test_wheel_midplanes_must_be_numbers(tmp_path):
+    """Before: ``wheels.midplanes = [[0.0], [1.0]]`` was refused as ``output_pins.wheel_midplanes must list
+    one axial position per wheel`` (a key the template leaves to follow wheels.midplanes)."""
+    table = _template_table("cycloid")
+    table["wheels"]["midplanes"] = [[0.0], [1.0]]
+    with pytest.raises(RvtoolInputError, match=r"^wheels\.midplanes = \[\[0\.0\], \[1\.0\]\]; valid: a list of numbers"):
+        _load(tmp_path, table)

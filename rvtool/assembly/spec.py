@@ -28,6 +28,7 @@ re-loads the changed data and the links follow a change (e.g. of the wheel width
 import copy
 import dataclasses
 import math
+import numbers
 import re
 import typing
 from dataclasses import dataclass, field
@@ -133,6 +134,11 @@ class Wheels:
         if self.body not in ("rigid", "ported"):
             raise RvtoolInputError(f"wheels.body = {self.body!r}; valid choices are ['rigid', 'ported']")
         check_positive("wheels.width", self.width)
+        if not all(isinstance(z, numbers.Real) and not isinstance(z, bool) for z in self.midplanes):
+            # a nested list was refused only by the output pins' copy (output_pins.wheel_midplanes)
+            shown = [list(z) if isinstance(z, tuple) else z for z in self.midplanes]     # as the file wrote it
+            raise RvtoolInputError(f"wheels.midplanes = {shown!r}; valid: a list of numbers [m], one "
+                                   "axial position per wheel")
         if len(self.midplanes) != len(self.phases):
             raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases_deg "
                                    f"({len(self.phases)}) must have one entry per wheel")
