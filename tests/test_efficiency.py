@@ -41,13 +41,20 @@ def test_sliding_losses_scale_with_mu_and_speed(rated):
 
 
 def test_main_bearing_loss_is_palmgrens_moment_times_output_speed(rated):
-    # hand: M0 = 160e-7 f0 d_m^3 [N mm] below nu n = 2000 (32 mm^2/s x 12.4 r/min), M1 = f1 P1 d_m >= 0
+    # hand: M0 = 160e-7 f0 d_m^3 [N mm] below nu n = 2000 (32 mm^2/s x 12.4 r/min), M1 = f1 P1 d_m with
+    # Palmgren's P1 of the two rows at their 500 N preload, 2 x 0.9 F_a cot(40 deg) - 0.1 F_r, F_r the pair's
+    # radial load at T_R (below 1 kN: within -0.1 F_r of the preload form, 10 % of M1)
     m, q = rated
     w_in = 1500 * 2 * math.pi / 60
     loss = rolling_losses(m, q, kinematic_velocity(m, 0.0, w_in))["main_bearings"]
     w_out = w_in / abs(m.ratio)
     M0 = 160e-7 * 2.0 * 150.0 ** 3 * 1e-3
-    assert M0 * w_out <= loss <= 1.5 * M0 * w_out
+    M1 = m.design.bearing_friction.f1_ball * 2 * 0.9 * 500.0 / math.tan(math.radians(40.0)) * 150.0 * 1e-3
+    assert (M0 + 0.9 * M1) * w_out <= loss <= (M0 + M1) * w_out
+    radial = m.design.replace(bearing_friction={"palmgren_load": "radial"})
+    m_r = rvtool.build(radial)
+    loss_r = rolling_losses(m_r, q, kinematic_velocity(m_r, 0.0, w_in))["main_bearings"]
+    assert M0 * w_out <= loss_r <= 1.5 * M0 * w_out
 
 
 def test_efficiency_points(rated):

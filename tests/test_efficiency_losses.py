@@ -53,7 +53,8 @@ def test_iso_tr_14179_closed_form():
 
 def test_main_bearing_loss_is_palmgrens_moment_in_closed_form(rv40e, loaded):
     # at no load the main pair (two angular-contact rows, outer ring on the housing) turns at the output speed
-    # with P1 = 0: loss = M0 omega_out, M0 = 1e-7 (2 f0) (nu n)^(2/3) d_m^3 [N mm] (nu n >= 2000 here)
+    # with no radial load: loss = (M0 + M1) omega_out, M0 = 1e-7 (2 f0) (nu n)^(2/3) d_m^3 [N mm] (nu n >= 2000
+    # here), M1 = f1 P1 d_m with Palmgren's P1 of the two rows at their 500 N preload, 2 x 0.9 F_a cot(40 deg)
     d, m = rv40e
     fs = loaded.central
     m.set_output_torque(0.0)
@@ -66,7 +67,10 @@ def test_main_bearing_loss_is_palmgrens_moment_in_closed_form(rv40e, loaded):
     nu_mm2 = fs.viscosity * 1e6
     assert nu_mm2 * n_out >= 2000
     M0 = 1e-7 * (2 * fs.f0_ball) * (nu_mm2 * n_out) ** (2 / 3) * 150.0 ** 3 * 1e-3
-    assert parts["main_bearings"] == pytest.approx(M0 * w_in / abs(m.ratio), rel=1e-9)
+    M1 = fs.f1_ball * 2 * 0.9 * 500.0 / math.tan(math.radians(40.0)) * 150.0 * 1e-3
+    assert parts["main_bearings"] == pytest.approx((M0 + M1) * w_in / abs(m.ratio), rel=1e-9)
+    radial = L.part_losses(m, d, replace(fs, palmgren_load="radial"), q, v)
+    assert radial["main_bearings"] == pytest.approx(M0 * w_in / abs(m.ratio), rel=1e-9)
     # the seal: c d^2 n with d = 1.1 x 150 mm
     assert parts["seals"] == pytest.approx(fs.seal_coefficient * (1.1 * 150.0) ** 2 * n_out, rel=1e-12)
     # no load: the sliding contacts carry nothing (1e-6 W: the contact law's regularization leaves 3e-10 W),

@@ -23,14 +23,19 @@ Reported per design:
 - the SKF reference's uncertain constants at their other values (the needle set's R1 over the caged cylindrical
   series, the tapered rows' mu_EHL at 0.002): the bearing loss at the audit state and the efficiency at the top
   speed with that change;
-- the main bearing's P1 with Palmgren's definition for an angular-contact ball row, P1 = max(0.9 F_a cot(alpha) -
-  0.1 F_r, F_r) (Harris & Kotzalas; the loss accounting takes the radial resultant): the loss it adds at 60 r/min.
+- Palmgren's P1 by bearing type (rvtool.bearings.palmgren_load, the friction set's rolling.palmgren_load =
+  "typed": ball rows max(0.9 F_a cot(alpha) - 0.1 F_r, F_r), tapered rows max(2 Y F_a, F_r), F_a the rows' declared
+  preload) against the radial resultant alone (the form before the correction, "radial"): per rolling set at the
+  audit state the two P1 and the loss the typed form adds; by speed the Palmgren column's efficiency with the
+  radial form; the no-load running torque with it.
 
 passed (stated criteria): every model relative speed equals its closed form (1e-9), SKF's factors in (0, 1], the
-Palmgren column's bearing losses equal the sum of its audit rows (1e-12), every efficiency in (0, 1), no NaN.
+Palmgren column's bearing losses equal the sum of its audit rows (1e-12), the typed P1 of every rolling set at least
+its radial resultant, every efficiency in (0, 1), no NaN.
 """
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -68,14 +73,14 @@ def _audit_rows(m, d, fs):
         c = cf[r["element"]]
         kin.append({"mounting": r["mounting"], "n_model_rpm": r["n_rel_rpm"], "n_closed_form_rpm": c,
                     "rel_err": abs(r["n_rel_rpm"] - c) / c})
-    main = next(r for r in L.rolling_audit(m, d, fs, q, v, skf=False) if r["element"] == "main_bearings")
-    main_bearing = m.elements["main_bearings"].evaluator.mountings[0].bearing
-    rows_pd = []
-    for row in main_bearing.rows:
-        fr = 0.5 * main["P1_N"]
-        rows_pd.append(max(0.9 * row.axial_preload / math.tan(row.contact_angle) - 0.1 * fr, fr))
-    dm = main["pitch_diameter_m"]
-    added = (main["palmgren_f1"] * dm * (sum(rows_pd) - main["P1_N"])) * main["omega_rel_rad_s"]
+    # Palmgren's P1 by type against the radial resultant, per rolling set (sums over its mountings)
+    correction = {}
+    for r in L.rolling_audit(m, d, fs, q, v, skf=False):
+        c = correction.setdefault(r["element"], {"P1_radial_N": 0.0, "P1_typed_N": 0.0, "loss_added_W": 0.0})
+        typed = sum(x["P1_N"] for x in r["P1_rows"])
+        c["P1_radial_N"] += r["P1_radial_N"]
+        c["P1_typed_N"] += typed
+        c["loss_added_W"] += r["palmgren_f1"] * r["pitch_diameter_m"] * (typed - r["P1_radial_N"]) * r["omega_rel_rad_s"]
     skf_sens = {}
     base = sum(r["skf_loss_W"] for r in rows)
     for key, consts in _skf_variants().items():
@@ -84,15 +89,13 @@ def _audit_rows(m, d, fs):
     sums = {e: sum(r["palmgren_loss_W"] for r in rows if r["element"] == e) for e in L.ROLLING_ELEMENTS}
     pl = L.part_losses(m, d, fs, q, v)
     consistency = max(abs(pl[e] - sums[e]) / pl[e] for e in L.ROLLING_ELEMENTS)
-    return rows, kin, cf, {"P1_radial_N": main["P1_N"], "P1_palmgren_ball_rows_N": rows_pd,
-                           "loss_added_W": added}, consistency, skf_sens
+    return rows, kin, cf, correction, consistency, skf_sens
 
 
 def _skf_variants():
     """The SKF reference's `assumed` or uncertain constants at their other values: the needle set's R1 at
     either end of the caged cylindrical-roller series (0.96e-6, 1.48e-6) and the tapered rows' mu_EHL at
     0.002 (the value a public implementation of the 2018 catalogue uses)."""
-    from dataclasses import replace
     from rvtool.bearings.skf_friction import CONSTANTS as C
     return {"needle_R1_low": {"needle_roller": replace(C["needle_roller"], R1=0.96e-6)},
             "needle_R1_high": {"needle_roller": replace(C["needle_roller"], R1=1.48e-6)},
@@ -103,10 +106,12 @@ def run_design(name, loaded, cat, speeds, n_ang):
     d, note = L.loss_design(rvtool.load_design(designs.path(name)))
     m = rvtool.build(d)
     fs = loaded.central
-    rows, kin, cf, main_p1, consistency, skf_sens = _audit_rows(m, d, fs)
+    rows, kin, cf, p1_correction, consistency, skf_sens = _audit_rows(m, d, fs)
     angles = L.mesh_angles(m, n_ang)
     maps = {mod: L.efficiency_map(m, d, fs, output_speeds_rpm=speeds, input_angles=angles, bearing_model=mod)
             for mod in MODELS}
+    fs_radial = replace(fs, palmgren_load="radial")
+    radial_map = L.efficiency_map(m, d, fs_radial, output_speeds_rpm=speeds, input_angles=angles)
     ends = {(mod, end): L.efficiency_map(m, d, loaded.at("churning_fraction", end), output_speeds_rpm=speeds,
                                          input_angles=angles, bearing_model=mod)
             for mod in MODELS for end in ("low", "high")}
@@ -114,7 +119,8 @@ def run_design(name, loaded, cat, speeds, n_ang):
     by_speed = []
     for i, n in enumerate(speeds):
         p = {mod: maps[mod]["points"][i] for mod in MODELS}
-        row = {"output_speed_rpm": n, "P_out_W": p["palmgren"]["P_out_W"]}
+        row = {"output_speed_rpm": n, "P_out_W": p["palmgren"]["P_out_W"],
+               "eta_palmgren_radial_pct": 100 * radial_map["points"][i]["efficiency"]}
         for mod in MODELS:
             row[f"eta_{mod}_pct"] = 100 * p[mod]["efficiency"]
             row[f"loss_{mod}_W"] = p[mod]["loss_by_part_W"]
@@ -140,12 +146,15 @@ def run_design(name, loaded, cat, speeds, n_ang):
     fig = cat.no_load[name]
     no_load = {mod: L.no_load_torque(m, d, fs, fig.input_speed_rpm, input_angles=angles, bearing_model=mod)
                for mod in MODELS}
+    no_load_radial = L.no_load_torque(m, d, fs_radial, fig.input_speed_rpm, input_angles=angles)
     return {"variant": note, "ratio": abs(float(m.ratio)), "viscosity_at_case_temperature_m2_s": fs.viscosity,
             "kinematics_60rpm": kin, "closed_form_60rpm": cf, "audit_rows_60rpm": rows, "by_speed": by_speed,
-            "main_bearing_P1": main_p1, "palmgren_rows_consistency_rel": consistency,
+            "palmgren_load_correction_60rpm": p1_correction, "palmgren_rows_consistency_rel": consistency,
             "skf_sensitivity_60rpm": skf_sens,
             "no_load": {"input_speed_rpm": fig.input_speed_rpm, "catalogue_Nm": fig.torque,
                         "palmgren_Nm": no_load["palmgren"]["total_Nm"], "skf_Nm": no_load["skf"]["total_Nm"],
+                        "palmgren_radial_Nm": no_load_radial["total_Nm"],
+                        "palmgren_radial_by_part_Nm": no_load_radial["by_part_Nm"],
                         "palmgren_by_part_Nm": no_load["palmgren"]["by_part_Nm"],
                         "skf_by_part_Nm": no_load["skf"]["by_part_Nm"]},
             "catalogue_status": curve.status}
@@ -165,6 +174,10 @@ def judge(r):
                                        why="reduction factors of the SKF model lie in (0, 1]")
         out[f"{name}_palmgren_rows_sum"] = c(res["palmgren_rows_consistency_rel"], 1e-12,
                                              why="the audit rows are the loss accounting's own terms")
+        corr = res["palmgren_load_correction_60rpm"]
+        out[f"{name}_typed_P1_at_least_radial"] = c(min(x["P1_typed_N"] - x["P1_radial_N"] for x in corr.values()),
+                                                    0.0, ">=", why="each typed form is max(..., F_r): never below "
+                                                                   "the radial resultant")
         effs = [row[f"eta_{mod}_pct"] for row in res["by_speed"] for mod in MODELS]
         out[f"{name}_efficiency_range"] = c(float(min(effs)) if max(effs) < 100 else float("nan"), (0.0, 100.0),
                                             "in", why="losses are nonnegative and finite")

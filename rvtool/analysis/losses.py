@@ -8,7 +8,9 @@ size and speed; each number carries its source there or is `assumed` at the midd
 - **rolling bearings**: Palmgren's M = M0 + M1 per mounting (:mod:`rvtool.bearings.friction_torque`),
   the grease column of Harris & Kotzalas' f0 table times the mounting's number of rows, f1 by type,
   the base oil's viscosity at the catalogue's case temperature (ASTM D341, :func:`walther_viscosity`),
-  P1 the mounting's radial resultant, omega the relative speed of its rings;
+  P1 Palmgren's load by bearing type from the mounting's radial resultant and its rows' declared axial
+  preload (:mod:`rvtool.bearings.palmgren_load`; the set's ``rolling.palmgren_load = "typed"``, or "radial":
+  the radial resultant alone, the form before the correction), omega the relative speed of its rings;
 - **involute teeth**: mu per mesh from ISO/TR 14179-2 (:func:`iso_tr_14179_mu`) at the mesh's load (all its
   tooth pairs and slices) per face width, its sum velocity and reduced radius at the pitch point; the loss
   mu F_n |v_t| per row;
@@ -55,7 +57,9 @@ class FrictionSet:
     source): case_temperature [K]; nu40, nu100: base-oil kinematic viscosity at 40 / 100 degC [m^2/s];
     density [kg/m^3]; f0_* (per row) and f1_* Palmgren's factors [-]; teeth_lubricant_factor X_L [-];
     roughness Ra [m]; pins_mu [-]; seal_coefficient c [W/(mm^2 r/min)]; seal_diameter_ratio (seal
-    diameter / main-bearing pitch diameter) [-]; churning_fraction [-]."""
+    diameter / main-bearing pitch diameter) [-]; churning_fraction [-]; palmgren_load: the form of
+    Palmgren's P1, "typed" (by bearing type with the rows' axial preload) or "radial"
+    (:mod:`rvtool.bearings.palmgren_load`)."""
     name: str = "custom"
     case_temperature: float
     nu40: float
@@ -73,8 +77,11 @@ class FrictionSet:
     seal_coefficient: float
     seal_diameter_ratio: float
     churning_fraction: float
+    palmgren_load: str = "typed"
 
     def __post_init__(self):
+        from ..bearings.palmgren_load import check_mode
+        check_mode(self.palmgren_load, "rolling.palmgren_load")
         check_range("friction_set.case_temperature", self.case_temperature, 200.0, 450.0)
         check_positive("lubricant.nu40", self.nu40)
         check_positive("lubricant.nu100", self.nu100)
@@ -136,6 +143,8 @@ def load_friction_set(path=None):
     if "friction_set" not in table:
         raise RvtoolInputError(f"{path}: the [friction_set] table is missing (valid: a friction-set file)")
     values, ranges, keys = {"name": str(table["friction_set"].get("name", "custom"))}, {}, {}
+    # the form of Palmgren's P1 (a name, not a number); absent: "typed", Palmgren's definition
+    values["palmgren_load"] = table.get("rolling", {}).get("palmgren_load", "typed")
     for (sec, key), field in _KEYS.items():
         where = f"{sec}.{key}"
         if sec not in table or key not in table[sec]:
@@ -304,18 +313,21 @@ def _skf_rows(bearing, fs, omega, load, constants=None):
 
 def rolling_audit(model, design, fs: FrictionSet, q, v, *, skf=True, skf_constants=None):
     """One row per bearing mounting at the static state q moving at v: the element and mounting, the
-    bearing type and rows, d_m [m], the rings' relative speed [rad/s and r/min], P1 [N], Palmgren's f0
+    bearing type and rows, d_m [m], the rings' relative speed [rad/s and r/min], P1 [N] (the friction set's
+    form ``palmgren_load``; with the radial resultant ``P1_radial_N`` and the typed P1 per row), Palmgren's f0
     (summed over the rows), f1, M0, M1 [N m] and loss [W] (the friction set's accounting), and with
     ``skf`` the SKF 2004 reference (rvtool.bearings.skf_friction) per row and in total [W];
     ``skf_constants`` replaces entries of its constants (:func:`_skf_rows`)."""
     from ..bearings.friction_element import ElementResultantLoads
+    from ..bearings.palmgren_load import palmgren_load, row_loads
     nu = fs.viscosity
     rows = []
     for name in ROLLING_ELEMENTS:
         bset = model.elements[name].evaluator
         pose, vel = _element_state(model.elements[name], q, v)
-        P1 = ElementResultantLoads(bset, [m.name for m in bset.mountings])(pose, vel)
-        for m, p in zip(bset.mountings, P1):
+        radial = ElementResultantLoads(bset, [m.name for m in bset.mountings])(pose, vel)
+        for m, fr in zip(bset.mountings, radial):
+            p = palmgren_load(m.bearing, fr, fs.palmgren_load)
             f0, f1, dm, n_rows = _mounting_factors(m.bearing, fs)
             wa = vel[m.inner, 2] if m.inner >= 0 else 0.0
             wb = vel[m.outer, 2] if m.outer >= 0 else 0.0
@@ -324,10 +336,14 @@ def rolling_audit(model, design, fs: FrictionSet, q, v, *, skf=True, skf_constan
             w = float(w)
             row = {"element": name, "mounting": m.name, "bearing_type": type(m.bearing).__name__, "rows": n_rows,
                    "pitch_diameter_m": dm, "omega_rel_rad_s": w, "n_rel_rpm": w * RPM_PER_RAD_S, "P1_N": float(p),
+                   "P1_radial_N": float(fr), "palmgren_load": fs.palmgren_load,
+                   "P1_rows": [{"row": lab, "F_r_N": a, "F_a_N": b, "P1_N": c}
+                               for lab, a, b, c in row_loads(m.bearing, fr)],
                    "palmgren_f0": f0, "palmgren_f1": f1, "viscosity_m2_s": nu, "palmgren_M0_Nm": m0,
                    "palmgren_M1_Nm": m1, "palmgren_loss_W": (m0 + m1) * w}
             if skf:
-                parts = _skf_rows(m.bearing, fs, w, float(p), skf_constants) if w > 0 else []
+                # SKF's model takes each row's radial and axial load itself (_skf_rows): the radial resultant
+                parts = _skf_rows(m.bearing, fs, w, float(fr), skf_constants) if w > 0 else []
                 row["skf_rows"] = [{"row": lab, "constants": key, **r} for lab, key, r in parts]
                 row["skf_M_Nm"] = float(sum(r["M"] for _, _, r in parts))
                 row["skf_loss_W"] = row["skf_M_Nm"] * w

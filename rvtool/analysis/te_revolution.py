@@ -35,18 +35,42 @@ CHUNK_POINTS = 800
 point of rv80e, 2 points per mesh, plus 3 s to build the variant and a cold start), so that 16 workers share a few
 hundred units evenly and a resumed run loses at most one unit per worker."""
 
+PORTABLE_DIGITS = 12
+"""Significant digits of every float in a TE job's digest (:func:`design_digest`). The job's inputs are computed
+floats (the angle step from the mesh period, a variant's pin centres from its draws), whose last bits differ
+between machines (libm / SIMD transcendental functions): the GPU host's step was 0.3081177410251525 where the
+development machine's is 0.30811774102515266 at the same commit, so every unit solved there had another key and no
+run could resume the other's units. Twelve digits are far below any physical difference of two jobs (a tolerance
+draw of ~1e-6 m resolved to ~1e-18 m) and far above the last-bit noise (~1e-16 relative)."""
+
+
+def _portable(obj):
+    """``obj`` with every float (NumPy's too, arrays through ``tolist()``) rounded to :data:`PORTABLE_DIGITS`
+    significant digits; dicts, lists and tuples walked."""
+    if isinstance(obj, dict):
+        return {k: _portable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_portable(v) for v in obj]
+    if hasattr(obj, "tolist") and not isinstance(obj, (bool, int)):
+        return _portable(obj.tolist())
+    if isinstance(obj, float):
+        return float(f"{obj:.{PORTABLE_DIGITS}g}")
+    return obj
+
+
 def design_digest(design, *, torque, step):
     """SHA-256 (hex) of what a TE job solves (:func:`rvtool.analysis.workunits.json_sha256`): every field of the
-    design dataclass, the output torque [N m] and the angle step [rad]."""
+    design dataclass, the output torque [N m] and the angle step [rad], each float at :data:`PORTABLE_DIGITS`
+    significant digits, so that a unit solved on one machine is found by a run on another."""
     from .workunits import json_sha256
-    return json_sha256({"design": dataclasses.asdict(design), "torque": float(torque), "step": float(step),
-                        "protocol": "quasi_static_te"})
+    return json_sha256(_portable({"design": dataclasses.asdict(design), "torque": float(torque),
+                                  "step": float(step), "protocol": "quasi_static_te"}))
 
 
 def unit_key(job_digest, i0, i1):
     """Key of the unit of points [i0, i1) of a job: the SHA-256 of the text ``"<job digest>:<i0>:<i1>"``. Not
-    :func:`~rvtool.analysis.workunits.json_sha256` (the JSON of that text is quoted, another hash): the 128
-    committed unit keys of te_measured_rv80e are of this text (tests/test_te_revolution.py)."""
+    :func:`~rvtool.analysis.workunits.json_sha256` (the JSON of that text is quoted, another hash): the
+    unit keys pinned in tests/test_te_revolution.py are of this text."""
     return hashlib.sha256(f"{job_digest}:{int(i0)}:{int(i1)}".encode()).hexdigest()
 
 

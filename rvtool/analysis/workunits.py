@@ -55,8 +55,9 @@ def json_sha256(obj):
     cannot write (``str``, ``repr``, ``float``); no committed input reaches a fallback (design tables and design
     dataclasses hold numbers, strings, lists and arrays only), so every committed key is unchanged:
     tests/test_validate_members.py recomputes the 65 draw digests of the committed
-    ``checkpoint_rv80e.json``, tests/test_te_revolution.py the 128 unit keys of the committed te_measured_rv80e
-    run, tests/test_workunits.py pins a key of each kind."""
+    ``checkpoint_rv80e.json``, tests/test_workunits.py pins a key of each kind. A TE job's digest rounds its
+    floats first (:data:`rvtool.analysis.te_revolution.PORTABLE_DIGITS`: a computed float's last bits differ
+    between machines), and its unit keys are pinned in tests/test_te_revolution.py."""
     text = json.dumps(obj, sort_keys=True, default=_plain)
     return hashlib.sha256(text.encode()).hexdigest()
 

@@ -349,7 +349,11 @@ class BearingFriction:
     regularizes the sign of the torque [rad/s]. static_stiffness: k_phi of the static part
     [N m/rad] (> 0), or None (M0 + M1 on the speed law); with it, M1 acts as a Coulomb torque with
     an anchor on the bearing's relative rotation (:mod:`rvtool.bearings.friction_element`);
-    switched off (None) it costs nothing.
+    switched off (None) it costs nothing. palmgren_load: the load P1 of M1 = f1 P1 d_m on the
+    rolling-element bearing sets, "typed" (Palmgren's definition by bearing type, with the rows'
+    declared axial preload: :mod:`rvtool.bearings.palmgren_load`) or "radial" (the mounting's
+    radial resultant alone, the form before the correction); lumped bearings take their row's
+    normal force either way.
 
     The defaults are chosen here, inside the ranges tabulated by Harris & Kotzalas (oil bath:
     f0 = 2 for angular-contact/deep-groove ball bearings, 4 for needle bearings; f1 = 7e-4 ball,
@@ -364,8 +368,11 @@ class BearingFriction:
     f1_tapered: float = 4e-4
     regularization_speed: float = 1e-2
     static_stiffness: float | None = None
+    palmgren_load: str = "typed"
 
     def __post_init__(self):
+        from ..bearings.palmgren_load import check_mode
+        check_mode(self.palmgren_load, "bearing_friction.palmgren_load")
         if self.model not in ("none", "palmgren"):
             raise RvtoolInputError(f"bearing_friction.model = {self.model!r}; valid choices are ['none', 'palmgren']")
         check_positive("bearing_friction.kinematic_viscosity", self.kinematic_viscosity)

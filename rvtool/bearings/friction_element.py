@@ -16,9 +16,10 @@ Load P1. Lumped bearings: the normal force of the bearing's own contact row
 (:class:`RowLoads`). Rolling-element bearings (ball, needle, tapered:
 :class:`ElementResultantLoads`): the radial resultant |sum_i Q_i n_i| of the
 accepted element loads of the mounting (``resultants`` of the bearing set, the
-force the elements carry between the rings), i.e. Palmgren's P1 = F_r of a
-radial bearing; the axial load is not added (the planar model holds no axial
-coordinate: the axial force is a preload observation), declared.
+force the elements carry between the rings), and from it Palmgren's P1 by bearing
+type with the rows' declared axial preload (:mod:`rvtool.bearings.palmgren_load`;
+``palmgren_load = "typed"``, the default) or the radial resultant alone
+(``palmgren_load = "radial"``, the form before the correction).
 
 Static part (``static_stiffness`` set, switchable): Palmgren's M1 is the load-
 dependent part that the sources attribute to elastic hysteresis and sliding in
@@ -46,6 +47,7 @@ from warp_contacts import circle_pairs_ref as cref
 from ..contact.evaluator import Evaluation, all_finite, check_finite_state
 from ..errors import RvtoolInputError
 from .friction_torque import PalmgrenFrictionTorque, friction_generalized_force, palmgren_torque
+from .palmgren_load import check_mode, palmgren_load
 
 GROUND = -1
 
@@ -85,16 +87,29 @@ class RowLoads:
 
 
 class ElementResultantLoads:
-    """P1 of rolling-element bearings: the radial resultant |F_r| [N] of the element forces of each
+    """P1 of rolling-element bearings from the radial resultant |F_r| [N] of the element forces of each
     named mounting, ``source.resultants(pose, vel)[name].force`` (:class:`rvtool.bearings.set.BearingSet`,
-    :class:`rvtool.bearings.tapered_set.TaperedBearingSet`)."""
+    :class:`rvtool.bearings.tapered_set.TaperedBearingSet`). ``mode`` "radial": P1 = |F_r|; "typed" (needs
+    ``bearings``, one per name): Palmgren's P1 by type with the rows' preload
+    (:func:`rvtool.bearings.palmgren_load.palmgren_load`)."""
 
-    def __init__(self, source, names):
+    def __init__(self, source, names, bearings=None, mode="radial"):
         self.source, self.names = source, tuple(names)
+        self.mode = check_mode(mode)
+        self.bearings = None if bearings is None else tuple(bearings)
+        if mode == "typed" and (self.bearings is None or len(self.bearings) != len(self.names)):
+            raise RvtoolInputError("mode = 'typed' needs one bearing per mounting name (bearings=)")
 
-    def __call__(self, pose, vel):
+    def radial(self, pose, vel):
+        """|F_r| [N] per named mounting."""
         res = self.source.resultants(pose, vel)
         return np.array([float(np.linalg.norm(res[n].force)) for n in self.names])
+
+    def __call__(self, pose, vel):
+        fr = self.radial(pose, vel)
+        if self.mode == "radial":
+            return fr
+        return np.array([float(palmgren_load(b, f)) for b, f in zip(self.bearings, fr)])
 
 
 class BearingFrictionEvaluator:
@@ -248,9 +263,10 @@ def mounting_losses(mountings, factors):
 
 def rolling_friction_evaluator(bearing_set, factors, *, name="bearing_friction"):
     """Palmgren friction of every mounting of a rolling-element set (:func:`mounting_losses`), P1 from
-    the accepted element loads (:class:`ElementResultantLoads`); ``factors.static_stiffness`` switches
-    the static part."""
+    the accepted element loads (:class:`ElementResultantLoads`, the form ``factors.palmgren_load``:
+    "typed" or "radial"); ``factors.static_stiffness`` switches the static part."""
     losses = mounting_losses(bearing_set.mountings, factors)
-    return BearingFrictionEvaluator(losses, bearing_set.n_bodies,
-                                    ElementResultantLoads(bearing_set, [b.name for b in losses]), name=name,
+    loads = ElementResultantLoads(bearing_set, [b.name for b in losses], [m.bearing for m in bearing_set.mountings],
+                                  mode=factors.palmgren_load)
+    return BearingFrictionEvaluator(losses, bearing_set.n_bodies, loads, name=name,
                                     static_stiffness=factors.static_stiffness)

@@ -13,8 +13,9 @@ are then, per family:
   same surface speed (the loss is mu F |v_t| at whichever interface slips, with its mu);
 - **rolling bearings** (needle, tapered crank rows, main bearing): Palmgren's moment
   M(|omega_rel|, P1) |omega_rel| (:mod:`rvtool.bearings.friction_torque`, the design's
-  ``[bearing_friction]`` factors whatever its ``model`` switch), P1 the mounting's radial resultant at
-  q, omega_rel the relative rotation speed of its rings.
+  ``[bearing_friction]`` factors whatever its ``model`` switch), P1 Palmgren's load by bearing type from
+  the mounting's radial resultant at q and its rows' preload (``bearing_friction.palmgren_load``,
+  :mod:`rvtool.bearings.palmgren_load`), omega_rel the relative rotation speed of its rings.
 
 The output power is P_out = |T omega_out|, the input power P_in = P_out + sum of the losses, and the
 efficiency eta = P_out / P_in (friction forces do not change the loads here: first order in mu).
@@ -92,7 +93,8 @@ def rolling_losses(model, q, v):
                                    "bending or torsion on?); valid: cranks.shaft.model = 'rigid', torsion = 'rigid'")
         losses = mounting_losses(bset.mountings, factors)
         pose, vel = _element_state(el, q, v)
-        P1 = ElementResultantLoads(bset, [b.name for b in losses])(pose, vel)
+        P1 = ElementResultantLoads(bset, [b.name for b in losses], [mt.bearing for mt in bset.mountings],
+                                   mode=factors.palmgren_load)(pose, vel)
         total = 0.0
         for b, p in zip(losses, P1):
             wa = vel[b.body_a, 2] if b.body_a >= 0 else 0.0
