@@ -182,8 +182,20 @@ def test_pointed_tip_names_the_thickness_allowance(tmp_path):
     that made the tip pointed was not named."""
     table = _template_table("rv2")
     table["sun_gear"]["thickness_allowance"] = 0.01
-    with pytest.raises(RvtoolInputError, match=r"pointed tip .*sun_gear\.thickness_allowance = 0\.01 m"):
+    with pytest.raises(RvtoolInputError, match=r"pointed tip .*the thickness allowance \(sun_gear\.thickness_allowance, "
+                                               r"0\.01 m\)"):
         _load(tmp_path, table)
+
+
+@pytest.mark.parametrize("topology", ["cycloid", "rv2", "rv3", "std-involute"])
+def test_template_ranges_quote_no_probe_values(topology):
+    """The template's range of a key comes from probing the spec with -1e30 and 1e30: a message that
+    quotes the probe (a first version of the pointed-tip message above made thickness_allowance read
+    "constrained by other keys: sun_gear.tip_diameter = 0.0202 m gives a pointed tip (tooth thickness
+    at the tip -1.122e+30 m)") is no range."""
+    from rvtool.designs.format import key_table
+    for sec, key, value, unit, rng, meaning, required in key_table(topology):
+        assert "e+30" not in rng and "e-30" not in rng and "VALUE" not in rng, f"{sec}.{key}: {rng}"
 
 
 def test_sweep_protocol_value_names_its_table(tmp_path):
