@@ -184,6 +184,13 @@ def _cmd_run(args, parser):
         name = resolve_case(args.case, folder)
     except LookupError as exc:
         parser.error(str(exc.args[0]))
+    if args.out is not None:
+        from rvtool.errors import RvtoolInputError
+        from rvtool.validation import check_out_dir
+        try:
+            check_out_dir(args.out, "--out")
+        except RvtoolInputError as exc:
+            return _input_error(exc)
     results = run_case(name, quick=args.quick, out=args.out)
     if not results.is_file():
         print(f"rvtool: error: case {name!r} finished but wrote no {results}", file=sys.stderr)
@@ -348,6 +355,9 @@ def _cmd_sweep(args, parser):
     if not os.path.isfile(args.spec):
         parser.error(f"sweep spec not found: {args.spec}")
     try:
+        if args.out is not None:
+            from rvtool.validation import check_out_dir
+            check_out_dir(args.out, "--out")
         main_sweep(args.spec, scheduler=args.scheduler, out_dir=args.out, quiet=args.quiet)
     except RvtoolInputError as exc:
         print(f"rvtool: error: {exc}", file=sys.stderr)
@@ -368,6 +378,12 @@ def _cmd_validate(args):
         return _input_error(f"--tornado-keys = {args.tornado_keys} is outside the valid range [0, inf) "
                             "(0: no tornado)")
     log = (lambda *a, **k: None) if args.quiet else (lambda *a, **k: print(*a, file=sys.stderr, **k))
+    if args.out is not None:
+        from rvtool.validation import check_out_dir
+        try:
+            check_out_dir(args.out, "--out")
+        except RvtoolInputError as exc:
+            return _input_error(exc)
     for name in names:
         out_dir = os.path.join(args.out, name) if args.out else os.path.join("results", f"validate_{name}")
         try:

@@ -75,6 +75,22 @@ def check_choice(name, value, choices):
     return value
 
 
+def check_out_dir(out_dir, name="--out / out_dir"):
+    """Raise where ``out_dir`` cannot become an output folder: an existing file, or a path under
+    one (a missing folder is made later by its writer); returns ``out_dir``."""
+    import os
+    path = os.path.abspath(str(out_dir))
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise RvtoolInputError(f"{name} = {str(out_dir)!r} is an existing file; valid: a folder (made if missing)")
+    parent = os.path.dirname(path)
+    while parent and not os.path.exists(parent) and parent != os.path.dirname(parent):
+        parent = os.path.dirname(parent)
+    if not os.path.isdir(parent):
+        raise RvtoolInputError(f"{name} = {str(out_dir)!r} lies under the file {parent!r}; valid: a folder path in a "
+                               "writable place")
+    return out_dir
+
+
 PLANAR_LAYOUT = "x, y, theta per body"
 SPATIAL_LAYOUT = "x, y, theta per planar body; z, gamma_x, gamma_y per out-of-plane row"
 

@@ -119,6 +119,10 @@ def test_allowables_file_without_its_table(tmp_path):
     p.write_text('topology = "cycloid"\n[pins]\nn_pins = 40\n')
     with pytest.raises(RvtoolInputError, match=r"has no \[allowables\] table; valid: an allowables file"):
         load_allowables(str(p))
+    p.write_text("[allowables]\nmin_torsional_stiffness = 100.0\n")     # not a design file: no template's hint
+    with pytest.raises(RvtoolInputError, match=r"^\[allowables\] is missing the required keys allowables\.max_lost_motion"
+                                               r", .*; rvtool/designs/rd40_allowables\.toml gives every key"):
+        load_allowables(str(p))
 
 
 def test_lumped_needles_without_load_have_no_hertz_peak():
@@ -178,8 +182,20 @@ def test_pointed_tip_names_the_thickness_allowance(tmp_path):
     that made the tip pointed was not named."""
     table = _template_table("rv2")
     table["sun_gear"]["thickness_allowance"] = 0.01
-    with pytest.raises(RvtoolInputError, match=r"pointed tip .*sun_gear\.thickness_allowance = 0\.01 m"):
+    with pytest.raises(RvtoolInputError, match=r"pointed tip .*the thickness allowance \(sun_gear\.thickness_allowance, "
+                                               r"0\.01 m\)"):
         _load(tmp_path, table)
+
+
+@pytest.mark.parametrize("topology", ["cycloid", "rv2", "rv3", "std-involute"])
+def test_template_ranges_quote_no_probe_values(topology):
+    """The template's range of a key comes from probing the spec with -1e30 and 1e30: a message that
+    quotes the probe (a first version of the pointed-tip message above made thickness_allowance read
+    "constrained by other keys: sun_gear.tip_diameter = 0.0202 m gives a pointed tip (tooth thickness
+    at the tip -1.122e+30 m)") is no range."""
+    from rvtool.designs.format import key_table
+    for sec, key, value, unit, rng, meaning, required in key_table(topology):
+        assert "e+30" not in rng and "e-30" not in rng and "VALUE" not in rng, f"{sec}.{key}: {rng}"
 
 
 def test_sweep_protocol_value_names_its_table(tmp_path):
@@ -202,3 +218,112 @@ def test_te_error_statement_quotes_the_refined_resolution(tmp_path):
     assert fine != model.resolution_settings()
     statement = res["te"].figure("te_pp").error_statement
     assert f"refined resolution ({fine})" in statement, statement
+
+
+def test_crank_eccentricity_error_keeps_the_eccentric_off_the_axis(tmp_path):
+    """Before: ``cranks.eccentricity_errors = [-0.0013, 0, 0]`` on a 1.2 mm eccentricity (crank 0's
+    eccentric across its axis) was accepted and reported by the rated-state check as "the geometry,
+    not the load, is inadmissible: check the clearances and radii", naming no key."""
+    table = _template_table("rv2")
+    table["cranks"]["eccentricity_errors"] = [-0.0013, 0.0, 0.0]
+    with pytest.raises(RvtoolInputError, match=r"^cranks\.eccentricity_errors\[0\] = -0\.0013 m .* valid range "
+                                               r"\(-0\.0012, inf\) m"):
+        _load(tmp_path, table)
+    table["cranks"]["eccentricity_errors"] = [2e-6, 0.0, -1e-6]      # a tolerance's size: accepted
+    _load(tmp_path, table)
+
+
+@pytest.mark.parametrize("out", ["taken.txt", "taken.txt/sub"])
+def test_out_into_a_file_is_an_input_error_before_any_work(out, tmp_path, monkeypatch, capsys):
+    """Before: ``rvtool analyze mydrive.toml --out mydrive.toml`` (or a path under a file) solved the
+    rated state and then ended in a ``FileExistsError`` / ``NotADirectoryError`` traceback."""
+    (tmp_path / "taken.txt").write_text("x")
+    assert _cli(["analyze", "rd40", "--quick", "--protocols", "lost_motion", "--out", out, "--quiet"],
+                tmp_path, monkeypatch) == 2
+    err = capsys.readouterr().err
+    assert f"--out / out_dir = '{out}'" in err and "Traceback" not in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.txt"]
+
+
+@pytest.mark.parametrize("argv", [
+    ["run", "hard_rd40", "--quick", "--out", "taken.txt"],
+    ["sweep", "spec.toml", "--out", "taken.txt", "--quiet"],
+    ["validate", "rv40e", "--quick", "--out", "taken.txt", "--quiet"],
+])
+def test_other_commands_refuse_an_out_that_is_a_file(argv, tmp_path, monkeypatch, capsys):
+    """Before: ``rvtool run CASE --out FILE`` and ``rvtool sweep SPEC --out FILE`` ended in a
+    ``FileExistsError`` traceback, ``rvtool validate --out FILE`` in a ``NotADirectoryError``."""
+    (tmp_path / "taken.txt").write_text("x")
+    (tmp_path / "spec.toml").write_text('design = "d.toml"\n[parameters]\npin_clearance = [0.0]\n')
+    assert _cli(argv, tmp_path, monkeypatch) == 2
+    err = capsys.readouterr().err
+    assert "--out = 'taken.txt' is an existing file" in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("topology,section", [("rv2", "crank_bearing"), ("rv2", "main_bearing"),
+                                              ("cycloid", "main_bearing")])
+def test_misspelt_pair_key_is_answered_with_the_pairs_keys(topology, section, tmp_path):
+    """Before: ``rowspacing`` in ``[main_bearing]`` was answered with the ball row's keys alone, without
+    ``row_spacing`` and without a "did you mean" (``crank_bearing.rowspacing is not a parameter of
+    TaperedRollerBearing; valid: [...]``): the pair's own keys share the table with its rows'."""
+    table = _template_table(topology)
+    table[section]["rowspacing"] = table[section].pop("row_spacing")
+    with pytest.raises(RvtoolInputError) as e:
+        _load(tmp_path, table)
+    msg = str(e.value)
+    assert msg.startswith(f"[{section}] has unknown keys ['rowspacing']; valid keys are ["), msg
+    assert "'row_spacing'" in msg and "'arrangement'" in msg and "did you mean 'rowspacing' -> 'row_spacing'" in msg
+
+
+def test_design_file_with_a_byte_order_mark_says_so(tmp_path):
+    """Before: a design file saved with a UTF-8 byte-order mark (Windows Notepad) was refused as
+    ``is not valid TOML: Invalid statement (at line 1, column 1)``, pointing at nothing visible."""
+    from rvtool.designs.format import template
+    p = tmp_path / "mine.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + template("cycloid", "mine").encode())
+    with pytest.raises(RvtoolInputError, match=r"starts with a UTF-8 byte-order mark"):
+        rvtool.load_design(str(p))
+
+
+def test_an_unused_scheduler_is_said(tmp_path):
+    """Before: ``rvtool analyze mydrive.toml --quick --protocols monte_carlo --scheduler HOST:PORT`` ran
+    the variants in this process and said nothing (an address nobody listens on passed unnoticed)."""
+    res = rvtool.analyze("rd40", "monte_carlo", quick=True, scheduler="tcp://nohost:1")     # its tolerance file
+    mc = res["monte_carlo"]
+    assert mc.status == "ok"
+    assert any("--scheduler tcp://nohost:1 was not used" in w for w in mc.warnings), mc.warnings
+
+
+def test_shared_output_pins_name_the_table_they_need(tmp_path):
+    """Before: ``output_pins.mode = "shared"`` (a choice the template offers) was refused with
+    ``output_pins.compliance = None must be a SharedPinCompliance in shared mode``: no key of that name
+    in the template, and the format doc said "compliance [m/N] (None: rigid)"."""
+    table = _template_table("cycloid")
+    table["output_pins"]["mode"] = "shared"
+    with pytest.raises(RvtoolInputError, match=r"output_pins\.mode = 'shared' needs .*\[output_pins\.compliance\] "
+                                               r"\(self_compliance_0, self_compliance_1"):
+        _load(tmp_path, table)
+    table["output_pins"]["compliance"] = {"self_compliance_0": 1e-9, "self_compliance_1": 1e-9}
+    assert _load(tmp_path, table).output_pins.mode.value == "shared"
+
+
+@pytest.mark.parametrize("section,key,value", [("bodies", "flange_coordinates", "spatial"),
+                                               ("eccentric_bearing", "slices", "influence")])
+def test_a_rolling_bearing_only_choice_says_rvtool_analyze_cannot_run_it(section, key, value, tmp_path):
+    """Before: a cycloid design file with ``bodies.flange_coordinates = "spatial"`` was refused under
+    `rvtool analyze` with "valid: build(..., bearing_model='rolling')", a keyword the command line has
+    no option for (it builds the lumped bearings)."""
+    table = _template_table("cycloid")
+    table[section][key] = value
+    design = _load(tmp_path, table)
+    with pytest.raises(RvtoolInputError, match=r"`rvtool analyze` builds the cycloid .* with lumped bearings"):
+        rvtool.build(design)
+
+
+def test_wheel_midplanes_must_be_numbers(tmp_path):
+    """Before: ``wheels.midplanes = [[0.0], [1.0]]`` was refused as ``output_pins.wheel_midplanes must list
+    one axial position per wheel`` (a key the template leaves to follow wheels.midplanes)."""
+    table = _template_table("cycloid")
+    table["wheels"]["midplanes"] = [[0.0], [1.0]]
+    with pytest.raises(RvtoolInputError, match=r"^wheels\.midplanes = \[\[0\.0\], \[1\.0\]\]; valid: a list of numbers"):
+        _load(tmp_path, table)

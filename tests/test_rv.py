@@ -182,7 +182,7 @@ def test_topology_errors_name_their_keys(design):
         GearGraph.of(design.replace(ratio_target=120.0))
     with pytest.raises(RvtoolInputError, match=r"wheels.phases_deg.*180"):
         design.replace(wheels={"phases_deg": (0.0, 120.0)})
-    with pytest.raises(RvtoolInputError, match=r"cranks.phase_errors has 2 entries"):
+    with pytest.raises(RvtoolInputError, match=r"cranks\.phase_errors_deg has 2 entries"):
         design.replace(cranks={"phase_errors_deg": (1.0, 2.0)})
 
 

@@ -130,12 +130,19 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     elif not os.path.isfile(allowables):
         raise RvtoolInputError(f"allowables file {str(allowables)!r} not found")
     allowed = allowables_record(allowables)      # a bad file is an input error, raised before any work
+    if out_dir is not None:
+        from ..validation import check_out_dir
+        check_out_dir(out_dir)                   # likewise a folder that cannot be made
     ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances, backend=backend,
                   scheduler=scheduler)
     # a valid but unsolvable load is an input error: raised here, before anything is written
     ctx.cache["rated_state"] = check_rated_state(obj, ctx.build)
     if out_dir is not None:
-        os.makedirs(out_dir, exist_ok=True)
+        try:
+            os.makedirs(out_dir, exist_ok=True)
+        except OSError as exc:
+            raise RvtoolInputError(f"--out / out_dir = {str(out_dir)!r} cannot be created as a folder ({exc.strerror}); "
+                                   "valid: a folder path in a writable place") from None
     results = tuple(_run_one(p, ctx) for p in chosen)
     res = AnalysisResult(getattr(obj, "name", type(obj).__name__), topologies.topology_of(obj) or type(obj).__name__,
                          source, bool(quick), dev, results, out_dir, time.perf_counter() - t0, backend)

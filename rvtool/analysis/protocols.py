@@ -692,6 +692,9 @@ def run_monte_carlo(ctx):
             b: "the design-variant Monte Carlo of this topology runs on the Exudyn CPU path only"
             for b in MC_MODES if b != "exudyn"}}
         n, res, names = _design_variant_monte_carlo(ctx, sampler, out)
+        if ctx.scheduler:
+            out.warnings.append(f"--scheduler {ctx.scheduler} was not used: this topology's Monte Carlo solves its "
+                                "design variants one after another in this process")
         settings = {"tolerances": str(ctx.tolerances), "n_variants": n, "seed": MC_SEED, "mode": "design variants (cpu)",
                     "te_interval": "one input revolution, 4 points per mesh cycle (the quick te protocol's)",
                     "lost_motion_torque_fraction": LOST_MOTION_FRACTION, "backend": choice}
@@ -713,6 +716,10 @@ def run_monte_carlo(ctx):
             res = mc(ctx.design, tol, protocol, mc_settings, chunk_dir, build_kw={"regularization": MC_REGULARIZATION},
                      progress=progress.callback("Monte Carlo", "variant"))
         names = ("te_pp_arcsec", "lost_motion_arcmin", "max_pin_force_N")
+        if ctx.scheduler and mode in ("batched", "device") and (str(ctx.device) != "cpu" or mc_settings.workers == 1):
+            # rvtool.variants.montecarlo runs such batches in this process (a Dask pool only for several CPU workers)
+            out.warnings.append(f"--scheduler {ctx.scheduler} was not used: the {mode} Monte Carlo ran its variant "
+                                f"batches in this process ({'--quick: one worker' if ctx.quick else ctx.device})")
         settings = {"tolerances": str(ctx.tolerances), "n_variants": n, "seed": mc_settings.seed,
                     "mode": mc_settings.mode, "regularization": MC_REGULARIZATION, "backend": choice,
                     "protocol": protocol.__dict__}

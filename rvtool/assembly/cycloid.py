@@ -42,7 +42,7 @@ from ..bearings.spec import AngularContactPair, BallBearing, CrossedRollerBearin
 from ..contact.circle_set import GROUND, CircleContact, CircleContactSet, FrictionLaw, FrictionModel, NormalLaw
 from ..contact.cycloid_set import (PALMGREN_EXPONENT, CycloidPinSet, WheelPinMesh, palmgren_line_coefficient,
                                      secant_line_stiffness)
-from ..bearings.influence import check_lumped
+from ..bearings.influence import LUMPED_IN_ANALYZE, check_lumped
 from ..errors import RvtoolInputError
 from ..geometry.cycloid import lobe_pitch_rotations
 from ..geometry.eccentric import journal_centre, journal_velocity
@@ -769,7 +769,7 @@ def spatial_flange(mbs, design, bearing_model, housing, regularization):
                                                              ("wheel_coordinates", b.spatial_wheels)) if on)
     if bearing_model != "rolling":
         raise RvtoolInputError(f"{said} with bearing_model = {bearing_model!r}: the lumped bearings have no rows; "
-                               "valid: build(..., bearing_model='rolling')")
+                               f"valid: build(..., bearing_model='rolling'){LUMPED_IN_ANALYZE}")
     if b.spatial_flange and not isinstance(d.main_bearing, SPATIAL_MAIN_BEARINGS):
         raise RvtoolInputError("bodies.flange_coordinates = 'spatial' needs a ball or crossed-roller main bearing; "
                                "valid: main_bearing.kind = 'angular_contact_pair', 'angular_contact', 'deep_groove' "

@@ -28,6 +28,7 @@ re-loads the changed data and the links follow a change (e.g. of the wheel width
 import copy
 import dataclasses
 import math
+import numbers
 import re
 import typing
 from dataclasses import dataclass, field
@@ -133,6 +134,11 @@ class Wheels:
         if self.body not in ("rigid", "ported"):
             raise RvtoolInputError(f"wheels.body = {self.body!r}; valid choices are ['rigid', 'ported']")
         check_positive("wheels.width", self.width)
+        if not all(isinstance(z, numbers.Real) and not isinstance(z, bool) for z in self.midplanes):
+            # a nested list was refused only by the output pins' copy (output_pins.wheel_midplanes)
+            shown = [list(z) if isinstance(z, tuple) else z for z in self.midplanes]     # as the file wrote it
+            raise RvtoolInputError(f"wheels.midplanes = {shown!r}; valid: a list of numbers [m], one "
+                                   "axial position per wheel")
         if len(self.midplanes) != len(self.phases):
             raise RvtoolInputError(f"wheels.midplanes ({len(self.midplanes)}) and wheels.phases_deg "
                                    f"({len(self.phases)}) must have one entry per wheel")
@@ -671,12 +677,16 @@ def _missing_keys_message(cls, section, kw, exc):
         try:
             probe = angle_range if is_angle(missing[0]) else valid_range
             rng = probe(cls, {**kw, missing[0].name: sample}, missing[0].name)
-        except Exception:       # a range that cannot be probed here: the key is still named
+        except (TypeError, ValueError, AttributeError):     # a range not probed here: the key is still named
             rng = ""
         rng = f" (valid: {rng}{' deg' if is_angle(missing[0]) else ''})" if rng and "constrained" not in rng else ""
     names = ", ".join(keys + file_key(f) for f in missing)
-    return (f"{where} is missing the required key{'s' if len(missing) > 1 else ''} {names}{rng}; 'rvtool new' "
-            "writes every key with its unit and valid range")
+    hint = _MISSING_HINTS.get(section.partition(".")[0], "'rvtool new' writes every key with its unit and valid range")
+    return f"{where} is missing the required key{'s' if len(missing) > 1 else ''} {names}{rng}; {hint}"
+
+
+_MISSING_HINTS = {"allowables": "rvtool/designs/rd40_allowables.toml gives every key with its unit and source"}
+"""Where the keys of a table that is not a design file's are listed (the design file's: its template)."""
 
 
 _RANGE_MESSAGE = re.compile(r"^(\w+) = (.+?) is outside the valid range ([\[(])([^,]+), ([^\])]+)([\])])(.*)$", re.S)
@@ -697,6 +707,17 @@ def _file_angle_message(msg, cls):
         return msg
     value_deg = _NUMBER.sub(lambda n: f"{np.degrees(float(n.group(0))):.12g}", value)
     return f"{name}_deg = {value_deg} is outside the valid range {lb}{low_deg}, {high_deg}{hb} deg{rest}"
+
+
+def check_pair_keys(section, data, pair_cls, row_cls, extra=()):
+    """An unknown key of a bearing pair's table, whose file gives the pair's own keys and its identical
+    rows' keys in one table, named with both sets and a "did you mean" (the row spec alone listed the
+    row's keys: ``rowspacing`` was not answered with ``row_spacing``); ``extra``: sub-table keys."""
+    valid = sorted((set(file_keys(pair_cls)) - {"rows"}) | set(file_keys(row_cls)) | set(extra))
+    unknown = sorted(set(data) - set(valid))
+    if unknown:
+        raise RvtoolInputError(f"[{section}] has unknown keys {unknown}; valid keys are {valid}"
+                               f"{_did_you_mean(unknown, valid)}")
 
 
 def _bearing_kind(section, data, kinds=BEARING_KINDS):
@@ -723,6 +744,7 @@ def _bearing_section(section, data, kinds=BEARING_KINDS):
         raise RvtoolInputError(f"{section}.contact_angle_deg = {angle!r} rad; valid range (0, 90) deg for "
                                "kind = 'angular_contact'")
     if cls is AngularContactPair:
+        check_pair_keys(section, data, AngularContactPair, BallBearing)
         own = {f.name for f in dataclasses.fields(AngularContactPair)} - {"rows"}
         row = build_section(BallBearing, section, {k: v for k, v in data.items() if k not in own})
         return build_section(AngularContactPair, section, {**{k: v for k, v in data.items() if k in own},

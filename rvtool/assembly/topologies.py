@@ -246,6 +246,9 @@ def read_table(path):
         with open(p, "rb") as fh:
             return tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
+        if p.read_bytes().startswith(b"\xef\xbb\xbf"):   # a Windows editor's byte-order mark: "Invalid statement (line 1)"
+            raise RvtoolInputError(f"design file {str(path)!r} starts with a UTF-8 byte-order mark, which TOML "
+                                   "parsing refuses; valid: the file saved as UTF-8 without BOM") from None
         raise RvtoolInputError(f"design file {str(path)!r} is not valid TOML: {exc}") from None
     except UnicodeDecodeError as exc:
         raise RvtoolInputError(f"design file {str(path)!r} is not UTF-8 text: {exc}") from None

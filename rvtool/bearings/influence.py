@@ -119,7 +119,14 @@ def check_lumped(design, bearing_model):
         b = getattr(design, key, None)
         if getattr(b, "slices", SliceLaw.LAMINAE) == SliceLaw.INFLUENCE:
             raise RvtoolInputError(f"{key}.slices = 'influence' needs bearing_model = 'rolling' (the lumped bearing "
-                                   "is one circle contact without slices); valid with 'lumped': 'laminae'")
+                                   "is one circle contact without slices); valid with 'lumped': 'laminae'"
+                                   f"{LUMPED_IN_ANALYZE}")
+
+
+LUMPED_IN_ANALYZE = ("; `rvtool analyze` builds the cycloid and small-tooth-difference drives with lumped bearings, "
+                     "so such a design runs from Python: rvtool.build(design, bearing_model='rolling')")
+"""What a design-file user is told with a refusal of the lumped bearing model (the command line offers no
+other model for these topologies)."""
 
 
 class RollerSlices:

@@ -345,9 +345,10 @@ class InvoluteGear:
         if s_a <= self.min_tip_thickness:
             raise RvtoolInputError(f"{p}.tip_diameter = {2 * ra:.6g} m gives a pointed tip (tooth thickness at the tip "
                                    f"{s_a:.4g} m); valid: tip thickness > {self.min_tip_thickness} m "
-                                   f"(reduce {p}.profile_shift = {self.profile_shift}"
-                                   + (f", {p}.thickness_allowance = {self.thickness_allowance:.6g} m"
-                                      if self.thickness_allowance else "") + f" or {p}.tip_diameter)")
+                                   f"(reduce {p}.profile_shift = {self.profile_shift} or {p}.tip_diameter"
+                                   # "the allowance (KEY, X m)": a range probe reads "KEY =" as a message about KEY
+                                   + (f", or the thickness allowance ({p}.thickness_allowance, "
+                                      f"{self.thickness_allowance:.6g} m)" if self.thickness_allowance else "") + ")")
         if 2 * self.edge_radius >= s_a:
             raise RvtoolInputError(f"{p}.tip_edge_radius = {self.edge_radius:.4g} m is outside the valid range "
                                    f"(0, {0.5 * s_a:.4g}) m (half the tip thickness)")

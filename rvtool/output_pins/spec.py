@@ -115,8 +115,11 @@ class OutputPinMechanism:
     midpoint slices (stations s relative to each wheel midplane).
     wheel_midplanes: axial positions z_i of the wheel midplanes relative to the flange [m].
     gap_offsets: u_off of Eq. (output_gap) per wheel [m] (e.g. thermal; positive opens).
-    mode: the output-pin model, "plain" or "shared" (:class:`PinMode`). compliance: the pins' compliance of the shared mode [m/N] (None: rigid;
-    shared mode only). sleeve: the sleeve iteration of the shared mode.
+    mode: the output-pin model, "plain" or "shared" (:class:`PinMode`). compliance: the pins' station
+    compliance of the shared mode [m/N], required there and unused in plain mode (a design file's
+    sub-table ``[output_pins.compliance]``: self_compliance_0, self_compliance_1, optional
+    cross_compliance and inner_compliance, :class:`SharedPinCompliance`). sleeve: the sleeve
+    iteration of the shared mode.
     support: the pin as a beam (:class:`~rvtool.structure.pin_beam.PinSupport`; rigid by default).
     The mechanism's own contacts are those of rigid pins; an elastic pin is closed per pin by the
     assembly (:class:`~rvtool.contact.pin_closure.ElasticPinClosure` with the beam's station
@@ -191,7 +194,9 @@ class OutputPinMechanism:
             if z.size != 2:
                 raise RvtoolInputError(f"wheel_midplanes has {z.size} entries; the shared-pin mode couples exactly 2 wheels")
             if not isinstance(self.compliance, SharedPinCompliance):
-                raise RvtoolInputError(f"compliance = {self.compliance!r} must be a SharedPinCompliance in shared mode")
+                raise RvtoolInputError(f"mode = 'shared' needs the pins' station compliance, the sub-table "
+                                       "[output_pins.compliance] (self_compliance_0, self_compliance_1 [m/N], optional "
+                                       f"cross_compliance, inner_compliance); got compliance = {self.compliance!r}")
         if not isinstance(self.sleeve, SleeveFit):
             raise RvtoolInputError(f"sleeve = {self.sleeve!r} must be a SleeveFit")
         if not isinstance(self.support, PinSupport):

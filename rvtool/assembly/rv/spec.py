@@ -29,7 +29,8 @@ from ...structure import ElasticMaterial
 from ...structure.carrier import CarrierStructure
 from ...structure.crank_beam import CrankShaft
 from ...structure.floating_ports import FloatingDynamics
-from ..spec import LINKS, BearingFriction, Housing, PinContact, Pins, Wheels, build_section, load_sections
+from ..spec import (LINKS, BearingFriction, Housing, PinContact, Pins, Wheels, build_section, check_pair_keys,
+                    load_sections)
 
 TOPOLOGIES = ("rv2", "rv3")
 
@@ -43,9 +44,10 @@ class Cranks:
     of each crank [kg m^2].
     phase_errors: the eccentric phase of crank k off its nominal by this angle [rad], one per crank,
     on both journals (an empty list: none) (file: ``phase_errors_deg``); eccentricity_errors: e_k - e
-    [m] per crank (an empty list: none); gear_pitch_deviations: per crank, the single pitch deviations
-    f_pt,j [m] of its spur gear (``crank_gear.n_teeth`` entries summing to zero, as
-    ``InvoluteGear.single_pitch_deviations``; an empty list: every crank gear as ``crank_gear``).
+    [m] per crank, each greater than -wheels.eccentricity (an empty list: none);
+    gear_pitch_deviations: per crank, the single pitch deviations f_pt,j [m] of its spur gear
+    (``crank_gear.n_teeth`` entries summing to zero, as ``InvoluteGear.single_pitch_deviations``; an
+    empty list: every crank gear as ``crank_gear``).
     wheel_bore_errors: per crank k, per wheel j, the (x, y) position error [m] of crank k's bore in
     wheel j (the needle row's outer ring centre), in the wheel's frame, off the crank circle (an
     empty list: every bore at its true position; a position tolerance of ISO 1101).
@@ -378,6 +380,12 @@ class RVDesign:
                 raise RvtoolInputError("cranks.wheel_bore_errors with wheels.body = 'ported' is not implemented (the "
                                        "ported wheel's FE bores sit at their true positions); valid: wheels.body = "
                                        "'rigid' or no cranks.wheel_bore_errors")
+        e = self.wheels.eccentricity
+        for k, de in enumerate(self.cranks.eccentricity_errors):
+            if not e + de > 0:      # crank k's eccentric would sit on (or across) its axis
+                raise RvtoolInputError(f"cranks.eccentricity_errors[{k}] = {de:.6g} m leaves crank {k} the eccentricity "
+                                       f"{e + de:.6g} m; valid range ({-e:.6g}, inf) m (-wheels.eccentricity: e_k = e + "
+                                       "error > 0)")
         z = self.crank_gear.n_teeth
         for k, f in enumerate(self.cranks.gear_pitch_deviations):
             f = tuple(float(x) for x in f)
@@ -471,6 +479,7 @@ def _main_bearing(data):
     tables (each a BallBearing spec), one ``[main_bearing.row]`` table for both, or the rows' keys
     in the pair's table (:func:`_flat_rows`)."""
     table = _table("main_bearing", data)
+    check_pair_keys("main_bearing", table, AngularContactPair, BallBearing, extra=("row", "rows"))
     data = _flat_rows(AngularContactPair, table)
     if "row" in data:
         # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
@@ -490,6 +499,7 @@ def _crank_bearing(data):
     """The TaperedPair from ``[crank_bearing]`` with ``[[crank_bearing.rows]]`` (or one ``row``) tables,
     or the rows' keys in the pair's table (:func:`_flat_rows`)."""
     table = _table("crank_bearing", data)
+    check_pair_keys("crank_bearing", table, TaperedPair, TaperedRollerBearing, extra=("row", "rows"))
     data = _flat_rows(TaperedPair, table)
     if "row" in data:
         # an error names the key where the file gives it: the pair's own table (flat rule) or its row table
