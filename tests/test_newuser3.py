@@ -9,6 +9,7 @@ import pytest
 
 import rvtool
 from rvtool.errors import RvtoolInputError
+from _design_files import load_table, template_table
 
 
 def test_list_into_a_closed_pipe_is_quiet():
@@ -23,34 +24,20 @@ def test_list_into_a_closed_pipe_is_quiet():
     assert p.returncode == 1
 
 
-def _template_table(topology):
-    import tomllib
-
-    from rvtool.designs.format import template
-    return tomllib.loads(template(topology, name="mine"))
-
-
-def _load(tmp_path, table):
-    import tomlkit
-    p = tmp_path / "mine.toml"
-    p.write_text(tomlkit.dumps(table))
-    return rvtool.load_design(str(p))
-
-
 @pytest.mark.parametrize("topology,gear", [("rv2", "sun_gear"), ("std-involute", "wheel")])
 def test_gear_sub_table_errors_name_the_file_key_once(topology, gear, tmp_path):
     """Before: ``sun_gear.rack.rack.pressure_angle = 0.8726646259971648 is outside the valid range (0.0,
     0.7853981633974483)`` (the rack's own prefix doubled, the field in radians instead of the file's
     ``pressure_angle_deg`` in degrees), and ``sun_gear.modification.modification.tip_relief``."""
-    table = _template_table(topology)
+    table = template_table(topology)
     table[gear]["rack"]["pressure_angle_deg"] = 50.0
     with pytest.raises(RvtoolInputError) as e:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     assert str(e.value) == f"{gear}.rack.pressure_angle_deg = 50 is outside the valid range (0, 45) deg"
-    table = _template_table(topology)
+    table = template_table(topology)
     table[gear]["modification"]["tip_relief"] = -1e-6
     with pytest.raises(RvtoolInputError) as e:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     assert str(e.value).startswith(f"{gear}.modification.tip_relief = -1e-06 is outside the valid range [0.0, inf)")
 
 
@@ -60,18 +47,18 @@ def test_gear_sub_table_errors_name_the_file_key_once(topology, gear, tmp_path):
 ])
 def test_non_finite_angle_names_the_deg_key(topology, section, key, value, tmp_path):
     """Before: ``profile.rotation_mod = inf must be finite``: the spec's field, not the file's key."""
-    table = _template_table(topology)
+    table = template_table(topology)
     table[section][key] = value
     with pytest.raises(RvtoolInputError, match=rf"^{section}\.{key} = (inf|nan) must be finite"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
 
 
 def test_crank_phase_error_count_names_the_deg_key(tmp_path):
     """Before: ``cranks.phase_errors has 1 entries`` (the file key is ``phase_errors_deg``)."""
-    table = _template_table("rv2")
+    table = template_table("rv2")
     table["cranks"]["phase_errors_deg"] = [1.0]
     with pytest.raises(RvtoolInputError, match=r"^cranks\.phase_errors_deg has 1 entries; valid: 0 or cranks\.count"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
 
 
 @pytest.mark.parametrize("topology,section,key,expect", [
@@ -84,28 +71,28 @@ def test_missing_required_key_is_named_as_the_file_writes_it(topology, section, 
     """Before: ``[pins]: Pins.__init__() missing 1 required keyword-only argument: 'n_pins'``, ``[design]:
     CycloidDesign.__init__() ...`` (no such section) and ``crank_bearing: TaperedRollerBearing.__init__()
     missing 1 required keyword-only argument: 'cup_angle'`` (the file key is cup_angle_deg)."""
-    table = _template_table(topology)
+    table = template_table(topology)
     del (table if section is None else table[section])[key]
     with pytest.raises(RvtoolInputError, match="^" + expect):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
 
 
 def test_tapered_unknown_key_lists_the_deg_keys(tmp_path):
     """Before: ``crank_bearing.foo is not a parameter of TaperedRollerBearing; valid: ['cone_angle', ...,
     'cup_angle', ...]``: writing 'cup_angle' is itself refused (degrees as cup_angle_deg)."""
-    table = _template_table("rv2")
+    table = template_table("rv2")
     table["crank_bearing"]["foo"] = 1.0
     with pytest.raises(RvtoolInputError) as e:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     assert "'cup_angle_deg'" in str(e.value) and "'cup_angle'" not in str(e.value)
 
 
 def test_calibration_frequencies_message_is_plain_numbers(tmp_path):
     """Before: ``calibration_frequencies = (np.float64(5000.0), np.float64(500.0)) must be increasing``."""
-    table = _template_table("cycloid")
+    table = template_table("cycloid")
     table["housing"]["structure"]["damping"]["calibration_frequencies"] = [5000.0, 500.0]
     with pytest.raises(RvtoolInputError) as e:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     assert "np.float64" not in str(e.value)
     assert str(e.value).startswith("housing.structure.damping.calibration_frequencies = [5000.0, 500.0] [Hz] must be "
                                    "increasing (valid: f_a < f_b")
@@ -168,9 +155,9 @@ def test_a_mesh_that_never_engages_is_a_geometry_error(tmp_path):
     equilibrate)``, a torque the solver's regularization springs carried with the pins unloaded. No
     rated torque is admissible for that geometry; the error says so and names the clearance."""
     from rvtool.analysis.admissible import check_rated_state
-    table = _template_table("cycloid")
+    table = template_table("cycloid")
     table["wheels"]["clearance"] = 0.01
-    design = _load(tmp_path, table)
+    design = load_table(tmp_path, table)
     with pytest.raises(RvtoolInputError, match=r"the main mesh \(pins\) carries no load at .* no rated_torque is "
                                                r"admissible.*wheels\.clearance = 0\.01 m"):
         check_rated_state(design, lambda: rvtool.build(design))
@@ -180,11 +167,11 @@ def test_pointed_tip_names_the_thickness_allowance(tmp_path):
     """Before: ``sun_gear.thickness_allowance = 0.01`` (10 mm on a 1 mm module) said ``... gives a pointed
     tip ...; valid: tip thickness > 0.0 m (reduce profile_shift = 0.1 or the tip diameter)``: the key
     that made the tip pointed was not named."""
-    table = _template_table("rv2")
+    table = template_table("rv2")
     table["sun_gear"]["thickness_allowance"] = 0.01
     with pytest.raises(RvtoolInputError, match=r"pointed tip .*the thickness allowance \(sun_gear\.thickness_allowance, "
                                                r"0\.01 m\)"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
 
 
 @pytest.mark.parametrize("topology", ["cycloid", "rv2", "rv3", "std-involute"])
@@ -224,13 +211,13 @@ def test_crank_eccentricity_error_keeps_the_eccentric_off_the_axis(tmp_path):
     """Before: ``cranks.eccentricity_errors = [-0.0013, 0, 0]`` on a 1.2 mm eccentricity (crank 0's
     eccentric across its axis) was accepted and reported by the rated-state check as "the geometry,
     not the load, is inadmissible: check the clearances and radii", naming no key."""
-    table = _template_table("rv2")
+    table = template_table("rv2")
     table["cranks"]["eccentricity_errors"] = [-0.0013, 0.0, 0.0]
     with pytest.raises(RvtoolInputError, match=r"^cranks\.eccentricity_errors\[0\] = -0\.0013 m .* valid range "
                                                r"\(-0\.0012, inf\) m"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     table["cranks"]["eccentricity_errors"] = [2e-6, 0.0, -1e-6]      # a tolerance's size: accepted
-    _load(tmp_path, table)
+    load_table(tmp_path, table)
 
 
 @pytest.mark.parametrize("out", ["taken.txt", "taken.txt/sub"])
@@ -266,10 +253,10 @@ def test_misspelt_pair_key_is_answered_with_the_pairs_keys(topology, section, tm
     """Before: ``rowspacing`` in ``[main_bearing]`` was answered with the ball row's keys alone, without
     ``row_spacing`` and without a "did you mean" (``crank_bearing.rowspacing is not a parameter of
     TaperedRollerBearing; valid: [...]``): the pair's own keys share the table with its rows'."""
-    table = _template_table(topology)
+    table = template_table(topology)
     table[section]["rowspacing"] = table[section].pop("row_spacing")
     with pytest.raises(RvtoolInputError) as e:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     msg = str(e.value)
     assert msg.startswith(f"[{section}] has unknown keys ['rowspacing']; valid keys are ["), msg
     assert "'row_spacing'" in msg and "'arrangement'" in msg and "did you mean 'rowspacing' -> 'row_spacing'" in msg
@@ -298,13 +285,13 @@ def test_shared_output_pins_name_the_table_they_need(tmp_path):
     """Before: ``output_pins.mode = "shared"`` (a choice the template offers) was refused with
     ``output_pins.compliance = None must be a SharedPinCompliance in shared mode``: no key of that name
     in the template, and the format doc said "compliance [m/N] (None: rigid)"."""
-    table = _template_table("cycloid")
+    table = template_table("cycloid")
     table["output_pins"]["mode"] = "shared"
     with pytest.raises(RvtoolInputError, match=r"output_pins\.mode = 'shared' needs .*\[output_pins\.compliance\] "
                                                r"\(self_compliance_0, self_compliance_1"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     table["output_pins"]["compliance"] = {"self_compliance_0": 1e-9, "self_compliance_1": 1e-9}
-    assert _load(tmp_path, table).output_pins.mode.value == "shared"
+    assert load_table(tmp_path, table).output_pins.mode.value == "shared"
 
 
 @pytest.mark.parametrize("section,key,value", [("bodies", "flange_coordinates", "spatial"),
@@ -313,9 +300,9 @@ def test_a_rolling_bearing_only_choice_says_rvtool_analyze_cannot_run_it(section
     """Before: a cycloid design file with ``bodies.flange_coordinates = "spatial"`` was refused under
     `rvtool analyze` with "valid: build(..., bearing_model='rolling')", a keyword the command line has
     no option for (it builds the lumped bearings)."""
-    table = _template_table("cycloid")
+    table = template_table("cycloid")
     table[section][key] = value
-    design = _load(tmp_path, table)
+    design = load_table(tmp_path, table)
     with pytest.raises(RvtoolInputError, match=r"`rvtool analyze` builds the cycloid .* with lumped bearings"):
         rvtool.build(design)
 
@@ -323,7 +310,7 @@ def test_a_rolling_bearing_only_choice_says_rvtool_analyze_cannot_run_it(section
 def test_wheel_midplanes_must_be_numbers(tmp_path):
     """Before: ``wheels.midplanes = [[0.0], [1.0]]`` was refused as ``output_pins.wheel_midplanes must list
     one axial position per wheel`` (a key the template leaves to follow wheels.midplanes)."""
-    table = _template_table("cycloid")
+    table = template_table("cycloid")
     table["wheels"]["midplanes"] = [[0.0], [1.0]]
     with pytest.raises(RvtoolInputError, match=r"^wheels\.midplanes = \[\[0\.0\], \[1\.0\]\]; valid: a list of numbers"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)

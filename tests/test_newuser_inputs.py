@@ -11,19 +11,9 @@ import rvtool
 from rvtool.assembly import topologies
 from rvtool.designs.format import key_table, template
 from rvtool.errors import RvtoolInputError
+from _design_files import load_table, template_table
 
 TOPOLOGIES = [t for t in topologies.TOPOLOGIES if topologies.available(t) is None]
-
-
-def _template_table(topology):
-    return tomllib.loads(template(topology, name="mine"))
-
-
-def _load(tmp_path, table):
-    import tomlkit
-    p = tmp_path / "mine.toml"
-    p.write_text(tomlkit.dumps(table))
-    return rvtool.load_design(str(p))
 
 
 @pytest.mark.parametrize("topology", TOPOLOGIES)
@@ -46,22 +36,22 @@ def test_std_involute_top_level_ranges_are_the_specs_own():
 def test_negative_body_mass_names_the_key(topology, key, tmp_path):
     """Before: ``exudyn.exudynCPP.ExudynValueError: parameter ObjectRigidBody2D.mass may not be
     negative, but received -1.2`` from deep inside the builder (the file was accepted)."""
-    table = _template_table(topology)
+    table = template_table(topology)
     table["bodies"][key] = -1.0
     with pytest.raises(RvtoolInputError, match=rf"bodies\.{key} = .*-1\.0.* is outside the valid range \(0\.0, inf\)"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     table["bodies"][key] = 0.0          # a massless body: singular in the driven runs
     with pytest.raises(RvtoolInputError, match=rf"bodies\.{key}"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
 
 
 def test_unknown_key_lists_the_file_keys_not_the_field_names(tmp_path):
     """Before: ``[wheels] has unknown keys ['widht']; valid keys are [..., 'phases', ...]``: 'phases' is
     the spec's field (radians), the file key is 'phases_deg'; writing 'phases' is itself refused."""
-    table = _template_table("cycloid")
+    table = template_table("cycloid")
     table["wheels"]["widht"] = 0.008
     with pytest.raises(RvtoolInputError) as exc:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     msg = str(exc.value)
     assert "'widht'" in msg and "'phases_deg'" in msg and "'phases'" not in msg, msg
 
@@ -69,10 +59,10 @@ def test_unknown_key_lists_the_file_keys_not_the_field_names(tmp_path):
 def test_unknown_top_level_key_lists_no_internal_fields(tmp_path):
     """Before: ``[design] has unknown keys ['rated_torq']; valid keys are [..., 'source', ...,
     'topology'...]``: 'source' is the loader's copy of the file, not a key a file may give."""
-    table = _template_table("rv3")
+    table = template_table("rv3")
     table["rated_torq"] = 400.0
     with pytest.raises(RvtoolInputError) as exc:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     msg = str(exc.value)
     assert "'rated_torq'" in msg and "'rated_torque'" in msg and "'source'" not in msg, msg
     assert msg.startswith("the top level has unknown keys") and "[design]" not in msg, msg   # no such table
@@ -84,11 +74,11 @@ def test_misspelt_section_is_named_with_its_correct_spelling(topology, section, 
     """Before: cycloid ``section [pin_contact] is missing from the design`` (the misspelt table not
     named), rv3 ``[compound_gear]: InvoluteGear.__init__() missing 3 required keyword-only
     arguments``."""
-    table = _template_table(topology)
+    table = template_table(topology)
     wrong = section[:3] + section[4:]           # one letter left out
     table[wrong] = table.pop(section)
     with pytest.raises(RvtoolInputError) as exc:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     msg = str(exc.value)
     assert f"[{wrong}]" in msg and f"[{section}]" in msg and "__init__" not in msg, msg
 
@@ -96,14 +86,14 @@ def test_misspelt_section_is_named_with_its_correct_spelling(topology, section, 
 @pytest.mark.parametrize("topology", ["cycloid", "std-involute"])
 def test_three_wheels_names_n_wheels(topology, tmp_path):
     """Before (cycloid): ``wheels.wheels: 3 wheels; valid range [1, 2]`` (no such key)."""
-    table = _template_table(topology)
+    table = template_table(topology)
     table["n_wheels"] = 3
     table["wheels"]["midplanes"] = [-0.012, 0.0, 0.012]
     table["wheels"]["phases_deg"] = [0.0, 120.0, 240.0]
     table["output_pins"].pop("wheel_midplanes", None)
     table["output_pins"]["gap_offsets"] = [0.0, 0.0, 0.0]
     with pytest.raises(RvtoolInputError, match=r"wheels\.midplanes has 3 entries.*valid range \[1, 2\]") as exc:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     assert "wheels.wheels" not in str(exc.value)
 
 
@@ -114,16 +104,16 @@ def test_n_wheels_range_and_what_else_to_change(topology, tmp_path):
     the other keys a one-wheel design changes."""
     rows = {key: rng for sec, key, value, unit, rng, meaning, required in key_table(topology) if sec == ""}
     assert rows["n_wheels"] == "[1, 2] (integer)", rows["n_wheels"]
-    table = _template_table(topology)
+    table = template_table(topology)
     table["n_wheels"] = 1
     with pytest.raises(RvtoolInputError, match=r"n_wheels = 1 but wheels\.midplanes has 2 entries; valid: .*"
                                                r"wheels\.phases_deg.*output_pins\.gap_offsets"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     table["wheels"]["midplanes"] = [0.0]
     table["wheels"]["phases_deg"] = [0.0]
     # the template leaves output_pins.wheel_midplanes and gap_offsets commented out: they follow
     assert "wheel_midplanes" not in table["output_pins"] and "gap_offsets" not in table["output_pins"]
-    assert _load(tmp_path, table).n_wheels == 1     # the three keys docs/guide/cycloid.md lists
+    assert load_table(tmp_path, table).n_wheels == 1     # the three keys docs/guide/cycloid.md lists
 
 
 def test_std_involute_has_marker_frequencies():
@@ -164,7 +154,7 @@ def test_template_linked_keys_follow_the_key_they_name(tmp_path):
     assert "contact_length" not in table["output_pins"] and "pin_radius" not in table["profile"]
     table["wheels"]["width"] = 0.010
     table["pins"]["pin_radius"] = 0.0032
-    d = _load(tmp_path, table)
+    d = load_table(tmp_path, table)
     assert d.output_pins.contact_length == 0.010 and d.profile.pin_radius == 0.0032
 
 
@@ -208,11 +198,11 @@ def test_pressure_angle_typed_in_radians_is_named(tmp_path):
     """``pressure_angle_deg = 0.349`` (20 deg typed in radians) passes its own range (0, 45) deg and
     stopped with "sun_gear.profile_shift = 0.1 undercuts the tooth ...; valid range [0.8720, inf) for
     z = 18", which does not point at the angle; the message now quotes the pressure angle it used."""
-    table = _template_table("rv2")
+    table = template_table("rv2")
     table["sun_gear"]["rack"]["pressure_angle_deg"] = 0.349
     with pytest.raises(RvtoolInputError, match=r"sun_gear\.profile_shift = .* undercuts .* and "
                                                r"sun_gear\.rack\.pressure_angle_deg = 0\.349\b"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
 
 
 def test_docs_name_the_topology_keys_the_loader_accepts():
@@ -282,11 +272,11 @@ def test_equidistant_mod_has_a_range_and_a_negative_generating_radius_is_refused
     rows = {key: rng for sec, key, value, unit, rng, meaning, required in key_table("cycloid") if sec == "profile"}
     assert rows["equidistant_mod"] == "(-0.003, 0.00174877)", rows["equidistant_mod"]
     for bad in (-0.0031, 0.0018):
-        table = _template_table("cycloid")
+        table = template_table("cycloid")
         table["profile"]["equidistant_mod"] = bad
         with pytest.raises(RvtoolInputError, match=r"profile\.equidistant_mod = .* is outside the valid range "
                                                    r"\(-0\.003, 0\.00174877\) m"):
-            _load(tmp_path, table)
+            load_table(tmp_path, table)
 
 
 def test_misspelt_case_name_suggests_the_case(tmp_path):
@@ -325,10 +315,10 @@ def test_output_pin_slices_have_an_upper_bound(tmp_path):
     at 64 for that reason. The bound is stated in the template and enforced."""
     rows = {(sec, key): rng for sec, key, value, unit, rng, meaning, required in key_table("cycloid")}
     assert rows[("output_pins", "n_slices")] == "[1, 64] (integer)", rows[("output_pins", "n_slices")]
-    table = _template_table("cycloid")
+    table = template_table("cycloid")
     table["output_pins"]["n_slices"] = 1000000
     with pytest.raises(RvtoolInputError, match=r"output_pins\.n_slices = 1000000 is outside the valid range \[1, 64\]"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
 
 
 # (topology, section path, key, the valid range the template states and the loader enforces); each key was
@@ -352,7 +342,7 @@ def test_count_keys_have_an_upper_bound(topology, path, key, valid, tmp_path):
     states the cost limit and the loader refuses a value above it by its key, before any meshing."""
     rows = {(sec, k): rng for sec, k, value, unit, rng, meaning, required in key_table(topology)}
     assert rows[(".".join(path), key)] == valid, rows[(".".join(path), key)]
-    table = _template_table(topology)
+    table = template_table(topology)
     sub = table
     for p in path:
         sub = sub.setdefault(p, {})
@@ -360,10 +350,10 @@ def test_count_keys_have_an_upper_bound(topology, path, key, valid, tmp_path):
     hi = re.search(r", (\d+)\]", valid).group(1)
     with pytest.raises(RvtoolInputError, match=rf"{re.escape('.'.join(path))}\.{key} = 1000000 is outside the valid "
                                                rf"range \[-?\d, {hi}\]"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     sub[key] = int(hi)                   # the bound itself is valid (the loader may refuse it for other reasons)
     try:
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     except RvtoolInputError as exc:
         assert f"{key} = {hi} is outside" not in str(exc), exc
 
@@ -371,10 +361,10 @@ def test_count_keys_have_an_upper_bound(topology, path, key, valid, tmp_path):
 def test_std_mesh_window_is_bounded_by_the_wheels_teeth(tmp_path):
     """``mesh.window`` ("[0, inf)") counts wheel teeth on each side of the pitch point: beyond
     (wheel.n_teeth - 1) // 2 a tooth would be evaluated twice (and a mistyped 1e6 built for minutes)."""
-    table = _template_table("std-involute")
+    table = template_table("std-involute")
     w_max = (table["wheel"]["n_teeth"] - 1) // 2
     table["mesh"]["window"] = w_max + 1
     with pytest.raises(RvtoolInputError, match=rf"mesh\.window = {w_max + 1} is outside the valid range \[0, {w_max}\]"):
-        _load(tmp_path, table)
+        load_table(tmp_path, table)
     table["mesh"]["window"] = w_max
-    assert _load(tmp_path, table).mesh.window == w_max
+    assert load_table(tmp_path, table).mesh.window == w_max
