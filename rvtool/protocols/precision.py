@@ -16,6 +16,14 @@ __all__ = ["transmission_error", "te_metrics", "batch_te", "equilibria_te", "mes
            "DYNAMIC_SOLVERS"]
 
 
+def peak_to_peak_sampling_error(fine):
+    """Sampling error of a peak-to-peak read from every second point of ``fine`` (a TE over one mesh cycle at
+    twice a run's points): ptp(fine) - ptp(fine[::2]) >= 0, the extrema the coarser grid misses between its
+    points (the Richardson-type estimate of the run's own sampling error; ``rvtool analyze``'s te_pp error)."""
+    fine = np.asarray(fine, float)
+    return float(np.ptp(fine) - np.ptp(fine[::2]))
+
+
 def te_metrics(te, *, n_revolutions=1.0, n_peaks=10, remove_mean=True):
     """Peak-to-peak, RMS (after removing the mean, reported separately) and the order spectrum of
     TE samples uniform in output angle over ``n_revolutions`` output revolutions (endpoint excluded)."""
