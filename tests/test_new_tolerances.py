@@ -13,7 +13,8 @@ import pytest
 from rvtool import cli
 from rvtool.analysis import protocols
 from rvtool.designs.tolerance_keys import CYCLOID_TOLERANCE_KEYS, RV_TOLERANCE_KEYS, STD_TOLERANCE_KEYS
-from rvtool.designs.tolerance_template import iso286_it4, iso1328_single_pitch
+from rvtool.designs.tolerance_template import (iso286_it4, iso1328_profile_slope, iso1328_runout, iso1328_single_pitch,
+                                               tolerance_template)
 from rvtool.errors import RvtoolInputError
 
 KEYS = {"cycloid": CYCLOID_TOLERANCE_KEYS, "rv2": RV_TOLERANCE_KEYS, "rv3": RV_TOLERANCE_KEYS,
@@ -141,3 +142,65 @@ def test_tolerances_for_a_changed_design_follow_its_sizes(tmp_path, monkeypatch,
     assert cli.main(["new", "--tolerances-for", "mine.toml", "--topology", "rv2"]) == cli.EXIT_USAGE
     assert cli.main(["new"]) == cli.EXIT_USAGE
     assert "needs --topology" in capsys.readouterr().err
+
+
+def test_rv80e_template_reproduces_the_shipped_rv80e_grades():
+    """The RV template at RV-80E's sizes (pins 8 mm, pin circle 155 mm, 40 pins, crank circle 2 a = 84 mm, sun
+    z = 10 and crank gears z = 38 of m_n = 1.75 mm) writes every one of the 16 fields of the shipped
+    rv80e_tolerances.toml, in the loader's order, with the same distribution and parameters: the rules of that
+    file's header ([ISO1328], [ISO286], [ISO1101], [POS], [ISO1328P], [ISO1328R]) computed from the design,
+    not copied. The one deliberate difference: the template writes 3 significant digits (a tolerance is not
+    known better), the shipped file 4 (2.167e-6 against 2.17e-6): rel 5e-3 covers that rounding and no grade
+    step (the smallest step, 0.5 um on 5.5 um, is 9 %)."""
+    import rvtool
+    from rvtool import designs
+    from rvtool.variants.rv_tolerances import RV_FIELDS
+    shipped = tomllib.loads(open(designs.path("rv80e_tolerances.toml")).read())["tolerances"]
+    mine = tomllib.loads(tolerance_template(rvtool.load_design("rv80e"), "rv80e.toml"))["tolerances"]
+    assert tuple(mine) == RV_FIELDS and set(shipped) == set(RV_FIELDS)
+    for key in RV_FIELDS:
+        a, b = mine[key], shipped[key]
+        assert a["dist"] == b["dist"] and set(a) == set(b), (key, a, b)
+        for p in set(a) - {"dist"}:
+            assert a[p] == pytest.approx(b[p], rel=5e-3, abs=1e-15), (key, p, a[p], b[p])
+
+
+@pytest.mark.parametrize("topology", ["rv2", "rv3"])
+def test_rv_templates_write_every_rv_field_in_the_loaders_order(topology, tmp_path, monkeypatch, capsys):
+    """`rvtool new --topology rv2|rv3` writes all 16 RV fields (both topologies draw through the one RV sampler,
+    rvtool.variants.rv_tolerances.rv_design_changes), active and in the loader's draw order, and the loader
+    reads them all; the three-stage file says its input stage draws nothing."""
+    from rvtool.variants.rv_tolerances import RV_FIELDS, load_rv_tolerances
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["new", "--topology", topology, "--name", "mine"]) == 0
+    text = (tmp_path / "mine_tolerances.toml").read_text()
+    assert tuple(_keys_and_comments(text)) == RV_FIELDS
+    spec = load_rv_tolerances(str(tmp_path / "mine_tolerances.toml"))
+    assert all(getattr(spec, f) is not None for f in RV_FIELDS)
+    assert ("input stage (input_pinion, compound_gear) draws no deviation" in " ".join(
+        ln.lstrip("# ") for ln in text.splitlines())) == (topology == "rv3")
+
+
+def test_rv_template_leaves_out_wheel_bores_of_ported_wheels():
+    """cranks.wheel_bore_errors is refused with wheels.body = 'ported' (RVDesign check): the template writes
+    wheel_bore_position_error commented out, with the reason, and every other field active."""
+    import rvtool
+    from rvtool.variants.rv_tolerances import RV_FIELDS
+    d = rvtool.load_design("rv80e")
+    text = tolerance_template(d.replace(wheels={"body": "ported"}))
+    assert tuple(tomllib.loads(text)["tolerances"]) == tuple(f for f in RV_FIELDS if f != "wheel_bore_position_error")
+    joined = " ".join(ln.lstrip("# ") for ln in text.splitlines())
+    assert "\n# wheel_bore_position_error = " in text and "not implemented with wheels.body = 'ported'" in joined
+
+
+def test_recalled_iso1328_profile_and_runout_grades():
+    """f_HaT = (0.4 m + 0.001 d + 4) sqrt(2)^(A-5) and F_rT = 0.9 (0.002 d + 0.55 sqrt(d) + 0.7 m + 12)
+    sqrt(2)^(A-5), rounded as f_pT (both recalled, not re-read), at hand-computed points: d = 151.1 mm, m = 3.875
+    mm: 1.55 + 0.1511 + 4 = 5.70 -> 5.5 (class 5), /sqrt 2 = 4.03 -> 4.0 (class 4); sun d = 17.5, m = 1.75:
+    F_pT = 0.035 + 2.301 + 1.225 + 12 = 15.56, 0.9 F_pT = 14.00 -> 14 (class 5), x sqrt 2 = 19.8 -> 20 (class 6)."""
+    assert iso1328_profile_slope(0.1511, 0.003875, "g") == pytest.approx(5.5e-6, abs=1e-12)
+    assert iso1328_profile_slope(0.1511, 0.003875, "g", flank_class=4) == pytest.approx(4.0e-6, abs=1e-12)
+    assert iso1328_runout(0.0175, 0.00175, "g") == pytest.approx(14e-6, abs=1e-12)
+    assert iso1328_runout(0.0175, 0.00175, "g", flank_class=6) == pytest.approx(20e-6, abs=1e-12)
+    with pytest.raises(RvtoolInputError, match=r"^sun_gear: d = 4 mm"):
+        iso1328_runout(0.004, 0.0004, "sun_gear")

@@ -16,7 +16,19 @@ Size-dependent grades are computed from the design at writing time:
   of a cycloid drive's pin circle to the output axis (the [POS] rule of rv80e_tolerances.toml),
 * ISO 1328-1:2013, eq. (5), the single pitch tolerance f_pT = (0.001 d + 0.4 m_n + 5) sqrt(2)^(A - 5) um
   (d, m_n in mm; A the flank tolerance class), rounded by the standard's 5.2.3 rule (below 5 um to 0.1 um,
-  5 to 10 um to 0.5 um, above 10 um to 1 um), within its scope 5 <= d <= 15000 mm, 0.5 <= m_n <= 70 mm.
+  5 to 10 um to 0.5 um, above 10 um to 1 um), within its scope 5 <= d <= 15000 mm, 0.5 <= m_n <= 70 mm,
+* ISO 1328-1:2013 clause 5.3.3, the profile slope tolerance f_HaT = (0.4 m_n + 0.001 d + 4) sqrt(2)^(A - 5) um
+  (:func:`iso1328_profile_slope`), and the runout tolerance F_rT = 0.9 F_pT with the cumulative pitch tolerance
+  F_pT = (0.002 d + 0.55 sqrt(d) + 0.7 m_n + 12) sqrt(2)^(A - 5) um (:func:`iso1328_runout`), both rounded as
+  f_pT; these two formulas are RECALLED, NOT RE-READ from the printed standard (as the [ISO1328P] and
+  [ISO1328R] notes of rv80e_tolerances.toml): the profile slope is taken as the analogue tolerance of the
+  ground cycloid profile, the runout as the eccentricity of a gear's pitch circle.
+
+The RV template writes every field of :data:`rvtool.designs.tolerance_keys.RV_TOLERANCE_KEYS` in the loader's
+order by the rules of rv80e_tolerances.toml ([ISO1328], [ISO286], [ISO1101], [POS], [ISO1328P], [ISO1328R]),
+at the design's own sizes: the pin ring as a gear of module 2 l_R / z_b (z_b pins) and its pin circle diameter,
+the cycloid wheel as a gear of that module and z_g = z_b - 1 teeth, the crank circle of diameter 2 a (a the
+sun--crank-gear centre distance), the sun and crank gears' own d and m_n.
 
 A design whose pin diameter or gears change should have its tolerance file written anew
 (``rvtool new --tolerances-for NAME.toml``: :func:`tolerance_template` of the changed design).
@@ -62,12 +74,44 @@ def iso1328_single_pitch(d, m, key, flank_class=FLANK_CLASS):
     """Single pitch tolerance f_pT [m] (ISO 1328-1:2013 eq. (5), rounded by 5.2.3) of a gear of reference
     diameter ``d`` [m] and normal module ``m`` [m]; ``key`` names the gear's design section."""
     d_mm, m_mm = d * 1e3, m * 1e3
+    _iso1328_scope(d_mm, m_mm, key)
+    return _iso1328_round((0.001 * d_mm + 0.4 * m_mm + 5.0) * math.sqrt(2.0) ** (flank_class - 5))
+
+
+def _iso1328_scope(d_mm, m_mm, key):
     if not 5.0 <= d_mm <= 15000.0 or not 0.5 <= m_mm <= 70.0:
         raise RvtoolInputError(f"{key}: d = {d_mm:.6g} mm, m = {m_mm:.6g} mm is outside the scope of ISO 1328-1:2013 "
                                f"(5 <= d <= 15000 mm, 0.5 <= m_n <= 70 mm); write the tolerance file by hand")
-    v = (0.001 * d_mm + 0.4 * m_mm + 5.0) * math.sqrt(2.0) ** (flank_class - 5)
+
+
+def _iso1328_round(v):
+    """ISO 1328-1:2013 5.2.3: below 5 um to 0.1 um, 5 to 10 um to 0.5 um, above 10 um to 1 um; ``v`` [um] -> [m]."""
     step = 1.0 if v > 10.0 else 0.5 if v >= 5.0 else 0.1
     return math.floor(v / step + 0.5) * step * 1e-6
+
+
+def iso1328_profile_slope(d, m, key, flank_class=FLANK_CLASS):
+    """Profile slope tolerance f_HaT [m] = (0.4 m_n + 0.001 d + 4) sqrt(2)^(A - 5) um (ISO 1328-1:2013 clause
+    5.3.3; formula RECALLED, NOT RE-READ from the printed standard, as [ISO1328P] of rv80e_tolerances.toml),
+    rounded by 5.2.3, of a gear of reference diameter ``d`` [m] and normal module ``m`` [m]."""
+    d_mm, m_mm = d * 1e3, m * 1e3
+    _iso1328_scope(d_mm, m_mm, key)
+    return _iso1328_round((0.4 * m_mm + 0.001 * d_mm + 4.0) * math.sqrt(2.0) ** (flank_class - 5))
+
+
+def iso1328_cumulative_pitch_um(d, m, flank_class=FLANK_CLASS):
+    """Cumulative pitch tolerance F_pT [um, unrounded] = (0.002 d + 0.55 sqrt(d) + 0.7 m_n + 12) sqrt(2)^(A - 5)
+    (ISO 1328-1:2013 clause 5.3; RECALLED, NOT RE-READ, as [ISO1328R] of rv80e_tolerances.toml); d, m [m]."""
+    d_mm, m_mm = d * 1e3, m * 1e3
+    return (0.002 * d_mm + 0.55 * math.sqrt(d_mm) + 0.7 * m_mm + 12.0) * math.sqrt(2.0) ** (flank_class - 5)
+
+
+def iso1328_runout(d, m, key, flank_class=FLANK_CLASS):
+    """Runout tolerance F_rT [m] = 0.9 F_pT (:func:`iso1328_cumulative_pitch_um` unrounded, the product rounded
+    by 5.2.3; RECALLED, NOT RE-READ, as [ISO1328R] of rv80e_tolerances.toml) of a gear of reference diameter
+    ``d`` [m] and normal module ``m`` [m]."""
+    _iso1328_scope(d * 1e3, m * 1e3, key)
+    return _iso1328_round(0.9 * iso1328_cumulative_pitch_um(d, m, flank_class))
 
 
 def _um(x):
@@ -150,17 +194,104 @@ def _coaxiality(key, pins, axis):
         f"rv80e_tolerances.toml)")
 
 
+CLASS_NOTE = (f"flank tolerance class {FLANK_CLASS} (class assumed: the grade 5 of rv40e_tolerances.toml and "
+              "rv80e_tolerances.toml, ground gears; range 4..6)")
+RECALLED = "formula recalled, not re-read from the printed standard, as in rv80e_tolerances.toml"
+POS_RULE = ("Grade IT5 assumed (range IT4..IT6 for precision bearing seats and jig-ground hole patterns, an "
+            "engineering bracket; the [POS] rule of rv80e_tolerances.toml)")
+
+
+def _pin_ring(pins):
+    """(d, m, z) of the pin ring taken as a gear: the pin circle diameter 2 l_R, module 2 l_R / z_b, z_b pins."""
+    d = 2.0 * pins.pin_circle_radius
+    return d, d / pins.n_pins, pins.n_pins
+
+
+def _position(key, size, key_of_size, what, drawn):
+    """A position tolerance t = IT5 of ``size`` (ISO 1101, zone of diameter t): each coordinate std t / 6."""
+    t = iso286_it5(size, key_of_size)
+    return key, _dist(dist="normal", mean=0.0, std=t / 6.0), (
+        f"source: ISO 286-1:2010 Table 1, IT5 at {what} = {_um(t)}, taken as the position tolerance t (ISO 1101, "
+        f"a zone of diameter t about the true position); {drawn}, normal with std t / 6 (the zone's radius t / 2 "
+        f"is three std). {POS_RULE}")
+
+
 def _rv_rows(design):
-    return [
+    from ..assembly.rv.gear_graph import GearGraph
+    pins = design.pins
+    d_r, m_r, z_b = _pin_ring(pins)
+    z_g = z_b - 1
+    d_w = m_r * z_g
+    ring = (f"the pin ring (z_b = {z_b} pins, l_R = {pins.pin_circle_radius * 1e3:.4g} mm) taken as an internal gear "
+            f"of its own module m = 2 l_R / z_b = {m_r * 1e3:.4g} mm and d = {d_r * 1e3:.4g} mm")
+    wheel = (f"the cycloid wheel taken as a gear of the pin ring's module m = 2 l_R / z_b = {m_r * 1e3:.4g} mm and "
+             f"z_g = {z_g} teeth, d = {d_w * 1e3:.4g} mm (the analogue: no standard tolerances a cycloid wheel)")
+    f_pin = iso1328_single_pitch(d_r, m_r, "pins.pin_circle_radius")
+    f_lobe = iso1328_single_pitch(d_w, m_r, "pins.pin_circle_radius")
+    f_ha = iso1328_profile_slope(d_w, m_r, "pins.pin_circle_radius")
+    a = GearGraph.of(design).crank_radius
+    crank_circle = (f"the crank circle diameter 2 a = {2e3 * a:.4g} mm (a the sun--crank-gear centre distance)")
+    bore = _position("wheel_bore_position_error", 2.0 * a, "crank_gear (crank circle diameter 2 a)",
+                     crank_circle, "the crank bores in each wheel: x and y of crank k's bore in wheel j, the "
+                     "wheels' bores drawn independently (no stacked-grinding correlation assumed)")
+    if design.wheels.body == "ported":
+        bore += ("not drawn: cranks.wheel_bore_errors is not implemented with wheels.body = 'ported' (the ported "
+                 "wheel's FE bores sit at their true positions); uncomment with wheels.body = 'rigid'",)
+    rows = [
         ("crank_phase_error", _dist(dist="normal", mean=0.0, std=1.0),
          "assumed: eccentric phase of each crank set at assembly, +-3 arcmin (unit: arcmin, not m); no published "
          "figure, as rv40e_tolerances.toml"),
         _normal_pm("crank_eccentricity_error", 3e-6, f"assumed: ground crank journals, +-3 um; {BLANCHE_YANG}"),
-        _pin_radius("pin_radius_error", design.pins),
+        _pin_radius("pin_radius_error", pins),
         _needle_clearance("needle_clearance", design.eccentric_bearing.radial_clearance, "eccentric_bearing"),
         _pitch("sun_pitch_deviation", design.sun_gear, "sun_gear", "sun gear"),
         _pitch("crank_gear_pitch_deviation", design.crank_gear, "crank_gear", "crank spur gears (one set per crank)"),
-    ], []
+        ("pin_pitch_deviation", _dist(dist="normal", mean=0.0, std=f_pin / 3.0),
+         f"source: ISO 1328-1:2013 eq. (5), {CLASS_NOTE}, {ring}: f_pT = +-{_um(f_pin)}, one draw per pin seat along "
+         f"the pin circle (pin k moves tangentially by the accumulated pitch); the class's cumulative pitch "
+         f"tolerance F_pT = (0.002 d + 0.55 sqrt(d) + 0.7 m_n + 12) sqrt(2)^(A - 5) um = "
+         f"{iso1328_cumulative_pitch_um(d_r, m_r):.3g} um for comparison ({RECALLED}, [ISO1328R])"),
+        _position("pin_radial_position_error", d_r, "pins.pin_circle_radius",
+                  f"the pin circle diameter {d_r * 1e3:.4g} mm", "the radial part of each pin seat's deviation "
+                  "(the tangential part is pin_pitch_deviation), one draw per pin"),
+        bore,
+        _position("carrier_bore_position_error", 2.0 * a, "crank_gear (crank circle diameter 2 a)",
+                  crank_circle, "the crank bearing seats in the carrier: x and y of each crank's seat"),
+        ("profile_equidistant_error", _dist(dist="normal", mean=0.0, std=f_ha / 3.0),
+         f"source: ISO 1328-1:2013 clause 5.3.3, profile slope tolerance f_HaT = (0.4 m_n + 0.001 d + 4) "
+         f"sqrt(2)^(A - 5) um ({RECALLED}, [ISO1328P]), {CLASS_NOTE}, {wheel}: f_HaT = +-{_um(f_ha)}, the analogue "
+         f"tolerance of the ground profile's equidistant deviation, one value per reducer (both wheels ground alike)"),
+        ("profile_offset_error", _dist(dist="normal", mean=0.0, std=f_ha / 3.0),
+         f"source: ISO 1328-1:2013 clause 5.3.3, profile slope tolerance ({RECALLED}, [ISO1328P]), {CLASS_NOTE}, "
+         f"the wheel as for profile_equidistant_error: f_HaT = +-{_um(f_ha)}, the analogue tolerance of the ground "
+         f"profile's offset deviation, one value per reducer"),
+        ("wheel_lobe_pitch_deviation", _dist(dist="normal", mean=0.0, std=f_lobe / 3.0),
+         f"source: ISO 1328-1:2013 eq. (5), {CLASS_NOTE}, {wheel}: f_pT = +-{_um(f_lobe)}, one draw per lobe and "
+         f"wheel (lobe j turns by its accumulated pitch); the wheels drawn independently"),
+        _coaxiality("pin_circle_coaxiality_error", pins, "main-bearing (carrier)"),
+        _runout("sun_runout", design.sun_gear, "sun_gear", "sun gear", "x and y one draw per reducer"),
+        _runout("crank_gear_runout", design.crank_gear, "crank_gear", "crank spur gears",
+                "x and y one draw per crank, the gears drawn independently"),
+    ]
+    return rows, []
+
+
+def _runout(key, gear, section, what, draws):
+    d = gear.module * gear.n_teeth
+    f = iso1328_runout(d, gear.module, section)
+    return key, _dist(dist="normal", mean=0.0, std=f / 6.0), (
+        f"source: ISO 1328-1:2013 runout tolerance F_rT = 0.9 F_pT, cumulative pitch tolerance F_pT = (0.002 d + "
+        f"0.55 sqrt(d) + 0.7 m_n + 12) sqrt(2)^(A - 5) um ({RECALLED}, [ISO1328R]), {CLASS_NOTE}, {what} "
+        f"d = {d * 1e3:.4g} mm, m_n = {gear.module * 1e3:.4g} mm: "
+        f"F_pT = {iso1328_cumulative_pitch_um(d, gear.module):.4g} um, F_rT = {_um(f)}; a pitch circle eccentric "
+        f"by e_r reads as a runout 2 e_r, so F_rT confines the pitch circle's centre to a circle of diameter F_rT "
+        f"about the axis: each coordinate of the eccentricity normal with std F_rT / 6, {draws}")
+
+
+RV3_NOTE = ("Three-stage design: the input stage (input_pinion, compound_gear) draws no deviation, the RV loader has "
+            "no field for it (rvtool/variants/rv_tolerances.py); sun_pitch_deviation and sun_runout are the sun's "
+            "on the compound gear's shaft (sun_gear), which meshes the crank gears. Every other field applies as "
+            "to a two-stage design (the same sampler).")
 
 
 def _std_rows(design):
@@ -182,10 +313,12 @@ def tolerance_template(design, design_file=None):
     import textwrap
 
     from ..assembly.rv.spec import RVDesign
+    tail = []
     from ..assembly.spec import CycloidDesign
     from ..assembly.std_spec import StdInvoluteDesign
     if isinstance(design, RVDesign):
         rows, off = _rv_rows(design)
+        tail = [RV3_NOTE] if design.topology == "rv3" else []
         fmt = "rvtool/variants/rv_tolerances.py (rvtool designs --format-doc)"
     elif isinstance(design, StdInvoluteDesign):
         rows, off = _std_rows(design)
@@ -209,6 +342,8 @@ def tolerance_template(design, design_file=None):
         out.append("")
         out += [f"# {line}" for line in textwrap.wrap(why + (f"; {rest[0]}" if rest else ""), 110)]
         out.append(f"{'# ' if rest else ''}{key} = {value}")
+    for para in tail:
+        out += [""] + [f"# {line}" for line in textwrap.wrap(para, 110)]
     return "\n".join(out) + "\n"
 
 
