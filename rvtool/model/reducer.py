@@ -92,6 +92,11 @@ def family_colour(family):
     return FAMILY_ARROW_COLOURS[list(Family).index(Family(family)) % len(FAMILY_ARROW_COLOURS)]
 
 
+SMALL_FAMILY_FLOOR = 0.1
+"""Smallest reference force of a family's arrow scale in the section plot, as a fraction of the largest
+family's largest force (:meth:`ReducerModel.draw_section`)."""
+
+
 def section_arrow_length(ax, fraction=0.1, default=0.01):
     """Drawn length [m] of each family's largest force on a section plot: ``fraction`` of the
     larger side of what ``ax`` holds so far (the topology's outlines), rounded down to 1, 2 or
@@ -552,19 +557,26 @@ class ReducerModel:
         arrow scale: its largest force is drawn :func:`section_arrow_length` long (a tenth of the
         outlines' extent, rounded down to 1, 2 or 5 x 10^k m; the key arrow in the corner), and its
         legend entry names the force that length stands for, so a 200 N ring-pin load stays visible
-        beside a 2 kN bearing load (lengths compare within a family, not across families).
+        beside a 2 kN bearing load (lengths compare within a family, not across families). A family
+        whose largest force is below :data:`SMALL_FAMILY_FLOOR` of the largest family's takes that
+        fraction of it as its reference force instead (its arrows stay short: a negligible load is not
+        drawn as long as the main ones).
         Topologies draw (and label) their outlines first."""
         length = section_arrow_length(ax)
         peaks = self.family_peaks(q)
+        largest = max((peaks[f.value] for f in self.families), default=0.0)
         key = None
         for fam in self.families:
             ob = self.observe(q, fam)
             on = ob.normal_force > 0
             f = ob.normal_force[on, None] * ob.normal[on]
-            peak = peaks[fam.value]
-            scale = length / peak if peak > 0 else 0.0
-            label = (f"{FAMILY_ARROW_WORDS.get(fam, fam.value)}: {peak:.4g} N per {length * 1e3:.3g} mm" if peak > 0
+            # a family far below the largest is not blown up to the key length (rv40e's 22 N main bearings
+            # would read like its 493 N pins): its reference force is at least SMALL_FAMILY_FLOOR of the largest
+            ref = max(peaks[fam.value], SMALL_FAMILY_FLOOR * largest)
+            scale = length / ref if ref > 0 else 0.0
+            label = (f"{FAMILY_ARROW_WORDS.get(fam, fam.value)}: {ref:.4g} N per {length * 1e3:.3g} mm" if ref > 0
                      else f"{FAMILY_ARROW_WORDS.get(fam, fam.value)}: no load")
+            peak = peaks[fam.value]
             arrows = ax.quiver(ob.position[on, 0], ob.position[on, 1], -f[:, 0] * scale, -f[:, 1] * scale,
                                angles="xy", scale_units="xy", scale=1, width=0.003, color=family_colour(fam),
                                label=label)
