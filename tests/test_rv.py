@@ -1,6 +1,7 @@
 """RV two-stage topology (issue 16): the ratio from the gear graph, kinematics, torque balance,
 crank load sharing at nominal geometry and with a crank phase error, element tangents at the
 rated state, and topology errors named with their key paths."""
+import dataclasses
 import math
 
 import numpy as np
@@ -270,3 +271,27 @@ def test_reference_backend_and_devices_give_the_same_rated_state(design, device)
         m.set_output_torque(-design.rated_torque)
         qs.append(s.solve(0.3))
     assert np.max(np.abs(qs[0] - qs[1])) < 1e-12
+
+
+def test_a_zero_deviation_rv_variant_is_the_nominal_design():
+    """The nominal design is inside the tolerance Monte Carlo's population: a variant whose every deviation is
+    zero (the needle clearance, which the sampler REPLACES, at the design's own value) keeps every clearance of
+    the nominal -- needle clearance, crank-gear thickness allowance (first-stage backlash), pin radius, profile
+    modifications -- and differs only by zero-valued deviation fields (a variant that silently dropped a
+    clearance would fail here). Why its lost motion is nevertheless the population's upper end:
+    docs/validation/mc_lost_motion.md."""
+    from rvtool.variants.rv_tolerances import RV_FIELDS, RvToleranceSpec, sample_rv_design
+    from rvtool.variants.tolerances import Fixed
+    nominal = load_design(designs.path("rv80e"))
+    c = nominal.eccentric_bearing.radial_clearance
+    assert c > 0 and nominal.crank_gear.thickness_allowance > 0     # the clearances the check is about
+    zero = RvToleranceSpec(**{f: Fixed(value=c if f == "needle_clearance" else 0.0) for f in RV_FIELDS})
+    v, drawn = sample_rv_design(zero, nominal, 0, 2026)
+    assert set(drawn) == set(RV_FIELDS)
+    for section in ("eccentric_bearing", "crank_gear", "profile", "pin_contact", "main_bearing", "crank_bearing"):
+        assert getattr(v, section) == getattr(nominal, section), section
+    assert v.pins.radius_error == nominal.pins.radius_error and v.pins.pin_radius == nominal.pins.pin_radius
+    assert not np.any(np.asarray(v.pins.centre_errors)) and not np.any(np.asarray(v.cranks.wheel_bore_errors))
+    assert not np.any(np.asarray(v.sun_gear.single_pitch_deviations))
+    assert not np.any(np.asarray(v.wheels.lobe_pitch_deviations))
+    assert dataclasses.replace(v.wheels, lobe_pitch_deviations=()) == nominal.wheels
