@@ -86,8 +86,29 @@ def _run_one(proto, ctx):
                           tuple(p for p in outcome.plots if p), time.perf_counter() - t0)
 
 
+BEARING_MODELS = ("lumped", "rolling")
+"""Valid ``--bearing-model`` / ``bearing_model`` values of :func:`analyze` (the cycloid and
+small-tooth-difference builders' ``bearing_model``)."""
+
+
+def check_bearing_model(design, bearing_model):
+    """Raise :class:`~rvtool.errors.RvtoolInputError` for a ``--bearing-model`` that is not one of
+    :data:`BEARING_MODELS`, or one given for a design whose builder offers no choice (RV)."""
+    if bearing_model is None:
+        return
+    if bearing_model not in BEARING_MODELS:
+        raise RvtoolInputError(f"--bearing-model / bearing_model = {bearing_model!r} is not one of the valid choices "
+                               f"{list(BEARING_MODELS)}")
+    from ..assembly.spec import CycloidDesign
+    from ..assembly.std_spec import StdInvoluteDesign
+    if not isinstance(design, (CycloidDesign, StdInvoluteDesign)):
+        raise RvtoolInputError(f"--bearing-model {bearing_model}: the {type(design).__name__} builder has no bearing "
+                               "model choice (its bearings are fixed by its topology); valid: leave --bearing-model "
+                               "out, or a cycloid or small-tooth-difference design")
+
+
 def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", tolerances=None, allowables=None,
-            backend="auto", scheduler=None):
+            backend="auto", scheduler=None, bearing_model=None):
     """Run ``protocols`` (names, a comma-separated string or None for all) on ``design``;
     returns an :class:`AnalysisResult`. Input errors (design, protocol names, device, a rated
     torque outside the design's admissible range, :mod:`rvtool.analysis.admissible`) raise
@@ -102,7 +123,11 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     protocol on the fastest backend that supports the model; a named backend runs where it can and
     skips a protocol it cannot run, with the reasons. Each protocol's settings record
     ``backend``: {"requested", "ran", "not_taken": {name: reason}}. ``scheduler``: the address of
-    the Dask scheduler of the Monte Carlo's CPU pool (None: a LocalCluster started for it)."""
+    the Dask scheduler of the Monte Carlo's CPU pool (None: a LocalCluster started for it).
+    ``bearing_model`` (``--bearing-model``): "lumped" (one circle contact per bearing) or "rolling"
+    (rolling elements: needed by spatial bodies and influence-coefficient roller slices) for the
+    cycloid and small-tooth-difference designs (``build(..., bearing_model=...)``); None builds
+    with the builder's default, lumped. RV designs have no choice (None only)."""
     t0 = time.perf_counter()
     chosen = select(protocols)
     dev = resolve_device(device)
@@ -110,6 +135,7 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     from ..validation import check_choice
     check_choice("backend", backend, CHOICES)
     obj, source, shipped = load(design)
+    check_bearing_model(obj, bearing_model)
     from .. import designs
     from ..assembly import topologies
     if tolerances is None and shipped is not None and designs.tolerances_of(shipped):
@@ -134,7 +160,7 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
         from ..validation import check_out_dir
         check_out_dir(out_dir)                   # likewise a folder that cannot be made
     ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances, backend=backend,
-                  scheduler=scheduler)
+                  scheduler=scheduler, bearing_model=bearing_model)
     # a valid but unsolvable load is an input error: raised here, before anything is written
     ctx.cache["rated_state"] = check_rated_state(obj, ctx.build)
     if out_dir is not None:
@@ -145,7 +171,8 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
                                    "valid: a folder path in a writable place") from None
     results = tuple(_run_one(p, ctx) for p in chosen)
     res = AnalysisResult(getattr(obj, "name", type(obj).__name__), topologies.topology_of(obj) or type(obj).__name__,
-                         source, bool(quick), dev, results, out_dir, time.perf_counter() - t0, backend)
+                         source, bool(quick), dev, results, out_dir, time.perf_counter() - t0, backend,
+                         bearing_model)
     if out_dir is not None:
         write(res, allowed)
     return res
@@ -158,6 +185,8 @@ def write(res, allowables=None):
     from .report import write_report
     settings = {"design_source": res.source, "quick": res.quick, "protocols_requested": [r.name for r in res.results],
                 "device": res.device, "backend": res.backend}
+    if res.bearing_model is not None:           # recorded where chosen (a default run's file is unchanged)
+        settings["bearing_model"] = res.bearing_model
     d = res.to_dict()
     d["allowables"] = allowables or {"source": None, "values": None}
     data = write_results(res.out_dir, d, settings=settings, wall_s=res.wall_s,

@@ -67,8 +67,10 @@ class Context:
     """What a protocol runs on: the design, the run mode and a cache shared by the protocols
     of one analysis (e.g. the stiffness sequence that lost motion and hysteresis reuse)."""
 
-    def __init__(self, design, *, quick, out_dir, device="cpu", tolerances=None, backend="auto", scheduler=None):
+    def __init__(self, design, *, quick, out_dir, device="cpu", tolerances=None, backend="auto", scheduler=None,
+                 bearing_model=None):
         self.design = design
+        self.bearing_model = bearing_model  # None: the builder's default (lumped); else "lumped" / "rolling"
         self.backend = backend          # a name of rvtool.solver.backends.CHOICES
         self.scheduler = scheduler      # Dask scheduler address of the studies' pool (None: a LocalCluster)
         self.quick = bool(quick)
@@ -77,10 +79,19 @@ class Context:
         self.tolerances = tolerances
         self.cache = {}
 
-    def build(self):
-        """A fresh model of the design (:func:`rvtool.assembly.build`, any topology)."""
+    def build_options(self):
+        """Keyword options of :func:`rvtool.assembly.build` this analysis asks for: the device (when not
+        the CPU) and the bearing model (when chosen: ``--bearing-model``); {} builds as the builder's defaults."""
+        kw = {} if self.device == "cpu" else {"device": self.device}
+        if self.bearing_model is not None:
+            kw["bearing_model"] = self.bearing_model
+        return kw
+
+    def build(self, design=None):
+        """A fresh model of ``design`` (default: the analysed design; e.g. its refined resolution or a
+        tolerance variant) with :meth:`build_options` (:func:`rvtool.assembly.build`, any topology)."""
         from ..assembly import build
-        return build(self.design) if self.device == "cpu" else build(self.design, device=self.device)
+        return build(self.design if design is None else design, **self.build_options())
 
     def require(self, *attributes):
         """The design's attributes the protocol needs (rated torque, input speed, ...);

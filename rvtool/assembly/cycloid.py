@@ -584,7 +584,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                                "output pins of a cycloid drive are not ported yet); valid: wheels.body = 'rigid'")
     if isinstance(design.main_bearing, CrossedRollerBearing) and bearing_model != "rolling":
         raise RvtoolInputError("main_bearing.kind = 'crossed_roller' with bearing_model = 'lumped': the lumped circle "
-                               "contact is a ball law; valid: build(..., bearing_model='rolling')")
+                               f"contact is a ball law; valid: build(..., bearing_model='rolling'){LUMPED_IN_ANALYZE}")
     d = design
     nw = d.n_wheels
     SC = exu.SystemContainer()
