@@ -76,3 +76,19 @@ def test_rv_design_has_no_bearing_model_choice(tmp_path, capsys):
     assert main(["analyze", "rv40e", "--protocols", "stiffness", "--quick", "--quiet",
                  "--out", str(tmp_path / "out"), "--bearing-model", "rolling"]) == EXIT_USAGE
     assert "RVDesign builder has no bearing model choice" in capsys.readouterr().err
+
+
+def test_monte_carlo_with_rolling_bearings_runs_one_model_per_variant():
+    """The Monte Carlo's batched and device modes build lumped bearings only: with "rolling" auto
+    takes one Exudyn model per variant (the pool) and names why not the others; a backend asked for
+    by name that builds lumped bearings skips the protocol with the reason. Without the option the
+    choice is today's (the batched system on a CPU)."""
+    from rvtool.analysis.protocols import _mc_backend
+    from rvtool.analysis.registry import Unsupported
+    rd40 = rvtool.load_design("rd40")
+    assert _mc_backend(Context(rd40, quick=True, out_dir=None))[0] == "batched"
+    mode, choice = _mc_backend(Context(rd40, quick=True, out_dir=None, bearing_model="rolling"))
+    assert mode == "pool" and choice["ran"] == "exudyn"
+    assert all("--bearing-model rolling" in choice["not_taken"][b] for b in ("device", "fused", "replica"))
+    with pytest.raises(Unsupported, match="--bearing-model rolling: the replica Monte Carlo builds lumped"):
+        _mc_backend(Context(rd40, quick=True, out_dir=None, backend="replica", bearing_model="rolling"))
