@@ -163,6 +163,27 @@ def test_a_mesh_that_never_engages_is_a_geometry_error(tmp_path):
         check_rated_state(design, lambda: rvtool.build(design))
 
 
+def test_a_small_clearance_rated_state_is_no_false_torque_limit(tmp_path):
+    """Before: the cycloid template with ``wheels.clearance = 1e-4`` (0.1 mm) failed its rated-state
+    solve at 10 and 140 N m (the load ramp jumped to a periodic copy of the engagement, the wheels
+    turned by -0.97 rad) but solved at 30 N m, and the check said ``valid range: 0 < rated_torque
+    <= 44.27 N m``. The check's solver now ends its ladder with the guide-spring homotopy, so the
+    rated state is found with the pins carrying the load; a solver built without the option keeps
+    the model's ladder (the protocols' paths do not change)."""
+    import numpy as np
+    from rvtool.analysis.admissible import check_rated_state
+    from rvtool.solver.static import StaticSolver
+    table = template_table("cycloid")
+    table["wheels"]["clearance"] = 1e-4
+    design = load_table(tmp_path, table)
+    model, q = check_rated_state(design, lambda: rvtool.build(design))
+    assert q is not None
+    # the rated torque is carried by the mesh, not by the regularization springs: the pin forces
+    # balance a torque of the order of the rated one (measured peak pin force 889 N)
+    assert np.max(model.observe(q, model.main_mesh).normal_force) > 100.0
+    assert StaticSolver(model).guided_fallback is False
+
+
 def test_pointed_tip_names_the_thickness_allowance(tmp_path):
     """Before: ``sun_gear.thickness_allowance = 0.01`` (10 mm on a 1 mm module) said ``... gives a pointed
     tip ...; valid: tip thickness > 0.0 m (reduce profile_shift = 0.1 or the tip diameter)``: the key
