@@ -124,7 +124,6 @@ def _torque_path(ctx, model, what):
 
 @register("te", "quasi-static transmission error under the rated torque (Eq. obs_te), with its refinement error")
 def run_te(ctx):
-    from ..assembly import build
     from ..protocols.precision import mesh_forces, peak_to_peak_sampling_error, quasi_static_te, te_metrics
     rated = ctx.require("rated_torque")
     out = Outcome()
@@ -150,7 +149,7 @@ def run_te(ctx):
         out.warnings.append(f"no refinement error: {exc}")
         err_note = err_pp_note = "not available: the topology declares no refined resolution"
     else:
-        fine_model = build(fine) if ctx.device == "cpu" else build(fine, device=ctx.device)
+        fine_model = ctx.build(fine)
         ref_backend, ref_choice = _backend(ctx, fine_model, "equilibria", len(window))
         coarse = quasi_static_te(model, torque=rated, input_angles=window[::2], backend=ref_backend)
         fine_run = quasi_static_te(fine_model, torque=rated, input_angles=window, backend=ref_backend)
