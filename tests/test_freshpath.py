@@ -104,18 +104,23 @@ def test_results_and_sweep_tables_are_written_with_the_usual_file_mode(tmp_path)
     assert sorted(os.listdir(tmp_path / "sweep")) == ["results.csv", "results.json"]
 
 
-@pytest.mark.parametrize("name", ["rd40", "std_involute"])
+@pytest.mark.parametrize("name", ["rd40", "std_involute", "rv40e"])
 def test_section_plot_says_what_its_arrows_and_circles_are(name):
     """Before: the report's section plot drew red and blue arrows with no legend entry and no scale
     (a reader could not tell a 200 N pin load from a 2 kN bearing load), the RV section had no
     legend at all, and the std-involute section drew each wheel's root circle in a colour of its
-    own, unlabelled (five circles, two named). Now every outline and arrow kind is in the legend,
-    each wheel's circles share its colour, and the arrow key gives the largest force."""
+    own, unlabelled (five circles, two named). Then one arrow scale served every family: the
+    2,247 N eccentric-bearing load of rd40 set it and the 231 N ring-pin arrows came out 1 mm long
+    (0.9 % of the plot), hidden under the pins. Now every outline and contact family is in the
+    legend, each wheel's circles share its colour, each family's largest force is drawn at the one
+    key length (its legend entry names that force) and no arrow is longer than it."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
-    from matplotlib.quiver import QuiverKey
+    from matplotlib.quiver import Quiver, QuiverKey
+
+    from rvtool.model.reducer import FAMILY_ARROW_WORDS, SMALL_FAMILY_FLOOR
     from rvtool.solver.static import StaticSolver
     d = rvtool.load_design(name)
     m = rvtool.build(d)
@@ -125,11 +130,31 @@ def test_section_plot_says_what_its_arrows_and_circles_are(name):
     try:
         m.draw_section(ax, q)
         labels = [t.get_text() for t in ax.get_legend().get_texts()]
-        assert "contact force, main mesh" in labels and "contact force, other contacts" in labels
         assert {"wheel 0", "wheel 1"} <= {lb.split(",")[0] for lb in labels}
         keys = [a for a in ax.get_children() if isinstance(a, QuiverKey)]
-        peak = max(m.family_peaks(q).values())
-        assert len(keys) == 1 and keys[0].text.get_text() == f"{peak:.4g} N"
+        assert len(keys) == 1
+        length = keys[0].U
+        assert keys[0].text.get_text() == f"{length * 1e3:.3g} mm"
+        quivers = {a.get_label().split(":")[0]: a for a in ax.get_children() if isinstance(a, Quiver)}
+        peaks = m.family_peaks(q)
+        assert set(quivers) == {FAMILY_ARROW_WORDS[f] for f in m.families}
+        largest = max(peaks[f.value] for f in m.families)
+        if name == "rv40e":     # its main bearings (22 N) lie below the floor: drawn short, not at the key length
+            assert any(0 < peaks[f.value] < SMALL_FAMILY_FLOOR * largest for f in m.families)
+        for fam in m.families:
+            words, peak = FAMILY_ARROW_WORDS[fam], peaks[fam.value]
+            ref = max(peak, SMALL_FAMILY_FLOOR * largest)
+            assert (f"{words}: {ref:.4g} N per {length * 1e3:.3g} mm" if ref > 0 else f"{words}: no load") in labels
+            drawn = np.hypot(quivers[words].U, quivers[words].V)
+            # the family's own scale: its largest force at the key length (rounding only), unless it lies
+            # below the floor: then shorter in proportion, never blown up to the key length
+            assert peak == 0 or np.max(drawn) == pytest.approx(length * peak / ref, rel=1e-9), words
+        x, y = ax.get_xlim(), ax.get_ylim()
+        extent = max(x[1] - x[0], y[1] - y[0])
+        main = np.hypot(quivers[FAMILY_ARROW_WORDS[m.main_mesh]].U, quivers[FAMILY_ARROW_WORDS[m.main_mesh]].V)
+        # a main-mesh arrow a reader sees (the single-scale plot drew rd40's at 0.9 % of the extent),
+        # none past a fifth of the plot
+        assert 0.05 * extent <= np.max(main) and length <= 0.2 * extent
         drawn = [ln for ln in ax.get_lines()]
         unlabelled = {ln.get_color() for ln in drawn if ln.get_label().startswith("_")}
         labelled = {ln.get_color() for ln in drawn if not ln.get_label().startswith("_")}

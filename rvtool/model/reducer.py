@@ -72,6 +72,44 @@ class Family(str, Enum):
     CRANK_BEARINGS = "crank_bearings"          # crankshaft -- carrier (RV)
 
 
+FAMILY_ARROW_WORDS = {
+    Family.PINS: "ring pins",
+    Family.OUTPUT_PINS: "output pins",
+    Family.ECCENTRIC_BEARINGS: "eccentric bearings",
+    Family.MAIN_BEARINGS: "main bearings",
+    Family.INPUT_BEARINGS: "input bearings",
+    Family.INVOLUTE_STAGE: "involute mesh",
+    Family.CRANK_BEARINGS: "crank bearings",
+}
+"""Contact families in words on the section plot's legend."""
+
+FAMILY_ARROW_COLOURS = ("tab:red", "tab:purple", "tab:brown", "tab:cyan", "tab:olive", "tab:pink", "tab:gray")
+"""Arrow colours by :class:`Family` order (the outlines use C0/C1 for the wheels, black and green)."""
+
+
+def family_colour(family):
+    """The arrow colour of ``family`` on the section plot (fixed per family across topologies)."""
+    return FAMILY_ARROW_COLOURS[list(Family).index(Family(family)) % len(FAMILY_ARROW_COLOURS)]
+
+
+SMALL_FAMILY_FLOOR = 0.1
+"""Smallest reference force of a family's arrow scale in the section plot, as a fraction of the largest
+family's largest force (:meth:`ReducerModel.draw_section`)."""
+
+
+def section_arrow_length(ax, fraction=0.1, default=0.01):
+    """Drawn length [m] of each family's largest force on a section plot: ``fraction`` of the
+    larger side of what ``ax`` holds so far (the topology's outlines), rounded down to 1, 2 or
+    5 x 10^k m so that the key reads plainly; ``default`` where nothing is drawn yet."""
+    lim = ax.dataLim
+    extent = max(lim.width, lim.height) if np.all(np.isfinite(lim.bounds)) else 0.0
+    if not extent > 0:
+        return default
+    target = fraction * extent
+    decade = 10.0 ** np.floor(np.log10(target))
+    return float(max(m for m in (1.0, 2.0, 5.0) if m * decade <= target * (1 + 1e-12)) * decade)
+
+
 @dataclass(frozen=True)
 class BodyCoordinate:
     """One coordinate of one body: body name and coordinate name ("x", "y", "theta")."""
@@ -515,24 +553,37 @@ class ReducerModel:
 
     def draw_section(self, ax, q):
         """Transverse section at state q: the contact forces of every family (arrows along the
-        normals at the contact points, the largest 10 mm long; its force is the arrow key's) and
-        the legend. Topologies draw (and label) their outlines first."""
-        peak = max(max(self.family_peaks(q).values()), 1e-9)
-        length = 0.01           # [m] drawn length of the largest force
-        scale = length / peak
-        labels = {True: "contact force, main mesh", False: "contact force, other contacts"}
-        arrows = None
+        normals at the contact points) and the legend. Each family has its own colour and its own
+        arrow scale: its largest force is drawn :func:`section_arrow_length` long (a tenth of the
+        outlines' extent, rounded down to 1, 2 or 5 x 10^k m; the key arrow in the corner), and its
+        legend entry names the force that length stands for, so a 200 N ring-pin load stays visible
+        beside a 2 kN bearing load (lengths compare within a family, not across families). A family
+        whose largest force is below :data:`SMALL_FAMILY_FLOOR` of the largest family's takes that
+        fraction of it as its reference force instead (its arrows stay short: a negligible load is not
+        drawn as long as the main ones).
+        Topologies draw (and label) their outlines first."""
+        length = section_arrow_length(ax)
+        peaks = self.family_peaks(q)
+        largest = max((peaks[f.value] for f in self.families), default=0.0)
+        key = None
         for fam in self.families:
             ob = self.observe(q, fam)
             on = ob.normal_force > 0
             f = ob.normal_force[on, None] * ob.normal[on]
-            main = fam == self.main_mesh
+            # a family far below the largest is not blown up to the key length (rv40e's 22 N main bearings
+            # would read like its 493 N pins): its reference force is at least SMALL_FAMILY_FLOOR of the largest
+            ref = max(peaks[fam.value], SMALL_FAMILY_FLOOR * largest)
+            scale = length / ref if ref > 0 else 0.0
+            label = (f"{FAMILY_ARROW_WORDS.get(fam, fam.value)}: {ref:.4g} N per {length * 1e3:.3g} mm" if ref > 0
+                     else f"{FAMILY_ARROW_WORDS.get(fam, fam.value)}: no load")
+            peak = peaks[fam.value]
             arrows = ax.quiver(ob.position[on, 0], ob.position[on, 1], -f[:, 0] * scale, -f[:, 1] * scale,
-                               angles="xy", scale_units="xy", scale=1, width=0.003, color="r" if main else "b",
-                               label=labels.pop(main, None))
-        if arrows is not None:  # the arrows' scale, in the empty corner outside the section's circle
-            ax.quiverkey(arrows, 0.04, 0.96, length, f"{peak:.4g} N", labelpos="E", coordinates="axes",
-                         color="k", fontproperties={"size": 8})
+                               angles="xy", scale_units="xy", scale=1, width=0.003, color=family_colour(fam),
+                               label=label)
+            key = arrows if peak > 0 else key
+        if key is not None:     # the reference length, in the empty corner outside the section's circle
+            ax.quiverkey(key, 0.04, 0.96, length, f"{length * 1e3:.3g} mm",
+                         labelpos="E", coordinates="axes", color="k", fontproperties={"size": 8})
         ax.set_aspect("equal")
         ax.set(xlabel="x [m]", ylabel="y [m]")
         # outlines (labelled by the topology) and arrows, below the section where they hide nothing
