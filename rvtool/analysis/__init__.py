@@ -17,7 +17,7 @@ import os
 import time
 from pathlib import Path
 
-from ..errors import RvtoolInputError
+from ..errors import RvtoolInputError, SolverFailure
 from .admissible import check_rated_state
 from .registry import PROTOCOLS, Context, Unsupported, select
 from .results import AnalysisResult, Figure, ProtocolResult, finite_or_none
@@ -62,14 +62,32 @@ def load(design):
 
 def _run_one(proto, ctx):
     t0 = time.perf_counter()
+    retried = None
     try:
-        outcome = proto.run(ctx)
+        try:
+            outcome = proto.run(ctx)
+        except SolverFailure as exc:
+            # rejected and retried on fresh models (no history carried over) with the guide-spring
+            # homotopy as the solvers' last fallback; reached only where the protocol has already
+            # failed, so no result that ran before changes; a second failure fails loudly, naming both
+            retry = ctx.guided_retry()
+            if retry is None:
+                raise
+            retried = f"{type(exc).__name__}: {exc}"
+            try:
+                outcome = proto.run(retry)
+            except Exception as exc2:
+                raise type(exc2)(f"{exc2} (retried with the guide-spring homotopy, guided_free_play, after: "
+                                 f"{retried})") from exc
     except Unsupported as exc:
         return ProtocolResult(proto.name, "skipped", proto.summary, reason=str(exc), wall_s=time.perf_counter() - t0)
     except Exception as exc:  # a failed protocol is a result; the others still run
         return ProtocolResult(proto.name, "failed", proto.summary, reason=f"{type(exc).__name__}: {exc}",
                               wall_s=time.perf_counter() - t0)
     warnings = list(outcome.warnings)
+    if retried is not None:
+        warnings.append(f"the solver's default ladder failed ({retried}); this result comes from fresh models "
+                        "with the guide-spring homotopy (guided_free_play) as the solvers' last fallback")
     figures = []
     for f in outcome.figures:
         value, bad_v = finite_or_none(f.value)
@@ -127,7 +145,12 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     ``bearing_model`` (``--bearing-model``): "lumped" (one circle contact per bearing) or "rolling"
     (rolling elements: needed by spatial bodies and influence-coefficient roller slices) for the
     cycloid and small-tooth-difference designs (``build(..., bearing_model=...)``); None builds
-    with the builder's default, lumped. RV designs have no choice (None only)."""
+    with the builder's default, lumped. RV designs have no choice (None only).
+    A protocol whose solver fails (:class:`~rvtool.errors.SolverFailure`) on a model without
+    ``guided_free_play`` is retried once on fresh models with it on
+    (:meth:`~rvtool.analysis.registry.Context.guided_retry`; free play such as a cycloid's
+    ``wheels.clearance`` leaves the zero-load state without contact stiffness): a warning says so,
+    and a second failure names both; a protocol that ran never reaches the retry."""
     t0 = time.perf_counter()
     chosen = select(protocols)
     dev = resolve_device(device)
