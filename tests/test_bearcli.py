@@ -46,8 +46,10 @@ def test_default_builds_as_before(tmp_path):
     option reaches the build, not only the influence check)."""
     design = load_table(tmp_path, template_table("cycloid"))
     assert Context(design, quick=True, out_dir=None).build_options() == {}
-    assert Context(design, quick=True, out_dir=None, bearing_model="rolling").build_options() == {
-        "bearing_model": "rolling"}
+    ctx = Context(design, quick=True, out_dir=None, bearing_model="rolling")
+    assert ctx.build_options() == {"bearing_model": "rolling"}
+    # a protocol retried after a solver failure keeps the bearing model asked for
+    assert ctx.guided_retry().build_options() == {"guided_free_play": True, "bearing_model": "rolling"}
 
     def figures(**kw):
         (r,) = rvtool.analyze(design, "stiffness", quick=True, **kw).results
