@@ -345,14 +345,15 @@ def test_shared_output_pins_name_the_table_they_need(tmp_path):
 
 @pytest.mark.parametrize("section,key,value", [("bodies", "flange_coordinates", "spatial"),
                                                ("eccentric_bearing", "slices", "influence")])
-def test_a_rolling_bearing_only_choice_says_rvtool_analyze_cannot_run_it(section, key, value, tmp_path):
+def test_a_rolling_bearing_only_choice_names_the_command_line_option(section, key, value, tmp_path):
     """Before: a cycloid design file with ``bodies.flange_coordinates = "spatial"`` was refused under
-    `rvtool analyze` with "valid: build(..., bearing_model='rolling')", a keyword the command line has
-    no option for (it builds the lumped bearings)."""
+    `rvtool analyze` with "valid: build(..., bearing_model='rolling')", a keyword the command line had
+    no option for; the lumped build now says so and names `--bearing-model rolling` (tests/test_bearcli.py
+    runs it)."""
     table = template_table("cycloid")
     table[section][key] = value
     design = load_table(tmp_path, table)
-    with pytest.raises(RvtoolInputError, match=r"`rvtool analyze` builds the cycloid .* with lumped bearings"):
+    with pytest.raises(RvtoolInputError, match=r"`rvtool analyze` builds the cycloid .* with lumped bearings.*--bearing-model rolling"):
         rvtool.build(design)
 
 
