@@ -353,7 +353,8 @@ def test_a_rolling_bearing_only_choice_names_the_command_line_option(section, ke
     table = template_table("cycloid")
     table[section][key] = value
     design = load_table(tmp_path, table)
-    with pytest.raises(RvtoolInputError, match=r"`rvtool analyze` builds the cycloid .* with lumped bearings.*--bearing-model rolling"):
+    with pytest.raises(RvtoolInputError,
+                       match=r"`rvtool analyze` builds the cycloid .* with lumped bearings.*--bearing-model rolling"):
         rvtool.build(design)
 
 
