@@ -212,7 +212,7 @@ def _input_error(exc):
 
 
 def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowables=None, backend="auto",
-             scheduler=None):
+             scheduler=None, bearing_model=None):
     from rvtool import progress
     from rvtool.analysis import analyze
     from rvtool.errors import RvtoolInputError
@@ -221,7 +221,8 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowa
         from rvtool.analysis import load, resolve_device, select
         select(protocols)
         resolve_device(device)
-        load(design)
+        from rvtool.analysis import check_bearing_model
+        check_bearing_model(load(design)[0], bearing_model)
     except RvtoolInputError as exc:
         return _input_error(exc)
     if out is None:
@@ -230,7 +231,7 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowa
     with progress.reporting("quiet" if quiet else "auto"):
         try:
             res = analyze(design, protocols, quick=quick, out_dir=out, device=device, tolerances=tolerances,
-                          allowables=allowables, backend=backend, scheduler=scheduler)
+                          allowables=allowables, backend=backend, scheduler=scheduler, bearing_model=bearing_model)
         except RvtoolInputError as exc:
             return _input_error(exc)
     for r in res.results:
@@ -250,7 +251,7 @@ def _analyze(design, protocols, *, quick, out, device, quiet, tolerances, allowa
 def _cmd_analyze(args):
     return _analyze(args.design, args.protocols, quick=args.quick, out=args.out, device=args.device,
                     quiet=args.quiet, tolerances=args.tolerances, allowables=args.allowables, backend=args.backend,
-                    scheduler=args.scheduler)
+                    scheduler=args.scheduler, bearing_model=args.bearing_model)
 
 
 def _cmd_designs(args):
@@ -423,6 +424,10 @@ def build_parser():
                          "(the device family: device Newton for equilibria and torque paths; driven runs, e.g. "
                          "--protocols vibration, on the fused stepper for cycloids with lumped bearings, else "
                          "on the row stepper: RV and other models with device rows)")
+    an.add_argument("--bearing-model", default=None, metavar="MODEL",
+                    help="cycloid and small-tooth-difference designs: lumped (default: one circle contact per "
+                         "bearing) or rolling (rolling elements; needed by spatial bodies and influence roller "
+                         "slices, slower)")
     an.add_argument("--scheduler", default=None, metavar="ADDRESS",
                     help="Dask scheduler of the Monte Carlo's CPU pool (default: a LocalCluster started for it)")
     an.add_argument("--quiet", action="store_true", help="no progress output")

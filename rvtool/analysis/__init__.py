@@ -17,7 +17,7 @@ import os
 import time
 from pathlib import Path
 
-from ..errors import RvtoolInputError
+from ..errors import RvtoolInputError, SolverFailure
 from .admissible import check_rated_state
 from .registry import PROTOCOLS, Context, Unsupported, select
 from .results import AnalysisResult, Figure, ProtocolResult, finite_or_none
@@ -62,14 +62,32 @@ def load(design):
 
 def _run_one(proto, ctx):
     t0 = time.perf_counter()
+    retried = None
     try:
-        outcome = proto.run(ctx)
+        try:
+            outcome = proto.run(ctx)
+        except SolverFailure as exc:
+            # rejected and retried on fresh models (no history carried over) with the guide-spring
+            # homotopy as the solvers' last fallback; reached only where the protocol has already
+            # failed, so no result that ran before changes; a second failure fails loudly, naming both
+            retry = ctx.guided_retry()
+            if retry is None:
+                raise
+            retried = f"{type(exc).__name__}: {exc}"
+            try:
+                outcome = proto.run(retry)
+            except Exception as exc2:
+                raise type(exc2)(f"{exc2} (retried with the guide-spring homotopy, guided_free_play, after: "
+                                 f"{retried})") from exc
     except Unsupported as exc:
         return ProtocolResult(proto.name, "skipped", proto.summary, reason=str(exc), wall_s=time.perf_counter() - t0)
     except Exception as exc:  # a failed protocol is a result; the others still run
         return ProtocolResult(proto.name, "failed", proto.summary, reason=f"{type(exc).__name__}: {exc}",
                               wall_s=time.perf_counter() - t0)
     warnings = list(outcome.warnings)
+    if retried is not None:
+        warnings.append(f"the solver's default ladder failed ({retried}); this result comes from fresh models "
+                        "with the guide-spring homotopy (guided_free_play) as the solvers' last fallback")
     figures = []
     for f in outcome.figures:
         value, bad_v = finite_or_none(f.value)
@@ -86,8 +104,29 @@ def _run_one(proto, ctx):
                           tuple(p for p in outcome.plots if p), time.perf_counter() - t0)
 
 
+BEARING_MODELS = ("lumped", "rolling")
+"""Valid ``--bearing-model`` / ``bearing_model`` values of :func:`analyze` (the cycloid and
+small-tooth-difference builders' ``bearing_model``)."""
+
+
+def check_bearing_model(design, bearing_model):
+    """Raise :class:`~rvtool.errors.RvtoolInputError` for a ``--bearing-model`` that is not one of
+    :data:`BEARING_MODELS`, or one given for a design whose builder offers no choice (RV)."""
+    if bearing_model is None:
+        return
+    if bearing_model not in BEARING_MODELS:
+        raise RvtoolInputError(f"--bearing-model / bearing_model = {bearing_model!r} is not one of the valid choices "
+                               f"{list(BEARING_MODELS)}")
+    from ..assembly.spec import CycloidDesign
+    from ..assembly.std_spec import StdInvoluteDesign
+    if not isinstance(design, (CycloidDesign, StdInvoluteDesign)):
+        raise RvtoolInputError(f"--bearing-model {bearing_model}: the {type(design).__name__} builder has no bearing "
+                               "model choice (its bearings are fixed by its topology); valid: leave --bearing-model "
+                               "out, or a cycloid or small-tooth-difference design")
+
+
 def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", tolerances=None, allowables=None,
-            backend="auto", scheduler=None):
+            backend="auto", scheduler=None, bearing_model=None):
     """Run ``protocols`` (names, a comma-separated string or None for all) on ``design``;
     returns an :class:`AnalysisResult`. Input errors (design, protocol names, device, a rated
     torque outside the design's admissible range, :mod:`rvtool.analysis.admissible`) raise
@@ -102,7 +141,16 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     protocol on the fastest backend that supports the model; a named backend runs where it can and
     skips a protocol it cannot run, with the reasons. Each protocol's settings record
     ``backend``: {"requested", "ran", "not_taken": {name: reason}}. ``scheduler``: the address of
-    the Dask scheduler of the Monte Carlo's CPU pool (None: a LocalCluster started for it)."""
+    the Dask scheduler of the Monte Carlo's CPU pool (None: a LocalCluster started for it).
+    ``bearing_model`` (``--bearing-model``): "lumped" (one circle contact per bearing) or "rolling"
+    (rolling elements: needed by spatial bodies and influence-coefficient roller slices) for the
+    cycloid and small-tooth-difference designs (``build(..., bearing_model=...)``); None builds
+    with the builder's default, lumped. RV designs have no choice (None only).
+    A protocol whose solver fails (:class:`~rvtool.errors.SolverFailure`) on a model without
+    ``guided_free_play`` is retried once on fresh models with it on
+    (:meth:`~rvtool.analysis.registry.Context.guided_retry`; free play such as a cycloid's
+    ``wheels.clearance`` leaves the zero-load state without contact stiffness): a warning says so,
+    and a second failure names both; a protocol that ran never reaches the retry."""
     t0 = time.perf_counter()
     chosen = select(protocols)
     dev = resolve_device(device)
@@ -110,6 +158,7 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
     from ..validation import check_choice
     check_choice("backend", backend, CHOICES)
     obj, source, shipped = load(design)
+    check_bearing_model(obj, bearing_model)
     from .. import designs
     from ..assembly import topologies
     if tolerances is None and shipped is not None and designs.tolerances_of(shipped):
@@ -134,7 +183,7 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
         from ..validation import check_out_dir
         check_out_dir(out_dir)                   # likewise a folder that cannot be made
     ctx = Context(obj, quick=quick, out_dir=out_dir, device=dev, tolerances=tolerances, backend=backend,
-                  scheduler=scheduler)
+                  scheduler=scheduler, bearing_model=bearing_model)
     # a valid but unsolvable load is an input error: raised here, before anything is written
     ctx.cache["rated_state"] = check_rated_state(obj, ctx.build)
     if out_dir is not None:
@@ -145,7 +194,8 @@ def analyze(design, protocols=None, *, quick=False, out_dir=None, device="cpu", 
                                    "valid: a folder path in a writable place") from None
     results = tuple(_run_one(p, ctx) for p in chosen)
     res = AnalysisResult(getattr(obj, "name", type(obj).__name__), topologies.topology_of(obj) or type(obj).__name__,
-                         source, bool(quick), dev, results, out_dir, time.perf_counter() - t0, backend)
+                         source, bool(quick), dev, results, out_dir, time.perf_counter() - t0, backend,
+                         bearing_model)
     if out_dir is not None:
         write(res, allowed)
     return res
@@ -158,6 +208,8 @@ def write(res, allowables=None):
     from .report import write_report
     settings = {"design_source": res.source, "quick": res.quick, "protocols_requested": [r.name for r in res.results],
                 "device": res.device, "backend": res.backend}
+    if res.bearing_model is not None:           # recorded where chosen (a default run's file is unchanged)
+        settings["bearing_model"] = res.bearing_model
     d = res.to_dict()
     d["allowables"] = allowables or {"source": None, "values": None}
     data = write_results(res.out_dir, d, settings=settings, wall_s=res.wall_s,

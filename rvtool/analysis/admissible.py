@@ -7,7 +7,11 @@ state the ``te`` protocol reports its contact forces at, so it is reused, not re
 raises :class:`~rvtool.errors.RvtoolInputError` naming ``rated_torque`` and its admissible
 range when
 
-* the static solver finds no plausible equilibrium there (:class:`~rvtool.errors.SolverFailure`):
+* the static solver finds no plausible equilibrium there (:class:`~rvtool.errors.SolverFailure`;
+  the solver's ladder ends with the guide-spring homotopy of :mod:`rvtool.solver.guide` here for
+  every topology, reached only where every other start failed: free play such as a cycloid's
+  ``wheels.clearance = 1e-4`` m let the load ramp jump to a periodic copy of the engagement
+  at 10 and 140 N m, and a false ``rated_torque <= 44.27 N m`` was reported):
   the range is then bracketed by solving lower torques (decades down, then a few bisection steps
   in log scale) and reported as ``0 < rated_torque <= T_ok``, the largest torque shown to
   equilibrate; or
@@ -54,7 +58,7 @@ def _solve(build, torque):
     model = build()
     model.set_output_torque(-np.sign(model.ratio) * torque)
     try:
-        return model, StaticSolver(model).solve(0.0)
+        return model, StaticSolver(model, guided_fallback=True).solve(0.0)
     except SolverFailure:
         return model, None
 

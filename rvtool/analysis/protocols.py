@@ -124,7 +124,6 @@ def _torque_path(ctx, model, what):
 
 @register("te", "quasi-static transmission error under the rated torque (Eq. obs_te), with its refinement error")
 def run_te(ctx):
-    from ..assembly import build
     from ..protocols.precision import mesh_forces, peak_to_peak_sampling_error, quasi_static_te, te_metrics
     rated = ctx.require("rated_torque")
     out = Outcome()
@@ -150,7 +149,7 @@ def run_te(ctx):
         out.warnings.append(f"no refinement error: {exc}")
         err_note = err_pp_note = "not available: the topology declares no refined resolution"
     else:
-        fine_model = build(fine) if ctx.device == "cpu" else build(fine, device=ctx.device)
+        fine_model = ctx.build(fine)
         ref_backend, ref_choice = _backend(ctx, fine_model, "equilibria", len(window))
         coarse = quasi_static_te(model, torque=rated, input_angles=window[::2], backend=ref_backend)
         fine_run = quasi_static_te(fine_model, torque=rated, input_angles=window, backend=ref_backend)
@@ -597,7 +596,6 @@ def _design_variant_monte_carlo(ctx, sampler, out):
     interval of the te protocol (one input revolution, 4 points per mesh cycle) at the rated torque
     and the lost motion at +-3 % of it (spring-controlled march); returns (n, the run's figures)."""
 
-    from ..assembly import build
     from ..protocols.lost_motion import lost_motion
     from ..protocols.precision import quasi_static_te
     from ..variants.montecarlo import summarize
@@ -609,7 +607,6 @@ def _design_variant_monte_carlo(ctx, sampler, out):
     rated = ctx.require("rated_torque")
     n = MC_DESIGN_VARIANTS[0] if ctx.quick else MC_DESIGN_VARIANTS[1]
     angles, _, _ = _te_angles(ctx.build(), quick=True)
-    kw = {} if ctx.device == "cpu" else {"device": ctx.device}
     records = []
     tick = progress.callback("Monte Carlo", "variant")
     for k in range(n):
@@ -619,8 +616,8 @@ def _design_variant_monte_carlo(ctx, sampler, out):
         try:
             # a variant its deviations make inadmissible (e.g. tooth interference) is a failed variant
             design, drawn = sample(spec, ctx.design, k, MC_SEED)
-            qs = quasi_static_te(build(design, **kw), torque=rated, input_angles=angles)
-            lm = lost_motion(build(design, **kw), torque_level=LOST_MOTION_FRACTION * rated)
+            qs = quasi_static_te(ctx.build(design), torque=rated, input_angles=angles)
+            lm = lost_motion(ctx.build(design), torque_level=LOST_MOTION_FRACTION * rated)
             rec.update(te_pp_arcsec=float(np.ptp(qs["te"])) * ARCSEC_PER_RAD,
                        lost_motion_arcmin=lm["lost_motion_rad"] * ARCMIN_PER_RAD,
                        max_contact_force_N=max(qs["peak_loads"].values()) if qs["peak_loads"] else None)
@@ -660,6 +657,10 @@ def _mc_backend(ctx):
         copy_parameters(ctx.design, [Variant()], regularization=MC_REGULARIZATION)
     except (RvtoolInputError, AttributeError, TypeError) as exc:
         reasons["device"] = reasons["fused"] = f"the device copies cannot be built from this design: {exc}"
+    if ctx.bearing_model not in (None, "lumped"):
+        for b in ("device", "fused", "replica"):   # their variant batches build lumped bearings only
+            reasons[b] = (f"--bearing-model {ctx.bearing_model}: the {b} Monte Carlo builds lumped bearings only "
+                          "(valid there: lumped); one Exudyn model per variant runs it")
     if ctx.backend != "auto":
         if ctx.backend in reasons:
             raise Unsupported(f"backend = {ctx.backend!r} cannot run the Monte Carlo of this design: "
@@ -667,7 +668,7 @@ def _mc_backend(ctx):
         return MC_MODES[ctx.backend], {"requested": ctx.backend, "ran": ctx.backend, "not_taken": {
             b: f"not requested (--backend {ctx.backend})" for b in MC_MODES if b != ctx.backend}}
     on_gpu = str(ctx.device).startswith("cuda")
-    ran = "device" if on_gpu and "device" not in reasons else "replica"
+    ran = "device" if on_gpu and "device" not in reasons else "replica" if "replica" not in reasons else "exudyn"
     slower = {"device": "on a CPU not faster than one batched Exudyn system per chunk (measured, see "
                         "rvtool.analysis.protocols._mc_backend)",
               "fused": "the fused stepper runs driven runs; the Monte Carlo's device mode is 'device'",
@@ -716,7 +717,7 @@ def run_monte_carlo(ctx):
             raise Unsupported(f"the tolerances do not apply to this design: {exc}") from None
         mode, choice = _mc_backend(ctx)
         n = MC_CYCLOID_VARIANTS[0] if ctx.quick else MC_CYCLOID_VARIANTS[1]
-        protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53)
+        protocol = VariantProtocol(n_te_points=23 if ctx.quick else 53, bearing_model=ctx.bearing_model or "lumped")
         mc_settings = MonteCarloSettings(n_variants=n, seed=MC_SEED, chunk_size=n if ctx.quick else 10,
                                          mode=mode, workers=1 if ctx.quick else None, device=ctx.device,
                                          scheduler=ctx.scheduler or "")

@@ -67,8 +67,13 @@ class Context:
     """What a protocol runs on: the design, the run mode and a cache shared by the protocols
     of one analysis (e.g. the stiffness sequence that lost motion and hysteresis reuse)."""
 
-    def __init__(self, design, *, quick, out_dir, device="cpu", tolerances=None, backend="auto", scheduler=None):
+    def __init__(self, design, *, quick, out_dir, device="cpu", tolerances=None, backend="auto", scheduler=None,
+                 guided_free_play=False, bearing_model=None):
         self.design = design
+        #: models built with the guide-spring homotopy as their solvers' last fallback (the retry of a
+        #: protocol whose solver failed, :meth:`guided_retry`); off: the design's own models
+        self.guided_free_play = bool(guided_free_play)
+        self.bearing_model = bearing_model  # None: the builder's default (lumped); else "lumped" / "rolling"
         self.backend = backend          # a name of rvtool.solver.backends.CHOICES
         self.scheduler = scheduler      # Dask scheduler address of the studies' pool (None: a LocalCluster)
         self.quick = bool(quick)
@@ -77,10 +82,41 @@ class Context:
         self.tolerances = tolerances
         self.cache = {}
 
-    def build(self):
-        """A fresh model of the design (:func:`rvtool.assembly.build`, any topology)."""
+    def build_options(self):
+        """Keyword options of :func:`rvtool.assembly.build` this analysis asks for: the device (when not
+        the CPU), ``guided_free_play`` (when on) and the bearing model (when chosen: ``--bearing-model``);
+        {} builds with the builder's defaults."""
+        opts = {} if self.device == "cpu" else {"device": self.device}
+        if self.guided_free_play:
+            opts["guided_free_play"] = True
+        if self.bearing_model is not None:
+            opts["bearing_model"] = self.bearing_model
+        return opts
+
+    def build(self, design=None):
+        """A fresh model of the design, or of ``design`` (e.g. its refined resolution or a tolerance
+        variant), with :meth:`build_options` (:func:`rvtool.assembly.build`, any topology)."""
         from ..assembly import build
-        return build(self.design) if self.device == "cpu" else build(self.design, device=self.device)
+        return build(self.design if design is None else design, **self.build_options())
+
+    def guided_retry(self):
+        """The context of a protocol's retry after a :class:`~rvtool.errors.SolverFailure`: the same
+        design and settings with models whose ``guided_free_play`` is on (a stalled load
+        continuation and a static point every other start missed are reached by the guide-spring
+        homotopy, :mod:`rvtool.solver.guide`), one per analysis (its cache shared by the retried
+        protocols); None where the design's models already have it (the retry would repeat the
+        failure) or the topology's builder has no such option (the cycloid's has)."""
+        if self.guided_free_play:
+            return None
+        if "guided_retry" not in self.cache:
+            from ..assembly.spec import CycloidDesign
+            ctx = None
+            if isinstance(self.design, CycloidDesign):
+                ctx = Context(self.design, quick=self.quick, out_dir=self.out_dir, device=self.device,
+                              tolerances=self.tolerances, backend=self.backend, scheduler=self.scheduler,
+                              guided_free_play=True, bearing_model=self.bearing_model)
+            self.cache["guided_retry"] = ctx
+        return self.cache["guided_retry"]
 
     def require(self, *attributes):
         """The design's attributes the protocol needs (rated torque, input speed, ...);

@@ -91,6 +91,7 @@ class AnalysisResult:
     out_dir: str | None = None
     wall_s: float = 0.0
     backend: str = "auto"
+    bearing_model: str | None = None    # --bearing-model; None: the builders' default (lumped)
 
     @property
     def backends(self):

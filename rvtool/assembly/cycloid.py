@@ -558,7 +558,7 @@ def lumped_bearing_contacts(design, *, offset=0, prefix=""):
 
 
 def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", precision="float64", device="cpu",
-          rigid_supports=False, regularization=(100.0, 0.1), contact_element=None):
+          rigid_supports=False, regularization=(100.0, 0.1), contact_element=None, guided_free_play=False):
     """Assemble ``design`` into an Exudyn system; returns a :class:`CycloidModel`.
 
     rigid_supports: shaft and flange centres held on the axis and the wheel
@@ -574,6 +574,8 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
     callbacks) or ``"merged"`` (:class:`~exudyn_user_elements.merged_element.MergedContactElement`:
     every family in one element, rows summed on the device, per-attempt controls); None reads
     ``RVTOOL_CONTACT_ELEMENT`` (default ``"merged"``). Same families, ids and physics.
+    guided_free_play: the model's :attr:`~rvtool.model.ReducerModel.guided_free_play` (default off: the
+    paths of every shipped figure; ``rvtool analyze`` retries a protocol whose solver failed with it on).
     """
     mode = contact_element_mode(contact_element)
     if bearing_model not in ("lumped", "rolling"):
@@ -584,7 +586,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
                                "output pins of a cycloid drive are not ported yet); valid: wheels.body = 'rigid'")
     if isinstance(design.main_bearing, CrossedRollerBearing) and bearing_model != "rolling":
         raise RvtoolInputError("main_bearing.kind = 'crossed_roller' with bearing_model = 'lumped': the lumped circle "
-                               "contact is a ball law; valid: build(..., bearing_model='rolling')")
+                               f"contact is a ball law; valid: build(..., bearing_model='rolling'){LUMPED_IN_ANALYZE}")
     d = design
     nw = d.n_wheels
     SC = exu.SystemContainer()
@@ -730,6 +732,7 @@ def build(design: CycloidDesign, *, bearing_model="lumped", backend="warp", prec
             elements["bearing_friction"] = element(bearing_friction_evaluator(d, bset, elements["bearings"].evaluator))
     mbs.Assemble()
     return CycloidModel(design=d, SC=SC, mbs=mbs, body_names=body_names(nw), nodes=nodes, elements=elements,
+                        guided_free_play=bool(guided_free_play),
                         families=contact_families(elements), input=BodyCoordinate("shaft", "theta"),
                         output=BodyCoordinate("flange", "theta"), ratio=d.ratio, kinematics=CycloidKinematics(d),
                         drive=bodies["drive"], load=bodies["load"], reference=bodies["reference"],

@@ -277,13 +277,15 @@ class Bodies:
     output flange [kg m^2].
     flange_coordinates: ``"planar"`` (default: the flange's axial translation and tilts held) or
     ``"spatial"`` (also z, gamma_x, gamma_y on the main-bearing rows, issue 32; needs rolling-element
-    bearings, bearing_model "rolling" of :func:`rvtool.build`, and a ball main bearing).
+    bearings, bearing_model "rolling" of :func:`rvtool.build`, ``rvtool analyze --bearing-model
+    rolling``, and a ball main bearing).
     flange_tilt_inertia: transverse inertia [kg m^2] of the flange (dynamic runs of a spatial flange);
     None: half the polar inertia (a thin disc, assumed).
     wheel_coordinates: ``"planar"`` (default) or ``"spatial"``: each wheel also retains its axial
     translation and two tilts about its mid-plane; the ring-pin mesh, the output pins and the
     eccentric bearing on it are sliced across the wheel width with the relative tilt (Eq. (skew),
-    :class:`rvtool.contact.skew.SkewSlices`; needs ``build(..., bearing_model="rolling")``).
+    :class:`rvtool.contact.skew.SkewSlices`; needs ``build(..., bearing_model="rolling")``,
+    ``rvtool analyze --bearing-model rolling``).
     tilt_slices: width slices of every family on a spatial wheel [-]. wheel_tilt_inertia: transverse
     inertia [kg m^2] of a wheel (None: a thin disc, half its polar inertia, assumed)."""
     shaft: tuple = COORDS

@@ -123,10 +123,12 @@ def check_lumped(design, bearing_model):
                                    f"{LUMPED_IN_ANALYZE}")
 
 
-LUMPED_IN_ANALYZE = ("; `rvtool analyze` builds the cycloid and small-tooth-difference drives with lumped bearings, "
-                     "so such a design runs from Python: rvtool.build(design, bearing_model='rolling')")
-"""What a design-file user is told with a refusal of the lumped bearing model (the command line offers no
-other model for these topologies)."""
+LUMPED_IN_ANALYZE = ("; `rvtool analyze` builds the cycloid and small-tooth-difference drives with lumped bearings "
+                     "unless told otherwise: run such a design with `rvtool analyze DESIGN --bearing-model rolling` "
+                     "(Python: rvtool.analyze(design, bearing_model='rolling') or rvtool.build(design, "
+                     "bearing_model='rolling'))")
+"""What a design-file user is told with a refusal of the lumped bearing model (the command line's
+``--bearing-model`` default is the builders' lumped model)."""
 
 
 class RollerSlices:

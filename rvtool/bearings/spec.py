@@ -101,9 +101,10 @@ class CylindricalRollerBearing:
     of Eq. (normal_force).
     slices: "laminae" (default, the law above per lamina) or "influence" (the slices coupled by
     the half-space compliance of both races, Eq. (bearing_ic), :mod:`rvtool.bearings.influence`;
-    damping acts per slice in contact as for the laminae). half_width: "fixed" (the Hertz half-width at
-    ``reference_roller_load``), "roller_load" or "slice_load" (updated from the roller's or each
-    slice's line load), influence only.
+    damping acts per slice in contact as for the laminae; a cycloid or std-involute design needs
+    rolling-element bearings for it: ``rvtool analyze --bearing-model rolling``). half_width:
+    "fixed" (the Hertz half-width at ``reference_roller_load``), "roller_load" or "slice_load"
+    (updated from the roller's or each slice's line load), influence only.
     youngs_modulus: E [Pa] (rollers and rings; the influence compliance); poisson_ratio: nu [-].
     """
     inner_radius: float

@@ -493,7 +493,8 @@ class ReducerModel:
         ev, pose = self.main_bearing_state(q)
         if not callable(getattr(ev, "resultants", None)):
             raise RvtoolInputError(f"the main bearing is a {type(ev).__name__} without resultants; valid: "
-                                   "rolling-element bearings (cycloid: build(..., bearing_model='rolling'))")
+                                   "rolling-element bearings (cycloid: build(..., bearing_model='rolling'), "
+                                   "rvtool analyze --bearing-model rolling)")
         return ev.resultants(pose)["main_bearing"]
 
     # -- contacts ----------------------------------------------------------------

@@ -6,7 +6,8 @@ equilibrium shifted by the kinematic increment; loads are applied in full
 (no load factor). If a warm start fails, the point is re-solved from the
 previous equilibrium in angle sub-steps, then from the kinematic state by a homotopy in the regularization stiffness (stiff springs
 first, then the model's own), then with the load ramped over ``ramp_steps``
-steps, and last (models declaring ``guided_free_play``) by the guide-spring homotopy from the
+steps, and last (models declaring ``guided_free_play``, or a solver built with
+``guided_fallback=True``) by the guide-spring homotopy from the
 kinematic state (:mod:`rvtool.solver.guide`: finer factor steps, bisected on failure; reached
 only where everything before failed, so no point that solved before changes). A point that still fails raises :class:`SolverFailure` naming the
 control values.
@@ -45,11 +46,18 @@ class StaticSolver:
     max_translation [m], max_rotation [rad]: plausibility bounds of the elastic deviation of
     every body from its kinematic position (contact deformations are micrometres and
     arcminutes; a larger deviation is a spurious Newton solution).
+    guided_fallback: run the guide-spring homotopy as the last fallback (default: the model's
+    ``guided_free_play``).
     """
 
     def __init__(self, model, *, abs_tol=1e-6, rel_tol=1e-9, max_iterations=30, ramp_steps=20,
-                 max_translation=5e-4, max_rotation=2e-2):
+                 max_translation=5e-4, max_rotation=2e-2, guided_fallback=None):
         self.model = model
+        #: the guide-spring homotopy as the last fallback: the model's ``guided_free_play`` unless set
+        #: (a caller that only asks *whether* a state exists, such as the rated-state admissibility
+        #: check, sets True; the protocols keep the model's choice, so their paths do not change)
+        self.guided_fallback = (bool(getattr(model, "guided_free_play", False)) if guided_fallback is None
+                                else bool(guided_fallback))
         self.max_translation = max_translation
         self.max_rotation = max_rotation
         self.stats = SolverStats()
@@ -194,7 +202,7 @@ class StaticSolver:
             finally:
                 self.ramp_steps = steps
             ok = ok and self.plausible(q, input_angle)
-        if not ok and getattr(self.model, "guided_free_play", False):
+        if not ok and self.guided_fallback:
             # free play without contact stiffness (rv40e's needle clearance and backlash at zero load):
             # the coarse stiffening ladder and the load ramps jump; the guides release in decades
             ok, q, _ = guided_newton(self.model, lambda q0: self.newton(q0, ramp=False),
@@ -206,7 +214,8 @@ class StaticSolver:
             raise SolverFailure(f"no plausible static equilibrium at input angle {input_angle:.6g} rad (warm start, "
                                 f"a {self.ramp_steps}-step and a {5 * self.ramp_steps}-step load ramp failed or left a "
                                 f"body more than {self.max_translation} m / {self.max_rotation} rad off its kinematic position; "
-                                f"angle sub-steps, shifts of up to 1e-5 rad and the guide-spring homotopy failed too)")
+                                f"angle sub-steps and shifts of up to 1e-5 rad"
+                                + (" and the guide-spring homotopy" if self.guided_fallback else "") + " failed too)")
         self.stats.points += 1
         self.q = q
         self.last_angle = used
