@@ -273,6 +273,7 @@ def _skf_rows(bearing, fs, omega, load, constants=None):
     ``constants``: {key: SkfConstants} replacing entries of ``skf_friction.CONSTANTS`` (a sensitivity)."""
     from ..bearings import skf_friction as S
     C = {**S.CONSTANTS, **(constants or {})}
+    from ..bearings.palmgren_load import row_loads
     from ..bearings.spec import AngularContactPair, CylindricalRollerBearing
     from ..bearings.tapered import TaperedPair
     nu = fs.viscosity
@@ -285,27 +286,26 @@ def _skf_rows(bearing, fs, omega, load, constants=None):
         return [("row", "needle_roller", S.skf_moment(c, speed=omega, pitch_diameter=0.5 * (d + D), bore=d, outside=D,
                                                       viscosity=nu, radial_load=load))]
     if isinstance(bearing, TaperedPair):
-        # each row half the pair's radial resultant; F_a per row the larger of the preload and the induced
-        # axial force 0.5 F_r / Y of a row under F_r (the usual rule for a paired tapered arrangement)
+        # the rows' F_r and F_a as Palmgren's P1 takes them (rvtool.bearings.palmgren_load.row_loads: half the
+        # pair's radial resultant each, F_a the larger of the preload and the induced 0.5 F_r / Y)
         out = []
-        for k, row in enumerate(bearing.rows):
+        for k, (row, (_, fr, fa, _)) in enumerate(zip(bearing.rows, row_loads(bearing, load))):
             d, D, size = S.tapered_ring_diameters(row.pitch_diameter)
-            Y = S.tapered_axial_factor(row.cup_angle)
-            fr = 0.5 * load
-            fa = max(bearing.axial_preload, 0.5 * fr / Y)
             out.append((f"row{k} ({size})", "tapered_roller_302",
                         S.skf_moment(C["tapered_roller_302"], speed=omega, pitch_diameter=row.pitch_diameter,
-                                     bore=d, outside=D, viscosity=nu, radial_load=fr, axial_load=fa, axial_factor=Y)))
+                                     bore=d, outside=D, viscosity=nu, radial_load=fr, axial_load=fa,
+                                     axial_factor=S.tapered_axial_factor(row.cup_angle))))
         return out
     if isinstance(bearing, AngularContactPair):
-        # each row half the pair's radial resultant and its own axial preload
+        # the rows' F_r and F_a as Palmgren's P1 takes them (row_loads: half the radial resultant each, the
+        # row's own axial preload)
         out = []
-        for k, row in enumerate(bearing.rows):
+        for k, (row, (_, fr, fa, _)) in enumerate(zip(bearing.rows, row_loads(bearing, load))):
             h = 0.5 * S.BALL_SECTION_OVER_DW * row.ball_diameter
             out.append((f"row{k}", "angular_contact_72B",
                         S.skf_moment(C["angular_contact_72B"], speed=omega, pitch_diameter=row.pitch_diameter,
                                      bore=row.pitch_diameter - h, outside=row.pitch_diameter + h, viscosity=nu,
-                                     radial_load=0.5 * load, axial_load=row.axial_preload)))
+                                     radial_load=fr, axial_load=fa)))
         return out
     raise RvtoolInputError(f"bearing type {type(bearing).__name__} has no SKF reference rows; valid: needle/cylindrical "
                            "roller set, tapered pair, angular-contact pair")
