@@ -98,6 +98,12 @@ def load_rv_tolerances(path):
     return load_design_tolerances(path, RvToleranceSpec, RV_FIELDS)
 
 
+def _current(changes, design, section, key):
+    """``section.key`` as the variant has it so far: the value an earlier field wrote into ``changes``, else the
+    design's own (fields that add onto a key -- pin centres, pitch deviations -- build on both)."""
+    return changes.get(section, {}).get(key, getattr(getattr(design, section), key))
+
+
 def sample_rv_design(spec, design, k, seed):
     """(design of variant k, its drawn deviations {field: value(s)})."""
     changes, drawn = rv_design_changes(spec, design, k, seed)
@@ -143,7 +149,7 @@ def rv_design_changes(spec, design, k, seed):
             changes.setdefault("pins", {})["centre_errors"] = pin_pitch_centre_errors(design.pins, v)
         elif nm == "pin_radial_position_error":
             v = tuple(float(x) for x in d.sample(rng, design.pins.n_pins))
-            base = changes.get("pins", {}).get("centre_errors", design.pins.centre_errors)
+            base = _current(changes, design, "pins", "centre_errors")
             changes.setdefault("pins", {})["centre_errors"] = pin_radial_centre_errors(design.pins, v, base)
         elif nm == "wheel_bore_position_error":
             f = np.asarray(d.sample(rng, (n, design.n_wheels, 2)), float)
@@ -166,20 +172,19 @@ def rv_design_changes(spec, design, k, seed):
             changes.setdefault("wheels", {})["lobe_pitch_deviations"] = v
         elif nm == "pin_circle_coaxiality_error":
             v = tuple(float(x) for x in d.sample(rng, 2))
-            base = changes.get("pins", {}).get("centre_errors", design.pins.centre_errors)
+            base = _current(changes, design, "pins", "centre_errors")
             changes.setdefault("pins", {})["centre_errors"] = coaxial_centre_errors(design.pins, v, base)
         elif nm == "sun_runout":
             v = tuple(float(x) for x in d.sample(rng, 2))
             z = design.sun_gear.n_teeth
-            base = changes.get("sun_gear", {}).get("single_pitch_deviations",
-                                                   design.sun_gear.single_pitch_deviations)
+            base = _current(changes, design, "sun_gear", "single_pitch_deviations")
             f = runout_pitch_deviations(z, v) + (0.0 if base is None else np.asarray(base, float))
             changes.setdefault("sun_gear", {})["single_pitch_deviations"] = tuple(float(x) for x in f)
         elif nm == "crank_gear_runout":
             e = np.asarray(d.sample(rng, (n, 2)), float)
             v = tuple(tuple(float(x) for x in xy) for xy in e)
             z = design.crank_gear.n_teeth
-            base = changes.get("cranks", {}).get("gear_pitch_deviations", design.cranks.gear_pitch_deviations)
+            base = _current(changes, design, "cranks", "gear_pitch_deviations")
             base = np.zeros((n, z)) if not len(base) else np.asarray(base, float)
             changes.setdefault("cranks", {})["gear_pitch_deviations"] = tuple(
                 tuple(float(x) for x in runout_pitch_deviations(z, e[k]) + base[k]) for k in range(n))
