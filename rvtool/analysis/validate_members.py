@@ -354,7 +354,6 @@ def members_tornado(design, table, catalogue, base_assumed, sample_values, *, ke
     input (derived from the row spacing) and is left out of the screening. ``workers``: processes over the
     2 keys + 1 independent b/a (validate.map_samples; one process: in order, as before)."""
     from scipy.stats import spearmanr
-    from ..assembly.topologies import design_from_table
     from ..designs.catalogue import get_key
     t0 = time.perf_counter()
     base, members, switches, derived = band_inputs(design, base_assumed)

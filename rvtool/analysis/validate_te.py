@@ -18,6 +18,7 @@ drift against the pin ring is left out), stated with every result. The compariso
 revolution, the measured definition, is :mod:`rvtool.analysis.te_revolution` (the full mode of
 cases/rv/te_measured_rv80e.py), which reads every window off the same curves.
 """
+import json
 import math
 import os
 import time
@@ -287,8 +288,6 @@ def te_comparison(design_name, design, rated_torque, *, quick=False, log=print, 
         inputs_digest = TR.revolution_inputs_digest(design_name, design, rated_torque, variants=n,
                                                     input_revolutions=input_revolutions)
     for path in reuse or ():
-        import json
-        import os
         if not os.path.exists(path):
             continue
         with open(path) as fh:
