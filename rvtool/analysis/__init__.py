@@ -114,9 +114,8 @@ def check_bearing_model(design, bearing_model):
     :data:`BEARING_MODELS`, or one given for a design whose builder offers no choice (RV)."""
     if bearing_model is None:
         return
-    if bearing_model not in BEARING_MODELS:
-        raise RvtoolInputError(f"--bearing-model / bearing_model = {bearing_model!r} is not one of the valid choices "
-                               f"{list(BEARING_MODELS)}")
+    from ..validation import check_choice
+    check_choice("--bearing-model / bearing_model", bearing_model, BEARING_MODELS)
     from ..assembly.spec import CycloidDesign
     from ..assembly.std_spec import StdInvoluteDesign
     if not isinstance(design, (CycloidDesign, StdInvoluteDesign)):
